@@ -1,0 +1,401 @@
+//! Phase `analyse`: interval (range) analysis of every channel in every resource, and the
+//! precision fit. A float precision must hold the range (f16 up to 65504, f32 up to
+//! 3.4e38); a unorm precision needs a finite range, which it stores with an affine encode
+//! `(v - lo) / (hi - lo)` (identity when the range is already [0, 1]; affine maps commute
+//! with the linear filters that follow). When a channel does not fit, the diagnostic
+//! states the largest safe value of each parameter it depends on, found by bisection
+//! (e.g. ESM with c = 80 at f16: c must stay at or below ln 65504 = 11.09 for z in [0, 1]).
+
+use crate::builtins::Func;
+use crate::diag::{Diagnostic, Diagnostics, Phase};
+use crate::front::ast::{ConstValue, Precision, Reduce};
+use crate::front::expr::{BinOp, UnOp};
+use crate::ir::*;
+use std::collections::HashMap;
+use std::f64::consts::PI;
+
+pub const F16_MAX: f64 = 65504.0;
+pub const F32_MAX: f64 = f32::MAX as f64;
+
+impl Interval {
+    pub fn point(v: f64) -> Interval {
+        Interval { lo: v, hi: v }
+    }
+
+    pub const UNBOUNDED: Interval = Interval { lo: f64::NEG_INFINITY, hi: f64::INFINITY };
+    pub const UNIT: Interval = Interval { lo: 0.0, hi: 1.0 };
+
+    fn hull(a: Interval, b: Interval) -> Interval {
+        Interval { lo: a.lo.min(b.lo), hi: a.hi.max(b.hi) }
+    }
+
+    fn of(vals: &[f64]) -> Interval {
+        let lo = vals.iter().copied().fold(f64::INFINITY, |a, b| if b.is_nan() { f64::NEG_INFINITY } else { a.min(b) });
+        let hi = vals.iter().copied().fold(f64::NEG_INFINITY, |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
+        Interval { lo, hi }
+    }
+
+    pub fn is_finite(&self) -> bool {
+        self.lo.is_finite() && self.hi.is_finite()
+    }
+
+    pub fn magnitude(&self) -> f64 {
+        self.lo.abs().max(self.hi.abs())
+    }
+
+    fn monotone(self, f: impl Fn(f64) -> f64) -> Interval {
+        Interval::of(&[f(self.lo), f(self.hi)])
+    }
+}
+
+/// Range of every expression node under given channel ranges.
+pub struct RangeEval<'a> {
+    ir: &'a Ir,
+    /// Map side: the range of each channel as stored in the resources the pass reads.
+    channels: HashMap<ChannelId, Interval>,
+    memo: HashMap<H, Interval>,
+}
+
+impl<'a> RangeEval<'a> {
+    pub fn new(ir: &'a Ir, channels: HashMap<ChannelId, Interval>) -> Self {
+        RangeEval { ir, channels, memo: HashMap::new() }
+    }
+
+    pub fn eval(&mut self, root: H) -> Interval {
+        for h in self.ir.arena.postorder(&[root]) {
+            if !self.memo.contains_key(&h) {
+                let r = self.node(h);
+                self.memo.insert(h, r);
+            }
+        }
+        self.memo[&root]
+    }
+
+    fn get(&self, h: H) -> Interval {
+        self.memo.get(&h).copied().unwrap_or(Interval::UNBOUNDED)
+    }
+
+    fn node(&self, h: H) -> Interval {
+        let a = &self.ir.arena;
+        match a.node(h) {
+            Node::F32(b) => Interval::point(f32::from_bits(*b) as f64),
+            Node::I32(v) => Interval::point(*v as f64),
+            Node::Bool(v) => Interval::point(*v as i32 as f64),
+            Node::Param(p) => {
+                let p = &self.ir.params[*p];
+                match (p.range, p.value) {
+                    (Some((lo, hi)), _) => Interval { lo, hi },
+                    (None, ConstValue::Bool(_)) => Interval::UNIT,
+                    (None, _) => Interval::UNBOUNDED,
+                }
+            }
+            Node::Input(i) => {
+                let (lo, hi) = i.range();
+                Interval { lo, hi }
+            }
+            Node::Channel(c) => self.channels.get(c).copied().unwrap_or(Interval::UNBOUNDED),
+            Node::Sample { channel, resource, .. } => self.ir.resources[*resource].slot_of(*channel).and_then(|s| s.range).unwrap_or(Interval::UNBOUNDED),
+            Node::Unary(UnOp::Neg, x) => {
+                let x = self.get(*x);
+                Interval { lo: -x.hi, hi: -x.lo }
+            }
+            Node::Unary(UnOp::Not, _) => Interval::UNIT,
+            Node::Binary(op, x, y) => {
+                let (x, y) = (self.get(*x), self.get(*y));
+                match op {
+                    BinOp::Add => Interval { lo: x.lo + y.lo, hi: x.hi + y.hi },
+                    BinOp::Sub => Interval { lo: x.lo - y.hi, hi: x.hi - y.lo },
+                    BinOp::Mul => Interval::of(&[mul(x.lo, y.lo), mul(x.lo, y.hi), mul(x.hi, y.lo), mul(x.hi, y.hi)]),
+                    BinOp::Div => {
+                        if y.lo <= 0.0 && y.hi >= 0.0 {
+                            Interval::UNBOUNDED
+                        } else {
+                            Interval::of(&[x.lo / y.lo, x.lo / y.hi, x.hi / y.lo, x.hi / y.hi])
+                        }
+                    }
+                    BinOp::Rem => {
+                        let m = y.magnitude();
+                        Interval { lo: if x.lo < 0.0 { -m } else { 0.0 }, hi: if x.hi > 0.0 { m } else { 0.0 } }
+                    }
+                    _ => Interval::UNIT,
+                }
+            }
+            Node::Swizzle(x, _) => self.get(*x),
+            Node::Call(f, args) => {
+                let v: Vec<Interval> = args.iter().map(|x| self.get(*x)).collect();
+                call_range(*f, &v)
+            }
+        }
+    }
+}
+
+/// 0 * inf is 0 here: a zero factor bounds the product whatever the other range.
+fn mul(a: f64, b: f64) -> f64 {
+    if a == 0.0 || b == 0.0 { 0.0 } else { a * b }
+}
+
+fn call_range(f: Func, v: &[Interval]) -> Interval {
+    let x = v[0];
+    match f {
+        Func::Exp => x.monotone(f64::exp),
+        Func::Exp2 => x.monotone(f64::exp2),
+        Func::Log => x.monotone(|t| if t <= 0.0 { f64::NEG_INFINITY } else { t.ln() }),
+        Func::Log2 => x.monotone(|t| if t <= 0.0 { f64::NEG_INFINITY } else { t.log2() }),
+        Func::Sqrt => x.monotone(|t| t.max(0.0).sqrt()),
+        Func::InverseSqrt => {
+            if x.lo <= 0.0 {
+                Interval { lo: if x.hi > 0.0 { 1.0 / x.hi.sqrt() } else { 0.0 }, hi: f64::INFINITY }
+            } else {
+                x.monotone(|t| 1.0 / t.sqrt())
+            }
+        }
+        Func::Sin => trig(x, 0.0),
+        Func::Cos => trig(x, PI / 2.0),
+        Func::Tan => {
+            if x.is_finite() && (x.hi - x.lo) < PI && (x.lo / PI + 0.5).floor() == (x.hi / PI + 0.5).floor() {
+                x.monotone(f64::tan)
+            } else {
+                Interval::UNBOUNDED
+            }
+        }
+        Func::Asin => Interval { lo: x.lo.max(-1.0), hi: x.hi.min(1.0) }.monotone(f64::asin),
+        Func::Acos => Interval { lo: x.lo.max(-1.0), hi: x.hi.min(1.0) }.monotone(f64::acos),
+        Func::Atan => x.monotone(f64::atan),
+        Func::Atan2 => Interval { lo: -PI, hi: PI },
+        Func::Abs => {
+            if x.lo >= 0.0 {
+                x
+            } else if x.hi <= 0.0 {
+                Interval { lo: -x.hi, hi: -x.lo }
+            } else {
+                Interval { lo: 0.0, hi: x.magnitude() }
+            }
+        }
+        Func::Floor => x.monotone(f64::floor),
+        Func::Ceil => x.monotone(f64::ceil),
+        Func::Round => x.monotone(f64::round),
+        Func::Trunc => x.monotone(f64::trunc),
+        Func::Fract => Interval { lo: 0.0, hi: 1.0 },
+        Func::Sign => Interval::of(&[x.lo.signum(), x.hi.signum()]),
+        Func::Saturate => Interval { lo: x.lo.clamp(0.0, 1.0), hi: x.hi.clamp(0.0, 1.0) },
+        Func::Step | Func::Smoothstep | Func::Linstep => Interval::UNIT,
+        Func::Min => Interval { lo: x.lo.min(v[1].lo), hi: x.hi.min(v[1].hi) },
+        Func::Max => Interval { lo: x.lo.max(v[1].lo), hi: x.hi.max(v[1].hi) },
+        Func::Clamp => Interval { lo: x.lo.max(v[1].lo).min(v[2].hi), hi: x.hi.min(v[2].hi).max(v[1].lo) },
+        Func::Pow => {
+            let (b, e) = (x, v[1]);
+            if b.lo >= 0.0 && b.is_finite() && e.is_finite() {
+                let corners = [b.lo.powf(e.lo), b.lo.powf(e.hi), b.hi.powf(e.lo), b.hi.powf(e.hi)];
+                let mut r = Interval::of(&corners);
+                if b.lo <= 1.0 && b.hi >= 1.0 {
+                    r = Interval::hull(r, Interval::point(1.0));
+                }
+                r
+            } else {
+                Interval::UNBOUNDED
+            }
+        }
+        Func::Mix => {
+            let (a, b, t) = (x, v[1], v[2]);
+            let mut vals = Vec::new();
+            for ta in [t.lo, t.hi] {
+                for av in [a.lo, a.hi] {
+                    for bv in [b.lo, b.hi] {
+                        vals.push(av * (1.0 - ta) + bv * ta);
+                    }
+                }
+            }
+            Interval::of(&vals)
+        }
+        Func::Select => Interval::hull(v[0], v[1]),
+        Func::ToF32 | Func::ToI32 => x,
+        Func::Vec2 | Func::Vec3 | Func::Vec4 => v.iter().copied().reduce(Interval::hull).unwrap_or(Interval::UNBOUNDED),
+        Func::Length => Interval { lo: 0.0, hi: (v.len() as f64).sqrt().max(2.0) * x.magnitude() },
+        Func::Dot => {
+            let m = x.magnitude() * v[1].magnitude() * 4.0;
+            Interval { lo: -m, hi: m }
+        }
+    }
+}
+
+/// Range of sin(x + phase) over x.
+fn trig(x: Interval, phase: f64) -> Interval {
+    if !x.is_finite() || x.hi - x.lo >= 2.0 * PI {
+        return Interval { lo: -1.0, hi: 1.0 };
+    }
+    let (a, b) = (x.lo + phase, x.hi + phase);
+    let mut vals = vec![a.sin(), b.sin()];
+    // extrema at pi/2 + n pi
+    let mut n = ((a - PI / 2.0) / PI).ceil();
+    while PI / 2.0 + n * PI <= b {
+        vals.push((PI / 2.0 + n * PI).sin());
+        n += 1.0;
+    }
+    Interval::of(&vals)
+}
+
+/// Ranges of every slot of every resource, in pass order (no diagnostics).
+pub fn slot_ranges(ir: &Ir) -> Vec<Vec<Interval>> {
+    let mut out: Vec<Vec<Interval>> = ir.resources.iter().map(|r| vec![Interval::UNBOUNDED; r.slots.len()]).collect();
+    for pass in &ir.passes {
+        let Some(w) = pass.writes else { continue };
+        let res = &ir.resources[w];
+        let src = |ch: ChannelId| -> Option<Interval> {
+            pass.reads.iter().find_map(|&r| {
+                let i = ir.resources[r].slots.iter().position(|s| s.channel == ch)?;
+                Some(out[r][i])
+            })
+        };
+        let mut ranges = Vec::with_capacity(res.slots.len());
+        match &pass.kind {
+            IrPassKind::Depth { .. } => ranges.extend(res.slots.iter().map(|_| Interval::UNIT)),
+            IrPassKind::Map | IrPassKind::Geometry { .. } => {
+                let mut env = HashMap::new();
+                for &r in &pass.reads {
+                    for (i, s) in ir.resources[r].slots.iter().enumerate() {
+                        env.insert(s.channel, out[r][i]);
+                    }
+                }
+                let mut ev = RangeEval::new(ir, env);
+                for s in &res.slots {
+                    ranges.push(match ir.channels[s.channel].value {
+                        Some(v) => ev.eval(v),
+                        None => Interval::UNIT,
+                    });
+                }
+            }
+            IrPassKind::Filter { kernel: IrKernel::LoG } => {
+                for s in &res.slots {
+                    let r = src(s.channel).unwrap_or(Interval::UNBOUNDED);
+                    // centre weight 4, four neighbours -1 (IrKernel::LOG_3X3)
+                    let w = r.hi - r.lo;
+                    ranges.push(Interval { lo: -4.0 * w, hi: 4.0 * w });
+                }
+            }
+            IrPassKind::Filter { .. } | IrPassKind::Mipmap { reduce: Reduce::Mean | Reduce::Max | Reduce::Min } | IrPassKind::SummedArea => {
+                // convex combinations, maxima and minima stay within the source range
+                for s in &res.slots {
+                    ranges.push(src(s.channel).unwrap_or(Interval::UNBOUNDED));
+                }
+            }
+            IrPassKind::Shade { .. } => {}
+        }
+        out[w] = ranges;
+    }
+    out
+}
+
+/// Whether a precision can hold a range.
+pub fn fits(p: Precision, r: Interval) -> bool {
+    if r.lo.is_nan() || r.hi.is_nan() {
+        return false;
+    }
+    match p {
+        Precision::F32 => r.magnitude() <= F32_MAX,
+        Precision::F16 => r.magnitude() <= F16_MAX,
+        Precision::Unorm8 | Precision::Unorm16 => r.is_finite(),
+    }
+}
+
+pub fn encode_for(p: Precision, r: Interval) -> Encode {
+    if !p.is_unorm() || (r.lo >= 0.0 && r.hi <= 1.0) {
+        return Encode::IDENTITY;
+    }
+    let w = r.hi - r.lo;
+    Encode { bias: r.lo, scale: if w > 0.0 { 1.0 / w } else { 1.0 } }
+}
+
+/// Re-evaluates one slot's range with one parameter changed: `(param, value) -> range`.
+pub type Probe<'p> = &'p dyn Fn(usize, f64, ResId, usize) -> Option<Interval>;
+
+pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics> {
+    let ranges = slot_ranges(ir);
+    let mut diags = Diagnostics::default();
+    let mut warnings = Vec::new();
+    for (ri, res) in ir.resources.iter().enumerate() {
+        // A resource repeats its source's complaint: report each channel once, where it is made.
+        let derived = matches!(ir.passes[res.writer].kind, IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea);
+        for (si, slot) in res.slots.iter().enumerate() {
+            let r = ranges[ri][si];
+            if fits(slot.precision, r) {
+                continue;
+            }
+            if derived && !matches!(ir.passes[res.writer].kind, IrPassKind::Filter { kernel: IrKernel::LoG }) {
+                continue;
+            }
+            let ch = &ir.channels[slot.channel];
+            let why = match slot.precision {
+                Precision::F16 => "F16 holds at most 65504",
+                Precision::F32 => "F32 holds at most 3.4e38",
+                _ => "a unorm channel stores a finite range scaled to [0, 1]",
+            };
+            let mut d = Diagnostic::error(
+                Phase::Analyse,
+                format!("channel `{}` in `{}` spans {r}, which {} cannot hold", ch.name, res.name, slot.precision.name()),
+            )
+            .at(ch.precision_span, format!("{why}"))
+            .also(ch.span, "channel computed here");
+            if let Some(v) = ch.value {
+                d = d.note(format!("the channel's value is {} (for inputs in their ranges: depth z in [0, 1])", ir.arena.display(v, Some(ir))));
+            }
+            let mut suggested = false;
+            for (pi, p) in ir.params.iter().enumerate() {
+                if matches!(p.value, ConstValue::Bool(_)) {
+                    continue;
+                }
+                let now = if p.uniform { p.range.map(|r| r.1).unwrap_or(p.value.as_f64()) } else { p.value.as_f64() };
+                let lo = p.range.map(|r| r.0).unwrap_or(0.0).min(now);
+                let ok = |v: f64| probe(pi, v, ri, si).is_some_and(|r| fits(slot.precision, r));
+                let unchanged = probe(pi, lo, ri, si) == probe(pi, now, ri, si);
+                if unchanged || !ok(lo) || ok(now) {
+                    continue;
+                }
+                let (mut a, mut b) = (lo, now);
+                for _ in 0..60 {
+                    let m = 0.5 * (a + b);
+                    if ok(m) { a = m } else { b = m }
+                }
+                let is_int = matches!(p.value, ConstValue::Int(_));
+                let best = if is_int { a.floor() } else { a };
+                let shown = if is_int { format!("{}", best as i64) } else { format!("{:.2}", (best * 100.0).floor() / 100.0) };
+                let what = if p.uniform {
+                    format!("narrow the range of `{}` to at most {shown}", p.name)
+                } else {
+                    format!("`{}` = {} is too large: it must stay at or below {shown} for {}", p.name, p.value, slot.precision.name())
+                };
+                d = d.help(format!("{what}, or store `{}` at a wider precision", ch.name)).also(p.span, format!("`{}` declared here", p.name));
+                suggested = true;
+                break;
+            }
+            if !suggested {
+                d = d.help(if r.is_finite() { "store the channel at F32".to_string() } else { "bound the value: give the params it uses a `range`, or clamp it".to_string() });
+            }
+            diags.push(d);
+        }
+    }
+    diags.check()?;
+    for (ri, res) in ir.resources.iter_mut().enumerate() {
+        for (si, slot) in res.slots.iter_mut().enumerate() {
+            let r = ranges[ri][si];
+            slot.range = Some(r);
+            slot.encode = encode_for(slot.precision, r);
+        }
+    }
+    // Unorm8 quantisation relative to the range, as a note for explain.
+    for res in &ir.resources {
+        for s in &res.slots {
+            if s.precision == Precision::Unorm8 {
+                if let Some(r) = s.range {
+                    if r.hi - r.lo > 8.0 {
+                        warnings.push(
+                            Diagnostic::warning(Phase::Analyse, format!("channel `{}` spans {r} at Unorm8: one step is {}", ir.channels[s.channel].name, short((r.hi - r.lo) / 255.0)))
+                                .at(ir.channels[s.channel].precision_span, "coarse quantisation")
+                                .help("use Unorm16 or F16 for this channel"),
+                        );
+                    }
+                }
+            }
+        }
+    }
+    Ok(warnings)
+}

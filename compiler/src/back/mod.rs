@@ -1,0 +1,41 @@
+//! Back end: WGSL generation, naga validation, and operation counts on the naga IR.
+
+pub mod wgsl;
+
+use sshc_runtime::graph::OpCount;
+
+/// Parse and validate WGSL with naga; the error text is naga's own.
+pub fn validate(source: &str) -> Result<naga::Module, String> {
+    let module = naga::front::wgsl::parse_str(source).map_err(|e| e.emit_to_string(source))?;
+    let mut v = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());
+    v.validate(&module).map_err(|e| e.emit_to_string(source))?;
+    Ok(module)
+}
+
+/// Texture fetches and arithmetic operations of one invocation of `entry`, counted on the
+/// naga IR (straight-line code: each expression runs once; called functions are counted
+/// at their call sites).
+pub fn count_ops(module: &naga::Module, entry: &str) -> OpCount {
+    let Some(ep) = module.entry_points.iter().find(|e| e.name == entry) else { return OpCount::default() };
+    let mut c = OpCount::default();
+    count_function(module, &ep.function, &mut c, 0);
+    c
+}
+
+fn count_function(module: &naga::Module, f: &naga::Function, c: &mut OpCount, depth: usize) {
+    use naga::Expression as E;
+    for (_, e) in f.expressions.iter() {
+        match e {
+            E::ImageSample { .. } | E::ImageLoad { .. } => c.fetches += 1,
+            E::Binary { .. } | E::Unary { .. } | E::Math { .. } | E::Select { .. } | E::As { .. } | E::Relational { .. } => c.ops += 1,
+            _ => {}
+        }
+    }
+    if depth < 8 {
+        for (_, e) in f.expressions.iter() {
+            if let E::CallResult(h) = e {
+                count_function(module, &module.functions[*h], c, depth + 1);
+            }
+        }
+    }
+}

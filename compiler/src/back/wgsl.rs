@@ -1,0 +1,710 @@
+//! Phase `codegen`: one WGSL module per GPU pass, following the binding conventions of
+//! `sshc_runtime::graph`. Expressions are emitted as straight-line code in operand order,
+//! one `let` per shared operation (the arena already merged equal sub-expressions), and
+//! texture reads of one texel of one layer are fetched once and shared by its channels.
+//! Every module is validated with naga inside the compiler.
+
+use crate::builtins::{Func, Input, SampleFn, Ty};
+use crate::diag::{Diagnostic, Diagnostics, Phase};
+use crate::front::ast::{ConstValue, Precision, Reduce};
+use crate::front::expr::{BinOp, UnOp};
+use crate::ir::*;
+use crate::pack::{Limits, layers_per_subpass};
+use sshc_runtime::graph::{self, Binding, Draw, FRAME_WGSL, OpCount, Step, Target, View};
+use std::collections::HashMap;
+use std::fmt::Write as _;
+
+/// One generated module and the steps that run it.
+#[derive(Clone, Debug)]
+pub struct Module {
+    pub pass: PassId,
+    pub file: String,
+    pub source: String,
+    pub steps: Vec<Step>,
+}
+
+/// Intermediate textures a module needs besides the IR's (the separable filters' scratch).
+#[derive(Clone, Debug)]
+pub struct Scratch {
+    pub name: String,
+    pub like: String,
+}
+
+pub struct Output {
+    pub modules: Vec<Module>,
+    pub scratch: Vec<Scratch>,
+}
+
+pub fn texture_format(t: &Texture) -> graph::Format {
+    use graph::Format::*;
+    match (t.precision, t.components) {
+        (Precision::Unorm8, 1) => R8Unorm,
+        (Precision::Unorm8, 2) => Rg8Unorm,
+        (Precision::Unorm8, _) => Rgba8Unorm,
+        (Precision::Unorm16, 1) => R16Unorm,
+        (Precision::Unorm16, 2) => Rg16Unorm,
+        (Precision::Unorm16, _) => Rgba16Unorm,
+        (Precision::F16, 1) => R16Float,
+        (Precision::F16, 2) => Rg16Float,
+        (Precision::F16, _) => Rgba16Float,
+        (Precision::F32, 1) => R32Float,
+        (Precision::F32, 2) => Rg32Float,
+        (Precision::F32, _) => Rgba32Float,
+    }
+}
+
+/// Format an f32 constant as a WGSL literal.
+pub fn f32_lit(v: f32) -> String {
+    if v == 0.0 {
+        return "0.0f".into();
+    }
+    let s = if v == v.trunc() && v.abs() < 1e9 { format!("{v:.1}") } else { format!("{v:e}") };
+    if v < 0.0 { format!("({s}f)") } else { format!("{s}f") }
+}
+
+fn i32_lit(v: i32) -> String {
+    if v == i32::MIN {
+        "(-2147483647i - 1i)".into()
+    } else if v < 0 {
+        format!("({v}i)")
+    } else {
+        format!("{v}i")
+    }
+}
+
+const COMP: [char; 4] = ['x', 'y', 'z', 'w'];
+
+/// Where expressions are evaluated.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Side {
+    /// Per shadow-map texel (`texel` is the integer coordinate).
+    Map,
+    /// Per camera pixel in the Shade pass.
+    Receiver,
+}
+
+/// Emits straight-line WGSL for a set of expression roots.
+struct Emitter<'a> {
+    ir: &'a Ir,
+    side: Side,
+    body: String,
+    names: HashMap<H, String>,
+    fetches: HashMap<String, String>,
+    /// Textures this module reads: (name, binding).
+    bindings: Vec<(String, View)>,
+    uses_params: bool,
+    uses_sampler: bool,
+    /// Map side: the resources the pass reads.
+    reads: Vec<ResId>,
+    counter: usize,
+}
+
+impl<'a> Emitter<'a> {
+    fn new(ir: &'a Ir, side: Side, reads: Vec<ResId>) -> Self {
+        Emitter { ir, side, body: String::new(), names: HashMap::new(), fetches: HashMap::new(), bindings: vec![], uses_params: false, uses_sampler: false, reads, counter: 0 }
+    }
+
+    fn binding(&mut self, texture: &str, view: View) -> String {
+        if !self.bindings.iter().any(|(n, _)| n == texture) {
+            self.bindings.push((texture.to_string(), view));
+        }
+        format!("t_{texture}")
+    }
+
+    fn fresh(&mut self, prefix: &str) -> String {
+        self.counter += 1;
+        format!("{prefix}{}", self.counter)
+    }
+
+    fn line(&mut self, s: &str) {
+        self.body.push_str("    ");
+        self.body.push_str(s);
+        self.body.push('\n');
+    }
+
+    fn input(&mut self, i: Input) -> String {
+        match (self.side, i) {
+            (_, Input::TexelSize) => "frame.shadow_size.z".into(),
+            (_, Input::ShadowSize) => "frame.shadow_size.x".into(),
+            (_, Input::Near) => "frame.depth_range.x".into(),
+            (_, Input::Far) => "frame.depth_range.y".into(),
+            (_, Input::LightSize) => "frame.light_size.x".into(),
+            (Side::Receiver, i) => format!("in_{}", i.name()),
+            // check refuses receiver inputs on the map side
+            (Side::Map, i) => format!("in_{}", i.name()),
+        }
+    }
+
+    /// The WGSL texture name and decode of a channel in a resource: (binding, layer, component, encode).
+    fn locate(&mut self, res: ResId, ch: ChannelId, view: View) -> Result<(String, u32, u32, Encode), Diagnostic> {
+        let r = &self.ir.resources[res];
+        let slot = r.slot_of(ch).ok_or_else(|| internal(format!("channel {} missing from `{}`", self.ir.channels[ch].name, r.name)))?;
+        let (t, layer, comp) = slot.place.ok_or_else(|| internal("channel not packed"))?;
+        let name = r.textures[t].name.clone();
+        let b = self.binding(&name, view);
+        Ok((b, layer, comp, slot.encode))
+    }
+
+    fn decode(stored: &str, e: Encode) -> String {
+        if e.is_identity() {
+            stored.to_string()
+        } else {
+            format!("({stored} * {} + {})", f32_lit((1.0 / e.scale) as f32), f32_lit(e.bias as f32))
+        }
+    }
+
+    fn emit(&mut self, root: H) -> Result<String, Diagnostic> {
+        for h in self.ir.arena.postorder(&[root]) {
+            if self.names.contains_key(&h) {
+                continue;
+            }
+            let e = self.expr(h)?;
+            let node = self.ir.arena.node(h);
+            let leaf = matches!(node, Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(_) | Node::Channel(_));
+            if leaf {
+                self.names.insert(h, e);
+            } else {
+                let name = format!("e{}", h.0);
+                self.line(&format!("let {name} = {e};"));
+                self.names.insert(h, name);
+            }
+        }
+        Ok(self.names[&root].clone())
+    }
+
+    fn n(&self, h: H) -> &str {
+        &self.names[&h]
+    }
+
+    fn expr(&mut self, h: H) -> Result<String, Diagnostic> {
+        let ir = self.ir;
+        let a = &ir.arena;
+        let node = a.node(h).clone();
+        // Operations on constants that did not fold are invalid at compile time (x / 0, log(-1)).
+        let ops = a.operands(h);
+        if !ops.is_empty() && ops.iter().all(|o| a.as_const(*o).is_some()) && !matches!(node, Node::Sample { .. }) && !matches!(node, Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, _)) {
+            if !(matches!(node, Node::Binary(BinOp::Div | BinOp::Rem, _, _)) && a.ty(h) == Ty::I32) {
+                return Err(Diagnostic::error(Phase::Codegen, format!("`{}` has no finite value", a.display(h, Some(ir))))
+                    .at(a.span(h), "evaluates to infinity or NaN at compile time")
+                    .help("check for a division by zero, the log or square root of a negative number, or an overflow"));
+            }
+        }
+        Ok(match node {
+            Node::F32(b) => f32_lit(f32::from_bits(b)),
+            Node::I32(v) => i32_lit(v),
+            Node::Bool(v) => v.to_string(),
+            Node::Param(p) => {
+                self.uses_params = true;
+                let prm = &ir.params[p];
+                if matches!(prm.value, ConstValue::Bool(_)) { format!("(params.{} != 0u)", prm.name) } else { format!("params.{}", prm.name) }
+            }
+            Node::Input(i) => self.input(i),
+            Node::Channel(c) => self.load_map_channel(c)?,
+            Node::Sample { channel, resource, how, args } => self.sample(channel, resource, how, &args)?,
+            Node::Unary(UnOp::Neg, x) => format!("-{}", self.n(x)),
+            Node::Unary(UnOp::Not, x) => format!("!{}", self.n(x)),
+            Node::Binary(op, x, y) => format!("{} {} {}", self.n(x), op.symbol(), self.n(y)),
+            Node::Swizzle(x, c) => format!("{}.{}", self.n(x), c.iter().map(|i| COMP[*i as usize]).collect::<String>()),
+            Node::Call(f, args) => {
+                let v: Vec<String> = args.iter().map(|x| self.n(*x).to_string()).collect();
+                match f {
+                    Func::Linstep => format!("saturate(({} - {}) / ({} - {}))", v[2], v[0], v[1], v[0]),
+                    Func::ToF32 => format!("f32({})", v[0]),
+                    Func::ToI32 => format!("i32({})", v[0]),
+                    Func::Vec2 | Func::Vec3 | Func::Vec4 => format!("vec{}<f32>({})", v.len(), v.join(", ")),
+                    f => format!("{}({})", f.name(), v.join(", ")),
+                }
+            }
+        })
+    }
+
+    /// Map side: the value of a channel at this texel, read from the resource that carries it.
+    fn load_map_channel(&mut self, c: ChannelId) -> Result<String, Diagnostic> {
+        let res = self.reads.iter().copied().find(|&r| self.ir.resources[r].slot_of(c).is_some()).ok_or_else(|| internal("map channel not read"))?;
+        let (tex, layer, comp, enc) = self.locate(res, c, View::Base)?;
+        let key = format!("{tex}/{layer}");
+        let v = match self.fetches.get(&key) {
+            Some(v) => v.clone(),
+            None => {
+                let v = self.fresh("texel_");
+                self.line(&format!("let {v} = textureLoad({tex}, texel, {layer}i, 0i);"));
+                self.fetches.insert(key, v.clone());
+                v
+            }
+        };
+        Ok(Self::decode(&format!("{v}.{}", COMP[comp as usize]), enc))
+    }
+
+    fn sample(&mut self, ch: ChannelId, res: ResId, how: SampleFn, args: &[H]) -> Result<String, Diagnostic> {
+        let (tex, layer, comp, enc) = self.locate(res, ch, View::All)?;
+        let args: Vec<String> = args.iter().map(|a| self.n(*a).to_string()).collect();
+        let key = format!("{tex}/{layer}/{how:?}/{}", args.join(","));
+        let v = match self.fetches.get(&key) {
+            Some(v) => v.clone(),
+            None => {
+                let v = self.fresh("s");
+                let call = match how {
+                    SampleFn::Sample => {
+                        self.uses_sampler = true;
+                        format!("textureSample({tex}, smp, in_uv, {layer}i)")
+                    }
+                    SampleFn::SampleLod => {
+                        self.uses_sampler = true;
+                        format!("textureSampleLevel({tex}, smp, in_uv, {layer}i, {})", args[0])
+                    }
+                    SampleFn::Nearest => {
+                        format!("textureLoad({tex}, clamp(vec2<i32>(floor(in_uv * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)")
+                    }
+                    SampleFn::Fetch => {
+                        format!("textureLoad({tex}, clamp(in_base + vec2<i32>({}, {}), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)", args[0], args[1])
+                    }
+                };
+                self.line(&format!("let {v} = {call};"));
+                self.fetches.insert(key, v.clone());
+                v
+            }
+        };
+        Ok(Self::decode(&format!("{v}.{}", COMP[comp as usize]), enc))
+    }
+
+    /// Module-level declarations for what the body used.
+    fn declarations(&self, ir: &Ir) -> String {
+        let mut s = String::new();
+        s.push_str(FRAME_WGSL);
+        s.push_str("@group(0) @binding(0) var<uniform> frame: Frame;\n");
+        if self.uses_params {
+            s.push_str(&params_struct(ir));
+            s.push_str("@group(0) @binding(1) var<uniform> params: Params;\n");
+        }
+        if self.uses_sampler {
+            s.push_str("@group(0) @binding(2) var smp: sampler;\n");
+        }
+        for (i, (name, _)) in self.bindings.iter().enumerate() {
+            let _ = writeln!(s, "@group(1) @binding({i}) var t_{name}: texture_2d_array<f32>;");
+        }
+        s
+    }
+
+    fn graph_bindings(&self) -> Vec<Binding> {
+        self.bindings.iter().enumerate().map(|(i, (n, v))| Binding { binding: i as u32, texture: n.clone(), view: *v }).collect()
+    }
+}
+
+fn internal(msg: impl Into<String>) -> Diagnostic {
+    Diagnostic::error(Phase::Codegen, format!("internal compiler error: {}", msg.into())).note("please report this with the technique file")
+}
+
+/// The `Params` uniform: every runtime param as one 4-byte field, in declaration order.
+pub fn params_struct(ir: &Ir) -> String {
+    let mut s = String::from("struct Params {\n");
+    for (_, p) in ir.uniform_params() {
+        let ty = match p.value {
+            ConstValue::Float(_) => "f32",
+            ConstValue::Int(_) => "i32",
+            ConstValue::Bool(_) => "u32",
+        };
+        let _ = writeln!(s, "    {}: {ty},", p.name);
+    }
+    s.push_str("}\n");
+    s
+}
+
+const FULLSCREEN_VS: &str = "@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(p * 2.0 - 1.0, 0.0, 1.0);
+}
+";
+
+fn header(ir: &Ir, pass: &IrPass) -> String {
+    format!("// Generated by sshc from technique `{}`: pass `{}` ({}). Do not edit.\n\n", ir.technique, pass.name, pass.kind_name())
+}
+
+/// Groups of layers of one texture that one render pass writes together.
+fn layer_chunks(t: &Texture, limits: &Limits) -> Vec<Vec<u32>> {
+    let per = layers_per_subpass(t, limits);
+    (0..t.layers).collect::<Vec<_>>().chunks(per as usize).map(|c| c.to_vec()).collect()
+}
+
+fn out_struct(name: &str, n: usize) -> String {
+    let mut s = format!("struct {name} {{\n");
+    for i in 0..n {
+        let _ = writeln!(s, "    @location({i}) o{i}: vec4<f32>,");
+    }
+    s.push_str("}\n");
+    s
+}
+
+pub fn codegen(ir: &Ir, limits: &Limits) -> Result<Output, Diagnostics> {
+    let mut modules = Vec::new();
+    let mut scratch = Vec::new();
+    let mut diags = Diagnostics::default();
+    for (pi, pass) in ir.passes.iter().enumerate() {
+        if !pass.live {
+            continue;
+        }
+        let file = format!("{}.{}.wgsl", ir.technique, pass.name);
+        let r = match &pass.kind {
+            IrPassKind::Depth { .. } => depth(ir, pass),
+            IrPassKind::Map => map(ir, pass, limits),
+            IrPassKind::Filter { kernel } => filter(ir, pass, kernel, limits, &mut scratch),
+            IrPassKind::Mipmap { reduce } => mipmap(ir, pass, *reduce, limits),
+            IrPassKind::Shade { visibility } => shade(ir, pass, *visibility),
+            IrPassKind::SummedArea => Err(Diagnostic::error(Phase::Codegen, format!("pass `{}`: summed-area tables have no lookup in the language yet, so none can be read", pass.name))
+                .at(pass.span, "this pass's output is read")
+                .note("box lookups over summed-area tables land with convolution soft shadow maps")),
+            IrPassKind::Geometry { .. } => Err(Diagnostic::error(Phase::Codegen, format!("pass `{}`: Geometry passes are checked, but the runtime that generates primitives is not built yet", pass.name))
+                .at(pass.span, "cannot generate code for this pass yet")
+                .note("`sshc check` accepts the technique; compiling it needs the Geometry runtime (compute-generated primitives drawn indirectly)")),
+        };
+        match r {
+            Ok((source, steps)) => modules.push(Module { pass: pi, file, source, steps }),
+            Err(d) => diags.push(d),
+        }
+    }
+    diags.check()?;
+    validate_all(&mut modules)?;
+    Ok(Output { modules, scratch })
+}
+
+fn depth(ir: &Ir, pass: &IrPass) -> Result<(String, Vec<Step>), Diagnostic> {
+    let w = pass.writes.ok_or_else(|| internal("depth pass without output"))?;
+    let res = &ir.resources[w];
+    let slot = res.slots.first().ok_or_else(|| internal("depth resource without channel"))?;
+    let (t, layer, comp) = slot.place.ok_or_else(|| internal("unpacked"))?;
+    let tex = &res.textures[t];
+    let mut s = header(ir, pass);
+    s.push_str(FRAME_WGSL);
+    s.push_str("@group(0) @binding(0) var<uniform> frame: Frame;\n\n");
+    s.push_str(
+        "struct DepthVarying {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) view_distance: f32,
+}
+
+@vertex
+fn vs_depth(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> DepthVarying {
+    var out: DepthVarying;
+    let world = vec4<f32>(position, 1.0);
+    out.clip = frame.light_view_proj * world;
+    out.view_distance = -(frame.light_view * world).z;
+    return out;
+}
+
+@fragment
+fn fs_depth(in: DepthVarying) -> @location(0) vec4<f32> {
+    // linear depth in [0, 1] between the fitted near and far planes (Annen 6.2.1 uses linear z)
+    let z = (in.view_distance - frame.depth_range.x) * frame.depth_range.z;
+",
+    );
+    let mut comps = ["0.0".to_string(), "0.0".into(), "0.0".into(), "1.0".into()];
+    comps[comp as usize] = encode_expr("z", slot.encode);
+    let _ = write!(s, "    return vec4<f32>({});\n}}\n", comps.join(", "));
+    let step = Step {
+        vertex: Some("vs_depth".into()),
+        fragment: Some("fs_depth".into()),
+        compute: None,
+        draw: Draw::SceneFromLight,
+        reads: vec![],
+        writes: vec![Target { texture: tex.name.clone(), layer }],
+        params: false,
+        sampler: false,
+        cost: OpCount::default(),
+    };
+    Ok((s, vec![step]))
+}
+
+fn encode_expr(v: &str, e: Encode) -> String {
+    if e.is_identity() {
+        v.to_string()
+    } else {
+        format!("({v} - {}) * {}", f32_lit(e.bias as f32), f32_lit(e.scale as f32))
+    }
+}
+
+fn map(ir: &Ir, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step>), Diagnostic> {
+    let w = pass.writes.ok_or_else(|| internal("map pass without output"))?;
+    let res = &ir.resources[w];
+    let mut bodies = String::new();
+    let mut steps = Vec::new();
+    let mut decl_emitter = Emitter::new(ir, Side::Map, pass.reads.clone());
+    let mut structs = String::new();
+    for (ti, tex) in res.textures.iter().enumerate() {
+        for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
+            let entry = format!("fs_{}_{ci}", tex.name);
+            let out_name = format!("Out_{}_{ci}", tex.name);
+            structs.push_str(&out_struct(&out_name, chunk.len()));
+            let mut em = Emitter::new(ir, Side::Map, pass.reads.clone());
+            em.bindings = decl_emitter.bindings.clone();
+            let mut outs = Vec::new();
+            for (oi, &layer) in chunk.iter().enumerate() {
+                let mut comps = vec!["0.0f".to_string(); 4];
+                for slot in res.slots.iter().filter(|s| matches!(s.place, Some((t, l, _)) if t == ti && l == layer)) {
+                    let (_, _, comp) = slot.place.unwrap_or_default();
+                    let v = ir.channels[slot.channel].value.ok_or_else(|| internal("map channel without value"))?;
+                    let name = em.emit(v)?;
+                    comps[comp as usize] = encode_expr(&name, slot.encode);
+                }
+                outs.push(format!("    out.o{oi} = vec4<f32>({});", comps.join(", ")));
+            }
+            let _ = write!(
+                bodies,
+                "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let texel = vec2<i32>(pos.xy);\n{}    var out: {out_name};\n{}\n    return out;\n}}\n",
+                em.body,
+                outs.join("\n")
+            );
+            decl_emitter.bindings = em.bindings.clone();
+            decl_emitter.uses_params |= em.uses_params;
+            steps.push(Step {
+                vertex: Some("vs_fullscreen".into()),
+                fragment: Some(entry),
+                compute: None,
+                draw: Draw::FullScreen,
+                reads: vec![],
+                writes: chunk.iter().map(|&l| Target { texture: tex.name.clone(), layer: l }).collect(),
+                params: em.uses_params,
+                sampler: false,
+                cost: OpCount::default(),
+            });
+        }
+    }
+    let bindings = decl_emitter.graph_bindings();
+    for s in &mut steps {
+        s.reads = bindings.clone();
+        s.params = decl_emitter.uses_params;
+    }
+    let src = format!("{}{}\n{structs}\n{FULLSCREEN_VS}{bodies}", header(ir, pass), decl_emitter.declarations(ir));
+    Ok((src, steps))
+}
+
+/// Weights and combine rule of one axis of a separable kernel, or the 3x3 stencil.
+fn filter(ir: &Ir, pass: &IrPass, kernel: &IrKernel, limits: &Limits, scratch: &mut Vec<Scratch>) -> Result<(String, Vec<Step>), Diagnostic> {
+    let src = &ir.resources[pass.reads[0]];
+    let dst = &ir.resources[pass.writes.ok_or_else(|| internal("filter without output"))?];
+    let mut s = header(ir, pass);
+    s.push_str(FRAME_WGSL);
+    s.push_str("@group(0) @binding(0) var<uniform> frame: Frame;\n");
+    s.push_str("@group(1) @binding(0) var t_src: texture_2d_array<f32>;\n\n");
+    s.push_str(FULLSCREEN_VS);
+    let mut steps = Vec::new();
+    let size = kernel.size() as i32;
+    let r = (size - 1) / 2;
+    // out = ((f / scale_in + bias_in * W) - bias_out) * scale_out, W = sum of weights
+    let sum_w = if matches!(kernel, IrKernel::LoG) { 0.0 } else { 1.0 };
+    for (ti, tex) in dst.textures.iter().enumerate() {
+        let src_tex = &src.textures[ti];
+        let chunks = layer_chunks(tex, limits);
+        let passes: Vec<(&str, bool)> = if kernel.separable() { vec![("h", true), ("v", false)] } else { vec![("2d", false)] };
+        let tmp = format!("{}_tmp", tex.name);
+        if kernel.separable() {
+            scratch.push(Scratch { name: tmp.clone(), like: tex.name.clone() });
+        }
+        for (axis, horizontal) in passes {
+            for (ci, chunk) in chunks.iter().enumerate() {
+                let entry = format!("fs_{}_{axis}_{ci}", tex.name);
+                let out_name = format!("Out_{}_{axis}_{ci}", tex.name);
+                s.push_str(&out_struct(&out_name, chunk.len()));
+                let _ = write!(s, "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let texel = vec2<i32>(pos.xy);\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n");
+                for (oi, &layer) in chunk.iter().enumerate() {
+                    let taps: Vec<(i32, i32, f64)> = match kernel {
+                        IrKernel::LoG => (0..9).filter(|i| IrKernel::LOG_3X3[*i] != 0.0).map(|i| (i as i32 % 3 - 1, i as i32 / 3 - 1, IrKernel::LOG_3X3[i])).collect(),
+                        _ => {
+                            let w = kernel.weights_1d().unwrap_or_else(|| vec![1.0; size as usize]);
+                            (-r..=r).map(|i| if horizontal { (i, 0, w[(i + r) as usize]) } else { (0, i, w[(i + r) as usize]) }).collect()
+                        }
+                    };
+                    let _ = writeln!(s, "    // layer {layer}");
+                    for (k, (dx, dy, _)) in taps.iter().enumerate() {
+                        let _ = writeln!(s, "    let a{oi}_{k} = textureLoad(t_src, clamp(texel + vec2<i32>({dx}i, {dy}i), vec2<i32>(0i), last), {layer}i, 0i);");
+                    }
+                    let combined = match kernel {
+                        IrKernel::Max(_) => taps.iter().enumerate().map(|(k, _)| format!("a{oi}_{k}")).reduce(|a, b| format!("max({a}, {b})")).unwrap_or_default(),
+                        IrKernel::Min(_) => taps.iter().enumerate().map(|(k, _)| format!("a{oi}_{k}")).reduce(|a, b| format!("min({a}, {b})")).unwrap_or_default(),
+                        _ => taps.iter().enumerate().map(|(k, (_, _, w))| format!("a{oi}_{k} * {}", f32_lit(*w as f32))).collect::<Vec<_>>().join(" + "),
+                    };
+                    // Encodes differ only across a LoG (its output range is wider).
+                    let last_axis = !kernel.separable() || !horizontal;
+                    let mut value = combined;
+                    if last_axis {
+                        let mut fix = Vec::new();
+                        let mut any = false;
+                        for c in 0..4u32 {
+                            let enc_in = src.slots.iter().find(|sl| sl.place == Some((ti, layer, c))).map(|sl| sl.encode);
+                            let enc_out = dst.slots.iter().find(|sl| sl.place == Some((ti, layer, c))).map(|sl| sl.encode);
+                            match (enc_in, enc_out) {
+                                (Some(i), Some(o)) if i != o || sum_w != 1.0 => {
+                                    any = true;
+                                    fix.push((1.0 / i.scale * o.scale, (i.bias * sum_w - o.bias) * o.scale));
+                                }
+                                _ => fix.push((1.0, 0.0)),
+                            }
+                        }
+                        if any {
+                            let m: Vec<String> = fix.iter().map(|f| f32_lit(f.0 as f32)).collect();
+                            let b: Vec<String> = fix.iter().map(|f| f32_lit(f.1 as f32)).collect();
+                            value = format!("({value}) * vec4<f32>({}) + vec4<f32>({})", m.join(", "), b.join(", "));
+                        }
+                    }
+                    let _ = writeln!(s, "    out.o{oi} = {value};");
+                }
+                s.push_str("    return out;\n}\n");
+                let (read, write) = match (kernel.separable(), horizontal) {
+                    (true, true) => (src_tex.name.clone(), tmp.clone()),
+                    (true, false) => (tmp.clone(), tex.name.clone()),
+                    _ => (src_tex.name.clone(), tex.name.clone()),
+                };
+                steps.push(Step {
+                    vertex: Some("vs_fullscreen".into()),
+                    fragment: Some(entry),
+                    compute: None,
+                    draw: Draw::FullScreen,
+                    reads: vec![Binding { binding: 0, texture: read, view: View::Base }],
+                    writes: chunk.iter().map(|&l| Target { texture: write.clone(), layer: l }).collect(),
+                    params: false,
+                    sampler: false,
+                    cost: OpCount::default(),
+                });
+            }
+        }
+    }
+    Ok((s, steps))
+}
+
+fn mipmap(ir: &Ir, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Result<(String, Vec<Step>), Diagnostic> {
+    let dst = &ir.resources[pass.writes.ok_or_else(|| internal("mipmap without output"))?];
+    let mut s = header(ir, pass);
+    s.push_str(FRAME_WGSL);
+    s.push_str("@group(0) @binding(0) var<uniform> frame: Frame;\n");
+    s.push_str("// the level above the one being written\n@group(1) @binding(0) var t_src: texture_2d_array<f32>;\n\n");
+    s.push_str(FULLSCREEN_VS);
+    let mut steps = Vec::new();
+    for tex in &dst.textures {
+        for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
+            let entry = format!("fs_{}_{ci}", tex.name);
+            let out_name = format!("Out_{}_{ci}", tex.name);
+            s.push_str(&out_struct(&out_name, chunk.len()));
+            let _ = write!(s, "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let src = vec2<i32>(pos.xy) * 2i;\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n");
+            for (oi, &layer) in chunk.iter().enumerate() {
+                for (k, (dx, dy)) in [(0, 0), (1, 0), (0, 1), (1, 1)].iter().enumerate() {
+                    let _ = writeln!(s, "    let a{oi}_{k} = textureLoad(t_src, min(src + vec2<i32>({dx}i, {dy}i), last), {layer}i, 0i);");
+                }
+                let v = match reduce {
+                    Reduce::Mean => format!("(a{oi}_0 + a{oi}_1 + a{oi}_2 + a{oi}_3) * 0.25"),
+                    Reduce::Max => format!("max(max(a{oi}_0, a{oi}_1), max(a{oi}_2, a{oi}_3))"),
+                    Reduce::Min => format!("min(min(a{oi}_0, a{oi}_1), min(a{oi}_2, a{oi}_3))"),
+                };
+                let _ = writeln!(s, "    out.o{oi} = {v};");
+            }
+            s.push_str("    return out;\n}\n");
+            steps.push(Step {
+                vertex: Some("vs_fullscreen".into()),
+                fragment: Some(entry),
+                compute: None,
+                draw: Draw::MipLevels,
+                reads: vec![Binding { binding: 0, texture: tex.name.clone(), view: View::PreviousLevel }],
+                writes: chunk.iter().map(|&l| Target { texture: tex.name.clone(), layer: l }).collect(),
+                params: false,
+                sampler: false,
+                cost: OpCount::default(),
+            });
+        }
+    }
+    Ok((s, steps))
+}
+
+fn shade(ir: &Ir, pass: &IrPass, visibility: H) -> Result<(String, Vec<Step>), Diagnostic> {
+    let mut em = Emitter::new(ir, Side::Receiver, pass.reads.clone());
+    let v = em.emit(visibility)?;
+    let mut s = header(ir, pass);
+    s.push_str(&em.declarations(ir));
+    s.push_str(
+        "
+struct ShadeVarying {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+
+// visibility (r32float), shaded colour (rgba8unorm), world position (rgba32float) and
+// world normal (rgba16float): 32 bytes per sample, WebGPU's limit.
+struct ShadeOut {
+    @location(0) visibility: vec4<f32>,
+    @location(1) color: vec4<f32>,
+    @location(2) position: vec4<f32>,
+    @location(3) normal: vec4<f32>,
+}
+
+@vertex
+fn vs_shade(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> ShadeVarying {
+    var out: ShadeVarying;
+    out.clip = frame.camera_view_proj * vec4<f32>(position, 1.0);
+    out.world = position;
+    out.normal = normal;
+    return out;
+}
+
+@fragment
+fn fs_shade(in: ShadeVarying) -> ShadeOut {
+    let n = normalize(in.normal);
+    let world = vec4<f32>(in.world, 1.0);
+    let in_d_world = -(frame.light_view * world).z;
+    let in_d = (in_d_world - frame.depth_range.x) * frame.depth_range.z;
+    let light_clip = frame.light_view_proj * world;
+    let in_uv = light_clip.xy / light_clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+    let to_light = select(normalize(frame.light_position.xyz - in.world), normalize(frame.light_position.xyz), frame.light_position.w == 0.0);
+    let in_ndotl = dot(n, to_light);
+    // tan(acos(ndotl)), for slope-scaled bias
+    let in_slope = min(sqrt(max(1.0 - in_ndotl * in_ndotl, 0.0)) / max(abs(in_ndotl), 0.01), 100.0);
+    let texel_pos = in_uv * frame.shadow_size.xy - 0.5;
+    let in_tf = fract(texel_pos);
+    let in_base = vec2<i32>(floor(texel_pos));
+",
+    );
+    s.push_str(&em.body);
+    let _ = write!(
+        s,
+        "    // outputs stay finite and in [0, 1]
+    let raw = {v};
+    let vis = select(clamp(raw, 0.0, 1.0), 1.0, raw != raw);
+    let lambert = max(in_ndotl, 0.0);
+    var out: ShadeOut;
+    out.visibility = vec4<f32>(vis, 0.0, 0.0, 1.0);
+    out.color = vec4<f32>(vec3<f32>(0.12 + 0.88 * vis * lambert), 1.0);
+    out.position = vec4<f32>(in.world, 1.0);
+    out.normal = vec4<f32>(n, 0.0);
+    return out;
+}}
+"
+    );
+    let step = Step {
+        vertex: Some("vs_shade".into()),
+        fragment: Some("fs_shade".into()),
+        compute: None,
+        draw: Draw::SceneFromCamera,
+        reads: em.graph_bindings(),
+        writes: vec![],
+        params: em.uses_params,
+        sampler: em.uses_sampler,
+        cost: OpCount::default(),
+    };
+    Ok((s, vec![step]))
+}
+
+/// Parse and validate every module with naga, and count each entry point's operations.
+fn validate_all(modules: &mut [Module]) -> Result<(), Diagnostics> {
+    let mut diags = Diagnostics::default();
+    for m in modules.iter_mut() {
+        match crate::back::validate(&m.source) {
+            Ok(module) => {
+                for step in &mut m.steps {
+                    let entry = step.fragment.clone().or_else(|| step.compute.clone());
+                    if let Some(e) = entry {
+                        step.cost = crate::back::count_ops(&module, &e);
+                    }
+                }
+            }
+            Err(msg) => diags.push(internal(format!("generated WGSL for `{}` does not validate: {msg}", m.file))),
+        }
+    }
+    diags.check()
+}

@@ -1,0 +1,164 @@
+//! Phase `emit`: the pass graph (the runtime crate's versioned schema), the WGSL files and
+//! a cost report (bytes per texel of every resource; fetches and operations per invocation
+//! of every step, counted on the naga IR).
+
+use crate::back::wgsl::{Output, texture_format};
+use crate::front::ast::{ConstValue, LightKind, ScalarTy};
+use crate::ir::*;
+use crate::pack::mip_source;
+use sshc_runtime::graph::{self, ChannelDecl, Extent, LightModel, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl};
+use std::fmt::Write as _;
+
+fn light(l: LightKind) -> LightModel {
+    match l {
+        LightKind::Any => LightModel::Any,
+        LightKind::Point => LightModel::Point,
+        LightKind::Directional => LightModel::Directional,
+        LightKind::Sphere => LightModel::Sphere,
+        LightKind::Disk => LightModel::Disk,
+        LightKind::Rectangle => LightModel::Rectangle,
+        LightKind::Segment { samples } => LightModel::Segment { samples },
+        LightKind::DistantDisk => LightModel::DistantDisk,
+    }
+}
+
+fn kind(p: &IrPass) -> graph::PassKind {
+    match p.kind {
+        IrPassKind::Depth { .. } => graph::PassKind::Depth,
+        IrPassKind::Map => graph::PassKind::Map,
+        IrPassKind::Filter { .. } => graph::PassKind::Filter,
+        IrPassKind::Mipmap { .. } => graph::PassKind::Mipmap,
+        IrPassKind::SummedArea => graph::PassKind::SummedArea,
+        IrPassKind::Geometry { .. } => graph::PassKind::Geometry,
+        IrPassKind::Shade { .. } => graph::PassKind::Shade,
+    }
+}
+
+pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
+    let mut params = Vec::new();
+    let mut offset = 0u32;
+    for p in &ir.params {
+        let ty = match p.ty {
+            ScalarTy::F32 => ParamType::F32,
+            ScalarTy::I32 => ParamType::I32,
+            ScalarTy::Bool => ParamType::Bool,
+        };
+        let value = match p.value {
+            ConstValue::Bool(b) => b as i32 as f64,
+            v => v.as_f64(),
+        };
+        let off = if p.uniform {
+            offset += 4;
+            Some(offset - 4)
+        } else {
+            None
+        };
+        params.push(ParamDecl { name: p.name.clone(), ty, value, range: p.range, offset: off, doc: p.doc.clone() });
+    }
+    let params_size = offset.div_ceil(16) * 16;
+
+    let mut textures: Vec<TextureDecl> = Vec::new();
+    for (ri, r) in ir.resources.iter().enumerate().filter(|(_, r)| r.live) {
+        let mips = mip_source(ir, ri).is_some();
+        for (ti, t) in r.textures.iter().enumerate() {
+            if let Some(existing) = textures.iter_mut().find(|d| d.name == t.name) {
+                existing.mips |= mips;
+                continue;
+            }
+            let channels = r
+                .slots
+                .iter()
+                .filter(|s| matches!(s.place, Some((i, _, _)) if i == ti))
+                .map(|s| {
+                    let (_, layer, component) = s.place.unwrap_or_default();
+                    let range = s.range.map(|r| (r.lo, r.hi)).unwrap_or((f64::NAN, f64::NAN));
+                    ChannelDecl { name: ir.channels[s.channel].name.clone(), layer, component, bias: s.encode.bias, scale: s.encode.scale, range }
+                })
+                .collect();
+            textures.push(TextureDecl { name: t.name.clone(), format: texture_format(t), layers: t.layers, extent: Extent::ShadowMap, mips, transient: false, channels });
+        }
+    }
+    for s in &out.scratch {
+        if let Some(like) = textures.iter().find(|t| t.name == s.like).cloned() {
+            if !textures.iter().any(|t| t.name == s.name) {
+                textures.push(TextureDecl { name: s.name.clone(), mips: false, transient: true, channels: vec![], ..like });
+            }
+        }
+    }
+    let passes = out
+        .modules
+        .iter()
+        .map(|m| PassDecl { name: ir.passes[m.pass].name.clone(), kind: kind(&ir.passes[m.pass]), shader: m.file.clone(), steps: m.steps.clone() })
+        .collect();
+    PassGraph {
+        version: graph::SCHEMA_VERSION,
+        technique: ir.technique.clone(),
+        lights: ir.lights.iter().map(|l| light(*l)).collect(),
+        params,
+        params_size,
+        textures,
+        passes,
+        removed: ir.removed.clone(),
+    }
+}
+
+/// Cost of a compiled technique.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cost {
+    /// (texture, format, layers, bytes per shadow-map texel including a mip chain's 4/3).
+    pub textures: Vec<(String, graph::Format, u32, f64)>,
+    /// (pass, kind, steps, fetches and ops summed over one invocation of each step).
+    pub passes: Vec<(String, graph::PassKind, usize, OpCount)>,
+    /// Per shaded pixel.
+    pub shade: OpCount,
+}
+
+impl Cost {
+    pub fn of(g: &PassGraph) -> Cost {
+        let textures = g
+            .textures
+            .iter()
+            .map(|t| {
+                let base = (t.format.bytes_per_texel() * t.layers) as f64;
+                (t.name.clone(), t.format, t.layers, if t.mips { base * 4.0 / 3.0 } else { base })
+            })
+            .collect();
+        let mut shade = OpCount::default();
+        let passes = g
+            .passes
+            .iter()
+            .map(|p| {
+                let mut c = OpCount::default();
+                for s in &p.steps {
+                    c.fetches += s.cost.fetches;
+                    c.ops += s.cost.ops;
+                }
+                if p.kind == graph::PassKind::Shade {
+                    shade = c;
+                }
+                (p.name.clone(), p.kind, p.steps.len(), c)
+            })
+            .collect();
+        Cost { textures, passes, shade }
+    }
+
+    /// Bytes per shadow-map texel of all persistent and transient textures.
+    pub fn bytes_per_texel(&self) -> f64 {
+        self.textures.iter().map(|t| t.3).sum()
+    }
+
+    pub fn markdown(&self, technique: &str) -> String {
+        let mut s = format!("# Cost of `{technique}`\n\nCounted on the naga IR of the generated WGSL (straight-line code: each counted operation runs once per invocation).\n\n## Memory\n\n| texture | format | layers | bytes per shadow-map texel |\n|---|---|---|---|\n");
+        for (n, f, l, b) in &self.textures {
+            let _ = writeln!(s, "| {n} | {f:?} | {l} | {b:.2} |");
+        }
+        let _ = writeln!(s, "| **total** | | | **{:.2}** |\n", self.bytes_per_texel());
+        s.push_str("## Work\n\n| pass | kind | steps | texture fetches per invocation | operations per invocation |\n|---|---|---|---|---|\n");
+        for (n, k, steps, c) in &self.passes {
+            let _ = writeln!(s, "| {n} | {k:?} | {steps} | {} | {} |", c.fetches, c.ops);
+        }
+        let _ = writeln!(s, "\nPer shaded pixel: {} texture fetches, {} arithmetic operations.", self.shade.fetches, self.shade.ops);
+        s.push_str("Map, Filter and Mipmap passes run once per shadow-map texel and step (Mipmap steps once per level, on a quarter of the texels of the level above).\n");
+        s
+    }
+}

@@ -1,0 +1,88 @@
+//! `sshc explain`: the compiled technique in plain words: parameters, passes in order,
+//! channels and how they are packed, cost, and what was removed.
+
+use crate::Compiled;
+use crate::ir::{IrPassKind, Origin, short};
+use std::fmt::Write as _;
+
+pub fn explain(c: &Compiled) -> String {
+    let ir = &c.ir;
+    let g = &c.graph;
+    let mut s = String::new();
+    let _ = writeln!(s, "Technique `{}`", ir.technique);
+    if !ir.lights.is_empty() {
+        let l: Vec<String> = ir.lights.iter().map(|l| format!("{l:?}")).collect();
+        let _ = writeln!(s, "Assumes a light of kind: {}", l.join(" or "));
+    }
+    if !ir.params.is_empty() {
+        let _ = writeln!(s, "\nParameters:");
+        for p in &ir.params {
+            let how = if p.uniform { "runtime uniform" } else { "fixed at compile time" };
+            let range = p.range.map(|(a, b)| format!(", range [{}, {}]", short(a), short(b))).unwrap_or_default();
+            let doc = p.doc.as_deref().map(|d| format!(" - {d}")).unwrap_or_default();
+            let _ = writeln!(s, "  {} = {} ({how}{range}){doc}", p.name, p.value);
+        }
+    }
+    let _ = writeln!(s, "\nPasses, in execution order:");
+    for (i, p) in ir.passes.iter().filter(|p| p.live).enumerate() {
+        let reads: Vec<&str> = p.reads.iter().map(|r| ir.resources[*r].name.as_str()).collect();
+        let what = match &p.kind {
+            IrPassKind::Depth { .. } => "rasterises the scene from the light and stores linear depth".to_string(),
+            IrPassKind::Map => "computes channels per shadow-map texel".to_string(),
+            IrPassKind::Filter { kernel } => format!("filters with {kernel:?}{}", if kernel.separable() { " (separable: horizontal then vertical)" } else { "" }),
+            IrPassKind::Mipmap { reduce } => format!("builds a {reduce:?} mip chain in place"),
+            IrPassKind::SummedArea => "builds a summed-area table".to_string(),
+            IrPassKind::Geometry { primitive, .. } => format!("generates {primitive:?} at silhouettes"),
+            IrPassKind::Shade { .. } => "evaluates visibility per camera pixel".to_string(),
+        };
+        let steps = g.passes.iter().find(|gp| gp.name == p.name).map(|gp| gp.steps.len()).unwrap_or(0);
+        let _ = write!(s, "  {}. {} ({}): {what}", i + 1, p.name, p.kind_name());
+        if !reads.is_empty() {
+            let _ = write!(s, "; reads {}", reads.join(", "));
+        }
+        if let Some(w) = p.writes {
+            let _ = write!(s, "; writes {}", ir.resources[w].name);
+        }
+        let _ = writeln!(s, "; {steps} GPU step(s)");
+    }
+    if let Some(p) = ir.shade_pass() {
+        if let IrPassKind::Shade { visibility } = p.kind {
+            let text = ir.arena.display(visibility, Some(ir));
+            let shown = if text.len() > 400 { format!("{}... ({} characters)", &text[..text.char_indices().nth(400).map(|x| x.0).unwrap_or(text.len())], text.len()) } else { text };
+            let _ = writeln!(s, "\nVisibility after lowering and constant folding:\n  {shown}");
+        }
+    }
+    let _ = writeln!(s, "\nChannels and packing:");
+    for r in ir.resources.iter().filter(|r| r.live) {
+        let _ = writeln!(s, "  {}:", r.name);
+        for sl in &r.slots {
+            let ch = &ir.channels[sl.channel];
+            let origin = match ch.origin {
+                Origin::Depth => "depth".to_string(),
+                Origin::Declared => "declared".to_string(),
+                Origin::Basis { expansion, term, k } => format!("basis term {term} of `{}` at k = {k}", ir.expansions[expansion].name),
+            };
+            let range = sl.range.map(|r| r.to_string()).unwrap_or_default();
+            let place = sl.place.map(|(t, l, c)| format!("{} layer {l} .{}", r.textures[t].name, ['r', 'g', 'b', 'a'][c as usize])).unwrap_or_default();
+            let enc = if sl.encode.is_identity() { String::new() } else { format!(", stored as (v - {}) * {}", short(sl.encode.bias), short(sl.encode.scale)) };
+            let _ = writeln!(s, "    {} ({origin}): {} range {range}{enc} -> {place}", ch.name, sl.precision.name());
+        }
+    }
+    let _ = writeln!(s, "\nTextures (bytes per shadow-map texel, mip chains count 4/3):");
+    for (n, f, l, b) in &c.cost.textures {
+        let _ = writeln!(s, "  {n}: {f:?} x {l} layer(s) = {b:.2} B");
+    }
+    let _ = writeln!(s, "  total: {:.2} B per shadow-map texel", c.cost.bytes_per_texel());
+    let _ = writeln!(s, "\nWork per invocation (naga IR counts):");
+    for (n, k, steps, oc) in &c.cost.passes {
+        let _ = writeln!(s, "  {n} ({k:?}, {steps} step(s)): {} fetches, {} operations", oc.fetches, oc.ops);
+    }
+    let _ = writeln!(s, "  per shaded pixel: {} fetches, {} operations", c.cost.shade.fetches, c.cost.shade.ops);
+    if !ir.removed.is_empty() {
+        let _ = writeln!(s, "\nRemoved:");
+        for r in &ir.removed {
+            let _ = writeln!(s, "  {r}");
+        }
+    }
+    s
+}

@@ -1,0 +1,307 @@
+//! The technique as written: what the parser produces and every later phase reads.
+//! Each node keeps the span it was read from.
+
+use crate::front::expr::Expr;
+use crate::span::{Span, Spanned};
+
+pub type Name = Spanned<String>;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Technique {
+    pub name: Name,
+    pub title: Option<String>,
+    pub paper: Option<String>,
+    /// The light models the technique is meant for (empty: any).
+    pub lights: Vec<Spanned<LightKind>>,
+    pub params: Vec<Param>,
+    pub channels: Vec<Channel>,
+    pub expansions: Vec<Expansion>,
+    pub passes: Vec<Pass>,
+    pub span: Span,
+}
+
+/// The light model a technique assumes (DESIGN.md section 4, "light" column).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightKind {
+    Any,
+    Point,
+    Directional,
+    Sphere,
+    Disk,
+    Rectangle,
+    /// A linear light sampled at `samples` points (Heidrich et al. 2000).
+    Segment { samples: u32 },
+    /// A distant disk given by its angular diameter (Lawlor 2006).
+    DistantDisk,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ScalarTy {
+    F32,
+    I32,
+    Bool,
+}
+
+impl ScalarTy {
+    pub fn name(self) -> &'static str {
+        match self {
+            ScalarTy::F32 => "f32",
+            ScalarTy::I32 => "i32",
+            ScalarTy::Bool => "bool",
+        }
+    }
+}
+
+/// A parameter value known at compile time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ConstValue {
+    Int(i64),
+    Float(f64),
+    Bool(bool),
+}
+
+impl ConstValue {
+    pub fn as_f64(self) -> f64 {
+        match self {
+            ConstValue::Int(v) => v as f64,
+            ConstValue::Float(v) => v,
+            ConstValue::Bool(b) => b as i64 as f64,
+        }
+    }
+}
+
+impl std::fmt::Display for ConstValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ConstValue::Int(v) => write!(f, "{v}"),
+            ConstValue::Float(v) => write!(f, "{}", crate::front::expr::fmt_float(*v)),
+            ConstValue::Bool(v) => write!(f, "{v}"),
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Param {
+    pub name: Name,
+    pub ty: Spanned<ScalarTy>,
+    pub default: Spanned<ConstValue>,
+    /// Inclusive range `(lo, hi)`.
+    pub range: Option<(Spanned<f64>, Spanned<f64>)>,
+    /// Fixed at compile time (substituted, series unrolled) or a runtime uniform.
+    pub fixed: bool,
+    pub doc: Option<String>,
+    pub span: Span,
+}
+
+/// Storage precision of a channel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Precision {
+    Unorm8,
+    Unorm16,
+    F16,
+    F32,
+}
+
+impl Precision {
+    pub const ALL: [Precision; 4] = [Precision::Unorm8, Precision::Unorm16, Precision::F16, Precision::F32];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::Unorm8 => "Unorm8",
+            Precision::Unorm16 => "Unorm16",
+            Precision::F16 => "F16",
+            Precision::F32 => "F32",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Precision> {
+        Some(match s.to_ascii_lowercase().as_str() {
+            "unorm8" => Precision::Unorm8,
+            "unorm16" => Precision::Unorm16,
+            "f16" => Precision::F16,
+            "f32" => Precision::F32,
+            _ => return None,
+        })
+    }
+
+    /// Bytes of one channel.
+    pub fn bytes(self) -> u32 {
+        match self {
+            Precision::Unorm8 => 1,
+            Precision::Unorm16 | Precision::F16 => 2,
+            Precision::F32 => 4,
+        }
+    }
+
+    pub fn is_unorm(self) -> bool {
+        matches!(self, Precision::Unorm8 | Precision::Unorm16)
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    pub name: Name,
+    pub precision: Spanned<Precision>,
+    /// The per-texel value (map side). `None`: the channel is written by a Depth pass.
+    pub value: Option<Expr>,
+    pub doc: Option<String>,
+    pub span: Span,
+}
+
+/// A basis expansion `f(d, z) ~ constant + sum_k sum_terms coeff(d) * basis(z)`, written as data.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Expansion {
+    pub name: Name,
+    pub index: Name,
+    pub from: Expr,
+    pub to: Expr,
+    /// `let` bindings, in order; each may use the index, params and earlier lets.
+    pub lets: Vec<(Name, Expr)>,
+    pub constant: Expr,
+    pub terms: Vec<Term>,
+    /// Precision of the basis channels.
+    pub precision: Spanned<Precision>,
+    pub doc: Option<String>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Term {
+    /// Receiver side: may use `d` and other receiver inputs, params, the index and lets.
+    pub coeff: Expr,
+    /// Map side: may use channels of the map (such as `z`), params, the index and lets.
+    pub basis: Expr,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pass {
+    pub name: Name,
+    pub kind: PassKind,
+    /// Span of the pass kind's name (`Filter` in `Filter(...)`).
+    pub kind_span: Span,
+    pub span: Span,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightView {
+    /// The light's centre (a hard shadow map under an area light uses it).
+    Center,
+    /// One view per light sample (linear lights).
+    PerSample,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reduce {
+    Mean,
+    Max,
+    Min,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Primitive {
+    /// Wyman & Hansen: cones at silhouette vertices and sheets along silhouette edges.
+    ConesAndSheets,
+    /// Lawlor: silhouette ribbons.
+    Ribbons,
+    /// Heidrich et al.: skins between depth discontinuities, warped into another view.
+    Skins,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Resolve {
+    KeepMin,
+    KeepMax,
+    Add,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Kernel {
+    Box { size: Expr },
+    Gaussian { size: Expr, sigma: Expr },
+    Max { size: Expr },
+    Min { size: Expr },
+    /// 3x3 Laplacian of Gaussian.
+    LoG,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum PassKind {
+    Depth {
+        writes: Name,
+        channel: Name,
+        view: LightView,
+    },
+    Map {
+        reads: Vec<Name>,
+        writes: Name,
+        /// Channels and expansions (all of an expansion's basis channels) to compute.
+        channels: Vec<Name>,
+    },
+    Filter {
+        reads: Name,
+        writes: Name,
+        kernel: Spanned<Kernel>,
+    },
+    Mipmap {
+        reads: Name,
+        writes: Name,
+        reduce: Reduce,
+    },
+    SummedArea {
+        reads: Name,
+        writes: Name,
+    },
+    Geometry {
+        reads: Vec<Name>,
+        writes: Name,
+        primitive: Primitive,
+        channels: Vec<Name>,
+        resolve: Resolve,
+        view: LightView,
+    },
+    Shade {
+        reads: Vec<Name>,
+        visibility: Expr,
+    },
+}
+
+impl PassKind {
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            PassKind::Depth { .. } => "Depth",
+            PassKind::Map { .. } => "Map",
+            PassKind::Filter { .. } => "Filter",
+            PassKind::Mipmap { .. } => "Mipmap",
+            PassKind::SummedArea { .. } => "SummedArea",
+            PassKind::Geometry { .. } => "Geometry",
+            PassKind::Shade { .. } => "Shade",
+        }
+    }
+
+    /// Resources this pass reads.
+    pub fn reads(&self) -> Vec<&Name> {
+        match self {
+            PassKind::Depth { .. } => vec![],
+            PassKind::Map { reads, .. } | PassKind::Geometry { reads, .. } | PassKind::Shade { reads, .. } => {
+                reads.iter().collect()
+            }
+            PassKind::Filter { reads, .. } | PassKind::Mipmap { reads, .. } | PassKind::SummedArea { reads, .. } => {
+                vec![reads]
+            }
+        }
+    }
+
+    /// The resource this pass writes (`None` for Shade, which writes the camera outputs).
+    pub fn writes(&self) -> Option<&Name> {
+        match self {
+            PassKind::Depth { writes, .. }
+            | PassKind::Map { writes, .. }
+            | PassKind::Filter { writes, .. }
+            | PassKind::Mipmap { writes, .. }
+            | PassKind::SummedArea { writes, .. }
+            | PassKind::Geometry { writes, .. } => Some(writes),
+            PassKind::Shade { .. } => None,
+        }
+    }
+}

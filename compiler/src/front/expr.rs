@@ -1,0 +1,581 @@
+//! The expression language inside technique strings (DESIGN.md section 2): small, pure,
+//! typed (f32, i32, bool, vec2..vec4), with `let` bindings, calls of WGSL math built-ins and
+//! of sampling functions, and `sum(k in a..=b, expr)` for series. No loops, no recursion.
+//!
+//! Spans are mapped from positions inside the string to positions in the file as the
+//! expression is read, so every later diagnostic points into the technique file.
+
+use crate::diag::{Diagnostic, Phase};
+use crate::front::ron::StrLit;
+use crate::span::Span;
+use logos::Logos;
+use std::fmt;
+
+const MAX_DEPTH: usize = 64;
+
+#[derive(Logos, Clone, Copy, Debug, PartialEq)]
+#[logos(skip r"[ \t\r\n\f]+")]
+#[logos(skip(r"//[^\n]*", allow_greedy = true))]
+enum Tok {
+    #[regex(r"[0-9]+\.[0-9]+([eE][+-]?[0-9]+)?|[0-9]+[eE][+-]?[0-9]+")]
+    Float,
+    #[regex(r"[0-9]+")]
+    Int,
+    #[regex(r"[A-Za-z_][A-Za-z0-9_]*")]
+    Ident,
+    #[token("(")]
+    LParen,
+    #[token(")")]
+    RParen,
+    #[token(",")]
+    Comma,
+    #[token(";")]
+    Semi,
+    #[token(".")]
+    Dot,
+    #[token("..=")]
+    DotDotEq,
+    #[token("=")]
+    Assign,
+    #[token("+")]
+    Plus,
+    #[token("-")]
+    Minus,
+    #[token("*")]
+    Star,
+    #[token("/")]
+    Slash,
+    #[token("%")]
+    Percent,
+    #[token("<")]
+    Lt,
+    #[token("<=")]
+    Le,
+    #[token(">")]
+    Gt,
+    #[token(">=")]
+    Ge,
+    #[token("==")]
+    EqEq,
+    #[token("!=")]
+    Ne,
+    #[token("&&")]
+    AndAnd,
+    #[token("||")]
+    OrOr,
+    #[token("!")]
+    Bang,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum UnOp {
+    Neg,
+    Not,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BinOp {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Rem,
+    Lt,
+    Le,
+    Gt,
+    Ge,
+    Eq,
+    Ne,
+    And,
+    Or,
+}
+
+impl BinOp {
+    pub fn symbol(self) -> &'static str {
+        match self {
+            BinOp::Add => "+",
+            BinOp::Sub => "-",
+            BinOp::Mul => "*",
+            BinOp::Div => "/",
+            BinOp::Rem => "%",
+            BinOp::Lt => "<",
+            BinOp::Le => "<=",
+            BinOp::Gt => ">",
+            BinOp::Ge => ">=",
+            BinOp::Eq => "==",
+            BinOp::Ne => "!=",
+            BinOp::And => "&&",
+            BinOp::Or => "||",
+        }
+    }
+
+    pub fn is_comparison(self) -> bool {
+        matches!(self, BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne)
+    }
+
+    pub fn is_logic(self) -> bool {
+        matches!(self, BinOp::And | BinOp::Or)
+    }
+
+    fn precedence(self) -> u8 {
+        match self {
+            BinOp::Or => 1,
+            BinOp::And => 2,
+            BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne => 3,
+            BinOp::Add | BinOp::Sub => 4,
+            BinOp::Mul | BinOp::Div | BinOp::Rem => 5,
+        }
+    }
+}
+
+/// A literal as written: integer literals are abstract (they become f32 or i32 by context,
+/// as in WGSL), float literals are f32.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Literal {
+    Int(i64),
+    Float(f64),
+    Bool(bool),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum ExprKind {
+    Lit(Literal),
+    Name(String),
+    Unary(UnOp, Box<Expr>),
+    Binary(BinOp, Box<Expr>, Box<Expr>),
+    /// `name(args)`; the span of the name is `name_span`.
+    Call {
+        name: String,
+        name_span: Span,
+        args: Vec<Expr>,
+    },
+    /// `base.x`, `base.xy`, ...
+    Member(Box<Expr>, String),
+    /// `let name = value; body`
+    Let {
+        name: String,
+        name_span: Span,
+        value: Box<Expr>,
+        body: Box<Expr>,
+    },
+    /// `sum(var in from..=to, body)`
+    Sum {
+        var: String,
+        var_span: Span,
+        from: Box<Expr>,
+        to: Box<Expr>,
+        body: Box<Expr>,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Expr {
+    pub kind: ExprKind,
+    pub span: Span,
+}
+
+impl Expr {
+    pub fn new(kind: ExprKind, span: Span) -> Expr {
+        Expr { kind, span }
+    }
+
+    /// Visit this expression and all sub-expressions, parents first.
+    pub fn walk<'a>(&'a self, f: &mut dyn FnMut(&'a Expr)) {
+        f(self);
+        match &self.kind {
+            ExprKind::Lit(_) | ExprKind::Name(_) => {}
+            ExprKind::Unary(_, a) | ExprKind::Member(a, _) => a.walk(f),
+            ExprKind::Binary(_, a, b) => {
+                a.walk(f);
+                b.walk(f);
+            }
+            ExprKind::Call { args, .. } => args.iter().for_each(|a| a.walk(f)),
+            ExprKind::Let { value, body, .. } => {
+                value.walk(f);
+                body.walk(f);
+            }
+            ExprKind::Sum { from, to, body, .. } => {
+                from.walk(f);
+                to.walk(f);
+                body.walk(f);
+            }
+        }
+    }
+
+    /// Number of nodes, used to bound unrolled series.
+    pub fn size(&self) -> usize {
+        let mut n = 0;
+        self.walk(&mut |_| n += 1);
+        n
+    }
+}
+
+impl fmt::Display for Expr {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.kind {
+            ExprKind::Lit(Literal::Int(v)) => write!(f, "{v}"),
+            ExprKind::Lit(Literal::Float(v)) => write!(f, "{}", fmt_float(*v)),
+            ExprKind::Lit(Literal::Bool(v)) => write!(f, "{v}"),
+            ExprKind::Name(n) => write!(f, "{n}"),
+            ExprKind::Unary(UnOp::Neg, a) => write!(f, "-({a})"),
+            ExprKind::Unary(UnOp::Not, a) => write!(f, "!({a})"),
+            ExprKind::Binary(op, a, b) => write!(f, "({a} {} {b})", op.symbol()),
+            ExprKind::Call { name, args, .. } => {
+                write!(f, "{name}(")?;
+                for (i, a) in args.iter().enumerate() {
+                    if i > 0 {
+                        write!(f, ", ")?;
+                    }
+                    write!(f, "{a}")?;
+                }
+                write!(f, ")")
+            }
+            ExprKind::Member(a, m) => write!(f, "{a}.{m}"),
+            ExprKind::Let { name, value, body, .. } => write!(f, "let {name} = {value}; {body}"),
+            ExprKind::Sum { var, from, to, body, .. } => write!(f, "sum({var} in {from}..={to}, {body})"),
+        }
+    }
+}
+
+/// Print a float so that it reads back as a float (always with a `.` or exponent).
+pub fn fmt_float(v: f64) -> String {
+    if v.is_finite() && v == v.trunc() && v.abs() < 1e15 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:?}")
+    }
+}
+
+struct Parser<'a> {
+    text: &'a str,
+    toks: Vec<(Tok, Span)>,
+    pos: usize,
+    lit: &'a StrLit,
+    depth: usize,
+}
+
+/// Parse an expression string read from the technique file.
+pub fn parse(lit: &StrLit) -> Result<Expr, Diagnostic> {
+    let text = lit.text.as_str();
+    let mut toks = Vec::new();
+    let mut lex = Tok::lexer(text);
+    while let Some(t) = lex.next() {
+        let span = Span::new(lex.span().start, lex.span().end);
+        match t {
+            Ok(t) => toks.push((t, span)),
+            Err(()) => {
+                return Err(Diagnostic::error(
+                    Phase::Syntax,
+                    format!("unexpected character `{}` in expression", &text[lex.span()].escape_debug()),
+                )
+                .at(lit.map_span(span), "not part of the expression language")
+                .help("expressions use numbers, names, `+ - * / %`, comparisons, `&& || !`, calls `f(x)`, `let x = e;` and `sum(k in a..=b, e)`"));
+            }
+        }
+    }
+    let mut p = Parser { text, toks, pos: 0, lit, depth: 0 };
+    if p.toks.is_empty() {
+        return Err(Diagnostic::error(Phase::Syntax, "empty expression")
+            .at(lit.map_span(Span::new(0, text.len())), "an expression is needed here"));
+    }
+    let e = p.block()?;
+    if let Some(&(_, span)) = p.toks.get(p.pos) {
+        return Err(Diagnostic::error(
+            Phase::Syntax,
+            format!("unexpected `{}` after the end of the expression", &text[span.range()]),
+        )
+        .at(lit.map_span(span), "expected an operator or the end of the expression"));
+    }
+    Ok(e)
+}
+
+impl Parser<'_> {
+    fn map(&self, s: Span) -> Span {
+        self.lit.map_span(s)
+    }
+
+    fn peek(&self) -> Option<Tok> {
+        self.toks.get(self.pos).map(|t| t.0)
+    }
+
+    fn peek_is_ident(&self, word: &str) -> bool {
+        matches!(self.toks.get(self.pos), Some((Tok::Ident, s)) if &self.text[s.range()] == word)
+    }
+
+    fn end_span(&self) -> Span {
+        Span::new(self.text.len(), self.text.len())
+    }
+
+    fn bump(&mut self) -> Option<(Tok, Span)> {
+        let t = self.toks.get(self.pos).copied();
+        self.pos += 1;
+        t
+    }
+
+    fn err_here(&self, what: &str) -> Diagnostic {
+        match self.toks.get(self.pos) {
+            Some(&(_, span)) => Diagnostic::error(
+                Phase::Syntax,
+                format!("expected {what}, found `{}`", &self.text[span.range()]),
+            )
+            .at(self.map(span), format!("expected {what}")),
+            None => Diagnostic::error(Phase::Syntax, format!("expected {what}, found the end of the expression"))
+                .at(self.map(self.end_span()), format!("expected {what}")),
+        }
+    }
+
+    fn expect(&mut self, t: Tok, what: &str) -> Result<Span, Diagnostic> {
+        if self.peek() == Some(t) {
+            Ok(self.bump().map(|x| x.1).unwrap_or_default())
+        } else {
+            Err(self.err_here(what))
+        }
+    }
+
+    fn enter(&mut self) -> Result<(), Diagnostic> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            let span = self.toks.get(self.pos).map(|t| t.1).unwrap_or(self.end_span());
+            return Err(Diagnostic::error(Phase::Syntax, format!("expression nests deeper than {MAX_DEPTH} levels"))
+                .at(self.map(span), "too deep")
+                .help("split it with `let` bindings"));
+        }
+        Ok(())
+    }
+
+    /// `let x = e; ... result`
+    fn block(&mut self) -> Result<Expr, Diagnostic> {
+        self.enter()?;
+        let r = if self.peek_is_ident("let") {
+            let (_, let_span) = self.bump().unwrap_or((Tok::Ident, Span::UNDEFINED));
+            let name_span = self.expect(Tok::Ident, "a name after `let`")?;
+            let name = self.text[name_span.range()].to_string();
+            self.expect(Tok::Assign, "`=`")?;
+            let value = self.expr(0)?;
+            self.expect(Tok::Semi, "`;` after a `let` binding")?;
+            let body = self.block()?;
+            let span = self.map(let_span).join(body.span);
+            Ok(Expr::new(
+                ExprKind::Let {
+                    name,
+                    name_span: self.map(name_span),
+                    value: Box::new(value),
+                    body: Box::new(body),
+                },
+                span,
+            ))
+        } else {
+            self.expr(0)
+        };
+        self.depth -= 1;
+        r
+    }
+
+    fn binop(&self) -> Option<BinOp> {
+        Some(match self.peek()? {
+            Tok::Plus => BinOp::Add,
+            Tok::Minus => BinOp::Sub,
+            Tok::Star => BinOp::Mul,
+            Tok::Slash => BinOp::Div,
+            Tok::Percent => BinOp::Rem,
+            Tok::Lt => BinOp::Lt,
+            Tok::Le => BinOp::Le,
+            Tok::Gt => BinOp::Gt,
+            Tok::Ge => BinOp::Ge,
+            Tok::EqEq => BinOp::Eq,
+            Tok::Ne => BinOp::Ne,
+            Tok::AndAnd => BinOp::And,
+            Tok::OrOr => BinOp::Or,
+            _ => return None,
+        })
+    }
+
+    /// Precedence climbing; comparisons do not chain.
+    fn expr(&mut self, min_prec: u8) -> Result<Expr, Diagnostic> {
+        self.enter()?;
+        let mut lhs = self.unary()?;
+        while let Some(op) = self.binop() {
+            let prec = op.precedence();
+            if prec < min_prec {
+                break;
+            }
+            let (_, op_span) = self.bump().unwrap_or((Tok::Plus, Span::UNDEFINED));
+            let rhs = self.expr(prec + 1)?;
+            if op.is_comparison() {
+                if let ExprKind::Binary(inner, ..) = &lhs.kind {
+                    if inner.is_comparison() {
+                        return Err(Diagnostic::error(Phase::Syntax, "comparisons cannot be chained")
+                            .at(self.map(op_span), "second comparison")
+                            .help("combine them with `&&`"));
+                    }
+                }
+            }
+            let span = lhs.span.join(rhs.span);
+            lhs = Expr::new(ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span);
+        }
+        self.depth -= 1;
+        Ok(lhs)
+    }
+
+    fn unary(&mut self) -> Result<Expr, Diagnostic> {
+        self.enter()?;
+        let r = match self.peek() {
+            Some(Tok::Minus) | Some(Tok::Bang) => {
+                let (t, span) = self.bump().unwrap_or((Tok::Minus, Span::UNDEFINED));
+                let op = if t == Tok::Minus { UnOp::Neg } else { UnOp::Not };
+                let a = self.unary()?;
+                let span = self.map(span).join(a.span);
+                Ok(Expr::new(ExprKind::Unary(op, Box::new(a)), span))
+            }
+            _ => self.postfix(),
+        };
+        self.depth -= 1;
+        r
+    }
+
+    fn postfix(&mut self) -> Result<Expr, Diagnostic> {
+        let mut e = self.primary()?;
+        while self.peek() == Some(Tok::Dot) {
+            self.bump();
+            let s = self.expect(Tok::Ident, "a component name such as `x` after `.`")?;
+            let span = e.span.join(self.map(s));
+            e = Expr::new(ExprKind::Member(Box::new(e), self.text[s.range()].to_string()), span);
+        }
+        Ok(e)
+    }
+
+    fn primary(&mut self) -> Result<Expr, Diagnostic> {
+        let Some((tok, span)) = self.bump() else {
+            self.pos -= 1;
+            return Err(self.err_here("a value"));
+        };
+        let text = &self.text[span.range()];
+        let fspan = self.map(span);
+        match tok {
+            Tok::Int => match text.parse::<i64>() {
+                Ok(v) if v <= i32::MAX as i64 + 1 => Ok(Expr::new(ExprKind::Lit(Literal::Int(v)), fspan)),
+                _ => Err(Diagnostic::error(Phase::Syntax, format!("integer literal `{text}` does not fit in i32"))
+                    .at(fspan, "too large")),
+            },
+            Tok::Float => match text.parse::<f64>() {
+                Ok(v) if v.is_finite() && v.abs() <= f32::MAX as f64 => {
+                    Ok(Expr::new(ExprKind::Lit(Literal::Float(v)), fspan))
+                }
+                _ => Err(Diagnostic::error(Phase::Syntax, format!("float literal `{text}` does not fit in f32"))
+                    .at(fspan, "too large")),
+            },
+            Tok::Ident if text == "true" || text == "false" => {
+                Ok(Expr::new(ExprKind::Lit(Literal::Bool(text == "true")), fspan))
+            }
+            Tok::Ident if text == "let" => Err(Diagnostic::error(Phase::Syntax, "`let` is only allowed at the start of an expression or inside parentheses")
+                .at(fspan, "unexpected `let`")),
+            Tok::Ident if text == "sum" && self.peek() == Some(Tok::LParen) => self.sum(fspan),
+            Tok::Ident => {
+                if self.peek() == Some(Tok::LParen) {
+                    self.bump();
+                    let mut args = Vec::new();
+                    let end = loop {
+                        if self.peek() == Some(Tok::RParen) {
+                            break self.bump().map(|t| t.1).unwrap_or_default();
+                        }
+                        args.push(self.block()?);
+                        match self.peek() {
+                            Some(Tok::Comma) => {
+                                self.bump();
+                            }
+                            Some(Tok::RParen) => {}
+                            _ => return Err(self.err_here("`,` or `)`")),
+                        }
+                    };
+                    let span = fspan.join(self.map(end));
+                    Ok(Expr::new(
+                        ExprKind::Call {
+                            name: text.to_string(),
+                            name_span: fspan,
+                            args,
+                        },
+                        span,
+                    ))
+                } else {
+                    Ok(Expr::new(ExprKind::Name(text.to_string()), fspan))
+                }
+            }
+            Tok::LParen => {
+                let mut e = self.block()?;
+                let end = self.expect(Tok::RParen, "`)`")?;
+                e.span = fspan.join(self.map(end));
+                Ok(e)
+            }
+            _ => {
+                self.pos -= 1;
+                Err(self.err_here("a value"))
+            }
+        }
+    }
+
+    /// `sum(k in a..=b, body)` after the name `sum`.
+    fn sum(&mut self, start: Span) -> Result<Expr, Diagnostic> {
+        self.expect(Tok::LParen, "`(`")?;
+        let var_span = self.expect(Tok::Ident, "the index name of `sum(k in a..=b, expr)`")?;
+        let var = self.text[var_span.range()].to_string();
+        if !self.peek_is_ident("in") {
+            return Err(self.err_here("`in`, as in `sum(k in 1..=M, expr)`"));
+        }
+        self.bump();
+        let from = self.expr(0)?;
+        self.expect(Tok::DotDotEq, "`..=` (series ranges are inclusive)")?;
+        let to = self.expr(0)?;
+        self.expect(Tok::Comma, "`,` before the series term")?;
+        let body = self.block()?;
+        let end = self.expect(Tok::RParen, "`)`")?;
+        Ok(Expr::new(
+            ExprKind::Sum {
+                var,
+                var_span: self.map(var_span),
+                from: Box::new(from),
+                to: Box::new(to),
+                body: Box::new(body),
+            },
+            start.join(self.map(end)),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lit(s: &str) -> StrLit {
+        StrLit {
+            text: s.to_string(),
+            offsets: (0..=s.len() as u32).collect(),
+        }
+    }
+
+    #[test]
+    fn precedence_and_printing() {
+        let e = parse(&lit("1 + 2 * x - f(a, b).x")).unwrap();
+        assert_eq!(e.to_string(), "((1 + (2 * x)) - f(a, b).x)");
+        let e = parse(&lit("let a = 2.5; a < 3 && !b")).unwrap();
+        assert_eq!(e.to_string(), "let a = 2.5; ((a < 3) && !(b))");
+        let e = parse(&lit("sum(k in 1..=M, 2 * k)")).unwrap();
+        assert_eq!(e.to_string(), "sum(k in 1..=M, (2 * k))");
+    }
+
+    #[test]
+    fn spans_inside_strings() {
+        let e = parse(&lit("a + foo(b)")).unwrap();
+        let ExprKind::Binary(_, _, rhs) = &e.kind else { panic!() };
+        assert_eq!(rhs.span, Span::new(4, 10));
+    }
+
+    #[test]
+    fn errors() {
+        assert!(parse(&lit("a < b < c")).is_err());
+        assert!(parse(&lit("1 +")).is_err());
+        assert!(parse(&lit("")).is_err());
+        assert!(parse(&lit("a $ b")).is_err());
+        assert!(parse(&lit(&"(".repeat(500))).is_err());
+        assert!(parse(&lit(&"-".repeat(500))).is_err());
+    }
+}

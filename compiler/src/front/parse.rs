@@ -1,0 +1,531 @@
+//! Phase `parse`: the spanned RON tree becomes a [`Technique`] AST. Every unknown field,
+//! missing field, wrong kind of value and malformed expression string is a diagnostic
+//! at the offending text.
+
+use crate::diag::{Diagnostic, Phase};
+use crate::front::ast::*;
+use crate::front::expr::{self, Expr, ExprKind, Literal};
+use crate::front::ron::{self, Field, Node, Value};
+use crate::span::{Span, Spanned};
+
+/// Read a technique from RON text.
+pub fn parse(source: &str) -> Result<Technique, Diagnostic> {
+    let root = ron::parse(source)?;
+    technique(&root)
+}
+
+fn err(span: Span, msg: impl Into<String>, label: impl Into<String>) -> Diagnostic {
+    Diagnostic::error(Phase::Parse, msg).at(span, label)
+}
+
+/// The fields of one `Name(field: value, ...)`, taken one by one; leftovers are errors.
+struct Fields<'a> {
+    what: &'static str,
+    span: Span,
+    fields: Vec<&'a Field>,
+    taken: Vec<bool>,
+    known: Vec<&'static str>,
+}
+
+impl<'a> Fields<'a> {
+    fn of(node: &'a Node, what: &'static str) -> Result<Self, Diagnostic> {
+        match &node.value {
+            Value::Struct { name, fields } => {
+                if let Some((n, span)) = name {
+                    if n != what {
+                        return Err(err(*span, format!("expected `{what}(...)`, found `{n}(...)`"), format!("expected `{what}`")));
+                    }
+                }
+                Ok(Fields {
+                    what,
+                    span: node.span,
+                    fields: fields.iter().collect(),
+                    taken: vec![false; fields.len()],
+                    known: Vec::new(),
+                })
+            }
+            Value::Tuple { items, .. } if items.is_empty() => Ok(Fields {
+                what,
+                span: node.span,
+                fields: Vec::new(),
+                taken: Vec::new(),
+                known: Vec::new(),
+            }),
+            _ => Err(err(node.span, format!("expected `{what}(...)`, found {}", node.describe()), format!("expected `{what}(field: value, ...)`"))),
+        }
+    }
+
+    fn opt(&mut self, name: &'static str) -> Result<Option<&'a Node>, Diagnostic> {
+        self.known.push(name);
+        let mut found = None;
+        for (i, f) in self.fields.iter().enumerate() {
+            if f.name == name {
+                if found.is_some() {
+                    return Err(err(f.name_span, format!("field `{name}` is given twice in `{}`", self.what), "second time here"));
+                }
+                self.taken[i] = true;
+                found = Some(&f.value);
+            }
+        }
+        Ok(found)
+    }
+
+    fn req(&mut self, name: &'static str) -> Result<&'a Node, Diagnostic> {
+        match self.opt(name)? {
+            Some(n) => Ok(n),
+            None => Err(err(self.span, format!("missing field `{name}` in `{}`", self.what), format!("`{name}: ...` is required here"))),
+        }
+    }
+
+    fn finish(self) -> Result<(), Diagnostic> {
+        for (i, f) in self.fields.iter().enumerate() {
+            if !self.taken[i] {
+                let mut d = err(f.name_span, format!("unknown field `{}` in `{}`", f.name, self.what), "unknown field");
+                if let Some(s) = closest(&f.name, &self.known) {
+                    d = d.help(format!("did you mean `{s}`?"));
+                } else {
+                    d = d.note(format!("`{}` has the fields: {}", self.what, self.known.join(", ")));
+                }
+                return Err(d);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The candidate closest to `name` by edit distance, if it is close enough to be a typo.
+pub fn closest<'a>(name: &str, candidates: &[&'a str]) -> Option<&'a str> {
+    candidates
+        .iter()
+        .map(|c| (edit_distance(name, c), *c))
+        .filter(|(d, c)| *d <= (c.len().max(name.len()) / 3).max(1))
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, c)| c)
+}
+
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            cur[j + 1] = (prev[j] + (ca != *cb) as usize).min(prev[j + 1] + 1).min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+fn string(node: &Node) -> Result<Spanned<String>, Diagnostic> {
+    match &node.value {
+        Value::Str(s) => Ok(Spanned::new(s.text.clone(), node.span)),
+        _ => Err(err(node.span, format!("expected a string, found {}", node.describe()), "expected a string")),
+    }
+}
+
+/// A name: a string holding an identifier.
+fn name(node: &Node) -> Result<Name, Diagnostic> {
+    let s = string(node)?;
+    let ok = s.value.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && s.value.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+    if !ok {
+        return Err(err(node.span, format!("`{}` is not a valid name", s.value), "names are identifiers")
+            .help("use letters, digits and `_`, starting with a letter"));
+    }
+    Ok(s)
+}
+
+fn names(node: &Node) -> Result<Vec<Name>, Diagnostic> {
+    match &node.value {
+        Value::List(items) => items.iter().map(name).collect(),
+        Value::Str(_) => Ok(vec![name(node)?]),
+        _ => Err(err(node.span, format!("expected a list of names, found {}", node.describe()), "expected `[\"a\", \"b\"]`")),
+    }
+}
+
+fn boolean(node: &Node) -> Result<bool, Diagnostic> {
+    match &node.value {
+        Value::Bool(b) => Ok(*b),
+        _ => Err(err(node.span, format!("expected `true` or `false`, found {}", node.describe()), "expected a boolean")),
+    }
+}
+
+fn number(node: &Node) -> Result<Spanned<f64>, Diagnostic> {
+    match &node.value {
+        Value::Int(v) => Ok(Spanned::new(*v as f64, node.span)),
+        Value::Float(v) => Ok(Spanned::new(*v, node.span)),
+        _ => Err(err(node.span, format!("expected a number, found {}", node.describe()), "expected a number")),
+    }
+}
+
+/// An expression: a string in the expression language, or a plain number.
+fn expression(node: &Node) -> Result<Expr, Diagnostic> {
+    match &node.value {
+        Value::Str(s) => expr::parse(s),
+        Value::Int(v) => Ok(Expr::new(ExprKind::Lit(Literal::Int(*v)), node.span)),
+        Value::Float(v) => Ok(Expr::new(ExprKind::Lit(Literal::Float(*v)), node.span)),
+        Value::Bool(v) => Ok(Expr::new(ExprKind::Lit(Literal::Bool(*v)), node.span)),
+        _ => Err(err(node.span, format!("expected an expression string, found {}", node.describe()), "expected an expression such as \"exp(c * z)\"")),
+    }
+}
+
+fn opt_string(f: &mut Fields, key: &'static str) -> Result<Option<String>, Diagnostic> {
+    f.opt(key)?.map(|n| string(n).map(|s| s.value)).transpose()
+}
+
+/// An identifier-like enum value: `Unorm8`, or `Segment(samples: 4)` for variants with data.
+fn variant(node: &Node) -> Result<(String, Span), Diagnostic> {
+    match &node.value {
+        Value::Ident(n) => Ok((n.clone(), node.span)),
+        Value::Struct { name: Some((n, s)), .. } | Value::Tuple { name: Some((n, s)), .. } => Ok((n.clone(), *s)),
+        _ => Err(err(node.span, format!("expected a name such as `F32`, found {}", node.describe()), "expected a variant name")),
+    }
+}
+
+fn unknown_variant(span: Span, got: &str, what: &str, options: &[&'static str]) -> Diagnostic {
+    let mut d = err(span, format!("unknown {what} `{got}`"), format!("not a {what}"));
+    if let Some(s) = closest(got, options) {
+        d = d.help(format!("did you mean `{s}`?"));
+    }
+    d.note(format!("expected one of: {}", options.join(", ")))
+}
+
+/// Entries of a map `{ "name": value }`, in order.
+fn map_entries(node: &Node) -> Result<Vec<(Name, &Node)>, Diagnostic> {
+    match &node.value {
+        Value::Map(entries) => entries.iter().map(|(k, v)| Ok((name(k)?, v))).collect(),
+        _ => Err(err(node.span, format!("expected a map `{{ \"name\": ... }}`, found {}", node.describe()), "expected a map")),
+    }
+}
+
+fn technique(root: &Node) -> Result<Technique, Diagnostic> {
+    let mut f = Fields::of(root, "Technique")?;
+    let name = name(f.req("name")?)?;
+    let title = opt_string(&mut f, "title")?;
+    let paper = opt_string(&mut f, "paper")?;
+    let lights = match f.opt("light")? {
+        None => vec![],
+        Some(n) => match &n.value {
+            Value::List(items) => items.iter().map(light).collect::<Result<_, _>>()?,
+            _ => vec![light(n)?],
+        },
+    };
+    let params = match f.opt("params")? {
+        None => vec![],
+        Some(n) => map_entries(n)?.into_iter().map(|(k, v)| param(k, v)).collect::<Result<_, _>>()?,
+    };
+    let channels = match f.opt("channels")? {
+        None => vec![],
+        Some(n) => map_entries(n)?.into_iter().map(|(k, v)| channel(k, v)).collect::<Result<_, _>>()?,
+    };
+    let expansions = match f.opt("expansions")? {
+        None => vec![],
+        Some(n) => map_entries(n)?.into_iter().map(|(k, v)| expansion(k, v)).collect::<Result<_, _>>()?,
+    };
+    let passes_node = f.req("passes")?;
+    let passes = match &passes_node.value {
+        Value::List(items) => items.iter().map(pass).collect::<Result<_, _>>()?,
+        _ => return Err(err(passes_node.span, format!("expected a list of passes, found {}", passes_node.describe()), "expected `[Depth(...), ...]`")),
+    };
+    f.finish()?;
+    Ok(Technique {
+        name,
+        title,
+        paper,
+        lights,
+        params,
+        channels,
+        expansions,
+        passes,
+        span: root.span,
+    })
+}
+
+const LIGHTS: &[&str] = &["Any", "Point", "Directional", "Sphere", "Disk", "Rectangle", "Segment", "DistantDisk"];
+
+fn light(node: &Node) -> Result<Spanned<LightKind>, Diagnostic> {
+    let (v, span) = variant(node)?;
+    let kind = match v.as_str() {
+        "Any" => LightKind::Any,
+        "Point" => LightKind::Point,
+        "Directional" => LightKind::Directional,
+        "Sphere" => LightKind::Sphere,
+        "Disk" => LightKind::Disk,
+        "Rectangle" => LightKind::Rectangle,
+        "DistantDisk" => LightKind::DistantDisk,
+        "Segment" => {
+            let mut f = Fields::of(node, "Segment")?;
+            let n = f.req("samples")?;
+            let samples = match n.value {
+                Value::Int(s) if (2..=64).contains(&s) => s as u32,
+                _ => return Err(err(n.span, "a segment light needs between 2 and 64 samples", "expected an integer in 2..=64")),
+            };
+            f.finish()?;
+            LightKind::Segment { samples }
+        }
+        _ => return Err(unknown_variant(span, &v, "light model", LIGHTS)),
+    };
+    Ok(Spanned::new(kind, node.span))
+}
+
+fn param(name: Name, node: &Node) -> Result<Param, Diagnostic> {
+    let mut f = Fields::of(node, "Param")?;
+    let ty_node = f.req("ty")?;
+    let (t, tspan) = variant(ty_node)?;
+    let ty = match t.as_str() {
+        "F32" => ScalarTy::F32,
+        "I32" => ScalarTy::I32,
+        "Bool" => ScalarTy::Bool,
+        _ => return Err(unknown_variant(tspan, &t, "parameter type", &["F32", "I32", "Bool"])),
+    };
+    let dn = f.req("default")?;
+    let default = const_value(dn, ty)?;
+    let range = match f.opt("range")? {
+        None => None,
+        Some(r) => match &r.value {
+            Value::Tuple { name: None, items } if items.len() == 2 => Some((number(&items[0])?, number(&items[1])?)),
+            _ => return Err(err(r.span, format!("expected a range `(lo, hi)`, found {}", r.describe()), "expected `(lo, hi)`")),
+        },
+    };
+    let fixed = f.opt("fixed")?.map(boolean).transpose()?.unwrap_or(false);
+    let doc = opt_string(&mut f, "doc")?;
+    f.finish()?;
+    Ok(Param {
+        name,
+        ty: Spanned::new(ty, ty_node.span),
+        default,
+        range,
+        fixed,
+        doc,
+        span: node.span,
+    })
+}
+
+/// A value of type `ty` as written in RON (used for defaults and `--set`).
+pub fn const_value(node: &Node, ty: ScalarTy) -> Result<Spanned<ConstValue>, Diagnostic> {
+    let v = match (&node.value, ty) {
+        (Value::Int(v), ScalarTy::I32) => ConstValue::Int(*v),
+        (Value::Int(v), ScalarTy::F32) => ConstValue::Float(*v as f64),
+        (Value::Float(v), ScalarTy::F32) => ConstValue::Float(*v),
+        (Value::Bool(v), ScalarTy::Bool) => ConstValue::Bool(*v),
+        _ => {
+            return Err(Diagnostic::error(Phase::Check, format!("expected a value of type {}, found {}", ty.name(), node.describe()))
+                .at(node.span, format!("expected {}", ty.name())));
+        }
+    };
+    if let ConstValue::Int(i) = v {
+        if i32::try_from(i).is_err() {
+            return Err(err(node.span, format!("{i} does not fit in i32"), "out of i32 range"));
+        }
+    }
+    Ok(Spanned::new(v, node.span))
+}
+
+const PRECISIONS: &[&str] = &["Unorm8", "Unorm16", "F16", "F32"];
+
+fn precision(node: &Node) -> Result<Spanned<Precision>, Diagnostic> {
+    let (v, span) = variant(node)?;
+    match Precision::parse(&v).filter(|_| PRECISIONS.contains(&v.as_str())) {
+        Some(p) => Ok(Spanned::new(p, node.span)),
+        None => Err(unknown_variant(span, &v, "precision", PRECISIONS)),
+    }
+}
+
+fn channel(name: Name, node: &Node) -> Result<Channel, Diagnostic> {
+    let mut f = Fields::of(node, "Channel")?;
+    let precision = precision(f.req("precision")?)?;
+    let value = f.opt("value")?.map(expression).transpose()?;
+    let doc = opt_string(&mut f, "doc")?;
+    f.finish()?;
+    Ok(Channel {
+        name,
+        precision,
+        value,
+        doc,
+        span: node.span,
+    })
+}
+
+fn expansion(name: Name, node: &Node) -> Result<Expansion, Diagnostic> {
+    let mut f = Fields::of(node, "Expansion")?;
+    let index = name_of(f.req("index")?)?;
+    let from = expression(f.req("from")?)?;
+    let to = expression(f.req("to")?)?;
+    let lets = match f.opt("lets")? {
+        None => vec![],
+        Some(n) => map_entries(n)?.into_iter().map(|(k, v)| Ok((k, expression(v)?))).collect::<Result<_, Diagnostic>>()?,
+    };
+    let constant = match f.opt("constant")? {
+        Some(n) => expression(n)?,
+        None => Expr::new(ExprKind::Lit(Literal::Float(0.0)), node.span),
+    };
+    let tn = f.req("terms")?;
+    let terms = match &tn.value {
+        Value::List(items) if !items.is_empty() => items.iter().map(term).collect::<Result<_, _>>()?,
+        Value::List(_) => return Err(err(tn.span, "an expansion needs at least one term", "no terms")),
+        _ => return Err(err(tn.span, format!("expected a list of terms, found {}", tn.describe()), "expected `[Term(coeff: ..., basis: ...)]`")),
+    };
+    let precision = precision(f.req("precision")?)?;
+    let doc = opt_string(&mut f, "doc")?;
+    f.finish()?;
+    Ok(Expansion {
+        name,
+        index,
+        from,
+        to,
+        lets,
+        constant,
+        terms,
+        precision,
+        doc,
+        span: node.span,
+    })
+}
+
+fn name_of(node: &Node) -> Result<Name, Diagnostic> {
+    name(node)
+}
+
+fn term(node: &Node) -> Result<Term, Diagnostic> {
+    let mut f = Fields::of(node, "Term")?;
+    let coeff = expression(f.req("coeff")?)?;
+    let basis = expression(f.req("basis")?)?;
+    f.finish()?;
+    Ok(Term { coeff, basis, span: node.span })
+}
+
+const PASSES: &[&str] = &["Depth", "Map", "Filter", "Mipmap", "SummedArea", "Geometry", "Shade"];
+
+fn light_view(f: &mut Fields) -> Result<LightView, Diagnostic> {
+    match f.opt("view")? {
+        None => Ok(LightView::Center),
+        Some(n) => {
+            let (v, span) = variant(n)?;
+            match v.as_str() {
+                "Center" => Ok(LightView::Center),
+                "PerSample" => Ok(LightView::PerSample),
+                _ => Err(unknown_variant(span, &v, "light view", &["Center", "PerSample"])),
+            }
+        }
+    }
+}
+
+fn pass(node: &Node) -> Result<Pass, Diagnostic> {
+    let (kind_name, kind_span) = match &node.value {
+        Value::Struct { name: Some((n, s)), .. } | Value::Tuple { name: Some((n, s)), .. } => (n.clone(), *s),
+        Value::Ident(n) => (n.clone(), node.span),
+        _ => return Err(err(node.span, format!("expected a pass such as `Map(...)`, found {}", node.describe()), "expected a pass")),
+    };
+    if !PASSES.contains(&kind_name.as_str()) {
+        return Err(unknown_variant(kind_span, &kind_name, "pass kind", PASSES));
+    }
+    let what: &'static str = PASSES.iter().find(|p| **p == kind_name).copied().unwrap_or("pass");
+    let mut f = Fields::of(node, what)?;
+    let name = name(f.req("name")?)?;
+    let kind = match what {
+        "Depth" => PassKind::Depth {
+            writes: self::name(f.req("writes")?)?,
+            channel: self::name(f.req("channel")?)?,
+            view: light_view(&mut f)?,
+        },
+        "Map" => PassKind::Map {
+            reads: names(f.req("reads")?)?,
+            writes: self::name(f.req("writes")?)?,
+            channels: names(f.req("channels")?)?,
+        },
+        "Filter" => PassKind::Filter {
+            reads: self::name(f.req("reads")?)?,
+            writes: self::name(f.req("writes")?)?,
+            kernel: kernel(f.req("kernel")?)?,
+        },
+        "Mipmap" => {
+            let reads = self::name(f.req("reads")?)?;
+            let writes = self::name(f.req("writes")?)?;
+            let reduce = match f.opt("reduce")? {
+                None => Reduce::Mean,
+                Some(n) => {
+                    let (v, span) = variant(n)?;
+                    match v.as_str() {
+                        "Mean" => Reduce::Mean,
+                        "Max" => Reduce::Max,
+                        "Min" => Reduce::Min,
+                        _ => return Err(unknown_variant(span, &v, "reduction", &["Mean", "Max", "Min"])),
+                    }
+                }
+            };
+            PassKind::Mipmap { reads, writes, reduce }
+        }
+        "SummedArea" => PassKind::SummedArea {
+            reads: self::name(f.req("reads")?)?,
+            writes: self::name(f.req("writes")?)?,
+        },
+        "Geometry" => {
+            let reads = names(f.req("reads")?)?;
+            let writes = self::name(f.req("writes")?)?;
+            let pn = f.req("primitive")?;
+            let (p, ps) = variant(pn)?;
+            let primitive = match p.as_str() {
+                "ConesAndSheets" => Primitive::ConesAndSheets,
+                "Ribbons" => Primitive::Ribbons,
+                "Skins" => Primitive::Skins,
+                _ => return Err(unknown_variant(ps, &p, "primitive", &["ConesAndSheets", "Ribbons", "Skins"])),
+            };
+            let channels = names(f.req("channels")?)?;
+            let rn = f.req("resolve")?;
+            let (r, rs) = variant(rn)?;
+            let resolve = match r.as_str() {
+                "KeepMin" => Resolve::KeepMin,
+                "KeepMax" => Resolve::KeepMax,
+                "Add" => Resolve::Add,
+                _ => return Err(unknown_variant(rs, &r, "resolve rule", &["KeepMin", "KeepMax", "Add"])),
+            };
+            let view = light_view(&mut f)?;
+            PassKind::Geometry { reads, writes, primitive, channels, resolve, view }
+        }
+        _ => PassKind::Shade {
+            reads: names(f.req("reads")?)?,
+            visibility: expression(f.req("visibility")?)?,
+        },
+    };
+    f.finish()?;
+    Ok(Pass {
+        name,
+        kind,
+        kind_span,
+        span: node.span,
+    })
+}
+
+const KERNELS: &[&str] = &["Box", "Gaussian", "Max", "Min", "LoG"];
+
+fn kernel(node: &Node) -> Result<Spanned<Kernel>, Diagnostic> {
+    let (v, span) = variant(node)?;
+    let k = match v.as_str() {
+        "LoG" => {
+            if !matches!(node.value, Value::Ident(_)) {
+                Fields::of(node, "LoG")?.finish()?;
+            }
+            Kernel::LoG
+        }
+        "Box" | "Max" | "Min" => {
+            let what: &'static str = KERNELS.iter().find(|k| **k == v).copied().unwrap_or("Box");
+            let mut f = Fields::of(node, what)?;
+            let size = expression(f.req("size")?)?;
+            f.finish()?;
+            match what {
+                "Box" => Kernel::Box { size },
+                "Max" => Kernel::Max { size },
+                _ => Kernel::Min { size },
+            }
+        }
+        "Gaussian" => {
+            let mut f = Fields::of(node, "Gaussian")?;
+            let size = expression(f.req("size")?)?;
+            let sigma = expression(f.req("sigma")?)?;
+            f.finish()?;
+            Kernel::Gaussian { size, sigma }
+        }
+        _ => return Err(unknown_variant(span, &v, "filter kernel", KERNELS)),
+    };
+    Ok(Spanned::new(k, node.span))
+}

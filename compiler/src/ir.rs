@@ -1,0 +1,721 @@
+//! The IR shared by the phases after `lower`: parameters resolved, series unrolled, one
+//! concrete channel per basis term, passes in execution order, and every expression in
+//! one hash-consed [`Arena`] (equal sub-expressions share a handle, constants fold as
+//! nodes are added).
+
+use crate::builtins::{Func, Input, SampleFn, Ty};
+use crate::front::ast::{ConstValue, LightKind, LightView, Precision, Primitive, Reduce, Resolve, ScalarTy};
+use crate::front::expr::{BinOp, UnOp, fmt_float};
+use crate::span::Span;
+use std::collections::HashMap;
+use std::fmt::{self, Write as _};
+
+
+/// Handle of an expression node in the [`Arena`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct H(pub u32);
+
+pub type ChannelId = usize;
+pub type ResId = usize;
+pub type PassId = usize;
+
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Node {
+    /// An f32 constant, by its bits.
+    F32(u32),
+    I32(i32),
+    Bool(bool),
+    /// A runtime uniform parameter (index into [`Ir::params`]).
+    Param(usize),
+    Input(Input),
+    /// Map side: the value of a channel at the texel being computed.
+    Channel(ChannelId),
+    /// Receiver side: a lookup of `channel` in `resource`.
+    Sample {
+        channel: ChannelId,
+        resource: ResId,
+        how: SampleFn,
+        args: Vec<H>,
+    },
+    Unary(UnOp, H),
+    Binary(BinOp, H, H),
+    Call(Func, Vec<H>),
+    /// Vector components, e.g. `.x` = [0], `.xy` = [0, 1].
+    Swizzle(H, Vec<u8>),
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Arena {
+    nodes: Vec<(Node, Ty, Span)>,
+    index: HashMap<(Node, Ty), H>,
+}
+
+impl Arena {
+    pub fn node(&self, h: H) -> &Node {
+        &self.nodes[h.0 as usize].0
+    }
+
+    pub fn ty(&self, h: H) -> Ty {
+        self.nodes[h.0 as usize].1
+    }
+
+    pub fn span(&self, h: H) -> Span {
+        self.nodes[h.0 as usize].2
+    }
+
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    pub fn f32(&mut self, v: f64) -> H {
+        self.add(Node::F32((v as f32).to_bits()), Ty::F32, Span::UNDEFINED)
+    }
+
+    pub fn i32(&mut self, v: i32) -> H {
+        self.add(Node::I32(v), Ty::I32, Span::UNDEFINED)
+    }
+
+    pub fn as_const(&self, h: H) -> Option<ConstValue> {
+        match self.node(h) {
+            Node::F32(b) => Some(ConstValue::Float(f32::from_bits(*b) as f64)),
+            Node::I32(v) => Some(ConstValue::Int(*v as i64)),
+            Node::Bool(v) => Some(ConstValue::Bool(*v)),
+            _ => None,
+        }
+    }
+
+    fn constant(&mut self, v: ConstValue, ty: Ty, span: Span) -> Option<H> {
+        let node = match (v, ty) {
+            (ConstValue::Float(f), Ty::F32) => {
+                let f = f as f32;
+                if !f.is_finite() {
+                    return None;
+                }
+                Node::F32(f.to_bits())
+            }
+            (ConstValue::Int(i), Ty::I32) => Node::I32(i32::try_from(i).ok()?),
+            (ConstValue::Bool(b), Ty::Bool) => Node::Bool(b),
+            _ => return None,
+        };
+        Some(self.intern(node, ty, span))
+    }
+
+    fn intern(&mut self, node: Node, ty: Ty, span: Span) -> H {
+        if let Some(h) = self.index.get(&(node.clone(), ty)) {
+            return *h;
+        }
+        let h = H(self.nodes.len() as u32);
+        self.nodes.push((node.clone(), ty, span));
+        self.index.insert((node, ty), h);
+        h
+    }
+
+    /// Add a node, folding it when its operands are constants.
+    pub fn add(&mut self, node: Node, ty: Ty, span: Span) -> H {
+        if let Some(h) = self.fold(&node, ty, span) {
+            return h;
+        }
+        self.intern(node, ty, span)
+    }
+
+    fn fold(&mut self, node: &Node, ty: Ty, span: Span) -> Option<H> {
+        use ConstValue::*;
+        match node {
+            Node::Unary(op, a) => {
+                let v = match (op, self.as_const(*a)?) {
+                    (UnOp::Neg, Float(x)) => Float(-x),
+                    (UnOp::Neg, Int(x)) => Int(x.checked_neg()?),
+                    (UnOp::Not, Bool(x)) => Bool(!x),
+                    _ => return None,
+                };
+                self.constant(v, ty, span)
+            }
+            Node::Binary(op, a, b) => {
+                let (x, y) = (self.as_const(*a), self.as_const(*b));
+                // Identities that hold for every finite value.
+                if ty == Ty::F32 || ty == Ty::I32 {
+                    let is = |c: Option<ConstValue>, v: f64| c.is_some_and(|c| c.as_f64() == v);
+                    match op {
+                        BinOp::Add if is(x, 0.0) => return Some(*b),
+                        BinOp::Add | BinOp::Sub if is(y, 0.0) => return Some(*a),
+                        BinOp::Mul if is(x, 1.0) => return Some(*b),
+                        BinOp::Mul | BinOp::Div if is(y, 1.0) => return Some(*a),
+                        _ => {}
+                    }
+                }
+                // Logic with one constant side.
+                match (op, x, y) {
+                    (BinOp::And, Some(Bool(true)), _) | (BinOp::Or, Some(Bool(false)), _) => return Some(*b),
+                    (BinOp::And, _, Some(Bool(true))) | (BinOp::Or, _, Some(Bool(false))) => return Some(*a),
+                    (BinOp::And, Some(Bool(false)), _) | (BinOp::And, _, Some(Bool(false))) => return self.constant(Bool(false), ty, span),
+                    (BinOp::Or, Some(Bool(true)), _) | (BinOp::Or, _, Some(Bool(true))) => return self.constant(Bool(true), ty, span),
+                    _ => {}
+                }
+                let v = match (x?, y?) {
+                    (Float(x), Float(y)) => match op {
+                        BinOp::Add => Float(x + y),
+                        BinOp::Sub => Float(x - y),
+                        BinOp::Mul => Float(x * y),
+                        BinOp::Div if y != 0.0 => Float(x / y),
+                        BinOp::Rem if y != 0.0 => Float(x % y),
+                        BinOp::Lt => Bool(x < y),
+                        BinOp::Le => Bool(x <= y),
+                        BinOp::Gt => Bool(x > y),
+                        BinOp::Ge => Bool(x >= y),
+                        BinOp::Eq => Bool(x == y),
+                        BinOp::Ne => Bool(x != y),
+                        _ => return None,
+                    },
+                    (Int(x), Int(y)) => match op {
+                        BinOp::Add => Int(x.checked_add(y)?),
+                        BinOp::Sub => Int(x.checked_sub(y)?),
+                        BinOp::Mul => Int(x.checked_mul(y)?),
+                        BinOp::Div if y != 0 => Int(x / y),
+                        BinOp::Rem if y != 0 => Int(x % y),
+                        BinOp::Lt => Bool(x < y),
+                        BinOp::Le => Bool(x <= y),
+                        BinOp::Gt => Bool(x > y),
+                        BinOp::Ge => Bool(x >= y),
+                        BinOp::Eq => Bool(x == y),
+                        BinOp::Ne => Bool(x != y),
+                        _ => return None,
+                    },
+                    (Bool(x), Bool(y)) => match op {
+                        BinOp::And => Bool(x && y),
+                        BinOp::Or => Bool(x || y),
+                        BinOp::Eq => Bool(x == y),
+                        BinOp::Ne => Bool(x != y),
+                        _ => return None,
+                    },
+                    _ => return None,
+                };
+                self.constant(v, ty, span)
+            }
+            Node::Call(Func::Select, args) => match self.as_const(args[2])? {
+                Bool(true) => Some(args[1]),
+                Bool(false) => Some(args[0]),
+                _ => None,
+            },
+            Node::Call(f, args) => {
+                if ty != Ty::F32 && ty != Ty::I32 {
+                    return None;
+                }
+                let vals: Vec<ConstValue> = args.iter().map(|a| self.as_const(*a)).collect::<Option<_>>()?;
+                let v = eval_call(*f, &vals)?;
+                self.constant(v, ty, span)
+            }
+            _ => None,
+        }
+    }
+
+    /// Handles reachable from `root`, operands before users (the order codegen emits them).
+    pub fn postorder(&self, roots: &[H]) -> Vec<H> {
+        let mut seen = vec![false; self.nodes.len()];
+        let mut out = Vec::new();
+        for &r in roots {
+            self.visit(r, &mut seen, &mut out);
+        }
+        out
+    }
+
+    fn visit(&self, h: H, seen: &mut [bool], out: &mut Vec<H>) {
+        // Iterative to keep deep series off the call stack.
+        let mut stack = vec![(h, false)];
+        while let Some((h, done)) = stack.pop() {
+            if seen[h.0 as usize] {
+                continue;
+            }
+            if done {
+                seen[h.0 as usize] = true;
+                out.push(h);
+                continue;
+            }
+            stack.push((h, true));
+            for c in self.operands(h).into_iter().rev() {
+                if !seen[c.0 as usize] {
+                    stack.push((c, false));
+                }
+            }
+        }
+    }
+
+    pub fn operands(&self, h: H) -> Vec<H> {
+        match self.node(h) {
+            Node::Unary(_, a) | Node::Swizzle(a, _) => vec![*a],
+            Node::Binary(_, a, b) => vec![*a, *b],
+            Node::Call(_, args) | Node::Sample { args, .. } => args.clone(),
+            _ => vec![],
+        }
+    }
+
+    /// Write `h` as an expression (for dumps and explain).
+    pub fn display(&self, h: H, ir: Option<&Ir>) -> String {
+        let mut s = String::new();
+        self.write(&mut s, h, ir, 0);
+        s
+    }
+
+    fn write(&self, s: &mut String, h: H, ir: Option<&Ir>, depth: usize) {
+        if depth > 24 {
+            let _ = write!(s, "%{}", h.0);
+            return;
+        }
+        let chan = |c: ChannelId| ir.map(|ir| ir.channels[c].name.clone()).unwrap_or_else(|| format!("ch{c}"));
+        match self.node(h) {
+            Node::F32(b) => s.push_str(&fmt_float(f32::from_bits(*b) as f64)),
+            Node::I32(v) => {
+                let _ = write!(s, "{v}");
+            }
+            Node::Bool(v) => {
+                let _ = write!(s, "{v}");
+            }
+            Node::Param(p) => match ir {
+                Some(ir) => {
+                    let _ = write!(s, "params.{}", ir.params[*p].name);
+                }
+                None => {
+                    let _ = write!(s, "param{p}");
+                }
+            },
+            Node::Input(i) => s.push_str(i.name()),
+            Node::Channel(c) => s.push_str(&chan(*c)),
+            Node::Sample { channel, how, args, .. } => {
+                let _ = write!(s, "{}({}", how.name(false), chan(*channel));
+                for a in args {
+                    s.push_str(", ");
+                    self.write(s, *a, ir, depth + 1);
+                }
+                s.push(')');
+            }
+            Node::Unary(op, a) => {
+                s.push_str(if *op == UnOp::Neg { "-" } else { "!" });
+                s.push('(');
+                self.write(s, *a, ir, depth + 1);
+                s.push(')');
+            }
+            Node::Binary(op, a, b) => {
+                s.push('(');
+                self.write(s, *a, ir, depth + 1);
+                let _ = write!(s, " {} ", op.symbol());
+                self.write(s, *b, ir, depth + 1);
+                s.push(')');
+            }
+            Node::Call(f, args) => {
+                let _ = write!(s, "{}(", f.name());
+                for (i, a) in args.iter().enumerate() {
+                    if i > 0 {
+                        s.push_str(", ");
+                    }
+                    self.write(s, *a, ir, depth + 1);
+                }
+                s.push(')');
+            }
+            Node::Swizzle(a, c) => {
+                self.write(s, *a, ir, depth + 1);
+                s.push('.');
+                for i in c {
+                    s.push(['x', 'y', 'z', 'w'][*i as usize]);
+                }
+            }
+        }
+    }
+}
+
+/// Evaluate a pure function on constants with f32 results rounded as the GPU would store them.
+pub fn eval_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
+    use ConstValue::*;
+    let fl = |i: usize| -> Option<f64> {
+        match v.get(i)? {
+            Float(x) => Some(*x),
+            Int(x) => Some(*x as f64),
+            Bool(_) => None,
+        }
+    };
+    if let [Int(a)] = v {
+        match f {
+            Func::Abs => return Some(Int(a.checked_abs()?)),
+            Func::Sign => return Some(Int(a.signum())),
+            Func::ToI32 => return Some(Int(*a)),
+            Func::ToF32 => return Some(Float(*a as f64)),
+            _ => {}
+        }
+    }
+    if let [Int(a), Int(b)] = v {
+        match f {
+            Func::Min => return Some(Int(*a.min(b))),
+            Func::Max => return Some(Int(*a.max(b))),
+            _ => {}
+        }
+    }
+    if let [Int(x), Int(lo), Int(hi)] = v {
+        if f == Func::Clamp {
+            return Some(Int(*x.max(lo).min(hi)));
+        }
+    }
+    let r = match f {
+        Func::ToF32 => match v[0] {
+            Bool(b) => b as i64 as f64,
+            _ => fl(0)?,
+        },
+        Func::ToI32 => match v[0] {
+            Float(x) if x.is_finite() => return Some(Int(x.trunc().clamp(i32::MIN as f64, i32::MAX as f64) as i64)),
+            Bool(b) => return Some(Int(b as i64)),
+            _ => return None,
+        },
+        Func::Abs => fl(0)?.abs(),
+        Func::Exp => fl(0)?.exp(),
+        Func::Exp2 => fl(0)?.exp2(),
+        Func::Log if fl(0)? > 0.0 => fl(0)?.ln(),
+        Func::Log2 if fl(0)? > 0.0 => fl(0)?.log2(),
+        Func::Sqrt if fl(0)? >= 0.0 => fl(0)?.sqrt(),
+        Func::InverseSqrt if fl(0)? > 0.0 => 1.0 / fl(0)?.sqrt(),
+        Func::Sin => fl(0)?.sin(),
+        Func::Cos => fl(0)?.cos(),
+        Func::Tan => fl(0)?.tan(),
+        Func::Asin if fl(0)?.abs() <= 1.0 => fl(0)?.asin(),
+        Func::Acos if fl(0)?.abs() <= 1.0 => fl(0)?.acos(),
+        Func::Atan => fl(0)?.atan(),
+        Func::Floor => fl(0)?.floor(),
+        Func::Ceil => fl(0)?.ceil(),
+        Func::Fract => fl(0)? - fl(0)?.floor(),
+        Func::Round => {
+            let x = fl(0)?;
+            let r = x.round();
+            // WGSL rounds half to even.
+            if (x - x.trunc()).abs() == 0.5 { 2.0 * (x / 2.0).round() } else { r }
+        }
+        Func::Trunc => fl(0)?.trunc(),
+        Func::Sign => fl(0)?.signum() * (fl(0)? != 0.0) as i32 as f64,
+        Func::Saturate => fl(0)?.clamp(0.0, 1.0),
+        Func::Pow if fl(0)? >= 0.0 => fl(0)?.powf(fl(1)?),
+        Func::Min => fl(0)?.min(fl(1)?),
+        Func::Max => fl(0)?.max(fl(1)?),
+        Func::Atan2 => fl(0)?.atan2(fl(1)?),
+        Func::Step => {
+            if fl(1)? >= fl(0)? {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        Func::Clamp if fl(1)? <= fl(2)? => fl(0)?.max(fl(1)?).min(fl(2)?),
+        Func::Mix => fl(0)? * (1.0 - fl(2)?) + fl(1)? * fl(2)?,
+        Func::Smoothstep if fl(0)? != fl(1)? => {
+            let t = ((fl(2)? - fl(0)?) / (fl(1)? - fl(0)?)).clamp(0.0, 1.0);
+            t * t * (3.0 - 2.0 * t)
+        }
+        Func::Linstep if fl(0)? != fl(1)? => ((fl(2)? - fl(0)?) / (fl(1)? - fl(0)?)).clamp(0.0, 1.0),
+        _ => return None,
+    };
+    if !r.is_finite() {
+        return None;
+    }
+    Some(Float(r as f32 as f64))
+}
+
+#[derive(Clone, Debug)]
+pub struct IrParam {
+    pub name: String,
+    pub ty: ScalarTy,
+    pub value: ConstValue,
+    pub range: Option<(f64, f64)>,
+    /// A runtime uniform (true) or substituted at compile time (false).
+    pub uniform: bool,
+    pub doc: Option<String>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Origin {
+    /// Written by a Depth pass.
+    Depth,
+    /// Declared in `channels` with a value.
+    Declared,
+    /// Basis term `term` of expansion `expansion` at index `k`.
+    Basis { expansion: usize, term: usize, k: i64 },
+}
+
+#[derive(Clone, Debug)]
+pub struct IrChannel {
+    pub name: String,
+    pub precision: Precision,
+    /// Where the precision was chosen (for diagnostics).
+    pub precision_span: Span,
+    pub value: Option<H>,
+    pub origin: Origin,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+pub struct IrExpansion {
+    pub name: String,
+    pub constant: H,
+    /// Unrolled terms: receiver-side coefficient and the basis channel it multiplies.
+    pub terms: Vec<(H, ChannelId)>,
+    pub span: Span,
+}
+
+/// A closed interval of real values; infinite ends mean unbounded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interval {
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl fmt::Display for Interval {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "[{}, {}]", short(self.lo), short(self.hi))
+    }
+}
+
+/// A number in at most 4 significant digits.
+pub fn short(v: f64) -> String {
+    if v.is_infinite() {
+        return if v > 0.0 { "inf".into() } else { "-inf".into() };
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if (1e-3..1e5).contains(&a) {
+        let s = format!("{v:.4}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        s.to_string()
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+/// How a channel value is stored: `stored = (value - bias) * scale`, decoded as `stored / scale + bias`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Encode {
+    pub bias: f64,
+    pub scale: f64,
+}
+
+impl Encode {
+    pub const IDENTITY: Encode = Encode { bias: 0.0, scale: 1.0 };
+
+    pub fn is_identity(&self) -> bool {
+        *self == Encode::IDENTITY
+    }
+}
+
+/// One channel as stored in one resource.
+#[derive(Clone, Debug)]
+pub struct Slot {
+    pub channel: ChannelId,
+    pub precision: Precision,
+    /// Value range (set by `analyse`).
+    pub range: Option<Interval>,
+    /// Storage encoding (set by `analyse`).
+    pub encode: Encode,
+    /// Placement (set by `pack`): texture index in the resource, layer, component.
+    pub place: Option<(usize, u32, u32)>,
+}
+
+/// One texture of a packed resource: all its channels of one precision.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub name: String,
+    pub precision: Precision,
+    /// Components per texel (1, 2 or 4).
+    pub components: u32,
+    pub layers: u32,
+}
+
+#[derive(Clone, Debug)]
+pub struct IrResource {
+    pub name: String,
+    pub slots: Vec<Slot>,
+    pub writer: PassId,
+    pub mips: bool,
+    pub sat: bool,
+    pub span: Span,
+    /// False once dead-code elimination found no shaded pixel can reach it.
+    pub live: bool,
+    /// Set by `pack`.
+    pub textures: Vec<Texture>,
+}
+
+impl IrResource {
+    pub fn slot_of(&self, c: ChannelId) -> Option<&Slot> {
+        self.slots.iter().find(|s| s.channel == c)
+    }
+}
+
+/// A filter kernel with its size resolved.
+#[derive(Clone, Debug, PartialEq)]
+pub enum IrKernel {
+    Box(u32),
+    Gaussian(u32, f64),
+    Max(u32),
+    Min(u32),
+    LoG,
+}
+
+impl IrKernel {
+    pub fn size(&self) -> u32 {
+        match self {
+            IrKernel::Box(n) | IrKernel::Gaussian(n, _) | IrKernel::Max(n) | IrKernel::Min(n) => *n,
+            IrKernel::LoG => 3,
+        }
+    }
+
+    pub fn separable(&self) -> bool {
+        !matches!(self, IrKernel::LoG)
+    }
+
+    /// 1-D weights of a separable linear kernel (Box, Gaussian), normalised to sum 1.
+    pub fn weights_1d(&self) -> Option<Vec<f64>> {
+        let w: Vec<f64> = match self {
+            IrKernel::Box(n) => vec![1.0; *n as usize],
+            IrKernel::Gaussian(n, sigma) => {
+                let r = (*n as i64 - 1) / 2;
+                (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect()
+            }
+            _ => return None,
+        };
+        let s: f64 = w.iter().sum();
+        Some(w.into_iter().map(|x| x / s).collect())
+    }
+
+    /// The 3x3 Laplacian-of-Gaussian weights (row major), summing to zero.
+    pub const LOG_3X3: [f64; 9] = [0.0, -1.0, 0.0, -1.0, 4.0, -1.0, 0.0, -1.0, 0.0];
+}
+
+#[derive(Clone, Debug)]
+pub enum IrPassKind {
+    Depth { view: LightView },
+    Map,
+    Filter { kernel: IrKernel },
+    Mipmap { reduce: Reduce },
+    SummedArea,
+    Geometry { primitive: Primitive, resolve: Resolve, view: LightView },
+    Shade { visibility: H },
+}
+
+#[derive(Clone, Debug)]
+pub struct IrPass {
+    pub name: String,
+    pub kind: IrPassKind,
+    pub reads: Vec<ResId>,
+    pub writes: Option<ResId>,
+    pub span: Span,
+    /// False once dead-code elimination removed it.
+    pub live: bool,
+}
+
+impl IrPass {
+    pub fn kind_name(&self) -> &'static str {
+        match self.kind {
+            IrPassKind::Depth { .. } => "Depth",
+            IrPassKind::Map => "Map",
+            IrPassKind::Filter { .. } => "Filter",
+            IrPassKind::Mipmap { .. } => "Mipmap",
+            IrPassKind::SummedArea => "SummedArea",
+            IrPassKind::Geometry { .. } => "Geometry",
+            IrPassKind::Shade { .. } => "Shade",
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Ir {
+    pub technique: String,
+    pub lights: Vec<LightKind>,
+    pub params: Vec<IrParam>,
+    pub channels: Vec<IrChannel>,
+    pub expansions: Vec<IrExpansion>,
+    pub resources: Vec<IrResource>,
+    /// In execution order.
+    pub passes: Vec<IrPass>,
+    pub arena: Arena,
+    /// What optimisation removed, and why (reported by `explain` and the cost report).
+    pub removed: Vec<String>,
+}
+
+impl Ir {
+    pub fn shade_pass(&self) -> Option<&IrPass> {
+        self.passes.iter().find(|p| matches!(p.kind, IrPassKind::Shade { .. }))
+    }
+
+    pub fn uniform_params(&self) -> impl Iterator<Item = (usize, &IrParam)> {
+        self.params.iter().enumerate().filter(|(_, p)| p.uniform)
+    }
+}
+
+impl fmt::Display for Ir {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "technique {}", self.technique)?;
+        for p in &self.params {
+            let kind = if p.uniform { "uniform" } else { "const" };
+            write!(f, "  param {} : {} = {} ({kind}", p.name, p.ty.name(), p.value)?;
+            if let Some((lo, hi)) = p.range {
+                write!(f, ", range [{}, {}]", short(lo), short(hi))?;
+            }
+            writeln!(f, ")")?;
+        }
+        for (i, c) in self.channels.iter().enumerate() {
+            write!(f, "  channel #{i} {} : {}", c.name, c.precision.name())?;
+            if let Some(v) = c.value {
+                write!(f, " = {}", self.arena.display(v, Some(self)))?;
+            }
+            writeln!(f)?;
+        }
+        for e in &self.expansions {
+            writeln!(f, "  expansion {} = {}", e.name, self.arena.display(e.constant, Some(self)))?;
+            for (coeff, ch) in &e.terms {
+                writeln!(f, "      + {} * {}", self.arena.display(*coeff, Some(self)), self.channels[*ch].name)?;
+            }
+        }
+        for r in &self.resources {
+            write!(f, "  resource {} (written by {}", r.name, self.passes.get(r.writer).map(|p| p.name.as_str()).unwrap_or("?"))?;
+            if r.mips {
+                write!(f, ", mips")?;
+            }
+            if r.sat {
+                write!(f, ", summed-area")?;
+            }
+            writeln!(f, ")")?;
+            for s in &r.slots {
+                write!(f, "      {} : {}", self.channels[s.channel].name, s.precision.name())?;
+                if let Some(range) = s.range {
+                    write!(f, " range {range}")?;
+                }
+                if !s.encode.is_identity() {
+                    write!(f, " encode (v - {}) * {}", short(s.encode.bias), short(s.encode.scale))?;
+                }
+                if let Some((t, layer, comp)) = s.place {
+                    write!(f, " at {}[{layer}].{}", r.textures[t].name, ['r', 'g', 'b', 'a'][comp as usize])?;
+                }
+                writeln!(f)?;
+            }
+            for t in &r.textures {
+                writeln!(f, "      texture {} : {} x{} components x{} layers", t.name, t.precision.name(), t.components, t.layers)?;
+            }
+        }
+        for p in &self.passes {
+            let reads: Vec<&str> = p.reads.iter().map(|r| self.resources[*r].name.as_str()).collect();
+            write!(f, "  pass {} : {} reads [{}]", p.name, p.kind_name(), reads.join(", "))?;
+            if let Some(w) = p.writes {
+                write!(f, " writes {}", self.resources[w].name)?;
+            }
+            match &p.kind {
+                IrPassKind::Filter { kernel } => write!(f, " kernel {kernel:?}")?,
+                IrPassKind::Mipmap { reduce } => write!(f, " reduce {reduce:?}")?,
+                IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self)))?,
+                _ => {}
+            }
+            writeln!(f)?;
+        }
+        for r in &self.removed {
+            writeln!(f, "  removed: {r}")?;
+        }
+        Ok(())
+    }
+}

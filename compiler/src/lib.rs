@@ -1,0 +1,218 @@
+//! `sshc`: a compiler of real-time soft-shadow techniques.
+//!
+//! A technique written in RON (params, light model, channels, basis expansions, passes and
+//! a visibility expression) is compiled through one module per phase:
+//!
+//! ```text
+//! parse -> resolve -> check -> lower -> analyse -> pack -> codegen -> emit
+//! ```
+//!
+//! into naga-validated WGSL modules and a [`PassGraph`] of the runtime crate's schema.
+//! Every error a technique file can cause is a [`Diagnostic`] with a span; nothing here
+//! touches the GPU.
+
+pub mod analyse;
+pub mod back;
+pub mod builtins;
+pub mod check;
+pub mod diag;
+pub mod emit;
+pub mod explain;
+pub mod front;
+pub mod ir;
+pub mod lower;
+pub mod pack;
+pub mod resolve;
+pub mod span;
+
+pub use diag::{Diagnostic, Diagnostics};
+pub use pack::Limits;
+pub use sshc_runtime::graph::PassGraph;
+
+use std::path::Path;
+
+/// Phases after which `--dump-ir-after` can print the IR.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, clap::ValueEnum)]
+pub enum DumpPhase {
+    Parse,
+    Resolve,
+    Check,
+    Lower,
+    Analyse,
+    Pack,
+    Codegen,
+    Emit,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct CompileOptions {
+    /// `--set NAME=VALUE` overrides of param values (RON literals).
+    pub set: Vec<(String, String)>,
+    /// `--precision NAME=P` overrides of channel or expansion precision.
+    pub precision: Vec<(String, String)>,
+    pub limits: Limits,
+    pub dump_after: Option<DumpPhase>,
+}
+
+/// A compiled technique.
+#[derive(Clone, Debug)]
+pub struct Compiled {
+    pub ir: ir::Ir,
+    pub graph: PassGraph,
+    /// (file name, WGSL source), in pass order.
+    pub shaders: Vec<(String, String)>,
+    pub cost: emit::Cost,
+    pub warnings: Vec<Diagnostic>,
+}
+
+/// The result of a compilation with the IR dump that was asked for (also on failure).
+pub struct Outcome {
+    pub result: Result<Compiled, Diagnostics>,
+    pub dump: Option<String>,
+}
+
+/// Stop after `check` (used by `sshc check`), or go all the way.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Until {
+    Check,
+    Emit,
+}
+
+/// Compile technique source text.
+pub fn compile_str(source: &str, opts: &CompileOptions) -> Result<Compiled, Diagnostics> {
+    run(source, opts, Until::Emit).result
+}
+
+/// Compile, keeping the `--dump-ir-after` text.
+pub fn compile_with_dump(source: &str, opts: &CompileOptions) -> Outcome {
+    run(source, opts, Until::Emit)
+}
+
+/// Validate only: parse, resolve and check.
+pub fn check_str(source: &str, opts: &CompileOptions) -> Result<(), Diagnostics> {
+    run(source, opts, Until::Check).result.map(|_| ())
+}
+
+/// Read and compile a technique file; errors are rendered against the file.
+pub fn compile_file(path: &Path, opts: &CompileOptions) -> Result<Compiled, String> {
+    let source = std::fs::read_to_string(path).map_err(|e| format!("error: cannot read {}: {e}", path.display()))?;
+    compile_str(&source, opts).map_err(|d| d.render(&path.display().to_string(), &source))
+}
+
+fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
+    let mut dump = None;
+    let want = |p: DumpPhase| opts.dump_after == Some(p);
+    let result = (|| {
+        let ast = front::parse::parse(source).map_err(Diagnostics::from)?;
+        if want(DumpPhase::Parse) {
+            dump = Some(format!("{ast:#?}\n"));
+        }
+        let sym = resolve::resolve(&ast, opts)?;
+        if want(DumpPhase::Resolve) {
+            dump = Some(resolve_dump(&sym));
+        }
+        let checked = check::check(&sym)?;
+        if want(DumpPhase::Check) {
+            let order: Vec<&str> = checked.order.iter().map(|&i| ast.passes[i].name.value.as_str()).collect();
+            let mut s = format!("execution order: {}\n", order.join(" -> "));
+            for (r, items) in &checked.items {
+                s.push_str(&format!("resource {r}: {items:?}\n"));
+            }
+            dump = Some(s);
+        }
+        if until == Until::Check {
+            return Err(Diagnostics::default());
+        }
+        let mut ir = lower::lower(&sym, &checked)?;
+        if want(DumpPhase::Lower) {
+            dump = Some(ir.to_string());
+        }
+        let probe = |param: usize, value: f64, res: usize, slot: usize| -> Option<ir::Interval> {
+            probe_range(&sym, &checked, &ir, param, value, res, slot)
+        };
+        let snapshot = ir.clone();
+        let warnings = {
+            let mut ir2 = snapshot.clone();
+            let w = analyse::analyse(&mut ir2, &probe)?;
+            ir = ir2;
+            w
+        };
+        if want(DumpPhase::Analyse) {
+            dump = Some(ir.to_string());
+        }
+        pack::pack(&mut ir, &opts.limits)?;
+        if want(DumpPhase::Pack) {
+            dump = Some(ir.to_string());
+        }
+        let out = back::wgsl::codegen(&ir, &opts.limits)?;
+        if want(DumpPhase::Codegen) {
+            dump = Some(out.modules.iter().map(|m| format!("// ----- {} -----\n{}", m.file, m.source)).collect());
+        }
+        let graph = emit::graph(&ir, &out);
+        if want(DumpPhase::Emit) {
+            dump = Some(graph.to_ron());
+        }
+        let cost = emit::Cost::of(&graph);
+        let shaders = out.modules.into_iter().map(|m| (m.file, m.source)).collect();
+        Ok(Compiled { ir, graph, shaders, cost, warnings })
+    })();
+    let result = match (result, until) {
+        (Err(d), Until::Check) if d.is_empty() => Err(Diagnostics::default()),
+        (r, _) => r,
+    };
+    Outcome { result, dump }
+}
+
+/// Range of one slot with one param changed (for the "largest safe value" of `analyse`).
+fn probe_range(sym: &resolve::Symbols, checked: &check::Checked, ir: &ir::Ir, param: usize, value: f64, res: usize, slot: usize) -> Option<ir::Interval> {
+    let p = &ir.params[param];
+    if p.uniform {
+        let mut ir2 = ir.clone();
+        let lo = p.range.map(|r| r.0).unwrap_or(value).min(value);
+        ir2.params[param].range = Some((lo, value));
+        return analyse::slot_ranges(&ir2).get(res)?.get(slot).copied();
+    }
+    let mut values = sym.values.clone();
+    values[param].value = match p.value {
+        front::ast::ConstValue::Int(_) => front::ast::ConstValue::Int(value.floor() as i64),
+        _ => front::ast::ConstValue::Float(value),
+    };
+    let sym2 = resolve::Symbols { values, ..sym.clone_shallow() };
+    let ir2 = lower::lower(&sym2, checked).ok()?;
+    analyse::slot_ranges(&ir2).get(res)?.get(slot).copied()
+}
+
+fn resolve_dump(sym: &resolve::Symbols) -> String {
+    let mut s = String::new();
+    for (n, i) in &sym.params {
+        s.push_str(&format!("param {n} = {} (fixed: {})\n", sym.values[*i].value, sym.t.params[*i].fixed));
+    }
+    for (n, i) in &sym.channels {
+        s.push_str(&format!("channel {n}: {}\n", sym.channel_precision[*i].name()));
+    }
+    for (n, i) in &sym.expansions {
+        s.push_str(&format!("expansion {n}: {}\n", sym.expansion_precision[*i].name()));
+    }
+    for (n, r) in &sym.resources {
+        s.push_str(&format!("resource {n} written by pass `{}`\n", sym.t.passes[r.writer].name.value));
+    }
+    s
+}
+
+/// Write the outputs of `sshc compile` into `dir`: WGSL files, `<name>.graph.ron`, `<name>.cost.md`.
+pub fn write_outputs(c: &Compiled, dir: &Path) -> std::io::Result<Vec<std::path::PathBuf>> {
+    std::fs::create_dir_all(dir)?;
+    let mut written = Vec::new();
+    for (file, src) in &c.shaders {
+        let p = dir.join(file);
+        std::fs::write(&p, src)?;
+        written.push(p);
+    }
+    let g = dir.join(format!("{}.graph.ron", c.graph.technique));
+    std::fs::write(&g, c.graph.to_ron())?;
+    written.push(g);
+    let cost = dir.join(format!("{}.cost.md", c.graph.technique));
+    std::fs::write(&cost, c.cost.markdown(&c.graph.technique))?;
+    written.push(cost);
+    Ok(written)
+}

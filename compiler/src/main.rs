@@ -1,0 +1,171 @@
+//! The `sshc` command line.
+
+use clap::{Parser, Subcommand};
+use codespan_reporting::term::termcolor::{ColorChoice, StandardStream};
+use sshc::{CompileOptions, DumpPhase, Diagnostics};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(name = "sshc", version, about = "Compile soft-shadow techniques written in RON into WGSL and a pass graph")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(clap::Args, Clone)]
+struct Common {
+    /// The technique file (RON).
+    technique: PathBuf,
+    /// Override a param: NAME=VALUE (a RON literal such as 16, 2.5 or true). Repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
+    set: Vec<(String, String)>,
+    /// Override the precision of a channel or expansion: NAME=unorm8|unorm16|f16|f32. Repeatable.
+    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
+    precision: Vec<(String, String)>,
+    /// Print the IR after this phase.
+    #[arg(long = "dump-ir-after", value_enum)]
+    dump_ir_after: Option<DumpPhase>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Compile a technique: WGSL files, the pass graph and a cost report.
+    Compile {
+        #[command(flatten)]
+        common: Common,
+        /// Output folder (default: ./out).
+        #[arg(short, long, default_value = "out")]
+        out: PathBuf,
+    },
+    /// Validate a technique without generating code.
+    Check {
+        #[command(flatten)]
+        common: Common,
+    },
+    /// Describe the compiled technique in plain words: passes, channels, packing, cost.
+    Explain {
+        #[command(flatten)]
+        common: Common,
+    },
+    /// Time compilation of techniques in a warm process (naga validation included).
+    BenchCompile {
+        /// Technique files.
+        techniques: Vec<PathBuf>,
+        /// Compilations per technique; the median is reported.
+        #[arg(long, default_value_t = 50)]
+        runs: usize,
+    },
+}
+
+fn pair(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
+        _ => Err(format!("expected NAME=VALUE, found `{s}`")),
+    }
+}
+
+fn options(c: &Common) -> CompileOptions {
+    CompileOptions { set: c.set.clone(), precision: c.precision.clone(), dump_after: c.dump_ir_after, ..Default::default() }
+}
+
+fn read(path: &Path) -> Result<String, String> {
+    std::fs::read_to_string(path).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))
+}
+
+fn report(diags: &Diagnostics, path: &Path, source: &str) {
+    let choice = if std::io::stderr().is_terminal() { ColorChoice::Auto } else { ColorChoice::Never };
+    let mut stderr = StandardStream::stderr(choice);
+    for d in &diags.0 {
+        d.emit_to(&mut stderr, &path.display().to_string(), source);
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(msg) => {
+            if !msg.is_empty() {
+                eprintln!("{msg}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Compile { common, out } => {
+            let source = read(&common.technique)?;
+            let outcome = sshc::compile_with_dump(&source, &options(&common));
+            if let Some(d) = &outcome.dump {
+                print!("{d}");
+            }
+            let c = outcome.result.map_err(|d| {
+                report(&d, &common.technique, &source);
+                String::new()
+            })?;
+            report(&Diagnostics(c.warnings.clone()), &common.technique, &source);
+            let files = sshc::write_outputs(&c, &out).map_err(|e| format!("error: cannot write to `{}`: {e}", out.display()))?;
+            for f in files {
+                println!("wrote {}", f.display());
+            }
+            Ok(())
+        }
+        Command::Check { common } => {
+            let source = read(&common.technique)?;
+            sshc::check_str(&source, &options(&common)).map_err(|d| {
+                report(&d, &common.technique, &source);
+                String::new()
+            })?;
+            println!("{}: ok", common.technique.display());
+            Ok(())
+        }
+        Command::Explain { common } => {
+            let source = read(&common.technique)?;
+            let outcome = sshc::compile_with_dump(&source, &options(&common));
+            if let Some(d) = &outcome.dump {
+                print!("{d}");
+            }
+            let c = outcome.result.map_err(|d| {
+                report(&d, &common.technique, &source);
+                String::new()
+            })?;
+            report(&Diagnostics(c.warnings.clone()), &common.technique, &source);
+            print!("{}", sshc::explain::explain(&c));
+            Ok(())
+        }
+        Command::BenchCompile { techniques, runs } => {
+            if techniques.is_empty() {
+                return Err("error: name at least one technique file".into());
+            }
+            let runs = runs.max(1);
+            println!("| technique | median ms | min ms | max ms | runs |\n|---|---|---|---|---|");
+            for t in &techniques {
+                let source = read(t)?;
+                let opts = CompileOptions::default();
+                // warm up
+                sshc::compile_str(&source, &opts).map_err(|d| {
+                    report(&d, t, &source);
+                    String::new()
+                })?;
+                let mut times: Vec<f64> = (0..runs)
+                    .map(|_| {
+                        let start = Instant::now();
+                        let r = sshc::compile_str(&source, &opts);
+                        let ms = start.elapsed().as_secs_f64() * 1e3;
+                        std::hint::black_box(r.is_ok());
+                        ms
+                    })
+                    .collect();
+                times.sort_by(f64::total_cmp);
+                let name = t.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+                println!("| {name} | {:.3} | {:.3} | {:.3} | {runs} |", times[times.len() / 2], times[0], times[times.len() - 1]);
+            }
+            Ok(())
+        }
+    }
+}

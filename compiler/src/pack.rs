@@ -1,0 +1,206 @@
+//! Phase `pack`: dead channel and dead pass elimination (what no shaded pixel can reach
+//! is removed, and the reason recorded), then channels are packed into textures: per
+//! resource, one 2D-array texture per precision, up to four channels per texel and as
+//! many layers as needed, within the limits profile (DESIGN.md section 2).
+
+use crate::diag::{Diagnostic, Diagnostics, Phase};
+use crate::front::ast::Precision;
+use crate::ir::*;
+use std::collections::HashSet;
+
+/// The device limits a technique is compiled against (default: WebGPU's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    pub max_color_attachments: u32,
+    pub max_color_attachment_bytes_per_sample: u32,
+    pub max_sampled_textures_per_shader_stage: u32,
+    pub max_texture_array_layers: u32,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_color_attachments: 8,
+            max_color_attachment_bytes_per_sample: 32,
+            max_sampled_textures_per_shader_stage: 16,
+            max_texture_array_layers: 256,
+        }
+    }
+}
+
+/// Components per texel for a texture holding `n` channels.
+pub fn components_for(n: usize) -> u32 {
+    match n {
+        1 => 1,
+        2 => 2,
+        _ => 4,
+    }
+}
+
+/// Bytes of one texel of a texture.
+pub fn texel_bytes(p: Precision, components: u32) -> u32 {
+    p.bytes() * components
+}
+
+/// Remove what the Shade pass cannot reach.
+pub fn eliminate(ir: &mut Ir) {
+    let Some(shade) = ir.passes.iter().position(|p| matches!(p.kind, IrPassKind::Shade { .. })) else { return };
+    let mut live: HashSet<(ResId, ChannelId)> = HashSet::new();
+    let mut live_pass = vec![false; ir.passes.len()];
+    live_pass[shade] = true;
+    if let IrPassKind::Shade { visibility } = ir.passes[shade].kind {
+        for h in ir.arena.postorder(&[visibility]) {
+            if let Node::Sample { channel, resource, .. } = ir.arena.node(h) {
+                live.insert((*resource, *channel));
+            }
+        }
+    }
+    // Walk writers backwards: passes are in execution order.
+    for pi in (0..ir.passes.len()).rev() {
+        let Some(w) = ir.passes[pi].writes else { continue };
+        let needed: Vec<ChannelId> = ir.resources[w].slots.iter().map(|s| s.channel).filter(|c| live.contains(&(w, *c))).collect();
+        if needed.is_empty() {
+            continue;
+        }
+        live_pass[pi] = true;
+        let reads = ir.passes[pi].reads.clone();
+        let carrier = |c: ChannelId, ir: &Ir| reads.iter().copied().find(|&r| ir.resources[r].slot_of(c).is_some());
+        match ir.passes[pi].kind {
+            IrPassKind::Map | IrPassKind::Geometry { .. } => {
+                let roots: Vec<H> = needed.iter().filter_map(|&c| ir.channels[c].value).collect();
+                for h in ir.arena.postorder(&roots) {
+                    if let Node::Channel(c) = ir.arena.node(h) {
+                        if let Some(r) = carrier(*c, ir) {
+                            live.insert((r, *c));
+                        }
+                    }
+                }
+            }
+            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea => {
+                for c in needed {
+                    if let Some(r) = carrier(c, ir) {
+                        live.insert((r, c));
+                    }
+                }
+            }
+            IrPassKind::Depth { .. } | IrPassKind::Shade { .. } => {}
+        }
+    }
+    let mut removed = Vec::new();
+    for (pi, pass) in ir.passes.iter_mut().enumerate() {
+        if !live_pass[pi] {
+            pass.live = false;
+            removed.push(format!("pass `{}`: no shaded pixel reads what it writes", pass.name));
+        }
+    }
+    for (ri, res) in ir.resources.iter_mut().enumerate() {
+        let before = res.slots.len();
+        let mut dropped = Vec::new();
+        res.slots.retain(|s| {
+            let keep = live.contains(&(ri, s.channel));
+            if !keep {
+                dropped.push(s.channel);
+            }
+            keep
+        });
+        if res.slots.is_empty() {
+            res.live = false;
+            removed.push(format!("resource `{}`: unused", res.name));
+        } else if res.slots.len() < before {
+            let names: Vec<&str> = dropped.iter().map(|c| ir.channels[*c].name.as_str()).collect();
+            removed.push(format!("channels {} of `{}`: no shaded pixel reads them", names.join(", "), res.name));
+        }
+    }
+    ir.removed.extend(removed);
+}
+
+pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
+    eliminate(ir);
+    let mut diags = Diagnostics::default();
+    // A Mipmap pass builds the chain in place: its output shares the textures of its input,
+    // which must therefore keep every channel the output needs.
+    for pi in 0..ir.passes.len() {
+        if let (IrPassKind::Mipmap { .. }, Some(w), true) = (&ir.passes[pi].kind, ir.passes[pi].writes, ir.passes[pi].live) {
+            let src = ir.passes[pi].reads[0];
+            let keep: Vec<ChannelId> = ir.resources[src].slots.iter().map(|s| s.channel).collect();
+            let out_slots = ir.resources[src].slots.clone();
+            let needed_missing = ir.resources[w].slots.iter().any(|s| !keep.contains(&s.channel));
+            debug_assert!(!needed_missing, "mip output needs a channel its input lost");
+            let ranges: Vec<_> = out_slots.iter().map(|s| ir.resources[w].slot_of(s.channel).map(|o| (o.range, o.encode))).collect();
+            ir.resources[w].slots = out_slots
+                .into_iter()
+                .zip(ranges)
+                .map(|(s, r)| match r {
+                    Some((range, encode)) => Slot { range, encode, ..s },
+                    None => s,
+                })
+                .collect();
+        }
+    }
+    for ri in 0..ir.resources.len() {
+        if !ir.resources[ri].live {
+            continue;
+        }
+        if let Some(src) = mip_source(ir, ri) {
+            // packed identically to its source (processed earlier: passes run in order)
+            let (textures, slots) = (ir.resources[src].textures.clone(), ir.resources[src].slots.clone());
+            let res = &mut ir.resources[ri];
+            res.textures = textures;
+            for s in res.slots.iter_mut() {
+                s.place = slots.iter().find(|o| o.channel == s.channel).and_then(|o| o.place);
+            }
+            continue;
+        }
+        let res = &mut ir.resources[ri];
+        let mut precisions: Vec<Precision> = res.slots.iter().map(|s| s.precision).collect();
+        precisions.sort();
+        precisions.dedup();
+        let single = precisions.len() == 1;
+        res.textures.clear();
+        for p in precisions {
+            let idx: Vec<usize> = (0..res.slots.len()).filter(|&i| res.slots[i].precision == p).collect();
+            let comps = components_for(idx.len());
+            let layers = (idx.len() as u32).div_ceil(comps);
+            let ti = res.textures.len();
+            let name = if single { res.name.clone() } else { format!("{}_{}", res.name, p.name().to_ascii_lowercase()) };
+            if layers > limits.max_texture_array_layers {
+                diags.push(
+                    Diagnostic::error(Phase::Pack, format!("resource `{}` needs {layers} texture array layers at {}, above maxTextureArrayLayers = {}", res.name, p.name(), limits.max_texture_array_layers))
+                        .at(res.span, format!("{} channels of {}", idx.len(), p.name()))
+                        .help("lower the series order, or split the channels over several resources"),
+                );
+            }
+            for (j, &i) in idx.iter().enumerate() {
+                res.slots[i].place = Some((ti, j as u32 / comps, j as u32 % comps));
+            }
+            res.textures.push(Texture { name, precision: p, components: comps, layers });
+        }
+    }
+    // Sampled textures per shader stage.
+    for pass in ir.passes.iter().filter(|p| p.live) {
+        let n: usize = pass.reads.iter().map(|&r| ir.resources[r].textures.len()).sum();
+        if n as u32 > limits.max_sampled_textures_per_shader_stage {
+            diags.push(
+                Diagnostic::error(Phase::Pack, format!("pass `{}` reads {n} textures, above maxSampledTexturesPerShaderStage = {}", pass.name, limits.max_sampled_textures_per_shader_stage))
+                    .at(pass.span, "reads too many textures")
+                    .help("store the channels it reads at fewer precisions, so that they share texture arrays"),
+            );
+        }
+    }
+    diags.check()
+}
+
+/// The resource whose textures a Mipmap output shares.
+pub fn mip_source(ir: &Ir, r: ResId) -> Option<ResId> {
+    let w = &ir.passes[ir.resources[r].writer];
+    match w.kind {
+        IrPassKind::Mipmap { .. } => Some(mip_source(ir, w.reads[0]).unwrap_or(w.reads[0])),
+        _ => None,
+    }
+}
+
+/// How many layers of a texture one render pass can write at once under the limits.
+pub fn layers_per_subpass(t: &Texture, limits: &Limits) -> u32 {
+    let by_bytes = limits.max_color_attachment_bytes_per_sample / texel_bytes(t.precision, t.components).max(1);
+    by_bytes.min(limits.max_color_attachments).max(1)
+}

@@ -1,0 +1,226 @@
+//! Phase `resolve`: names become indices. Declarations are collected (duplicates and
+//! reserved names refused), command-line overrides (`--set`, `--precision`) are applied,
+//! and every resource gets the pass that writes it.
+
+use crate::diag::{Diagnostic, Diagnostics, Phase};
+use crate::front::ast::*;
+use crate::front::parse::closest;
+use crate::span::{Span, Spanned};
+use crate::{CompileOptions, builtins};
+use indexmap::IndexMap;
+
+/// A resource: named image written by exactly one pass.
+#[derive(Clone, Debug)]
+pub struct Resource {
+    pub name: String,
+    pub writer: usize,
+    pub span: Span,
+}
+
+/// What a name in a resource's channel list stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Item {
+    Channel(usize),
+    Expansion(usize),
+}
+
+#[derive(Debug)]
+pub struct Symbols<'a> {
+    pub t: &'a Technique,
+    pub params: IndexMap<String, usize>,
+    pub channels: IndexMap<String, usize>,
+    pub expansions: IndexMap<String, usize>,
+    pub passes: IndexMap<String, usize>,
+    pub resources: IndexMap<String, Resource>,
+    /// Parameter values after `--set` overrides, with the span that set them.
+    pub values: Vec<Spanned<ConstValue>>,
+    /// Whether a value came from the command line.
+    pub overridden: Vec<bool>,
+    /// Channel and expansion precisions after `--precision` overrides.
+    pub channel_precision: Vec<Precision>,
+    pub expansion_precision: Vec<Precision>,
+}
+
+impl<'a> Symbols<'a> {
+    /// A copy sharing the technique (for re-lowering with other param values).
+    pub fn clone_shallow(&self) -> Symbols<'a> {
+        Symbols {
+            t: self.t,
+            params: self.params.clone(),
+            channels: self.channels.clone(),
+            expansions: self.expansions.clone(),
+            passes: self.passes.clone(),
+            resources: self.resources.clone(),
+            values: self.values.clone(),
+            overridden: self.overridden.clone(),
+            channel_precision: self.channel_precision.clone(),
+            expansion_precision: self.expansion_precision.clone(),
+        }
+    }
+
+    pub fn param(&self, name: &str) -> Option<(usize, &Param)> {
+        self.params.get(name).map(|&i| (i, &self.t.params[i]))
+    }
+
+    /// Every name an expression may refer to, for "did you mean" hints.
+    pub fn visible_names(&self) -> Vec<&str> {
+        let mut v: Vec<&str> = self.params.keys().map(String::as_str).collect();
+        v.extend(self.channels.keys().map(String::as_str));
+        v.extend(self.expansions.keys().map(String::as_str));
+        v.extend(builtins::Input::ALL.iter().map(|i| i.name()));
+        v.extend(["PI", "E"]);
+        v
+    }
+}
+
+pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a>, Diagnostics> {
+    let mut diags = Diagnostics::default();
+    let mut seen: IndexMap<String, Span> = IndexMap::new();
+    let mut declare = |name: &Spanned<String>, what: &str, diags: &mut Diagnostics| {
+        if builtins::is_reserved(&name.value) {
+            diags.push(
+                Diagnostic::error(Phase::Resolve, format!("`{}` is a built-in name and cannot name a {what}", name.value))
+                    .at(name.span, "reserved")
+                    .help("choose another name"),
+            );
+        } else if let Some(first) = seen.get(&name.value) {
+            diags.push(
+                Diagnostic::error(Phase::Resolve, format!("duplicate name `{}`", name.value))
+                    .at(name.span, format!("{what} `{}` declared again here", name.value))
+                    .also(*first, "first declared here")
+                    .help("params, channels and expansions share one namespace; rename one of them"),
+            );
+        } else {
+            seen.insert(name.value.clone(), name.span);
+        }
+    };
+    let mut params = IndexMap::new();
+    for (i, p) in t.params.iter().enumerate() {
+        declare(&p.name, "param", &mut diags);
+        params.entry(p.name.value.clone()).or_insert(i);
+    }
+    let mut channels = IndexMap::new();
+    for (i, c) in t.channels.iter().enumerate() {
+        declare(&c.name, "channel", &mut diags);
+        channels.entry(c.name.value.clone()).or_insert(i);
+    }
+    let mut expansions = IndexMap::new();
+    for (i, e) in t.expansions.iter().enumerate() {
+        declare(&e.name, "expansion", &mut diags);
+        expansions.entry(e.name.value.clone()).or_insert(i);
+    }
+
+    let mut passes = IndexMap::new();
+    let mut resources: IndexMap<String, Resource> = IndexMap::new();
+    for (i, p) in t.passes.iter().enumerate() {
+        if let Some(&first) = passes.get(&p.name.value) {
+            let first: &Pass = &t.passes[first];
+            diags.push(
+                Diagnostic::error(Phase::Resolve, format!("duplicate pass name `{}`", p.name.value))
+                    .at(p.name.span, "declared again here")
+                    .also(first.name.span, "first declared here"),
+            );
+        } else {
+            passes.insert(p.name.value.clone(), i);
+        }
+        if let Some(w) = p.kind.writes() {
+            if let Some(prev) = resources.get(&w.value) {
+                diags.push(
+                    Diagnostic::error(Phase::Resolve, format!("resource `{}` is written by two passes", w.value))
+                        .at(w.span, format!("written again by `{}`", p.name.value))
+                        .also(prev.span, "first written here")
+                        .help("every pass writes a resource of its own name; give this output a new name"),
+                );
+            } else {
+                resources.insert(
+                    w.value.clone(),
+                    Resource {
+                        name: w.value.clone(),
+                        writer: i,
+                        span: w.span,
+                    },
+                );
+            }
+        }
+    }
+
+    // Channel names listed by Depth, Map and Geometry passes must be declared.
+    for p in &t.passes {
+        let listed: Vec<&Name> = match &p.kind {
+            PassKind::Depth { channel, .. } => vec![channel],
+            PassKind::Map { channels: c, .. } | PassKind::Geometry { channels: c, .. } => c.iter().collect(),
+            _ => vec![],
+        };
+        for n in listed {
+            if !channels.contains_key(&n.value) && !expansions.contains_key(&n.value) {
+                let cands: Vec<&str> = channels.keys().chain(expansions.keys()).map(String::as_str).collect();
+                let mut d = Diagnostic::error(Phase::Resolve, format!("unknown channel `{}`", n.value))
+                    .at(n.span, "not declared in `channels` or `expansions`");
+                if let Some(s) = closest(&n.value, &cands) {
+                    d = d.help(format!("did you mean `{s}`?"));
+                }
+                diags.push(d);
+            }
+        }
+    }
+
+    // Overrides from the command line.
+    let mut values: Vec<Spanned<ConstValue>> = t.params.iter().map(|p| p.default.clone()).collect();
+    let mut overridden = vec![false; t.params.len()];
+    for (name, text) in &opts.set {
+        let Some(&i) = params.get(name) else {
+            let cands: Vec<&str> = params.keys().map(String::as_str).collect();
+            let mut d = Diagnostic::error(Phase::Cli, format!("`--set {name}=...`: the technique has no param `{name}`"));
+            if let Some(s) = closest(name, &cands) {
+                d = d.help(format!("did you mean `{s}`?"));
+            } else {
+                d = d.note(format!("its params are: {}", cands.join(", ")));
+            }
+            diags.push(d);
+            continue;
+        };
+        let p = &t.params[i];
+        let parsed = crate::front::ron::parse(text).map_err(|_| ()).and_then(|node| {
+            crate::front::parse::const_value(&node, p.ty.value).map_err(|_| ())
+        });
+        match parsed {
+            Ok(v) => {
+                values[i] = Spanned::new(v.value, p.default.span);
+                overridden[i] = true;
+            }
+            Err(()) => diags.push(
+                Diagnostic::error(Phase::Cli, format!("`--set {name}={text}`: expected a value of type {}", p.ty.value.name()))
+                    .at(p.ty.span, format!("`{name}` is declared {} here", p.ty.value.name())),
+            ),
+        }
+    }
+    let mut channel_precision: Vec<Precision> = t.channels.iter().map(|c| c.precision.value).collect();
+    let mut expansion_precision: Vec<Precision> = t.expansions.iter().map(|e| e.precision.value).collect();
+    for (name, text) in &opts.precision {
+        let Some(p) = Precision::parse(text) else {
+            diags.push(Diagnostic::error(Phase::Cli, format!("`--precision {name}={text}`: unknown precision")).note("expected one of: unorm8, unorm16, f16, f32"));
+            continue;
+        };
+        if let Some(&i) = channels.get(name) {
+            channel_precision[i] = p;
+        } else if let Some(&i) = expansions.get(name) {
+            expansion_precision[i] = p;
+        } else {
+            diags.push(Diagnostic::error(Phase::Cli, format!("`--precision {name}=...`: no channel or expansion named `{name}`")));
+        }
+    }
+
+    diags.check()?;
+    Ok(Symbols {
+        t,
+        params,
+        channels,
+        expansions,
+        passes,
+        resources,
+        values,
+        overridden,
+        channel_precision,
+        expansion_precision,
+    })
+}

@@ -1,0 +1,378 @@
+//! The pass graph: resources, passes and the shader modules that run them, plus the
+//! binding conventions every generated module follows.
+//!
+//! Conventions shared by the compiler and the runtime:
+//! - `@group(0) @binding(0)`: the [`FRAME_WGSL`] uniform `frame` (light and camera matrices,
+//!   depth range, sizes), filled by the runtime each frame.
+//! - `@group(0) @binding(1)`: the technique's `Params` uniform, present when
+//!   [`PassGraph::params_size`] > 0; every field is 4 bytes at [`ParamDecl::offset`].
+//! - `@group(0) @binding(2)`: a filtering sampler (linear, mipmap linear, clamp to edge),
+//!   present when [`Step::sampler`] is true.
+//! - `@group(1) @binding(i)`: the textures in [`Step::reads`], in order.
+//! - Scene draws use one vertex buffer: `@location(0)` position and `@location(1)` normal,
+//!   `vec3<f32>` each, interleaved (24-byte stride), in world space.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// Version of this schema; a graph of another version is refused.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// The per-frame uniform every module declares at `@group(0) @binding(0)`.
+pub const FRAME_WGSL: &str = "struct Frame {
+    // world -> light clip space
+    light_view_proj: mat4x4<f32>,
+    // world -> light view space (the light looks down -z)
+    light_view: mat4x4<f32>,
+    // world -> camera clip space
+    camera_view_proj: mat4x4<f32>,
+    // xyz: light position (w = 1) or direction towards the light (w = 0)
+    light_position: vec4<f32>,
+    // xyz: camera position
+    camera_position: vec4<f32>,
+    // x: near, y: far (light view distances), z: 1 / (far - near)
+    depth_range: vec4<f32>,
+    // xy: shadow-map size in texels, zw: 1 / size
+    shadow_size: vec4<f32>,
+    // x: light radius or half-extent (world units), y: angular diameter (radians), zw: rectangle half-extents
+    light_size: vec4<f32>,
+    // xy: size of the current render target, zw: 1 / size
+    target_size: vec4<f32>,
+}
+";
+
+/// Size in bytes of [`FRAME_WGSL`]'s `Frame`.
+pub const FRAME_SIZE: u32 = 3 * 64 + 6 * 16;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PassGraph {
+    pub version: u32,
+    pub technique: String,
+    /// Light models the technique assumes (empty: any).
+    pub lights: Vec<LightModel>,
+    pub params: Vec<ParamDecl>,
+    /// Bytes of the `Params` uniform (0: none).
+    pub params_size: u32,
+    pub textures: Vec<TextureDecl>,
+    /// In execution order.
+    pub passes: Vec<PassDecl>,
+    /// What the compiler removed, and why.
+    pub removed: Vec<String>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum LightModel {
+    Any,
+    Point,
+    Directional,
+    Sphere,
+    Disk,
+    Rectangle,
+    Segment { samples: u32 },
+    DistantDisk,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ParamType {
+    F32,
+    I32,
+    Bool,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParamDecl {
+    pub name: String,
+    pub ty: ParamType,
+    /// The value compiled in (fixed) or the default (uniform).
+    pub value: f64,
+    pub range: Option<(f64, f64)>,
+    /// Byte offset in `Params` when a runtime uniform; `None` when fixed at compile time.
+    pub offset: Option<u32>,
+    pub doc: Option<String>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Format {
+    R8Unorm,
+    Rg8Unorm,
+    Rgba8Unorm,
+    R16Unorm,
+    Rg16Unorm,
+    Rgba16Unorm,
+    R16Float,
+    Rg16Float,
+    Rgba16Float,
+    R32Float,
+    Rg32Float,
+    Rgba32Float,
+    /// Summed-area tables: u32 fixed point, stored in a storage buffer.
+    SummedAreaU32,
+}
+
+impl Format {
+    pub fn bytes_per_texel(self) -> u32 {
+        match self {
+            Format::R8Unorm => 1,
+            Format::Rg8Unorm | Format::R16Unorm | Format::R16Float => 2,
+            Format::Rgba8Unorm | Format::Rg16Unorm | Format::Rg16Float | Format::R32Float => 4,
+            Format::Rgba16Unorm | Format::Rgba16Float | Format::Rg32Float => 8,
+            Format::Rgba32Float => 16,
+            Format::SummedAreaU32 => 16,
+        }
+    }
+
+    /// The WGSL storage format name, as in `texture_storage_2d<...>`.
+    pub fn wgsl(self) -> &'static str {
+        match self {
+            Format::R8Unorm => "r8unorm",
+            Format::Rg8Unorm => "rg8unorm",
+            Format::Rgba8Unorm => "rgba8unorm",
+            Format::R16Unorm => "r16unorm",
+            Format::Rg16Unorm => "rg16unorm",
+            Format::Rgba16Unorm => "rgba16unorm",
+            Format::R16Float => "r16float",
+            Format::Rg16Float => "rg16float",
+            Format::Rgba16Float => "rgba16float",
+            Format::R32Float => "r32float",
+            Format::Rg32Float => "rg32float",
+            Format::Rgba32Float => "rgba32float",
+            Format::SummedAreaU32 => "rgba32uint",
+        }
+    }
+}
+
+/// How large a texture is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Extent {
+    /// The shadow-map resolution the scene asks for.
+    ShadowMap,
+    /// The camera's resolution.
+    Camera,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TextureDecl {
+    pub name: String,
+    pub format: Format,
+    pub layers: u32,
+    pub extent: Extent,
+    /// A full mip chain.
+    pub mips: bool,
+    /// Only used within one pass (the intermediate of a separable filter).
+    pub transient: bool,
+    pub channels: Vec<ChannelDecl>,
+}
+
+/// Where a channel lives in a texture and how to decode it: `value = stored / scale + bias`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ChannelDecl {
+    pub name: String,
+    pub layer: u32,
+    pub component: u32,
+    pub bias: f64,
+    pub scale: f64,
+    /// Value range found by range analysis.
+    pub range: (f64, f64),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PassKind {
+    Depth,
+    Map,
+    Filter,
+    Mipmap,
+    SummedArea,
+    Geometry,
+    Shade,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PassDecl {
+    pub name: String,
+    pub kind: PassKind,
+    /// The WGSL file, relative to the graph's folder.
+    pub shader: String,
+    pub steps: Vec<Step>,
+}
+
+/// What one step draws or dispatches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Draw {
+    /// The scene rasterised from the light.
+    SceneFromLight,
+    /// The scene rasterised from the camera.
+    SceneFromCamera,
+    /// One full-screen triangle (3 vertices, no vertex buffer) over the targets.
+    FullScreen,
+    /// One full-screen triangle per mip level 1.. of the targets, each reading the level above.
+    MipLevels,
+    /// A compute dispatch with one invocation per row of the shadow map (64 per workgroup).
+    ComputeRows,
+    /// A compute dispatch with one invocation per column of the shadow map (64 per workgroup).
+    ComputeColumns,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum View {
+    /// Every mip level.
+    All,
+    /// Level 0 only.
+    Base,
+    /// For [`Draw::MipLevels`]: the level above the one being written.
+    PreviousLevel,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Binding {
+    pub binding: u32,
+    pub texture: String,
+    pub view: View,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Target {
+    pub texture: String,
+    pub layer: u32,
+}
+
+/// Operation counts of one invocation of an entry point, counted on the naga IR.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct OpCount {
+    pub fetches: u32,
+    pub ops: u32,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Step {
+    pub vertex: Option<String>,
+    pub fragment: Option<String>,
+    pub compute: Option<String>,
+    pub draw: Draw,
+    pub reads: Vec<Binding>,
+    pub writes: Vec<Target>,
+    /// Binds the `Params` uniform.
+    pub params: bool,
+    /// Binds the filtering sampler.
+    pub sampler: bool,
+    /// Per fragment or compute invocation.
+    pub cost: OpCount,
+}
+
+/// Why a graph was refused.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GraphError {
+    Syntax { message: String, line: usize, column: usize },
+    Version { found: u32, expected: u32 },
+    Path { pass: String, path: String },
+    Reference { pass: String, name: String },
+}
+
+impl fmt::Display for GraphError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            GraphError::Syntax { message, line, column } => write!(f, "{line}:{column}: not a valid pass graph: {message}"),
+            GraphError::Version { found, expected } => write!(f, "pass graph schema version {found}, but this runtime reads version {expected}; recompile the technique with a matching sshc"),
+            GraphError::Path { pass, path } => write!(f, "pass `{pass}` names shader `{path}`, which is not a plain file name inside the graph's folder"),
+            GraphError::Reference { pass, name } => write!(f, "pass `{pass}` refers to texture `{name}`, which the graph does not declare"),
+        }
+    }
+}
+
+impl std::error::Error for GraphError {}
+
+impl PassGraph {
+    /// Serialise as pretty RON.
+    pub fn to_ron(&self) -> String {
+        let config = ron::ser::PrettyConfig::new().depth_limit(8).indentor("  ".to_string());
+        ron::ser::to_string_pretty(self, config).unwrap_or_else(|e| format!("// serialisation failed: {e}"))
+    }
+
+    /// Parse and check a graph: schema version, shader paths that stay inside the graph's
+    /// folder, and texture names that resolve. Shader validation and device limits are
+    /// checked by the executor when it loads the modules.
+    pub fn from_ron(text: &str) -> Result<PassGraph, GraphError> {
+        // Read the version first, so that an old graph gets the version error, not a schema one.
+        #[derive(Deserialize)]
+        struct Versioned {
+            version: u32,
+        }
+        let syntax = |e: ron::error::SpannedError| GraphError::Syntax { message: e.code.to_string(), line: e.span.start.line, column: e.span.start.col };
+        if let Ok(v) = ron::Options::default().without_recursion_limit().from_str::<ron::Value>(text) {
+            if let Ok(v) = v.into_rust::<Versioned>() {
+                if v.version != SCHEMA_VERSION {
+                    return Err(GraphError::Version { found: v.version, expected: SCHEMA_VERSION });
+                }
+            }
+        }
+        let g: PassGraph = ron::from_str(text).map_err(syntax)?;
+        if g.version != SCHEMA_VERSION {
+            return Err(GraphError::Version { found: g.version, expected: SCHEMA_VERSION });
+        }
+        for p in &g.passes {
+            if !is_plain_file_name(&p.shader) {
+                return Err(GraphError::Path { pass: p.name.clone(), path: p.shader.clone() });
+            }
+            for s in &p.steps {
+                let names = s.reads.iter().map(|b| &b.texture).chain(s.writes.iter().map(|t| &t.texture));
+                for n in names {
+                    if !g.textures.iter().any(|t| &t.name == n) {
+                        return Err(GraphError::Reference { pass: p.name.clone(), name: n.clone() });
+                    }
+                }
+            }
+        }
+        Ok(g)
+    }
+
+    pub fn texture(&self, name: &str) -> Option<&TextureDecl> {
+        self.textures.iter().find(|t| t.name == name)
+    }
+}
+
+/// A file name with no directory part, no `..`, not absolute.
+pub fn is_plain_file_name(p: &str) -> bool {
+    !p.is_empty() && !p.contains(['/', '\\', ':']) && p != "." && p != ".." && !p.starts_with('.')
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tiny() -> PassGraph {
+        PassGraph {
+            version: SCHEMA_VERSION,
+            technique: "t".into(),
+            lights: vec![LightModel::Any],
+            params: vec![],
+            params_size: 0,
+            textures: vec![TextureDecl { name: "z".into(), format: Format::R32Float, layers: 1, extent: Extent::ShadowMap, mips: false, transient: false, channels: vec![] }],
+            passes: vec![PassDecl {
+                name: "depth".into(),
+                kind: PassKind::Depth,
+                shader: "t.depth.wgsl".into(),
+                steps: vec![Step { vertex: Some("vs".into()), fragment: Some("fs".into()), compute: None, draw: Draw::SceneFromLight, reads: vec![], writes: vec![Target { texture: "z".into(), layer: 0 }], params: false, sampler: false, cost: OpCount::default() }],
+            }],
+            removed: vec![],
+        }
+    }
+
+    #[test]
+    fn round_trip() {
+        let g = tiny();
+        assert_eq!(PassGraph::from_ron(&g.to_ron()).unwrap(), g);
+    }
+
+    #[test]
+    fn refuses_wrong_version_paths_and_names() {
+        let mut g = tiny();
+        g.version = 99;
+        assert_eq!(PassGraph::from_ron(&g.to_ron()), Err(GraphError::Version { found: 99, expected: SCHEMA_VERSION }));
+        let mut g = tiny();
+        g.passes[0].shader = "../evil.wgsl".into();
+        assert!(matches!(PassGraph::from_ron(&g.to_ron()), Err(GraphError::Path { .. })));
+        let mut g = tiny();
+        g.passes[0].steps[0].writes[0].texture = "nope".into();
+        assert!(matches!(PassGraph::from_ron(&g.to_ron()), Err(GraphError::Reference { .. })));
+        assert!(matches!(PassGraph::from_ron("PassGraph(version: 1"), Err(GraphError::Syntax { .. })));
+    }
+}

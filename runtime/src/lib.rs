@@ -1,0 +1,9 @@
+//! `sshc-runtime`: the pass-graph schema that `sshc compile` writes and the runtime loads.
+//!
+//! This part is always built and has no GPU dependency, so that the compiler can produce
+//! graphs without wgpu (DESIGN.md section 1). The wgpu executor lands behind the `gpu`
+//! feature.
+
+pub mod graph;
+
+pub use graph::*;
