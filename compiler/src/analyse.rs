@@ -298,7 +298,10 @@ pub fn fits(p: Precision, r: Interval) -> bool {
 }
 
 pub fn encode_for(p: Precision, r: Interval) -> Encode {
-    if !p.is_unorm() || (r.lo >= 0.0 && r.hi <= 1.0) {
+    // Ranges computed through f32 constants can stray below 0 or above 1 by rounding
+    // (sin(f32(pi)) = -8.7e-8); within 1e-6 the unorm clamp is the right encode.
+    const SLACK: f64 = 1e-6;
+    if !p.is_unorm() || (r.lo >= -SLACK && r.hi <= 1.0 + SLACK) {
         return Encode::IDENTITY;
     }
     let w = r.hi - r.lo;
@@ -357,7 +360,8 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
                 }
                 let is_int = matches!(p.value, ConstValue::Int(_));
                 let best = if is_int { a.floor() } else { a };
-                let shown = if is_int { format!("{}", best as i64) } else { format!("{:.2}", (best * 100.0).floor() / 100.0) };
+                // floored, so that the value shown fits
+                let shown = if is_int { format!("{}", best as i64) } else { format!("{:.4}", (best * 1e4).floor() / 1e4) };
                 let what = if p.uniform {
                     format!("narrow the range of `{}` to at most {shown}", p.name)
                 } else {

@@ -147,6 +147,15 @@ impl Arena {
                         _ => {}
                     }
                 }
+                // (c1 * x) / c2 -> (c1 / c2) * x
+                if let (BinOp::Div, Some(Float(c2)), Node::Binary(BinOp::Mul, m1, m2)) = (op, y, self.node(*a).clone()) {
+                    if c2 != 0.0 {
+                        if let Some(Float(c1)) = self.as_const(m1) {
+                            let k = self.f32(c1 / c2);
+                            return Some(self.add(Node::Binary(BinOp::Mul, k, m2), ty, span));
+                        }
+                    }
+                }
                 // Logic with one constant side.
                 match (op, x, y) {
                     (BinOp::And, Some(Bool(true)), _) | (BinOp::Or, Some(Bool(false)), _) => return Some(*b),
@@ -322,6 +331,60 @@ impl Arena {
                 }
             }
         }
+    }
+}
+
+impl Arena {
+    /// Evaluate a scalar expression on the CPU (f64). `leaf` gives the value of params,
+    /// inputs, channels and samples; vectors are not supported (NaN).
+    pub fn eval(&self, h: H, leaf: &dyn Fn(&Node) -> Option<f64>) -> f64 {
+        use ConstValue::*;
+        let mut vals: HashMap<H, f64> = HashMap::new();
+        for n in self.postorder(&[h]) {
+            let get = |x: &H| vals.get(x).copied().unwrap_or(f64::NAN);
+            let v = match self.node(n) {
+                Node::F32(b) => f32::from_bits(*b) as f64,
+                Node::I32(v) => *v as f64,
+                Node::Bool(b) => *b as i32 as f64,
+                Node::Unary(UnOp::Neg, x) => -get(x),
+                Node::Unary(UnOp::Not, x) => (get(x) == 0.0) as i32 as f64,
+                Node::Binary(op, x, y) => {
+                    let (x, y) = (get(x), get(y));
+                    let int = self.ty(n) == Ty::I32;
+                    match op {
+                        BinOp::Add => x + y,
+                        BinOp::Sub => x - y,
+                        BinOp::Mul => x * y,
+                        BinOp::Div => if int { (x / y).trunc() } else { x / y },
+                        BinOp::Rem => x % y,
+                        BinOp::Lt => (x < y) as i32 as f64,
+                        BinOp::Le => (x <= y) as i32 as f64,
+                        BinOp::Gt => (x > y) as i32 as f64,
+                        BinOp::Ge => (x >= y) as i32 as f64,
+                        BinOp::Eq => (x == y) as i32 as f64,
+                        BinOp::Ne => (x != y) as i32 as f64,
+                        BinOp::And => (x != 0.0 && y != 0.0) as i32 as f64,
+                        BinOp::Or => (x != 0.0 || y != 0.0) as i32 as f64,
+                    }
+                }
+                Node::Call(Func::Select, a) => if get(&a[2]) != 0.0 { get(&a[1]) } else { get(&a[0]) },
+                Node::Call(f, a) => {
+                    let args: Vec<ConstValue> = a.iter().map(|x| if self.ty(*x) == Ty::I32 { Int(get(x) as i64) } else { Float(get(x)) }).collect();
+                    eval_call_f64(*f, &args).unwrap_or(f64::NAN)
+                }
+                other => leaf(other).unwrap_or(f64::NAN),
+            };
+            vals.insert(n, v);
+        }
+        vals.get(&h).copied().unwrap_or(f64::NAN)
+    }
+}
+
+fn eval_call_f64(f: Func, v: &[ConstValue]) -> Option<f64> {
+    match eval_call(f, v)? {
+        ConstValue::Float(x) => Some(x),
+        ConstValue::Int(x) => Some(x as f64),
+        ConstValue::Bool(b) => Some(b as i32 as f64),
     }
 }
 

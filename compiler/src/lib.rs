@@ -90,7 +90,11 @@ pub fn compile_with_dump(source: &str, opts: &CompileOptions) -> Outcome {
 
 /// Validate only: parse, resolve and check.
 pub fn check_str(source: &str, opts: &CompileOptions) -> Result<(), Diagnostics> {
-    run(source, opts, Until::Check).result.map(|_| ())
+    match run(source, opts, Until::Check).result {
+        Err(d) if d.is_empty() => Ok(()),
+        Err(d) => Err(d),
+        Ok(_) => Ok(()),
+    }
 }
 
 /// Read and compile a technique file; errors are rendered against the file.

@@ -1,0 +1,67 @@
+//! One failing fixture per user mistake (Halide's `test/error/`): every `errors/*.ron`
+//! must be refused, and its rendered diagnostic must match `errors/*.stderr`.
+//! Set `UPDATE_EXPECT=1` to rewrite the expected files after reviewing a change.
+
+use std::path::Path;
+
+fn render(path: &Path) -> String {
+    let source = std::fs::read_to_string(path).expect("fixture is readable");
+    let name = path.file_name().unwrap().to_string_lossy().into_owned();
+    match sshc::compile_str(&source, &sshc::CompileOptions::default()) {
+        Ok(_) => panic!("{name}: compiled, but it is a fixture of a mistake"),
+        Err(d) => {
+            assert!(d.has_errors(), "{name}: refused without an error");
+            d.render(&name, &source)
+        }
+    }
+}
+
+#[test]
+fn every_mistake_has_its_diagnostic() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/errors");
+    let mut fixtures: Vec<_> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.extension().is_some_and(|x| x == "ron")).collect();
+    fixtures.sort();
+    assert!(fixtures.len() >= 12, "expected at least 12 fixtures, found {}", fixtures.len());
+    let update = std::env::var_os("UPDATE_EXPECT").is_some();
+    let mut failures = Vec::new();
+    for f in &fixtures {
+        let got = render(f);
+        // Every diagnostic names the file with a line and column.
+        let name = f.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(got.contains(&format!("{name}:")), "{name}: no file:line:column in\n{got}");
+        let expected_path = f.with_extension("stderr");
+        if update {
+            std::fs::write(&expected_path, &got).unwrap();
+            continue;
+        }
+        match std::fs::read_to_string(&expected_path) {
+            Ok(want) if want == got => {}
+            Ok(want) => failures.push(format!("{name}: diagnostic changed\n--- expected\n{want}\n--- got\n{got}")),
+            Err(_) => failures.push(format!("{name}: no expected file {}; got\n{got}", expected_path.display())),
+        }
+    }
+    assert!(failures.is_empty(), "{}\n(run with UPDATE_EXPECT=1 to accept)", failures.join("\n"));
+}
+
+#[test]
+fn wrong_precision_names_the_largest_safe_exponent() {
+    // DESIGN.md section 6: exp(c z) at f16 needs c <= ln 65504 = 11.0898 for z in [0, 1].
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/errors/wrong_precision.ron");
+    let got = render(&path);
+    assert!(got.contains("at or below 11.0898"), "{got}");
+    assert!(got.contains("F16"), "{got}");
+}
+
+#[test]
+fn command_line_overrides_are_checked() {
+    let src = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../techniques/csm.ron")).unwrap();
+    let opts = |set: &[(&str, &str)]| sshc::CompileOptions { set: set.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(), ..Default::default() };
+    let e = sshc::compile_str(&src, &opts(&[("M", "65")])).unwrap_err();
+    assert!(e.render("csm.ron", &src).contains("out of range: set on the command line to 65"), "{}", e.render("csm.ron", &src));
+    let e = sshc::compile_str(&src, &opts(&[("MM", "4")])).unwrap_err();
+    assert!(e.render("csm.ron", &src).contains("did you mean `M`?"));
+    let e = sshc::compile_str(&src, &opts(&[("M", "4.5")])).unwrap_err();
+    assert!(e.render("csm.ron", &src).contains("expected a value of type i32"));
+    let e = sshc::compile_str(&src, &sshc::CompileOptions { precision: vec![("f".into(), "f64".into())], ..Default::default() }).unwrap_err();
+    assert!(e.render("csm.ron", &src).contains("unknown precision"));
+}

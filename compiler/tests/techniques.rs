@@ -1,0 +1,220 @@
+//! The bundled techniques: snapshots of everything they compile to (reviewed as diffs,
+//! naga style), parameter and precision grids where every variant compiles and validates
+//! or is refused with a diagnostic naming the limit, and the CSM convergence check.
+
+use sshc::front::ast::Precision;
+use sshc::ir::{Node, Origin};
+use sshc::{CompileOptions, Limits};
+use std::path::{Path, PathBuf};
+
+pub const TECHNIQUES: [&str; 5] = ["hard", "pcf", "vsm", "esm", "csm"];
+
+fn path(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../techniques").join(format!("{name}.ron"))
+}
+
+fn source(name: &str) -> String {
+    std::fs::read_to_string(path(name)).unwrap()
+}
+
+fn opts(set: &[(&str, String)], precision: &[(&str, Precision)]) -> CompileOptions {
+    CompileOptions {
+        set: set.iter().map(|(a, b)| (a.to_string(), b.clone())).collect(),
+        precision: precision.iter().map(|(a, p)| (a.to_string(), p.name().to_string())).collect(),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn snapshots_of_every_technique() {
+    for t in TECHNIQUES {
+        let c = sshc::compile_str(&source(t), &CompileOptions::default()).unwrap_or_else(|d| panic!("{t}: {}", d.render(t, &source(t))));
+        insta::assert_snapshot!(format!("{t}.graph.ron"), c.graph.to_ron());
+        for (file, src) in &c.shaders {
+            insta::assert_snapshot!(file.clone(), src);
+        }
+        insta::assert_snapshot!(format!("{t}.explain"), sshc::explain::explain(&c));
+        // What the compiler reports equals what it writes.
+        let back = sshc::PassGraph::from_ron(&c.graph.to_ron()).expect("emitted graph reads back");
+        assert_eq!(back, c.graph);
+    }
+}
+
+/// Compile a variant: it must compile and validate (codegen runs naga), or be refused with
+/// an error that names `limit`.
+fn variant(t: &str, o: &CompileOptions, refusal_names: Option<&str>) {
+    let src = source(t);
+    match (sshc::compile_str(&src, o), refusal_names) {
+        (Ok(c), None) => {
+            for (file, wgsl) in &c.shaders {
+                sshc::back::validate(wgsl).unwrap_or_else(|e| panic!("{t} {:?}: {file} does not validate: {e}", o.set));
+            }
+        }
+        (Ok(_), Some(limit)) => panic!("{t} {:?} {:?}: compiled, but should be refused naming {limit}", o.set, o.precision),
+        (Err(d), None) => panic!("{t} {:?} {:?}: refused\n{}", o.set, o.precision, d.render(t, &src)),
+        (Err(d), Some(limit)) => {
+            let text = d.render(t, &src);
+            assert!(text.contains(limit), "{t} {:?}: refusal does not name `{limit}`:\n{text}", o.set);
+        }
+    }
+}
+
+#[test]
+fn csm_grid_every_order_at_every_precision() {
+    for m in [1, 2, 4, 8, 16, 32, 64] {
+        for p in Precision::ALL {
+            variant("csm", &opts(&[("M", m.to_string())], &[("f", p)]), None);
+        }
+    }
+    // Under a device with 16 array layers, M = 64 at unorm8 (128 channels, 32 RGBA layers)
+    // does not fit and the refusal names the limit.
+    let mut o = opts(&[("M", "64".into())], &[]);
+    o.limits = Limits { max_texture_array_layers: 16, ..Limits::default() };
+    variant("csm", &o, Some("maxTextureArrayLayers = 16"));
+    for fix in 0..=2 {
+        for alpha in ["0.0", "1.0", "4.0"] {
+            variant("csm", &opts(&[("fix", fix.to_string()), ("alpha", alpha.into())], &[]), None);
+        }
+    }
+}
+
+#[test]
+fn esm_grid_exponent_precision_and_classification() {
+    for c in [5.0, 11.0, 11.2, 40.0, 80.0, 88.0] {
+        for p in [Precision::F16, Precision::F32] {
+            for classify in 0..=2 {
+                let o = opts(&[("c", format!("{c:?}")), ("classify", classify.to_string())], &[("e", p)]);
+                // f16 holds exp(c z) for z in [0, 1] only while c <= ln 65504 = 11.09
+                let refused = p == Precision::F16 && c > 11.09;
+                variant("esm", &o, refused.then_some("must stay at or below 11.0898"));
+            }
+        }
+    }
+}
+
+#[test]
+fn vsm_grid_blur_and_precision() {
+    for k in [1, 3, 7, 15] {
+        for p in [Precision::Unorm16, Precision::F16, Precision::F32] {
+            variant("vsm", &opts(&[("K", k.to_string())], &[("m1", p), ("m2", p)]), None);
+        }
+    }
+}
+
+#[test]
+fn pcf_and_hard_grids() {
+    for n in 1..=8 {
+        variant("pcf", &opts(&[("N", n.to_string())], &[]), None);
+    }
+    variant("pcf", &opts(&[("N", "16".into())], &[]), Some("out of range"));
+    for p in Precision::ALL {
+        variant("hard", &opts(&[], &[("z", p)]), None);
+        variant("pcf", &opts(&[], &[("z", p)]), None);
+    }
+}
+
+/// f(d, z) of the compiled CSM expansion, evaluated on the CPU from the IR (no quantisation).
+fn csm_reconstruction(m: i64) -> impl Fn(f64, f64) -> f64 {
+    let o = opts(&[("M", m.to_string()), ("alpha", "0.0".into()), ("fix", "0".into())], &[]);
+    let c = sshc::compile_str(&source("csm"), &o).unwrap();
+    let ir = c.ir;
+    move |d: f64, z: f64| {
+        let e = &ir.expansions[0];
+        let receiver = |n: &Node| match n {
+            Node::Input(sshc::builtins::Input::D) => Some(d),
+            Node::Input(sshc::builtins::Input::Slope) => Some(0.0),
+            Node::Param(p) => Some(ir.params[*p].value.as_f64()),
+            _ => None,
+        };
+        let map = |n: &Node| match n {
+            Node::Channel(_) => Some(z),
+            _ => None,
+        };
+        let mut f = ir.arena.eval(e.constant, &receiver);
+        for (coeff, ch) in &e.terms {
+            assert!(matches!(ir.channels[*ch].origin, Origin::Basis { .. }));
+            let basis = ir.arena.eval(ir.channels[*ch].value.unwrap(), &map);
+            f += ir.arena.eval(*coeff, &receiver) * basis;
+        }
+        f
+    }
+}
+
+#[test]
+fn csm_reconstruction_approaches_the_step_as_m_grows() {
+    // Away from the step (|z - d| >= 0.1) and from the square wave's next edge (|z - d| <= 0.9),
+    // the reconstruction of eq. 6.5 with c_k = pi (2k - 1) converges to 1 (lit, d < z) and
+    // 0 (shadowed, d > z); the largest error must fall as M grows. With c_k = 2k - 1, as
+    // printed in eq. 6.3, it would not: the period would be 2 pi, not 2.
+    let mut last = f64::INFINITY;
+    let mut errors = Vec::new();
+    for m in [1, 2, 4, 8, 16, 32, 64] {
+        let f = csm_reconstruction(m);
+        let mut worst: f64 = 0.0;
+        for i in 0..=100 {
+            for j in 0..=100 {
+                let (d, z) = (i as f64 / 100.0, j as f64 / 100.0);
+                let t = (z - d).abs();
+                if !(0.1..=0.9).contains(&t) {
+                    continue;
+                }
+                let truth = if d <= z { 1.0 } else { 0.0 };
+                worst = worst.max((f(d, z) - truth).abs());
+            }
+        }
+        errors.push((m, worst));
+        assert!(worst < last, "max error away from the step did not fall at M = {m}: {errors:?}");
+        last = worst;
+    }
+    // The Fourier partial sum of the unit square wave at distance 0.1 from its edge decays
+    // like 1 / (pi^2 M 0.1); at M = 64 that is below 0.02.
+    assert!(last < 0.02, "M = 64 still far from the step: {errors:?}");
+    // At the step itself the series reads 1/2 (the lit-surface problem of fig. 6.3).
+    let f = csm_reconstruction(16);
+    assert!((f(0.5, 0.5) - 0.5).abs() < 1e-6);
+}
+
+mod mutations {
+    use super::*;
+    use proptest::prelude::*;
+
+    const TOKENS: &[&str] = &["(", ")", ",", ":", "\"", "[", "]", "{", "}", "0", "-1", "1e40", "65", "M", "k", "sum(k in 1..=3, ", "let x = 1;", "..=", "/", "*", "r#\"", "\\", "é", "Unorm8", "Shade(", "Filter(", "expand(", "sample(", "//", "/*"];
+
+    fn mutate(src: &str, ops: &[(usize, usize, usize)]) -> String {
+        let mut s = src.to_string();
+        for &(pos, len, tok) in ops {
+            let mut at = pos % (s.len() + 1);
+            while !s.is_char_boundary(at) {
+                at -= 1;
+            }
+            let mut end = (at + len % 8).min(s.len());
+            while !s.is_char_boundary(end) {
+                end -= 1;
+            }
+            match tok % 3 {
+                0 => s.replace_range(at..end, ""),
+                1 => s.insert_str(at, TOKENS[tok % TOKENS.len()]),
+                _ => s.replace_range(at..end, TOKENS[tok % TOKENS.len()]),
+            }
+        }
+        s
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
+        /// Random token mutations of the bundled techniques never panic the compiler.
+        #[test]
+        fn mutated_techniques_never_panic(which in 0usize..5, ops in proptest::collection::vec((0usize..100_000, 0usize..8, 0usize..1000), 1..6)) {
+            let src = source(TECHNIQUES[which]);
+            let mutated = mutate(&src, &ops);
+            let r = std::panic::catch_unwind(|| {
+                let _ = sshc::check_str(&mutated, &CompileOptions::default());
+                if let Err(d) = sshc::compile_str(&mutated, &CompileOptions::default()) {
+                    // rendering must not panic either
+                    let _ = d.render("mutated.ron", &mutated);
+                }
+            });
+            prop_assert!(r.is_ok(), "panicked on:\n{}", mutated);
+        }
+    }
+}
