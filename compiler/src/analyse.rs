@@ -22,16 +22,28 @@ impl Interval {
         Interval { lo: v, hi: v }
     }
 
-    pub const UNBOUNDED: Interval = Interval { lo: f64::NEG_INFINITY, hi: f64::INFINITY };
+    pub const UNBOUNDED: Interval = Interval {
+        lo: f64::NEG_INFINITY,
+        hi: f64::INFINITY,
+    };
     pub const UNIT: Interval = Interval { lo: 0.0, hi: 1.0 };
 
     fn hull(a: Interval, b: Interval) -> Interval {
-        Interval { lo: a.lo.min(b.lo), hi: a.hi.max(b.hi) }
+        Interval {
+            lo: a.lo.min(b.lo),
+            hi: a.hi.max(b.hi),
+        }
     }
 
     fn of(vals: &[f64]) -> Interval {
-        let lo = vals.iter().copied().fold(f64::INFINITY, |a, b| if b.is_nan() { f64::NEG_INFINITY } else { a.min(b) });
-        let hi = vals.iter().copied().fold(f64::NEG_INFINITY, |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
+        let lo = vals
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, |a, b| if b.is_nan() { f64::NEG_INFINITY } else { a.min(b) });
+        let hi = vals
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
         Interval { lo, hi }
     }
 
@@ -58,7 +70,11 @@ pub struct RangeEval<'a> {
 
 impl<'a> RangeEval<'a> {
     pub fn new(ir: &'a Ir, channels: HashMap<ChannelId, Interval>) -> Self {
-        RangeEval { ir, channels, memo: HashMap::new() }
+        RangeEval {
+            ir,
+            channels,
+            memo: HashMap::new(),
+        }
     }
 
     pub fn eval(&mut self, root: H) -> Interval {
@@ -94,7 +110,10 @@ impl<'a> RangeEval<'a> {
                 Interval { lo, hi }
             }
             Node::Channel(c) => self.channels.get(c).copied().unwrap_or(Interval::UNBOUNDED),
-            Node::Sample { channel, resource, .. } => self.ir.resources[*resource].slot_of(*channel).and_then(|s| s.range).unwrap_or(Interval::UNBOUNDED),
+            Node::Sample { channel, resource, .. } => self.ir.resources[*resource]
+                .slot_of(*channel)
+                .and_then(|s| s.range)
+                .unwrap_or(Interval::UNBOUNDED),
             Node::Unary(UnOp::Neg, x) => {
                 let x = self.get(*x);
                 Interval { lo: -x.hi, hi: -x.lo }
@@ -103,8 +122,14 @@ impl<'a> RangeEval<'a> {
             Node::Binary(op, x, y) => {
                 let (x, y) = (self.get(*x), self.get(*y));
                 match op {
-                    BinOp::Add => Interval { lo: x.lo + y.lo, hi: x.hi + y.hi },
-                    BinOp::Sub => Interval { lo: x.lo - y.hi, hi: x.hi - y.lo },
+                    BinOp::Add => Interval {
+                        lo: x.lo + y.lo,
+                        hi: x.hi + y.hi,
+                    },
+                    BinOp::Sub => Interval {
+                        lo: x.lo - y.hi,
+                        hi: x.hi - y.lo,
+                    },
                     BinOp::Mul => Interval::of(&[mul(x.lo, y.lo), mul(x.lo, y.hi), mul(x.hi, y.lo), mul(x.hi, y.hi)]),
                     BinOp::Div => {
                         if y.lo <= 0.0 && y.hi >= 0.0 {
@@ -115,7 +140,10 @@ impl<'a> RangeEval<'a> {
                     }
                     BinOp::Rem => {
                         let m = y.magnitude();
-                        Interval { lo: if x.lo < 0.0 { -m } else { 0.0 }, hi: if x.hi > 0.0 { m } else { 0.0 } }
+                        Interval {
+                            lo: if x.lo < 0.0 { -m } else { 0.0 },
+                            hi: if x.hi > 0.0 { m } else { 0.0 },
+                        }
                     }
                     _ => Interval::UNIT,
                 }
@@ -144,7 +172,10 @@ fn call_range(f: Func, v: &[Interval]) -> Interval {
         Func::Sqrt => x.monotone(|t| t.max(0.0).sqrt()),
         Func::InverseSqrt => {
             if x.lo <= 0.0 {
-                Interval { lo: if x.hi > 0.0 { 1.0 / x.hi.sqrt() } else { 0.0 }, hi: f64::INFINITY }
+                Interval {
+                    lo: if x.hi > 0.0 { 1.0 / x.hi.sqrt() } else { 0.0 },
+                    hi: f64::INFINITY,
+                }
             } else {
                 x.monotone(|t| 1.0 / t.sqrt())
             }
@@ -158,8 +189,16 @@ fn call_range(f: Func, v: &[Interval]) -> Interval {
                 Interval::UNBOUNDED
             }
         }
-        Func::Asin => Interval { lo: x.lo.max(-1.0), hi: x.hi.min(1.0) }.monotone(f64::asin),
-        Func::Acos => Interval { lo: x.lo.max(-1.0), hi: x.hi.min(1.0) }.monotone(f64::acos),
+        Func::Asin => Interval {
+            lo: x.lo.max(-1.0),
+            hi: x.hi.min(1.0),
+        }
+        .monotone(f64::asin),
+        Func::Acos => Interval {
+            lo: x.lo.max(-1.0),
+            hi: x.hi.min(1.0),
+        }
+        .monotone(f64::acos),
         Func::Atan => x.monotone(f64::atan),
         Func::Atan2 => Interval { lo: -PI, hi: PI },
         Func::Abs => {
@@ -168,7 +207,10 @@ fn call_range(f: Func, v: &[Interval]) -> Interval {
             } else if x.hi <= 0.0 {
                 Interval { lo: -x.hi, hi: -x.lo }
             } else {
-                Interval { lo: 0.0, hi: x.magnitude() }
+                Interval {
+                    lo: 0.0,
+                    hi: x.magnitude(),
+                }
             }
         }
         Func::Floor => x.monotone(f64::floor),
@@ -177,11 +219,23 @@ fn call_range(f: Func, v: &[Interval]) -> Interval {
         Func::Trunc => x.monotone(f64::trunc),
         Func::Fract => Interval { lo: 0.0, hi: 1.0 },
         Func::Sign => Interval::of(&[x.lo.signum(), x.hi.signum()]),
-        Func::Saturate => Interval { lo: x.lo.clamp(0.0, 1.0), hi: x.hi.clamp(0.0, 1.0) },
+        Func::Saturate => Interval {
+            lo: x.lo.clamp(0.0, 1.0),
+            hi: x.hi.clamp(0.0, 1.0),
+        },
         Func::Step | Func::Smoothstep | Func::Linstep => Interval::UNIT,
-        Func::Min => Interval { lo: x.lo.min(v[1].lo), hi: x.hi.min(v[1].hi) },
-        Func::Max => Interval { lo: x.lo.max(v[1].lo), hi: x.hi.max(v[1].hi) },
-        Func::Clamp => Interval { lo: x.lo.max(v[1].lo).min(v[2].hi), hi: x.hi.min(v[2].hi).max(v[1].lo) },
+        Func::Min => Interval {
+            lo: x.lo.min(v[1].lo),
+            hi: x.hi.min(v[1].hi),
+        },
+        Func::Max => Interval {
+            lo: x.lo.max(v[1].lo),
+            hi: x.hi.max(v[1].hi),
+        },
+        Func::Clamp => Interval {
+            lo: x.lo.max(v[1].lo).min(v[2].hi),
+            hi: x.hi.min(v[2].hi).max(v[1].lo),
+        },
         Func::Pow => {
             let (b, e) = (x, v[1]);
             if b.lo >= 0.0 && b.is_finite() && e.is_finite() {
@@ -210,7 +264,10 @@ fn call_range(f: Func, v: &[Interval]) -> Interval {
         Func::Select => Interval::hull(v[0], v[1]),
         Func::ToF32 | Func::ToI32 => x,
         Func::Vec2 | Func::Vec3 | Func::Vec4 => v.iter().copied().reduce(Interval::hull).unwrap_or(Interval::UNBOUNDED),
-        Func::Length => Interval { lo: 0.0, hi: (v.len() as f64).sqrt().max(2.0) * x.magnitude() },
+        Func::Length => Interval {
+            lo: 0.0,
+            hi: (v.len() as f64).sqrt().max(2.0) * x.magnitude(),
+        },
         Func::Dot => {
             let m = x.magnitude() * v[1].magnitude() * 4.0;
             Interval { lo: -m, hi: m }
@@ -272,7 +329,11 @@ pub fn slot_ranges(ir: &Ir) -> Vec<Vec<Interval>> {
                     ranges.push(Interval { lo: -4.0 * w, hi: 4.0 * w });
                 }
             }
-            IrPassKind::Filter { .. } | IrPassKind::Mipmap { reduce: Reduce::Mean | Reduce::Max | Reduce::Min } | IrPassKind::SummedArea => {
+            IrPassKind::Filter { .. }
+            | IrPassKind::Mipmap {
+                reduce: Reduce::Mean | Reduce::Max | Reduce::Min,
+            }
+            | IrPassKind::SummedArea => {
                 // convex combinations, maxima and minima stay within the source range
                 for s in &res.slots {
                     ranges.push(src(s.channel).unwrap_or(Interval::UNBOUNDED));
@@ -305,7 +366,10 @@ pub fn encode_for(p: Precision, r: Interval) -> Encode {
         return Encode::IDENTITY;
     }
     let w = r.hi - r.lo;
-    Encode { bias: r.lo, scale: if w > 0.0 { 1.0 / w } else { 1.0 } }
+    Encode {
+        bias: r.lo,
+        scale: if w > 0.0 { 1.0 / w } else { 1.0 },
+    }
 }
 
 /// Re-evaluates one slot's range with one parameter changed: `(param, value) -> range`.
@@ -317,7 +381,10 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
     let mut warnings = Vec::new();
     for (ri, res) in ir.resources.iter().enumerate() {
         // A resource repeats its source's complaint: report each channel once, where it is made.
-        let derived = matches!(ir.passes[res.writer].kind, IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea);
+        let derived = matches!(
+            ir.passes[res.writer].kind,
+            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea
+        );
         for (si, slot) in res.slots.iter().enumerate() {
             let r = ranges[ri][si];
             if fits(slot.precision, r) {
@@ -334,19 +401,31 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
             };
             let mut d = Diagnostic::error(
                 Phase::Analyse,
-                format!("channel `{}` in `{}` spans {r}, which {} cannot hold", ch.name, res.name, slot.precision.name()),
+                format!(
+                    "channel `{}` in `{}` spans {r}, which {} cannot hold",
+                    ch.name,
+                    res.name,
+                    slot.precision.name()
+                ),
             )
-            .at(ch.precision_span, format!("{why}"))
+            .at(ch.precision_span, why.to_string())
             .also(ch.span, "channel computed here");
             if let Some(v) = ch.value {
-                d = d.note(format!("the channel's value is {} (for inputs in their ranges: depth z in [0, 1])", ir.arena.display(v, Some(ir))));
+                d = d.note(format!(
+                    "the channel's value is {} (for inputs in their ranges: depth z in [0, 1])",
+                    ir.arena.display(v, Some(ir))
+                ));
             }
             let mut suggested = false;
             for (pi, p) in ir.params.iter().enumerate() {
                 if matches!(p.value, ConstValue::Bool(_)) {
                     continue;
                 }
-                let now = if p.uniform { p.range.map(|r| r.1).unwrap_or(p.value.as_f64()) } else { p.value.as_f64() };
+                let now = if p.uniform {
+                    p.range.map(|r| r.1).unwrap_or(p.value.as_f64())
+                } else {
+                    p.value.as_f64()
+                };
                 let lo = p.range.map(|r| r.0).unwrap_or(0.0).min(now);
                 let ok = |v: f64| probe(pi, v, ri, si).is_some_and(|r| fits(slot.precision, r));
                 let unchanged = probe(pi, lo, ri, si) == probe(pi, now, ri, si);
@@ -361,18 +440,33 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
                 let is_int = matches!(p.value, ConstValue::Int(_));
                 let best = if is_int { a.floor() } else { a };
                 // floored, so that the value shown fits
-                let shown = if is_int { format!("{}", best as i64) } else { format!("{:.4}", (best * 1e4).floor() / 1e4) };
+                let shown = if is_int {
+                    format!("{}", best as i64)
+                } else {
+                    format!("{:.4}", (best * 1e4).floor() / 1e4)
+                };
                 let what = if p.uniform {
                     format!("narrow the range of `{}` to at most {shown}", p.name)
                 } else {
-                    format!("`{}` = {} is too large: it must stay at or below {shown} for {}", p.name, p.value, slot.precision.name())
+                    format!(
+                        "`{}` = {} is too large: it must stay at or below {shown} for {}",
+                        p.name,
+                        p.value,
+                        slot.precision.name()
+                    )
                 };
-                d = d.help(format!("{what}, or store `{}` at a wider precision", ch.name)).also(p.span, format!("`{}` declared here", p.name));
+                d = d
+                    .help(format!("{what}, or store `{}` at a wider precision", ch.name))
+                    .also(p.span, format!("`{}` declared here", p.name));
                 suggested = true;
                 break;
             }
             if !suggested {
-                d = d.help(if r.is_finite() { "store the channel at F32".to_string() } else { "bound the value: give the params it uses a `range`, or clamp it".to_string() });
+                d = d.help(if r.is_finite() {
+                    "store the channel at F32".to_string()
+                } else {
+                    "bound the value: give the params it uses a `range`, or clamp it".to_string()
+                });
             }
             diags.push(d);
         }
@@ -388,16 +482,22 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
     // Unorm8 quantisation relative to the range, as a note for explain.
     for res in &ir.resources {
         for s in &res.slots {
-            if s.precision == Precision::Unorm8 {
-                if let Some(r) = s.range {
-                    if r.hi - r.lo > 8.0 {
-                        warnings.push(
-                            Diagnostic::warning(Phase::Analyse, format!("channel `{}` spans {r} at Unorm8: one step is {}", ir.channels[s.channel].name, short((r.hi - r.lo) / 255.0)))
-                                .at(ir.channels[s.channel].precision_span, "coarse quantisation")
-                                .help("use Unorm16 or F16 for this channel"),
-                        );
-                    }
-                }
+            if s.precision == Precision::Unorm8
+                && let Some(r) = s.range
+                && r.hi - r.lo > 8.0
+            {
+                warnings.push(
+                    Diagnostic::warning(
+                        Phase::Analyse,
+                        format!(
+                            "channel `{}` spans {r} at Unorm8: one step is {}",
+                            ir.channels[s.channel].name,
+                            short((r.hi - r.lo) / 255.0)
+                        ),
+                    )
+                    .at(ir.channels[s.channel].precision_span, "coarse quantisation")
+                    .help("use Unorm16 or F16 for this channel"),
+                );
             }
         }
     }

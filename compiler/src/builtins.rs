@@ -337,7 +337,12 @@ impl Func {
     /// Result type for these argument types, or a message saying what was expected.
     pub fn result(self, args: &[Ty]) -> Result<Ty, String> {
         if args.len() != self.arity() {
-            return Err(format!("`{}` takes {} argument(s), found {}", self.name(), self.arity(), args.len()));
+            return Err(format!(
+                "`{}` takes {} argument(s), found {}",
+                self.name(),
+                self.arity(),
+                args.len()
+            ));
         }
         let same = |tys: &[Ty]| -> Option<Ty> { tys.iter().try_fold(tys[0], |acc, t| unify(acc, *t)) };
         match self {
@@ -347,7 +352,11 @@ impl Func {
             },
             Func::Min | Func::Max | Func::Clamp => match same(args) {
                 Some(t) if t.is_numeric() => Ok(t.concrete()),
-                _ => Err(format!("`{}` expects arguments of one numeric type, found {}", self.name(), list(args))),
+                _ => Err(format!(
+                    "`{}` expects arguments of one numeric type, found {}",
+                    self.name(),
+                    list(args)
+                )),
             },
             Func::Select => match (unify(args[0], args[1]), args[2]) {
                 (Some(t), Ty::Bool) => Ok(t.concrete()),

@@ -57,8 +57,11 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
         for r in p.kind.reads() {
             if !sym.resources.contains_key(&r.value) {
                 let cands: Vec<&str> = sym.resources.keys().map(String::as_str).collect();
-                let mut d = Diagnostic::error(Phase::Check, format!("pass `{}` reads `{}`, which no pass writes", p.name.value, r.value))
-                    .at(r.span, "read before any write");
+                let mut d = Diagnostic::error(
+                    Phase::Check,
+                    format!("pass `{}` reads `{}`, which no pass writes", p.name.value, r.value),
+                )
+                .at(r.span, "read before any write");
                 if let Some(s) = closest(&r.value, &cands) {
                     d = d.help(format!("did you mean `{s}`?"));
                 } else {
@@ -81,9 +84,15 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                 let c = sym.channels[&channel.value];
                 if let Some(v) = &t.channels[c].value {
                     diags.push(
-                        Diagnostic::error(Phase::Check, format!("channel `{}` is written by the Depth pass `{}` but also has a `value`", channel.value, p.name.value))
-                            .at(v.span, "a depth channel holds the rasterised depth")
-                            .help("remove `value`, or let a Map pass compute this channel"),
+                        Diagnostic::error(
+                            Phase::Check,
+                            format!(
+                                "channel `{}` is written by the Depth pass `{}` but also has a `value`",
+                                channel.value, p.name.value
+                            ),
+                        )
+                        .at(v.span, "a depth channel holds the rasterised depth")
+                        .help("remove `value`, or let a Map pass compute this channel"),
                     );
                 }
                 vec![Item::Channel(c)]
@@ -118,7 +127,12 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                 Err(d) => diags.push(d),
             }
             for u in ty.uses.iter().filter(|u| u.side == Side::Receiver) {
-                diags.push(side_error(u, "the value of channel", &c.name.value, "channel values are computed per shadow-map texel, before any receiver is known"));
+                diags.push(side_error(
+                    u,
+                    "the value of channel",
+                    &c.name.value,
+                    "channel values are computed per shadow-map texel, before any receiver is known",
+                ));
             }
         }
     }
@@ -128,28 +142,40 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
         let p = &t.passes[pi];
         match &p.kind {
             PassKind::Map { reads, channels, .. } => {
-                let carried: Vec<Item> = reads.iter().flat_map(|r| items.get(&r.value).cloned().unwrap_or_default()).collect();
+                let carried: Vec<Item> = reads
+                    .iter()
+                    .flat_map(|r| items.get(&r.value).cloned().unwrap_or_default())
+                    .collect();
                 for n in channels {
                     let needed = map_inputs(sym, &n.value);
                     for (ch, span) in needed {
                         if !carried.contains(&Item::Channel(ch)) {
                             diags.push(
-                                Diagnostic::error(Phase::Check, format!("Map pass `{}` computes `{}` from channel `{}`, which none of its reads carries", p.name.value, n.value, t.channels[ch].name.value))
-                                    .at(n.span, "computed here")
-                                    .also(span, "channel used here")
-                                    .help("add the resource holding it to `reads`"),
+                                Diagnostic::error(
+                                    Phase::Check,
+                                    format!(
+                                        "Map pass `{}` computes `{}` from channel `{}`, which none of its reads carries",
+                                        p.name.value, n.value, t.channels[ch].name.value
+                                    ),
+                                )
+                                .at(n.span, "computed here")
+                                .also(span, "channel used here")
+                                .help("add the resource holding it to `reads`"),
                             );
                         }
                     }
-                    if let Some(&c) = sym.channels.get(&n.value) {
-                        if t.channels[c].value.is_none() {
-                            diags.push(
-                                Diagnostic::error(Phase::Check, format!("channel `{}` has no `value` for Map pass `{}` to compute", n.value, p.name.value))
-                                    .at(n.span, "nothing to compute")
-                                    .also(t.channels[c].span, "declared here")
-                                    .help("give the channel a `value`, or write it with a Depth pass"),
-                            );
-                        }
+                    if let Some(&c) = sym.channels.get(&n.value)
+                        && t.channels[c].value.is_none()
+                    {
+                        diags.push(
+                            Diagnostic::error(
+                                Phase::Check,
+                                format!("channel `{}` has no `value` for Map pass `{}` to compute", n.value, p.name.value),
+                            )
+                            .at(n.span, "nothing to compute")
+                            .also(t.channels[c].span, "declared here")
+                            .help("give the channel a `value`, or write it with a Depth pass"),
+                        );
                     }
                 }
             }
@@ -160,7 +186,14 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
             PassKind::Shade { reads, visibility } => {
                 let carried: Vec<(Item, String)> = reads
                     .iter()
-                    .flat_map(|r| items.get(&r.value).cloned().unwrap_or_default().into_iter().map(|i| (i, r.value.clone())))
+                    .flat_map(|r| {
+                        items
+                            .get(&r.value)
+                            .cloned()
+                            .unwrap_or_default()
+                            .into_iter()
+                            .map(|i| (i, r.value.clone()))
+                    })
                     .collect();
                 let mut ty = Typer::new(sym, Mode::Shade);
                 ty.available = Some(carried);
@@ -181,7 +214,11 @@ fn expect_f32(t: Ty, span: Span, what: &str, diags: &mut Diagnostics) {
         diags.push(
             Diagnostic::error(Phase::Check, format!("type mismatch: {what} must be f32, found {t}"))
                 .at(span, format!("this is {t}"))
-                .help(if t == Ty::Bool { "turn a condition into a number with `select(0.0, 1.0, cond)`" } else { "reduce it to one f32" }),
+                .help(if t == Ty::Bool {
+                    "turn a condition into a number with `select(0.0, 1.0, cond)`"
+                } else {
+                    "reduce it to one f32"
+                }),
         );
     }
 }
@@ -200,12 +237,11 @@ fn map_inputs(sym: &Symbols, name: &str) -> Vec<(usize, Span)> {
     let mut out: Vec<(usize, Span)> = Vec::new();
     for e in exprs {
         e.walk(&mut |x| {
-            if let ExprKind::Name(n) = &x.kind {
-                if let Some(&c) = sym.channels.get(n) {
-                    if !out.iter().any(|(o, _)| *o == c) {
-                        out.push((c, x.span));
-                    }
-                }
+            if let ExprKind::Name(n) = &x.kind
+                && let Some(&c) = sym.channels.get(n)
+                && !out.iter().any(|(o, _)| *o == c)
+            {
+                out.push((c, x.span));
             }
         });
     }
@@ -224,16 +260,35 @@ fn check_params(sym: &Symbols, diags: &mut Diagnostics) {
                 continue;
             }
             if v < lo.value || v > hi.value {
-                let origin = if sym.overridden[i] { "set on the command line to" } else { "defaults to" };
+                let origin = if sym.overridden[i] {
+                    "set on the command line to"
+                } else {
+                    "defaults to"
+                };
                 diags.push(
-                    Diagnostic::error(Phase::Check, format!("param `{}` is out of range: {origin} {}, but its range is [{}, {}]", p.name.value, sym.values[i].value, lo.value, hi.value))
-                        .at(if sym.overridden[i] { lo.span.join(hi.span) } else { p.default.span }, if sym.overridden[i] { "range declared here" } else { "outside the range" })
-                        .help(format!("choose a value of `{}` in [{}, {}]", p.name.value, lo.value, hi.value)),
+                    Diagnostic::error(
+                        Phase::Check,
+                        format!(
+                            "param `{}` is out of range: {origin} {}, but its range is [{}, {}]",
+                            p.name.value, sym.values[i].value, lo.value, hi.value
+                        ),
+                    )
+                    .at(
+                        if sym.overridden[i] { lo.span.join(hi.span) } else { p.default.span },
+                        if sym.overridden[i] {
+                            "range declared here"
+                        } else {
+                            "outside the range"
+                        },
+                    )
+                    .help(format!("choose a value of `{}` in [{}, {}]", p.name.value, lo.value, hi.value)),
                 );
             }
         }
         if p.ty.value == ScalarTy::Bool && p.range.is_some() {
-            diags.push(Diagnostic::error(Phase::Check, format!("bool param `{}` cannot have a range", p.name.value)).at(p.span, "remove `range`"));
+            diags.push(
+                Diagnostic::error(Phase::Check, format!("bool param `{}` cannot have a range", p.name.value)).at(p.span, "remove `range`"),
+            );
         }
     }
 }
@@ -243,7 +298,16 @@ fn check_expansion(sym: &Symbols, e: &Expansion, diags: &mut Diagnostics) {
     for (bound, what) in [(&e.from, "start"), (&e.to, "end")] {
         match ty.infer(bound) {
             Ok(Ty::I32 | Ty::AbstractInt) => {}
-            Ok(t) => diags.push(Diagnostic::error(Phase::Check, format!("type mismatch: the {what} of expansion `{}` must be an integer, found {t}", e.name.value)).at(bound.span, format!("this is {t}"))),
+            Ok(t) => diags.push(
+                Diagnostic::error(
+                    Phase::Check,
+                    format!(
+                        "type mismatch: the {what} of expansion `{}` must be an integer, found {t}",
+                        e.name.value
+                    ),
+                )
+                .at(bound.span, format!("this is {t}")),
+            ),
             Err(d) => diags.push(d),
         }
     }
@@ -253,16 +317,29 @@ fn check_expansion(sym: &Symbols, e: &Expansion, diags: &mut Diagnostics) {
         Err(d) => diags.push(d),
     }
     for u in ty.uses.drain(..).filter(|u| u.side == Side::Map) {
-        diags.push(side_error(&u, "the constant of expansion", &e.name.value, "the constant term is added per receiver"));
+        diags.push(side_error(
+            &u,
+            "the constant of expansion",
+            &e.name.value,
+            "the constant term is added per receiver",
+        ));
     }
     ty.mode = Mode::Let;
-    ty.locals.push(Local { name: e.index.value.clone(), ty: Ty::I32, uses: vec![] });
+    ty.locals.push(Local {
+        name: e.index.value.clone(),
+        ty: Ty::I32,
+        uses: vec![],
+    });
     for (name, value) in &e.lets {
         ty.uses.clear();
         match ty.infer(value) {
             Ok(t) => {
                 let uses = std::mem::take(&mut ty.uses);
-                ty.locals.push(Local { name: name.value.clone(), ty: t.concrete(), uses });
+                ty.locals.push(Local {
+                    name: name.value.clone(),
+                    ty: t.concrete(),
+                    uses,
+                });
             }
             Err(d) => {
                 diags.push(d);
@@ -277,7 +354,15 @@ fn check_expansion(sym: &Symbols, e: &Expansion, diags: &mut Diagnostics) {
             Err(d) => diags.push(d),
         }
         for u in ty.uses.drain(..).filter(|u| u.side == Side::Map) {
-            diags.push(side_error(&u, "a coefficient of expansion", &e.name.value, "coefficients a_i(d) are evaluated per receiver and may use receiver-side inputs only (Annen eq. 5.6)").help("move the factor that depends on the shadow map into `basis`"));
+            diags.push(
+                side_error(
+                    &u,
+                    "a coefficient of expansion",
+                    &e.name.value,
+                    "coefficients a_i(d) are evaluated per receiver and may use receiver-side inputs only (Annen eq. 5.6)",
+                )
+                .help("move the factor that depends on the shadow map into `basis`"),
+            );
         }
         ty.mode = Mode::Basis;
         match ty.infer(&term.basis) {
@@ -295,9 +380,12 @@ fn side_error(u: &Use, what: &str, owner: &str, why: &str) -> Diagnostic {
         Side::Receiver => "a receiver-side input",
         _ => "a map-side channel",
     };
-    let mut d = Diagnostic::error(Phase::Check, format!("non-separable term: {what} `{owner}` uses `{}`, {side}", u.name))
-        .at(u.span, format!("`{}` is {side}", u.name))
-        .note(why);
+    let mut d = Diagnostic::error(
+        Phase::Check,
+        format!("non-separable term: {what} `{owner}` uses `{}`, {side}", u.name),
+    )
+    .at(u.span, format!("`{}` is {side}", u.name))
+    .note(why);
     if let Some(via) = u.via {
         d = d.also(via, "used through this binding");
     }
@@ -308,12 +396,23 @@ fn resolve_kernel(sym: &Symbols, kernel: &crate::span::Spanned<Kernel>) -> Resul
     let size = |e: &Expr| -> Result<u32, Diagnostic> {
         let v = lower::const_eval(sym, e)?;
         match v {
-            ConstValue::Int(n) if n >= 1 && n <= MAX_KERNEL && n % 2 == 1 => Ok(n as u32),
-            ConstValue::Int(n) => Err(Diagnostic::error(Phase::Check, format!("bad filter size {n}: sizes are odd and between 1 and {MAX_KERNEL}"))
-                .at(e.span, format!("evaluates to {n}"))
-                .note("an odd size keeps the kernel centred on the texel")
-                .help(if n % 2 == 0 && n > 0 { format!("use {} or {}", n - 1, n + 1) } else { format!("use a size in 1..={MAX_KERNEL}") })),
-            other => Err(Diagnostic::error(Phase::Check, format!("type mismatch: a filter size must be an integer, found {other}")).at(e.span, "not an integer")),
+            ConstValue::Int(n) if (1..=MAX_KERNEL).contains(&n) && n % 2 == 1 => Ok(n as u32),
+            ConstValue::Int(n) => Err(Diagnostic::error(
+                Phase::Check,
+                format!("bad filter size {n}: sizes are odd and between 1 and {MAX_KERNEL}"),
+            )
+            .at(e.span, format!("evaluates to {n}"))
+            .note("an odd size keeps the kernel centred on the texel")
+            .help(if n % 2 == 0 && n > 0 {
+                format!("use {} or {}", n - 1, n + 1)
+            } else {
+                format!("use a size in 1..={MAX_KERNEL}")
+            })),
+            other => Err(Diagnostic::error(
+                Phase::Check,
+                format!("type mismatch: a filter size must be an integer, found {other}"),
+            )
+            .at(e.span, "not an integer")),
         }
     };
     Ok(match &kernel.value {
@@ -325,7 +424,9 @@ fn resolve_kernel(sym: &Symbols, kernel: &crate::span::Spanned<Kernel>) -> Resul
             let n = size(s)?;
             let sg = lower::const_eval(sym, sigma)?.as_f64();
             if !(sg > 0.0 && sg.is_finite()) {
-                return Err(Diagnostic::error(Phase::Check, format!("bad Gaussian sigma {sg}: it must be positive")).at(sigma.span, "not positive"));
+                return Err(
+                    Diagnostic::error(Phase::Check, format!("bad Gaussian sigma {sg}: it must be positive")).at(sigma.span, "not positive"),
+                );
             }
             IrKernel::Gaussian(n, sg)
         }
@@ -340,7 +441,13 @@ fn topo_order(sym: &Symbols) -> Result<Vec<usize>, Diagnostics> {
     let deps: Vec<Vec<usize>> = t
         .passes
         .iter()
-        .map(|p| p.kind.reads().iter().filter_map(|r| sym.resources.get(&r.value).map(|res| res.writer)).collect())
+        .map(|p| {
+            p.kind
+                .reads()
+                .iter()
+                .filter_map(|r| sym.resources.get(&r.value).map(|res| res.writer))
+                .collect()
+        })
         .collect();
     let mut done = vec![false; n];
     let mut order = Vec::with_capacity(n);
@@ -350,8 +457,7 @@ fn topo_order(sym: &Symbols) -> Result<Vec<usize>, Diagnostics> {
             let start = (0..n).find(|&i| !done[i]).unwrap_or(0);
             let mut path = vec![start];
             let mut cur = start;
-            loop {
-                let Some(&nxt) = deps[cur].iter().find(|&&d| !done[d]) else { break };
+            while let Some(&nxt) = deps[cur].iter().find(|&&d| !done[d]) {
                 if let Some(pos) = path.iter().position(|&p| p == nxt) {
                     path.drain(..pos);
                     break;
@@ -361,12 +467,17 @@ fn topo_order(sym: &Symbols) -> Result<Vec<usize>, Diagnostics> {
             }
             let names: Vec<&str> = path.iter().rev().map(|&i| t.passes[i].name.value.as_str()).collect();
             let first = &t.passes[path[0]];
-            let mut d = Diagnostic::error(Phase::Check, format!("the passes form a cycle: {} -> {}", names.join(" -> "), names[0]))
-                .at(first.name.span, "this pass depends on its own output");
+            let mut d = Diagnostic::error(
+                Phase::Check,
+                format!("the passes form a cycle: {} -> {}", names.join(" -> "), names[0]),
+            )
+            .at(first.name.span, "this pass depends on its own output");
             for &i in path.iter().skip(1) {
                 d = d.also(t.passes[i].name.span, "part of the cycle");
             }
-            return Err(d.help("pass order follows reads and writes; one of these reads must come from a resource that does not depend on it").into());
+            return Err(d
+                .help("pass order follows reads and writes; one of these reads must come from a resource that does not depend on it")
+                .into());
         };
         done[next] = true;
         order.push(next);
@@ -412,7 +523,13 @@ struct Typer<'s, 'a> {
 
 impl<'s, 'a> Typer<'s, 'a> {
     fn new(sym: &'s Symbols<'a>, mode: Mode) -> Self {
-        Typer { sym, mode, locals: vec![], uses: vec![], available: None }
+        Typer {
+            sym,
+            mode,
+            locals: vec![],
+            uses: vec![],
+            available: None,
+        }
     }
 
     fn err(span: Span, msg: impl Into<String>, label: impl Into<String>) -> Diagnostic {
@@ -430,22 +547,44 @@ impl<'s, 'a> Typer<'s, 'a> {
                 match (op, t) {
                     (UnOp::Neg, t) if t.is_numeric() => Ok(t),
                     (UnOp::Not, Ty::Bool) => Ok(Ty::Bool),
-                    (UnOp::Neg, t) => Err(Self::err(e.span, format!("type mismatch: cannot negate {t}"), format!("this is {t}"))),
-                    (UnOp::Not, t) => Err(Self::err(e.span, format!("type mismatch: `!` needs a bool, found {t}"), format!("this is {t}"))),
+                    (UnOp::Neg, t) => Err(Self::err(
+                        e.span,
+                        format!("type mismatch: cannot negate {t}"),
+                        format!("this is {t}"),
+                    )),
+                    (UnOp::Not, t) => Err(Self::err(
+                        e.span,
+                        format!("type mismatch: `!` needs a bool, found {t}"),
+                        format!("this is {t}"),
+                    )),
                 }
             }
             ExprKind::Binary(op, a, b) => {
                 let (ta, tb) = (self.infer(a)?, self.infer(b)?);
                 let mismatch = || {
-                    Self::err(e.span, format!("type mismatch: `{}` between {ta} and {tb}", op.symbol()), format!("{ta} {} {tb}", op.symbol()))
-                        .also(a.span, format!("{ta}"))
-                        .also(b.span, format!("{tb}"))
-                        .help(if matches!((ta, tb), (Ty::I32, Ty::F32) | (Ty::F32, Ty::I32)) { "convert explicitly with `f32(...)` or `i32(...)`" } else { "both sides need one type" })
+                    Self::err(
+                        e.span,
+                        format!("type mismatch: `{}` between {ta} and {tb}", op.symbol()),
+                        format!("{ta} {} {tb}", op.symbol()),
+                    )
+                    .also(a.span, format!("{ta}"))
+                    .also(b.span, format!("{tb}"))
+                    .help(if matches!((ta, tb), (Ty::I32, Ty::F32) | (Ty::F32, Ty::I32)) {
+                        "convert explicitly with `f32(...)` or `i32(...)`"
+                    } else {
+                        "both sides need one type"
+                    })
                 };
                 if op.is_logic() {
-                    return if ta == Ty::Bool && tb == Ty::Bool { Ok(Ty::Bool) } else { Err(mismatch()) };
+                    return if ta == Ty::Bool && tb == Ty::Bool {
+                        Ok(Ty::Bool)
+                    } else {
+                        Err(mismatch())
+                    };
                 }
-                let t = unify(ta, tb).filter(|t| t.is_numeric() || (t == &Ty::Bool && matches!(op, BinOp::Eq | BinOp::Ne))).ok_or_else(mismatch)?;
+                let t = unify(ta, tb)
+                    .filter(|t| t.is_numeric() || (t == &Ty::Bool && matches!(op, BinOp::Eq | BinOp::Ne)))
+                    .ok_or_else(mismatch)?;
                 if op.is_comparison() {
                     if matches!(t, Ty::Vec(_)) {
                         return Err(mismatch());
@@ -459,27 +598,50 @@ impl<'s, 'a> Typer<'s, 'a> {
             ExprKind::Member(base, m) => {
                 let t = self.infer(base)?;
                 let Ty::Vec(n) = t else {
-                    return Err(Self::err(e.span, format!("type mismatch: `.{m}` needs a vector, found {t}"), format!("this is {t}")));
+                    return Err(Self::err(
+                        e.span,
+                        format!("type mismatch: `.{m}` needs a vector, found {t}"),
+                        format!("this is {t}"),
+                    ));
                 };
-                let ok = !m.is_empty() && m.len() <= 4 && m.chars().all(|c| matches!(c, 'x' | 'y' | 'z' | 'w' | 'r' | 'g' | 'b' | 'a') && comp_index(c) < n as usize);
+                let ok = !m.is_empty()
+                    && m.len() <= 4
+                    && m.chars()
+                        .all(|c| matches!(c, 'x' | 'y' | 'z' | 'w' | 'r' | 'g' | 'b' | 'a') && comp_index(c) < n as usize);
                 if !ok {
-                    return Err(Self::err(e.span, format!("`{t}` has no component `{m}`"), "unknown component").help("use x, y, z, w (or r, g, b, a) within the vector's size"));
+                    return Err(Self::err(e.span, format!("`{t}` has no component `{m}`"), "unknown component")
+                        .help("use x, y, z, w (or r, g, b, a) within the vector's size"));
                 }
                 Ok(if m.len() == 1 { Ty::F32 } else { Ty::Vec(m.len() as u8) })
             }
-            ExprKind::Let { name, name_span, value, body } => {
+            ExprKind::Let {
+                name,
+                name_span,
+                value,
+                body,
+            } => {
                 if crate::builtins::is_reserved(name) {
                     return Err(Self::err(*name_span, format!("`{name}` is a built-in name"), "reserved").help("choose another name"));
                 }
                 let before = self.uses.len();
                 let t = self.infer(value)?;
                 let uses: Vec<Use> = self.uses.drain(before..).collect();
-                self.locals.push(Local { name: name.clone(), ty: t.concrete(), uses });
+                self.locals.push(Local {
+                    name: name.clone(),
+                    ty: t.concrete(),
+                    uses,
+                });
                 let r = self.infer(body);
                 self.locals.pop();
                 r
             }
-            ExprKind::Sum { var, var_span, from, to, body } => {
+            ExprKind::Sum {
+                var,
+                var_span,
+                from,
+                to,
+                body,
+            } => {
                 if crate::builtins::is_reserved(var) {
                     return Err(Self::err(*var_span, format!("`{var}` is a built-in name"), "reserved"));
                 }
@@ -489,16 +651,28 @@ impl<'s, 'a> Typer<'s, 'a> {
                     let t = self.infer(b)?;
                     if !matches!(t, Ty::I32 | Ty::AbstractInt) {
                         self.mode = mode;
-                        return Err(Self::err(b.span, format!("type mismatch: series bounds are integers, found {t}"), format!("this is {t}")));
+                        return Err(Self::err(
+                            b.span,
+                            format!("type mismatch: series bounds are integers, found {t}"),
+                            format!("this is {t}"),
+                        ));
                     }
                 }
                 self.mode = mode;
-                self.locals.push(Local { name: var.clone(), ty: Ty::I32, uses: vec![] });
+                self.locals.push(Local {
+                    name: var.clone(),
+                    ty: Ty::I32,
+                    uses: vec![],
+                });
                 let r = self.infer(body);
                 self.locals.pop();
                 let t = r?;
                 if !t.is_numeric() {
-                    return Err(Self::err(body.span, format!("type mismatch: a series sums numbers, found {t}"), format!("this is {t}")));
+                    return Err(Self::err(
+                        body.span,
+                        format!("type mismatch: a series sums numbers, found {t}"),
+                        format!("this is {t}"),
+                    ));
                 }
                 Ok(t)
             }
@@ -508,15 +682,26 @@ impl<'s, 'a> Typer<'s, 'a> {
     fn name(&mut self, n: &str, span: Span) -> Result<Ty, Diagnostic> {
         if let Some(l) = self.locals.iter().rev().find(|l| l.name == n) {
             let ty = l.ty;
-            let uses: Vec<Use> = l.uses.iter().map(|u| Use { via: Some(u.via.unwrap_or(span)), ..u.clone() }).collect();
+            let uses: Vec<Use> = l
+                .uses
+                .iter()
+                .map(|u| Use {
+                    via: Some(u.via.unwrap_or(span)),
+                    ..u.clone()
+                })
+                .collect();
             self.uses.extend(uses);
             return Ok(ty);
         }
         if let Some((i, p)) = self.sym.param(n) {
             if self.mode == Mode::Const && !p.fixed {
-                return Err(Self::err(span, format!("param `{n}` is a runtime uniform, but this value is needed at compile time"), "not known at compile time")
-                    .also(p.name.span, "declared here")
-                    .help(format!("add `fixed: true` to param `{n}`")));
+                return Err(Self::err(
+                    span,
+                    format!("param `{n}` is a runtime uniform, but this value is needed at compile time"),
+                    "not known at compile time",
+                )
+                .also(p.name.span, "declared here")
+                .help(format!("add `fixed: true` to param `{n}`")));
             }
             let _ = i;
             return Ok(Ty::from_scalar(p.ty.value));
@@ -529,25 +714,48 @@ impl<'s, 'a> Typer<'s, 'a> {
                 return Err(Self::err(span, format!("`{n}` is not known at compile time"), "a per-pixel input").note(input.doc()));
             }
             if input.side() != Side::Both {
-                self.uses.push(Use { name: n.to_string(), side: input.side(), span, via: None });
+                self.uses.push(Use {
+                    name: n.to_string(),
+                    side: input.side(),
+                    span,
+                    via: None,
+                });
             }
             return Ok(input.ty());
         }
         if self.sym.channels.contains_key(n) {
             match self.mode {
                 Mode::Shade => {
-                    return Err(Self::err(span, format!("channel `{n}` must be looked up in a Shade pass"), "a stored channel, not a value")
-                        .help(format!("use `sample({n})`, `sample_lod({n}, lod)`, `nearest({n})` or `fetch({n}, dx, dy)`")));
+                    return Err(Self::err(
+                        span,
+                        format!("channel `{n}` must be looked up in a Shade pass"),
+                        "a stored channel, not a value",
+                    )
+                    .help(format!(
+                        "use `sample({n})`, `sample_lod({n}, lod)`, `nearest({n})` or `fetch({n}, dx, dy)`"
+                    )));
                 }
-                Mode::Const => return Err(Self::err(span, format!("channel `{n}` is not known at compile time"), "a per-texel value")),
+                Mode::Const => {
+                    return Err(Self::err(
+                        span,
+                        format!("channel `{n}` is not known at compile time"),
+                        "a per-texel value",
+                    ));
+                }
                 _ => {
-                    self.uses.push(Use { name: n.to_string(), side: Side::Map, span, via: None });
+                    self.uses.push(Use {
+                        name: n.to_string(),
+                        side: Side::Map,
+                        span,
+                        via: None,
+                    });
                     return Ok(Ty::F32);
                 }
             }
         }
         if self.sym.expansions.contains_key(n) {
-            return Err(Self::err(span, format!("expansion `{n}` is not a value"), "an expansion").help(format!("evaluate it with `expand({n})` in the Shade pass")));
+            return Err(Self::err(span, format!("expansion `{n}` is not a value"), "an expansion")
+                .help(format!("evaluate it with `expand({n})` in the Shade pass")));
         }
         let names = self.sym.visible_names();
         let local_names: Vec<&str> = self.locals.iter().map(|l| l.name.as_str()).collect();
@@ -562,15 +770,30 @@ impl<'s, 'a> Typer<'s, 'a> {
     fn call(&mut self, name: &str, name_span: Span, args: &[Expr], span: Span) -> Result<Ty, Diagnostic> {
         if let Some((how, expand)) = SampleFn::from_name(name) {
             if self.mode != Mode::Shade {
-                return Err(Self::err(name_span, format!("`{name}` is only available in a Shade pass"), "lookups need a receiver")
-                    .note("channel values and basis functions are computed per texel from the channels of the map"));
+                return Err(Self::err(
+                    name_span,
+                    format!("`{name}` is only available in a Shade pass"),
+                    "lookups need a receiver",
+                )
+                .note("channel values and basis functions are computed per texel from the channels of the map"));
             }
             let extra = how.extra_args();
             if args.len() != extra.len() + 1 {
-                return Err(Self::err(span, format!("`{name}` takes {} argument(s), found {}", extra.len() + 1, args.len()), "wrong number of arguments"));
+                return Err(Self::err(
+                    span,
+                    format!("`{name}` takes {} argument(s), found {}", extra.len() + 1, args.len()),
+                    "wrong number of arguments",
+                ));
             }
             let ExprKind::Name(target) = &args[0].kind else {
-                return Err(Self::err(args[0].span, format!("the first argument of `{name}` names a {}", if expand { "expansion" } else { "channel" }), "expected a name"));
+                return Err(Self::err(
+                    args[0].span,
+                    format!(
+                        "the first argument of `{name}` names a {}",
+                        if expand { "expansion" } else { "channel" }
+                    ),
+                    "expected a name",
+                ));
             };
             let item = if expand {
                 self.sym.expansions.get(target).map(|&i| Item::Expansion(i))
@@ -579,7 +802,11 @@ impl<'s, 'a> Typer<'s, 'a> {
             };
             let Some(item) = item else {
                 let what = if expand { "expansion" } else { "channel" };
-                let cands: Vec<&str> = if expand { self.sym.expansions.keys().map(String::as_str).collect() } else { self.sym.channels.keys().map(String::as_str).collect() };
+                let cands: Vec<&str> = if expand {
+                    self.sym.expansions.keys().map(String::as_str).collect()
+                } else {
+                    self.sym.channels.keys().map(String::as_str).collect()
+                };
                 let mut d = Self::err(args[0].span, format!("unknown {what} `{target}`"), format!("not a declared {what}"));
                 if let Some(s) = closest(target, &cands) {
                     d = d.help(format!("did you mean `{s}`?"));
@@ -589,23 +816,50 @@ impl<'s, 'a> Typer<'s, 'a> {
             if let Some(avail) = &self.available {
                 let holders: Vec<&String> = avail.iter().filter(|(i, _)| *i == item).map(|(_, r)| r).collect();
                 if holders.is_empty() {
-                    return Err(Self::err(args[0].span, format!("`{target}` is not carried by any resource this Shade pass reads"), "not available here").help("add the resource that holds it to the Shade pass's `reads`"));
+                    return Err(Self::err(
+                        args[0].span,
+                        format!("`{target}` is not carried by any resource this Shade pass reads"),
+                        "not available here",
+                    )
+                    .help("add the resource that holds it to the Shade pass's `reads`"));
                 }
                 if holders.len() > 1 {
-                    return Err(Self::err(args[0].span, format!("`{target}` is carried by several resources this pass reads: {}", holders.iter().map(|h| format!("`{h}`")).collect::<Vec<_>>().join(", ")), "ambiguous").help("read only one version of it"));
+                    return Err(Self::err(
+                        args[0].span,
+                        format!(
+                            "`{target}` is carried by several resources this pass reads: {}",
+                            holders.iter().map(|h| format!("`{h}`")).collect::<Vec<_>>().join(", ")
+                        ),
+                        "ambiguous",
+                    )
+                    .help("read only one version of it"));
                 }
             }
             for (a, want) in args[1..].iter().zip(extra) {
                 let t = self.infer(a)?;
                 if unify(t, *want) != Some(*want) {
-                    return Err(Self::err(a.span, format!("type mismatch: `{name}` expects {want} here, found {t}"), format!("this is {t}")));
+                    return Err(Self::err(
+                        a.span,
+                        format!("type mismatch: `{name}` expects {want} here, found {t}"),
+                        format!("this is {t}"),
+                    ));
                 }
             }
             return Ok(Ty::F32);
         }
         let Some(f) = Func::from_name(name) else {
             let mut cands: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
-            cands.extend(["sample", "sample_lod", "nearest", "fetch", "expand", "expand_lod", "expand_nearest", "expand_fetch", "sum"]);
+            cands.extend([
+                "sample",
+                "sample_lod",
+                "nearest",
+                "fetch",
+                "expand",
+                "expand_lod",
+                "expand_nearest",
+                "expand_fetch",
+                "sum",
+            ]);
             let mut d = Self::err(name_span, format!("unknown function `{name}`"), "not a built-in function");
             if let Some(s) = closest(name, &cands) {
                 d = d.help(format!("did you mean `{s}`?"));
@@ -613,7 +867,8 @@ impl<'s, 'a> Typer<'s, 'a> {
             return Err(d);
         };
         let tys = args.iter().map(|a| self.infer(a)).collect::<Result<Vec<_>, _>>()?;
-        f.result(&tys).map_err(|m| Self::err(span, format!("type mismatch: {m}"), "in this call"))
+        f.result(&tys)
+            .map_err(|m| Self::err(span, format!("type mismatch: {m}"), "in this call"))
     }
 }
 

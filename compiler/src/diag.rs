@@ -114,10 +114,7 @@ impl Diagnostic {
         };
         let mut labels = Vec::new();
         if self.primary.0.is_defined() || !self.primary.1.is_empty() {
-            labels.push(
-                Label::new(LabelStyle::Primary, (), self.primary.0.range())
-                    .with_message(self.primary.1.clone()),
-            );
+            labels.push(Label::new(LabelStyle::Primary, (), self.primary.0.range()).with_message(self.primary.1.clone()));
         }
         for (span, msg) in &self.secondary {
             labels.push(Label::new(LabelStyle::Secondary, (), span.range()).with_message(msg.clone()));

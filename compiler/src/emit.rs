@@ -53,7 +53,14 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
         } else {
             None
         };
-        params.push(ParamDecl { name: p.name.clone(), ty, value, range: p.range, offset: off, doc: p.doc.clone() });
+        params.push(ParamDecl {
+            name: p.name.clone(),
+            ty,
+            value,
+            range: p.range,
+            offset: off,
+            doc: p.doc.clone(),
+        });
     }
     let params_size = offset.div_ceil(16) * 16;
 
@@ -72,23 +79,49 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
                 .map(|s| {
                     let (_, layer, component) = s.place.unwrap_or_default();
                     let range = s.range.map(|r| (r.lo, r.hi)).unwrap_or((f64::NAN, f64::NAN));
-                    ChannelDecl { name: ir.channels[s.channel].name.clone(), layer, component, bias: s.encode.bias, scale: s.encode.scale, range }
+                    ChannelDecl {
+                        name: ir.channels[s.channel].name.clone(),
+                        layer,
+                        component,
+                        bias: s.encode.bias,
+                        scale: s.encode.scale,
+                        range,
+                    }
                 })
                 .collect();
-            textures.push(TextureDecl { name: t.name.clone(), format: texture_format(t), layers: t.layers, extent: Extent::ShadowMap, mips, transient: false, channels });
+            textures.push(TextureDecl {
+                name: t.name.clone(),
+                format: texture_format(t),
+                layers: t.layers,
+                extent: Extent::ShadowMap,
+                mips,
+                transient: false,
+                channels,
+            });
         }
     }
     for s in &out.scratch {
-        if let Some(like) = textures.iter().find(|t| t.name == s.like).cloned() {
-            if !textures.iter().any(|t| t.name == s.name) {
-                textures.push(TextureDecl { name: s.name.clone(), mips: false, transient: true, channels: vec![], ..like });
-            }
+        if let Some(like) = textures.iter().find(|t| t.name == s.like).cloned()
+            && !textures.iter().any(|t| t.name == s.name)
+        {
+            textures.push(TextureDecl {
+                name: s.name.clone(),
+                mips: false,
+                transient: true,
+                channels: vec![],
+                ..like
+            });
         }
     }
     let passes = out
         .modules
         .iter()
-        .map(|m| PassDecl { name: ir.passes[m.pass].name.clone(), kind: kind(&ir.passes[m.pass]), shader: m.file.clone(), steps: m.steps.clone() })
+        .map(|m| PassDecl {
+            name: ir.passes[m.pass].name.clone(),
+            kind: kind(&ir.passes[m.pass]),
+            shader: m.file.clone(),
+            steps: m.steps.clone(),
+        })
         .collect();
     PassGraph {
         version: graph::SCHEMA_VERSION,
@@ -148,16 +181,24 @@ impl Cost {
     }
 
     pub fn markdown(&self, technique: &str) -> String {
-        let mut s = format!("# Cost of `{technique}`\n\nCounted on the naga IR of the generated WGSL (straight-line code: each counted operation runs once per invocation).\n\n## Memory\n\n| texture | format | layers | bytes per shadow-map texel |\n|---|---|---|---|\n");
+        let mut s = format!(
+            "# Cost of `{technique}`\n\nCounted on the naga IR of the generated WGSL (straight-line code: each counted operation runs once per invocation).\n\n## Memory\n\n| texture | format | layers | bytes per shadow-map texel |\n|---|---|---|---|\n"
+        );
         for (n, f, l, b) in &self.textures {
             let _ = writeln!(s, "| {n} | {f:?} | {l} | {b:.2} |");
         }
         let _ = writeln!(s, "| **total** | | | **{:.2}** |\n", self.bytes_per_texel());
-        s.push_str("## Work\n\n| pass | kind | steps | texture fetches per invocation | operations per invocation |\n|---|---|---|---|---|\n");
+        s.push_str(
+            "## Work\n\n| pass | kind | steps | texture fetches per invocation | operations per invocation |\n|---|---|---|---|---|\n",
+        );
         for (n, k, steps, c) in &self.passes {
             let _ = writeln!(s, "| {n} | {k:?} | {steps} | {} | {} |", c.fetches, c.ops);
         }
-        let _ = writeln!(s, "\nPer shaded pixel: {} texture fetches, {} arithmetic operations.", self.shade.fetches, self.shade.ops);
+        let _ = writeln!(
+            s,
+            "\nPer shaded pixel: {} texture fetches, {} arithmetic operations.",
+            self.shade.fetches, self.shade.ops
+        );
         s.push_str("Map, Filter and Mipmap passes run once per shadow-map texel and step (Mipmap steps once per level, on a quarter of the texels of the level above).\n");
         s
     }

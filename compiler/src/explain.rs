@@ -18,7 +18,10 @@ pub fn explain(c: &Compiled) -> String {
         let _ = writeln!(s, "\nParameters:");
         for p in &ir.params {
             let how = if p.uniform { "runtime uniform" } else { "fixed at compile time" };
-            let range = p.range.map(|(a, b)| format!(", range [{}, {}]", short(a), short(b))).unwrap_or_default();
+            let range = p
+                .range
+                .map(|(a, b)| format!(", range [{}, {}]", short(a), short(b)))
+                .unwrap_or_default();
             let doc = p.doc.as_deref().map(|d| format!(" - {d}")).unwrap_or_default();
             let _ = writeln!(s, "  {} = {} ({how}{range}){doc}", p.name, p.value);
         }
@@ -29,7 +32,14 @@ pub fn explain(c: &Compiled) -> String {
         let what = match &p.kind {
             IrPassKind::Depth { .. } => "rasterises the scene from the light and stores linear depth".to_string(),
             IrPassKind::Map => "computes channels per shadow-map texel".to_string(),
-            IrPassKind::Filter { kernel } => format!("filters with {kernel:?}{}", if kernel.separable() { " (separable: horizontal then vertical)" } else { "" }),
+            IrPassKind::Filter { kernel } => format!(
+                "filters with {kernel:?}{}",
+                if kernel.separable() {
+                    " (separable: horizontal then vertical)"
+                } else {
+                    ""
+                }
+            ),
             IrPassKind::Mipmap { reduce } => format!("builds a {reduce:?} mip chain in place"),
             IrPassKind::SummedArea => "builds a summed-area table".to_string(),
             IrPassKind::Geometry { primitive, .. } => format!("generates {primitive:?} at silhouettes"),
@@ -45,12 +55,20 @@ pub fn explain(c: &Compiled) -> String {
         }
         let _ = writeln!(s, "; {steps} GPU step(s)");
     }
-    if let Some(p) = ir.shade_pass() {
-        if let IrPassKind::Shade { visibility } = p.kind {
-            let text = ir.arena.display(visibility, Some(ir));
-            let shown = if text.len() > 400 { format!("{}... ({} characters)", &text[..text.char_indices().nth(400).map(|x| x.0).unwrap_or(text.len())], text.len()) } else { text };
-            let _ = writeln!(s, "\nVisibility after lowering and constant folding:\n  {shown}");
-        }
+    if let Some(p) = ir.shade_pass()
+        && let IrPassKind::Shade { visibility } = p.kind
+    {
+        let text = ir.arena.display(visibility, Some(ir));
+        let shown = if text.len() > 400 {
+            format!(
+                "{}... ({} characters)",
+                &text[..text.char_indices().nth(400).map(|x| x.0).unwrap_or(text.len())],
+                text.len()
+            )
+        } else {
+            text
+        };
+        let _ = writeln!(s, "\nVisibility after lowering and constant folding:\n  {shown}");
     }
     let _ = writeln!(s, "\nChannels and packing:");
     for r in ir.resources.iter().filter(|r| r.live) {
@@ -63,9 +81,21 @@ pub fn explain(c: &Compiled) -> String {
                 Origin::Basis { expansion, term, k } => format!("basis term {term} of `{}` at k = {k}", ir.expansions[expansion].name),
             };
             let range = sl.range.map(|r| r.to_string()).unwrap_or_default();
-            let place = sl.place.map(|(t, l, c)| format!("{} layer {l} .{}", r.textures[t].name, ['r', 'g', 'b', 'a'][c as usize])).unwrap_or_default();
-            let enc = if sl.encode.is_identity() { String::new() } else { format!(", stored as (v - {}) * {}", short(sl.encode.bias), short(sl.encode.scale)) };
-            let _ = writeln!(s, "    {} ({origin}): {} range {range}{enc} -> {place}", ch.name, sl.precision.name());
+            let place = sl
+                .place
+                .map(|(t, l, c)| format!("{} layer {l} .{}", r.textures[t].name, ['r', 'g', 'b', 'a'][c as usize]))
+                .unwrap_or_default();
+            let enc = if sl.encode.is_identity() {
+                String::new()
+            } else {
+                format!(", stored as (v - {}) * {}", short(sl.encode.bias), short(sl.encode.scale))
+            };
+            let _ = writeln!(
+                s,
+                "    {} ({origin}): {} range {range}{enc} -> {place}",
+                ch.name,
+                sl.precision.name()
+            );
         }
     }
     let _ = writeln!(s, "\nTextures (bytes per shadow-map texel, mip chains count 4/3):");
@@ -77,7 +107,11 @@ pub fn explain(c: &Compiled) -> String {
     for (n, k, steps, oc) in &c.cost.passes {
         let _ = writeln!(s, "  {n} ({k:?}, {steps} step(s)): {} fetches, {} operations", oc.fetches, oc.ops);
     }
-    let _ = writeln!(s, "  per shaded pixel: {} fetches, {} operations", c.cost.shade.fetches, c.cost.shade.ops);
+    let _ = writeln!(
+        s,
+        "  per shaded pixel: {} fetches, {} operations",
+        c.cost.shade.fetches, c.cost.shade.ops
+    );
     if !ir.removed.is_empty() {
         let _ = writeln!(s, "\nRemoved:");
         for r in &ir.removed {

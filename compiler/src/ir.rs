@@ -10,7 +10,6 @@ use crate::span::Span;
 use std::collections::HashMap;
 use std::fmt::{self, Write as _};
 
-
 /// Handle of an expression node in the [`Arena`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct H(pub u32);
@@ -148,13 +147,12 @@ impl Arena {
                     }
                 }
                 // (c1 * x) / c2 -> (c1 / c2) * x
-                if let (BinOp::Div, Some(Float(c2)), Node::Binary(BinOp::Mul, m1, m2)) = (op, y, self.node(*a).clone()) {
-                    if c2 != 0.0 {
-                        if let Some(Float(c1)) = self.as_const(m1) {
-                            let k = self.f32(c1 / c2);
-                            return Some(self.add(Node::Binary(BinOp::Mul, k, m2), ty, span));
-                        }
-                    }
+                if let (BinOp::Div, Some(Float(c2)), Node::Binary(BinOp::Mul, m1, m2)) = (op, y, self.node(*a).clone())
+                    && c2 != 0.0
+                    && let Some(Float(c1)) = self.as_const(m1)
+                {
+                    let k = self.f32(c1 / c2);
+                    return Some(self.add(Node::Binary(BinOp::Mul, k, m2), ty, span));
                 }
                 // Logic with one constant side.
                 match (op, x, y) {
@@ -355,7 +353,13 @@ impl Arena {
                         BinOp::Add => x + y,
                         BinOp::Sub => x - y,
                         BinOp::Mul => x * y,
-                        BinOp::Div => if int { (x / y).trunc() } else { x / y },
+                        BinOp::Div => {
+                            if int {
+                                (x / y).trunc()
+                            } else {
+                                x / y
+                            }
+                        }
                         BinOp::Rem => x % y,
                         BinOp::Lt => (x < y) as i32 as f64,
                         BinOp::Le => (x <= y) as i32 as f64,
@@ -367,9 +371,24 @@ impl Arena {
                         BinOp::Or => (x != 0.0 || y != 0.0) as i32 as f64,
                     }
                 }
-                Node::Call(Func::Select, a) => if get(&a[2]) != 0.0 { get(&a[1]) } else { get(&a[0]) },
+                Node::Call(Func::Select, a) => {
+                    if get(&a[2]) != 0.0 {
+                        get(&a[1])
+                    } else {
+                        get(&a[0])
+                    }
+                }
                 Node::Call(f, a) => {
-                    let args: Vec<ConstValue> = a.iter().map(|x| if self.ty(*x) == Ty::I32 { Int(get(x) as i64) } else { Float(get(x)) }).collect();
+                    let args: Vec<ConstValue> = a
+                        .iter()
+                        .map(|x| {
+                            if self.ty(*x) == Ty::I32 {
+                                Int(get(x) as i64)
+                            } else {
+                                Float(get(x))
+                            }
+                        })
+                        .collect();
                     eval_call_f64(*f, &args).unwrap_or(f64::NAN)
                 }
                 other => leaf(other).unwrap_or(f64::NAN),
@@ -414,10 +433,10 @@ pub fn eval_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
             _ => {}
         }
     }
-    if let [Int(x), Int(lo), Int(hi)] = v {
-        if f == Func::Clamp {
-            return Some(Int(*x.max(lo).min(hi)));
-        }
+    if let [Int(x), Int(lo), Int(hi)] = v
+        && f == Func::Clamp
+    {
+        return Some(Int(*x.max(lo).min(hi)));
     }
     let r = match f {
         Func::ToF32 => match v[0] {
@@ -653,13 +672,25 @@ impl IrKernel {
 
 #[derive(Clone, Debug)]
 pub enum IrPassKind {
-    Depth { view: LightView },
+    Depth {
+        view: LightView,
+    },
     Map,
-    Filter { kernel: IrKernel },
-    Mipmap { reduce: Reduce },
+    Filter {
+        kernel: IrKernel,
+    },
+    Mipmap {
+        reduce: Reduce,
+    },
     SummedArea,
-    Geometry { primitive: Primitive, resolve: Resolve, view: LightView },
-    Shade { visibility: H },
+    Geometry {
+        primitive: Primitive,
+        resolve: Resolve,
+        view: LightView,
+    },
+    Shade {
+        visibility: H,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -733,11 +764,21 @@ impl fmt::Display for Ir {
         for e in &self.expansions {
             writeln!(f, "  expansion {} = {}", e.name, self.arena.display(e.constant, Some(self)))?;
             for (coeff, ch) in &e.terms {
-                writeln!(f, "      + {} * {}", self.arena.display(*coeff, Some(self)), self.channels[*ch].name)?;
+                writeln!(
+                    f,
+                    "      + {} * {}",
+                    self.arena.display(*coeff, Some(self)),
+                    self.channels[*ch].name
+                )?;
             }
         }
         for r in &self.resources {
-            write!(f, "  resource {} (written by {}", r.name, self.passes.get(r.writer).map(|p| p.name.as_str()).unwrap_or("?"))?;
+            write!(
+                f,
+                "  resource {} (written by {}",
+                r.name,
+                self.passes.get(r.writer).map(|p| p.name.as_str()).unwrap_or("?")
+            )?;
             if r.mips {
                 write!(f, ", mips")?;
             }
@@ -759,7 +800,14 @@ impl fmt::Display for Ir {
                 writeln!(f)?;
             }
             for t in &r.textures {
-                writeln!(f, "      texture {} : {} x{} components x{} layers", t.name, t.precision.name(), t.components, t.layers)?;
+                writeln!(
+                    f,
+                    "      texture {} : {} x{} components x{} layers",
+                    t.name,
+                    t.precision.name(),
+                    t.components,
+                    t.layers
+                )?;
             }
         }
         for p in &self.passes {

@@ -11,6 +11,9 @@
 //! Every error a technique file can cause is a [`Diagnostic`] with a span; nothing here
 //! touches the GPU.
 
+// Diagnostics travel on the cold error path; boxing them would only add noise.
+#![allow(clippy::result_large_err)]
+
 pub mod analyse;
 pub mod back;
 pub mod builtins;
@@ -150,7 +153,12 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         }
         let out = back::wgsl::codegen(&ir, &opts.limits)?;
         if want(DumpPhase::Codegen) {
-            dump = Some(out.modules.iter().map(|m| format!("// ----- {} -----\n{}", m.file, m.source)).collect());
+            dump = Some(
+                out.modules
+                    .iter()
+                    .map(|m| format!("// ----- {} -----\n{}", m.file, m.source))
+                    .collect(),
+            );
         }
         let graph = emit::graph(&ir, &out);
         if want(DumpPhase::Emit) {
@@ -158,7 +166,13 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         }
         let cost = emit::Cost::of(&graph);
         let shaders = out.modules.into_iter().map(|m| (m.file, m.source)).collect();
-        Ok(Compiled { ir, graph, shaders, cost, warnings })
+        Ok(Compiled {
+            ir,
+            graph,
+            shaders,
+            cost,
+            warnings,
+        })
     })();
     let result = match (result, until) {
         (Err(d), Until::Check) if d.is_empty() => Err(Diagnostics::default()),
@@ -168,7 +182,15 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
 }
 
 /// Range of one slot with one param changed (for the "largest safe value" of `analyse`).
-fn probe_range(sym: &resolve::Symbols, checked: &check::Checked, ir: &ir::Ir, param: usize, value: f64, res: usize, slot: usize) -> Option<ir::Interval> {
+fn probe_range(
+    sym: &resolve::Symbols,
+    checked: &check::Checked,
+    ir: &ir::Ir,
+    param: usize,
+    value: f64,
+    res: usize,
+    slot: usize,
+) -> Option<ir::Interval> {
     let p = &ir.params[param];
     if p.uniform {
         let mut ir2 = ir.clone();
@@ -181,7 +203,10 @@ fn probe_range(sym: &resolve::Symbols, checked: &check::Checked, ir: &ir::Ir, pa
         front::ast::ConstValue::Int(_) => front::ast::ConstValue::Int(value.floor() as i64),
         _ => front::ast::ConstValue::Float(value),
     };
-    let sym2 = resolve::Symbols { values, ..sym.clone_shallow() };
+    let sym2 = resolve::Symbols {
+        values,
+        ..sym.clone_shallow()
+    };
     let ir2 = lower::lower(&sym2, checked).ok()?;
     analyse::slot_ranges(&ir2).get(res)?.get(slot).copied()
 }
@@ -189,7 +214,10 @@ fn probe_range(sym: &resolve::Symbols, checked: &check::Checked, ir: &ir::Ir, pa
 fn resolve_dump(sym: &resolve::Symbols) -> String {
     let mut s = String::new();
     for (n, i) in &sym.params {
-        s.push_str(&format!("param {n} = {} (fixed: {})\n", sym.values[*i].value, sym.t.params[*i].fixed));
+        s.push_str(&format!(
+            "param {n} = {} (fixed: {})\n",
+            sym.values[*i].value, sym.t.params[*i].fixed
+        ));
     }
     for (n, i) in &sym.channels {
         s.push_str(&format!("channel {n}: {}\n", sym.channel_precision[*i].name()));

@@ -39,17 +39,23 @@ impl Lowerer<'_, '_> {
 
     /// An abstract integer literal takes the type its context asks for.
     fn coerce(&mut self, (h, abs): Lowered, to: Ty) -> H {
-        if abs && matches!(to, Ty::F32 | Ty::Vec(_)) {
-            if let Some(ConstValue::Int(v)) = self.arena.as_const(h) {
-                return self.arena.f32(v as f64);
-            }
+        if abs
+            && matches!(to, Ty::F32 | Ty::Vec(_))
+            && let Some(ConstValue::Int(v)) = self.arena.as_const(h)
+        {
+            return self.arena.f32(v as f64);
         }
         h
     }
 
     fn budget(&self, span: Span) -> Result<(), Diagnostic> {
         if self.arena.len() > MAX_NODES {
-            return Err(Self::err(span, format!("the technique grows past {MAX_NODES} distinct operations after unrolling"), "while unrolling this").help("lower the series order or the filter sizes"));
+            return Err(Self::err(
+                span,
+                format!("the technique grows past {MAX_NODES} distinct operations after unrolling"),
+                "while unrolling this",
+            )
+            .help("lower the series order or the filter sizes"));
         }
         Ok(())
     }
@@ -112,7 +118,11 @@ impl Lowerer<'_, '_> {
                 let lo = self.const_int(from)?;
                 let hi = self.const_int(to)?;
                 if hi - lo + 1 > MAX_SERIES {
-                    return Err(Self::err(e.span, format!("series of {} terms: at most {MAX_SERIES} unroll", hi - lo + 1), "too long"));
+                    return Err(Self::err(
+                        e.span,
+                        format!("series of {} terms: at most {MAX_SERIES} unroll", hi - lo + 1),
+                        "too long",
+                    ));
                 }
                 let mut acc: Option<Lowered> = None;
                 for k in lo..=hi {
@@ -124,7 +134,13 @@ impl Lowerer<'_, '_> {
                     acc = Some(match acc {
                         None => term,
                         Some(a) => {
-                            let ty = if a.1 && term.1 { Ty::I32 } else if a.1 { self.arena.ty(term.0) } else { self.arena.ty(a.0) };
+                            let ty = if a.1 && term.1 {
+                                Ty::I32
+                            } else if a.1 {
+                                self.arena.ty(term.0)
+                            } else {
+                                self.arena.ty(a.0)
+                            };
                             let ha = self.coerce(a, ty);
                             let hb = self.coerce(term, ty);
                             (self.arena.add(Node::Binary(BinOp::Add, ha, hb), ty, e.span), a.1 && term.1)
@@ -143,7 +159,11 @@ impl Lowerer<'_, '_> {
         let (h, _) = self.expr(e)?;
         match self.arena.as_const(h) {
             Some(ConstValue::Int(v)) => Ok(v),
-            _ => Err(Self::err(e.span, "series bounds must be integers known at compile time", "not a compile-time integer")),
+            _ => Err(Self::err(
+                e.span,
+                "series bounds must be integers known at compile time",
+                "not a compile-time integer",
+            )),
         }
     }
 
@@ -173,7 +193,11 @@ impl Lowerer<'_, '_> {
         }
         if let Some(&c) = self.sym.channels.get(n) {
             if self.const_only {
-                return Err(Self::err(span, format!("channel `{n}` is not known at compile time"), "a per-texel value"));
+                return Err(Self::err(
+                    span,
+                    format!("channel `{n}` is not known at compile time"),
+                    "a per-texel value",
+                ));
             }
             return Ok((self.arena.add(Node::Channel(self.channel_ids[c]), Ty::F32, span), false));
         }
@@ -196,11 +220,21 @@ impl Lowerer<'_, '_> {
             let find = |item: Item| reads.iter().find(|(i, _)| *i == item).map(|(_, r)| *r);
             if expand {
                 let e = self.sym.expansions[target.as_str()];
-                let res = find(Item::Expansion(e)).ok_or_else(|| Self::err(args[0].span, format!("`{target}` is not read by this pass"), "here"))?;
+                let res = find(Item::Expansion(e))
+                    .ok_or_else(|| Self::err(args[0].span, format!("`{target}` is not read by this pass"), "here"))?;
                 let exp = self.expansions[e].clone();
                 let mut acc = exp.constant;
                 for (coeff, ch) in exp.terms {
-                    let s = self.arena.add(Node::Sample { channel: ch, resource: res, how, args: extra.clone() }, Ty::F32, span);
+                    let s = self.arena.add(
+                        Node::Sample {
+                            channel: ch,
+                            resource: res,
+                            how,
+                            args: extra.clone(),
+                        },
+                        Ty::F32,
+                        span,
+                    );
                     let prod = self.arena.add(Node::Binary(BinOp::Mul, coeff, s), Ty::F32, span);
                     acc = self.arena.add(Node::Binary(BinOp::Add, acc, prod), Ty::F32, span);
                     self.budget(span)?;
@@ -208,13 +242,29 @@ impl Lowerer<'_, '_> {
                 return Ok((acc, false));
             }
             let c = self.sym.channels[target.as_str()];
-            let res = find(Item::Channel(c)).ok_or_else(|| Self::err(args[0].span, format!("`{target}` is not read by this pass"), "here"))?;
+            let res =
+                find(Item::Channel(c)).ok_or_else(|| Self::err(args[0].span, format!("`{target}` is not read by this pass"), "here"))?;
             let ch = self.channel_ids[c];
-            return Ok((self.arena.add(Node::Sample { channel: ch, resource: res, how, args: extra }, Ty::F32, span), false));
+            return Ok((
+                self.arena.add(
+                    Node::Sample {
+                        channel: ch,
+                        resource: res,
+                        how,
+                        args: extra,
+                    },
+                    Ty::F32,
+                    span,
+                ),
+                false,
+            ));
         }
         let f = Func::from_name(name).ok_or_else(|| Self::err(span, format!("unknown function `{name}`"), "here"))?;
         let lowered = args.iter().map(|a| self.expr(a)).collect::<Result<Vec<_>, _>>()?;
-        let tys: Vec<Ty> = lowered.iter().map(|(h, abs)| if *abs { Ty::AbstractInt } else { self.arena.ty(*h) }).collect();
+        let tys: Vec<Ty> = lowered
+            .iter()
+            .map(|(h, abs)| if *abs { Ty::AbstractInt } else { self.arena.ty(*h) })
+            .collect();
         let ty = f.result(&tys).map_err(|m| Self::err(span, m, "here"))?;
         let all_abs = lowered.iter().all(|l| l.1);
         let arg_ty = |i: usize| -> Ty {
@@ -232,11 +282,19 @@ impl Lowerer<'_, '_> {
                 }
             }
         };
-        let hs: Vec<H> = lowered.into_iter().enumerate().map(|(i, l)| {
-            let t = arg_ty(i);
-            let scalar = if matches!(t, Ty::Vec(_)) && !matches!(self.arena.ty(l.0), Ty::Vec(_)) { Ty::F32 } else { t };
-            self.coerce(l, scalar)
-        }).collect();
+        let hs: Vec<H> = lowered
+            .into_iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let t = arg_ty(i);
+                let scalar = if matches!(t, Ty::Vec(_)) && !matches!(self.arena.ty(l.0), Ty::Vec(_)) {
+                    Ty::F32
+                } else {
+                    t
+                };
+                self.coerce(l, scalar)
+            })
+            .collect();
         // min/max/clamp/abs/sign of abstract integers stay abstract
         let abs = all_abs && matches!(f, Func::Min | Func::Max | Func::Clamp | Func::Abs | Func::Sign);
         let ty = if ty == Ty::AbstractInt { Ty::I32 } else { ty };
@@ -247,7 +305,15 @@ impl Lowerer<'_, '_> {
 /// Evaluate an expression that must be known at compile time (kernel sizes, series bounds).
 pub fn const_eval(sym: &Symbols, e: &Expr) -> Result<ConstValue, Diagnostic> {
     let mut arena = Arena::default();
-    let mut l = Lowerer { sym, arena: &mut arena, locals: vec![], channel_ids: &[], expansions: &[], shade_reads: None, const_only: true };
+    let mut l = Lowerer {
+        sym,
+        arena: &mut arena,
+        locals: vec![],
+        channel_ids: &[],
+        expansions: &[],
+        shade_reads: None,
+        const_only: true,
+    };
     let (h, _) = l.expr(e)?;
     arena.as_const(h).ok_or_else(|| {
         Diagnostic::error(Phase::Check, "this value must be known at compile time")
@@ -292,7 +358,15 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
     // Channel values (map side).
     for (i, c) in t.channels.iter().enumerate() {
         if let Some(v) = &c.value {
-            let mut l = Lowerer { sym, arena: &mut arena, locals: vec![], channel_ids: &channel_ids, expansions: &[], shade_reads: None, const_only: false };
+            let mut l = Lowerer {
+                sym,
+                arena: &mut arena,
+                locals: vec![],
+                channel_ids: &channel_ids,
+                expansions: &[],
+                shade_reads: None,
+                const_only: false,
+            };
             let lv = l.expr(v).map_err(Diagnostics::from)?;
             channels[i].value = Some(l.coerce(lv, Ty::F32));
         }
@@ -301,14 +375,32 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
     // Expansions: one channel per (term, k).
     let mut expansions = Vec::new();
     for (ei, e) in t.expansions.iter().enumerate() {
-        let mut l = Lowerer { sym, arena: &mut arena, locals: vec![], channel_ids: &channel_ids, expansions: &[], shade_reads: None, const_only: false };
+        let mut l = Lowerer {
+            sym,
+            arena: &mut arena,
+            locals: vec![],
+            channel_ids: &channel_ids,
+            expansions: &[],
+            shade_reads: None,
+            const_only: false,
+        };
         let lo = l.const_int(&e.from).map_err(Diagnostics::from)?;
         let hi = l.const_int(&e.to).map_err(Diagnostics::from)?;
         if hi < lo {
-            return Err(Diagnostic::error(Phase::Lower, format!("expansion `{}` has no terms: its index runs from {lo} to {hi}", e.name.value)).at(e.from.span.join(e.to.span), "empty range").into());
+            return Err(Diagnostic::error(
+                Phase::Lower,
+                format!("expansion `{}` has no terms: its index runs from {lo} to {hi}", e.name.value),
+            )
+            .at(e.from.span.join(e.to.span), "empty range")
+            .into());
         }
         if hi - lo + 1 > MAX_SERIES {
-            return Err(Diagnostic::error(Phase::Lower, format!("expansion `{}` has {} orders: at most {MAX_SERIES}", e.name.value, hi - lo + 1)).at(e.to.span, "too many").into());
+            return Err(Diagnostic::error(
+                Phase::Lower,
+                format!("expansion `{}` has {} orders: at most {MAX_SERIES}", e.name.value, hi - lo + 1),
+            )
+            .at(e.to.span, "too many")
+            .into());
         }
         let cl = l.expr(&e.constant).map_err(Diagnostics::from)?;
         let constant = l.coerce(cl, Ty::F32);
@@ -332,7 +424,11 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     precision: sym.expansion_precision[ei],
                     precision_span: e.precision.span,
                     value: Some(basis),
-                    origin: Origin::Basis { expansion: ei, term: ti, k },
+                    origin: Origin::Basis {
+                        expansion: ei,
+                        term: ti,
+                        k,
+                    },
                     span: term.span,
                 });
                 terms.push((coeff, id));
@@ -340,7 +436,12 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             l.locals.clear();
         }
         channels.extend(new_channels);
-        expansions.push(IrExpansion { name: e.name.value.clone(), constant, terms, span: e.span });
+        expansions.push(IrExpansion {
+            name: e.name.value.clone(),
+            constant,
+            terms,
+            span: e.span,
+        });
     }
 
     // Resources and passes in execution order.
@@ -353,10 +454,20 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         let kind = match &p.kind {
             PassKind::Depth { view, .. } => IrPassKind::Depth { view: *view },
             PassKind::Map { .. } => IrPassKind::Map,
-            PassKind::Filter { .. } => IrPassKind::Filter { kernel: checked.kernels[pi].clone().ok_or_else(|| Diagnostic::error(Phase::Lower, "filter kernel was not resolved").at(p.span, "here"))? },
+            PassKind::Filter { .. } => IrPassKind::Filter {
+                kernel: checked.kernels[pi]
+                    .clone()
+                    .ok_or_else(|| Diagnostic::error(Phase::Lower, "filter kernel was not resolved").at(p.span, "here"))?,
+            },
             PassKind::Mipmap { reduce, .. } => IrPassKind::Mipmap { reduce: *reduce },
             PassKind::SummedArea { .. } => IrPassKind::SummedArea,
-            PassKind::Geometry { primitive, resolve, view, .. } => IrPassKind::Geometry { primitive: *primitive, resolve: *resolve, view: *view },
+            PassKind::Geometry {
+                primitive, resolve, view, ..
+            } => IrPassKind::Geometry {
+                primitive: *primitive,
+                resolve: *resolve,
+                view: *view,
+            },
             PassKind::Shade { reads: rnames, visibility } => {
                 let mut shade_reads = Vec::new();
                 for r in rnames {
@@ -365,7 +476,15 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                         shade_reads.push((*item, rid));
                     }
                 }
-                let mut l = Lowerer { sym, arena: &mut arena, locals: vec![], channel_ids: &channel_ids, expansions: &expansions, shade_reads: Some(shade_reads), const_only: false };
+                let mut l = Lowerer {
+                    sym,
+                    arena: &mut arena,
+                    locals: vec![],
+                    channel_ids: &channel_ids,
+                    expansions: &expansions,
+                    shade_reads: Some(shade_reads),
+                    const_only: false,
+                };
                 let v = l.expr(visibility).map_err(Diagnostics::from)?;
                 let v = l.coerce(v, Ty::F32);
                 IrPassKind::Shade { visibility: v }
@@ -377,7 +496,19 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     let src = &resources[reads[0]];
                     let mips = matches!(p.kind, PassKind::Mipmap { .. });
                     let sat = matches!(p.kind, PassKind::SummedArea { .. });
-                    (mips, sat, src.slots.iter().map(|s| Slot { range: None, place: None, encode: Encode::IDENTITY, ..s.clone() }).collect())
+                    (
+                        mips,
+                        sat,
+                        src.slots
+                            .iter()
+                            .map(|s| Slot {
+                                range: None,
+                                place: None,
+                                encode: Encode::IDENTITY,
+                                ..s.clone()
+                            })
+                            .collect(),
+                    )
                 }
                 _ => {
                     let mut slots = Vec::new();
@@ -387,18 +518,40 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                             Item::Expansion(e) => expansions[*e].terms.iter().map(|(_, c)| *c).collect(),
                         };
                         for c in ids {
-                            slots.push(Slot { channel: c, precision: channels[c].precision, range: None, encode: Encode::IDENTITY, place: None });
+                            slots.push(Slot {
+                                channel: c,
+                                precision: channels[c].precision,
+                                range: None,
+                                encode: Encode::IDENTITY,
+                                place: None,
+                            });
                         }
                     }
                     (false, false, slots)
                 }
             };
             let id = resources.len();
-            resources.push(IrResource { name: w.value.clone(), slots, writer: passes.len(), mips, sat, span: w.span, live: true, textures: vec![] });
+            resources.push(IrResource {
+                name: w.value.clone(),
+                slots,
+                writer: passes.len(),
+                mips,
+                sat,
+                span: w.span,
+                live: true,
+                textures: vec![],
+            });
             res_index.insert(w.value.clone(), id);
             id
         });
-        passes.push(IrPass { name: p.name.value.clone(), kind, reads, writes, span: p.span, live: true });
+        passes.push(IrPass {
+            name: p.name.value.clone(),
+            kind,
+            reads,
+            writes,
+            span: p.span,
+            live: true,
+        });
     }
 
     Ok(Ir {
@@ -413,4 +566,3 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         removed: vec![],
     })
 }
-

@@ -2,14 +2,18 @@
 
 use clap::{Parser, Subcommand};
 use codespan_reporting::term::termcolor::{ColorChoice, StandardStream};
-use sshc::{CompileOptions, DumpPhase, Diagnostics};
+use sshc::{CompileOptions, Diagnostics, DumpPhase};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
 #[derive(Parser)]
-#[command(name = "sshc", version, about = "Compile soft-shadow techniques written in RON into WGSL and a pass graph")]
+#[command(
+    name = "sshc",
+    version,
+    about = "Compile soft-shadow techniques written in RON into WGSL and a pass graph"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -68,7 +72,12 @@ fn pair(s: &str) -> Result<(String, String), String> {
 }
 
 fn options(c: &Common) -> CompileOptions {
-    CompileOptions { set: c.set.clone(), precision: c.precision.clone(), dump_after: c.dump_ir_after, ..Default::default() }
+    CompileOptions {
+        set: c.set.clone(),
+        precision: c.precision.clone(),
+        dump_after: c.dump_ir_after,
+        ..Default::default()
+    }
 }
 
 fn read(path: &Path) -> Result<String, String> {
@@ -76,7 +85,11 @@ fn read(path: &Path) -> Result<String, String> {
 }
 
 fn report(diags: &Diagnostics, path: &Path, source: &str) {
-    let choice = if std::io::stderr().is_terminal() { ColorChoice::Auto } else { ColorChoice::Never };
+    let choice = if std::io::stderr().is_terminal() {
+        ColorChoice::Auto
+    } else {
+        ColorChoice::Never
+    };
     let mut stderr = StandardStream::stderr(choice);
     for d in &diags.0 {
         d.emit_to(&mut stderr, &path.display().to_string(), source);
@@ -163,7 +176,12 @@ fn run(cli: Cli) -> Result<(), String> {
                     .collect();
                 times.sort_by(f64::total_cmp);
                 let name = t.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-                println!("| {name} | {:.3} | {:.3} | {:.3} | {runs} |", times[times.len() / 2], times[0], times[times.len() - 1]);
+                println!(
+                    "| {name} | {:.3} | {:.3} | {:.3} | {runs} |",
+                    times[times.len() / 2],
+                    times[0],
+                    times[times.len() - 1]
+                );
             }
             Ok(())
         }

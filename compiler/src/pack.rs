@@ -44,7 +44,9 @@ pub fn texel_bytes(p: Precision, components: u32) -> u32 {
 
 /// Remove what the Shade pass cannot reach.
 pub fn eliminate(ir: &mut Ir) {
-    let Some(shade) = ir.passes.iter().position(|p| matches!(p.kind, IrPassKind::Shade { .. })) else { return };
+    let Some(shade) = ir.passes.iter().position(|p| matches!(p.kind, IrPassKind::Shade { .. })) else {
+        return;
+    };
     let mut live: HashSet<(ResId, ChannelId)> = HashSet::new();
     let mut live_pass = vec![false; ir.passes.len()];
     live_pass[shade] = true;
@@ -58,7 +60,12 @@ pub fn eliminate(ir: &mut Ir) {
     // Walk writers backwards: passes are in execution order.
     for pi in (0..ir.passes.len()).rev() {
         let Some(w) = ir.passes[pi].writes else { continue };
-        let needed: Vec<ChannelId> = ir.resources[w].slots.iter().map(|s| s.channel).filter(|c| live.contains(&(w, *c))).collect();
+        let needed: Vec<ChannelId> = ir.resources[w]
+            .slots
+            .iter()
+            .map(|s| s.channel)
+            .filter(|c| live.contains(&(w, *c)))
+            .collect();
         if needed.is_empty() {
             continue;
         }
@@ -69,10 +76,10 @@ pub fn eliminate(ir: &mut Ir) {
             IrPassKind::Map | IrPassKind::Geometry { .. } => {
                 let roots: Vec<H> = needed.iter().filter_map(|&c| ir.channels[c].value).collect();
                 for h in ir.arena.postorder(&roots) {
-                    if let Node::Channel(c) = ir.arena.node(h) {
-                        if let Some(r) = carrier(*c, ir) {
-                            live.insert((r, *c));
-                        }
+                    if let Node::Channel(c) = ir.arena.node(h)
+                        && let Some(r) = carrier(*c, ir)
+                    {
+                        live.insert((r, *c));
                     }
                 }
             }
@@ -108,7 +115,11 @@ pub fn eliminate(ir: &mut Ir) {
             removed.push(format!("resource `{}`: unused", res.name));
         } else if res.slots.len() < before {
             let names: Vec<&str> = dropped.iter().map(|c| ir.channels[*c].name.as_str()).collect();
-            removed.push(format!("channels {} of `{}`: no shaded pixel reads them", names.join(", "), res.name));
+            removed.push(format!(
+                "channels {} of `{}`: no shaded pixel reads them",
+                names.join(", "),
+                res.name
+            ));
         }
     }
     ir.removed.extend(removed);
@@ -126,7 +137,10 @@ pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
             let out_slots = ir.resources[src].slots.clone();
             let needed_missing = ir.resources[w].slots.iter().any(|s| !keep.contains(&s.channel));
             debug_assert!(!needed_missing, "mip output needs a channel its input lost");
-            let ranges: Vec<_> = out_slots.iter().map(|s| ir.resources[w].slot_of(s.channel).map(|o| (o.range, o.encode))).collect();
+            let ranges: Vec<_> = out_slots
+                .iter()
+                .map(|s| ir.resources[w].slot_of(s.channel).map(|o| (o.range, o.encode)))
+                .collect();
             ir.resources[w].slots = out_slots
                 .into_iter()
                 .zip(ranges)
@@ -162,18 +176,35 @@ pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
             let comps = components_for(idx.len());
             let layers = (idx.len() as u32).div_ceil(comps);
             let ti = res.textures.len();
-            let name = if single { res.name.clone() } else { format!("{}_{}", res.name, p.name().to_ascii_lowercase()) };
+            let name = if single {
+                res.name.clone()
+            } else {
+                format!("{}_{}", res.name, p.name().to_ascii_lowercase())
+            };
             if layers > limits.max_texture_array_layers {
                 diags.push(
-                    Diagnostic::error(Phase::Pack, format!("resource `{}` needs {layers} texture array layers at {}, above maxTextureArrayLayers = {}", res.name, p.name(), limits.max_texture_array_layers))
-                        .at(res.span, format!("{} channels of {}", idx.len(), p.name()))
-                        .help("lower the series order, or split the channels over several resources"),
+                    Diagnostic::error(
+                        Phase::Pack,
+                        format!(
+                            "resource `{}` needs {layers} texture array layers at {}, above maxTextureArrayLayers = {}",
+                            res.name,
+                            p.name(),
+                            limits.max_texture_array_layers
+                        ),
+                    )
+                    .at(res.span, format!("{} channels of {}", idx.len(), p.name()))
+                    .help("lower the series order, or split the channels over several resources"),
                 );
             }
             for (j, &i) in idx.iter().enumerate() {
                 res.slots[i].place = Some((ti, j as u32 / comps, j as u32 % comps));
             }
-            res.textures.push(Texture { name, precision: p, components: comps, layers });
+            res.textures.push(Texture {
+                name,
+                precision: p,
+                components: comps,
+                layers,
+            });
         }
     }
     // Sampled textures per shader stage.
@@ -181,9 +212,15 @@ pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
         let n: usize = pass.reads.iter().map(|&r| ir.resources[r].textures.len()).sum();
         if n as u32 > limits.max_sampled_textures_per_shader_stage {
             diags.push(
-                Diagnostic::error(Phase::Pack, format!("pass `{}` reads {n} textures, above maxSampledTexturesPerShaderStage = {}", pass.name, limits.max_sampled_textures_per_shader_stage))
-                    .at(pass.span, "reads too many textures")
-                    .help("store the channels it reads at fewer precisions, so that they share texture arrays"),
+                Diagnostic::error(
+                    Phase::Pack,
+                    format!(
+                        "pass `{}` reads {n} textures, above maxSampledTexturesPerShaderStage = {}",
+                        pass.name, limits.max_sampled_textures_per_shader_stage
+                    ),
+                )
+                .at(pass.span, "reads too many textures")
+                .help("store the channels it reads at fewer precisions, so that they share texture arrays"),
             );
         }
     }

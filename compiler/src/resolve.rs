@@ -79,9 +79,12 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
     let mut declare = |name: &Spanned<String>, what: &str, diags: &mut Diagnostics| {
         if builtins::is_reserved(&name.value) {
             diags.push(
-                Diagnostic::error(Phase::Resolve, format!("`{}` is a built-in name and cannot name a {what}", name.value))
-                    .at(name.span, "reserved")
-                    .help("choose another name"),
+                Diagnostic::error(
+                    Phase::Resolve,
+                    format!("`{}` is a built-in name and cannot name a {what}", name.value),
+                )
+                .at(name.span, "reserved")
+                .help("choose another name"),
             );
         } else if let Some(first) = seen.get(&name.value) {
             diags.push(
@@ -180,17 +183,20 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
             continue;
         };
         let p = &t.params[i];
-        let parsed = crate::front::ron::parse(text).map_err(|_| ()).and_then(|node| {
-            crate::front::parse::const_value(&node, p.ty.value).map_err(|_| ())
-        });
+        let parsed = crate::front::ron::parse(text)
+            .map_err(|_| ())
+            .and_then(|node| crate::front::parse::const_value(&node, p.ty.value).map_err(|_| ()));
         match parsed {
             Ok(v) => {
                 values[i] = Spanned::new(v.value, p.default.span);
                 overridden[i] = true;
             }
             Err(()) => diags.push(
-                Diagnostic::error(Phase::Cli, format!("`--set {name}={text}`: expected a value of type {}", p.ty.value.name()))
-                    .at(p.ty.span, format!("`{name}` is declared {} here", p.ty.value.name())),
+                Diagnostic::error(
+                    Phase::Cli,
+                    format!("`--set {name}={text}`: expected a value of type {}", p.ty.value.name()),
+                )
+                .at(p.ty.span, format!("`{name}` is declared {} here", p.ty.value.name())),
             ),
         }
     }
@@ -198,7 +204,10 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
     let mut expansion_precision: Vec<Precision> = t.expansions.iter().map(|e| e.precision.value).collect();
     for (name, text) in &opts.precision {
         let Some(p) = Precision::parse(text) else {
-            diags.push(Diagnostic::error(Phase::Cli, format!("`--precision {name}={text}`: unknown precision")).note("expected one of: unorm8, unorm16, f16, f32"));
+            diags.push(
+                Diagnostic::error(Phase::Cli, format!("`--precision {name}={text}`: unknown precision"))
+                    .note("expected one of: unorm8, unorm16, f16, f32"),
+            );
             continue;
         };
         if let Some(&i) = channels.get(name) {
@@ -206,7 +215,10 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         } else if let Some(&i) = expansions.get(name) {
             expansion_precision[i] = p;
         } else {
-            diags.push(Diagnostic::error(Phase::Cli, format!("`--precision {name}=...`: no channel or expansion named `{name}`")));
+            diags.push(Diagnostic::error(
+                Phase::Cli,
+                format!("`--precision {name}=...`: no channel or expansion named `{name}`"),
+            ));
         }
     }
 

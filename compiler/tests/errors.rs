@@ -19,7 +19,12 @@ fn render(path: &Path) -> String {
 #[test]
 fn every_mistake_has_its_diagnostic() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/errors");
-    let mut fixtures: Vec<_> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.extension().is_some_and(|x| x == "ron")).collect();
+    let mut fixtures: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .collect();
     fixtures.sort();
     assert!(fixtures.len() >= 12, "expected at least 12 fixtures, found {}", fixtures.len());
     let update = std::env::var_os("UPDATE_EXPECT").is_some();
@@ -55,13 +60,27 @@ fn wrong_precision_names_the_largest_safe_exponent() {
 #[test]
 fn command_line_overrides_are_checked() {
     let src = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../techniques/csm.ron")).unwrap();
-    let opts = |set: &[(&str, &str)]| sshc::CompileOptions { set: set.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(), ..Default::default() };
+    let opts = |set: &[(&str, &str)]| sshc::CompileOptions {
+        set: set.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(),
+        ..Default::default()
+    };
     let e = sshc::compile_str(&src, &opts(&[("M", "65")])).unwrap_err();
-    assert!(e.render("csm.ron", &src).contains("out of range: set on the command line to 65"), "{}", e.render("csm.ron", &src));
+    assert!(
+        e.render("csm.ron", &src).contains("out of range: set on the command line to 65"),
+        "{}",
+        e.render("csm.ron", &src)
+    );
     let e = sshc::compile_str(&src, &opts(&[("MM", "4")])).unwrap_err();
     assert!(e.render("csm.ron", &src).contains("did you mean `M`?"));
     let e = sshc::compile_str(&src, &opts(&[("M", "4.5")])).unwrap_err();
     assert!(e.render("csm.ron", &src).contains("expected a value of type i32"));
-    let e = sshc::compile_str(&src, &sshc::CompileOptions { precision: vec![("f".into(), "f64".into())], ..Default::default() }).unwrap_err();
+    let e = sshc::compile_str(
+        &src,
+        &sshc::CompileOptions {
+            precision: vec![("f".into(), "f64".into())],
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
     assert!(e.render("csm.ron", &src).contains("unknown precision"));
 }

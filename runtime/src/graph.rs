@@ -271,8 +271,14 @@ impl fmt::Display for GraphError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             GraphError::Syntax { message, line, column } => write!(f, "{line}:{column}: not a valid pass graph: {message}"),
-            GraphError::Version { found, expected } => write!(f, "pass graph schema version {found}, but this runtime reads version {expected}; recompile the technique with a matching sshc"),
-            GraphError::Path { pass, path } => write!(f, "pass `{pass}` names shader `{path}`, which is not a plain file name inside the graph's folder"),
+            GraphError::Version { found, expected } => write!(
+                f,
+                "pass graph schema version {found}, but this runtime reads version {expected}; recompile the technique with a matching sshc"
+            ),
+            GraphError::Path { pass, path } => write!(
+                f,
+                "pass `{pass}` names shader `{path}`, which is not a plain file name inside the graph's folder"
+            ),
             GraphError::Reference { pass, name } => write!(f, "pass `{pass}` refers to texture `{name}`, which the graph does not declare"),
         }
     }
@@ -296,27 +302,42 @@ impl PassGraph {
         struct Versioned {
             version: u32,
         }
-        let syntax = |e: ron::error::SpannedError| GraphError::Syntax { message: e.code.to_string(), line: e.span.start.line, column: e.span.start.col };
-        if let Ok(v) = ron::Options::default().without_recursion_limit().from_str::<ron::Value>(text) {
-            if let Ok(v) = v.into_rust::<Versioned>() {
-                if v.version != SCHEMA_VERSION {
-                    return Err(GraphError::Version { found: v.version, expected: SCHEMA_VERSION });
-                }
-            }
+        let syntax = |e: ron::error::SpannedError| GraphError::Syntax {
+            message: e.code.to_string(),
+            line: e.span.start.line,
+            column: e.span.start.col,
+        };
+        if let Ok(v) = ron::from_str::<ron::Value>(text)
+            && let Ok(v) = v.into_rust::<Versioned>()
+            && v.version != SCHEMA_VERSION
+        {
+            return Err(GraphError::Version {
+                found: v.version,
+                expected: SCHEMA_VERSION,
+            });
         }
         let g: PassGraph = ron::from_str(text).map_err(syntax)?;
         if g.version != SCHEMA_VERSION {
-            return Err(GraphError::Version { found: g.version, expected: SCHEMA_VERSION });
+            return Err(GraphError::Version {
+                found: g.version,
+                expected: SCHEMA_VERSION,
+            });
         }
         for p in &g.passes {
             if !is_plain_file_name(&p.shader) {
-                return Err(GraphError::Path { pass: p.name.clone(), path: p.shader.clone() });
+                return Err(GraphError::Path {
+                    pass: p.name.clone(),
+                    path: p.shader.clone(),
+                });
             }
             for s in &p.steps {
                 let names = s.reads.iter().map(|b| &b.texture).chain(s.writes.iter().map(|t| &t.texture));
                 for n in names {
                     if !g.textures.iter().any(|t| &t.name == n) {
-                        return Err(GraphError::Reference { pass: p.name.clone(), name: n.clone() });
+                        return Err(GraphError::Reference {
+                            pass: p.name.clone(),
+                            name: n.clone(),
+                        });
                     }
                 }
             }
@@ -345,12 +366,33 @@ mod tests {
             lights: vec![LightModel::Any],
             params: vec![],
             params_size: 0,
-            textures: vec![TextureDecl { name: "z".into(), format: Format::R32Float, layers: 1, extent: Extent::ShadowMap, mips: false, transient: false, channels: vec![] }],
+            textures: vec![TextureDecl {
+                name: "z".into(),
+                format: Format::R32Float,
+                layers: 1,
+                extent: Extent::ShadowMap,
+                mips: false,
+                transient: false,
+                channels: vec![],
+            }],
             passes: vec![PassDecl {
                 name: "depth".into(),
                 kind: PassKind::Depth,
                 shader: "t.depth.wgsl".into(),
-                steps: vec![Step { vertex: Some("vs".into()), fragment: Some("fs".into()), compute: None, draw: Draw::SceneFromLight, reads: vec![], writes: vec![Target { texture: "z".into(), layer: 0 }], params: false, sampler: false, cost: OpCount::default() }],
+                steps: vec![Step {
+                    vertex: Some("vs".into()),
+                    fragment: Some("fs".into()),
+                    compute: None,
+                    draw: Draw::SceneFromLight,
+                    reads: vec![],
+                    writes: vec![Target {
+                        texture: "z".into(),
+                        layer: 0,
+                    }],
+                    params: false,
+                    sampler: false,
+                    cost: OpCount::default(),
+                }],
             }],
             removed: vec![],
         }
@@ -366,13 +408,22 @@ mod tests {
     fn refuses_wrong_version_paths_and_names() {
         let mut g = tiny();
         g.version = 99;
-        assert_eq!(PassGraph::from_ron(&g.to_ron()), Err(GraphError::Version { found: 99, expected: SCHEMA_VERSION }));
+        assert_eq!(
+            PassGraph::from_ron(&g.to_ron()),
+            Err(GraphError::Version {
+                found: 99,
+                expected: SCHEMA_VERSION
+            })
+        );
         let mut g = tiny();
         g.passes[0].shader = "../evil.wgsl".into();
         assert!(matches!(PassGraph::from_ron(&g.to_ron()), Err(GraphError::Path { .. })));
         let mut g = tiny();
         g.passes[0].steps[0].writes[0].texture = "nope".into();
         assert!(matches!(PassGraph::from_ron(&g.to_ron()), Err(GraphError::Reference { .. })));
-        assert!(matches!(PassGraph::from_ron("PassGraph(version: 1"), Err(GraphError::Syntax { .. })));
+        assert!(matches!(
+            PassGraph::from_ron("PassGraph(version: 1"),
+            Err(GraphError::Syntax { .. })
+        ));
     }
 }

@@ -16,7 +16,9 @@ pub fn validate(source: &str) -> Result<naga::Module, String> {
 /// naga IR (straight-line code: each expression runs once; called functions are counted
 /// at their call sites).
 pub fn count_ops(module: &naga::Module, entry: &str) -> OpCount {
-    let Some(ep) = module.entry_points.iter().find(|e| e.name == entry) else { return OpCount::default() };
+    let Some(ep) = module.entry_points.iter().find(|e| e.name == entry) else {
+        return OpCount::default();
+    };
     let mut c = OpCount::default();
     count_function(module, &ep.function, &mut c, 0);
     c

@@ -58,7 +58,11 @@ pub fn f32_lit(v: f32) -> String {
     if v == 0.0 {
         return "0.0f".into();
     }
-    let s = if v == v.trunc() && v.abs() < 1e9 { format!("{v:.1}") } else { format!("{v:e}") };
+    let s = if v == v.trunc() && v.abs() < 1e9 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:e}")
+    };
     if v < 0.0 { format!("({s}f)") } else { format!("{s}f") }
 }
 
@@ -101,7 +105,18 @@ struct Emitter<'a> {
 
 impl<'a> Emitter<'a> {
     fn new(ir: &'a Ir, side: Side, reads: Vec<ResId>) -> Self {
-        Emitter { ir, side, body: String::new(), names: HashMap::new(), fetches: HashMap::new(), bindings: vec![], uses_params: false, uses_sampler: false, reads, counter: 0 }
+        Emitter {
+            ir,
+            side,
+            body: String::new(),
+            names: HashMap::new(),
+            fetches: HashMap::new(),
+            bindings: vec![],
+            uses_params: false,
+            uses_sampler: false,
+            reads,
+            counter: 0,
+        }
     }
 
     fn binding(&mut self, texture: &str, view: View) -> String {
@@ -138,7 +153,9 @@ impl<'a> Emitter<'a> {
     /// The WGSL texture name and decode of a channel in a resource: (binding, layer, component, encode).
     fn locate(&mut self, res: ResId, ch: ChannelId, view: View) -> Result<(String, u32, u32, Encode), Diagnostic> {
         let r = &self.ir.resources[res];
-        let slot = r.slot_of(ch).ok_or_else(|| internal(format!("channel {} missing from `{}`", self.ir.channels[ch].name, r.name)))?;
+        let slot = r
+            .slot_of(ch)
+            .ok_or_else(|| internal(format!("channel {} missing from `{}`", self.ir.channels[ch].name, r.name)))?;
         let (t, layer, comp) = slot.place.ok_or_else(|| internal("channel not packed"))?;
         let name = r.textures[t].name.clone();
         let b = self.binding(&name, view);
@@ -160,7 +177,10 @@ impl<'a> Emitter<'a> {
             }
             let e = self.expr(h)?;
             let node = self.ir.arena.node(h);
-            let leaf = matches!(node, Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(_) | Node::Channel(_));
+            let leaf = matches!(
+                node,
+                Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(_) | Node::Channel(_)
+            );
             if leaf {
                 self.names.insert(h, e);
             } else {
@@ -182,12 +202,15 @@ impl<'a> Emitter<'a> {
         let node = a.node(h).clone();
         // Operations on constants that did not fold are invalid at compile time (x / 0, log(-1)).
         let ops = a.operands(h);
-        if !ops.is_empty() && ops.iter().all(|o| a.as_const(*o).is_some()) && !matches!(node, Node::Sample { .. }) && !matches!(node, Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, _)) {
-            if !(matches!(node, Node::Binary(BinOp::Div | BinOp::Rem, _, _)) && a.ty(h) == Ty::I32) {
-                return Err(Diagnostic::error(Phase::Codegen, format!("`{}` has no finite value", a.display(h, Some(ir))))
+        let all_const = !ops.is_empty() && ops.iter().all(|o| a.as_const(*o).is_some());
+        let exempt = matches!(node, Node::Sample { .. } | Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, _))
+            || (matches!(node, Node::Binary(BinOp::Div | BinOp::Rem, _, _)) && a.ty(h) == Ty::I32);
+        if all_const && !exempt {
+            return Err(
+                Diagnostic::error(Phase::Codegen, format!("`{}` has no finite value", a.display(h, Some(ir))))
                     .at(a.span(h), "evaluates to infinity or NaN at compile time")
-                    .help("check for a division by zero, the log or square root of a negative number, or an overflow"));
-            }
+                    .help("check for a division by zero, the log or square root of a negative number, or an overflow"),
+            );
         }
         Ok(match node {
             Node::F32(b) => f32_lit(f32::from_bits(b)),
@@ -196,11 +219,20 @@ impl<'a> Emitter<'a> {
             Node::Param(p) => {
                 self.uses_params = true;
                 let prm = &ir.params[p];
-                if matches!(prm.value, ConstValue::Bool(_)) { format!("(params.{} != 0u)", prm.name) } else { format!("params.{}", prm.name) }
+                if matches!(prm.value, ConstValue::Bool(_)) {
+                    format!("(params.{} != 0u)", prm.name)
+                } else {
+                    format!("params.{}", prm.name)
+                }
             }
             Node::Input(i) => self.input(i),
             Node::Channel(c) => self.load_map_channel(c)?,
-            Node::Sample { channel, resource, how, args } => self.sample(channel, resource, how, &args)?,
+            Node::Sample {
+                channel,
+                resource,
+                how,
+                args,
+            } => self.sample(channel, resource, how, &args)?,
             Node::Unary(UnOp::Neg, x) => format!("-{}", self.n(x)),
             Node::Unary(UnOp::Not, x) => format!("!{}", self.n(x)),
             Node::Binary(op, x, y) => format!("{} {} {}", self.n(x), op.symbol(), self.n(y)),
@@ -220,7 +252,12 @@ impl<'a> Emitter<'a> {
 
     /// Map side: the value of a channel at this texel, read from the resource that carries it.
     fn load_map_channel(&mut self, c: ChannelId) -> Result<String, Diagnostic> {
-        let res = self.reads.iter().copied().find(|&r| self.ir.resources[r].slot_of(c).is_some()).ok_or_else(|| internal("map channel not read"))?;
+        let res = self
+            .reads
+            .iter()
+            .copied()
+            .find(|&r| self.ir.resources[r].slot_of(c).is_some())
+            .ok_or_else(|| internal("map channel not read"))?;
         let (tex, layer, comp, enc) = self.locate(res, c, View::Base)?;
         let key = format!("{tex}/{layer}");
         let v = match self.fetches.get(&key) {
@@ -253,10 +290,15 @@ impl<'a> Emitter<'a> {
                         format!("textureSampleLevel({tex}, smp, in_uv, {layer}i, {})", args[0])
                     }
                     SampleFn::Nearest => {
-                        format!("textureLoad({tex}, clamp(vec2<i32>(floor(in_uv * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)")
+                        format!(
+                            "textureLoad({tex}, clamp(vec2<i32>(floor(in_uv * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)"
+                        )
                     }
                     SampleFn::Fetch => {
-                        format!("textureLoad({tex}, clamp(in_base + vec2<i32>({}, {}), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)", args[0], args[1])
+                        format!(
+                            "textureLoad({tex}, clamp(in_base + vec2<i32>({}, {}), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)",
+                            args[0], args[1]
+                        )
                     }
                 };
                 self.line(&format!("let {v} = {call};"));
@@ -286,7 +328,15 @@ impl<'a> Emitter<'a> {
     }
 
     fn graph_bindings(&self) -> Vec<Binding> {
-        self.bindings.iter().enumerate().map(|(i, (n, v))| Binding { binding: i as u32, texture: n.clone(), view: *v }).collect()
+        self.bindings
+            .iter()
+            .enumerate()
+            .map(|(i, (n, v))| Binding {
+                binding: i as u32,
+                texture: n.clone(),
+                view: *v,
+            })
+            .collect()
     }
 }
 
@@ -317,7 +367,12 @@ fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> 
 ";
 
 fn header(ir: &Ir, pass: &IrPass) -> String {
-    format!("// Generated by sshc from technique `{}`: pass `{}` ({}). Do not edit.\n\n", ir.technique, pass.name, pass.kind_name())
+    format!(
+        "// Generated by sshc from technique `{}`: pass `{}` ({}). Do not edit.\n\n",
+        ir.technique,
+        pass.name,
+        pass.kind_name()
+    )
 }
 
 /// Groups of layers of one texture that one render pass writes together.
@@ -358,7 +413,12 @@ pub fn codegen(ir: &Ir, limits: &Limits) -> Result<Output, Diagnostics> {
                 .note("`sshc check` accepts the technique; compiling it needs the Geometry runtime (compute-generated primitives drawn indirectly)")),
         };
         match r {
-            Ok((source, steps)) => modules.push(Module { pass: pi, file, source, steps }),
+            Ok((source, steps)) => modules.push(Module {
+                pass: pi,
+                file,
+                source,
+                steps,
+            }),
             Err(d) => diags.push(d),
         }
     }
@@ -406,7 +466,10 @@ fn fs_depth(in: DepthVarying) -> @location(0) vec4<f32> {
         compute: None,
         draw: Draw::SceneFromLight,
         reads: vec![],
-        writes: vec![Target { texture: tex.name.clone(), layer }],
+        writes: vec![Target {
+            texture: tex.name.clone(),
+            layer,
+        }],
         params: false,
         sampler: false,
         cost: OpCount::default(),
@@ -439,9 +502,15 @@ fn map(ir: &Ir, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step>), D
             let mut outs = Vec::new();
             for (oi, &layer) in chunk.iter().enumerate() {
                 let mut comps = vec!["0.0f".to_string(); 4];
-                for slot in res.slots.iter().filter(|s| matches!(s.place, Some((t, l, _)) if t == ti && l == layer)) {
+                for slot in res
+                    .slots
+                    .iter()
+                    .filter(|s| matches!(s.place, Some((t, l, _)) if t == ti && l == layer))
+                {
                     let (_, _, comp) = slot.place.unwrap_or_default();
-                    let v = ir.channels[slot.channel].value.ok_or_else(|| internal("map channel without value"))?;
+                    let v = ir.channels[slot.channel]
+                        .value
+                        .ok_or_else(|| internal("map channel without value"))?;
                     let name = em.emit(v)?;
                     comps[comp as usize] = encode_expr(&name, slot.encode);
                 }
@@ -461,7 +530,13 @@ fn map(ir: &Ir, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step>), D
                 compute: None,
                 draw: Draw::FullScreen,
                 reads: vec![],
-                writes: chunk.iter().map(|&l| Target { texture: tex.name.clone(), layer: l }).collect(),
+                writes: chunk
+                    .iter()
+                    .map(|&l| Target {
+                        texture: tex.name.clone(),
+                        layer: l,
+                    })
+                    .collect(),
                 params: em.uses_params,
                 sampler: false,
                 cost: OpCount::default(),
@@ -473,12 +548,22 @@ fn map(ir: &Ir, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step>), D
         s.reads = bindings.clone();
         s.params = decl_emitter.uses_params;
     }
-    let src = format!("{}{}\n{structs}\n{FULLSCREEN_VS}{bodies}", header(ir, pass), decl_emitter.declarations(ir));
+    let src = format!(
+        "{}{}\n{structs}\n{FULLSCREEN_VS}{bodies}",
+        header(ir, pass),
+        decl_emitter.declarations(ir)
+    );
     Ok((src, steps))
 }
 
 /// Weights and combine rule of one axis of a separable kernel, or the 3x3 stencil.
-fn filter(ir: &Ir, pass: &IrPass, kernel: &IrKernel, limits: &Limits, scratch: &mut Vec<Scratch>) -> Result<(String, Vec<Step>), Diagnostic> {
+fn filter(
+    ir: &Ir,
+    pass: &IrPass,
+    kernel: &IrKernel,
+    limits: &Limits,
+    scratch: &mut Vec<Scratch>,
+) -> Result<(String, Vec<Step>), Diagnostic> {
     let src = &ir.resources[pass.reads[0]];
     let dst = &ir.resources[pass.writes.ok_or_else(|| internal("filter without output"))?];
     let mut s = header(ir, pass);
@@ -494,33 +579,72 @@ fn filter(ir: &Ir, pass: &IrPass, kernel: &IrKernel, limits: &Limits, scratch: &
     for (ti, tex) in dst.textures.iter().enumerate() {
         let src_tex = &src.textures[ti];
         let chunks = layer_chunks(tex, limits);
-        let passes: Vec<(&str, bool)> = if kernel.separable() { vec![("h", true), ("v", false)] } else { vec![("2d", false)] };
+        let passes: Vec<(&str, bool)> = if kernel.separable() {
+            vec![("h", true), ("v", false)]
+        } else {
+            vec![("2d", false)]
+        };
         let tmp = format!("{}_tmp", tex.name);
         if kernel.separable() {
-            scratch.push(Scratch { name: tmp.clone(), like: tex.name.clone() });
+            scratch.push(Scratch {
+                name: tmp.clone(),
+                like: tex.name.clone(),
+            });
         }
         for (axis, horizontal) in passes {
             for (ci, chunk) in chunks.iter().enumerate() {
                 let entry = format!("fs_{}_{axis}_{ci}", tex.name);
                 let out_name = format!("Out_{}_{axis}_{ci}", tex.name);
                 s.push_str(&out_struct(&out_name, chunk.len()));
-                let _ = write!(s, "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let texel = vec2<i32>(pos.xy);\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n");
+                let _ = write!(
+                    s,
+                    "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let texel = vec2<i32>(pos.xy);\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n"
+                );
                 for (oi, &layer) in chunk.iter().enumerate() {
                     let taps: Vec<(i32, i32, f64)> = match kernel {
-                        IrKernel::LoG => (0..9).filter(|i| IrKernel::LOG_3X3[*i] != 0.0).map(|i| (i as i32 % 3 - 1, i as i32 / 3 - 1, IrKernel::LOG_3X3[i])).collect(),
+                        IrKernel::LoG => (0..9)
+                            .filter(|i| IrKernel::LOG_3X3[*i] != 0.0)
+                            .map(|i| (i as i32 % 3 - 1, i as i32 / 3 - 1, IrKernel::LOG_3X3[i]))
+                            .collect(),
                         _ => {
                             let w = kernel.weights_1d().unwrap_or_else(|| vec![1.0; size as usize]);
-                            (-r..=r).map(|i| if horizontal { (i, 0, w[(i + r) as usize]) } else { (0, i, w[(i + r) as usize]) }).collect()
+                            (-r..=r)
+                                .map(|i| {
+                                    if horizontal {
+                                        (i, 0, w[(i + r) as usize])
+                                    } else {
+                                        (0, i, w[(i + r) as usize])
+                                    }
+                                })
+                                .collect()
                         }
                     };
                     let _ = writeln!(s, "    // layer {layer}");
                     for (k, (dx, dy, _)) in taps.iter().enumerate() {
-                        let _ = writeln!(s, "    let a{oi}_{k} = textureLoad(t_src, clamp(texel + vec2<i32>({dx}i, {dy}i), vec2<i32>(0i), last), {layer}i, 0i);");
+                        let _ = writeln!(
+                            s,
+                            "    let a{oi}_{k} = textureLoad(t_src, clamp(texel + vec2<i32>({dx}i, {dy}i), vec2<i32>(0i), last), {layer}i, 0i);"
+                        );
                     }
                     let combined = match kernel {
-                        IrKernel::Max(_) => taps.iter().enumerate().map(|(k, _)| format!("a{oi}_{k}")).reduce(|a, b| format!("max({a}, {b})")).unwrap_or_default(),
-                        IrKernel::Min(_) => taps.iter().enumerate().map(|(k, _)| format!("a{oi}_{k}")).reduce(|a, b| format!("min({a}, {b})")).unwrap_or_default(),
-                        _ => taps.iter().enumerate().map(|(k, (_, _, w))| format!("a{oi}_{k} * {}", f32_lit(*w as f32))).collect::<Vec<_>>().join(" + "),
+                        IrKernel::Max(_) => taps
+                            .iter()
+                            .enumerate()
+                            .map(|(k, _)| format!("a{oi}_{k}"))
+                            .reduce(|a, b| format!("max({a}, {b})"))
+                            .unwrap_or_default(),
+                        IrKernel::Min(_) => taps
+                            .iter()
+                            .enumerate()
+                            .map(|(k, _)| format!("a{oi}_{k}"))
+                            .reduce(|a, b| format!("min({a}, {b})"))
+                            .unwrap_or_default(),
+                        _ => taps
+                            .iter()
+                            .enumerate()
+                            .map(|(k, (_, _, w))| format!("a{oi}_{k} * {}", f32_lit(*w as f32)))
+                            .collect::<Vec<_>>()
+                            .join(" + "),
                     };
                     // Encodes differ only across a LoG (its output range is wider).
                     let last_axis = !kernel.separable() || !horizontal;
@@ -558,8 +682,18 @@ fn filter(ir: &Ir, pass: &IrPass, kernel: &IrKernel, limits: &Limits, scratch: &
                     fragment: Some(entry),
                     compute: None,
                     draw: Draw::FullScreen,
-                    reads: vec![Binding { binding: 0, texture: read, view: View::Base }],
-                    writes: chunk.iter().map(|&l| Target { texture: write.clone(), layer: l }).collect(),
+                    reads: vec![Binding {
+                        binding: 0,
+                        texture: read,
+                        view: View::Base,
+                    }],
+                    writes: chunk
+                        .iter()
+                        .map(|&l| Target {
+                            texture: write.clone(),
+                            layer: l,
+                        })
+                        .collect(),
                     params: false,
                     sampler: false,
                     cost: OpCount::default(),
@@ -583,10 +717,16 @@ fn mipmap(ir: &Ir, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Result<(St
             let entry = format!("fs_{}_{ci}", tex.name);
             let out_name = format!("Out_{}_{ci}", tex.name);
             s.push_str(&out_struct(&out_name, chunk.len()));
-            let _ = write!(s, "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let src = vec2<i32>(pos.xy) * 2i;\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n");
+            let _ = write!(
+                s,
+                "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let src = vec2<i32>(pos.xy) * 2i;\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n"
+            );
             for (oi, &layer) in chunk.iter().enumerate() {
                 for (k, (dx, dy)) in [(0, 0), (1, 0), (0, 1), (1, 1)].iter().enumerate() {
-                    let _ = writeln!(s, "    let a{oi}_{k} = textureLoad(t_src, min(src + vec2<i32>({dx}i, {dy}i), last), {layer}i, 0i);");
+                    let _ = writeln!(
+                        s,
+                        "    let a{oi}_{k} = textureLoad(t_src, min(src + vec2<i32>({dx}i, {dy}i), last), {layer}i, 0i);"
+                    );
                 }
                 let v = match reduce {
                     Reduce::Mean => format!("(a{oi}_0 + a{oi}_1 + a{oi}_2 + a{oi}_3) * 0.25"),
@@ -601,8 +741,18 @@ fn mipmap(ir: &Ir, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Result<(St
                 fragment: Some(entry),
                 compute: None,
                 draw: Draw::MipLevels,
-                reads: vec![Binding { binding: 0, texture: tex.name.clone(), view: View::PreviousLevel }],
-                writes: chunk.iter().map(|&l| Target { texture: tex.name.clone(), layer: l }).collect(),
+                reads: vec![Binding {
+                    binding: 0,
+                    texture: tex.name.clone(),
+                    view: View::PreviousLevel,
+                }],
+                writes: chunk
+                    .iter()
+                    .map(|&l| Target {
+                        texture: tex.name.clone(),
+                        layer: l,
+                    })
+                    .collect(),
                 params: false,
                 sampler: false,
                 cost: OpCount::default(),

@@ -30,7 +30,9 @@ pub enum LightKind {
     Disk,
     Rectangle,
     /// A linear light sampled at `samples` points (Heidrich et al. 2000).
-    Segment { samples: u32 },
+    Segment {
+        samples: u32,
+    },
     /// A distant disk given by its angular diameter (Lawlor 2006).
     DistantDisk,
 }
@@ -217,10 +219,19 @@ pub enum Resolve {
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Kernel {
-    Box { size: Expr },
-    Gaussian { size: Expr, sigma: Expr },
-    Max { size: Expr },
-    Min { size: Expr },
+    Box {
+        size: Expr,
+    },
+    Gaussian {
+        size: Expr,
+        sigma: Expr,
+    },
+    Max {
+        size: Expr,
+    },
+    Min {
+        size: Expr,
+    },
     /// 3x3 Laplacian of Gaussian.
     LoG,
 }
@@ -283,9 +294,7 @@ impl PassKind {
     pub fn reads(&self) -> Vec<&Name> {
         match self {
             PassKind::Depth { .. } => vec![],
-            PassKind::Map { reads, .. } | PassKind::Geometry { reads, .. } | PassKind::Shade { reads, .. } => {
-                reads.iter().collect()
-            }
+            PassKind::Map { reads, .. } | PassKind::Geometry { reads, .. } | PassKind::Shade { reads, .. } => reads.iter().collect(),
             PassKind::Filter { reads, .. } | PassKind::Mipmap { reads, .. } | PassKind::SummedArea { reads, .. } => {
                 vec![reads]
             }

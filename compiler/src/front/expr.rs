@@ -273,10 +273,17 @@ pub fn parse(lit: &StrLit) -> Result<Expr, Diagnostic> {
             }
         }
     }
-    let mut p = Parser { text, toks, pos: 0, lit, depth: 0 };
+    let mut p = Parser {
+        text,
+        toks,
+        pos: 0,
+        lit,
+        depth: 0,
+    };
     if p.toks.is_empty() {
-        return Err(Diagnostic::error(Phase::Syntax, "empty expression")
-            .at(lit.map_span(Span::new(0, text.len())), "an expression is needed here"));
+        return Err(
+            Diagnostic::error(Phase::Syntax, "empty expression").at(lit.map_span(Span::new(0, text.len())), "an expression is needed here")
+        );
     }
     let e = p.block()?;
     if let Some(&(_, span)) = p.toks.get(p.pos) {
@@ -314,11 +321,8 @@ impl Parser<'_> {
 
     fn err_here(&self, what: &str) -> Diagnostic {
         match self.toks.get(self.pos) {
-            Some(&(_, span)) => Diagnostic::error(
-                Phase::Syntax,
-                format!("expected {what}, found `{}`", &self.text[span.range()]),
-            )
-            .at(self.map(span), format!("expected {what}")),
+            Some(&(_, span)) => Diagnostic::error(Phase::Syntax, format!("expected {what}, found `{}`", &self.text[span.range()]))
+                .at(self.map(span), format!("expected {what}")),
             None => Diagnostic::error(Phase::Syntax, format!("expected {what}, found the end of the expression"))
                 .at(self.map(self.end_span()), format!("expected {what}")),
         }
@@ -336,9 +340,11 @@ impl Parser<'_> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
             let span = self.toks.get(self.pos).map(|t| t.1).unwrap_or(self.end_span());
-            return Err(Diagnostic::error(Phase::Syntax, format!("expression nests deeper than {MAX_DEPTH} levels"))
-                .at(self.map(span), "too deep")
-                .help("split it with `let` bindings"));
+            return Err(
+                Diagnostic::error(Phase::Syntax, format!("expression nests deeper than {MAX_DEPTH} levels"))
+                    .at(self.map(span), "too deep")
+                    .help("split it with `let` bindings"),
+            );
         }
         Ok(())
     }
@@ -401,14 +407,13 @@ impl Parser<'_> {
             }
             let (_, op_span) = self.bump().unwrap_or((Tok::Plus, Span::UNDEFINED));
             let rhs = self.expr(prec + 1)?;
-            if op.is_comparison() {
-                if let ExprKind::Binary(inner, ..) = &lhs.kind {
-                    if inner.is_comparison() {
-                        return Err(Diagnostic::error(Phase::Syntax, "comparisons cannot be chained")
-                            .at(self.map(op_span), "second comparison")
-                            .help("combine them with `&&`"));
-                    }
-                }
+            if op.is_comparison()
+                && let ExprKind::Binary(inner, ..) = &lhs.kind
+                && inner.is_comparison()
+            {
+                return Err(Diagnostic::error(Phase::Syntax, "comparisons cannot be chained")
+                    .at(self.map(op_span), "second comparison")
+                    .help("combine them with `&&`"));
             }
             let span = lhs.span.join(rhs.span);
             lhs = Expr::new(ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span);
@@ -454,21 +459,18 @@ impl Parser<'_> {
         match tok {
             Tok::Int => match text.parse::<i64>() {
                 Ok(v) if v <= i32::MAX as i64 + 1 => Ok(Expr::new(ExprKind::Lit(Literal::Int(v)), fspan)),
-                _ => Err(Diagnostic::error(Phase::Syntax, format!("integer literal `{text}` does not fit in i32"))
-                    .at(fspan, "too large")),
+                _ => Err(Diagnostic::error(Phase::Syntax, format!("integer literal `{text}` does not fit in i32")).at(fspan, "too large")),
             },
             Tok::Float => match text.parse::<f64>() {
-                Ok(v) if v.is_finite() && v.abs() <= f32::MAX as f64 => {
-                    Ok(Expr::new(ExprKind::Lit(Literal::Float(v)), fspan))
-                }
-                _ => Err(Diagnostic::error(Phase::Syntax, format!("float literal `{text}` does not fit in f32"))
-                    .at(fspan, "too large")),
+                Ok(v) if v.is_finite() && v.abs() <= f32::MAX as f64 => Ok(Expr::new(ExprKind::Lit(Literal::Float(v)), fspan)),
+                _ => Err(Diagnostic::error(Phase::Syntax, format!("float literal `{text}` does not fit in f32")).at(fspan, "too large")),
             },
-            Tok::Ident if text == "true" || text == "false" => {
-                Ok(Expr::new(ExprKind::Lit(Literal::Bool(text == "true")), fspan))
-            }
-            Tok::Ident if text == "let" => Err(Diagnostic::error(Phase::Syntax, "`let` is only allowed at the start of an expression or inside parentheses")
-                .at(fspan, "unexpected `let`")),
+            Tok::Ident if text == "true" || text == "false" => Ok(Expr::new(ExprKind::Lit(Literal::Bool(text == "true")), fspan)),
+            Tok::Ident if text == "let" => Err(Diagnostic::error(
+                Phase::Syntax,
+                "`let` is only allowed at the start of an expression or inside parentheses",
+            )
+            .at(fspan, "unexpected `let`")),
             Tok::Ident if text == "sum" && self.peek() == Some(Tok::LParen) => self.sum(fspan),
             Tok::Ident => {
                 if self.peek() == Some(Tok::LParen) {

@@ -31,10 +31,14 @@ impl<'a> Fields<'a> {
     fn of(node: &'a Node, what: &'static str) -> Result<Self, Diagnostic> {
         match &node.value {
             Value::Struct { name, fields } => {
-                if let Some((n, span)) = name {
-                    if n != what {
-                        return Err(err(*span, format!("expected `{what}(...)`, found `{n}(...)`"), format!("expected `{what}`")));
-                    }
+                if let Some((n, span)) = name
+                    && n != what
+                {
+                    return Err(err(
+                        *span,
+                        format!("expected `{what}(...)`, found `{n}(...)`"),
+                        format!("expected `{what}`"),
+                    ));
                 }
                 Ok(Fields {
                     what,
@@ -51,7 +55,11 @@ impl<'a> Fields<'a> {
                 taken: Vec::new(),
                 known: Vec::new(),
             }),
-            _ => Err(err(node.span, format!("expected `{what}(...)`, found {}", node.describe()), format!("expected `{what}(field: value, ...)`"))),
+            _ => Err(err(
+                node.span,
+                format!("expected `{what}(...)`, found {}", node.describe()),
+                format!("expected `{what}(field: value, ...)`"),
+            )),
         }
     }
 
@@ -61,7 +69,11 @@ impl<'a> Fields<'a> {
         for (i, f) in self.fields.iter().enumerate() {
             if f.name == name {
                 if found.is_some() {
-                    return Err(err(f.name_span, format!("field `{name}` is given twice in `{}`", self.what), "second time here"));
+                    return Err(err(
+                        f.name_span,
+                        format!("field `{name}` is given twice in `{}`", self.what),
+                        "second time here",
+                    ));
                 }
                 self.taken[i] = true;
                 found = Some(&f.value);
@@ -73,14 +85,22 @@ impl<'a> Fields<'a> {
     fn req(&mut self, name: &'static str) -> Result<&'a Node, Diagnostic> {
         match self.opt(name)? {
             Some(n) => Ok(n),
-            None => Err(err(self.span, format!("missing field `{name}` in `{}`", self.what), format!("`{name}: ...` is required here"))),
+            None => Err(err(
+                self.span,
+                format!("missing field `{name}` in `{}`", self.what),
+                format!("`{name}: ...` is required here"),
+            )),
         }
     }
 
     fn finish(self) -> Result<(), Diagnostic> {
         for (i, f) in self.fields.iter().enumerate() {
             if !self.taken[i] {
-                let mut d = err(f.name_span, format!("unknown field `{}` in `{}`", f.name, self.what), "unknown field");
+                let mut d = err(
+                    f.name_span,
+                    format!("unknown field `{}` in `{}`", f.name, self.what),
+                    "unknown field",
+                );
                 if let Some(s) = closest(&f.name, &self.known) {
                     d = d.help(format!("did you mean `{s}`?"));
                 } else {
@@ -119,7 +139,11 @@ fn edit_distance(a: &str, b: &str) -> usize {
 fn string(node: &Node) -> Result<Spanned<String>, Diagnostic> {
     match &node.value {
         Value::Str(s) => Ok(Spanned::new(s.text.clone(), node.span)),
-        _ => Err(err(node.span, format!("expected a string, found {}", node.describe()), "expected a string")),
+        _ => Err(err(
+            node.span,
+            format!("expected a string, found {}", node.describe()),
+            "expected a string",
+        )),
     }
 }
 
@@ -129,8 +153,10 @@ fn name(node: &Node) -> Result<Name, Diagnostic> {
     let ok = s.value.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
         && s.value.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
     if !ok {
-        return Err(err(node.span, format!("`{}` is not a valid name", s.value), "names are identifiers")
-            .help("use letters, digits and `_`, starting with a letter"));
+        return Err(
+            err(node.span, format!("`{}` is not a valid name", s.value), "names are identifiers")
+                .help("use letters, digits and `_`, starting with a letter"),
+        );
     }
     Ok(s)
 }
@@ -139,14 +165,22 @@ fn names(node: &Node) -> Result<Vec<Name>, Diagnostic> {
     match &node.value {
         Value::List(items) => items.iter().map(name).collect(),
         Value::Str(_) => Ok(vec![name(node)?]),
-        _ => Err(err(node.span, format!("expected a list of names, found {}", node.describe()), "expected `[\"a\", \"b\"]`")),
+        _ => Err(err(
+            node.span,
+            format!("expected a list of names, found {}", node.describe()),
+            "expected `[\"a\", \"b\"]`",
+        )),
     }
 }
 
 fn boolean(node: &Node) -> Result<bool, Diagnostic> {
     match &node.value {
         Value::Bool(b) => Ok(*b),
-        _ => Err(err(node.span, format!("expected `true` or `false`, found {}", node.describe()), "expected a boolean")),
+        _ => Err(err(
+            node.span,
+            format!("expected `true` or `false`, found {}", node.describe()),
+            "expected a boolean",
+        )),
     }
 }
 
@@ -154,7 +188,11 @@ fn number(node: &Node) -> Result<Spanned<f64>, Diagnostic> {
     match &node.value {
         Value::Int(v) => Ok(Spanned::new(*v as f64, node.span)),
         Value::Float(v) => Ok(Spanned::new(*v, node.span)),
-        _ => Err(err(node.span, format!("expected a number, found {}", node.describe()), "expected a number")),
+        _ => Err(err(
+            node.span,
+            format!("expected a number, found {}", node.describe()),
+            "expected a number",
+        )),
     }
 }
 
@@ -165,7 +203,11 @@ fn expression(node: &Node) -> Result<Expr, Diagnostic> {
         Value::Int(v) => Ok(Expr::new(ExprKind::Lit(Literal::Int(*v)), node.span)),
         Value::Float(v) => Ok(Expr::new(ExprKind::Lit(Literal::Float(*v)), node.span)),
         Value::Bool(v) => Ok(Expr::new(ExprKind::Lit(Literal::Bool(*v)), node.span)),
-        _ => Err(err(node.span, format!("expected an expression string, found {}", node.describe()), "expected an expression such as \"exp(c * z)\"")),
+        _ => Err(err(
+            node.span,
+            format!("expected an expression string, found {}", node.describe()),
+            "expected an expression such as \"exp(c * z)\"",
+        )),
     }
 }
 
@@ -178,7 +220,11 @@ fn variant(node: &Node) -> Result<(String, Span), Diagnostic> {
     match &node.value {
         Value::Ident(n) => Ok((n.clone(), node.span)),
         Value::Struct { name: Some((n, s)), .. } | Value::Tuple { name: Some((n, s)), .. } => Ok((n.clone(), *s)),
-        _ => Err(err(node.span, format!("expected a name such as `F32`, found {}", node.describe()), "expected a variant name")),
+        _ => Err(err(
+            node.span,
+            format!("expected a name such as `F32`, found {}", node.describe()),
+            "expected a variant name",
+        )),
     }
 }
 
@@ -194,7 +240,11 @@ fn unknown_variant(span: Span, got: &str, what: &str, options: &[&'static str]) 
 fn map_entries(node: &Node) -> Result<Vec<(Name, &Node)>, Diagnostic> {
     match &node.value {
         Value::Map(entries) => entries.iter().map(|(k, v)| Ok((name(k)?, v))).collect(),
-        _ => Err(err(node.span, format!("expected a map `{{ \"name\": ... }}`, found {}", node.describe()), "expected a map")),
+        _ => Err(err(
+            node.span,
+            format!("expected a map `{{ \"name\": ... }}`, found {}", node.describe()),
+            "expected a map",
+        )),
     }
 }
 
@@ -220,12 +270,21 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
     };
     let expansions = match f.opt("expansions")? {
         None => vec![],
-        Some(n) => map_entries(n)?.into_iter().map(|(k, v)| expansion(k, v)).collect::<Result<_, _>>()?,
+        Some(n) => map_entries(n)?
+            .into_iter()
+            .map(|(k, v)| expansion(k, v))
+            .collect::<Result<_, _>>()?,
     };
     let passes_node = f.req("passes")?;
     let passes = match &passes_node.value {
         Value::List(items) => items.iter().map(pass).collect::<Result<_, _>>()?,
-        _ => return Err(err(passes_node.span, format!("expected a list of passes, found {}", passes_node.describe()), "expected `[Depth(...), ...]`")),
+        _ => {
+            return Err(err(
+                passes_node.span,
+                format!("expected a list of passes, found {}", passes_node.describe()),
+                "expected `[Depth(...), ...]`",
+            ));
+        }
     };
     f.finish()?;
     Ok(Technique {
@@ -241,7 +300,16 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
     })
 }
 
-const LIGHTS: &[&str] = &["Any", "Point", "Directional", "Sphere", "Disk", "Rectangle", "Segment", "DistantDisk"];
+const LIGHTS: &[&str] = &[
+    "Any",
+    "Point",
+    "Directional",
+    "Sphere",
+    "Disk",
+    "Rectangle",
+    "Segment",
+    "DistantDisk",
+];
 
 fn light(node: &Node) -> Result<Spanned<LightKind>, Diagnostic> {
     let (v, span) = variant(node)?;
@@ -258,7 +326,13 @@ fn light(node: &Node) -> Result<Spanned<LightKind>, Diagnostic> {
             let n = f.req("samples")?;
             let samples = match n.value {
                 Value::Int(s) if (2..=64).contains(&s) => s as u32,
-                _ => return Err(err(n.span, "a segment light needs between 2 and 64 samples", "expected an integer in 2..=64")),
+                _ => {
+                    return Err(err(
+                        n.span,
+                        "a segment light needs between 2 and 64 samples",
+                        "expected an integer in 2..=64",
+                    ));
+                }
             };
             f.finish()?;
             LightKind::Segment { samples }
@@ -284,7 +358,13 @@ fn param(name: Name, node: &Node) -> Result<Param, Diagnostic> {
         None => None,
         Some(r) => match &r.value {
             Value::Tuple { name: None, items } if items.len() == 2 => Some((number(&items[0])?, number(&items[1])?)),
-            _ => return Err(err(r.span, format!("expected a range `(lo, hi)`, found {}", r.describe()), "expected `(lo, hi)`")),
+            _ => {
+                return Err(err(
+                    r.span,
+                    format!("expected a range `(lo, hi)`, found {}", r.describe()),
+                    "expected `(lo, hi)`",
+                ));
+            }
         },
     };
     let fixed = f.opt("fixed")?.map(boolean).transpose()?.unwrap_or(false);
@@ -309,14 +389,17 @@ pub fn const_value(node: &Node, ty: ScalarTy) -> Result<Spanned<ConstValue>, Dia
         (Value::Float(v), ScalarTy::F32) => ConstValue::Float(*v),
         (Value::Bool(v), ScalarTy::Bool) => ConstValue::Bool(*v),
         _ => {
-            return Err(Diagnostic::error(Phase::Check, format!("expected a value of type {}, found {}", ty.name(), node.describe()))
-                .at(node.span, format!("expected {}", ty.name())));
+            return Err(Diagnostic::error(
+                Phase::Check,
+                format!("expected a value of type {}, found {}", ty.name(), node.describe()),
+            )
+            .at(node.span, format!("expected {}", ty.name())));
         }
     };
-    if let ConstValue::Int(i) = v {
-        if i32::try_from(i).is_err() {
-            return Err(err(node.span, format!("{i} does not fit in i32"), "out of i32 range"));
-        }
+    if let ConstValue::Int(i) = v
+        && i32::try_from(i).is_err()
+    {
+        return Err(err(node.span, format!("{i} does not fit in i32"), "out of i32 range"));
     }
     Ok(Spanned::new(v, node.span))
 }
@@ -353,7 +436,10 @@ fn expansion(name: Name, node: &Node) -> Result<Expansion, Diagnostic> {
     let to = expression(f.req("to")?)?;
     let lets = match f.opt("lets")? {
         None => vec![],
-        Some(n) => map_entries(n)?.into_iter().map(|(k, v)| Ok((k, expression(v)?))).collect::<Result<_, Diagnostic>>()?,
+        Some(n) => map_entries(n)?
+            .into_iter()
+            .map(|(k, v)| Ok((k, expression(v)?)))
+            .collect::<Result<_, Diagnostic>>()?,
     };
     let constant = match f.opt("constant")? {
         Some(n) => expression(n)?,
@@ -363,7 +449,13 @@ fn expansion(name: Name, node: &Node) -> Result<Expansion, Diagnostic> {
     let terms = match &tn.value {
         Value::List(items) if !items.is_empty() => items.iter().map(term).collect::<Result<_, _>>()?,
         Value::List(_) => return Err(err(tn.span, "an expansion needs at least one term", "no terms")),
-        _ => return Err(err(tn.span, format!("expected a list of terms, found {}", tn.describe()), "expected `[Term(coeff: ..., basis: ...)]`")),
+        _ => {
+            return Err(err(
+                tn.span,
+                format!("expected a list of terms, found {}", tn.describe()),
+                "expected `[Term(coeff: ..., basis: ...)]`",
+            ));
+        }
     };
     let precision = precision(f.req("precision")?)?;
     let doc = opt_string(&mut f, "doc")?;
@@ -391,7 +483,11 @@ fn term(node: &Node) -> Result<Term, Diagnostic> {
     let coeff = expression(f.req("coeff")?)?;
     let basis = expression(f.req("basis")?)?;
     f.finish()?;
-    Ok(Term { coeff, basis, span: node.span })
+    Ok(Term {
+        coeff,
+        basis,
+        span: node.span,
+    })
 }
 
 const PASSES: &[&str] = &["Depth", "Map", "Filter", "Mipmap", "SummedArea", "Geometry", "Shade"];
@@ -414,7 +510,13 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
     let (kind_name, kind_span) = match &node.value {
         Value::Struct { name: Some((n, s)), .. } | Value::Tuple { name: Some((n, s)), .. } => (n.clone(), *s),
         Value::Ident(n) => (n.clone(), node.span),
-        _ => return Err(err(node.span, format!("expected a pass such as `Map(...)`, found {}", node.describe()), "expected a pass")),
+        _ => {
+            return Err(err(
+                node.span,
+                format!("expected a pass such as `Map(...)`, found {}", node.describe()),
+                "expected a pass",
+            ));
+        }
     };
     if !PASSES.contains(&kind_name.as_str()) {
         return Err(unknown_variant(kind_span, &kind_name, "pass kind", PASSES));
@@ -480,7 +582,14 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
                 _ => return Err(unknown_variant(rs, &r, "resolve rule", &["KeepMin", "KeepMax", "Add"])),
             };
             let view = light_view(&mut f)?;
-            PassKind::Geometry { reads, writes, primitive, channels, resolve, view }
+            PassKind::Geometry {
+                reads,
+                writes,
+                primitive,
+                channels,
+                resolve,
+                view,
+            }
         }
         _ => PassKind::Shade {
             reads: names(f.req("reads")?)?,

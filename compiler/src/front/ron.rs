@@ -162,7 +162,10 @@ pub fn parse(src: &str) -> Result<Node, Diagnostic> {
                 } else if text.starts_with("/*") {
                     ("unterminated block comment", "close the comment with `*/`")
                 } else {
-                    ("unexpected character", "RON values are structs `Name(...)`, lists `[...]`, maps `{...}`, strings, numbers and identifiers")
+                    (
+                        "unexpected character",
+                        "RON values are structs `Name(...)`, lists `[...]`, maps `{...}`, strings, numbers and identifiers",
+                    )
                 };
                 return Err(Diagnostic::error(Phase::Syntax, format!("{msg} `{}`", text.escape_debug()))
                     .at(span, "not valid RON here")
@@ -206,13 +209,14 @@ impl<'s> Parser<'s> {
     fn expect(&mut self, want: Tok, what: &str) -> Result<Span, Diagnostic> {
         match self.bump() {
             Some((t, span)) if t == want => Ok(span),
-            Some((_, span)) => Err(Diagnostic::error(
-                Phase::Syntax,
-                format!("expected {what}, found `{}`", self.text(span)),
-            )
-            .at(span, format!("expected {what}"))),
-            None => Err(Diagnostic::error(Phase::Syntax, format!("expected {what}, found the end of the file"))
-                .at(self.eof_span(), format!("expected {what}"))),
+            Some((_, span)) => Err(
+                Diagnostic::error(Phase::Syntax, format!("expected {what}, found `{}`", self.text(span)))
+                    .at(span, format!("expected {what}")),
+            ),
+            None => Err(
+                Diagnostic::error(Phase::Syntax, format!("expected {what}, found the end of the file"))
+                    .at(self.eof_span(), format!("expected {what}")),
+            ),
         }
     }
 
@@ -222,8 +226,7 @@ impl<'s> Parser<'s> {
                 .at(self.eof_span(), "a value is missing here"));
         };
         if depth > MAX_DEPTH {
-            return Err(Diagnostic::error(Phase::Syntax, format!("values nest deeper than {MAX_DEPTH} levels"))
-                .at(span, "too deep"));
+            return Err(Diagnostic::error(Phase::Syntax, format!("values nest deeper than {MAX_DEPTH} levels")).at(span, "too deep"));
         }
         let text = self.text(span);
         let value = match tok {
@@ -232,8 +235,9 @@ impl<'s> Parser<'s> {
             Tok::Int => match text.replace('_', "").parse::<i64>() {
                 Ok(v) => Value::Int(v),
                 Err(_) => {
-                    return Err(Diagnostic::error(Phase::Syntax, format!("integer `{text}` is out of range"))
-                        .at(span, "does not fit in 64 bits"));
+                    return Err(
+                        Diagnostic::error(Phase::Syntax, format!("integer `{text}` is out of range")).at(span, "does not fit in 64 bits")
+                    );
                 }
             },
             Tok::Float => match text.replace('_', "").parse::<f64>() {
@@ -275,7 +279,10 @@ impl<'s> Parser<'s> {
                         continue;
                     }
                 };
-                return Ok(Node { value: Value::List(items), span: span.join(end) });
+                return Ok(Node {
+                    value: Value::List(items),
+                    span: span.join(end),
+                });
             }
             Tok::LBrace => {
                 let mut entries = Vec::new();
@@ -290,7 +297,10 @@ impl<'s> Parser<'s> {
                     entries.push((key, value));
                     self.comma_or_close(Tok::RBrace, "`,` or `}`")?;
                 };
-                return Ok(Node { value: Value::Map(entries), span: span.join(end) });
+                return Ok(Node {
+                    value: Value::Map(entries),
+                    span: span.join(end),
+                });
             }
             Tok::RParen | Tok::RBracket | Tok::RBrace | Tok::Comma | Tok::Colon => {
                 return Err(Diagnostic::error(Phase::Syntax, format!("expected a value, found `{text}`"))
@@ -309,24 +319,22 @@ impl<'s> Parser<'s> {
                 Ok(true)
             }
             Some((t, _)) if t == close => Ok(false),
-            Some((_, span)) => Err(Diagnostic::error(
-                Phase::Syntax,
-                format!("expected {what}, found `{}`", self.text(span)),
-            )
-            .at(span, format!("expected {what}"))
-            .help("items are separated by commas")),
-            None => Err(Diagnostic::error(Phase::Syntax, format!("expected {what}, found the end of the file"))
-                .at(self.eof_span(), "unclosed here")),
+            Some((_, span)) => Err(
+                Diagnostic::error(Phase::Syntax, format!("expected {what}, found `{}`", self.text(span)))
+                    .at(span, format!("expected {what}"))
+                    .help("items are separated by commas"),
+            ),
+            None => Err(
+                Diagnostic::error(Phase::Syntax, format!("expected {what}, found the end of the file"))
+                    .at(self.eof_span(), "unclosed here"),
+            ),
         }
     }
 
     /// `( ... )` after an optional name: fields `a: v` make a struct, plain values a tuple.
     fn parens(&mut self, name: Option<(String, Span)>, start: Span, depth: usize) -> Result<Node, Diagnostic> {
         self.expect(Tok::LParen, "`(`")?;
-        let is_struct = matches!(
-            (self.peek_tok(0), self.peek_tok(1)),
-            (Some(Tok::Ident), Some(Tok::Colon))
-        );
+        let is_struct = matches!((self.peek_tok(0), self.peek_tok(1)), (Some(Tok::Ident), Some(Tok::Colon)));
         let mut fields = Vec::new();
         let mut items = Vec::new();
         let end = loop {
@@ -335,15 +343,14 @@ impl<'s> Parser<'s> {
                 break end;
             }
             if is_struct {
-                let (tok, name_span) = self.bump().ok_or_else(|| {
-                    Diagnostic::error(Phase::Syntax, "unclosed `(`").at(start, "opened here")
-                })?;
+                let (tok, name_span) = self
+                    .bump()
+                    .ok_or_else(|| Diagnostic::error(Phase::Syntax, "unclosed `(`").at(start, "opened here"))?;
                 if tok != Tok::Ident {
-                    return Err(Diagnostic::error(
-                        Phase::Syntax,
-                        format!("expected a field name, found `{}`", self.text(name_span)),
-                    )
-                    .at(name_span, "expected `name: value`"));
+                    return Err(
+                        Diagnostic::error(Phase::Syntax, format!("expected a field name, found `{}`", self.text(name_span)))
+                            .at(name_span, "expected `name: value`"),
+                    );
                 }
                 self.expect(Tok::Colon, "`:` after a field name")?;
                 let value = self.value(depth + 1)?;
@@ -412,7 +419,9 @@ mod tests {
     fn spans_point_at_values_and_string_bytes() {
         let src = r#"T(a: 1, b: [2.5, "x*y"], c: {"k": Unit}, d: r"raw")"#;
         let node = parse(src).unwrap();
-        let Value::Struct { fields, .. } = &node.value else { panic!("not a struct: {node:?}") };
+        let Value::Struct { fields, .. } = &node.value else {
+            panic!("not a struct: {node:?}")
+        };
         assert_eq!(fields.len(), 4);
         assert_eq!(&src[fields[0].value.span.range()], "1");
         let Value::List(items) = &fields[1].value.value else { panic!() };
