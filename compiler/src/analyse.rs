@@ -16,6 +16,8 @@ use std::f64::consts::PI;
 
 pub const F16_MAX: f64 = 65504.0;
 pub const F32_MAX: f64 = f32::MAX as f64;
+/// The smallest positive normal f16.
+pub const F16_MIN_NORMAL: f64 = 6.103515625e-5;
 
 impl Interval {
     pub fn point(v: f64) -> Interval {
@@ -479,25 +481,60 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
             slot.encode = encode_for(slot.precision, r);
         }
     }
-    // Unorm8 quantisation relative to the range, as a note for explain.
+    // Quantisation and underflow, reported once, where the channel is made.
     for res in &ir.resources {
+        if matches!(
+            ir.passes[res.writer].kind,
+            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea
+        ) {
+            continue;
+        }
         for s in &res.slots {
-            if s.precision == Precision::Unorm8
-                && let Some(r) = s.range
-                && r.hi - r.lo > 8.0
-            {
+            let Some(r) = s.range else { continue };
+            let ch = &ir.channels[s.channel];
+            if s.precision == Precision::Unorm8 && r.hi - r.lo > 8.0 {
                 warnings.push(
                     Diagnostic::warning(
                         Phase::Analyse,
                         format!(
                             "channel `{}` spans {r} at Unorm8: one step is {}",
-                            ir.channels[s.channel].name,
+                            ch.name,
                             short((r.hi - r.lo) / 255.0)
                         ),
                     )
-                    .at(ir.channels[s.channel].precision_span, "coarse quantisation")
+                    .at(ch.precision_span, "coarse quantisation")
                     .help("use Unorm16 or F16 for this channel"),
                 );
+            }
+            let min_normal = match s.precision {
+                Precision::F16 => Some(F16_MIN_NORMAL),
+                Precision::F32 => Some(f32::MIN_POSITIVE as f64),
+                _ => None,
+            };
+            if let Some(m) = min_normal {
+                let smallest = if r.lo > 0.0 {
+                    r.lo
+                } else if r.hi < 0.0 {
+                    -r.hi
+                } else {
+                    f64::INFINITY
+                };
+                if smallest < m {
+                    warnings.push(
+                        Diagnostic::warning(
+                            Phase::Analyse,
+                            format!(
+                                "channel `{}` reaches magnitudes down to {} at {}, below its smallest normal number {}",
+                                ch.name,
+                                short(smallest),
+                                s.precision.name(),
+                                short(m)
+                            ),
+                        )
+                        .at(ch.precision_span, "values underflow to subnormals or zero")
+                        .help("rescale the channel, or store it at a wider precision"),
+                    );
+                }
             }
         }
     }

@@ -81,7 +81,17 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
         let p = &t.passes[pi];
         let list = match &p.kind {
             PassKind::Depth { channel, .. } => {
-                let c = sym.channels[&channel.value];
+                let Some(&c) = sym.channels.get(&channel.value) else {
+                    diags.push(
+                        Diagnostic::error(
+                            Phase::Check,
+                            format!("a Depth pass writes one channel, but `{}` is an expansion", channel.value),
+                        )
+                        .at(channel.span, "not a channel")
+                        .help("declare a channel without `value` in `channels` and name it here"),
+                    );
+                    continue;
+                };
                 if let Some(v) = &t.channels[c].value {
                     diags.push(
                         Diagnostic::error(
@@ -184,6 +194,20 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                 Err(d) => diags.push(d),
             },
             PassKind::Shade { reads, visibility } => {
+                for r in reads {
+                    let writer = &t.passes[sym.resources[&r.value].writer];
+                    if matches!(writer.kind, PassKind::SummedArea { .. }) {
+                        diags.push(
+                            Diagnostic::error(
+                                Phase::Check,
+                                format!("`{}` is a summed-area table, which the language cannot look up yet", r.value),
+                            )
+                            .at(r.span, "no lookup reads a summed-area table")
+                            .note("box lookups over summed-area tables arrive with convolution soft shadow maps")
+                            .help("read the resource before the SummedArea pass, or a mip chain of it"),
+                        );
+                    }
+                }
                 let carried: Vec<(Item, String)> = reads
                     .iter()
                     .flat_map(|r| {
@@ -394,6 +418,7 @@ fn side_error(u: &Use, what: &str, owner: &str, why: &str) -> Diagnostic {
 
 fn resolve_kernel(sym: &Symbols, kernel: &crate::span::Spanned<Kernel>) -> Result<IrKernel, Diagnostic> {
     let size = |e: &Expr| -> Result<u32, Diagnostic> {
+        const_typed(sym, e, &[Ty::I32, Ty::AbstractInt], "a filter size", "an integer")?;
         let v = lower::const_eval(sym, e)?;
         match v {
             ConstValue::Int(n) if (1..=MAX_KERNEL).contains(&n) && n % 2 == 1 => Ok(n as u32),
@@ -422,6 +447,7 @@ fn resolve_kernel(sym: &Symbols, kernel: &crate::span::Spanned<Kernel>) -> Resul
         Kernel::LoG => IrKernel::LoG,
         Kernel::Gaussian { size: s, sigma } => {
             let n = size(s)?;
+            const_typed(sym, sigma, &[Ty::F32, Ty::AbstractInt], "a Gaussian sigma", "an f32")?;
             let sg = lower::const_eval(sym, sigma)?.as_f64();
             if !(sg > 0.0 && sg.is_finite()) {
                 return Err(
@@ -431,6 +457,20 @@ fn resolve_kernel(sym: &Symbols, kernel: &crate::span::Spanned<Kernel>) -> Resul
             IrKernel::Gaussian(n, sg)
         }
     })
+}
+
+/// Type-check an expression that must be known at compile time.
+fn const_typed(sym: &Symbols, e: &Expr, allowed: &[Ty], what: &str, want: &str) -> Result<(), Diagnostic> {
+    let t = Typer::new(sym, Mode::Const).infer(e)?;
+    if allowed.contains(&t) {
+        Ok(())
+    } else {
+        Err(Typer::err(
+            e.span,
+            format!("type mismatch: {what} must be {want}, found {t}"),
+            format!("this is {t}"),
+        ))
+    }
 }
 
 /// The execution order: Kahn's algorithm over writer -> reader edges, taking passes in the

@@ -3,10 +3,10 @@
 //! of every step, counted on the naga IR).
 
 use crate::back::wgsl::{Output, texture_format};
-use crate::front::ast::{ConstValue, LightKind, ScalarTy};
+use crate::front::ast::{ConstValue, LightKind, LightView, ScalarTy};
 use crate::ir::*;
 use crate::pack::mip_source;
-use sshc_runtime::graph::{self, ChannelDecl, Extent, LightModel, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl};
+use sshc_runtime::graph::{self, ChannelDecl, Extent, LightModel, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
 use std::fmt::Write as _;
 
 fn light(l: LightKind) -> LightModel {
@@ -106,6 +106,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
         {
             textures.push(TextureDecl {
                 name: s.name.clone(),
+                format: s.format,
                 mips: false,
                 transient: true,
                 channels: vec![],
@@ -119,6 +120,16 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
         .map(|m| PassDecl {
             name: ir.passes[m.pass].name.clone(),
             kind: kind(&ir.passes[m.pass]),
+            views: match ir.passes[m.pass].kind {
+                IrPassKind::Depth {
+                    view: LightView::PerSample,
+                }
+                | IrPassKind::Geometry {
+                    view: LightView::PerSample,
+                    ..
+                } => Views::PerLightSample,
+                _ => Views::LightCenter,
+            },
             shader: m.file.clone(),
             steps: m.steps.clone(),
         })
@@ -126,6 +137,8 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
     PassGraph {
         version: graph::SCHEMA_VERSION,
         technique: ir.technique.clone(),
+        title: ir.title.clone(),
+        paper: ir.paper.clone(),
         lights: ir.lights.iter().map(|l| light(*l)).collect(),
         params,
         params_size,

@@ -28,7 +28,12 @@ pub fn explain(c: &Compiled) -> String {
     }
     let _ = writeln!(s, "\nPasses, in execution order:");
     for (i, p) in ir.passes.iter().filter(|p| p.live).enumerate() {
-        let reads: Vec<&str> = p.reads.iter().map(|r| ir.resources[*r].name.as_str()).collect();
+        let reads: Vec<&str> = p
+            .reads
+            .iter()
+            .filter(|r| ir.resources[**r].live)
+            .map(|r| ir.resources[*r].name.as_str())
+            .collect();
         let what = match &p.kind {
             IrPassKind::Depth { .. } => "rasterises the scene from the light and stores linear depth".to_string(),
             IrPassKind::Map => "computes channels per shadow-map texel".to_string(),

@@ -721,6 +721,8 @@ impl IrPass {
 #[derive(Clone, Debug)]
 pub struct Ir {
     pub technique: String,
+    pub title: Option<String>,
+    pub paper: Option<String>,
     pub lights: Vec<LightKind>,
     pub params: Vec<IrParam>,
     pub channels: Vec<IrChannel>,
@@ -773,17 +775,16 @@ impl fmt::Display for Ir {
             }
         }
         for r in &self.resources {
-            write!(
-                f,
-                "  resource {} (written by {}",
-                r.name,
-                self.passes.get(r.writer).map(|p| p.name.as_str()).unwrap_or("?")
-            )?;
+            let writer = self.passes.get(r.writer).map(|p| p.name.as_str()).unwrap_or("?");
+            write!(f, "  resource {} (written by pass `{writer}`", r.name)?;
             if r.mips {
-                write!(f, ", mips")?;
+                write!(f, "; mip chain")?;
             }
             if r.sat {
-                write!(f, ", summed-area")?;
+                write!(f, "; summed-area table")?;
+            }
+            if !r.live {
+                write!(f, "; removed")?;
             }
             writeln!(f, ")")?;
             for s in &r.slots {
@@ -792,7 +793,7 @@ impl fmt::Display for Ir {
                     write!(f, " range {range}")?;
                 }
                 if !s.encode.is_identity() {
-                    write!(f, " encode (v - {}) * {}", short(s.encode.bias), short(s.encode.scale))?;
+                    write!(f, " stored as (v - ({})) * {}", short(s.encode.bias), short(s.encode.scale))?;
                 }
                 if let Some((t, layer, comp)) = s.place {
                     write!(f, " at {}[{layer}].{}", r.textures[t].name, ['r', 'g', 'b', 'a'][comp as usize])?;

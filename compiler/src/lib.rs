@@ -93,11 +93,18 @@ pub fn compile_with_dump(source: &str, opts: &CompileOptions) -> Outcome {
 
 /// Validate only: parse, resolve and check.
 pub fn check_str(source: &str, opts: &CompileOptions) -> Result<(), Diagnostics> {
-    match run(source, opts, Until::Check).result {
+    check_with_dump(source, opts).0
+}
+
+/// Validate only, keeping the `--dump-ir-after` text of the phases that ran (parse, resolve, check).
+pub fn check_with_dump(source: &str, opts: &CompileOptions) -> (Result<(), Diagnostics>, Option<String>) {
+    let o = run(source, opts, Until::Check);
+    let r = match o.result {
         Err(d) if d.is_empty() => Ok(()),
         Err(d) => Err(d),
         Ok(_) => Ok(()),
-    }
+    };
+    (r, o.dump)
 }
 
 /// Read and compile a technique file; errors are rendered against the file.

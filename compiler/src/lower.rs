@@ -173,7 +173,16 @@ impl Lowerer<'_, '_> {
         }
         if let Some((i, p)) = self.sym.param(n) {
             let v = self.sym.values[i].value;
-            if p.fixed || self.const_only {
+            if self.const_only && !p.fixed {
+                return Err(Diagnostic::error(
+                    Phase::Check,
+                    format!("param `{n}` is a runtime uniform, but this value is needed at compile time"),
+                )
+                .at(span, "not known at compile time")
+                .also(p.name.span, "declared here")
+                .help(format!("add `fixed: true` to param `{n}`")));
+            }
+            if p.fixed {
                 return Ok(match v {
                     ConstValue::Int(x) => (self.arena.i32(x as i32), false),
                     ConstValue::Float(x) => (self.arena.f32(x), false),
@@ -556,6 +565,8 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
 
     Ok(Ir {
         technique: t.name.value.clone(),
+        title: t.title.clone(),
+        paper: t.paper.clone(),
         lights: t.lights.iter().map(|l| l.value).collect(),
         params,
         channels,

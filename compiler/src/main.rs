@@ -130,7 +130,19 @@ fn run(cli: Cli) -> Result<(), String> {
         }
         Command::Check { common } => {
             let source = read(&common.technique)?;
-            sshc::check_str(&source, &options(&common)).map_err(|d| {
+            let opts = options(&common);
+            if opts.dump_after.is_some_and(|p| p > DumpPhase::Check) {
+                return Err(format!(
+                    "error: `sshc check` stops after the check phase; use `sshc compile --dump-ir-after {:?}`",
+                    opts.dump_after.unwrap_or(DumpPhase::Check)
+                )
+                .to_lowercase());
+            }
+            let (result, dump) = sshc::check_with_dump(&source, &opts);
+            if let Some(d) = &dump {
+                print!("{d}");
+            }
+            result.map_err(|d| {
                 report(&d, &common.technique, &source);
                 String::new()
             })?;

@@ -48,6 +48,9 @@ pub const FRAME_SIZE: u32 = 3 * 64 + 6 * 16;
 pub struct PassGraph {
     pub version: u32,
     pub technique: String,
+    pub title: Option<String>,
+    /// The paper and equations the technique implements.
+    pub paper: Option<String>,
     /// Light models the technique assumes (empty: any).
     pub lights: Vec<LightModel>,
     pub params: Vec<ParamDecl>,
@@ -190,9 +193,20 @@ pub enum PassKind {
 pub struct PassDecl {
     pub name: String,
     pub kind: PassKind,
+    /// For scene draws from the light: its centre, or once per light sample (linear lights).
+    pub views: Views,
     /// The WGSL file, relative to the graph's folder.
     pub shader: String,
     pub steps: Vec<Step>,
+}
+
+/// Which light views a pass that draws the scene from the light renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Views {
+    /// One view from the light's centre.
+    LightCenter,
+    /// One view per light sample; the pass's textures get one layer block per view.
+    PerLightSample,
 }
 
 /// What one step draws or dispatches.
@@ -363,6 +377,8 @@ mod tests {
         PassGraph {
             version: SCHEMA_VERSION,
             technique: "t".into(),
+            title: None,
+            paper: None,
             lights: vec![LightModel::Any],
             params: vec![],
             params_size: 0,
@@ -378,6 +394,7 @@ mod tests {
             passes: vec![PassDecl {
                 name: "depth".into(),
                 kind: PassKind::Depth,
+                views: Views::LightCenter,
                 shader: "t.depth.wgsl".into(),
                 steps: vec![Step {
                     vertex: Some("vs".into()),

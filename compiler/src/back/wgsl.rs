@@ -28,6 +28,16 @@ pub struct Module {
 pub struct Scratch {
     pub name: String,
     pub like: String,
+    pub format: graph::Format,
+}
+
+/// The precision of a separable filter's intermediate: wide enough that the first axis's
+/// result is not rounded to the destination's precision before the second axis.
+pub fn scratch_precision(p: Precision) -> Precision {
+    match p {
+        Precision::Unorm8 => Precision::F16,
+        _ => Precision::F32,
+    }
 }
 
 pub struct Output {
@@ -578,21 +588,28 @@ fn filter(
     let sum_w = if matches!(kernel, IrKernel::LoG) { 0.0 } else { 1.0 };
     for (ti, tex) in dst.textures.iter().enumerate() {
         let src_tex = &src.textures[ti];
-        let chunks = layer_chunks(tex, limits);
+        let tmp_tex = Texture {
+            name: format!("{}_tmp", tex.name),
+            precision: scratch_precision(tex.precision),
+            ..tex.clone()
+        };
         let passes: Vec<(&str, bool)> = if kernel.separable() {
             vec![("h", true), ("v", false)]
         } else {
             vec![("2d", false)]
         };
-        let tmp = format!("{}_tmp", tex.name);
+        let tmp = tmp_tex.name.clone();
         if kernel.separable() {
             scratch.push(Scratch {
                 name: tmp.clone(),
                 like: tex.name.clone(),
+                format: texture_format(&tmp_tex),
             });
         }
         for (axis, horizontal) in passes {
-            for (ci, chunk) in chunks.iter().enumerate() {
+            // each axis writes as many layers at once as its target's format allows
+            let written = if kernel.separable() && horizontal { &tmp_tex } else { tex };
+            for (ci, chunk) in layer_chunks(written, limits).iter().enumerate() {
                 let entry = format!("fs_{}_{axis}_{ci}", tex.name);
                 let out_name = format!("Out_{}_{axis}_{ci}", tex.name);
                 s.push_str(&out_struct(&out_name, chunk.len()));

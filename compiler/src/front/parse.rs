@@ -85,11 +85,26 @@ impl<'a> Fields<'a> {
     fn req(&mut self, name: &'static str) -> Result<&'a Node, Diagnostic> {
         match self.opt(name)? {
             Some(n) => Ok(n),
-            None => Err(err(
-                self.span,
-                format!("missing field `{name}` in `{}`", self.what),
-                format!("`{name}: ...` is required here"),
-            )),
+            None => {
+                let mut d = err(
+                    self.span,
+                    format!("missing field `{name}` in `{}`", self.what),
+                    format!("`{name}: ...` is required here"),
+                );
+                // A misspelling of it among the fields given?
+                if let Some(f) = self
+                    .fields
+                    .iter()
+                    .zip(&self.taken)
+                    .find(|(f, t)| !**t && closest(&f.name, &[name]).is_some())
+                    .map(|(f, _)| f)
+                {
+                    d = d
+                        .also(f.name_span, "unknown field")
+                        .help(format!("`{}` is not a field of `{}`: did you mean `{name}`?", f.name, self.what));
+                }
+                Err(d)
+            }
         }
     }
 
@@ -390,7 +405,7 @@ pub fn const_value(node: &Node, ty: ScalarTy) -> Result<Spanned<ConstValue>, Dia
         (Value::Bool(v), ScalarTy::Bool) => ConstValue::Bool(*v),
         _ => {
             return Err(Diagnostic::error(
-                Phase::Check,
+                Phase::Parse,
                 format!("expected a value of type {}, found {}", ty.name(), node.describe()),
             )
             .at(node.span, format!("expected {}", ty.name())));
