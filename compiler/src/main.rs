@@ -61,6 +61,9 @@ enum Command {
         /// Compilations per technique; the median is reported.
         #[arg(long, default_value_t = 50)]
         runs: usize,
+        /// Override a param of every technique that has it: NAME=VALUE. Repeatable.
+        #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
+        set: Vec<(String, String)>,
     },
 }
 
@@ -163,7 +166,7 @@ fn run(cli: Cli) -> Result<(), String> {
             print!("{}", sshc::explain::explain(&c));
             Ok(())
         }
-        Command::BenchCompile { techniques, runs } => {
+        Command::BenchCompile { techniques, runs, set } => {
             if techniques.is_empty() {
                 return Err("error: name at least one technique file".into());
             }
@@ -171,7 +174,9 @@ fn run(cli: Cli) -> Result<(), String> {
             println!("| technique | median ms | min ms | max ms | runs |\n|---|---|---|---|---|");
             for t in &techniques {
                 let source = read(t)?;
-                let opts = CompileOptions::default();
+                // only the overrides this technique has a param for
+                let has = |name: &str| source.contains(&format!("\"{name}\": Param("));
+                let opts = CompileOptions { set: set.iter().filter(|(n, _)| has(n)).cloned().collect(), ..Default::default() };
                 // warm up
                 sshc::compile_str(&source, &opts).map_err(|d| {
                     report(&d, t, &source);
