@@ -410,7 +410,14 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
                     slot.precision.name()
                 ),
             )
-            .at(ch.precision_span, why.to_string())
+            .at(
+                ch.precision_span,
+                if ch.precision_overridden {
+                    format!("{why} (set by `--precision`)")
+                } else {
+                    why.to_string()
+                },
+            )
             .also(ch.span, "channel computed here");
             if let Some(v) = ch.value {
                 d = d.note(format!(
@@ -459,7 +466,7 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
                 };
                 d = d
                     .help(format!("{what}, or store `{}` at a wider precision", ch.name))
-                    .also(p.span, format!("`{}` declared here", p.name));
+                    .also(p.name_span, format!("`{}` declared here", p.name));
                 suggested = true;
                 break;
             }

@@ -502,6 +502,7 @@ pub fn eval_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
 #[derive(Clone, Debug)]
 pub struct IrParam {
     pub name: String,
+    pub name_span: Span,
     pub ty: ScalarTy,
     pub value: ConstValue,
     pub range: Option<(f64, f64)>,
@@ -527,6 +528,8 @@ pub struct IrChannel {
     pub precision: Precision,
     /// Where the precision was chosen (for diagnostics).
     pub precision_span: Span,
+    /// The precision came from `--precision` rather than the file.
+    pub precision_overridden: bool,
     pub value: Option<H>,
     pub origin: Origin,
     pub span: Span,

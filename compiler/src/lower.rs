@@ -340,6 +340,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         .enumerate()
         .map(|(i, p)| IrParam {
             name: p.name.value.clone(),
+            name_span: p.name.span,
             ty: p.ty.value,
             value: sym.values[i].value,
             range: p.range.as_ref().map(|(lo, hi)| (lo.value, hi.value)),
@@ -357,6 +358,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             name: c.name.value.clone(),
             precision: sym.channel_precision[i],
             precision_span: c.precision.span,
+            precision_overridden: sym.channel_precision[i] != c.precision.value,
             value: None,
             origin: if c.value.is_some() { Origin::Declared } else { Origin::Depth },
             span: c.span,
@@ -432,6 +434,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     name: format!("{}_t{ti}_k{k}", e.name.value),
                     precision: sym.expansion_precision[ei],
                     precision_span: e.precision.span,
+                    precision_overridden: sym.expansion_precision[ei] != e.precision.value,
                     value: Some(basis),
                     origin: Origin::Basis {
                         expansion: ei,

@@ -176,7 +176,10 @@ fn run(cli: Cli) -> Result<(), String> {
                 let source = read(t)?;
                 // only the overrides this technique has a param for
                 let has = |name: &str| source.contains(&format!("\"{name}\": Param("));
-                let opts = CompileOptions { set: set.iter().filter(|(n, _)| has(n)).cloned().collect(), ..Default::default() };
+                let opts = CompileOptions {
+                    set: set.iter().filter(|(n, _)| has(n)).cloned().collect(),
+                    ..Default::default()
+                };
                 // warm up
                 sshc::compile_str(&source, &opts).map_err(|d| {
                     report(&d, t, &source);
