@@ -411,6 +411,9 @@ pub enum SampleFn {
     Sample,
     /// `sample_lod(ch, lod)`: filtered at an explicit level of detail.
     SampleLod,
+    /// `sample_width(ch, w)`: filtered over a footprint `w` wide in shadow-map uv units,
+    /// i.e. at level of detail log2(max(w * shadow_size, 1)).
+    SampleWidth,
     /// `nearest(ch)`: the texel containing `uv`, level 0.
     Nearest,
     /// `fetch(ch, dx, dy)`: texel `floor(uv * size - 0.5) + (dx, dy)`, clamped to the edge.
@@ -418,14 +421,30 @@ pub enum SampleFn {
 }
 
 impl SampleFn {
+    /// Every lookup function of the language.
+    pub const NAMES: [&'static str; 10] = [
+        "sample",
+        "sample_lod",
+        "sample_width",
+        "nearest",
+        "fetch",
+        "expand",
+        "expand_lod",
+        "expand_width",
+        "expand_nearest",
+        "expand_fetch",
+    ];
+
     pub fn from_name(n: &str) -> Option<(SampleFn, bool)> {
         Some(match n {
             "sample" => (SampleFn::Sample, false),
             "sample_lod" => (SampleFn::SampleLod, false),
+            "sample_width" => (SampleFn::SampleWidth, false),
             "nearest" => (SampleFn::Nearest, false),
             "fetch" => (SampleFn::Fetch, false),
             "expand" => (SampleFn::Sample, true),
             "expand_lod" => (SampleFn::SampleLod, true),
+            "expand_width" => (SampleFn::SampleWidth, true),
             "expand_nearest" => (SampleFn::Nearest, true),
             "expand_fetch" => (SampleFn::Fetch, true),
             _ => return None,
@@ -436,7 +455,7 @@ impl SampleFn {
     pub fn extra_args(self) -> &'static [Ty] {
         match self {
             SampleFn::Sample | SampleFn::Nearest => &[],
-            SampleFn::SampleLod => &[Ty::F32],
+            SampleFn::SampleLod | SampleFn::SampleWidth => &[Ty::F32],
             SampleFn::Fetch => &[Ty::I32, Ty::I32],
         }
     }
@@ -445,6 +464,8 @@ impl SampleFn {
         match (self, expand) {
             (SampleFn::Sample, false) => "sample",
             (SampleFn::SampleLod, false) => "sample_lod",
+            (SampleFn::SampleWidth, false) => "sample_width",
+            (SampleFn::SampleWidth, true) => "expand_width",
             (SampleFn::Nearest, false) => "nearest",
             (SampleFn::Fetch, false) => "fetch",
             (SampleFn::Sample, true) => "expand",

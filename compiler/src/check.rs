@@ -772,7 +772,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                         "a stored channel, not a value",
                     )
                     .help(format!(
-                        "use `sample({n})`, `sample_lod({n}, lod)`, `nearest({n})` or `fetch({n}, dx, dy)`"
+                        "use `sample({n})`, `sample_lod({n}, lod)`, `sample_width({n}, w)`, `nearest({n})` or `fetch({n}, dx, dy)`"
                     )));
                 }
                 Mode::Const => {
@@ -889,17 +889,8 @@ impl<'s, 'a> Typer<'s, 'a> {
         }
         let Some(f) = Func::from_name(name) else {
             let mut cands: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
-            cands.extend([
-                "sample",
-                "sample_lod",
-                "nearest",
-                "fetch",
-                "expand",
-                "expand_lod",
-                "expand_nearest",
-                "expand_fetch",
-                "sum",
-            ]);
+            cands.extend(SampleFn::NAMES);
+            cands.push("sum");
             let mut d = Self::err(name_span, format!("unknown function `{name}`"), "not a built-in function");
             if let Some(s) = closest(name, &cands) {
                 d = d.help(format!("did you mean `{s}`?"));

@@ -278,3 +278,19 @@ mod mutations {
         }
     }
 }
+
+#[test]
+fn lookups_by_filter_width_validate() {
+    // `sample_width` and `expand_width` pick the mip level of a footprint given in uv units.
+    let src = source("csm").replace("let s = expand(f);", "let s = expand_width(f, 4.0 * texel_size);");
+    let c = sshc::compile_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("csm", &src)));
+    let shade = &c.shaders.iter().find(|(f, _)| f.ends_with("shade.wgsl")).unwrap().1;
+    assert!(shade.contains("textureSampleLevel(t_blurred, smp, in_uv, 0i, log2(max("), "{shade}");
+    let src = source("vsm").replace("let mean = sample(m1);", "let mean = sample_width(m1, 0.01);");
+    let c = sshc::compile_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("vsm", &src)));
+    assert!(
+        c.shaders
+            .iter()
+            .any(|(_, s)| s.contains("log2(max(0.01f * frame.shadow_size.x, 1.0))"))
+    );
+}

@@ -295,6 +295,13 @@ impl<'a> Emitter<'a> {
                         self.uses_sampler = true;
                         format!("textureSample({tex}, smp, in_uv, {layer}i)")
                     }
+                    SampleFn::SampleWidth => {
+                        self.uses_sampler = true;
+                        format!(
+                            "textureSampleLevel({tex}, smp, in_uv, {layer}i, log2(max({} * frame.shadow_size.x, 1.0)))",
+                            args[0]
+                        )
+                    }
                     SampleFn::SampleLod => {
                         self.uses_sampler = true;
                         format!("textureSampleLevel({tex}, smp, in_uv, {layer}i, {})", args[0])
