@@ -291,6 +291,6 @@ fn lookups_by_filter_width_validate() {
     assert!(
         c.shaders
             .iter()
-            .any(|(_, s)| s.contains("log2(max(0.01f * frame.shadow_size.x, 1.0))"))
+            .any(|(_, s)| s.contains("log2(max(1e-2f * frame.shadow_size.x, 1.0))"))
     );
 }
