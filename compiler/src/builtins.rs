@@ -96,6 +96,9 @@ pub enum Input {
     Slope,
     /// Size of one shadow-map texel in uv units (1 / resolution).
     TexelSize,
+    /// World size of one shadow-map texel at the receiver, in normalised depth units
+    /// (for slope-scaled bias in texels).
+    TexelDepth,
     /// Shadow-map resolution in texels.
     ShadowSize,
     /// Near and far planes of the light's depth range, world units.
@@ -106,7 +109,7 @@ pub enum Input {
 }
 
 impl Input {
-    pub const ALL: [Input; 11] = [
+    pub const ALL: [Input; 12] = [
         Input::D,
         Input::DWorld,
         Input::Uv,
@@ -114,6 +117,7 @@ impl Input {
         Input::NdotL,
         Input::Slope,
         Input::TexelSize,
+        Input::TexelDepth,
         Input::ShadowSize,
         Input::Near,
         Input::Far,
@@ -129,6 +133,7 @@ impl Input {
             Input::NdotL => "ndotl",
             Input::Slope => "slope",
             Input::TexelSize => "texel_size",
+            Input::TexelDepth => "texel_depth",
             Input::ShadowSize => "shadow_size",
             Input::Near => "near",
             Input::Far => "far",
@@ -161,6 +166,7 @@ impl Input {
             Input::NdotL => (-1.0, 1.0),
             Input::Slope => (0.0, 100.0),
             Input::TexelSize => (1.0 / 16384.0, 1.0),
+            Input::TexelDepth => (0.0, 1e4),
             Input::ShadowSize => (1.0, 16384.0),
             Input::DWorld | Input::Near | Input::Far => (0.0, 1e4),
             Input::LightSize => (0.0, 1e4),
@@ -176,6 +182,7 @@ impl Input {
             Input::NdotL => "cosine between surface normal and direction to the light",
             Input::Slope => "tan of the angle between normal and light, clamped to [0, 100]",
             Input::TexelSize => "1 / shadow-map resolution",
+            Input::TexelDepth => "world size of one shadow-map texel at the receiver, in normalised depth units",
             Input::ShadowSize => "shadow-map resolution in texels",
             Input::Near => "near plane of the light's depth range (world units)",
             Input::Far => "far plane of the light's depth range (world units)",

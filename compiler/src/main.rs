@@ -8,6 +8,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
+#[cfg(feature = "gpu")]
+mod render;
+
 #[derive(Parser)]
 #[command(
     name = "sshc",
@@ -54,6 +57,10 @@ enum Command {
         #[command(flatten)]
         common: Common,
     },
+    /// Render a bundled or compiled technique on a scene: the shaded image, and on request
+    /// the visibility buffer and the world position and normal of every pixel.
+    #[cfg(feature = "gpu")]
+    Render(render::RenderArgs),
     /// Time compilation of techniques in a warm process (naga validation included).
     BenchCompile {
         /// Technique files.
@@ -67,7 +74,7 @@ enum Command {
     },
 }
 
-fn pair(s: &str) -> Result<(String, String), String> {
+pub(crate) fn pair(s: &str) -> Result<(String, String), String> {
     match s.split_once('=') {
         Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
         _ => Err(format!("expected NAME=VALUE, found `{s}`")),
@@ -83,11 +90,11 @@ fn options(c: &Common) -> CompileOptions {
     }
 }
 
-fn read(path: &Path) -> Result<String, String> {
+pub(crate) fn read(path: &Path) -> Result<String, String> {
     std::fs::read_to_string(path).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))
 }
 
-fn report(diags: &Diagnostics, path: &Path, source: &str) {
+pub(crate) fn report(diags: &Diagnostics, path: &Path, source: &str) {
     let choice = if std::io::stderr().is_terminal() {
         ColorChoice::Auto
     } else {
@@ -114,6 +121,8 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
+        #[cfg(feature = "gpu")]
+        Command::Render(args) => render::render(args),
         Command::Compile { common, out } => {
             let source = read(&common.technique)?;
             let outcome = sshc::compile_with_dump(&source, &options(&common));

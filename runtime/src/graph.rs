@@ -38,11 +38,14 @@ pub const FRAME_WGSL: &str = "struct Frame {
     light_size: vec4<f32>,
     // xy: size of the current render target, zw: 1 / size
     target_size: vec4<f32>,
+    // world size of one shadow-map texel: x per unit of view distance (perspective light),
+    // y constant (orthographic light); the size at distance D is x * D + y
+    texel_world: vec4<f32>,
 }
 ";
 
 /// Size in bytes of [`FRAME_WGSL`]'s `Frame`.
-pub const FRAME_SIZE: u32 = 3 * 64 + 6 * 16;
+pub const FRAME_SIZE: u32 = 3 * 64 + 7 * 16;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PassGraph {

@@ -4,6 +4,12 @@
 //! graphs without wgpu (DESIGN.md section 1). The wgpu executor lands behind the `gpu`
 //! feature.
 
+#[cfg(feature = "gpu")]
+pub mod bind;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod graph;
+pub mod scene;
+pub mod visibility;
 
 pub use graph::*;

@@ -831,6 +831,8 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {
     let in_slope = min(sqrt(max(1.0 - in_ndotl * in_ndotl, 0.0)) / max(abs(in_ndotl), 0.01), 100.0);
     let texel_pos = in_uv * frame.shadow_size.xy - 0.5;
     let in_tf = fract(texel_pos);
+    // one shadow-map texel at the receiver, in normalised depth units
+    let in_texel_depth = (frame.texel_world.x * in_d_world + frame.texel_world.y) * frame.depth_range.z;
     let in_base = vec2<i32>(floor(texel_pos));
 ",
     );

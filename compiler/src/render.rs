@@ -1,0 +1,191 @@
+//! `sshc render`: compile a technique (or load a compiled graph), bind a scene, run it on
+//! the GPU and write the images.
+
+use crate::{pair, read, report};
+use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
+use sshc_runtime::scene::Scene;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// A technique (`.ron`) or a compiled pass graph (`.graph.ron`).
+    input: PathBuf,
+    /// The scene (RON).
+    #[arg(long)]
+    scene: PathBuf,
+    /// The shaded image (PNG).
+    #[arg(short, long, default_value = "render.png")]
+    out: PathBuf,
+    /// The visibility buffer: one-channel float PFM at camera resolution (1 where no surface is seen).
+    #[arg(long)]
+    visibility: Option<PathBuf>,
+    /// World-space position of the surface seen at each pixel: three-channel PFM (NaN where none).
+    #[arg(long)]
+    positions: Option<PathBuf>,
+    /// World-space normal of the surface seen at each pixel: three-channel PFM (NaN where none).
+    #[arg(long)]
+    normals: Option<PathBuf>,
+    /// Param override NAME=VALUE: compiled in for a technique, a uniform for a graph. Repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
+    set: Vec<(String, String)>,
+    /// Precision override of a channel or expansion, NAME=PRECISION (techniques only). Repeatable.
+    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
+    precision: Vec<(String, String)>,
+    /// Override the scene's shadow-map resolution.
+    #[arg(long)]
+    shadow_map: Option<u32>,
+    /// Override the scene's camera size, WIDTHxHEIGHT.
+    #[arg(long, value_parser = size)]
+    size: Option<(u32, u32)>,
+    /// Write every intermediate texture (each layer and mip level, each channel) as PNG and PFM here.
+    #[arg(long)]
+    dump: Option<PathBuf>,
+    /// Frames to run; GPU times per pass are the median over them.
+    #[arg(long, default_value_t = 1)]
+    frames: usize,
+}
+
+fn size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once('x').ok_or_else(|| format!("expected WIDTHxHEIGHT, found `{s}`"))?;
+    Ok((
+        w.trim().parse().map_err(|e| format!("{e}"))?,
+        h.trim().parse().map_err(|e| format!("{e}"))?,
+    ))
+}
+
+fn rt(e: RuntimeError) -> String {
+    format!("error: {e}")
+}
+
+pub fn render(a: RenderArgs) -> Result<(), String> {
+    let mut scene = Scene::load(&a.scene).map_err(|e| format!("error: {e}"))?;
+    if let Some(n) = a.shadow_map {
+        scene.shadow_map = n;
+    }
+    if let Some((w, h)) = a.size {
+        scene.set_camera_size(w, h);
+    }
+    let gpu = Gpu::new().map_err(rt)?;
+    let is_graph = a.input.to_string_lossy().ends_with(".graph.ron");
+    let mut ex = if is_graph {
+        if !a.precision.is_empty() {
+            return Err("error: `--precision` needs a technique, not a compiled graph".into());
+        }
+        let mut ex = Executor::load(&gpu, &a.input).map_err(rt)?;
+        for (k, v) in &a.set {
+            let v: f64 = v.parse().map_err(|_| format!("error: `--set {k}={v}`: expected a number"))?;
+            ex.set_param(k, v).map_err(rt)?;
+        }
+        ex
+    } else {
+        let source = read(&a.input)?;
+        let opts = sshc::CompileOptions {
+            set: a.set.clone(),
+            precision: a.precision.clone(),
+            ..Default::default()
+        };
+        let c = sshc::compile_str(&source, &opts).map_err(|d| {
+            report(&d, &a.input, &source);
+            String::new()
+        })?;
+        Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?
+    };
+    let inputs = sshc_runtime::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
+    ex.bind_scene(&inputs).map_err(rt)?;
+    let mut all: Vec<Vec<Option<f64>>> = Vec::new();
+    let mut names = Vec::new();
+    for _ in 0..a.frames.max(1) {
+        let t = ex.run_frame().map_err(rt)?;
+        names = t.passes.iter().map(|p| p.0.clone()).collect();
+        all.push(t.passes.into_iter().map(|p| p.1).collect());
+    }
+    let color = ex.read_camera(CameraOutput::Color).map_err(rt)?;
+    color.write_png(&a.out, None, (0.0, 1.0)).map_err(rt)?;
+    println!("wrote {}", a.out.display());
+    if let Some(p) = &a.visibility {
+        ex.read_camera(CameraOutput::Visibility)
+            .map_err(rt)?
+            .write_pfm_gray(p, 0)
+            .map_err(rt)?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(p) = &a.positions {
+        ex.read_camera(CameraOutput::Position).map_err(rt)?.write_pfm_rgb(p).map_err(rt)?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(p) = &a.normals {
+        ex.read_camera(CameraOutput::Normal).map_err(rt)?.write_pfm_rgb(p).map_err(rt)?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(dir) = &a.dump {
+        dump(&ex, dir).map_err(rt)?;
+    }
+    println!("device: {}", gpu.describe());
+    println!("| pass | GPU ms (median of {} frame(s)) |\n|---|---|", all.len());
+    for (i, n) in names.iter().enumerate() {
+        let mut v: Vec<f64> = all.iter().filter_map(|f| f[i]).collect();
+        v.sort_by(f64::total_cmp);
+        let shown = v
+            .get(v.len() / 2)
+            .map(|m| format!("{m:.3}"))
+            .unwrap_or_else(|| "n/a (no timestamp queries)".into());
+        println!("| {n} | {shown} |");
+    }
+    Ok(())
+}
+
+/// Every texture, layer, mip level and channel as PNG (scaled by the channel's range) and PFM.
+fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
+    let io = |e: std::io::Error| RuntimeError::File {
+        path: dir.to_path_buf(),
+        message: e.to_string(),
+    };
+    std::fs::create_dir_all(dir).map_err(io)?;
+    let levels_of = |mips: bool, size: u32| if mips { sshc_runtime::gpu::mip_count(size) } else { 1 };
+    let size = ex.read_texture(&ex.graph.textures[0].name, 0, 0)?.width;
+    for t in &ex.graph.textures {
+        for layer in 0..t.layers {
+            for level in 0..levels_of(t.mips, size) {
+                let img = ex.read_texture(&t.name, layer, level)?;
+                let comps: Vec<(String, usize, (f32, f32))> = if t.channels.is_empty() {
+                    (0..4).map(|c| (format!("c{c}"), c, (0.0, 1.0))).collect()
+                } else {
+                    t.channels
+                        .iter()
+                        .filter(|c| c.layer == layer)
+                        .map(|c| {
+                            // stored values: the range encoded, for viewing
+                            let lo = ((c.range.0 - c.bias) * c.scale) as f32;
+                            let hi = ((c.range.1 - c.bias) * c.scale) as f32;
+                            (c.name.clone(), c.component as usize, (lo, hi))
+                        })
+                        .collect()
+                };
+                for (name, c, range) in comps {
+                    let stem = format!("{}.layer{layer}.level{level}.{name}", t.name);
+                    img.write_png(&dir.join(format!("{stem}.png")), Some(c), range)?;
+                    img.write_pfm_gray(&dir.join(format!("{stem}.pfm")), c)?;
+                }
+            }
+        }
+    }
+    for (which, name) in [
+        (CameraOutput::Visibility, "visibility"),
+        (CameraOutput::Color, "color"),
+        (CameraOutput::Position, "position"),
+        (CameraOutput::Normal, "normal"),
+    ] {
+        let img = ex.read_camera(which)?;
+        match which {
+            CameraOutput::Visibility => img.write_pfm_gray(&dir.join(format!("{name}.pfm")), 0)?,
+            _ => img.write_pfm_rgb(&dir.join(format!("{name}.pfm")))?,
+        }
+        img.write_png(
+            &dir.join(format!("{name}.png")),
+            if which == CameraOutput::Visibility { Some(0) } else { None },
+            (0.0, 1.0),
+        )?;
+    }
+    println!("wrote every texture to {}", dir.display());
+    Ok(())
+}

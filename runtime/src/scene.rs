@@ -1,0 +1,1474 @@
+//! Scenes: a camera, lights, objects and the shadow-map resolution, read from RON.
+//!
+//! A scene file is one `Scene(...)` value (DESIGN.md section 3). Reading it builds the
+//! world-space triangle list once; the GPU executor takes it as [`Scene::vertex_data`],
+//! the CPU ground truth ([`crate::visibility`]) as [`Scene::triangles`].
+//!
+//! ```ron
+//! Scene(
+//!     camera: Perspective(
+//!         position: (0.0, 2.0, 4.0),
+//!         target: (0.0, 0.3, 0.0),
+//!         fov_y_degrees: 40.0,
+//!         width: 256,
+//!         height: 256,
+//!     ),
+//!     shadow_map: 512,
+//!     lights: [
+//!         Rectangle(center: (1.0, 3.0, 0.5), normal: (0.0, -1.0, 0.0), u_axis: (1.0, 0.0, 0.0),
+//!                   half_width: 0.4, half_height: 0.4),
+//!     ],
+//!     objects: [
+//!         Object(name: "floor", mesh: Plane(size: (6.0, 6.0))),
+//!         Object(mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (0.0, 0.5, 0.0))),
+//!         Object(mesh: Obj(path: "bunny.obj"), transform: (scale: (0.1, 0.1, 0.1))),
+//!     ],
+//! )
+//! ```
+//!
+//! Conventions: right-handed world, +Y up, lengths in scene units, angles in degrees in
+//! the file (radians in the API where named so). Vectors are RON tuples `(x, y, z)`.
+//! `Option` fields may be written bare (`near: 0.1`; the `implicit_some` extension is on).
+//! Unknown fields are errors. Semantic errors (a negative radius, a zero normal) name the
+//! value's path in the file, such as `lights[0] (Disk).radius`; syntax and type errors
+//! name the line and column that `ron` reports.
+//!
+//! OBJ paths are relative to the folder of the scene file and must stay inside it: an
+//! absolute path, a `..` component or a symbolic link leading out is refused. Material
+//! libraries named by an OBJ file are never opened.
+
+use std::fmt;
+use std::ops::Range;
+use std::path::{Component, Path, PathBuf};
+
+use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
+use serde::{Deserialize, Serialize};
+
+// ---------------------------------------------------------------------------------------
+// File schema
+// ---------------------------------------------------------------------------------------
+
+/// The scene file's top-level value, as written: `Scene(camera: ..., shadow_map: ...,
+/// lights: [...], objects: [...])`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Scene", deny_unknown_fields)]
+pub struct SceneDesc {
+    /// The viewpoint of the shaded image.
+    pub camera: Camera,
+    /// Side of the (square) shadow map, in texels, for every light view. At least 1.
+    pub shadow_map: u32,
+    /// The lights; visibility is computed for each. May be empty.
+    #[serde(default)]
+    pub lights: Vec<Light>,
+    /// The geometry. May be empty.
+    #[serde(default)]
+    pub objects: Vec<Object>,
+}
+
+/// The camera of the shaded image. `position` looks at `target`; `up` (default +Y) picks
+/// the roll and must not be parallel to the view direction. `width` x `height` is the
+/// image size in pixels. `near`/`far` (view-space distances along the view axis) default
+/// to a fit around the scene bounds: far just past the farthest corner, near just before
+/// the nearest corner in front of the camera but at least far * 1e-3.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Camera {
+    /// A pinhole camera with a vertical field of view.
+    Perspective {
+        /// Eye position, world space.
+        position: Vec3,
+        /// The point the camera looks at, world space.
+        target: Vec3,
+        /// Approximate up direction (default (0, 1, 0)).
+        #[serde(default = "default_up")]
+        up: Vec3,
+        /// Full vertical field of view in degrees, in (0, 180).
+        fov_y_degrees: f32,
+        /// Image width in pixels, at least 1.
+        width: u32,
+        /// Image height in pixels, at least 1.
+        height: u32,
+        /// Near plane distance; fitted to the scene when absent.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        near: Option<f32>,
+        /// Far plane distance; fitted to the scene when absent.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        far: Option<f32>,
+    },
+    /// A parallel projection; the view volume is `half_height` above and below the view
+    /// axis and `half_height * width / height` to either side.
+    Orthographic {
+        /// Eye position, world space. Geometry behind it (closer than `near`) is clipped,
+        /// which lets a camera sit between an occluder and the surface it shades.
+        position: Vec3,
+        /// The point the camera looks at, world space.
+        target: Vec3,
+        /// Approximate up direction (default (0, 1, 0)).
+        #[serde(default = "default_up")]
+        up: Vec3,
+        /// Half the height of the view volume, in scene units, > 0.
+        half_height: f32,
+        /// Image width in pixels, at least 1.
+        width: u32,
+        /// Image height in pixels, at least 1.
+        height: u32,
+        /// Near plane distance; fitted to the scene when absent.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        near: Option<f32>,
+        /// Far plane distance; fitted to the scene when absent.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        far: Option<f32>,
+    },
+}
+
+fn default_up() -> Vec3 {
+    Vec3::Y
+}
+
+/// A light. Visibility from a point is the fraction of the light that the point sees
+/// (DESIGN.md section 5); how each kind is sampled is in [`crate::visibility`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Light {
+    /// A point light.
+    Point {
+        /// World position.
+        position: Vec3,
+    },
+    /// A light at infinity with no extent (parallel rays).
+    Directional {
+        /// Direction from the scene towards the light, e.g. (0, 1, 0) for straight
+        /// overhead. Normalised on load.
+        direction: Vec3,
+    },
+    /// A sphere, sampled uniformly over the cone it subtends from the receiver.
+    Sphere {
+        /// Centre, world space.
+        center: Vec3,
+        /// Radius, >= 0 (0 behaves as a point light).
+        radius: f32,
+    },
+    /// A flat disk, sampled uniformly over its area.
+    Disk {
+        /// Centre, world space.
+        center: Vec3,
+        /// Normal of the disk's plane (the side it faces). Normalised on load.
+        normal: Vec3,
+        /// Radius, >= 0.
+        radius: f32,
+    },
+    /// A rectangle, sampled uniformly over its area.
+    Rectangle {
+        /// Centre, world space.
+        center: Vec3,
+        /// Normal of the rectangle's plane (the side it faces). Normalised on load.
+        normal: Vec3,
+        /// Direction of the `half_width` side; its component along `normal` is removed
+        /// and it is normalised on load. The other side runs along `normal x u_axis`.
+        u_axis: Vec3,
+        /// Half the extent along `u_axis`, >= 0.
+        half_width: f32,
+        /// Half the extent along `normal x u_axis`, >= 0.
+        half_height: f32,
+    },
+    /// A linear light from `a` to `b`, sampled uniformly over its length.
+    Segment {
+        /// One end, world space.
+        a: Vec3,
+        /// The other end, world space.
+        b: Vec3,
+    },
+    /// A disk at infinity (the sun), sampled uniformly over its disk in the tangent plane,
+    /// i.e. directions within the cone of half-angle `angle_degrees / 2` around
+    /// `direction`.
+    DistantDisk {
+        /// Direction from the scene towards the disk's centre. Normalised on load.
+        direction: Vec3,
+        /// Full angular diameter in degrees, in [0, 180). The sun is about 0.53.
+        angle_degrees: f32,
+    },
+}
+
+/// One piece of geometry: a mesh placed by a transform.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Object", deny_unknown_fields)]
+pub struct Object {
+    /// Optional name, used in error messages only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The mesh, in object space.
+    pub mesh: Mesh,
+    /// Object-to-world placement (default: identity).
+    #[serde(default)]
+    pub transform: Transform,
+    /// Use each triangle's face normal even where the mesh has smooth normals
+    /// (default false).
+    #[serde(default)]
+    pub flat_normals: bool,
+}
+
+/// A mesh in object space. Triangles are counter-clockwise seen from their front side;
+/// shadow rays hit both sides.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Mesh {
+    /// A rectangle in the XZ plane centred at the origin, facing +Y; `size` = (x, z).
+    Plane {
+        /// Extent along X and Z.
+        size: Vec2,
+    },
+    /// An axis-aligned box centred at the origin (12 triangles, flat normals).
+    Box {
+        /// Extent along X, Y, Z.
+        size: Vec3,
+    },
+    /// A UV sphere centred at the origin with smooth normals.
+    Sphere {
+        /// Radius, > 0.
+        radius: f32,
+        /// Segments around the Y axis, at least 3; it has `max(2, segments / 2)` rings.
+        segments: u32,
+    },
+    /// One triangle.
+    Triangle {
+        /// First corner.
+        a: Vec3,
+        /// Second corner.
+        b: Vec3,
+        /// Third corner.
+        c: Vec3,
+    },
+    /// A quadrilateral given by its corners in order, split into (a, b, c) and (a, c, d).
+    Quad {
+        /// First corner.
+        a: Vec3,
+        /// Second corner.
+        b: Vec3,
+        /// Third corner.
+        c: Vec3,
+        /// Fourth corner.
+        d: Vec3,
+    },
+    /// A Wavefront OBJ file (every model in it), triangulated; its normals are used when
+    /// it has them, else smooth normals are computed (area-weighted).
+    Obj {
+        /// Relative to the scene file's folder, and inside it.
+        path: String,
+    },
+}
+
+/// Object-to-world placement: scale, then rotate, then translate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Transform {
+    /// Translation (default 0).
+    pub translate: Vec3,
+    /// Rotation (default none).
+    pub rotate: Rotation,
+    /// Scale per axis (default 1); a negative product mirrors and keeps triangles facing
+    /// out.
+    pub scale: Vec3,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Transform {
+            translate: Vec3::ZERO,
+            rotate: Rotation::None,
+            scale: Vec3::ONE,
+        }
+    }
+}
+
+/// A rotation.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Rotation {
+    /// No rotation.
+    #[default]
+    None,
+    /// Degrees about the world X, then Y, then Z axes: `R = Rz * Ry * Rx`.
+    Euler(f32, f32, f32),
+    /// `degrees` about `axis` (right-hand rule; the axis is normalised).
+    AxisAngle {
+        /// Axis of rotation, non-zero.
+        axis: Vec3,
+        /// Angle in degrees.
+        degrees: f32,
+    },
+}
+
+impl Transform {
+    /// The object-to-world matrix.
+    pub fn matrix(&self) -> Mat4 {
+        let q = match &self.rotate {
+            Rotation::None => Quat::IDENTITY,
+            Rotation::Euler(x, y, z) => {
+                Quat::from_rotation_z(z.to_radians()) * Quat::from_rotation_y(y.to_radians()) * Quat::from_rotation_x(x.to_radians())
+            }
+            Rotation::AxisAngle { axis, degrees } => Quat::from_axis_angle(axis.normalize_or(Vec3::Y), degrees.to_radians()),
+        };
+        Mat4::from_scale_rotation_translation(self.scale, q, self.translate)
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Errors
+// ---------------------------------------------------------------------------------------
+
+/// What went wrong reading a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneErrorKind {
+    /// A file could not be read.
+    Io,
+    /// RON syntax, or a value of the wrong shape (unknown field, missing field, ...).
+    Syntax,
+    /// A value out of its range (negative radius, zero normal, ...).
+    Invalid,
+    /// An OBJ mesh could not be used (bad path, parse error).
+    Mesh,
+}
+
+/// An error reading a scene: where (file, line:column where known, or the value's path),
+/// what, and a hint at the fix.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneError(Box<ErrorInfo>);
+
+#[derive(Clone, Debug, PartialEq)]
+struct ErrorInfo {
+    kind: SceneErrorKind,
+    file: Option<PathBuf>,
+    position: Option<(usize, usize)>,
+    at: Option<String>,
+    message: String,
+    hint: Option<String>,
+}
+
+impl SceneError {
+    fn new(kind: SceneErrorKind, message: impl Into<String>) -> Self {
+        SceneError(Box::new(ErrorInfo {
+            kind,
+            file: None,
+            position: None,
+            at: None,
+            message: message.into(),
+            hint: None,
+        }))
+    }
+
+    fn invalid(at: impl Into<String>, message: impl Into<String>, hint: impl Into<String>) -> Self {
+        SceneError::new(SceneErrorKind::Invalid, message).with_at(at).with_hint(hint)
+    }
+
+    fn with_hint(mut self, hint: impl Into<String>) -> Self {
+        self.0.hint = Some(hint.into());
+        self
+    }
+
+    fn with_at(mut self, at: impl Into<String>) -> Self {
+        self.0.at = Some(at.into());
+        self
+    }
+
+    fn with_position(mut self, position: (usize, usize)) -> Self {
+        self.0.position = Some(position);
+        self
+    }
+
+    /// Names the scene file unless a file is already named.
+    fn with_file(mut self, file: Option<&Path>) -> Self {
+        if self.0.file.is_none() {
+            self.0.file = file.map(Path::to_path_buf);
+        }
+        self
+    }
+
+    /// The kind of error.
+    pub fn kind(&self) -> SceneErrorKind {
+        self.0.kind
+    }
+    /// The scene file, when read from a file.
+    pub fn file(&self) -> Option<&Path> {
+        self.0.file.as_deref()
+    }
+    /// 1-based line and column, where known (syntax and type errors).
+    pub fn line_col(&self) -> Option<(usize, usize)> {
+        self.0.position
+    }
+    /// The path of the offending value in the file (`lights[0] (Disk).radius`), for
+    /// semantic errors.
+    pub fn at(&self) -> Option<&str> {
+        self.0.at.as_deref()
+    }
+    /// What is wrong.
+    pub fn message(&self) -> &str {
+        &self.0.message
+    }
+    /// What would fix it.
+    pub fn hint(&self) -> Option<&str> {
+        self.0.hint.as_deref()
+    }
+}
+
+impl fmt::Display for SceneError {
+    /// `FILE:LINE:COL: error: MESSAGE` (parts that are unknown are left out; `<scene>`
+    /// stands for a scene read from a string), then `at VALUE` and `hint: ...` lines.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.0.file {
+            Some(p) => write!(f, "{}", p.display())?,
+            None => f.write_str("<scene>")?,
+        }
+        if let Some((line, col)) = self.0.position {
+            write!(f, ":{line}:{col}")?;
+        }
+        write!(f, ": error: {}", self.0.message)?;
+        if let Some(at) = &self.0.at {
+            write!(f, "\n  at: {at}")?;
+        }
+        if let Some(hint) = &self.0.hint {
+            write!(f, "\n  hint: {hint}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+fn syntax_error(e: &ron::error::SpannedError) -> SceneError {
+    use ron::Error as E;
+    let hint = match &e.code {
+        E::NoSuchStructField { expected, .. } => format!("the fields allowed here are: {}", expected.join(", ")),
+        E::MissingStructField { field, outer } => match outer {
+            Some(outer) => format!("add `{field}: ...` to this `{outer}`"),
+            None => format!("add `{field}: ...`"),
+        },
+        E::NoSuchEnumVariant { expected, .. } => format!("write one of: {}", expected.join(", ")),
+        E::DuplicateStructField { field, .. } => format!("remove one of the `{field}` fields"),
+        E::ExpectedComma => "separate fields and list items with `,`".to_string(),
+        _ => "see scenes/README.md for the scene format".to_string(),
+    };
+    SceneError::new(SceneErrorKind::Syntax, e.code.to_string())
+        .with_position((e.span.start.line, e.span.start.col))
+        .with_hint(hint)
+}
+
+// ---------------------------------------------------------------------------------------
+// The loaded scene
+// ---------------------------------------------------------------------------------------
+
+/// A loaded scene: its description plus the world-space triangles built from it.
+///
+/// `camera`, `shadow_map` and `lights` may be changed after loading (a test can shrink
+/// the image); the geometry is fixed once loaded.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The camera (may be changed, e.g. by [`Scene::set_camera_size`]).
+    pub camera: Camera,
+    /// Side of the square shadow map in texels.
+    pub shadow_map: u32,
+    /// The lights.
+    pub lights: Vec<Light>,
+    objects: Vec<Object>,
+    source: Option<PathBuf>,
+    triangles: Vec<[Vec3; 3]>,
+    normals: Vec<[Vec3; 3]>,
+    object_triangles: Vec<Range<usize>>,
+    bounds: (Vec3, Vec3),
+}
+
+/// The view of a light used to rasterise a shadow map.
+///
+/// The shaders compute linear depth as `(-(view * p).z - near) / (far - near)`; `near` and
+/// `far` are view-space distances along the view axis, fitted so that every corner of the
+/// bounds it was fitted to has linear depth in [0, 1] and lies inside the clip volume.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightView {
+    /// World to light view (right-handed, looking down -Z).
+    pub view: Mat4,
+    /// Light view to clip space (depth range [0, 1]).
+    pub proj: Mat4,
+    /// `proj * view`.
+    pub view_proj: Mat4,
+    /// Near distance along the view axis, > 0.
+    pub near: f32,
+    /// Far distance along the view axis, > near.
+    pub far: f32,
+    /// `w = 1`: the light's centre (point-like lights); `w = 0`: unit direction towards
+    /// the light (directional and distant-disk lights).
+    pub position_or_direction: Vec4,
+    /// Radius (sphere, disk), half of the larger side (rectangle), half length (segment),
+    /// 0 for point and directional lights, and `tan(angle / 2)` for a distant disk (the
+    /// radius of its disk in the tangent plane at unit distance).
+    pub size: f32,
+    /// Half-extents of the light along its two axes: (r, r) for sphere and disk,
+    /// (half_width, half_height) for a rectangle, (half length, 0) for a segment, 0 for the
+    /// rest.
+    pub half_extents: Vec2,
+    /// Full angular diameter in radians for a distant disk, else 0.
+    pub angle: f32,
+    /// True for an orthographic view (directional and distant-disk lights).
+    pub orthographic: bool,
+}
+
+impl Scene {
+    /// Reads a scene file. OBJ paths resolve against the file's folder.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            SceneError::new(SceneErrorKind::Io, format!("cannot read the scene: {e}"))
+                .with_file(Some(path))
+                .with_hint("check the path of the scene file")
+        })?;
+        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let base = if base.as_os_str().is_empty() { PathBuf::from(".") } else { base };
+        let mut scene = Scene::parse(&text, &base, Some(path))?;
+        scene.source = Some(path.to_path_buf());
+        Ok(scene)
+    }
+
+    /// Reads a scene from RON text; OBJ paths resolve against `base_dir`.
+    pub fn from_str(text: &str, base_dir: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        Scene::parse(text, base_dir.as_ref(), None)
+    }
+
+    /// Builds a scene from a description (OBJ paths resolve against `base_dir`).
+    pub fn from_desc(desc: SceneDesc, base_dir: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        Scene::build(desc, base_dir.as_ref()).map_err(|e| e.with_file(None))
+    }
+
+    fn parse(text: &str, base: &Path, file: Option<&Path>) -> Result<Scene, SceneError> {
+        let options = ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        let desc: SceneDesc = options.from_str(text).map_err(|e| syntax_error(&e).with_file(file))?;
+        Scene::build(desc, base).map_err(|e| e.with_file(file))
+    }
+
+    fn build(mut desc: SceneDesc, base: &Path) -> Result<Scene, SceneError> {
+        validate(&mut desc)?;
+        let mut triangles = Vec::new();
+        let mut normals = Vec::new();
+        let mut object_triangles = Vec::with_capacity(desc.objects.len());
+        for (i, object) in desc.objects.iter().enumerate() {
+            let start = triangles.len();
+            let mesh = build_mesh(i, object, base)?;
+            place(&mesh, object, &mut triangles, &mut normals);
+            object_triangles.push(start..triangles.len());
+        }
+        let bounds = bounds_of(triangles.iter().flatten().copied());
+        Ok(Scene {
+            camera: desc.camera,
+            shadow_map: desc.shadow_map,
+            lights: desc.lights,
+            objects: desc.objects,
+            source: None,
+            triangles,
+            normals,
+            object_triangles,
+            bounds,
+        })
+    }
+
+    /// The scene file this scene was loaded from, if any.
+    pub fn source(&self) -> Option<&Path> {
+        self.source.as_deref()
+    }
+
+    /// The objects as written in the file.
+    pub fn objects(&self) -> &[Object] {
+        &self.objects
+    }
+
+    /// World-space triangles after transforms, object by object in file order;
+    /// degenerate triangles (zero area, non-finite corners) are dropped.
+    pub fn triangles(&self) -> &[[Vec3; 3]] {
+        &self.triangles
+    }
+
+    /// World-space unit normals of the three corners of each triangle of
+    /// [`Scene::triangles`] (smooth where the mesh has smooth normals).
+    pub fn normals(&self) -> &[[Vec3; 3]] {
+        &self.normals
+    }
+
+    /// The range of [`Scene::triangles`] that object `i` produced.
+    pub fn object_triangles(&self, i: usize) -> Range<usize> {
+        self.object_triangles[i].clone()
+    }
+
+    /// Vertex buffer for the GPU: 3 vertices per triangle, each 6 `f32`: world position
+    /// xyz, then world unit normal xyz (stride 24 bytes).
+    pub fn vertex_data(&self) -> Vec<f32> {
+        let mut out = Vec::with_capacity(self.triangles.len() * 18);
+        for (tri, nrm) in self.triangles.iter().zip(&self.normals) {
+            for k in 0..3 {
+                out.extend_from_slice(&tri[k].to_array());
+                out.extend_from_slice(&nrm[k].to_array());
+            }
+        }
+        out
+    }
+
+    /// Axis-aligned bounds (min, max) of all triangles; (0, 0) for an empty scene.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
+    }
+
+    /// Replaces the camera's image size (e.g. a small image in tests).
+    pub fn set_camera_size(&mut self, width: u32, height: u32) {
+        match &mut self.camera {
+            Camera::Perspective { width: w, height: h, .. } | Camera::Orthographic { width: w, height: h, .. } => {
+                *w = width.max(1);
+                *h = height.max(1);
+            }
+        }
+    }
+
+    /// The camera's image size (width, height) in pixels.
+    pub fn camera_size(&self) -> (u32, u32) {
+        match &self.camera {
+            Camera::Perspective { width, height, .. } | Camera::Orthographic { width, height, .. } => (*width, *height),
+        }
+    }
+
+    /// The camera's eye position, world space.
+    pub fn camera_position(&self) -> Vec3 {
+        match &self.camera {
+            Camera::Perspective { position, .. } | Camera::Orthographic { position, .. } => *position,
+        }
+    }
+
+    /// World to camera view (right-handed, looking down -Z).
+    pub fn camera_view(&self) -> Mat4 {
+        match &self.camera {
+            Camera::Perspective { position, target, up, .. } | Camera::Orthographic { position, target, up, .. } => {
+                look_at(*position, *target, *up)
+            }
+        }
+    }
+
+    /// The camera's (near, far) distances along the view axis: as written, or fitted to
+    /// the bounds (far 1% past the farthest corner, near 1% before the nearest corner in
+    /// front of the camera, at least far * 1e-3).
+    pub fn camera_near_far(&self) -> (f32, f32) {
+        let (near, far) = match &self.camera {
+            Camera::Perspective { near, far, .. } | Camera::Orthographic { near, far, .. } => (*near, *far),
+        };
+        let view = self.camera_view();
+        let (lo, hi) = depth_range(&view, self.bounds);
+        let far = far.unwrap_or_else(|| (hi * 1.01).max(1e-3));
+        let near = near.unwrap_or_else(|| (lo * 0.99).max(far * 1e-3));
+        (near, far.max(near * (1.0 + 1e-4)))
+    }
+
+    /// Camera view to clip space (right-handed, depth range [0, 1] as WebGPU expects).
+    pub fn camera_proj(&self) -> Mat4 {
+        let (near, far) = self.camera_near_far();
+        let (w, h) = self.camera_size();
+        let aspect = w.max(1) as f32 / h.max(1) as f32;
+        match &self.camera {
+            Camera::Perspective { fov_y_degrees, .. } => perspective(fov_y_degrees.to_radians(), aspect, near, far),
+            Camera::Orthographic { half_height, .. } => {
+                let hw = half_height * aspect;
+                orthographic(-hw, hw, -half_height, *half_height, near, far)
+            }
+        }
+    }
+
+    /// `camera_proj() * camera_view()`.
+    pub fn camera_view_proj(&self) -> Mat4 {
+        self.camera_proj() * self.camera_view()
+    }
+
+    /// A 64-bit FNV-1a hash of everything that determines a ground-truth image: the
+    /// world-space triangles and normals, the camera and the lights (not the file's text or
+    /// paths). A key for caches.
+    pub fn fingerprint(&self) -> u64 {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |bytes: &[u8]| {
+            for b in bytes {
+                h ^= u64::from(*b);
+                h = h.wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        for v in self.vertex_data() {
+            eat(&v.to_bits().to_le_bytes());
+        }
+        let rest = ron::to_string(&(&self.camera, self.shadow_map, &self.lights)).unwrap_or_default();
+        eat(rest.as_bytes());
+        h
+    }
+}
+
+/// Right-handed view matrix looking from `eye` at `target` (view space: -Z forward, +Y up).
+pub fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
+    glam::camera::rh::view::look_at_mat4(eye, target, up)
+}
+
+/// Right-handed perspective projection to WebGPU clip space (depth [0, 1], Y up), as
+/// `Mat4::perspective_rh` of older glam.
+pub fn perspective(fov_y: f32, aspect: f32, near: f32, far: f32) -> Mat4 {
+    glam::camera::rh::proj::directx::perspective(fov_y, aspect, near, far)
+}
+
+/// Right-handed orthographic projection to WebGPU clip space (depth [0, 1], Y up), as
+/// `Mat4::orthographic_rh` of older glam.
+pub fn orthographic(left: f32, right: f32, bottom: f32, top: f32, near: f32, far: f32) -> Mat4 {
+    glam::camera::rh::proj::directx::orthographic(left, right, bottom, top, near, far)
+}
+
+/// Smallest and largest view-space distance (-z) of the corners of `bounds`.
+fn depth_range(view: &Mat4, bounds: (Vec3, Vec3)) -> (f32, f32) {
+    let mut lo = f32::INFINITY;
+    let mut hi = f32::NEG_INFINITY;
+    for c in corners(bounds) {
+        let d = -view.transform_point3(c).z;
+        lo = lo.min(d);
+        hi = hi.max(d);
+    }
+    (lo, hi)
+}
+
+/// The 8 corners of a box.
+pub fn corners((lo, hi): (Vec3, Vec3)) -> [Vec3; 8] {
+    std::array::from_fn(|i| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
+fn bounds_of(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
+    let (lo, hi) = points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    if lo.cmple(hi).all() { (lo, hi) } else { (Vec3::ZERO, Vec3::ZERO) }
+}
+
+/// A unit vector not parallel to `dir`, for `look_at` up vectors and tangent frames.
+pub(crate) fn any_perpendicular_up(dir: Vec3) -> Vec3 {
+    if dir.normalize_or_zero().dot(Vec3::Y).abs() < 0.99 {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Lights
+// ---------------------------------------------------------------------------------------
+
+impl Light {
+    /// The variant's name as written in a scene file.
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Light::Point { .. } => "Point",
+            Light::Directional { .. } => "Directional",
+            Light::Sphere { .. } => "Sphere",
+            Light::Disk { .. } => "Disk",
+            Light::Rectangle { .. } => "Rectangle",
+            Light::Segment { .. } => "Segment",
+            Light::DistantDisk { .. } => "DistantDisk",
+        }
+    }
+
+    /// True for lights at infinity (directional, distant disk).
+    pub fn is_distant(&self) -> bool {
+        matches!(self, Light::Directional { .. } | Light::DistantDisk { .. })
+    }
+
+    /// The centre of a light at a finite position (the midpoint of a segment); `None` for
+    /// lights at infinity.
+    pub fn center(&self) -> Option<Vec3> {
+        match self {
+            Light::Point { position } => Some(*position),
+            Light::Sphere { center, .. } | Light::Disk { center, .. } | Light::Rectangle { center, .. } => Some(*center),
+            Light::Segment { a, b } => Some((*a + *b) * 0.5),
+            Light::Directional { .. } | Light::DistantDisk { .. } => None,
+        }
+    }
+
+    /// The unit direction towards a light at infinity; `None` for the others.
+    pub fn direction(&self) -> Option<Vec3> {
+        match self {
+            Light::Directional { direction } | Light::DistantDisk { direction, .. } => Some(direction.normalize_or(Vec3::Y)),
+            _ => None,
+        }
+    }
+
+    /// Radius of a sphere around [`Light::center`] that holds the whole light (0 for a
+    /// point, and for lights at infinity).
+    pub fn bounding_radius(&self) -> f32 {
+        match self {
+            Light::Sphere { radius, .. } | Light::Disk { radius, .. } => radius.max(0.0),
+            Light::Rectangle {
+                half_width, half_height, ..
+            } => half_width.hypot(*half_height),
+            Light::Segment { a, b } => 0.5 * a.distance(*b),
+            Light::Point { .. } | Light::Directional { .. } | Light::DistantDisk { .. } => 0.0,
+        }
+    }
+
+    /// Full angular diameter in radians of a distant disk, else 0.
+    pub fn angle(&self) -> f32 {
+        match self {
+            Light::DistantDisk { angle_degrees, .. } => angle_degrees.to_radians(),
+            _ => 0.0,
+        }
+    }
+
+    /// `n` points evenly spaced along a segment light, ends included (`n = 1`: the
+    /// midpoint), for techniques that render one view per light sample; `None` for other
+    /// kinds.
+    pub fn segment_samples(&self, n: u32) -> Option<Vec<Vec3>> {
+        match self {
+            Light::Segment { a, b } => Some(match n {
+                0 => Vec::new(),
+                1 => vec![(*a + *b) * 0.5],
+                _ => (0..n).map(|i| a.lerp(*b, i as f32 / (n - 1) as f32)).collect(),
+            }),
+            _ => None,
+        }
+    }
+
+    /// The light's view for rasterising a shadow map of the geometry in `bounds`.
+    ///
+    /// Point-like lights (point, sphere, disk, rectangle, segment) get a square
+    /// perspective frustum from the light's centre, wide enough for every corner of
+    /// `bounds`, with near/far fitted to the corners (near at least far * 1e-4). It looks
+    /// along the axis of the narrowest cone that holds the corners, which is the direction
+    /// of the bounds' centre for a distant light but differs where the bounds reach
+    /// beside or behind the light (a light low over a large floor). A light that no
+    /// frustum narrower than 160 degrees can see the bounds from (a light inside them)
+    /// gets that widest frustum, and corners outside it are left out. Directional and
+    /// distant-disk lights get an orthographic view along their direction fitted to the
+    /// bounds.
+    pub fn view(&self, bounds: (Vec3, Vec3)) -> LightView {
+        let mut v = match self.center() {
+            Some(eye) => perspective_view(eye, bounds),
+            None => orthographic_view(self.direction().unwrap_or(Vec3::Y), bounds),
+        };
+        v.size = match self {
+            Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius,
+            Light::Rectangle {
+                half_width, half_height, ..
+            } => half_width.max(*half_height),
+            Light::Segment { a, b } => 0.5 * a.distance(*b),
+            Light::DistantDisk { angle_degrees, .. } => (0.5 * angle_degrees.to_radians()).tan(),
+            Light::Point { .. } | Light::Directional { .. } => 0.0,
+        };
+        v.half_extents = match self {
+            Light::Sphere { radius, .. } | Light::Disk { radius, .. } => Vec2::splat(*radius),
+            Light::Rectangle {
+                half_width, half_height, ..
+            } => Vec2::new(*half_width, *half_height),
+            Light::Segment { a, b } => Vec2::new(0.5 * a.distance(*b), 0.0),
+            _ => Vec2::ZERO,
+        };
+        v.angle = self.angle();
+        v
+    }
+
+    /// A perspective view from any point `eye` (for example one sample of a segment
+    /// light) fitted to `bounds` as in [`Light::view`]; `size`, `half_extents` and `angle`
+    /// are 0.
+    pub fn view_from(eye: Vec3, bounds: (Vec3, Vec3)) -> LightView {
+        perspective_view(eye, bounds)
+    }
+}
+
+/// Bounds with every side at least a small positive length, so views stay finite.
+fn padded(bounds: (Vec3, Vec3)) -> (Vec3, Vec3) {
+    let (lo, hi) = bounds;
+    let scale = (hi - lo)
+        .max_element()
+        .max(lo.abs().max_element())
+        .max(hi.abs().max_element())
+        .max(1.0);
+    let pad = Vec3::splat(scale * 1e-4);
+    let mid = (lo + hi) * 0.5;
+    let half = ((hi - lo) * 0.5).max(pad);
+    (mid - half, mid + half)
+}
+
+/// The axis of (nearly) the narrowest cone from `eye` that holds every corner of
+/// `bounds`: Badoiu–Clarkson iterations for the smallest ball around the unit directions
+/// to the corners, started from their mean.
+fn enclosing_axis(eye: Vec3, bounds: (Vec3, Vec3)) -> Vec3 {
+    let dirs: Vec<Vec3> = corners(bounds).iter().filter_map(|c| (*c - eye).try_normalize()).collect();
+    let mut axis = dirs.iter().copied().sum::<Vec3>().try_normalize().unwrap_or(-Vec3::Y);
+    for i in 1..=200 {
+        let Some(far) = dirs.iter().copied().min_by(|a, b| a.dot(axis).total_cmp(&b.dot(axis))) else {
+            break;
+        };
+        axis = (axis + (far - axis) / (i as f32 + 1.0)).try_normalize().unwrap_or(axis);
+    }
+    axis
+}
+
+fn perspective_view(eye: Vec3, bounds: (Vec3, Vec3)) -> LightView {
+    let bounds = padded(bounds);
+    let forward = enclosing_axis(eye, bounds);
+    let view = look_at(eye, eye + forward, any_perpendicular_up(forward));
+    let (lo, hi) = depth_range(&view, bounds);
+    let far = (hi * 1.001).max(1e-6);
+    let near = (lo * 0.999).max(far * 1e-4);
+    // Widest tangent over the corners in front of the near plane.
+    let mut tan = 0.0f32;
+    for c in corners(bounds) {
+        let p = view.transform_point3(c);
+        let depth = (-p.z).max(near);
+        tan = tan.max(p.x.abs() / depth).max(p.y.abs() / depth);
+    }
+    let tan = (tan * 1.001).clamp(1e-6, 80f32.to_radians().tan());
+    let proj = perspective(2.0 * tan.atan(), 1.0, near, far);
+    LightView {
+        view,
+        proj,
+        view_proj: proj * view,
+        near,
+        far,
+        position_or_direction: eye.extend(1.0),
+        size: 0.0,
+        half_extents: Vec2::ZERO,
+        angle: 0.0,
+        orthographic: false,
+    }
+}
+
+fn orthographic_view(direction: Vec3, bounds: (Vec3, Vec3)) -> LightView {
+    let bounds = padded(bounds);
+    let centre = (bounds.0 + bounds.1) * 0.5;
+    let radius = 0.5 * (bounds.1 - bounds.0).length();
+    let dir = direction.normalize_or(Vec3::Y);
+    let eye = centre + dir * (2.0 * radius);
+    let view = look_at(eye, centre, any_perpendicular_up(dir));
+    let (lo, hi) = depth_range(&view, bounds);
+    let margin = radius * 1e-3;
+    let far = hi + margin;
+    let near = (lo - margin).max(far * 1e-4);
+    let mut half = 0.0f32;
+    for c in corners(bounds) {
+        let p = view.transform_point3(c);
+        half = half.max(p.x.abs()).max(p.y.abs());
+    }
+    let half = half * 1.001;
+    let proj = orthographic(-half, half, -half, half, near, far);
+    LightView {
+        view,
+        proj,
+        view_proj: proj * view,
+        near,
+        far,
+        position_or_direction: dir.extend(0.0),
+        size: 0.0,
+        half_extents: Vec2::ZERO,
+        angle: 0.0,
+        orthographic: true,
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Validation
+// ---------------------------------------------------------------------------------------
+
+fn finite3(v: Vec3) -> bool {
+    v.is_finite()
+}
+
+/// Checks ranges and normalises directions in place.
+fn validate(desc: &mut SceneDesc) -> Result<(), SceneError> {
+    if desc.shadow_map == 0 {
+        return Err(SceneError::invalid(
+            "shadow_map",
+            "the shadow map has no texels",
+            "write a resolution of at least 1, such as 512",
+        ));
+    }
+    validate_camera(&desc.camera)?;
+    for (i, light) in desc.lights.iter_mut().enumerate() {
+        let name = light.kind_name();
+        let at = |field: &str| format!("lights[{i}] ({name}).{field}");
+        validate_light(light, &at)?;
+    }
+    for (i, object) in desc.objects.iter().enumerate() {
+        let at = |field: &str| match &object.name {
+            Some(n) => format!("objects[{i}] (\"{n}\").{field}"),
+            None => format!("objects[{i}].{field}"),
+        };
+        validate_object(object, &at)?;
+    }
+    Ok(())
+}
+
+fn validate_camera(camera: &Camera) -> Result<(), SceneError> {
+    let (name, position, target, up, width, height, near, far) = match camera {
+        Camera::Perspective {
+            position,
+            target,
+            up,
+            width,
+            height,
+            near,
+            far,
+            ..
+        } => ("Perspective", position, target, up, width, height, near, far),
+        Camera::Orthographic {
+            position,
+            target,
+            up,
+            width,
+            height,
+            near,
+            far,
+            ..
+        } => ("Orthographic", position, target, up, width, height, near, far),
+    };
+    let at = |f: &str| format!("camera ({name}).{f}");
+    for (field, v) in [("position", position), ("target", target), ("up", up)] {
+        if !finite3(*v) {
+            return Err(SceneError::invalid(at(field), "the vector is not finite", "write finite numbers"));
+        }
+    }
+    let dir = *target - *position;
+    if dir.length_squared() == 0.0 {
+        return Err(SceneError::invalid(
+            at("target"),
+            "the camera looks at its own position",
+            "move `target` away from `position`",
+        ));
+    }
+    if up.length_squared() == 0.0 || dir.normalize().cross(up.normalize()).length() < 1e-4 {
+        return Err(SceneError::invalid(
+            at("up"),
+            "`up` is zero or parallel to the view direction",
+            "choose an `up` not parallel to `target - position` (looking straight down, use (0.0, 0.0, -1.0))",
+        ));
+    }
+    if *width == 0 || *height == 0 {
+        return Err(SceneError::invalid(
+            at("width"),
+            "the image has no pixels",
+            "write a width and height of at least 1",
+        ));
+    }
+    match camera {
+        Camera::Perspective { fov_y_degrees, .. } if !(*fov_y_degrees > 0.0 && *fov_y_degrees < 180.0) => {
+            return Err(SceneError::invalid(
+                at("fov_y_degrees"),
+                format!("field of view {fov_y_degrees} is outside (0, 180) degrees"),
+                "write a field of view such as 45.0",
+            ));
+        }
+        Camera::Orthographic { half_height, .. } if !(*half_height > 0.0 && half_height.is_finite()) => {
+            return Err(SceneError::invalid(
+                at("half_height"),
+                format!("half height {half_height} is not positive"),
+                "write a positive half height",
+            ));
+        }
+        _ => {}
+    }
+    if let Some(n) = near
+        && !(*n > 0.0 && n.is_finite())
+    {
+        return Err(SceneError::invalid(
+            at("near"),
+            format!("near {n} is not positive"),
+            "write a positive near distance or leave it out",
+        ));
+    }
+    if let Some(f) = far
+        && !(*f > near.unwrap_or(0.0) && f.is_finite())
+    {
+        return Err(SceneError::invalid(
+            at("far"),
+            format!("far {f} is not positive and beyond near"),
+            "write far > near > 0 or leave them out",
+        ));
+    }
+    Ok(())
+}
+
+fn check_unit(v: &mut Vec3, at: String) -> Result<(), SceneError> {
+    if !(finite3(*v) && v.length_squared() > 0.0) {
+        return Err(SceneError::invalid(
+            at,
+            "the direction is zero or not finite",
+            "write a non-zero direction such as (0.0, -1.0, 0.0)",
+        ));
+    }
+    *v = v.normalize();
+    Ok(())
+}
+
+fn check_point(v: &Vec3, at: String) -> Result<(), SceneError> {
+    if finite3(*v) {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(at, "the position is not finite", "write finite numbers"))
+    }
+}
+
+fn check_size(x: f32, at: String, what: &str) -> Result<(), SceneError> {
+    if x >= 0.0 && x.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            at,
+            format!("{what} {x} is negative or not finite"),
+            format!("write a {what} >= 0"),
+        ))
+    }
+}
+
+fn validate_light(light: &mut Light, at: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
+    match light {
+        Light::Point { position } => check_point(position, at("position")),
+        Light::Directional { direction } => check_unit(direction, at("direction")),
+        Light::Sphere { center, radius } => {
+            check_point(center, at("center"))?;
+            check_size(*radius, at("radius"), "radius")
+        }
+        Light::Disk { center, normal, radius } => {
+            check_point(center, at("center"))?;
+            check_unit(normal, at("normal"))?;
+            check_size(*radius, at("radius"), "radius")
+        }
+        Light::Rectangle {
+            center,
+            normal,
+            u_axis,
+            half_width,
+            half_height,
+        } => {
+            check_point(center, at("center"))?;
+            check_unit(normal, at("normal"))?;
+            check_size(*half_width, at("half_width"), "half width")?;
+            check_size(*half_height, at("half_height"), "half height")?;
+            let u = *u_axis - *normal * u_axis.dot(*normal);
+            if !(u.is_finite() && u.length() > 1e-4 * u_axis.length()) {
+                return Err(SceneError::invalid(
+                    at("u_axis"),
+                    "`u_axis` is zero or parallel to `normal`",
+                    "write an axis that lies in the rectangle's plane, perpendicular to `normal`",
+                ));
+            }
+            *u_axis = u.normalize();
+            Ok(())
+        }
+        Light::Segment { a, b } => {
+            check_point(a, at("a"))?;
+            check_point(b, at("b"))
+        }
+        Light::DistantDisk { direction, angle_degrees } => {
+            check_unit(direction, at("direction"))?;
+            if !(*angle_degrees >= 0.0 && *angle_degrees < 180.0) {
+                return Err(SceneError::invalid(
+                    at("angle_degrees"),
+                    format!("angular diameter {angle_degrees} is outside [0, 180) degrees"),
+                    "write the full angular diameter in degrees, such as 0.53 for the sun",
+                ));
+            }
+            Ok(())
+        }
+    }
+}
+
+fn validate_object(object: &Object, at: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
+    let t = &object.transform;
+    if !(t.translate.is_finite() && t.scale.is_finite()) {
+        return Err(SceneError::invalid(
+            at("transform"),
+            "the transform is not finite",
+            "write finite numbers",
+        ));
+    }
+    if t.scale.x * t.scale.y * t.scale.z == 0.0 {
+        return Err(SceneError::invalid(
+            at("transform.scale"),
+            "a scale of 0 flattens the object",
+            "write non-zero scales",
+        ));
+    }
+    match &t.rotate {
+        Rotation::AxisAngle { axis, degrees } if !(axis.is_finite() && axis.length_squared() > 0.0 && degrees.is_finite()) => {
+            return Err(SceneError::invalid(
+                at("transform.rotate"),
+                "the rotation axis is zero or not finite",
+                "write a non-zero axis",
+            ));
+        }
+        Rotation::Euler(x, y, z) if !(x.is_finite() && y.is_finite() && z.is_finite()) => {
+            return Err(SceneError::invalid(
+                at("transform.rotate"),
+                "the angles are not finite",
+                "write finite angles",
+            ));
+        }
+        _ => {}
+    }
+    match &object.mesh {
+        Mesh::Plane { size } if !(size.is_finite() && size.cmpgt(Vec2::ZERO).all()) => Err(SceneError::invalid(
+            at("mesh.size"),
+            "a plane needs a positive size",
+            "write (x, z) sizes > 0",
+        )),
+        Mesh::Box { size } if !(size.is_finite() && size.cmpgt(Vec3::ZERO).all()) => Err(SceneError::invalid(
+            at("mesh.size"),
+            "a box needs a positive size",
+            "write (x, y, z) sizes > 0",
+        )),
+        Mesh::Sphere { radius, .. } if !(*radius > 0.0 && radius.is_finite()) => Err(SceneError::invalid(
+            at("mesh.radius"),
+            format!("radius {radius} is not positive"),
+            "write a radius > 0",
+        )),
+        Mesh::Sphere { segments, .. } if *segments < 3 => Err(SceneError::invalid(
+            at("mesh.segments"),
+            format!("{segments} segments cannot make a sphere"),
+            "write at least 3 segments",
+        )),
+        Mesh::Triangle { a, b, c } if !(a.is_finite() && b.is_finite() && c.is_finite()) => {
+            Err(SceneError::invalid(at("mesh"), "a corner is not finite", "write finite numbers"))
+        }
+        Mesh::Quad { a, b, c, d } if !(a.is_finite() && b.is_finite() && c.is_finite() && d.is_finite()) => {
+            Err(SceneError::invalid(at("mesh"), "a corner is not finite", "write finite numbers"))
+        }
+        _ => Ok(()),
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Meshes
+// ---------------------------------------------------------------------------------------
+
+/// Object-space triangles with per-corner normals (`None`: use face normals).
+struct MeshData {
+    triangles: Vec<[Vec3; 3]>,
+    normals: Option<Vec<[Vec3; 3]>>,
+}
+
+fn build_mesh(index: usize, object: &Object, base: &Path) -> Result<MeshData, SceneError> {
+    let flat = |triangles| MeshData { triangles, normals: None };
+    Ok(match &object.mesh {
+        Mesh::Plane { size } => {
+            let (x, z) = (0.5 * size.x, 0.5 * size.y);
+            let (a, b, c, d) = (
+                Vec3::new(-x, 0.0, -z),
+                Vec3::new(-x, 0.0, z),
+                Vec3::new(x, 0.0, z),
+                Vec3::new(x, 0.0, -z),
+            );
+            flat(vec![[a, b, c], [a, c, d]])
+        }
+        Mesh::Box { size } => flat(box_triangles(*size * 0.5)),
+        Mesh::Sphere { radius, segments } => sphere(*radius, *segments),
+        Mesh::Triangle { a, b, c } => flat(vec![[*a, *b, *c]]),
+        Mesh::Quad { a, b, c, d } => flat(vec![[*a, *b, *c], [*a, *c, *d]]),
+        Mesh::Obj { path } => {
+            let at = match &object.name {
+                Some(n) => format!("objects[{index}] (\"{n}\").mesh.path"),
+                None => format!("objects[{index}].mesh.path"),
+            };
+            load_obj(path, base).map_err(|e| e.with_at(at))?
+        }
+    })
+}
+
+fn box_triangles(h: Vec3) -> Vec<[Vec3; 3]> {
+    let mut out = Vec::with_capacity(12);
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = sign;
+            // u x v = n, so (c-u-v, c+u-v, c+u+v, c-u+v) runs counter-clockwise around n.
+            let mut u = Vec3::ZERO;
+            u[(axis + 1) % 3] = 1.0;
+            let v = n.cross(u);
+            let c = n * h;
+            let (u, v) = (u * h, v * h);
+            let q = [c - u - v, c + u - v, c + u + v, c - u + v];
+            out.push([q[0], q[1], q[2]]);
+            out.push([q[0], q[2], q[3]]);
+        }
+    }
+    out
+}
+
+fn sphere(radius: f32, segments: u32) -> MeshData {
+    let rings = (segments / 2).max(2);
+    let point = |ring: u32, seg: u32| {
+        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
+        let phi = std::f32::consts::TAU * (seg % segments) as f32 / segments as f32;
+        Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin())
+    };
+    let mut triangles = Vec::new();
+    let mut normals = Vec::new();
+    for ring in 0..rings {
+        for seg in 0..segments {
+            let p00 = point(ring, seg);
+            let p01 = point(ring, seg + 1);
+            let p10 = point(ring + 1, seg);
+            let p11 = point(ring + 1, seg + 1);
+            for tri in [[p00, p10, p11], [p00, p11, p01]] {
+                // Face outwards: flip where the winding points in.
+                let centroid = tri[0] + tri[1] + tri[2];
+                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+                let tri = if n.dot(centroid) < 0.0 { [tri[0], tri[2], tri[1]] } else { tri };
+                normals.push(tri);
+                triangles.push(tri.map(|p| p * radius));
+            }
+        }
+    }
+    MeshData {
+        triangles,
+        normals: Some(normals),
+    }
+}
+
+/// Resolves `rel` inside `base`, refusing absolute paths, `..` and links leading out.
+fn resolve_inside(rel: &str, base: &Path) -> Result<PathBuf, SceneError> {
+    let escape = |what: &str| {
+        SceneError::new(SceneErrorKind::Mesh, format!("the OBJ path `{rel}` {what}"))
+            .with_hint("write a path relative to the scene file's folder, without `..`, and put the mesh beside the scene")
+    };
+    let p = Path::new(rel);
+    if rel.is_empty() {
+        return Err(escape("is empty"));
+    }
+    if p.is_absolute() || p.has_root() {
+        return Err(escape("is absolute"));
+    }
+    for c in p.components() {
+        match c {
+            Component::Normal(_) | Component::CurDir => {}
+            Component::ParentDir => return Err(escape("leaves the scene's folder (`..`)")),
+            Component::RootDir | Component::Prefix(_) => return Err(escape("is absolute")),
+        }
+    }
+    let joined = base.join(p);
+    let canon_base = base.canonicalize().map_err(|e| {
+        SceneError::new(
+            SceneErrorKind::Io,
+            format!("cannot open the scene's folder `{}`: {e}", base.display()),
+        )
+        .with_hint("load the scene from an existing folder")
+    })?;
+    let canon = joined.canonicalize().map_err(|e| {
+        SceneError::new(SceneErrorKind::Io, format!("cannot open the OBJ file `{}`: {e}", joined.display()))
+            .with_hint("check that the mesh file is beside the scene file")
+    })?;
+    if !canon.starts_with(&canon_base) {
+        return Err(escape("leads out of the scene's folder through a link"));
+    }
+    Ok(canon)
+}
+
+fn load_obj(rel: &str, base: &Path) -> Result<MeshData, SceneError> {
+    let path = resolve_inside(rel, base)?;
+    let bytes = std::fs::read(&path).map_err(|e| {
+        SceneError::new(SceneErrorKind::Io, format!("cannot read the OBJ file `{}`: {e}", path.display()))
+            .with_hint("check that the mesh file is readable")
+    })?;
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ..Default::default()
+    };
+    // Material libraries are never opened: they could name files outside the folder.
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut bytes.as_slice(), &options, |_| Err(tobj::LoadError::OpenFileFailed)).map_err(|e| {
+            SceneError::new(SceneErrorKind::Mesh, format!("cannot parse the OBJ file `{rel}`: {e}"))
+                .with_hint("check that the file is a Wavefront OBJ with `v` and `f` lines")
+        })?;
+    let mut triangles = Vec::new();
+    let mut normals = Vec::new();
+    let mut all_have_normals = true;
+    let mut computed = Vec::new();
+    for model in &models {
+        let m = &model.mesh;
+        let vertex = |i: u32| {
+            let i = i as usize * 3;
+            m.positions.get(i..i + 3).map(|s| Vec3::new(s[0], s[1], s[2]))
+        };
+        let has_normals = m.normals.len() == m.positions.len() && !m.normals.is_empty();
+        all_have_normals &= has_normals;
+        // Area-weighted smooth normals by vertex index, for meshes without normals.
+        let mut smooth = vec![Vec3::ZERO; m.positions.len() / 3];
+        let mut tris = Vec::with_capacity(m.indices.len() / 3);
+        for f in m.indices.chunks_exact(3) {
+            let (Some(a), Some(b), Some(c)) = (vertex(f[0]), vertex(f[1]), vertex(f[2])) else {
+                return Err(
+                    SceneError::new(SceneErrorKind::Mesh, format!("the OBJ file `{rel}` has a face index out of range"))
+                        .with_hint("check the face indices of the OBJ file"),
+                );
+            };
+            let n = (b - a).cross(c - a);
+            if n.is_finite() {
+                for &k in f {
+                    smooth[k as usize] += n;
+                }
+            }
+            tris.push([a, b, c]);
+            if has_normals {
+                let nr = |i: u32| {
+                    let i = i as usize * 3;
+                    Vec3::new(m.normals[i], m.normals[i + 1], m.normals[i + 2])
+                };
+                normals.push([nr(f[0]), nr(f[1]), nr(f[2])]);
+            }
+        }
+        computed.extend(
+            m.indices
+                .chunks_exact(3)
+                .map(|f| [smooth[f[0] as usize], smooth[f[1] as usize], smooth[f[2] as usize]]),
+        );
+        triangles.extend(tris);
+    }
+    let normals = if all_have_normals { normals } else { computed };
+    Ok(MeshData {
+        triangles,
+        normals: Some(normals),
+    })
+}
+
+/// Transforms a mesh to world space, drops degenerate triangles, and appends it.
+fn place(mesh: &MeshData, object: &Object, triangles: &mut Vec<[Vec3; 3]>, normals: &mut Vec<[Vec3; 3]>) {
+    let m = object.transform.matrix();
+    let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
+    let mirrored = Mat3::from_mat4(m).determinant() < 0.0;
+    for (i, tri) in mesh.triangles.iter().enumerate() {
+        let mut w = tri.map(|p| m.transform_point3(p));
+        let e1 = w[1] - w[0];
+        let e2 = w[2] - w[0];
+        let e3 = w[2] - w[1];
+        let cross = e1.cross(e2);
+        let longest = e1.length_squared().max(e2.length_squared()).max(e3.length_squared());
+        // Zero area up to f32 rounding of the cross product (about 1.2e-7 * |e1| |e2|).
+        if !(w.iter().all(|p| p.is_finite()) && cross.is_finite() && cross.length() > 1e-6 * longest) {
+            continue;
+        }
+        let face = cross.normalize();
+        let mut n = match (&mesh.normals, object.flat_normals) {
+            (Some(ns), false) => ns[i].map(|n| {
+                let n = normal_matrix * n;
+                if n.is_finite() && n.length_squared() > 0.0 {
+                    n.normalize()
+                } else {
+                    face
+                }
+            }),
+            _ => [face; 3],
+        };
+        if mirrored {
+            w.swap(1, 2);
+            n.swap(1, 2);
+        }
+        if mesh.normals.is_none() || object.flat_normals {
+            // Recompute after a possible swap so the face normal matches the winding.
+            let f = (w[1] - w[0]).cross(w[2] - w[0]).normalize();
+            n = [f; 3];
+        }
+        triangles.push(w);
+        normals.push(n);
+    }
+}

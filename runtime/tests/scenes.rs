@@ -1,0 +1,488 @@
+//! Scenes (loading, errors, light views) and the CPU visibility query (against exact
+//! answers: a box over a point light, half-blocked lights, the straight edge's closed
+//! form).
+
+use std::path::{Path, PathBuf};
+
+use glam::{Vec3, Vec4};
+use sshc_runtime::scene::{Light, Scene, SceneErrorKind, corners};
+use sshc_runtime::visibility::Visibility;
+
+const BUNDLED: [&str; 5] = ["bunny", "contact", "fence", "edge", "triangle"];
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+}
+
+fn bundled(name: &str) -> Scene {
+    let path = scenes_dir().join(format!("{name}.ron"));
+    Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A fresh empty folder under the system's temporary folder.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("sshc-scene-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const CAMERA: &str = "camera: Perspective(position: (0.0, 3.0, 5.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 45.0, width: 32, height: 32)";
+
+fn scene_with(lights: &str, objects: &str) -> Scene {
+    let text = format!("Scene({CAMERA}, shadow_map: 64, lights: [{lights}], objects: [{objects}])");
+    Scene::from_str(&text, ".").unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn every_bundled_scene_loads() {
+    for name in BUNDLED {
+        let scene = bundled(name);
+        let tris = scene.triangles();
+        assert!(!tris.is_empty(), "{name}: no triangles");
+        assert_eq!(scene.normals().len(), tris.len());
+        assert_eq!(
+            scene.vertex_data().len(),
+            tris.len() * 18,
+            "{name}: 3 vertices x (position + normal)"
+        );
+        assert!(!scene.lights.is_empty(), "{name}: no light");
+        assert_eq!(scene.camera_size(), (256, 256), "{name}");
+        assert_eq!(scene.shadow_map, 512, "{name}");
+        for n in scene.normals().iter().flatten() {
+            assert!((n.length() - 1.0).abs() < 1e-4, "{name}: normal {n}");
+        }
+        let (lo, hi) = scene.bounds();
+        assert!(lo.is_finite() && hi.is_finite() && lo.cmple(hi).all(), "{name}: bounds");
+        let vp = scene.camera_view_proj();
+        assert!(vp.is_finite(), "{name}: camera matrix");
+        // The bounds' centre is in front of the camera.
+        let c = vp * ((lo + hi) * 0.5).extend(1.0);
+        assert!(c.w > 0.0, "{name}: the scene is behind the camera");
+    }
+    assert_eq!(bundled("bunny").triangles().len(), 3674 + 2, "bunny + floor");
+}
+
+#[test]
+fn camera_size_can_be_overridden() {
+    let mut scene = bundled("edge");
+    scene.set_camera_size(16, 8);
+    scene.shadow_map = 32;
+    assert_eq!(scene.camera_size(), (16, 8));
+    // Orthographic: a point half_height above the centre line lands on the top edge.
+    let p = scene.camera_view_proj() * Vec4::new(0.0, 0.0, -0.25, 1.0);
+    assert!((p.y / p.w - 1.0).abs() < 1e-5, "{p}");
+}
+
+#[test]
+fn a_syntax_error_names_line_and_column() {
+    let dir = temp_dir("syntax");
+    let path = dir.join("bad.ron");
+    std::fs::write(&path, "Scene(\n    camera: Orthographic(position: (0.0, 1.0, 0.0), target: (0.0, 0.0, 0.0),\n        half_height: 1.0 width: 8, height: 8),\n)\n")
+        .unwrap();
+    let err = Scene::load(&path).unwrap_err();
+    assert_eq!(err.kind(), SceneErrorKind::Syntax);
+    let (line, col) = err.line_col().expect("a position");
+    assert_eq!(line, 3, "{err}");
+    assert!(col > 1, "{err}");
+    let text = err.to_string();
+    assert!(text.starts_with(&format!("{}:3:{col}: error:", path.display())), "{text}");
+    assert!(text.contains("hint:"), "{text}");
+}
+
+#[test]
+fn an_unknown_field_names_line_column_and_the_fields_allowed() {
+    let text = "Scene(\n  camera: Perspective(position: (0.0, 1.0, 2.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 40.0, width: 8, height: 8),\n  shadow_map: 8,\n  lights: [Sphere(center: (0.0, 2.0, 0.0), radius: 0.5, colour: (1.0, 1.0, 1.0))],\n)";
+    let err = Scene::from_str(text, ".").unwrap_err();
+    assert_eq!(err.line_col().map(|p| p.0), Some(4), "{err}");
+    assert!(err.hint().unwrap().contains("center, radius"), "{err}");
+    assert!(err.to_string().starts_with("<scene>:4:"), "{err}");
+
+    let missing = "Scene(camera: Perspective(position: (0.0, 1.0, 2.0), target: (0.0, 0.0, 0.0), width: 8, height: 8), shadow_map: 8)";
+    let err = Scene::from_str(missing, ".").unwrap_err();
+    assert!(err.message().contains("fov_y_degrees"), "{err}");
+    assert!(err.line_col().is_some());
+}
+
+#[test]
+fn a_value_out_of_range_names_its_path_and_a_fix() {
+    let text = format!(
+        "Scene({CAMERA}, shadow_map: 64, lights: [Point(position: (0.0, 1.0, 0.0)), Disk(center: (0.0, 2.0, 0.0), normal: (0.0, -1.0, 0.0), radius: -1.0)])"
+    );
+    let err = Scene::from_str(&text, ".").unwrap_err();
+    assert_eq!(err.kind(), SceneErrorKind::Invalid);
+    assert_eq!(err.at(), Some("lights[1] (Disk).radius"));
+    assert!(err.hint().is_some());
+
+    let text = "Scene(camera: Orthographic(position: (0.0, 1.0, 0.0), target: (0.0, 0.0, 0.0), half_height: 1.0, width: 8, height: 8), shadow_map: 8)";
+    let err = Scene::from_str(text, ".").unwrap_err();
+    assert_eq!(
+        err.at(),
+        Some("camera (Orthographic).up"),
+        "looking straight down with up = +Y: {err}"
+    );
+    assert!(err.hint().unwrap().contains("(0.0, 0.0, -1.0)"));
+
+    let text = format!("Scene({CAMERA}, shadow_map: 0)");
+    assert_eq!(Scene::from_str(&text, ".").unwrap_err().at(), Some("shadow_map"));
+}
+
+#[test]
+fn obj_paths_may_not_leave_the_scene_folder() {
+    let root = temp_dir("escape");
+    let inner = root.join("scenes");
+    std::fs::create_dir_all(&inner).unwrap();
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::fs::write(root.join("outside.obj"), obj).unwrap();
+    std::fs::write(inner.join("inside.obj"), obj).unwrap();
+    let scene = |path: &str| format!("Scene({CAMERA}, shadow_map: 8, objects: [Object(mesh: Obj(path: {path:?}))])");
+
+    let ok = Scene::from_str(&scene("inside.obj"), &inner).unwrap();
+    assert_eq!(ok.triangles().len(), 1);
+
+    for bad in ["../outside.obj", "./../scenes/../outside.obj", "/etc/passwd", ""] {
+        let err = Scene::from_str(&scene(bad), &inner).unwrap_err();
+        assert_eq!(err.kind(), SceneErrorKind::Mesh, "{bad}: {err}");
+        assert_eq!(err.at(), Some("objects[0].mesh.path"), "{bad}: {err}");
+    }
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(root.join("outside.obj"), inner.join("link.obj")).unwrap();
+        let err = Scene::from_str(&scene("link.obj"), &inner).unwrap_err();
+        assert!(err.message().contains("link"), "{err}");
+    }
+    // A material library is never opened, even one that names a file outside.
+    std::fs::write(inner.join("mtl.obj"), format!("mtllib ../outside.mtl\n{obj}")).unwrap();
+    assert_eq!(Scene::from_str(&scene("mtl.obj"), &inner).unwrap().triangles().len(), 1);
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+#[test]
+fn obj_normals_are_used_when_present_and_computed_when_not() {
+    let dir = temp_dir("normals");
+    // A quad in the XZ plane facing +Y, with tilted normals in the file.
+    std::fs::write(
+        dir.join("with.obj"),
+        "v 0 0 0\nv 0 0 1\nv 1 0 1\nv 1 0 0\nvn 0.6 0.8 0\nf 1//1 2//1 3//1 4//1\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("without.obj"), "v 0 0 0\nv 0 0 1\nv 1 0 1\nv 1 0 0\nf 1 2 3 4\n").unwrap();
+    let load = |file: &str| {
+        let text =
+            format!("Scene({CAMERA}, shadow_map: 8, objects: [Object(mesh: Obj(path: {file:?}), transform: (scale: (2.0, 1.0, 1.0)))])");
+        Scene::from_str(&text, &dir).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let with = load("with.obj");
+    assert_eq!(with.triangles().len(), 2, "triangulated");
+    // Normals transform by the inverse transpose: (0.6, 0.8, 0) scaled x2 in x -> (0.3, 0.8, 0).
+    let expect = Vec3::new(0.3, 0.8, 0.0).normalize();
+    assert!(with.normals()[0][0].abs_diff_eq(expect, 1e-5), "{}", with.normals()[0][0]);
+    let without = load("without.obj");
+    for n in without.normals().iter().flatten() {
+        assert!(n.abs_diff_eq(Vec3::Y, 1e-5), "{n}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn degenerate_triangles_are_dropped_and_an_empty_scene_works() {
+    let scene = scene_with(
+        "Point(position: (0.0, 2.0, 0.0))",
+        "Object(mesh: Triangle(a: (0.0, 0.0, 0.0), b: (1.0, 0.0, 0.0), c: (2.0, 0.0, 0.0))), Object(mesh: Triangle(a: (0.0, 1.0, 0.0), b: (0.0, 1.0, 0.0), c: (1.0, 1.0, 1.0)))",
+    );
+    assert!(scene.triangles().is_empty());
+    assert_eq!(scene.bounds(), (Vec3::ZERO, Vec3::ZERO));
+    let vis = Visibility::new(&scene);
+    assert_eq!(vis.visible_fraction(Vec3::ZERO, &scene.lights[0], 4, 0), 1.0);
+    let view = scene.lights[0].view(scene.bounds());
+    assert!(view.view_proj.is_finite() && view.near > 0.0 && view.far > view.near);
+    assert!(scene.camera_view_proj().is_finite());
+}
+
+#[test]
+fn mirrored_objects_keep_their_faces_outwards() {
+    let scene = scene_with(
+        "Point(position: (0.0, 2.0, 0.0))",
+        "Object(mesh: Box(size: (1.0, 1.0, 1.0)), transform: (scale: (-1.0, 1.0, 1.0)))",
+    );
+    for (t, n) in scene.triangles().iter().zip(scene.normals()) {
+        let face = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+        let centroid = (t[0] + t[1] + t[2]) / 3.0;
+        assert!(face.dot(centroid) > 0.0, "winding points in");
+        assert!(n[0].abs_diff_eq(face, 1e-5), "normal {} vs face {face}", n[0]);
+    }
+}
+
+/// Every corner of the bounds projects inside the clip volume, and its linear depth
+/// `(-(view * p).z - near) / (far - near)` is in [0, 1].
+fn check_view(what: &str, light: &Light, bounds: (Vec3, Vec3)) {
+    let v = light.view(bounds);
+    assert!(v.near > 0.0 && v.far > v.near, "{what}: near {} far {}", v.near, v.far);
+    assert!(v.view_proj.abs_diff_eq(v.proj * v.view, 1e-5));
+    assert_eq!(v.orthographic, light.is_distant(), "{what}");
+    for c in corners(bounds) {
+        let clip = v.view_proj * c.extend(1.0);
+        let w = clip.w;
+        let tol = 1e-5 * w.abs();
+        assert!(w > 0.0, "{what}: corner {c} behind the light");
+        assert!(
+            clip.x.abs() <= w + tol && clip.y.abs() <= w + tol,
+            "{what}: corner {c} outside ({clip})"
+        );
+        assert!(clip.z >= -tol && clip.z <= w + tol, "{what}: corner {c} depth {}", clip.z / w);
+        let depth = (-(v.view * c.extend(1.0)).z - v.near) / (v.far - v.near);
+        assert!((0.0..=1.0).contains(&depth), "{what}: corner {c} linear depth {depth}");
+    }
+}
+
+#[test]
+fn light_views_hold_the_whole_scene() {
+    for name in BUNDLED {
+        let scene = bundled(name);
+        for light in &scene.lights {
+            check_view(name, light, scene.bounds());
+        }
+    }
+    // Every kind, over a flat floor-like box and a tall one, from several sides.
+    let boxes = [
+        (Vec3::new(-3.0, 0.0, -3.0), Vec3::new(3.0, 0.0, 3.0)),
+        (Vec3::new(-0.5, 0.0, -0.5), Vec3::new(0.5, 10.0, 0.5)),
+    ];
+    let dirs = [Vec3::Y, Vec3::new(0.3, 1.0, -0.4), Vec3::new(1.0, 0.01, 0.0), -Vec3::Y];
+    for bounds in boxes {
+        for d in dirs {
+            let d = d.normalize();
+            let p = (bounds.0 + bounds.1) * 0.5 + d * 20.0;
+            let lights = [
+                Light::Point { position: p },
+                Light::Directional { direction: d },
+                Light::Sphere { center: p, radius: 0.5 },
+                Light::Disk {
+                    center: p,
+                    normal: -d,
+                    radius: 0.5,
+                },
+                Light::Rectangle {
+                    center: p,
+                    normal: -d,
+                    u_axis: d.any_orthonormal_vector(),
+                    half_width: 0.5,
+                    half_height: 0.2,
+                },
+                Light::Segment {
+                    a: p - Vec3::X,
+                    b: p + Vec3::X,
+                },
+                Light::DistantDisk {
+                    direction: d,
+                    angle_degrees: 5.0,
+                },
+            ];
+            for light in &lights {
+                check_view(&format!("{light:?} over {bounds:?}"), light, bounds);
+            }
+        }
+    }
+    // Depth range extremes: a light 1e-3 above a tiny box and 1e4 away from a large one.
+    check_view(
+        "near",
+        &Light::Point {
+            position: Vec3::new(0.0, 1e-3 + 1e-3, 0.0),
+        },
+        (Vec3::splat(-1e-3), Vec3::splat(1e-3)),
+    );
+    check_view(
+        "far",
+        &Light::Point {
+            position: Vec3::new(0.0, 1e4, 0.0),
+        },
+        (Vec3::splat(-10.0), Vec3::splat(10.0)),
+    );
+}
+
+#[test]
+fn light_view_describes_the_light() {
+    let bounds = (Vec3::splat(-1.0), Vec3::splat(1.0));
+    let v = Light::DistantDisk {
+        direction: Vec3::new(0.0, 2.0, 0.0),
+        angle_degrees: 10.0,
+    }
+    .view(bounds);
+    assert_eq!(v.position_or_direction, Vec4::new(0.0, 1.0, 0.0, 0.0));
+    assert!((v.angle - 10f32.to_radians()).abs() < 1e-6);
+    let v = Light::Rectangle {
+        center: Vec3::Y * 5.0,
+        normal: -Vec3::Y,
+        u_axis: Vec3::X,
+        half_width: 0.5,
+        half_height: 0.25,
+    }
+    .view(bounds);
+    assert_eq!(v.position_or_direction, Vec4::new(0.0, 5.0, 0.0, 1.0));
+    assert_eq!(v.size, 0.5);
+    assert_eq!(v.angle, 0.0);
+    let seg = Light::Segment { a: Vec3::ZERO, b: Vec3::X };
+    assert_eq!(seg.segment_samples(3).unwrap(), vec![Vec3::ZERO, Vec3::X * 0.5, Vec3::X]);
+}
+
+#[test]
+fn a_box_over_the_floor_shadows_a_point_light() {
+    let scene = scene_with(
+        "Point(position: (0.0, 3.0, 0.0))",
+        "Object(mesh: Plane(size: (10.0, 10.0))), Object(mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (0.0, 1.0, 0.0)))",
+    );
+    let vis = Visibility::new(&scene);
+    let light = &scene.lights[0];
+    assert_eq!(vis.visible_fraction(Vec3::ZERO, light, 4, 0), 0.0);
+    assert_eq!(vis.visible_fraction(Vec3::new(4.0, 0.0, 0.0), light, 4, 0), 1.0);
+    assert_eq!(vis.visible_fraction_at(Vec3::ZERO, Vec3::Y, light, 4, 0), 0.0);
+    assert_eq!(vis.visible_fraction_at(Vec3::new(4.0, 0.0, 0.0), Vec3::Y, light, 4, 0), 1.0);
+    assert!(vis.occluded(Vec3::ZERO, Vec3::new(0.0, 3.0, 0.0)));
+    assert!(!vis.occluded(Vec3::new(4.0, 0.0, 0.0), Vec3::new(0.0, 3.0, 0.0)));
+    // The top of the box sees the light; its underside does not.
+    assert_eq!(vis.visible_fraction_at(Vec3::new(0.1, 1.5, 0.0), Vec3::Y, light, 4, 0), 1.0);
+    assert_eq!(vis.visible_fraction_at(Vec3::new(0.1, 0.5, 0.0), -Vec3::Y, light, 4, 0), 0.0);
+    // No surface: lit.
+    let v = vis.visible_fractions(&[Vec3::NAN, Vec3::ZERO, Vec3::new(4.0, 0.0, 0.0)], &[], light, 4);
+    assert_eq!(v, vec![1.0, 0.0, 1.0]);
+}
+
+#[test]
+fn half_blocked_lights_are_half_visible() {
+    // A large quad at height 1 over x < 0 and a receiver at the origin: any light centred
+    // straight above at height 2 is cut exactly in half, and with an even number of
+    // strata per axis the strata split exactly on the cut line for the rectangle, the
+    // disk (concentric map) and the segment.
+    let occluder = "Object(mesh: Quad(a: (-10.0, 1.0, -10.0), b: (-10.0, 1.0, 10.0), c: (0.0, 1.0, 10.0), d: (0.0, 1.0, -10.0)))";
+    let lights = [
+        "Rectangle(center: (0.0, 2.0, 0.0), normal: (0.0, -1.0, 0.0), u_axis: (1.0, 0.0, 0.0), half_width: 0.5, half_height: 0.3)",
+        "Disk(center: (0.0, 2.0, 0.0), normal: (0.0, -1.0, 0.0), radius: 0.5)",
+        "Segment(a: (-0.5, 2.0, 0.0), b: (0.5, 2.0, 0.0))",
+    ];
+    for light in lights {
+        let scene = scene_with(light, occluder);
+        let vis = Visibility::new(&scene);
+        for seed in 0..4 {
+            assert_eq!(vis.visible_fraction(Vec3::ZERO, &scene.lights[0], 8, seed), 0.5, "{light}");
+        }
+    }
+    // A sphere's cone is sampled in polar coordinates: about half, within sampling error.
+    let scene = scene_with("Sphere(center: (0.0, 2.0, 0.0), radius: 0.5)", occluder);
+    let vis = Visibility::new(&scene);
+    let v = vis.visible_fraction(Vec3::ZERO, &scene.lights[0], 32, 7);
+    assert!((v - 0.5).abs() < 0.02, "{v}");
+    // Inside the sphere light: all of it is visible.
+    assert_eq!(vis.visible_fraction(Vec3::new(0.0, 2.1, 0.0), &scene.lights[0], 4, 0), 1.0);
+}
+
+#[test]
+fn results_are_deterministic_and_seeds_independent() {
+    let scene = bundled("contact");
+    let vis = Visibility::new(&scene);
+    let light = &scene.lights[0];
+    // A grid on the floor behind the boxes, where their shadows fall.
+    let points: Vec<Vec3> = (0..100)
+        .map(|i| Vec3::new(-1.5 + 0.3 * (i % 10) as f32, 0.0, -0.5 - 0.15 * (i / 10) as f32))
+        .collect();
+    let normals = vec![Vec3::Y; points.len()];
+    let a = vis.visible_fractions(&points, &normals, light, 4);
+    let b = vis.visible_fractions(&points, &normals, light, 4);
+    assert_eq!(a, b);
+    let c = vis.visible_fractions_seeded(&points, &normals, light, 4, 99);
+    assert!(a.iter().zip(&c).any(|(x, y)| x != y), "another seed draws other samples");
+    assert!(a.iter().any(|&v| v > 0.0 && v < 1.0), "the row crosses a penumbra");
+}
+
+/// Area of the part of a unit disk on the far side of a chord at signed distance `u`
+/// from its centre, as a fraction of the disk: 1 at u >= 1, 0 at u <= -1.
+fn disk_fraction(u: f64) -> f64 {
+    let u = u.clamp(-1.0, 1.0);
+    0.5 + (u * (1.0 - u * u).sqrt() + u.asin()) / std::f64::consts::PI
+}
+
+#[test]
+fn a_straight_edge_under_a_distant_disk_matches_the_closed_form() {
+    let scene = bundled("edge");
+    let vis = Visibility::new(&scene);
+    let light = &scene.lights[0];
+    let Light::DistantDisk { angle_degrees, .. } = light else {
+        panic!("edge.ron has a distant disk")
+    };
+    // The occluder: every triangle above the floor; its edge is its largest x.
+    let occluder: Vec<Vec3> = scene.triangles().iter().flatten().copied().filter(|p| p.y > 1e-3).collect();
+    let h = occluder[0].y as f64;
+    let edge_x = occluder.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max) as f64;
+    assert!(occluder.iter().all(|p| (p.y as f64 - h).abs() < 1e-6), "a flat occluder");
+    // Receivers on the floor (y = 0) at h below the edge; the light is straight overhead,
+    // so the shadow line is at x = edge_x and the penumbra's half-width is h tan(theta / 2).
+    let w = h * (0.5 * (*angle_degrees as f64).to_radians()).tan();
+    let n = 32u32;
+    let samples = f64::from(n * n);
+    let mut worst: f64 = 0.0;
+    for k in -30..=30 {
+        let s = 1.3 * w * k as f64 / 25.0;
+        let z = 0.01 * k as f32;
+        let x = Vec3::new((edge_x + s) as f32, 0.0, z);
+        let f = disk_fraction(s / w);
+        let est = vis.visible_fraction_at(x, Vec3::Y, light, n, k as u64) as f64;
+        // Tolerance. Stratified sampling is unbiased and its variance is never above that
+        // of N = n^2 independent samples (proportional allocation), so 3 binomial standard
+        // errors sqrt(f (1 - f) / N) bound the random error with margin; in fact only the
+        // O(n) strata that the chord cuts contribute any variance. Near u = +-1 the
+        // binomial term vanishes while a few rim strata can still be cut: 2 / N allows
+        // two samples to fall either way there. The f32 geometry (ray offset 1e-4 of the
+        // scene size along a vertical ray, 1e-6 barycentric tolerance) moves the chord by
+        // less than 1e-5 w, far below both terms.
+        let tol = 3.0 * (f * (1.0 - f) / samples).sqrt() + 2.0 / samples;
+        assert!(
+            (est - f).abs() <= tol,
+            "s = {s:.5} (u = {:.3}): estimate {est:.4}, closed form {f:.4}, tolerance {tol:.4}",
+            s / w
+        );
+        worst = worst.max((est - f).abs());
+    }
+    assert!(worst > 0.0, "a penumbra was sampled");
+}
+
+/// Throughput of the batch query (run with `cargo test --release -p sshc-runtime --test
+/// scenes -- --ignored --nocapture visibility_throughput`): 10^4 floor points around the
+/// bunny, 8 x 8 samples of its rectangle light. Without normals the floor can never be
+/// skipped, so every point casts all 64 rays; with normals, most lit points cast none.
+#[test]
+#[ignore]
+fn visibility_throughput() {
+    let scene = bundled("bunny");
+    let t = std::time::Instant::now();
+    let vis = Visibility::new(&scene);
+    let build = t.elapsed();
+    let light = &scene.lights[0];
+    let points: Vec<Vec3> = (0..10_000)
+        .map(|i| Vec3::new(-0.8 + 2.0 * (i % 100) as f32 / 100.0, 0.0, -1.2 + 2.0 * (i / 100) as f32 / 100.0))
+        .collect();
+    let normals = vec![Vec3::Y; points.len()];
+    let _ = vis.visible_fractions(&points[..1000], &[], light, 8); // warm up the thread pool
+    let runs = 5;
+    let t = std::time::Instant::now();
+    let mut shadowed = 0;
+    for seed in 0..runs {
+        let v = vis.visible_fractions_seeded(&points, &[], light, 8, seed);
+        shadowed = v.iter().filter(|&&v| v < 1.0).count();
+    }
+    let all = t.elapsed().as_secs_f64() / runs as f64;
+    let t = std::time::Instant::now();
+    for seed in 0..runs {
+        vis.visible_fractions_seeded(&points, &normals, light, 8, seed);
+    }
+    let skipping = t.elapsed().as_secs_f64() / runs as f64;
+    let rays = (points.len() * 64) as f64;
+    println!(
+        "bunny ({} triangles, BVH built in {build:?}), {} rayon threads: {} points x 64 rays in {:.1} ms = {:.2} M rays/s ({shadowed} points not fully lit); with normals (skip test) {:.1} ms = {:.2} M points/s",
+        vis.triangle_count(),
+        rayon::current_num_threads(),
+        points.len(),
+        all * 1e3,
+        rays / all / 1e6,
+        skipping * 1e3,
+        points.len() as f64 / skipping / 1e6
+    );
+}
