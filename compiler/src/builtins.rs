@@ -99,6 +99,10 @@ pub enum Input {
     /// World size of one shadow-map texel at the receiver, in normalised depth units
     /// (for slope-scaled bias in texels).
     TexelDepth,
+    /// How much the receiver's normalised depth changes over one shadow-map texel, along
+    /// its steepest direction: the receiver-plane depth gradient from screen-space
+    /// derivatives (Isidoro 2006), clamped to [0, 0.1]. Slope-scaled bias in texels.
+    DepthSlope,
     /// Shadow-map resolution in texels.
     ShadowSize,
     /// Near and far planes of the light's depth range, world units.
@@ -109,7 +113,7 @@ pub enum Input {
 }
 
 impl Input {
-    pub const ALL: [Input; 12] = [
+    pub const ALL: [Input; 13] = [
         Input::D,
         Input::DWorld,
         Input::Uv,
@@ -118,6 +122,7 @@ impl Input {
         Input::Slope,
         Input::TexelSize,
         Input::TexelDepth,
+        Input::DepthSlope,
         Input::ShadowSize,
         Input::Near,
         Input::Far,
@@ -134,6 +139,7 @@ impl Input {
             Input::Slope => "slope",
             Input::TexelSize => "texel_size",
             Input::TexelDepth => "texel_depth",
+            Input::DepthSlope => "depth_slope",
             Input::ShadowSize => "shadow_size",
             Input::Near => "near",
             Input::Far => "far",
@@ -167,6 +173,7 @@ impl Input {
             Input::Slope => (0.0, 100.0),
             Input::TexelSize => (1.0 / 16384.0, 1.0),
             Input::TexelDepth => (0.0, 1e4),
+            Input::DepthSlope => (0.0, 0.1),
             Input::ShadowSize => (1.0, 16384.0),
             Input::DWorld | Input::Near | Input::Far => (0.0, 1e4),
             Input::LightSize => (0.0, 1e4),
@@ -183,6 +190,9 @@ impl Input {
             Input::Slope => "tan of the angle between normal and light, clamped to [0, 100]",
             Input::TexelSize => "1 / shadow-map resolution",
             Input::TexelDepth => "world size of one shadow-map texel at the receiver, in normalised depth units",
+            Input::DepthSlope => {
+                "change of the receiver's normalised depth over one shadow-map texel (receiver-plane gradient), clamped to [0, 0.1]"
+            }
             Input::ShadowSize => "shadow-map resolution in texels",
             Input::Near => "near plane of the light's depth range (world units)",
             Input::Far => "far plane of the light's depth range (world units)",

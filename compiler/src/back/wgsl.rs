@@ -834,6 +834,15 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {
     // one shadow-map texel at the receiver, in normalised depth units
     let in_texel_depth = (frame.texel_world.x * in_d_world + frame.texel_world.y) * frame.depth_range.z;
     let in_base = vec2<i32>(floor(texel_pos));
+    // receiver-plane depth gradient over uv from screen-space derivatives (Isidoro 2006):
+    // solve [duv/dx; duv/dy] g = [dd/dx; dd/dy]; 0 where the Jacobian is singular
+    let duv_dx = dpdx(in_uv);
+    let duv_dy = dpdy(in_uv);
+    let dd_dx = dpdx(in_d);
+    let dd_dy = dpdy(in_d);
+    let det = duv_dx.x * duv_dy.y - duv_dx.y * duv_dy.x;
+    let g = vec2<f32>(dd_dx * duv_dy.y - duv_dx.y * dd_dy, duv_dx.x * dd_dy - dd_dx * duv_dy.x);
+    let in_depth_slope = select(0.0, min(length(g / det) * frame.shadow_size.z, 0.1), abs(det) > 1e-14);
 ",
     );
     s.push_str(&em.body);
