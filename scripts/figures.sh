@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Renders every bundled technique on scenes/bunny.ron into docs/images/ and measures
+# per-pass GPU times (median of repeated frames) into docs/gpu-times.md.
+# Usage: scripts/figures.sh [frames]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+frames=${1:-15}
+source scripts/setup.sh
+cargo build --release -p sshc --quiet
+mkdir -p docs/images
+out=docs/gpu-times.md
+{
+    echo "# GPU time per pass"
+    echo
+    echo "Each bundled technique on \`scenes/bunny.ron\` (256 x 256 camera, 512 x 512 shadow map),"
+    echo "median of $frames frames measured with timestamp queries, in milliseconds."
+    echo "Produced by \`scripts/figures.sh $frames\` on $(date -u +%Y-%m-%d)."
+    echo "On lavapipe (Mesa's CPU Vulkan driver) these times rank CPU rasterisation and texture"
+    echo "filtering on this 2-core machine, not GPUs; compare techniques only as ratios taken in"
+    echo "one run. The first frame of each run compiles pipelines and is included in the median's"
+    echo "population but not its middle."
+    echo
+} > "$out"
+for t in hard pcf vsm esm csm; do
+    log=$(./target/release/sshc render "techniques/$t.ron" --scene scenes/bunny.ron -o "docs/images/bunny-$t.png" --frames "$frames")
+    device=$(echo "$log" | sed -n 's/^device: //p')
+    {
+        echo "## $t"
+        echo
+        echo "Device: $device"
+        echo
+        echo "$log" | sed -n '/^| pass/,$p'
+        echo
+    } >> "$out"
+done
+echo "wrote docs/images/bunny-*.png and $out"
