@@ -93,6 +93,11 @@ fn footprint_grid(p: Vec3, n: Vec3, step: f32, k: i32) -> Vec<Vec3> {
 /// Shaded points whose light-centre visibility is the same everywhere within `footprint`
 /// shadow-map texels: (pixel, hidden).
 fn unambiguous(s: &Scene, f: &Frame, footprint: f32) -> Vec<(usize, bool)> {
+    unambiguous_with(s, f, &|_| footprint)
+}
+
+/// As [`unambiguous`], with a footprint (in texels) per pixel.
+fn unambiguous_with(s: &Scene, f: &Frame, footprint_of: &dyn Fn(usize) -> f32) -> Vec<(usize, bool)> {
     let vis = Visibility::new(s);
     let mut out = Vec::new();
     for (i, (pp, nn)) in f.position.rgba.iter().zip(&f.normal.rgba).enumerate() {
@@ -112,6 +117,10 @@ fn unambiguous(s: &Scene, f: &Frame, footprint: f32) -> Vec<(usize, bool)> {
         let h = centre_hidden(&vis, s, p, n);
         // half-texel spacing over the footprint
         let step = 0.5 * texel_world(s, p);
+        let footprint = footprint_of(i);
+        if !footprint.is_finite() {
+            continue;
+        }
         if footprint_grid(p, n, step, (2.0 * footprint).ceil() as i32)
             .into_iter()
             .all(|q| centre_hidden(&vis, s, q, n) == h)
@@ -276,6 +285,35 @@ fn rejected_graphs_say_why() {
     let _ = std::fs::remove_dir_all(&base);
 }
 
+/// Shadow-map texels between each pixel and its right and lower neighbours (the larger).
+fn texels_per_pixel(s: &Scene, f: &Frame) -> Vec<f32> {
+    let v = s.lights[0].view(s.bounds());
+    let n = s.shadow_map as f32;
+    let w = f.position.width as usize;
+    let uv: Vec<Option<glam::Vec2>> = f
+        .position
+        .rgba
+        .iter()
+        .map(|p| {
+            if p[0].is_nan() {
+                return None;
+            }
+            let c = v.view_proj * glam::Vec4::new(p[0], p[1], p[2], 1.0);
+            Some(glam::Vec2::new(c.x / c.w, c.y / c.w) * 0.5 * n)
+        })
+        .collect();
+    (0..uv.len())
+        .map(|i| {
+            let here = uv[i];
+            [i + 1, i + w, i.wrapping_sub(1), i.wrapping_sub(w)]
+                .into_iter()
+                .filter_map(|j| Some((here?, *uv.get(j)?)))
+                .filter_map(|(a, b)| b.map(|b| (a - b).length()))
+                .fold(0.0, f32::max)
+        })
+        .collect()
+}
+
 /// Largest change of visibility between horizontally or vertically adjacent pixels that
 /// both see a surface.
 fn largest_step(v: &[f32], surface: &[bool], w: usize) -> f32 {
@@ -340,5 +378,53 @@ fn soft_techniques_change_smoothly_across_the_edge() {
             g_step <= bound,
             "{t} {set:?}: step {g_step} between neighbouring pixels, above the truth's {t_step} + {quantum} + MC error"
         );
+    }
+}
+
+#[test]
+fn prefiltered_techniques_read_one_where_fully_lit_beyond_their_footprint() {
+    // VSM: p = 1 where d <= mean (Chebyshev applies behind the mean only), exactly.
+    // ESM: saturate(exp(-c (d - z))) = 1 where every z under the kernel is >= d, exactly.
+    // CSM: with the scale fix (fix = 2), saturate(2 f) = 1 wherever f >= 1/2, which holds on
+    //      lit receivers (d - z <= 0) up to the basis' unorm8 quantisation, bounded by 1/255
+    //      times the sum of |coefficients| (2 / pi * sum 1/(2k-1) < 1.3 for M = 4): tolerance
+    //      1.3 / 255. With the offset fix a lit surface reads the truncated, attenuated series
+    //      at d - z = -1/(2M) (0.96 for M = 4, alpha = 1; Annen fig. 6.1): by design, not 1.
+    // Footprint per pixel: the 3-texel blur, the bilinear lookup (1 texel), and for mip
+    // chains the texels one level of the trilinear lookup averages: the sampler picks level
+    // log2(texels per pixel) and blends with the next, so up to 2x the texels per pixel,
+    // measured from the neighbouring pixels' shadow-map coordinates.
+    let gpu = gpu();
+    for (t, set, tol) in [
+        ("vsm", vec![], 0.0f32),
+        ("esm", vec![], 0.0),
+        ("csm", vec![("fix", "2")], 1.3 / 255.0),
+    ] {
+        let c = compile(t, &set);
+        for sc in SCENES {
+            let s = scene(sc, 48, 512);
+            let f = render(&gpu, &c, &s);
+            let vis = f.visibility.channel(0);
+            let per_pixel = texels_per_pixel(&s, &f);
+            // pixels whose footprint exceeds 12 texels are too blurred to call (and costly)
+            let footprint = |i: usize| {
+                let t = 3.0 + 1.0 + 2.0 * per_pixel[i].max(1.0) + 1.0;
+                if t <= 12.0 { t } else { f32::INFINITY }
+            };
+            let lit: Vec<usize> = unambiguous_with(&s, &f, &footprint)
+                .into_iter()
+                .filter(|(_, h)| !h)
+                .map(|(i, _)| i)
+                .collect();
+            let wrong: Vec<(usize, f32)> = lit.iter().filter(|i| vis[**i] < 1.0 - tol).map(|i| (*i, vis[*i])).collect();
+            eprintln!("{t} {sc}: {} lit pixels checked, {} wrong", lit.len(), wrong.len());
+            assert!(
+                wrong.is_empty(),
+                "{t} on {sc}: {} of {} fully lit pixels read below 1, e.g. {:?}",
+                wrong.len(),
+                lit.len(),
+                &wrong[..wrong.len().min(5)]
+            );
+        }
     }
 }
