@@ -106,6 +106,21 @@ pub(crate) fn report(diags: &Diagnostics, path: &Path, source: &str) {
     }
 }
 
+/// Compile the technique of `common`, printing the IR dump asked for and every diagnostic.
+fn compile_reported(common: &Common) -> Result<sshc::Compiled, String> {
+    let source = read(&common.technique)?;
+    let outcome = sshc::compile_with_dump(&source, &options(common));
+    if let Some(d) = &outcome.dump {
+        print!("{d}");
+    }
+    let c = outcome.result.map_err(|d| {
+        report(&d, &common.technique, &source);
+        String::new()
+    })?;
+    report(&Diagnostics(c.warnings.clone()), &common.technique, &source);
+    Ok(c)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
@@ -124,16 +139,7 @@ fn run(cli: Cli) -> Result<(), String> {
         #[cfg(feature = "gpu")]
         Command::Render(args) => render::render(args),
         Command::Compile { common, out } => {
-            let source = read(&common.technique)?;
-            let outcome = sshc::compile_with_dump(&source, &options(&common));
-            if let Some(d) = &outcome.dump {
-                print!("{d}");
-            }
-            let c = outcome.result.map_err(|d| {
-                report(&d, &common.technique, &source);
-                String::new()
-            })?;
-            report(&Diagnostics(c.warnings.clone()), &common.technique, &source);
+            let c = compile_reported(&common)?;
             let files = sshc::write_outputs(&c, &out).map_err(|e| format!("error: cannot write to `{}`: {e}", out.display()))?;
             for f in files {
                 println!("wrote {}", f.display());
@@ -144,11 +150,14 @@ fn run(cli: Cli) -> Result<(), String> {
             let source = read(&common.technique)?;
             let opts = options(&common);
             if opts.dump_after.is_some_and(|p| p > DumpPhase::Check) {
+                let phase = opts
+                    .dump_after
+                    .and_then(|p| clap::ValueEnum::to_possible_value(&p))
+                    .map(|v| v.get_name().to_string())
+                    .unwrap_or_default();
                 return Err(format!(
-                    "error: `sshc check` stops after the check phase; use `sshc compile --dump-ir-after {:?}`",
-                    opts.dump_after.unwrap_or(DumpPhase::Check)
-                )
-                .to_lowercase());
+                    "error: `sshc check` stops after the check phase; use `sshc compile --dump-ir-after {phase}`"
+                ));
             }
             let (result, dump) = sshc::check_with_dump(&source, &opts);
             if let Some(d) = &dump {
@@ -162,16 +171,7 @@ fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Explain { common } => {
-            let source = read(&common.technique)?;
-            let outcome = sshc::compile_with_dump(&source, &options(&common));
-            if let Some(d) = &outcome.dump {
-                print!("{d}");
-            }
-            let c = outcome.result.map_err(|d| {
-                report(&d, &common.technique, &source);
-                String::new()
-            })?;
-            report(&Diagnostics(c.warnings.clone()), &common.technique, &source);
+            let c = compile_reported(&common)?;
             print!("{}", sshc::explain::explain(&c));
             Ok(())
         }

@@ -121,6 +121,15 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         dump(&ex, dir).map_err(rt)?;
     }
     println!("device: {}", gpu.describe());
+    // Every texture is allocated when the scene is bound and lives for the whole frame, so
+    // the peak is the sum.
+    let memory = ex.memory().map_err(rt)?;
+    let total: u64 = memory.iter().map(|(_, b)| b).sum();
+    println!("| texture | bytes |\n|---|---|");
+    for (name, bytes) in &memory {
+        println!("| {name} | {bytes} |");
+    }
+    println!("| peak (all textures resident) | {total} |");
     println!("| pass | GPU ms (median of {} frame(s)) |\n|---|---|", all.len());
     for (i, n) in names.iter().enumerate() {
         let mut v: Vec<f64> = all.iter().filter_map(|f| f[i]).collect();

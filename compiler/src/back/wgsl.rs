@@ -398,6 +398,27 @@ fn layer_chunks(t: &Texture, limits: &Limits) -> Vec<Vec<u32>> {
     (0..t.layers).collect::<Vec<_>>().chunks(per as usize).map(|c| c.to_vec()).collect()
 }
 
+/// A full-screen step writing `layers` of `texture`.
+fn fullscreen_step(entry: String, draw: Draw, reads: Vec<Binding>, texture: &str, layers: &[u32]) -> Step {
+    Step {
+        vertex: Some("vs_fullscreen".into()),
+        fragment: Some(entry),
+        compute: None,
+        draw,
+        reads,
+        writes: layers
+            .iter()
+            .map(|&layer| Target {
+                texture: texture.to_string(),
+                layer,
+            })
+            .collect(),
+        params: false,
+        sampler: false,
+        cost: OpCount::default(),
+    }
+}
+
 fn out_struct(name: &str, n: usize) -> String {
     let mut s = format!("struct {name} {{\n");
     for i in 0..n {
@@ -541,23 +562,9 @@ fn map(ir: &Ir, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step>), D
             );
             decl_emitter.bindings = em.bindings.clone();
             decl_emitter.uses_params |= em.uses_params;
-            steps.push(Step {
-                vertex: Some("vs_fullscreen".into()),
-                fragment: Some(entry),
-                compute: None,
-                draw: Draw::FullScreen,
-                reads: vec![],
-                writes: chunk
-                    .iter()
-                    .map(|&l| Target {
-                        texture: tex.name.clone(),
-                        layer: l,
-                    })
-                    .collect(),
-                params: em.uses_params,
-                sampler: false,
-                cost: OpCount::default(),
-            });
+            let mut step = fullscreen_step(entry, Draw::FullScreen, vec![], &tex.name, &chunk);
+            step.params = em.uses_params;
+            steps.push(step);
         }
     }
     let bindings = decl_emitter.graph_bindings();
@@ -701,27 +708,17 @@ fn filter(
                     (true, false) => (tmp.clone(), tex.name.clone()),
                     _ => (src_tex.name.clone(), tex.name.clone()),
                 };
-                steps.push(Step {
-                    vertex: Some("vs_fullscreen".into()),
-                    fragment: Some(entry),
-                    compute: None,
-                    draw: Draw::FullScreen,
-                    reads: vec![Binding {
+                steps.push(fullscreen_step(
+                    entry,
+                    Draw::FullScreen,
+                    vec![Binding {
                         binding: 0,
                         texture: read,
                         view: View::Base,
                     }],
-                    writes: chunk
-                        .iter()
-                        .map(|&l| Target {
-                            texture: write.clone(),
-                            layer: l,
-                        })
-                        .collect(),
-                    params: false,
-                    sampler: false,
-                    cost: OpCount::default(),
-                });
+                    &write,
+                    chunk,
+                ));
             }
         }
     }
@@ -760,27 +757,17 @@ fn mipmap(ir: &Ir, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Result<(St
                 let _ = writeln!(s, "    out.o{oi} = {v};");
             }
             s.push_str("    return out;\n}\n");
-            steps.push(Step {
-                vertex: Some("vs_fullscreen".into()),
-                fragment: Some(entry),
-                compute: None,
-                draw: Draw::MipLevels,
-                reads: vec![Binding {
+            steps.push(fullscreen_step(
+                entry,
+                Draw::MipLevels,
+                vec![Binding {
                     binding: 0,
                     texture: tex.name.clone(),
                     view: View::PreviousLevel,
                 }],
-                writes: chunk
-                    .iter()
-                    .map(|&l| Target {
-                        texture: tex.name.clone(),
-                        layer: l,
-                    })
-                    .collect(),
-                params: false,
-                sampler: false,
-                cost: OpCount::default(),
-            });
+                &tex.name,
+                &chunk,
+            ));
         }
     }
     Ok((s, steps))
