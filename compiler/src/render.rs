@@ -58,7 +58,7 @@ fn rt(e: RuntimeError) -> String {
 }
 
 pub fn render(a: RenderArgs) -> Result<(), String> {
-    let mut scene = Scene::load(&a.scene).map_err(|e| format!("error: {e}"))?;
+    let mut scene = Scene::load(&a.scene).map_err(|e| e.to_string())?;
     if let Some(n) = a.shadow_map {
         scene.shadow_map = n;
     }
@@ -151,7 +151,7 @@ fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
     };
     std::fs::create_dir_all(dir).map_err(io)?;
     let levels_of = |mips: bool, size: u32| if mips { sshc_runtime::gpu::mip_count(size) } else { 1 };
-    let size = ex.read_texture(&ex.graph.textures[0].name, 0, 0)?.width;
+    let size = ex.shadow_size()?;
     for t in &ex.graph.textures {
         for layer in 0..t.layers {
             for level in 0..levels_of(t.mips, size) {

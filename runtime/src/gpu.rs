@@ -1046,6 +1046,11 @@ impl<'g> Executor<'g> {
             .collect())
     }
 
+    /// The bound scene's shadow-map resolution.
+    pub fn shadow_size(&self) -> Result<u32> {
+        Ok(self.bound()?.shadow_size)
+    }
+
     pub fn gpu(&self) -> &Gpu {
         self.gpu
     }
