@@ -424,3 +424,29 @@ fn prefiltered_techniques_read_one_where_fully_lit_beyond_their_footprint() {
         }
     }
 }
+
+#[test]
+fn gpu_times_and_memory_are_reported_per_pass_and_texture() {
+    let gpu = gpu();
+    let c = compile("csm", &[]);
+    let s = scene("contact", 32, 64);
+    let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+    ex.bind_scene(&sshc_runtime::bind::scene_inputs(&s).unwrap()).unwrap();
+    let times = ex.run_frame().unwrap();
+    let names: Vec<&str> = times.passes.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["depth", "basis", "blur", "mips", "shade"]);
+    if gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
+        for (n, t) in &times.passes {
+            let t = t.unwrap_or_else(|| panic!("pass {n} has no GPU time"));
+            assert!(t.is_finite() && t >= 0.0, "pass {n}: {t} ms");
+        }
+    }
+    // CSM M = 4 at unorm8: 8 basis channels in 2 RGBA8 layers; with a full mip chain the
+    // blurred copy takes 4/3 of its level 0; the blur's scratch is F16 (8 bytes x 2 layers).
+    let texels = 64u64 * 64;
+    let memory: std::collections::HashMap<String, u64> = ex.memory().unwrap().into_iter().collect();
+    assert_eq!(memory["shadow"], texels * 4);
+    assert_eq!(memory["basis"], texels * 4 * 2);
+    assert_eq!(memory["blurred"], texels * 4 * 2 * 4 / 3);
+    assert_eq!(memory["blurred_tmp"], texels * 8 * 2);
+}
