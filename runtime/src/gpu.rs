@@ -81,6 +81,11 @@ pub struct Gpu {
     pub features: wgpu::Features,
     pub limits: wgpu::Limits,
     uncaptured: Arc<Mutex<Vec<String>>>,
+    /// Pipelines by what determines them (shader source, entry points, formats, bindings):
+    /// lavapipe compiles each pipeline through LLVM, so executors of one technique on
+    /// several scenes share them.
+    pipelines: Mutex<HashMap<u64, Arc<StepPipeline>>>,
+    modules: Mutex<HashMap<u64, wgpu::ShaderModule>>,
 }
 
 impl Gpu {
@@ -121,7 +126,15 @@ impl Gpu {
             features,
             limits,
             uncaptured,
+            pipelines: Mutex::new(HashMap::new()),
+            modules: Mutex::new(HashMap::new()),
         })
+    }
+
+    /// Number of pipelines built on this device so far (each is built once per distinct
+    /// shader, entry points, formats and bindings).
+    pub fn cached_pipelines(&self) -> usize {
+        self.pipelines.lock().map(|c| c.len()).unwrap_or(0)
     }
 
     /// "name (backend, driver)" for reports.
@@ -342,8 +355,9 @@ struct Bound {
 pub struct Executor<'g> {
     gpu: &'g Gpu,
     pub graph: PassGraph,
-    modules: HashMap<String, wgpu::ShaderModule>,
-    pipelines: Vec<Vec<StepPipeline>>,
+    /// Shader module and the hash of its source, by file name.
+    modules: HashMap<String, (wgpu::ShaderModule, u64)>,
+    pipelines: Vec<Vec<Arc<StepPipeline>>>,
     params: Vec<u8>,
     params_buf: Option<wgpu::Buffer>,
     sampler: wgpu::Sampler,
@@ -398,13 +412,24 @@ impl<'g> Executor<'g> {
                 message,
             })?;
             if !modules.contains_key(&p.shader) {
-                let m = gpu.scoped(&format!("shader `{}`", p.shader), || {
-                    gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                        label: Some(&p.shader),
-                        source: wgpu::ShaderSource::Wgsl(src.into()),
-                    })
-                })?;
-                modules.insert(p.shader.clone(), m);
+                let key = hash_of(&[src]);
+                let cached = gpu.modules.lock().ok().and_then(|c| c.get(&key).cloned());
+                let m = match cached {
+                    Some(m) => m,
+                    None => {
+                        let m = gpu.scoped(&format!("shader `{}`", p.shader), || {
+                            gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                                label: Some(&p.shader),
+                                source: wgpu::ShaderSource::Wgsl(src.into()),
+                            })
+                        })?;
+                        if let Ok(mut c) = gpu.modules.lock() {
+                            c.insert(key, m.clone());
+                        }
+                        m
+                    }
+                };
+                modules.insert(p.shader.clone(), (m, key));
             }
         }
         for t in &graph.textures {
@@ -500,10 +525,28 @@ impl<'g> Executor<'g> {
         let filterable_floats = gpu.features.contains(wgpu::Features::FLOAT32_FILTERABLE);
         let mut all = Vec::new();
         for pass in &self.graph.passes {
-            let module = &self.modules[&pass.shader];
+            let (module, source_key) = &self.modules[&pass.shader];
             let mut steps = Vec::new();
             for step in &pass.steps {
                 let ctx = format!("pipeline of pass `{}` ({:?})", pass.name, step.fragment);
+                let formats: Vec<String> = match step.draw {
+                    Draw::SceneFromCamera => CAMERA_FORMATS.iter().map(|f| format!("{f:?}")).collect(),
+                    _ => step
+                        .writes
+                        .iter()
+                        .map(|t| self.texture_format(&t.texture).map(|f| format!("{f:?}")))
+                        .collect::<Result<_>>()?,
+                };
+                let key = hash_of(&[
+                    &source_key.to_string(),
+                    &format!("{:?}{:?}{:?}", step.vertex, step.fragment, step.draw),
+                    &formats.join(","),
+                    &format!("{}:{}:{}:{}", step.reads.len(), step.params, step.sampler, filterable_floats),
+                ]);
+                if let Some(p) = gpu.pipelines.lock().ok().and_then(|c| c.get(&key).cloned()) {
+                    steps.push(p);
+                    continue;
+                }
                 let group0 = group0_layout(gpu, step);
                 let group1 = if step.reads.is_empty() {
                     None
@@ -604,7 +647,11 @@ impl<'g> Executor<'g> {
                         cache: None,
                     })
                 })?;
-                steps.push(StepPipeline { pipeline, group0, group1 });
+                let p = Arc::new(StepPipeline { pipeline, group0, group1 });
+                if let Ok(mut c) = gpu.pipelines.lock() {
+                    c.insert(key, p.clone());
+                }
+                steps.push(p);
             }
             all.push(steps);
         }
@@ -1054,6 +1101,13 @@ impl<'g> Executor<'g> {
     pub fn gpu(&self) -> &Gpu {
         self.gpu
     }
+}
+
+fn hash_of(parts: &[&str]) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    parts.hash(&mut h);
+    h.finish()
 }
 
 fn group0_layout(gpu: &Gpu, step: &Step) -> wgpu::BindGroupLayout {

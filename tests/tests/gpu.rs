@@ -7,8 +7,11 @@ use sshc_runtime::scene::Scene;
 use sshc_runtime::visibility::Visibility;
 use std::path::{Path, PathBuf};
 
-fn gpu() -> Gpu {
-    Gpu::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
+/// One device per test process: `cargo test` runs every test of this binary on it (and
+/// pipelines are cached on it); nextest gives each test its own process.
+fn gpu() -> &'static Gpu {
+    static GPU: std::sync::OnceLock<Gpu> = std::sync::OnceLock::new();
+    GPU.get_or_init(|| Gpu::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}")))
 }
 
 fn root() -> PathBuf {
@@ -449,4 +452,28 @@ fn gpu_times_and_memory_are_reported_per_pass_and_texture() {
     assert_eq!(memory["basis"], texels * 4 * 2);
     assert_eq!(memory["blurred"], texels * 4 * 2 * 4 / 3);
     assert_eq!(memory["blurred_tmp"], texels * 8 * 2);
+}
+
+#[test]
+fn pipelines_are_built_once_per_device() {
+    // Fresh device: this test must not share one with others (it counts its pipelines).
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let c = compile("vsm", &[]);
+    let steps: usize = c.graph.passes.iter().map(|p| p.steps.len()).sum();
+    let first = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+    assert_eq!(gpu.cached_pipelines(), steps);
+    drop(first);
+    // The same technique on another scene reuses every pipeline.
+    for sc in ["contact", "edge"] {
+        let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        ex.bind_scene(&sshc_runtime::bind::scene_inputs(&scene(sc, 16, 32)).unwrap())
+            .unwrap();
+        ex.run_frame().unwrap();
+    }
+    assert_eq!(gpu.cached_pipelines(), steps);
+    // Another variant adds only the pipelines whose shaders changed.
+    let c2 = compile("vsm", &[("K", "5")]);
+    let _ = Executor::new(&gpu, c2.graph.clone(), c2.shaders.clone()).unwrap();
+    let blur_steps = c2.graph.passes.iter().find(|p| p.name == "blur").map(|p| p.steps.len()).unwrap();
+    assert_eq!(gpu.cached_pipelines(), steps + blur_steps);
 }
