@@ -141,7 +141,7 @@ fn every_technique_on_every_scene_is_finite_and_in_range() {
         let c = compile(t, &[]);
         for sc in SCENES {
             let s = scene(sc, 48, 256);
-            let f = render(&gpu, &c, &s);
+            let f = render(gpu, &c, &s);
             for (i, v) in f.visibility.channel(0).iter().enumerate() {
                 assert!(
                     v.is_finite() && (0.0..=1.0).contains(v),
@@ -165,7 +165,7 @@ fn hard_shadow_map_is_zero_where_the_light_centre_is_hidden_and_one_where_it_is_
     let c = compile("hard", &[]);
     for sc in SCENES {
         let s = scene(sc, 48, 512);
-        let f = render(&gpu, &c, &s);
+        let f = render(gpu, &c, &s);
         let checked = unambiguous(&s, &f, 6.0);
         assert!(checked.len() > 100, "{sc}: only {} unambiguous pixels", checked.len());
         let vis = f.visibility.channel(0);
@@ -188,7 +188,7 @@ fn pcf_is_one_where_lit_and_zero_where_hidden_beyond_its_footprint() {
     let c = compile("pcf", &[("N", "3")]);
     for sc in SCENES {
         let s = scene(sc, 48, 512);
-        let f = render(&gpu, &c, &s);
+        let f = render(gpu, &c, &s);
         let checked = unambiguous(&s, &f, 10.0);
         let vis = f.visibility.channel(0);
         // bilinear weights (1 - f) + f sum to 1 up to f32 rounding of the products
@@ -214,7 +214,7 @@ fn shadow_maps_of_one_texel_and_2048_squared_render() {
     let c = compile("hard", &[]);
     for n in [1, 2048] {
         let s = scene("contact", 32, n);
-        let f = render(&gpu, &c, &s);
+        let f = render(gpu, &c, &s);
         assert!(
             f.visibility.channel(0).iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)),
             "shadow map {n}"
@@ -236,13 +236,13 @@ fn rejected_graphs_say_why() {
 
     // A compiled graph loads from its folder.
     let ok = write_compiled(&c, &base.join("ok"));
-    Executor::load(&gpu, &ok).unwrap_or_else(|e| panic!("{e}"));
+    Executor::load(gpu, &ok).unwrap_or_else(|e| panic!("{e}"));
 
     // Another schema version.
     let g = write_compiled(&c, &base.join("version"));
     let text = std::fs::read_to_string(&g).unwrap().replacen("version: 1", "version: 2", 1);
     std::fs::write(&g, text).unwrap();
-    let e = Executor::load(&gpu, &g).err().expect("version 2 must be refused");
+    let e = Executor::load(gpu, &g).err().expect("version 2 must be refused");
     assert!(
         matches!(e, RuntimeError::Graph(sshc_runtime::GraphError::Version { found: 2, expected: 1 })),
         "{e}"
@@ -254,7 +254,7 @@ fn rejected_graphs_say_why() {
         .unwrap()
         .replace("\"hard.shade.wgsl\"", "\"../ok/hard.shade.wgsl\"");
     std::fs::write(&g, text).unwrap();
-    let e = Executor::load(&gpu, &g).err().expect("a path leaving the folder must be refused");
+    let e = Executor::load(gpu, &g).err().expect("a path leaving the folder must be refused");
     assert!(matches!(e, RuntimeError::Graph(sshc_runtime::GraphError::Path { .. })), "{e}");
 
     // A link that leaves the folder.
@@ -262,7 +262,7 @@ fn rejected_graphs_say_why() {
     let shade = g.parent().unwrap().join("hard.shade.wgsl");
     std::fs::remove_file(&shade).unwrap();
     std::os::unix::fs::symlink(base.join("ok").join("hard.shade.wgsl"), &shade).unwrap();
-    let e = Executor::load(&gpu, &g).err().expect("a link leaving the folder must be refused");
+    let e = Executor::load(gpu, &g).err().expect("a link leaving the folder must be refused");
     assert!(e.to_string().contains("outside the graph's folder"), "{e}");
 
     // A shader that does not validate.
@@ -270,11 +270,11 @@ fn rejected_graphs_say_why() {
     let shade = g.parent().unwrap().join("hard.shade.wgsl");
     let text = std::fs::read_to_string(&shade).unwrap().replace("let vis = ", "let vis: i32 = ");
     std::fs::write(&shade, text).unwrap();
-    let e = Executor::load(&gpu, &g).err().expect("an invalid shader must be refused");
+    let e = Executor::load(gpu, &g).err().expect("an invalid shader must be refused");
     assert!(matches!(e, RuntimeError::Shader { .. }), "{e}");
 
     // A shadow map one texel above the device's limit is refused before allocation.
-    let mut ex = Executor::load(&gpu, &ok).unwrap();
+    let mut ex = Executor::load(gpu, &ok).unwrap();
     let mut s = scene("contact", 16, 16);
     s.shadow_map = gpu.limits.max_texture_dimension_2d + 1;
     let e = ex
@@ -353,7 +353,7 @@ fn soft_techniques_change_smoothly_across_the_edge() {
         ("csm", vec![], 1.0 / 255.0),
     ] {
         let c = compile(t, &set);
-        let f = render(&gpu, &c, &s);
+        let f = render(gpu, &c, &s);
         let pos: Vec<Vec3> = f.position.rgba.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
         let nrm: Vec<Vec3> = f.normal.rgba.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
         let surface: Vec<bool> = pos.iter().map(|p| p.x.is_finite()).collect();
@@ -402,7 +402,7 @@ fn prefiltered_techniques_read_one_where_fully_lit_beyond_their_footprint() {
         let c = compile(t, &set);
         for sc in SCENES {
             let s = scene(sc, 48, 512);
-            let f = render(&gpu, &c, &s);
+            let f = render(gpu, &c, &s);
             let vis = f.visibility.channel(0);
             let per_pixel = texels_per_pixel(&s, &f);
             // pixels whose footprint exceeds 12 texels are too blurred to call (and costly)
@@ -433,7 +433,7 @@ fn gpu_times_and_memory_are_reported_per_pass_and_texture() {
     let gpu = gpu();
     let c = compile("csm", &[]);
     let s = scene("contact", 32, 64);
-    let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
     ex.bind_scene(&sshc_runtime::bind::scene_inputs(&s).unwrap()).unwrap();
     let times = ex.run_frame().unwrap();
     let names: Vec<&str> = times.passes.iter().map(|(n, _)| n.as_str()).collect();
