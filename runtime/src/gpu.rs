@@ -456,6 +456,25 @@ impl<'g> Executor<'g> {
                 )));
             }
         }
+        // Params: the uniform must fit the device, and every field must lie inside it.
+        let max_uniform = gpu.limits.max_uniform_buffer_binding_size;
+        if graph.params_size as u64 > max_uniform || graph.params_size % 4 != 0 {
+            return Err(RuntimeError::Limit {
+                what: "the Params uniform (bytes, a multiple of 4)".into(),
+                needed: graph.params_size as u64,
+                limit: max_uniform,
+            });
+        }
+        for p in &graph.params {
+            if let Some(off) = p.offset
+                && (off % 4 != 0 || off as u64 + 4 > graph.params_size as u64)
+            {
+                return Err(RuntimeError::Param(format!(
+                    "param `{}` lies at byte {off}, outside the {}-byte Params uniform",
+                    p.name, graph.params_size
+                )));
+            }
+        }
         let params = default_params(&graph);
         let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("sshc linear clamp"),

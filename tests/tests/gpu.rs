@@ -273,6 +273,22 @@ fn rejected_graphs_say_why() {
     let e = Executor::load(gpu, &g).err().expect("an invalid shader must be refused");
     assert!(matches!(e, RuntimeError::Shader { .. }), "{e}");
 
+    // A Params uniform larger than the device allows, and a param outside the uniform.
+    let mut g = c.graph.clone();
+    g.params_size = u32::try_from(gpu.limits.max_uniform_buffer_binding_size + 16).unwrap_or(u32::MAX);
+    let e = Executor::new(gpu, g, c.shaders.clone())
+        .err()
+        .expect("an oversized uniform must be refused");
+    assert!(matches!(e, RuntimeError::Limit { .. }), "{e}");
+    let mut g = c.graph.clone();
+    if let Some(p) = g.params.iter_mut().find(|p| p.offset.is_some()) {
+        p.offset = Some(g.params_size);
+    }
+    let e = Executor::new(gpu, g, c.shaders.clone())
+        .err()
+        .expect("a param outside the uniform must be refused");
+    assert!(matches!(e, RuntimeError::Param(_)), "{e}");
+
     // A shadow map one texel above the device's limit is refused before allocation.
     let mut ex = Executor::load(gpu, &ok).unwrap();
     let mut s = scene("contact", 16, 16);
