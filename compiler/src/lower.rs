@@ -32,7 +32,26 @@ struct Lowerer<'s, 'a> {
 
 type Lowered = (H, bool);
 
-impl Lowerer<'_, '_> {
+impl<'s, 'a> Lowerer<'s, 'a> {
+    fn new(
+        sym: &'s Symbols<'a>,
+        arena: &'s mut Arena,
+        channel_ids: &'s [ChannelId],
+        expansions: &'s [IrExpansion],
+        shade_reads: Option<Vec<(Item, ResId)>>,
+        const_only: bool,
+    ) -> Self {
+        Lowerer {
+            sym,
+            arena,
+            locals: vec![],
+            channel_ids,
+            expansions,
+            shade_reads,
+            const_only,
+        }
+    }
+
     fn err(span: Span, msg: impl Into<String>, label: impl Into<String>) -> Diagnostic {
         Diagnostic::error(Phase::Lower, msg).at(span, label)
     }
@@ -314,15 +333,7 @@ impl Lowerer<'_, '_> {
 /// Evaluate an expression that must be known at compile time (kernel sizes, series bounds).
 pub fn const_eval(sym: &Symbols, e: &Expr) -> Result<ConstValue, Diagnostic> {
     let mut arena = Arena::default();
-    let mut l = Lowerer {
-        sym,
-        arena: &mut arena,
-        locals: vec![],
-        channel_ids: &[],
-        expansions: &[],
-        shade_reads: None,
-        const_only: true,
-    };
+    let mut l = Lowerer::new(sym, &mut arena, &[], &[], None, true);
     let (h, _) = l.expr(e)?;
     arena.as_const(h).ok_or_else(|| {
         Diagnostic::error(Phase::Check, "this value must be known at compile time")
@@ -369,15 +380,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
     // Channel values (map side).
     for (i, c) in t.channels.iter().enumerate() {
         if let Some(v) = &c.value {
-            let mut l = Lowerer {
-                sym,
-                arena: &mut arena,
-                locals: vec![],
-                channel_ids: &channel_ids,
-                expansions: &[],
-                shade_reads: None,
-                const_only: false,
-            };
+            let mut l = Lowerer::new(sym, &mut arena, &channel_ids, &[], None, false);
             let lv = l.expr(v).map_err(Diagnostics::from)?;
             channels[i].value = Some(l.coerce(lv, Ty::F32));
         }
@@ -386,15 +389,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
     // Expansions: one channel per (term, k).
     let mut expansions = Vec::new();
     for (ei, e) in t.expansions.iter().enumerate() {
-        let mut l = Lowerer {
-            sym,
-            arena: &mut arena,
-            locals: vec![],
-            channel_ids: &channel_ids,
-            expansions: &[],
-            shade_reads: None,
-            const_only: false,
-        };
+        let mut l = Lowerer::new(sym, &mut arena, &channel_ids, &[], None, false);
         let lo = l.const_int(&e.from).map_err(Diagnostics::from)?;
         let hi = l.const_int(&e.to).map_err(Diagnostics::from)?;
         if hi < lo {
@@ -488,15 +483,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                         shade_reads.push((*item, rid));
                     }
                 }
-                let mut l = Lowerer {
-                    sym,
-                    arena: &mut arena,
-                    locals: vec![],
-                    channel_ids: &channel_ids,
-                    expansions: &expansions,
-                    shade_reads: Some(shade_reads),
-                    const_only: false,
-                };
+                let mut l = Lowerer::new(sym, &mut arena, &channel_ids, &expansions, Some(shade_reads), false);
                 let v = l.expr(visibility).map_err(Diagnostics::from)?;
                 let v = l.coerce(v, Ty::F32);
                 IrPassKind::Shade { visibility: v }
