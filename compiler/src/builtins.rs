@@ -435,21 +435,26 @@ pub enum SampleFn {
     Nearest,
     /// `fetch(ch, dx, dy)`: texel `floor(uv * size - 0.5) + (dx, dy)`, clamped to the edge.
     Fetch,
+    /// `sample_box(ch, wx, wy)`: the mean over a `wx` x `wy` box (shadow-map uv units, at least
+    /// one texel each way) centred at `uv`, from a summed-area table.
+    Box,
 }
 
 impl SampleFn {
     /// Every lookup function of the language.
-    pub const NAMES: [&'static str; 10] = [
+    pub const NAMES: [&'static str; 12] = [
         "sample",
         "sample_lod",
         "sample_width",
         "nearest",
         "fetch",
+        "sample_box",
         "expand",
         "expand_lod",
         "expand_width",
         "expand_nearest",
         "expand_fetch",
+        "expand_box",
     ];
 
     pub fn from_name(n: &str) -> Option<(SampleFn, bool)> {
@@ -459,6 +464,8 @@ impl SampleFn {
             "sample_width" => (SampleFn::SampleWidth, false),
             "nearest" => (SampleFn::Nearest, false),
             "fetch" => (SampleFn::Fetch, false),
+            "sample_box" => (SampleFn::Box, false),
+            "expand_box" => (SampleFn::Box, true),
             "expand" => (SampleFn::Sample, true),
             "expand_lod" => (SampleFn::SampleLod, true),
             "expand_width" => (SampleFn::SampleWidth, true),
@@ -474,6 +481,7 @@ impl SampleFn {
             SampleFn::Sample | SampleFn::Nearest => &[],
             SampleFn::SampleLod | SampleFn::SampleWidth => &[Ty::F32],
             SampleFn::Fetch => &[Ty::I32, Ty::I32],
+            SampleFn::Box => &[Ty::F32, Ty::F32],
         }
     }
 
@@ -489,6 +497,8 @@ impl SampleFn {
             (SampleFn::SampleLod, true) => "expand_lod",
             (SampleFn::Nearest, true) => "expand_nearest",
             (SampleFn::Fetch, true) => "expand_fetch",
+            (SampleFn::Box, false) => "sample_box",
+            (SampleFn::Box, true) => "expand_box",
         }
     }
 }

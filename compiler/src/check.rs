@@ -194,29 +194,16 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                 Err(d) => diags.push(d),
             },
             PassKind::Shade { reads, visibility } => {
-                for r in reads {
-                    let writer = &t.passes[sym.resources[&r.value].writer];
-                    if matches!(writer.kind, PassKind::SummedArea { .. }) {
-                        diags.push(
-                            Diagnostic::error(
-                                Phase::Check,
-                                format!("`{}` is a summed-area table, which the language cannot look up yet", r.value),
-                            )
-                            .at(r.span, "no lookup reads a summed-area table")
-                            .note("box lookups over summed-area tables arrive with convolution soft shadow maps")
-                            .help("read the resource before the SummedArea pass, or a mip chain of it"),
-                        );
-                    }
-                }
-                let carried: Vec<(Item, String)> = reads
+                let carried: Vec<(Item, String, bool)> = reads
                     .iter()
                     .flat_map(|r| {
+                        let table = matches!(t.passes[sym.resources[&r.value].writer].kind, PassKind::SummedArea { .. });
                         items
                             .get(&r.value)
                             .cloned()
                             .unwrap_or_default()
                             .into_iter()
-                            .map(|i| (i, r.value.clone()))
+                            .map(move |i| (i, r.value.clone(), table))
                     })
                     .collect();
                 let mut ty = Typer::new(sym, Mode::Shade);
@@ -558,7 +545,8 @@ struct Typer<'s, 'a> {
     locals: Vec<Local>,
     uses: Vec<Use>,
     /// For a Shade pass: channels and expansions its reads carry, and the resource of each.
-    available: Option<Vec<(Item, String)>>,
+    /// What a Shade pass's reads carry: (item, resource, whether a summed-area table).
+    available: Option<Vec<(Item, String, bool)>>,
 }
 
 impl<'s, 'a> Typer<'s, 'a> {
@@ -772,7 +760,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                         "a stored channel, not a value",
                     )
                     .help(format!(
-                        "use `sample({n})`, `sample_lod({n}, lod)`, `sample_width({n}, w)`, `nearest({n})` or `fetch({n}, dx, dy)`"
+                        "use `sample({n})`, `sample_lod({n}, lod)`, `sample_width({n}, w)`, `nearest({n})`, `fetch({n}, dx, dy)` or `sample_box({n}, wx, wy)`"
                     )));
                 }
                 Mode::Const => {
@@ -854,7 +842,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                 return Err(d);
             };
             if let Some(avail) = &self.available {
-                let holders: Vec<&String> = avail.iter().filter(|(i, _)| *i == item).map(|(_, r)| r).collect();
+                let holders: Vec<(&String, bool)> = avail.iter().filter(|(i, _, _)| *i == item).map(|(_, r, t)| (r, *t)).collect();
                 if holders.is_empty() {
                     return Err(Self::err(
                         args[0].span,
@@ -868,11 +856,33 @@ impl<'s, 'a> Typer<'s, 'a> {
                         args[0].span,
                         format!(
                             "`{target}` is carried by several resources this pass reads: {}",
-                            holders.iter().map(|h| format!("`{h}`")).collect::<Vec<_>>().join(", ")
+                            holders.iter().map(|(h, _)| format!("`{h}`")).collect::<Vec<_>>().join(", ")
                         ),
                         "ambiguous",
                     )
                     .help("read only one version of it"));
+                }
+                let (holder, table) = holders[0];
+                if table != (how == SampleFn::Box) {
+                    let d = if table {
+                        Self::err(
+                            span,
+                            format!("`{name}` cannot read `{target}` from `{holder}`, a summed-area table"),
+                            "summed-area tables are read by box lookups",
+                        )
+                        .help(format!(
+                            "use `{}({target}, wx, wy)`, the mean over a box wx x wy wide in uv units",
+                            if expand { "expand_box" } else { "sample_box" }
+                        ))
+                    } else {
+                        Self::err(
+                            span,
+                            format!("`{name}` needs a summed-area table, but `{holder}` is a texture"),
+                            "box lookups read summed-area tables",
+                        )
+                        .help("add a SummedArea pass over the resource and read its output, or use `sample_width` on a mip chain")
+                    };
+                    return Err(d);
                 }
             }
             for (a, want) in args[1..].iter().zip(extra) {

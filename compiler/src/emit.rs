@@ -5,7 +5,7 @@
 use crate::back::wgsl::{Output, texture_format};
 use crate::front::ast::{ConstValue, LightKind, LightView, ScalarTy};
 use crate::ir::*;
-use crate::pack::mip_source;
+use crate::pack::{mip_source, table_source};
 use sshc_runtime::graph::{self, ChannelDecl, Extent, LightModel, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
 use std::fmt::Write as _;
 
@@ -67,6 +67,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
     let mut textures: Vec<TextureDecl> = Vec::new();
     for (ri, r) in ir.resources.iter().enumerate().filter(|(_, r)| r.live) {
         let mips = mip_source(ir, ri).is_some();
+        let table = table_source(ir, ri).is_some();
         for (ti, t) in r.textures.iter().enumerate() {
             if let Some(existing) = textures.iter_mut().find(|d| d.name == t.name) {
                 existing.mips |= mips;
@@ -91,7 +92,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
                 .collect();
             textures.push(TextureDecl {
                 name: t.name.clone(),
-                format: texture_format(t),
+                format: if table { graph::Format::SummedAreaU32 } else { texture_format(t) },
                 layers: t.layers,
                 extent: Extent::ShadowMap,
                 mips,

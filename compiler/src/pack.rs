@@ -155,6 +155,44 @@ pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
         if !ir.resources[ri].live {
             continue;
         }
+        if let Some(src) = table_source(ir, ri) {
+            // A summed-area table sums the unorm codes of its source, texel for texel: same
+            // layers and components, its own (u32) storage.
+            let (textures, slots) = (ir.resources[src].textures.clone(), ir.resources[src].slots.clone());
+            let res = &mut ir.resources[ri];
+            let name = res.name.clone();
+            let single = textures.len() == 1;
+            res.textures = textures
+                .into_iter()
+                .map(|t| Texture {
+                    name: if single {
+                        name.clone()
+                    } else {
+                        format!("{name}_{}", t.precision.name().to_ascii_lowercase())
+                    },
+                    ..t
+                })
+                .collect();
+            for s in res.slots.iter_mut() {
+                s.place = slots.iter().find(|o| o.channel == s.channel).and_then(|o| o.place);
+                if !matches!(s.precision, Precision::Unorm8 | Precision::Unorm16) {
+                    diags.push(
+                        Diagnostic::error(
+                            Phase::Pack,
+                            format!(
+                                "summed-area table `{}` sums channel `{}`, stored at {}; tables sum unorm codes in u32 fixed point",
+                                res.name,
+                                ir.channels[s.channel].name,
+                                s.precision.name()
+                            ),
+                        )
+                        .at(res.span, "summed here")
+                        .help("store the channel at Unorm8 or Unorm16 (`--precision NAME=Unorm8`)"),
+                    );
+                }
+            }
+            continue;
+        }
         if let Some(src) = mip_source(ir, ri) {
             // packed identically to its source (processed earlier: passes run in order)
             let (textures, slots) = (ir.resources[src].textures.clone(), ir.resources[src].slots.clone());
@@ -232,6 +270,15 @@ pub fn mip_source(ir: &Ir, r: ResId) -> Option<ResId> {
     let w = &ir.passes[ir.resources[r].writer];
     match w.kind {
         IrPassKind::Mipmap { .. } => Some(mip_source(ir, w.reads[0]).unwrap_or(w.reads[0])),
+        _ => None,
+    }
+}
+
+/// The resource a SummedArea output sums.
+pub fn table_source(ir: &Ir, r: ResId) -> Option<ResId> {
+    let w = &ir.passes[ir.resources[r].writer];
+    match w.kind {
+        IrPassKind::SummedArea => Some(w.reads[0]),
         _ => None,
     }
 }

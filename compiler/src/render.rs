@@ -170,7 +170,11 @@ fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
                         })
                         .collect()
                 };
-                for (name, c, range) in comps {
+                for (name, c, mut range) in comps {
+                    if t.format == sshc_runtime::graph::Format::SummedAreaU32 {
+                        // prefix sums of codes: viewed from 0 to the largest (the far corner)
+                        range = (0.0, img.rgba.iter().map(|p| p[c]).fold(1.0, f32::max));
+                    }
                     let stem = format!("{}.layer{layer}.level{level}.{name}", t.name);
                     img.write_png(&dir.join(format!("{stem}.png")), Some(c), range)?;
                     img.write_pfm_gray(&dir.join(format!("{stem}.pfm")), c)?;

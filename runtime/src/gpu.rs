@@ -333,10 +333,18 @@ pub enum CameraOutput {
     Normal = 3,
 }
 
+enum Pipeline {
+    Render(wgpu::RenderPipeline),
+    Compute(wgpu::ComputePipeline),
+}
+
 struct StepPipeline {
-    pipeline: wgpu::RenderPipeline,
+    pipeline: Pipeline,
     group0: wgpu::BindGroupLayout,
+    /// What the step reads: textures, and summed-area tables as read-only storage buffers.
     group1: Option<wgpu::BindGroupLayout>,
+    /// What a compute step writes: summed-area tables as read-write storage buffers.
+    group2: Option<wgpu::BindGroupLayout>,
 }
 
 struct Bound {
@@ -345,6 +353,8 @@ struct Bound {
     vertices: wgpu::Buffer,
     vertex_count: u32,
     textures: HashMap<String, wgpu::Texture>,
+    /// Summed-area tables, by texture name.
+    buffers: HashMap<String, wgpu::Buffer>,
     light_depth: wgpu::Texture,
     camera: Vec<wgpu::Texture>,
     camera_depth: wgpu::Texture,
@@ -363,6 +373,8 @@ pub struct Executor<'g> {
     sampler: wgpu::Sampler,
     bound: Option<Bound>,
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
+    /// Linear depth written into the Depth pass's output instead of rasterising the scene.
+    depth_override: Option<Vec<f32>>,
     /// Refuse scenes whose textures would take more than this many bytes.
     pub max_bytes: u64,
 }
@@ -441,9 +453,9 @@ impl<'g> Executor<'g> {
                     limit: limit as u64,
                 });
             }
-            if wgpu_format(t.format).is_none() {
+            if t.format == Format::SummedAreaU32 && t.mips {
                 return Err(RuntimeError::NotFound(format!(
-                    "texture `{}`: summed-area tables are not supported by this runtime yet",
+                    "texture `{}`: a summed-area table has no mip levels",
                     t.name
                 )));
             }
@@ -496,6 +508,7 @@ impl<'g> Executor<'g> {
             sampler,
             bound: None,
             timestamps: None,
+            depth_override: None,
             max_bytes: 4 << 30,
         };
         ex.build_pipelines()?;
@@ -539,6 +552,11 @@ impl<'g> Executor<'g> {
         wgpu_format(t.format).ok_or_else(|| RuntimeError::NotFound(format!("texture `{name}` has no texture format")))
     }
 
+    /// A summed-area table (a storage buffer, not a texture).
+    fn is_table(&self, name: &str) -> bool {
+        self.graph.texture(name).is_some_and(|t| t.format == Format::SummedAreaU32)
+    }
+
     fn build_pipelines(&mut self) -> Result<()> {
         let gpu = self.gpu;
         let filterable_floats = gpu.features.contains(wgpu::Features::FLOAT32_FILTERABLE);
@@ -548,8 +566,10 @@ impl<'g> Executor<'g> {
             let mut steps = Vec::new();
             for step in &pass.steps {
                 let ctx = format!("pipeline of pass `{}` ({:?})", pass.name, step.fragment);
+                let compute = matches!(step.draw, Draw::ComputeRows | Draw::ComputeColumns);
                 let formats: Vec<String> = match step.draw {
                     Draw::SceneFromCamera => CAMERA_FORMATS.iter().map(|f| format!("{f:?}")).collect(),
+                    _ if compute => step.writes.iter().map(|t| format!("table {}", t.texture)).collect(),
                     _ => step
                         .writes
                         .iter()
@@ -558,7 +578,7 @@ impl<'g> Executor<'g> {
                 };
                 let key = hash_of(&[
                     &source_key.to_string(),
-                    &format!("{:?}{:?}{:?}", step.vertex, step.fragment, step.draw),
+                    &format!("{:?}{:?}{:?}{:?}", step.vertex, step.fragment, step.compute, step.draw),
                     &formats.join(","),
                     &format!("{}:{}:{}:{}", step.reads.len(), step.params, step.sampler, filterable_floats),
                 ]);
@@ -572,6 +592,10 @@ impl<'g> Executor<'g> {
                 } else {
                     let mut entries = Vec::new();
                     for b in &step.reads {
+                        if self.is_table(&b.texture) {
+                            entries.push(storage_entry(b.binding, true));
+                            continue;
+                        }
                         let fmt = self.texture_format(&b.texture)?;
                         let is_f32 = matches!(
                             fmt,
@@ -599,15 +623,53 @@ impl<'g> Executor<'g> {
                         entries: &entries,
                     }))
                 };
-                let layouts: Vec<Option<&wgpu::BindGroupLayout>> = match &group1 {
-                    Some(g1) => vec![Some(&group0), Some(g1)],
-                    None => vec![Some(&group0)],
-                };
+                let group2 = compute.then(|| {
+                    let entries: Vec<wgpu::BindGroupLayoutEntry> = (0..step.writes.len() as u32).map(|i| storage_entry(i, false)).collect();
+                    gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                        label: Some("tables"),
+                        entries: &entries,
+                    })
+                });
+                // An empty group 1 keeps group 2 at its index when a compute step reads nothing.
+                let empty = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("empty"),
+                    entries: &[],
+                });
+                let mut layouts: Vec<Option<&wgpu::BindGroupLayout>> = vec![Some(&group0)];
+                if group1.is_some() || group2.is_some() {
+                    layouts.push(Some(group1.as_ref().unwrap_or(&empty)));
+                }
+                if let Some(g2) = &group2 {
+                    layouts.push(Some(g2));
+                }
                 let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                     label: Some(&ctx),
                     bind_group_layouts: &layouts,
                     immediate_size: 0,
                 });
+                if compute {
+                    let pipeline = gpu.scoped(&ctx, || {
+                        gpu.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                            label: Some(&ctx),
+                            layout: Some(&layout),
+                            module,
+                            entry_point: step.compute.as_deref(),
+                            compilation_options: Default::default(),
+                            cache: None,
+                        })
+                    })?;
+                    let p = Arc::new(StepPipeline {
+                        pipeline: Pipeline::Compute(pipeline),
+                        group0,
+                        group1: Some(group1.unwrap_or(empty)),
+                        group2,
+                    });
+                    if let Ok(mut c) = gpu.pipelines.lock() {
+                        c.insert(key, p.clone());
+                    }
+                    steps.push(p);
+                    continue;
+                }
                 let targets: Vec<Option<wgpu::ColorTargetState>> = match step.draw {
                     Draw::SceneFromCamera => CAMERA_FORMATS.iter().map(|f| Some((*f).into())).collect(),
                     _ => step
@@ -666,7 +728,12 @@ impl<'g> Executor<'g> {
                         cache: None,
                     })
                 })?;
-                let p = Arc::new(StepPipeline { pipeline, group0, group1 });
+                let p = Arc::new(StepPipeline {
+                    pipeline: Pipeline::Render(pipeline),
+                    group0,
+                    group1,
+                    group2: None,
+                });
                 if let Ok(mut c) = gpu.pipelines.lock() {
                     c.insert(key, p.clone());
                 }
@@ -735,6 +802,17 @@ impl<'g> Executor<'g> {
                 limit: self.max_bytes,
             });
         }
+        for t in self.graph.textures.iter().filter(|t| t.format == Format::SummedAreaU32) {
+            let size = table_bytes(t, s.shadow_size);
+            let limit = (gpu.limits.max_storage_buffer_binding_size as u64).min(gpu.limits.max_buffer_size);
+            if size > limit {
+                return Err(RuntimeError::Limit {
+                    what: format!("summed-area table `{}` (storage buffer bytes)", t.name),
+                    needed: size,
+                    limit,
+                });
+            }
+        }
         let vertex_count = (s.vertices.len() / 6) as u32;
         let vb_size = (s.vertices.len() * 4).max(24) as u64;
         if vb_size > gpu.limits.max_buffer_size {
@@ -755,8 +833,18 @@ impl<'g> Executor<'g> {
                 gpu.queue.write_buffer(&vertices, 0, f32_bytes(&s.vertices).as_slice());
             }
             let mut textures = HashMap::new();
+            let mut buffers = HashMap::new();
             for t in &self.graph.textures {
-                let Some(format) = wgpu_format(t.format) else { continue };
+                let Some(format) = wgpu_format(t.format) else {
+                    let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(&t.name),
+                        size: table_bytes(t, s.shadow_size),
+                        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                        mapped_at_creation: false,
+                    });
+                    buffers.insert(t.name.clone(), buf);
+                    continue;
+                };
                 let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
                     label: Some(&t.name),
                     size: wgpu::Extent3d {
@@ -768,7 +856,10 @@ impl<'g> Executor<'g> {
                     sample_count: 1,
                     dimension: wgpu::TextureDimension::D2,
                     format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING
+                        | wgpu::TextureUsages::COPY_SRC
+                        | wgpu::TextureUsages::COPY_DST,
                     view_formats: &[],
                 });
                 textures.insert(t.name.clone(), tex);
@@ -809,6 +900,7 @@ impl<'g> Executor<'g> {
                 vertices,
                 vertex_count,
                 textures,
+                buffers,
                 light_depth,
                 camera,
                 camera_depth,
@@ -861,36 +953,128 @@ impl<'g> Executor<'g> {
             .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{name}`")))
     }
 
+    fn table(&self, name: &str) -> Result<&wgpu::Buffer> {
+        self.bound()?
+            .buffers
+            .get(name)
+            .ok_or_else(|| RuntimeError::NotFound(format!("no summed-area table `{name}`")))
+    }
+
     fn group1(&self, sp: &StepPipeline, reads: &[Binding], level: u32) -> Result<Option<wgpu::BindGroup>> {
         let Some(layout) = &sp.group1 else { return Ok(None) };
         let mut views = Vec::new();
-        for b in reads {
+        for b in reads.iter().filter(|b| !self.is_table(&b.texture)) {
             let t = self.texture(&b.texture)?;
             let (base, count) = match b.view {
                 View::All => (0, None),
                 View::Base => (0, Some(1)),
                 View::PreviousLevel => (level - 1, Some(1)),
             };
-            views.push(t.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                base_mip_level: base,
-                mip_level_count: count,
-                ..Default::default()
-            }));
+            views.push((
+                b.binding,
+                t.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                    base_mip_level: base,
+                    mip_level_count: count,
+                    ..Default::default()
+                }),
+            ));
         }
-        let entries: Vec<wgpu::BindGroupEntry> = reads
+        let mut entries: Vec<wgpu::BindGroupEntry> = views
             .iter()
-            .zip(&views)
-            .map(|(b, v)| wgpu::BindGroupEntry {
-                binding: b.binding,
+            .map(|(binding, v)| wgpu::BindGroupEntry {
+                binding: *binding,
                 resource: wgpu::BindingResource::TextureView(v),
             })
             .collect();
+        for b in reads.iter().filter(|b| self.is_table(&b.texture)) {
+            entries.push(wgpu::BindGroupEntry {
+                binding: b.binding,
+                resource: self.table(&b.texture)?.as_entire_binding(),
+            });
+        }
         Ok(Some(self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
             layout,
             entries: &entries,
         })))
+    }
+
+    /// Compute steps: the summed-area tables they write, as read-write storage buffers.
+    fn group2(&self, sp: &StepPipeline, writes: &[graph::Target]) -> Result<Option<wgpu::BindGroup>> {
+        let Some(layout) = &sp.group2 else { return Ok(None) };
+        let mut entries = Vec::new();
+        for (i, w) in writes.iter().enumerate() {
+            entries.push(wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: self.table(&w.texture)?.as_entire_binding(),
+            });
+        }
+        Ok(Some(self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout,
+            entries: &entries,
+        })))
+    }
+
+    /// Replace the Depth pass: its output takes these linear depths (row-major, row 0 first,
+    /// `shadow_size`^2 values) instead of the scene rasterised from the light. For feeding
+    /// synthetic depth fields to the passes after Depth; `None` rasterises again.
+    pub fn set_depth_override(&mut self, depth: Option<Vec<f32>>) {
+        self.depth_override = depth;
+    }
+
+    /// Upload the depth override into the Depth pass's output.
+    fn write_depth_override(&self, pass: &graph::PassDecl, depth: &[f32]) -> Result<()> {
+        let b = self.bound()?;
+        let n = b.shadow_size as usize;
+        if depth.len() != n * n {
+            return Err(RuntimeError::Param(format!(
+                "depth override has {} values, the shadow map {n} x {n}",
+                depth.len()
+            )));
+        }
+        let target = pass
+            .steps
+            .first()
+            .and_then(|s| s.writes.first())
+            .ok_or_else(|| RuntimeError::NotFound(format!("Depth pass `{}` writes nothing", pass.name)))?;
+        let decl = self
+            .graph
+            .texture(&target.texture)
+            .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{}`", target.texture)))?;
+        if decl.format != Format::R32Float {
+            return Err(RuntimeError::Param(format!(
+                "the Depth pass writes {:?}; a depth override needs R32Float",
+                decl.format
+            )));
+        }
+        let tex = self.texture(&target.texture)?;
+        self.gpu.scoped("writing the depth override", || {
+            self.gpu.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: tex,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: 0,
+                        z: target.layer,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                &f32_bytes(depth),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(4 * n as u32),
+                    rows_per_image: Some(n as u32),
+                },
+                wgpu::Extent3d {
+                    width: n as u32,
+                    height: n as u32,
+                    depth_or_array_layers: 1,
+                },
+            )
+        })
     }
 
     /// Run every pass once. Returns the GPU time of each pass when timestamps are available.
@@ -905,6 +1089,12 @@ impl<'g> Executor<'g> {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         gpu.scoped("recording the frame", || -> Result<()> {
             for (pi, pass) in self.graph.passes.iter().enumerate() {
+                if pass.kind == graph::PassKind::Depth
+                    && let Some(depth) = &self.depth_override
+                {
+                    self.write_depth_override(pass, depth)?;
+                    continue;
+                }
                 // Every render pass of this graph pass, in order: (step index, mip level).
                 let mut work: Vec<(usize, u32)> = Vec::new();
                 for (si, step) in pass.steps.iter().enumerate() {
@@ -922,6 +1112,36 @@ impl<'g> Executor<'g> {
                     let sp = &self.pipelines[pi][si];
                     let g0 = self.group0(sp, step)?;
                     let g1 = self.group1(sp, &step.reads, level)?;
+                    let timestamp_writes = self
+                        .timestamps
+                        .as_ref()
+                        .map(|(qs, _, _)| (qs, (wi == 0).then_some(2 * pi as u32), (wi == last).then_some(2 * pi as u32 + 1)));
+                    let pipeline = match &sp.pipeline {
+                        Pipeline::Compute(cp) => {
+                            let g2 = self.group2(sp, &step.writes)?;
+                            let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                                label: Some(&pass.name),
+                                timestamp_writes: timestamp_writes.filter(|(_, a, z)| a.is_some() || z.is_some()).map(|(qs, a, z)| {
+                                    wgpu::ComputePassTimestampWrites {
+                                        query_set: qs,
+                                        beginning_of_pass_write_index: a,
+                                        end_of_pass_write_index: z,
+                                    }
+                                }),
+                            });
+                            cpass.set_pipeline(cp);
+                            cpass.set_bind_group(0, &g0, &[]);
+                            if let Some(g1) = &g1 {
+                                cpass.set_bind_group(1, g1, &[]);
+                            }
+                            if let Some(g2) = &g2 {
+                                cpass.set_bind_group(2, g2, &[]);
+                            }
+                            cpass.dispatch_workgroups(b.shadow_size.div_ceil(graph::COMPUTE_WORKGROUP), 1, 1);
+                            continue;
+                        }
+                        Pipeline::Render(rp) => rp,
+                    };
                     let views: Vec<wgpu::TextureView> = match step.draw {
                         Draw::SceneFromCamera => b.camera.iter().map(|t| t.create_view(&Default::default())).collect(),
                         _ => step
@@ -991,10 +1211,10 @@ impl<'g> Executor<'g> {
                         Draw::SceneFromCamera => Some(b.camera_depth.create_view(&Default::default())),
                         _ => None,
                     };
-                    let timestamp_writes = self.timestamps.as_ref().map(|(qs, _, _)| wgpu::RenderPassTimestampWrites {
+                    let timestamp_writes = timestamp_writes.map(|(qs, a, z)| wgpu::RenderPassTimestampWrites {
                         query_set: qs,
-                        beginning_of_pass_write_index: (wi == 0).then_some(2 * pi as u32),
-                        end_of_pass_write_index: (wi == last).then_some(2 * pi as u32 + 1),
+                        beginning_of_pass_write_index: a,
+                        end_of_pass_write_index: z,
                     });
                     let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                         label: Some(&pass.name),
@@ -1012,7 +1232,7 @@ impl<'g> Executor<'g> {
                         occlusion_query_set: None,
                         multiview_mask: None,
                     });
-                    rp.set_pipeline(&sp.pipeline);
+                    rp.set_pipeline(pipeline);
                     rp.set_bind_group(0, &g0, &[]);
                     if let Some(g1) = &g1 {
                         rp.set_bind_group(1, g1, &[]);
@@ -1081,6 +1301,9 @@ impl<'g> Executor<'g> {
             )));
         }
         let size = (b.shadow_size >> level).max(1);
+        if decl.format == Format::SummedAreaU32 {
+            return read_table(self.gpu, self.table(name)?, layer, size);
+        }
         read_back(self.gpu, self.texture(name)?, layer, level, size, size, decl.format)
     }
 
@@ -1127,6 +1350,24 @@ fn hash_of(parts: &[&str]) -> u64 {
     let mut h = std::collections::hash_map::DefaultHasher::new();
     parts.hash(&mut h);
     h.finish()
+}
+
+/// A storage-buffer binding (summed-area tables), visible to fragment and compute stages.
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: if read_only {
+            wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE
+        } else {
+            wgpu::ShaderStages::COMPUTE
+        },
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
 }
 
 fn group0_layout(gpu: &Gpu, step: &Step) -> wgpu::BindGroupLayout {
@@ -1240,6 +1481,43 @@ fn map_read(gpu: &Gpu, buf: &wgpu::Buffer) -> Result<Vec<u8>> {
         .to_vec();
     buf.unmap();
     Ok(data)
+}
+
+/// Bytes of a summed-area table at a shadow-map size: one `vec4<u32>` per texel and layer.
+fn table_bytes(t: &TextureDecl, shadow_size: u32) -> u64 {
+    Format::SummedAreaU32.bytes_per_texel() as u64 * t.layers as u64 * shadow_size as u64 * shadow_size as u64
+}
+
+/// One layer of a summed-area table: the u32 sums (wrapping) as f32, rows top first.
+fn read_table(gpu: &Gpu, table: &wgpu::Buffer, layer: u32, size: u32) -> Result<Image> {
+    let bytes = Format::SummedAreaU32.bytes_per_texel() as u64 * size as u64 * size as u64;
+    let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("read back table"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    gpu.scoped("copying a summed-area table for read-back", || {
+        enc.copy_buffer_to_buffer(table, layer as u64 * bytes, &buf, 0, bytes);
+        gpu.queue.submit([enc.finish()]);
+    })?;
+    let raw = map_read(gpu, &buf)?;
+    let rgba = raw
+        .chunks_exact(16)
+        .map(|t| {
+            let mut v = [0.0f32; 4];
+            for (i, c) in t.chunks_exact(4).enumerate() {
+                v[i] = u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f32;
+            }
+            v
+        })
+        .collect();
+    Ok(Image {
+        width: size,
+        height: size,
+        rgba,
+    })
 }
 
 fn read_back(gpu: &Gpu, tex: &wgpu::Texture, layer: u32, level: u32, w: u32, h: u32, format: Format) -> Result<Image> {

@@ -8,7 +8,10 @@
 //!   [`PassGraph::params_size`] > 0; every field is 4 bytes at [`ParamDecl::offset`].
 //! - `@group(0) @binding(2)`: a filtering sampler (linear, mipmap linear, clamp to edge),
 //!   present when [`Step::sampler`] is true.
-//! - `@group(1) @binding(i)`: the textures in [`Step::reads`], in order.
+//! - `@group(1) @binding(i)`: the textures in [`Step::reads`], in order; a summed-area table
+//!   ([`Format::SummedAreaU32`]) is a read-only storage buffer `array<vec4<u32>>`, one
+//!   element per texel, rows of the shadow map's width, layers one after another.
+//! - `@group(2) @binding(i)`: compute steps only: the tables in [`Step::writes`], read-write.
 //! - Scene draws use one vertex buffer: `@location(0)` position and `@location(1)` normal,
 //!   `vec3<f32>` each, interleaved (24-byte stride), in world space.
 
@@ -43,6 +46,9 @@ pub const FRAME_WGSL: &str = "struct Frame {
     texel_world: vec4<f32>,
 }
 ";
+
+/// Workgroup size of compute steps ([`Draw::ComputeRows`], [`Draw::ComputeColumns`]).
+pub const COMPUTE_WORKGROUP: u32 = 64;
 
 /// Size in bytes of [`FRAME_WGSL`]'s `Frame`.
 pub const FRAME_SIZE: u32 = 3 * 64 + 7 * 16;

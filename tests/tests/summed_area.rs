@@ -1,0 +1,150 @@
+//! Summed-area tables on the GPU: the SummedArea pass (u32 fixed point over unorm codes,
+//! two compute steps) and the language's box lookup `sample_box`, checked against sums and
+//! means computed on the CPU from the very codes the GPU stored.
+
+mod support;
+
+use support::{QueryPlane, compile_source, depth_field, gpu, run_plane};
+
+/// A probe technique: `m` = z stored at `precision`, summed into a table, and the Shade
+/// pass reading the mean of `m` over a box `wx` x `wy` texels wide (or, with
+/// `lookup = "bilinear"`, the base level filtered bilinearly).
+fn probe(precision: &str, lookup: &str) -> sshc::Compiled {
+    let (reads, visibility) = match lookup {
+        "box" => ("table", "sample_box(m, wx * texel_size, wy * texel_size)"),
+        _ => ("mapped", "sample_lod(m, 0.0) + 0.0 * (wx + wy)"),
+    };
+    let src = format!(
+        r#"Technique(
+    name: "box_probe",
+    params: {{
+        "wx": Param(ty: F32, default: 1.0, range: (0.0, 64.0), doc: "box width in texels"),
+        "wy": Param(ty: F32, default: 1.0, range: (0.0, 64.0), doc: "box height in texels"),
+    }},
+    channels: {{
+        "z": Channel(precision: F32),
+        "m": Channel(precision: {precision}, value: "z"),
+    }},
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Map(name: "map", reads: ["shadow"], writes: "mapped", channels: ["m"]),
+        SummedArea(name: "sat", reads: "mapped", writes: "table"),
+        Shade(name: "shade", reads: ["{reads}"], visibility: "{visibility}"),
+    ],
+)"#
+    );
+    compile_source("box_probe", &src, &[], &[])
+}
+
+const N: u32 = 32;
+
+fn plane() -> QueryPlane {
+    QueryPlane { shadow: N, camera: 2 * N }
+}
+
+/// The unorm codes the Map pass stored, read back, as integers.
+fn codes(c: &sshc::Compiled, depth: &[f32], scale: f64) -> (Vec<u64>, Vec<[f32; 4]>) {
+    let mut ex = sshc_runtime::gpu::Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    ex.bind_scene(&plane().inputs()).unwrap();
+    ex.set_depth_override(Some(depth.to_vec()));
+    ex.run_frame().unwrap();
+    let stored = ex.read_texture("mapped", 0, 0).unwrap();
+    let table = ex.read_texture("table", 0, 0).unwrap();
+    let codes = stored.rgba.iter().map(|t| (t[0] as f64 * scale).round() as u64).collect();
+    (codes, table.rgba)
+}
+
+#[test]
+fn table_holds_the_prefix_sums_of_the_stored_codes() {
+    // Unorm8 only: lavapipe cannot render to 16-bit unorm targets (wgpu reports R16Unorm
+    // as not renderable there), so a Map pass cannot write a Unorm16 channel on it.
+    for (precision, scale) in [("Unorm8", 255.0)] {
+        let c = probe(precision, "box");
+        let depth = depth_field("noise", N);
+        let (codes, table) = codes(&c, &depth, scale);
+        let n = N as usize;
+        let mut checked = 0;
+        for y in 0..n {
+            for x in 0..n {
+                let want: u64 = (0..=y)
+                    .flat_map(|j| (0..=x).map(move |i| (i, j)))
+                    .map(|(i, j)| codes[j * n + i])
+                    .sum();
+                // the table is u32 and read back as f32: sums below 2^24 come back exactly
+                if want < 1 << 24 {
+                    assert_eq!(table[y * n + x][0] as u64, want, "{precision}: table at ({x}, {y})");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > n * n / 4, "{precision}: only {checked} sums small enough to compare");
+    }
+}
+
+/// CPU mean of the stored values over the box of `w` x `h` texels centred at `uv`, clipped
+/// to the map, at least one texel each way: the lookup's definition (docs/language.md).
+fn box_mean(codes: &[u64], scale: f64, uv: [f64; 2], w: f64, h: f64) -> f64 {
+    let n = N as f64;
+    let (c0, c1) = ((uv[0] * n).clamp(0.0, n), (uv[1] * n).clamp(0.0, n));
+    let (hx, hy) = (w.max(1.0) / 2.0, h.max(1.0) / 2.0);
+    let (x0, x1) = ((c0 - hx).clamp(0.0, n), (c0 + hx).clamp(0.0, n));
+    let (y0, y1) = ((c1 - hy).clamp(0.0, n), (c1 + hy).clamp(0.0, n));
+    let overlap = |a: f64, b: f64, i: usize| (b.min(i as f64 + 1.0) - a.max(i as f64)).max(0.0);
+    let mut sum = 0.0;
+    for j in 0..N as usize {
+        for i in 0..N as usize {
+            sum += overlap(x0, x1, i) * overlap(y0, y1, j) * codes[j * N as usize + i] as f64;
+        }
+    }
+    sum / ((x1 - x0) * (y1 - y0) * scale)
+}
+
+#[test]
+fn box_lookups_match_the_mean_over_the_box() {
+    let p = plane();
+    for (precision, scale) in [("Unorm8", 255.0)] {
+        let c = probe(precision, "box");
+        for field in ["noise", "checker"] {
+            let depth = depth_field(field, N);
+            let (codes, _) = codes(&c, &depth, scale);
+            for (w, h) in [(1.0, 1.0), (5.5, 3.25), (0.2, 12.0), (40.0, 40.0)] {
+                let run = run_plane(&c, &p, &depth, &[("wx", w), ("wy", h)], 1);
+                let mut worst = 0.0f64;
+                for (v, pos) in run.visibility.iter().zip(&run.positions) {
+                    let (uv, _) = p.project(*pos);
+                    let want = box_mean(&codes, scale, uv, w, h);
+                    worst = worst.max((*v as f64 - want).abs());
+                }
+                // The box sums are exact integers; what remains is f32 rounding: the nine
+                // weighted rectangles (2^-24 relative each, of sums at most the box's total)
+                // and the uv the GPU computed in f32 from the world position (2^-24
+                // relative, times N = 32 texels, moving a box edge by ~2e-6 texel, which
+                // changes the mean by at most that over the box's width). 1e-5 bounds both
+                // with margin; one texel of misplacement would show as ~0.3 on noise.
+                assert!(worst <= 1e-5, "{precision} {field} box {w} x {h}: worst error {worst}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_box_one_texel_wide_is_bilinear_filtering() {
+    // Identical stored codes, two lookups: the one-texel box integrates the piecewise
+    // constant texels over one texel, which is exactly bilinear interpolation. Hardware
+    // bilinear weights are quantised to the device's sub-texel precision (Vulkan requires
+    // at least 4 bits; lavapipe and current desktop GPUs have 8), so the two differ by at
+    // most 2^-8 of the largest difference between neighbouring texels (at most 1 for unorm
+    // values in [0, 1]); and a device may filter an 8-bit format in 8-bit fixed point,
+    // rounding the result to the nearest code (lavapipe does): 1/255 more.
+    let p = plane();
+    let depth = depth_field("noise", N);
+    let sat = run_plane(&probe("Unorm8", "box"), &p, &depth, &[], 1);
+    let bil = run_plane(&probe("Unorm8", "bilinear"), &p, &depth, &[], 1);
+    let worst = sat
+        .visibility
+        .iter()
+        .zip(&bil.visibility)
+        .map(|(a, b)| (a - b).abs() as f64)
+        .fold(0.0, f64::max);
+    assert!(worst <= 1.0 / 256.0 + 1.0 / 255.0, "one-texel box vs bilinear: worst {worst}");
+}
