@@ -226,6 +226,25 @@ fn call_range(f: Func, v: &[Interval]) -> Interval {
             hi: x.hi.clamp(0.0, 1.0),
         },
         Func::Step | Func::Smoothstep | Func::Linstep => Interval::UNIT,
+        Func::DivOr => {
+            // the quotient over the denominators at least eps away from 0, and the fallback
+            let (num, den, eps, fb) = (x, v[1], v[2], v[3]);
+            if eps.lo <= 0.0 {
+                return Interval::UNBOUNDED;
+            }
+            let mut r = fb;
+            for (lo, hi) in [(den.lo.max(eps.lo), den.hi), (den.lo, den.hi.min(-eps.lo))] {
+                if lo <= hi {
+                    r = Interval::hull(r, Interval::of(&[num.lo / lo, num.lo / hi, num.hi / lo, num.hi / hi]));
+                }
+            }
+            r
+        }
+        // a length over a texel's world size: scaled by the frame, unknown here
+        Func::UvWidth => Interval {
+            lo: if x.lo >= 0.0 { 0.0 } else { f64::NEG_INFINITY },
+            hi: if x.hi <= 0.0 { 0.0 } else { f64::INFINITY },
+        },
         Func::Min => Interval {
             lo: x.lo.min(v[1].lo),
             hi: x.hi.min(v[1].hi),

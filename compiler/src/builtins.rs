@@ -110,10 +110,12 @@ pub enum Input {
     Far,
     /// Light size in world units (radius of a sphere or disk, half-extent of a rectangle).
     LightSize,
+    /// Full width of the light along the shadow map's u and v axes, world units.
+    LightWidth,
 }
 
 impl Input {
-    pub const ALL: [Input; 13] = [
+    pub const ALL: [Input; 14] = [
         Input::D,
         Input::DWorld,
         Input::Uv,
@@ -127,6 +129,7 @@ impl Input {
         Input::Near,
         Input::Far,
         Input::LightSize,
+        Input::LightWidth,
     ];
 
     pub fn name(self) -> &'static str {
@@ -144,6 +147,7 @@ impl Input {
             Input::Near => "near",
             Input::Far => "far",
             Input::LightSize => "light_size",
+            Input::LightWidth => "light_width",
         }
     }
 
@@ -153,14 +157,14 @@ impl Input {
 
     pub fn ty(self) -> Ty {
         match self {
-            Input::Uv | Input::Tf => Ty::Vec(2),
+            Input::Uv | Input::Tf | Input::LightWidth => Ty::Vec(2),
             _ => Ty::F32,
         }
     }
 
     pub fn side(self) -> Side {
         match self {
-            Input::TexelSize | Input::ShadowSize | Input::Near | Input::Far | Input::LightSize => Side::Both,
+            Input::TexelSize | Input::ShadowSize | Input::Near | Input::Far | Input::LightSize | Input::LightWidth => Side::Both,
             _ => Side::Receiver,
         }
     }
@@ -177,6 +181,7 @@ impl Input {
             Input::ShadowSize => (1.0, 16384.0),
             Input::DWorld | Input::Near | Input::Far => (0.0, 1e4),
             Input::LightSize => (0.0, 1e4),
+            Input::LightWidth => (0.0, 2e4),
         }
     }
 
@@ -197,6 +202,7 @@ impl Input {
             Input::Near => "near plane of the light's depth range (world units)",
             Input::Far => "far plane of the light's depth range (world units)",
             Input::LightSize => "light radius or half-extent (world units)",
+            Input::LightWidth => "full width of the light along the shadow map's u and v axes (world units)",
         }
     }
 }
@@ -251,10 +257,16 @@ pub enum Func {
     Vec4,
     Length,
     Dot,
+    /// `div_or(num, den, eps, fallback)`: num / den where |den| >= eps, else fallback
+    /// (guarded division: no infinity or NaN reaches what follows).
+    DivOr,
+    /// `uv_width(len, dist)`: the shadow-map uv extent of a world length `len` lying across
+    /// the light's view at view distance `dist` (perspective or orthographic light).
+    UvWidth,
 }
 
 impl Func {
-    pub const ALL: [Func; 37] = [
+    pub const ALL: [Func; 39] = [
         Func::Abs,
         Func::Exp,
         Func::Exp2,
@@ -292,6 +304,8 @@ impl Func {
         Func::Vec4,
         Func::Length,
         Func::Dot,
+        Func::DivOr,
+        Func::UvWidth,
     ];
 
     pub fn name(self) -> &'static str {
@@ -333,6 +347,8 @@ impl Func {
             Func::Vec4 => "vec4",
             Func::Length => "length",
             Func::Dot => "dot",
+            Func::DivOr => "div_or",
+            Func::UvWidth => "uv_width",
         }
     }
 
@@ -342,7 +358,8 @@ impl Func {
 
     pub fn arity(self) -> usize {
         match self {
-            Func::Pow | Func::Min | Func::Max | Func::Atan2 | Func::Step | Func::Dot => 2,
+            Func::Pow | Func::Min | Func::Max | Func::Atan2 | Func::Step | Func::Dot | Func::UvWidth => 2,
+            Func::DivOr => 4,
             Func::Clamp | Func::Mix | Func::Smoothstep | Func::Linstep | Func::Select => 3,
             Func::Vec2 => 2,
             Func::Vec3 => 3,
@@ -403,6 +420,13 @@ impl Func {
                 Some(Ty::Vec(_)) => Ok(Ty::F32),
                 _ => Err(format!("`dot` expects two vectors of one size, found {}", list(args))),
             },
+            Func::DivOr | Func::UvWidth => {
+                if args.iter().all(|t| matches!(t, Ty::F32 | Ty::AbstractInt)) {
+                    Ok(Ty::F32)
+                } else {
+                    Err(format!("`{}` takes f32 arguments, found {}", self.name(), list(args)))
+                }
+            }
             _ => match same(args) {
                 Some(t) if t.is_float_like() => Ok(if t == Ty::AbstractInt { Ty::F32 } else { t }),
                 _ => Err(format!("`{}` expects f32 or vector arguments, found {}", self.name(), list(args))),
@@ -435,6 +459,8 @@ pub enum SampleFn {
     Nearest,
     /// `fetch(ch, dx, dy)`: texel `floor(uv * size - 0.5) + (dx, dy)`, clamped to the edge.
     Fetch,
+    /// `nearest_at(ch, du, dv)`: the texel containing `uv + (du, dv)`, level 0, clamped to the edge.
+    NearestAt,
     /// `sample_box(ch, wx, wy)`: the mean over a `wx` x `wy` box (shadow-map uv units, at least
     /// one texel each way) centred at `uv`, from a summed-area table.
     Box,
@@ -442,19 +468,21 @@ pub enum SampleFn {
 
 impl SampleFn {
     /// Every lookup function of the language.
-    pub const NAMES: [&'static str; 12] = [
+    pub const NAMES: [&'static str; 14] = [
         "sample",
         "sample_lod",
         "sample_width",
         "nearest",
         "fetch",
         "sample_box",
+        "nearest_at",
         "expand",
         "expand_lod",
         "expand_width",
         "expand_nearest",
         "expand_fetch",
         "expand_box",
+        "expand_nearest_at",
     ];
 
     pub fn from_name(n: &str) -> Option<(SampleFn, bool)> {
@@ -465,6 +493,8 @@ impl SampleFn {
             "nearest" => (SampleFn::Nearest, false),
             "fetch" => (SampleFn::Fetch, false),
             "sample_box" => (SampleFn::Box, false),
+            "nearest_at" => (SampleFn::NearestAt, false),
+            "expand_nearest_at" => (SampleFn::NearestAt, true),
             "expand_box" => (SampleFn::Box, true),
             "expand" => (SampleFn::Sample, true),
             "expand_lod" => (SampleFn::SampleLod, true),
@@ -481,7 +511,7 @@ impl SampleFn {
             SampleFn::Sample | SampleFn::Nearest => &[],
             SampleFn::SampleLod | SampleFn::SampleWidth => &[Ty::F32],
             SampleFn::Fetch => &[Ty::I32, Ty::I32],
-            SampleFn::Box => &[Ty::F32, Ty::F32],
+            SampleFn::Box | SampleFn::NearestAt => &[Ty::F32, Ty::F32],
         }
     }
 
@@ -499,6 +529,8 @@ impl SampleFn {
             (SampleFn::Fetch, true) => "expand_fetch",
             (SampleFn::Box, false) => "sample_box",
             (SampleFn::Box, true) => "expand_box",
+            (SampleFn::NearestAt, false) => "nearest_at",
+            (SampleFn::NearestAt, true) => "expand_nearest_at",
         }
     }
 }

@@ -491,6 +491,13 @@ pub fn eval_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
             t * t * (3.0 - 2.0 * t)
         }
         Func::Linstep if fl(0)? != fl(1)? => ((fl(2)? - fl(0)?) / (fl(1)? - fl(0)?)).clamp(0.0, 1.0),
+        Func::DivOr => {
+            if fl(1)?.abs() >= fl(2)? && fl(1)? != 0.0 {
+                fl(0)? / fl(1)?
+            } else {
+                fl(3)?
+            }
+        }
         _ => return None,
     };
     if !r.is_finite() {

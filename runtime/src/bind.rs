@@ -23,6 +23,7 @@ pub fn scene_inputs(scene: &Scene) -> Result<SceneInputs, String> {
         near: v.near,
         far: v.far,
         light_size: v.size,
+        light_half_extents: v.half_extents.to_array(),
         light_angle: v.angle,
         light_proj_y: v.proj.y_axis.y,
         light_orthographic: v.orthographic,

@@ -196,6 +196,8 @@ pub struct SceneInputs {
     pub far: f32,
     /// Radius or half-extent, world units.
     pub light_size: f32,
+    /// Half-extents of the light along the shadow map's u and v axes, world units.
+    pub light_half_extents: [f32; 2],
     /// Full angular diameter, radians.
     pub light_angle: f32,
     /// Element [1][1] of the light's projection (1 / tan(fov / 2), or 2 / height for an orthographic light).
@@ -1446,7 +1448,7 @@ fn frame_bytes(s: &SceneInputs) -> Vec<u8> {
     v.extend_from_slice(&[s.camera_position[0], s.camera_position[1], s.camera_position[2], 1.0]);
     v.extend_from_slice(&[s.near, s.far, 1.0 / range, 0.0]);
     v.extend_from_slice(&[n, n, 1.0 / n, 1.0 / n]);
-    v.extend_from_slice(&[s.light_size, s.light_angle, s.light_size, s.light_size]);
+    v.extend_from_slice(&[s.light_size, s.light_angle, s.light_half_extents[0], s.light_half_extents[1]]);
     v.extend_from_slice(&[n, n, 1.0 / n, 1.0 / n]);
     let texel = 2.0 / (s.light_proj_y.max(f32::MIN_POSITIVE) * n);
     if s.light_orthographic {

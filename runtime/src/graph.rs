@@ -37,7 +37,8 @@ pub const FRAME_WGSL: &str = "struct Frame {
     depth_range: vec4<f32>,
     // xy: shadow-map size in texels, zw: 1 / size
     shadow_size: vec4<f32>,
-    // x: light radius or half-extent (world units), y: angular diameter (radians), zw: rectangle half-extents
+    // x: light radius or half-extent (world units), y: angular diameter (radians),
+    // zw: half-extents of the light along the shadow map's u and v axes (world units)
     light_size: vec4<f32>,
     // xy: size of the current render target, zw: 1 / size
     target_size: vec4<f32>,

@@ -500,9 +500,9 @@ pub struct LightView {
     /// 0 for point and directional lights, and `tan(angle / 2)` for a distant disk (the
     /// radius of its disk in the tangent plane at unit distance).
     pub size: f32,
-    /// Half-extents of the light along its two axes: (r, r) for sphere and disk,
-    /// (half_width, half_height) for a rectangle, (half length, 0) for a segment, 0 for the
-    /// rest.
+    /// Half-extents of the light's outline along the view's x and y axes (the shadow map's
+    /// u and v): r for a sphere, a disk or rectangle projected onto each axis, half the
+    /// projected length for a segment, 0 for the rest.
     pub half_extents: Vec2,
     /// Full angular diameter in radians for a distant disk, else 0.
     pub angle: f32,
@@ -855,14 +855,28 @@ impl Light {
             Light::DistantDisk { angle_degrees, .. } => (0.5 * angle_degrees.to_radians()).tan(),
             Light::Point { .. } | Light::Directional { .. } => 0.0,
         };
-        v.half_extents = match self {
-            Light::Sphere { radius, .. } | Light::Disk { radius, .. } => Vec2::splat(*radius),
-            Light::Rectangle {
-                half_width, half_height, ..
-            } => Vec2::new(*half_width, *half_height),
-            Light::Segment { a, b } => Vec2::new(0.5 * a.distance(*b), 0.0),
-            _ => Vec2::ZERO,
+        // half-extents along the shadow map's u and v axes (the view's x and y): the
+        // half-widths of the light's outline projected onto them
+        let (ax, ay) = (v.view.row(0).truncate(), v.view.row(1).truncate());
+        let along = |axis: Vec3| -> f32 {
+            match self {
+                Light::Sphere { radius, .. } => *radius,
+                Light::Disk { radius, normal, .. } => radius * (1.0 - normal.normalize_or_zero().dot(axis).powi(2)).max(0.0).sqrt(),
+                Light::Rectangle {
+                    normal,
+                    u_axis,
+                    half_width,
+                    half_height,
+                    ..
+                } => {
+                    let w = normal.cross(*u_axis).normalize_or_zero();
+                    half_width * u_axis.dot(axis).abs() + half_height * w.dot(axis).abs()
+                }
+                Light::Segment { a, b } => 0.5 * (*b - *a).dot(axis).abs(),
+                _ => 0.0,
+            }
         };
+        v.half_extents = Vec2::new(along(ax), along(ay));
         v.angle = self.angle();
         v
     }

@@ -157,6 +157,7 @@ impl<'a> Emitter<'a> {
             (_, Input::Near) => "frame.depth_range.x".into(),
             (_, Input::Far) => "frame.depth_range.y".into(),
             (_, Input::LightSize) => "frame.light_size.x".into(),
+            (_, Input::LightWidth) => "(frame.light_size.zw * 2.0)".into(),
             (Side::Receiver, i) => format!("in_{}", i.name()),
             // check refuses receiver inputs on the map side
             (Side::Map, i) => format!("in_{}", i.name()),
@@ -257,6 +258,20 @@ impl<'a> Emitter<'a> {
                     Func::ToF32 => format!("f32({})", v[0]),
                     Func::ToI32 => format!("i32({})", v[0]),
                     Func::Vec2 | Func::Vec3 | Func::Vec4 => format!("vec{}<f32>({})", v.len(), v.join(", ")),
+                    // the denominator is replaced by 1 where it is refused, so that no
+                    // infinity or NaN is computed even in the branch select discards
+                    Func::DivOr => format!(
+                        "select({fb}, {n} / select(1.0, {d}, abs({d}) >= {e} && {d} != 0.0), abs({d}) >= {e} && {d} != 0.0)",
+                        n = v[0],
+                        d = v[1],
+                        e = v[2],
+                        fb = v[3]
+                    ),
+                    // one texel at distance D spans texel_world.x * D + texel_world.y world units
+                    Func::UvWidth => format!(
+                        "({} / ((frame.texel_world.x * {} + frame.texel_world.y) * frame.shadow_size.x))",
+                        v[0], v[1]
+                    ),
                     f => format!("{}({})", f.name(), v.join(", ")),
                 }
             }
@@ -325,6 +340,12 @@ impl<'a> Emitter<'a> {
                     SampleFn::SampleLod => {
                         self.uses_sampler = true;
                         format!("textureSampleLevel({tex}, smp, in_uv, {layer}i, {})", args[0])
+                    }
+                    SampleFn::NearestAt => {
+                        format!(
+                            "textureLoad({tex}, clamp(vec2<i32>(floor((in_uv + vec2<f32>({}, {})) * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)",
+                            args[0], args[1]
+                        )
                     }
                     SampleFn::Nearest => {
                         format!(

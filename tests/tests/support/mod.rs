@@ -85,6 +85,7 @@ impl QueryPlane {
             near: NEAR,
             far: FAR,
             light_size: 0.0,
+            light_half_extents: [0.0, 0.0],
             light_angle: 0.0,
             light_proj_y: proj.y_axis.y,
             light_orthographic: true,

@@ -1,6 +1,6 @@
-//! Summed-area tables on the GPU: the SummedArea pass (u32 fixed point over unorm codes,
-//! two compute steps) and the language's box lookup `sample_box`, checked against sums and
-//! means computed on the CPU from the very codes the GPU stored.
+//! Lookups and frame-dependent functions of the language on the GPU: summed-area tables
+//! (u32 fixed point over unorm codes, two compute steps) read by `sample_box`, `nearest_at`,
+//! `uv_width` and `div_or`, checked against values computed on the CPU from what the GPU stored.
 
 mod support;
 
@@ -147,4 +147,86 @@ fn a_box_one_texel_wide_is_bilinear_filtering() {
         .map(|(a, b)| (a - b).abs() as f64)
         .fold(0.0, f64::max);
     assert!(worst <= 1.0 / 256.0 + 1.0 / 255.0, "one-texel box vs bilinear: worst {worst}");
+}
+
+/// A technique whose visibility is `expr` over a depth map read as channel `z` (F32).
+fn probe_expr(expr: &str) -> sshc::Compiled {
+    let src = format!(
+        r#"Technique(
+    name: "expr_probe",
+    channels: {{ "z": Channel(precision: F32) }},
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Shade(name: "shade", reads: ["shadow"], visibility: "{expr}"),
+    ],
+)"#
+    );
+    compile_source("expr_probe", &src, &[], &[])
+}
+
+#[test]
+fn nearest_at_reads_the_texel_under_the_offset_point() {
+    let p = plane();
+    let depth = depth_field("noise", N);
+    let run = run_plane(
+        &probe_expr("nearest_at(z, 3.0 * texel_size, -2.0 * texel_size)"),
+        &p,
+        &depth,
+        &[],
+        1,
+    );
+    for (v, pos) in run.visibility.iter().zip(&run.positions) {
+        let (uv, _) = p.project(*pos);
+        let n = N as f64;
+        // the query plane's pixel centres sit a quarter texel from texel edges, far from
+        // any rounding of uv, so the texel index is exact
+        let i = ((uv[0] + 3.0 / n) * n).floor().clamp(0.0, n - 1.0) as usize;
+        let j = ((uv[1] - 2.0 / n) * n).floor().clamp(0.0, n - 1.0) as usize;
+        assert_eq!(*v, depth[j * N as usize + i], "at uv {uv:?}");
+    }
+}
+
+#[test]
+fn uv_width_maps_world_lengths_to_the_shadow_map() {
+    // The query plane's orthographic light spans 2 world units: a length of 0.5 covers a
+    // quarter of the map at every distance. f32: one division and one multiply-add, a few
+    // ulps of 0.25.
+    let p = plane();
+    let run = run_plane(&probe_expr("uv_width(0.5, d_world)"), &p, &depth_field("one", N), &[], 1);
+    for v in &run.visibility {
+        assert!((v - 0.25).abs() <= 4.0 * f32::EPSILON, "uv_width(0.5) = {v}");
+    }
+}
+
+#[test]
+fn div_or_divides_where_the_denominator_is_large_enough() {
+    let p = plane();
+    let run = run_plane(
+        &probe_expr("saturate(div_or(0.1, d - 0.5, 0.2, 0.25))"),
+        &p,
+        &depth_field("one", N),
+        &[],
+        1,
+    );
+    let mut counts = [0; 3];
+    for (v, pos) in run.visibility.iter().zip(&run.positions) {
+        let (_, d) = p.project(*pos);
+        let den = d - 0.5;
+        // pixels within f32 rounding of the threshold could go either way
+        if (den.abs() - 0.2).abs() < 1e-5 {
+            continue;
+        }
+        let want = if den.abs() >= 0.2 { (0.1 / den).clamp(0.0, 1.0) } else { 0.25 };
+        counts[if den >= 0.2 {
+            0
+        } else if den <= -0.2 {
+            1
+        } else {
+            2
+        }] += 1;
+        // f32: the GPU's d differs from the f64 one by a few ulps of the plane's depth
+        // (1e-6), and 0.1 / den amplifies that by at most 0.1 / 0.2^2 = 2.5
+        assert!((*v as f64 - want).abs() <= 1e-5, "d = {d}: {v} vs {want}");
+    }
+    assert!(counts.iter().all(|&c| c > 0), "every branch is exercised: {counts:?}");
 }
