@@ -9,7 +9,13 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 #[cfg(feature = "gpu")]
+mod compare_cmd;
+#[cfg(feature = "gpu")]
 mod render;
+#[cfg(feature = "gpu")]
+mod sweep;
+#[cfg(feature = "gpu")]
+mod truth_cmd;
 
 #[derive(Parser)]
 #[command(
@@ -61,6 +67,19 @@ enum Command {
     /// the visibility buffer and the world position and normal of every pixel.
     #[cfg(feature = "gpu")]
     Render(render::RenderArgs),
+    /// Ground truth: the fraction of the light visible from the world position of every
+    /// pixel (rendered on the GPU), by CPU ray casting, with its measured standard error.
+    #[cfg(feature = "gpu")]
+    Truth(truth_cmd::TruthArgs),
+    /// Render a technique and compare it with the ground truth at the same positions: one
+    /// PNG with its visibility, the truth, the signed error and the figures.
+    #[cfg(feature = "gpu")]
+    Compare(compare_cmd::CompareArgs),
+    /// Sweep techniques x their parameter axes x scenes: error against the ground truth,
+    /// GPU time (as a ratio to a reference technique) and memory; CSV, Markdown and Pareto
+    /// charts.
+    #[cfg(feature = "gpu")]
+    Sweep(sweep::SweepArgs),
     /// Time compilation of techniques in a warm process (naga validation included).
     BenchCompile {
         /// Technique files.
@@ -138,6 +157,12 @@ fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         #[cfg(feature = "gpu")]
         Command::Render(args) => render::render(args),
+        #[cfg(feature = "gpu")]
+        Command::Truth(args) => truth_cmd::truth(args),
+        #[cfg(feature = "gpu")]
+        Command::Compare(args) => compare_cmd::compare(args),
+        #[cfg(feature = "gpu")]
+        Command::Sweep(args) => sweep::sweep(args),
         Command::Compile { common, out } => {
             let c = compile_reported(&common)?;
             let files = sshc::write_outputs(&c, &out).map_err(|e| format!("error: cannot write to `{}`: {e}", out.display()))?;

@@ -7,7 +7,7 @@ use sshc::ir::{Node, Origin};
 use sshc::{CompileOptions, Limits};
 use std::path::{Path, PathBuf};
 
-pub const TECHNIQUES: [&str; 5] = ["hard", "pcf", "vsm", "esm", "csm"];
+pub const TECHNIQUES: [&str; 7] = ["hard", "pcf", "vsm", "esm", "csm", "cssm", "pcss"];
 
 fn path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -264,7 +264,7 @@ mod mutations {
         #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
         /// Random token mutations of the bundled techniques never panic the compiler.
         #[test]
-        fn mutated_techniques_never_panic(which in 0usize..5, ops in proptest::collection::vec((0usize..100_000, 0usize..8, 0usize..1000), 1..6)) {
+        fn mutated_techniques_never_panic(which in 0usize..TECHNIQUES.len(), ops in proptest::collection::vec((0usize..100_000, 0usize..8, 0usize..1000), 1..6)) {
             let src = source(TECHNIQUES[which]);
             let mutated = mutate(&src, &ops);
             let r = std::panic::catch_unwind(|| {
@@ -293,4 +293,96 @@ fn lookups_by_filter_width_validate() {
             .iter()
             .any(|(_, s)| s.contains("log2(max(1e-2f * frame.shadow_size.x, 1.0))"))
     );
+}
+
+#[test]
+fn cssm_with_summed_area_tables_snapshots() {
+    // filter = 1: the table path (every channel Unorm8, box lookups); the default snapshot
+    // above covers the mipmap path.
+    let src = source("cssm");
+    let c = sshc::compile_str(&src, &opts(&[("filter", "1".into())], &[])).unwrap_or_else(|d| panic!("{}", d.render("cssm", &src)));
+    insta::assert_snapshot!("cssm-filter1.graph.ron", c.graph.to_ron());
+    for (file, wgsl) in &c.shaders {
+        insta::assert_snapshot!(format!("cssm-filter1.{file}"), wgsl);
+    }
+    insta::assert_snapshot!("cssm-filter1.explain", sshc::explain::explain(&c));
+}
+
+#[test]
+fn cssm_filter_param_removes_the_unused_prefilter() {
+    // The Shade pass selects between the mipmap and the table lookups with the fixed param
+    // `filter`: the select folds, and dead-code elimination removes the other path's passes
+    // and resources; `sshc explain` says so.
+    let src = source("cssm");
+    for (filter, kept, gone) in [
+        ("0", ["basis", "blur", "mips"], ["basis_sat", "blur_sat", "sat"]),
+        ("1", ["basis_sat", "blur_sat", "sat"], ["basis", "blur", "mips"]),
+    ] {
+        let c = sshc::compile_str(&src, &opts(&[("filter", filter.into())], &[])).unwrap_or_else(|d| panic!("{}", d.render("cssm", &src)));
+        let passes: Vec<&str> = c.graph.passes.iter().map(|p| p.name.as_str()).collect();
+        let text = sshc::explain::explain(&c);
+        let removed = text
+            .split("\nRemoved:")
+            .nth(1)
+            .unwrap_or_else(|| panic!("filter = {filter}: nothing removed:\n{text}"));
+        for p in kept {
+            assert!(passes.contains(&p), "filter = {filter}: pass `{p}` missing from {passes:?}");
+        }
+        for p in gone {
+            assert!(!passes.contains(&p), "filter = {filter}: pass `{p}` kept in {passes:?}");
+            assert!(
+                removed.contains(&format!("pass `{p}`: no shaded pixel reads what it writes")),
+                "filter = {filter}: explain does not report removing `{p}`:\n{removed}"
+            );
+        }
+        // the table path stores only unorm codes; the mipmap path keeps the z-weighted basis at F16
+        let shade = &c.shaders.iter().find(|(f, _)| f.ends_with("shade.wgsl")).unwrap().1;
+        assert_eq!(filter == "1", !shade.contains("textureSampleLevel"), "filter = {filter}:\n{shade}");
+    }
+}
+
+#[test]
+fn cssm_grid_order_filter_and_precision() {
+    for m in [1, 2, 4, 8, 16, 32, 64] {
+        // mipmaps: the CSM basis at every precision, the z-weighted basis and z/2 at every
+        // precision (unorm ones with an affine encoding)
+        for p in Precision::ALL {
+            variant("cssm", &opts(&[("M", m.to_string())], &[("f", p), ("g", p), ("zh", p)]), None);
+        }
+        // summed-area tables: unorm only; a float channel is refused by the pack phase
+        for p in [Precision::Unorm8, Precision::Unorm16] {
+            let o = opts(&[("M", m.to_string()), ("filter", "1".into())], &[("fs", p), ("gs", p), ("zhs", p)]);
+            variant("cssm", &o, None);
+        }
+    }
+    for p in [Precision::F16, Precision::F32] {
+        let o = opts(&[("filter", "1".into())], &[("gs", p)]);
+        variant("cssm", &o, Some("tables sum unorm codes in u32 fixed point"));
+    }
+    for fix in 0..=2 {
+        for alpha in ["0.0", "1.0", "4.0"] {
+            for filter in ["0", "1"] {
+                let o = opts(&[("fix", fix.to_string()), ("alpha", alpha.into()), ("filter", filter.into())], &[]);
+                variant("cssm", &o, None);
+            }
+        }
+    }
+    for k in [1, 3, 7] {
+        variant("cssm", &opts(&[("K", k.to_string())], &[]), None);
+    }
+    variant("cssm", &opts(&[("filter", "2".into())], &[]), Some("out of range"));
+}
+
+#[test]
+fn pcss_grid_samples_and_precision() {
+    for n in [1, 2, 3, 6, 8, 16] {
+        for m in [1, 2, 5, 8, 16] {
+            variant("pcss", &opts(&[("N", n.to_string()), ("M", m.to_string())], &[]), None);
+        }
+    }
+    variant("pcss", &opts(&[("N", "17".into())], &[]), Some("out of range"));
+    variant("pcss", &opts(&[("M", "0".into())], &[]), Some("out of range"));
+    for p in Precision::ALL {
+        variant("pcss", &opts(&[], &[("z", p)]), None);
+    }
 }

@@ -806,7 +806,7 @@ impl<'g> Executor<'g> {
         }
         for t in self.graph.textures.iter().filter(|t| t.format == Format::SummedAreaU32) {
             let size = table_bytes(t, s.shadow_size);
-            let limit = (gpu.limits.max_storage_buffer_binding_size as u64).min(gpu.limits.max_buffer_size);
+            let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
             if size > limit {
                 return Err(RuntimeError::Limit {
                     what: format!("summed-area table `{}` (storage buffer bytes)", t.name),

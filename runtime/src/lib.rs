@@ -9,7 +9,9 @@ pub mod bind;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod graph;
+pub mod metrics;
 pub mod scene;
+pub mod truth;
 pub mod visibility;
 
 pub use graph::*;

@@ -1,1 +1,5 @@
-//! Cross-crate tests live in `tests/`; this library is empty on purpose.
+//! Cross-crate tests live in `tests/`. This library holds what they share: the
+//! hand-written reference implementations of the bundled techniques ([`reference`]),
+//! kept apart from the compiler's code generator so that tests can compare the two.
+
+pub mod reference;

@@ -1,0 +1,638 @@
+//! `sshc sweep <sweep.ron>`: techniques x their own parameter axes x scenes, each
+//! configuration rendered, timed (median of repeated frames, as a ratio to a reference
+//! technique timed in the same run) and compared with the cached ground truth; a CSV, a
+//! Markdown table and Pareto charts (error against time, error against memory).
+//!
+//! `--shard i/n` runs every n-th configuration starting at i; every shard times the
+//! reference technique on each of its scenes, so time ratios from separate shards (run on
+//! separate machines by any batch scheduler) stay comparable, and their CSVs merge by
+//! concatenation (drop the header lines after the first).
+
+use crate::truth_cmd::{TruthOpts, load_scene, positions_normals, rt, truth_at};
+use crate::{read, report};
+use indexmap::IndexMap;
+use plotters::prelude::*;
+use serde::Deserialize;
+use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
+use sshc_runtime::graph::{Draw, PassGraph};
+use sshc_runtime::metrics;
+use sshc_runtime::scene::Light;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args)]
+pub struct SweepArgs {
+    /// The sweep file (RON): scenes, a reference technique and techniques with their axes.
+    sweep: PathBuf,
+    /// Output folder: sweep.csv, sweep.md and the Pareto charts (SVG and PNG).
+    #[arg(short, long, default_value = "out/sweep")]
+    out: PathBuf,
+    /// Run one slice of the configurations: `i/n` runs those whose index is i modulo n.
+    #[arg(long, value_parser = shard, default_value = "0/1")]
+    shard: (usize, usize),
+    #[command(flatten)]
+    truth: TruthOpts,
+}
+
+fn shard(s: &str) -> Result<(usize, usize), String> {
+    let (i, n) = s.split_once('/').ok_or_else(|| format!("expected i/n, found `{s}`"))?;
+    let (i, n): (usize, usize) = (
+        i.trim().parse().map_err(|e| format!("`{i}`: {e}"))?,
+        n.trim().parse().map_err(|e| format!("`{n}`: {e}"))?,
+    );
+    if n == 0 || i >= n {
+        return Err(format!("`{s}`: need 0 <= i < n"));
+    }
+    Ok((i, n))
+}
+
+/// The sweep file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SweepFile {
+    /// Scene files, relative to the sweep file.
+    scenes: Vec<String>,
+    /// Camera size for every scene (default: each scene's own).
+    #[serde(default)]
+    camera: Option<(u32, u32)>,
+    /// Frames timed per configuration (after one untimed frame that builds pipelines).
+    #[serde(default = "default_frames")]
+    frames: usize,
+    /// The technique every shard times on each scene: time ratios are against it.
+    reference: String,
+    techniques: Vec<Entry>,
+    /// CPU ray-traced baselines: this many light samples per pixel, one run (Lawlor's
+    /// "16 samples" row). Not timed on the GPU.
+    #[serde(default)]
+    stochastic: Vec<u32>,
+}
+
+fn default_frames() -> usize {
+    5
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Entry {
+    /// Technique file, relative to the sweep file.
+    file: String,
+    /// Name in tables and charts (default: the file stem).
+    #[serde(default)]
+    label: Option<String>,
+    /// Axes: `shadow_map` (texels), `light_scale` (multiplies the light's size),
+    /// `precision:NAME` (a precision name) or a param name (a `--set` value).
+    #[serde(default)]
+    axes: IndexMap<String, Vec<ron::Value>>,
+}
+
+/// One configuration: a technique with one value on each of its axes, on one scene.
+#[derive(Clone, Debug)]
+struct Config {
+    scene: usize,
+    technique: usize,
+    label: String,
+    /// `name=value` on each axis, in the file's order.
+    values: Vec<(String, String)>,
+}
+
+impl Config {
+    fn describe(&self) -> String {
+        self.values.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")
+    }
+}
+
+fn value_text(v: &ron::Value) -> String {
+    match v {
+        ron::Value::String(s) => s.clone(),
+        ron::Value::Number(n) => {
+            let x = n.into_f64();
+            if x.fract() == 0.0 && x.abs() < 1e15 {
+                format!("{}", x as i64)
+            } else {
+                format!("{x}")
+            }
+        }
+        ron::Value::Bool(b) => b.to_string(),
+        other => ron::to_string(other).unwrap_or_default(),
+    }
+}
+
+fn configs(file: &SweepFile) -> Vec<Config> {
+    let mut out = Vec::new();
+    for scene in 0..file.scenes.len() {
+        for (ti, t) in file.techniques.iter().enumerate() {
+            let label = t.label.clone().unwrap_or_else(|| stem(&t.file));
+            let mut combos: Vec<Vec<(String, String)>> = vec![vec![]];
+            for (axis, values) in &t.axes {
+                combos = combos
+                    .into_iter()
+                    .flat_map(|c| {
+                        values.iter().map(move |v| {
+                            let mut c = c.clone();
+                            c.push((axis.clone(), value_text(v)));
+                            c
+                        })
+                    })
+                    .collect();
+            }
+            for values in combos {
+                out.push(Config {
+                    scene,
+                    technique: ti,
+                    label: label.clone(),
+                    values,
+                });
+            }
+        }
+    }
+    out
+}
+
+fn stem(p: &str) -> String {
+    Path::new(p)
+        .file_stem()
+        .map(|s| s.to_string_lossy().trim_end_matches(".graph").to_string())
+        .unwrap_or_else(|| p.to_string())
+}
+
+/// Scale a light's extent (radius, half-extents, segment length about its midpoint,
+/// angular diameter).
+fn scale_light(l: &mut Light, f: f32) {
+    match l {
+        Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius *= f,
+        Light::Rectangle {
+            half_width, half_height, ..
+        } => {
+            *half_width *= f;
+            *half_height *= f;
+        }
+        Light::Segment { a, b } => {
+            let m = (*a + *b) * 0.5;
+            *a = m + (*a - m) * f;
+            *b = m + (*b - m) * f;
+        }
+        Light::DistantDisk { angle_degrees, .. } => *angle_degrees *= f,
+        Light::Point { .. } | Light::Directional { .. } => {}
+    }
+}
+
+/// The truth of one scene at one light scale: visibility, its largest standard error, and
+/// which pixels face the light.
+type SceneTruth = (Vec<f32>, f64, Vec<bool>);
+
+/// One measured row.
+#[derive(Clone, Debug)]
+struct Row {
+    scene: String,
+    label: String,
+    config: String,
+    shadow_map: u32,
+    light_scale: f64,
+    /// Median GPU ms per frame (all passes), or none for CPU baselines.
+    ms: Option<f64>,
+    reference_ms: Option<f64>,
+    peak_bytes: u64,
+    fetches: f64,
+    ops: f64,
+    acc: metrics::Accuracy,
+    truth_se: f64,
+}
+
+impl Row {
+    fn ratio(&self) -> Option<f64> {
+        Some(self.ms? / self.reference_ms?)
+    }
+}
+
+/// Median of per-frame GPU times (sum over passes) over `frames` frames after a warm-up.
+fn time_frames(ex: &mut Executor, frames: usize) -> Result<Option<f64>, String> {
+    ex.run_frame().map_err(rt)?;
+    let mut t = Vec::new();
+    for _ in 0..frames.max(1) {
+        let f = ex.run_frame().map_err(rt)?;
+        let ms: Option<f64> = f.passes.iter().map(|(_, ms)| *ms).sum();
+        if let Some(ms) = ms {
+            t.push(ms);
+        }
+    }
+    t.sort_by(f64::total_cmp);
+    Ok(t.get(t.len() / 2).copied())
+}
+
+/// Fetches and operations per frame: per-invocation counts of every step times its
+/// invocations (texels for map-side steps, summed over mip levels; pixels for the Shade
+/// pass; rows or columns for compute steps).
+fn work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> (f64, f64) {
+    let texels = shadow as f64 * shadow as f64;
+    let (mut f, mut o) = (0.0, 0.0);
+    for p in &graph.passes {
+        for s in &p.steps {
+            let n = match s.draw {
+                Draw::SceneFromCamera => camera.0 as f64 * camera.1 as f64,
+                Draw::SceneFromLight | Draw::FullScreen => texels,
+                Draw::MipLevels => texels / 3.0,
+                Draw::ComputeRows | Draw::ComputeColumns => shadow as f64,
+            };
+            f += s.cost.fetches as f64 * n;
+            o += s.cost.ops as f64 * n;
+        }
+    }
+    (f, o)
+}
+
+pub fn sweep(a: SweepArgs) -> Result<(), String> {
+    let text = read(&a.sweep)?;
+    let file: SweepFile = ron::from_str(&text).map_err(|e| {
+        format!(
+            "error: {}:{}:{}: {}",
+            a.sweep.display(),
+            e.span.start.line,
+            e.span.start.col,
+            e.code
+        )
+    })?;
+    if file.scenes.is_empty() || (file.techniques.is_empty() && file.stochastic.is_empty()) {
+        return Err(format!("error: {}: a sweep needs scenes and techniques", a.sweep.display()));
+    }
+    let base = a.sweep.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let resolve = |p: &str| -> PathBuf { base.join(p) };
+    let all = configs(&file);
+    let (si, sn) = a.shard;
+    let mine: Vec<Config> = all
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| i % sn == si)
+        .map(|(_, c)| c.clone())
+        .collect();
+    let gpu = Gpu::new().map_err(rt)?;
+    let device = gpu.describe();
+    // charts name the device briefly: the adapter's name
+    let short = gpu.info.name.clone();
+    eprintln!(
+        "sweep: {} configurations ({} in shard {si}/{sn}) on {device}",
+        all.len(),
+        mine.len()
+    );
+    let sources: Vec<String> = file.techniques.iter().map(|t| read(&resolve(&t.file))).collect::<Result<_, _>>()?;
+    let bar = indicatif::ProgressBar::new((mine.len() + file.scenes.len() * file.stochastic.len()) as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("sweep [{bar:40}] {pos}/{len} {elapsed_precise} (eta {eta}) {msg}")
+            .map_err(|e| format!("error: {e}"))?
+            .progress_chars("=> "),
+    );
+    let mut rows = Vec::new();
+    // truths by (scene, light scale); reference times by scene
+    let mut truths: Vec<((usize, String), SceneTruth)> = Vec::new();
+    let mut reference: Vec<Option<f64>> = vec![None; file.scenes.len()];
+    let reference_source = read(&resolve(&file.reference))?;
+    for (si_, scene_path) in file.scenes.iter().enumerate() {
+        let touches = mine.iter().any(|c| c.scene == si_) || !file.stochastic.is_empty();
+        if !touches {
+            continue;
+        }
+        let scene = load_scene(&resolve(scene_path), file.camera, None)?;
+        let c = compile(&resolve(&file.reference), &reference_source, &[], &[])?;
+        let mut ex = Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?;
+        ex.bind_scene(&sshc_runtime::bind::scene_inputs(&scene)?).map_err(rt)?;
+        reference[si_] = time_frames(&mut ex, file.frames)?;
+    }
+    for c in &mine {
+        bar.set_message(format!("{} {} {}", stem(&file.scenes[c.scene]), c.label, c.describe()));
+        let mut scene = load_scene(&resolve(&file.scenes[c.scene]), file.camera, None)?;
+        let mut set = Vec::new();
+        let mut precision = Vec::new();
+        let mut light_scale = 1.0f64;
+        for (k, v) in &c.values {
+            match k.as_str() {
+                "shadow_map" => scene.shadow_map = v.parse().map_err(|_| format!("error: shadow_map = `{v}` is not a whole number"))?,
+                "light_scale" => light_scale = v.parse().map_err(|_| format!("error: light_scale = `{v}` is not a number"))?,
+                k if k.starts_with("precision:") => precision.push((k["precision:".len()..].to_string(), v.clone())),
+                k => set.push((k.to_string(), v.clone())),
+            }
+        }
+        if let Some(l) = scene.lights.first_mut() {
+            scale_light(l, light_scale as f32);
+        }
+        let path = resolve(&file.techniques[c.technique].file);
+        let compiled = compile(&path, &sources[c.technique], &set, &precision)?;
+        let (fetches, ops) = work(&compiled.graph, scene.shadow_map, scene.camera_size());
+        let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
+        ex.bind_scene(&sshc_runtime::bind::scene_inputs(&scene)?).map_err(rt)?;
+        let ms = time_frames(&mut ex, file.frames)?;
+        let vis = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
+        let peak = ex.memory().map_err(rt)?.iter().map(|(_, b)| b).sum();
+        let key = (c.scene, format!("{light_scale}"));
+        let (truth, se, facing) = match truths.iter().find(|(k, _)| *k == key) {
+            Some((_, t)) => t.clone(),
+            None => {
+                let (p, n) = positions_normals(&ex)?;
+                bar.suspend(|| truth_at(&scene, &p, &n, &a.truth)).map(|(t, _)| {
+                    let facing = metrics::facing_light(&p, &n, &scene.lights[0]).unwrap_or_default();
+                    (t.visibility.clone(), t.max_std_error() as f64, facing)
+                })?
+            }
+        };
+        if !truths.iter().any(|(k, _)| *k == key) {
+            truths.push((key, (truth.clone(), se, facing.clone())));
+        }
+        let acc = metrics::accuracy(&vis, &truth, &facing).map_err(|e| format!("error: {e}"))?;
+        rows.push(Row {
+            scene: stem(&file.scenes[c.scene]),
+            label: c.label.clone(),
+            config: c.describe(),
+            shadow_map: scene.shadow_map,
+            light_scale,
+            ms,
+            reference_ms: reference[c.scene],
+            peak_bytes: peak,
+            fetches,
+            ops,
+            acc,
+            truth_se: se,
+        });
+        bar.inc(1);
+    }
+    // CPU baselines: n light samples per pixel, one run, against the truth
+    if si == 0 {
+        for (sc, scene_path) in file.scenes.iter().enumerate() {
+            for &n in &file.stochastic {
+                let scene = load_scene(&resolve(scene_path), file.camera, None)?;
+                let c = compile(&resolve(&file.reference), &reference_source, &[], &[])?;
+                let mut ex = Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?;
+                ex.bind_scene(&sshc_runtime::bind::scene_inputs(&scene)?).map_err(rt)?;
+                ex.run_frame().map_err(rt)?;
+                let (p, nrm) = positions_normals(&ex)?;
+                let (truth, _) = bar.suspend(|| truth_at(&scene, &p, &nrm, &a.truth))?;
+                let vis = sshc_runtime::visibility::Visibility::new(&scene);
+                let est = vis.visible_fractions_seeded(&p, &nrm, &scene.lights[0], n, 0x5eed_0000 + n as u64);
+                let est: Vec<f32> = est.iter().zip(&p).map(|(v, p)| if p.is_finite() { *v } else { 1.0 }).collect();
+                let facing = metrics::facing_light(&p, &nrm, &scene.lights[0]).unwrap_or_default();
+                let acc = metrics::accuracy(&est, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;
+                rows.push(Row {
+                    scene: stem(&file.scenes[sc]),
+                    label: format!("{n} samples (CPU)"),
+                    config: format!("samples={n}"),
+                    shadow_map: 0,
+                    light_scale: 1.0,
+                    ms: None,
+                    reference_ms: reference[sc],
+                    peak_bytes: 0,
+                    fetches: 0.0,
+                    ops: 0.0,
+                    acc,
+                    truth_se: truth.max_std_error() as f64,
+                });
+                bar.inc(1);
+            }
+        }
+    }
+    bar.finish_and_clear();
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("error: {}: {e}", a.out.display()))?;
+    let write = |name: &str, text: &str| -> Result<(), String> {
+        let p = a.out.join(name);
+        std::fs::write(&p, text).map_err(|e| format!("error: {}: {e}", p.display()))?;
+        println!("wrote {}", p.display());
+        Ok(())
+    };
+    write("sweep.csv", &csv(&rows, &device, a.shard))?;
+    write("sweep.md", &markdown(&rows, &device, &file.reference))?;
+    for scene in file.scenes.iter().map(|s| stem(s)) {
+        let these: Vec<&Row> = rows.iter().filter(|r| r.scene == scene).collect();
+        if these.iter().all(|r| r.ms.is_none()) {
+            continue;
+        }
+        for (what, x_of, x_label) in [
+            (
+                "time",
+                (|r: &Row| r.ratio()) as fn(&Row) -> Option<f64>,
+                "GPU time per frame / reference technique's",
+            ),
+            (
+                "memory",
+                |r: &Row| (r.ms.is_some()).then_some(r.peak_bytes as f64 / (1 << 20) as f64),
+                "peak memory (MiB)",
+            ),
+        ] {
+            for ext in ["svg", "png"] {
+                let p = a.out.join(format!("pareto-{scene}-{what}.{ext}"));
+                pareto(
+                    &p,
+                    &these,
+                    x_of,
+                    x_label,
+                    &format!("{scene}: RMS penumbra error vs {what} on {short}"),
+                )?;
+                println!("wrote {}", p.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+fn compile(path: &Path, source: &str, set: &[(String, String)], precision: &[(String, String)]) -> Result<sshc::Compiled, String> {
+    let opts = sshc::CompileOptions {
+        set: set.to_vec(),
+        precision: precision.to_vec(),
+        ..Default::default()
+    };
+    sshc::compile_str(source, &opts).map_err(|d| {
+        report(&d, path, source);
+        format!("error: {} does not compile with {set:?} {precision:?}", path.display())
+    })
+}
+
+fn opt(v: Option<f64>, digits: usize) -> String {
+    v.map(|x| format!("{x:.digits$}")).unwrap_or_default()
+}
+
+fn csv(rows: &[Row], device: &str, (si, sn): (usize, usize)) -> String {
+    let mut s = String::from(
+        "shard,device,scene,technique,config,shadow_map,light_scale,gpu_ms,reference_ms,time_ratio,peak_bytes,fetches,ops,rms_facing,max_facing,rms_penumbra,max_penumbra,facing_pixels,penumbra_pixels,truth_max_se\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{si}/{sn},\"{device}\",{},{},\"{}\",{},{},{},{},{},{},{:.0},{:.0},{:.3},{:.3},{:.3},{:.3},{},{},{:.5}",
+            r.scene,
+            r.label,
+            r.config,
+            r.shadow_map,
+            r.light_scale,
+            opt(r.ms, 4),
+            opt(r.reference_ms, 4),
+            opt(r.ratio(), 4),
+            r.peak_bytes,
+            r.fetches,
+            r.ops,
+            r.acc.facing.rms,
+            r.acc.facing.max,
+            r.acc.penumbra.rms,
+            r.acc.penumbra.max,
+            r.acc.facing.pixels,
+            r.acc.penumbra.pixels,
+            r.truth_se
+        );
+    }
+    s
+}
+
+fn markdown(rows: &[Row], device: &str, reference: &str) -> String {
+    let mut s = format!(
+        "Device: {device}. Errors in 0..255 units against the ground truth (RMS over pixels facing the light, and over penumbra pixels); time as a ratio to `{reference}` timed in the same run (median of repeated frames).\n\n"
+    );
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        let _ = writeln!(s, "### {scene}\n");
+        s.push_str("| technique | config | RMS facing | RMS penumbra | max penumbra | time ratio | GPU ms | peak MiB | fetches/frame | ops/frame |\n|---|---|---|---|---|---|---|---|---|---|\n");
+        for r in rows.iter().filter(|r| r.scene == scene) {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.2} | {:.2} | {:.1} | {} | {} | {:.2} | {:.3e} | {:.3e} |",
+                r.label,
+                r.config,
+                r.acc.facing.rms,
+                r.acc.penumbra.rms,
+                r.acc.penumbra.max,
+                opt(r.ratio(), 2),
+                opt(r.ms, 2),
+                r.peak_bytes as f64 / (1 << 20) as f64,
+                r.fetches,
+                r.ops
+            );
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// The configurations no other one beats on both axes (lower x and lower error).
+fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut p: Vec<(f64, f64)> = points.to_vec();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let mut front: Vec<(f64, f64)> = Vec::new();
+    for q in p {
+        if front.last().is_none_or(|l| q.1 < l.1) {
+            front.push(q);
+        }
+    }
+    front
+}
+
+const FONT: &str = "sshc-sweep";
+
+fn pareto(path: &Path, rows: &[&Row], x_of: fn(&Row) -> Option<f64>, x_label: &str, title: &str) -> Result<(), String> {
+    let pts: Vec<(String, f64, f64)> = rows
+        .iter()
+        .filter_map(|r| Some((r.label.clone(), x_of(r)?, r.acc.penumbra.rms)))
+        .filter(|(_, x, y)| x.is_finite() && y.is_finite() && *x > 0.0)
+        .collect();
+    if pts.is_empty() {
+        return Err(format!("error: {}: nothing to plot", path.display()));
+    }
+    let svg = path.extension().is_some_and(|e| e == "svg");
+    let size = (900, 600);
+    // text is measured with the bundled font in both backends
+    plotters::style::register_font(FONT, FontStyle::Normal, epaint_default_fonts::HACK_REGULAR)
+        .map_err(|_| "error: the bundled font cannot be read".to_string())?;
+    if svg {
+        let root = SVGBackend::new(path, size).into_drawing_area();
+        draw(&root, &pts, x_label, title, FONT)
+    } else {
+        let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
+        {
+            let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
+            draw(&root, &pts, x_label, title, FONT)?;
+        }
+        image::RgbImage::from_raw(size.0, size.1, buf)
+            .ok_or_else(|| "error: chart buffer of the wrong size".to_string())?
+            .save(path)
+            .map_err(|e| format!("error: {}: {e}", path.display()))
+    }
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    pts: &[(String, f64, f64)],
+    x_label: &str,
+    title: &str,
+    font: &str,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| format!("error: drawing a chart: {e}");
+    root.fill(&WHITE).map_err(e)?;
+    let (x0, x1) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
+    let y1 = pts.iter().fold(0.0f64, |a, p| a.max(p.2));
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (font, 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(56)
+        .build_cartesian_2d((x0 * 0.8..x1 * 1.25).log_scale(), 0.0..y1 * 1.1 + 1e-3)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc("RMS error in penumbra (0..255)")
+        .label_style((font, 13))
+        .draw()
+        .map_err(e)?;
+    let mut labels: Vec<&str> = pts.iter().map(|p| p.0.as_str()).collect();
+    labels.sort();
+    labels.dedup();
+    for (i, l) in labels.iter().enumerate() {
+        let colour = Palette99::pick(i).to_rgba();
+        let mine: Vec<(f64, f64)> = pts.iter().filter(|p| p.0 == *l).map(|p| (p.1, p.2)).collect();
+        chart
+            .draw_series(mine.iter().map(|&(x, y)| Circle::new((x, y), 5, colour.filled())))
+            .map_err(e)?
+            .label(*l)
+            .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
+    }
+    let all: Vec<(f64, f64)> = pts.iter().map(|p| (p.1, p.2)).collect();
+    chart
+        .draw_series(LineSeries::new(pareto_front(&all), BLACK.stroke_width(1)))
+        .map_err(e)?
+        .label("Pareto front")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK));
+    chart
+        .configure_series_labels()
+        .label_font((font, 13))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pareto_front_keeps_only_undominated_points() {
+        let f = pareto_front(&[(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (0.5, 9.0)]);
+        assert_eq!(f, vec![(0.5, 9.0), (1.0, 5.0), (2.0, 3.0), (4.0, 1.0)]);
+    }
+
+    #[test]
+    fn axes_multiply_per_technique_and_scene() {
+        let f: SweepFile = ron::from_str(
+            r#"(scenes: ["a.ron", "b.ron"], reference: "h.ron", techniques: [
+                (file: "p.ron", axes: { "shadow_map": [16, 32], "r": [1, 2, 3] }),
+                (file: "c.ron", label: Some("csm"), axes: { "precision:f": ["Unorm8", "F16"] }),
+            ])"#,
+        )
+        .unwrap();
+        let c = configs(&f);
+        assert_eq!(c.len(), 2 * (2 * 3 + 2));
+        assert_eq!(c[0].describe(), "shadow_map=16 r=1");
+        assert_eq!(c[6].label, "csm");
+        assert_eq!(c[6].describe(), "precision:f=Unorm8");
+        assert_eq!(shard("1/3"), Ok((1, 3)));
+        assert!(shard("3/3").is_err());
+    }
+}

@@ -1,0 +1,216 @@
+//! `sshc truth` and `sshc compare` end to end on a real adapter (lavapipe on machines
+//! without a GPU), at tiny resolutions. They never skip: with no adapter the commands
+//! fail, and so do these tests (`scripts/test.sh` installs lavapipe).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// A fresh empty folder under the system's temporary folder.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("sshc-gpu-cli-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn sshc(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sshc"))
+        .args(args)
+        .current_dir(root())
+        .env("LP_NUM_THREADS", std::env::var("LP_NUM_THREADS").unwrap_or_else(|_| "2".into()))
+        .env(
+            "XDG_RUNTIME_DIR",
+            std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| "/tmp".into()),
+        )
+        .output()
+        .expect("the sshc binary runs")
+}
+
+/// Runs `sshc` and returns its standard output; fails with its output when it fails.
+fn ok(args: &[&str]) -> String {
+    let out = sshc(args);
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "sshc {} failed ({}):\n{stdout}\n{}",
+        args.join(" "),
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
+fn read_pfm(path: &Path) -> pxm::PFM {
+    let mut f = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    pxm::PFM::read_from(&mut f).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Area of the part of a unit disk on the far side of a chord at signed distance `u`.
+fn disk_fraction(u: f64) -> f64 {
+    let u = u.clamp(-1.0, 1.0);
+    0.5 + (u * (1.0 - u * u).sqrt() + u.asin()) / std::f64::consts::PI
+}
+
+/// The truth that `sshc truth` computes at the GPU's positions on edge.ron agrees with the
+/// closed form at the pixel centres (the orthographic camera sees x in [-0.25, 0.25]
+/// left to right), and the second call reads it from the cache.
+#[test]
+fn truth_command_matches_the_closed_form_and_is_cached() {
+    let dir = temp_dir("truth");
+    let (out, se, cache) = (dir.join("truth.pfm"), dir.join("se.pfm"), dir.join("cache"));
+    let args = [
+        "truth",
+        "--scene",
+        "scenes/edge.ron",
+        "--size",
+        "32x32",
+        "--samples",
+        "64",
+        "--runs",
+        "4",
+        "-o",
+        out.to_str().unwrap(),
+        "--std-error",
+        se.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ];
+    let first = ok(&args);
+    for needle in [
+        "truth: computed, cached in",
+        "64 light samples per pixel per run x 4 runs",
+        "standard error",
+        "rays/s",
+    ] {
+        assert!(first.contains(needle), "`{needle}` missing from:\n{first}");
+    }
+    let truth = read_pfm(&out);
+    let std_error = read_pfm(&se);
+    assert_eq!((truth.width, truth.height, truth.color), (32, 32, false));
+    let png = image::open(dir.join("truth.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (32, 32));
+    let se_max = std_error.data.iter().copied().fold(0f32, f32::max) as f64;
+    assert!(se_max > 0.0 && se_max < 0.05, "max standard error {se_max}");
+    // 4 x the largest measured standard error, plus the bias bound of the ray caster on
+    // this scene (runtime/tests/truth.rs: 1e-3, which also covers the GPU's f32
+    // interpolation of positions, about 1e-6 of the scene size).
+    let tol = 4.0 * se_max + 1e-3;
+    let w = (5f64).to_radians().tan();
+    for y in 0..32 {
+        for x in 0..32 {
+            let px = -0.25 + (x as f64 + 0.5) / 32.0 * 0.5;
+            let f = disk_fraction(px / w);
+            let t = truth.data[y * 32 + x] as f64;
+            assert!(
+                (t - f).abs() <= tol,
+                "pixel ({x}, {y}) at x = {px:.4}: truth {t:.5}, closed form {f:.5}, tolerance {tol:.5}"
+            );
+        }
+    }
+    let second = ok(&args);
+    assert!(second.contains("truth: read from the cache"), "{second}");
+    assert_eq!(read_pfm(&out).data, truth.data);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `sshc compare` reads the truth that `sshc truth` cached (every technique's camera pass
+/// writes the same positions), writes one image with three panels and the figures, and
+/// prints them.
+#[test]
+fn compare_command_writes_the_comparison_and_its_figures() {
+    let dir = temp_dir("compare");
+    let cache = dir.join("cache");
+    let common = [
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "32x32",
+        "--samples",
+        "16",
+        "--runs",
+        "2",
+        "--cache",
+    ];
+    let mut truth_args = vec!["truth"];
+    truth_args.extend(common);
+    let truth_out = dir.join("truth.pfm");
+    truth_args.extend([cache.to_str().unwrap(), "-o", truth_out.to_str().unwrap()]);
+    ok(&truth_args);
+    let png = dir.join("compare.png");
+    let mut args = vec!["compare", "techniques/pcf.ron"];
+    args.extend(common);
+    args.extend([
+        cache.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--set",
+        "N=5",
+        "--frames",
+        "3",
+        "--stability-frames",
+        "3",
+    ]);
+    let out = ok(&args);
+    for needle in [
+        "truth: read from the cache",
+        "pcf.ron on contact.ron: 32x32 px",
+        "N=5",
+        "error facing the light: RMS",
+        "error in penumbra (0 < truth < 1): RMS",
+        "temporal: mean |change|",
+        "GPU time per frame:",
+        "memory peak",
+        "device:",
+    ] {
+        assert!(out.contains(needle), "`{needle}` missing from:\n{out}");
+    }
+    // The figures are numbers in range.
+    let number_after = |label: &str| -> f64 {
+        let rest = &out[out.find(label).unwrap_or_else(|| panic!("{label}: {out}")) + label.len()..];
+        let token: String = rest.trim_start().chars().take_while(|c| c.is_ascii_digit() || *c == '.').collect();
+        token.parse().unwrap_or_else(|_| panic!("no number after `{label}` in:\n{out}"))
+    };
+    let rms = number_after("error facing the light: RMS");
+    let penumbra_rms = number_after("error in penumbra (0 < truth < 1): RMS");
+    let temporal = number_after("temporal: mean |change|");
+    assert!((0.0..=255.0).contains(&rms) && (0.0..=255.0).contains(&penumbra_rms), "{out}");
+    assert!(penumbra_rms > 0.0, "PCF is not exact in the penumbra:\n{out}");
+    assert!((0.0..=255.0).contains(&temporal), "{out}");
+    // Three 32-pixel panels scaled by 8, side by side, text below.
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert!(img.width() >= 3 * 256 && img.height() > 256 + 8 * 19, "{:?}", img.dimensions());
+    // The error panel (third) holds red or blue somewhere: PCF errs in the penumbra.
+    let x0 = 12 + 2 * (256 + 12);
+    let coloured = (0..256)
+        .flat_map(|y| (0..256).map(move |x| (x, y)))
+        .map(|(x, y)| img.get_pixel(x0 + x, 34 + y).0)
+        .filter(|p| p[0].abs_diff(p[2]) > 40)
+        .count();
+    assert!(coloured > 0, "the error panel is blank");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_arguments_are_errors_that_say_why() {
+    let out = sshc(&["truth", "--scene", "scenes/edge.ron", "--runs", "1", "--no-cache"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--runs") && err.contains("at least 2"), "{err}");
+
+    let dir = temp_dir("bad");
+    let scene = dir.join("bad.ron");
+    std::fs::write(&scene, "Scene(\n  camera: Perspective(position: (0.0, 1.0, 2.0)),\n)\n").unwrap();
+    let out = sshc(&["compare", "techniques/pcf.ron", "--scene", scene.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("{}:2:", scene.display())), "file:line:column expected: {err}");
+
+    let out = sshc(&["compare", "techniques/pcf.ron", "--scene", "scenes/edge.ron", "--size", "0x4"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("at least one pixel"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,233 @@
+//! Accuracy and stability of a technique's visibility against the ground truth
+//! (DESIGN.md section 5).
+//!
+//! - Errors are in 0..255 units, as in Lawlor 2006, figure 10: `255 * (estimate - truth)`
+//!   with visibility in 0..1.
+//! - [`accuracy`] gives RMS and max error over the pixels whose surface faces the light
+//!   ([`facing_light`]: `n . l > 0` with `l` towards the light's centre, or the direction
+//!   of a light at infinity), and separately over the penumbra pixels among them
+//!   ([`penumbra`]: `0 < truth < 1`), since lit floor in frame dilutes the first figure.
+//!   Pixels that face away receive no light whatever their visibility, so they are left
+//!   out of both.
+//! - A visibility that is not finite counts as the largest error, 255, and is counted.
+//! - [`error_image`] draws the signed error `estimate - truth` with the diverging
+//!   red-blue colour map of `colorous` (d3's continuous RdBu, a B-spline through
+//!   ColorBrewer's 11 classes): red where the technique lets through more light than the
+//!   truth (light leaking, too bright), blue where it lets through less (over-darkening),
+//!   near white at 0 (RdBu's centre, RGB (241, 239, 237)), dark red and dark blue at
+//!   `+range` and `-range` and beyond. Pixels outside the mask are mid grey.
+//! - [`mean_frame_change`]: temporal stability, the mean absolute change of visibility from
+//!   one frame to the next (0..255 units), over the masked pixels and all consecutive
+//!   pairs of frames.
+
+use std::fmt;
+
+use glam::Vec3;
+
+use crate::scene::Light;
+
+/// 0..1 visibility to the 0..255 units of the figures.
+pub const UNITS: f64 = 255.0;
+
+/// The colour of pixels left out of an error image.
+pub const MASKED_GREY: [u8; 3] = [128, 128, 128];
+
+/// Why a metric could not be computed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MetricsError(pub String);
+
+impl fmt::Display for MetricsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for MetricsError {}
+
+/// Error figures over one set of pixels, in 0..255 units.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ErrorStats {
+    /// Root-mean-square error.
+    pub rms: f64,
+    /// Largest absolute error.
+    pub max: f64,
+    /// Mean signed error (positive: the technique is too bright on average).
+    pub mean: f64,
+    /// Pixels the figures are over.
+    pub pixels: usize,
+    /// Of those, pixels whose visibility was not finite (each counted as an error of 255).
+    pub non_finite: usize,
+}
+
+/// Accuracy of one image: over the pixels that face the light, and over the penumbra
+/// pixels among them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Accuracy {
+    /// Pixels whose surface faces the light.
+    pub facing: ErrorStats,
+    /// Facing pixels with `0 < truth < 1`.
+    pub penumbra: ErrorStats,
+}
+
+fn same_len(what: &str, a: usize, b: usize) -> Result<(), MetricsError> {
+    if a == b {
+        Ok(())
+    } else {
+        Err(MetricsError(format!(
+            "{what}: {a} values against {b}; the images must have the same size"
+        )))
+    }
+}
+
+/// The signed error of one pixel in 0..1 units (a non-finite estimate counts as 1).
+fn signed_error(estimate: f32, truth: f32) -> Option<f64> {
+    let e = f64::from(estimate) - f64::from(truth);
+    e.is_finite().then_some(e)
+}
+
+/// True for each pixel whose surface faces the light: a finite position and normal with
+/// `n . l > 0`, where `l` points from the position to the light's centre, or is the
+/// direction of a light at infinity.
+pub fn facing_light(positions: &[Vec3], normals: &[Vec3], light: &Light) -> Result<Vec<bool>, MetricsError> {
+    same_len("positions and normals", positions.len(), normals.len())?;
+    Ok(positions
+        .iter()
+        .zip(normals)
+        .map(|(&p, &n)| {
+            if !(p.is_finite() && n.is_finite()) {
+                return false;
+            }
+            let l = match (light.center(), light.direction()) {
+                (Some(c), _) => c - p,
+                (None, Some(d)) => d,
+                (None, None) => return false,
+            };
+            n.dot(l) > 0.0
+        })
+        .collect())
+}
+
+/// The pixels of `mask` where the truth is strictly between 0 and 1.
+pub fn penumbra(truth: &[f32], mask: &[bool]) -> Result<Vec<bool>, MetricsError> {
+    same_len("truth and mask", truth.len(), mask.len())?;
+    Ok(truth.iter().zip(mask).map(|(&t, &m)| m && t > 0.0 && t < 1.0).collect())
+}
+
+/// RMS, max and mean error of `estimate` against `truth` over the pixels of `mask`, in
+/// 0..255 units. No pixel gives zeros.
+pub fn error_stats(estimate: &[f32], truth: &[f32], mask: &[bool]) -> Result<ErrorStats, MetricsError> {
+    same_len("estimate and truth", estimate.len(), truth.len())?;
+    same_len("estimate and mask", estimate.len(), mask.len())?;
+    let mut s = ErrorStats::default();
+    let (mut sum, mut sum_sq) = (0f64, 0f64);
+    for ((&e, &t), &m) in estimate.iter().zip(truth).zip(mask) {
+        if !m {
+            continue;
+        }
+        s.pixels += 1;
+        let err = match signed_error(e, t) {
+            Some(err) => err * UNITS,
+            None => {
+                s.non_finite += 1;
+                UNITS
+            }
+        };
+        sum += err;
+        sum_sq += err * err;
+        s.max = s.max.max(err.abs());
+    }
+    if s.pixels > 0 {
+        s.rms = (sum_sq / s.pixels as f64).sqrt();
+        s.mean = sum / s.pixels as f64;
+    }
+    Ok(s)
+}
+
+/// [`error_stats`] over the facing pixels and over the penumbra pixels among them.
+pub fn accuracy(estimate: &[f32], truth: &[f32], facing: &[bool]) -> Result<Accuracy, MetricsError> {
+    let pen = penumbra(truth, facing)?;
+    Ok(Accuracy {
+        facing: error_stats(estimate, truth, facing)?,
+        penumbra: error_stats(estimate, truth, &pen)?,
+    })
+}
+
+/// The colour of a signed error `e` for a symmetric range `[-range, range]` (values
+/// beyond it are clamped): red for positive, blue for negative, near white at 0.
+pub fn error_colour(e: f64, range: f64) -> [u8; 3] {
+    let x = if e.is_nan() {
+        1.0
+    } else if range > 0.0 {
+        (e / range).clamp(-1.0, 1.0)
+    } else if e == 0.0 {
+        0.0
+    } else {
+        e.signum()
+    };
+    // RdBu runs from red (0) to blue (1).
+    let c = colorous::RED_BLUE.eval_continuous(0.5 - 0.5 * x);
+    [c.r, c.g, c.b]
+}
+
+/// The half-width of a symmetric colour range that holds every masked error: the largest
+/// absolute error in 0..255 units rounded up to 4, 8, 16, 32, 64, 128 or 255. Returned
+/// in 0..255 units.
+pub fn error_range(estimate: &[f32], truth: &[f32], mask: &[bool]) -> Result<f64, MetricsError> {
+    let s = error_stats(estimate, truth, mask)?;
+    Ok([4.0, 8.0, 16.0, 32.0, 64.0, 128.0]
+        .into_iter()
+        .find(|&r| s.max <= r)
+        .unwrap_or(UNITS))
+}
+
+/// The signed error image (RGB, 8 bits per channel, rows top first): see the module docs.
+/// `range` is the half-width of the colour range in 0..255 units; pixels outside `mask`
+/// (when given) are [`MASKED_GREY`].
+pub fn error_image(
+    estimate: &[f32],
+    truth: &[f32],
+    mask: Option<&[bool]>,
+    width: u32,
+    height: u32,
+    range: f64,
+) -> Result<image::RgbImage, MetricsError> {
+    same_len("estimate and truth", estimate.len(), truth.len())?;
+    same_len("image size and values", width as usize * height as usize, estimate.len())?;
+    if let Some(m) = mask {
+        same_len("estimate and mask", estimate.len(), m.len())?;
+    }
+    let bytes = estimate
+        .iter()
+        .zip(truth)
+        .enumerate()
+        .flat_map(|(i, (&e, &t))| {
+            if mask.is_some_and(|m| !m[i]) {
+                return MASKED_GREY;
+            }
+            let err = signed_error(e, t).map_or(f64::NAN, |x| x * UNITS);
+            error_colour(err, range)
+        })
+        .collect();
+    image::RgbImage::from_raw(width, height, bytes).ok_or_else(|| MetricsError(format!("no {width} x {height} image")))
+}
+
+/// Mean absolute change of visibility between consecutive frames over the pixels of
+/// `mask`, in 0..255 units (a non-finite value counts as a change of 255). Fewer than two
+/// frames, or an empty mask, give 0.
+pub fn mean_frame_change(frames: &[Vec<f32>], mask: &[bool]) -> Result<f64, MetricsError> {
+    for f in frames {
+        same_len("frame and mask", f.len(), mask.len())?;
+    }
+    let mut sum = 0f64;
+    let mut count = 0usize;
+    for pair in frames.windows(2) {
+        for ((&a, &b), &m) in pair[0].iter().zip(&pair[1]).zip(mask) {
+            if m {
+                let d = (f64::from(b) - f64::from(a)).abs() * UNITS;
+                sum += if d.is_finite() { d } else { UNITS };
+                count += 1;
+            }
+        }
+    }
+    Ok(if count == 0 { 0.0 } else { sum / count as f64 })
+}

@@ -1,0 +1,18 @@
+//! trybuild cases of `technique!`: every bundled technique embeds and its `Params` is used
+//! (tests/ui/pass), and mistakes fail the build with the expected messages
+//! (tests/ui/fail/*.stderr; `TRYBUILD=overwrite` rewrites them, to be reviewed as a diff).
+//!
+//! trybuild builds the cases in its own crate under `target/tests/trybuild`, where
+//! `CARGO_MANIFEST_DIR` is that crate's folder; the macro resolves technique paths against
+//! `SSHC_SHADERS_GEN_BASE_DIR` instead when it is set, so the cases name files as a crate in
+//! `shaders-gen/` would.
+
+#[test]
+fn ui() {
+    // SAFETY: this binary has no other test, and no thread of ours reads the environment
+    // concurrently; trybuild's cargo inherits the variable.
+    unsafe { std::env::set_var("SSHC_SHADERS_GEN_BASE_DIR", env!("CARGO_MANIFEST_DIR")) };
+    let t = trybuild::TestCases::new();
+    t.pass("tests/ui/pass/*.rs");
+    t.compile_fail("tests/ui/fail/*.rs");
+}

@@ -1,0 +1,3 @@
+sshc_shaders_gen::technique!(mod missing = "techniques/no_such_technique.ron");
+
+fn main() {}

@@ -1,0 +1,3 @@
+sshc_shaders_gen::technique!(mod broken = "tests/ui/fail/syntax_error.ron");
+
+fn main() {}

@@ -1,0 +1,3 @@
+sshc_shaders_gen::technique!(mod typed = "tests/ui/fail/type_error.ron");
+
+fn main() {}

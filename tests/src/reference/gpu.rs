@@ -1,0 +1,718 @@
+//! The GPU reference: hand-written WGSL compute shaders (`shaders/*.wgsl`) run on wgpu.
+//!
+//! Every intermediate image is stored at the technique's storage precision
+//! ([`Storage`]: `rgba8unorm`, `rgba16unorm`, `rgba16float`, `rgba32float`), channels packed
+//! four per layer of a 2D array texture in the order of [`Resolved::stored_channels`]. The
+//! passes after Depth run in one compute pass, timed with timestamp queries when the device
+//! has them:
+//!
+//! - Map: one invocation per texel (and layer) computes the channels and encodes them;
+//! - Filter: a separable kernel as two dispatches, the first writing an `rgba32float`
+//!   intermediate (so only the second rounds to the storage precision); skipped for K = 1;
+//! - Mipmap: one dispatch per level, each texel the mean of the 2 x 2 texels below;
+//! - Shade: one invocation per query, filtered lookups through a linear, clamp-to-edge
+//!   sampler with `textureSampleLevel` at the query's level of detail.
+
+use super::{DepthMap, Kind, Query, Resolved, Storage, Technique, check_map, resolve};
+use sshc_runtime::gpu::Gpu;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+use wgpu::util::DeviceExt;
+
+const COMMON: &str = include_str!("shaders/common.wgsl");
+
+/// What a binding holds, in the order of the shader's `@binding` numbers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Slot {
+    /// `texture_2d<f32>` read with `textureLoad` (the r32float depth, z-max).
+    Depth,
+    /// `texture_2d_array<f32>` read with `textureLoad`.
+    Texels,
+    /// `texture_2d_array<f32>` sampled through the linear sampler.
+    Filtered,
+    Sampler,
+    /// `texture_storage_2d_array<FORMAT, write>`, FORMAT chosen per pipeline.
+    Write,
+    /// `texture_storage_2d<r32float, write>`.
+    WriteR32,
+    Uniform,
+    Read,
+    ReadWrite,
+}
+
+/// One entry point of one shader file.
+struct Program {
+    file: &'static str,
+    source: &'static str,
+    entry: &'static str,
+    slots: &'static [Slot],
+    /// Shade shaders start with `common.wgsl` (queries in, visibility out).
+    shade: bool,
+}
+
+/// `program!(file, entry, [slots], shade)`: the shader source comes from `shaders/<file>`.
+macro_rules! program {
+    ($file:literal, $entry:literal, [$($slot:ident),*], $shade:literal) => {
+        Program {
+            file: $file,
+            source: include_str!(concat!("shaders/", $file)),
+            entry: $entry,
+            slots: &[$(Slot::$slot),*],
+            shade: $shade,
+        }
+    };
+}
+
+const MAP_VSM: Program = program!("map_vsm.wgsl", "main", [Depth, Write], false);
+const MAP_ESM: Program = program!("map_esm.wgsl", "main", [Depth, Write, Uniform], false);
+const MAP_CSM: Program = program!("map_csm.wgsl", "main", [Depth, Write, Uniform, Read], false);
+const BLUR: Program = program!("blur.wgsl", "main", [Texels, Write, Uniform, Read], false);
+const MIP: Program = program!("mip.wgsl", "main", [Texels, Write], false);
+const ZMAX: Program = program!("zmax.wgsl", "main", [Depth, WriteR32, Uniform], false);
+const SHADE_HARD: Program = program!("shade_hard.wgsl", "main", [Read, ReadWrite, Depth, Uniform], true);
+const SHADE_PCF: Program = program!("shade_pcf.wgsl", "main", [Read, ReadWrite, Depth, Uniform], true);
+const SHADE_VSM: Program = program!("shade_vsm.wgsl", "main", [Read, ReadWrite, Filtered, Sampler, Uniform], true);
+/// By `classify`: none, threshold (7.3.2), z-max (7.3.1).
+const SHADE_ESM: [Program; 3] = [
+    program!("shade_esm.wgsl", "plain", [Read, ReadWrite, Filtered, Sampler, Uniform], true),
+    program!("shade_esm.wgsl", "threshold", [Read, ReadWrite, Filtered, Sampler, Uniform], true),
+    program!(
+        "shade_esm.wgsl",
+        "z_max",
+        [Read, ReadWrite, Filtered, Sampler, Uniform, Depth],
+        true
+    ),
+];
+const SHADE_CSM: Program = program!(
+    "shade_csm.wgsl",
+    "main",
+    [Read, ReadWrite, Filtered, Sampler, Uniform, Read, Read],
+    true
+);
+
+/// The texture format of a storage precision, and its WGSL name.
+pub fn texture_format(s: Storage) -> (wgpu::TextureFormat, &'static str) {
+    match s {
+        Storage::Unorm8 => (wgpu::TextureFormat::Rgba8Unorm, "rgba8unorm"),
+        Storage::Unorm16 => (wgpu::TextureFormat::Rgba16Unorm, "rgba16unorm"),
+        Storage::F16 => (wgpu::TextureFormat::Rgba16Float, "rgba16float"),
+        Storage::F32 => (wgpu::TextureFormat::Rgba32Float, "rgba32float"),
+    }
+}
+
+struct Pipeline {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+type PipelineKey = (&'static str, &'static str, Option<Storage>);
+
+/// The hand-written WGSL references on one device; pipelines are built once and cached
+/// (lavapipe compiles each through LLVM).
+pub struct GpuReference<'g> {
+    gpu: &'g Gpu,
+    sampler: wgpu::Sampler,
+    pipelines: Mutex<HashMap<PipelineKey, Arc<Pipeline>>>,
+}
+
+/// One dispatch of the compute pass.
+struct Dispatch {
+    pipeline: Arc<Pipeline>,
+    group: wgpu::BindGroup,
+    workgroups: [u32; 3],
+}
+
+/// Little-endian words of a uniform block.
+#[derive(Default)]
+struct Words(Vec<u8>);
+
+impl Words {
+    fn f(mut self, v: f64) -> Words {
+        self.0.extend_from_slice(&(v as f32).to_le_bytes());
+        self
+    }
+    fn u(mut self, v: u32) -> Words {
+        self.0.extend_from_slice(&v.to_le_bytes());
+        self
+    }
+    fn i(mut self, v: i32) -> Words {
+        self.0.extend_from_slice(&v.to_le_bytes());
+        self
+    }
+}
+
+fn groups(n: u32, per: u32) -> u32 {
+    n.div_ceil(per)
+}
+
+impl<'g> GpuReference<'g> {
+    pub fn new(gpu: &'g Gpu) -> Result<GpuReference<'g>, String> {
+        let sampler = gpu
+            .scoped("creating the reference sampler", || {
+                gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+                    label: Some("reference linear clamp"),
+                    address_mode_u: wgpu::AddressMode::ClampToEdge,
+                    address_mode_v: wgpu::AddressMode::ClampToEdge,
+                    address_mode_w: wgpu::AddressMode::ClampToEdge,
+                    mag_filter: wgpu::FilterMode::Linear,
+                    min_filter: wgpu::FilterMode::Linear,
+                    mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                    ..Default::default()
+                })
+            })
+            .map_err(|e| e.to_string())?;
+        Ok(GpuReference {
+            gpu,
+            sampler,
+            pipelines: Mutex::new(HashMap::new()),
+        })
+    }
+
+    /// Visibility at every query, and the GPU time in nanoseconds of the passes after Depth
+    /// for this one run (timestamp queries when the device has them, else the wall time of
+    /// submitting and waiting, read-back included).
+    pub fn visibility(&self, t: &Technique, map: &DepthMap, queries: &[Query]) -> Result<(Vec<f32>, f64), String> {
+        let r = resolve(t)?;
+        check_map(map)?;
+        if queries.is_empty() {
+            return Ok((Vec::new(), 0.0));
+        }
+        self.check_device(&r, map, queries)?;
+        let gpu = self.gpu;
+        let run = || -> Result<(Vec<f32>, f64), String> {
+            let device = &gpu.device;
+            let n = map.size;
+            let depth = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("reference depth"),
+                size: wgpu::Extent3d {
+                    width: n,
+                    height: n,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            });
+            let bytes: Vec<u8> = map.z.iter().flat_map(|z| z.to_le_bytes()).collect();
+            gpu.queue.write_texture(
+                depth.as_image_copy(),
+                &bytes,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(4 * n),
+                    rows_per_image: Some(n),
+                },
+                wgpu::Extent3d {
+                    width: n,
+                    height: n,
+                    depth_or_array_layers: 1,
+                },
+            );
+            let depth = depth.create_view(&Default::default());
+            let query_bytes: Vec<u8> = queries
+                .iter()
+                .flat_map(|q| [q.uv[0], q.uv[1], q.d, q.lod])
+                .flat_map(f32::to_le_bytes)
+                .collect();
+            let query_buffer = self.buffer("queries", &query_bytes, wgpu::BufferUsages::STORAGE);
+            let size = 4 * queries.len() as u64;
+            let results = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("reference visibility"),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let readback = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("reference read-back"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut dispatches = Vec::new();
+            let shade_groups = [groups(queries.len() as u32, 64), 1, 1];
+            let io = [query_buffer.as_entire_binding(), results.as_entire_binding()];
+            self.passes(&r, n, &depth, io, shade_groups, &mut dispatches)?;
+
+            let timer = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
+                let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("reference time"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                });
+                let resolved = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("reference timestamps"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let read = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("reference timestamps read-back"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                (set, resolved, read)
+            });
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("reference passes"),
+            });
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("reference passes after Depth"),
+                    timestamp_writes: timer.as_ref().map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
+                        query_set: set,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: Some(1),
+                    }),
+                });
+                for d in &dispatches {
+                    pass.set_pipeline(&d.pipeline.pipeline);
+                    pass.set_bind_group(0, &d.group, &[]);
+                    let [x, y, z] = d.workgroups;
+                    pass.dispatch_workgroups(x, y, z);
+                }
+            }
+            encoder.copy_buffer_to_buffer(&results, 0, &readback, 0, size);
+            if let Some((set, resolved, read)) = &timer {
+                encoder.resolve_query_set(set, 0..2, resolved, 0);
+                encoder.copy_buffer_to_buffer(resolved, 0, read, 0, 16);
+            }
+            let start = Instant::now();
+            gpu.queue.submit([encoder.finish()]);
+            let values = map_read(gpu, &readback)?;
+            let wall = start.elapsed().as_nanos() as f64;
+            let visibility: Vec<f32> = values
+                .chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect();
+            let time = match &timer {
+                Some((_, _, read)) => {
+                    let raw = map_read(gpu, read)?;
+                    let tick = |i: usize| u64::from_le_bytes(raw[8 * i..8 * i + 8].try_into().unwrap_or([0; 8]));
+                    let (a, b) = (tick(0), tick(1));
+                    if b > a && a > 0 {
+                        (b - a) as f64 * gpu.queue.get_timestamp_period() as f64
+                    } else {
+                        wall
+                    }
+                }
+                None => wall,
+            };
+            Ok((visibility, time))
+        };
+        gpu.scoped(&format!("running the GPU reference of `{}`", t.name), run)
+            .map_err(|e| e.to_string())?
+    }
+
+    /// Refuse what the device cannot do, before allocating anything.
+    fn check_device(&self, r: &Resolved, map: &DepthMap, queries: &[Query]) -> Result<(), String> {
+        let limits = &self.gpu.limits;
+        let features = self.gpu.features;
+        if map.size > limits.max_texture_dimension_2d {
+            return Err(format!(
+                "a {0} x {0} depth map exceeds the device's limit of {1} x {1}",
+                map.size, limits.max_texture_dimension_2d
+            ));
+        }
+        let layers = layers(r);
+        if layers > limits.max_texture_array_layers {
+            return Err(format!(
+                "{layers} texture layers exceed the device's limit of {}",
+                limits.max_texture_array_layers
+            ));
+        }
+        let bytes = 16 * queries.len() as u64;
+        if bytes > limits.max_storage_buffer_binding_size || groups(queries.len() as u32, 64) > limits.max_compute_workgroups_per_dimension
+        {
+            return Err(format!(
+                "{} queries are more than one dispatch of the device can take",
+                queries.len()
+            ));
+        }
+        if matches!(r.kind, Kind::Vsm | Kind::Esm | Kind::Csm) {
+            if r.storage == Storage::Unorm16 && !features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM) {
+                return Err("Unorm16 storage needs the device feature TEXTURE_FORMAT_16BIT_NORM".into());
+            }
+            if r.storage == Storage::F32 && !features.contains(wgpu::Features::FLOAT32_FILTERABLE) {
+                return Err("filtered lookups of F32 storage need the device feature FLOAT32_FILTERABLE".into());
+            }
+        }
+        Ok(())
+    }
+
+    /// Append the dispatches of every pass after Depth.
+    fn passes(
+        &self,
+        r: &Resolved,
+        n: u32,
+        depth: &wgpu::TextureView,
+        io: [wgpu::BindingResource<'_>; 2],
+        shade_groups: [u32; 3],
+        out: &mut Vec<Dispatch>,
+    ) -> Result<(), String> {
+        let [queries, results] = io;
+        let sampler = wgpu::BindingResource::Sampler(&self.sampler);
+        match r.kind {
+            Kind::Hard => {
+                let params = self.uniform("hard", Words::default().f(r.get("bias")));
+                let resources = vec![queries, results, view(depth), params.as_entire_binding()];
+                out.push(self.dispatch(&SHADE_HARD, None, resources, shade_groups)?);
+            }
+            Kind::Pcf => {
+                let params = self.uniform("pcf", Words::default().f(r.get("bias")).i(r.int("N") as i32));
+                let resources = vec![queries, results, view(depth), params.as_entire_binding()];
+                out.push(self.dispatch(&SHADE_PCF, None, resources, shade_groups)?);
+            }
+            Kind::Vsm => {
+                let filtered = self.prefilter(r, n, depth, (&MAP_VSM, Vec::new()), out)?;
+                let words = Words::default().f(r.get("bias")).f(r.get("min_variance")).f(r.get("bleed"));
+                let params = self.uniform("vsm", words);
+                let resources = vec![queries, results, view(&filtered), sampler, params.as_entire_binding()];
+                out.push(self.dispatch(&SHADE_VSM, None, resources, shade_groups)?);
+            }
+            Kind::Esm => {
+                let c = r.get("c");
+                let (lo, span) = r.stored_channels()[0].encoding(r.storage);
+                let map_params = self.uniform("esm map", Words::default().f(c).f(lo).f(span));
+                let map = (&MAP_ESM, vec![map_params.as_entire_binding()]);
+                let filtered = self.prefilter(r, n, depth, map, out)?;
+                let words = Words::default()
+                    .f(c)
+                    .f(r.get("bias"))
+                    .f(r.get("eps"))
+                    .f(r.get("zmax_offset"))
+                    .f(lo)
+                    .f(span);
+                let params = self.uniform("esm", words);
+                let classify = r.int("classify").clamp(0, 2);
+                let zmax = match classify {
+                    2 => Some(self.zmax(n, depth, r.int("K") as u32 + 2, out)?),
+                    _ => None,
+                };
+                let mut resources = vec![queries, results, view(&filtered), sampler, params.as_entire_binding()];
+                resources.extend(zmax.as_ref().map(view));
+                out.push(self.dispatch(&SHADE_ESM[classify as usize], None, resources, shade_groups)?);
+            }
+            Kind::Csm => {
+                let m = r.int("M");
+                // per layer: (lo, span) of its four channels; unused slots (odd M) decode as is
+                let mut encoding = Words::default();
+                for layer in r.stored_channels().chunks(4) {
+                    let mut lo = [0.0; 4];
+                    let mut span = [1.0; 4];
+                    for (i, c) in layer.iter().enumerate() {
+                        (lo[i], span[i]) = c.encoding(r.storage);
+                    }
+                    for v in lo.into_iter().chain(span) {
+                        encoding = encoding.f(v);
+                    }
+                }
+                let encoding = self.buffer("csm encoding", &encoding.0, wgpu::BufferUsages::STORAGE);
+                let map_params = self.uniform("csm map", Words::default().u(m as u32));
+                let map = (&MAP_CSM, vec![map_params.as_entire_binding(), encoding.as_entire_binding()]);
+                let filtered = self.prefilter(r, n, depth, map, out)?;
+                // 2 a_k / c_k with a_k = exp(-alpha (k/M)^2), c_k = pi (2k - 1) (eq. 6.6, 6.1.1)
+                let alpha = r.get("alpha");
+                let mut amplitude = Words::default();
+                for k in 1..=m {
+                    let ck = std::f64::consts::PI * (2 * k - 1) as f64;
+                    amplitude = amplitude.f(2.0 * (-alpha * (k as f64 / m as f64).powi(2)).exp() / ck);
+                }
+                let amplitude = self.buffer("csm amplitudes", &amplitude.0, wgpu::BufferUsages::STORAGE);
+                let fix = r.int("fix");
+                let shift = r.get("bias") + if fix == 1 { 0.5 / m as f64 } else { 0.0 };
+                let scale = if fix == 2 { 2.0 } else { 1.0 };
+                let params = self.uniform("csm", Words::default().u(m as u32).f(shift).f(scale));
+                let resources = vec![
+                    queries,
+                    results,
+                    view(&filtered),
+                    sampler,
+                    params.as_entire_binding(),
+                    encoding.as_entire_binding(),
+                    amplitude.as_entire_binding(),
+                ];
+                out.push(self.dispatch(&SHADE_CSM, None, resources, shade_groups)?);
+            }
+        }
+        Ok(())
+    }
+
+    /// The technique's Map pass (the program, with its extra bindings after the depth and
+    /// the target), its Filter pass (separable; skipped for one tap, which changes nothing)
+    /// and, for VSM and CSM, its Mipmap pass. Returns a view of every level of the result.
+    fn prefilter(
+        &self,
+        r: &Resolved,
+        n: u32,
+        depth: &wgpu::TextureView,
+        map: (&Program, Vec<wgpu::BindingResource<'_>>),
+        out: &mut Vec<Dispatch>,
+    ) -> Result<wgpu::TextureView, String> {
+        // the techniques' Filter kernels; VSM and CSM build a mean mip chain, ESM does not
+        let (weights, mips) = match r.kind {
+            Kind::Csm => (super::cpu::gaussian_weights(r.int("K").max(1) as usize, r.get("sigma")), true),
+            _ => (super::cpu::box_weights(r.int("K").max(1) as usize), r.kind == Kind::Vsm),
+        };
+        let layers = layers(r);
+        let levels = if mips { 32 - n.leading_zeros() } else { 1 };
+        let (format, _) = texture_format(r.storage);
+        let filtered = self.texture("filtered", n, layers, levels, format);
+        let tile = [groups(n, 8), groups(n, 8), layers];
+        let (program, extra) = map;
+        let map_resources = |target| [view(depth), target].into_iter().chain(extra.iter().cloned()).collect::<Vec<_>>();
+        let base = level_view(&filtered, 0);
+        if weights.len() > 1 {
+            let mapped = level_view(&self.texture("mapped", n, layers, 1, format), 0);
+            let tmp = level_view(
+                &self.texture("filter intermediate", n, layers, 1, wgpu::TextureFormat::Rgba32Float),
+                0,
+            );
+            let taps = weights.iter().fold(Words::default(), |w, &v| w.f(v));
+            let taps = self.buffer("filter weights", &taps.0, wgpu::BufferUsages::STORAGE);
+            let radius = (weights.len() / 2) as i32;
+            let horizontal = self.uniform("filter x", Words::default().i(1).i(0).i(radius));
+            let vertical = self.uniform("filter y", Words::default().i(0).i(1).i(radius));
+            out.push(self.dispatch(program, Some(r.storage), map_resources(view(&mapped)), tile)?);
+            let resources = vec![view(&mapped), view(&tmp), horizontal.as_entire_binding(), taps.as_entire_binding()];
+            out.push(self.dispatch(&BLUR, Some(Storage::F32), resources, tile)?);
+            let resources = vec![view(&tmp), view(&base), vertical.as_entire_binding(), taps.as_entire_binding()];
+            out.push(self.dispatch(&BLUR, Some(r.storage), resources, tile)?);
+        } else {
+            out.push(self.dispatch(program, Some(r.storage), map_resources(view(&base)), tile)?);
+        }
+        for level in 1..levels {
+            let size = (n >> level).max(1);
+            out.push(self.dispatch(
+                &MIP,
+                Some(r.storage),
+                vec![view(&level_view(&filtered, level - 1)), view(&level_view(&filtered, level))],
+                [groups(size, 8), groups(size, 8), layers],
+            )?);
+        }
+        Ok(filtered.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        }))
+    }
+
+    /// ESM's z-max texture (7.3.1): the depth max-filtered over `taps x taps`.
+    fn zmax(&self, n: u32, depth: &wgpu::TextureView, taps: u32, out: &mut Vec<Dispatch>) -> Result<wgpu::TextureView, String> {
+        let texture = |label| {
+            self.gpu
+                .device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: n,
+                        height: n,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: wgpu::TextureFormat::R32Float,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        let (tmp, zmax) = (texture("z-max intermediate"), texture("z-max"));
+        let radius = (taps / 2) as i32;
+        let horizontal = self.uniform("z-max x", Words::default().i(1).i(0).i(radius));
+        let vertical = self.uniform("z-max y", Words::default().i(0).i(1).i(radius));
+        let tile = [groups(n, 8), groups(n, 8), 1];
+        out.push(self.dispatch(&ZMAX, None, vec![view(depth), view(&tmp), horizontal.as_entire_binding()], tile)?);
+        out.push(self.dispatch(&ZMAX, None, vec![view(&tmp), view(&zmax), vertical.as_entire_binding()], tile)?);
+        Ok(zmax)
+    }
+
+    fn texture(&self, label: &str, n: u32, layers: u32, levels: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
+        self.gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: n,
+                height: n,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: levels,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+            view_formats: &[],
+        })
+    }
+
+    fn buffer(&self, label: &str, bytes: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        self.gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytes,
+            usage,
+        })
+    }
+
+    /// A uniform block, padded to 16 bytes.
+    fn uniform(&self, label: &str, words: Words) -> wgpu::Buffer {
+        let mut bytes = words.0;
+        bytes.resize(bytes.len().div_ceil(16).max(1) * 16, 0);
+        self.buffer(label, &bytes, wgpu::BufferUsages::UNIFORM)
+    }
+
+    fn dispatch(
+        &self,
+        program: &Program,
+        storage: Option<Storage>,
+        resources: Vec<wgpu::BindingResource<'_>>,
+        workgroups: [u32; 3],
+    ) -> Result<Dispatch, String> {
+        let pipeline = self.pipeline(program, storage)?;
+        let entries: Vec<wgpu::BindGroupEntry> = resources
+            .into_iter()
+            .enumerate()
+            .map(|(i, resource)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource,
+            })
+            .collect();
+        let group = self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(program.file),
+            layout: &pipeline.layout,
+            entries: &entries,
+        });
+        Ok(Dispatch {
+            pipeline,
+            group,
+            workgroups,
+        })
+    }
+
+    /// The pipeline of one entry point, with FORMAT set to the storage precision's format.
+    fn pipeline(&self, program: &Program, storage: Option<Storage>) -> Result<Arc<Pipeline>, String> {
+        let key = (program.file, program.entry, storage);
+        let mut cache = self.pipelines.lock().map_err(|_| "the pipeline cache is poisoned".to_string())?;
+        if let Some(p) = cache.get(&key) {
+            return Ok(p.clone());
+        }
+        let format = storage.map(texture_format);
+        let mut source = String::new();
+        if program.shade {
+            source.push_str(COMMON);
+            source.push('\n');
+        }
+        source.push_str(&program.source.replace("FORMAT", format.map_or("rgba32float", |f| f.1)));
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = program
+            .slots
+            .iter()
+            .enumerate()
+            .map(|(i, slot)| wgpu::BindGroupLayoutEntry {
+                binding: i as u32,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: binding_type(*slot, format.map_or(wgpu::TextureFormat::Rgba32Float, |f| f.0)),
+                count: None,
+            })
+            .collect();
+        let context = format!("building the reference pipeline {}:{} ({storage:?})", program.file, program.entry);
+        let device = &self.gpu.device;
+        let pipeline = self
+            .gpu
+            .scoped(&context, || {
+                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(program.file),
+                    source: wgpu::ShaderSource::Wgsl(source.into()),
+                });
+                let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some(program.file),
+                    entries: &entries,
+                });
+                let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some(program.file),
+                    bind_group_layouts: &[Some(&layout)],
+                    immediate_size: 0,
+                });
+                let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(program.file),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(program.entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                });
+                Pipeline { pipeline, layout }
+            })
+            .map_err(|e| e.to_string())?;
+        let pipeline = Arc::new(pipeline);
+        cache.insert(key, pipeline.clone());
+        Ok(pipeline)
+    }
+}
+
+fn binding_type(slot: Slot, format: wgpu::TextureFormat) -> wgpu::BindingType {
+    use Slot::*;
+    let texture = |filterable, view_dimension| wgpu::BindingType::Texture {
+        sample_type: wgpu::TextureSampleType::Float { filterable },
+        view_dimension,
+        multisampled: false,
+    };
+    let storage_texture = |format, view_dimension| wgpu::BindingType::StorageTexture {
+        access: wgpu::StorageTextureAccess::WriteOnly,
+        format,
+        view_dimension,
+    };
+    let buffer = |ty| wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    match slot {
+        Depth => texture(false, wgpu::TextureViewDimension::D2),
+        Texels => texture(false, wgpu::TextureViewDimension::D2Array),
+        Filtered => texture(true, wgpu::TextureViewDimension::D2Array),
+        Sampler => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+        Write => storage_texture(format, wgpu::TextureViewDimension::D2Array),
+        WriteR32 => storage_texture(wgpu::TextureFormat::R32Float, wgpu::TextureViewDimension::D2),
+        Uniform => buffer(wgpu::BufferBindingType::Uniform),
+        Read => buffer(wgpu::BufferBindingType::Storage { read_only: true }),
+        ReadWrite => buffer(wgpu::BufferBindingType::Storage { read_only: false }),
+    }
+}
+
+fn view(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::TextureView(v)
+}
+
+/// A view of one level of an array texture, all layers.
+fn level_view(t: &wgpu::Texture, level: u32) -> wgpu::TextureView {
+    t.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        base_mip_level: level,
+        mip_level_count: Some(1),
+        ..Default::default()
+    })
+}
+
+/// Layers of the technique's channel texture (four channels each).
+fn layers(r: &Resolved) -> u32 {
+    (r.stored_channels().len() as u32).div_ceil(4).max(1)
+}
+
+fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, String> {
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| format!("waiting for the GPU: {e}"))?;
+    rx.recv()
+        .map_err(|e| format!("reading back: {e}"))?
+        .map_err(|e| format!("reading back: {e}"))?;
+    let data = slice.get_mapped_range().map_err(|e| format!("reading back: {e}"))?.to_vec();
+    buffer.unmap();
+    Ok(data)
+}

@@ -1,0 +1,588 @@
+//! The hand-written references of the bundled techniques (`sshc_tests::reference`) agree
+//! with themselves: the CPU evaluator (f64, no quantisation) and the WGSL one (intermediate
+//! images at the storage precision, hardware-filtered lookups) give the same visibility on
+//! small synthetic depth maps, within tolerances derived below, per query, from the storage
+//! precision and Vulkan's precision rules. The CPU evaluator is also checked against
+//! closed forms of the papers' equations.
+//!
+//! GPU tests never skip: with no adapter they fail with the error (lavapipe, Mesa's CPU
+//! Vulkan driver, is enough; run with `LP_NUM_THREADS=2`).
+//!
+//! Binary shadow tests are guarded against exact ties: a query whose f64 result changes when
+//! its depth (or, for `nearest` lookups, its uv) moves by 2^-22 (four times the rounding of
+//! f32 values in [0, 1]) is skipped and counted, since the f32 arithmetic of a GPU may land
+//! on either side.
+
+use sshc_runtime::gpu::Gpu;
+use sshc_tests::reference::cpu;
+use sshc_tests::reference::tolerance::{Allowed, allowed};
+use sshc_tests::reference::{DepthMap, GpuReference, Query, Storage, Technique, cpu_visibility};
+use std::sync::OnceLock;
+
+// ---------------------------------------------------------------------------------------
+// Inputs
+
+fn gpu() -> &'static Gpu {
+    static GPU: OnceLock<Gpu> = OnceLock::new();
+    GPU.get_or_init(|| Gpu::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}")))
+}
+
+fn depth_map(size: u32, f: impl Fn(u32, u32) -> f32) -> DepthMap {
+    DepthMap {
+        size,
+        z: (0..size * size).map(|i| f(i % size, i / size)).collect(),
+    }
+}
+
+/// A deterministic xorshift64* generator.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn pick<T: Copy>(&mut self, v: &[T]) -> T {
+        v[(self.next() % v.len() as u64) as usize]
+    }
+}
+
+/// Synthetic depth maps: a tilted plane, a step edge, a checkerboard of a size that is no
+/// power of two, value noise, and the extremes all-0 and all-1.
+fn maps() -> Vec<(&'static str, DepthMap)> {
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let noise: Vec<f32> = (0..64 * 64).map(|_| rng.unit()).collect();
+    vec![
+        ("ramp32", depth_map(32, |x, y| 0.1 + 0.8 * (x as f32 + 0.5 * y as f32) / 46.5)),
+        ("step16", depth_map(16, |x, y| if x + y / 4 < 8 { 0.3 } else { 0.7 })),
+        (
+            "checker24",
+            depth_map(24, |x, y| if (x / 3 + y / 3) % 2 == 0 { 0.25 } else { 0.75 }),
+        ),
+        ("noise64", depth_map(64, |x, y| noise[(y * 64 + x) as usize])),
+        ("zeros16", depth_map(16, |_, _| 0.0)),
+        ("ones16", depth_map(16, |_, _| 1.0)),
+    ]
+}
+
+/// 240 receivers: uv anywhere on the map (a few on its edges), d near the stored depth
+/// (where the tests switch), uniform, or at the extremes 0 and 1; lod at whole levels,
+/// between levels, and beyond the chain (clamped).
+fn queries(map: &DepthMap, seed: u64) -> Vec<Query> {
+    let mut rng = Rng(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
+    let n = map.size as f32;
+    let levels = (32 - map.size.leading_zeros()) as f32;
+    (0..240)
+        .map(|i| {
+            let mut uv = [rng.unit(), rng.unit()];
+            if i % 37 == 0 {
+                uv[i % 2] = if i % 3 == 0 { 0.0 } else { 1.0 };
+            }
+            let texel = |c: f32| ((c * n).floor() as u32).min(map.size - 1);
+            let z = map.z[(texel(uv[1]) * map.size + texel(uv[0])) as usize];
+            let d = match i % 4 {
+                0 => rng.unit(),
+                1 => z + rng.pick(&[-0.2, -0.03, -0.004, 0.0, 0.002, 0.01, 0.03, 0.1, 0.3]),
+                2 => z + 0.04 * (rng.unit() - 0.5),
+                _ => rng.pick(&[0.0, 1.0, z]),
+            };
+            let lod = match i % 5 {
+                0 => 0.0,
+                1 => 1.0,
+                2 => rng.unit() * (levels - 1.0),
+                3 => levels - 0.5 + rng.unit(),
+                _ => 2.0 + 0.5 * rng.unit(),
+            };
+            Query {
+                uv,
+                d: d.clamp(0.0, 1.0),
+                lod,
+            }
+        })
+        .collect()
+}
+
+// ---------------------------------------------------------------------------------------
+// CPU against GPU
+
+struct Row {
+    label: String,
+    checked: usize,
+    ties: usize,
+    max_diff: f64,
+    mean_diff: f64,
+    /// Widest allowance (half-width of the allowed interval about the CPU value).
+    max_allowed: f64,
+    /// Largest difference over its allowance.
+    worst_ratio: f64,
+    /// Queries whose allowance exceeds 0.1: where the precision leaves the result open
+    /// (VSM's Chebyshev bound at a small variance, 8-bit storage of wide ranges).
+    loose: usize,
+    nanoseconds: f64,
+    failures: Vec<String>,
+}
+
+fn compare(reference: &GpuReference, label: &str, t: &Technique, map_name: &str, map: &DepthMap, seed: u64) -> Row {
+    let qs = queries(map, seed);
+    let pre = cpu::prefilter(t, map).unwrap_or_else(|e| panic!("{label}: {e}"));
+    let cpu_v = cpu_visibility(t, map, &qs).unwrap_or_else(|e| panic!("{label}: {e}"));
+    let (gpu_v, ns) = reference
+        .visibility(t, map, &qs)
+        .unwrap_or_else(|e| panic!("{label} on {map_name}: {e}"));
+    let mut row = Row {
+        label: format!("{label} / {map_name}"),
+        checked: 0,
+        ties: 0,
+        max_diff: 0.0,
+        mean_diff: 0.0,
+        max_allowed: 0.0,
+        worst_ratio: 0.0,
+        loose: 0,
+        nanoseconds: ns,
+        failures: Vec::new(),
+    };
+    assert_eq!(gpu_v.len(), qs.len(), "{label}: one visibility per query");
+    for ((q, &c), &g) in qs.iter().zip(&cpu_v).zip(&gpu_v) {
+        let g = g as f64;
+        assert!((0.0..=1.0).contains(&g), "{label}: GPU visibility {g} outside [0, 1] at {q:?}");
+        assert!((0.0..=1.0).contains(&c), "{label}: CPU visibility {c} outside [0, 1] at {q:?}");
+        let (lo, hi) = match allowed(&pre, q) {
+            Allowed::Tie => {
+                row.ties += 1;
+                continue;
+            }
+            Allowed::Within(lo, hi) => (lo, hi),
+        };
+        row.checked += 1;
+        let diff = (g - c).abs();
+        let allowance = (c - lo).max(hi - c).max(0.0);
+        row.max_diff = row.max_diff.max(diff);
+        row.mean_diff += diff;
+        row.max_allowed = row.max_allowed.max(allowance);
+        row.loose += (allowance > 0.1) as usize;
+        if diff > 0.0 {
+            row.worst_ratio = row.worst_ratio.max(if allowance > 0.0 { diff / allowance } else { f64::INFINITY });
+        }
+        if !(lo..=hi).contains(&g) && row.failures.len() < 5 {
+            row.failures.push(format!(
+                "{}: at {q:?} the CPU gives {c:.7}, the GPU {g:.7}, outside the allowed [{lo:.7}, {hi:.7}]",
+                row.label
+            ));
+        }
+    }
+    row.mean_diff /= row.checked.max(1) as f64;
+    row
+}
+
+/// Compare every configuration on every map; print a table (per technique and map: queries
+/// checked, ties skipped, max and mean |GPU - CPU|, the widest allowance, the largest
+/// difference over its allowance, queries allowed more than 0.1, GPU microseconds of the
+/// run); fail with every disagreement.
+fn agree(configs: &[(&str, Technique)]) {
+    let reference = GpuReference::new(gpu()).unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("device: {}", gpu().describe());
+    eprintln!(
+        "{:<44} {:>7} {:>5} {:>10} {:>10} {:>10} {:>7} {:>5} {:>10}",
+        "technique / map", "checked", "ties", "max |d|", "mean |d|", "max allow", "d/allow", "loose", "GPU us"
+    );
+    let mut failures = Vec::new();
+    for (ci, (label, t)) in configs.iter().enumerate() {
+        for (mi, (map_name, map)) in maps().iter().enumerate() {
+            let row = compare(&reference, label, t, map_name, map, (ci * 16 + mi) as u64 + 1);
+            eprintln!(
+                "{:<44} {:>7} {:>5} {:>10.3e} {:>10.3e} {:>10.3e} {:>7.3} {:>5} {:>10.1}",
+                row.label,
+                row.checked,
+                row.ties,
+                row.max_diff,
+                row.mean_diff,
+                row.max_allowed,
+                row.worst_ratio,
+                row.loose,
+                row.nanoseconds * 1e-3
+            );
+            // The guard must not hollow the comparison out. (On the all-0 and all-1 maps
+            // many receivers sit exactly at the stored depth, d = z: genuine ties.)
+            if row.checked < 100 {
+                failures.push(format!(
+                    "{}: {} of {} queries are ties",
+                    row.label,
+                    row.ties,
+                    row.checked + row.ties
+                ));
+            }
+            failures.extend(row.failures);
+        }
+    }
+    assert!(failures.is_empty(), "CPU and GPU references disagree:\n{}", failures.join("\n"));
+}
+
+fn technique(name: &str, params: &[(&str, f64)], storage: Option<Storage>) -> Technique {
+    let mut t = Technique::new(name);
+    for (k, v) in params {
+        t = t.with(k, *v);
+    }
+    t.storage = storage;
+    t
+}
+
+#[test]
+fn gpu_hard_agrees_with_cpu() {
+    agree(&[
+        ("hard", technique("hard", &[], None)),
+        ("hard bias=0", technique("hard", &[("bias", 0.0)], None)),
+    ]);
+}
+
+#[test]
+fn gpu_pcf_agrees_with_cpu() {
+    agree(&[
+        ("pcf N=3", technique("pcf", &[], None)),
+        ("pcf N=1", technique("pcf", &[("N", 1.0)], None)),
+        ("pcf N=4 bias=0", technique("pcf", &[("N", 4.0), ("bias", 0.0)], None)),
+        ("pcf N=15", technique("pcf", &[("N", 15.0)], None)),
+    ]);
+}
+
+#[test]
+fn gpu_vsm_agrees_with_cpu() {
+    agree(&[
+        ("vsm F32", technique("vsm", &[], None)),
+        ("vsm Unorm8", technique("vsm", &[], Some(Storage::Unorm8))),
+        ("vsm Unorm16", technique("vsm", &[], Some(Storage::Unorm16))),
+        ("vsm F16", technique("vsm", &[], Some(Storage::F16))),
+        ("vsm F32 K=1", technique("vsm", &[("K", 1.0)], None)),
+        (
+            "vsm F16 K=7 bleed=0 minvar=1e-3",
+            technique("vsm", &[("K", 7.0), ("bleed", 0.0), ("min_variance", 1e-3)], Some(Storage::F16)),
+        ),
+    ]);
+}
+
+#[test]
+fn gpu_esm_agrees_with_cpu() {
+    agree(&[
+        ("esm F32 c=80 threshold", technique("esm", &[], None)),
+        ("esm F32 c=80 none", technique("esm", &[("classify", 0.0)], None)),
+        ("esm F32 c=80 z-max", technique("esm", &[("classify", 2.0)], None)),
+        (
+            "esm F32 c=40 K=1 z-max",
+            technique("esm", &[("c", 40.0), ("K", 1.0), ("classify", 2.0)], None),
+        ),
+        ("esm F16 c=10 threshold", technique("esm", &[("c", 10.0)], Some(Storage::F16))),
+        ("esm Unorm16 c=8 threshold", technique("esm", &[("c", 8.0)], Some(Storage::Unorm16))),
+        (
+            "esm Unorm8 c=5 none",
+            technique("esm", &[("c", 5.0), ("classify", 0.0)], Some(Storage::Unorm8)),
+        ),
+    ]);
+}
+
+#[test]
+fn gpu_csm_agrees_with_cpu() {
+    agree(&[
+        ("csm Unorm8 M=4", technique("csm", &[], None)),
+        ("csm Unorm8 M=1 fix=0", technique("csm", &[("M", 1.0), ("fix", 0.0)], None)),
+        (
+            "csm Unorm16 M=16 fix=2 K=5 s=2",
+            technique(
+                "csm",
+                &[("M", 16.0), ("fix", 2.0), ("K", 5.0), ("sigma", 2.0)],
+                Some(Storage::Unorm16),
+            ),
+        ),
+        (
+            "csm F16 M=8 alpha=0",
+            technique("csm", &[("M", 8.0), ("alpha", 0.0)], Some(Storage::F16)),
+        ),
+        ("csm F32 M=4", technique("csm", &[], Some(Storage::F32))),
+        ("csm Unorm8 M=64 K=1", technique("csm", &[("M", 64.0), ("K", 1.0)], None)),
+    ]);
+}
+
+#[test]
+fn gpu_refuses_what_cpu_refuses() {
+    let reference = GpuReference::new(gpu()).unwrap_or_else(|e| panic!("{e}"));
+    let map = depth_map(8, |x, _| x as f32 / 8.0);
+    let q = [Query {
+        uv: [0.5, 0.5],
+        d: 0.5,
+        lod: 0.0,
+    }];
+    for t in refused() {
+        let cpu = cpu_visibility(&t, &map, &q);
+        let gpu = reference.visibility(&t, &map, &q);
+        match (cpu, gpu) {
+            (Err(a), Err(b)) => assert_eq!(a, b, "{t:?}: the references refuse with different messages"),
+            (a, b) => panic!("{t:?}: expected both references to refuse it, got CPU {a:?}, GPU {b:?}"),
+        }
+    }
+    let bad = DepthMap { size: 4, z: vec![0.5; 15] };
+    assert!(reference.visibility(&Technique::new("hard"), &bad, &q).is_err());
+    let over = depth_map(4, |_, _| 1.5);
+    assert!(reference.visibility(&Technique::new("hard"), &over, &q).is_err());
+    // no queries: nothing to run
+    assert_eq!(reference.visibility(&Technique::new("csm"), &map, &[]), Ok((Vec::new(), 0.0)));
+    // ln 65504 = 11.09: c = 11 fits F16
+    let t = technique("esm", &[("c", 11.0)], Some(Storage::F16));
+    let (v, _) = reference.visibility(&t, &map, &q).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(v.len(), 1);
+}
+
+// ---------------------------------------------------------------------------------------
+// The CPU evaluator against the papers' equations
+
+fn refused() -> Vec<Technique> {
+    vec![
+        Technique::new("pcss"),
+        technique("csm", &[("Q", 1.0)], None),
+        technique("csm", &[("M", 65.0)], None),
+        technique("csm", &[("M", 2.5)], None),
+        technique("csm", &[("K", 4.0)], None),
+        technique("csm", &[("alpha", f64::NAN)], None),
+        technique("esm", &[], Some(Storage::F16)),
+        technique("hard", &[], Some(Storage::Unorm8)),
+        technique("pcf", &[("N", 0.0)], None),
+    ]
+}
+
+#[test]
+fn cpu_refuses_bad_inputs_with_a_message() {
+    let map = depth_map(8, |x, _| x as f32 / 8.0);
+    let q = [Query {
+        uv: [0.5, 0.5],
+        d: 0.5,
+        lod: 0.0,
+    }];
+    for t in refused() {
+        let e = cpu_visibility(&t, &map, &q).expect_err(&format!("{t:?} should be refused"));
+        assert!(!e.is_empty());
+    }
+    let e = cpu_visibility(&technique("esm", &[], Some(Storage::F16)), &map, &q).unwrap_err();
+    assert!(e.contains("F16"), "{e}");
+    for bad in [
+        DepthMap { size: 0, z: vec![] },
+        DepthMap { size: 2, z: vec![0.0; 3] },
+        depth_map(2, |_, _| f32::NAN),
+        depth_map(2, |_, _| -0.5),
+    ] {
+        assert!(cpu_visibility(&Technique::new("hard"), &bad, &q).is_err(), "{bad:?}");
+    }
+    // storage F32 is the depth's own precision: accepted for hard
+    assert!(cpu_visibility(&technique("hard", &[], Some(Storage::F32)), &map, &q).is_ok());
+}
+
+#[test]
+fn cpu_defaults_come_from_the_technique_files() {
+    let r = sshc_tests::reference::resolve(&Technique::new("csm")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((r.int("M"), r.int("fix"), r.int("K"), r.storage), (4, 1, 3, Storage::Unorm8));
+    let r = sshc_tests::reference::resolve(&Technique::new("esm")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((r.get("c"), r.int("classify"), r.storage), (80.0, 1, Storage::F32));
+    let r = sshc_tests::reference::resolve(&Technique::new("pcf").with("N", 5.0)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.int("N"), 5);
+}
+
+/// A constant map: filters and mip chains leave it unchanged.
+fn flat(size: u32, z: f32) -> DepthMap {
+    depth_map(size, |_, _| z)
+}
+
+fn at(uv: [f32; 2], d: f32, lod: f32) -> Query {
+    Query { uv, d, lod }
+}
+
+fn one(t: &Technique, map: &DepthMap, q: Query) -> f64 {
+    cpu_visibility(t, map, &[q]).unwrap_or_else(|e| panic!("{e}"))[0]
+}
+
+#[test]
+fn cpu_hard_is_the_binary_test() {
+    // eq. 3.2 with the stored depth of the texel containing uv
+    let map = depth_map(16, |x, _| if x < 8 { 0.3 } else { 0.7 });
+    let t = technique("hard", &[("bias", 0.0)], None);
+    assert_eq!(one(&t, &map, at([7.9 / 16.0, 0.5], 0.5, 0.0)), 0.0);
+    assert_eq!(one(&t, &map, at([8.1 / 16.0, 0.5], 0.5, 0.0)), 1.0);
+    assert_eq!(one(&t, &map, at([0.2, 0.5], 0.3, 0.0)), 1.0, "d = z is lit");
+    assert_eq!(one(&t, &map, at([1.0, 1.0], 0.7, 0.0)), 1.0, "uv = 1 clamps to the last texel");
+    let biased = technique("hard", &[("bias", 0.01)], None);
+    assert_eq!(one(&biased, &map, at([0.2, 0.5], 0.305, 0.0)), 1.0);
+}
+
+#[test]
+fn cpu_pcf_is_the_bilinear_tent() {
+    // An edge between texels 7 (z = 0.3) and 8 (z = 0.7), receiver at 0.5: N = 1 is
+    // bilinear PCF, lit fraction tf between the two texel centres.
+    let map = depth_map(16, |x, _| if x < 8 { 0.3 } else { 0.7 });
+    let pcf = |n: f64| technique("pcf", &[("N", n), ("bias", 0.0)], None);
+    for t in [0.0, 0.25, 0.5, 0.9] {
+        let uv = [(7.5 + t) as f32 / 16.0, 0.5];
+        let v = one(&pcf(1.0), &map, at(uv, 0.5, 0.0));
+        assert!((v - t).abs() < 1e-6, "N = 1 at tf = {t}: {v}");
+        // N = 3: taps at texels 6..9 with weights (1 - tf, 1, 1, tf) / 9 per row, rows sum to 3
+        let v = one(&pcf(3.0), &map, at(uv, 0.5, 0.0));
+        assert!((v - (1.0 + t) / 3.0).abs() < 1e-6, "N = 3 at tf = {t}: {v}");
+    }
+    // far from the edge PCF is the binary test
+    assert_eq!(one(&pcf(3.0), &map, at([0.1, 0.5], 0.5, 0.0)), 0.0);
+    assert_eq!(one(&pcf(3.0), &map, at([0.9, 0.5], 0.5, 0.0)), 1.0);
+}
+
+#[test]
+fn cpu_vsm_is_chebyshevs_bound() {
+    let z0 = 0.4;
+    let map = flat(16, z0 as f32);
+    let t = technique("vsm", &[("bleed", 0.0), ("bias", 0.0)], None);
+    let min_variance = 2e-5;
+    assert_eq!(one(&t, &map, at([0.3, 0.6], 0.4, 1.5)), 1.0, "at the mean: lit");
+    assert_eq!(one(&t, &map, at([0.3, 0.6], 0.2, 0.0)), 1.0, "in front: lit");
+    for d in [0.41f32, 0.45, 0.9] {
+        let delta = d as f64 - z0;
+        // variance of a constant map: 0, clamped to the minimum (float rounding of z^2
+        // leaves at most 1e-8)
+        let expected = min_variance / (min_variance + delta * delta);
+        let v = one(&t, &map, at([0.3, 0.6], d, 2.0));
+        assert!((v - expected).abs() < 1e-3 * expected.max(1e-3), "d = {d}: {v} vs {expected}");
+    }
+    // an edge 0.3 | 0.7 averaged half-half: mean 0.5, variance 0.04, receiver at 0.9
+    let map = depth_map(16, |x, _| if x < 8 { 0.3 } else { 0.7 });
+    let t = technique("vsm", &[("bleed", 0.0), ("bias", 0.0), ("K", 1.0)], None);
+    let v = one(&t, &map, at([0.5, 0.5], 0.9, 0.0));
+    assert!((v - 0.04 / (0.04 + 0.16)).abs() < 1e-9, "{v}");
+    // light-bleeding reduction: linstep(0.2, 1, p)
+    let bled = technique("vsm", &[("bleed", 0.2), ("bias", 0.0), ("K", 1.0)], None);
+    let w = one(&bled, &map, at([0.5, 0.5], 0.9, 0.0));
+    assert!((w - (0.2 - 0.2) / 0.8).abs() < 1e-9, "{w}");
+}
+
+#[test]
+fn cpu_esm_is_the_exponential_test() {
+    // eq. 7.1-7.2 on a constant map: s = exp(-c (d - z)), clamped
+    let z0 = 0.4;
+    let map = flat(16, z0 as f32);
+    let t = technique("esm", &[("classify", 0.0)], None);
+    for (d, c) in [(0.45f32, 80.0), (0.41, 80.0), (0.7, 80.0)] {
+        let expected = (-c * (d as f64 - z0 as f32 as f64)).exp();
+        let v = one(&t, &map, at([0.5, 0.5], d, 0.0));
+        assert!((v - expected).abs() < 1e-12 + 1e-9 * expected, "d = {d}: {v} vs {expected}");
+    }
+    assert_eq!(one(&t, &map, at([0.5, 0.5], 0.3, 0.0)), 1.0, "d < z overflows and clamps to lit");
+    // Threshold classification (7.3.2) at a step: a receiver on the near side sees
+    // e^{c (0.7 - 0.31)} under the kernel, falls back to the 2 x 2 ESM, which is lit at the
+    // texels of the near side and ~0 at the far side's.
+    let map = depth_map(16, |x, _| if x < 8 { 0.3 } else { 0.7 });
+    let plain = technique("esm", &[("classify", 0.0), ("K", 3.0)], None);
+    let threshold = technique("esm", &[("classify", 1.0), ("K", 3.0)], None);
+    let zmax = technique("esm", &[("classify", 2.0), ("K", 3.0)], None);
+    let q = at([(7.5 + 0.25) / 16.0, 0.5], 0.31, 0.0);
+    assert_eq!(one(&plain, &map, q), 1.0, "without classification the overflow reads lit");
+    // fallback: texel 7 (z = 0.3, d = 0.31): blurred e^{cz} = (2 e^{0.3c} + e^{0.7c}) / 3 per
+    // row, times e^{-0.31c}, clamps to 1; texel 8: (e^{0.3c} + 2 e^{0.7c}) / 3 e^{-0.31c}
+    // clamps to 1 too: the fallback reads 1.
+    assert_eq!(one(&threshold, &map, q), 1.0);
+    assert_eq!(one(&zmax, &map, q), 1.0);
+    // a receiver behind the far side near the edge: e^{-c d} e^{c z} with z = 0.7 < d
+    let q = at([(7.5 + 0.25) / 16.0, 0.5], 0.9, 0.0);
+    let v = one(&threshold, &map, q);
+    assert!(v < 1e-6, "{v}");
+}
+
+#[test]
+fn cpu_csm_approaches_the_step_as_m_grows() {
+    // eq. 6.3 with c_k = pi (2k - 1): 1/2 + 2 sum sin(c_k (z - d)) / c_k is the square wave
+    // of period 2, so it converges to 1 for d < z and to 0 for d > z (away from the jump,
+    // at rate 1/(M |d - z|)); at d = z it reads 1/2 (fig. 6.3).
+    let z0 = 0.5;
+    let map = flat(16, z0);
+    let csm = |m: f64| technique("csm", &[("M", m), ("alpha", 0.0), ("fix", 0.0), ("K", 1.0)], Some(Storage::F32));
+    // the series before the final clamp
+    let series = |m: f64, d: f32| {
+        let pre = cpu::prefilter(&csm(m), &map).unwrap_or_else(|e| panic!("{e}"));
+        cpu::shade(&pre, &at([0.5, 0.5], d, 0.0))
+    };
+    for d in [0.1f32, 0.3, 0.45, 0.55, 0.7, 0.9] {
+        let step = if d < z0 { 1.0 } else { 0.0 };
+        let errors: Vec<f64> = [1.0, 4.0, 16.0, 64.0].iter().map(|&m| (series(m, d) - step).abs()).collect();
+        assert!(errors.windows(2).all(|w| w[1] < w[0]), "d = {d}: errors {errors:?}");
+        // the tail (2/pi) sum_{k>M} sin((2k-1) pi t)/(2k-1), t = z - d, is bounded by Abel
+        // summation: (2/pi) / ((2M + 1) |sin(pi t)|)
+        let pi = std::f64::consts::PI;
+        let tail = 2.0 / pi / (129.0 * (pi * (d - z0) as f64).sin().abs());
+        assert!(errors[3] < tail, "d = {d}: {errors:?}, bound {tail}");
+    }
+    for m in [1.0, 4.0, 64.0] {
+        let v = series(m, z0);
+        assert!((v - 0.5).abs() < 1e-12, "M = {m}: d = z reads {v}");
+    }
+    // The fixes: offsetting d by 1/(2M) or scaling by 2 light the surface at d = z.
+    let offset = technique("csm", &[("fix", 1.0)], None);
+    let scaled = technique("csm", &[("fix", 2.0)], None);
+    assert!(one(&offset, &map, at([0.5, 0.5], z0, 0.0)) > 0.95);
+    assert_eq!(one(&scaled, &map, at([0.5, 0.5], z0, 0.0)), 1.0);
+    // and both still shadow a receiver well behind
+    assert!(one(&offset, &map, at([0.5, 0.5], 0.9, 0.0)) < 0.05);
+    assert!(one(&scaled, &map, at([0.5, 0.5], 0.9, 0.0)) < 0.05);
+}
+
+#[test]
+fn cpu_filters_and_mip_chains_follow_the_conventions() {
+    let g = cpu::gaussian_weights(5, 1.5);
+    assert!((g.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+    assert!((g[0] - g[4]).abs() < 1e-15 && g[2] > g[1] && g[1] > g[0]);
+    assert!((g[1] / g[2] - (-1.0f64 / (2.0 * 1.5 * 1.5)).exp()).abs() < 1e-12);
+    // mip chain of a 24 x 24 map: 24, 12, 6, 3, 1; the 1 x 1 level is the mean of the
+    // 2 x 2 texels at the corner of the 3 x 3 level (the odd edge clamps)
+    let map = depth_map(24, |x, y| ((x * 7 + y * 3) % 11) as f32 / 11.0);
+    let t = technique("vsm", &[("K", 1.0)], None);
+    let pre = cpu::prefilter(&t, &map).unwrap_or_else(|e| panic!("{e}"));
+    let chain = pre.channel("m1").unwrap_or_else(|| panic!("m1"));
+    let sizes: Vec<usize> = chain.levels.iter().map(|l| l.size).collect();
+    assert_eq!(sizes, [24, 12, 6, 3, 1]);
+    let l3 = &chain.levels[3];
+    let expected = (l3.at(0, 0) + l3.at(1, 0) + l3.at(0, 1) + l3.at(1, 1)) / 4.0;
+    assert!((chain.levels[4].texels[0] - expected).abs() < 1e-15);
+    // a box blur clamps at the edge: texel 0 of a ramp is (2 z0 + z1) / 3
+    let ramp = depth_map(8, |x, _| x as f32 / 8.0);
+    let blurred = cpu::convolve(
+        &cpu::prefilter(&t, &ramp).unwrap_or_else(|e| panic!("{e}")).depth.levels[0],
+        &cpu::box_weights(3),
+    );
+    assert!((blurred.at(0, 3) - (2.0 * 0.0 + 0.125) / 3.0).abs() < 1e-15);
+    // sampling at texel centres returns the texels; lod beyond the chain clamps
+    let q = [0.5 + 0.5 / 24.0, 0.5 / 24.0];
+    assert!((chain.sample(q, 0.0) - chain.base().at(12, 0)).abs() < 1e-15);
+    assert_eq!(chain.sample(q, 9.0), chain.levels[4].texels[0]);
+    // fetch and nearest
+    assert_eq!(chain.nearest([0.999, 0.0]), chain.base().at(23, 0));
+    assert_eq!(chain.fetch([0.5 / 24.0, 0.5 / 24.0], -1, 1), chain.base().at(0, 1));
+}
+
+#[test]
+fn cpu_results_stay_in_the_unit_interval() {
+    let configs = [
+        technique("hard", &[], None),
+        technique("pcf", &[("N", 15.0)], None),
+        technique("vsm", &[("min_variance", 0.0), ("bleed", 0.0)], None),
+        technique("esm", &[("c", 88.0), ("classify", 2.0)], None),
+        technique("csm", &[("M", 64.0), ("alpha", 0.0), ("fix", 2.0)], None),
+    ];
+    let mut extremes = vec![
+        at([0.0, 0.0], 0.0, 0.0),
+        at([1.0, 1.0], 1.0, 100.0),
+        at([0.5, 0.5], 0.5, -3.0),
+        at([-0.5, 1.5], 0.5, 0.0),
+        at([0.5, 0.5], f32::NAN, f32::NAN),
+    ];
+    for (_, map) in maps() {
+        extremes.extend(queries(&map, 7).into_iter().take(40));
+        for t in &configs {
+            let v = cpu_visibility(t, &map, &extremes).unwrap_or_else(|e| panic!("{e}"));
+            assert!(v.iter().all(|v| (0.0..=1.0).contains(v)), "{t:?}: {v:?}");
+        }
+    }
+}
