@@ -112,10 +112,14 @@ pub enum Input {
     LightSize,
     /// Full width of the light along the shadow map's u and v axes, world units.
     LightWidth,
+    /// Angular width of a distant light, `2 tan(angle / 2)`: how much its penumbra widens
+    /// per unit of distance between blocker and receiver (Lawlor 2006's distant disk);
+    /// 0 for local lights, whose spread is `light_width / d` instead.
+    LightSpread,
 }
 
 impl Input {
-    pub const ALL: [Input; 14] = [
+    pub const ALL: [Input; 15] = [
         Input::D,
         Input::DWorld,
         Input::Uv,
@@ -130,6 +134,7 @@ impl Input {
         Input::Far,
         Input::LightSize,
         Input::LightWidth,
+        Input::LightSpread,
     ];
 
     pub fn name(self) -> &'static str {
@@ -148,6 +153,7 @@ impl Input {
             Input::Far => "far",
             Input::LightSize => "light_size",
             Input::LightWidth => "light_width",
+            Input::LightSpread => "light_spread",
         }
     }
 
@@ -164,7 +170,9 @@ impl Input {
 
     pub fn side(self) -> Side {
         match self {
-            Input::TexelSize | Input::ShadowSize | Input::Near | Input::Far | Input::LightSize | Input::LightWidth => Side::Both,
+            Input::TexelSize | Input::ShadowSize | Input::Near | Input::Far | Input::LightSize | Input::LightWidth | Input::LightSpread => {
+                Side::Both
+            }
             _ => Side::Receiver,
         }
     }
@@ -182,6 +190,8 @@ impl Input {
             Input::DWorld | Input::Near | Input::Far => (0.0, 1e4),
             Input::LightSize => (0.0, 1e4),
             Input::LightWidth => (0.0, 2e4),
+            // 2 tan(angle / 2) for an angular diameter below 180 degrees; 4 is 126.9 degrees
+            Input::LightSpread => (0.0, 4.0),
         }
     }
 
@@ -203,6 +213,9 @@ impl Input {
             Input::Far => "far plane of the light's depth range (world units)",
             Input::LightSize => "light radius or half-extent (world units)",
             Input::LightWidth => "full width of the light along the shadow map's u and v axes (world units)",
+            Input::LightSpread => {
+                "angular width 2 tan(angle / 2) of a distant light: penumbra width per unit of blocker-receiver distance; 0 for local lights"
+            }
         }
     }
 }

@@ -364,7 +364,10 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
                 let (p, nrm) = positions_normals(&ex)?;
                 let (truth, _) = bar.suspend(|| truth_at(&scene, &p, &nrm, &a.truth))?;
                 let vis = sshc_runtime::visibility::Visibility::new(&scene);
-                let est = vis.visible_fractions_seeded(&p, &nrm, &scene.lights[0], n, 0x5eed_0000 + n as u64);
+                // the visibility query takes samples per axis (an n x n stratified grid)
+                let per_axis = sshc_runtime::truth::strata(n);
+                let n = per_axis * per_axis;
+                let est = vis.visible_fractions_seeded(&p, &nrm, &scene.lights[0], per_axis, 0x5eed_0000 + n as u64);
                 let est: Vec<f32> = est.iter().zip(&p).map(|(v, p)| if p.is_finite() { *v } else { 1.0 }).collect();
                 let facing = metrics::facing_light(&p, &nrm, &scene.lights[0]).unwrap_or_default();
                 let acc = metrics::accuracy(&est, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;

@@ -16,7 +16,7 @@
 use sshc_runtime::gpu::Gpu;
 use sshc_tests::reference::cpu;
 use sshc_tests::reference::tolerance::{Allowed, allowed};
-use sshc_tests::reference::{DepthMap, GpuReference, Query, Storage, Technique, cpu_visibility};
+use sshc_tests::reference::{DepthMap, GpuReference, LightFrame, Query, Storage, Technique, cpu_visibility};
 use std::sync::OnceLock;
 
 // ---------------------------------------------------------------------------------------
@@ -185,6 +185,11 @@ fn compare(reference: &GpuReference, label: &str, t: &Technique, map_name: &str,
 /// difference over its allowance, queries allowed more than 0.1, GPU microseconds of the
 /// run); fail with every disagreement.
 fn agree(configs: &[(&str, Technique)]) {
+    agree_on(configs, &maps());
+}
+
+/// [`agree`] on chosen maps.
+fn agree_on(configs: &[(&str, Technique)], maps: &[(&'static str, DepthMap)]) {
     let reference = GpuReference::new(gpu()).unwrap_or_else(|e| panic!("{e}"));
     eprintln!("device: {}", gpu().describe());
     eprintln!(
@@ -193,7 +198,7 @@ fn agree(configs: &[(&str, Technique)]) {
     );
     let mut failures = Vec::new();
     for (ci, (label, t)) in configs.iter().enumerate() {
-        for (mi, (map_name, map)) in maps().iter().enumerate() {
+        for (mi, (map_name, map)) in maps.iter().enumerate() {
             let row = compare(&reference, label, t, map_name, map, (ci * 16 + mi) as u64 + 1);
             eprintln!(
                 "{:<44} {:>7} {:>5} {:>10.3e} {:>10.3e} {:>10.3e} {:>7.3} {:>5} {:>10.1}",
@@ -306,6 +311,138 @@ fn gpu_csm_agrees_with_cpu() {
     ]);
 }
 
+/// The soft-shadow techniques on the query plane (orthographic, extent [-1, 1]^2, near 8,
+/// far 12) under a light `width` wide (x, y).
+fn soft(name: &str, params: &[(&str, f64)], width: [f64; 2]) -> Technique {
+    let mut light = LightFrame::query_plane(0.0);
+    light.width = width;
+    technique(name, params, None).lit(light)
+}
+
+/// A step edge, a ramp and noise (of `maps`).
+fn soft_maps() -> Vec<(&'static str, DepthMap)> {
+    maps()
+        .into_iter()
+        .filter(|(n, _)| matches!(*n, "step16" | "ramp32" | "noise64"))
+        .collect()
+}
+
+#[test]
+fn gpu_cssm_mipmaps_agree_with_cpu() {
+    agree_on(
+        &[
+            ("cssm mips W=1", soft("cssm", &[("slope_bias", 0.0)], [1.0, 1.0])),
+            (
+                "cssm mips M=2 fix=2 K=1 W=2",
+                soft("cssm", &[("slope_bias", 0.0), ("M", 2.0), ("fix", 2.0), ("K", 1.0)], [2.0, 2.0]),
+            ),
+        ],
+        &soft_maps(),
+    );
+}
+
+#[test]
+fn gpu_cssm_tables_agree_with_cpu() {
+    agree_on(
+        &[
+            (
+                "cssm table W=1x0.4",
+                soft("cssm", &[("slope_bias", 0.0), ("filter", 1.0)], [1.0, 0.4]),
+            ),
+            (
+                "cssm table M=8 K=5 A=30 B=32 W=0.5",
+                soft(
+                    "cssm",
+                    &[
+                        ("slope_bias", 0.0),
+                        ("filter", 1.0),
+                        ("M", 8.0),
+                        ("K", 5.0),
+                        ("A", 30.0),
+                        ("B", 32.0),
+                    ],
+                    [0.5, 0.5],
+                ),
+            ),
+        ],
+        &soft_maps(),
+    );
+}
+
+#[test]
+fn gpu_pcss_agrees_with_cpu() {
+    agree_on(
+        &[
+            ("pcss W=1", soft("pcss", &[("slope_bias", 0.0)], [1.0, 1.0])),
+            (
+                "pcss N=3 M=5 W=2x0.5",
+                soft("pcss", &[("slope_bias", 0.0), ("N", 3.0), ("M", 5.0)], [2.0, 0.5]),
+            ),
+            (
+                "pcss N=16 M=16 bias=0 W=0.3",
+                soft("pcss", &[("slope_bias", 0.0), ("N", 16.0), ("M", 16.0), ("bias", 0.0)], [0.3, 0.3]),
+            ),
+        ],
+        &soft_maps(),
+    );
+}
+
+#[test]
+fn soft_shadows_at_light_width_0_are_their_point_light_bases() {
+    // A point light: CSSM's kernels are 0, so it reads the CSM series at mip level 0 (or a
+    // one-texel box: bilinear); with no ringing suppression and no sharpening it is CSM at
+    // the finest level. PCSS samples the receiver's own texel: the hard shadow map.
+    let reference = GpuReference::new(gpu()).unwrap_or_else(|e| panic!("{e}"));
+    let mut worst = (0.0f64, 0.0f64, 0.0f64);
+    for (name, map) in soft_maps() {
+        let qs: Vec<Query> = queries(&map, 3).into_iter().map(|q| Query { lod: 0.0, ..q }).collect();
+        let csm = technique("csm", &[("slope_bias", 0.0)], None);
+        let (csm_cpu, csm_gpu) = (
+            cpu_visibility(&csm, &map, &qs).unwrap_or_else(|e| panic!("{e}")),
+            reference.visibility(&csm, &map, &qs).unwrap_or_else(|e| panic!("{e}")).0,
+        );
+        for filter in [0.0, 1.0] {
+            let cssm = soft(
+                "cssm",
+                &[("slope_bias", 0.0), ("ring", 0.0), ("A", 0.0), ("filter", filter)],
+                [0.0, 0.0],
+            );
+            let cpu_v = cpu_visibility(&cssm, &map, &qs).unwrap_or_else(|e| panic!("{e}"));
+            let gpu_v = reference.visibility(&cssm, &map, &qs).unwrap_or_else(|e| panic!("{e}")).0;
+            for i in 0..qs.len() {
+                let d = (cpu_v[i] - csm_cpu[i]).abs();
+                assert!(
+                    d < 1e-12,
+                    "{name} filter {filter}: CPU CSSM {} vs CSM {} at {:?}",
+                    cpu_v[i],
+                    csm_cpu[i],
+                    qs[i]
+                );
+                worst.0 = worst.0.max(d);
+                if filter == 0.0 {
+                    // the same texture, sampler and series: only pow(s, 1) and f32 order differ
+                    let d = (gpu_v[i] - csm_gpu[i]).abs() as f64;
+                    assert!(d < 1e-5, "{name}: GPU CSSM {} vs CSM {} at {:?}", gpu_v[i], csm_gpu[i], qs[i]);
+                    worst.1 = worst.1.max(d);
+                }
+            }
+        }
+        for bias in [0.0, 0.0005] {
+            let hard = technique("hard", &[("bias", bias), ("slope_bias", 0.0)], None);
+            let pcss = soft("pcss", &[("bias", bias), ("slope_bias", 0.0)], [0.0, 0.0]);
+            assert_eq!(
+                cpu_visibility(&pcss, &map, &qs).unwrap_or_else(|e| panic!("{e}")),
+                cpu_visibility(&hard, &map, &qs).unwrap_or_else(|e| panic!("{e}")),
+                "{name}: CPU PCSS at width 0 is the hard shadow"
+            );
+            let a = reference.visibility(&pcss, &map, &qs).unwrap_or_else(|e| panic!("{e}")).0;
+            let b = reference.visibility(&hard, &map, &qs).unwrap_or_else(|e| panic!("{e}")).0;
+            assert_eq!(a, b, "{name}: GPU PCSS at width 0 is the hard shadow");
+        }
+    }
+    eprintln!("width 0: |CSSM - CSM| CPU {:.3e}, GPU (mipmaps) {:.3e}", worst.0, worst.1);
+}
+
 #[test]
 fn gpu_refuses_what_cpu_refuses() {
     let reference = GpuReference::new(gpu()).unwrap_or_else(|e| panic!("{e}"));
@@ -339,8 +476,15 @@ fn gpu_refuses_what_cpu_refuses() {
 // The CPU evaluator against the papers' equations
 
 fn refused() -> Vec<Technique> {
+    let mut inverted = LightFrame::query_plane(1.0);
+    inverted.far = 4.0;
     vec![
         Technique::new("pcss"),
+        Technique::new("cssm"),
+        Technique::new("cssm").lit(inverted),
+        Technique::new("cssm").lit(LightFrame::query_plane(1.0)).stored(Storage::F16),
+        soft("pcss", &[("N", 0.0)], [1.0, 1.0]),
+        soft("cssm", &[("filter", 2.0)], [1.0, 1.0]),
         technique("csm", &[("Q", 1.0)], None),
         technique("csm", &[("M", 65.0)], None),
         technique("csm", &[("M", 2.5)], None),
@@ -570,6 +714,9 @@ fn cpu_results_stay_in_the_unit_interval() {
         technique("vsm", &[("min_variance", 0.0), ("bleed", 0.0)], None),
         technique("esm", &[("c", 88.0), ("classify", 2.0)], None),
         technique("csm", &[("M", 64.0), ("alpha", 0.0), ("fix", 2.0)], None),
+        soft("cssm", &[("M", 16.0), ("alpha", 0.0), ("min_blocker", 0.0)], [4.0, 4.0]),
+        soft("cssm", &[("filter", 1.0), ("A", 100.0), ("B", 1000.0)], [4.0, 0.0]),
+        soft("pcss", &[("N", 2.0), ("M", 3.0)], [20.0, 20.0]),
     ];
     let mut extremes = vec![
         at([0.0, 0.0], 0.0, 0.0),
@@ -585,4 +732,110 @@ fn cpu_results_stay_in_the_unit_interval() {
             assert!(v.iter().all(|v| (0.0..=1.0).contains(v)), "{t:?}: {v:?}");
         }
     }
+}
+
+#[test]
+fn cpu_summed_area_boxes_follow_the_conventions() {
+    // sample_box integrates the piecewise-constant texels over the clipped box: a one-texel
+    // box is bilinear interpolation, the whole map its mean, and boxes never shrink below a
+    // texel.
+    let map = depth_map(8, |x, y| ((x * 5 + y * 3) % 7) as f32 / 7.0);
+    let level = cpu::Level {
+        size: 8,
+        texels: map.z.iter().map(|&z| z as f64).collect(),
+    };
+    let table = cpu::Table::new(&level);
+    for uv in [[0.31, 0.62], [0.5, 0.5], [0.07, 0.93], [1.0 / 16.0, 3.0 / 16.0]] {
+        let bilinear = level.bilinear(uv).value;
+        assert!((table.box_mean(uv, [1.0 / 8.0, 1.0 / 8.0]) - bilinear).abs() < 1e-12, "{uv:?}");
+        assert!((table.box_mean(uv, [0.0, 0.01]) - bilinear).abs() < 1e-12, "{uv:?}");
+    }
+    let mean = level.texels.iter().sum::<f64>() / 64.0;
+    assert!((table.box_mean([0.5, 0.5], [1.0, 1.0]) - mean).abs() < 1e-12);
+    assert!((table.box_mean([0.5, 0.5], [5.0, 3.0]) - mean).abs() < 1e-12, "clipped to the map");
+    // a box over the left half-map's corner: clipped to [0, 2] x [0, 2] texels
+    let corner = (level.at(0, 0) + level.at(1, 0) + level.at(0, 1) + level.at(1, 1)) / 4.0;
+    assert!((table.box_mean([0.0, 0.0], [0.5, 0.5]) - corner).abs() < 1e-12);
+}
+
+#[test]
+fn cpu_cssm_follows_eq_8_6_to_8_9() {
+    // A flat occluder at z0 over the whole map: the filtered series equals the point series
+    // at any kernel, 1 - s_f the complementary test, and num / (1 - s_f) = z0 exactly (the
+    // z-weighted series is z0 times the complementary one, eq. 8.5-8.8).
+    let z0 = 0.3f32;
+    let map = flat(16, z0);
+    let t = soft(
+        "cssm",
+        &[
+            ("slope_bias", 0.0),
+            ("alpha", 0.0),
+            ("ring", 0.0),
+            ("A", 0.0),
+            ("fix", 0.0),
+            ("M", 16.0),
+        ],
+        [1.0, 1.0],
+    );
+    for filter in [0.0, 1.0] {
+        let t = t.clone().with("filter", filter);
+        let pre = cpu::prefilter(&t, &map).unwrap_or_else(|e| panic!("{e}"));
+        for d in [0.5f32, 0.7, 0.9] {
+            let tr = cpu::cssm_trace(&pre, &at([0.4, 0.6], d, 0.0));
+            assert!(!tr.no_blocker, "d = {d}");
+            assert!((tr.zavg - z0 as f64).abs() < 1e-9, "d = {d}: z_avg {} vs {z0}", tr.zavg);
+            // 8.3.1: f_w = (W / d) ((d - z_avg) / z_avg) near in world units, / 2 in uv
+            let (near, far) = (8.0, 12.0);
+            let (dw, zw) = (near + d as f64 * (far - near), near + z0 as f64 * (far - near));
+            let fw = (1.0 / dw) * ((dw - zw) / zw) * near / 2.0;
+            assert!(
+                (tr.u1[0] - fw).abs() < 1e-12 && (tr.u1[1] - fw).abs() < 1e-12,
+                "{:?} vs {fw}",
+                tr.u1
+            );
+            // deep behind the occluder the series is near 0
+            assert!(tr.value < 0.05, "d = {d}: {}", tr.value);
+        }
+        // in front of the occluder: lit
+        let v = cpu_visibility(&t, &map, &[at([0.4, 0.6], 0.1, 0.0)]).unwrap_or_else(|e| panic!("{e}"))[0];
+        assert!(v > 0.95, "{v}");
+    }
+    // eq. 8.9: the sharpening exponent p = 1 + A exp(-B (d - z_avg))
+    let r = sshc_tests::reference::resolve(&soft("cssm", &[("A", 10.0), ("B", 16.0)], [1.0, 1.0])).unwrap_or_else(|e| panic!("{e}"));
+    assert!((cpu::cssm_sharpening(&r, 0.5, 0.5) - 11.0).abs() < 1e-12);
+    assert!((cpu::cssm_sharpening(&r, 0.6, 0.5) - (1.0 + 10.0 * (-1.6f64).exp())).abs() < 1e-12);
+    // 8.2.3: (s - ring) / (1 - 2 ring), clamped
+    assert!((cpu::cssm_ringing(&r, 0.5) - 0.5).abs() < 1e-12);
+    assert_eq!(cpu::cssm_ringing(&r, 0.04), 0.0);
+    assert_eq!(cpu::cssm_ringing(&r, 0.96), 1.0);
+}
+
+#[test]
+fn cpu_pcss_penumbra_follows_the_blocker_distance() {
+    // A half-plane occluder at z_b (x < 8 of 16 texels), an empty rest (z = 1): across the
+    // edge the lit fraction rises from 0 to 1 over the penumbra width
+    // w = (d_r - d_b) light_width / d_b projected to the near plane.
+    let zb = 0.25f32;
+    let map = depth_map(16, |x, _| if x < 8 { zb } else { 1.0 });
+    let t = soft("pcss", &[("slope_bias", 0.0), ("bias", 0.0), ("M", 16.0)], [1.0, 1.0]);
+    let d = 0.75f32;
+    let pre = cpu::prefilter(&t, &map).unwrap_or_else(|e| panic!("{e}"));
+    let (near, far) = (8.0, 12.0);
+    let (dr, db) = (near + d as f64 * (far - near), near + zb as f64 * (far - near));
+    let width = (dr - db) / db * near / dr / 2.0;
+    let mut last = -1.0;
+    for i in 0..=20 {
+        let u = 0.5 + width * (i as f64 / 10.0 - 1.0);
+        let tr = cpu::pcss_trace(&pre, &at([u as f32, 0.5], d, 0.0));
+        if tr.count > 0 {
+            assert!((tr.zb - zb as f64).abs() < 1e-12);
+            assert!((tr.pu[0] - width).abs() < 1e-12, "{:?} vs {width}", tr.pu);
+        }
+        assert!(tr.value >= last, "monotone across the edge");
+        last = tr.value;
+    }
+    let v = |u: f32| cpu::pcss_trace(&pre, &at([u, 0.5], d, 0.0)).value;
+    assert_eq!(v(0.5 - 1.2 * width as f32), 0.0);
+    assert_eq!(v(0.5 + 1.2 * width as f32), 1.0);
+    assert!((v(0.5) - 0.5).abs() <= 1.0 / 16.0, "{}", v(0.5));
 }

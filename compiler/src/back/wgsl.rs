@@ -158,6 +158,7 @@ impl<'a> Emitter<'a> {
             (_, Input::Far) => "frame.depth_range.y".into(),
             (_, Input::LightSize) => "frame.light_size.x".into(),
             (_, Input::LightWidth) => "(frame.light_size.zw * 2.0)".into(),
+            (_, Input::LightSpread) => "(2.0 * tan(0.5 * frame.light_size.y))".into(),
             (Side::Receiver, i) => format!("in_{}", i.name()),
             // check refuses receiver inputs on the map side
             (Side::Map, i) => format!("in_{}", i.name()),

@@ -3,9 +3,11 @@
 //! [`prefilter`] runs the Map, Filter and Mipmap passes of a technique and keeps every
 //! channel as a chain of f64 images; [`evaluate`] runs the Shade lookup for one receiver.
 //! Both are public so that tests can derive tolerances from the same lookups (the texels a
-//! filtered lookup blends, [`Chain::lookup`]).
+//! filtered lookup blends, [`Chain::lookup`]). CSSM's summed-area tables are f64 prefix
+//! sums ([`Table`]); the soft-shadow techniques expose their steps ([`cssm_trace`],
+//! [`pcss_trace`]) so that the error model can propagate bounds through them.
 
-use super::{DepthMap, Kind, Query, Resolved, Technique, check_map, clamp_visibility, resolve};
+use super::{DepthMap, Kind, LightFrame, Query, Resolved, Technique, check_map, clamp_visibility, resolve};
 use std::f64::consts::PI;
 
 /// Visibility at every query, computed in f64 from the exact math of the papers.
@@ -145,11 +147,17 @@ pub struct Prefiltered {
     /// The stored channels, filtered (and mipmapped where the technique builds a mip chain),
     /// plus ESM's `zm` (the max-filtered depth).
     pub channels: Vec<Channel>,
+    /// Summed-area tables of the filtered channels, by channel name (CSSM with filter = 1).
+    pub tables: Vec<(String, Table)>,
 }
 
 impl Prefiltered {
     pub fn channel(&self, name: &str) -> Option<&Chain> {
         self.channels.iter().find(|c| c.name == name).map(|c| &c.chain)
+    }
+
+    pub fn table(&self, name: &str) -> Option<&Table> {
+        self.tables.iter().find(|(n, _)| n == name).map(|(_, t)| t)
     }
 
     fn chain(&self, name: &str) -> &Chain {
@@ -237,6 +245,80 @@ pub fn mip_chain(base: Level) -> Chain {
     Chain { levels }
 }
 
+/// A summed-area table (Crow 1984; Annen 2008, 8.3.1) of one f64 image, read by
+/// `sample_box` (docs/language.md 8.7).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    pub size: usize,
+    /// `(size + 1)^2` prefix sums: entry `(x, y)` sums the texels `i < x`, `j < y`.
+    sums: Vec<f64>,
+}
+
+/// One axis of a box: up to three runs of texels `[start, end)` with the fraction of each
+/// texel the box covers (a partial first texel, whole texels, a partial last texel).
+pub type BoxRuns = [(i64, i64, f64); 3];
+
+/// The runs of one axis of `sample_box` in texel units: the box of width
+/// `max(w * size, 1)` texels ("at least one texel each way") centred at `c * size`, clipped
+/// to `[0, size]`, and its clipped length. Reading of docs/language.md for a centre outside
+/// the map (not specified there): the centre is clamped to the map first, so the clipped box
+/// is never empty (at least half a texel).
+pub fn box_runs(size: usize, c: f64, w: f64) -> (BoxRuns, f64) {
+    let n = size as f64;
+    let wt = (w * n).max(1.0);
+    let centre = (c * n).clamp(0.0, n);
+    let centre = if centre.is_nan() { 0.0 } else { centre };
+    let (x0, x1) = ((centre - 0.5 * wt).max(0.0), (centre + 0.5 * wt).min(n));
+    let last = size as i64 - 1;
+    let a = (x0.floor() as i64).clamp(0, last);
+    let b = (x1.ceil() as i64 - 1).clamp(0, last);
+    let runs = if a == b {
+        [(a, a + 1, x1 - x0), (0, 0, 0.0), (0, 0, 0.0)]
+    } else {
+        [(a, a + 1, (a + 1) as f64 - x0), (a + 1, b, 1.0), (b, b + 1, x1 - b as f64)]
+    };
+    (runs, x1 - x0)
+}
+
+impl Table {
+    pub fn new(level: &Level) -> Table {
+        let n = level.size;
+        let mut sums = vec![0.0; (n + 1) * (n + 1)];
+        for y in 0..n {
+            for x in 0..n {
+                sums[(y + 1) * (n + 1) + x + 1] =
+                    level.texels[y * n + x] + sums[y * (n + 1) + x + 1] + sums[(y + 1) * (n + 1) + x] - sums[y * (n + 1) + x];
+            }
+        }
+        Table { size: n, sums }
+    }
+
+    /// The sum of texels `[x0, x1) x [y0, y1)` (0 for an empty block).
+    pub fn block(&self, x: (i64, i64), y: (i64, i64)) -> f64 {
+        if x.1 <= x.0 || y.1 <= y.0 {
+            return 0.0;
+        }
+        let row = self.size as i64 + 1;
+        let s = |x: i64, y: i64| self.sums[(y * row + x) as usize];
+        s(x.1, y.1) - s(x.0, y.1) - s(x.1, y.0) + s(x.0, y.0)
+    }
+
+    /// `sample_box(ch, wx, wy)`: the mean over the box `wx x wy` (uv units, at least one
+    /// texel each way) centred at uv, clipped to the map, integrating the piecewise-constant
+    /// texels exactly (so a one-texel box is bilinear interpolation).
+    pub fn box_mean(&self, uv: [f64; 2], w: [f64; 2]) -> f64 {
+        let (rx, lx) = box_runs(self.size, uv[0], w[0]);
+        let (ry, ly) = box_runs(self.size, uv[1], w[1]);
+        let mut sum = 0.0;
+        for &(y0, y1, wy) in &ry {
+            for &(x0, x1, wx) in &rx {
+                sum += wx * wy * self.block((x0, x1), (y0, y1));
+            }
+        }
+        sum / (lx * ly)
+    }
+}
+
 /// Run the Map, Filter and Mipmap passes of the technique on a depth map.
 pub fn prefilter(t: &Technique, map: &DepthMap) -> Result<Prefiltered, String> {
     let technique = resolve(t)?;
@@ -247,8 +329,9 @@ pub fn prefilter(t: &Technique, map: &DepthMap) -> Result<Prefiltered, String> {
     };
     let k = technique.int("K").max(1) as usize;
     let channel = |name: String, chain: Chain| Channel { name, chain };
+    let mut tables = Vec::new();
     let channels = match technique.kind {
-        Kind::Hard | Kind::Pcf => Vec::new(),
+        Kind::Hard | Kind::Pcf | Kind::Pcss => Vec::new(),
         Kind::Vsm => {
             // Map: the moments (z, z^2); Filter: box of K; Mipmap: mean.
             let blur = box_weights(k);
@@ -287,12 +370,47 @@ pub fn prefilter(t: &Technique, map: &DepthMap) -> Result<Prefiltered, String> {
             }
             out
         }
+        Kind::Cssm => {
+            // Map: the CSM basis sin(c_k z), cos(c_k z) (eq. 6.6), the z-weighted basis
+            // z sin(c_k z), z cos(c_k z) and z/2 (eq. 8.8); Filter: Gaussian of K, sigma;
+            // then a mean mip chain (filter = 0) or a summed-area table (filter = 1, 8.3.1).
+            let blur = gaussian_weights(k, technique.get("sigma"));
+            let sat = technique.int("filter") == 1;
+            let mut out = Vec::new();
+            for c in technique.stored_channels() {
+                let blurred = convolve(&z.map(|z| cssm_basis(&c.name, z)), &blur);
+                if sat {
+                    tables.push((c.name.clone(), Table::new(&blurred)));
+                    out.push(channel(c.name, Chain { levels: vec![blurred] }));
+                } else {
+                    out.push(channel(c.name, mip_chain(blurred)));
+                }
+            }
+            out
+        }
     };
     Ok(Prefiltered {
         technique,
         depth: Chain { levels: vec![z] },
         channels,
+        tables,
     })
+}
+
+/// The value of a CSSM channel at depth z, by its name: `<set>_t<term>_k<order>` with
+/// term 0 the sine and term 1 the cosine of c_k z = pi (2k - 1) z, times z for the
+/// z-weighted sets `g`, `gs` (eq. 8.8); `zh`, `zhs` are z / 2.
+pub fn cssm_basis(name: &str, z: f64) -> f64 {
+    let parts: Vec<&str> = name.split('_').collect();
+    match parts.as_slice() {
+        [set, term, order] => {
+            let k: i64 = order.trim_start_matches('k').parse().unwrap_or(0);
+            let ck = PI * (2 * k - 1) as f64;
+            let b = if *term == "t0" { (ck * z).sin() } else { (ck * z).cos() };
+            if set.starts_with('g') { z * b } else { b }
+        }
+        _ => 0.5 * z,
+    }
 }
 
 /// The Shade lookup for one receiver: the visibility, clamped to `[0, 1]` (NaN reads as 1).
@@ -394,6 +512,292 @@ pub fn shade(pre: &Prefiltered, q: &Query) -> f64 {
             }
             if fix == 2 { 2.0 * s } else { s }
         }
+        Kind::Cssm => cssm_trace(pre, q).value,
+        Kind::Pcss => pcss_trace(pre, q).value,
+    }
+}
+
+/// `div_or(num, den, eps, fallback)` (docs/language.md 8.6): `num / den` where
+/// `|den| >= eps` and `den != 0`, else `fallback`.
+pub fn div_or(num: f64, den: f64, eps: f64, fallback: f64) -> f64 {
+    if den.abs() >= eps && den != 0.0 { num / den } else { fallback }
+}
+
+/// `sample_width`'s level of detail (docs/language.md 8.7): `log2(max(w * size, 1))`.
+pub fn lod_of_width(size: usize, w: f64) -> f64 {
+    (w * size as f64).max(1.0).log2()
+}
+
+// ---------------------------------------------------------------------------------------
+// CSSM (Annen 2008, chapter 8; techniques/cssm.ron)
+
+/// Where a CSSM lookup of a kernel reads: a mip level of detail (filter = 0) or a box
+/// (filter = 1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Footprint {
+    Lod(f64),
+    Box([f64; 2]),
+}
+
+/// 1 / sqrt(3): a trilinear lookup at level log2(w n) spreads like a box sqrt(3) times
+/// wider (variance 4^L / 4 against w^2 / 12 texels^2), so the mip path asks for w / sqrt(3)
+/// (cssm.ron writes it as the f32 literal 0.57735026).
+pub const INV_SQRT3: f64 = 0.577_350_269_189_625_8;
+
+/// The footprint of a kernel `u` wide (uv units per axis): the mip path reads
+/// `expand_width(f, max(u.x, u.y) / sqrt(3))`, the table path `expand_box(fs, u.x, u.y)`.
+pub fn cssm_footprint(pre: &Prefiltered, u: [f64; 2]) -> Footprint {
+    if pre.technique.int("filter") == 1 {
+        Footprint::Box(u)
+    } else {
+        Footprint::Lod(lod_of_width(pre.depth.base().size, INV_SQRT3 * u[0].max(u[1])))
+    }
+}
+
+/// One CSSM channel read at a footprint (NaN where the channel is missing).
+pub fn cssm_lookup(pre: &Prefiltered, name: &str, uv: [f64; 2], at: Footprint) -> f64 {
+    match at {
+        Footprint::Lod(lod) => pre.channel(name).map_or(f64::NAN, |c| c.sample(uv, lod)),
+        Footprint::Box(w) => pre.table(name).map_or(f64::NAN, |t| t.box_mean(uv, w)),
+    }
+}
+
+/// `2 a_k / c_k` with a_k = exp(-alpha (k/M)^2) (6.1.1) and c_k = pi (2k - 1).
+pub fn cssm_amplitude(t: &Resolved, k: i64) -> f64 {
+    let m = t.int("M") as f64;
+    let ck = PI * (2 * k - 1) as f64;
+    2.0 * (-t.get("alpha") * (k as f64 / m).powi(2)).exp() / ck
+}
+
+/// The names of the CSM basis, the z-weighted basis and z/2 of the filter's path.
+pub fn cssm_sets(t: &Resolved) -> (&'static str, &'static str, &'static str) {
+    if t.int("filter") == 1 {
+        ("fs", "gs", "zhs")
+    } else {
+        ("f", "g", "zh")
+    }
+}
+
+/// Eq. 8.1 with the CSM series (eq. 6.5-6.6): s_f = 1/2 + sum_k (2 a_k / c_k)
+/// [cos(c_k dr) S_k - sin(c_k dr) C_k], S_k, C_k the filtered sin(c_k z), cos(c_k z) and dr
+/// the biased receiver depth (with the 1/(2M) offset of fix = 1).
+pub fn cssm_series(pre: &Prefiltered, uv: [f64; 2], at: Footprint, dr: f64) -> f64 {
+    let t = &pre.technique;
+    let (f, _, _) = cssm_sets(t);
+    let mut s = 0.5;
+    for k in 1..=t.int("M") {
+        let ck = PI * (2 * k - 1) as f64;
+        let sin_z = cssm_lookup(pre, &format!("{f}_t0_k{k}"), uv, at);
+        let cos_z = cssm_lookup(pre, &format!("{f}_t1_k{k}"), uv, at);
+        s += cssm_amplitude(t, k) * ((ck * dr).cos() * sin_z - (ck * dr).sin() * cos_z);
+    }
+    s
+}
+
+/// The numerator of eq. 8.6 by eq. 8.8: [w * z/2] + sum_k (2 a_k / c_k)
+/// [sin(c_k dr) [w * z cos(c_k z)] - cos(c_k dr) [w * z sin(c_k z)]], the complementary
+/// series with the CSM series' attenuation and biased depth (cssm.ron), so that
+/// f_bar = 1 - f term by term.
+pub fn cssm_weighted(pre: &Prefiltered, uv: [f64; 2], at: Footprint, dr: f64) -> f64 {
+    let t = &pre.technique;
+    let (_, g, zh) = cssm_sets(t);
+    let mut s = cssm_lookup(pre, zh, uv, at);
+    for k in 1..=t.int("M") {
+        let ck = PI * (2 * k - 1) as f64;
+        let z_sin = cssm_lookup(pre, &format!("{g}_t0_k{k}"), uv, at);
+        let z_cos = cssm_lookup(pre, &format!("{g}_t1_k{k}"), uv, at);
+        s += cssm_amplitude(t, k) * ((ck * dr).sin() * z_cos - (ck * dr).cos() * z_sin);
+    }
+    s
+}
+
+/// Eq. 8.4 / 8.6: whether there is no blocker (1 - s_f below `min_blocker`) and z_avg, the
+/// guarded quotient num / (1 - s_f) (fallback: the receiver's depth) clamped to
+/// `[0, max(db, 0)]`.
+pub fn cssm_blocker_depth(t: &Resolved, sf: f64, num: f64, db: f64) -> (bool, f64) {
+    let blockers = 1.0 - sf;
+    let min_blocker = t.get("min_blocker");
+    let no_blocker = blockers < min_blocker;
+    let zavg = div_or(num, blockers, min_blocker, db).max(0.0).min(db.max(0.0));
+    (no_blocker, zavg)
+}
+
+/// 8.3.1: the final kernel f_w = (light_width / d) ((d - z_avg) / z_avg) near with d and
+/// z_avg light-space distances (`dist`, and z_avg mapped to `near + z_avg (far - near)`), in
+/// uv per axis at the near plane.
+pub fn cssm_final_width(light: &LightFrame, dist: f64, zavg: f64) -> [f64; 2] {
+    let zw = light.near + zavg * (light.far - light.near);
+    let ratio = div_or(light.near * (dist - zw).max(0.0), dist * zw, 1e-30, 0.0);
+    light.width.map(|w| light.uv_width(w * ratio, light.near))
+}
+
+/// 8.2.2: the initial kernel, the pyramid from the receiver (at `dist`) to the light cut by
+/// the near plane, `light_width (dist - near) / dist` there, in uv per axis.
+pub fn cssm_initial_width(light: &LightFrame, dist: f64) -> [f64; 2] {
+    light.width.map(|w| light.uv_width(w * ((dist - light.near) / dist), light.near))
+}
+
+/// 6.1.1 (fix = 2 scales by 2) and 8.2.3 (shift by -ring, scale by 1 / (1 - 2 ring), clamp).
+pub fn cssm_ringing(t: &Resolved, s: f64) -> f64 {
+    let s = if t.int("fix") == 2 { 2.0 * s } else { s };
+    let ring = t.get("ring");
+    ((s - ring) / (1.0 - 2.0 * ring)).clamp(0.0, 1.0)
+}
+
+/// Eq. 8.9: p = 1 + A exp(-B (d - z_avg)), d - z_avg in normalised depth, at least 0.
+pub fn cssm_sharpening(t: &Resolved, db: f64, zavg: f64) -> f64 {
+    1.0 + t.get("A") * (-t.get("B") * (db - zavg).max(0.0)).exp()
+}
+
+/// The steps of CSSM's Shade pass for one receiver.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CssmTrace {
+    /// d - bias (depth_slope = 0), and the series' depth (less 1/(2M) for fix = 1).
+    pub db: f64,
+    pub dr: f64,
+    /// max(d_world, near)
+    pub dist: f64,
+    /// the initial kernel (uv), s_f there and the numerator of eq. 8.8
+    pub u0: [f64; 2],
+    pub sf: f64,
+    pub num: f64,
+    pub no_blocker: bool,
+    pub zavg: f64,
+    /// the final kernel (uv) and the series there
+    pub u1: [f64; 2],
+    pub s1: f64,
+    pub p: f64,
+    /// before the final clamp
+    pub value: f64,
+}
+
+/// CSSM (cssm.ron's Shade pass, Annen 2008 eq. 8.1-8.9) for one receiver.
+pub fn cssm_trace(pre: &Prefiltered, q: &Query) -> CssmTrace {
+    let t = &pre.technique;
+    let light = t.light();
+    let uv = [q.uv[0] as f64, q.uv[1] as f64];
+    let d = q.d as f64;
+    let db = d - t.get("bias");
+    let dr = db - if t.int("fix") == 1 { 0.5 / t.get("M") } else { 0.0 };
+    let dist = light.d_world(d).max(light.near);
+    let u0 = cssm_initial_width(&light, dist);
+    let at0 = cssm_footprint(pre, u0);
+    let sf = cssm_series(pre, uv, at0, dr);
+    let num = cssm_weighted(pre, uv, at0, dr);
+    let (no_blocker, zavg) = cssm_blocker_depth(t, sf, num, db);
+    let u1 = cssm_final_width(&light, dist, zavg);
+    let s1 = cssm_series(pre, uv, cssm_footprint(pre, u1), dr);
+    let p = cssm_sharpening(t, db, zavg);
+    let value = if no_blocker {
+        cssm_ringing(t, sf)
+    } else {
+        cssm_ringing(t, s1).powf(p)
+    };
+    CssmTrace {
+        db,
+        dr,
+        dist,
+        u0,
+        sf,
+        num,
+        no_blocker,
+        zavg,
+        u1,
+        s1,
+        p,
+        value,
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// PCSS (Fernando 2005; Annen 2008, 4.2; techniques/pcss.ron)
+
+/// Sample (i, j) of PCSS's n x n lattice in [-1/2, 1/2]^2: ((i n + j + 1/2) / n^2,
+/// (j n + i + 1/2) / n^2) - 1/2, one sample per cell of an n x n grid and per row and column
+/// of an n^2 x n^2 grid.
+pub fn pcss_lattice(n: i64, i: i64, j: i64) -> [f64; 2] {
+    let nn = (n * n) as f64;
+    [((i * n + j) as f64 + 0.5) / nn - 0.5, ((j * n + i) as f64 + 0.5) / nn - 0.5]
+}
+
+/// One `nearest_at` read: the offset (uv), the continuous texel position `(uv + o) size`,
+/// and the depth read there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PcssSample {
+    pub offset: [f64; 2],
+    pub position: [f64; 2],
+    pub z: f64,
+}
+
+/// The steps of PCSS's Shade pass for one receiver.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PcssTrace {
+    pub db: f64,
+    pub dist: f64,
+    /// the search region (uv) and its N x N reads
+    pub su: [f64; 2],
+    pub search: Vec<PcssSample>,
+    /// blockers found, and their mean depth (the receiver's without any)
+    pub count: usize,
+    pub zb: f64,
+    /// the filter region (uv) and its M x M reads
+    pub pu: [f64; 2],
+    pub filter: Vec<PcssSample>,
+    pub value: f64,
+}
+
+/// PCSS (pcss.ron's Shade pass) for one receiver: blocker search over the near-plane cut of
+/// the light pyramid, the penumbra width w = (d_r - d_b) light_width / d_b projected to the
+/// near plane, PCF of M x M binary tests (eq. 3.2) at `nearest_at` reads.
+pub fn pcss_trace(pre: &Prefiltered, q: &Query) -> PcssTrace {
+    let t = &pre.technique;
+    let light = t.light();
+    let uv = [q.uv[0] as f64, q.uv[1] as f64];
+    let d = q.d as f64;
+    // depth_slope = 0: the slope term sb (1 + |o| shadow_size) vanishes
+    let db = d - t.get("bias");
+    let dist = light.d_world(d).max(light.near);
+    let size = pre.depth.base().size as f64;
+    let read = |o: [f64; 2]| {
+        let at = [uv[0] + o[0], uv[1] + o[1]];
+        PcssSample {
+            offset: o,
+            position: [at[0] * size, at[1] * size],
+            z: pre.depth.nearest(at),
+        }
+    };
+    let lattice = |n: i64, region: [f64; 2]| -> Vec<PcssSample> {
+        (0..n)
+            .flat_map(|i| (0..n).map(move |j| (i, j)))
+            .map(|(i, j)| {
+                let c = pcss_lattice(n, i, j);
+                read([c[0] * region[0], c[1] * region[1]])
+            })
+            .collect()
+    };
+    // 1. blocker search over the near-plane cut of the pyramid to the light
+    let su = light.width.map(|w| light.uv_width(w * ((dist - light.near) / dist), light.near));
+    let search = lattice(t.int("N"), su);
+    let blockers: Vec<f64> = search.iter().map(|s| s.z).filter(|&z| z < db).collect();
+    let count = blockers.len();
+    let zb = div_or(blockers.iter().sum(), count as f64, 0.5, db);
+    // 2. penumbra width (light-space distances), projected to the near plane
+    let zbw = light.near + zb * (light.far - light.near);
+    let wp = div_or((dist - zbw).max(0.0), zbw, 1e-30, 0.0);
+    let pu = light.width.map(|w| light.uv_width(w * wp * (light.near / dist), light.near));
+    // 3. PCF over it
+    let filter = lattice(t.int("M"), pu);
+    let lit = filter.iter().filter(|s| db <= s.z).count() as f64 / filter.len() as f64;
+    PcssTrace {
+        db,
+        dist,
+        su,
+        search,
+        count,
+        zb,
+        pu,
+        filter,
+        value: if count == 0 { 1.0 } else { lit },
     }
 }
 

@@ -12,8 +12,13 @@
 //! - Mipmap: one dispatch per level, each texel the mean of the 2 x 2 texels below;
 //! - Shade: one invocation per query, filtered lookups through a linear, clamp-to-edge
 //!   sampler with `textureSampleLevel` at the query's level of detail.
+//!
+//! CSSM keeps its CSM basis (Unorm8) and its z-weighted set (z-weighted basis and z/2, F16
+//! for mipmaps, Unorm8 for tables) in two array textures, each mapped, blurred and then
+//! mipmapped, or summed into u32 tables (`sat.wgsl`: rows, then columns) in one storage
+//! buffer. PCSS reads the r32float depth directly.
 
-use super::{DepthMap, Kind, Query, Resolved, Storage, Technique, check_map, resolve};
+use super::{DepthMap, Kind, Query, Resolved, Storage, StoredChannel, Technique, check_map, resolve};
 use sshc_runtime::gpu::Gpu;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -49,9 +54,12 @@ struct Program {
     slots: &'static [Slot],
     /// Shade shaders start with `common.wgsl` (queries in, visibility out).
     shade: bool,
+    /// Appended after `source` (CSSM's shade body after its lookups).
+    tail: &'static str,
 }
 
-/// `program!(file, entry, [slots], shade)`: the shader source comes from `shaders/<file>`.
+/// `program!(file, entry, [slots], shade)`: the shader source comes from `shaders/<file>`;
+/// `program!(file + tail, ...)` appends `shaders/<tail>`.
 macro_rules! program {
     ($file:literal, $entry:literal, [$($slot:ident),*], $shade:literal) => {
         Program {
@@ -60,10 +68,23 @@ macro_rules! program {
             entry: $entry,
             slots: &[$(Slot::$slot),*],
             shade: $shade,
+            tail: "",
+        }
+    };
+    ($file:literal + $tail:literal, $entry:literal, [$($slot:ident),*], $shade:literal) => {
+        Program {
+            file: $file,
+            source: include_str!(concat!("shaders/", $file)),
+            entry: $entry,
+            slots: &[$(Slot::$slot),*],
+            shade: $shade,
+            tail: include_str!(concat!("shaders/", $tail)),
         }
     };
 }
 
+/// Closes the timed pass after the Shade dispatch (see `shaders/fence.wgsl`).
+const FENCE: Program = program!("fence.wgsl", "main", [ReadWrite], false);
 const MAP_VSM: Program = program!("map_vsm.wgsl", "main", [Depth, Write], false);
 const MAP_ESM: Program = program!("map_esm.wgsl", "main", [Depth, Write, Uniform], false);
 const MAP_CSM: Program = program!("map_csm.wgsl", "main", [Depth, Write, Uniform, Read], false);
@@ -90,6 +111,23 @@ const SHADE_CSM: Program = program!(
     [Read, ReadWrite, Filtered, Sampler, Uniform, Read, Read],
     true
 );
+
+const MAP_CSSM: Program = program!("map_cssm.wgsl", "main", [Depth, Write, Uniform, Read], false);
+const SAT_ROWS: Program = program!("sat.wgsl", "rows", [Texels, ReadWrite, Uniform], false);
+const SAT_COLUMNS: Program = program!("sat.wgsl", "columns", [Texels, ReadWrite, Uniform], false);
+const SHADE_CSSM_MIPS: Program = program!(
+    "cssm_mips.wgsl" + "shade_cssm.wgsl",
+    "main",
+    [Read, ReadWrite, Filtered, Filtered, Sampler, Uniform, Read, Read],
+    true
+);
+const SHADE_CSSM_TABLE: Program = program!(
+    "cssm_table.wgsl" + "shade_cssm.wgsl",
+    "main",
+    [Read, ReadWrite, Read, Uniform, Read, Read],
+    true
+);
+const SHADE_PCSS: Program = program!("shade_pcss.wgsl", "main", [Read, ReadWrite, Depth, Uniform], true);
 
 /// The texture format of a storage precision, and its WGSL name.
 pub fn texture_format(s: Storage) -> (wgpu::TextureFormat, &'static str) {
@@ -236,6 +274,7 @@ impl<'g> GpuReference<'g> {
             let shade_groups = [groups(queries.len() as u32, 64), 1, 1];
             let io = [query_buffer.as_entire_binding(), results.as_entire_binding()];
             self.passes(&r, n, &depth, io, shade_groups, &mut dispatches)?;
+            let fence = self.dispatch(&FENCE, None, vec![results.as_entire_binding()], [1, 1, 1])?;
 
             let timer = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
                 let set = device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -266,7 +305,7 @@ impl<'g> GpuReference<'g> {
                     timestamp_writes: timer.as_ref().map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
                         query_set: set,
                         beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: Some(1),
+                        end_of_pass_write_index: None,
                     }),
                 });
                 for d in &dispatches {
@@ -275,6 +314,21 @@ impl<'g> GpuReference<'g> {
                     let [x, y, z] = d.workgroups;
                     pass.dispatch_workgroups(x, y, z);
                 }
+            }
+            {
+                // the end timestamp in a pass of its own behind a barrier on the visibility
+                // buffer (see `shaders/fence.wgsl`)
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("reference fence"),
+                    timestamp_writes: timer.as_ref().map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
+                        query_set: set,
+                        beginning_of_pass_write_index: None,
+                        end_of_pass_write_index: Some(1),
+                    }),
+                });
+                pass.set_pipeline(&fence.pipeline.pipeline);
+                pass.set_bind_group(0, &fence.group, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
             }
             encoder.copy_buffer_to_buffer(&results, 0, &readback, 0, size);
             if let Some((set, resolved, read)) = &timer {
@@ -332,6 +386,19 @@ impl<'g> GpuReference<'g> {
                 "{} queries are more than one dispatch of the device can take",
                 queries.len()
             ));
+        }
+        if r.kind == Kind::Cssm {
+            let (series, weighted) = cssm_sets(r);
+            let table = 4 * 4 * (layers_of(&series) + layers_of(&weighted)) as u64 * (map.size as u64).pow(2);
+            if r.int("filter") == 1 && table > limits.max_storage_buffer_binding_size {
+                return Err(format!(
+                    "the summed-area tables of a {0} x {0} map ({table} bytes) exceed the device's storage buffer limit",
+                    map.size
+                ));
+            }
+            if r.int("filter") == 1 && map.size > 4096 {
+                return Err("u32 summed-area tables of unorm8 codes hold maps up to 4096 x 4096".into());
+            }
         }
         if matches!(r.kind, Kind::Vsm | Kind::Esm | Kind::Csm) {
             if r.storage == Storage::Unorm16 && !features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM) {
@@ -438,7 +505,125 @@ impl<'g> GpuReference<'g> {
                 ];
                 out.push(self.dispatch(&SHADE_CSM, None, resources, shade_groups)?);
             }
+            Kind::Cssm => self.cssm(r, n, depth, [queries, results], shade_groups, out)?,
+            Kind::Pcss => {
+                let light = r.light();
+                let words = Words::default()
+                    .f(light.width[0])
+                    .f(light.width[1])
+                    .f(light.near)
+                    .f(light.far)
+                    .f(light.uv_per_world(light.near))
+                    .f(r.get("bias"))
+                    .i(r.int("N") as i32)
+                    .i(r.int("M") as i32);
+                let params = self.uniform("pcss", words);
+                let resources = vec![queries, results, view(depth), params.as_entire_binding()];
+                out.push(self.dispatch(&SHADE_PCSS, None, resources, shade_groups)?);
+            }
         }
+        Ok(())
+    }
+
+    /// CSSM: two channel sets (the CSM basis; the z-weighted basis and z/2), each mapped and
+    /// blurred, then mipmapped (filter = 0) or summed into tables (filter = 1); the Shade
+    /// pass reads both.
+    fn cssm(
+        &self,
+        r: &Resolved,
+        n: u32,
+        depth: &wgpu::TextureView,
+        io: [wgpu::BindingResource<'_>; 2],
+        shade_groups: [u32; 3],
+        out: &mut Vec<Dispatch>,
+    ) -> Result<(), String> {
+        let [queries, results] = io;
+        let m = r.int("M");
+        let sat = r.int("filter") == 1;
+        let (series, weighted) = cssm_sets(r);
+        let (series_layers, weighted_layers) = (layers_of(&series), layers_of(&weighted));
+        // per layer (the CSM basis's, then the z-weighted set's): (lo, span) of its four
+        // channels, each at its own precision's encoding; unused slots decode as is
+        let mut encoding = Words::default();
+        for set in [&series, &weighted] {
+            for layer in set.chunks(4) {
+                let mut lo = [0.0; 4];
+                let mut span = [1.0; 4];
+                for (i, c) in layer.iter().enumerate() {
+                    (lo[i], span[i]) = c.encoding(r.channel_storage(&c.name));
+                }
+                for v in lo.into_iter().chain(span) {
+                    encoding = encoding.f(v);
+                }
+            }
+        }
+        let encoding = self.buffer("cssm encoding", &encoding.0, wgpu::BufferUsages::STORAGE);
+        let weights = super::cpu::gaussian_weights(r.int("K").max(1) as usize, r.get("sigma"));
+        let mut stacks = Vec::new();
+        for (weighted, set, layers, first_layer) in [(0, &series, series_layers, 0), (1, &weighted, weighted_layers, series_layers)] {
+            let storage = r.channel_storage(&set[0].name);
+            let map_params = self.uniform("cssm map", Words::default().u(m as u32).u(weighted).u(first_layer));
+            let map = (&MAP_CSSM, vec![map_params.as_entire_binding(), encoding.as_entire_binding()]);
+            stacks.push(self.filtered_stack(n, depth, map, storage, layers, &weights, !sat, out)?);
+        }
+        let amplitude = (1..=m).fold(Words::default(), |w, k| w.f(super::cpu::cssm_amplitude(r, k)));
+        let amplitude = self.buffer("cssm amplitudes", &amplitude.0, wgpu::BufferUsages::STORAGE);
+        let light = r.light();
+        let fix = r.int("fix");
+        let words = Words::default()
+            .f(light.width[0])
+            .f(light.width[1])
+            .f(light.near)
+            .f(light.far)
+            .f(light.uv_per_world(light.near))
+            .f(r.get("bias"))
+            .f(if fix == 1 { 0.5 / m as f64 } else { 0.0 })
+            .f(if fix == 2 { 2.0 } else { 1.0 })
+            .f(r.get("ring"))
+            .f(r.get("min_blocker"))
+            .f(r.get("A"))
+            .f(r.get("B"))
+            .u(m as u32)
+            .f(n as f64);
+        let params = self.uniform("cssm", words);
+        if !sat {
+            let resources = vec![
+                queries,
+                results,
+                view(&stacks[0]),
+                view(&stacks[1]),
+                wgpu::BindingResource::Sampler(&self.sampler),
+                params.as_entire_binding(),
+                encoding.as_entire_binding(),
+                amplitude.as_entire_binding(),
+            ];
+            out.push(self.dispatch(&SHADE_CSSM_MIPS, None, resources, shade_groups)?);
+            return Ok(());
+        }
+        let channels = 4 * (series_layers + weighted_layers) as u64;
+        let table = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("cssm summed-area tables"),
+            size: 4 * channels * (n as u64) * (n as u64),
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        for (stack, layers, first_channel) in [(&stacks[0], series_layers, 0), (&stacks[1], weighted_layers, 4 * series_layers)] {
+            let sat_params = self.uniform("sat", Words::default().u(n).u(first_channel));
+            let groups = [groups(n, 64), 4 * layers, 1];
+            for program in [&SAT_ROWS, &SAT_COLUMNS] {
+                let resources = vec![view(stack), table.as_entire_binding(), sat_params.as_entire_binding()];
+                out.push(self.dispatch(program, Some(Storage::Unorm8), resources, groups)?);
+            }
+        }
+        let resources = vec![
+            queries,
+            results,
+            table.as_entire_binding(),
+            params.as_entire_binding(),
+            encoding.as_entire_binding(),
+            amplitude.as_entire_binding(),
+        ];
+        out.push(self.dispatch(&SHADE_CSSM_TABLE, None, resources, shade_groups)?);
         Ok(())
     }
 
@@ -458,9 +643,25 @@ impl<'g> GpuReference<'g> {
             Kind::Csm => (super::cpu::gaussian_weights(r.int("K").max(1) as usize, r.get("sigma")), true),
             _ => (super::cpu::box_weights(r.int("K").max(1) as usize), r.kind == Kind::Vsm),
         };
-        let layers = layers(r);
+        self.filtered_stack(n, depth, map, r.storage, layers(r), &weights, mips, out)
+    }
+
+    /// A Map pass into `layers` layers at `storage`, the separable Filter `weights` and, with
+    /// `mips`, a mean mip chain. Returns a view of every level of the result.
+    #[allow(clippy::too_many_arguments)]
+    fn filtered_stack(
+        &self,
+        n: u32,
+        depth: &wgpu::TextureView,
+        map: (&Program, Vec<wgpu::BindingResource<'_>>),
+        storage: Storage,
+        layers: u32,
+        weights: &[f64],
+        mips: bool,
+        out: &mut Vec<Dispatch>,
+    ) -> Result<wgpu::TextureView, String> {
         let levels = if mips { 32 - n.leading_zeros() } else { 1 };
-        let (format, _) = texture_format(r.storage);
+        let (format, _) = texture_format(storage);
         let filtered = self.texture("filtered", n, layers, levels, format);
         let tile = [groups(n, 8), groups(n, 8), layers];
         let (program, extra) = map;
@@ -477,19 +678,19 @@ impl<'g> GpuReference<'g> {
             let radius = (weights.len() / 2) as i32;
             let horizontal = self.uniform("filter x", Words::default().i(1).i(0).i(radius));
             let vertical = self.uniform("filter y", Words::default().i(0).i(1).i(radius));
-            out.push(self.dispatch(program, Some(r.storage), map_resources(view(&mapped)), tile)?);
+            out.push(self.dispatch(program, Some(storage), map_resources(view(&mapped)), tile)?);
             let resources = vec![view(&mapped), view(&tmp), horizontal.as_entire_binding(), taps.as_entire_binding()];
             out.push(self.dispatch(&BLUR, Some(Storage::F32), resources, tile)?);
             let resources = vec![view(&tmp), view(&base), vertical.as_entire_binding(), taps.as_entire_binding()];
-            out.push(self.dispatch(&BLUR, Some(r.storage), resources, tile)?);
+            out.push(self.dispatch(&BLUR, Some(storage), resources, tile)?);
         } else {
-            out.push(self.dispatch(program, Some(r.storage), map_resources(view(&base)), tile)?);
+            out.push(self.dispatch(program, Some(storage), map_resources(view(&base)), tile)?);
         }
         for level in 1..levels {
             let size = (n >> level).max(1);
             out.push(self.dispatch(
                 &MIP,
-                Some(r.storage),
+                Some(storage),
                 vec![view(&level_view(&filtered, level - 1)), view(&level_view(&filtered, level))],
                 [groups(size, 8), groups(size, 8), layers],
             )?);
@@ -605,6 +806,8 @@ impl<'g> GpuReference<'g> {
             source.push('\n');
         }
         source.push_str(&program.source.replace("FORMAT", format.map_or("rgba32float", |f| f.1)));
+        source.push('\n');
+        source.push_str(program.tail);
         let entries: Vec<wgpu::BindGroupLayoutEntry> = program
             .slots
             .iter()
@@ -697,7 +900,25 @@ fn level_view(t: &wgpu::Texture, level: u32) -> wgpu::TextureView {
 
 /// Layers of the technique's channel texture (four channels each).
 fn layers(r: &Resolved) -> u32 {
-    (r.stored_channels().len() as u32).div_ceil(4).max(1)
+    match r.kind {
+        Kind::Cssm => {
+            let (series, weighted) = cssm_sets(r);
+            layers_of(&series).max(layers_of(&weighted))
+        }
+        _ => layers_of(&r.stored_channels()),
+    }
+}
+
+fn layers_of(channels: &[StoredChannel]) -> u32 {
+    (channels.len() as u32).div_ceil(4).max(1)
+}
+
+/// CSSM's two channel sets: the CSM basis (`f` or `fs`, 2M channels), and the z-weighted
+/// basis with z/2 (`g` and `zh`, or `gs` and `zhs`, 2M + 1 channels).
+fn cssm_sets(r: &Resolved) -> (Vec<StoredChannel>, Vec<StoredChannel>) {
+    let mut series = r.stored_channels();
+    let weighted = series.split_off(2 * r.int("M") as usize);
+    (series, weighted)
 }
 
 fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, String> {

@@ -1,7 +1,8 @@
 //! Hand-written reference implementations of the bundled techniques (`techniques/hard.ron`,
-//! `pcf.ron`, `vsm.ron`, `esm.ron`, `csm.ron`), written from the papers (Annen 2008,
-//! chapters 3, 4, 6 and 7) and the technique files alone, independently of the compiler's
-//! code generator, so that tests can check that generated and hand-written results agree.
+//! `pcf.ron`, `vsm.ron`, `esm.ron`, `csm.ron`, `cssm.ron`, `pcss.ron`), written from the
+//! papers (Annen 2008, chapters 3, 4, 6, 7 and 8; Fernando 2005) and the technique files
+//! alone, independently of the compiler's code generator, so that tests can check that
+//! generated and hand-written results agree.
 //!
 //! Every pass after the Depth pass (Map, Filter, Mipmap and the Shade lookup) exists twice:
 //!
@@ -19,6 +20,11 @@
 //! a unorm format is kept as `(v - lo) / (hi - lo)` unless the range already lies in `[0, 1]`.
 //! The receiver's `depth_slope` is taken as 0 (the slope-scaled bias is not modelled), and
 //! the visibility is clamped to `[0, 1]` with NaN reading as 1.
+//!
+//! The soft-shadow techniques (`cssm`, `pcss`) also need the light: its width, the world
+//! distances of the fitted depth range and its projection ([`LightFrame`], set with
+//! [`Technique::lit`]). A receiver's view distance is `d_world = near + d (far - near)`
+//! (the Depth pass's linear normalisation, docs/language.md section 7).
 
 pub mod cpu;
 pub mod gpu;
@@ -63,15 +69,100 @@ impl Storage {
     }
 }
 
+/// How the light's view maps world lengths to shadow-map uv (`uv_width` in
+/// docs/language.md: `len / (texel world size at dist * shadow_size)`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// An orthographic view whose shadow map covers `extent` world units along each of its
+    /// x and y axes (the square map's full width): `uv_width(len, dist) = len / extent` at any
+    /// distance.
+    Orthographic { extent: f64 },
+    /// A perspective view of vertical (and, the map being square, horizontal) field of view
+    /// `fov_y` radians: the map covers `2 dist tan(fov_y / 2)` at view distance `dist`, so
+    /// `uv_width(len, dist) = len / (2 dist tan(fov_y / 2))` (Annen 2008, 8.3.1).
+    Perspective { fov_y: f64 },
+}
+
+/// The light as the soft-shadow techniques see it (the `light_width`, `near`, `far` inputs
+/// of docs/language.md section 8.5, and the projection `uv_width` needs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightFrame {
+    /// `light_width`: the full width of the light's outline along the light view's x and y
+    /// axes (the shadow map's u and v), world units; 0 for a point light.
+    pub width: [f64; 2],
+    /// `near`, `far`: world distances along the light's view axis of the fitted depth range;
+    /// the Depth pass stores `z = (distance - near) / (far - near)`.
+    pub near: f64,
+    pub far: f64,
+    pub projection: Projection,
+}
+
+impl LightFrame {
+    /// The tests' query plane: an orthographic light of extent `[-1, 1] x [-1, 1]` (a length
+    /// L is L / 2 in uv), near 8, far 12, a square light `width` wide.
+    pub fn query_plane(width: f64) -> LightFrame {
+        LightFrame {
+            width: [width, width],
+            near: 8.0,
+            far: 12.0,
+            projection: Projection::Orthographic { extent: 2.0 },
+        }
+    }
+
+    /// `uv_width(len, dist)`: the uv extent of a world length `len` across the light's view
+    /// at view distance `dist`.
+    pub fn uv_width(&self, len: f64, dist: f64) -> f64 {
+        len * self.uv_per_world(dist)
+    }
+
+    /// `1 / (texel world size at dist * shadow_size)`: uv units per world unit at `dist`.
+    pub fn uv_per_world(&self, dist: f64) -> f64 {
+        match self.projection {
+            Projection::Orthographic { extent } => 1.0 / extent,
+            Projection::Perspective { fov_y } => 1.0 / (2.0 * dist * (0.5 * fov_y).tan()),
+        }
+    }
+
+    /// `d_world` of a receiver at normalised depth `d`.
+    pub fn d_world(&self, d: f64) -> f64 {
+        self.near + d * (self.far - self.near)
+    }
+
+    fn check(&self) -> Result<(), String> {
+        let [wx, wy] = self.width;
+        if !(wx.is_finite() && wy.is_finite() && wx >= 0.0 && wy >= 0.0) {
+            return Err(format!("the light's width {:?} must be finite and non-negative", self.width));
+        }
+        if !(self.near.is_finite() && self.far.is_finite() && self.near > 0.0 && self.far > self.near) {
+            return Err(format!(
+                "the light's depth range must satisfy 0 < near < far (near {}, far {})",
+                self.near, self.far
+            ));
+        }
+        match self.projection {
+            Projection::Orthographic { extent } if !(extent.is_finite() && extent > 0.0) => {
+                Err(format!("an orthographic light's extent {extent} must be positive"))
+            }
+            Projection::Perspective { fov_y } if !(fov_y > 0.0 && fov_y < std::f64::consts::PI) => {
+                Err(format!("a perspective light's field of view {fov_y} must lie in (0, pi)"))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
 /// A technique to evaluate: the name of a bundled technique file, parameter values by the
-/// file's names (a missing one takes the file's default), and an optional override of the
+/// file's names (a missing one takes the file's default), an optional override of the
 /// precision of the stored non-depth channel or expansion (CSM's basis `f`, VSM's moments
-/// `m1`/`m2`, ESM's `e`; `None` keeps the file's).
+/// `m1`/`m2`, ESM's `e`; `None` keeps the file's; not supported for CSSM, whose channels
+/// keep the file's precisions), and the light (needed by `cssm` and `pcss`, ignored by the
+/// others).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Technique {
     pub name: String,
     pub params: BTreeMap<String, f64>,
     pub storage: Option<Storage>,
+    pub light: Option<LightFrame>,
 }
 
 impl Technique {
@@ -81,6 +172,7 @@ impl Technique {
             name: name.to_string(),
             params: BTreeMap::new(),
             storage: None,
+            light: None,
         }
     }
 
@@ -95,9 +187,15 @@ impl Technique {
         self.storage = Some(storage);
         self
     }
+
+    /// Set the light (for `cssm` and `pcss`).
+    pub fn lit(mut self, light: LightFrame) -> Technique {
+        self.light = Some(light);
+        self
+    }
 }
 
-/// The five techniques the references implement.
+/// The seven techniques the references implement.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Kind {
     Hard,
@@ -105,10 +203,12 @@ pub enum Kind {
     Vsm,
     Esm,
     Csm,
+    Cssm,
+    Pcss,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 5] = [Kind::Hard, Kind::Pcf, Kind::Vsm, Kind::Esm, Kind::Csm];
+    pub const ALL: [Kind; 7] = [Kind::Hard, Kind::Pcf, Kind::Vsm, Kind::Esm, Kind::Csm, Kind::Cssm, Kind::Pcss];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -117,6 +217,8 @@ impl Kind {
             Kind::Vsm => "vsm",
             Kind::Esm => "esm",
             Kind::Csm => "csm",
+            Kind::Cssm => "cssm",
+            Kind::Pcss => "pcss",
         }
     }
 
@@ -127,6 +229,8 @@ impl Kind {
             Kind::Vsm => include_str!("../../../techniques/vsm.ron"),
             Kind::Esm => include_str!("../../../techniques/esm.ron"),
             Kind::Csm => include_str!("../../../techniques/csm.ron"),
+            Kind::Cssm => include_str!("../../../techniques/cssm.ron"),
+            Kind::Pcss => include_str!("../../../techniques/pcss.ron"),
         }
     }
 
@@ -160,13 +264,29 @@ impl Kind {
                 ("bias", false),
                 ("slope_bias", false),
             ],
+            Kind::Cssm => &[
+                ("M", true),
+                ("alpha", false),
+                ("fix", true),
+                ("filter", true),
+                ("K", true),
+                ("sigma", false),
+                ("ring", false),
+                ("min_blocker", false),
+                ("A", false),
+                ("B", false),
+                ("bias", false),
+                ("slope_bias", false),
+            ],
+            Kind::Pcss => &[("N", true), ("M", true), ("bias", false), ("slope_bias", false)],
         }
     }
 
     /// The channels or expansions whose precision `Technique::storage` overrides.
     fn stored_names(self) -> &'static [&'static str] {
         match self {
-            Kind::Hard | Kind::Pcf => &[],
+            // CSSM's channels have their own precisions (see `Resolved::channel_storage`)
+            Kind::Hard | Kind::Pcf | Kind::Pcss | Kind::Cssm => &[],
             Kind::Vsm => &["m1", "m2"],
             Kind::Esm => &["e"],
             Kind::Csm => &["f"],
@@ -242,8 +362,12 @@ fn read_file(kind: Kind) -> Result<FileDecl, String> {
 pub struct Resolved {
     pub kind: Kind,
     pub params: BTreeMap<String, f64>,
-    /// Precision of the stored non-depth channel (F32, the depth's, for hard and PCF).
+    /// Precision of the stored non-depth channel (F32, the depth's, for hard, PCF and
+    /// PCSS; for CSSM the precision of the CSM basis, Unorm8, see
+    /// [`Resolved::channel_storage`] for the others).
     pub storage: Storage,
+    /// The light (checked present for CSSM and PCSS).
+    pub light: Option<LightFrame>,
 }
 
 impl Resolved {
@@ -257,12 +381,31 @@ impl Resolved {
         self.get(name) as i64
     }
 
-    /// The channels the Map pass stores at `storage`, in the order the GPU reference packs
-    /// them (four per RGBA layer), each with the range of its value for `z` in `[0, 1]`.
+    /// The precision of one stored channel (by its name in [`Resolved::stored_channels`]).
+    /// CSSM (techniques/cssm.ron): the CSM basis `f_*` at Unorm8, the z-weighted basis `g_*`
+    /// and `zh` at F16 (mipmaps); every table channel `fs_*`, `gs_*`, `zhs` at Unorm8. The
+    /// other techniques store every channel at [`Resolved::storage`].
+    pub fn channel_storage(&self, name: &str) -> Storage {
+        match self.kind {
+            Kind::Cssm if name.starts_with("g_") || name == "zh" => Storage::F16,
+            Kind::Cssm => Storage::Unorm8,
+            _ => self.storage,
+        }
+    }
+
+    /// The light frame (CSSM and PCSS; `resolve` refused them without one).
+    pub fn light(&self) -> LightFrame {
+        self.light.unwrap_or(LightFrame::query_plane(0.0))
+    }
+
+    /// The channels the Map pass stores at `storage` ([`Resolved::channel_storage`] for
+    /// CSSM), in the order the GPU reference packs them (four per RGBA layer; CSSM packs the
+    /// CSM basis and the z-weighted channels in two textures), each with the range of its
+    /// value for `z` in `[0, 1]`.
     pub fn stored_channels(&self) -> Vec<StoredChannel> {
         let ch = |name: String, lo: f64, hi: f64| StoredChannel { name, lo, hi };
         match self.kind {
-            Kind::Hard | Kind::Pcf => Vec::new(),
+            Kind::Hard | Kind::Pcf | Kind::Pcss => Vec::new(),
             // z and z^2 of z in [0, 1]
             Kind::Vsm => vec![ch("m1".into(), 0.0, 1.0), ch("m2".into(), 0.0, 1.0)],
             // exp(c z) of z in [0, 1] (eq. 7.1)
@@ -276,6 +419,31 @@ impl Resolved {
                     [ch(format!("f_t0_k{k}"), sin_lo, 1.0), ch(format!("f_t1_k{k}"), -1.0, 1.0)]
                 })
                 .collect(),
+            // CSSM (cssm.ron), mipmaps (filter 0): the CSM basis `f` as for CSM; the
+            // z-weighted basis z sin(c_k z), z cos(c_k z) (eq. 8.8) and z/2. Their ranges are
+            // the interval products of docs/language.md 5 (z in [0, 1] times the basis's
+            // exact range): z sin(pi z) in [0, 1], every other product in [-1, 1]; z/2 in
+            // [0, 1/2]. Summed-area tables (filter 1): the same as `fs`, `gs`, `zhs`.
+            Kind::Cssm => {
+                let (f, g, zh) = if self.int("filter") == 1 {
+                    ("fs", "gs", "zhs")
+                } else {
+                    ("f", "g", "zh")
+                };
+                let m = self.int("M");
+                let series = |name: &str| -> Vec<StoredChannel> {
+                    (1..=m)
+                        .flat_map(|k| {
+                            let sin_lo = if k == 1 { 0.0 } else { -1.0 };
+                            [ch(format!("{name}_t0_k{k}"), sin_lo, 1.0), ch(format!("{name}_t1_k{k}"), -1.0, 1.0)]
+                        })
+                        .collect()
+                };
+                let mut out = series(f);
+                out.extend(series(g));
+                out.push(ch(zh.into(), 0.0, 0.5));
+                out
+            }
         }
     }
 }
@@ -306,7 +474,7 @@ impl StoredChannel {
 pub fn resolve(t: &Technique) -> Result<Resolved, String> {
     let kind = Kind::ALL.into_iter().find(|k| k.name() == t.name).ok_or_else(|| {
         format!(
-            "no reference implementation of technique `{}` (there are: hard, pcf, vsm, esm, csm)",
+            "no reference implementation of technique `{}` (there are: hard, pcf, vsm, esm, csm, cssm, pcss)",
             t.name
         )
     })?;
@@ -376,6 +544,48 @@ pub fn resolve(t: &Technique) -> Result<Resolved, String> {
             ));
         }
     }
+    if kind == Kind::Cssm {
+        if let Some(s) = t.storage {
+            return Err(format!(
+                "`cssm` keeps the precisions of its file (f Unorm8, g and zh F16, fs, gs and zhs Unorm8): an override to {s:?} is not supported"
+            ));
+        }
+        for (name, want) in [("zh", Storage::F16), ("zhs", Storage::Unorm8)] {
+            let p = file.channels.get(name).map(|c| c.precision);
+            if p != Some(want) {
+                return Err(format!(
+                    "techniques/cssm.ron stores `{name}` at {p:?}; the reference expects {want:?}"
+                ));
+            }
+        }
+        for (name, want) in [
+            ("f", Storage::Unorm8),
+            ("g", Storage::F16),
+            ("fs", Storage::Unorm8),
+            ("gs", Storage::Unorm8),
+        ] {
+            let p = file.expansions.get(name).map(|e| e.precision);
+            if p != Some(want) {
+                return Err(format!(
+                    "techniques/cssm.ron stores `{name}` at {p:?}; the reference expects {want:?}"
+                ));
+            }
+        }
+    }
+    let light = match kind {
+        Kind::Cssm | Kind::Pcss => {
+            let light = t.light.ok_or_else(|| {
+                format!(
+                    "`{}` needs the light (`Technique::light`: its width, near, far and projection)",
+                    kind.name()
+                )
+            })?;
+            light.check()?;
+            Some(light)
+        }
+        _ => t.light,
+    };
+    let file_storage = if kind == Kind::Cssm { Some(Storage::Unorm8) } else { file_storage };
     let storage = match (file_storage, t.storage) {
         (None, None | Some(Storage::F32)) => Storage::F32,
         (None, Some(s)) => {
@@ -386,7 +596,12 @@ pub fn resolve(t: &Technique) -> Result<Resolved, String> {
         }
         (Some(f), s) => s.unwrap_or(f),
     };
-    let r = Resolved { kind, params, storage };
+    let r = Resolved {
+        kind,
+        params,
+        storage,
+        light,
+    };
     check_sizes(&r)?;
     check_storage(&r)?;
     Ok(r)
@@ -394,8 +609,8 @@ pub fn resolve(t: &Technique) -> Result<Resolved, String> {
 
 fn check_sizes(r: &Resolved) -> Result<(), String> {
     let sizes: Vec<(&str, i64)> = match r.kind {
-        Kind::Hard | Kind::Pcf => Vec::new(),
-        Kind::Vsm | Kind::Csm => vec![("K", r.int("K"))],
+        Kind::Hard | Kind::Pcf | Kind::Pcss => Vec::new(),
+        Kind::Vsm | Kind::Csm | Kind::Cssm => vec![("K", r.int("K"))],
         Kind::Esm => vec![("K", r.int("K")), ("K + 2", r.int("K") + 2)],
     };
     for (what, n) in sizes {
@@ -403,25 +618,31 @@ fn check_sizes(r: &Resolved) -> Result<(), String> {
             return Err(format!("filter size {what} = {n} must be odd and in 1..=63"));
         }
     }
-    if r.kind == Kind::Csm && r.get("sigma") <= 0.0 {
+    if matches!(r.kind, Kind::Csm | Kind::Cssm) && r.get("sigma") <= 0.0 {
         return Err("the Gaussian's sigma must be positive".into());
     }
     if r.kind == Kind::Pcf && r.int("N") < 1 {
         return Err("PCF needs N >= 1".into());
     }
-    if r.kind == Kind::Csm && r.int("M") < 1 {
+    if matches!(r.kind, Kind::Csm | Kind::Cssm) && r.int("M") < 1 {
         return Err("CSM needs M >= 1".into());
+    }
+    if r.kind == Kind::Pcss && (r.int("N") < 1 || r.int("M") < 1) {
+        return Err("PCSS needs N >= 1 and M >= 1".into());
+    }
+    if r.kind == Kind::Cssm && r.get("ring") >= 0.5 {
+        return Err("CSSM's ring must stay below 1/2".into());
     }
     Ok(())
 }
 
 fn check_storage(r: &Resolved) -> Result<(), String> {
-    let max = match r.storage {
-        Storage::Unorm8 | Storage::Unorm16 => f64::MAX,
-        Storage::F16 => 65504.0,
-        Storage::F32 => f32::MAX as f64,
-    };
     for c in r.stored_channels() {
+        let max = match r.channel_storage(&c.name) {
+            Storage::Unorm8 | Storage::Unorm16 => f64::MAX,
+            Storage::F16 => 65504.0,
+            Storage::F32 => f32::MAX as f64,
+        };
         if !(c.lo.is_finite() && c.hi.is_finite()) || c.lo.abs().max(c.hi.abs()) > max {
             return Err(format!(
                 "channel `{}` of `{}` spans [{}, {:e}], which {:?} cannot hold",
@@ -429,7 +650,7 @@ fn check_storage(r: &Resolved) -> Result<(), String> {
                 r.kind.name(),
                 c.lo,
                 c.hi,
-                r.storage
+                r.channel_storage(&c.name)
             ));
         }
     }

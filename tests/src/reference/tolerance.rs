@@ -4,7 +4,7 @@
 //! Used to compare both the hand-written WGSL and the shaders sshc generates with the CPU.
 
 use super::Query;
-use super::cpu::{self, LevelLookup, Lookup, Prefiltered};
+use super::cpu::{self, Footprint, LevelLookup, Lookup, Prefiltered};
 use super::{Kind, Storage};
 
 // ---------------------------------------------------------------------------------------
@@ -39,6 +39,8 @@ struct Model {
     /// `value = stored * span + lo`
     lo: f64,
     span: f64,
+    /// width of the channel's range of values (1 where unknown)
+    range: f64,
     /// Rounds at level 0: the Map pass, plus the blur's vertical pass.
     level0_roundings: u32,
     /// Taps of the blur (1 without blur).
@@ -56,12 +58,15 @@ impl Model {
     fn new(pre: &Prefiltered, channel: &str, map_abs: f64, map_rel: f64, signed: Option<f64>) -> Model {
         let t = &pre.technique;
         let c = t.stored_channels().into_iter().find(|c| c.name == channel);
-        let (lo, span) = c.map_or((0.0, 1.0), |c| c.encoding(t.storage));
+        let storage = t.channel_storage(channel);
+        let (lo, span) = c.as_ref().map_or((0.0, 1.0), |c| c.encoding(storage));
+        let range = c.map_or(1.0, |c| c.hi - c.lo);
         let taps = t.int("K").max(1) as usize;
         Model {
-            storage: t.storage,
+            storage,
             lo,
             span,
+            range,
             level0_roundings: if taps > 1 { 2 } else { 1 },
             taps,
             map_abs,
@@ -125,6 +130,31 @@ impl Model {
     /// `stored * span + lo` in f32.
     fn decoding(&self, mag: f64) -> f64 {
         2.0 * EPS32 * (mag + self.lo.abs())
+    }
+
+    /// Error of a box mean from a summed-area table of this (unorm) channel, `sample_box` on
+    /// a map of `size` texels over a box `w` (uv) wide:
+    /// - the level-0 texels' error (Map and blur roundings): a mean does not grow it; the
+    ///   table sums their unorm codes exactly (u32);
+    /// - f32 arithmetic of the box: nine products of run sums (exact integers below 2^24)
+    ///   by covered fractions, their sum and the division by the area: a few roundings of
+    ///   values up to the largest code, 16 EPS32 of the range;
+    /// - the box's edges in f32: the centre uv n rounds by (n + 2) 2^-24 texels, the width
+    ///   carries the relative error of the kernel (32 EPS32); the mean moves by at most
+    ///   (spread of the texels) / (clipped length >= 1/2 texel) per texel an edge moves,
+    ///   four edges.
+    fn boxed(&self, size: usize, w: [f64; 2]) -> f64 {
+        let n = size as f64;
+        let mag = self.signed.unwrap_or(self.range);
+        let edges: f64 = w
+            .iter()
+            .map(|w| {
+                let wt = (w * n).max(1.0);
+                let edge = (n + 2.0) * 2.0 * EPS32 + wt * 32.0 * EPS32;
+                2.0 * 2.0 * self.range * edge
+            })
+            .sum();
+        self.level(0, mag) + 16.0 * EPS32 * self.range + edges + self.decoding(mag)
     }
 }
 
@@ -306,7 +336,319 @@ pub fn allowed(pre: &Prefiltered, q: &Query) -> Allowed {
             let scale = if fix == 2 { 2.0 } else { 1.0 };
             clamp_interval(scale * (s - b), scale * (s + b))
         }
+        Kind::Cssm => cssm_allowed(pre, q),
+        Kind::Pcss => pcss_allowed(pre, q),
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// CSSM (Annen 2008, chapter 8)
+//
+// The visibility is a chain of nonlinear steps over filtered lookups, so the bounds are
+// propagated as intervals, each step evaluated with the CPU formulas at the ends of its
+// inputs' intervals (every step is monotone in each input, or is bounded over its inputs'
+// range as noted):
+// 1. the initial kernel u0 (f32: d_world = near + d (far - near) and (dist - near) / dist,
+//    a few roundings of values up to dist: 32 EPS32 of u0 plus of light_width in uv);
+// 2. s_f and the numerator of eq. 8.8 at u0: value +- the series' error (below), taken
+//    over the kernel's interval;
+// 3. the blocker branch: where the interval of 1 - s_f straddles min_blocker either branch
+//    may be taken and the allowed interval is the union of both;
+// 4. z_avg = clamp(num / (1 - s_f), 0, d): monotone in num and in 1 - s_f > 0, so its
+//    interval comes from the four corners (plus 4 roundings and d - bias's);
+// 5. the final kernel u1, decreasing in z_avg: the kernels of the ends of z_avg's interval,
+//    widened like u0;
+// 6. s_1: the series bounded over the whole interval of kernels (mipmaps: it is piecewise
+//    linear in the level of detail between whole levels, so the ends and the whole levels
+//    between bound it; tables: 9 kernels along the segment of kernels plus the series'
+//    Lipschitz bound between them, |d mean / d width| <= spread / clipped length);
+// 7. ringing suppression, monotone in s; p of eq. 8.9, increasing in z_avg (exp: 3 + 2|x|
+//    ulp); v^p, increasing in v and decreasing in p for v in [0, 1], with pow's error as
+//    exp2(p log2 v): log2 2^-21 absolute near 1 or 3 ulp, exp2 3 + 2|x| ulp.
+//
+// The series' error at one footprint is the CSM model's: per basis image its stored and
+// filtered error ([`Model`]: Map rounding, blur rounding, one per mip level, 8-bit filter
+// weights, the rgba8unorm filter output; for tables [`Model::boxed`]), times |cos| and
+// |sin| of the coefficient, plus the coefficients' own sin/cos error 2^-11 (and the phase
+// rounding of the argument) times the lookup, and the f32 sum of 2M terms. The mip path's
+// level of detail log2(max(w n, 1)) carries log2's error and the kernel's (2^-19 of a level
+// in all), which moves a lookup by at most that times the range of its channel.
+
+/// Error of a level of detail computed on the GPU (log2, the kernel's f32 arithmetic).
+const LOD_ERR: f64 = 1.0 / (1u64 << 19) as f64;
+
+/// The value and error bound of one CSSM channel at a footprint.
+fn cssm_channel(pre: &Prefiltered, model: &Model, name: &str, uv: [f64; 2], at: Footprint) -> (f64, f64) {
+    match at {
+        Footprint::Lod(lod) => match pre.channel(name) {
+            Some(c) => {
+                let l = c.lookup(uv, lod);
+                (l.value, model.lookup(&l) + LOD_ERR * model.range)
+            }
+            None => (f64::NAN, f64::INFINITY),
+        },
+        Footprint::Box(w) => match pre.table(name) {
+            Some(t) => (t.box_mean(uv, w), model.boxed(t.size, w)),
+            None => (f64::NAN, f64::INFINITY),
+        },
+    }
+}
+
+/// The CSM series s_f (`weighted` false) or the numerator of eq. 8.8 (true) at one
+/// footprint: its value, its error bound, and the sum over its terms of |coefficient| times
+/// the range of the channel (the Lipschitz factor of the box path).
+fn cssm_series_bound(pre: &Prefiltered, uv: [f64; 2], at: Footprint, dr: f64, weighted: bool) -> (f64, f64, f64) {
+    let t = &pre.technique;
+    let m = t.int("M");
+    let (f, g, zh) = cpu::cssm_sets(t);
+    let set = if weighted { g } else { f };
+    let phase = |k: i64| std::f64::consts::PI * (2 * k - 1) as f64 * EPS32 * (2.0 * dr.abs() + 2.0);
+    // the Map pass's sin/cos (2^-11 and the phase of its argument); times z for the
+    // weighted set (z <= 1), one more rounding
+    let model = |name: &str| Model::new(pre, name, 1.0 / 2048.0 + phase(m), if weighted { EPS32 } else { 0.0 }, Some(1.0));
+    let (mut s, mut b, mut lipschitz, mut magnitude) = (if weighted { 0.0 } else { 0.5 }, 0.0, 0.0, 0.5);
+    for k in 1..=m {
+        let ck = std::f64::consts::PI * (2 * k - 1) as f64;
+        let amp = cpu::cssm_amplitude(t, k);
+        let (sin_name, cos_name) = (format!("{set}_t0_k{k}"), format!("{set}_t1_k{k}"));
+        let (ms, mc) = (model(&sin_name), model(&cos_name));
+        let (sv, se) = cssm_channel(pre, &ms, &sin_name, uv, at);
+        let (cv, ce) = cssm_channel(pre, &mc, &cos_name, uv, at);
+        let (cos_d, sin_d) = ((ck * dr).cos(), (ck * dr).sin());
+        // CSM: cos S - sin C; weighted: sin Zc - cos Zs (same magnitudes)
+        s += if weighted {
+            amp * (sin_d * cv - cos_d * sv)
+        } else {
+            amp * (cos_d * sv - sin_d * cv)
+        };
+        b += amp * (cos_d.abs() * se + sin_d.abs() * ce);
+        b += amp * (sv.abs() + cv.abs() + 2.0 * (se + ce)) * (1.0 / 2048.0 + phase(k));
+        lipschitz += amp * (cos_d.abs() * ms.range + sin_d.abs() * mc.range);
+        magnitude += amp * (sv.abs() + cv.abs());
+    }
+    if weighted {
+        // z / 2 exactly (no Map error), non-negative
+        let mz = Model::new(pre, zh, 0.0, 0.0, Some(0.5));
+        let (zv, ze) = cssm_channel(pre, &mz, zh, uv, at);
+        s += zv;
+        b += ze;
+        lipschitz += mz.range;
+    }
+    // amplitudes rounded to f32, and the sum of 2M + 1 terms in f32
+    b += (2 * m + 3) as f64 * 2.0 * EPS32 * magnitude;
+    (s, b, lipschitz)
+}
+
+/// Bounds of the series over every kernel between `lo` and `hi` (uv, per axis).
+fn cssm_series_range(pre: &Prefiltered, uv: [f64; 2], lo: [f64; 2], hi: [f64; 2], dr: f64, weighted: bool) -> (f64, f64) {
+    let size = pre.depth.base().size;
+    let mut out = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut include = |(v, e, _): (f64, f64, f64), extra: f64| {
+        out = (out.0.min(v - e - extra), out.1.max(v + e + extra));
+    };
+    if pre.technique.int("filter") == 1 {
+        // Both kernels scale light_width by one ratio, so the kernels between `lo` and `hi`
+        // lie on the segment between them (off it only by the per-axis f32 roundings that
+        // widened its ends, 1e-5 of a texel here): 9 points along it, and between two points
+        // the box mean moves by at most (spread) / (clipped length) per texel of width, the
+        // clipped length at least that of the narrower box.
+        let steps = if lo == hi { 1 } else { 9 };
+        let n = size as f64;
+        for i in 0..steps {
+            let f = if steps == 1 { 0.0 } else { i as f64 / (steps - 1) as f64 };
+            let w = [lo[0] + (hi[0] - lo[0]) * f, lo[1] + (hi[1] - lo[1]) * f];
+            let bound = cssm_series_bound(pre, uv, Footprint::Box(w), dr, weighted);
+            let between: f64 = (0..2)
+                .map(|a| {
+                    let h = if steps == 1 {
+                        0.0
+                    } else {
+                        (hi[a] - lo[a]) * n / (steps - 1) as f64
+                    };
+                    let len = cpu::box_runs(size, uv[a], w[a]).1;
+                    bound.2 * (h + 1e-5) / len
+                })
+                .sum();
+            include(bound, between);
+        }
+    } else {
+        // piecewise linear in the level of detail: the ends and the whole levels between
+        // (just above each too, where the blend with the next level starts)
+        let lod = |u: [f64; 2]| cpu::lod_of_width(size, cpu::INV_SQRT3 * u[0].max(u[1]));
+        let last = (pre.depth.levels.len().max(1) - 1) as f64;
+        let chain_last = pre
+            .channel(&format!("{}_t0_k1", cpu::cssm_sets(&pre.technique).0))
+            .map_or(last, |c| (c.levels.len() - 1) as f64);
+        let (a, b) = ((lod(lo) - LOD_ERR).max(0.0), lod(hi) + LOD_ERR);
+        let mut candidates = vec![a, b];
+        let mut l = a.ceil();
+        while l < b && l <= chain_last {
+            candidates.push(l);
+            l += 1.0;
+        }
+        for c in candidates {
+            let c = c.min(chain_last);
+            for at in [c, (c + 1e-9).min(chain_last)] {
+                include(cssm_series_bound(pre, uv, Footprint::Lod(at), dr, weighted), 0.0);
+            }
+        }
+    }
+    out
+}
+
+/// A kernel (uv per axis) widened by the f32 error of its computation.
+fn cssm_widen(u: [f64; 2], light_uv: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+    let e = |a: usize| 32.0 * EPS32 * (u[a] + light_uv[a]);
+    ([(u[0] - e(0)).max(0.0), (u[1] - e(1)).max(0.0)], [u[0] + e(0), u[1] + e(1)])
+}
+
+/// Bound on |pow(v, p) - v^p| on the GPU: exp2(p log2 v), log2 2^-21 absolute (v in
+/// [1/2, 2]) or 3 ulp, the product one rounding, exp2 3 + 2|x| ulp.
+fn pow_error(v: f64, p: f64) -> f64 {
+    if v <= 0.0 {
+        return 0.0;
+    }
+    let l = v.log2();
+    let x = p * l;
+    let dx = p * (1.0 / (1u64 << 21) as f64 + 3.0 * 2.0 * EPS32 * l.abs()) + 2.0 * EPS32 * x.abs();
+    v.powf(p) * (std::f64::consts::LN_2 * dx + (3.0 + 2.0 * x.abs()) * 2.0 * EPS32) * 1.01
+}
+
+fn cssm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
+    let t = &pre.technique;
+    let light = t.light();
+    let uv = [q.uv[0] as f64, q.uv[1] as f64];
+    let tr = cpu::cssm_trace(pre, q);
+    let light_uv = light.width.map(|w| light.uv_width(w, light.near));
+    // d - bias rounds once in f32
+    let db_err = 2.0 * EPS32 * (tr.db.abs() + 1.0);
+    let (u0_lo, u0_hi) = cssm_widen(tr.u0, light_uv);
+    let sf = cssm_series_range(pre, uv, u0_lo, u0_hi, tr.dr, false);
+    let num = cssm_series_range(pre, uv, u0_lo, u0_hi, tr.dr, true);
+    // 1 - s_f in f32
+    let blockers = (1.0 - sf.1 - EPS32, 1.0 - sf.0 + EPS32);
+    let min_blocker = t.get("min_blocker");
+    // ringing suppression: (scale s - ring) / (1 - 2 ring) in f32, a few roundings
+    let ring_slack = 8.0 * EPS32 / (1.0 - 2.0 * t.get("ring"));
+    let ringing = |s: (f64, f64)| (cpu::cssm_ringing(t, s.0) - ring_slack, cpu::cssm_ringing(t, s.1) + ring_slack);
+    let mut out = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut include = |(lo, hi): (f64, f64)| {
+        out = (out.0.min(lo), out.1.max(hi));
+    };
+    // no blocker: the ringing-suppressed series at the initial kernel
+    if blockers.0 < min_blocker {
+        include(ringing(sf));
+    }
+    if blockers.1 >= min_blocker {
+        // in this branch the GPU's 1 - s_f is at least min_blocker: the division happens
+        let den = (blockers.0.max(min_blocker), blockers.1);
+        let top = tr.db.max(0.0) + db_err;
+        let (za_lo, za_hi) = if den.0 <= 0.0 {
+            (0.0, top)
+        } else {
+            let corners = [num.0 / den.0, num.0 / den.1, num.1 / den.0, num.1 / den.1];
+            let lo = corners.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = corners.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            // the quotient rounds (2.5 ulp), the clamp's bound d - bias rounds
+            let e = |z: f64| 4.0 * EPS32 * z.abs();
+            ((lo - e(lo)).clamp(0.0, top), (hi + e(hi)).clamp(0.0, top))
+        };
+        // the final kernel decreases with z_avg
+        let (u1_lo, _) = cssm_widen(cpu::cssm_final_width(&light, tr.dist, za_hi), light_uv);
+        let (_, u1_hi) = cssm_widen(cpu::cssm_final_width(&light, tr.dist, za_lo), light_uv);
+        let s1 = cssm_series_range(pre, uv, u1_lo, u1_hi, tr.dr, false);
+        let v1 = ringing(s1);
+        let v1 = (v1.0.clamp(0.0, 1.0), v1.1.clamp(0.0, 1.0));
+        // p = 1 + A exp(-B x), x = max(d - z_avg, 0), decreasing in x
+        let (a, b) = (t.get("A"), t.get("B"));
+        let x_lo = (tr.db - db_err - za_hi).max(0.0);
+        let x_hi = (tr.db + db_err - za_lo).max(0.0);
+        let sharpen = |x: f64, sign: f64| {
+            let e = a * (-b * x).exp();
+            1.0 + e * (1.0 + sign * ((3.0 + 2.0 * b * x) * 2.0 * EPS32 + 8.0 * EPS32))
+        };
+        let (p_lo, p_hi) = (sharpen(x_hi, -1.0), sharpen(x_lo, 1.0));
+        let lo = v1.0.powf(p_hi) - pow_error(v1.0, p_hi);
+        let hi = v1.1.powf(p_lo) + pow_error(v1.1, p_lo);
+        include((lo, hi));
+    }
+    clamp_interval(out.0, out.1)
+}
+
+// ---------------------------------------------------------------------------------------
+// PCSS (Fernando 2005)
+//
+// Every read is a binary choice: which texel `nearest_at` reads, and each depth test. The
+// f32 positions (uv + o) n on the GPU differ from the exact ones by the error of the
+// region's width (search: 16 EPS32 of it plus 16 EPS32 of light_width in uv, for the
+// cancellation in d_world - near; filter: the blocker depth's error propagated through
+// (dist - zb) / zb, the mean of up to N^2 f32 values carrying (N^2 + 2) EPS32), the lattice
+// constants (2 EPS32), and the products and sums (2 EPS32 of each operand), doubled. A query
+// is a tie where any read could land on a texel of another depth within that error (in the
+// search a different depth changes the blocker mean; in the filter only a different test
+// result matters), or where a depth test compares values within 2 EPS32 (d - bias rounds).
+// Otherwise the GPU reads the same texels and decides the same tests, and the result is
+// the same count over M^2 (one rounding).
+
+/// Whether a `nearest_at` read at texel position `p` (+- `e` texels per axis) may read a
+/// texel whose value `differs` from the exact one's.
+fn read_is_open(pre: &Prefiltered, p: [f64; 2], e: [f64; 2], differs: impl Fn(f64, f64) -> bool) -> bool {
+    let base = pre.depth.base();
+    let cell = |x: f64| x.floor() as i64;
+    let exact = base.at(cell(p[0]), cell(p[1]));
+    [-1.0, 1.0]
+        .iter()
+        .flat_map(|sx| [-1.0, 1.0].map(|sy| (*sx, sy)))
+        .any(|(sx, sy)| differs(exact, base.at(cell(p[0] + sx * e[0]), cell(p[1] + sy * e[1]))))
+}
+
+fn pcss_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
+    let t = &pre.technique;
+    let light = t.light();
+    let tr = cpu::pcss_trace(pre, q);
+    let n = pre.depth.base().size as f64;
+    let uv = [q.uv[0] as f64, q.uv[1] as f64];
+    let light_uv = light.width.map(|w| light.uv_width(w, light.near));
+    let test_err = 2.0 * EPS32 * (tr.db.abs() + 1.0);
+    let position_err = |s: &cpu::PcssSample, region: [f64; 2], region_err: [f64; 2]| -> [f64; 2] {
+        [0, 1].map(|a| {
+            let c = if region[a] > 0.0 { (s.offset[a] / region[a]).abs() } else { 0.5 };
+            let o = s.offset[a].abs();
+            2.0 * n * (c * region_err[a] + 2.0 * EPS32 * region[a] + 2.0 * EPS32 * (uv[a].abs() + o + 1.0))
+        })
+    };
+    let near_test = |z: f64| (z - tr.db).abs() <= test_err;
+    // 1. the search
+    let su_err = [0, 1].map(|a| 16.0 * EPS32 * (tr.su[a] + light_uv[a]));
+    for s in &tr.search {
+        let e = position_err(s, tr.su, su_err);
+        if near_test(s.z) || read_is_open(pre, s.position, e, |a, b| a != b || near_test(b)) {
+            return Allowed::Tie;
+        }
+    }
+    if tr.count == 0 {
+        return Allowed::Within(1.0, 1.0);
+    }
+    // 2. the filter region's error through the blocker mean
+    let nn = (t.int("N") * t.int("N")) as f64;
+    let span = light.far - light.near;
+    let zbw = light.near + tr.zb * span;
+    let e_zbw = span * (nn + 2.0) * EPS32 * tr.zb.abs() + 4.0 * EPS32 * zbw;
+    let e_dist = 4.0 * EPS32 * tr.dist;
+    let gap = (tr.dist - zbw).max(0.0);
+    let pu_err = [0, 1].map(|a| {
+        light_uv[a] * light.near / tr.dist * ((e_dist + e_zbw) / zbw + gap / (zbw * zbw) * e_zbw + gap / zbw * e_dist / tr.dist)
+            + 16.0 * EPS32 * tr.pu[a]
+    });
+    for s in &tr.filter {
+        let e = position_err(s, tr.pu, pu_err);
+        let lit = |z: f64| tr.db <= z;
+        if near_test(s.z) || read_is_open(pre, s.position, e, |a, b| lit(a) != lit(b) || near_test(b)) {
+            return Allowed::Tie;
+        }
+    }
+    let v = tr.value;
+    clamp_interval(v - 2.0 * EPS32, v + 2.0 * EPS32)
 }
 
 /// VSM's visibility over boxes of its inputs: mean, second moment and biased depth.

@@ -92,6 +92,16 @@ impl QueryPlane {
         }
     }
 
+    /// [`QueryPlane::inputs`] under a square light `width` world units wide, centred on the
+    /// light's eye (the reference's `LightFrame::query_plane(width)`).
+    pub fn lit_inputs(&self, width: f32) -> SceneInputs {
+        SceneInputs {
+            light_size: 0.5 * width,
+            light_half_extents: [0.5 * width, 0.5 * width],
+            ..self.inputs()
+        }
+    }
+
     /// Light uv and normalised depth of a world position, in f64.
     pub fn project(&self, p: [f32; 3]) -> ([f64; 2], f64) {
         let vp = (self.light_proj() * self.light_view()).as_dmat4();
@@ -121,11 +131,16 @@ pub struct PlaneRun {
 /// Run `c` over the query plane with `depth` as the Depth pass's output, `frames` times
 /// (the first builds pipelines and is not timed when more than one frame runs).
 pub fn run_plane(c: &sshc::Compiled, plane: &QueryPlane, depth: &[f32], params: &[(&str, f64)], frames: usize) -> PlaneRun {
+    run_inputs(c, &plane.inputs(), depth, params, frames)
+}
+
+/// [`run_plane`] with any scene inputs (the query plane under an area light, say).
+pub fn run_inputs(c: &sshc::Compiled, inputs: &SceneInputs, depth: &[f32], params: &[(&str, f64)], frames: usize) -> PlaneRun {
     let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
     for (k, v) in params {
         ex.set_param(k, *v).unwrap_or_else(|e| panic!("{e}"));
     }
-    ex.bind_scene(&plane.inputs()).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
     ex.set_depth_override(Some(depth.to_vec()));
     let mut times = Vec::new();
     for f in 0..frames.max(1) {
