@@ -100,6 +100,16 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
     let mut params = IndexMap::new();
     for (i, p) in t.params.iter().enumerate() {
         declare(&p.name, "param", &mut diags);
+        // a runtime param is a field of the WGSL uniform block `params`: its name must be
+        // a WGSL identifier (a fixed one is folded into the code and never named there)
+        let name = &p.name.value;
+        if !p.fixed && (naga::keywords::wgsl::RESERVED.contains(&name.as_str()) || name.starts_with("__")) {
+            diags.push(
+                Diagnostic::error(Phase::Resolve, format!("`{name}` cannot name a runtime param: WGSL reserves it"))
+                    .at(p.name.span, "reserved in WGSL")
+                    .help("a runtime param becomes a field of the shaders' uniform block; rename it, or make it `fixed: true`"),
+            );
+        }
         params.entry(p.name.value.clone()).or_insert(i);
     }
     let mut channels = IndexMap::new();
