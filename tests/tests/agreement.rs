@@ -26,7 +26,7 @@ mod support;
 
 use sshc_tests::reference::tolerance::{Allowed, allowed};
 use sshc_tests::reference::{DepthMap, GpuReference, LightFrame, Query, Storage, cpu};
-use support::{FIELDS, QueryPlane, compile_source, depth_field, gpu, run_inputs, run_plane, scene_depth, technique_source};
+use support::{FIELDS, QueryPlane, compile_source, depth_field, gpu, run_inputs, scene_depth, technique_source};
 
 const N: u32 = 32;
 
