@@ -21,7 +21,7 @@ out=docs/gpu-times.md
     echo "population but not its middle."
     echo
 } > "$out"
-for t in hard pcf vsm esm csm; do
+for t in hard pcf vsm esm csm cssm pcss; do
     log=$(./target/release/sshc render "techniques/$t.ron" --scene scenes/bunny.ron -o "docs/images/bunny-$t.png" --frames "$frames")
     device=$(echo "$log" | sed -n 's/^device: //p')
     {

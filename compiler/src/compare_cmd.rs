@@ -5,8 +5,8 @@
 //! (`sshc_runtime::metrics`), temporal stability while the light moves by sub-texel steps,
 //! GPU time per frame, peak memory and the device.
 
-use crate::pair;
-use crate::truth_cmd::{TruthOpts, describe, executor, load_scene, positions_normals, rt, size, truth_at};
+use crate::render::Overrides;
+use crate::truth_cmd::{TruthOpts, describe, positions_normals, rt, truth_at};
 use glam::Vec3;
 use plotters::prelude::*;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
@@ -24,18 +24,8 @@ pub struct CompareArgs {
     /// The comparison image (PNG).
     #[arg(short, long, default_value = "compare.png")]
     out: PathBuf,
-    /// Param override NAME=VALUE: compiled in for a technique, a uniform for a graph. Repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
-    set: Vec<(String, String)>,
-    /// Precision override of a channel or expansion, NAME=PRECISION (techniques only). Repeatable.
-    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
-    precision: Vec<(String, String)>,
-    /// Override the scene's shadow-map resolution.
-    #[arg(long)]
-    shadow_map: Option<u32>,
-    /// Override the scene's camera size, WIDTHxHEIGHT.
-    #[arg(long, value_parser = size)]
-    size: Option<(u32, u32)>,
+    #[command(flatten)]
+    over: Overrides,
     /// Frames timed; the GPU time per frame is their median.
     #[arg(long, default_value_t = 5)]
     frames: usize,
@@ -122,7 +112,8 @@ struct Figures {
 }
 
 pub fn compare(a: CompareArgs) -> Result<(), String> {
-    let scene = load_scene(&a.scene, a.size, a.shadow_map)?;
+    let gpu = Gpu::new().map_err(rt)?;
+    let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
     let light = scene
         .lights
         .first()
@@ -139,8 +130,6 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     {
         return Err(format!("error: `--range {r}`: expected a half-width > 0 in 0..255 units"));
     }
-    let gpu = Gpu::new().map_err(rt)?;
-    let mut ex = executor(&gpu, &a.input, &a.set, &a.precision)?;
     let inputs = sshc_runtime::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
     ex.bind_scene(&inputs).map_err(rt)?;
     let mut frame_ms = Vec::new();
@@ -174,8 +163,8 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     };
 
     let name = |p: &std::path::Path| p.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let mut overrides: Vec<String> = a.set.iter().map(|(k, v)| format!("{k}={v}")).collect();
-    overrides.extend(a.precision.iter().map(|(k, v)| format!("{k}:{v}")));
+    let mut overrides: Vec<String> = a.over.set.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    overrides.extend(a.over.precision.iter().map(|(k, v)| format!("{k}:{v}")));
     let lines = figure_lines(&FigureInputs {
         title: format!(
             "{} on {}: {w}x{h} px, shadow map {}{}",

@@ -1,7 +1,8 @@
 //! `sshc render`: compile a technique (or load a compiled graph), bind a scene, run it on
 //! the GPU and write the images.
 
-use crate::{pair, read, report};
+use crate::pair;
+use crate::truth_cmd::{executor, load_scene, rt, size};
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
 use sshc_runtime::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -25,18 +26,8 @@ pub struct RenderArgs {
     /// World-space normal of the surface seen at each pixel: three-channel PFM (NaN where none).
     #[arg(long)]
     normals: Option<PathBuf>,
-    /// Param override NAME=VALUE: compiled in for a technique, a uniform for a graph. Repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
-    set: Vec<(String, String)>,
-    /// Precision override of a channel or expansion, NAME=PRECISION (techniques only). Repeatable.
-    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
-    precision: Vec<(String, String)>,
-    /// Override the scene's shadow-map resolution.
-    #[arg(long)]
-    shadow_map: Option<u32>,
-    /// Override the scene's camera size, WIDTHxHEIGHT.
-    #[arg(long, value_parser = size)]
-    size: Option<(u32, u32)>,
+    #[command(flatten)]
+    over: Overrides,
     /// Write every intermediate texture (each layer and mip level, each channel) as PNG and PFM here.
     #[arg(long)]
     dump: Option<PathBuf>,
@@ -45,51 +36,37 @@ pub struct RenderArgs {
     frames: usize,
 }
 
-fn size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once('x').ok_or_else(|| format!("expected WIDTHxHEIGHT, found `{s}`"))?;
-    Ok((
-        w.trim().parse().map_err(|e| format!("{e}"))?,
-        h.trim().parse().map_err(|e| format!("{e}"))?,
-    ))
+/// What `render` and `compare` let the command line change: params, precisions, the
+/// shadow-map resolution and the camera size.
+#[derive(clap::Args)]
+pub(crate) struct Overrides {
+    /// Param override NAME=VALUE: compiled in for a technique, a uniform for a graph. Repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
+    pub set: Vec<(String, String)>,
+    /// Precision override of a channel or expansion, NAME=PRECISION (techniques only). Repeatable.
+    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
+    pub precision: Vec<(String, String)>,
+    /// Override the scene's shadow-map resolution.
+    #[arg(long)]
+    pub shadow_map: Option<u32>,
+    /// Override the scene's camera size, WIDTHxHEIGHT.
+    #[arg(long, value_parser = size)]
+    pub size: Option<(u32, u32)>,
 }
 
-fn rt(e: RuntimeError) -> String {
-    format!("error: {e}")
+impl Overrides {
+    /// The scene at `path` with the size and shadow-map overrides, and an executor of
+    /// `input` (a technique compiled with the overrides, or a graph with params set).
+    pub fn load<'g>(&self, gpu: &'g Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor<'g>), String> {
+        let scene = load_scene(scene, self.size, self.shadow_map)?;
+        let ex = executor(gpu, input, &self.set, &self.precision)?;
+        Ok((scene, ex))
+    }
 }
 
 pub fn render(a: RenderArgs) -> Result<(), String> {
-    let mut scene = Scene::load(&a.scene).map_err(|e| e.to_string())?;
-    if let Some(n) = a.shadow_map {
-        scene.shadow_map = n;
-    }
-    if let Some((w, h)) = a.size {
-        scene.set_camera_size(w, h);
-    }
     let gpu = Gpu::new().map_err(rt)?;
-    let is_graph = a.input.to_string_lossy().ends_with(".graph.ron");
-    let mut ex = if is_graph {
-        if !a.precision.is_empty() {
-            return Err("error: `--precision` needs a technique, not a compiled graph".into());
-        }
-        let mut ex = Executor::load(&gpu, &a.input).map_err(rt)?;
-        for (k, v) in &a.set {
-            let v: f64 = v.parse().map_err(|_| format!("error: `--set {k}={v}`: expected a number"))?;
-            ex.set_param(k, v).map_err(rt)?;
-        }
-        ex
-    } else {
-        let source = read(&a.input)?;
-        let opts = sshc::CompileOptions {
-            set: a.set.clone(),
-            precision: a.precision.clone(),
-            ..Default::default()
-        };
-        let c = sshc::compile_str(&source, &opts).map_err(|d| {
-            report(&d, &a.input, &source);
-            String::new()
-        })?;
-        Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?
-    };
+    let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
     let inputs = sshc_runtime::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
     ex.bind_scene(&inputs).map_err(rt)?;
     let mut all: Vec<Vec<Option<f64>>> = Vec::new();

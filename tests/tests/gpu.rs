@@ -19,7 +19,7 @@ fn root() -> PathBuf {
 }
 
 const SCENES: [&str; 5] = ["bunny", "contact", "fence", "edge", "triangle"];
-const TECHNIQUES: [&str; 5] = ["hard", "pcf", "vsm", "esm", "csm"];
+const TECHNIQUES: [&str; 7] = ["hard", "pcf", "vsm", "esm", "csm", "cssm", "pcss"];
 
 fn compile(technique: &str, set: &[(&str, &str)]) -> sshc::Compiled {
     let src = std::fs::read_to_string(root().join("techniques").join(format!("{technique}.ron"))).unwrap();
@@ -367,6 +367,11 @@ fn soft_techniques_change_smoothly_across_the_edge() {
         ("vsm", vec![], 0.0),
         ("esm", vec![], 0.0),
         ("csm", vec![], 1.0 / 255.0),
+        // the soft techniques take the distant disk's spread from `light_spread`: one of
+        // PCSS's 8 x 8 binary taps; CSSM's unorm8 basis
+        ("pcss", vec![], 1.0 / 64.0),
+        ("cssm", vec![], 1.0 / 255.0),
+        ("cssm", vec![("filter", "1")], 1.0 / 255.0),
     ] {
         let c = compile(t, &set);
         let f = render(gpu, &c, &s);
