@@ -4,6 +4,7 @@
 use crate::pair;
 use crate::truth_cmd::{executor, load_scene, rt, size};
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
+use sshc_runtime::graph::{Draw, PassGraph};
 use sshc_runtime::scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -107,7 +108,11 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         println!("| {name} | {bytes} |");
     }
     println!("| peak (all textures resident) | {total} |");
-    println!("| pass | GPU ms (median of {} frame(s)) |\n|---|---|", all.len());
+    let work = pass_work(&ex.graph, scene.shadow_map, scene.camera_size());
+    println!(
+        "| pass | GPU ms (median of {} frame(s)) | invocations | fetches | operations |\n|---|---|---|---|---|",
+        all.len()
+    );
     for (i, n) in names.iter().enumerate() {
         let mut v: Vec<f64> = all.iter().filter_map(|f| f[i]).collect();
         v.sort_by(f64::total_cmp);
@@ -115,9 +120,59 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
             .get(v.len() / 2)
             .map(|m| format!("{m:.3}"))
             .unwrap_or_else(|| "n/a (no timestamp queries)".into());
-        println!("| {n} | {shown} |");
+        match work.iter().find(|w| &w.pass == n) {
+            Some(w) => println!("| {n} | {shown} | {:.3e} | {:.3e} | {:.3e} |", w.invocations, w.fetches, w.ops),
+            None => println!("| {n} | {shown} | | | |"),
+        }
     }
     Ok(())
+}
+
+/// The work of one pass in a frame.
+pub(crate) struct PassWork {
+    pub pass: String,
+    /// Shader invocations per frame, over all the pass's steps.
+    pub invocations: f64,
+    /// Fetches (texture reads, table loads) and operations per frame: each step's
+    /// per-invocation counts (counted on the naga IR by the compiler) times its invocations.
+    pub fetches: f64,
+    pub ops: f64,
+}
+
+/// Invocations, fetches and operations per frame of every pass: a step's invocations are
+/// texels for map-side steps (summed over the mip levels below the base for a mip chain),
+/// pixels for the Shade pass, and rows or columns for compute steps, whose counts are per
+/// texel of the row or column they walk.
+pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> Vec<PassWork> {
+    let texels = f64::from(shadow) * f64::from(shadow);
+    graph
+        .passes
+        .iter()
+        .map(|p| {
+            let mut w = PassWork {
+                pass: p.name.clone(),
+                invocations: 0.0,
+                fetches: 0.0,
+                ops: 0.0,
+            };
+            for s in &p.steps {
+                // (invocations, how many times the counted code runs)
+                let (n, runs) = match s.draw {
+                    Draw::SceneFromCamera => (f64::from(camera.0) * f64::from(camera.1), 1.0),
+                    Draw::SceneFromLight | Draw::FullScreen => (texels, 1.0),
+                    // levels 1.. of the chain: texels (1/4 + 1/16 + ...)
+                    Draw::MipLevels => (texels / 3.0, 1.0),
+                    // one invocation per row or column, whose loop body (counted once)
+                    // runs once per texel of it
+                    Draw::ComputeRows | Draw::ComputeColumns => (f64::from(shadow), f64::from(shadow)),
+                };
+                w.invocations += n;
+                w.fetches += f64::from(s.cost.fetches) * n * runs;
+                w.ops += f64::from(s.cost.ops) * n * runs;
+            }
+            w
+        })
+        .collect()
 }
 
 /// Every texture, layer, mip level and channel as PNG (scaled by the channel's range) and PFM.

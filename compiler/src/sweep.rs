@@ -14,7 +14,7 @@ use indexmap::IndexMap;
 use plotters::prelude::*;
 use serde::Deserialize;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
-use sshc_runtime::graph::{Draw, PassGraph};
+use sshc_runtime::graph::PassGraph;
 use sshc_runtime::metrics;
 use sshc_runtime::scene::Light;
 use std::fmt::Write as _;
@@ -219,25 +219,11 @@ fn time_frames(ex: &mut Executor, frames: usize) -> Result<Option<f64>, String> 
     Ok(t.get(t.len() / 2).copied())
 }
 
-/// Fetches and operations per frame: per-invocation counts of every step times its
-/// invocations (texels for map-side steps, summed over mip levels; pixels for the Shade
-/// pass; rows or columns for compute steps).
+/// Fetches and operations per frame, summed over the passes of [`crate::render::pass_work`].
 fn work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> (f64, f64) {
-    let texels = shadow as f64 * shadow as f64;
-    let (mut f, mut o) = (0.0, 0.0);
-    for p in &graph.passes {
-        for s in &p.steps {
-            let n = match s.draw {
-                Draw::SceneFromCamera => camera.0 as f64 * camera.1 as f64,
-                Draw::SceneFromLight | Draw::FullScreen => texels,
-                Draw::MipLevels => texels / 3.0,
-                Draw::ComputeRows | Draw::ComputeColumns => shadow as f64,
-            };
-            f += s.cost.fetches as f64 * n;
-            o += s.cost.ops as f64 * n;
-        }
-    }
-    (f, o)
+    crate::render::pass_work(graph, shadow, camera)
+        .iter()
+        .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops))
 }
 
 pub fn sweep(a: SweepArgs) -> Result<(), String> {

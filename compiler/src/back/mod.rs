@@ -12,9 +12,10 @@ pub fn validate(source: &str) -> Result<naga::Module, String> {
     Ok(module)
 }
 
-/// Texture fetches and arithmetic operations of one invocation of `entry`, counted on the
-/// naga IR (straight-line code: each expression runs once; called functions are counted
-/// at their call sites).
+/// Fetches (texture reads and storage-buffer loads: summed-area tables) and arithmetic
+/// operations of one invocation of `entry`, counted on the naga IR (straight-line code:
+/// each expression runs once, a loop's body once; called functions are counted at their
+/// call sites).
 pub fn count_ops(module: &naga::Module, entry: &str) -> OpCount {
     let Some(ep) = module.entry_points.iter().find(|e| e.name == entry) else {
         return OpCount::default();
@@ -24,11 +25,24 @@ pub fn count_ops(module: &naga::Module, entry: &str) -> OpCount {
     c
 }
 
+/// Whether `pointer` points into a storage buffer (through any chain of accesses).
+fn in_storage(module: &naga::Module, f: &naga::Function, mut pointer: naga::Handle<naga::Expression>) -> bool {
+    use naga::Expression as E;
+    loop {
+        match f.expressions[pointer] {
+            E::Access { base, .. } | E::AccessIndex { base, .. } => pointer = base,
+            E::GlobalVariable(g) => return matches!(module.global_variables[g].space, naga::AddressSpace::Storage { .. }),
+            _ => return false,
+        }
+    }
+}
+
 fn count_function(module: &naga::Module, f: &naga::Function, c: &mut OpCount, depth: usize) {
     use naga::Expression as E;
     for (_, e) in f.expressions.iter() {
         match e {
             E::ImageSample { .. } | E::ImageLoad { .. } => c.fetches += 1,
+            E::Load { pointer } if in_storage(module, f, *pointer) => c.fetches += 1,
             E::Binary { .. } | E::Unary { .. } | E::Math { .. } | E::Select { .. } | E::As { .. } | E::Relational { .. } => c.ops += 1,
             _ => {}
         }

@@ -83,8 +83,6 @@ macro_rules! program {
     };
 }
 
-/// Closes the timed pass after the Shade dispatch (see `shaders/fence.wgsl`).
-const FENCE: Program = program!("fence.wgsl", "main", [ReadWrite], false);
 const MAP_VSM: Program = program!("map_vsm.wgsl", "main", [Depth, Write], false);
 const MAP_ESM: Program = program!("map_esm.wgsl", "main", [Depth, Write, Uniform], false);
 const MAP_CSM: Program = program!("map_csm.wgsl", "main", [Depth, Write, Uniform, Read], false);
@@ -209,16 +207,33 @@ impl<'g> GpuReference<'g> {
 
     /// Visibility at every query, and the GPU time in nanoseconds of the passes after Depth
     /// for this one run (timestamp queries when the device has them, else the wall time of
-    /// submitting and waiting, read-back included).
+    /// submitting and waiting, read-back included). On lavapipe the end timestamp does not
+    /// wait for a pass's last dispatch (docs/agreement.md): techniques whose work is one
+    /// dispatch read near zero there.
     pub fn visibility(&self, t: &Technique, map: &DepthMap, queries: &[Query]) -> Result<(Vec<f32>, f64), String> {
+        self.visibility_repeated(t, map, queries, 1).map(|(v, gpu, _)| (v, gpu))
+    }
+
+    /// [`GpuReference::visibility`] with the Shade dispatch (the last) run `shade_repeats`
+    /// times (at least once; it writes the same results each time), and the wall time in
+    /// nanoseconds from submission to read-back as well. The difference of wall times with
+    /// different repeats is the Shade dispatch's cost with every fixed cost cancelled: what
+    /// a device whose timestamps skip the last dispatch cannot measure otherwise.
+    pub fn visibility_repeated(
+        &self,
+        t: &Technique,
+        map: &DepthMap,
+        queries: &[Query],
+        shade_repeats: u32,
+    ) -> Result<(Vec<f32>, f64, f64), String> {
         let r = resolve(t)?;
         check_map(map)?;
         if queries.is_empty() {
-            return Ok((Vec::new(), 0.0));
+            return Ok((Vec::new(), 0.0, 0.0));
         }
         self.check_device(&r, map, queries)?;
         let gpu = self.gpu;
-        let run = || -> Result<(Vec<f32>, f64), String> {
+        let run = || -> Result<(Vec<f32>, f64, f64), String> {
             let device = &gpu.device;
             let n = map.size;
             let depth = device.create_texture(&wgpu::TextureDescriptor {
@@ -274,7 +289,6 @@ impl<'g> GpuReference<'g> {
             let shade_groups = [groups(queries.len() as u32, 64), 1, 1];
             let io = [query_buffer.as_entire_binding(), results.as_entire_binding()];
             self.passes(&r, n, &depth, io, shade_groups, &mut dispatches)?;
-            let fence = self.dispatch(&FENCE, None, vec![results.as_entire_binding()], [1, 1, 1])?;
 
             let timer = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
                 let set = device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -305,30 +319,19 @@ impl<'g> GpuReference<'g> {
                     timestamp_writes: timer.as_ref().map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
                         query_set: set,
                         beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: None,
-                    }),
-                });
-                for d in &dispatches {
-                    pass.set_pipeline(&d.pipeline.pipeline);
-                    pass.set_bind_group(0, &d.group, &[]);
-                    let [x, y, z] = d.workgroups;
-                    pass.dispatch_workgroups(x, y, z);
-                }
-            }
-            {
-                // the end timestamp in a pass of its own behind a barrier on the visibility
-                // buffer (see `shaders/fence.wgsl`)
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("reference fence"),
-                    timestamp_writes: timer.as_ref().map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
-                        query_set: set,
-                        beginning_of_pass_write_index: None,
                         end_of_pass_write_index: Some(1),
                     }),
                 });
-                pass.set_pipeline(&fence.pipeline.pipeline);
-                pass.set_bind_group(0, &fence.group, &[]);
-                pass.dispatch_workgroups(1, 1, 1);
+                let last = dispatches.len().saturating_sub(1);
+                for (i, d) in dispatches.iter().enumerate() {
+                    pass.set_pipeline(&d.pipeline.pipeline);
+                    pass.set_bind_group(0, &d.group, &[]);
+                    let [x, y, z] = d.workgroups;
+                    let times = if i == last { shade_repeats.max(1) } else { 1 };
+                    for _ in 0..times {
+                        pass.dispatch_workgroups(x, y, z);
+                    }
+                }
             }
             encoder.copy_buffer_to_buffer(&results, 0, &readback, 0, size);
             if let Some((set, resolved, read)) = &timer {
@@ -356,7 +359,7 @@ impl<'g> GpuReference<'g> {
                 }
                 None => wall,
             };
-            Ok((visibility, time))
+            Ok((visibility, time, wall))
         };
         gpu.scoped(&format!("running the GPU reference of `{}`", t.name), run)
             .map_err(|e| e.to_string())?
