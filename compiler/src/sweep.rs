@@ -273,10 +273,13 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     let mut truths: Vec<((usize, String), SceneTruth)> = Vec::new();
     // The reference is timed on each scene before the first configuration, after every
     // `RETIME` configurations and after the last; its time is the median of those, so that
-    // a machine that speeds up or slows down during the shard moves the ratios less.
+    // a machine that speeds up or slows down during the shard moves the ratios less. Each
+    // timing builds a fresh executor, as every configuration does (a long-lived one keeps
+    // its memory warm and reads faster on a CPU driver).
     const RETIME: usize = 12;
     let reference_source = read(&resolve(&file.reference))?;
-    let mut reference_runs: Vec<Option<(Executor, Vec<f64>)>> = Vec::new();
+    type ReferenceRun = (sshc::Compiled, sshc_runtime::gpu::SceneInputs, Vec<f64>);
+    let mut reference_runs: Vec<Option<ReferenceRun>> = Vec::new();
     for (si_, scene_path) in file.scenes.iter().enumerate() {
         let touches = mine.iter().any(|c| c.scene == si_) || !file.stochastic.is_empty();
         if !touches {
@@ -285,13 +288,14 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         }
         let scene = load_scene(&resolve(scene_path), file.camera, None)?;
         let c = compile(&resolve(&file.reference), &reference_source, &[], &[])?;
-        let mut ex = Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?;
-        ex.bind_scene(&sshc_runtime::bind::scene_inputs(&scene)?).map_err(rt)?;
-        reference_runs.push(Some((ex, Vec::new())));
+        let inputs = sshc_runtime::bind::scene_inputs(&scene)?;
+        reference_runs.push(Some((c, inputs, Vec::new())));
     }
-    let time_references = |runs: &mut Vec<Option<(Executor, Vec<f64>)>>| -> Result<(), String> {
-        for (ex, times) in runs.iter_mut().flatten() {
-            times.extend(time_frames(ex, file.frames)?);
+    let time_references = |runs: &mut Vec<Option<ReferenceRun>>| -> Result<(), String> {
+        for (c, inputs, times) in runs.iter_mut().flatten() {
+            let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).map_err(rt)?;
+            ex.bind_scene(inputs).map_err(rt)?;
+            times.extend(time_frames(&mut ex, file.frames)?);
         }
         Ok(())
     };
@@ -399,7 +403,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     let medians: Vec<Option<f64>> = reference_runs
         .iter()
         .map(|r| {
-            r.as_ref().and_then(|(_, t)| {
+            r.as_ref().and_then(|(_, _, t)| {
                 let mut t = t.clone();
                 t.sort_by(f64::total_cmp);
                 t.get(t.len() / 2).copied()
