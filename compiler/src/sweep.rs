@@ -269,7 +269,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     let mut rows = Vec::new();
     // the scene index of each row
     let mut row_scenes: Vec<usize> = Vec::new();
-    // truths by (scene, light scale); reference times by scene
+    // truths by (scene, light scale)
     let mut truths: Vec<((usize, String), SceneTruth)> = Vec::new();
     // The reference is timed on each scene before the first configuration, after every
     // `RETIME` configurations and after the last; its time is the median of those, so that
