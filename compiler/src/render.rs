@@ -234,3 +234,32 @@ fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
     println!("wrote every texture to {}", dir.display());
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::pass_work;
+
+    #[test]
+    fn pass_work_counts_table_loads_and_compute_steps_per_texel() {
+        let src = include_str!("../../techniques/cssm.ron");
+        let opts = sshc::CompileOptions {
+            set: vec![("filter".into(), "1".into())],
+            ..Default::default()
+        };
+        let c = sshc::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("cssm.ron", src)));
+        let (shadow, camera) = (512u32, (256u32, 128u32));
+        let work = pass_work(&c.graph, shadow, camera);
+        let get = |name: &str| work.iter().find(|w| w.pass == name).unwrap_or_else(|| panic!("no pass `{name}`"));
+        // the table: one invocation per row, then per column; each reads one texel (rows:
+        // the blurred texture; columns: the table) per texel it walks
+        let sat = get("sat");
+        assert_eq!(sat.invocations, 2.0 * 512.0);
+        assert_eq!(sat.fetches, 2.0 * 512.0 * 512.0);
+        // the Shade pass reads only tables: storage-buffer loads, one invocation per pixel
+        let shade = get("shade");
+        let per_pixel = c.graph.passes.iter().find(|p| p.name == "shade").unwrap().steps[0].cost.fetches;
+        assert!(per_pixel > 0, "table lookups must count as fetches");
+        assert_eq!(shade.invocations, 256.0 * 128.0);
+        assert_eq!(shade.fetches, f64::from(per_pixel) * 256.0 * 128.0);
+    }
+}
