@@ -17,7 +17,7 @@ phase "lint"
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 
 phase "the compiler library builds without wgpu"
-cargo build -p sshc --no-default-features --quiet
+cargo check -p sshc --no-default-features --quiet
 if cargo tree -p sshc --no-default-features -e normal | grep -q '\bwgpu'; then
     echo "error: wgpu is a dependency of the sshc library without the gpu feature"
     exit 1
