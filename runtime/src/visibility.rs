@@ -278,6 +278,24 @@ impl Visibility {
         self.ray_blocked(origin, d / len, self.epsilon, len - self.epsilon)
     }
 
+    /// What the camera of `scene` (the scene this query was built from) sees through the
+    /// image point `(u, v)` (0..1 across, 0..1 down; pixel centres at `(x + 0.5) / width`):
+    /// the nearest surface point on the ray between the near and far planes and the face
+    /// normal of its triangle, or `None` where the ray meets nothing. A CPU G-buffer, for
+    /// checking what the GPU shaded.
+    pub fn seen_by_camera(&self, scene: &Scene, u: f32, v: f32) -> Option<(Vec3, Vec3)> {
+        let inv = scene.camera_view_proj().inverse();
+        let at = |z| {
+            let p = inv * glam::Vec4::new(u * 2.0 - 1.0, 1.0 - v * 2.0, z, 1.0);
+            p.truncate() / p.w
+        };
+        let (p0, p1) = (at(0.0), at(1.0));
+        let d = (p1 - p0).normalize();
+        let (t, i) = self.closest_hit(p0, d, (p1 - p0).length())?;
+        let [a, b, c] = *scene.triangles().get(i)?;
+        Some((p0 + d * t, (b - a).cross(c - a).normalize()))
+    }
+
     /// The nearest triangle along the ray from `origin` in unit direction `dir` with
     /// `epsilon < t < t_max`: its distance `t` and its index in [`Scene::triangles`].
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<(f32, usize)> {
@@ -516,35 +534,14 @@ impl Visibility {
 
 #[cfg(test)]
 mod tests {
-    use glam::Vec4;
 
     use super::*;
 
     /// Surface points and normals the camera sees on a `k x k` grid of pixels.
     fn camera_points(scene: &Scene, vis: &Visibility, k: u32) -> Vec<(Vec3, Vec3)> {
-        let inv = scene.camera_view_proj().inverse();
-        let mut out = Vec::new();
-        for y in 0..k {
-            for x in 0..k {
-                let ndc = |z| {
-                    let p = inv
-                        * Vec4::new(
-                            (x as f32 + 0.5) / k as f32 * 2.0 - 1.0,
-                            1.0 - (y as f32 + 0.5) / k as f32 * 2.0,
-                            z,
-                            1.0,
-                        );
-                    p.truncate() / p.w
-                };
-                let (p0, p1) = (ndc(0.0), ndc(1.0));
-                let d = (p1 - p0).normalize();
-                if let Some((t, i)) = vis.closest_hit(p0, d, (p1 - p0).length()) {
-                    let [a, b, c] = scene.triangles()[i];
-                    out.push((p0 + d * t, (b - a).cross(c - a).normalize()));
-                }
-            }
-        }
-        out
+        (0..k * k)
+            .filter_map(|i| vis.seen_by_camera(scene, ((i % k) as f32 + 0.5) / k as f32, ((i / k) as f32 + 0.5) / k as f32))
+            .collect()
     }
 
     /// The skip test is conservative: with it and without it, every light kind gives the

@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use sshc_runtime::scene::{Light, Scene};
 use sshc_runtime::truth::{self, CacheLookup, Points, Source, Truth, TruthCache, TruthError, TruthSettings};
 use sshc_runtime::visibility::Visibility;
@@ -35,37 +35,12 @@ fn temp_dir(name: &str) -> PathBuf {
 fn camera_points(scene: &Scene) -> (Vec<Vec3>, Vec<Vec3>) {
     let vis = Visibility::new(scene);
     let (w, h) = scene.camera_size();
-    let inv = scene.camera_view_proj().inverse();
-    let mut points = Vec::new();
-    let mut normals = Vec::new();
-    for y in 0..h {
-        for x in 0..w {
-            let at = |z| {
-                let p = inv
-                    * Vec4::new(
-                        (x as f32 + 0.5) / w as f32 * 2.0 - 1.0,
-                        1.0 - (y as f32 + 0.5) / h as f32 * 2.0,
-                        z,
-                        1.0,
-                    );
-                p.truncate() / p.w
-            };
-            let (p0, p1) = (at(0.0), at(1.0));
-            let d = (p1 - p0).normalize();
-            match vis.closest_hit(p0, d, (p1 - p0).length()) {
-                Some((t, i)) => {
-                    let [a, b, c] = scene.triangles()[i];
-                    points.push(p0 + d * t);
-                    normals.push((b - a).cross(c - a).normalize());
-                }
-                None => {
-                    points.push(Vec3::NAN);
-                    normals.push(Vec3::NAN);
-                }
-            }
-        }
-    }
-    (points, normals)
+    (0..w * h)
+        .map(|i| {
+            let (u, v) = (((i % w) as f32 + 0.5) / w as f32, ((i / w) as f32 + 0.5) / h as f32);
+            vis.seen_by_camera(scene, u, v).unwrap_or((Vec3::NAN, Vec3::NAN))
+        })
+        .unzip()
 }
 
 fn no_progress(_: truth::Progress) {}
