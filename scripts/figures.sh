@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 frames=${1:-15}
 source scripts/setup.sh
-cargo build --release -p sshc --quiet
+cargo build --release -p sshc-lab --quiet
 mkdir -p docs/images
 out=docs/gpu-times.md
 {

@@ -8,7 +8,7 @@ technique=${1:-techniques/pcf.ron}
 scene=${2:-scenes/bunny.ron}
 out=${3:-out}
 source scripts/setup.sh
-cargo build --release -p sshc --quiet
+cargo build --release -p sshc-lab --quiet
 ./target/release/sshc compile "$technique" -o "$out"
 name=$(basename "$technique" .ron)
 ./target/release/sshc render "$technique" --scene "$scene" -o "$out/$name.png" --visibility "$out/$name.visibility.pfm" --frames 5

@@ -16,12 +16,21 @@ cargo fmt --all -- --check
 phase "lint"
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 
-phase "the compiler library builds without wgpu"
-cargo check -p sshc --no-default-features --quiet
-if cargo tree -p sshc --no-default-features -e normal | grep -q '\bwgpu'; then
-    echo "error: wgpu is a dependency of the sshc library without the gpu feature"
-    exit 1
-fi
+phase "dependency boundaries"
+# The compiler library and the build-time embedding macro carry no GPU, command line, image
+# codec or measurement code: their trees must not contain these crates
+# (docs/architecture.md section 2).
+for pkg in sshc sshc-shaders-gen; do
+    tree=$(cargo tree -p "$pkg" -e normal --prefix none --format '{p}')
+    for banned in wgpu clap image rayon sshc-runtime sshc-lab; do
+        if grep -q "^$banned v" <<<"$tree"; then
+            echo "error: \`$banned\` is in the dependency tree of \`$pkg\`:"
+            cargo tree -p "$pkg" -e normal -i "$banned"
+            exit 1
+        fi
+    done
+    echo "$pkg: $(wc -l <<<"$tree") crates, none of wgpu clap image rayon sshc-runtime sshc-lab"
+done
 
 phase "tests"
 if cargo nextest --version >/dev/null 2>&1; then

@@ -6,7 +6,7 @@ use crate::back::wgsl::{Output, texture_format};
 use crate::front::ast::{ConstValue, LightKind, LightView, ScalarTy};
 use crate::ir::*;
 use crate::pack::{mip_source, table_source};
-use sshc_runtime::graph::{self, ChannelDecl, Extent, LightModel, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
+use sshc_graph::{self as graph, ChannelDecl, Extent, LightModel, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
 use std::fmt::Write as _;
 
 fn light(l: LightKind) -> LightModel {

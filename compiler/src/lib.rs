@@ -30,12 +30,12 @@ pub mod span;
 
 pub use diag::{Diagnostic, Diagnostics};
 pub use pack::Limits;
-pub use sshc_runtime::graph::PassGraph;
+pub use sshc_graph::PassGraph;
 
 use std::path::Path;
 
 /// Phases after which `--dump-ir-after` can print the IR.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum DumpPhase {
     Parse,
     Resolve,
@@ -45,6 +45,45 @@ pub enum DumpPhase {
     Pack,
     Codegen,
     Emit,
+}
+
+impl DumpPhase {
+    /// Every phase, in pipeline order.
+    pub const ALL: [DumpPhase; 8] = [
+        DumpPhase::Parse,
+        DumpPhase::Resolve,
+        DumpPhase::Check,
+        DumpPhase::Lower,
+        DumpPhase::Analyse,
+        DumpPhase::Pack,
+        DumpPhase::Codegen,
+        DumpPhase::Emit,
+    ];
+
+    /// The phase's name on the command line (`--dump-ir-after NAME`).
+    pub fn name(self) -> &'static str {
+        match self {
+            DumpPhase::Parse => "parse",
+            DumpPhase::Resolve => "resolve",
+            DumpPhase::Check => "check",
+            DumpPhase::Lower => "lower",
+            DumpPhase::Analyse => "analyse",
+            DumpPhase::Pack => "pack",
+            DumpPhase::Codegen => "codegen",
+            DumpPhase::Emit => "emit",
+        }
+    }
+}
+
+impl std::str::FromStr for DumpPhase {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<DumpPhase, String> {
+        DumpPhase::ALL.into_iter().find(|p| p.name() == s).ok_or_else(|| {
+            let names: Vec<&str> = DumpPhase::ALL.iter().map(|p| p.name()).collect();
+            format!("unknown phase `{s}`: expected one of {}", names.join(", "))
+        })
+    }
 }
 
 #[derive(Clone, Debug, Default)]

@@ -1,17 +1,12 @@
-//! `sshc-runtime`: the pass-graph schema that `sshc compile` writes and the runtime loads.
+//! `sshc-runtime`: the wgpu executor of sshc pass graphs.
 //!
-//! This part is always built and has no GPU dependency, so that the compiler can produce
-//! graphs without wgpu (DESIGN.md section 1). The wgpu executor lands behind the `gpu`
-//! feature.
+//! It loads a compiled graph (trusted or not: every shader is re-validated with naga and
+//! every size checked against the device before allocation), binds what a frame needs from
+//! a scene ([`gpu::SceneInputs`]: triangles, camera, light) and runs the passes. The graph
+//! schema is the crate `sshc-graph`, re-exported here as [`graph`] so that a program that
+//! runs graphs needs one dependency.
 
-#[cfg(feature = "gpu")]
-pub mod bind;
-#[cfg(feature = "gpu")]
 pub mod gpu;
-pub mod graph;
-pub mod metrics;
-pub mod scene;
-pub mod truth;
-pub mod visibility;
 
-pub use graph::*;
+pub use sshc_graph as graph;
+pub use sshc_graph::*;

@@ -6,15 +6,15 @@
 //! // with overrides, as `sshc --set` / `--precision`:
 //! sshc_shaders_gen::technique!(pub mod pcf5 = "techniques/pcf.ron", set: { N = 5 }, precision: { z = F16 });
 //!
-//! let graph = pcf::graph()?;                 // sshc_runtime::graph::PassGraph
+//! let graph = pcf::graph()?;                 // sshc_graph::PassGraph
 //! let shaders = pcf::shaders();              // [(file name, WGSL)] for Executor::new
 //! let bytes = pcf::Params::default().to_bytes(); // the `Params` uniform
 //! ```
 //!
 //! The path is relative to the directory of the using crate's `Cargo.toml`. The generated
-//! module names the runtime crate as `::sshc_runtime`, so the using crate depends on
-//! `sshc-runtime` (`default-features = false` is enough: only the graph schema is named);
-//! `runtime: crate::path::to::sshc_runtime` names it elsewhere (a path as seen from inside
+//! module names the graph-schema crate as `::sshc_graph`, so the using crate depends on
+//! `sshc-graph` (serde and ron only; the executor, `sshc-runtime`, is needed only to run it);
+//! `graph: crate::path::to::sshc_graph` names it elsewhere (a path as seen from inside
 //! the generated module). A technique that does not compile fails the
 //! build with the compiler's own diagnostic (`file:line:column`). The module contents are
 //! described in the crate `sshc-shaders-gen-impl`, which does the work; this crate is the
@@ -24,7 +24,7 @@ use proc_macro::TokenStream;
 
 /// Embed a technique: `technique!(pub mod NAME = "path/to/technique.ron")`, optionally
 /// followed by `, set: { NAME = VALUE, .. }`, `, precision: { NAME = PRECISION, .. }` and
-/// `, runtime: path::to::sshc_runtime`.
+/// `, graph: path::to::sshc_graph`.
 #[proc_macro]
 pub fn technique(input: TokenStream) -> TokenStream {
     sshc_shaders_gen_impl::expand(input.into()).into()

@@ -2,7 +2,7 @@
 //! technique and options, and `Params` writes the uniform the runtime would write from the
 //! graph's defaults. (No GPU: `gpu.rs` renders.)
 
-use sshc_runtime::graph::{ParamType, PassGraph};
+use sshc_graph::{ParamType, PassGraph};
 
 sshc_shaders_gen::technique!(mod hard = "../techniques/hard.ron");
 sshc_shaders_gen::technique!(mod pcf = "../techniques/pcf.ron");
@@ -17,7 +17,7 @@ sshc_shaders_gen::technique!(
 sshc_shaders_gen::technique!(mod no_runtime_params = "tests/techniques/no_runtime_params.ron");
 sshc_shaders_gen::technique!(mod typed_params = "tests/techniques/typed_params.ron");
 sshc_shaders_gen::technique!(mod unused_params = "tests/techniques/unused_params.ron");
-sshc_shaders_gen::technique!(mod esm_f16 = "../techniques/esm.ron", set: { "c" = 10.0 }, precision: { e = "F16" }, runtime: ::sshc_runtime);
+sshc_shaders_gen::technique!(mod esm_f16 = "../techniques/esm.ron", set: { "c" = 10.0 }, precision: { e = "F16" }, graph: ::sshc_graph);
 
 struct Embedded {
     technique: &'static str,

@@ -2,9 +2,9 @@
 //! no adapter they fail and name what to install (`scripts/test.sh` installs it).
 
 use glam::Vec3;
+use sshc_lab::scene::Scene;
+use sshc_lab::visibility::Visibility;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, Image, RuntimeError};
-use sshc_runtime::scene::Scene;
-use sshc_runtime::visibility::Visibility;
 use std::path::{Path, PathBuf};
 
 /// One device per test process: `cargo test` runs every test of this binary on it (and
@@ -45,7 +45,7 @@ struct Frame {
 
 fn render(gpu: &Gpu, c: &sshc::Compiled, s: &Scene) -> Frame {
     let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&sshc_runtime::bind::scene_inputs(s).unwrap())
+    ex.bind_scene(&sshc_lab::bind::scene_inputs(s).unwrap())
         .unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     Frame {
@@ -294,7 +294,7 @@ fn rejected_graphs_say_why() {
     let mut s = scene("contact", 16, 16);
     s.shadow_map = gpu.limits.max_texture_dimension_2d + 1;
     let e = ex
-        .bind_scene(&sshc_runtime::bind::scene_inputs(&s).unwrap())
+        .bind_scene(&sshc_lab::bind::scene_inputs(&s).unwrap())
         .expect_err("over the limit");
     assert!(matches!(e, RuntimeError::Limit { needed, limit, .. } if needed == limit + 1), "{e}");
     let _ = std::fs::remove_dir_all(&base);
@@ -455,7 +455,7 @@ fn gpu_times_and_memory_are_reported_per_pass_and_texture() {
     let c = compile("csm", &[]);
     let s = scene("contact", 32, 64);
     let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
-    ex.bind_scene(&sshc_runtime::bind::scene_inputs(&s).unwrap()).unwrap();
+    ex.bind_scene(&sshc_lab::bind::scene_inputs(&s).unwrap()).unwrap();
     let times = ex.run_frame().unwrap();
     let names: Vec<&str> = times.passes.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(names, ["depth", "basis", "blur", "mips", "shade"]);
@@ -487,8 +487,7 @@ fn pipelines_are_built_once_per_device() {
     // The same technique on another scene reuses every pipeline.
     for sc in ["contact", "edge"] {
         let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).unwrap();
-        ex.bind_scene(&sshc_runtime::bind::scene_inputs(&scene(sc, 16, 32)).unwrap())
-            .unwrap();
+        ex.bind_scene(&sshc_lab::bind::scene_inputs(&scene(sc, 16, 32)).unwrap()).unwrap();
         ex.run_frame().unwrap();
     }
     assert_eq!(gpu.cached_pipelines(), steps);

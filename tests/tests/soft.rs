@@ -9,8 +9,8 @@
 
 mod support;
 
+use sshc_lab::scene::{Light, Scene};
 use sshc_runtime::gpu::{CameraOutput, Executor, SceneInputs};
-use sshc_runtime::scene::{Light, Scene};
 use support::{QueryPlane, compile_source, depth_field, gpu, root, technique_source};
 
 const SCENES: [&str; 5] = ["bunny", "contact", "fence", "edge", "triangle"];
@@ -87,7 +87,7 @@ fn soft_techniques_render_every_bundled_scene_finite_and_in_range() {
         let c = compile(t, set);
         for sc in SCENES {
             let s = scene(sc, 32, 128);
-            let (vis, pos) = run(&c, &sshc_runtime::bind::scene_inputs(&s).unwrap(), None, &[]);
+            let (vis, pos) = run(&c, &sshc_lab::bind::scene_inputs(&s).unwrap(), None, &[]);
             let mut shadowed = 0;
             for (i, v) in vis.iter().enumerate() {
                 assert!(
@@ -160,7 +160,7 @@ fn cssm_at_light_size_zero_is_csm_at_the_finest_level() {
                 *radius = 1e-4;
             }
         }
-        let inputs = sshc_runtime::bind::scene_inputs(&s).unwrap();
+        let inputs = sshc_lab::bind::scene_inputs(&s).unwrap();
         let (a, _) = run(&cssm, &inputs, None, &off);
         let (b, _) = run(&csm, &inputs, None, &[]);
         let worst = a.iter().zip(&b).map(|(x, y)| (x - y).abs() as f64).fold(0.0, f64::max);

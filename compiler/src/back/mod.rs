@@ -2,7 +2,7 @@
 
 pub mod wgsl;
 
-use sshc_runtime::graph::OpCount;
+use sshc_graph::OpCount;
 
 /// Parse and validate WGSL with naga; the error text is naga's own.
 pub fn validate(source: &str) -> Result<naga::Module, String> {

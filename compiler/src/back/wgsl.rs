@@ -1,5 +1,5 @@
 //! Phase `codegen`: one WGSL module per GPU pass, following the binding conventions of
-//! `sshc_runtime::graph`. Expressions are emitted as straight-line code in operand order,
+//! `sshc_graph`. Expressions are emitted as straight-line code in operand order,
 //! one `let` per shared operation (the arena already merged equal sub-expressions), and
 //! texture reads of one texel of one layer are fetched once and shared by its channels.
 //! Every module is validated with naga inside the compiler.
@@ -10,7 +10,7 @@ use crate::front::ast::{ConstValue, Precision, Reduce};
 use crate::front::expr::{BinOp, UnOp};
 use crate::ir::*;
 use crate::pack::{Limits, layers_per_subpass, table_source};
-use sshc_runtime::graph::{self, Binding, Draw, FRAME_WGSL, OpCount, Step, Target, View};
+use sshc_graph::{self as graph, Binding, Draw, FRAME_WGSL, OpCount, Step, Target, View};
 use std::collections::HashMap;
 use std::fmt::Write as _;
 
@@ -898,7 +898,7 @@ fn summed_area(ir: &Ir, pass: &IrPass) -> Result<(String, Vec<Step>), Diagnostic
             dst = dt.name
         );
     }
-    let wg = sshc_runtime::graph::COMPUTE_WORKGROUP;
+    let wg = sshc_graph::COMPUTE_WORKGROUP;
     let _ = write!(
         s,
         "

@@ -12,8 +12,8 @@
 //! This example is a package of its own (`sshc-render-embedded`) so that the macro crate
 //! needs no GPU runtime among its dev-dependencies: trybuild builds those for every case.
 
+use sshc_lab::scene::Scene;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
-use sshc_runtime::scene::Scene;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -56,7 +56,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> Result<Summary, String> 
     for (name, value) in params.values() {
         ex.set_param(name, value).map_err(|e| e.to_string())?;
     }
-    let inputs = sshc_runtime::bind::scene_inputs(&scene)?;
+    let inputs = sshc_lab::bind::scene_inputs(&scene)?;
     ex.bind_scene(&inputs).map_err(|e| e.to_string())?;
     let times = ex.run_frame().map_err(|e| e.to_string())?;
     let color = ex.read_camera(CameraOutput::Color).map_err(|e| e.to_string())?;

@@ -11,19 +11,19 @@
 //!     pub mod pcf = "../techniques/pcf.ron",         // path relative to CARGO_MANIFEST_DIR
 //!     set: { N = 5, bias = 0.001 },                  // optional: `sshc --set NAME=VALUE`
 //!     precision: { z = F16 },                        // optional: `sshc --precision NAME=P`
-//!     runtime: ::sshc_runtime,                       // optional: path of the runtime crate
+//!     graph: ::sshc_graph,                           // optional: path of the graph-schema crate
 //! );
 //! ```
 //!
 //! The expansion is a module holding the WGSL of every pass, the pass graph as RON and a
-//! function parsing it into `sshc_runtime::graph::PassGraph`, the values of the fixed params,
+//! function parsing it into `sshc_graph::PassGraph`, the values of the fixed params,
 //! and a `#[repr(C)]` `Params` struct whose layout is checked against the WGSL `Params`
 //! uniform (as laid out by naga's `Layouter`) by compile-time assertions. See [`expand`].
 
 use proc_macro2::{Span, TokenStream};
 use quote::ToTokens;
 use quote::{format_ident, quote, quote_spanned};
-use sshc_runtime::graph::{ParamDecl, ParamType, PassGraph};
+use sshc_graph::{ParamDecl, ParamType, PassGraph};
 use std::path::{Path, PathBuf};
 use syn::ext::IdentExt;
 use syn::parse::{Parse, ParseStream};
@@ -45,12 +45,12 @@ pub struct TechniqueInput {
     pub set: Vec<(String, String)>,
     /// `precision: { NAME = P, .. }`.
     pub precision: Vec<(String, String)>,
-    /// `runtime: path`: where the generated code finds `sshc_runtime`.
-    pub runtime: Option<syn::Path>,
+    /// `graph: path`: where the generated code finds the `sshc_graph` crate.
+    pub graph: Option<syn::Path>,
 }
 
 const USAGE: &str = "expected `technique!(pub mod NAME = \"path/to/technique.ron\")`, optionally followed by \
-                     `, set: { NAME = VALUE, .. }`, `, precision: { NAME = PRECISION, .. }` and `, runtime: path::to::sshc_runtime`";
+                     `, set: { NAME = VALUE, .. }`, `, precision: { NAME = PRECISION, .. }` and `, graph: path::to::sshc_graph`";
 
 impl Parse for TechniqueInput {
     fn parse(input: ParseStream) -> syn::Result<Self> {
@@ -77,7 +77,7 @@ impl Parse for TechniqueInput {
             path,
             set: Vec::new(),
             precision: Vec::new(),
-            runtime: None,
+            graph: None,
         };
         let mut seen: Vec<String> = Vec::new();
         while !input.is_empty() {
@@ -94,11 +94,11 @@ impl Parse for TechniqueInput {
             match k.as_str() {
                 "set" => out.set = parse_pairs(input, parse_set_value)?,
                 "precision" => out.precision = parse_pairs(input, parse_precision_value)?,
-                "runtime" => out.runtime = Some(input.parse()?),
+                "graph" => out.graph = Some(input.parse()?),
                 _ => {
                     return Err(syn::Error::new(
                         key.span(),
-                        format!("unknown option `{k}`: expected `set`, `precision` or `runtime`"),
+                        format!("unknown option `{k}`: expected `set`, `precision` or `graph`"),
                     ));
                 }
             }
@@ -387,9 +387,9 @@ fn generate(input: &TechniqueInput, base: &Path) -> Result<TokenStream, TokenStr
         )));
     }
 
-    let runtime = match &input.runtime {
+    let graph_crate = match &input.graph {
         Some(p) => quote!(#p),
-        None => quote!(::sshc_runtime),
+        None => quote!(::sshc_graph),
     };
 
     // Params fields, with types as the technique declares them, checked against naga's.
@@ -537,9 +537,9 @@ fn generate(input: &TechniqueInput, base: &Path) -> Result<TokenStream, TokenStr
             /// Bytes of the `Params` uniform (0: the technique has no runtime param).
             pub const PARAMS_SIZE: u32 = #params_size;
 
-            /// Parse [`GRAPH_RON`] into the runtime's pass graph.
-            pub fn graph() -> ::core::result::Result<#runtime::graph::PassGraph, #runtime::graph::GraphError> {
-                #runtime::graph::PassGraph::from_ron(GRAPH_RON)
+            /// Parse [`GRAPH_RON`] into the pass graph the runtime executes.
+            pub fn graph() -> ::core::result::Result<#graph_crate::PassGraph, #graph_crate::GraphError> {
+                #graph_crate::PassGraph::from_ron(GRAPH_RON)
             }
 
             /// [`SHADERS`] as owned pairs, as `Executor::new` takes them.
@@ -626,7 +626,7 @@ mod tests {
     #[test]
     fn parses_options() {
         let i = parse(
-            quote!(#[doc = "x"] pub(crate) mod pcf5 = "techniques/pcf.ron", set: { N = 5, "bias" = -0.25, x = true }, precision: { z = F16 }, runtime: my::rt,),
+            quote!(#[doc = "x"] pub(crate) mod pcf5 = "techniques/pcf.ron", set: { N = 5, "bias" = -0.25, x = true }, precision: { z = F16 }, graph: my::rt,),
         );
         assert_eq!(i.name, "pcf5");
         assert_eq!(i.path.value(), "techniques/pcf.ron");
@@ -639,7 +639,7 @@ mod tests {
             ]
         );
         assert_eq!(i.precision, vec![("z".into(), "F16".into())]);
-        assert!(i.runtime.is_some());
+        assert!(i.graph.is_some());
         assert_eq!(i.attrs.len(), 1);
     }
 

@@ -4,8 +4,8 @@
 #![allow(dead_code)]
 
 use glam::{Mat4, Vec3};
+use sshc_lab::scene;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, SceneInputs};
-use sshc_runtime::scene;
 use std::path::{Path, PathBuf};
 
 /// One device per test process (nextest runs each test in its own process).
@@ -226,11 +226,11 @@ pub const FIELDS: [&str; 6] = ["ramp", "step", "checker", "noise", "zero", "one"
 /// The depth map a bundled scene renders from its light (with the hard technique).
 pub fn scene_depth(scene: &str, n: u32) -> Vec<f32> {
     let c = compile_source("hard", &technique_source("hard"), &[], &[]);
-    let mut s = sshc_runtime::scene::Scene::load(root().join("scenes").join(format!("{scene}.ron"))).unwrap_or_else(|e| panic!("{e}"));
+    let mut s = sshc_lab::scene::Scene::load(root().join("scenes").join(format!("{scene}.ron"))).unwrap_or_else(|e| panic!("{e}"));
     s.shadow_map = n;
     s.set_camera_size(8, 8);
     let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&sshc_runtime::bind::scene_inputs(&s).unwrap())
+    ex.bind_scene(&sshc_lab::bind::scene_inputs(&s).unwrap())
         .unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     let depth = c

@@ -5,7 +5,7 @@ sshc_shaders_gen::technique!(pub mod vsm = "../techniques/vsm.ron");
 sshc_shaders_gen::technique!(pub mod esm = "../techniques/esm.ron");
 sshc_shaders_gen::technique!(pub mod csm = "../techniques/csm.ron");
 
-fn check(graph: sshc_runtime::graph::PassGraph, bytes: &[u8], shaders: &[(&str, &str)]) {
+fn check(graph: sshc_graph::PassGraph, bytes: &[u8], shaders: &[(&str, &str)]) {
     assert_eq!(graph.params_size as usize, bytes.len());
     assert_eq!(graph.passes.len(), shaders.len());
 }

@@ -1,7 +1,7 @@
-// Overrides as `sshc --set` / `--precision`, attributes on the module, and the runtime
-// crate named through another path (as seen from inside the generated module).
+// Overrides as `sshc --set` / `--precision`, attributes on the module, and the graph
+// schema crate named through another path (as seen from inside the generated module).
 mod rt {
-    pub use sshc_runtime;
+    pub use sshc_graph;
 }
 
 sshc_shaders_gen::technique!(
@@ -10,7 +10,7 @@ sshc_shaders_gen::technique!(
     pub(crate) mod pcf5 = "../techniques/pcf.ron",
     set: { N = 5, bias = 0.001, "slope_bias" = 2 },
     precision: { z = F16 },
-    runtime: crate::rt::sshc_runtime,
+    graph: crate::rt::sshc_graph,
 );
 
 fn main() {

@@ -1,20 +1,70 @@
-//! `sshc truth`: render a scene's world positions and normals on the GPU (with the bundled
-//! hard shadow-map technique; every technique's camera pass writes the same positions),
-//! then compute the ground-truth visibility at exactly those points on the CPU
-//! (`sshc_runtime::truth`), through the on-disk cache.
-//!
-//! Also the pieces `sshc compare` shares: loading a technique into an executor, the
-//! truth options and the cached, progress-reporting truth computation.
+//! What the measurement commands share: one *session* is a scene loaded with the command
+//! line's overrides, a GPU, and an executor of a technique (compiled here) or of a compiled
+//! graph; plus the ground-truth options and the cached, progress-reporting truth, and the
+//! reading, reporting and argument helpers of the `sshc` command line.
 
-use crate::{read, report};
+use crate::scene::Scene;
+use crate::truth::{self, Source, Truth, TruthCache, TruthSettings};
+use codespan_reporting::term::termcolor::{ColorChoice, StandardStream};
 use glam::Vec3;
+use sshc::Diagnostics;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
-use sshc_runtime::scene::Scene;
-use sshc_runtime::truth::{self, Source, Truth, TruthCache, TruthSettings};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
-/// The technique `sshc truth` renders positions with.
-const HARD: &str = include_str!("../../techniques/hard.ron");
+/// Reads a text file, with the path in the error.
+pub fn read(path: &Path) -> Result<String, String> {
+    std::fs::read_to_string(path).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))
+}
+
+/// Prints diagnostics against their source file on standard error (coloured on a terminal).
+pub fn report(diags: &Diagnostics, path: &Path, source: &str) {
+    let choice = if std::io::stderr().is_terminal() {
+        ColorChoice::Auto
+    } else {
+        ColorChoice::Never
+    };
+    let mut stderr = StandardStream::stderr(choice);
+    for d in &diags.0 {
+        d.emit_to(&mut stderr, &path.display().to_string(), source);
+    }
+}
+
+/// Parses `NAME=VALUE` (the `--set` and `--precision` arguments).
+pub fn pair(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
+        _ => Err(format!("expected NAME=VALUE, found `{s}`")),
+    }
+}
+
+/// What `render` and `compare` let the command line change: params, precisions, the
+/// shadow-map resolution and the camera size.
+#[derive(clap::Args)]
+pub struct Overrides {
+    /// Param override NAME=VALUE: compiled in for a technique, a uniform for a graph. Repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
+    pub set: Vec<(String, String)>,
+    /// Precision override of a channel or expansion, NAME=PRECISION (techniques only). Repeatable.
+    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
+    pub precision: Vec<(String, String)>,
+    /// Override the scene's shadow-map resolution.
+    #[arg(long)]
+    pub shadow_map: Option<u32>,
+    /// Override the scene's camera size, WIDTHxHEIGHT.
+    #[arg(long, value_parser = size)]
+    pub size: Option<(u32, u32)>,
+}
+
+impl Overrides {
+    /// The scene at `path` with the size and shadow-map overrides, and an executor of
+    /// `input` (a technique compiled with the overrides, or a graph with params set).
+    pub fn load<'g>(&self, gpu: &'g Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor<'g>), String> {
+        let scene = load_scene(scene, self.size, self.shadow_map)?;
+        let ex = executor(gpu, input, &self.set, &self.precision)?;
+        Ok((scene, ex))
+    }
+}
 
 /// Options of the ground truth, shared by `truth` and `compare`.
 #[derive(clap::Args, Clone)]
@@ -45,7 +95,7 @@ pub struct TruthOpts {
 }
 
 impl TruthOpts {
-    fn settings(&self) -> TruthSettings {
+    pub fn settings(&self) -> TruthSettings {
         TruthSettings {
             samples: self.samples,
             runs: self.runs,
@@ -56,26 +106,7 @@ impl TruthOpts {
     }
 }
 
-#[derive(clap::Args)]
-pub struct TruthArgs {
-    /// The scene (RON).
-    #[arg(long)]
-    scene: PathBuf,
-    /// The ground truth: one-channel float PFM at camera resolution; a PNG of it is written
-    /// beside it (same name, `.png`).
-    #[arg(short, long, default_value = "truth.pfm")]
-    out: PathBuf,
-    /// Also write the per-pixel standard error as a one-channel PFM.
-    #[arg(long = "std-error", value_name = "PFM")]
-    std_error: Option<PathBuf>,
-    /// Override the scene's camera size, WIDTHxHEIGHT.
-    #[arg(long, value_parser = size)]
-    size: Option<(u32, u32)>,
-    #[command(flatten)]
-    truth: TruthOpts,
-}
-
-pub(crate) fn size(s: &str) -> Result<(u32, u32), String> {
+pub fn size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once('x').ok_or_else(|| format!("expected WIDTHxHEIGHT, found `{s}`"))?;
     let (w, h): (u32, u32) = (
         w.trim().parse().map_err(|e| format!("width `{w}`: {e}"))?,
@@ -87,12 +118,12 @@ pub(crate) fn size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-pub(crate) fn rt(e: RuntimeError) -> String {
+pub fn rt(e: RuntimeError) -> String {
     format!("error: {e}")
 }
 
 /// Loads a scene and applies the size and shadow-map overrides.
-pub(crate) fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>) -> Result<Scene, String> {
+pub fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>) -> Result<Scene, String> {
     let mut scene = Scene::load(path).map_err(|e| e.to_string())?;
     if let Some(n) = shadow_map {
         if n == 0 {
@@ -108,12 +139,7 @@ pub(crate) fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Opti
 
 /// An executor for a technique (`.ron`, compiled with the overrides) or a compiled graph
 /// (`.graph.ron`, params set as uniforms), as `sshc render` does.
-pub(crate) fn executor<'g>(
-    gpu: &'g Gpu,
-    input: &Path,
-    set: &[(String, String)],
-    precision: &[(String, String)],
-) -> Result<Executor<'g>, String> {
+pub fn executor<'g>(gpu: &'g Gpu, input: &Path, set: &[(String, String)], precision: &[(String, String)]) -> Result<Executor<'g>, String> {
     if input.to_string_lossy().ends_with(".graph.ron") {
         if !precision.is_empty() {
             return Err("error: `--precision` needs a technique, not a compiled graph".into());
@@ -129,7 +155,7 @@ pub(crate) fn executor<'g>(
     compile_executor(gpu, input, &source, set, precision)
 }
 
-fn compile_executor<'g>(
+pub fn compile_executor<'g>(
     gpu: &'g Gpu,
     path: &Path,
     source: &str,
@@ -149,7 +175,7 @@ fn compile_executor<'g>(
 }
 
 /// The camera pass's world positions and normals (NaN where no surface is seen).
-pub(crate) fn positions_normals(ex: &Executor) -> Result<(Vec<Vec3>, Vec<Vec3>), String> {
+pub fn positions_normals(ex: &Executor) -> Result<(Vec<Vec3>, Vec<Vec3>), String> {
     let xyz = |img: sshc_runtime::gpu::Image| img.rgba.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect::<Vec<_>>();
     let p = xyz(ex.read_camera(CameraOutput::Position).map_err(rt)?);
     let n = xyz(ex.read_camera(CameraOutput::Normal).map_err(rt)?);
@@ -158,7 +184,7 @@ pub(crate) fn positions_normals(ex: &Executor) -> Result<(Vec<Vec3>, Vec<Vec3>),
 
 /// The truth at `positions`, through the cache unless `--no-cache`, with a progress bar
 /// on a terminal. Prints where it came from.
-pub(crate) fn truth_at(scene: &Scene, positions: &[Vec3], normals: &[Vec3], opts: &TruthOpts) -> Result<(Truth, Source), String> {
+pub fn truth_at(scene: &Scene, positions: &[Vec3], normals: &[Vec3], opts: &TruthOpts) -> Result<(Truth, Source), String> {
     let (w, h) = scene.camera_size();
     let cache = (!opts.no_cache).then(|| TruthCache::new(&opts.cache));
     let bar = indicatif::ProgressBar::new(0);
@@ -187,7 +213,7 @@ pub(crate) fn truth_at(scene: &Scene, positions: &[Vec3], normals: &[Vec3], opts
 }
 
 /// The lines `sshc truth` and `sshc compare` print about a truth.
-pub(crate) fn describe(t: &Truth, source: &Source) -> Vec<String> {
+pub fn describe(t: &Truth, source: &Source) -> Vec<String> {
     let mut out = Vec::new();
     match source {
         Source::Cached(p) => out.push(format!("truth: read from the cache {}", p.display())),
@@ -224,46 +250,4 @@ pub(crate) fn describe(t: &Truth, source: &Source) -> Vec<String> {
         t.rays_at_least as f64
     ));
     out
-}
-
-/// The PNG beside a PFM: same name, `.png`.
-fn png_beside(path: &Path) -> PathBuf {
-    path.with_extension("png")
-}
-
-pub fn truth(a: TruthArgs) -> Result<(), String> {
-    if a.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-        return Err(format!(
-            "error: `-o {}`: the truth is written as PFM (its PNG goes beside it); name a `.pfm` file",
-            a.out.display()
-        ));
-    }
-    let scene = load_scene(&a.scene, a.size, None)?;
-    if scene.lights.is_empty() {
-        return Err(format!("error: {}: the scene has no light: add one to `lights`", a.scene.display()));
-    }
-    if a.truth.runs < 2 {
-        return Err("error: `--runs` must be at least 2: the standard error is measured from independent runs".into());
-    }
-    let gpu = Gpu::new().map_err(rt)?;
-    let mut ex = compile_executor(&gpu, Path::new("techniques/hard.ron"), HARD, &[], &[])?;
-    let inputs = sshc_runtime::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
-    ex.bind_scene(&inputs).map_err(rt)?;
-    ex.run_frame().map_err(rt)?;
-    let (positions, normals) = positions_normals(&ex)?;
-    let (t, source) = truth_at(&scene, &positions, &normals, &a.truth)?;
-    t.write_pfm(&a.out).map_err(|e| format!("error: {e}"))?;
-    println!("wrote {}", a.out.display());
-    let png = png_beside(&a.out);
-    t.write_png(&png).map_err(|e| format!("error: {e}"))?;
-    println!("wrote {}", png.display());
-    if let Some(p) = &a.std_error {
-        t.write_std_error_pfm(p).map_err(|e| format!("error: {e}"))?;
-        println!("wrote {}", p.display());
-    }
-    for line in describe(&t, &source) {
-        println!("{line}");
-    }
-    println!("positions: {}", gpu.describe());
-    Ok(())
 }

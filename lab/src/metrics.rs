@@ -1,5 +1,6 @@
 //! Accuracy and stability of a technique's visibility against the ground truth
-//! (DESIGN.md section 5).
+//! (docs/truth.md: RMS and max error over facing and penumbra pixels, signed error images,
+//! temporal stability).
 //!
 //! - Errors are in 0..255 units, as in Lawlor 2006, figure 10: `255 * (estimate - truth)`
 //!   with visibility in 0..1.

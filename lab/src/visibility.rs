@@ -1,5 +1,5 @@
 //! CPU visibility query: the fraction of a light that a point sees, by ray casting with
-//! stratified samples (the ground truth of DESIGN.md section 5).
+//! stratified samples (the ground truth of docs/truth.md).
 //!
 //! A compressed wide BVH (CWBVH, from the `obvhs` crate) over the scene's world-space
 //! triangles is built once by [`Visibility::new`]; shadow rays use it with a

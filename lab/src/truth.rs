@@ -1,4 +1,4 @@
-//! Ground truth (DESIGN.md section 5): for every camera pixel, the fraction of the light
+//! Ground truth (docs/truth.md): for every camera pixel, the fraction of the light
 //! visible from exactly the world position the GPU shaded there, by ray casting with the
 //! CPU visibility query ([`crate::visibility`]).
 //!

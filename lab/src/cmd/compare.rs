@@ -2,16 +2,16 @@
 //! ground truth at the same world positions, and write one PNG with the technique's
 //! visibility, the truth and the signed error side by side, the figures written under
 //! them: RMS and max error over the pixels facing the light and over the penumbra
-//! (`sshc_runtime::metrics`), temporal stability while the light moves by sub-texel steps,
+//! (`crate::metrics`), temporal stability while the light moves by sub-texel steps,
 //! GPU time per frame, peak memory and the device.
 
-use crate::render::Overrides;
-use crate::truth_cmd::{TruthOpts, describe, positions_normals, rt, truth_at};
+use crate::metrics::{self, Accuracy};
+use crate::scene::{Light, Scene};
+use crate::session::Overrides;
+use crate::session::{TruthOpts, describe, positions_normals, rt, truth_at};
 use glam::Vec3;
 use plotters::prelude::*;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
-use sshc_runtime::metrics::{self, Accuracy};
-use sshc_runtime::scene::{Light, Scene};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -97,7 +97,7 @@ pub(crate) fn moving_light_frames(
     for i in 1..frames {
         let mut s = scene.clone();
         s.lights[0] = moved_light(light, scene, i as f32 * step);
-        let inputs = sshc_runtime::bind::scene_inputs(&s).map_err(|e| format!("error: {e}"))?;
+        let inputs = crate::bind::scene_inputs(&s).map_err(|e| format!("error: {e}"))?;
         ex.bind_scene(&inputs).map_err(rt)?;
         ex.run_frame().map_err(rt)?;
         out.push(ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0));
@@ -130,7 +130,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     {
         return Err(format!("error: `--range {r}`: expected a half-width > 0 in 0..255 units"));
     }
-    let inputs = sshc_runtime::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
+    let inputs = crate::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
     ex.bind_scene(&inputs).map_err(rt)?;
     let mut frame_ms = Vec::new();
     for _ in 0..a.frames.max(1) {
@@ -216,7 +216,7 @@ struct FigureInputs<'a> {
     median_ms: Option<f64>,
     frames: usize,
     peak: u64,
-    truth: &'a sshc_runtime::truth::Truth,
+    truth: &'a crate::truth::Truth,
     device: String,
     range: f64,
 }

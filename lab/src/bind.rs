@@ -1,7 +1,7 @@
 //! From a [`Scene`] to the plain data the executor binds ([`SceneInputs`]).
 
-use crate::gpu::SceneInputs;
 use crate::scene::Scene;
+use sshc_runtime::gpu::SceneInputs;
 
 /// The scene's geometry, camera and first light, as the executor needs them.
 pub fn scene_inputs(scene: &Scene) -> Result<SceneInputs, String> {

@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::Vec3;
-use sshc_runtime::scene::{Light, Scene};
-use sshc_runtime::truth::{self, CacheLookup, Points, Source, Truth, TruthCache, TruthError, TruthSettings};
-use sshc_runtime::visibility::Visibility;
+use sshc_lab::scene::{Light, Scene};
+use sshc_lab::truth::{self, CacheLookup, Points, Source, Truth, TruthCache, TruthError, TruthSettings};
+use sshc_lab::visibility::Visibility;
 
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")

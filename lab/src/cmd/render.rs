@@ -1,11 +1,9 @@
 //! `sshc render`: compile a technique (or load a compiled graph), bind a scene, run it on
 //! the GPU and write the images.
 
-use crate::pair;
-use crate::truth_cmd::{executor, load_scene, rt, size};
+use crate::session::{Overrides, rt};
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
 use sshc_runtime::graph::{Draw, PassGraph};
-use sshc_runtime::scene::Scene;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -37,38 +35,10 @@ pub struct RenderArgs {
     frames: usize,
 }
 
-/// What `render` and `compare` let the command line change: params, precisions, the
-/// shadow-map resolution and the camera size.
-#[derive(clap::Args)]
-pub(crate) struct Overrides {
-    /// Param override NAME=VALUE: compiled in for a technique, a uniform for a graph. Repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
-    pub set: Vec<(String, String)>,
-    /// Precision override of a channel or expansion, NAME=PRECISION (techniques only). Repeatable.
-    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
-    pub precision: Vec<(String, String)>,
-    /// Override the scene's shadow-map resolution.
-    #[arg(long)]
-    pub shadow_map: Option<u32>,
-    /// Override the scene's camera size, WIDTHxHEIGHT.
-    #[arg(long, value_parser = size)]
-    pub size: Option<(u32, u32)>,
-}
-
-impl Overrides {
-    /// The scene at `path` with the size and shadow-map overrides, and an executor of
-    /// `input` (a technique compiled with the overrides, or a graph with params set).
-    pub fn load<'g>(&self, gpu: &'g Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor<'g>), String> {
-        let scene = load_scene(scene, self.size, self.shadow_map)?;
-        let ex = executor(gpu, input, &self.set, &self.precision)?;
-        Ok((scene, ex))
-    }
-}
-
 pub fn render(a: RenderArgs) -> Result<(), String> {
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
-    let inputs = sshc_runtime::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
+    let inputs = crate::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
     ex.bind_scene(&inputs).map_err(rt)?;
     let mut all: Vec<Vec<Option<f64>>> = Vec::new();
     let mut names = Vec::new();
@@ -241,7 +211,7 @@ mod tests {
 
     #[test]
     fn pass_work_counts_table_loads_and_compute_steps_per_texel() {
-        let src = include_str!("../../techniques/cssm.ron");
+        let src = include_str!("../../../techniques/cssm.ron");
         let opts = sshc::CompileOptions {
             set: vec![("filter".into(), "1".into())],
             ..Default::default()

@@ -8,15 +8,15 @@
 //! separate machines by any batch scheduler) stay comparable, and their CSVs merge by
 //! concatenation (drop the header lines after the first).
 
-use crate::truth_cmd::{TruthOpts, load_scene, positions_normals, rt, truth_at};
-use crate::{read, report};
+use crate::metrics;
+use crate::scene::Light;
+use crate::session::{TruthOpts, load_scene, positions_normals, rt, truth_at};
+use crate::session::{read, report};
 use indexmap::IndexMap;
 use plotters::prelude::*;
 use serde::Deserialize;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
 use sshc_runtime::graph::PassGraph;
-use sshc_runtime::metrics;
-use sshc_runtime::scene::Light;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -219,9 +219,9 @@ fn time_frames(ex: &mut Executor, frames: usize) -> Result<Option<f64>, String> 
     Ok(t.get(t.len() / 2).copied())
 }
 
-/// Fetches and operations per frame, summed over the passes of [`crate::render::pass_work`].
+/// Fetches and operations per frame, summed over the passes of [`crate::cmd::render::pass_work`].
 fn work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> (f64, f64) {
-    crate::render::pass_work(graph, shadow, camera)
+    crate::cmd::render::pass_work(graph, shadow, camera)
         .iter()
         .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops))
 }
@@ -288,7 +288,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         }
         let scene = load_scene(&resolve(scene_path), file.camera, None)?;
         let c = compile(&resolve(&file.reference), &reference_source, &[], &[])?;
-        let inputs = sshc_runtime::bind::scene_inputs(&scene)?;
+        let inputs = crate::bind::scene_inputs(&scene)?;
         reference_runs.push(Some((c, inputs, Vec::new())));
     }
     let time_references = |runs: &mut Vec<Option<ReferenceRun>>| -> Result<(), String> {
@@ -324,7 +324,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         let compiled = compile(&path, &sources[c.technique], &set, &precision)?;
         let (fetches, ops) = work(&compiled.graph, scene.shadow_map, scene.camera_size());
         let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
-        ex.bind_scene(&sshc_runtime::bind::scene_inputs(&scene)?).map_err(rt)?;
+        ex.bind_scene(&crate::bind::scene_inputs(&scene)?).map_err(rt)?;
         let ms = time_frames(&mut ex, file.frames)?;
         let vis = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
         let peak = ex.memory().map_err(rt)?.iter().map(|(_, b)| b).sum();
@@ -368,13 +368,13 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
                 let scene = load_scene(&resolve(scene_path), file.camera, None)?;
                 let c = compile(&resolve(&file.reference), &reference_source, &[], &[])?;
                 let mut ex = Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?;
-                ex.bind_scene(&sshc_runtime::bind::scene_inputs(&scene)?).map_err(rt)?;
+                ex.bind_scene(&crate::bind::scene_inputs(&scene)?).map_err(rt)?;
                 ex.run_frame().map_err(rt)?;
                 let (p, nrm) = positions_normals(&ex)?;
                 let (truth, _) = bar.suspend(|| truth_at(&scene, &p, &nrm, &a.truth))?;
-                let vis = sshc_runtime::visibility::Visibility::new(&scene);
+                let vis = crate::visibility::Visibility::new(&scene);
                 // the visibility query takes samples per axis (an n x n stratified grid)
-                let per_axis = sshc_runtime::truth::strata(n);
+                let per_axis = crate::truth::strata(n);
                 let n = per_axis * per_axis;
                 let est = vis.visible_fractions_seeded(&p, &nrm, &scene.lights[0], per_axis, 0x5eed_0000 + n as u64);
                 let est: Vec<f32> = est.iter().zip(&p).map(|(v, p)| if p.is_finite() { *v } else { 1.0 }).collect();

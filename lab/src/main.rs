@@ -1,21 +1,13 @@
-//! The `sshc` command line.
+//! The `sshc` command line: a thin shell over the compiler library (`compile`, `check`,
+//! `explain`, `bench-compile`) and the lab (`render`, `truth`, `compare`, `sweep`).
 
 use clap::{Parser, Subcommand};
-use codespan_reporting::term::termcolor::{ColorChoice, StandardStream};
 use sshc::{CompileOptions, Diagnostics, DumpPhase};
-use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use sshc_lab::cmd::{compare, render, sweep, truth};
+use sshc_lab::session::{pair, read, report};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
-
-#[cfg(feature = "gpu")]
-mod compare_cmd;
-#[cfg(feature = "gpu")]
-mod render;
-#[cfg(feature = "gpu")]
-mod sweep;
-#[cfg(feature = "gpu")]
-mod truth_cmd;
 
 #[derive(Parser)]
 #[command(
@@ -39,7 +31,7 @@ struct Common {
     #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
     precision: Vec<(String, String)>,
     /// Print the IR after this phase.
-    #[arg(long = "dump-ir-after", value_enum)]
+    #[arg(long = "dump-ir-after", value_name = "PHASE", value_parser = dump_phase)]
     dump_ir_after: Option<DumpPhase>,
 }
 
@@ -65,20 +57,16 @@ enum Command {
     },
     /// Render a bundled or compiled technique on a scene: the shaded image, and on request
     /// the visibility buffer and the world position and normal of every pixel.
-    #[cfg(feature = "gpu")]
     Render(render::RenderArgs),
     /// Ground truth: the fraction of the light visible from the world position of every
     /// pixel (rendered on the GPU), by CPU ray casting, with its measured standard error.
-    #[cfg(feature = "gpu")]
-    Truth(truth_cmd::TruthArgs),
+    Truth(truth::TruthArgs),
     /// Render a technique and compare it with the ground truth at the same positions: one
     /// PNG with its visibility, the truth, the signed error and the figures.
-    #[cfg(feature = "gpu")]
-    Compare(compare_cmd::CompareArgs),
+    Compare(compare::CompareArgs),
     /// Sweep techniques x their parameter axes x scenes: error against the ground truth,
     /// GPU time (as a ratio to a reference technique) and memory; CSV, Markdown and Pareto
     /// charts.
-    #[cfg(feature = "gpu")]
     Sweep(sweep::SweepArgs),
     /// Time compilation of techniques in a warm process (naga validation included).
     BenchCompile {
@@ -93,11 +81,9 @@ enum Command {
     },
 }
 
-pub(crate) fn pair(s: &str) -> Result<(String, String), String> {
-    match s.split_once('=') {
-        Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
-        _ => Err(format!("expected NAME=VALUE, found `{s}`")),
-    }
+/// `--dump-ir-after NAME`: the phase names of [`DumpPhase::name`].
+fn dump_phase(s: &str) -> Result<DumpPhase, String> {
+    s.parse()
 }
 
 fn options(c: &Common) -> CompileOptions {
@@ -106,22 +92,6 @@ fn options(c: &Common) -> CompileOptions {
         precision: c.precision.clone(),
         dump_after: c.dump_ir_after,
         ..Default::default()
-    }
-}
-
-pub(crate) fn read(path: &Path) -> Result<String, String> {
-    std::fs::read_to_string(path).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))
-}
-
-pub(crate) fn report(diags: &Diagnostics, path: &Path, source: &str) {
-    let choice = if std::io::stderr().is_terminal() {
-        ColorChoice::Auto
-    } else {
-        ColorChoice::Never
-    };
-    let mut stderr = StandardStream::stderr(choice);
-    for d in &diags.0 {
-        d.emit_to(&mut stderr, &path.display().to_string(), source);
     }
 }
 
@@ -155,13 +125,9 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
-        #[cfg(feature = "gpu")]
         Command::Render(args) => render::render(args),
-        #[cfg(feature = "gpu")]
-        Command::Truth(args) => truth_cmd::truth(args),
-        #[cfg(feature = "gpu")]
-        Command::Compare(args) => compare_cmd::compare(args),
-        #[cfg(feature = "gpu")]
+        Command::Truth(args) => truth::truth(args),
+        Command::Compare(args) => compare::compare(args),
         Command::Sweep(args) => sweep::sweep(args),
         Command::Compile { common, out } => {
             let c = compile_reported(&common)?;
@@ -175,11 +141,7 @@ fn run(cli: Cli) -> Result<(), String> {
             let source = read(&common.technique)?;
             let opts = options(&common);
             if opts.dump_after.is_some_and(|p| p > DumpPhase::Check) {
-                let phase = opts
-                    .dump_after
-                    .and_then(|p| clap::ValueEnum::to_possible_value(&p))
-                    .map(|v| v.get_name().to_string())
-                    .unwrap_or_default();
+                let phase = opts.dump_after.map(DumpPhase::name).unwrap_or_default();
                 return Err(format!(
                     "error: `sshc check` stops after the check phase; use `sshc compile --dump-ir-after {phase}`"
                 ));

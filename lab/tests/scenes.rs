@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Vec3, Vec4};
-use sshc_runtime::scene::{Light, Scene, SceneErrorKind, corners};
-use sshc_runtime::visibility::Visibility;
+use sshc_lab::scene::{Light, Scene, SceneErrorKind, corners};
+use sshc_lab::visibility::Visibility;
 
 const BUNDLED: [&str; 5] = ["bunny", "contact", "fence", "edge", "triangle"];
 

@@ -1,8 +1,8 @@
 //! Metrics against the ground truth on hand-made arrays whose answers are known.
 
 use glam::Vec3;
-use sshc_runtime::metrics::{self, MASKED_GREY};
-use sshc_runtime::scene::Light;
+use sshc_lab::metrics::{self, MASKED_GREY};
+use sshc_lab::scene::Light;
 
 const EPS: f64 = 1e-9;
 

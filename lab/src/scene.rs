@@ -1,6 +1,6 @@
 //! Scenes: a camera, lights, objects and the shadow-map resolution, read from RON.
 //!
-//! A scene file is one `Scene(...)` value (DESIGN.md section 3). Reading it builds the
+//! A scene file is one `Scene(...)` value (the format is documented in scenes/README.md and docs/truth.md). Reading it builds the
 //! world-space triangle list once; the GPU executor takes it as [`Scene::vertex_data`],
 //! the CPU ground truth ([`crate::visibility`]) as [`Scene::triangles`].
 //!
@@ -126,7 +126,7 @@ fn default_up() -> Vec3 {
 }
 
 /// A light. Visibility from a point is the fraction of the light that the point sees
-/// (DESIGN.md section 5); how each kind is sampled is in [`crate::visibility`].
+/// (the ground truth of docs/truth.md); how each kind is sampled is in [`crate::visibility`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum Light {
