@@ -407,103 +407,10 @@ fn eval_call_f64(f: Func, v: &[ConstValue]) -> Option<f64> {
     }
 }
 
-/// Evaluate a pure function on constants with f32 results rounded as the GPU would store them.
+/// Evaluate a pure function on constants with f32 results rounded as the GPU would store
+/// them (the function's [`crate::builtins::Fold`] rule).
 pub fn eval_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
-    use ConstValue::*;
-    let fl = |i: usize| -> Option<f64> {
-        match v.get(i)? {
-            Float(x) => Some(*x),
-            Int(x) => Some(*x as f64),
-            Bool(_) => None,
-        }
-    };
-    if let [Int(a)] = v {
-        match f {
-            Func::Abs => return Some(Int(a.checked_abs()?)),
-            Func::Sign => return Some(Int(a.signum())),
-            Func::ToI32 => return Some(Int(*a)),
-            Func::ToF32 => return Some(Float(*a as f64)),
-            _ => {}
-        }
-    }
-    if let [Int(a), Int(b)] = v {
-        match f {
-            Func::Min => return Some(Int(*a.min(b))),
-            Func::Max => return Some(Int(*a.max(b))),
-            _ => {}
-        }
-    }
-    if let [Int(x), Int(lo), Int(hi)] = v
-        && f == Func::Clamp
-    {
-        return Some(Int(*x.max(lo).min(hi)));
-    }
-    let r = match f {
-        Func::ToF32 => match v[0] {
-            Bool(b) => b as i64 as f64,
-            _ => fl(0)?,
-        },
-        Func::ToI32 => match v[0] {
-            Float(x) if x.is_finite() => return Some(Int(x.trunc().clamp(i32::MIN as f64, i32::MAX as f64) as i64)),
-            Bool(b) => return Some(Int(b as i64)),
-            _ => return None,
-        },
-        Func::Abs => fl(0)?.abs(),
-        Func::Exp => fl(0)?.exp(),
-        Func::Exp2 => fl(0)?.exp2(),
-        Func::Log if fl(0)? > 0.0 => fl(0)?.ln(),
-        Func::Log2 if fl(0)? > 0.0 => fl(0)?.log2(),
-        Func::Sqrt if fl(0)? >= 0.0 => fl(0)?.sqrt(),
-        Func::InverseSqrt if fl(0)? > 0.0 => 1.0 / fl(0)?.sqrt(),
-        Func::Sin => fl(0)?.sin(),
-        Func::Cos => fl(0)?.cos(),
-        Func::Tan => fl(0)?.tan(),
-        Func::Asin if fl(0)?.abs() <= 1.0 => fl(0)?.asin(),
-        Func::Acos if fl(0)?.abs() <= 1.0 => fl(0)?.acos(),
-        Func::Atan => fl(0)?.atan(),
-        Func::Floor => fl(0)?.floor(),
-        Func::Ceil => fl(0)?.ceil(),
-        Func::Fract => fl(0)? - fl(0)?.floor(),
-        Func::Round => {
-            let x = fl(0)?;
-            let r = x.round();
-            // WGSL rounds half to even.
-            if (x - x.trunc()).abs() == 0.5 { 2.0 * (x / 2.0).round() } else { r }
-        }
-        Func::Trunc => fl(0)?.trunc(),
-        Func::Sign => fl(0)?.signum() * (fl(0)? != 0.0) as i32 as f64,
-        Func::Saturate => fl(0)?.clamp(0.0, 1.0),
-        Func::Pow if fl(0)? >= 0.0 => fl(0)?.powf(fl(1)?),
-        Func::Min => fl(0)?.min(fl(1)?),
-        Func::Max => fl(0)?.max(fl(1)?),
-        Func::Atan2 => fl(0)?.atan2(fl(1)?),
-        Func::Step => {
-            if fl(1)? >= fl(0)? {
-                1.0
-            } else {
-                0.0
-            }
-        }
-        Func::Clamp if fl(1)? <= fl(2)? => fl(0)?.max(fl(1)?).min(fl(2)?),
-        Func::Mix => fl(0)? * (1.0 - fl(2)?) + fl(1)? * fl(2)?,
-        Func::Smoothstep if fl(0)? != fl(1)? => {
-            let t = ((fl(2)? - fl(0)?) / (fl(1)? - fl(0)?)).clamp(0.0, 1.0);
-            t * t * (3.0 - 2.0 * t)
-        }
-        Func::Linstep if fl(0)? != fl(1)? => ((fl(2)? - fl(0)?) / (fl(1)? - fl(0)?)).clamp(0.0, 1.0),
-        Func::DivOr => {
-            if fl(1)?.abs() >= fl(2)? && fl(1)? != 0.0 {
-                fl(0)? / fl(1)?
-            } else {
-                fl(3)?
-            }
-        }
-        _ => return None,
-    };
-    if !r.is_finite() {
-        return None;
-    }
-    Some(Float(r as f32 as f64))
+    crate::builtins::fold_call(f, v)
 }
 
 #[derive(Clone, Debug)]
