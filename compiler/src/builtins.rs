@@ -674,7 +674,7 @@ impl Func {
                 arity: 1,
                 sig: Sig::Float,
                 fold: Float(|x| Some(round_half_even(x[0]))),
-                range: |v| v[0].monotone(f64::round),
+                range: |v| v[0].monotone(round_half_even),
                 wgsl: Same,
             },
             Func::Trunc => &Builtin {
@@ -690,7 +690,7 @@ impl Func {
                 arity: 1,
                 sig: Numeric,
                 fold: IntOrFloat(|a| Some(a[0].signum()), |x| Some(x[0].signum() * (x[0] != 0.0) as i32 as f64)),
-                range: |v| Interval::of(&[v[0].lo.signum(), v[0].hi.signum()]),
+                range: |v| v[0].monotone(sign),
                 wgsl: Same,
             },
             Func::Saturate => &Builtin {
@@ -770,9 +770,10 @@ impl Func {
                     |a| Some(a[0].max(a[1]).min(a[2])),
                     |x| (x[1] <= x[2]).then(|| x[0].max(x[1]).min(x[2])),
                 ),
+                // min(max(x, lo), hi) grows with each argument
                 range: |v| Interval {
-                    lo: v[0].lo.max(v[1].lo).min(v[2].hi),
-                    hi: v[0].hi.min(v[2].hi).max(v[1].lo),
+                    lo: v[0].lo.max(v[1].lo).min(v[2].lo),
+                    hi: v[0].hi.max(v[1].hi).min(v[2].hi),
                 },
                 wgsl: Same,
             },
@@ -853,7 +854,7 @@ impl Func {
                     ConstValue::Float(_) => None,
                     ConstValue::Bool(b) => Some(ConstValue::Int(b as i64)),
                 }),
-                range: |v| v[0],
+                range: |v| v[0].monotone(f64::trunc),
                 wgsl: Same,
             },
             Func::Vec2 => &Builtin {
@@ -1111,6 +1112,11 @@ fn round_half_even(x: f64) -> f64 {
     }
 }
 
+/// WGSL's `sign`: -1, 0 or 1.
+fn sign(x: f64) -> f64 {
+    if x == 0.0 { 0.0 } else { x.signum() }
+}
+
 /// Range of a vector constructor: the hull of its components.
 fn components(v: &[Interval]) -> Interval {
     v.iter().copied().reduce(Interval::hull).unwrap_or(Interval::UNBOUNDED)
@@ -1340,4 +1346,222 @@ pub fn is_reserved(name: &str) -> bool {
         || Func::from_name(name).is_some()
         || SampleFn::from_name(name).is_some()
         || matches!(name, "let" | "sum" | "in" | "true" | "false")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_name_round_trips_through_lookup() {
+        for (i, f) in Func::ALL.into_iter().enumerate() {
+            assert_eq!(f as usize, i, "Func::ALL out of declaration order at {f:?}");
+            assert_eq!(Func::from_name(f.name()), Some(f));
+            assert!(is_reserved(f.name()));
+        }
+        assert_eq!(Func::UvWidth as usize + 1, Func::ALL.len(), "a Func is missing from Func::ALL");
+        for (i, input) in Input::ALL.into_iter().enumerate() {
+            assert_eq!(input as usize, i, "Input::ALL out of declaration order at {input:?}");
+            assert_eq!(Input::from_name(input.name()), Some(input));
+            assert!(is_reserved(input.name()));
+        }
+        assert_eq!(
+            Input::LightSpread as usize + 1,
+            Input::ALL.len(),
+            "an Input is missing from Input::ALL"
+        );
+        let mut names: Vec<&str> = SampleFn::ALL.iter().map(|s| s.name(false)).collect();
+        names.extend(SampleFn::ALL.iter().map(|s| s.name(true)));
+        assert_eq!(names, SampleFn::NAMES, "SampleFn::NAMES disagrees with the descriptors");
+        for s in SampleFn::ALL {
+            for expand in [false, true] {
+                assert_eq!(SampleFn::from_name(s.name(expand)), Some((s, expand)));
+                assert!(is_reserved(s.name(expand)));
+            }
+        }
+        let mut order: Vec<usize> = SampleFn::ALL.iter().map(|s| *s as usize).collect();
+        order.sort_unstable();
+        assert_eq!(order, (0..SampleFn::ALL.len()).collect::<Vec<_>>());
+        assert_eq!(
+            SampleFn::Box as usize + 1,
+            SampleFn::ALL.len(),
+            "a SampleFn is missing from SampleFn::ALL"
+        );
+        // names are unique across all builtins
+        let mut all: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
+        all.extend(Input::ALL.iter().map(|i| i.name()));
+        all.extend(SampleFn::NAMES);
+        let n = all.len();
+        all.sort_unstable();
+        all.dedup();
+        assert_eq!(all.len(), n, "two builtins share a name");
+    }
+
+    /// Argument types a call may take: every uniform choice the signature accepts.
+    fn signatures(f: Func) -> Vec<Vec<Ty>> {
+        let n = f.arity();
+        let mut out: Vec<Vec<Ty>> = [Ty::F32, Ty::Vec(2), Ty::Vec(3), Ty::Vec(4), Ty::I32, Ty::Bool]
+            .into_iter()
+            .map(|t| vec![t; n])
+            .collect();
+        if n == 3 {
+            for t in [Ty::F32, Ty::Vec(2), Ty::I32] {
+                out.push(vec![t, t, Ty::Bool]);
+            }
+        }
+        out.retain(|args| f.result(args).is_ok());
+        out
+    }
+
+    #[test]
+    fn every_function_has_a_signature_of_its_arity() {
+        for f in Func::ALL {
+            assert!(!signatures(f).is_empty(), "`{}` accepts no argument types", f.name());
+            let wrong = vec![Ty::F32; f.arity() + 1];
+            assert!(f.result(&wrong).is_err());
+        }
+    }
+
+    /// Folding sample arguments gives a value inside the range rule's interval of any
+    /// argument intervals that hold them.
+    #[test]
+    fn folding_lies_inside_the_range_rule() {
+        let boxes: [(f64, f64); 11] = [
+            // f32 values, so the sample points are the ends themselves
+            (-3.0, -0.5),
+            (-1.0, 1.0),
+            (0.0, 1.0),
+            (0.25, 4.0),
+            (1.0, 100.0),
+            (-100.0, 100.0),
+            (0.0, 0.0),
+            (0.5, 0.5),
+            (2.5, 2.5),
+            (-2.5, -2.5),
+            (2.75, 2.75),
+        ];
+        let mut checked = 0;
+        let mut failures = Vec::new();
+        for f in Func::ALL {
+            let d = f.desc();
+            if matches!(d.fold, Fold::Never) {
+                continue;
+            }
+            let scalar: Vec<Vec<Ty>> = signatures(f)
+                .into_iter()
+                .filter(|s| !s.iter().any(|t| matches!(t, Ty::Vec(_))))
+                .collect();
+            for sig in scalar {
+                // every combination of argument boxes
+                let k = sig.len();
+                for combo in 0..boxes.len().pow(k as u32) {
+                    let pick: Vec<(f64, f64)> = (0..k).map(|i| boxes[combo / boxes.len().pow(i as u32) % boxes.len()]).collect();
+                    let ivs: Vec<Interval> = pick
+                        .iter()
+                        .zip(&sig)
+                        .map(|(&(lo, hi), t)| if *t == Ty::Bool { Interval::UNIT } else { Interval { lo, hi } })
+                        .collect();
+                    let range = (d.range)(&ivs);
+                    // sample points: ends and middle of each box (integers: rounded inward)
+                    for p in 0..3usize.pow(k as u32) {
+                        let args: Option<Vec<ConstValue>> = (0..k)
+                            .map(|i| {
+                                let (lo, hi) = pick[i];
+                                let x = [lo, hi, 0.5 * (lo + hi)][p / 3usize.pow(i as u32) % 3];
+                                match sig[i] {
+                                    // integers: the point rounded, if still inside the box
+                                    Ty::I32 => (lo..=hi).contains(&x.round()).then_some(ConstValue::Int(x.round() as i64)),
+                                    Ty::Bool => Some(ConstValue::Bool(x > lo)),
+                                    Ty::F32 | Ty::Vec(_) | Ty::AbstractInt => Some(ConstValue::Float(x as f32 as f64)),
+                                }
+                            })
+                            .collect();
+                        let Some(args) = args else { continue };
+                        let Some(v) = fold_call(f, &args) else { continue };
+                        let r = v.as_f64();
+                        // the fold rounds to f32, the range rule is exact
+                        let tol = r.abs().max(1.0) * f32::EPSILON as f64;
+                        if !(range.lo - tol <= r && r <= range.hi + tol) && !failures.iter().any(|m: &String| m.starts_with(d.name)) {
+                            failures.push(format!(
+                                "{}({args:?}) folds to {r}, outside its range rule's {range} for argument ranges {ivs:?}",
+                                d.name
+                            ));
+                        }
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
+        assert!(checked > 10_000, "only {checked} folds checked");
+    }
+
+    /// A module that calls every function (with every argument type its signature
+    /// accepts), reads every input and every texture lookup, written by the code
+    /// generator's own emission, must pass naga's validation.
+    #[test]
+    fn every_builtin_emits_valid_wgsl() {
+        let mut body = String::new();
+        let arg = |t: Ty| match t {
+            Ty::F32 | Ty::AbstractInt => "a_f32".to_string(),
+            Ty::I32 => "a_i32".to_string(),
+            Ty::Bool => "a_bool".to_string(),
+            Ty::Vec(n) => format!("a_vec{n}"),
+        };
+        for i in Input::ALL {
+            let d = i.desc();
+            if d.side == Side::Receiver {
+                body.push_str(&format!("    let {}: {} = {};\n", d.wgsl, d.ty.wgsl(), arg(d.ty)));
+            }
+        }
+        for (k, i) in Input::ALL.into_iter().enumerate() {
+            body.push_str(&format!("    let input{k}: {} = {};\n", i.ty().wgsl(), i.desc().wgsl));
+        }
+        let mut k = 0;
+        for f in Func::ALL {
+            for sig in signatures(f) {
+                let ty = f.result(&sig).unwrap();
+                let args: Vec<String> = sig.iter().map(|t| arg(*t)).collect();
+                body.push_str(&format!(
+                    "    let call{k}: {} = {};\n",
+                    ty.wgsl(),
+                    crate::back::wgsl::call(f, &args)
+                ));
+                k += 1;
+            }
+        }
+        for (k, s) in SampleFn::ALL.into_iter().enumerate() {
+            let d = s.desc();
+            match d.wgsl {
+                SampleWgsl::Texture { read, .. } => {
+                    let args: Vec<String> = d.extra_args.iter().map(|t| arg(*t)).collect();
+                    body.push_str(&format!("    let lookup{k}: vec4<f32> = {};\n", read("t_x", 1, &args)));
+                }
+                // the box function is written per table by the code generator
+                SampleWgsl::SummedAreaTable => {}
+            }
+        }
+        let module = format!(
+            "{}@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(2) var smp: sampler;
+@group(1) @binding(0) var t_x: texture_2d_array<f32>;
+
+@fragment
+fn fs_main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {{
+    let a_f32 = frame.shadow_size.z + pos.x;
+    let a_vec2 = frame.shadow_size.xy;
+    let a_vec3 = frame.shadow_size.xyz;
+    let a_vec4 = frame.shadow_size;
+    let a_i32 = i32(frame.shadow_size.x);
+    let a_bool = frame.shadow_size.x > 1.0;
+    let in_base = vec2<i32>(floor(a_vec2));
+{body}    return vec4<f32>(0.0);
+}}
+",
+            sshc_runtime::graph::FRAME_WGSL
+        );
+        if let Err(e) = crate::back::validate(&module) {
+            panic!("{e}\n{module}");
+        }
+    }
 }
