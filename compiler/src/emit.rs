@@ -3,24 +3,11 @@
 //! of every step, counted on the naga IR).
 
 use crate::back::wgsl::{Output, texture_format};
-use crate::front::ast::{ConstValue, LightKind, LightView, ScalarTy};
+use crate::front::ast::{ConstValue, LightView, ScalarTy};
 use crate::ir::*;
 use crate::pack::{mip_source, table_source};
-use sshc_runtime::graph::{self, ChannelDecl, Extent, LightModel, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
+use sshc_runtime::graph::{self, ChannelDecl, Extent, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
 use std::fmt::Write as _;
-
-fn light(l: LightKind) -> LightModel {
-    match l {
-        LightKind::Any => LightModel::Any,
-        LightKind::Point => LightModel::Point,
-        LightKind::Directional => LightModel::Directional,
-        LightKind::Sphere => LightModel::Sphere,
-        LightKind::Disk => LightModel::Disk,
-        LightKind::Rectangle => LightModel::Rectangle,
-        LightKind::Segment { samples } => LightModel::Segment { samples },
-        LightKind::DistantDisk => LightModel::DistantDisk,
-    }
-}
 
 fn kind(p: &IrPass) -> graph::PassKind {
     match p.kind {
@@ -140,7 +127,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
         technique: ir.technique.clone(),
         title: ir.title.clone(),
         paper: ir.paper.clone(),
-        lights: ir.lights.iter().map(|l| light(*l)).collect(),
+        lights: ir.lights.clone(),
         params,
         params_size,
         textures,

@@ -4,7 +4,7 @@
 //! nodes are added).
 
 use crate::builtins::{Func, Input, SampleFn, Ty};
-use crate::front::ast::{ConstValue, LightKind, LightView, Precision, Primitive, Reduce, Resolve, ScalarTy};
+use crate::front::ast::{ConstValue, LightModel, LightView, Precision, Primitive, Reduce, Resolve, ScalarTy};
 use crate::front::expr::{BinOp, UnOp, fmt_float};
 use crate::span::Span;
 use std::collections::HashMap;
@@ -640,7 +640,7 @@ pub struct Ir {
     pub technique: String,
     pub title: Option<String>,
     pub paper: Option<String>,
-    pub lights: Vec<LightKind>,
+    pub lights: Vec<LightModel>,
     pub params: Vec<IrParam>,
     pub channels: Vec<IrChannel>,
     pub expansions: Vec<IrExpansion>,

@@ -315,46 +315,32 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
     })
 }
 
-const LIGHTS: &[&str] = &[
-    "Any",
-    "Point",
-    "Directional",
-    "Sphere",
-    "Disk",
-    "Rectangle",
-    "Segment",
-    "DistantDisk",
-];
-
-fn light(node: &Node) -> Result<Spanned<LightKind>, Diagnostic> {
+fn light(node: &Node) -> Result<Spanned<LightModel>, Diagnostic> {
     let (v, span) = variant(node)?;
-    let kind = match v.as_str() {
-        "Any" => LightKind::Any,
-        "Point" => LightKind::Point,
-        "Directional" => LightKind::Directional,
-        "Sphere" => LightKind::Sphere,
-        "Disk" => LightKind::Disk,
-        "Rectangle" => LightKind::Rectangle,
-        "DistantDisk" => LightKind::DistantDisk,
-        "Segment" => {
-            let mut f = Fields::of(node, "Segment")?;
-            let n = f.req("samples")?;
-            let samples = match n.value {
-                Value::Int(s) if (2..=64).contains(&s) => s as u32,
-                _ => {
-                    return Err(err(
-                        n.span,
-                        "a segment light needs between 2 and 64 samples",
-                        "expected an integer in 2..=64",
-                    ));
-                }
-            };
-            f.finish()?;
-            LightKind::Segment { samples }
-        }
-        _ => return Err(unknown_variant(span, &v, "light model", LIGHTS)),
+    if v == "Any" {
+        return Ok(Spanned::new(LightModel::Any, node.span));
+    }
+    let Some(kind) = LightKind::from_name(&v) else {
+        let names: Vec<&'static str> = std::iter::once("Any").chain(LightKind::ALL.map(LightKind::name)).collect();
+        return Err(unknown_variant(span, &v, "light model", &names));
     };
-    Ok(Spanned::new(kind, node.span))
+    let mut samples = 0;
+    if kind == LightKind::Segment {
+        let mut f = Fields::of(node, "Segment")?;
+        let n = f.req("samples")?;
+        samples = match n.value {
+            Value::Int(s) if (2..=64).contains(&s) => s as u32,
+            _ => {
+                return Err(err(
+                    n.span,
+                    "a segment light needs between 2 and 64 samples",
+                    "expected an integer in 2..=64",
+                ));
+            }
+        };
+        f.finish()?;
+    }
+    Ok(Spanned::new(LightModel::of(kind, samples), node.span))
 }
 
 fn param(name: Name, node: &Node) -> Result<Param, Diagnostic> {
