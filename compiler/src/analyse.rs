@@ -145,7 +145,7 @@ impl<'a> RangeEval<'a> {
                             hi: if x.hi > 0.0 { m } else { 0.0 },
                         }
                     }
-                    _ => Interval::UNIT,
+                    BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne | BinOp::And | BinOp::Or => Interval::UNIT,
                 }
             }
             Node::Swizzle(x, _) => self.get(*x),
@@ -268,7 +268,7 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
             let why = match slot.precision {
                 Precision::F16 => "F16 holds at most 65504",
                 Precision::F32 => "F32 holds at most 3.4e38",
-                _ => "a unorm channel stores a finite range scaled to [0, 1]",
+                Precision::Unorm8 | Precision::Unorm16 => "a unorm channel stores a finite range scaled to [0, 1]",
             };
             let mut d = Diagnostic::error(
                 Phase::Analyse,
@@ -385,7 +385,7 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
             let min_normal = match s.precision {
                 Precision::F16 => Some(F16_MIN_NORMAL),
                 Precision::F32 => Some(f32::MIN_POSITIVE as f64),
-                _ => None,
+                Precision::Unorm8 | Precision::Unorm16 => None,
             };
             if let Some(m) = min_normal {
                 let smallest = if r.lo > 0.0 {

@@ -61,7 +61,7 @@ impl fmt::Display for Ty {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Ty::AbstractInt => write!(f, "integer"),
-            t => write!(f, "{}", t.wgsl()),
+            t @ (Ty::F32 | Ty::I32 | Ty::Bool | Ty::Vec(_)) => write!(f, "{}", t.wgsl()),
         }
     }
 }
@@ -1481,7 +1481,8 @@ mod tests {
                         let r = v.as_f64();
                         // the fold rounds to f32, the range rule is exact
                         let tol = r.abs().max(1.0) * f32::EPSILON as f64;
-                        if !(range.lo - tol <= r && r <= range.hi + tol) && !failures.iter().any(|m: &String| m.starts_with(d.name)) {
+                        let inside = range.lo - tol <= r && r <= range.hi + tol;
+                        if !inside && !failures.iter().any(|m: &String| m.starts_with(d.name)) {
                             failures.push(format!(
                                 "{}({args:?}) folds to {r}, outside its range rule's {range} for argument ranges {ivs:?}",
                                 d.name

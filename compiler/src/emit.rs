@@ -32,7 +32,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
         };
         let value = match p.value {
             ConstValue::Bool(b) => b as i32 as f64,
-            v => v.as_f64(),
+            v @ (ConstValue::Int(_) | ConstValue::Float(_)) => v.as_f64(),
         };
         let off = if p.uniform {
             offset += 4;
@@ -116,7 +116,13 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
                     view: LightView::PerSample,
                     ..
                 } => Views::PerLightSample,
-                _ => Views::LightCenter,
+                IrPassKind::Depth { .. }
+                | IrPassKind::Map
+                | IrPassKind::Filter { .. }
+                | IrPassKind::Mipmap { .. }
+                | IrPassKind::SummedArea
+                | IrPassKind::Geometry { .. }
+                | IrPassKind::Shade { .. } => Views::LightCenter,
             },
             shader: m.file.clone(),
             steps: m.steps.clone(),

@@ -83,7 +83,14 @@ impl Arena {
             Node::F32(b) => Some(ConstValue::Float(f32::from_bits(*b) as f64)),
             Node::I32(v) => Some(ConstValue::Int(*v as i64)),
             Node::Bool(v) => Some(ConstValue::Bool(*v)),
-            _ => None,
+            Node::Param(_)
+            | Node::Input(_)
+            | Node::Channel(_)
+            | Node::Sample { .. }
+            | Node::Unary(..)
+            | Node::Binary(..)
+            | Node::Call(..)
+            | Node::Swizzle(..) => None,
         }
     }
 
@@ -143,7 +150,19 @@ impl Arena {
                         BinOp::Add | BinOp::Sub if is(y, 0.0) => return Some(*a),
                         BinOp::Mul if is(x, 1.0) => return Some(*b),
                         BinOp::Mul | BinOp::Div if is(y, 1.0) => return Some(*a),
-                        _ => {}
+                        BinOp::Add
+                        | BinOp::Sub
+                        | BinOp::Mul
+                        | BinOp::Div
+                        | BinOp::Rem
+                        | BinOp::Lt
+                        | BinOp::Le
+                        | BinOp::Gt
+                        | BinOp::Ge
+                        | BinOp::Eq
+                        | BinOp::Ne
+                        | BinOp::And
+                        | BinOp::Or => {}
                     }
                 }
                 // (c1 * x) / c2 -> (c1 / c2) * x
@@ -175,7 +194,7 @@ impl Arena {
                         BinOp::Ge => Bool(x >= y),
                         BinOp::Eq => Bool(x == y),
                         BinOp::Ne => Bool(x != y),
-                        _ => return None,
+                        BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
                     },
                     (Int(x), Int(y)) => match op {
                         BinOp::Add => Int(x.checked_add(y)?),
@@ -189,14 +208,16 @@ impl Arena {
                         BinOp::Ge => Bool(x >= y),
                         BinOp::Eq => Bool(x == y),
                         BinOp::Ne => Bool(x != y),
-                        _ => return None,
+                        BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
                     },
                     (Bool(x), Bool(y)) => match op {
                         BinOp::And => Bool(x && y),
                         BinOp::Or => Bool(x || y),
                         BinOp::Eq => Bool(x == y),
                         BinOp::Ne => Bool(x != y),
-                        _ => return None,
+                        BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem | BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge => {
+                            return None;
+                        }
                     },
                     _ => return None,
                 };
@@ -205,7 +226,7 @@ impl Arena {
             Node::Call(Func::Select, args) => match self.as_const(args[2])? {
                 Bool(true) => Some(args[1]),
                 Bool(false) => Some(args[0]),
-                _ => None,
+                Int(_) | Float(_) => None,
             },
             Node::Call(f, args) => {
                 if ty != Ty::F32 && ty != Ty::I32 {
@@ -215,7 +236,14 @@ impl Arena {
                 let v = eval_call(*f, &vals)?;
                 self.constant(v, ty, span)
             }
-            _ => None,
+            Node::F32(_)
+            | Node::I32(_)
+            | Node::Bool(_)
+            | Node::Param(_)
+            | Node::Input(_)
+            | Node::Channel(_)
+            | Node::Sample { .. }
+            | Node::Swizzle(..) => None,
         }
     }
 
@@ -255,7 +283,7 @@ impl Arena {
             Node::Unary(_, a) | Node::Swizzle(a, _) => vec![*a],
             Node::Binary(_, a, b) => vec![*a, *b],
             Node::Call(_, args) | Node::Sample { args, .. } => args.clone(),
-            _ => vec![],
+            Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(_) | Node::Channel(_) => vec![],
         }
     }
 
@@ -391,7 +419,9 @@ impl Arena {
                         .collect();
                     eval_call_f64(*f, &args).unwrap_or(f64::NAN)
                 }
-                other => leaf(other).unwrap_or(f64::NAN),
+                other @ (Node::Param(_) | Node::Input(_) | Node::Channel(_) | Node::Sample { .. } | Node::Swizzle(..)) => {
+                    leaf(other).unwrap_or(f64::NAN)
+                }
             };
             vals.insert(n, v);
         }
@@ -577,7 +607,7 @@ impl IrKernel {
                 let r = (*n as i64 - 1) / 2;
                 (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect()
             }
-            _ => return None,
+            IrKernel::Max(_) | IrKernel::Min(_) | IrKernel::LoG => return None,
         };
         let s: f64 = w.iter().sum();
         Some(w.into_iter().map(|x| x / s).collect())
@@ -738,7 +768,7 @@ impl fmt::Display for Ir {
                 IrPassKind::Filter { kernel } => write!(f, " kernel {kernel:?}")?,
                 IrPassKind::Mipmap { reduce } => write!(f, " reduce {reduce:?}")?,
                 IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self)))?,
-                _ => {}
+                IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::SummedArea | IrPassKind::Geometry { .. } => {}
             }
             writeln!(f)?;
         }

@@ -36,7 +36,7 @@ pub struct Scratch {
 pub fn scratch_precision(p: Precision) -> Precision {
     match p {
         Precision::Unorm8 => Precision::F16,
-        _ => Precision::F32,
+        Precision::Unorm16 | Precision::F16 | Precision::F32 => Precision::F32,
     }
 }
 
@@ -710,7 +710,7 @@ fn filter(
                             .filter(|i| IrKernel::LOG_3X3[*i] != 0.0)
                             .map(|i| (i as i32 % 3 - 1, i as i32 / 3 - 1, IrKernel::LOG_3X3[i]))
                             .collect(),
-                        _ => {
+                        IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::Max(_) | IrKernel::Min(_) => {
                             let w = kernel.weights_1d().unwrap_or_else(|| vec![1.0; size as usize]);
                             (-r..=r)
                                 .map(|i| {
@@ -743,7 +743,7 @@ fn filter(
                             .map(|(k, _)| format!("a{oi}_{k}"))
                             .reduce(|a, b| format!("min({a}, {b})"))
                             .unwrap_or_default(),
-                        _ => taps
+                        IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::LoG => taps
                             .iter()
                             .enumerate()
                             .map(|(k, (_, _, w))| format!("a{oi}_{k} * {}", f32_lit(*w as f32)))
@@ -823,7 +823,7 @@ fn summed_area(ir: &Ir, pass: &IrPass) -> Result<(String, Vec<Step>), Diagnostic
         let scale = match st.precision {
             Precision::Unorm8 => 255,
             Precision::Unorm16 => 65535,
-            _ => return Err(internal("summed-area table over a non-unorm texture")),
+            Precision::F16 | Precision::F32 => return Err(internal("summed-area table over a non-unorm texture")),
         };
         let _ = write!(
             rows,
