@@ -1497,6 +1497,45 @@ mod tests {
         assert!(checked > 10_000, "only {checked} folds checked");
     }
 
+    /// docs/language.md lists every function, input, lookup and light kind, inputs with
+    /// their type and side.
+    #[test]
+    fn the_language_reference_lists_every_builtin() {
+        let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/language.md")).unwrap();
+        let section = |from: &str, to: &str| -> &str {
+            let a = doc.find(from).unwrap_or_else(|| panic!("no `{from}` in docs/language.md"));
+            let b = doc[a..].find(to).map_or(doc.len(), |b| a + b);
+            &doc[a..b]
+        };
+        let functions = section("### 8.6 Functions", "### 8.7");
+        for f in Func::ALL {
+            assert!(functions.contains(&format!("`{}(", f.name())), "docs/language.md 8.6 lacks `{}`", f.name());
+        }
+        let lookups = section("### 8.7 Sampling functions", "### 8.8");
+        for name in SampleFn::NAMES {
+            assert!(lookups.contains(&format!("`{name}(")), "docs/language.md 8.7 lacks `{name}`");
+        }
+        let inputs = section("**Built-in inputs.**", "**Channels**");
+        for i in Input::ALL {
+            let d = i.desc();
+            let ty = match d.ty {
+                Ty::Vec(n) => format!("vec{n}"),
+                t @ (Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt) => t.to_string(),
+            };
+            let side = match d.side {
+                Side::Receiver => "receiver",
+                Side::Map => "map",
+                Side::Both => "both",
+            };
+            let row = format!("| `{}` | {ty} | {side} |", d.name);
+            assert!(inputs.contains(&row), "docs/language.md 8.5 lacks the row `{row}`");
+        }
+        let lights = section("## 4. Light models", "## 5.");
+        for k in crate::front::ast::LightKind::ALL {
+            assert!(lights.contains(&format!("| `{}", k.name())), "docs/language.md 4 lacks `{}`", k.name());
+        }
+    }
+
     /// A module that calls every function (with every argument type its signature
     /// accepts), reads every input and every texture lookup, written by the code
     /// generator's own emission, must pass naga's validation.

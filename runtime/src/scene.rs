@@ -798,7 +798,7 @@ impl Light {
     pub fn direction(&self) -> Option<Vec3> {
         match self {
             Light::Directional { direction } | Light::DistantDisk { direction, .. } => Some(direction.normalize_or(Vec3::Y)),
-            _ => None,
+            Light::Point { .. } | Light::Sphere { .. } | Light::Disk { .. } | Light::Rectangle { .. } | Light::Segment { .. } => None,
         }
     }
 
@@ -819,7 +819,12 @@ impl Light {
     pub fn angle(&self) -> f32 {
         match self {
             Light::DistantDisk { angle_degrees, .. } => angle_degrees.to_radians(),
-            _ => 0.0,
+            Light::Point { .. }
+            | Light::Directional { .. }
+            | Light::Sphere { .. }
+            | Light::Disk { .. }
+            | Light::Rectangle { .. }
+            | Light::Segment { .. } => 0.0,
         }
     }
 
@@ -833,7 +838,12 @@ impl Light {
                 1 => vec![(*a + *b) * 0.5],
                 _ => (0..n).map(|i| a.lerp(*b, i as f32 / (n - 1) as f32)).collect(),
             }),
-            _ => None,
+            Light::Point { .. }
+            | Light::Directional { .. }
+            | Light::Sphere { .. }
+            | Light::Disk { .. }
+            | Light::Rectangle { .. }
+            | Light::DistantDisk { .. } => None,
         }
     }
 
@@ -881,7 +891,7 @@ impl Light {
                     half_width * u_axis.dot(axis).abs() + half_height * w.dot(axis).abs()
                 }
                 Light::Segment { a, b } => 0.5 * (*b - *a).dot(axis).abs(),
-                _ => 0.0,
+                Light::Point { .. } | Light::Directional { .. } | Light::DistantDisk { .. } => 0.0,
             }
         };
         v.half_extents = Vec2::new(along(ax), along(ay));
