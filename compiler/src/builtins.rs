@@ -1509,7 +1509,11 @@ mod tests {
         };
         let functions = section("### 8.6 Functions", "### 8.7");
         for f in Func::ALL {
-            assert!(functions.contains(&format!("`{}(", f.name())), "docs/language.md 8.6 lacks `{}`", f.name());
+            assert!(
+                functions.contains(&format!("`{}(", f.name())),
+                "docs/language.md 8.6 lacks `{}`",
+                f.name()
+            );
         }
         let lookups = section("### 8.7 Sampling functions", "### 8.8");
         for name in SampleFn::NAMES {
@@ -1532,7 +1536,11 @@ mod tests {
         }
         let lights = section("## 4. Light models", "## 5.");
         for k in crate::front::ast::LightKind::ALL {
-            assert!(lights.contains(&format!("| `{}", k.name())), "docs/language.md 4 lacks `{}`", k.name());
+            assert!(
+                lights.contains(&format!("| `{}", k.name())),
+                "docs/language.md 4 lacks `{}`",
+                k.name()
+            );
         }
     }
 
