@@ -6,13 +6,11 @@
 //! states the largest safe value of each parameter it depends on, found by bisection
 //! (e.g. ESM with c = 80 at f16: c must stay at or below ln 65504 = 11.09 for z in [0, 1]).
 
-use crate::builtins::Func;
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::{ConstValue, Precision, Reduce};
 use crate::front::expr::{BinOp, UnOp};
 use crate::ir::*;
 use std::collections::HashMap;
-use std::f64::consts::PI;
 
 pub const F16_MAX: f64 = 65504.0;
 pub const F32_MAX: f64 = f32::MAX as f64;
@@ -30,14 +28,14 @@ impl Interval {
     };
     pub const UNIT: Interval = Interval { lo: 0.0, hi: 1.0 };
 
-    fn hull(a: Interval, b: Interval) -> Interval {
+    pub(crate) fn hull(a: Interval, b: Interval) -> Interval {
         Interval {
             lo: a.lo.min(b.lo),
             hi: a.hi.max(b.hi),
         }
     }
 
-    fn of(vals: &[f64]) -> Interval {
+    pub(crate) fn of(vals: &[f64]) -> Interval {
         let lo = vals
             .iter()
             .copied()
@@ -57,7 +55,7 @@ impl Interval {
         self.lo.abs().max(self.hi.abs())
     }
 
-    fn monotone(self, f: impl Fn(f64) -> f64) -> Interval {
+    pub(crate) fn monotone(self, f: impl Fn(f64) -> f64) -> Interval {
         Interval::of(&[f(self.lo), f(self.hi)])
     }
 }
@@ -147,13 +145,13 @@ impl<'a> RangeEval<'a> {
                             hi: if x.hi > 0.0 { m } else { 0.0 },
                         }
                     }
-                    _ => Interval::UNIT,
+                    BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne | BinOp::And | BinOp::Or => Interval::UNIT,
                 }
             }
             Node::Swizzle(x, _) => self.get(*x),
             Node::Call(f, args) => {
                 let v: Vec<Interval> = args.iter().map(|x| self.get(*x)).collect();
-                call_range(*f, &v)
+                (f.desc().range)(&v)
             }
         }
     }
@@ -162,154 +160,6 @@ impl<'a> RangeEval<'a> {
 /// 0 * inf is 0 here: a zero factor bounds the product whatever the other range.
 fn mul(a: f64, b: f64) -> f64 {
     if a == 0.0 || b == 0.0 { 0.0 } else { a * b }
-}
-
-fn call_range(f: Func, v: &[Interval]) -> Interval {
-    let x = v[0];
-    match f {
-        Func::Exp => x.monotone(f64::exp),
-        Func::Exp2 => x.monotone(f64::exp2),
-        Func::Log => x.monotone(|t| if t <= 0.0 { f64::NEG_INFINITY } else { t.ln() }),
-        Func::Log2 => x.monotone(|t| if t <= 0.0 { f64::NEG_INFINITY } else { t.log2() }),
-        Func::Sqrt => x.monotone(|t| t.max(0.0).sqrt()),
-        Func::InverseSqrt => {
-            if x.lo <= 0.0 {
-                Interval {
-                    lo: if x.hi > 0.0 { 1.0 / x.hi.sqrt() } else { 0.0 },
-                    hi: f64::INFINITY,
-                }
-            } else {
-                x.monotone(|t| 1.0 / t.sqrt())
-            }
-        }
-        Func::Sin => trig(x, 0.0),
-        Func::Cos => trig(x, PI / 2.0),
-        Func::Tan => {
-            if x.is_finite() && (x.hi - x.lo) < PI && (x.lo / PI + 0.5).floor() == (x.hi / PI + 0.5).floor() {
-                x.monotone(f64::tan)
-            } else {
-                Interval::UNBOUNDED
-            }
-        }
-        Func::Asin => Interval {
-            lo: x.lo.max(-1.0),
-            hi: x.hi.min(1.0),
-        }
-        .monotone(f64::asin),
-        Func::Acos => Interval {
-            lo: x.lo.max(-1.0),
-            hi: x.hi.min(1.0),
-        }
-        .monotone(f64::acos),
-        Func::Atan => x.monotone(f64::atan),
-        Func::Atan2 => Interval { lo: -PI, hi: PI },
-        Func::Abs => {
-            if x.lo >= 0.0 {
-                x
-            } else if x.hi <= 0.0 {
-                Interval { lo: -x.hi, hi: -x.lo }
-            } else {
-                Interval {
-                    lo: 0.0,
-                    hi: x.magnitude(),
-                }
-            }
-        }
-        Func::Floor => x.monotone(f64::floor),
-        Func::Ceil => x.monotone(f64::ceil),
-        Func::Round => x.monotone(f64::round),
-        Func::Trunc => x.monotone(f64::trunc),
-        Func::Fract => Interval { lo: 0.0, hi: 1.0 },
-        Func::Sign => Interval::of(&[x.lo.signum(), x.hi.signum()]),
-        Func::Saturate => Interval {
-            lo: x.lo.clamp(0.0, 1.0),
-            hi: x.hi.clamp(0.0, 1.0),
-        },
-        Func::Step | Func::Smoothstep | Func::Linstep => Interval::UNIT,
-        Func::DivOr => {
-            // the quotient over the denominators at least eps away from 0, and the fallback
-            let (num, den, eps, fb) = (x, v[1], v[2], v[3]);
-            if eps.lo <= 0.0 {
-                return Interval::UNBOUNDED;
-            }
-            let mut r = fb;
-            for (lo, hi) in [(den.lo.max(eps.lo), den.hi), (den.lo, den.hi.min(-eps.lo))] {
-                if lo <= hi {
-                    r = Interval::hull(r, Interval::of(&[num.lo / lo, num.lo / hi, num.hi / lo, num.hi / hi]));
-                }
-            }
-            r
-        }
-        // a length over a texel's world size: scaled by the frame, unknown here
-        Func::UvWidth => Interval {
-            lo: if x.lo >= 0.0 { 0.0 } else { f64::NEG_INFINITY },
-            hi: if x.hi <= 0.0 { 0.0 } else { f64::INFINITY },
-        },
-        Func::Min => Interval {
-            lo: x.lo.min(v[1].lo),
-            hi: x.hi.min(v[1].hi),
-        },
-        Func::Max => Interval {
-            lo: x.lo.max(v[1].lo),
-            hi: x.hi.max(v[1].hi),
-        },
-        Func::Clamp => Interval {
-            lo: x.lo.max(v[1].lo).min(v[2].hi),
-            hi: x.hi.min(v[2].hi).max(v[1].lo),
-        },
-        Func::Pow => {
-            let (b, e) = (x, v[1]);
-            if b.lo >= 0.0 && b.is_finite() && e.is_finite() {
-                let corners = [b.lo.powf(e.lo), b.lo.powf(e.hi), b.hi.powf(e.lo), b.hi.powf(e.hi)];
-                let mut r = Interval::of(&corners);
-                if b.lo <= 1.0 && b.hi >= 1.0 {
-                    r = Interval::hull(r, Interval::point(1.0));
-                }
-                r
-            } else {
-                Interval::UNBOUNDED
-            }
-        }
-        Func::Mix => {
-            let (a, b, t) = (x, v[1], v[2]);
-            let mut vals = Vec::new();
-            for ta in [t.lo, t.hi] {
-                for av in [a.lo, a.hi] {
-                    for bv in [b.lo, b.hi] {
-                        vals.push(av * (1.0 - ta) + bv * ta);
-                    }
-                }
-            }
-            Interval::of(&vals)
-        }
-        Func::Select => Interval::hull(v[0], v[1]),
-        Func::ToF32 | Func::ToI32 => x,
-        Func::Vec2 | Func::Vec3 | Func::Vec4 => v.iter().copied().reduce(Interval::hull).unwrap_or(Interval::UNBOUNDED),
-        Func::Length => Interval {
-            lo: 0.0,
-            hi: (v.len() as f64).sqrt().max(2.0) * x.magnitude(),
-        },
-        Func::Dot => {
-            let m = x.magnitude() * v[1].magnitude() * 4.0;
-            Interval { lo: -m, hi: m }
-        }
-    }
-}
-
-/// Range of sin(x + phase) over x.
-fn trig(x: Interval, phase: f64) -> Interval {
-    if !x.is_finite() || x.hi - x.lo >= 2.0 * PI {
-        return Interval { lo: -1.0, hi: 1.0 };
-    }
-    let (a, b) = (x.lo + phase, x.hi + phase);
-    let mut vals = vec![a.sin(), b.sin()];
-    // extrema at pi/2 + n pi
-    let mut n = ((a - PI / 2.0) / PI).ceil();
-    while PI / 2.0 + n * PI <= b {
-        vals.push((PI / 2.0 + n * PI).sin());
-        n += 1.0;
-    }
-    Interval::of(&vals)
 }
 
 /// Ranges of every slot of every resource, in pass order (no diagnostics).
@@ -418,7 +268,7 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
             let why = match slot.precision {
                 Precision::F16 => "F16 holds at most 65504",
                 Precision::F32 => "F32 holds at most 3.4e38",
-                _ => "a unorm channel stores a finite range scaled to [0, 1]",
+                Precision::Unorm8 | Precision::Unorm16 => "a unorm channel stores a finite range scaled to [0, 1]",
             };
             let mut d = Diagnostic::error(
                 Phase::Analyse,
@@ -535,7 +385,7 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
             let min_normal = match s.precision {
                 Precision::F16 => Some(F16_MIN_NORMAL),
                 Precision::F32 => Some(f32::MIN_POSITIVE as f64),
-                _ => None,
+                Precision::Unorm8 | Precision::Unorm16 => None,
             };
             if let Some(m) = min_normal {
                 let smallest = if r.lo > 0.0 {

@@ -1,8 +1,13 @@
 //! Names the expression language knows without a declaration: receiver- and map-side
 //! inputs, constants, WGSL math functions and the sampling functions of a Shade pass.
-//! Check and lower both read this one table.
+//! Each function, input and lookup has one descriptor here (`Func::desc`, `Input::desc`,
+//! `SampleFn::desc`): its name, type rule, constant folding, range rule and WGSL. check,
+//! lower, the arena's folding, analyse and codegen read these descriptors and do not
+//! match on the function themselves.
 
-use crate::front::ast::ScalarTy;
+use crate::front::ast::{ConstValue, ScalarTy};
+use crate::ir::Interval;
+use std::f64::consts::PI;
 use std::fmt;
 
 /// Types of the expression language. Integer literals are abstract until context fixes them.
@@ -45,7 +50,9 @@ impl Ty {
             Ty::Bool => "bool",
             Ty::Vec(2) => "vec2<f32>",
             Ty::Vec(3) => "vec3<f32>",
-            _ => "vec4<f32>",
+            Ty::Vec(_) => "vec4<f32>",
+            // `concrete` leaves no abstract type
+            Ty::AbstractInt => "i32",
         }
     }
 }
@@ -54,7 +61,7 @@ impl fmt::Display for Ty {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Ty::AbstractInt => write!(f, "integer"),
-            t => write!(f, "{}", t.wgsl()),
+            t @ (Ty::F32 | Ty::I32 | Ty::Bool | Ty::Vec(_)) => write!(f, "{}", t.wgsl()),
         }
     }
 }
@@ -79,7 +86,7 @@ pub enum Side {
     Both,
 }
 
-/// Built-in inputs.
+/// Built-in inputs. Everything about one input is its [`InputDesc`] (see [`Input::desc`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Input {
     /// Receiver depth from the light, normalised to [0, 1] between the depth pass's near and far.
@@ -118,6 +125,21 @@ pub enum Input {
     LightSpread,
 }
 
+/// Everything the compiler knows about one built-in input: check reads its name, type and
+/// side, analyse its range, codegen its WGSL.
+#[derive(Debug)]
+pub struct InputDesc {
+    pub name: &'static str,
+    pub ty: Ty,
+    pub side: Side,
+    /// The range range analysis assumes.
+    pub range: (f64, f64),
+    /// The WGSL expression for it. Receiver-side inputs are the `in_*` locals the Shade
+    /// module computes before the visibility; the others read the `Frame` uniform.
+    pub wgsl: &'static str,
+    pub doc: &'static str,
+}
+
 impl Input {
     pub const ALL: [Input; 15] = [
         Input::D,
@@ -137,24 +159,138 @@ impl Input {
         Input::LightSpread,
     ];
 
-    pub fn name(self) -> &'static str {
+    /// The descriptor: adding an input means adding a variant, its entry in
+    /// [`Input::ALL`] and its arm here (and its `in_*` local in the Shade prelude of
+    /// `back/wgsl.rs` when it is receiver-side).
+    pub fn desc(self) -> &'static InputDesc {
+        use Side::{Both, Receiver};
         match self {
-            Input::D => "d",
-            Input::DWorld => "d_world",
-            Input::Uv => "uv",
-            Input::Tf => "tf",
-            Input::NdotL => "ndotl",
-            Input::Slope => "slope",
-            Input::TexelSize => "texel_size",
-            Input::TexelDepth => "texel_depth",
-            Input::DepthSlope => "depth_slope",
-            Input::ShadowSize => "shadow_size",
-            Input::Near => "near",
-            Input::Far => "far",
-            Input::LightSize => "light_size",
-            Input::LightWidth => "light_width",
-            Input::LightSpread => "light_spread",
+            Input::D => &InputDesc {
+                name: "d",
+                ty: Ty::F32,
+                side: Receiver,
+                range: (0.0, 1.0),
+                wgsl: "in_d",
+                doc: "receiver depth from the light, normalised to [0, 1] between near and far",
+            },
+            Input::DWorld => &InputDesc {
+                name: "d_world",
+                ty: Ty::F32,
+                side: Receiver,
+                range: (0.0, 1e4),
+                wgsl: "in_d_world",
+                doc: "receiver distance from the light along its view axis (world units)",
+            },
+            Input::Uv => &InputDesc {
+                name: "uv",
+                ty: Ty::Vec(2),
+                side: Receiver,
+                range: (0.0, 1.0),
+                wgsl: "in_uv",
+                doc: "shadow-map coordinates of the receiver",
+            },
+            Input::Tf => &InputDesc {
+                name: "tf",
+                ty: Ty::Vec(2),
+                side: Receiver,
+                range: (0.0, 1.0),
+                wgsl: "in_tf",
+                doc: "fractional texel position fract(uv * shadow_size - 0.5), for bilinear weights",
+            },
+            Input::NdotL => &InputDesc {
+                name: "ndotl",
+                ty: Ty::F32,
+                side: Receiver,
+                range: (-1.0, 1.0),
+                wgsl: "in_ndotl",
+                doc: "cosine between surface normal and direction to the light",
+            },
+            Input::Slope => &InputDesc {
+                name: "slope",
+                ty: Ty::F32,
+                side: Receiver,
+                range: (0.0, 100.0),
+                wgsl: "in_slope",
+                doc: "tan of the angle between normal and light, clamped to [0, 100]",
+            },
+            Input::TexelSize => &InputDesc {
+                name: "texel_size",
+                ty: Ty::F32,
+                side: Both,
+                range: (1.0 / 16384.0, 1.0),
+                wgsl: "frame.shadow_size.z",
+                doc: "1 / shadow-map resolution",
+            },
+            Input::TexelDepth => &InputDesc {
+                name: "texel_depth",
+                ty: Ty::F32,
+                side: Receiver,
+                range: (0.0, 1e4),
+                wgsl: "in_texel_depth",
+                doc: "world size of one shadow-map texel at the receiver, in normalised depth units",
+            },
+            Input::DepthSlope => &InputDesc {
+                name: "depth_slope",
+                ty: Ty::F32,
+                side: Receiver,
+                range: (0.0, 0.1),
+                wgsl: "in_depth_slope",
+                doc: "change of the receiver's normalised depth over one shadow-map texel (receiver-plane gradient), clamped to [0, 0.1]",
+            },
+            Input::ShadowSize => &InputDesc {
+                name: "shadow_size",
+                ty: Ty::F32,
+                side: Both,
+                range: (1.0, 16384.0),
+                wgsl: "frame.shadow_size.x",
+                doc: "shadow-map resolution in texels",
+            },
+            Input::Near => &InputDesc {
+                name: "near",
+                ty: Ty::F32,
+                side: Both,
+                range: (0.0, 1e4),
+                wgsl: "frame.depth_range.x",
+                doc: "near plane of the light's depth range (world units)",
+            },
+            Input::Far => &InputDesc {
+                name: "far",
+                ty: Ty::F32,
+                side: Both,
+                range: (0.0, 1e4),
+                wgsl: "frame.depth_range.y",
+                doc: "far plane of the light's depth range (world units)",
+            },
+            Input::LightSize => &InputDesc {
+                name: "light_size",
+                ty: Ty::F32,
+                side: Both,
+                range: (0.0, 1e4),
+                wgsl: "frame.light_size.x",
+                doc: "light radius or half-extent (world units)",
+            },
+            Input::LightWidth => &InputDesc {
+                name: "light_width",
+                ty: Ty::Vec(2),
+                side: Both,
+                range: (0.0, 2e4),
+                wgsl: "(frame.light_size.zw * 2.0)",
+                doc: "full width of the light along the shadow map's u and v axes (world units)",
+            },
+            Input::LightSpread => &InputDesc {
+                name: "light_spread",
+                ty: Ty::F32,
+                side: Both,
+                // 2 tan(angle / 2) for an angular diameter below 180 degrees; 4 is 126.9 degrees
+                range: (0.0, 4.0),
+                wgsl: "(2.0 * tan(0.5 * frame.light_size.y))",
+                doc: "angular width 2 tan(angle / 2) of a distant light: penumbra width per unit of blocker-receiver distance; 0 for local lights",
+            },
         }
+    }
+
+    pub fn name(self) -> &'static str {
+        self.desc().name
     }
 
     pub fn from_name(n: &str) -> Option<Input> {
@@ -162,61 +298,20 @@ impl Input {
     }
 
     pub fn ty(self) -> Ty {
-        match self {
-            Input::Uv | Input::Tf | Input::LightWidth => Ty::Vec(2),
-            _ => Ty::F32,
-        }
+        self.desc().ty
     }
 
     pub fn side(self) -> Side {
-        match self {
-            Input::TexelSize | Input::ShadowSize | Input::Near | Input::Far | Input::LightSize | Input::LightWidth | Input::LightSpread => {
-                Side::Both
-            }
-            _ => Side::Receiver,
-        }
+        self.desc().side
     }
 
     /// The range range analysis assumes for this input.
     pub fn range(self) -> (f64, f64) {
-        match self {
-            Input::D | Input::Uv | Input::Tf => (0.0, 1.0),
-            Input::NdotL => (-1.0, 1.0),
-            Input::Slope => (0.0, 100.0),
-            Input::TexelSize => (1.0 / 16384.0, 1.0),
-            Input::TexelDepth => (0.0, 1e4),
-            Input::DepthSlope => (0.0, 0.1),
-            Input::ShadowSize => (1.0, 16384.0),
-            Input::DWorld | Input::Near | Input::Far => (0.0, 1e4),
-            Input::LightSize => (0.0, 1e4),
-            Input::LightWidth => (0.0, 2e4),
-            // 2 tan(angle / 2) for an angular diameter below 180 degrees; 4 is 126.9 degrees
-            Input::LightSpread => (0.0, 4.0),
-        }
+        self.desc().range
     }
 
     pub fn doc(self) -> &'static str {
-        match self {
-            Input::D => "receiver depth from the light, normalised to [0, 1] between near and far",
-            Input::DWorld => "receiver distance from the light along its view axis (world units)",
-            Input::Uv => "shadow-map coordinates of the receiver",
-            Input::Tf => "fractional texel position fract(uv * shadow_size - 0.5), for bilinear weights",
-            Input::NdotL => "cosine between surface normal and direction to the light",
-            Input::Slope => "tan of the angle between normal and light, clamped to [0, 100]",
-            Input::TexelSize => "1 / shadow-map resolution",
-            Input::TexelDepth => "world size of one shadow-map texel at the receiver, in normalised depth units",
-            Input::DepthSlope => {
-                "change of the receiver's normalised depth over one shadow-map texel (receiver-plane gradient), clamped to [0, 0.1]"
-            }
-            Input::ShadowSize => "shadow-map resolution in texels",
-            Input::Near => "near plane of the light's depth range (world units)",
-            Input::Far => "far plane of the light's depth range (world units)",
-            Input::LightSize => "light radius or half-extent (world units)",
-            Input::LightWidth => "full width of the light along the shadow map's u and v axes (world units)",
-            Input::LightSpread => {
-                "angular width 2 tan(angle / 2) of a distant light: penumbra width per unit of blocker-receiver distance; 0 for local lights"
-            }
-        }
+        self.desc().doc
     }
 }
 
@@ -229,7 +324,8 @@ pub fn constant(name: &str) -> Option<f64> {
     }
 }
 
-/// Pure functions (WGSL built-ins plus `linstep`).
+/// Pure functions (WGSL built-ins plus `linstep`, `div_or`, `uv_width`). Everything about
+/// one function is its [`Builtin`] descriptor (see [`Func::desc`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Func {
     Abs,
@@ -278,6 +374,82 @@ pub enum Func {
     UvWidth,
 }
 
+/// Everything the compiler knows about one built-in function. check types a call with
+/// [`Builtin::sig`], lower coerces its arguments with it, the arena folds it with
+/// [`Builtin::fold`] (`ir::eval_call`), analyse bounds it with [`Builtin::range`], codegen
+/// writes it with [`Builtin::wgsl`].
+pub struct Builtin {
+    pub name: &'static str,
+    pub arity: usize,
+    pub sig: Sig,
+    pub fold: Fold,
+    /// The range of the result given the ranges of the arguments (interval analysis).
+    pub range: fn(&[Interval]) -> Interval,
+    pub wgsl: Wgsl,
+}
+
+/// The typing rule of a function: which argument types it takes and what it returns,
+/// with WGSL's rules for abstract integer literals and vectors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sig {
+    /// f32 or vector arguments of one type (abstract integers become f32); the result
+    /// has that type. Component-wise on vectors.
+    Float,
+    /// One number of any type (`abs`, `sign`); the result has its type and an abstract
+    /// integer stays abstract.
+    Numeric,
+    /// Arguments of one numeric type (`min`, `max`, `clamp`); the result has that type
+    /// and abstract integers stay abstract.
+    SameNumeric,
+    /// `select(f, t, cond)`: `f` and `t` of one type, `cond` a bool.
+    Select,
+    /// A conversion of a scalar (`f32`, `i32` or `bool`) to this type.
+    Convert(Ty),
+    /// A vector of this many f32 components.
+    Construct(u8),
+    /// f32 scalars only; the result is f32.
+    Scalars,
+    /// `length`: one vector (or f32); the result is f32.
+    Length,
+    /// `dot`: two vectors of one size; the result is f32.
+    Dot,
+}
+
+/// How a call on constants is evaluated at compile time.
+#[derive(Clone, Copy)]
+pub enum Fold {
+    /// Never folded.
+    Never,
+    /// On the arguments as f64 (integers converted; booleans are not folded), the result
+    /// rounded to f32; `None` or a result that is not finite is not folded.
+    Float(fn(&[f64]) -> Option<f64>),
+    /// Integer arithmetic when every argument is an integer, else as [`Fold::Float`].
+    IntOrFloat(fn(&[i64]) -> Option<i64>, fn(&[f64]) -> Option<f64>),
+    /// Any other rule, on the constants as they are.
+    Custom(fn(&[ConstValue]) -> Option<ConstValue>),
+}
+
+/// How a call is written in WGSL, given the WGSL expressions of its arguments.
+#[derive(Clone, Copy)]
+pub enum Wgsl {
+    /// `name(args)`: the WGSL built-in of the same name.
+    Same,
+    /// `callee(args)` with another callee (a type constructor such as `vec2<f32>`).
+    Callee(&'static str),
+    /// Any other expression of the arguments.
+    Expr(fn(&[String]) -> String),
+}
+
+impl fmt::Debug for Builtin {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Builtin")
+            .field("name", &self.name)
+            .field("arity", &self.arity)
+            .field("sig", &self.sig)
+            .finish_non_exhaustive()
+    }
+}
+
 impl Func {
     pub const ALL: [Func; 39] = [
         Func::Abs,
@@ -321,48 +493,471 @@ impl Func {
         Func::UvWidth,
     ];
 
-    pub fn name(self) -> &'static str {
+    /// The descriptor: adding a function means adding a variant, its entry in
+    /// [`Func::ALL`] and its arm here.
+    pub fn desc(self) -> &'static Builtin {
+        use Fold::{Custom, Float, IntOrFloat, Never};
+        use Sig::{Construct, Convert, Dot, Length, Numeric, SameNumeric, Scalars};
+        use Wgsl::{Callee, Expr, Same};
         match self {
-            Func::Abs => "abs",
-            Func::Exp => "exp",
-            Func::Exp2 => "exp2",
-            Func::Log => "log",
-            Func::Log2 => "log2",
-            Func::Sqrt => "sqrt",
-            Func::InverseSqrt => "inverseSqrt",
-            Func::Sin => "sin",
-            Func::Cos => "cos",
-            Func::Tan => "tan",
-            Func::Asin => "asin",
-            Func::Acos => "acos",
-            Func::Atan => "atan",
-            Func::Floor => "floor",
-            Func::Ceil => "ceil",
-            Func::Fract => "fract",
-            Func::Round => "round",
-            Func::Trunc => "trunc",
-            Func::Sign => "sign",
-            Func::Saturate => "saturate",
-            Func::Pow => "pow",
-            Func::Min => "min",
-            Func::Max => "max",
-            Func::Atan2 => "atan2",
-            Func::Step => "step",
-            Func::Clamp => "clamp",
-            Func::Mix => "mix",
-            Func::Smoothstep => "smoothstep",
-            Func::Linstep => "linstep",
-            Func::Select => "select",
-            Func::ToF32 => "f32",
-            Func::ToI32 => "i32",
-            Func::Vec2 => "vec2",
-            Func::Vec3 => "vec3",
-            Func::Vec4 => "vec4",
-            Func::Length => "length",
-            Func::Dot => "dot",
-            Func::DivOr => "div_or",
-            Func::UvWidth => "uv_width",
+            Func::Abs => &Builtin {
+                name: "abs",
+                arity: 1,
+                sig: Numeric,
+                fold: IntOrFloat(|a| a[0].checked_abs(), |x| Some(x[0].abs())),
+                range: |v| {
+                    let x = v[0];
+                    if x.lo >= 0.0 {
+                        x
+                    } else if x.hi <= 0.0 {
+                        Interval { lo: -x.hi, hi: -x.lo }
+                    } else {
+                        Interval {
+                            lo: 0.0,
+                            hi: x.magnitude(),
+                        }
+                    }
+                },
+                wgsl: Same,
+            },
+            Func::Exp => &Builtin {
+                name: "exp",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].exp())),
+                range: |v| v[0].monotone(f64::exp),
+                wgsl: Same,
+            },
+            Func::Exp2 => &Builtin {
+                name: "exp2",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].exp2())),
+                range: |v| v[0].monotone(f64::exp2),
+                wgsl: Same,
+            },
+            Func::Log => &Builtin {
+                name: "log",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| (x[0] > 0.0).then(|| x[0].ln())),
+                range: |v| v[0].monotone(|t| if t <= 0.0 { f64::NEG_INFINITY } else { t.ln() }),
+                wgsl: Same,
+            },
+            Func::Log2 => &Builtin {
+                name: "log2",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| (x[0] > 0.0).then(|| x[0].log2())),
+                range: |v| v[0].monotone(|t| if t <= 0.0 { f64::NEG_INFINITY } else { t.log2() }),
+                wgsl: Same,
+            },
+            Func::Sqrt => &Builtin {
+                name: "sqrt",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| (x[0] >= 0.0).then(|| x[0].sqrt())),
+                range: |v| v[0].monotone(|t| t.max(0.0).sqrt()),
+                wgsl: Same,
+            },
+            Func::InverseSqrt => &Builtin {
+                name: "inverseSqrt",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| (x[0] > 0.0).then(|| 1.0 / x[0].sqrt())),
+                range: |v| {
+                    let x = v[0];
+                    if x.lo <= 0.0 {
+                        Interval {
+                            lo: if x.hi > 0.0 { 1.0 / x.hi.sqrt() } else { 0.0 },
+                            hi: f64::INFINITY,
+                        }
+                    } else {
+                        x.monotone(|t| 1.0 / t.sqrt())
+                    }
+                },
+                wgsl: Same,
+            },
+            Func::Sin => &Builtin {
+                name: "sin",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].sin())),
+                range: |v| trig(v[0], 0.0),
+                wgsl: Same,
+            },
+            Func::Cos => &Builtin {
+                name: "cos",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].cos())),
+                range: |v| trig(v[0], PI / 2.0),
+                wgsl: Same,
+            },
+            Func::Tan => &Builtin {
+                name: "tan",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].tan())),
+                range: |v| {
+                    let x = v[0];
+                    if x.is_finite() && (x.hi - x.lo) < PI && (x.lo / PI + 0.5).floor() == (x.hi / PI + 0.5).floor() {
+                        x.monotone(f64::tan)
+                    } else {
+                        Interval::UNBOUNDED
+                    }
+                },
+                wgsl: Same,
+            },
+            Func::Asin => &Builtin {
+                name: "asin",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| (x[0].abs() <= 1.0).then(|| x[0].asin())),
+                range: |v| {
+                    Interval {
+                        lo: v[0].lo.max(-1.0),
+                        hi: v[0].hi.min(1.0),
+                    }
+                    .monotone(f64::asin)
+                },
+                wgsl: Same,
+            },
+            Func::Acos => &Builtin {
+                name: "acos",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| (x[0].abs() <= 1.0).then(|| x[0].acos())),
+                range: |v| {
+                    Interval {
+                        lo: v[0].lo.max(-1.0),
+                        hi: v[0].hi.min(1.0),
+                    }
+                    .monotone(f64::acos)
+                },
+                wgsl: Same,
+            },
+            Func::Atan => &Builtin {
+                name: "atan",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].atan())),
+                range: |v| v[0].monotone(f64::atan),
+                wgsl: Same,
+            },
+            Func::Floor => &Builtin {
+                name: "floor",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].floor())),
+                range: |v| v[0].monotone(f64::floor),
+                wgsl: Same,
+            },
+            Func::Ceil => &Builtin {
+                name: "ceil",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].ceil())),
+                range: |v| v[0].monotone(f64::ceil),
+                wgsl: Same,
+            },
+            Func::Fract => &Builtin {
+                name: "fract",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0] - x[0].floor())),
+                range: |_| Interval { lo: 0.0, hi: 1.0 },
+                wgsl: Same,
+            },
+            Func::Round => &Builtin {
+                name: "round",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(round_half_even(x[0]))),
+                range: |v| v[0].monotone(round_half_even),
+                wgsl: Same,
+            },
+            Func::Trunc => &Builtin {
+                name: "trunc",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].trunc())),
+                range: |v| v[0].monotone(f64::trunc),
+                wgsl: Same,
+            },
+            Func::Sign => &Builtin {
+                name: "sign",
+                arity: 1,
+                sig: Numeric,
+                fold: IntOrFloat(|a| Some(a[0].signum()), |x| Some(x[0].signum() * (x[0] != 0.0) as i32 as f64)),
+                range: |v| v[0].monotone(sign),
+                wgsl: Same,
+            },
+            Func::Saturate => &Builtin {
+                name: "saturate",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].clamp(0.0, 1.0))),
+                range: |v| Interval {
+                    lo: v[0].lo.clamp(0.0, 1.0),
+                    hi: v[0].hi.clamp(0.0, 1.0),
+                },
+                wgsl: Same,
+            },
+            Func::Pow => &Builtin {
+                name: "pow",
+                arity: 2,
+                sig: Sig::Float,
+                fold: Float(|x| (x[0] >= 0.0).then(|| x[0].powf(x[1]))),
+                range: |v| {
+                    let (b, e) = (v[0], v[1]);
+                    if b.lo >= 0.0 && b.is_finite() && e.is_finite() {
+                        let corners = [b.lo.powf(e.lo), b.lo.powf(e.hi), b.hi.powf(e.lo), b.hi.powf(e.hi)];
+                        let mut r = Interval::of(&corners);
+                        if b.lo <= 1.0 && b.hi >= 1.0 {
+                            r = Interval::hull(r, Interval::point(1.0));
+                        }
+                        r
+                    } else {
+                        Interval::UNBOUNDED
+                    }
+                },
+                wgsl: Same,
+            },
+            Func::Min => &Builtin {
+                name: "min",
+                arity: 2,
+                sig: SameNumeric,
+                fold: IntOrFloat(|a| Some(a[0].min(a[1])), |x| Some(x[0].min(x[1]))),
+                range: |v| Interval {
+                    lo: v[0].lo.min(v[1].lo),
+                    hi: v[0].hi.min(v[1].hi),
+                },
+                wgsl: Same,
+            },
+            Func::Max => &Builtin {
+                name: "max",
+                arity: 2,
+                sig: SameNumeric,
+                fold: IntOrFloat(|a| Some(a[0].max(a[1])), |x| Some(x[0].max(x[1]))),
+                range: |v| Interval {
+                    lo: v[0].lo.max(v[1].lo),
+                    hi: v[0].hi.max(v[1].hi),
+                },
+                wgsl: Same,
+            },
+            Func::Atan2 => &Builtin {
+                name: "atan2",
+                arity: 2,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].atan2(x[1]))),
+                range: |_| Interval { lo: -PI, hi: PI },
+                wgsl: Same,
+            },
+            Func::Step => &Builtin {
+                name: "step",
+                arity: 2,
+                sig: Sig::Float,
+                fold: Float(|x| Some(if x[1] >= x[0] { 1.0 } else { 0.0 })),
+                range: |_| Interval::UNIT,
+                wgsl: Same,
+            },
+            Func::Clamp => &Builtin {
+                name: "clamp",
+                arity: 3,
+                sig: SameNumeric,
+                fold: IntOrFloat(
+                    |a| Some(a[0].max(a[1]).min(a[2])),
+                    |x| (x[1] <= x[2]).then(|| x[0].max(x[1]).min(x[2])),
+                ),
+                // min(max(x, lo), hi) grows with each argument
+                range: |v| Interval {
+                    lo: v[0].lo.max(v[1].lo).min(v[2].lo),
+                    hi: v[0].hi.max(v[1].hi).min(v[2].hi),
+                },
+                wgsl: Same,
+            },
+            Func::Mix => &Builtin {
+                name: "mix",
+                arity: 3,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0] * (1.0 - x[2]) + x[1] * x[2])),
+                range: |v| {
+                    let (a, b, t) = (v[0], v[1], v[2]);
+                    let mut vals = Vec::new();
+                    for ta in [t.lo, t.hi] {
+                        for av in [a.lo, a.hi] {
+                            for bv in [b.lo, b.hi] {
+                                vals.push(av * (1.0 - ta) + bv * ta);
+                            }
+                        }
+                    }
+                    Interval::of(&vals)
+                },
+                wgsl: Same,
+            },
+            Func::Smoothstep => &Builtin {
+                name: "smoothstep",
+                arity: 3,
+                sig: Sig::Float,
+                fold: Float(|x| {
+                    (x[0] != x[1]).then(|| {
+                        let t = ((x[2] - x[0]) / (x[1] - x[0])).clamp(0.0, 1.0);
+                        t * t * (3.0 - 2.0 * t)
+                    })
+                }),
+                range: |_| Interval::UNIT,
+                wgsl: Same,
+            },
+            Func::Linstep => &Builtin {
+                name: "linstep",
+                arity: 3,
+                sig: Sig::Float,
+                fold: Float(|x| (x[0] != x[1]).then(|| ((x[2] - x[0]) / (x[1] - x[0])).clamp(0.0, 1.0))),
+                range: |_| Interval::UNIT,
+                wgsl: Expr(|v| format!("saturate(({} - {}) / ({} - {}))", v[2], v[0], v[1], v[0])),
+            },
+            Func::Select => &Builtin {
+                name: "select",
+                arity: 3,
+                sig: Sig::Select,
+                // the arena also folds a select with a constant condition and other operands
+                fold: Custom(|v| match v[2] {
+                    ConstValue::Bool(true) => Some(v[1]),
+                    ConstValue::Bool(false) => Some(v[0]),
+                    ConstValue::Int(_) | ConstValue::Float(_) => None,
+                }),
+                range: |v| Interval::hull(v[0], v[1]),
+                wgsl: Same,
+            },
+            Func::ToF32 => &Builtin {
+                name: "f32",
+                arity: 1,
+                sig: Convert(Ty::F32),
+                fold: Custom(|v| match v[0] {
+                    ConstValue::Int(a) => Some(ConstValue::Float(a as f64)),
+                    ConstValue::Float(x) => finite_f32(x),
+                    ConstValue::Bool(b) => finite_f32(b as i64 as f64),
+                }),
+                range: |v| v[0],
+                wgsl: Same,
+            },
+            Func::ToI32 => &Builtin {
+                name: "i32",
+                arity: 1,
+                sig: Convert(Ty::I32),
+                fold: Custom(|v| match v[0] {
+                    ConstValue::Int(a) => Some(ConstValue::Int(a)),
+                    ConstValue::Float(x) if x.is_finite() => {
+                        Some(ConstValue::Int(x.trunc().clamp(i32::MIN as f64, i32::MAX as f64) as i64))
+                    }
+                    ConstValue::Float(_) => None,
+                    ConstValue::Bool(b) => Some(ConstValue::Int(b as i64)),
+                }),
+                range: |v| v[0].monotone(f64::trunc),
+                wgsl: Same,
+            },
+            Func::Vec2 => &Builtin {
+                name: "vec2",
+                arity: 2,
+                sig: Construct(2),
+                fold: Never,
+                range: components,
+                wgsl: Callee("vec2<f32>"),
+            },
+            Func::Vec3 => &Builtin {
+                name: "vec3",
+                arity: 3,
+                sig: Construct(3),
+                fold: Never,
+                range: components,
+                wgsl: Callee("vec3<f32>"),
+            },
+            Func::Vec4 => &Builtin {
+                name: "vec4",
+                arity: 4,
+                sig: Construct(4),
+                fold: Never,
+                range: components,
+                wgsl: Callee("vec4<f32>"),
+            },
+            Func::Length => &Builtin {
+                name: "length",
+                arity: 1,
+                sig: Length,
+                fold: Never,
+                range: |v| Interval {
+                    lo: 0.0,
+                    hi: (v.len() as f64).sqrt().max(2.0) * v[0].magnitude(),
+                },
+                wgsl: Same,
+            },
+            Func::Dot => &Builtin {
+                name: "dot",
+                arity: 2,
+                sig: Dot,
+                fold: Never,
+                range: |v| {
+                    let m = v[0].magnitude() * v[1].magnitude() * 4.0;
+                    Interval { lo: -m, hi: m }
+                },
+                wgsl: Same,
+            },
+            Func::DivOr => &Builtin {
+                name: "div_or",
+                arity: 4,
+                sig: Scalars,
+                fold: Float(|x| Some(if x[1].abs() >= x[2] && x[1] != 0.0 { x[0] / x[1] } else { x[3] })),
+                range: |v| {
+                    // the quotient over the denominators at least eps away from 0, and the fallback
+                    let (num, den, eps, fb) = (v[0], v[1], v[2], v[3]);
+                    if eps.lo <= 0.0 {
+                        return Interval::UNBOUNDED;
+                    }
+                    let mut r = fb;
+                    for (lo, hi) in [(den.lo.max(eps.lo), den.hi), (den.lo, den.hi.min(-eps.lo))] {
+                        if lo <= hi {
+                            r = Interval::hull(r, Interval::of(&[num.lo / lo, num.lo / hi, num.hi / lo, num.hi / hi]));
+                        }
+                    }
+                    r
+                },
+                // the denominator is replaced by 1 where it is refused, so that no
+                // infinity or NaN is computed even in the branch select discards
+                wgsl: Expr(|v| {
+                    format!(
+                        "select({fb}, {n} / select(1.0, {d}, abs({d}) >= {e} && {d} != 0.0), abs({d}) >= {e} && {d} != 0.0)",
+                        n = v[0],
+                        d = v[1],
+                        e = v[2],
+                        fb = v[3]
+                    )
+                }),
+            },
+            Func::UvWidth => &Builtin {
+                name: "uv_width",
+                arity: 2,
+                sig: Scalars,
+                // scaled by the frame: unknown at compile time
+                fold: Never,
+                // a length over a texel's world size: scaled by the frame, unknown here
+                range: |v| Interval {
+                    lo: if v[0].lo >= 0.0 { 0.0 } else { f64::NEG_INFINITY },
+                    hi: if v[0].hi <= 0.0 { 0.0 } else { f64::INFINITY },
+                },
+                // one texel at distance D spans texel_world.x * D + texel_world.y world units
+                wgsl: Expr(|v| {
+                    format!(
+                        "({} / ((frame.texel_world.x * {} + frame.texel_world.y) * frame.shadow_size.x))",
+                        v[0], v[1]
+                    )
+                }),
+            },
         }
+    }
+
+    pub fn name(self) -> &'static str {
+        self.desc().name
     }
 
     pub fn from_name(n: &str) -> Option<Func> {
@@ -370,95 +965,185 @@ impl Func {
     }
 
     pub fn arity(self) -> usize {
-        match self {
-            Func::Pow | Func::Min | Func::Max | Func::Atan2 | Func::Step | Func::Dot | Func::UvWidth => 2,
-            Func::DivOr => 4,
-            Func::Clamp | Func::Mix | Func::Smoothstep | Func::Linstep | Func::Select => 3,
-            Func::Vec2 => 2,
-            Func::Vec3 => 3,
-            Func::Vec4 => 4,
-            _ => 1,
-        }
+        self.desc().arity
     }
 
     /// Result type for these argument types, or a message saying what was expected.
     pub fn result(self, args: &[Ty]) -> Result<Ty, String> {
-        if args.len() != self.arity() {
-            return Err(format!(
-                "`{}` takes {} argument(s), found {}",
-                self.name(),
-                self.arity(),
-                args.len()
-            ));
+        let d = self.desc();
+        if args.len() != d.arity {
+            return Err(format!("`{}` takes {} argument(s), found {}", d.name, d.arity, args.len()));
         }
+        d.sig.result(d.name, args)
+    }
+
+    /// The type argument `i` is coerced to (abstract integer literals become it), given
+    /// the argument types and the call's result type from [`Func::result`].
+    pub fn arg_ty(self, i: usize, args: &[Ty], result: Ty) -> Ty {
+        self.desc().sig.arg_ty(i, args, result)
+    }
+
+    /// Whether a call on abstract integers stays an abstract integer (`min(1, 2)`).
+    pub fn keeps_abstract(self) -> bool {
+        self.desc().sig.keeps_abstract()
+    }
+}
+
+impl Sig {
+    fn result(self, name: &str, args: &[Ty]) -> Result<Ty, String> {
         let same = |tys: &[Ty]| -> Option<Ty> { tys.iter().try_fold(tys[0], |acc, t| unify(acc, *t)) };
         match self {
-            Func::Abs | Func::Sign => match args[0] {
-                t if t.is_numeric() => Ok(t.concrete_or_f32_for(self)),
-                t => Err(format!("`{}` expects a number, found {t}", self.name())),
+            Sig::Numeric => match args[0] {
+                t if t.is_numeric() => Ok(t.concrete()),
+                t => Err(format!("`{name}` expects a number, found {t}")),
             },
-            Func::Min | Func::Max | Func::Clamp => match same(args) {
+            Sig::SameNumeric => match same(args) {
                 Some(t) if t.is_numeric() => Ok(t.concrete()),
-                _ => Err(format!(
-                    "`{}` expects arguments of one numeric type, found {}",
-                    self.name(),
-                    list(args)
-                )),
+                _ => Err(format!("`{name}` expects arguments of one numeric type, found {}", list(args))),
             },
-            Func::Select => match (unify(args[0], args[1]), args[2]) {
+            Sig::Select => match (unify(args[0], args[1]), args[2]) {
                 (Some(t), Ty::Bool) => Ok(t.concrete()),
                 (None, _) => Err(format!("`select(f, t, cond)` needs `f` and `t` of one type, found {}", list(args))),
                 (_, c) => Err(format!("`select(f, t, cond)` needs a bool condition, found {c}")),
             },
-            Func::ToF32 => match args[0] {
-                Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt => Ok(Ty::F32),
-                t => Err(format!("`f32` converts a scalar, found {t}")),
+            Sig::Convert(to) => match args[0] {
+                Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt => Ok(to),
+                t @ Ty::Vec(_) => Err(format!("`{name}` converts a scalar, found {t}")),
             },
-            Func::ToI32 => match args[0] {
-                Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt => Ok(Ty::I32),
-                t => Err(format!("`i32` converts a scalar, found {t}")),
-            },
-            Func::Vec2 | Func::Vec3 | Func::Vec4 => {
+            Sig::Construct(n) => {
                 if args.iter().all(|t| matches!(t, Ty::F32 | Ty::AbstractInt)) {
-                    Ok(Ty::Vec(self.arity() as u8))
+                    Ok(Ty::Vec(n))
                 } else {
-                    Err(format!("`{}` takes f32 components, found {}", self.name(), list(args)))
+                    Err(format!("`{name}` takes f32 components, found {}", list(args)))
                 }
             }
-            Func::Length => match args[0] {
+            Sig::Length => match args[0] {
                 Ty::Vec(_) | Ty::F32 | Ty::AbstractInt => Ok(Ty::F32),
-                t => Err(format!("`length` expects a vector, found {t}")),
+                t @ (Ty::I32 | Ty::Bool) => Err(format!("`{name}` expects a vector, found {t}")),
             },
-            Func::Dot => match same(args) {
+            Sig::Dot => match same(args) {
                 Some(Ty::Vec(_)) => Ok(Ty::F32),
-                _ => Err(format!("`dot` expects two vectors of one size, found {}", list(args))),
+                Some(Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt) | None => {
+                    Err(format!("`{name}` expects two vectors of one size, found {}", list(args)))
+                }
             },
-            Func::DivOr | Func::UvWidth => {
+            Sig::Scalars => {
                 if args.iter().all(|t| matches!(t, Ty::F32 | Ty::AbstractInt)) {
                     Ok(Ty::F32)
                 } else {
-                    Err(format!("`{}` takes f32 arguments, found {}", self.name(), list(args)))
+                    Err(format!("`{name}` takes f32 arguments, found {}", list(args)))
                 }
             }
-            _ => match same(args) {
+            Sig::Float => match same(args) {
                 Some(t) if t.is_float_like() => Ok(if t == Ty::AbstractInt { Ty::F32 } else { t }),
-                _ => Err(format!("`{}` expects f32 or vector arguments, found {}", self.name(), list(args))),
+                _ => Err(format!("`{name}` expects f32 or vector arguments, found {}", list(args))),
             },
+        }
+    }
+
+    fn arg_ty(self, i: usize, args: &[Ty], result: Ty) -> Ty {
+        match self {
+            Sig::Convert(_) => Ty::I32,
+            Sig::Select if i == 2 => Ty::Bool,
+            Sig::Select | Sig::SameNumeric | Sig::Numeric => result,
+            Sig::Length | Sig::Dot => args.iter().copied().find(|t| matches!(t, Ty::Vec(_))).unwrap_or(Ty::F32),
+            Sig::Construct(_) => Ty::F32,
+            Sig::Float | Sig::Scalars => {
+                if matches!(result, Ty::Vec(_)) {
+                    result
+                } else {
+                    Ty::F32
+                }
+            }
+        }
+    }
+
+    fn keeps_abstract(self) -> bool {
+        match self {
+            Sig::Numeric | Sig::SameNumeric => true,
+            Sig::Float | Sig::Select | Sig::Convert(_) | Sig::Construct(_) | Sig::Scalars | Sig::Length | Sig::Dot => false,
         }
     }
 }
 
-impl Ty {
-    fn concrete_or_f32_for(self, _f: Func) -> Ty {
-        self.concrete()
+/// Evaluate a pure function on constants with f32 results rounded as the GPU would store
+/// them; `None` where it is not folded (no finite value, or not evaluated at compile time).
+pub fn fold_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
+    let floats = || -> Option<Vec<f64>> {
+        v.iter()
+            .map(|c| match c {
+                ConstValue::Float(x) => Some(*x),
+                ConstValue::Int(x) => Some(*x as f64),
+                ConstValue::Bool(_) => None,
+            })
+            .collect()
+    };
+    match f.desc().fold {
+        Fold::Never => None,
+        Fold::Float(g) => finite_f32(g(&floats()?)?),
+        Fold::IntOrFloat(int, g) => {
+            let ints: Option<Vec<i64>> = v
+                .iter()
+                .map(|c| match c {
+                    ConstValue::Int(a) => Some(*a),
+                    ConstValue::Float(_) | ConstValue::Bool(_) => None,
+                })
+                .collect();
+            match ints {
+                Some(a) => int(&a).map(ConstValue::Int),
+                None => finite_f32(g(&floats()?)?),
+            }
+        }
+        Fold::Custom(g) => g(v),
     }
+}
+
+/// `x` rounded to f32, if finite.
+fn finite_f32(x: f64) -> Option<ConstValue> {
+    x.is_finite().then_some(ConstValue::Float(x as f32 as f64))
+}
+
+/// WGSL's `round`: half to even.
+fn round_half_even(x: f64) -> f64 {
+    if (x - x.trunc()).abs() == 0.5 {
+        2.0 * (x / 2.0).round()
+    } else {
+        x.round()
+    }
+}
+
+/// WGSL's `sign`: -1, 0 or 1.
+fn sign(x: f64) -> f64 {
+    if x == 0.0 { 0.0 } else { x.signum() }
+}
+
+/// Range of a vector constructor: the hull of its components.
+fn components(v: &[Interval]) -> Interval {
+    v.iter().copied().reduce(Interval::hull).unwrap_or(Interval::UNBOUNDED)
+}
+
+/// Range of sin(x + phase) over x.
+fn trig(x: Interval, phase: f64) -> Interval {
+    if !x.is_finite() || x.hi - x.lo >= 2.0 * PI {
+        return Interval { lo: -1.0, hi: 1.0 };
+    }
+    let (a, b) = (x.lo + phase, x.hi + phase);
+    let mut vals = vec![a.sin(), b.sin()];
+    // extrema at pi/2 + n pi
+    let mut n = ((a - PI / 2.0) / PI).ceil();
+    while PI / 2.0 + n * PI <= b {
+        vals.push((PI / 2.0 + n * PI).sin());
+        n += 1.0;
+    }
+    Interval::of(&vals)
 }
 
 fn list(args: &[Ty]) -> String {
     args.iter().map(|t| format!("`{t}`")).collect::<Vec<_>>().join(", ")
 }
 
-/// How a Shade pass reads a channel (DESIGN.md section 2: filtered lookups into channels).
+/// How a Shade pass reads a channel (filtered lookups into channels). Everything about one
+/// lookup function is its [`SampleDesc`] (see [`SampleFn::desc`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SampleFn {
     /// `sample(ch)`: hardware-filtered (bilinear, trilinear over mips) at `uv`.
@@ -479,8 +1164,53 @@ pub enum SampleFn {
     Box,
 }
 
+/// Everything the compiler knows about one lookup function.
+#[derive(Debug)]
+pub struct SampleDesc {
+    /// The name on a channel (`sample`).
+    pub name: &'static str,
+    /// The name on an expansion (`expand`).
+    pub expand_name: &'static str,
+    /// Types of the arguments after the channel or expansion name.
+    pub extra_args: &'static [Ty],
+    pub wgsl: SampleWgsl,
+}
+
+/// How a lookup is written in WGSL.
+#[derive(Clone, Copy)]
+pub enum SampleWgsl {
+    /// A texture read: `read(texture binding, layer, extra argument expressions)`; the
+    /// module binds the filtering sampler `smp` when `sampler` is set.
+    Texture {
+        sampler: bool,
+        read: fn(&str, u32, &[String]) -> String,
+    },
+    /// A box sum over a summed-area table, through the module's `box_<table>` function.
+    SummedAreaTable,
+}
+
+impl fmt::Debug for SampleWgsl {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SampleWgsl::Texture { sampler, .. } => f.debug_struct("Texture").field("sampler", sampler).finish_non_exhaustive(),
+            SampleWgsl::SummedAreaTable => f.write_str("SummedAreaTable"),
+        }
+    }
+}
+
 impl SampleFn {
-    /// Every lookup function of the language.
+    pub const ALL: [SampleFn; 7] = [
+        SampleFn::Sample,
+        SampleFn::SampleLod,
+        SampleFn::SampleWidth,
+        SampleFn::Nearest,
+        SampleFn::Fetch,
+        SampleFn::Box,
+        SampleFn::NearestAt,
+    ];
+
+    /// Every lookup function of the language (the names of [`SampleFn::ALL`], then their
+    /// `expand` forms).
     pub const NAMES: [&'static str; 14] = [
         "sample",
         "sample_lod",
@@ -498,53 +1228,114 @@ impl SampleFn {
         "expand_nearest_at",
     ];
 
+    /// The descriptor: adding a lookup means adding a variant, its entries in
+    /// [`SampleFn::ALL`] and [`SampleFn::NAMES`] and its arm here.
+    pub fn desc(self) -> &'static SampleDesc {
+        use SampleWgsl::{SummedAreaTable, Texture};
+        match self {
+            SampleFn::Sample => &SampleDesc {
+                name: "sample",
+                expand_name: "expand",
+                extra_args: &[],
+                wgsl: Texture {
+                    sampler: true,
+                    read: |tex, layer, _| format!("textureSample({tex}, smp, in_uv, {layer}i)"),
+                },
+            },
+            SampleFn::SampleLod => &SampleDesc {
+                name: "sample_lod",
+                expand_name: "expand_lod",
+                extra_args: &[Ty::F32],
+                wgsl: Texture {
+                    sampler: true,
+                    read: |tex, layer, a| format!("textureSampleLevel({tex}, smp, in_uv, {layer}i, {})", a[0]),
+                },
+            },
+            SampleFn::SampleWidth => &SampleDesc {
+                name: "sample_width",
+                expand_name: "expand_width",
+                extra_args: &[Ty::F32],
+                wgsl: Texture {
+                    sampler: true,
+                    read: |tex, layer, a| {
+                        format!(
+                            "textureSampleLevel({tex}, smp, in_uv, {layer}i, log2(max({} * frame.shadow_size.x, 1.0)))",
+                            a[0]
+                        )
+                    },
+                },
+            },
+            SampleFn::Nearest => &SampleDesc {
+                name: "nearest",
+                expand_name: "expand_nearest",
+                extra_args: &[],
+                wgsl: Texture {
+                    sampler: false,
+                    read: |tex, layer, _| {
+                        format!(
+                            "textureLoad({tex}, clamp(vec2<i32>(floor(in_uv * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)"
+                        )
+                    },
+                },
+            },
+            SampleFn::Fetch => &SampleDesc {
+                name: "fetch",
+                expand_name: "expand_fetch",
+                extra_args: &[Ty::I32, Ty::I32],
+                wgsl: Texture {
+                    sampler: false,
+                    read: |tex, layer, a| {
+                        format!(
+                            "textureLoad({tex}, clamp(in_base + vec2<i32>({}, {}), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)",
+                            a[0], a[1]
+                        )
+                    },
+                },
+            },
+            SampleFn::NearestAt => &SampleDesc {
+                name: "nearest_at",
+                expand_name: "expand_nearest_at",
+                extra_args: &[Ty::F32, Ty::F32],
+                wgsl: Texture {
+                    sampler: false,
+                    read: |tex, layer, a| {
+                        format!(
+                            "textureLoad({tex}, clamp(vec2<i32>(floor((in_uv + vec2<f32>({}, {})) * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)",
+                            a[0], a[1]
+                        )
+                    },
+                },
+            },
+            SampleFn::Box => &SampleDesc {
+                name: "sample_box",
+                expand_name: "expand_box",
+                extra_args: &[Ty::F32, Ty::F32],
+                wgsl: SummedAreaTable,
+            },
+        }
+    }
+
+    /// The lookup a name denotes, and whether it is the `expand` form.
     pub fn from_name(n: &str) -> Option<(SampleFn, bool)> {
-        Some(match n {
-            "sample" => (SampleFn::Sample, false),
-            "sample_lod" => (SampleFn::SampleLod, false),
-            "sample_width" => (SampleFn::SampleWidth, false),
-            "nearest" => (SampleFn::Nearest, false),
-            "fetch" => (SampleFn::Fetch, false),
-            "sample_box" => (SampleFn::Box, false),
-            "nearest_at" => (SampleFn::NearestAt, false),
-            "expand_nearest_at" => (SampleFn::NearestAt, true),
-            "expand_box" => (SampleFn::Box, true),
-            "expand" => (SampleFn::Sample, true),
-            "expand_lod" => (SampleFn::SampleLod, true),
-            "expand_width" => (SampleFn::SampleWidth, true),
-            "expand_nearest" => (SampleFn::Nearest, true),
-            "expand_fetch" => (SampleFn::Fetch, true),
-            _ => return None,
+        SampleFn::ALL.into_iter().find_map(|s| {
+            let d = s.desc();
+            if d.name == n {
+                Some((s, false))
+            } else if d.expand_name == n {
+                Some((s, true))
+            } else {
+                None
+            }
         })
     }
 
     /// Arguments after the channel or expansion name.
     pub fn extra_args(self) -> &'static [Ty] {
-        match self {
-            SampleFn::Sample | SampleFn::Nearest => &[],
-            SampleFn::SampleLod | SampleFn::SampleWidth => &[Ty::F32],
-            SampleFn::Fetch => &[Ty::I32, Ty::I32],
-            SampleFn::Box | SampleFn::NearestAt => &[Ty::F32, Ty::F32],
-        }
+        self.desc().extra_args
     }
 
     pub fn name(self, expand: bool) -> &'static str {
-        match (self, expand) {
-            (SampleFn::Sample, false) => "sample",
-            (SampleFn::SampleLod, false) => "sample_lod",
-            (SampleFn::SampleWidth, false) => "sample_width",
-            (SampleFn::SampleWidth, true) => "expand_width",
-            (SampleFn::Nearest, false) => "nearest",
-            (SampleFn::Fetch, false) => "fetch",
-            (SampleFn::Sample, true) => "expand",
-            (SampleFn::SampleLod, true) => "expand_lod",
-            (SampleFn::Nearest, true) => "expand_nearest",
-            (SampleFn::Fetch, true) => "expand_fetch",
-            (SampleFn::Box, false) => "sample_box",
-            (SampleFn::Box, true) => "expand_box",
-            (SampleFn::NearestAt, false) => "nearest_at",
-            (SampleFn::NearestAt, true) => "expand_nearest_at",
-        }
+        if expand { self.desc().expand_name } else { self.desc().name }
     }
 }
 
@@ -555,4 +1346,270 @@ pub fn is_reserved(name: &str) -> bool {
         || Func::from_name(name).is_some()
         || SampleFn::from_name(name).is_some()
         || matches!(name, "let" | "sum" | "in" | "true" | "false")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_name_round_trips_through_lookup() {
+        for (i, f) in Func::ALL.into_iter().enumerate() {
+            assert_eq!(f as usize, i, "Func::ALL out of declaration order at {f:?}");
+            assert_eq!(Func::from_name(f.name()), Some(f));
+            assert!(is_reserved(f.name()));
+        }
+        assert_eq!(Func::UvWidth as usize + 1, Func::ALL.len(), "a Func is missing from Func::ALL");
+        for (i, input) in Input::ALL.into_iter().enumerate() {
+            assert_eq!(input as usize, i, "Input::ALL out of declaration order at {input:?}");
+            assert_eq!(Input::from_name(input.name()), Some(input));
+            assert!(is_reserved(input.name()));
+        }
+        assert_eq!(
+            Input::LightSpread as usize + 1,
+            Input::ALL.len(),
+            "an Input is missing from Input::ALL"
+        );
+        let mut names: Vec<&str> = SampleFn::ALL.iter().map(|s| s.name(false)).collect();
+        names.extend(SampleFn::ALL.iter().map(|s| s.name(true)));
+        assert_eq!(names, SampleFn::NAMES, "SampleFn::NAMES disagrees with the descriptors");
+        for s in SampleFn::ALL {
+            for expand in [false, true] {
+                assert_eq!(SampleFn::from_name(s.name(expand)), Some((s, expand)));
+                assert!(is_reserved(s.name(expand)));
+            }
+        }
+        let mut order: Vec<usize> = SampleFn::ALL.iter().map(|s| *s as usize).collect();
+        order.sort_unstable();
+        assert_eq!(order, (0..SampleFn::ALL.len()).collect::<Vec<_>>());
+        assert_eq!(
+            SampleFn::Box as usize + 1,
+            SampleFn::ALL.len(),
+            "a SampleFn is missing from SampleFn::ALL"
+        );
+        // names are unique across all builtins
+        let mut all: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
+        all.extend(Input::ALL.iter().map(|i| i.name()));
+        all.extend(SampleFn::NAMES);
+        let n = all.len();
+        all.sort_unstable();
+        all.dedup();
+        assert_eq!(all.len(), n, "two builtins share a name");
+    }
+
+    /// Argument types a call may take: every uniform choice the signature accepts.
+    fn signatures(f: Func) -> Vec<Vec<Ty>> {
+        let n = f.arity();
+        let mut out: Vec<Vec<Ty>> = [Ty::F32, Ty::Vec(2), Ty::Vec(3), Ty::Vec(4), Ty::I32, Ty::Bool]
+            .into_iter()
+            .map(|t| vec![t; n])
+            .collect();
+        if n == 3 {
+            for t in [Ty::F32, Ty::Vec(2), Ty::I32] {
+                out.push(vec![t, t, Ty::Bool]);
+            }
+        }
+        out.retain(|args| f.result(args).is_ok());
+        out
+    }
+
+    #[test]
+    fn every_function_has_a_signature_of_its_arity() {
+        for f in Func::ALL {
+            assert!(!signatures(f).is_empty(), "`{}` accepts no argument types", f.name());
+            let wrong = vec![Ty::F32; f.arity() + 1];
+            assert!(f.result(&wrong).is_err());
+        }
+    }
+
+    /// Folding sample arguments gives a value inside the range rule's interval of any
+    /// argument intervals that hold them.
+    #[test]
+    fn folding_lies_inside_the_range_rule() {
+        let boxes: [(f64, f64); 11] = [
+            // f32 values, so the sample points are the ends themselves
+            (-3.0, -0.5),
+            (-1.0, 1.0),
+            (0.0, 1.0),
+            (0.25, 4.0),
+            (1.0, 100.0),
+            (-100.0, 100.0),
+            (0.0, 0.0),
+            (0.5, 0.5),
+            (2.5, 2.5),
+            (-2.5, -2.5),
+            (2.75, 2.75),
+        ];
+        let mut checked = 0;
+        let mut failures = Vec::new();
+        for f in Func::ALL {
+            let d = f.desc();
+            if matches!(d.fold, Fold::Never) {
+                continue;
+            }
+            let scalar: Vec<Vec<Ty>> = signatures(f)
+                .into_iter()
+                .filter(|s| !s.iter().any(|t| matches!(t, Ty::Vec(_))))
+                .collect();
+            for sig in scalar {
+                // every combination of argument boxes
+                let k = sig.len();
+                for combo in 0..boxes.len().pow(k as u32) {
+                    let pick: Vec<(f64, f64)> = (0..k).map(|i| boxes[combo / boxes.len().pow(i as u32) % boxes.len()]).collect();
+                    let ivs: Vec<Interval> = pick
+                        .iter()
+                        .zip(&sig)
+                        .map(|(&(lo, hi), t)| if *t == Ty::Bool { Interval::UNIT } else { Interval { lo, hi } })
+                        .collect();
+                    let range = (d.range)(&ivs);
+                    // sample points: ends and middle of each box (integers: rounded inward)
+                    for p in 0..3usize.pow(k as u32) {
+                        let args: Option<Vec<ConstValue>> = (0..k)
+                            .map(|i| {
+                                let (lo, hi) = pick[i];
+                                let x = [lo, hi, 0.5 * (lo + hi)][p / 3usize.pow(i as u32) % 3];
+                                match sig[i] {
+                                    // integers: the point rounded, if still inside the box
+                                    Ty::I32 => (lo..=hi).contains(&x.round()).then_some(ConstValue::Int(x.round() as i64)),
+                                    Ty::Bool => Some(ConstValue::Bool(x > lo)),
+                                    Ty::F32 | Ty::Vec(_) | Ty::AbstractInt => Some(ConstValue::Float(x as f32 as f64)),
+                                }
+                            })
+                            .collect();
+                        let Some(args) = args else { continue };
+                        let Some(v) = fold_call(f, &args) else { continue };
+                        let r = v.as_f64();
+                        // the fold rounds to f32, the range rule is exact
+                        let tol = r.abs().max(1.0) * f32::EPSILON as f64;
+                        let inside = range.lo - tol <= r && r <= range.hi + tol;
+                        if !inside && !failures.iter().any(|m: &String| m.starts_with(d.name)) {
+                            failures.push(format!(
+                                "{}({args:?}) folds to {r}, outside its range rule's {range} for argument ranges {ivs:?}",
+                                d.name
+                            ));
+                        }
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
+        assert!(checked > 10_000, "only {checked} folds checked");
+    }
+
+    /// docs/language.md lists every function, input, lookup and light kind, inputs with
+    /// their type and side.
+    #[test]
+    fn the_language_reference_lists_every_builtin() {
+        let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/language.md")).unwrap();
+        let section = |from: &str, to: &str| -> &str {
+            let a = doc.find(from).unwrap_or_else(|| panic!("no `{from}` in docs/language.md"));
+            let b = doc[a..].find(to).map_or(doc.len(), |b| a + b);
+            &doc[a..b]
+        };
+        let functions = section("### 8.6 Functions", "### 8.7");
+        for f in Func::ALL {
+            assert!(
+                functions.contains(&format!("`{}(", f.name())),
+                "docs/language.md 8.6 lacks `{}`",
+                f.name()
+            );
+        }
+        let lookups = section("### 8.7 Sampling functions", "### 8.8");
+        for name in SampleFn::NAMES {
+            assert!(lookups.contains(&format!("`{name}(")), "docs/language.md 8.7 lacks `{name}`");
+        }
+        let inputs = section("**Built-in inputs.**", "**Channels**");
+        for i in Input::ALL {
+            let d = i.desc();
+            let ty = match d.ty {
+                Ty::Vec(n) => format!("vec{n}"),
+                t @ (Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt) => t.to_string(),
+            };
+            let side = match d.side {
+                Side::Receiver => "receiver",
+                Side::Map => "map",
+                Side::Both => "both",
+            };
+            let row = format!("| `{}` | {ty} | {side} |", d.name);
+            assert!(inputs.contains(&row), "docs/language.md 8.5 lacks the row `{row}`");
+        }
+        let lights = section("## 4. Light models", "## 5.");
+        for k in crate::front::ast::LightKind::ALL {
+            assert!(
+                lights.contains(&format!("| `{}", k.name())),
+                "docs/language.md 4 lacks `{}`",
+                k.name()
+            );
+        }
+    }
+
+    /// A module that calls every function (with every argument type its signature
+    /// accepts), reads every input and every texture lookup, written by the code
+    /// generator's own emission, must pass naga's validation.
+    #[test]
+    fn every_builtin_emits_valid_wgsl() {
+        let mut body = String::new();
+        let arg = |t: Ty| match t {
+            Ty::F32 | Ty::AbstractInt => "a_f32".to_string(),
+            Ty::I32 => "a_i32".to_string(),
+            Ty::Bool => "a_bool".to_string(),
+            Ty::Vec(n) => format!("a_vec{n}"),
+        };
+        for i in Input::ALL {
+            let d = i.desc();
+            if d.side == Side::Receiver {
+                body.push_str(&format!("    let {}: {} = {};\n", d.wgsl, d.ty.wgsl(), arg(d.ty)));
+            }
+        }
+        for (k, i) in Input::ALL.into_iter().enumerate() {
+            body.push_str(&format!("    let input{k}: {} = {};\n", i.ty().wgsl(), i.desc().wgsl));
+        }
+        let mut k = 0;
+        for f in Func::ALL {
+            for sig in signatures(f) {
+                let ty = f.result(&sig).unwrap();
+                let args: Vec<String> = sig.iter().map(|t| arg(*t)).collect();
+                body.push_str(&format!(
+                    "    let call{k}: {} = {};\n",
+                    ty.wgsl(),
+                    crate::back::wgsl::call(f, &args)
+                ));
+                k += 1;
+            }
+        }
+        for (k, s) in SampleFn::ALL.into_iter().enumerate() {
+            let d = s.desc();
+            match d.wgsl {
+                SampleWgsl::Texture { read, .. } => {
+                    let args: Vec<String> = d.extra_args.iter().map(|t| arg(*t)).collect();
+                    body.push_str(&format!("    let lookup{k}: vec4<f32> = {};\n", read("t_x", 1, &args)));
+                }
+                // the box function is written per table by the code generator
+                SampleWgsl::SummedAreaTable => {}
+            }
+        }
+        let module = format!(
+            "{}@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(2) var smp: sampler;
+@group(1) @binding(0) var t_x: texture_2d_array<f32>;
+
+@fragment
+fn fs_main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {{
+    let a_f32 = frame.shadow_size.z + pos.x;
+    let a_vec2 = frame.shadow_size.xy;
+    let a_vec3 = frame.shadow_size.xyz;
+    let a_vec4 = frame.shadow_size;
+    let a_i32 = i32(frame.shadow_size.x);
+    let a_bool = frame.shadow_size.x > 1.0;
+    let in_base = vec2<i32>(floor(a_vec2));
+{body}    return vec4<f32>(0.0);
+}}
+",
+            sshc_graph::FRAME_WGSL
+        );
+        if let Err(e) = crate::back::validate(&module) {
+            panic!("{e}\n{module}");
+        }
+    }
 }

@@ -3,24 +3,11 @@
 //! of every step, counted on the naga IR).
 
 use crate::back::wgsl::{Output, texture_format};
-use crate::front::ast::{ConstValue, LightKind, LightView, ScalarTy};
+use crate::front::ast::{ConstValue, LightView, ScalarTy};
 use crate::ir::*;
 use crate::pack::{mip_source, table_source};
-use sshc_graph::{self as graph, ChannelDecl, Extent, LightModel, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
+use sshc_graph::{self as graph, ChannelDecl, Extent, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
 use std::fmt::Write as _;
-
-fn light(l: LightKind) -> LightModel {
-    match l {
-        LightKind::Any => LightModel::Any,
-        LightKind::Point => LightModel::Point,
-        LightKind::Directional => LightModel::Directional,
-        LightKind::Sphere => LightModel::Sphere,
-        LightKind::Disk => LightModel::Disk,
-        LightKind::Rectangle => LightModel::Rectangle,
-        LightKind::Segment { samples } => LightModel::Segment { samples },
-        LightKind::DistantDisk => LightModel::DistantDisk,
-    }
-}
 
 fn kind(p: &IrPass) -> graph::PassKind {
     match p.kind {
@@ -45,7 +32,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
         };
         let value = match p.value {
             ConstValue::Bool(b) => b as i32 as f64,
-            v => v.as_f64(),
+            v @ (ConstValue::Int(_) | ConstValue::Float(_)) => v.as_f64(),
         };
         let off = if p.uniform {
             offset += 4;
@@ -129,7 +116,13 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
                     view: LightView::PerSample,
                     ..
                 } => Views::PerLightSample,
-                _ => Views::LightCenter,
+                IrPassKind::Depth { .. }
+                | IrPassKind::Map
+                | IrPassKind::Filter { .. }
+                | IrPassKind::Mipmap { .. }
+                | IrPassKind::SummedArea
+                | IrPassKind::Geometry { .. }
+                | IrPassKind::Shade { .. } => Views::LightCenter,
             },
             shader: m.file.clone(),
             steps: m.steps.clone(),
@@ -140,7 +133,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
         technique: ir.technique.clone(),
         title: ir.title.clone(),
         paper: ir.paper.clone(),
-        lights: ir.lights.iter().map(|l| light(*l)).collect(),
+        lights: ir.lights.clone(),
         params,
         params_size,
         textures,

@@ -4,7 +4,7 @@
 //! nodes are added).
 
 use crate::builtins::{Func, Input, SampleFn, Ty};
-use crate::front::ast::{ConstValue, LightKind, LightView, Precision, Primitive, Reduce, Resolve, ScalarTy};
+use crate::front::ast::{ConstValue, LightModel, LightView, Precision, Primitive, Reduce, Resolve, ScalarTy};
 use crate::front::expr::{BinOp, UnOp, fmt_float};
 use crate::span::Span;
 use std::collections::HashMap;
@@ -83,7 +83,14 @@ impl Arena {
             Node::F32(b) => Some(ConstValue::Float(f32::from_bits(*b) as f64)),
             Node::I32(v) => Some(ConstValue::Int(*v as i64)),
             Node::Bool(v) => Some(ConstValue::Bool(*v)),
-            _ => None,
+            Node::Param(_)
+            | Node::Input(_)
+            | Node::Channel(_)
+            | Node::Sample { .. }
+            | Node::Unary(..)
+            | Node::Binary(..)
+            | Node::Call(..)
+            | Node::Swizzle(..) => None,
         }
     }
 
@@ -143,7 +150,19 @@ impl Arena {
                         BinOp::Add | BinOp::Sub if is(y, 0.0) => return Some(*a),
                         BinOp::Mul if is(x, 1.0) => return Some(*b),
                         BinOp::Mul | BinOp::Div if is(y, 1.0) => return Some(*a),
-                        _ => {}
+                        BinOp::Add
+                        | BinOp::Sub
+                        | BinOp::Mul
+                        | BinOp::Div
+                        | BinOp::Rem
+                        | BinOp::Lt
+                        | BinOp::Le
+                        | BinOp::Gt
+                        | BinOp::Ge
+                        | BinOp::Eq
+                        | BinOp::Ne
+                        | BinOp::And
+                        | BinOp::Or => {}
                     }
                 }
                 // (c1 * x) / c2 -> (c1 / c2) * x
@@ -175,7 +194,7 @@ impl Arena {
                         BinOp::Ge => Bool(x >= y),
                         BinOp::Eq => Bool(x == y),
                         BinOp::Ne => Bool(x != y),
-                        _ => return None,
+                        BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
                     },
                     (Int(x), Int(y)) => match op {
                         BinOp::Add => Int(x.checked_add(y)?),
@@ -189,14 +208,16 @@ impl Arena {
                         BinOp::Ge => Bool(x >= y),
                         BinOp::Eq => Bool(x == y),
                         BinOp::Ne => Bool(x != y),
-                        _ => return None,
+                        BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
                     },
                     (Bool(x), Bool(y)) => match op {
                         BinOp::And => Bool(x && y),
                         BinOp::Or => Bool(x || y),
                         BinOp::Eq => Bool(x == y),
                         BinOp::Ne => Bool(x != y),
-                        _ => return None,
+                        BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem | BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge => {
+                            return None;
+                        }
                     },
                     _ => return None,
                 };
@@ -205,7 +226,7 @@ impl Arena {
             Node::Call(Func::Select, args) => match self.as_const(args[2])? {
                 Bool(true) => Some(args[1]),
                 Bool(false) => Some(args[0]),
-                _ => None,
+                Int(_) | Float(_) => None,
             },
             Node::Call(f, args) => {
                 if ty != Ty::F32 && ty != Ty::I32 {
@@ -215,7 +236,14 @@ impl Arena {
                 let v = eval_call(*f, &vals)?;
                 self.constant(v, ty, span)
             }
-            _ => None,
+            Node::F32(_)
+            | Node::I32(_)
+            | Node::Bool(_)
+            | Node::Param(_)
+            | Node::Input(_)
+            | Node::Channel(_)
+            | Node::Sample { .. }
+            | Node::Swizzle(..) => None,
         }
     }
 
@@ -255,7 +283,7 @@ impl Arena {
             Node::Unary(_, a) | Node::Swizzle(a, _) => vec![*a],
             Node::Binary(_, a, b) => vec![*a, *b],
             Node::Call(_, args) | Node::Sample { args, .. } => args.clone(),
-            _ => vec![],
+            Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(_) | Node::Channel(_) => vec![],
         }
     }
 
@@ -391,7 +419,9 @@ impl Arena {
                         .collect();
                     eval_call_f64(*f, &args).unwrap_or(f64::NAN)
                 }
-                other => leaf(other).unwrap_or(f64::NAN),
+                other @ (Node::Param(_) | Node::Input(_) | Node::Channel(_) | Node::Sample { .. } | Node::Swizzle(..)) => {
+                    leaf(other).unwrap_or(f64::NAN)
+                }
             };
             vals.insert(n, v);
         }
@@ -407,103 +437,10 @@ fn eval_call_f64(f: Func, v: &[ConstValue]) -> Option<f64> {
     }
 }
 
-/// Evaluate a pure function on constants with f32 results rounded as the GPU would store them.
+/// Evaluate a pure function on constants with f32 results rounded as the GPU would store
+/// them (the function's [`crate::builtins::Fold`] rule).
 pub fn eval_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
-    use ConstValue::*;
-    let fl = |i: usize| -> Option<f64> {
-        match v.get(i)? {
-            Float(x) => Some(*x),
-            Int(x) => Some(*x as f64),
-            Bool(_) => None,
-        }
-    };
-    if let [Int(a)] = v {
-        match f {
-            Func::Abs => return Some(Int(a.checked_abs()?)),
-            Func::Sign => return Some(Int(a.signum())),
-            Func::ToI32 => return Some(Int(*a)),
-            Func::ToF32 => return Some(Float(*a as f64)),
-            _ => {}
-        }
-    }
-    if let [Int(a), Int(b)] = v {
-        match f {
-            Func::Min => return Some(Int(*a.min(b))),
-            Func::Max => return Some(Int(*a.max(b))),
-            _ => {}
-        }
-    }
-    if let [Int(x), Int(lo), Int(hi)] = v
-        && f == Func::Clamp
-    {
-        return Some(Int(*x.max(lo).min(hi)));
-    }
-    let r = match f {
-        Func::ToF32 => match v[0] {
-            Bool(b) => b as i64 as f64,
-            _ => fl(0)?,
-        },
-        Func::ToI32 => match v[0] {
-            Float(x) if x.is_finite() => return Some(Int(x.trunc().clamp(i32::MIN as f64, i32::MAX as f64) as i64)),
-            Bool(b) => return Some(Int(b as i64)),
-            _ => return None,
-        },
-        Func::Abs => fl(0)?.abs(),
-        Func::Exp => fl(0)?.exp(),
-        Func::Exp2 => fl(0)?.exp2(),
-        Func::Log if fl(0)? > 0.0 => fl(0)?.ln(),
-        Func::Log2 if fl(0)? > 0.0 => fl(0)?.log2(),
-        Func::Sqrt if fl(0)? >= 0.0 => fl(0)?.sqrt(),
-        Func::InverseSqrt if fl(0)? > 0.0 => 1.0 / fl(0)?.sqrt(),
-        Func::Sin => fl(0)?.sin(),
-        Func::Cos => fl(0)?.cos(),
-        Func::Tan => fl(0)?.tan(),
-        Func::Asin if fl(0)?.abs() <= 1.0 => fl(0)?.asin(),
-        Func::Acos if fl(0)?.abs() <= 1.0 => fl(0)?.acos(),
-        Func::Atan => fl(0)?.atan(),
-        Func::Floor => fl(0)?.floor(),
-        Func::Ceil => fl(0)?.ceil(),
-        Func::Fract => fl(0)? - fl(0)?.floor(),
-        Func::Round => {
-            let x = fl(0)?;
-            let r = x.round();
-            // WGSL rounds half to even.
-            if (x - x.trunc()).abs() == 0.5 { 2.0 * (x / 2.0).round() } else { r }
-        }
-        Func::Trunc => fl(0)?.trunc(),
-        Func::Sign => fl(0)?.signum() * (fl(0)? != 0.0) as i32 as f64,
-        Func::Saturate => fl(0)?.clamp(0.0, 1.0),
-        Func::Pow if fl(0)? >= 0.0 => fl(0)?.powf(fl(1)?),
-        Func::Min => fl(0)?.min(fl(1)?),
-        Func::Max => fl(0)?.max(fl(1)?),
-        Func::Atan2 => fl(0)?.atan2(fl(1)?),
-        Func::Step => {
-            if fl(1)? >= fl(0)? {
-                1.0
-            } else {
-                0.0
-            }
-        }
-        Func::Clamp if fl(1)? <= fl(2)? => fl(0)?.max(fl(1)?).min(fl(2)?),
-        Func::Mix => fl(0)? * (1.0 - fl(2)?) + fl(1)? * fl(2)?,
-        Func::Smoothstep if fl(0)? != fl(1)? => {
-            let t = ((fl(2)? - fl(0)?) / (fl(1)? - fl(0)?)).clamp(0.0, 1.0);
-            t * t * (3.0 - 2.0 * t)
-        }
-        Func::Linstep if fl(0)? != fl(1)? => ((fl(2)? - fl(0)?) / (fl(1)? - fl(0)?)).clamp(0.0, 1.0),
-        Func::DivOr => {
-            if fl(1)?.abs() >= fl(2)? && fl(1)? != 0.0 {
-                fl(0)? / fl(1)?
-            } else {
-                fl(3)?
-            }
-        }
-        _ => return None,
-    };
-    if !r.is_finite() {
-        return None;
-    }
-    Some(Float(r as f32 as f64))
+    crate::builtins::fold_call(f, v)
 }
 
 #[derive(Clone, Debug)]
@@ -670,7 +607,7 @@ impl IrKernel {
                 let r = (*n as i64 - 1) / 2;
                 (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect()
             }
-            _ => return None,
+            IrKernel::Max(_) | IrKernel::Min(_) | IrKernel::LoG => return None,
         };
         let s: f64 = w.iter().sum();
         Some(w.into_iter().map(|x| x / s).collect())
@@ -733,7 +670,7 @@ pub struct Ir {
     pub technique: String,
     pub title: Option<String>,
     pub paper: Option<String>,
-    pub lights: Vec<LightKind>,
+    pub lights: Vec<LightModel>,
     pub params: Vec<IrParam>,
     pub channels: Vec<IrChannel>,
     pub expansions: Vec<IrExpansion>,
@@ -831,7 +768,7 @@ impl fmt::Display for Ir {
                 IrPassKind::Filter { kernel } => write!(f, " kernel {kernel:?}")?,
                 IrPassKind::Mipmap { reduce } => write!(f, " reduce {reduce:?}")?,
                 IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self)))?,
-                _ => {}
+                IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::SummedArea | IrPassKind::Geometry { .. } => {}
             }
             writeln!(f)?;
         }

@@ -295,21 +295,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
             .collect();
         let ty = f.result(&tys).map_err(|m| Self::err(span, m, "here"))?;
         let all_abs = lowered.iter().all(|l| l.1);
-        let arg_ty = |i: usize| -> Ty {
-            match f {
-                Func::ToF32 | Func::ToI32 => Ty::I32,
-                Func::Select if i == 2 => Ty::Bool,
-                Func::Select | Func::Min | Func::Max | Func::Clamp | Func::Abs | Func::Sign => ty,
-                Func::Length | Func::Dot => tys.iter().copied().find(|t| matches!(t, Ty::Vec(_))).unwrap_or(Ty::F32),
-                _ => {
-                    if matches!(ty, Ty::Vec(_)) && !matches!(f, Func::Vec2 | Func::Vec3 | Func::Vec4) {
-                        ty
-                    } else {
-                        Ty::F32
-                    }
-                }
-            }
-        };
+        let arg_ty = |i: usize| f.arg_ty(i, &tys, ty);
         let hs: Vec<H> = lowered
             .into_iter()
             .enumerate()
@@ -324,7 +310,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
             })
             .collect();
         // min/max/clamp/abs/sign of abstract integers stay abstract
-        let abs = all_abs && matches!(f, Func::Min | Func::Max | Func::Clamp | Func::Abs | Func::Sign);
+        let abs = all_abs && f.keeps_abstract();
         let ty = if ty == Ty::AbstractInt { Ty::I32 } else { ty };
         Ok((self.arena.add(Node::Call(f, hs), ty, span), abs))
     }

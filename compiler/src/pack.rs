@@ -270,7 +270,12 @@ pub fn mip_source(ir: &Ir, r: ResId) -> Option<ResId> {
     let w = &ir.passes[ir.resources[r].writer];
     match w.kind {
         IrPassKind::Mipmap { .. } => Some(mip_source(ir, w.reads[0]).unwrap_or(w.reads[0])),
-        _ => None,
+        IrPassKind::Depth { .. }
+        | IrPassKind::Map
+        | IrPassKind::Filter { .. }
+        | IrPassKind::SummedArea
+        | IrPassKind::Geometry { .. }
+        | IrPassKind::Shade { .. } => None,
     }
 }
 
@@ -279,7 +284,12 @@ pub fn table_source(ir: &Ir, r: ResId) -> Option<ResId> {
     let w = &ir.passes[ir.resources[r].writer];
     match w.kind {
         IrPassKind::SummedArea => Some(w.reads[0]),
-        _ => None,
+        IrPassKind::Depth { .. }
+        | IrPassKind::Map
+        | IrPassKind::Filter { .. }
+        | IrPassKind::Mipmap { .. }
+        | IrPassKind::Geometry { .. }
+        | IrPassKind::Shade { .. } => None,
     }
 }
 

@@ -73,6 +73,63 @@ pub struct PassGraph {
     pub removed: Vec<String>,
 }
 
+/// The kinds of light. This is the one list: a technique's [`LightModel`] is `Any` or one
+/// of these (the compiler parses `light:` through [`LightKind::from_name`]), and a scene's
+/// light, which adds the geometry, says its kind with `Light::kind`. Adding a kind means
+/// a variant here, its entry in [`LightKind::ALL`], and the arms the compiler then asks
+/// for (names, [`LightModel`], the scene's geometry).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LightKind {
+    Point,
+    Directional,
+    Sphere,
+    Disk,
+    Rectangle,
+    /// A linear light; a technique renders one view per sample along it (Heidrich et al. 2000).
+    Segment,
+    /// A disk at infinity given by its angular diameter (Lawlor 2006).
+    DistantDisk,
+}
+
+impl LightKind {
+    pub const ALL: [LightKind; 7] = [
+        LightKind::Point,
+        LightKind::Directional,
+        LightKind::Sphere,
+        LightKind::Disk,
+        LightKind::Rectangle,
+        LightKind::Segment,
+        LightKind::DistantDisk,
+    ];
+
+    /// The name scene and technique files write.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightKind::Point => "Point",
+            LightKind::Directional => "Directional",
+            LightKind::Sphere => "Sphere",
+            LightKind::Disk => "Disk",
+            LightKind::Rectangle => "Rectangle",
+            LightKind::Segment => "Segment",
+            LightKind::DistantDisk => "DistantDisk",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<LightKind> {
+        LightKind::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// True for lights at infinity (orthographic light views).
+    pub fn is_distant(self) -> bool {
+        match self {
+            LightKind::Directional | LightKind::DistantDisk => true,
+            LightKind::Point | LightKind::Sphere | LightKind::Disk | LightKind::Rectangle | LightKind::Segment => false,
+        }
+    }
+}
+
+/// The light a technique assumes: any, or a [`LightKind`] (with the number of views
+/// along a segment light).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum LightModel {
     Any,
@@ -83,6 +140,41 @@ pub enum LightModel {
     Rectangle,
     Segment { samples: u32 },
     DistantDisk,
+}
+
+impl LightModel {
+    /// The kind assumed; `None` for `Any`.
+    pub fn kind(self) -> Option<LightKind> {
+        match self {
+            LightModel::Any => None,
+            LightModel::Point => Some(LightKind::Point),
+            LightModel::Directional => Some(LightKind::Directional),
+            LightModel::Sphere => Some(LightKind::Sphere),
+            LightModel::Disk => Some(LightKind::Disk),
+            LightModel::Rectangle => Some(LightKind::Rectangle),
+            LightModel::Segment { .. } => Some(LightKind::Segment),
+            LightModel::DistantDisk => Some(LightKind::DistantDisk),
+        }
+    }
+
+    /// The model assuming `kind`; `samples` is the number of views along a segment light
+    /// (ignored for the other kinds).
+    pub fn of(kind: LightKind, samples: u32) -> LightModel {
+        match kind {
+            LightKind::Point => LightModel::Point,
+            LightKind::Directional => LightModel::Directional,
+            LightKind::Sphere => LightModel::Sphere,
+            LightKind::Disk => LightModel::Disk,
+            LightKind::Rectangle => LightModel::Rectangle,
+            LightKind::Segment => LightModel::Segment { samples },
+            LightKind::DistantDisk => LightModel::DistantDisk,
+        }
+    }
+
+    /// Whether a technique assuming this model is meant for a light of `kind`.
+    pub fn accepts(self, kind: LightKind) -> bool {
+        self.kind().is_none_or(|k| k == kind)
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -423,6 +515,21 @@ mod tests {
             }],
             removed: vec![],
         }
+    }
+
+    #[test]
+    fn light_kinds_round_trip() {
+        for (i, k) in LightKind::ALL.into_iter().enumerate() {
+            assert_eq!(k as usize, i);
+            assert_eq!(LightKind::from_name(k.name()), Some(k));
+            let m = LightModel::of(k, 4);
+            assert_eq!(m.kind(), Some(k));
+            assert!(m.accepts(k) && LightModel::Any.accepts(k));
+            // the model's serialised name is the kind's
+            assert!(ron::to_string(&m).unwrap().starts_with(k.name()));
+        }
+        assert_eq!(LightKind::DistantDisk as usize + 1, LightKind::ALL.len());
+        assert_eq!(LightModel::Any.kind(), None);
     }
 
     #[test]

@@ -44,6 +44,8 @@ use std::path::{Component, Path, PathBuf};
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 
+use sshc_graph::LightKind;
+
 // ---------------------------------------------------------------------------------------
 // File schema
 // ---------------------------------------------------------------------------------------
@@ -757,22 +759,28 @@ pub(crate) fn any_perpendicular_up(dir: Vec3) -> Vec3 {
 // ---------------------------------------------------------------------------------------
 
 impl Light {
+    /// The light's kind (the schema's one list of kinds, shared with techniques'
+    /// light models).
+    pub fn kind(&self) -> LightKind {
+        match self {
+            Light::Point { .. } => LightKind::Point,
+            Light::Directional { .. } => LightKind::Directional,
+            Light::Sphere { .. } => LightKind::Sphere,
+            Light::Disk { .. } => LightKind::Disk,
+            Light::Rectangle { .. } => LightKind::Rectangle,
+            Light::Segment { .. } => LightKind::Segment,
+            Light::DistantDisk { .. } => LightKind::DistantDisk,
+        }
+    }
+
     /// The variant's name as written in a scene file.
     pub fn kind_name(&self) -> &'static str {
-        match self {
-            Light::Point { .. } => "Point",
-            Light::Directional { .. } => "Directional",
-            Light::Sphere { .. } => "Sphere",
-            Light::Disk { .. } => "Disk",
-            Light::Rectangle { .. } => "Rectangle",
-            Light::Segment { .. } => "Segment",
-            Light::DistantDisk { .. } => "DistantDisk",
-        }
+        self.kind().name()
     }
 
     /// True for lights at infinity (directional, distant disk).
     pub fn is_distant(&self) -> bool {
-        matches!(self, Light::Directional { .. } | Light::DistantDisk { .. })
+        self.kind().is_distant()
     }
 
     /// The centre of a light at a finite position (the midpoint of a segment); `None` for
@@ -790,7 +798,7 @@ impl Light {
     pub fn direction(&self) -> Option<Vec3> {
         match self {
             Light::Directional { direction } | Light::DistantDisk { direction, .. } => Some(direction.normalize_or(Vec3::Y)),
-            _ => None,
+            Light::Point { .. } | Light::Sphere { .. } | Light::Disk { .. } | Light::Rectangle { .. } | Light::Segment { .. } => None,
         }
     }
 
@@ -811,7 +819,12 @@ impl Light {
     pub fn angle(&self) -> f32 {
         match self {
             Light::DistantDisk { angle_degrees, .. } => angle_degrees.to_radians(),
-            _ => 0.0,
+            Light::Point { .. }
+            | Light::Directional { .. }
+            | Light::Sphere { .. }
+            | Light::Disk { .. }
+            | Light::Rectangle { .. }
+            | Light::Segment { .. } => 0.0,
         }
     }
 
@@ -825,7 +838,12 @@ impl Light {
                 1 => vec![(*a + *b) * 0.5],
                 _ => (0..n).map(|i| a.lerp(*b, i as f32 / (n - 1) as f32)).collect(),
             }),
-            _ => None,
+            Light::Point { .. }
+            | Light::Directional { .. }
+            | Light::Sphere { .. }
+            | Light::Disk { .. }
+            | Light::Rectangle { .. }
+            | Light::DistantDisk { .. } => None,
         }
     }
 
@@ -873,7 +891,7 @@ impl Light {
                     half_width * u_axis.dot(axis).abs() + half_height * w.dot(axis).abs()
                 }
                 Light::Segment { a, b } => 0.5 * (*b - *a).dot(axis).abs(),
-                _ => 0.0,
+                Light::Point { .. } | Light::Directional { .. } | Light::DistantDisk { .. } => 0.0,
             }
         };
         v.half_extents = Vec2::new(along(ax), along(ay));
@@ -1484,5 +1502,45 @@ fn place(mesh: &MeshData, object: &Object, triangles: &mut Vec<[Vec3; 3]>, norma
         }
         triangles.push(w);
         normals.push(n);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A scene file names a light by its kind's name, the name technique files use.
+    #[test]
+    fn light_variants_are_named_by_their_kind() {
+        let (p, d) = (Vec3::ONE, Vec3::Y);
+        let lights = [
+            Light::Point { position: p },
+            Light::Directional { direction: d },
+            Light::Sphere { center: p, radius: 1.0 },
+            Light::Disk {
+                center: p,
+                normal: d,
+                radius: 1.0,
+            },
+            Light::Rectangle {
+                center: p,
+                normal: d,
+                u_axis: Vec3::X,
+                half_width: 1.0,
+                half_height: 1.0,
+            },
+            Light::Segment { a: p, b: d },
+            Light::DistantDisk {
+                direction: d,
+                angle_degrees: 1.0,
+            },
+        ];
+        let kinds: Vec<LightKind> = lights.iter().map(Light::kind).collect();
+        assert_eq!(kinds, LightKind::ALL);
+        for l in &lights {
+            let ron = ron::to_string(l).unwrap();
+            assert!(ron.starts_with(&format!("{}(", l.kind_name())), "{ron}");
+            assert_eq!(l.is_distant(), l.direction().is_some());
+        }
     }
 }

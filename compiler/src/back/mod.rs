@@ -32,7 +32,37 @@ fn in_storage(module: &naga::Module, f: &naga::Function, mut pointer: naga::Hand
         match f.expressions[pointer] {
             E::Access { base, .. } | E::AccessIndex { base, .. } => pointer = base,
             E::GlobalVariable(g) => return matches!(module.global_variables[g].space, naga::AddressSpace::Storage { .. }),
-            _ => return false,
+            E::Literal(_)
+            | E::Constant(_)
+            | E::Override(_)
+            | E::ZeroValue(_)
+            | E::Compose { .. }
+            | E::Splat { .. }
+            | E::Swizzle { .. }
+            | E::FunctionArgument(_)
+            | E::LocalVariable(_)
+            | E::Load { .. }
+            | E::ImageSample { .. }
+            | E::ImageLoad { .. }
+            | E::ImageQuery { .. }
+            | E::Unary { .. }
+            | E::Binary { .. }
+            | E::Select { .. }
+            | E::Derivative { .. }
+            | E::Relational { .. }
+            | E::Math { .. }
+            | E::As { .. }
+            | E::CallResult(_)
+            | E::AtomicResult { .. }
+            | E::WorkGroupUniformLoadResult { .. }
+            | E::ArrayLength(_)
+            | E::RayQueryVertexPositions { .. }
+            | E::RayQueryProceedResult
+            | E::RayQueryGetIntersection { .. }
+            | E::SubgroupBallotResult
+            | E::SubgroupOperationResult { .. }
+            | E::CooperativeLoad { .. }
+            | E::CooperativeMultiplyAdd { .. } => return false,
         }
     }
 }
@@ -44,7 +74,32 @@ fn count_function(module: &naga::Module, f: &naga::Function, c: &mut OpCount, de
             E::ImageSample { .. } | E::ImageLoad { .. } => c.fetches += 1,
             E::Load { pointer } if in_storage(module, f, *pointer) => c.fetches += 1,
             E::Binary { .. } | E::Unary { .. } | E::Math { .. } | E::Select { .. } | E::As { .. } | E::Relational { .. } => c.ops += 1,
-            _ => {}
+            E::Literal(_)
+            | E::Constant(_)
+            | E::Override(_)
+            | E::ZeroValue(_)
+            | E::Compose { .. }
+            | E::Access { .. }
+            | E::AccessIndex { .. }
+            | E::Splat { .. }
+            | E::Swizzle { .. }
+            | E::FunctionArgument(_)
+            | E::GlobalVariable(_)
+            | E::LocalVariable(_)
+            | E::Load { .. }
+            | E::ImageQuery { .. }
+            | E::Derivative { .. }
+            | E::CallResult(_)
+            | E::AtomicResult { .. }
+            | E::WorkGroupUniformLoadResult { .. }
+            | E::ArrayLength(_)
+            | E::RayQueryVertexPositions { .. }
+            | E::RayQueryProceedResult
+            | E::RayQueryGetIntersection { .. }
+            | E::SubgroupBallotResult
+            | E::SubgroupOperationResult { .. }
+            | E::CooperativeLoad { .. }
+            | E::CooperativeMultiplyAdd { .. } => {}
         }
     }
     if depth < 8 {

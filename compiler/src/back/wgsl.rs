@@ -4,7 +4,7 @@
 //! texture reads of one texel of one layer are fetched once and shared by its channels.
 //! Every module is validated with naga inside the compiler.
 
-use crate::builtins::{Func, Input, SampleFn, Ty};
+use crate::builtins::{Func, Input, SampleFn, SampleWgsl, Sig, Ty, Wgsl};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::{ConstValue, Precision, Reduce};
 use crate::front::expr::{BinOp, UnOp};
@@ -36,7 +36,7 @@ pub struct Scratch {
 pub fn scratch_precision(p: Precision) -> Precision {
     match p {
         Precision::Unorm8 => Precision::F16,
-        _ => Precision::F32,
+        Precision::Unorm16 | Precision::F16 | Precision::F32 => Precision::F32,
     }
 }
 
@@ -74,6 +74,17 @@ pub fn f32_lit(v: f32) -> String {
         format!("{v:e}")
     };
     if v < 0.0 { format!("({s}f)") } else { format!("{s}f") }
+}
+
+/// A call of a built-in function on the WGSL expressions of its arguments, as its
+/// descriptor writes it.
+pub fn call(f: Func, args: &[String]) -> String {
+    let d = f.desc();
+    match d.wgsl {
+        Wgsl::Same => format!("{}({})", d.name, args.join(", ")),
+        Wgsl::Callee(callee) => format!("{callee}({})", args.join(", ")),
+        Wgsl::Expr(write) => write(args),
+    }
 }
 
 fn i32_lit(v: i32) -> String {
@@ -151,18 +162,9 @@ impl<'a> Emitter<'a> {
     }
 
     fn input(&mut self, i: Input) -> String {
-        match (self.side, i) {
-            (_, Input::TexelSize) => "frame.shadow_size.z".into(),
-            (_, Input::ShadowSize) => "frame.shadow_size.x".into(),
-            (_, Input::Near) => "frame.depth_range.x".into(),
-            (_, Input::Far) => "frame.depth_range.y".into(),
-            (_, Input::LightSize) => "frame.light_size.x".into(),
-            (_, Input::LightWidth) => "(frame.light_size.zw * 2.0)".into(),
-            (_, Input::LightSpread) => "(2.0 * tan(0.5 * frame.light_size.y))".into(),
-            (Side::Receiver, i) => format!("in_{}", i.name()),
-            // check refuses receiver inputs on the map side
-            (Side::Map, i) => format!("in_{}", i.name()),
-        }
+        // check refuses receiver inputs on the map side
+        debug_assert!(matches!(self.side, Side::Receiver) || i.side() == crate::builtins::Side::Both);
+        i.desc().wgsl.to_string()
     }
 
     /// The WGSL texture name and decode of a channel in a resource: (binding, layer, component, encode).
@@ -218,7 +220,8 @@ impl<'a> Emitter<'a> {
         // Operations on constants that did not fold are invalid at compile time (x / 0, log(-1)).
         let ops = a.operands(h);
         let all_const = !ops.is_empty() && ops.iter().all(|o| a.as_const(*o).is_some());
-        let exempt = matches!(node, Node::Sample { .. } | Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, _))
+        let exempt = matches!(node, Node::Sample { .. })
+            || matches!(node, Node::Call(f, _) if matches!(f.desc().sig, Sig::Construct(_)))
             || (matches!(node, Node::Binary(BinOp::Div | BinOp::Rem, _, _)) && a.ty(h) == Ty::I32);
         if all_const && !exempt {
             return Err(
@@ -254,27 +257,7 @@ impl<'a> Emitter<'a> {
             Node::Swizzle(x, c) => format!("{}.{}", self.n(x), c.iter().map(|i| COMP[*i as usize]).collect::<String>()),
             Node::Call(f, args) => {
                 let v: Vec<String> = args.iter().map(|x| self.n(*x).to_string()).collect();
-                match f {
-                    Func::Linstep => format!("saturate(({} - {}) / ({} - {}))", v[2], v[0], v[1], v[0]),
-                    Func::ToF32 => format!("f32({})", v[0]),
-                    Func::ToI32 => format!("i32({})", v[0]),
-                    Func::Vec2 | Func::Vec3 | Func::Vec4 => format!("vec{}<f32>({})", v.len(), v.join(", ")),
-                    // the denominator is replaced by 1 where it is refused, so that no
-                    // infinity or NaN is computed even in the branch select discards
-                    Func::DivOr => format!(
-                        "select({fb}, {n} / select(1.0, {d}, abs({d}) >= {e} && {d} != 0.0), abs({d}) >= {e} && {d} != 0.0)",
-                        n = v[0],
-                        d = v[1],
-                        e = v[2],
-                        fb = v[3]
-                    ),
-                    // one texel at distance D spans texel_world.x * D + texel_world.y world units
-                    Func::UvWidth => format!(
-                        "({} / ((frame.texel_world.x * {} + frame.texel_world.y) * frame.shadow_size.x))",
-                        v[0], v[1]
-                    ),
-                    f => format!("{}({})", f.name(), v.join(", ")),
-                }
+                call(f, &v)
             }
         })
     }
@@ -309,14 +292,16 @@ impl<'a> Emitter<'a> {
             Some(v) => v.clone(),
             None => {
                 let v = self.fresh("s");
-                let call = match how {
-                    SampleFn::Box => {
+                let call = match how.desc().wgsl {
+                    SampleWgsl::SummedAreaTable => {
                         let r = &self.ir.resources[res];
                         let t = r.slot_of(ch).and_then(|s| s.place).map(|p| &r.textures[p.0]);
                         let scale = match t.map(|t| t.precision) {
                             Some(Precision::Unorm8) => 255,
                             Some(Precision::Unorm16) => 65535,
-                            _ => return Err(internal("summed-area table over a non-unorm texture")),
+                            Some(Precision::F16 | Precision::F32) | None => {
+                                return Err(internal("summed-area table over a non-unorm texture"));
+                            }
                         };
                         let name = tex.trim_start_matches("t_").to_string();
                         if table_source(self.ir, res).is_none() {
@@ -327,37 +312,9 @@ impl<'a> Emitter<'a> {
                         }
                         format!("box_{name}(in_uv, vec2<f32>({}, {}), {layer}i)", args[0], args[1])
                     }
-                    SampleFn::Sample => {
-                        self.uses_sampler = true;
-                        format!("textureSample({tex}, smp, in_uv, {layer}i)")
-                    }
-                    SampleFn::SampleWidth => {
-                        self.uses_sampler = true;
-                        format!(
-                            "textureSampleLevel({tex}, smp, in_uv, {layer}i, log2(max({} * frame.shadow_size.x, 1.0)))",
-                            args[0]
-                        )
-                    }
-                    SampleFn::SampleLod => {
-                        self.uses_sampler = true;
-                        format!("textureSampleLevel({tex}, smp, in_uv, {layer}i, {})", args[0])
-                    }
-                    SampleFn::NearestAt => {
-                        format!(
-                            "textureLoad({tex}, clamp(vec2<i32>(floor((in_uv + vec2<f32>({}, {})) * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)",
-                            args[0], args[1]
-                        )
-                    }
-                    SampleFn::Nearest => {
-                        format!(
-                            "textureLoad({tex}, clamp(vec2<i32>(floor(in_uv * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)"
-                        )
-                    }
-                    SampleFn::Fetch => {
-                        format!(
-                            "textureLoad({tex}, clamp(in_base + vec2<i32>({}, {}), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)",
-                            args[0], args[1]
-                        )
+                    SampleWgsl::Texture { sampler, read } => {
+                        self.uses_sampler |= sampler;
+                        read(&tex, layer, &args)
                     }
                 };
                 self.line(&format!("let {v} = {call};"));
@@ -753,7 +710,7 @@ fn filter(
                             .filter(|i| IrKernel::LOG_3X3[*i] != 0.0)
                             .map(|i| (i as i32 % 3 - 1, i as i32 / 3 - 1, IrKernel::LOG_3X3[i]))
                             .collect(),
-                        _ => {
+                        IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::Max(_) | IrKernel::Min(_) => {
                             let w = kernel.weights_1d().unwrap_or_else(|| vec![1.0; size as usize]);
                             (-r..=r)
                                 .map(|i| {
@@ -786,7 +743,7 @@ fn filter(
                             .map(|(k, _)| format!("a{oi}_{k}"))
                             .reduce(|a, b| format!("min({a}, {b})"))
                             .unwrap_or_default(),
-                        _ => taps
+                        IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::LoG => taps
                             .iter()
                             .enumerate()
                             .map(|(k, (_, _, w))| format!("a{oi}_{k} * {}", f32_lit(*w as f32)))
@@ -866,7 +823,7 @@ fn summed_area(ir: &Ir, pass: &IrPass) -> Result<(String, Vec<Step>), Diagnostic
         let scale = match st.precision {
             Precision::Unorm8 => 255,
             Precision::Unorm16 => 65535,
-            _ => return Err(internal("summed-area table over a non-unorm texture")),
+            Precision::F16 | Precision::F32 => return Err(internal("summed-area table over a non-unorm texture")),
         };
         let _ = write!(
             rows,

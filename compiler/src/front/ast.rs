@@ -12,7 +12,7 @@ pub struct Technique {
     pub title: Option<String>,
     pub paper: Option<String>,
     /// The light models the technique is meant for (empty: any).
-    pub lights: Vec<Spanned<LightKind>>,
+    pub lights: Vec<Spanned<LightModel>>,
     pub params: Vec<Param>,
     pub channels: Vec<Channel>,
     pub expansions: Vec<Expansion>,
@@ -20,22 +20,9 @@ pub struct Technique {
     pub span: Span,
 }
 
-/// The light model a technique assumes (DESIGN.md section 4, "light" column).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LightKind {
-    Any,
-    Point,
-    Directional,
-    Sphere,
-    Disk,
-    Rectangle,
-    /// A linear light sampled at `samples` points (Heidrich et al. 2000).
-    Segment {
-        samples: u32,
-    },
-    /// A distant disk given by its angular diameter (Lawlor 2006).
-    DistantDisk,
-}
+/// The light model a technique assumes: the pass-graph schema's type, so the compiler
+/// and the runtime share one list of light kinds.
+pub use sshc_graph::{LightKind, LightModel};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum ScalarTy {

@@ -392,7 +392,17 @@ impl Parser<'_> {
             Tok::Ne => BinOp::Ne,
             Tok::AndAnd => BinOp::And,
             Tok::OrOr => BinOp::Or,
-            _ => return None,
+            Tok::Float
+            | Tok::Int
+            | Tok::Ident
+            | Tok::LParen
+            | Tok::RParen
+            | Tok::Comma
+            | Tok::Semi
+            | Tok::Dot
+            | Tok::DotDotEq
+            | Tok::Assign
+            | Tok::Bang => return None,
         })
     }
 
@@ -508,7 +518,26 @@ impl Parser<'_> {
                 e.span = fspan.join(self.map(end));
                 Ok(e)
             }
-            _ => {
+            Tok::RParen
+            | Tok::Comma
+            | Tok::Semi
+            | Tok::Dot
+            | Tok::DotDotEq
+            | Tok::Assign
+            | Tok::Plus
+            | Tok::Minus
+            | Tok::Star
+            | Tok::Slash
+            | Tok::Percent
+            | Tok::Lt
+            | Tok::Le
+            | Tok::Gt
+            | Tok::Ge
+            | Tok::EqEq
+            | Tok::Ne
+            | Tok::AndAnd
+            | Tok::OrOr
+            | Tok::Bang => {
                 self.pos -= 1;
                 Err(self.err_here("a value"))
             }

@@ -55,7 +55,14 @@ impl<'a> Fields<'a> {
                 taken: Vec::new(),
                 known: Vec::new(),
             }),
-            _ => Err(err(
+            Value::Bool(_)
+            | Value::Int(_)
+            | Value::Float(_)
+            | Value::Str(_)
+            | Value::Ident(_)
+            | Value::Tuple { .. }
+            | Value::List(_)
+            | Value::Map(_) => Err(err(
                 node.span,
                 format!("expected `{what}(...)`, found {}", node.describe()),
                 format!("expected `{what}(field: value, ...)`"),
@@ -154,7 +161,14 @@ fn edit_distance(a: &str, b: &str) -> usize {
 fn string(node: &Node) -> Result<Spanned<String>, Diagnostic> {
     match &node.value {
         Value::Str(s) => Ok(Spanned::new(s.text.clone(), node.span)),
-        _ => Err(err(
+        Value::Bool(_)
+        | Value::Int(_)
+        | Value::Float(_)
+        | Value::Ident(_)
+        | Value::Struct { .. }
+        | Value::Tuple { .. }
+        | Value::List(_)
+        | Value::Map(_) => Err(err(
             node.span,
             format!("expected a string, found {}", node.describe()),
             "expected a string",
@@ -180,18 +194,27 @@ fn names(node: &Node) -> Result<Vec<Name>, Diagnostic> {
     match &node.value {
         Value::List(items) => items.iter().map(name).collect(),
         Value::Str(_) => Ok(vec![name(node)?]),
-        _ => Err(err(
-            node.span,
-            format!("expected a list of names, found {}", node.describe()),
-            "expected `[\"a\", \"b\"]`",
-        )),
+        Value::Bool(_) | Value::Int(_) | Value::Float(_) | Value::Ident(_) | Value::Struct { .. } | Value::Tuple { .. } | Value::Map(_) => {
+            Err(err(
+                node.span,
+                format!("expected a list of names, found {}", node.describe()),
+                "expected `[\"a\", \"b\"]`",
+            ))
+        }
     }
 }
 
 fn boolean(node: &Node) -> Result<bool, Diagnostic> {
     match &node.value {
         Value::Bool(b) => Ok(*b),
-        _ => Err(err(
+        Value::Int(_)
+        | Value::Float(_)
+        | Value::Str(_)
+        | Value::Ident(_)
+        | Value::Struct { .. }
+        | Value::Tuple { .. }
+        | Value::List(_)
+        | Value::Map(_) => Err(err(
             node.span,
             format!("expected `true` or `false`, found {}", node.describe()),
             "expected a boolean",
@@ -203,11 +226,13 @@ fn number(node: &Node) -> Result<Spanned<f64>, Diagnostic> {
     match &node.value {
         Value::Int(v) => Ok(Spanned::new(*v as f64, node.span)),
         Value::Float(v) => Ok(Spanned::new(*v, node.span)),
-        _ => Err(err(
-            node.span,
-            format!("expected a number, found {}", node.describe()),
-            "expected a number",
-        )),
+        Value::Bool(_) | Value::Str(_) | Value::Ident(_) | Value::Struct { .. } | Value::Tuple { .. } | Value::List(_) | Value::Map(_) => {
+            Err(err(
+                node.span,
+                format!("expected a number, found {}", node.describe()),
+                "expected a number",
+            ))
+        }
     }
 }
 
@@ -218,7 +243,7 @@ fn expression(node: &Node) -> Result<Expr, Diagnostic> {
         Value::Int(v) => Ok(Expr::new(ExprKind::Lit(Literal::Int(*v)), node.span)),
         Value::Float(v) => Ok(Expr::new(ExprKind::Lit(Literal::Float(*v)), node.span)),
         Value::Bool(v) => Ok(Expr::new(ExprKind::Lit(Literal::Bool(*v)), node.span)),
-        _ => Err(err(
+        Value::Ident(_) | Value::Struct { .. } | Value::Tuple { .. } | Value::List(_) | Value::Map(_) => Err(err(
             node.span,
             format!("expected an expression string, found {}", node.describe()),
             "expected an expression such as \"exp(c * z)\"",
@@ -235,7 +260,14 @@ fn variant(node: &Node) -> Result<(String, Span), Diagnostic> {
     match &node.value {
         Value::Ident(n) => Ok((n.clone(), node.span)),
         Value::Struct { name: Some((n, s)), .. } | Value::Tuple { name: Some((n, s)), .. } => Ok((n.clone(), *s)),
-        _ => Err(err(
+        Value::Bool(_)
+        | Value::Int(_)
+        | Value::Float(_)
+        | Value::Str(_)
+        | Value::Struct { .. }
+        | Value::Tuple { .. }
+        | Value::List(_)
+        | Value::Map(_) => Err(err(
             node.span,
             format!("expected a name such as `F32`, found {}", node.describe()),
             "expected a variant name",
@@ -255,7 +287,14 @@ fn unknown_variant(span: Span, got: &str, what: &str, options: &[&'static str]) 
 fn map_entries(node: &Node) -> Result<Vec<(Name, &Node)>, Diagnostic> {
     match &node.value {
         Value::Map(entries) => entries.iter().map(|(k, v)| Ok((name(k)?, v))).collect(),
-        _ => Err(err(
+        Value::Bool(_)
+        | Value::Int(_)
+        | Value::Float(_)
+        | Value::Str(_)
+        | Value::Ident(_)
+        | Value::Struct { .. }
+        | Value::Tuple { .. }
+        | Value::List(_) => Err(err(
             node.span,
             format!("expected a map `{{ \"name\": ... }}`, found {}", node.describe()),
             "expected a map",
@@ -272,7 +311,14 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
         None => vec![],
         Some(n) => match &n.value {
             Value::List(items) => items.iter().map(light).collect::<Result<_, _>>()?,
-            _ => vec![light(n)?],
+            Value::Bool(_)
+            | Value::Int(_)
+            | Value::Float(_)
+            | Value::Str(_)
+            | Value::Ident(_)
+            | Value::Struct { .. }
+            | Value::Tuple { .. }
+            | Value::Map(_) => vec![light(n)?],
         },
     };
     let params = match f.opt("params")? {
@@ -293,7 +339,14 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
     let passes_node = f.req("passes")?;
     let passes = match &passes_node.value {
         Value::List(items) => items.iter().map(pass).collect::<Result<_, _>>()?,
-        _ => {
+        Value::Bool(_)
+        | Value::Int(_)
+        | Value::Float(_)
+        | Value::Str(_)
+        | Value::Ident(_)
+        | Value::Struct { .. }
+        | Value::Tuple { .. }
+        | Value::Map(_) => {
             return Err(err(
                 passes_node.span,
                 format!("expected a list of passes, found {}", passes_node.describe()),
@@ -315,46 +368,40 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
     })
 }
 
-const LIGHTS: &[&str] = &[
-    "Any",
-    "Point",
-    "Directional",
-    "Sphere",
-    "Disk",
-    "Rectangle",
-    "Segment",
-    "DistantDisk",
-];
-
-fn light(node: &Node) -> Result<Spanned<LightKind>, Diagnostic> {
+fn light(node: &Node) -> Result<Spanned<LightModel>, Diagnostic> {
     let (v, span) = variant(node)?;
-    let kind = match v.as_str() {
-        "Any" => LightKind::Any,
-        "Point" => LightKind::Point,
-        "Directional" => LightKind::Directional,
-        "Sphere" => LightKind::Sphere,
-        "Disk" => LightKind::Disk,
-        "Rectangle" => LightKind::Rectangle,
-        "DistantDisk" => LightKind::DistantDisk,
-        "Segment" => {
-            let mut f = Fields::of(node, "Segment")?;
-            let n = f.req("samples")?;
-            let samples = match n.value {
-                Value::Int(s) if (2..=64).contains(&s) => s as u32,
-                _ => {
-                    return Err(err(
-                        n.span,
-                        "a segment light needs between 2 and 64 samples",
-                        "expected an integer in 2..=64",
-                    ));
-                }
-            };
-            f.finish()?;
-            LightKind::Segment { samples }
-        }
-        _ => return Err(unknown_variant(span, &v, "light model", LIGHTS)),
+    if v == "Any" {
+        return Ok(Spanned::new(LightModel::Any, node.span));
+    }
+    let Some(kind) = LightKind::from_name(&v) else {
+        let names: Vec<&'static str> = std::iter::once("Any").chain(LightKind::ALL.map(LightKind::name)).collect();
+        return Err(unknown_variant(span, &v, "light model", &names));
     };
-    Ok(Spanned::new(kind, node.span))
+    let mut samples = 0;
+    if kind == LightKind::Segment {
+        let mut f = Fields::of(node, "Segment")?;
+        let n = f.req("samples")?;
+        samples = match n.value {
+            Value::Int(s) if (2..=64).contains(&s) => s as u32,
+            Value::Bool(_)
+            | Value::Int(_)
+            | Value::Float(_)
+            | Value::Str(_)
+            | Value::Ident(_)
+            | Value::Struct { .. }
+            | Value::Tuple { .. }
+            | Value::List(_)
+            | Value::Map(_) => {
+                return Err(err(
+                    n.span,
+                    "a segment light needs between 2 and 64 samples",
+                    "expected an integer in 2..=64",
+                ));
+            }
+        };
+        f.finish()?;
+    }
+    Ok(Spanned::new(LightModel::of(kind, samples), node.span))
 }
 
 fn param(name: Name, node: &Node) -> Result<Param, Diagnostic> {
@@ -373,7 +420,15 @@ fn param(name: Name, node: &Node) -> Result<Param, Diagnostic> {
         None => None,
         Some(r) => match &r.value {
             Value::Tuple { name: None, items } if items.len() == 2 => Some((number(&items[0])?, number(&items[1])?)),
-            _ => {
+            Value::Bool(_)
+            | Value::Int(_)
+            | Value::Float(_)
+            | Value::Str(_)
+            | Value::Ident(_)
+            | Value::Struct { .. }
+            | Value::Tuple { .. }
+            | Value::List(_)
+            | Value::Map(_) => {
                 return Err(err(
                     r.span,
                     format!("expected a range `(lo, hi)`, found {}", r.describe()),
@@ -464,7 +519,14 @@ fn expansion(name: Name, node: &Node) -> Result<Expansion, Diagnostic> {
     let terms = match &tn.value {
         Value::List(items) if !items.is_empty() => items.iter().map(term).collect::<Result<_, _>>()?,
         Value::List(_) => return Err(err(tn.span, "an expansion needs at least one term", "no terms")),
-        _ => {
+        Value::Bool(_)
+        | Value::Int(_)
+        | Value::Float(_)
+        | Value::Str(_)
+        | Value::Ident(_)
+        | Value::Struct { .. }
+        | Value::Tuple { .. }
+        | Value::Map(_) => {
             return Err(err(
                 tn.span,
                 format!("expected a list of terms, found {}", tn.describe()),
@@ -525,7 +587,14 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
     let (kind_name, kind_span) = match &node.value {
         Value::Struct { name: Some((n, s)), .. } | Value::Tuple { name: Some((n, s)), .. } => (n.clone(), *s),
         Value::Ident(n) => (n.clone(), node.span),
-        _ => {
+        Value::Bool(_)
+        | Value::Int(_)
+        | Value::Float(_)
+        | Value::Str(_)
+        | Value::Struct { .. }
+        | Value::Tuple { .. }
+        | Value::List(_)
+        | Value::Map(_) => {
             return Err(err(
                 node.span,
                 format!("expected a pass such as `Map(...)`, found {}", node.describe()),
