@@ -4,6 +4,7 @@
 //! nodes are added).
 
 use crate::builtins::{Func, Input, SampleFn, Ty};
+use crate::consteval;
 use crate::front::ast::{ConstValue, LightKind, LightView, Precision, Primitive, Reduce, Resolve, ScalarTy};
 use crate::front::expr::{BinOp, UnOp, fmt_float};
 use crate::span::Span;
@@ -125,12 +126,7 @@ impl Arena {
         use ConstValue::*;
         match node {
             Node::Unary(op, a) => {
-                let v = match (op, self.as_const(*a)?) {
-                    (UnOp::Neg, Float(x)) => Float(-x),
-                    (UnOp::Neg, Int(x)) => Int(x.checked_neg()?),
-                    (UnOp::Not, Bool(x)) => Bool(!x),
-                    _ => return None,
-                };
+                let v = consteval::unary(*op, self.as_const(*a)?)?;
                 self.constant(v, ty, span)
             }
             Node::Binary(op, a, b) => {
@@ -162,44 +158,7 @@ impl Arena {
                     (BinOp::Or, Some(Bool(true)), _) | (BinOp::Or, _, Some(Bool(true))) => return self.constant(Bool(true), ty, span),
                     _ => {}
                 }
-                let v = match (x?, y?) {
-                    (Float(x), Float(y)) => match op {
-                        BinOp::Add => Float(x + y),
-                        BinOp::Sub => Float(x - y),
-                        BinOp::Mul => Float(x * y),
-                        BinOp::Div if y != 0.0 => Float(x / y),
-                        BinOp::Rem if y != 0.0 => Float(x % y),
-                        BinOp::Lt => Bool(x < y),
-                        BinOp::Le => Bool(x <= y),
-                        BinOp::Gt => Bool(x > y),
-                        BinOp::Ge => Bool(x >= y),
-                        BinOp::Eq => Bool(x == y),
-                        BinOp::Ne => Bool(x != y),
-                        _ => return None,
-                    },
-                    (Int(x), Int(y)) => match op {
-                        BinOp::Add => Int(x.checked_add(y)?),
-                        BinOp::Sub => Int(x.checked_sub(y)?),
-                        BinOp::Mul => Int(x.checked_mul(y)?),
-                        BinOp::Div if y != 0 => Int(x / y),
-                        BinOp::Rem if y != 0 => Int(x % y),
-                        BinOp::Lt => Bool(x < y),
-                        BinOp::Le => Bool(x <= y),
-                        BinOp::Gt => Bool(x > y),
-                        BinOp::Ge => Bool(x >= y),
-                        BinOp::Eq => Bool(x == y),
-                        BinOp::Ne => Bool(x != y),
-                        _ => return None,
-                    },
-                    (Bool(x), Bool(y)) => match op {
-                        BinOp::And => Bool(x && y),
-                        BinOp::Or => Bool(x || y),
-                        BinOp::Eq => Bool(x == y),
-                        BinOp::Ne => Bool(x != y),
-                        _ => return None,
-                    },
-                    _ => return None,
-                };
+                let v = consteval::binary(*op, x?, y?)?;
                 self.constant(v, ty, span)
             }
             Node::Call(Func::Select, args) => match self.as_const(args[2])? {

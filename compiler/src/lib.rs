@@ -18,6 +18,7 @@ pub mod analyse;
 pub mod back;
 pub mod builtins;
 pub mod check;
+pub mod consteval;
 pub mod diag;
 pub mod emit;
 pub mod explain;
@@ -27,6 +28,7 @@ pub mod lower;
 pub mod pack;
 pub mod resolve;
 pub mod span;
+pub mod types;
 
 pub use diag::{Diagnostic, Diagnostics};
 pub use pack::Limits;
