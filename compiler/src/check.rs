@@ -1063,13 +1063,9 @@ impl<'s, 'a> Typer<'s, 'a> {
         // (for min, max, clamp, abs, sign and select: where its result is a float).
         for a in args {
             let float_result = matches!(ty, Ty::F32 | Ty::Vec(_));
-            let to = if matches!(f, Func::ToF32 | Func::ToI32) {
-                Ty::I32
-            } else if matches!(f, Func::Select | Func::Min | Func::Max | Func::Clamp | Func::Abs | Func::Sign) && !float_result {
-                Ty::I32
-            } else {
-                Ty::F32
-            };
+            let integer = matches!(f, Func::ToF32 | Func::ToI32)
+                || (matches!(f, Func::Select | Func::Min | Func::Max | Func::Clamp | Func::Abs | Func::Sign) && !float_result);
+            let to = if integer { Ty::I32 } else { Ty::F32 };
             self.settle(a, to)?;
         }
         Ok(ty)

@@ -65,7 +65,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
     let params_size = offset.div_ceil(16) * 16;
 
     let mut textures: Vec<TextureDecl> = Vec::new();
-    for (ri, r) in ir.resources.iter().enumerate().filter(|(_, r)| r.live) {
+    for (ri, r) in ir.resources.with_handles().filter(|(_, r)| r.live) {
         let mips = mip_source(ir, ri).is_some();
         let table = table_source(ir, ri).is_some();
         for (ti, t) in r.textures.iter().enumerate() {

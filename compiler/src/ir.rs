@@ -7,17 +7,34 @@ use crate::builtins::{Func, Input, SampleFn, Ty};
 use crate::consteval;
 use crate::front::ast::{ConstValue, LightKind, LightView, Precision, Primitive, Reduce, Resolve, ScalarTy};
 use crate::front::expr::{BinOp, UnOp, fmt_float};
+use crate::handle::{Arena as Table, Handle, Kind};
 use crate::span::Span;
 use std::collections::HashMap;
 use std::fmt::{self, Write as _};
 
-/// Handle of an expression node in the [`Arena`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct H(pub u32);
+pub mod validate;
 
-pub type ChannelId = usize;
-pub type ResId = usize;
-pub type PassId = usize;
+/// Handle of an expression node in the expression [`Arena`].
+pub type H = Handle<Node>;
+/// Handle of a channel in [`Ir::channels`].
+pub type ChannelId = Handle<IrChannel>;
+/// Handle of a resource in [`Ir::resources`].
+pub type ResId = Handle<IrResource>;
+/// Handle of a pass in [`Ir::passes`].
+pub type PassId = Handle<IrPass>;
+
+impl Kind for Node {
+    const KIND: &'static str = "node";
+}
+impl Kind for IrChannel {
+    const KIND: &'static str = "channel";
+}
+impl Kind for IrResource {
+    const KIND: &'static str = "resource";
+}
+impl Kind for IrPass {
+    const KIND: &'static str = "pass";
+}
 
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Node {
@@ -52,15 +69,15 @@ pub struct Arena {
 
 impl Arena {
     pub fn node(&self, h: H) -> &Node {
-        &self.nodes[h.0 as usize].0
+        &self.nodes[h.index()].0
     }
 
     pub fn ty(&self, h: H) -> Ty {
-        self.nodes[h.0 as usize].1
+        self.nodes[h.index()].1
     }
 
     pub fn span(&self, h: H) -> Span {
-        self.nodes[h.0 as usize].2
+        self.nodes[h.index()].2
     }
 
     pub fn len(&self) -> usize {
@@ -108,7 +125,7 @@ impl Arena {
         if let Some(h) = self.index.get(&(node.clone(), ty)) {
             return *h;
         }
-        let h = H(self.nodes.len() as u32);
+        let h = H::new(self.nodes.len());
         self.nodes.push((node.clone(), ty, span));
         self.index.insert((node, ty), h);
         h
@@ -192,17 +209,17 @@ impl Arena {
         // Iterative to keep deep series off the call stack.
         let mut stack = vec![(h, false)];
         while let Some((h, done)) = stack.pop() {
-            if seen[h.0 as usize] {
+            if seen[h.index()] {
                 continue;
             }
             if done {
-                seen[h.0 as usize] = true;
+                seen[h.index()] = true;
                 out.push(h);
                 continue;
             }
             stack.push((h, true));
             for c in self.operands(h).into_iter().rev() {
-                if !seen[c.0 as usize] {
+                if !seen[c.index()] {
                     stack.push((c, false));
                 }
             }
@@ -227,7 +244,7 @@ impl Arena {
 
     fn write(&self, s: &mut String, h: H, ir: Option<&Ir>, depth: usize) {
         if depth > 24 {
-            let _ = write!(s, "%{}", h.0);
+            let _ = write!(s, "%{}", h.index());
             return;
         }
         let chan = |c: ChannelId| ir.map(|ir| ir.channels[c].name.clone()).unwrap_or_else(|| format!("ch{c}"));
@@ -556,14 +573,35 @@ impl Encode {
     }
 }
 
+/// What `analyse` found about one channel as stored in one resource.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlotInfo {
+    pub range: Interval,
+    pub encode: Encode,
+}
+
+/// The product of `analyse`, a side table beside the IR (which `analyse` only reads):
+/// range and storage encoding of every (resource, channel) slot as lowered, before
+/// elimination drops any.
+#[derive(Clone, Debug, Default)]
+pub struct Analysis {
+    pub slots: HashMap<(ResId, ChannelId), SlotInfo>,
+}
+
+impl Analysis {
+    pub fn get(&self, r: ResId, c: ChannelId) -> Option<SlotInfo> {
+        self.slots.get(&(r, c)).copied()
+    }
+}
+
 /// One channel as stored in one resource.
 #[derive(Clone, Debug)]
 pub struct Slot {
     pub channel: ChannelId,
     pub precision: Precision,
-    /// Value range (set by `analyse`).
+    /// Value range, from [`Analysis`] (recorded by `pack`, which lays the slot out).
     pub range: Option<Interval>,
-    /// Storage encoding (set by `analyse`).
+    /// Storage encoding, from [`Analysis`] (recorded by `pack`).
     pub encode: Encode,
     /// Placement (set by `pack`): texture index in the resource, layer, component.
     pub place: Option<(usize, u32, u32)>,
@@ -694,11 +732,11 @@ pub struct Ir {
     pub paper: Option<String>,
     pub lights: Vec<LightKind>,
     pub params: Vec<IrParam>,
-    pub channels: Vec<IrChannel>,
+    pub channels: Table<IrChannel>,
     pub expansions: Vec<IrExpansion>,
-    pub resources: Vec<IrResource>,
+    pub resources: Table<IrResource>,
     /// In execution order.
-    pub passes: Vec<IrPass>,
+    pub passes: Table<IrPass>,
     pub arena: Arena,
     /// What optimisation removed, and why (reported by `explain` and the cost report).
     pub removed: Vec<String>,
@@ -714,8 +752,25 @@ impl Ir {
     }
 }
 
+/// The IR printed with the side table of `analyse` (`--dump-ir-after analyse`).
+pub struct WithAnalysis<'a>(pub &'a Ir, pub &'a Analysis);
+
+impl fmt::Display for WithAnalysis<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.write_dump(f, Some(self.1))
+    }
+}
+
 impl fmt::Display for Ir {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write_dump(f, None)
+    }
+}
+
+impl Ir {
+    /// The text form of `--dump-ir-after`: slots show the ranges and encodings of
+    /// `analysis` when given, else those recorded in the IR (after `pack`).
+    fn write_dump(&self, f: &mut fmt::Formatter<'_>, analysis: Option<&Analysis>) -> fmt::Result {
         writeln!(f, "technique {}", self.technique)?;
         for p in &self.params {
             let kind = if p.uniform { "uniform" } else { "const" };
@@ -743,7 +798,7 @@ impl fmt::Display for Ir {
                 )?;
             }
         }
-        for r in &self.resources {
+        for (rh, r) in self.resources.with_handles() {
             let writer = self.passes.get(r.writer).map(|p| p.name.as_str()).unwrap_or("?");
             write!(f, "  resource {} (written by pass `{writer}`", r.name)?;
             if r.mips {
@@ -758,11 +813,15 @@ impl fmt::Display for Ir {
             writeln!(f, ")")?;
             for s in &r.slots {
                 write!(f, "      {} : {}", self.channels[s.channel].name, s.precision.name())?;
-                if let Some(range) = s.range {
+                let (range, encode) = match analysis.and_then(|a| a.get(rh, s.channel)) {
+                    Some(info) => (Some(info.range), info.encode),
+                    None => (s.range, s.encode),
+                };
+                if let Some(range) = range {
                     write!(f, " range {range}")?;
                 }
-                if !s.encode.is_identity() {
-                    write!(f, " stored as (v - ({})) * {}", short(s.encode.bias), short(s.encode.scale))?;
+                if !encode.is_identity() {
+                    write!(f, " stored as (v - ({})) * {}", short(encode.bias), short(encode.scale))?;
                 }
                 if let Some((t, layer, comp)) = s.place {
                     write!(f, " at {}[{layer}].{}", r.textures[t].name, ['r', 'g', 'b', 'a'][comp as usize])?;

@@ -9,6 +9,7 @@ use crate::consteval::MAX_SERIES;
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::*;
 use crate::front::expr::{BinOp, Expr, ExprKind, Literal};
+use crate::handle::Arena as Table;
 use crate::ir::*;
 use crate::resolve::{Item, Symbols};
 use crate::span::Span;
@@ -311,7 +312,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         })
         .collect();
 
-    let mut channels: Vec<IrChannel> = t
+    let mut channels: Table<IrChannel> = t
         .channels
         .iter()
         .enumerate()
@@ -325,13 +326,13 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             span: c.span,
         })
         .collect();
-    let channel_ids: Vec<ChannelId> = (0..channels.len()).collect();
+    let channel_ids: Vec<ChannelId> = channels.handles().collect();
 
     // Channel values (map side).
     for (i, c) in t.channels.iter().enumerate() {
         if let Some(v) = &c.value {
             let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &[], None);
-            channels[i].value = Some(l.expr_coerced(v).map_err(Diagnostics::from)?);
+            channels[channel_ids[i]].value = Some(l.expr_coerced(v).map_err(Diagnostics::from)?);
         }
     }
 
@@ -371,7 +372,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             for (ti, term) in e.terms.iter().enumerate() {
                 let coeff = l.expr_coerced(&term.coeff).map_err(Diagnostics::from)?;
                 let basis = l.expr_coerced(&term.basis).map_err(Diagnostics::from)?;
-                let id = channels.len() + new_channels.len();
+                let id = ChannelId::new(channels.len() + new_channels.len());
                 new_channels.push(IrChannel {
                     name: format!("{}_t{ti}_k{k}", e.name.value),
                     precision: sym.expansion_precision[ei],
@@ -399,9 +400,9 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
     }
 
     // Resources and passes in execution order.
-    let mut resources: Vec<IrResource> = Vec::new();
+    let mut resources: Table<IrResource> = Table::default();
     let mut res_index = std::collections::HashMap::new();
-    let mut passes = Vec::new();
+    let mut passes: Table<IrPass> = Table::default();
     for &pi in &checked.order {
         let p = &t.passes[pi];
         let reads: Vec<ResId> = p.kind.reads().iter().map(|r| res_index[&r.value]).collect();
@@ -475,11 +476,10 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     (false, false, slots)
                 }
             };
-            let id = resources.len();
-            resources.push(IrResource {
+            let id = resources.append(IrResource {
                 name: w.value.clone(),
                 slots,
-                writer: passes.len(),
+                writer: PassId::new(passes.len()),
                 mips,
                 sat,
                 span: w.span,
@@ -489,7 +489,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             res_index.insert(w.value.clone(), id);
             id
         });
-        passes.push(IrPass {
+        passes.append(IrPass {
             name: p.name.value.clone(),
             kind,
             reads,

@@ -44,12 +44,12 @@ pub fn texel_bytes(p: Precision, components: u32) -> u32 {
 
 /// Remove what the Shade pass cannot reach.
 pub fn eliminate(ir: &mut Ir) {
-    let Some(shade) = ir.passes.iter().position(|p| matches!(p.kind, IrPassKind::Shade { .. })) else {
+    let Some((shade, _)) = ir.passes.with_handles().find(|(_, p)| matches!(p.kind, IrPassKind::Shade { .. })) else {
         return;
     };
     let mut live: HashSet<(ResId, ChannelId)> = HashSet::new();
     let mut live_pass = vec![false; ir.passes.len()];
-    live_pass[shade] = true;
+    live_pass[shade.index()] = true;
     if let IrPassKind::Shade { visibility } = ir.passes[shade].kind {
         for h in ir.arena.postorder(&[visibility]) {
             if let Node::Sample { channel, resource, .. } = ir.arena.node(h) {
@@ -58,7 +58,7 @@ pub fn eliminate(ir: &mut Ir) {
         }
     }
     // Walk writers backwards: passes are in execution order.
-    for pi in (0..ir.passes.len()).rev() {
+    for pi in ir.passes.handles().rev() {
         let Some(w) = ir.passes[pi].writes else { continue };
         let needed: Vec<ChannelId> = ir.resources[w]
             .slots
@@ -69,7 +69,7 @@ pub fn eliminate(ir: &mut Ir) {
         if needed.is_empty() {
             continue;
         }
-        live_pass[pi] = true;
+        live_pass[pi.index()] = true;
         let reads = ir.passes[pi].reads.clone();
         let carrier = |c: ChannelId, ir: &Ir| reads.iter().copied().find(|&r| ir.resources[r].slot_of(c).is_some());
         match ir.passes[pi].kind {
@@ -94,13 +94,13 @@ pub fn eliminate(ir: &mut Ir) {
         }
     }
     let mut removed = Vec::new();
-    for (pi, pass) in ir.passes.iter_mut().enumerate() {
-        if !live_pass[pi] {
+    for (pi, pass) in ir.passes.with_handles_mut() {
+        if !live_pass[pi.index()] {
             pass.live = false;
             removed.push(format!("pass `{}`: no shaded pixel reads what it writes", pass.name));
         }
     }
-    for (ri, res) in ir.resources.iter_mut().enumerate() {
+    for (ri, res) in ir.resources.with_handles_mut() {
         let before = res.slots.len();
         let mut dropped = Vec::new();
         res.slots.retain(|s| {
@@ -125,12 +125,23 @@ pub fn eliminate(ir: &mut Ir) {
     ir.removed.extend(removed);
 }
 
-pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
+/// Lay the live slots out in textures. `pack` owns the layout of the IR it is given:
+/// it records each slot's range and encoding from `analysis`, removes what is dead, and
+/// places the slots that remain.
+pub fn pack(ir: &mut Ir, analysis: &Analysis, limits: &Limits) -> Result<(), Diagnostics> {
+    for (ri, res) in ir.resources.with_handles_mut() {
+        for s in &mut res.slots {
+            if let Some(info) = analysis.get(ri, s.channel) {
+                s.range = Some(info.range);
+                s.encode = info.encode;
+            }
+        }
+    }
     eliminate(ir);
     let mut diags = Diagnostics::default();
     // A Mipmap pass builds the chain in place: its output shares the textures of its input,
     // which must therefore keep every channel the output needs.
-    for pi in 0..ir.passes.len() {
+    for pi in ir.passes.handles() {
         if let (IrPassKind::Mipmap { .. }, Some(w), true) = (&ir.passes[pi].kind, ir.passes[pi].writes, ir.passes[pi].live) {
             let src = ir.passes[pi].reads[0];
             let keep: Vec<ChannelId> = ir.resources[src].slots.iter().map(|s| s.channel).collect();
@@ -151,7 +162,7 @@ pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
                 .collect();
         }
     }
-    for ri in 0..ir.resources.len() {
+    for ri in ir.resources.handles() {
         if !ir.resources[ri].live {
             continue;
         }

@@ -199,7 +199,7 @@ impl<'a> Emitter<'a> {
             if leaf {
                 self.names.insert(h, e);
             } else {
-                let name = format!("e{}", h.0);
+                let name = format!("e{}", h.index());
                 self.line(&format!("let {name} = {e};"));
                 self.names.insert(h, name);
             }
@@ -550,7 +550,7 @@ pub fn codegen(ir: &Ir, limits: &Limits) -> Result<Output, Diagnostics> {
     let mut modules = Vec::new();
     let mut scratch = Vec::new();
     let mut diags = Diagnostics::default();
-    for (pi, pass) in ir.passes.iter().enumerate() {
+    for (pi, pass) in ir.passes.with_handles() {
         if !pass.live {
             continue;
         }
