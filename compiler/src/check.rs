@@ -4,6 +4,8 @@
 //! receiver-side inputs only, basis functions map-side inputs only); parameter values lie
 //! in their ranges; filter sizes are odd and within bounds.
 
+#![deny(clippy::wildcard_enum_match_arm)]
+
 use crate::builtins::{Func, Input, SampleFn, Side, Ty, constant, unify};
 use crate::consteval::{self, MAX_SERIES, NotConst};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
@@ -218,7 +220,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                     Err(d) => diags.push(d),
                 }
             }
-            _ => {}
+            PassKind::Depth { .. } | PassKind::Mipmap { .. } | PassKind::SummedArea { .. } | PassKind::Geometry { .. } => {}
         }
     }
     diags.check()?;
@@ -430,7 +432,7 @@ fn check_expansion(sym: &Symbols, e: &Expansion, types: &mut Types, diags: &mut 
 fn side_error(u: &Use, what: &str, owner: &str, why: &str) -> Diagnostic {
     let side = match u.side {
         Side::Receiver => "a receiver-side input",
-        _ => "a map-side channel",
+        Side::Map | Side::Both => "a map-side channel",
     };
     let mut d = Diagnostic::error(
         Phase::Check,

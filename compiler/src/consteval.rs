@@ -4,6 +4,8 @@
 //! integers are i32 (a result outside i32 is not a constant), floats are rounded to f32
 //! after every operation, division by zero is not a constant.
 
+#![deny(clippy::wildcard_enum_match_arm)]
+
 use crate::builtins::{Func, constant};
 use crate::diag::{Diagnostic, Phase};
 use crate::front::ast::ConstValue;

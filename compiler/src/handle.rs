@@ -1,6 +1,8 @@
 //! Typed handles into typed arenas, as naga's `Handle<T>` and `Arena<T>`: a handle of a
 //! channel cannot index the resources, and a dump prints `channel#3`, not `3`.
 
+#![deny(clippy::wildcard_enum_match_arm)]
+
 use std::fmt;
 use std::hash::{Hash, Hasher};
 use std::marker::PhantomData;

@@ -3,6 +3,8 @@
 //! `constant + sum_i a_i(d) * lookup(B_i)` (Annen eq. 5.8), and passes put in execution
 //! order. Expressions go into the hash-consed arena, which folds constants as it goes.
 
+#![deny(clippy::wildcard_enum_match_arm)]
+
 use crate::builtins::{Func, SampleFn, Ty};
 use crate::check::Checked;
 use crate::consteval::MAX_SERIES;
@@ -456,7 +458,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                             .collect(),
                     )
                 }
-                _ => {
+                PassKind::Depth { .. } | PassKind::Map { .. } | PassKind::Geometry { .. } | PassKind::Shade { .. } => {
                     let mut slots = Vec::new();
                     for item in &checked.items[&w.value] {
                         let ids: Vec<ChannelId> = match item {

@@ -2,6 +2,8 @@
 //! reserved names refused), command-line overrides (`--set`, `--precision`) are applied,
 //! and every resource gets the pass that writes it.
 
+#![deny(clippy::wildcard_enum_match_arm)]
+
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::*;
 use crate::front::parse::closest;
@@ -162,7 +164,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         let listed: Vec<&Name> = match &p.kind {
             PassKind::Depth { channel, .. } => vec![channel],
             PassKind::Map { channels: c, .. } | PassKind::Geometry { channels: c, .. } => c.iter().collect(),
-            _ => vec![],
+            PassKind::Filter { .. } | PassKind::Mipmap { .. } | PassKind::SummedArea { .. } | PassKind::Shade { .. } => vec![],
         };
         for n in listed {
             if !channels.contains_key(&n.value) && !expansions.contains_key(&n.value) {

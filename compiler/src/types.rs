@@ -2,6 +2,8 @@
 //! expression node, what each name resolves to, and where an abstract integer is
 //! converted to f32. Neither phase module imports the other; both use this one.
 
+#![deny(clippy::wildcard_enum_match_arm)]
+
 use crate::builtins::{Input, Ty};
 use crate::front::expr::Expr;
 use std::collections::{HashMap, HashSet};

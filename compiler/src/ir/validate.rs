@@ -9,6 +9,8 @@
 //! only on the receiver side and read a resource their pass reads; a Shade pass exists,
 //! exactly one; placements (after `pack`) lie inside their textures.
 
+#![deny(clippy::wildcard_enum_match_arm)]
+
 use super::*;
 use std::collections::HashSet;
 
