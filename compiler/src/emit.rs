@@ -34,7 +34,7 @@ fn kind(p: &IrPass) -> graph::PassKind {
     }
 }
 
-pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
+pub fn graph(ir: &Program, out: &Output) -> PassGraph {
     let mut params = Vec::new();
     let mut offset = 0u32;
     for p in &ir.params {
@@ -145,7 +145,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
         params_size,
         textures,
         passes,
-        removed: ir.removed.clone(),
+        removed: ir.removed.to_vec(),
     }
 }
 

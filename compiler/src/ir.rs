@@ -738,8 +738,66 @@ pub struct Ir {
     /// In execution order.
     pub passes: Table<IrPass>,
     pub arena: Arena,
+}
+
+/// The product of `pack`, beside the IR (which `pack` only reads): the resources with
+/// their live slots placed in textures (ranges and encodings from the [`Analysis`]), the
+/// passes with their live flags, and what elimination removed.
+#[derive(Clone, Debug, Default)]
+pub struct Layout {
+    pub resources: Table<IrResource>,
+    pub passes: Table<IrPass>,
     /// What optimisation removed, and why (reported by `explain` and the cost report).
     pub removed: Vec<String>,
+}
+
+/// What codegen, emit and explain read: the IR of `lower` seen through the [`Layout`] of
+/// `pack`. The fields `resources`, `passes` and `removed` are the layout's; everything
+/// else (params, channels, expansions, the arena...) derefs to the IR.
+#[derive(Clone, Copy)]
+pub struct Program<'a> {
+    pub ir: &'a Ir,
+    pub resources: &'a Table<IrResource>,
+    pub passes: &'a Table<IrPass>,
+    pub removed: &'a [String],
+}
+
+impl<'a> Program<'a> {
+    pub fn new(ir: &'a Ir, layout: &'a Layout) -> Program<'a> {
+        Program {
+            ir,
+            resources: &layout.resources,
+            passes: &layout.passes,
+            removed: &layout.removed,
+        }
+    }
+
+    /// The IR as `lower` left it (nothing laid out yet, nothing removed).
+    pub fn lowered(ir: &'a Ir) -> Program<'a> {
+        Program {
+            ir,
+            resources: &ir.resources,
+            passes: &ir.passes,
+            removed: &[],
+        }
+    }
+
+    pub fn shade_pass(&self) -> Option<&'a IrPass> {
+        self.passes.iter().find(|p| matches!(p.kind, IrPassKind::Shade { .. }))
+    }
+}
+
+impl std::ops::Deref for Program<'_> {
+    type Target = Ir;
+    fn deref(&self) -> &Ir {
+        self.ir
+    }
+}
+
+impl fmt::Display for Program<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write_dump(f, None)
+    }
 }
 
 impl Ir {
@@ -757,17 +815,17 @@ pub struct WithAnalysis<'a>(pub &'a Ir, pub &'a Analysis);
 
 impl fmt::Display for WithAnalysis<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.0.write_dump(f, Some(self.1))
+        Program::lowered(self.0).write_dump(f, Some(self.1))
     }
 }
 
 impl fmt::Display for Ir {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.write_dump(f, None)
+        Program::lowered(self).write_dump(f, None)
     }
 }
 
-impl Ir {
+impl Program<'_> {
     /// The text form of `--dump-ir-after`: slots show the ranges and encodings of
     /// `analysis` when given, else those recorded in the IR (after `pack`).
     fn write_dump(&self, f: &mut fmt::Formatter<'_>, analysis: Option<&Analysis>) -> fmt::Result {
@@ -783,17 +841,17 @@ impl Ir {
         for (i, c) in self.channels.iter().enumerate() {
             write!(f, "  channel #{i} {} : {}", c.name, c.precision.name())?;
             if let Some(v) = c.value {
-                write!(f, " = {}", self.arena.display(v, Some(self)))?;
+                write!(f, " = {}", self.arena.display(v, Some(self.ir)))?;
             }
             writeln!(f)?;
         }
         for e in &self.expansions {
-            writeln!(f, "  expansion {} = {}", e.name, self.arena.display(e.constant, Some(self)))?;
+            writeln!(f, "  expansion {} = {}", e.name, self.arena.display(e.constant, Some(self.ir)))?;
             for (coeff, ch) in &e.terms {
                 writeln!(
                     f,
                     "      + {} * {}",
-                    self.arena.display(*coeff, Some(self)),
+                    self.arena.display(*coeff, Some(self.ir)),
                     self.channels[*ch].name
                 )?;
             }
@@ -839,7 +897,7 @@ impl Ir {
                 )?;
             }
         }
-        for p in &self.passes {
+        for p in self.passes.iter() {
             let reads: Vec<&str> = p.reads.iter().map(|r| self.resources[*r].name.as_str()).collect();
             write!(f, "  pass {} : {} reads [{}]", p.name, p.kind_name(), reads.join(", "))?;
             if let Some(w) = p.writes {
@@ -848,12 +906,12 @@ impl Ir {
             match &p.kind {
                 IrPassKind::Filter { kernel } => write!(f, " kernel {kernel:?}")?,
                 IrPassKind::Mipmap { reduce } => write!(f, " reduce {reduce:?}")?,
-                IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self)))?,
+                IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self.ir)))?,
                 _ => {}
             }
             writeln!(f)?;
         }
-        for r in &self.removed {
+        for r in self.removed.iter() {
             writeln!(f, "  removed: {r}")?;
         }
         Ok(())

@@ -63,7 +63,10 @@ pub struct CompileOptions {
 /// A compiled technique.
 #[derive(Clone, Debug)]
 pub struct Compiled {
+    /// The IR as `lower` produced it (no later phase changes it).
     pub ir: ir::Ir,
+    /// Its layout after `pack`: live resources and passes, placements, textures.
+    pub layout: ir::Layout,
     pub graph: PassGraph,
     /// (file name, WGSL source), in pass order.
     pub shaders: Vec<(String, String)>,
@@ -140,8 +143,8 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         if until == Until::Check {
             return Err(Diagnostics::default());
         }
-        let mut ir = lower::lower(&sym, &checked)?;
-        debug_validate(&ir, "lower");
+        let ir = lower::lower(&sym, &checked)?;
+        debug_validate(ir::Program::lowered(&ir), "lower");
         if want(DumpPhase::Lower) {
             dump = Some(ir.to_string());
         }
@@ -152,12 +155,13 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         if want(DumpPhase::Analyse) {
             dump = Some(ir::WithAnalysis(&ir, &analysis).to_string());
         }
-        pack::pack(&mut ir, &analysis, &opts.limits)?;
-        debug_validate(&ir, "pack");
+        let layout = pack::pack(&ir, &analysis, &opts.limits)?;
+        let program = ir::Program::new(&ir, &layout);
+        debug_validate(program, "pack");
         if want(DumpPhase::Pack) {
-            dump = Some(ir.to_string());
+            dump = Some(program.to_string());
         }
-        let out = back::wgsl::codegen(&ir, &opts.limits)?;
+        let out = back::wgsl::codegen(&program, &opts.limits)?;
         if want(DumpPhase::Codegen) {
             dump = Some(
                 out.modules
@@ -166,7 +170,7 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
                     .collect(),
             );
         }
-        let graph = emit::graph(&ir, &out);
+        let graph = emit::graph(&program, &out);
         if want(DumpPhase::Emit) {
             dump = Some(graph.to_ron());
         }
@@ -174,6 +178,7 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         let shaders = out.modules.into_iter().map(|m| (m.file, m.source)).collect();
         Ok(Compiled {
             ir,
+            layout,
             graph,
             shaders,
             cost,
@@ -188,9 +193,9 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
 }
 
 /// In debug builds (every test), the IR a phase hands on must pass `ir::validate`.
-fn debug_validate(ir: &ir::Ir, after: &str) {
+fn debug_validate(ir: ir::Program, after: &str) {
     if cfg!(debug_assertions)
-        && let Err(e) = ir::validate::validate(ir)
+        && let Err(e) = ir::validate::validate(&ir)
     {
         panic!("internal compiler error: invalid IR after {after}: {e}");
     }

@@ -512,6 +512,5 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         resources,
         passes,
         arena,
-        removed: vec![],
     })
 }

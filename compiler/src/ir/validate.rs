@@ -121,14 +121,20 @@ impl fmt::Display for ValidationError {
 
 impl std::error::Error for ValidationError {}
 
-/// Check the invariants of an IR (see the module documentation).
-pub fn validate(ir: &Ir) -> Result<(), ValidationError> {
+/// Check the invariants of the IR of `lower` (see the module documentation).
+pub fn validate_ir(ir: &Ir) -> Result<(), ValidationError> {
+    validate(&Program::lowered(ir))
+}
+
+/// Check the invariants of an IR seen through its layout (after `pack`), or as lowered
+/// ([`Program::lowered`]).
+pub fn validate(ir: &Program) -> Result<(), ValidationError> {
     nodes(ir)?;
     channels(ir)?;
     resources_and_passes(ir)
 }
 
-fn nodes(ir: &Ir) -> Result<(), ValidationError> {
+fn nodes(ir: &Program) -> Result<(), ValidationError> {
     let a = &ir.arena;
     for i in 0..a.len() {
         let h = H::new(i);
@@ -243,7 +249,7 @@ fn nodes(ir: &Ir) -> Result<(), ValidationError> {
 
 /// A root expression: in the arena, an f32, and only of its side (`map`: channels, no
 /// lookups; receiver: lookups, no channels).
-fn root(ir: &Ir, h: H, at: &str, map: bool) -> Result<(), ValidationError> {
+fn root(ir: &Program, h: H, at: &str, map: bool) -> Result<(), ValidationError> {
     if h.index() >= ir.arena.len() {
         return Err(ValidationError::BadNode {
             at: at.to_string(),
@@ -278,7 +284,7 @@ fn root(ir: &Ir, h: H, at: &str, map: bool) -> Result<(), ValidationError> {
     Ok(())
 }
 
-fn channels(ir: &Ir) -> Result<(), ValidationError> {
+fn channels(ir: &Program) -> Result<(), ValidationError> {
     for (c, ch) in ir.channels.with_handles() {
         if let Some(v) = ch.value {
             root(ir, v, &format!("the value of {c:?} `{}`", ch.name), true)?;
@@ -307,7 +313,7 @@ fn channels(ir: &Ir) -> Result<(), ValidationError> {
     Ok(())
 }
 
-fn resources_and_passes(ir: &Ir) -> Result<(), ValidationError> {
+fn resources_and_passes(ir: &Program) -> Result<(), ValidationError> {
     for (r, res) in ir.resources.with_handles() {
         let Some(w) = ir.passes.get(res.writer) else {
             return Err(ValidationError::BadPass {
@@ -424,7 +430,7 @@ mod tests {
     #[test]
     fn bundled_techniques_validate() {
         for t in ["hard", "pcf", "vsm", "esm", "csm", "cssm", "pcss"] {
-            validate(&compiled(t)).unwrap_or_else(|e| panic!("{t}: {e}"));
+            validate_ir(&compiled(t)).unwrap_or_else(|e| panic!("{t}: {e}"));
         }
     }
 
@@ -435,13 +441,13 @@ mod tests {
         let one = ir.arena.f32(1.0);
         ir.arena.nodes.push((Node::Binary(BinOp::Add, one, last), Ty::F32, Span::UNDEFINED));
         assert_eq!(
-            validate(&ir),
+            validate_ir(&ir),
             Err(ValidationError::OperandOrder {
                 node: H::new(ir.arena.len() - 1),
                 operand: last
             })
         );
-        assert!(validate(&ir).unwrap_err().to_string().contains("does not precede it"));
+        assert!(validate_ir(&ir).unwrap_err().to_string().contains("does not precede it"));
     }
 
     #[test]
@@ -451,12 +457,12 @@ mod tests {
         let k = ir.arena.i32(2);
         ir.arena.nodes.push((Node::Binary(BinOp::Add, one, k), Ty::F32, Span::UNDEFINED));
         let bad = H::new(ir.arena.len() - 1);
-        assert!(matches!(validate(&ir), Err(ValidationError::NodeType { node, .. }) if node == bad));
+        assert!(matches!(validate_ir(&ir), Err(ValidationError::NodeType { node, .. }) if node == bad));
         // a swizzle of a scalar
         let mut ir = compiled("hard");
         let one = ir.arena.f32(1.0);
         ir.arena.nodes.push((Node::Swizzle(one, vec![0]), Ty::F32, Span::UNDEFINED));
-        assert!(matches!(validate(&ir), Err(ValidationError::NodeType { .. })));
+        assert!(matches!(validate_ir(&ir), Err(ValidationError::NodeType { .. })));
     }
 
     #[test]
@@ -464,15 +470,15 @@ mod tests {
         let mut ir = compiled("hard");
         let ghost = ChannelId::new(99);
         ir.arena.nodes.push((Node::Channel(ghost), Ty::F32, Span::UNDEFINED));
-        assert!(matches!(validate(&ir), Err(ValidationError::BadChannel { channel, .. }) if channel == ghost));
+        assert!(matches!(validate_ir(&ir), Err(ValidationError::BadChannel { channel, .. }) if channel == ghost));
 
         let mut ir = compiled("hard");
         ir.passes[PassId::new(1)].reads.push(ResId::new(7));
-        assert!(matches!(validate(&ir), Err(ValidationError::BadResource { resource, .. }) if resource == ResId::new(7)));
+        assert!(matches!(validate_ir(&ir), Err(ValidationError::BadResource { resource, .. }) if resource == ResId::new(7)));
 
         let mut ir = compiled("hard");
         ir.resources[ResId::new(0)].writer = PassId::new(1);
-        assert!(matches!(validate(&ir), Err(ValidationError::Writer { .. })));
+        assert!(matches!(validate_ir(&ir), Err(ValidationError::Writer { .. })));
     }
 
     #[test]
@@ -484,13 +490,13 @@ mod tests {
         };
         let c = ir.channels.handles().find(|c| ir.channels[*c].value.is_some()).unwrap();
         ir.channels[c].value = Some(visibility);
-        assert!(matches!(validate(&ir), Err(ValidationError::WrongSide { .. })));
+        assert!(matches!(validate_ir(&ir), Err(ValidationError::WrongSide { .. })));
 
         let mut ir = compiled("hard");
         let shade = ir.passes.handles().last().unwrap();
         ir.passes[shade].kind = IrPassKind::Map;
         assert!(matches!(
-            validate(&ir),
+            validate_ir(&ir),
             Err(ValidationError::PassShape { .. } | ValidationError::ShadePasses(0))
         ));
     }
@@ -501,6 +507,6 @@ mod tests {
         // the first pass reads what the last non-Shade pass writes
         let last_written = ir.passes.iter().filter_map(|p| p.writes).next_back().unwrap();
         ir.passes[PassId::new(0)].reads.push(last_written);
-        assert!(matches!(validate(&ir), Err(ValidationError::ReadOrder { .. })));
+        assert!(matches!(validate_ir(&ir), Err(ValidationError::ReadOrder { .. })));
     }
 }
