@@ -352,6 +352,33 @@ fn check_and_compile_agree_on_integer_literals() {
     assert!(d.render("hard", &src).contains("has no i32 value"), "{}", d.render("hard", &src));
 }
 
+/// Every error fixture: what compile refuses in a front-end phase, check refuses with the
+/// same diagnostic; what compile refuses later, check accepts.
+#[test]
+fn check_and_compile_agree_on_every_error_fixture() {
+    use sshc::diag::Phase;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/errors");
+    for f in std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).map(|e| e.path()) {
+        if f.extension().is_none_or(|x| x != "ron") {
+            continue;
+        }
+        let src = std::fs::read_to_string(&f).unwrap();
+        let name = f.file_name().unwrap().to_string_lossy().into_owned();
+        let compiled = sshc::compile_str(&src, &CompileOptions::default()).expect_err(&name);
+        let checked = sshc::check_str(&src, &CompileOptions::default());
+        let front = compiled
+            .errors()
+            .any(|e| matches!(e.phase, Phase::Syntax | Phase::Parse | Phase::Resolve | Phase::Check));
+        match checked {
+            Err(d) => {
+                assert!(front, "{name}: check refuses what compile refuses only later");
+                assert_eq!(d.render(&name, &src), compiled.render(&name, &src), "{name}");
+            }
+            Ok(()) => assert_later_than_check(&compiled, &compiled.render(&name, &src)),
+        }
+    }
+}
+
 #[test]
 fn check_and_compile_agree_on_empty_series() {
     // An empty series is the zero of its body's type (docs/language.md): here vec2(0.0),
