@@ -200,3 +200,69 @@ fn name(sym: &Symbols, n: &str, span: Span, env: &[(String, ConstValue)]) -> Res
         Diagnostic::error(Phase::Check, format!("`{n}` is not known at compile time")).at(span, "not a compile-time value"),
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ConstValue::*;
+
+    #[test]
+    fn integers_stay_in_i32_and_floats_round_to_f32() {
+        assert_eq!(represent(Int(i32::MAX as i64)), Some(Int(i32::MAX as i64)));
+        assert_eq!(represent(Int(i32::MAX as i64 + 1)), None);
+        assert_eq!(represent(Float(0.1)), Some(Float(0.1f32 as f64)));
+        assert_eq!(represent(Float(1e39)), None);
+        assert_eq!(binary(BinOp::Div, Int(7), Int(2)), Some(Int(3)));
+        assert_eq!(binary(BinOp::Div, Int(1), Int(0)), None);
+        assert_eq!(binary(BinOp::Rem, Float(1.0), Float(0.0)), None);
+        assert_eq!(
+            binary(BinOp::Add, Int(1), Float(1.0)),
+            None,
+            "mixed types are converted by the caller"
+        );
+        assert_eq!(unary(UnOp::Neg, Int(i64::MIN)), None);
+        assert_eq!(unary(UnOp::Not, Bool(true)), Some(Bool(false)));
+    }
+
+    fn eval_str(expr: &str, params: &str) -> Result<ConstValue, String> {
+        let src = format!(
+            "Technique(name: \"t\", params: {{ {params} }}, channels: {{ \"z\": Channel(precision: F32) }}, passes: [Depth(name: \"depth\", writes: \"shadow\", channel: \"z\"), Shade(name: \"shade\", reads: [\"shadow\"], visibility: \"{expr}\")])"
+        );
+        let t = crate::front::parse::parse(&src).map_err(|d| format!("{d:?}"))?;
+        let sym = crate::resolve::resolve(&t, &crate::CompileOptions::default()).map_err(|d| format!("{d:?}"))?;
+        let crate::front::ast::PassKind::Shade { visibility, .. } = &t.passes[1].kind else {
+            unreachable!()
+        };
+        const_eval(&sym, visibility).map_err(|d| d.message)
+    }
+
+    #[test]
+    fn expressions_of_literals_fixed_params_lets_and_series() {
+        assert_eq!(eval_str("2 * 3 + 1", ""), Ok(Int(7)));
+        assert_eq!(eval_str("7 / 2 * 1.0", ""), Ok(Float(3.0)), "the integer quotient, then f32");
+        assert_eq!(
+            eval_str(
+                "let a = N + 1; sum(k in 1..=a, k)",
+                "\"N\": Param(ty: I32, default: 3, fixed: true)"
+            ),
+            Ok(Int(10))
+        );
+        assert_eq!(
+            eval_str("max(f32(N), 0.5)", "\"N\": Param(ty: I32, default: 3, fixed: true)"),
+            Ok(Float(3.0))
+        );
+        assert_eq!(eval_str("sum(k in 1..=0, 2.0)", ""), Ok(Int(0)));
+        assert_eq!(eval_str("select(1, 2, 1 < 2)", ""), Ok(Int(2)));
+        assert!(
+            eval_str("2147483647 + 1", "")
+                .unwrap_err()
+                .contains("must be known at compile time")
+        );
+        assert!(
+            eval_str("N * 2", "\"N\": Param(ty: I32, default: 3)")
+                .unwrap_err()
+                .contains("runtime uniform")
+        );
+        assert!(eval_str("d * 2.0", "").unwrap_err().contains("`d` is not known at compile time"));
+    }
+}
