@@ -9,12 +9,16 @@
 use std::path::Path;
 use std::time::Instant;
 
+/// One row of the table: a technique's source with overrides, compiled `runs` times.
+struct Case {
+    name: String,
+    source: String,
+    set: Vec<(String, String)>,
+    runs: usize,
+}
+
 fn main() {
-    let runs: usize = std::env::args()
-        .skip(1)
-        .find_map(|a| a.parse().ok())
-        .unwrap_or(200)
-        .max(1);
+    let runs: usize = std::env::args().skip(1).find_map(|a| a.parse().ok()).unwrap_or(200).max(1);
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../techniques");
     let mut files: Vec<_> = std::fs::read_dir(&dir)
         .expect("the bundled techniques folder")
@@ -22,22 +26,33 @@ fn main() {
         .filter(|p| p.extension().is_some_and(|x| x == "ron"))
         .collect();
     files.sort();
-    let mut cases: Vec<(String, String, Vec<(String, String)>, usize)> = files
+    let mut cases: Vec<Case> = files
         .iter()
-        .map(|p| {
-            let name = p.file_stem().unwrap().to_string_lossy().into_owned();
-            (name, std::fs::read_to_string(p).unwrap(), vec![], runs)
+        .map(|p| Case {
+            name: p.file_stem().unwrap().to_string_lossy().into_owned(),
+            source: std::fs::read_to_string(p).unwrap(),
+            set: vec![],
+            runs,
         })
         .collect();
     let csm = std::fs::read_to_string(dir.join("csm.ron")).unwrap();
-    cases.push(("csm, M = 16".into(), csm.clone(), vec![("M".into(), "16".into())], (runs / 4).max(1)));
-    cases.push(("csm, M = 64".into(), csm, vec![("M".into(), "64".into())], (runs / 10).max(1)));
+    for (m, n) in [(16, (runs / 4).max(1)), (64, (runs / 10).max(1))] {
+        cases.push(Case {
+            name: format!("csm, M = {m}"),
+            source: csm.clone(),
+            set: vec![("M".into(), m.to_string())],
+            runs: n,
+        });
+    }
     println!("| technique | median ms | min ms | max ms | runs |\n|---|---|---|---|---|");
-    for (name, source, set, n) in cases {
-        let opts = sshc::CompileOptions {
-            set,
-            ..Default::default()
-        };
+    for Case {
+        name,
+        source,
+        set,
+        runs: n,
+    } in cases
+    {
+        let opts = sshc::CompileOptions { set, ..Default::default() };
         if let Err(d) = sshc::compile_str(&source, &opts) {
             panic!("{name} does not compile:\n{}", d.render(&name, &source));
         }

@@ -65,6 +65,8 @@ pub struct RangeEval<'a> {
     ir: &'a Ir,
     /// Map side: the range of each channel as stored in the resources the pass reads.
     channels: HashMap<ChannelId, Interval>,
+    /// One runtime param evaluated over another range than its declared one.
+    pub param_range: Option<(usize, Interval)>,
     memo: HashMap<H, Interval>,
 }
 
@@ -73,6 +75,7 @@ impl<'a> RangeEval<'a> {
         RangeEval {
             ir,
             channels,
+            param_range: None,
             memo: HashMap::new(),
         }
     }
@@ -97,6 +100,9 @@ impl<'a> RangeEval<'a> {
             Node::F32(b) => Interval::point(f32::from_bits(*b) as f64),
             Node::I32(v) => Interval::point(*v as f64),
             Node::Bool(v) => Interval::point(*v as i32 as f64),
+            Node::Param(p) if self.param_range.is_some_and(|(o, _)| o == *p) => {
+                self.param_range.map(|(_, r)| r).unwrap_or(Interval::UNBOUNDED)
+            }
             Node::Param(p) => {
                 let p = &self.ir.params[*p];
                 match (p.range, p.value) {
@@ -162,8 +168,10 @@ fn mul(a: f64, b: f64) -> f64 {
     if a == 0.0 || b == 0.0 { 0.0 } else { a * b }
 }
 
-/// Ranges of every slot of every resource, in pass order (no diagnostics).
-pub fn slot_ranges(ir: &Ir) -> Vec<Vec<Interval>> {
+/// Ranges of every slot of every resource (indexed by resource, then slot), in pass order
+/// (no diagnostics). `param_range` overrides the range of one runtime param: the probe
+/// of the largest safe value evaluates the same IR under another environment.
+pub fn slot_ranges(ir: &Ir, param_range: Option<(usize, Interval)>) -> Vec<Vec<Interval>> {
     let mut out: Vec<Vec<Interval>> = ir.resources.iter().map(|r| vec![Interval::UNBOUNDED; r.slots.len()]).collect();
     for pass in &ir.passes {
         let Some(w) = pass.writes else { continue };
@@ -171,7 +179,7 @@ pub fn slot_ranges(ir: &Ir) -> Vec<Vec<Interval>> {
         let src = |ch: ChannelId| -> Option<Interval> {
             pass.reads.iter().find_map(|&r| {
                 let i = ir.resources[r].slots.iter().position(|s| s.channel == ch)?;
-                Some(out[r][i])
+                Some(out[r.index()][i])
             })
         };
         let mut ranges = Vec::with_capacity(res.slots.len());
@@ -181,10 +189,11 @@ pub fn slot_ranges(ir: &Ir) -> Vec<Vec<Interval>> {
                 let mut env = HashMap::new();
                 for &r in &pass.reads {
                     for (i, s) in ir.resources[r].slots.iter().enumerate() {
-                        env.insert(s.channel, out[r][i]);
+                        env.insert(s.channel, out[r.index()][i]);
                     }
                 }
                 let mut ev = RangeEval::new(ir, env);
+                ev.param_range = param_range;
                 for s in &res.slots {
                     ranges.push(match ir.channels[s.channel].value {
                         Some(v) => ev.eval(v),
@@ -212,7 +221,7 @@ pub fn slot_ranges(ir: &Ir) -> Vec<Vec<Interval>> {
             }
             IrPassKind::Shade { .. } => {}
         }
-        out[w] = ranges;
+        out[w.index()] = ranges;
     }
     out
 }
@@ -246,18 +255,20 @@ pub fn encode_for(p: Precision, r: Interval) -> Encode {
 /// Re-evaluates one slot's range with one parameter changed: `(param, value) -> range`.
 pub type Probe<'p> = &'p dyn Fn(usize, f64, ResId, usize) -> Option<Interval>;
 
-pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics> {
-    let ranges = slot_ranges(ir);
+/// Ranges and encodings of every slot (a side table: the IR is only read, so the probe
+/// may read it too), and the warnings.
+pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Diagnostics> {
+    let ranges = slot_ranges(ir, None);
     let mut diags = Diagnostics::default();
     let mut warnings = Vec::new();
-    for (ri, res) in ir.resources.iter().enumerate() {
+    for (ri, res) in ir.resources.with_handles() {
         // A resource repeats its source's complaint: report each channel once, where it is made.
         let derived = matches!(
             ir.passes[res.writer].kind,
             IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea
         );
         for (si, slot) in res.slots.iter().enumerate() {
-            let r = ranges[ri][si];
+            let r = ranges[ri.index()][si];
             if fits(slot.precision, r) {
                 continue;
             }
@@ -350,15 +361,16 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
         }
     }
     diags.check()?;
-    for (ri, res) in ir.resources.iter_mut().enumerate() {
-        for (si, slot) in res.slots.iter_mut().enumerate() {
-            let r = ranges[ri][si];
-            slot.range = Some(r);
-            slot.encode = encode_for(slot.precision, r);
+    let mut analysis = Analysis::default();
+    for (ri, res) in ir.resources.with_handles() {
+        for (si, slot) in res.slots.iter().enumerate() {
+            let range = ranges[ri.index()][si];
+            let encode = encode_for(slot.precision, range);
+            analysis.slots.insert((ri, slot.channel), SlotInfo { range, encode });
         }
     }
     // Quantisation and underflow, reported once, where the channel is made.
-    for res in &ir.resources {
+    for (ri, res) in ir.resources.with_handles() {
         if matches!(
             ir.passes[res.writer].kind,
             IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea
@@ -366,7 +378,9 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
             continue;
         }
         for s in &res.slots {
-            let Some(r) = s.range else { continue };
+            let Some(SlotInfo { range: r, .. }) = analysis.get(ri, s.channel) else {
+                continue;
+            };
             let ch = &ir.channels[s.channel];
             if s.precision == Precision::Unorm8 && r.hi - r.lo > 8.0 {
                 warnings.push(
@@ -414,5 +428,5 @@ pub fn analyse(ir: &mut Ir, probe: Probe) -> Result<Vec<Diagnostic>, Diagnostics
             }
         }
     }
-    Ok(warnings)
+    Ok((analysis, warnings))
 }

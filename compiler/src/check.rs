@@ -5,14 +5,15 @@
 //! in their ranges; filter sizes are odd and within bounds.
 
 use crate::builtins::{Func, Input, SampleFn, Side, Ty, constant, unify};
+use crate::consteval::{self, MAX_SERIES, NotConst};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::*;
 use crate::front::expr::{BinOp, Expr, ExprKind, Literal, UnOp};
 use crate::front::parse::closest;
 use crate::ir::IrKernel;
-use crate::lower;
 use crate::resolve::{Item, Symbols};
 use crate::span::Span;
+use crate::types::{Resolved, Types, comp_index};
 use indexmap::IndexMap;
 
 /// The largest filter kernel, per axis.
@@ -27,11 +28,15 @@ pub struct Checked {
     pub items: IndexMap<String, Vec<Item>>,
     /// The resolved kernel of each Filter pass (by pass index).
     pub kernels: Vec<Option<IrKernel>>,
+    /// The type of every expression, what every name resolves to, and where abstract
+    /// integers become f32: what `lower` builds the IR from.
+    pub types: Types,
 }
 
 pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
     let t = sym.t;
     let mut diags = Diagnostics::default();
+    let mut types = Types::default();
 
     check_params(sym, &mut diags);
 
@@ -126,13 +131,13 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
 
     // Expansions.
     for e in &t.expansions {
-        check_expansion(sym, e, &mut diags);
+        check_expansion(sym, e, &mut types, &mut diags);
     }
     // Channel values are computed per shadow-map texel.
     for c in &t.channels {
         if let Some(v) = &c.value {
-            let mut ty = Typer::new(sym, Mode::ChannelValue);
-            match ty.infer(v) {
+            let mut ty = Typer::new(sym, Mode::ChannelValue, &mut types);
+            match ty.infer_as(v, Ty::F32) {
                 Ok(t) => expect_f32(t, v.span, "a channel value", &mut diags),
                 Err(d) => diags.push(d),
             }
@@ -189,7 +194,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                     }
                 }
             }
-            PassKind::Filter { kernel, .. } => match resolve_kernel(sym, kernel) {
+            PassKind::Filter { kernel, .. } => match resolve_kernel(sym, kernel, &mut types) {
                 Ok(k) => kernels[pi] = Some(k),
                 Err(d) => diags.push(d),
             },
@@ -206,18 +211,23 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                             .map(move |i| (i, r.value.clone(), table))
                     })
                     .collect();
-                let mut ty = Typer::new(sym, Mode::Shade);
+                let mut ty = Typer::new(sym, Mode::Shade, &mut types);
                 ty.available = Some(carried);
-                match ty.infer(visibility) {
+                match ty.infer_as(visibility, Ty::F32) {
                     Ok(t) => expect_f32(t, visibility.span, "the visibility", &mut diags),
                     Err(d) => diags.push(d),
                 }
             }
-            _ => {}
+            PassKind::Depth { .. } | PassKind::Mipmap { .. } | PassKind::SummedArea { .. } | PassKind::Geometry { .. } => {}
         }
     }
     diags.check()?;
-    Ok(Checked { order, items, kernels })
+    Ok(Checked {
+        order,
+        items,
+        kernels,
+        types,
+    })
 }
 
 fn expect_f32(t: Ty, span: Span, what: &str, diags: &mut Diagnostics) {
@@ -304,10 +314,11 @@ fn check_params(sym: &Symbols, diags: &mut Diagnostics) {
     }
 }
 
-fn check_expansion(sym: &Symbols, e: &Expansion, diags: &mut Diagnostics) {
-    let mut ty = Typer::new(sym, Mode::Const);
+fn check_expansion(sym: &Symbols, e: &Expansion, types: &mut Types, diags: &mut Diagnostics) {
+    let mut ty = Typer::new(sym, Mode::Const, types);
+    let mut bounds_typed = true;
     for (bound, what) in [(&e.from, "start"), (&e.to, "end")] {
-        match ty.infer(bound) {
+        match ty.infer_as(bound, Ty::I32) {
             Ok(Ty::I32 | Ty::AbstractInt) => {}
             Ok(t) => diags.push(
                 Diagnostic::error(
@@ -319,11 +330,37 @@ fn check_expansion(sym: &Symbols, e: &Expansion, diags: &mut Diagnostics) {
                 )
                 .at(bound.span, format!("this is {t}")),
             ),
-            Err(d) => diags.push(d),
+            Err(d) => {
+                diags.push(d);
+                bounds_typed = false;
+            }
+        }
+    }
+    // The number of terms is known here: an empty or too long expansion is refused now,
+    // not when lowering unrolls it.
+    if bounds_typed
+        && let (Ok(ConstValue::Int(lo)), Ok(ConstValue::Int(hi))) = (consteval::const_eval(sym, &e.from), consteval::const_eval(sym, &e.to))
+    {
+        if hi < lo {
+            diags.push(
+                Diagnostic::error(
+                    Phase::Check,
+                    format!("expansion `{}` has no terms: its index runs from {lo} to {hi}", e.name.value),
+                )
+                .at(e.from.span.join(e.to.span), "empty range"),
+            );
+        } else if hi - lo + 1 > MAX_SERIES {
+            diags.push(
+                Diagnostic::error(
+                    Phase::Check,
+                    format!("expansion `{}` has {} orders: at most {MAX_SERIES}", e.name.value, hi - lo + 1),
+                )
+                .at(e.to.span, "too many"),
+            );
         }
     }
     ty.mode = Mode::Coeff;
-    match ty.infer(&e.constant) {
+    match ty.infer_as(&e.constant, Ty::F32) {
         Ok(t) => expect_f32(t, e.constant.span, "the constant term", diags),
         Err(d) => diags.push(d),
     }
@@ -340,16 +377,20 @@ fn check_expansion(sym: &Symbols, e: &Expansion, diags: &mut Diagnostics) {
         name: e.index.value.clone(),
         ty: Ty::I32,
         uses: vec![],
+        konst: true,
     });
     for (name, value) in &e.lets {
         ty.uses.clear();
-        match ty.infer(value) {
+        let before = ty.runtime;
+        match ty.infer_as(value, Ty::I32) {
             Ok(t) => {
                 let uses = std::mem::take(&mut ty.uses);
+                let konst = ty.runtime == before;
                 ty.locals.push(Local {
                     name: name.value.clone(),
                     ty: t.concrete(),
                     uses,
+                    konst,
                 });
             }
             Err(d) => {
@@ -360,7 +401,7 @@ fn check_expansion(sym: &Symbols, e: &Expansion, diags: &mut Diagnostics) {
     }
     for term in &e.terms {
         ty.mode = Mode::Coeff;
-        match ty.infer(&term.coeff) {
+        match ty.infer_as(&term.coeff, Ty::F32) {
             Ok(t) => expect_f32(t, term.coeff.span, "a coefficient", diags),
             Err(d) => diags.push(d),
         }
@@ -376,7 +417,7 @@ fn check_expansion(sym: &Symbols, e: &Expansion, diags: &mut Diagnostics) {
             );
         }
         ty.mode = Mode::Basis;
-        match ty.infer(&term.basis) {
+        match ty.infer_as(&term.basis, Ty::F32) {
             Ok(t) => expect_f32(t, term.basis.span, "a basis function", diags),
             Err(d) => diags.push(d),
         }
@@ -389,7 +430,7 @@ fn check_expansion(sym: &Symbols, e: &Expansion, diags: &mut Diagnostics) {
 fn side_error(u: &Use, what: &str, owner: &str, why: &str) -> Diagnostic {
     let side = match u.side {
         Side::Receiver => "a receiver-side input",
-        _ => "a map-side channel",
+        Side::Map | Side::Both => "a map-side channel",
     };
     let mut d = Diagnostic::error(
         Phase::Check,
@@ -403,39 +444,41 @@ fn side_error(u: &Use, what: &str, owner: &str, why: &str) -> Diagnostic {
     d
 }
 
-fn resolve_kernel(sym: &Symbols, kernel: &crate::span::Spanned<Kernel>) -> Result<IrKernel, Diagnostic> {
-    let size = |e: &Expr| -> Result<u32, Diagnostic> {
-        const_typed(sym, e, &[Ty::I32, Ty::AbstractInt], "a filter size", "an integer")?;
-        let v = lower::const_eval(sym, e)?;
-        match v {
-            ConstValue::Int(n) if (1..=MAX_KERNEL).contains(&n) && n % 2 == 1 => Ok(n as u32),
-            ConstValue::Int(n) => Err(Diagnostic::error(
-                Phase::Check,
-                format!("bad filter size {n}: sizes are odd and between 1 and {MAX_KERNEL}"),
-            )
-            .at(e.span, format!("evaluates to {n}"))
-            .note("an odd size keeps the kernel centred on the texel")
-            .help(if n % 2 == 0 && n > 0 {
-                format!("use {} or {}", n - 1, n + 1)
-            } else {
-                format!("use a size in 1..={MAX_KERNEL}")
-            })),
-            other => Err(Diagnostic::error(
-                Phase::Check,
-                format!("type mismatch: a filter size must be an integer, found {other}"),
-            )
-            .at(e.span, "not an integer")),
-        }
-    };
+fn kernel_size(sym: &Symbols, e: &Expr, types: &mut Types) -> Result<u32, Diagnostic> {
+    const_typed(sym, e, types, Ty::I32, "a filter size", "an integer")?;
+    let v = consteval::const_eval(sym, e)?;
+    match v {
+        ConstValue::Int(n) if (1..=MAX_KERNEL).contains(&n) && n % 2 == 1 => Ok(n as u32),
+        ConstValue::Int(n) => Err(Diagnostic::error(
+            Phase::Check,
+            format!("bad filter size {n}: sizes are odd and between 1 and {MAX_KERNEL}"),
+        )
+        .at(e.span, format!("evaluates to {n}"))
+        .note("an odd size keeps the kernel centred on the texel")
+        .help(if n % 2 == 0 && n > 0 {
+            format!("use {} or {}", n - 1, n + 1)
+        } else {
+            format!("use a size in 1..={MAX_KERNEL}")
+        })),
+        other @ (ConstValue::Float(_) | ConstValue::Bool(_)) => Err(Diagnostic::error(
+            Phase::Check,
+            format!("type mismatch: a filter size must be an integer, found {other}"),
+        )
+        .at(e.span, "not an integer")),
+    }
+}
+
+fn resolve_kernel(sym: &Symbols, kernel: &crate::span::Spanned<Kernel>, types: &mut Types) -> Result<IrKernel, Diagnostic> {
+    let size = |e: &Expr, types: &mut Types| kernel_size(sym, e, types);
     Ok(match &kernel.value {
-        Kernel::Box { size: s } => IrKernel::Box(size(s)?),
-        Kernel::Max { size: s } => IrKernel::Max(size(s)?),
-        Kernel::Min { size: s } => IrKernel::Min(size(s)?),
+        Kernel::Box { size: s } => IrKernel::Box(size(s, types)?),
+        Kernel::Max { size: s } => IrKernel::Max(size(s, types)?),
+        Kernel::Min { size: s } => IrKernel::Min(size(s, types)?),
         Kernel::LoG => IrKernel::LoG,
         Kernel::Gaussian { size: s, sigma } => {
-            let n = size(s)?;
-            const_typed(sym, sigma, &[Ty::F32, Ty::AbstractInt], "a Gaussian sigma", "an f32")?;
-            let sg = lower::const_eval(sym, sigma)?.as_f64();
+            let n = size(s, types)?;
+            const_typed(sym, sigma, types, Ty::F32, "a Gaussian sigma", "an f32")?;
+            let sg = consteval::const_eval(sym, sigma)?.as_f64();
             if !(sg > 0.0 && sg.is_finite()) {
                 return Err(
                     Diagnostic::error(Phase::Check, format!("bad Gaussian sigma {sg}: it must be positive")).at(sigma.span, "not positive"),
@@ -447,9 +490,10 @@ fn resolve_kernel(sym: &Symbols, kernel: &crate::span::Spanned<Kernel>) -> Resul
 }
 
 /// Type-check an expression that must be known at compile time.
-fn const_typed(sym: &Symbols, e: &Expr, allowed: &[Ty], what: &str, want: &str) -> Result<(), Diagnostic> {
-    let t = Typer::new(sym, Mode::Const).infer(e)?;
-    if allowed.contains(&t) {
+/// `want` is I32 or F32; an abstract integer is accepted for either.
+fn const_typed(sym: &Symbols, e: &Expr, types: &mut Types, want_ty: Ty, what: &str, want: &str) -> Result<(), Diagnostic> {
+    let t = Typer::new(sym, Mode::Const, types).infer_as(e, want_ty)?;
+    if t == want_ty || t == Ty::AbstractInt {
         Ok(())
     } else {
         Err(Typer::err(
@@ -536,11 +580,17 @@ struct Local {
     name: String,
     ty: Ty,
     uses: Vec<Use>,
+    /// Known at compile time (a series variable, an expansion index, or a `let` of
+    /// compile-time values), so usable where a constant is needed.
+    konst: bool,
 }
 
-/// Type inference for one expression in one context.
+/// Type inference for one expression in one context; what it infers goes into `types`.
 struct Typer<'s, 'a> {
     sym: &'s Symbols<'a>,
+    types: &'s mut Types,
+    /// Uses of values not known at compile time so far (to tell constant `let`s).
+    runtime: usize,
     mode: Mode,
     locals: Vec<Local>,
     uses: Vec<Use>,
@@ -550,9 +600,11 @@ struct Typer<'s, 'a> {
 }
 
 impl<'s, 'a> Typer<'s, 'a> {
-    fn new(sym: &'s Symbols<'a>, mode: Mode) -> Self {
+    fn new(sym: &'s Symbols<'a>, mode: Mode, types: &'s mut Types) -> Self {
         Typer {
             sym,
+            types,
+            runtime: 0,
             mode,
             locals: vec![],
             uses: vec![],
@@ -564,12 +616,59 @@ impl<'s, 'a> Typer<'s, 'a> {
         Diagnostic::error(Phase::Check, msg).at(span, label)
     }
 
+    /// Infer the type of `e` where the context needs `want` (F32 or I32): an abstract
+    /// integer is settled to it.
+    fn infer_as(&mut self, e: &Expr, want: Ty) -> Result<Ty, Diagnostic> {
+        let t = self.infer(e)?;
+        self.settle(e, want)?;
+        Ok(t)
+    }
+
+    /// Where an abstract integer expression meets a concrete type: its value must be an
+    /// i32 (it is computed as one), and it converts to f32 if `to` is a float type.
+    fn settle(&mut self, e: &Expr, to: Ty) -> Result<(), Diagnostic> {
+        if self.types.ty(e) != Some(Ty::AbstractInt) {
+            return Ok(());
+        }
+        match consteval::eval(self.sym, e, &mut Vec::new()) {
+            // depends on a series variable: its value is known only when unrolled
+            Ok(_) | Err(NotConst::Runtime(_)) => {}
+            Err(NotConst::NoValue) => {
+                return Err(Self::err(
+                    e.span,
+                    "this integer expression has no i32 value",
+                    "overflows i32 or divides by zero",
+                )
+                .help("integer expressions are computed in i32; write float literals (`2.0`) for larger values"));
+            }
+        }
+        if matches!(to, Ty::F32 | Ty::Vec(_)) {
+            self.types.convert_to_f32(e);
+        }
+        Ok(())
+    }
+
     fn infer(&mut self, e: &Expr) -> Result<Ty, Diagnostic> {
+        let t = self.infer_kind(e)?;
+        self.types.set(e, t);
+        Ok(t)
+    }
+
+    fn infer_kind(&mut self, e: &Expr) -> Result<Ty, Diagnostic> {
         match &e.kind {
-            ExprKind::Lit(Literal::Int(_)) => Ok(Ty::AbstractInt),
+            ExprKind::Lit(Literal::Int(v)) => {
+                if i32::try_from(*v).is_err() {
+                    return Err(
+                        Self::err(e.span, format!("integer literal {v} does not fit in i32"), "out of i32 range")
+                            .note(format!("integers are i32: from {} to {}", i32::MIN, i32::MAX))
+                            .help(format!("write it as a float literal: `{v}.0`")),
+                    );
+                }
+                Ok(Ty::AbstractInt)
+            }
             ExprKind::Lit(Literal::Float(_)) => Ok(Ty::F32),
             ExprKind::Lit(Literal::Bool(_)) => Ok(Ty::Bool),
-            ExprKind::Name(n) => self.name(n, e.span),
+            ExprKind::Name(n) => self.name(e, n, e.span),
             ExprKind::Unary(op, a) => {
                 let t = self.infer(a)?;
                 match (op, t) {
@@ -613,6 +712,13 @@ impl<'s, 'a> Typer<'s, 'a> {
                 let t = unify(ta, tb)
                     .filter(|t| t.is_numeric() || (t == &Ty::Bool && matches!(op, BinOp::Eq | BinOp::Ne)))
                     .ok_or_else(mismatch)?;
+                // An abstract operand takes the other's type (a scalar beside a vector
+                // broadcasts as f32); two abstract operands stay abstract, unless compared.
+                if t != Ty::AbstractInt || op.is_comparison() {
+                    let to = if matches!(t, Ty::Vec(_)) { Ty::F32 } else { t.concrete() };
+                    self.settle(a, to)?;
+                    self.settle(b, to)?;
+                }
                 if op.is_comparison() {
                     if matches!(t, Ty::Vec(_)) {
                         return Err(mismatch());
@@ -632,10 +738,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                         format!("this is {t}"),
                     ));
                 };
-                let ok = !m.is_empty()
-                    && m.len() <= 4
-                    && m.chars()
-                        .all(|c| matches!(c, 'x' | 'y' | 'z' | 'w' | 'r' | 'g' | 'b' | 'a') && comp_index(c) < n as usize);
+                let ok = !m.is_empty() && m.len() <= 4 && m.chars().all(|c| comp_index(c).is_some_and(|i| i < n as usize));
                 if !ok {
                     return Err(Self::err(e.span, format!("`{t}` has no component `{m}`"), "unknown component")
                         .help("use x, y, z, w (or r, g, b, a) within the vector's size"));
@@ -652,12 +755,14 @@ impl<'s, 'a> Typer<'s, 'a> {
                     return Err(Self::err(*name_span, format!("`{name}` is a built-in name"), "reserved").help("choose another name"));
                 }
                 let before = self.uses.len();
-                let t = self.infer(value)?;
+                let runtime = self.runtime;
+                let t = self.infer_as(value, Ty::I32)?;
                 let uses: Vec<Use> = self.uses.drain(before..).collect();
                 self.locals.push(Local {
                     name: name.clone(),
                     ty: t.concrete(),
                     uses,
+                    konst: self.runtime == runtime,
                 });
                 let r = self.infer(body);
                 self.locals.pop();
@@ -676,21 +781,41 @@ impl<'s, 'a> Typer<'s, 'a> {
                 let mode = self.mode;
                 self.mode = Mode::Const;
                 for b in [from, to] {
-                    let t = self.infer(b)?;
-                    if !matches!(t, Ty::I32 | Ty::AbstractInt) {
-                        self.mode = mode;
-                        return Err(Self::err(
-                            b.span,
-                            format!("type mismatch: series bounds are integers, found {t}"),
-                            format!("this is {t}"),
-                        ));
+                    let t = self.infer_as(b, Ty::I32);
+                    match t {
+                        Ok(Ty::I32 | Ty::AbstractInt) => {}
+                        Ok(t) => {
+                            self.mode = mode;
+                            return Err(Self::err(
+                                b.span,
+                                format!("type mismatch: series bounds are integers, found {t}"),
+                                format!("this is {t}"),
+                            ));
+                        }
+                        Err(d) => {
+                            self.mode = mode;
+                            return Err(d);
+                        }
                     }
                 }
                 self.mode = mode;
+                // Bounds that do not depend on an enclosing series are known now.
+                let mut env = Vec::new();
+                if let (Ok(ConstValue::Int(lo)), Ok(ConstValue::Int(hi))) =
+                    (consteval::eval(self.sym, from, &mut env), consteval::eval(self.sym, to, &mut env))
+                    && hi - lo + 1 > MAX_SERIES
+                {
+                    return Err(Self::err(
+                        e.span,
+                        format!("series of {} terms: at most {MAX_SERIES} unroll", hi - lo + 1),
+                        "too long",
+                    ));
+                }
                 self.locals.push(Local {
                     name: var.clone(),
                     ty: Ty::I32,
                     uses: vec![],
+                    konst: true,
                 });
                 let r = self.infer(body);
                 self.locals.pop();
@@ -707,9 +832,26 @@ impl<'s, 'a> Typer<'s, 'a> {
         }
     }
 
-    fn name(&mut self, n: &str, span: Span) -> Result<Ty, Diagnostic> {
+    fn name(&mut self, e: &Expr, n: &str, span: Span) -> Result<Ty, Diagnostic> {
+        let (ty, r) = self.resolve_name(n, span)?;
+        self.types.set_name(e, r);
+        Ok(ty)
+    }
+
+    fn resolve_name(&mut self, n: &str, span: Span) -> Result<(Ty, Resolved), Diagnostic> {
         if let Some(l) = self.locals.iter().rev().find(|l| l.name == n) {
             let ty = l.ty;
+            if !l.konst {
+                if self.mode == Mode::Const {
+                    return Err(Self::err(
+                        span,
+                        format!("`{n}` is not known at compile time"),
+                        "bound to a value computed per pixel or texel",
+                    )
+                    .help("a value needed at compile time may use literals, params with `fixed: true` and series variables only"));
+                }
+                self.runtime += 1;
+            }
             let uses: Vec<Use> = l
                 .uses
                 .iter()
@@ -719,7 +861,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                 })
                 .collect();
             self.uses.extend(uses);
-            return Ok(ty);
+            return Ok((ty, Resolved::Local));
         }
         if let Some((i, p)) = self.sym.param(n) {
             if self.mode == Mode::Const && !p.fixed {
@@ -731,11 +873,13 @@ impl<'s, 'a> Typer<'s, 'a> {
                 .also(p.name.span, "declared here")
                 .help(format!("add `fixed: true` to param `{n}`")));
             }
-            let _ = i;
-            return Ok(Ty::from_scalar(p.ty.value));
+            if !p.fixed {
+                self.runtime += 1;
+            }
+            return Ok((Ty::from_scalar(p.ty.value), Resolved::Param(i)));
         }
-        if constant(n).is_some() {
-            return Ok(Ty::F32);
+        if let Some(c) = constant(n) {
+            return Ok((Ty::F32, Resolved::Constant(c)));
         }
         if let Some(input) = Input::from_name(n) {
             if self.mode == Mode::Const {
@@ -749,9 +893,10 @@ impl<'s, 'a> Typer<'s, 'a> {
                     via: None,
                 });
             }
-            return Ok(input.ty());
+            self.runtime += 1;
+            return Ok((input.ty(), Resolved::Input(input)));
         }
-        if self.sym.channels.contains_key(n) {
+        if let Some(&c) = self.sym.channels.get(n) {
             match self.mode {
                 Mode::Shade => {
                     return Err(Self::err(
@@ -770,14 +915,15 @@ impl<'s, 'a> Typer<'s, 'a> {
                         "a per-texel value",
                     ));
                 }
-                _ => {
+                Mode::Let | Mode::Coeff | Mode::Basis | Mode::ChannelValue => {
                     self.uses.push(Use {
                         name: n.to_string(),
                         side: Side::Map,
                         span,
                         via: None,
                     });
-                    return Ok(Ty::F32);
+                    self.runtime += 1;
+                    return Ok((Ty::F32, Resolved::Channel(c)));
                 }
             }
         }
@@ -894,7 +1040,9 @@ impl<'s, 'a> Typer<'s, 'a> {
                         format!("this is {t}"),
                     ));
                 }
+                self.settle(a, *want)?;
             }
+            self.runtime += 1;
             return Ok(Ty::F32);
         }
         let Some(f) = Func::from_name(name) else {
@@ -908,16 +1056,20 @@ impl<'s, 'a> Typer<'s, 'a> {
             return Err(d);
         };
         let tys = args.iter().map(|a| self.infer(a)).collect::<Result<Vec<_>, _>>()?;
-        f.result(&tys)
-            .map_err(|m| Self::err(span, format!("type mismatch: {m}"), "in this call"))
-    }
-}
-
-pub fn comp_index(c: char) -> usize {
-    match c {
-        'x' | 'r' => 0,
-        'y' | 'g' => 1,
-        'z' | 'b' => 2,
-        _ => 3,
+        let ty = f
+            .result(&tys)
+            .map_err(|m| Self::err(span, format!("type mismatch: {m}"), "in this call"))?;
+        // Abstract arguments take the type the builtin's signature gives each argument
+        // (`Sig::arg_ty`): i32 where it computes in integers (conversions; min, max,
+        // clamp, abs, sign and select of integers), f32 otherwise.
+        for (i, a) in args.iter().enumerate() {
+            let to = if matches!(f.arg_ty(i, &tys, ty), Ty::I32 | Ty::AbstractInt) {
+                Ty::I32
+            } else {
+                Ty::F32
+            };
+            self.settle(a, to)?;
+        }
+        Ok(ty)
     }
 }

@@ -21,7 +21,7 @@ fn kind(p: &IrPass) -> graph::PassKind {
     }
 }
 
-pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
+pub fn graph(ir: &Program, out: &Output) -> PassGraph {
     let mut params = Vec::new();
     let mut offset = 0u32;
     for p in &ir.params {
@@ -52,7 +52,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
     let params_size = offset.div_ceil(16) * 16;
 
     let mut textures: Vec<TextureDecl> = Vec::new();
-    for (ri, r) in ir.resources.iter().enumerate().filter(|(_, r)| r.live) {
+    for (ri, r) in ir.resources.with_handles().filter(|(_, r)| r.live) {
         let mips = mip_source(ir, ri).is_some();
         let table = table_source(ir, ri).is_some();
         for (ti, t) in r.textures.iter().enumerate() {
@@ -138,7 +138,7 @@ pub fn graph(ir: &Ir, out: &Output) -> PassGraph {
         params_size,
         textures,
         passes,
-        removed: ir.removed.clone(),
+        removed: ir.removed.to_vec(),
     }
 }
 

@@ -2,11 +2,11 @@
 //! channels and how they are packed, cost, and what was removed.
 
 use crate::Compiled;
-use crate::ir::{IrPassKind, Origin, short};
+use crate::ir::{IrPassKind, Origin, Program, short};
 use std::fmt::Write as _;
 
 pub fn explain(c: &Compiled) -> String {
-    let ir = &c.ir;
+    let ir = &Program::new(&c.ir, &c.layout);
     let g = &c.graph;
     let mut s = String::new();
     let _ = writeln!(s, "Technique `{}`", ir.technique);
@@ -119,7 +119,7 @@ pub fn explain(c: &Compiled) -> String {
     );
     if !ir.removed.is_empty() {
         let _ = writeln!(s, "\nRemoved:");
-        for r in &ir.removed {
+        for r in ir.removed.iter() {
             let _ = writeln!(s, "  {r}");
         }
     }

@@ -4,19 +4,37 @@
 //! nodes are added).
 
 use crate::builtins::{Func, Input, SampleFn, Ty};
+use crate::consteval;
 use crate::front::ast::{ConstValue, LightModel, LightView, Precision, Primitive, Reduce, Resolve, ScalarTy};
 use crate::front::expr::{BinOp, UnOp, fmt_float};
+use crate::handle::{Arena as Table, Handle, Kind};
 use crate::span::Span;
 use std::collections::HashMap;
 use std::fmt::{self, Write as _};
 
-/// Handle of an expression node in the [`Arena`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct H(pub u32);
+pub mod validate;
 
-pub type ChannelId = usize;
-pub type ResId = usize;
-pub type PassId = usize;
+/// Handle of an expression node in the expression [`Arena`].
+pub type H = Handle<Node>;
+/// Handle of a channel in [`Ir::channels`].
+pub type ChannelId = Handle<IrChannel>;
+/// Handle of a resource in [`Ir::resources`].
+pub type ResId = Handle<IrResource>;
+/// Handle of a pass in [`Ir::passes`].
+pub type PassId = Handle<IrPass>;
+
+impl Kind for Node {
+    const KIND: &'static str = "node";
+}
+impl Kind for IrChannel {
+    const KIND: &'static str = "channel";
+}
+impl Kind for IrResource {
+    const KIND: &'static str = "resource";
+}
+impl Kind for IrPass {
+    const KIND: &'static str = "pass";
+}
 
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Node {
@@ -51,15 +69,15 @@ pub struct Arena {
 
 impl Arena {
     pub fn node(&self, h: H) -> &Node {
-        &self.nodes[h.0 as usize].0
+        &self.nodes[h.index()].0
     }
 
     pub fn ty(&self, h: H) -> Ty {
-        self.nodes[h.0 as usize].1
+        self.nodes[h.index()].1
     }
 
     pub fn span(&self, h: H) -> Span {
-        self.nodes[h.0 as usize].2
+        self.nodes[h.index()].2
     }
 
     pub fn len(&self) -> usize {
@@ -114,7 +132,7 @@ impl Arena {
         if let Some(h) = self.index.get(&(node.clone(), ty)) {
             return *h;
         }
-        let h = H(self.nodes.len() as u32);
+        let h = H::new(self.nodes.len());
         self.nodes.push((node.clone(), ty, span));
         self.index.insert((node, ty), h);
         h
@@ -132,12 +150,7 @@ impl Arena {
         use ConstValue::*;
         match node {
             Node::Unary(op, a) => {
-                let v = match (op, self.as_const(*a)?) {
-                    (UnOp::Neg, Float(x)) => Float(-x),
-                    (UnOp::Neg, Int(x)) => Int(x.checked_neg()?),
-                    (UnOp::Not, Bool(x)) => Bool(!x),
-                    _ => return None,
-                };
+                let v = consteval::unary(*op, self.as_const(*a)?)?;
                 self.constant(v, ty, span)
             }
             Node::Binary(op, a, b) => {
@@ -181,46 +194,7 @@ impl Arena {
                     (BinOp::Or, Some(Bool(true)), _) | (BinOp::Or, _, Some(Bool(true))) => return self.constant(Bool(true), ty, span),
                     _ => {}
                 }
-                let v = match (x?, y?) {
-                    (Float(x), Float(y)) => match op {
-                        BinOp::Add => Float(x + y),
-                        BinOp::Sub => Float(x - y),
-                        BinOp::Mul => Float(x * y),
-                        BinOp::Div if y != 0.0 => Float(x / y),
-                        BinOp::Rem if y != 0.0 => Float(x % y),
-                        BinOp::Lt => Bool(x < y),
-                        BinOp::Le => Bool(x <= y),
-                        BinOp::Gt => Bool(x > y),
-                        BinOp::Ge => Bool(x >= y),
-                        BinOp::Eq => Bool(x == y),
-                        BinOp::Ne => Bool(x != y),
-                        BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
-                    },
-                    (Int(x), Int(y)) => match op {
-                        BinOp::Add => Int(x.checked_add(y)?),
-                        BinOp::Sub => Int(x.checked_sub(y)?),
-                        BinOp::Mul => Int(x.checked_mul(y)?),
-                        BinOp::Div if y != 0 => Int(x / y),
-                        BinOp::Rem if y != 0 => Int(x % y),
-                        BinOp::Lt => Bool(x < y),
-                        BinOp::Le => Bool(x <= y),
-                        BinOp::Gt => Bool(x > y),
-                        BinOp::Ge => Bool(x >= y),
-                        BinOp::Eq => Bool(x == y),
-                        BinOp::Ne => Bool(x != y),
-                        BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
-                    },
-                    (Bool(x), Bool(y)) => match op {
-                        BinOp::And => Bool(x && y),
-                        BinOp::Or => Bool(x || y),
-                        BinOp::Eq => Bool(x == y),
-                        BinOp::Ne => Bool(x != y),
-                        BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem | BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge => {
-                            return None;
-                        }
-                    },
-                    _ => return None,
-                };
+                let v = consteval::binary(*op, x?, y?)?;
                 self.constant(v, ty, span)
             }
             Node::Call(Func::Select, args) => match self.as_const(args[2])? {
@@ -261,17 +235,17 @@ impl Arena {
         // Iterative to keep deep series off the call stack.
         let mut stack = vec![(h, false)];
         while let Some((h, done)) = stack.pop() {
-            if seen[h.0 as usize] {
+            if seen[h.index()] {
                 continue;
             }
             if done {
-                seen[h.0 as usize] = true;
+                seen[h.index()] = true;
                 out.push(h);
                 continue;
             }
             stack.push((h, true));
             for c in self.operands(h).into_iter().rev() {
-                if !seen[c.0 as usize] {
+                if !seen[c.index()] {
                     stack.push((c, false));
                 }
             }
@@ -296,7 +270,7 @@ impl Arena {
 
     fn write(&self, s: &mut String, h: H, ir: Option<&Ir>, depth: usize) {
         if depth > 24 {
-            let _ = write!(s, "%{}", h.0);
+            let _ = write!(s, "%{}", h.index());
             return;
         }
         let chan = |c: ChannelId| ir.map(|ir| ir.channels[c].name.clone()).unwrap_or_else(|| format!("ch{c}"));
@@ -534,14 +508,35 @@ impl Encode {
     }
 }
 
+/// What `analyse` found about one channel as stored in one resource.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlotInfo {
+    pub range: Interval,
+    pub encode: Encode,
+}
+
+/// The product of `analyse`, a side table beside the IR (which `analyse` only reads):
+/// range and storage encoding of every (resource, channel) slot as lowered, before
+/// elimination drops any.
+#[derive(Clone, Debug, Default)]
+pub struct Analysis {
+    pub slots: HashMap<(ResId, ChannelId), SlotInfo>,
+}
+
+impl Analysis {
+    pub fn get(&self, r: ResId, c: ChannelId) -> Option<SlotInfo> {
+        self.slots.get(&(r, c)).copied()
+    }
+}
+
 /// One channel as stored in one resource.
 #[derive(Clone, Debug)]
 pub struct Slot {
     pub channel: ChannelId,
     pub precision: Precision,
-    /// Value range (set by `analyse`).
+    /// Value range, from [`Analysis`] (recorded by `pack`, which lays the slot out).
     pub range: Option<Interval>,
-    /// Storage encoding (set by `analyse`).
+    /// Storage encoding, from [`Analysis`] (recorded by `pack`).
     pub encode: Encode,
     /// Placement (set by `pack`): texture index in the resource, layer, component.
     pub place: Option<(usize, u32, u32)>,
@@ -672,14 +667,72 @@ pub struct Ir {
     pub paper: Option<String>,
     pub lights: Vec<LightModel>,
     pub params: Vec<IrParam>,
-    pub channels: Vec<IrChannel>,
+    pub channels: Table<IrChannel>,
     pub expansions: Vec<IrExpansion>,
-    pub resources: Vec<IrResource>,
+    pub resources: Table<IrResource>,
     /// In execution order.
-    pub passes: Vec<IrPass>,
+    pub passes: Table<IrPass>,
     pub arena: Arena,
+}
+
+/// The product of `pack`, beside the IR (which `pack` only reads): the resources with
+/// their live slots placed in textures (ranges and encodings from the [`Analysis`]), the
+/// passes with their live flags, and what elimination removed.
+#[derive(Clone, Debug, Default)]
+pub struct Layout {
+    pub resources: Table<IrResource>,
+    pub passes: Table<IrPass>,
     /// What optimisation removed, and why (reported by `explain` and the cost report).
     pub removed: Vec<String>,
+}
+
+/// What codegen, emit and explain read: the IR of `lower` seen through the [`Layout`] of
+/// `pack`. The fields `resources`, `passes` and `removed` are the layout's; everything
+/// else (params, channels, expansions, the arena...) derefs to the IR.
+#[derive(Clone, Copy)]
+pub struct Program<'a> {
+    pub ir: &'a Ir,
+    pub resources: &'a Table<IrResource>,
+    pub passes: &'a Table<IrPass>,
+    pub removed: &'a [String],
+}
+
+impl<'a> Program<'a> {
+    pub fn new(ir: &'a Ir, layout: &'a Layout) -> Program<'a> {
+        Program {
+            ir,
+            resources: &layout.resources,
+            passes: &layout.passes,
+            removed: &layout.removed,
+        }
+    }
+
+    /// The IR as `lower` left it (nothing laid out yet, nothing removed).
+    pub fn lowered(ir: &'a Ir) -> Program<'a> {
+        Program {
+            ir,
+            resources: &ir.resources,
+            passes: &ir.passes,
+            removed: &[],
+        }
+    }
+
+    pub fn shade_pass(&self) -> Option<&'a IrPass> {
+        self.passes.iter().find(|p| matches!(p.kind, IrPassKind::Shade { .. }))
+    }
+}
+
+impl std::ops::Deref for Program<'_> {
+    type Target = Ir;
+    fn deref(&self) -> &Ir {
+        self.ir
+    }
+}
+
+impl fmt::Display for Program<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write_dump(f, None)
+    }
 }
 
 impl Ir {
@@ -692,8 +745,25 @@ impl Ir {
     }
 }
 
+/// The IR printed with the side table of `analyse` (`--dump-ir-after analyse`).
+pub struct WithAnalysis<'a>(pub &'a Ir, pub &'a Analysis);
+
+impl fmt::Display for WithAnalysis<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        Program::lowered(self.0).write_dump(f, Some(self.1))
+    }
+}
+
 impl fmt::Display for Ir {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        Program::lowered(self).write_dump(f, None)
+    }
+}
+
+impl Program<'_> {
+    /// The text form of `--dump-ir-after`: slots show the ranges and encodings of
+    /// `analysis` when given, else those recorded in the IR (after `pack`).
+    fn write_dump(&self, f: &mut fmt::Formatter<'_>, analysis: Option<&Analysis>) -> fmt::Result {
         writeln!(f, "technique {}", self.technique)?;
         for p in &self.params {
             let kind = if p.uniform { "uniform" } else { "const" };
@@ -706,22 +776,22 @@ impl fmt::Display for Ir {
         for (i, c) in self.channels.iter().enumerate() {
             write!(f, "  channel #{i} {} : {}", c.name, c.precision.name())?;
             if let Some(v) = c.value {
-                write!(f, " = {}", self.arena.display(v, Some(self)))?;
+                write!(f, " = {}", self.arena.display(v, Some(self.ir)))?;
             }
             writeln!(f)?;
         }
         for e in &self.expansions {
-            writeln!(f, "  expansion {} = {}", e.name, self.arena.display(e.constant, Some(self)))?;
+            writeln!(f, "  expansion {} = {}", e.name, self.arena.display(e.constant, Some(self.ir)))?;
             for (coeff, ch) in &e.terms {
                 writeln!(
                     f,
                     "      + {} * {}",
-                    self.arena.display(*coeff, Some(self)),
+                    self.arena.display(*coeff, Some(self.ir)),
                     self.channels[*ch].name
                 )?;
             }
         }
-        for r in &self.resources {
+        for (rh, r) in self.resources.with_handles() {
             let writer = self.passes.get(r.writer).map(|p| p.name.as_str()).unwrap_or("?");
             write!(f, "  resource {} (written by pass `{writer}`", r.name)?;
             if r.mips {
@@ -736,11 +806,15 @@ impl fmt::Display for Ir {
             writeln!(f, ")")?;
             for s in &r.slots {
                 write!(f, "      {} : {}", self.channels[s.channel].name, s.precision.name())?;
-                if let Some(range) = s.range {
+                let (range, encode) = match analysis.and_then(|a| a.get(rh, s.channel)) {
+                    Some(info) => (Some(info.range), info.encode),
+                    None => (s.range, s.encode),
+                };
+                if let Some(range) = range {
                     write!(f, " range {range}")?;
                 }
-                if !s.encode.is_identity() {
-                    write!(f, " stored as (v - ({})) * {}", short(s.encode.bias), short(s.encode.scale))?;
+                if !encode.is_identity() {
+                    write!(f, " stored as (v - ({})) * {}", short(encode.bias), short(encode.scale))?;
                 }
                 if let Some((t, layer, comp)) = s.place {
                     write!(f, " at {}[{layer}].{}", r.textures[t].name, ['r', 'g', 'b', 'a'][comp as usize])?;
@@ -758,7 +832,7 @@ impl fmt::Display for Ir {
                 )?;
             }
         }
-        for p in &self.passes {
+        for p in self.passes.iter() {
             let reads: Vec<&str> = p.reads.iter().map(|r| self.resources[*r].name.as_str()).collect();
             write!(f, "  pass {} : {} reads [{}]", p.name, p.kind_name(), reads.join(", "))?;
             if let Some(w) = p.writes {
@@ -767,12 +841,12 @@ impl fmt::Display for Ir {
             match &p.kind {
                 IrPassKind::Filter { kernel } => write!(f, " kernel {kernel:?}")?,
                 IrPassKind::Mipmap { reduce } => write!(f, " reduce {reduce:?}")?,
-                IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self)))?,
+                IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self.ir)))?,
                 IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::SummedArea | IrPassKind::Geometry { .. } => {}
             }
             writeln!(f)?;
         }
-        for r in &self.removed {
+        for r in self.removed.iter() {
             writeln!(f, "  removed: {r}")?;
         }
         Ok(())

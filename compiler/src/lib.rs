@@ -20,22 +20,19 @@
 pub mod analyse;
 pub mod back;
 pub mod builtins;
-// fe branch makes this clean
-#[allow(clippy::wildcard_enum_match_arm)]
 pub mod check;
+pub mod consteval;
 pub mod diag;
 pub mod emit;
 pub mod explain;
 pub mod front;
+pub mod handle;
 pub mod ir;
-// fe branch makes this clean
-#[allow(clippy::wildcard_enum_match_arm)]
 pub mod lower;
 pub mod pack;
-// fe branch makes this clean
-#[allow(clippy::wildcard_enum_match_arm)]
 pub mod resolve;
 pub mod span;
+pub mod types;
 
 pub use diag::{Diagnostic, Diagnostics};
 pub use pack::Limits;
@@ -108,7 +105,10 @@ pub struct CompileOptions {
 /// A compiled technique.
 #[derive(Clone, Debug)]
 pub struct Compiled {
+    /// The IR as `lower` produced it (no later phase changes it).
     pub ir: ir::Ir,
+    /// Its layout after `pack`: live resources and passes, placements, textures.
+    pub layout: ir::Layout,
     pub graph: PassGraph,
     /// (file name, WGSL source), in pass order.
     pub shaders: Vec<(String, String)>,
@@ -185,28 +185,25 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         if until == Until::Check {
             return Err(Diagnostics::default());
         }
-        let mut ir = lower::lower(&sym, &checked)?;
+        let ir = lower::lower(&sym, &checked)?;
+        debug_validate(ir::Program::lowered(&ir), "lower");
         if want(DumpPhase::Lower) {
             dump = Some(ir.to_string());
         }
-        let probe = |param: usize, value: f64, res: usize, slot: usize| -> Option<ir::Interval> {
+        let probe = |param: usize, value: f64, res: ir::ResId, slot: usize| -> Option<ir::Interval> {
             probe_range(&sym, &checked, &ir, param, value, res, slot)
         };
-        let snapshot = ir.clone();
-        let warnings = {
-            let mut ir2 = snapshot.clone();
-            let w = analyse::analyse(&mut ir2, &probe)?;
-            ir = ir2;
-            w
-        };
+        let (analysis, warnings) = analyse::analyse(&ir, &probe)?;
         if want(DumpPhase::Analyse) {
-            dump = Some(ir.to_string());
+            dump = Some(ir::WithAnalysis(&ir, &analysis).to_string());
         }
-        pack::pack(&mut ir, &opts.limits)?;
+        let layout = pack::pack(&ir, &analysis, &opts.limits)?;
+        let program = ir::Program::new(&ir, &layout);
+        debug_validate(program, "pack");
         if want(DumpPhase::Pack) {
-            dump = Some(ir.to_string());
+            dump = Some(program.to_string());
         }
-        let out = back::wgsl::codegen(&ir, &opts.limits)?;
+        let out = back::wgsl::codegen(&program, &opts.limits)?;
         if want(DumpPhase::Codegen) {
             dump = Some(
                 out.modules
@@ -215,7 +212,7 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
                     .collect(),
             );
         }
-        let graph = emit::graph(&ir, &out);
+        let graph = emit::graph(&program, &out);
         if want(DumpPhase::Emit) {
             dump = Some(graph.to_ron());
         }
@@ -223,6 +220,7 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         let shaders = out.modules.into_iter().map(|m| (m.file, m.source)).collect();
         Ok(Compiled {
             ir,
+            layout,
             graph,
             shaders,
             cost,
@@ -236,22 +234,32 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
     Outcome { result, dump }
 }
 
+/// In debug builds (every test), the IR a phase hands on must pass `ir::validate`.
+fn debug_validate(ir: ir::Program, after: &str) {
+    if cfg!(debug_assertions)
+        && let Err(e) = ir::validate::validate(&ir)
+    {
+        panic!("internal compiler error: invalid IR after {after}: {e}");
+    }
+}
+
 /// Range of one slot with one param changed (for the "largest safe value" of `analyse`).
+/// A runtime param is evaluated over a wider range on the same IR; a fixed one is
+/// substituted at lowering, so the technique is lowered again with the other value.
 fn probe_range(
     sym: &resolve::Symbols,
     checked: &check::Checked,
     ir: &ir::Ir,
     param: usize,
     value: f64,
-    res: usize,
+    res: ir::ResId,
     slot: usize,
 ) -> Option<ir::Interval> {
     let p = &ir.params[param];
     if p.uniform {
-        let mut ir2 = ir.clone();
         let lo = p.range.map(|r| r.0).unwrap_or(value).min(value);
-        ir2.params[param].range = Some((lo, value));
-        return analyse::slot_ranges(&ir2).get(res)?.get(slot).copied();
+        let over = ir::Interval { lo, hi: value };
+        return analyse::slot_ranges(ir, Some((param, over))).get(res.index())?.get(slot).copied();
     }
     let mut values = sym.values.clone();
     values[param].value = match p.value {
@@ -263,7 +271,7 @@ fn probe_range(
         ..sym.clone_shallow()
     };
     let ir2 = lower::lower(&sym2, checked).ok()?;
-    analyse::slot_ranges(&ir2).get(res)?.get(slot).copied()
+    analyse::slot_ranges(&ir2, None).get(res.index())?.get(slot).copied()
 }
 
 fn resolve_dump(sym: &resolve::Symbols) -> String {

@@ -3,52 +3,58 @@
 //! `constant + sum_i a_i(d) * lookup(B_i)` (Annen eq. 5.8), and passes put in execution
 //! order. Expressions go into the hash-consed arena, which folds constants as it goes.
 
-use crate::builtins::{Func, Input, SampleFn, Ty, constant};
-use crate::check::{Checked, comp_index};
+use crate::builtins::{Func, SampleFn, Ty};
+use crate::check::Checked;
+use crate::consteval::MAX_SERIES;
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::*;
 use crate::front::expr::{BinOp, Expr, ExprKind, Literal};
+use crate::handle::Arena as Table;
 use crate::ir::*;
 use crate::resolve::{Item, Symbols};
 use crate::span::Span;
+use crate::types::{Resolved, Types, comp_index};
 
-/// Unrolling stops past this many terms in one series.
-pub const MAX_SERIES: i64 = 4096;
 /// Lowering stops past this many distinct expression nodes.
 pub const MAX_NODES: usize = 1 << 20;
 
+/// Lowers expressions that `check` has typed: types, name resolutions and the conversions
+/// of abstract integers come from its [`Types`]; nothing is inferred again here.
 struct Lowerer<'s, 'a> {
     sym: &'s Symbols<'a>,
+    types: &'s Types,
     arena: &'s mut Arena,
-    locals: Vec<(String, H, bool)>,
+    locals: Vec<(String, H)>,
     /// AST channel index -> IR channel id.
     channel_ids: &'s [ChannelId],
     /// IR expansions (by AST expansion index), for `expand`.
     expansions: &'s [IrExpansion],
     /// For a Shade pass: what its reads carry.
     shade_reads: Option<Vec<(Item, ResId)>>,
-    const_only: bool,
 }
 
-type Lowered = (H, bool);
+/// An invariant `check` established does not hold: a compiler bug, reported as a value.
+fn internal(span: Span, what: &str) -> Diagnostic {
+    Diagnostic::error(Phase::Lower, format!("internal compiler error: {what}")).at(span, "here")
+}
 
 impl<'s, 'a> Lowerer<'s, 'a> {
     fn new(
         sym: &'s Symbols<'a>,
+        types: &'s Types,
         arena: &'s mut Arena,
         channel_ids: &'s [ChannelId],
         expansions: &'s [IrExpansion],
         shade_reads: Option<Vec<(Item, ResId)>>,
-        const_only: bool,
     ) -> Self {
         Lowerer {
             sym,
+            types,
             arena,
             locals: vec![],
             channel_ids,
             expansions,
             shade_reads,
-            const_only,
         }
     }
 
@@ -56,15 +62,29 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         Diagnostic::error(Phase::Lower, msg).at(span, label)
     }
 
-    /// An abstract integer literal takes the type its context asks for.
-    fn coerce(&mut self, (h, abs): Lowered, to: Ty) -> H {
-        if abs
-            && matches!(to, Ty::F32 | Ty::Vec(_))
+    /// The concrete type `check` gave `e` (an abstract integer is computed as i32).
+    fn ty(&self, e: &Expr) -> Result<Ty, Diagnostic> {
+        self.types
+            .ty(e)
+            .map(Ty::concrete)
+            .ok_or_else(|| internal(e.span, "expression not typed by check"))
+    }
+
+    /// The value of `e` (lowered to `h`) where it is used: an abstract integer that
+    /// `check` converted to f32 becomes the f32 constant.
+    fn coerce(&mut self, e: &Expr, h: H) -> H {
+        if self.types.converts_to_f32(e)
             && let Some(ConstValue::Int(v)) = self.arena.as_const(h)
         {
             return self.arena.f32(v as f64);
         }
         h
+    }
+
+    /// Lower `e` and convert it for its context.
+    fn expr_coerced(&mut self, e: &Expr) -> Result<H, Diagnostic> {
+        let h = self.expr(e)?;
+        Ok(self.coerce(e, h))
     }
 
     fn budget(&self, span: Span) -> Result<(), Diagnostic> {
@@ -79,56 +99,47 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         Ok(())
     }
 
-    fn expr(&mut self, e: &Expr) -> Result<Lowered, Diagnostic> {
+    fn expr(&mut self, e: &Expr) -> Result<H, Diagnostic> {
         self.budget(e.span)?;
         Ok(match &e.kind {
             ExprKind::Lit(Literal::Int(v)) => {
-                let v = i32::try_from(*v).map_err(|_| Self::err(e.span, "integer literal out of i32 range", "too large"))?;
-                (self.arena.i32(v), true)
+                let v = i32::try_from(*v).map_err(|_| internal(e.span, "integer literal out of i32 range"))?;
+                self.arena.i32(v)
             }
-            ExprKind::Lit(Literal::Float(v)) => (self.arena.f32(*v), false),
-            ExprKind::Lit(Literal::Bool(b)) => (self.arena.add(Node::Bool(*b), Ty::Bool, e.span), false),
-            ExprKind::Name(n) => self.name(n, e.span)?,
+            ExprKind::Lit(Literal::Float(v)) => self.arena.f32(*v),
+            ExprKind::Lit(Literal::Bool(b)) => self.arena.add(Node::Bool(*b), Ty::Bool, e.span),
+            ExprKind::Name(n) => self.name(e, n)?,
             ExprKind::Unary(op, a) => {
-                let (h, abs) = self.expr(a)?;
-                let ty = self.arena.ty(h);
-                (self.arena.add(Node::Unary(*op, h), ty, e.span), abs)
+                let h = self.expr(a)?;
+                let ty = self.ty(e)?;
+                self.arena.add(Node::Unary(*op, h), ty, e.span)
             }
             ExprKind::Binary(op, a, b) => {
-                let la = self.expr(a)?;
-                let lb = self.expr(b)?;
-                let (ta, tb) = (self.arena.ty(la.0), self.arena.ty(lb.0));
-                let abs = la.1 && lb.1;
-                let operand = if abs {
-                    Ty::I32
-                } else if la.1 {
-                    tb
-                } else if lb.1 {
-                    ta
-                } else {
-                    // vector op scalar keeps the vector type
-                    if matches!(ta, Ty::Vec(_)) { ta } else { tb }
-                };
-                let scalar_of = |t: Ty| if matches!(t, Ty::Vec(_)) { Ty::F32 } else { t };
-                let ha = self.coerce(la, scalar_of(operand));
-                let hb = self.coerce(lb, scalar_of(operand));
-                let ty = if op.is_comparison() || op.is_logic() { Ty::Bool } else { operand };
-                (self.arena.add(Node::Binary(*op, ha, hb), ty, e.span), abs && !op.is_comparison())
+                let ha = self.expr(a)?;
+                let hb = self.expr(b)?;
+                let ha = self.coerce(a, ha);
+                let hb = self.coerce(b, hb);
+                let ty = self.ty(e)?;
+                self.arena.add(Node::Binary(*op, ha, hb), ty, e.span)
             }
-            ExprKind::Call { name, args, .. } => self.call(name, args, e.span)?,
+            ExprKind::Call { name, args, .. } => self.call(name, args, e)?,
             ExprKind::Member(base, m) => {
-                let (h, _) = self.expr(base)?;
-                let comps: Vec<u8> = m.chars().map(|c| comp_index(c) as u8).collect();
-                let ty = if comps.len() == 1 { Ty::F32 } else { Ty::Vec(comps.len() as u8) };
+                let h = self.expr(base)?;
+                let comps: Vec<u8> = m
+                    .chars()
+                    .map(|c| comp_index(c).map(|i| i as u8))
+                    .collect::<Option<_>>()
+                    .ok_or_else(|| internal(e.span, "unknown vector component"))?;
+                let ty = self.ty(e)?;
                 // Swizzles of a constructor fold to its components.
                 if let (Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, parts), 1) = (self.arena.node(h).clone(), comps.len()) {
-                    return Ok((parts[comps[0] as usize], false));
+                    return Ok(parts[comps[0] as usize]);
                 }
-                (self.arena.add(Node::Swizzle(h, comps), ty, e.span), false)
+                self.arena.add(Node::Swizzle(h, comps), ty, e.span)
             }
             ExprKind::Let { name, value, body, .. } => {
-                let (h, abs) = self.expr(value)?;
-                self.locals.push((name.clone(), h, abs));
+                let h = self.expr_coerced(value)?;
+                self.locals.push((name.clone(), h));
                 let r = self.expr(body);
                 self.locals.pop();
                 r?
@@ -137,119 +148,109 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 let lo = self.const_int(from)?;
                 let hi = self.const_int(to)?;
                 if hi - lo + 1 > MAX_SERIES {
+                    // bounds depending on an enclosing series are known only now
                     return Err(Self::err(
                         e.span,
                         format!("series of {} terms: at most {MAX_SERIES} unroll", hi - lo + 1),
                         "too long",
                     ));
                 }
-                let mut acc: Option<Lowered> = None;
+                let ty = self.ty(e)?;
+                let mut acc: Option<H> = None;
                 for k in lo..=hi {
                     let kh = self.arena.i32(k as i32);
-                    self.locals.push((var.clone(), kh, false));
+                    self.locals.push((var.clone(), kh));
                     let term = self.expr(body);
                     self.locals.pop();
                     let term = term?;
                     acc = Some(match acc {
                         None => term,
-                        Some(a) => {
-                            let ty = if a.1 && term.1 {
-                                Ty::I32
-                            } else if a.1 {
-                                self.arena.ty(term.0)
-                            } else {
-                                self.arena.ty(a.0)
-                            };
-                            let ha = self.coerce(a, ty);
-                            let hb = self.coerce(term, ty);
-                            (self.arena.add(Node::Binary(BinOp::Add, ha, hb), ty, e.span), a.1 && term.1)
-                        }
+                        Some(a) => self.arena.add(Node::Binary(BinOp::Add, a, term), ty, e.span),
                     });
                 }
                 match acc {
                     Some(a) => a,
-                    None => (self.arena.i32(0), true),
+                    // An empty series is the zero of its type.
+                    None => self.zero(ty, e.span),
                 }
             }
         })
     }
 
+    /// The zero of a type: `0`, `0.0`, `vecN(0.0)` (`false` for bool, which a sum never is).
+    fn zero(&mut self, ty: Ty, span: Span) -> H {
+        match ty {
+            Ty::F32 => self.arena.f32(0.0),
+            Ty::I32 | Ty::AbstractInt => self.arena.i32(0),
+            Ty::Bool => self.arena.add(Node::Bool(false), Ty::Bool, span),
+            Ty::Vec(n) => {
+                let z = self.arena.f32(0.0);
+                let f = match n {
+                    2 => Func::Vec2,
+                    3 => Func::Vec3,
+                    _ => Func::Vec4,
+                };
+                self.arena.add(Node::Call(f, vec![z; n as usize]), ty, span)
+            }
+        }
+    }
+
     fn const_int(&mut self, e: &Expr) -> Result<i64, Diagnostic> {
-        let (h, _) = self.expr(e)?;
+        let h = self.expr(e)?;
         match self.arena.as_const(h) {
             Some(ConstValue::Int(v)) => Ok(v),
-            _ => Err(Self::err(
-                e.span,
-                "series bounds must be integers known at compile time",
-                "not a compile-time integer",
-            )),
+            _ => Err(internal(e.span, "series bounds must be integers known at compile time")),
         }
     }
 
-    fn name(&mut self, n: &str, span: Span) -> Result<Lowered, Diagnostic> {
-        if let Some((_, h, abs)) = self.locals.iter().rev().find(|l| l.0 == n) {
-            return Ok((*h, *abs));
-        }
-        if let Some((i, p)) = self.sym.param(n) {
-            let v = self.sym.values[i].value;
-            if self.const_only && !p.fixed {
-                return Err(Diagnostic::error(
-                    Phase::Check,
-                    format!("param `{n}` is a runtime uniform, but this value is needed at compile time"),
-                )
-                .at(span, "not known at compile time")
-                .also(p.name.span, "declared here")
-                .help(format!("add `fixed: true` to param `{n}`")));
+    fn name(&mut self, e: &Expr, n: &str) -> Result<H, Diagnostic> {
+        let span = e.span;
+        let r = self.types.name(e).ok_or_else(|| internal(span, "name not resolved by check"))?;
+        Ok(match r {
+            Resolved::Local => {
+                let (_, h) = self
+                    .locals
+                    .iter()
+                    .rev()
+                    .find(|l| l.0 == n)
+                    .ok_or_else(|| internal(span, "local binding not in scope"))?;
+                *h
             }
-            if p.fixed {
-                return Ok(match v {
-                    ConstValue::Int(x) => (self.arena.i32(x as i32), false),
-                    ConstValue::Float(x) => (self.arena.f32(x), false),
-                    ConstValue::Bool(b) => (self.arena.add(Node::Bool(b), Ty::Bool, span), false),
-                });
+            Resolved::Param(i) => {
+                let p = &self.sym.t.params[i];
+                if p.fixed {
+                    match self.sym.values[i].value {
+                        ConstValue::Int(x) => self.arena.i32(x as i32),
+                        ConstValue::Float(x) => self.arena.f32(x),
+                        ConstValue::Bool(b) => self.arena.add(Node::Bool(b), Ty::Bool, span),
+                    }
+                } else {
+                    self.arena.add(Node::Param(i), Ty::from_scalar(p.ty.value), span)
+                }
             }
-            return Ok((self.arena.add(Node::Param(i), Ty::from_scalar(p.ty.value), span), false));
-        }
-        if let Some(c) = constant(n) {
-            return Ok((self.arena.f32(c), false));
-        }
-        if let Some(input) = Input::from_name(n) {
-            if self.const_only {
-                return Err(Self::err(span, format!("`{n}` is not known at compile time"), "a per-pixel input"));
-            }
-            return Ok((self.arena.add(Node::Input(input), input.ty(), span), false));
-        }
-        if let Some(&c) = self.sym.channels.get(n) {
-            if self.const_only {
-                return Err(Self::err(
-                    span,
-                    format!("channel `{n}` is not known at compile time"),
-                    "a per-texel value",
-                ));
-            }
-            return Ok((self.arena.add(Node::Channel(self.channel_ids[c]), Ty::F32, span), false));
-        }
-        Err(Self::err(span, format!("unknown name `{n}`"), "unknown"))
+            Resolved::Constant(c) => self.arena.f32(c),
+            Resolved::Input(input) => self.arena.add(Node::Input(input), input.ty(), span),
+            Resolved::Channel(c) => self.arena.add(Node::Channel(self.channel_ids[c]), Ty::F32, span),
+        })
     }
 
-    fn call(&mut self, name: &str, args: &[Expr], span: Span) -> Result<Lowered, Diagnostic> {
+    fn call(&mut self, name: &str, args: &[Expr], e: &Expr) -> Result<H, Diagnostic> {
+        let span = e.span;
         if let Some((how, expand)) = SampleFn::from_name(name) {
             let Some(reads) = self.shade_reads.clone() else {
-                return Err(Self::err(span, format!("`{name}` is only available in a Shade pass"), "here"));
+                return Err(internal(span, "lookup outside a Shade pass"));
             };
             let ExprKind::Name(target) = &args[0].kind else {
-                return Err(Self::err(args[0].span, "expected a name", "here"));
+                return Err(internal(args[0].span, "lookup of something other than a name"));
             };
             let mut extra = Vec::new();
-            for (a, want) in args[1..].iter().zip(how.extra_args()) {
-                let l = self.expr(a)?;
-                extra.push(self.coerce(l, *want));
+            for a in &args[1..] {
+                extra.push(self.expr_coerced(a)?);
             }
             let find = |item: Item| reads.iter().find(|(i, _)| *i == item).map(|(_, r)| *r);
             if expand {
                 let e = self.sym.expansions[target.as_str()];
-                let res = find(Item::Expansion(e))
-                    .ok_or_else(|| Self::err(args[0].span, format!("`{target}` is not read by this pass"), "here"))?;
+                let res = find(Item::Expansion(e)).ok_or_else(|| internal(args[0].span, "expansion not read by this pass"))?;
                 let exp = self.expansions[e].clone();
                 let mut acc = exp.constant;
                 for (coeff, ch) in exp.terms {
@@ -267,69 +268,33 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                     acc = self.arena.add(Node::Binary(BinOp::Add, acc, prod), Ty::F32, span);
                     self.budget(span)?;
                 }
-                return Ok((acc, false));
+                return Ok(acc);
             }
             let c = self.sym.channels[target.as_str()];
-            let res =
-                find(Item::Channel(c)).ok_or_else(|| Self::err(args[0].span, format!("`{target}` is not read by this pass"), "here"))?;
+            let res = find(Item::Channel(c)).ok_or_else(|| internal(args[0].span, "channel not read by this pass"))?;
             let ch = self.channel_ids[c];
-            return Ok((
-                self.arena.add(
-                    Node::Sample {
-                        channel: ch,
-                        resource: res,
-                        how,
-                        args: extra,
-                    },
-                    Ty::F32,
-                    span,
-                ),
-                false,
+            return Ok(self.arena.add(
+                Node::Sample {
+                    channel: ch,
+                    resource: res,
+                    how,
+                    args: extra,
+                },
+                Ty::F32,
+                span,
             ));
         }
-        let f = Func::from_name(name).ok_or_else(|| Self::err(span, format!("unknown function `{name}`"), "here"))?;
+        let f = Func::from_name(name).ok_or_else(|| internal(span, "unknown function"))?;
         let lowered = args.iter().map(|a| self.expr(a)).collect::<Result<Vec<_>, _>>()?;
-        let tys: Vec<Ty> = lowered
-            .iter()
-            .map(|(h, abs)| if *abs { Ty::AbstractInt } else { self.arena.ty(*h) })
-            .collect();
-        let ty = f.result(&tys).map_err(|m| Self::err(span, m, "here"))?;
-        let all_abs = lowered.iter().all(|l| l.1);
-        let arg_ty = |i: usize| f.arg_ty(i, &tys, ty);
-        let hs: Vec<H> = lowered
-            .into_iter()
-            .enumerate()
-            .map(|(i, l)| {
-                let t = arg_ty(i);
-                let scalar = if matches!(t, Ty::Vec(_)) && !matches!(self.arena.ty(l.0), Ty::Vec(_)) {
-                    Ty::F32
-                } else {
-                    t
-                };
-                self.coerce(l, scalar)
-            })
-            .collect();
-        // min/max/clamp/abs/sign of abstract integers stay abstract
-        let abs = all_abs && f.keeps_abstract();
-        let ty = if ty == Ty::AbstractInt { Ty::I32 } else { ty };
-        Ok((self.arena.add(Node::Call(f, hs), ty, span), abs))
+        let hs: Vec<H> = lowered.into_iter().zip(args).map(|(h, a)| self.coerce(a, h)).collect();
+        let ty = self.ty(e)?;
+        Ok(self.arena.add(Node::Call(f, hs), ty, span))
     }
-}
-
-/// Evaluate an expression that must be known at compile time (kernel sizes, series bounds).
-pub fn const_eval(sym: &Symbols, e: &Expr) -> Result<ConstValue, Diagnostic> {
-    let mut arena = Arena::default();
-    let mut l = Lowerer::new(sym, &mut arena, &[], &[], None, true);
-    let (h, _) = l.expr(e)?;
-    arena.as_const(h).ok_or_else(|| {
-        Diagnostic::error(Phase::Check, "this value must be known at compile time")
-            .at(e.span, "depends on runtime values")
-            .help("use literals and params with `fixed: true` only")
-    })
 }
 
 pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
     let t = sym.t;
+    let types = &checked.types;
     let mut arena = Arena::default();
     let params: Vec<IrParam> = t
         .params
@@ -347,7 +312,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         })
         .collect();
 
-    let mut channels: Vec<IrChannel> = t
+    let mut channels: Table<IrChannel> = t
         .channels
         .iter()
         .enumerate()
@@ -361,24 +326,24 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             span: c.span,
         })
         .collect();
-    let channel_ids: Vec<ChannelId> = (0..channels.len()).collect();
+    let channel_ids: Vec<ChannelId> = channels.handles().collect();
 
     // Channel values (map side).
     for (i, c) in t.channels.iter().enumerate() {
         if let Some(v) = &c.value {
-            let mut l = Lowerer::new(sym, &mut arena, &channel_ids, &[], None, false);
-            let lv = l.expr(v).map_err(Diagnostics::from)?;
-            channels[i].value = Some(l.coerce(lv, Ty::F32));
+            let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &[], None);
+            channels[channel_ids[i]].value = Some(l.expr_coerced(v).map_err(Diagnostics::from)?);
         }
     }
 
     // Expansions: one channel per (term, k).
     let mut expansions = Vec::new();
     for (ei, e) in t.expansions.iter().enumerate() {
-        let mut l = Lowerer::new(sym, &mut arena, &channel_ids, &[], None, false);
+        let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &[], None);
         let lo = l.const_int(&e.from).map_err(Diagnostics::from)?;
         let hi = l.const_int(&e.to).map_err(Diagnostics::from)?;
         if hi < lo {
+            // refused by check; reachable when a probe re-lowers with other param values
             return Err(Diagnostic::error(
                 Phase::Lower,
                 format!("expansion `{}` has no terms: its index runs from {lo} to {hi}", e.name.value),
@@ -394,23 +359,20 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             .at(e.to.span, "too many")
             .into());
         }
-        let cl = l.expr(&e.constant).map_err(Diagnostics::from)?;
-        let constant = l.coerce(cl, Ty::F32);
+        let constant = l.expr_coerced(&e.constant).map_err(Diagnostics::from)?;
         let mut terms = Vec::new();
         let mut new_channels = Vec::new();
         for k in lo..=hi {
             let kh = l.arena.i32(k as i32);
-            l.locals.push((e.index.value.clone(), kh, false));
+            l.locals.push((e.index.value.clone(), kh));
             for (name, value) in &e.lets {
-                let v = l.expr(value).map_err(Diagnostics::from)?;
-                l.locals.push((name.value.clone(), v.0, v.1));
+                let v = l.expr_coerced(value).map_err(Diagnostics::from)?;
+                l.locals.push((name.value.clone(), v));
             }
             for (ti, term) in e.terms.iter().enumerate() {
-                let c = l.expr(&term.coeff).map_err(Diagnostics::from)?;
-                let coeff = l.coerce(c, Ty::F32);
-                let b = l.expr(&term.basis).map_err(Diagnostics::from)?;
-                let basis = l.coerce(b, Ty::F32);
-                let id = channels.len() + new_channels.len();
+                let coeff = l.expr_coerced(&term.coeff).map_err(Diagnostics::from)?;
+                let basis = l.expr_coerced(&term.basis).map_err(Diagnostics::from)?;
+                let id = ChannelId::new(channels.len() + new_channels.len());
                 new_channels.push(IrChannel {
                     name: format!("{}_t{ti}_k{k}", e.name.value),
                     precision: sym.expansion_precision[ei],
@@ -438,9 +400,9 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
     }
 
     // Resources and passes in execution order.
-    let mut resources: Vec<IrResource> = Vec::new();
+    let mut resources: Table<IrResource> = Table::default();
     let mut res_index = std::collections::HashMap::new();
-    let mut passes = Vec::new();
+    let mut passes: Table<IrPass> = Table::default();
     for &pi in &checked.order {
         let p = &t.passes[pi];
         let reads: Vec<ResId> = p.kind.reads().iter().map(|r| res_index[&r.value]).collect();
@@ -469,9 +431,8 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                         shade_reads.push((*item, rid));
                     }
                 }
-                let mut l = Lowerer::new(sym, &mut arena, &channel_ids, &expansions, Some(shade_reads), false);
-                let v = l.expr(visibility).map_err(Diagnostics::from)?;
-                let v = l.coerce(v, Ty::F32);
+                let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &expansions, Some(shade_reads));
+                let v = l.expr_coerced(visibility).map_err(Diagnostics::from)?;
                 IrPassKind::Shade { visibility: v }
             }
         };
@@ -495,7 +456,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                             .collect(),
                     )
                 }
-                _ => {
+                PassKind::Depth { .. } | PassKind::Map { .. } | PassKind::Geometry { .. } | PassKind::Shade { .. } => {
                     let mut slots = Vec::new();
                     for item in &checked.items[&w.value] {
                         let ids: Vec<ChannelId> = match item {
@@ -515,11 +476,10 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     (false, false, slots)
                 }
             };
-            let id = resources.len();
-            resources.push(IrResource {
+            let id = resources.append(IrResource {
                 name: w.value.clone(),
                 slots,
-                writer: passes.len(),
+                writer: PassId::new(passes.len()),
                 mips,
                 sat,
                 span: w.span,
@@ -529,7 +489,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             res_index.insert(w.value.clone(), id);
             id
         });
-        passes.push(IrPass {
+        passes.append(IrPass {
             name: p.name.value.clone(),
             kind,
             reads,
@@ -550,6 +510,5 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         resources,
         passes,
         arena,
-        removed: vec![],
     })
 }

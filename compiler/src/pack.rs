@@ -43,14 +43,14 @@ pub fn texel_bytes(p: Precision, components: u32) -> u32 {
 }
 
 /// Remove what the Shade pass cannot reach.
-pub fn eliminate(ir: &mut Ir) {
-    let Some(shade) = ir.passes.iter().position(|p| matches!(p.kind, IrPassKind::Shade { .. })) else {
+pub fn eliminate(ir: &Ir, lay: &mut Layout) {
+    let Some((shade, _)) = lay.passes.with_handles().find(|(_, p)| matches!(p.kind, IrPassKind::Shade { .. })) else {
         return;
     };
     let mut live: HashSet<(ResId, ChannelId)> = HashSet::new();
-    let mut live_pass = vec![false; ir.passes.len()];
-    live_pass[shade] = true;
-    if let IrPassKind::Shade { visibility } = ir.passes[shade].kind {
+    let mut live_pass = vec![false; lay.passes.len()];
+    live_pass[shade.index()] = true;
+    if let IrPassKind::Shade { visibility } = lay.passes[shade].kind {
         for h in ir.arena.postorder(&[visibility]) {
             if let Node::Sample { channel, resource, .. } = ir.arena.node(h) {
                 live.insert((*resource, *channel));
@@ -58,9 +58,9 @@ pub fn eliminate(ir: &mut Ir) {
         }
     }
     // Walk writers backwards: passes are in execution order.
-    for pi in (0..ir.passes.len()).rev() {
-        let Some(w) = ir.passes[pi].writes else { continue };
-        let needed: Vec<ChannelId> = ir.resources[w]
+    for pi in lay.passes.handles().rev() {
+        let Some(w) = lay.passes[pi].writes else { continue };
+        let needed: Vec<ChannelId> = lay.resources[w]
             .slots
             .iter()
             .map(|s| s.channel)
@@ -69,15 +69,15 @@ pub fn eliminate(ir: &mut Ir) {
         if needed.is_empty() {
             continue;
         }
-        live_pass[pi] = true;
-        let reads = ir.passes[pi].reads.clone();
-        let carrier = |c: ChannelId, ir: &Ir| reads.iter().copied().find(|&r| ir.resources[r].slot_of(c).is_some());
-        match ir.passes[pi].kind {
+        live_pass[pi.index()] = true;
+        let reads = lay.passes[pi].reads.clone();
+        let carrier = |c: ChannelId| reads.iter().copied().find(|&r| lay.resources[r].slot_of(c).is_some());
+        match lay.passes[pi].kind {
             IrPassKind::Map | IrPassKind::Geometry { .. } => {
                 let roots: Vec<H> = needed.iter().filter_map(|&c| ir.channels[c].value).collect();
                 for h in ir.arena.postorder(&roots) {
                     if let Node::Channel(c) = ir.arena.node(h)
-                        && let Some(r) = carrier(*c, ir)
+                        && let Some(r) = carrier(*c)
                     {
                         live.insert((r, *c));
                     }
@@ -85,7 +85,7 @@ pub fn eliminate(ir: &mut Ir) {
             }
             IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea => {
                 for c in needed {
-                    if let Some(r) = carrier(c, ir) {
+                    if let Some(r) = carrier(c) {
                         live.insert((r, c));
                     }
                 }
@@ -94,13 +94,13 @@ pub fn eliminate(ir: &mut Ir) {
         }
     }
     let mut removed = Vec::new();
-    for (pi, pass) in ir.passes.iter_mut().enumerate() {
-        if !live_pass[pi] {
+    for (pi, pass) in lay.passes.with_handles_mut() {
+        if !live_pass[pi.index()] {
             pass.live = false;
             removed.push(format!("pass `{}`: no shaded pixel reads what it writes", pass.name));
         }
     }
-    for (ri, res) in ir.resources.iter_mut().enumerate() {
+    for (ri, res) in lay.resources.with_handles_mut() {
         let before = res.slots.len();
         let mut dropped = Vec::new();
         res.slots.retain(|s| {
@@ -122,26 +122,42 @@ pub fn eliminate(ir: &mut Ir) {
             ));
         }
     }
-    ir.removed.extend(removed);
+    lay.removed.extend(removed);
 }
 
-pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
-    eliminate(ir);
+/// Lay the live slots out in textures. The IR is only read: the result is a [`Layout`]
+/// (resources and passes as laid out, with each slot's range and encoding from
+/// `analysis`; what is dead removed, the rest placed).
+pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Diagnostics> {
+    let mut lay = Layout {
+        resources: ir.resources.clone(),
+        passes: ir.passes.clone(),
+        removed: Vec::new(),
+    };
+    for (ri, res) in lay.resources.with_handles_mut() {
+        for s in &mut res.slots {
+            if let Some(info) = analysis.get(ri, s.channel) {
+                s.range = Some(info.range);
+                s.encode = info.encode;
+            }
+        }
+    }
+    eliminate(ir, &mut lay);
     let mut diags = Diagnostics::default();
     // A Mipmap pass builds the chain in place: its output shares the textures of its input,
     // which must therefore keep every channel the output needs.
-    for pi in 0..ir.passes.len() {
-        if let (IrPassKind::Mipmap { .. }, Some(w), true) = (&ir.passes[pi].kind, ir.passes[pi].writes, ir.passes[pi].live) {
-            let src = ir.passes[pi].reads[0];
-            let keep: Vec<ChannelId> = ir.resources[src].slots.iter().map(|s| s.channel).collect();
-            let out_slots = ir.resources[src].slots.clone();
-            let needed_missing = ir.resources[w].slots.iter().any(|s| !keep.contains(&s.channel));
+    for pi in lay.passes.handles() {
+        if let (IrPassKind::Mipmap { .. }, Some(w), true) = (&lay.passes[pi].kind, lay.passes[pi].writes, lay.passes[pi].live) {
+            let src = lay.passes[pi].reads[0];
+            let keep: Vec<ChannelId> = lay.resources[src].slots.iter().map(|s| s.channel).collect();
+            let out_slots = lay.resources[src].slots.clone();
+            let needed_missing = lay.resources[w].slots.iter().any(|s| !keep.contains(&s.channel));
             debug_assert!(!needed_missing, "mip output needs a channel its input lost");
             let ranges: Vec<_> = out_slots
                 .iter()
-                .map(|s| ir.resources[w].slot_of(s.channel).map(|o| (o.range, o.encode)))
+                .map(|s| lay.resources[w].slot_of(s.channel).map(|o| (o.range, o.encode)))
                 .collect();
-            ir.resources[w].slots = out_slots
+            lay.resources[w].slots = out_slots
                 .into_iter()
                 .zip(ranges)
                 .map(|(s, r)| match r {
@@ -151,15 +167,15 @@ pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
                 .collect();
         }
     }
-    for ri in 0..ir.resources.len() {
-        if !ir.resources[ri].live {
+    for ri in lay.resources.handles() {
+        if !lay.resources[ri].live {
             continue;
         }
         if let Some(src) = table_source(ir, ri) {
             // A summed-area table sums the unorm codes of its source, texel for texel: same
             // layers and components, its own (u32) storage.
-            let (textures, slots) = (ir.resources[src].textures.clone(), ir.resources[src].slots.clone());
-            let res = &mut ir.resources[ri];
+            let (textures, slots) = (lay.resources[src].textures.clone(), lay.resources[src].slots.clone());
+            let res = &mut lay.resources[ri];
             let name = res.name.clone();
             let single = textures.len() == 1;
             res.textures = textures
@@ -195,15 +211,15 @@ pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
         }
         if let Some(src) = mip_source(ir, ri) {
             // packed identically to its source (processed earlier: passes run in order)
-            let (textures, slots) = (ir.resources[src].textures.clone(), ir.resources[src].slots.clone());
-            let res = &mut ir.resources[ri];
+            let (textures, slots) = (lay.resources[src].textures.clone(), lay.resources[src].slots.clone());
+            let res = &mut lay.resources[ri];
             res.textures = textures;
             for s in res.slots.iter_mut() {
                 s.place = slots.iter().find(|o| o.channel == s.channel).and_then(|o| o.place);
             }
             continue;
         }
-        let res = &mut ir.resources[ri];
+        let res = &mut lay.resources[ri];
         let mut precisions: Vec<Precision> = res.slots.iter().map(|s| s.precision).collect();
         precisions.sort();
         precisions.dedup();
@@ -246,8 +262,8 @@ pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
         }
     }
     // Sampled textures per shader stage.
-    for pass in ir.passes.iter().filter(|p| p.live) {
-        let n: usize = pass.reads.iter().map(|&r| ir.resources[r].textures.len()).sum();
+    for pass in lay.passes.iter().filter(|p| p.live) {
+        let n: usize = pass.reads.iter().map(|&r| lay.resources[r].textures.len()).sum();
         if n as u32 > limits.max_sampled_textures_per_shader_stage {
             diags.push(
                 Diagnostic::error(
@@ -262,7 +278,8 @@ pub fn pack(ir: &mut Ir, limits: &Limits) -> Result<(), Diagnostics> {
             );
         }
     }
-    diags.check()
+    diags.check()?;
+    Ok(lay)
 }
 
 /// The resource whose textures a Mipmap output shares.

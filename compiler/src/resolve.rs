@@ -162,7 +162,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         let listed: Vec<&Name> = match &p.kind {
             PassKind::Depth { channel, .. } => vec![channel],
             PassKind::Map { channels: c, .. } | PassKind::Geometry { channels: c, .. } => c.iter().collect(),
-            _ => vec![],
+            PassKind::Filter { .. } | PassKind::Mipmap { .. } | PassKind::SummedArea { .. } | PassKind::Shade { .. } => vec![],
         };
         for n in listed {
             if !channels.contains_key(&n.value) && !expansions.contains_key(&n.value) {

@@ -268,13 +268,138 @@ mod mutations {
             let src = source(TECHNIQUES[which]);
             let mutated = mutate(&src, &ops);
             let r = std::panic::catch_unwind(|| {
-                let _ = sshc::check_str(&mutated, &CompileOptions::default());
+                let checked = sshc::check_str(&mutated, &CompileOptions::default());
                 if let Err(d) = sshc::compile_str(&mutated, &CompileOptions::default()) {
                     // rendering must not panic either
-                    let _ = d.render("mutated.ron", &mutated);
+                    let text = d.render("mutated.ron", &mutated);
+                    // check and compile agree: what passes check fails only in a later phase
+                    if checked.is_ok() {
+                        assert_later_than_check(&d, &text);
+                    }
                 }
             });
             prop_assert!(r.is_ok(), "panicked on:\n{}", mutated);
+        }
+    }
+}
+
+/// Errors of a technique that `check_str` accepted: none may come from a front-end phase,
+/// and none may be an internal error of `lower` (an invariant check should have made).
+fn assert_later_than_check(d: &sshc::Diagnostics, text: &str) {
+    use sshc::diag::Phase;
+    for e in d.errors() {
+        assert!(
+            !matches!(e.phase, Phase::Syntax | Phase::Parse | Phase::Resolve | Phase::Check),
+            "check passed but compile reports a front-end error:\n{text}"
+        );
+        assert!(
+            !e.message.contains("internal compiler error"),
+            "check passed but lower failed:\n{text}"
+        );
+    }
+}
+
+#[test]
+fn check_and_compile_agree_on_integer_literals() {
+    // 2^31 does not fit in an i32: `check` refuses it, at the literal, as `compile` does.
+    let src = source("hard").replace(
+        "select(0.0, 1.0, d_biased <= nearest(z))",
+        "select(0.0, 1.0, d_biased <= nearest(z)) * f32(2147483648)",
+    );
+    let at = src.find("2147483648").unwrap();
+    for d in [
+        sshc::check_str(&src, &CompileOptions::default()).unwrap_err(),
+        sshc::compile_str(&src, &CompileOptions::default()).unwrap_err(),
+    ] {
+        let e = d.errors().next().unwrap();
+        assert_eq!(e.phase, sshc::diag::Phase::Check, "{}", d.render("hard", &src));
+        assert_eq!(
+            (e.primary.0.start as usize, e.primary.0.end as usize),
+            (at, at + 10),
+            "{}",
+            d.render("hard", &src)
+        );
+        assert!(e.message.contains("does not fit in i32"), "{}", e.message);
+    }
+    // 2^31 - 1 fits, and an abstract integer beside an f32 converts to f32.
+    for ok in ["* f32(2147483647)", "* (7 / 2)", "+ 0.0 * f32(sum(k in 1..=3, 2 * k))"] {
+        let src = source("hard").replace(
+            "select(0.0, 1.0, d_biased <= nearest(z))",
+            &format!("select(0.0, 1.0, d_biased <= nearest(z)) {ok}"),
+        );
+        if ok.contains("7 / 2") {
+            // abstract 7 / 2 is the integer 3, then the f32 3.0 (as WGSL)
+            let c = sshc::compile_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("hard", &src)));
+            let shade = c.ir.shade_pass().unwrap();
+            let sshc::ir::IrPassKind::Shade { visibility } = shade.kind else {
+                unreachable!()
+            };
+            assert!(
+                c.ir.arena.display(visibility, Some(&c.ir)).contains("* 3.0)"),
+                "{}",
+                c.ir.arena.display(visibility, Some(&c.ir))
+            );
+        }
+        sshc::check_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{ok}: {}", d.render("hard", &src)));
+        sshc::compile_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{ok}: {}", d.render("hard", &src)));
+    }
+    // An abstract expression without an i32 value is refused by check too.
+    let src = source("hard").replace(
+        "select(0.0, 1.0, d_biased <= nearest(z))",
+        "select(0.0, 1.0, d_biased <= nearest(z)) * (2147483647 + 1)",
+    );
+    let d = sshc::check_str(&src, &CompileOptions::default()).unwrap_err();
+    assert!(d.render("hard", &src).contains("has no i32 value"), "{}", d.render("hard", &src));
+}
+
+/// Every error fixture: what compile refuses in a front-end phase, check refuses with the
+/// same diagnostic; what compile refuses later, check accepts.
+#[test]
+fn check_and_compile_agree_on_every_error_fixture() {
+    use sshc::diag::Phase;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/errors");
+    for f in std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).map(|e| e.path()) {
+        if f.extension().is_none_or(|x| x != "ron") {
+            continue;
+        }
+        let src = std::fs::read_to_string(&f).unwrap();
+        let name = f.file_name().unwrap().to_string_lossy().into_owned();
+        let compiled = sshc::compile_str(&src, &CompileOptions::default()).expect_err(&name);
+        let checked = sshc::check_str(&src, &CompileOptions::default());
+        let front = compiled
+            .errors()
+            .any(|e| matches!(e.phase, Phase::Syntax | Phase::Parse | Phase::Resolve | Phase::Check));
+        match checked {
+            Err(d) => {
+                assert!(front, "{name}: check refuses what compile refuses only later");
+                assert_eq!(d.render(&name, &src), compiled.render(&name, &src), "{name}");
+            }
+            Ok(()) => assert_later_than_check(&compiled, &compiled.render(&name, &src)),
+        }
+    }
+}
+
+#[test]
+fn check_and_compile_agree_on_empty_series() {
+    // An empty series is the zero of its body's type (docs/language.md): here vec2(0.0),
+    // so `.x` of it is well typed in check and lowers to a vector in compile.
+    for body in ["vec2(d, 1.0)", "d", "k"] {
+        let sum = format!("sum(k in 1..=0, {body})");
+        let term = if body.starts_with("vec2") {
+            format!("{sum}.x")
+        } else if body == "k" {
+            format!("f32({sum})")
+        } else {
+            sum.clone()
+        };
+        let src = source("hard").replace(
+            "select(0.0, 1.0, d_biased <= nearest(z))",
+            &format!("select(0.0, 1.0, d_biased <= nearest(z)) + {term}"),
+        );
+        sshc::check_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{body}: {}", d.render("hard", &src)));
+        let c = sshc::compile_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{body}: {}", d.render("hard", &src)));
+        for (file, wgsl) in &c.shaders {
+            sshc::back::validate(wgsl).unwrap_or_else(|e| panic!("{file}: {e}"));
         }
     }
 }

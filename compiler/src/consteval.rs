@@ -1,0 +1,266 @@
+//! Constant evaluation, shared by `check` (filter sizes, sigmas, expansion bounds, the
+//! value of abstract integer expressions) and by the IR arena's folding (`ir::Arena::add`
+//! folds unary and binary operations through [`unary`] and [`binary`]). One set of rules:
+//! integers are i32 (a result outside i32 is not a constant), floats are rounded to f32
+//! after every operation, division by zero is not a constant.
+
+use crate::builtins::{Func, constant};
+use crate::diag::{Diagnostic, Phase};
+use crate::front::ast::ConstValue;
+use crate::front::expr::{BinOp, Expr, ExprKind, Literal, UnOp};
+use crate::resolve::Symbols;
+use crate::span::Span;
+
+/// Unrolling stops past this many terms in one series (also bounds constant evaluation).
+pub const MAX_SERIES: i64 = 4096;
+
+/// A value as the GPU would hold it: floats rounded to f32 (finite only), integers in i32.
+pub fn represent(v: ConstValue) -> Option<ConstValue> {
+    match v {
+        ConstValue::Float(f) => {
+            let f = f as f32;
+            f.is_finite().then_some(ConstValue::Float(f as f64))
+        }
+        ConstValue::Int(i) => i32::try_from(i).ok().map(|i| ConstValue::Int(i as i64)),
+        ConstValue::Bool(b) => Some(ConstValue::Bool(b)),
+    }
+}
+
+/// A unary operation on a constant (not yet rounded: see [`represent`]).
+pub fn unary(op: UnOp, v: ConstValue) -> Option<ConstValue> {
+    use ConstValue::*;
+    match (op, v) {
+        (UnOp::Neg, Float(x)) => Some(Float(-x)),
+        (UnOp::Neg, Int(x)) => Some(Int(x.checked_neg()?)),
+        (UnOp::Not, Bool(x)) => Some(Bool(!x)),
+        (UnOp::Neg, Bool(_)) | (UnOp::Not, Float(_) | Int(_)) => None,
+    }
+}
+
+/// A binary operation on two constants of one type (not yet rounded: see [`represent`]).
+pub fn binary(op: BinOp, x: ConstValue, y: ConstValue) -> Option<ConstValue> {
+    use ConstValue::*;
+    Some(match (x, y) {
+        (Float(x), Float(y)) => match op {
+            BinOp::Add => Float(x + y),
+            BinOp::Sub => Float(x - y),
+            BinOp::Mul => Float(x * y),
+            BinOp::Div if y != 0.0 => Float(x / y),
+            BinOp::Rem if y != 0.0 => Float(x % y),
+            BinOp::Lt => Bool(x < y),
+            BinOp::Le => Bool(x <= y),
+            BinOp::Gt => Bool(x > y),
+            BinOp::Ge => Bool(x >= y),
+            BinOp::Eq => Bool(x == y),
+            BinOp::Ne => Bool(x != y),
+            BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
+        },
+        (Int(x), Int(y)) => match op {
+            BinOp::Add => Int(x.checked_add(y)?),
+            BinOp::Sub => Int(x.checked_sub(y)?),
+            BinOp::Mul => Int(x.checked_mul(y)?),
+            BinOp::Div if y != 0 => Int(x / y),
+            BinOp::Rem if y != 0 => Int(x % y),
+            BinOp::Lt => Bool(x < y),
+            BinOp::Le => Bool(x <= y),
+            BinOp::Gt => Bool(x > y),
+            BinOp::Ge => Bool(x >= y),
+            BinOp::Eq => Bool(x == y),
+            BinOp::Ne => Bool(x != y),
+            BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
+        },
+        (Bool(x), Bool(y)) => match op {
+            BinOp::And => Bool(x && y),
+            BinOp::Or => Bool(x || y),
+            BinOp::Eq => Bool(x == y),
+            BinOp::Ne => Bool(x != y),
+            BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem | BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge => return None,
+        },
+        (Float(_), Int(_) | Bool(_)) | (Int(_), Float(_) | Bool(_)) | (Bool(_), Float(_) | Int(_)) => return None,
+    })
+}
+
+/// Why an expression has no compile-time value.
+pub enum NotConst {
+    /// A name that is not known at compile time (the diagnostic says which and why).
+    Runtime(Diagnostic),
+    /// The operations have no representable value (overflow, division by zero, a vector).
+    NoValue,
+}
+
+/// Evaluate an expression that must be known at compile time (kernel sizes, sigmas,
+/// expansion bounds): literals, fixed params, `PI`/`E`, operators, pure built-ins,
+/// `let` and `sum`. An integer mixed with a float is an abstract integer literal (check
+/// has refused every other mix) and converts to f32, as WGSL does.
+pub fn const_eval(sym: &Symbols, e: &Expr) -> Result<ConstValue, Diagnostic> {
+    match eval(sym, e, &mut Vec::new()) {
+        Ok(v) => Ok(v),
+        Err(NotConst::Runtime(d)) => Err(d),
+        Err(NotConst::NoValue) => Err(Diagnostic::error(Phase::Check, "this value must be known at compile time")
+            .at(e.span, "depends on runtime values")
+            .help("use literals and params with `fixed: true` only")),
+    }
+}
+
+/// [`const_eval`] with local bindings in scope (innermost last).
+pub fn eval(sym: &Symbols, e: &Expr, env: &mut Vec<(String, ConstValue)>) -> Result<ConstValue, NotConst> {
+    use ConstValue::*;
+    let lift = |x: ConstValue, y: ConstValue| match (x, y) {
+        (Int(i), Float(_)) => (Float(i as f64), y),
+        (Float(_), Int(i)) => (x, Float(i as f64)),
+        _ => (x, y),
+    };
+    let v = match &e.kind {
+        ExprKind::Lit(Literal::Int(v)) => Int(*v),
+        ExprKind::Lit(Literal::Float(v)) => Float(*v),
+        ExprKind::Lit(Literal::Bool(b)) => Bool(*b),
+        ExprKind::Name(n) => name(sym, n, e.span, env)?,
+        ExprKind::Unary(op, a) => unary(*op, eval(sym, a, env)?).ok_or(NotConst::NoValue)?,
+        ExprKind::Binary(op, a, b) => {
+            let x = eval(sym, a, env)?;
+            // `&&` and `||` with a decided left side do not need the right one.
+            match (op, x) {
+                (BinOp::And, Bool(false)) => return Ok(Bool(false)),
+                (BinOp::Or, Bool(true)) => return Ok(Bool(true)),
+                _ => {}
+            }
+            let y = eval(sym, b, env)?;
+            let (x, y) = lift(x, y);
+            binary(*op, x, y).ok_or(NotConst::NoValue)?
+        }
+        ExprKind::Call { name, args, .. } => {
+            let f = Func::from_name(name).ok_or(NotConst::NoValue)?;
+            let vals = args.iter().map(|a| eval(sym, a, env)).collect::<Result<Vec<_>, _>>()?;
+            if f == Func::Select {
+                return match vals[..] {
+                    [f, t, Bool(c)] => Ok(if c { t } else { f }),
+                    _ => Err(NotConst::NoValue),
+                };
+            }
+            crate::ir::eval_call(f, &vals).ok_or(NotConst::NoValue)?
+        }
+        ExprKind::Member(..) => return Err(NotConst::NoValue),
+        ExprKind::Let { name, value, body, .. } => {
+            let v = eval(sym, value, env)?;
+            env.push((name.clone(), v));
+            let r = eval(sym, body, env);
+            env.pop();
+            r?
+        }
+        ExprKind::Sum { var, from, to, body, .. } => {
+            let (Int(lo), Int(hi)) = (eval(sym, from, env)?, eval(sym, to, env)?) else {
+                return Err(NotConst::NoValue);
+            };
+            if hi - lo + 1 > MAX_SERIES {
+                return Err(NotConst::NoValue);
+            }
+            let mut acc = Int(0);
+            for k in lo..=hi {
+                env.push((var.clone(), Int(k)));
+                let t = eval(sym, body, env);
+                env.pop();
+                let (a, t) = lift(acc, t?);
+                acc = if k == lo {
+                    t
+                } else {
+                    binary(BinOp::Add, a, t).ok_or(NotConst::NoValue)?
+                };
+                acc = represent(acc).ok_or(NotConst::NoValue)?;
+            }
+            acc
+        }
+    };
+    represent(v).ok_or(NotConst::NoValue)
+}
+
+fn name(sym: &Symbols, n: &str, span: Span, env: &[(String, ConstValue)]) -> Result<ConstValue, NotConst> {
+    if let Some((_, v)) = env.iter().rev().find(|(l, _)| l == n) {
+        return Ok(*v);
+    }
+    if let Some((i, p)) = sym.param(n) {
+        if !p.fixed {
+            return Err(NotConst::Runtime(
+                Diagnostic::error(
+                    Phase::Check,
+                    format!("param `{n}` is a runtime uniform, but this value is needed at compile time"),
+                )
+                .at(span, "not known at compile time")
+                .also(p.name.span, "declared here")
+                .help(format!("add `fixed: true` to param `{n}`")),
+            ));
+        }
+        return Ok(sym.values[i].value);
+    }
+    if let Some(c) = constant(n) {
+        return Ok(ConstValue::Float(c));
+    }
+    Err(NotConst::Runtime(
+        Diagnostic::error(Phase::Check, format!("`{n}` is not known at compile time")).at(span, "not a compile-time value"),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ConstValue::*;
+
+    #[test]
+    fn integers_stay_in_i32_and_floats_round_to_f32() {
+        assert_eq!(represent(Int(i32::MAX as i64)), Some(Int(i32::MAX as i64)));
+        assert_eq!(represent(Int(i32::MAX as i64 + 1)), None);
+        assert_eq!(represent(Float(0.1)), Some(Float(0.1f32 as f64)));
+        assert_eq!(represent(Float(1e39)), None);
+        assert_eq!(binary(BinOp::Div, Int(7), Int(2)), Some(Int(3)));
+        assert_eq!(binary(BinOp::Div, Int(1), Int(0)), None);
+        assert_eq!(binary(BinOp::Rem, Float(1.0), Float(0.0)), None);
+        assert_eq!(
+            binary(BinOp::Add, Int(1), Float(1.0)),
+            None,
+            "mixed types are converted by the caller"
+        );
+        assert_eq!(unary(UnOp::Neg, Int(i64::MIN)), None);
+        assert_eq!(unary(UnOp::Not, Bool(true)), Some(Bool(false)));
+    }
+
+    fn eval_str(expr: &str, params: &str) -> Result<ConstValue, String> {
+        let src = format!(
+            "Technique(name: \"t\", params: {{ {params} }}, channels: {{ \"z\": Channel(precision: F32) }}, passes: [Depth(name: \"depth\", writes: \"shadow\", channel: \"z\"), Shade(name: \"shade\", reads: [\"shadow\"], visibility: \"{expr}\")])"
+        );
+        let t = crate::front::parse::parse(&src).map_err(|d| format!("{d:?}"))?;
+        let sym = crate::resolve::resolve(&t, &crate::CompileOptions::default()).map_err(|d| format!("{d:?}"))?;
+        let crate::front::ast::PassKind::Shade { visibility, .. } = &t.passes[1].kind else {
+            unreachable!()
+        };
+        const_eval(&sym, visibility).map_err(|d| d.message)
+    }
+
+    #[test]
+    fn expressions_of_literals_fixed_params_lets_and_series() {
+        assert_eq!(eval_str("2 * 3 + 1", ""), Ok(Int(7)));
+        assert_eq!(eval_str("7 / 2 * 1.0", ""), Ok(Float(3.0)), "the integer quotient, then f32");
+        assert_eq!(
+            eval_str(
+                "let a = N + 1; sum(k in 1..=a, k)",
+                "\"N\": Param(ty: I32, default: 3, fixed: true)"
+            ),
+            Ok(Int(10))
+        );
+        assert_eq!(
+            eval_str("max(f32(N), 0.5)", "\"N\": Param(ty: I32, default: 3, fixed: true)"),
+            Ok(Float(3.0))
+        );
+        assert_eq!(eval_str("sum(k in 1..=0, 2.0)", ""), Ok(Int(0)));
+        assert_eq!(eval_str("select(1, 2, 1 < 2)", ""), Ok(Int(2)));
+        assert!(
+            eval_str("2147483647 + 1", "")
+                .unwrap_err()
+                .contains("must be known at compile time")
+        );
+        assert!(
+            eval_str("N * 2", "\"N\": Param(ty: I32, default: 3)")
+                .unwrap_err()
+                .contains("runtime uniform")
+        );
+        assert!(eval_str("d * 2.0", "").unwrap_err().contains("`d` is not known at compile time"));
+    }
+}

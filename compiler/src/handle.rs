@@ -1,0 +1,198 @@
+//! Typed handles into typed arenas, as naga's `Handle<T>` and `Arena<T>`: a handle of a
+//! channel cannot index the resources, and a dump prints `channel#3`, not `3`.
+
+use std::fmt;
+use std::hash::{Hash, Hasher};
+use std::marker::PhantomData;
+
+/// What a handle's `Debug` form calls the entity it names (`node#3`, `channel#0`).
+pub trait Kind {
+    const KIND: &'static str;
+}
+
+/// An index into an [`Arena<T>`] (or the expression arena, for `Handle<Node>`).
+pub struct Handle<T> {
+    index: u32,
+    marker: PhantomData<fn() -> T>,
+}
+
+impl<T> Handle<T> {
+    /// The handle of the `index`-th element. Valid only for an arena holding more than
+    /// `index` elements (`ir::validate` checks every handle of an IR).
+    pub fn new(index: usize) -> Handle<T> {
+        Handle {
+            index: u32::try_from(index).expect("arena holds at most 2^32 elements"),
+            marker: PhantomData,
+        }
+    }
+
+    pub fn index(self) -> usize {
+        self.index as usize
+    }
+}
+
+impl<T> Clone for Handle<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<T> Copy for Handle<T> {}
+
+impl<T> PartialEq for Handle<T> {
+    fn eq(&self, other: &Self) -> bool {
+        self.index == other.index
+    }
+}
+
+impl<T> Eq for Handle<T> {}
+
+impl<T> PartialOrd for Handle<T> {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl<T> Ord for Handle<T> {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.index.cmp(&other.index)
+    }
+}
+
+impl<T> Hash for Handle<T> {
+    fn hash<S: Hasher>(&self, state: &mut S) {
+        self.index.hash(state)
+    }
+}
+
+impl<T: Kind> fmt::Debug for Handle<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}#{}", T::KIND, self.index)
+    }
+}
+
+impl<T: Kind> fmt::Display for Handle<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}#{}", T::KIND, self.index)
+    }
+}
+
+/// A vector of `T` indexed by `Handle<T>`; elements are only appended.
+#[derive(Clone)]
+pub struct Arena<T> {
+    items: Vec<T>,
+}
+
+impl<T> Default for Arena<T> {
+    fn default() -> Self {
+        Arena { items: Vec::new() }
+    }
+}
+
+impl<T: fmt::Debug + Kind> fmt::Debug for Arena<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_map().entries(self.with_handles()).finish()
+    }
+}
+
+impl<T> Arena<T> {
+    pub fn append(&mut self, item: T) -> Handle<T> {
+        let h = Handle::new(self.items.len());
+        self.items.push(item);
+        h
+    }
+
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+
+    /// Whether `h` indexes an element of this arena.
+    pub fn contains(&self, h: Handle<T>) -> bool {
+        h.index() < self.items.len()
+    }
+
+    pub fn get(&self, h: Handle<T>) -> Option<&T> {
+        self.items.get(h.index())
+    }
+
+    /// Elements with their handles, in order.
+    pub fn with_handles(&self) -> impl DoubleEndedIterator<Item = (Handle<T>, &T)> + ExactSizeIterator {
+        self.items.iter().enumerate().map(|(i, t)| (Handle::new(i), t))
+    }
+
+    pub fn with_handles_mut(&mut self) -> impl DoubleEndedIterator<Item = (Handle<T>, &mut T)> + ExactSizeIterator {
+        self.items.iter_mut().enumerate().map(|(i, t)| (Handle::new(i), t))
+    }
+
+    /// Elements alone, in order.
+    pub fn iter(&self) -> std::slice::Iter<'_, T> {
+        self.items.iter()
+    }
+
+    pub fn iter_mut(&mut self) -> std::slice::IterMut<'_, T> {
+        self.items.iter_mut()
+    }
+
+    pub fn handles(&self) -> impl DoubleEndedIterator<Item = Handle<T>> + ExactSizeIterator + use<T> {
+        (0..self.items.len()).map(Handle::new)
+    }
+}
+
+impl<T> std::ops::Index<Handle<T>> for Arena<T> {
+    type Output = T;
+    fn index(&self, h: Handle<T>) -> &T {
+        &self.items[h.index()]
+    }
+}
+
+impl<T> std::ops::IndexMut<Handle<T>> for Arena<T> {
+    fn index_mut(&mut self, h: Handle<T>) -> &mut T {
+        &mut self.items[h.index()]
+    }
+}
+
+impl<'a, T> IntoIterator for &'a Arena<T> {
+    type Item = &'a T;
+    type IntoIter = std::slice::Iter<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.items.iter()
+    }
+}
+
+impl<T> FromIterator<T> for Arena<T> {
+    fn from_iter<I: IntoIterator<Item = T>>(iter: I) -> Self {
+        Arena {
+            items: iter.into_iter().collect(),
+        }
+    }
+}
+
+impl<T> Extend<T> for Arena<T> {
+    fn extend<I: IntoIterator<Item = T>>(&mut self, iter: I) {
+        self.items.extend(iter)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Thing;
+    impl Kind for Thing {
+        const KIND: &'static str = "thing";
+    }
+
+    #[test]
+    fn handles_print_their_kind_and_index() {
+        let mut a: Arena<Thing> = Arena::default();
+        a.append(Thing);
+        let h = a.append(Thing);
+        assert_eq!(format!("{h:?}"), "thing#1");
+        assert!(a.contains(h) && !a.contains(Handle::new(2)));
+        assert_eq!(a.handles().collect::<Vec<_>>(), vec![Handle::new(0), h]);
+    }
+}
