@@ -50,7 +50,7 @@ fn every_mistake_has_its_diagnostic() {
 
 #[test]
 fn wrong_precision_names_the_largest_safe_exponent() {
-    // DESIGN.md section 6: exp(c z) at f16 needs c <= ln 65504 = 11.0898 for z in [0, 1].
+    // F16 holds at most 65504, so exp(c z) at f16 needs c <= ln 65504 = 11.0898 for z in [0, 1].
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/errors/wrong_precision.ron");
     let got = render(&path);
     assert!(got.contains("at or below 11.0898"), "{got}");

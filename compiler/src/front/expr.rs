@@ -1,4 +1,4 @@
-//! The expression language inside technique strings (DESIGN.md section 2): small, pure,
+//! The expression language inside technique strings (docs/language.md): small, pure,
 //! typed (f32, i32, bool, vec2..vec4), with `let` bindings, calls of WGSL math built-ins and
 //! of sampling functions, and `sum(k in a..=b, expr)` for series. No loops, no recursion.
 //!

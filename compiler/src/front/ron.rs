@@ -2,7 +2,7 @@
 //! its byte span, and every string knows where each of its bytes came from, so that
 //! errors inside expression strings point at the right column.
 //!
-//! The `ron` crate checks syntax but keeps no span per value (DESIGN.md section 2), so the
+//! The `ron` crate checks syntax but keeps no span per value (docs/architecture.md section 1), so the
 //! technique front end reads RON itself: tokens come from a `logos` lexer, the grammar
 //! (<https://github.com/ron-rs/ron/blob/master/docs/grammar.md>, the subset techniques
 //! use: structs, tuples, lists, maps, strings, raw strings, numbers, booleans, unit
