@@ -7,11 +7,29 @@
 #[cfg(feature = "gpu")]
 pub mod bind;
 #[cfg(feature = "gpu")]
+mod device;
+#[cfg(feature = "gpu")]
+mod executor;
+#[cfg(feature = "gpu")]
+mod frame;
+#[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod graph;
+#[cfg(feature = "gpu")]
+mod image;
+#[cfg(feature = "gpu")]
+mod image_io;
 pub mod metrics;
+#[cfg(feature = "gpu")]
+mod pipeline;
+#[cfg(feature = "gpu")]
+mod resources;
 pub mod scene;
+#[cfg(feature = "gpu")]
+mod steps;
 pub mod truth;
+#[cfg(feature = "gpu")]
+mod validate;
 pub mod visibility;
 
 pub use graph::*;
