@@ -596,6 +596,14 @@ pub(crate) fn unsupported(graph: &PassGraph) -> Result<()> {
         if p.kind == PassKind::Geometry {
             return refuse("a Geometry pass (primitives generated on the GPU)");
         }
+        // Every texture is allocated at the shadow map's size.
+        let writes = p.steps.iter().flat_map(|s| &s.writes);
+        if let Some(t) = writes
+            .filter_map(|w| graph.texture(&w.texture))
+            .find(|t| t.extent == graph::Extent::Camera)
+        {
+            return refuse(&format!("texture `{}` at the camera's resolution (`extent: Camera`)", t.name));
+        }
     }
     Ok(())
 }

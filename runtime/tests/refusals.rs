@@ -118,3 +118,17 @@ fn geometry_passes_are_refused() {
         "{e}"
     );
 }
+
+#[test]
+fn camera_sized_textures_are_refused() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
+    let (mut g, shaders) = depth_graph(Views::LightCenter);
+    g.textures[0].extent = Extent::Camera;
+    let e = Executor::new(&gpu, g, shaders)
+        .err()
+        .expect("a camera-sized texture must be refused");
+    assert!(
+        matches!(&e, RuntimeError::Unsupported { pass, feature } if pass == "depth" && feature.contains("extent: Camera")),
+        "{e}"
+    );
+}
