@@ -21,38 +21,158 @@ use std::fmt;
 /// Version of this schema; a graph of another version is refused.
 pub const SCHEMA_VERSION: u32 = 1;
 
-/// The per-frame uniform every module declares at `@group(0) @binding(0)`.
-pub const FRAME_WGSL: &str = "struct Frame {
-    // world -> light clip space
-    light_view_proj: mat4x4<f32>,
-    // world -> light view space (the light looks down -z)
-    light_view: mat4x4<f32>,
-    // world -> camera clip space
-    camera_view_proj: mat4x4<f32>,
-    // xyz: light position (w = 1) or direction towards the light (w = 0)
-    light_position: vec4<f32>,
-    // xyz: camera position
-    camera_position: vec4<f32>,
-    // x: near, y: far (light view distances), z: 1 / (far - near)
-    depth_range: vec4<f32>,
-    // xy: shadow-map size in texels, zw: 1 / size
-    shadow_size: vec4<f32>,
-    // x: light radius or half-extent (world units), y: angular diameter (radians),
-    // zw: half-extents of the light along the shadow map's u and v axes (world units)
-    light_size: vec4<f32>,
-    // xy: size of the current render target, zw: 1 / size
-    target_size: vec4<f32>,
-    // world size of one shadow-map texel: x per unit of view distance (perspective light),
-    // y constant (orthographic light); the size at distance D is x * D + y
-    texel_world: vec4<f32>,
+/// The type of one field of the `Frame` uniform: its WGSL spelling, size and alignment
+/// (WGSL's uniform address space), and the Rust array that holds it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameType {
+    /// `mat4x4<f32>`, column-major: `[f32; 16]`.
+    Mat4,
+    /// `vec4<f32>`: `[f32; 4]`.
+    Vec4,
 }
-";
+
+impl FrameType {
+    pub const fn wgsl(self) -> &'static str {
+        match self {
+            FrameType::Mat4 => "mat4x4<f32>",
+            FrameType::Vec4 => "vec4<f32>",
+        }
+    }
+
+    /// Bytes.
+    pub const fn size(self) -> u32 {
+        match self {
+            FrameType::Mat4 => 64,
+            FrameType::Vec4 => 16,
+        }
+    }
+
+    /// Alignment in bytes.
+    pub const fn align(self) -> u32 {
+        16
+    }
+}
+
+/// One field of the `Frame` uniform, in declaration order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameField {
+    pub name: &'static str,
+    pub ty: FrameType,
+}
+
+const fn round_up(v: u32, to: u32) -> u32 {
+    v.div_ceil(to) * to
+}
+
+/// Byte offset of field `i` of [`FRAME_FIELDS`] (WGSL layout rules: each field at the next
+/// multiple of its alignment).
+pub const fn frame_offset(i: usize) -> u32 {
+    let mut end = 0;
+    let mut k = 0;
+    while k < i {
+        end = round_up(end, FRAME_FIELDS[k].ty.align()) + FRAME_FIELDS[k].ty.size();
+        k += 1;
+    }
+    round_up(end, FRAME_FIELDS[i].ty.align())
+}
+
+const fn frame_size() -> u32 {
+    let last = FRAME_FIELDS.len() - 1;
+    round_up(frame_offset(last) + FRAME_FIELDS[last].ty.size(), 16)
+}
+
+macro_rules! frame_type {
+    (wgsl Mat4) => {
+        "mat4x4<f32>"
+    };
+    (wgsl Vec4) => {
+        "vec4<f32>"
+    };
+    (rust Mat4) => {
+        [f32; 16]
+    };
+    (rust Vec4) => {
+        [f32; 4]
+    };
+}
+
+/// The one definition of the `Frame` uniform: from the field list come the WGSL
+/// declaration [`FRAME_WGSL`] (each doc line becomes a `//` comment), the field table
+/// [`FRAME_FIELDS`] with its offsets and [`FRAME_SIZE`], and the Rust struct
+/// [`FrameUniform`] whose [`FrameUniform::to_bytes`] writes each field at its offset.
+macro_rules! frame_uniform {
+    ($( $(#[doc = $doc:literal])+ $name:ident: $ty:ident, )+) => {
+        /// The per-frame uniform every module declares at `@group(0) @binding(0)`.
+        pub const FRAME_WGSL: &str = concat!(
+            "struct Frame {\n",
+            $( $("    //", $doc, "\n",)+ "    ", stringify!($name), ": ", frame_type!(wgsl $ty), ",\n", )+
+            "}\n"
+        );
+
+        /// The fields of [`FRAME_WGSL`]'s `Frame`, in declaration order.
+        pub const FRAME_FIELDS: &[FrameField] = &[$(FrameField { name: stringify!($name), ty: FrameType::$ty },)+];
+
+        /// The values of the `Frame` uniform (matrices column-major).
+        #[derive(Clone, Copy, Debug, Default, PartialEq)]
+        #[repr(C)]
+        pub struct FrameUniform {
+            $( $(#[doc = $doc])+ pub $name: frame_type!(rust $ty), )+
+        }
+
+        impl FrameUniform {
+            /// The uniform's bytes (little-endian), [`FRAME_SIZE`] of them, each field at
+            /// its [`frame_offset`].
+            pub fn to_bytes(&self) -> Vec<u8> {
+                let mut out = vec![0u8; FRAME_SIZE as usize];
+                let values: &[&[f32]] = &[$(&self.$name,)+];
+                for (i, v) in values.iter().enumerate() {
+                    let at = frame_offset(i) as usize;
+                    for (k, x) in v.iter().enumerate() {
+                        out[at + 4 * k..at + 4 * k + 4].copy_from_slice(&x.to_le_bytes());
+                    }
+                }
+                out
+            }
+
+            /// Byte offsets of the Rust struct's fields, in declaration order (for the
+            /// layout test: the `#[repr(C)]` struct matches the WGSL layout).
+            pub fn rust_offsets() -> Vec<usize> {
+                vec![$(std::mem::offset_of!(FrameUniform, $name),)+]
+            }
+        }
+    };
+}
+
+frame_uniform! {
+    /// world -> light clip space
+    light_view_proj: Mat4,
+    /// world -> light view space (the light looks down -z)
+    light_view: Mat4,
+    /// world -> camera clip space
+    camera_view_proj: Mat4,
+    /// xyz: light position (w = 1) or direction towards the light (w = 0)
+    light_position: Vec4,
+    /// xyz: camera position
+    camera_position: Vec4,
+    /// x: near, y: far (light view distances), z: 1 / (far - near)
+    depth_range: Vec4,
+    /// xy: shadow-map size in texels, zw: 1 / size
+    shadow_size: Vec4,
+    /// x: light radius or half-extent (world units), y: angular diameter (radians),
+    /// zw: half-extents of the light along the shadow map's u and v axes (world units)
+    light_size: Vec4,
+    /// xy: size of the current render target, zw: 1 / size
+    target_size: Vec4,
+    /// world size of one shadow-map texel: x per unit of view distance (perspective light),
+    /// y constant (orthographic light); the size at distance D is x * D + y
+    texel_world: Vec4,
+}
 
 /// Workgroup size of compute steps ([`Draw::ComputeRows`], [`Draw::ComputeColumns`]).
 pub const COMPUTE_WORKGROUP: u32 = 64;
 
 /// Size in bytes of [`FRAME_WGSL`]'s `Frame`.
-pub const FRAME_SIZE: u32 = 3 * 64 + 7 * 16;
+pub const FRAME_SIZE: u32 = frame_size();
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PassGraph {

@@ -9,6 +9,7 @@
 
 pub mod bind;
 pub mod cmd;
+pub mod image_io;
 pub mod metrics;
 pub mod scene;
 pub mod session;

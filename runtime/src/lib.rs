@@ -6,7 +6,15 @@
 //! schema is the crate `sshc-graph`, re-exported here as [`graph`] so that a program that
 //! runs graphs needs one dependency.
 
+mod device;
+mod executor;
+mod frame;
 pub mod gpu;
+mod image;
+mod pipeline;
+mod resources;
+mod steps;
+mod validate;
 
 pub use sshc_graph as graph;
 pub use sshc_graph::*;

@@ -1,6 +1,7 @@
 //! `sshc render`: compile a technique (or load a compiled graph), bind a scene, run it on
 //! the GPU and write the images.
 
+use crate::image_io::ImageFiles;
 use crate::session::{Overrides, rt};
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
 use sshc_runtime::graph::{Draw, PassGraph};

@@ -12,6 +12,7 @@
 //! This example is a package of its own (`sshc-render-embedded`) so that the macro crate
 //! needs no GPU runtime among its dev-dependencies: trybuild builds those for every case.
 
+use sshc_lab::image_io::ImageFiles;
 use sshc_lab::scene::Scene;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
 use std::ffi::OsString;

@@ -356,7 +356,7 @@ fn generate(input: &TechniqueInput, base: &Path) -> Result<TokenStream, TokenStr
     if !uniform.is_empty() {
         let decl = format!(
             "{}@group(0) @binding(1) var<uniform> params: Params;\n",
-            sshc::back::wgsl::params_struct(&compiled.ir)
+            sshc::back::wgsl::params_struct(&sshc::ir::Program::new(&compiled.ir, &compiled.layout))
         );
         let l = params_layout(&decl).map_err(|e| internal(format!("the `Params` declaration: {e}")))?;
         layout = Some(l.ok_or_else(|| internal("the `Params` declaration declares no `Params`".into()))?);

@@ -1,0 +1,74 @@
+//! Writing the runtime's read-back [`Image`]s to files: PFM (float) and 8-bit PNG. The
+//! codecs live here, in the lab, so that the executor carries none.
+
+use sshc_runtime::gpu::{Image, Result, RuntimeError};
+use std::path::Path;
+
+/// File writers of a read-back image (`use sshc_lab::image_io::ImageFiles`).
+pub trait ImageFiles {
+    /// Write component `c` as a one-channel PFM (float) file.
+    fn write_pfm_gray(&self, path: &Path, c: usize) -> Result<()>;
+    /// Write components xyz as a three-channel PFM file.
+    fn write_pfm_rgb(&self, path: &Path) -> Result<()>;
+    /// Write component `c` (or RGB when `None`) as an 8-bit PNG, values clamped to [0, 1].
+    /// `range` maps [lo, hi] to [0, 1] first (for depth and basis images).
+    fn write_png(&self, path: &Path, c: Option<usize>, range: (f32, f32)) -> Result<()>;
+}
+
+impl ImageFiles for Image {
+    fn write_pfm_gray(&self, path: &Path, c: usize) -> Result<()> {
+        write_pfm(path, self.width, self.height, false, self.channel(c))
+    }
+
+    fn write_pfm_rgb(&self, path: &Path) -> Result<()> {
+        let data = self.rgba.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        write_pfm(path, self.width, self.height, true, data)
+    }
+
+    fn write_png(&self, path: &Path, c: Option<usize>, range: (f32, f32)) -> Result<()> {
+        let scale = |v: f32| {
+            let t = if range.1 > range.0 {
+                (v - range.0) / (range.1 - range.0)
+            } else {
+                v
+            };
+            (t.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+        };
+        let err = |e: ::image::ImageError| RuntimeError::File {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
+        match c {
+            Some(c) => {
+                let buf: Vec<u8> = self.rgba.iter().map(|p| scale(p[c])).collect();
+                ::image::GrayImage::from_raw(self.width, self.height, buf)
+                    .ok_or_else(|| RuntimeError::NotFound("image size mismatch".into()))?
+                    .save(path)
+                    .map_err(err)
+            }
+            None => {
+                let buf: Vec<u8> = self.rgba.iter().flat_map(|p| [scale(p[0]), scale(p[1]), scale(p[2])]).collect();
+                ::image::RgbImage::from_raw(self.width, self.height, buf)
+                    .ok_or_else(|| RuntimeError::NotFound("image size mismatch".into()))?
+                    .save(path)
+                    .map_err(err)
+            }
+        }
+    }
+}
+
+fn write_pfm(path: &Path, w: u32, h: u32, color: bool, data: Vec<f32>) -> Result<()> {
+    let file_error = |message: String| RuntimeError::File {
+        path: path.to_path_buf(),
+        message,
+    };
+    let pfm = pxm::PFMBuilder::new()
+        .size(w as usize, h as usize)
+        .color(color)
+        .scale(-1.0)
+        .data(data)
+        .build()
+        .map_err(|e| file_error(e.to_string()))?;
+    let mut f = std::fs::File::create(path).map_err(|e| file_error(e.to_string()))?;
+    pfm.write_into(&mut f).map_err(|e| file_error(e.to_string()))
+}

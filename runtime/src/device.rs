@@ -1,0 +1,242 @@
+//! The device: opening it, wgpu errors as values (error scopes), and the caches of shader
+//! modules and pipelines shared by every executor on it.
+
+use crate::graph;
+use crate::pipeline::{PipelineKey, StepPipeline};
+use std::collections::HashMap;
+use std::fmt;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+/// Why the runtime could not do what was asked.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RuntimeError {
+    /// No GPU adapter: the message names what to install.
+    NoAdapter(String),
+    Device(String),
+    Graph(graph::GraphError),
+    /// A file named by the graph could not be read, or lies outside the graph's folder.
+    File {
+        path: PathBuf,
+        message: String,
+    },
+    /// A shader module of the graph does not validate.
+    Shader {
+        file: String,
+        message: String,
+    },
+    /// A resource exceeds the device's limits.
+    Limit {
+        what: String,
+        needed: u64,
+        limit: u64,
+    },
+    /// wgpu refused an object or a command.
+    Wgpu {
+        context: String,
+        message: String,
+    },
+    /// The graph asks for something this runtime cannot do yet; it is refused rather than
+    /// run another way.
+    Unsupported {
+        pass: String,
+        feature: String,
+    },
+    Param(String),
+    NotFound(String),
+}
+
+impl fmt::Display for RuntimeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RuntimeError::NoAdapter(m) => write!(f, "no GPU adapter: {m}"),
+            RuntimeError::Device(m) => write!(f, "cannot open the GPU device: {m}"),
+            RuntimeError::Graph(e) => write!(f, "{e}"),
+            RuntimeError::File { path, message } => write!(f, "{}: {message}", path.display()),
+            RuntimeError::Shader { file, message } => write!(f, "shader `{file}` does not validate:\n{message}"),
+            RuntimeError::Limit { what, needed, limit } => write!(f, "{what} needs {needed}, above the device's limit of {limit}"),
+            RuntimeError::Wgpu { context, message } => write!(f, "{context}: {message}"),
+            RuntimeError::Unsupported { pass, feature } => {
+                write!(f, "pass `{pass}` needs {feature}, which this runtime does not support yet")
+            }
+            RuntimeError::Param(m) => write!(f, "{m}"),
+            RuntimeError::NotFound(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+impl std::error::Error for RuntimeError {}
+
+impl From<graph::GraphError> for RuntimeError {
+    fn from(e: graph::GraphError) -> Self {
+        RuntimeError::Graph(e)
+    }
+}
+
+pub type Result<T> = std::result::Result<T, RuntimeError>;
+
+/// What to install when no adapter exists.
+pub const INSTALL_HINT: &str = "install the Vulkan loader and Mesa's lavapipe CPU driver (Debian/Ubuntu: `apt-get install -y libvulkan1 mesa-vulkan-drivers`), or a GPU driver with Vulkan support";
+
+/// An open device.
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    pub features: wgpu::Features,
+    pub limits: wgpu::Limits,
+    uncaptured: Arc<Mutex<Vec<String>>>,
+    /// Pipelines by everything that determines them ([`PipelineKey`]): lavapipe compiles
+    /// each pipeline through LLVM, so executors of one technique on several scenes share them.
+    pipelines: Mutex<HashMap<PipelineKey, Arc<StepPipeline>>>,
+    /// Shader modules by their WGSL source.
+    modules: Mutex<HashMap<Arc<str>, wgpu::ShaderModule>>,
+}
+
+impl Gpu {
+    /// Open the first Vulkan adapter, headless.
+    pub fn new() -> Result<Gpu> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends: wgpu::Backends::VULKAN,
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| RuntimeError::NoAdapter(format!("{e}; {INSTALL_HINT}")))?;
+        let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::FLOAT32_FILTERABLE | wgpu::Features::TEXTURE_FORMAT_16BIT_NORM;
+        let features = adapter.features() & wanted;
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("sshc"),
+            required_features: features,
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| RuntimeError::Device(e.to_string()))?;
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        Ok(Gpu {
+            device,
+            queue,
+            info: adapter.get_info(),
+            features,
+            limits,
+            uncaptured,
+            pipelines: Mutex::new(HashMap::new()),
+            modules: Mutex::new(HashMap::new()),
+        })
+    }
+
+    /// Number of pipelines built on this device so far (each is built once per distinct
+    /// [`PipelineKey`]: shader, entry points, formats, bindings, depth and blend state).
+    pub fn cached_pipelines(&self) -> usize {
+        self.pipelines.lock().map(|c| c.len()).unwrap_or(0)
+    }
+
+    /// "name (backend, driver)" for reports.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {} {})",
+            self.info.name, self.info.backend, self.info.driver, self.info.driver_info
+        )
+    }
+
+    /// Run `f` inside validation and out-of-memory error scopes; wgpu's error becomes a value.
+    pub fn scoped<T>(&self, context: &str, f: impl FnOnce() -> T) -> Result<T> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let v = f();
+        let e1 = pollster::block_on(validation.pop());
+        let e2 = pollster::block_on(oom.pop());
+        match e1.or(e2) {
+            Some(e) => Err(RuntimeError::Wgpu {
+                context: context.to_string(),
+                message: e.to_string(),
+            }),
+            None => self.take_uncaptured(context).map(|_| v),
+        }
+    }
+
+    fn take_uncaptured(&self, context: &str) -> Result<()> {
+        let mut v = self
+            .uncaptured
+            .lock()
+            .map_err(|_| RuntimeError::Device("error sink poisoned".into()))?;
+        if v.is_empty() {
+            Ok(())
+        } else {
+            let message = v.join("\n");
+            v.clear();
+            Err(RuntimeError::Wgpu {
+                context: context.to_string(),
+                message,
+            })
+        }
+    }
+
+    /// The shader module of a (validated) WGSL source, created once per device.
+    pub(crate) fn module(&self, label: &str, source: &Arc<str>) -> Result<wgpu::ShaderModule> {
+        if let Some(m) = self.modules.lock().ok().and_then(|c| c.get(source).cloned()) {
+            return Ok(m);
+        }
+        let m = self.scoped(&format!("shader `{label}`"), || {
+            self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(source.as_ref().into()),
+            })
+        })?;
+        if let Ok(mut c) = self.modules.lock() {
+            c.insert(source.clone(), m.clone());
+        }
+        Ok(m)
+    }
+
+    /// The pipeline of `key`, built (from the key alone) once per device.
+    pub(crate) fn pipeline(&self, key: &PipelineKey, label: &str) -> Result<Arc<StepPipeline>> {
+        if let Some(p) = self.pipelines.lock().ok().and_then(|c| c.get(key).cloned()) {
+            return Ok(p);
+        }
+        let module = self.module(label, &key.source)?;
+        let p = Arc::new(StepPipeline::build(self, key, &module, label)?);
+        if let Ok(mut c) = self.pipelines.lock() {
+            c.insert(key.clone(), p.clone());
+        }
+        Ok(p)
+    }
+
+    /// Map a `MAP_READ` buffer and copy its bytes out.
+    pub(crate) fn map_read(&self, buf: &wgpu::Buffer) -> Result<Vec<u8>> {
+        let slice = buf.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| RuntimeError::Device(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| RuntimeError::Device(e.to_string()))?
+            .map_err(|e| RuntimeError::Wgpu {
+                context: "reading back".into(),
+                message: e.to_string(),
+            })?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| RuntimeError::Wgpu {
+                context: "reading back".into(),
+                message: e.to_string(),
+            })?
+            .to_vec();
+        buf.unmap();
+        Ok(data)
+    }
+}

@@ -1,0 +1,462 @@
+//! The executor: loads a compiled pass graph (treated as untrusted input) into step nodes,
+//! binds a scene, runs frames with GPU timestamps per pass, and reads any texture back.
+
+use crate::device::{Gpu, Result, RuntimeError};
+use crate::frame::SceneInputs;
+use crate::graph::{self, Format, PassGraph, TextureDecl};
+use crate::image::{Image, read_back, read_table};
+use crate::resources::{Resources, f32_bytes, mip_count};
+use crate::steps::{self, Group0, PassNode, Stamps};
+use crate::validate::validate_wgsl;
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// GPU time of each pass of one frame, in milliseconds (None without timestamp queries).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameTimes {
+    pub passes: Vec<(String, Option<f64>)>,
+}
+
+/// The camera outputs of the Shade pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraOutput {
+    Visibility = 0,
+    Color = 1,
+    Position = 2,
+    Normal = 3,
+}
+
+/// Two timestamps per pass: the query set, the buffer it resolves into, and a readable copy.
+struct Timestamps {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    read: wgpu::Buffer,
+}
+
+/// A loaded pass graph, ready to run.
+pub struct Executor<'g> {
+    gpu: &'g Gpu,
+    pub graph: PassGraph,
+    /// One node per step, per pass, in execution order.
+    passes: Vec<PassNode>,
+    params: Vec<u8>,
+    params_buf: Option<wgpu::Buffer>,
+    sampler: wgpu::Sampler,
+    bound: Option<Resources>,
+    timestamps: Option<Timestamps>,
+    /// Linear depth written into the Depth pass's output instead of rasterising the scene.
+    depth_override: Option<Vec<f32>>,
+    /// Refuse scenes whose textures would take more than this many bytes.
+    pub max_bytes: u64,
+}
+
+impl<'g> Executor<'g> {
+    /// Load `T.graph.ron` and the shader files it names, from the graph's own folder.
+    pub fn load(gpu: &'g Gpu, graph_path: &Path) -> Result<Executor<'g>> {
+        let io = |path: &Path, e: std::io::Error| RuntimeError::File {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
+        let text = std::fs::read_to_string(graph_path).map_err(|e| io(graph_path, e))?;
+        let graph = PassGraph::from_ron(&text)?;
+        let dir = graph_path.parent().unwrap_or(Path::new("."));
+        let canon_dir = dir.canonicalize().map_err(|e| io(dir, e))?;
+        let mut shaders = Vec::new();
+        for p in &graph.passes {
+            let path = dir.join(&p.shader);
+            let canon = path.canonicalize().map_err(|e| io(&path, e))?;
+            if !canon.starts_with(&canon_dir) {
+                return Err(RuntimeError::File {
+                    path,
+                    message: "lies outside the graph's folder (through a link)".into(),
+                });
+            }
+            let src = std::fs::read_to_string(&canon).map_err(|e| io(&path, e))?;
+            shaders.push((p.shader.clone(), src));
+        }
+        Executor::new(gpu, graph, shaders)
+    }
+
+    /// Build from a graph and its shader sources (as the compiler's API returns them).
+    pub fn new(gpu: &'g Gpu, graph: PassGraph, shaders: Vec<(String, String)>) -> Result<Executor<'g>> {
+        // The graph is untrusted: check references, refuse what this runtime cannot honour,
+        // re-validate every module with naga, and check declared sizes against the device
+        // before creating anything.
+        let text = graph.to_ron();
+        let graph = PassGraph::from_ron(&text)?;
+        steps::unsupported(&graph)?;
+        let mut sources: HashMap<String, Arc<str>> = HashMap::new();
+        for p in &graph.passes {
+            let src = shaders
+                .iter()
+                .find(|(f, _)| f == &p.shader)
+                .map(|(_, s)| s.as_str())
+                .ok_or_else(|| RuntimeError::NotFound(format!("pass `{}` names shader `{}`, which was not given", p.name, p.shader)))?;
+            validate_wgsl(src).map_err(|message| RuntimeError::Shader {
+                file: p.shader.clone(),
+                message,
+            })?;
+            if !sources.contains_key(&p.shader) {
+                let src: Arc<str> = src.into();
+                gpu.module(&p.shader, &src)?;
+                sources.insert(p.shader.clone(), src);
+            }
+        }
+        for t in &graph.textures {
+            let limit = gpu.limits.max_texture_array_layers;
+            if t.layers > limit {
+                return Err(RuntimeError::Limit {
+                    what: format!("texture `{}` (array layers)", t.name),
+                    needed: t.layers as u64,
+                    limit: limit as u64,
+                });
+            }
+            if t.format == Format::SummedAreaU32 && t.mips {
+                return Err(RuntimeError::NotFound(format!(
+                    "texture `{}`: a summed-area table has no mip levels",
+                    t.name
+                )));
+            }
+            if matches!(t.format, Format::R16Unorm | Format::Rg16Unorm | Format::Rgba16Unorm)
+                && !gpu.features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM)
+            {
+                return Err(RuntimeError::Device(format!(
+                    "texture `{}` is {:?}, which this device cannot store (no 16-bit norm formats)",
+                    t.name, t.format
+                )));
+            }
+        }
+        // Params: the uniform must fit the device, and every field must lie inside it.
+        let max_uniform = gpu.limits.max_uniform_buffer_binding_size;
+        if graph.params_size as u64 > max_uniform || graph.params_size % 4 != 0 {
+            return Err(RuntimeError::Limit {
+                what: "the Params uniform (bytes, a multiple of 4)".into(),
+                needed: graph.params_size as u64,
+                limit: max_uniform,
+            });
+        }
+        for p in &graph.params {
+            if let Some(off) = p.offset
+                && (off % 4 != 0 || off as u64 + 4 > graph.params_size as u64)
+            {
+                return Err(RuntimeError::Param(format!(
+                    "param `{}` lies at byte {off}, outside the {}-byte Params uniform",
+                    p.name, graph.params_size
+                )));
+            }
+        }
+        let params = default_params(&graph);
+        let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("sshc linear clamp"),
+            address_mode_u: wgpu::AddressMode::ClampToEdge,
+            address_mode_v: wgpu::AddressMode::ClampToEdge,
+            address_mode_w: wgpu::AddressMode::ClampToEdge,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            ..Default::default()
+        });
+        let passes = steps::build(gpu, &graph, &sources)?;
+        let params_buf = (graph.params_size > 0).then(|| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("params"),
+                size: graph.params_size as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        let timestamps = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
+            let n = (graph.passes.len() * 2) as u32;
+            Timestamps {
+                set: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("pass times"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: n,
+                }),
+                resolve: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("timestamps"),
+                    size: n as u64 * 8,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                }),
+                read: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("timestamps read"),
+                    size: n as u64 * 8,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+            }
+        });
+        Ok(Executor {
+            gpu,
+            graph,
+            passes,
+            params,
+            params_buf,
+            sampler,
+            bound: None,
+            timestamps,
+            depth_override: None,
+            max_bytes: 4 << 30,
+        })
+    }
+
+    /// Set a runtime param (a uniform); fixed params were compiled in and cannot change.
+    pub fn set_param(&mut self, name: &str, value: f64) -> Result<()> {
+        let p = self
+            .graph
+            .params
+            .iter()
+            .find(|p| p.name == name)
+            .ok_or_else(|| RuntimeError::Param(format!("the technique has no param `{name}`")))?;
+        let Some(off) = p.offset else {
+            return Err(RuntimeError::Param(format!(
+                "param `{name}` is fixed at compile time; recompile with `--set {name}={value}`"
+            )));
+        };
+        if let Some((lo, hi)) = p.range
+            && !(lo..=hi).contains(&value)
+        {
+            return Err(RuntimeError::Param(format!(
+                "param `{name}` = {value} is outside its range [{lo}, {hi}]"
+            )));
+        }
+        let bytes = param_bytes(p.ty, value);
+        self.params[off as usize..off as usize + 4].copy_from_slice(&bytes);
+        Ok(())
+    }
+
+    /// Create the scene's buffers and every texture at the scene's sizes, then bind every
+    /// step node to them.
+    pub fn bind_scene(&mut self, s: &SceneInputs) -> Result<()> {
+        let gpu = self.gpu;
+        self.bound = None;
+        let res = Resources::new(gpu, &self.graph, s, self.max_bytes)?;
+        let shared = Group0 {
+            frame: &res.frame,
+            params: self.params_buf.as_ref(),
+            sampler: &self.sampler,
+        };
+        gpu.scoped("binding the passes to the scene", || -> Result<()> {
+            for node in self.passes.iter_mut().flat_map(|p| &mut p.steps) {
+                node.bind(gpu, &res, &shared)?;
+            }
+            Ok(())
+        })??;
+        self.bound = Some(res);
+        Ok(())
+    }
+
+    fn bound(&self) -> Result<&Resources> {
+        self.bound
+            .as_ref()
+            .ok_or_else(|| RuntimeError::NotFound("no scene is bound: call bind_scene first".into()))
+    }
+
+    /// Replace the Depth pass: its output takes these linear depths (row-major, row 0 first,
+    /// `shadow_size`^2 values) instead of the scene rasterised from the light. For feeding
+    /// synthetic depth fields to the passes after Depth; `None` rasterises again.
+    pub fn set_depth_override(&mut self, depth: Option<Vec<f32>>) {
+        self.depth_override = depth;
+    }
+
+    /// Upload the depth override into the Depth pass's output.
+    fn write_depth_override(&self, pass: &graph::PassDecl, depth: &[f32]) -> Result<()> {
+        let b = self.bound()?;
+        let n = b.shadow_size as usize;
+        if depth.len() != n * n {
+            return Err(RuntimeError::Param(format!(
+                "depth override has {} values, the shadow map {n} x {n}",
+                depth.len()
+            )));
+        }
+        let target = pass
+            .steps
+            .first()
+            .and_then(|s| s.writes.first())
+            .ok_or_else(|| RuntimeError::NotFound(format!("Depth pass `{}` writes nothing", pass.name)))?;
+        let decl = self
+            .graph
+            .texture(&target.texture)
+            .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{}`", target.texture)))?;
+        if decl.format != Format::R32Float {
+            return Err(RuntimeError::Param(format!(
+                "the Depth pass writes {:?}; a depth override needs R32Float",
+                decl.format
+            )));
+        }
+        let tex = b.texture(&target.texture)?;
+        self.gpu.scoped("writing the depth override", || {
+            self.gpu.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: tex,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: 0,
+                        z: target.layer,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                &f32_bytes(depth),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(4 * n as u32),
+                    rows_per_image: Some(n as u32),
+                },
+                wgpu::Extent3d {
+                    width: n as u32,
+                    height: n as u32,
+                    depth_or_array_layers: 1,
+                },
+            )
+        })
+    }
+
+    /// Run every pass once. Returns the GPU time of each pass when timestamps are available.
+    pub fn run_frame(&mut self) -> Result<FrameTimes> {
+        let gpu = self.gpu;
+        if let Some(buf) = &self.params_buf {
+            gpu.queue.write_buffer(buf, 0, &self.params);
+        }
+        let res = self.bound()?;
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        gpu.scoped("recording the frame", || -> Result<()> {
+            for (pi, (pass, decl)) in self.passes.iter().zip(&self.graph.passes).enumerate() {
+                if pass.kind == graph::PassKind::Depth
+                    && let Some(depth) = &self.depth_override
+                {
+                    self.write_depth_override(decl, depth)?;
+                    continue;
+                }
+                // The pass's first render or compute pass writes its start, the last its end.
+                let recording: Vec<_> = pass.steps.iter().filter(|n| n.passes() > 0).collect();
+                let last = recording.len().saturating_sub(1);
+                for (i, node) in recording.into_iter().enumerate() {
+                    let stamps = self.timestamps.as_ref().map(|t| Stamps {
+                        set: &t.set,
+                        begin: (i == 0).then_some(2 * pi as u32),
+                        end: (i == last).then_some(2 * pi as u32 + 1),
+                    });
+                    node.record(&mut encoder, res, stamps)?;
+                }
+            }
+            Ok(())
+        })??;
+        if let Some(t) = &self.timestamps {
+            let n = (self.graph.passes.len() * 2) as u32;
+            encoder.resolve_query_set(&t.set, 0..n, &t.resolve, 0);
+            encoder.copy_buffer_to_buffer(&t.resolve, 0, &t.read, 0, n as u64 * 8);
+        }
+        gpu.scoped("submitting the frame", || gpu.queue.submit([encoder.finish()]))?;
+        let times = match &self.timestamps {
+            Some(t) => {
+                let raw = gpu.map_read(&t.read)?;
+                let ticks: Vec<u64> = raw
+                    .chunks_exact(8)
+                    .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                    .collect();
+                let period = gpu.queue.get_timestamp_period() as f64;
+                self.passes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| {
+                        let (a, z) = (ticks[2 * i], ticks[2 * i + 1]);
+                        (p.name.clone(), (z >= a && a > 0).then(|| (z - a) as f64 * period * 1e-6))
+                    })
+                    .collect()
+            }
+            None => self.passes.iter().map(|p| (p.name.clone(), None)).collect(),
+        };
+        Ok(FrameTimes { passes: times })
+    }
+
+    /// Read one layer and mip level of a texture of the graph.
+    pub fn read_texture(&self, name: &str, layer: u32, level: u32) -> Result<Image> {
+        let b = self.bound()?;
+        let decl = self
+            .graph
+            .texture(name)
+            .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{name}`")))?;
+        if layer >= decl.layers {
+            return Err(RuntimeError::NotFound(format!(
+                "texture `{name}` has {} layer(s), not {}",
+                decl.layers,
+                layer + 1
+            )));
+        }
+        let levels = if decl.mips { mip_count(b.shadow_size) } else { 1 };
+        if level >= levels {
+            return Err(RuntimeError::NotFound(format!(
+                "texture `{name}` has {levels} level(s), not {}",
+                level + 1
+            )));
+        }
+        let size = (b.shadow_size >> level).max(1);
+        if decl.format == Format::SummedAreaU32 {
+            return read_table(self.gpu, b.table(name)?, layer, size);
+        }
+        read_back(self.gpu, b.texture(name)?, layer, level, size, size, decl.format)
+    }
+
+    /// Read a camera output of the Shade pass.
+    pub fn read_camera(&self, which: CameraOutput) -> Result<Image> {
+        let b = self.bound()?;
+        let (w, h) = b.camera_size;
+        let format = match which {
+            CameraOutput::Visibility => Format::R32Float,
+            CameraOutput::Color => Format::Rgba8Unorm,
+            CameraOutput::Position => Format::Rgba32Float,
+            CameraOutput::Normal => Format::Rgba16Float,
+        };
+        read_back(self.gpu, &b.camera[which as usize], 0, 0, w, h, format)
+    }
+
+    /// Bytes of every texture at the bound sizes: (name, bytes); transient ones included.
+    pub fn memory(&self) -> Result<Vec<(String, u64)>> {
+        let b = self.bound()?;
+        let texels = b.shadow_size as u64 * b.shadow_size as u64;
+        Ok(self
+            .graph
+            .textures
+            .iter()
+            .map(|t: &TextureDecl| {
+                let per = t.format.bytes_per_texel() as u64 * t.layers as u64 * texels;
+                (t.name.clone(), if t.mips { per * 4 / 3 } else { per })
+            })
+            .collect())
+    }
+
+    /// The bound scene's shadow-map resolution.
+    pub fn shadow_size(&self) -> Result<u32> {
+        Ok(self.bound()?.shadow_size)
+    }
+
+    pub fn gpu(&self) -> &Gpu {
+        self.gpu
+    }
+}
+
+fn param_bytes(ty: graph::ParamType, v: f64) -> [u8; 4] {
+    match ty {
+        graph::ParamType::F32 => (v as f32).to_le_bytes(),
+        graph::ParamType::I32 => (v as i32).to_le_bytes(),
+        graph::ParamType::Bool => ((v != 0.0) as u32).to_le_bytes(),
+    }
+}
+
+fn default_params(g: &PassGraph) -> Vec<u8> {
+    let mut bytes = vec![0u8; g.params_size as usize];
+    for p in &g.params {
+        if let Some(off) = p.offset {
+            let o = off as usize;
+            if o + 4 <= bytes.len() {
+                bytes[o..o + 4].copy_from_slice(&param_bytes(p.ty, p.value));
+            }
+        }
+    }
+    bytes
+}

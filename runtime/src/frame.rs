@@ -1,0 +1,120 @@
+//! What the executor takes from a scene ([`SceneInputs`]) and the `Frame` uniform made
+//! from it. The uniform's layout has one definition, [`crate::graph::FrameUniform`] (with
+//! [`crate::graph::FRAME_WGSL`] and [`crate::graph::FRAME_FIELDS`] derived from it).
+
+use crate::graph::FrameUniform;
+
+/// Everything the executor needs from a scene, as plain data (column-major matrices).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneInputs {
+    /// Interleaved world-space position xyz and normal xyz, three vertices per triangle.
+    pub vertices: Vec<f32>,
+    pub camera_view_proj: [f32; 16],
+    pub camera_position: [f32; 3],
+    pub camera_size: (u32, u32),
+    pub shadow_size: u32,
+    pub light_view: [f32; 16],
+    pub light_view_proj: [f32; 16],
+    /// xyz position (w = 1) or direction towards the light (w = 0).
+    pub light_position: [f32; 4],
+    pub near: f32,
+    pub far: f32,
+    /// Radius or half-extent, world units.
+    pub light_size: f32,
+    /// Half-extents of the light along the shadow map's u and v axes, world units.
+    pub light_half_extents: [f32; 2],
+    /// Full angular diameter, radians.
+    pub light_angle: f32,
+    /// Element [1][1] of the light's projection (1 / tan(fov / 2), or 2 / height for an orthographic light).
+    pub light_proj_y: f32,
+    pub light_orthographic: bool,
+}
+
+impl SceneInputs {
+    /// The `Frame` uniform of this scene. Every render target of the graph has the
+    /// shadow map's size, so `target_size` is the shadow map's.
+    pub fn frame(&self) -> FrameUniform {
+        let n = self.shadow_size as f32;
+        let range = (self.far - self.near).max(f32::MIN_POSITIVE);
+        let p = self.camera_position;
+        let texel = 2.0 / (self.light_proj_y.max(f32::MIN_POSITIVE) * n);
+        FrameUniform {
+            light_view_proj: self.light_view_proj,
+            light_view: self.light_view,
+            camera_view_proj: self.camera_view_proj,
+            light_position: self.light_position,
+            camera_position: [p[0], p[1], p[2], 1.0],
+            depth_range: [self.near, self.far, 1.0 / range, 0.0],
+            shadow_size: [n, n, 1.0 / n, 1.0 / n],
+            light_size: [
+                self.light_size,
+                self.light_angle,
+                self.light_half_extents[0],
+                self.light_half_extents[1],
+            ],
+            target_size: [n, n, 1.0 / n, 1.0 / n],
+            texel_world: if self.light_orthographic {
+                [0.0, texel, 0.0, 0.0]
+            } else {
+                [texel, 0.0, 0.0, 0.0]
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::graph::{FRAME_FIELDS, FRAME_SIZE, FRAME_WGSL, FrameUniform, frame_offset};
+
+    /// naga's layout of the WGSL `Frame` (name, offset, size per member; struct size).
+    fn naga_layout() -> (Vec<(String, u32, u32)>, u32) {
+        let module = naga::front::wgsl::parse_str(FRAME_WGSL).unwrap_or_else(|e| panic!("{}", e.emit_to_string(FRAME_WGSL)));
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        let (handle, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("Frame"))
+            .expect("FRAME_WGSL declares `Frame`");
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            panic!("`Frame` is not a struct")
+        };
+        assert_eq!(layouter[handle].size, *span);
+        let members = members
+            .iter()
+            .map(|m| (m.name.clone().unwrap_or_default(), m.offset, layouter[m.ty].size))
+            .collect();
+        (members, *span)
+    }
+
+    #[test]
+    fn frame_layout_is_nagas() {
+        let (members, span) = naga_layout();
+        assert_eq!(members.len(), FRAME_FIELDS.len());
+        let rust = FrameUniform::rust_offsets();
+        for (i, (f, (name, offset, size))) in FRAME_FIELDS.iter().zip(&members).enumerate() {
+            assert_eq!(f.name, name, "field {i}");
+            assert_eq!(frame_offset(i), *offset, "offset of `{name}`");
+            assert_eq!(f.ty.size(), *size, "size of `{name}`");
+            assert_eq!(rust[i], *offset as usize, "offset of the Rust field `{name}`");
+            assert!(FRAME_WGSL.contains(&format!("    {name}: {},\n", f.ty.wgsl())));
+        }
+        assert_eq!(span, FRAME_SIZE);
+        assert_eq!(std::mem::size_of::<FrameUniform>(), FRAME_SIZE as usize);
+    }
+
+    #[test]
+    fn frame_bytes_put_each_field_at_its_offset() {
+        let mut f = FrameUniform::default();
+        f.light_view[1] = 2.0;
+        f.texel_world[3] = 3.0;
+        let bytes = f.to_bytes();
+        assert_eq!(bytes.len(), FRAME_SIZE as usize);
+        let at = |i: usize| f32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
+        let (members, _) = naga_layout();
+        let offset = |name: &str| members.iter().find(|m| m.0 == name).unwrap().1 as usize;
+        assert_eq!(at(offset("light_view") + 4), 2.0);
+        assert_eq!(at(offset("texel_world") + 12), 3.0);
+        assert_eq!(bytes.chunks_exact(4).filter(|w| w.iter().any(|b| *b != 0)).count(), 2);
+    }
+}

@@ -1,0 +1,262 @@
+//! Pipelines and the key that determines them.
+//!
+//! A [`PipelineKey`] holds everything a pipeline is built from: the shader source itself,
+//! the entry points, the binding layout, the colour targets with their blend state, the
+//! depth state and the vertex input. [`StepPipeline::build`] reads nothing else, so two
+//! steps with equal keys can share one pipeline (the device caches them by key).
+
+use crate::device::{Gpu, Result};
+use std::sync::Arc;
+
+/// The depth attachment format of scene draws.
+pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Everything a pipeline is built from.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct PipelineKey {
+    /// The WGSL source (its identity is its text).
+    pub source: Arc<str>,
+    pub stages: Stages,
+    pub layout: BindingLayout,
+}
+
+/// The entry points and fixed-function state.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum Stages {
+    Raster {
+        vertex: Option<String>,
+        fragment: Option<String>,
+        /// The scene's vertex buffer (position and normal, 24-byte stride), or none.
+        scene_vertices: bool,
+        targets: Vec<ColorTarget>,
+        depth: Option<DepthState>,
+    },
+    Compute {
+        entry: Option<String>,
+    },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct ColorTarget {
+    pub format: wgpu::TextureFormat,
+    pub blend: Option<wgpu::BlendState>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct DepthState {
+    pub format: wgpu::TextureFormat,
+    pub compare: wgpu::CompareFunction,
+    pub write: bool,
+}
+
+/// The bind groups of a step (see the conventions in [`crate::graph`]).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct BindingLayout {
+    /// Group 0 binding 1: the `Params` uniform.
+    pub params: bool,
+    /// Group 0 binding 2: the filtering sampler.
+    pub sampler: bool,
+    /// Group 1: what the step reads.
+    pub reads: Vec<(u32, Slot)>,
+    /// Group 2 (compute steps): what the step writes, bindings 0, 1, ...
+    pub writes: Vec<Slot>,
+}
+
+/// One binding of group 1 or 2.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum Slot {
+    /// A `texture_2d_array<f32>`, filterable when the step binds the sampler.
+    Texture { filterable: bool },
+    /// A storage buffer (a summed-area table).
+    Buffer { read_only: bool },
+}
+
+/// A built pipeline and its bind group layouts.
+pub(crate) struct StepPipeline {
+    pub pipeline: Pipeline,
+    pub group0: wgpu::BindGroupLayout,
+    /// What the step reads; an empty layout when a compute step reads nothing but writes.
+    pub group1: Option<wgpu::BindGroupLayout>,
+    /// What a compute step writes.
+    pub group2: Option<wgpu::BindGroupLayout>,
+}
+
+pub(crate) enum Pipeline {
+    Render(wgpu::RenderPipeline),
+    Compute(wgpu::ComputePipeline),
+}
+
+impl Slot {
+    fn entry(self, binding: u32) -> wgpu::BindGroupLayoutEntry {
+        let ty = match self {
+            Slot::Texture { filterable } => wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable },
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            Slot::Buffer { read_only } => wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+        };
+        let visibility = match self {
+            Slot::Buffer { read_only: false } => wgpu::ShaderStages::COMPUTE,
+            _ => wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+        };
+        wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty,
+            count: None,
+        }
+    }
+}
+
+fn group0_layout(gpu: &Gpu, l: &BindingLayout) -> wgpu::BindGroupLayout {
+    let vis = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+    let uniform = |binding| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: vis,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let mut entries = vec![uniform(0)];
+    if l.params {
+        entries.push(uniform(1));
+    }
+    if l.sampler {
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 2,
+            visibility: vis,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            count: None,
+        });
+    }
+    gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("frame"),
+        entries: &entries,
+    })
+}
+
+const SCENE_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
+    wgpu::VertexAttribute {
+        format: wgpu::VertexFormat::Float32x3,
+        offset: 0,
+        shader_location: 0,
+    },
+    wgpu::VertexAttribute {
+        format: wgpu::VertexFormat::Float32x3,
+        offset: 12,
+        shader_location: 1,
+    },
+];
+
+impl StepPipeline {
+    /// Build the pipeline of `key` (and nothing else) from `module`, the key's source.
+    pub fn build(gpu: &Gpu, key: &PipelineKey, module: &wgpu::ShaderModule, label: &str) -> Result<StepPipeline> {
+        let l = &key.layout;
+        let compute = matches!(key.stages, Stages::Compute { .. });
+        let group0 = group0_layout(gpu, l);
+        let layout_of = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
+            gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries,
+            })
+        };
+        let reads: Vec<_> = l.reads.iter().map(|(b, s)| s.entry(*b)).collect();
+        let writes: Vec<_> = l.writes.iter().enumerate().map(|(i, s)| s.entry(i as u32)).collect();
+        // An empty group 1 keeps group 2 at its index when a compute step reads nothing.
+        let group1 = (!reads.is_empty() || compute).then(|| layout_of("reads", &reads));
+        let group2 = compute.then(|| layout_of("writes", &writes));
+        let mut layouts: Vec<Option<&wgpu::BindGroupLayout>> = vec![Some(&group0)];
+        layouts.extend(group1.iter().map(Some));
+        layouts.extend(group2.iter().map(Some));
+        let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &layouts,
+            immediate_size: 0,
+        });
+        let pipeline = match &key.stages {
+            Stages::Compute { entry } => Pipeline::Compute(gpu.scoped(label, || {
+                gpu.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&layout),
+                    module,
+                    entry_point: entry.as_deref(),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+            })?),
+            Stages::Raster {
+                vertex,
+                fragment,
+                scene_vertices,
+                targets,
+                depth,
+            } => {
+                let targets: Vec<Option<wgpu::ColorTargetState>> = targets
+                    .iter()
+                    .map(|t| {
+                        Some(wgpu::ColorTargetState {
+                            format: t.format,
+                            blend: t.blend,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })
+                    })
+                    .collect();
+                let buffers: Vec<Option<wgpu::VertexBufferLayout>> = if *scene_vertices {
+                    vec![Some(wgpu::VertexBufferLayout {
+                        array_stride: 24,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &SCENE_VERTEX_ATTRIBUTES,
+                    })]
+                } else {
+                    vec![]
+                };
+                Pipeline::Render(gpu.scoped(label, || {
+                    gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some(label),
+                        layout: Some(&layout),
+                        vertex: wgpu::VertexState {
+                            module,
+                            entry_point: vertex.as_deref(),
+                            compilation_options: Default::default(),
+                            buffers: &buffers,
+                        },
+                        primitive: wgpu::PrimitiveState {
+                            cull_mode: None,
+                            ..Default::default()
+                        },
+                        depth_stencil: depth.map(|d| wgpu::DepthStencilState {
+                            format: d.format,
+                            depth_write_enabled: Some(d.write),
+                            depth_compare: Some(d.compare),
+                            stencil: Default::default(),
+                            bias: Default::default(),
+                        }),
+                        multisample: Default::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module,
+                            entry_point: fragment.as_deref(),
+                            compilation_options: Default::default(),
+                            targets: &targets,
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    })
+                })?)
+            }
+        };
+        Ok(StepPipeline {
+            pipeline,
+            group0,
+            group1,
+            group2,
+        })
+    }
+}

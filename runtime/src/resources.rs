@@ -1,0 +1,220 @@
+//! What a graph's passes read and write at one scene's sizes: textures, summed-area tables,
+//! the scene's vertices, the fixed attachments (depth buffers, the camera outputs) and the
+//! `Frame` uniform. Sizes are checked against the device before anything is allocated
+//! (lavapipe keeps allocating past its limits).
+
+use crate::device::{Gpu, Result, RuntimeError};
+use crate::frame::SceneInputs;
+use crate::graph::{FRAME_SIZE, Format, PassGraph, TextureDecl};
+use crate::pipeline::DEPTH_FORMAT;
+use std::collections::HashMap;
+
+/// Number of levels of a full mip chain.
+pub fn mip_count(size: u32) -> u32 {
+    32 - size.max(1).leading_zeros()
+}
+
+/// The wgpu format of a texture; `None` for a summed-area table (a storage buffer).
+pub(crate) fn wgpu_format(f: Format) -> Option<wgpu::TextureFormat> {
+    use wgpu::TextureFormat as T;
+    Some(match f {
+        Format::R8Unorm => T::R8Unorm,
+        Format::Rg8Unorm => T::Rg8Unorm,
+        Format::Rgba8Unorm => T::Rgba8Unorm,
+        Format::R16Unorm => T::R16Unorm,
+        Format::Rg16Unorm => T::Rg16Unorm,
+        Format::Rgba16Unorm => T::Rgba16Unorm,
+        Format::R16Float => T::R16Float,
+        Format::Rg16Float => T::Rg16Float,
+        Format::Rgba16Float => T::Rgba16Float,
+        Format::R32Float => T::R32Float,
+        Format::Rg32Float => T::Rg32Float,
+        Format::Rgba32Float => T::Rgba32Float,
+        Format::SummedAreaU32 => return None,
+    })
+}
+
+/// The camera outputs of the Shade pass, in [`crate::executor::CameraOutput`] order.
+pub(crate) const CAMERA_FORMATS: [wgpu::TextureFormat; 4] = [
+    wgpu::TextureFormat::R32Float,
+    wgpu::TextureFormat::Rgba8Unorm,
+    wgpu::TextureFormat::Rgba32Float,
+    wgpu::TextureFormat::Rgba16Float,
+];
+
+/// Bytes of a summed-area table at a shadow-map size: one `vec4<u32>` per texel and layer.
+fn table_bytes(t: &TextureDecl, shadow_size: u32) -> u64 {
+    Format::SummedAreaU32.bytes_per_texel() as u64 * t.layers as u64 * shadow_size as u64 * shadow_size as u64
+}
+
+pub(crate) fn f32_bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// The resources of one graph bound to one scene.
+pub(crate) struct Resources {
+    pub shadow_size: u32,
+    pub camera_size: (u32, u32),
+    pub vertices: wgpu::Buffer,
+    pub vertex_count: u32,
+    textures: HashMap<String, wgpu::Texture>,
+    /// Summed-area tables, by texture name.
+    tables: HashMap<String, wgpu::Buffer>,
+    pub light_depth: wgpu::Texture,
+    /// Visibility, colour, position, normal ([`CAMERA_FORMATS`]).
+    pub camera: Vec<wgpu::Texture>,
+    pub camera_depth: wgpu::Texture,
+    pub frame: wgpu::Buffer,
+}
+
+impl Resources {
+    /// Check the scene's sizes against the device and `max_bytes`, then create everything.
+    pub fn new(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) -> Result<Resources> {
+        let max_dim = gpu.limits.max_texture_dimension_2d;
+        if s.shadow_size == 0 || s.shadow_size > max_dim {
+            return Err(RuntimeError::Limit {
+                what: "shadow map (texels per side)".into(),
+                needed: s.shadow_size as u64,
+                limit: max_dim as u64,
+            });
+        }
+        let (cw, ch) = s.camera_size;
+        if cw == 0 || ch == 0 || cw.max(ch) > max_dim {
+            return Err(RuntimeError::Limit {
+                what: "camera image (pixels per side)".into(),
+                needed: cw.max(ch) as u64,
+                limit: max_dim as u64,
+            });
+        }
+        let texels = s.shadow_size as u64 * s.shadow_size as u64;
+        let mut bytes: u64 = texels * 4 + cw as u64 * ch as u64 * (4 + 4 + 16 + 8 + 4);
+        for t in &graph.textures {
+            let per = t.format.bytes_per_texel() as u64 * t.layers as u64 * texels;
+            bytes += if t.mips { per * 4 / 3 } else { per };
+        }
+        if bytes > max_bytes {
+            return Err(RuntimeError::Limit {
+                what: "textures of this graph at this scene's sizes (bytes)".into(),
+                needed: bytes,
+                limit: max_bytes,
+            });
+        }
+        for t in graph.textures.iter().filter(|t| t.format == Format::SummedAreaU32) {
+            let size = table_bytes(t, s.shadow_size);
+            let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+            if size > limit {
+                return Err(RuntimeError::Limit {
+                    what: format!("summed-area table `{}` (storage buffer bytes)", t.name),
+                    needed: size,
+                    limit,
+                });
+            }
+        }
+        let vertex_count = (s.vertices.len() / 6) as u32;
+        let vb_size = (s.vertices.len() * 4).max(24) as u64;
+        if vb_size > gpu.limits.max_buffer_size {
+            return Err(RuntimeError::Limit {
+                what: "vertex buffer (bytes)".into(),
+                needed: vb_size,
+                limit: gpu.limits.max_buffer_size,
+            });
+        }
+        gpu.scoped("scene resources", || {
+            let vertices = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("scene vertices"),
+                size: vb_size,
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            if !s.vertices.is_empty() {
+                gpu.queue.write_buffer(&vertices, 0, f32_bytes(&s.vertices).as_slice());
+            }
+            let mut textures = HashMap::new();
+            let mut tables = HashMap::new();
+            for t in &graph.textures {
+                let Some(format) = wgpu_format(t.format) else {
+                    let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(&t.name),
+                        size: table_bytes(t, s.shadow_size),
+                        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                        mapped_at_creation: false,
+                    });
+                    tables.insert(t.name.clone(), buf);
+                    continue;
+                };
+                let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some(&t.name),
+                    size: wgpu::Extent3d {
+                        width: s.shadow_size,
+                        height: s.shadow_size,
+                        depth_or_array_layers: t.layers,
+                    },
+                    mip_level_count: if t.mips { mip_count(s.shadow_size) } else { 1 },
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING
+                        | wgpu::TextureUsages::COPY_SRC
+                        | wgpu::TextureUsages::COPY_DST,
+                    view_formats: &[],
+                });
+                textures.insert(t.name.clone(), tex);
+            }
+            let plain = |label: &str, w: u32, h: u32, format: wgpu::TextureFormat| {
+                gpu.device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: w,
+                        height: h,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                })
+            };
+            let light_depth = plain("light depth", s.shadow_size, s.shadow_size, DEPTH_FORMAT);
+            let camera = ["visibility", "color", "position", "normal"]
+                .iter()
+                .zip(CAMERA_FORMATS)
+                .map(|(n, f)| plain(n, cw, ch, f))
+                .collect();
+            let camera_depth = plain("camera depth", cw, ch, DEPTH_FORMAT);
+            let frame = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("frame"),
+                size: FRAME_SIZE as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            gpu.queue.write_buffer(&frame, 0, &s.frame().to_bytes());
+            Resources {
+                shadow_size: s.shadow_size,
+                camera_size: s.camera_size,
+                vertices,
+                vertex_count,
+                textures,
+                tables,
+                light_depth,
+                camera,
+                camera_depth,
+                frame,
+            }
+        })
+    }
+
+    pub fn texture(&self, name: &str) -> Result<&wgpu::Texture> {
+        self.textures
+            .get(name)
+            .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{name}`")))
+    }
+
+    pub fn table(&self, name: &str) -> Result<&wgpu::Buffer> {
+        self.tables
+            .get(name)
+            .ok_or_else(|| RuntimeError::NotFound(format!("no summed-area table `{name}`")))
+    }
+}

@@ -1,0 +1,609 @@
+//! The step nodes: each step of the graph becomes, once at load, a node that owns its
+//! pipeline; binding a scene gives it its bind groups and attachments, and each frame it
+//! records itself into the command encoder. [`build`] is the one place that reads
+//! [`Draw`]: what a step draws or dispatches is decided there and nowhere else.
+
+use crate::device::{Gpu, Result, RuntimeError};
+use crate::graph::{self, Binding, Draw, Format, PassGraph, PassKind, Target, View};
+use crate::pipeline::{BindingLayout, ColorTarget, DEPTH_FORMAT, DepthState, Pipeline, PipelineKey, Slot, Stages, StepPipeline};
+use crate::resources::{CAMERA_FORMATS, Resources, mip_count, wgpu_format};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// The graph's passes as nodes, in execution order.
+pub(crate) struct PassNode {
+    pub name: String,
+    pub kind: PassKind,
+    pub steps: Vec<StepNode>,
+}
+
+/// One step: its pipeline, what it binds, and what it records.
+pub(crate) struct StepNode {
+    /// The pass's name (the label of its render and compute passes).
+    label: String,
+    pipeline: Arc<StepPipeline>,
+    /// What it reads (group 1), and as what.
+    reads: Vec<(Binding, Slot)>,
+    params: bool,
+    sampler: bool,
+    kind: NodeKind,
+    /// Bind groups, views and draw arguments at the bound scene's sizes.
+    bound: Option<Bound>,
+}
+
+enum NodeKind {
+    Raster(RasterStep),
+    Compute(ComputeStep),
+}
+
+/// A raster step: one render pass per level it writes.
+struct RasterStep {
+    targets: Targets,
+    /// Clear colour of each target.
+    clear: Vec<wgpu::Color>,
+    depth: Option<DepthTarget>,
+    draw: DrawCall,
+    levels: Levels,
+}
+
+enum Targets {
+    /// Layers of the graph's textures.
+    Textures(Vec<Target>),
+    /// The four camera outputs.
+    Camera,
+}
+
+#[derive(Clone, Copy)]
+enum DepthTarget {
+    Light,
+    Camera,
+}
+
+/// What a raster step draws.
+enum DrawCall {
+    /// The scene's triangles.
+    Scene,
+    /// One full-screen triangle (3 vertices, no vertex buffer).
+    FullScreenTriangle,
+    /// Arguments a compute step wrote (`draw_indirect`).
+    #[expect(dead_code, reason = "the Geometry passes will draw generated primitives indirectly")]
+    Indirect(IndirectArgs),
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Levels {
+    /// Level 0.
+    Base,
+    /// Levels 1.. of the targets' mip chain, each reading the level above.
+    BelowBase,
+}
+
+/// A compute step: one compute pass.
+struct ComputeStep {
+    /// The summed-area tables it writes (group 2).
+    writes: Vec<String>,
+    dispatch: Dispatch,
+}
+
+/// How many workgroups a compute step runs.
+enum Dispatch {
+    /// One invocation per row (or column) of the shadow map, [`graph::COMPUTE_WORKGROUP`]
+    /// per workgroup.
+    ShadowMapLines,
+    /// Arguments in a buffer, written on the GPU (`dispatch_workgroups_indirect`).
+    #[expect(dead_code, reason = "the Geometry passes will size their dispatches on the GPU")]
+    Indirect(IndirectArgs),
+}
+
+/// An indirect argument buffer (draw or dispatch arguments, written by an earlier step).
+#[derive(Clone)]
+pub(crate) struct IndirectArgs {
+    pub buffer: wgpu::Buffer,
+    pub offset: u64,
+}
+
+/// What binding a scene gives a node.
+enum Bound {
+    Raster {
+        group0: wgpu::BindGroup,
+        /// One render pass per level.
+        passes: Vec<RasterPass>,
+        vertices: Option<(wgpu::Buffer, u32)>,
+    },
+    Compute {
+        group0: wgpu::BindGroup,
+        group1: Option<wgpu::BindGroup>,
+        group2: Option<wgpu::BindGroup>,
+    },
+}
+
+struct RasterPass {
+    group1: Option<wgpu::BindGroup>,
+    color: Vec<wgpu::TextureView>,
+    depth: Option<wgpu::TextureView>,
+}
+
+/// What every step's group 0 binds.
+pub(crate) struct Group0<'a> {
+    pub frame: &'a wgpu::Buffer,
+    pub params: Option<&'a wgpu::Buffer>,
+    pub sampler: &'a wgpu::Sampler,
+}
+
+/// Timestamp writes for the start and the end of a node's work.
+#[derive(Clone, Copy)]
+pub(crate) struct Stamps<'a> {
+    pub set: &'a wgpu::QuerySet,
+    pub begin: Option<u32>,
+    pub end: Option<u32>,
+}
+
+const WHITE: wgpu::Color = wgpu::Color {
+    r: 1.0,
+    g: 1.0,
+    b: 1.0,
+    a: 1.0,
+};
+const NAN: wgpu::Color = wgpu::Color {
+    r: f64::NAN,
+    g: f64::NAN,
+    b: f64::NAN,
+    a: f64::NAN,
+};
+/// Where the camera sees no surface: visibility 1, a dark background, position and normal NaN.
+const CAMERA_CLEAR: [wgpu::Color; 4] = [
+    wgpu::Color {
+        r: 1.0,
+        g: 0.0,
+        b: 0.0,
+        a: 1.0,
+    },
+    wgpu::Color {
+        r: 0.02,
+        g: 0.02,
+        b: 0.03,
+        a: 1.0,
+    },
+    NAN,
+    NAN,
+];
+
+/// Build the node of every step: decide from its [`Draw`] what it records, check what it
+/// binds against the graph and the device, and build (or find) its pipeline.
+pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<str>>) -> Result<Vec<PassNode>> {
+    let filterable_floats = gpu.features.contains(wgpu::Features::FLOAT32_FILTERABLE);
+    let mut passes = Vec::new();
+    for pass in &graph.passes {
+        let source = sources
+            .get(&pass.shader)
+            .ok_or_else(|| RuntimeError::NotFound(format!("no source for shader `{}`", pass.shader)))?;
+        let mut steps = Vec::new();
+        for step in &pass.steps {
+            let texture_format = |name: &str| {
+                let t = graph
+                    .texture(name)
+                    .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{name}`")))?;
+                wgpu_format(t.format).ok_or_else(|| RuntimeError::NotFound(format!("texture `{name}` has no texture format")))
+            };
+            let is_table = |name: &str| graph.texture(name).is_some_and(|t| t.format == Format::SummedAreaU32);
+            let n = step.writes.len();
+            let raster = |targets, clear, depth, draw, levels| {
+                NodeKind::Raster(RasterStep {
+                    targets,
+                    clear,
+                    depth,
+                    draw,
+                    levels,
+                })
+            };
+            let kind = match step.draw {
+                Draw::SceneFromLight => raster(
+                    Targets::Textures(step.writes.clone()),
+                    // no occluder: the far plane
+                    vec![WHITE; n],
+                    Some(DepthTarget::Light),
+                    DrawCall::Scene,
+                    Levels::Base,
+                ),
+                Draw::SceneFromCamera => raster(
+                    Targets::Camera,
+                    CAMERA_CLEAR.to_vec(),
+                    Some(DepthTarget::Camera),
+                    DrawCall::Scene,
+                    Levels::Base,
+                ),
+                Draw::FullScreen => raster(
+                    Targets::Textures(step.writes.clone()),
+                    vec![wgpu::Color::TRANSPARENT; n],
+                    None,
+                    DrawCall::FullScreenTriangle,
+                    Levels::Base,
+                ),
+                Draw::MipLevels => raster(
+                    Targets::Textures(step.writes.clone()),
+                    vec![wgpu::Color::TRANSPARENT; n],
+                    None,
+                    DrawCall::FullScreenTriangle,
+                    Levels::BelowBase,
+                ),
+                Draw::ComputeRows | Draw::ComputeColumns => NodeKind::Compute(ComputeStep {
+                    writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
+                    dispatch: Dispatch::ShadowMapLines,
+                }),
+            };
+            // What the step reads (group 1).
+            let mut reads = Vec::new();
+            for b in &step.reads {
+                if is_table(&b.texture) {
+                    reads.push((b.binding, Slot::Buffer { read_only: true }));
+                    continue;
+                }
+                let fmt = texture_format(&b.texture)?;
+                let is_f32 = matches!(
+                    fmt,
+                    wgpu::TextureFormat::R32Float | wgpu::TextureFormat::Rg32Float | wgpu::TextureFormat::Rgba32Float
+                );
+                if step.sampler && is_f32 && !filterable_floats {
+                    return Err(RuntimeError::Device(format!(
+                        "pass `{}` filters 32-bit float texture `{}`, but this device cannot filter 32-bit floats",
+                        pass.name, b.texture
+                    )));
+                }
+                let below_base = matches!(&kind, NodeKind::Raster(r) if r.levels == Levels::BelowBase);
+                if b.view == View::PreviousLevel && !below_base {
+                    return Err(RuntimeError::NotFound(format!(
+                        "pass `{}` reads `{}` at the previous mip level outside a MipLevels step",
+                        pass.name, b.texture
+                    )));
+                }
+                reads.push((b.binding, Slot::Texture { filterable: step.sampler }));
+            }
+            let stages = match &kind {
+                NodeKind::Raster(r) => Stages::Raster {
+                    vertex: step.vertex.clone(),
+                    fragment: step.fragment.clone(),
+                    scene_vertices: matches!(r.draw, DrawCall::Scene),
+                    targets: match &r.targets {
+                        Targets::Camera => CAMERA_FORMATS.to_vec(),
+                        Targets::Textures(t) => t.iter().map(|t| texture_format(&t.texture)).collect::<Result<_>>()?,
+                    }
+                    .into_iter()
+                    .map(|format| ColorTarget { format, blend: None })
+                    .collect(),
+                    depth: r.depth.map(|_| DepthState {
+                        format: DEPTH_FORMAT,
+                        compare: wgpu::CompareFunction::Less,
+                        write: true,
+                    }),
+                },
+                NodeKind::Compute(c) => {
+                    if let Some(w) = c.writes.iter().find(|w| !is_table(w)) {
+                        return Err(RuntimeError::NotFound(format!(
+                            "a compute step of pass `{}` writes `{w}`, which is not a summed-area table",
+                            pass.name
+                        )));
+                    }
+                    Stages::Compute {
+                        entry: step.compute.clone(),
+                    }
+                }
+            };
+            let writes = match &kind {
+                NodeKind::Compute(c) => vec![Slot::Buffer { read_only: false }; c.writes.len()],
+                NodeKind::Raster(_) => vec![],
+            };
+            let key = PipelineKey {
+                source: source.clone(),
+                stages,
+                layout: BindingLayout {
+                    params: step.params,
+                    sampler: step.sampler,
+                    reads,
+                    writes,
+                },
+            };
+            let label = format!("pipeline of pass `{}` ({:?})", pass.name, step.fragment);
+            steps.push(StepNode {
+                label: pass.name.clone(),
+                pipeline: gpu.pipeline(&key, &label)?,
+                reads: step.reads.iter().cloned().zip(key.layout.reads.iter().map(|r| r.1)).collect(),
+                params: step.params,
+                sampler: step.sampler,
+                kind,
+                bound: None,
+            });
+        }
+        passes.push(PassNode {
+            name: pass.name.clone(),
+            kind: pass.kind,
+            steps,
+        });
+    }
+    Ok(passes)
+}
+
+impl StepNode {
+    /// Create the bind groups, attachment views and draw arguments at `res`'s sizes.
+    pub fn bind(&mut self, gpu: &Gpu, res: &Resources, shared: &Group0) -> Result<()> {
+        self.bound = None;
+        let group0 = self.group0(gpu, shared)?;
+        let bound = match &self.kind {
+            NodeKind::Raster(r) => {
+                let levels = match r.levels {
+                    Levels::Base => 0..1,
+                    Levels::BelowBase => 1..mip_count(res.shadow_size),
+                };
+                let mut passes = Vec::new();
+                for level in levels {
+                    let color = match &r.targets {
+                        Targets::Camera => res.camera.iter().map(|t| t.create_view(&Default::default())).collect(),
+                        Targets::Textures(ts) => ts
+                            .iter()
+                            .map(|w| {
+                                res.texture(&w.texture).map(|t| {
+                                    t.create_view(&wgpu::TextureViewDescriptor {
+                                        dimension: Some(wgpu::TextureViewDimension::D2),
+                                        base_array_layer: w.layer,
+                                        array_layer_count: Some(1),
+                                        base_mip_level: level,
+                                        mip_level_count: Some(1),
+                                        ..Default::default()
+                                    })
+                                })
+                            })
+                            .collect::<Result<_>>()?,
+                    };
+                    let depth = r.depth.map(|d| match d {
+                        DepthTarget::Light => res.light_depth.create_view(&Default::default()),
+                        DepthTarget::Camera => res.camera_depth.create_view(&Default::default()),
+                    });
+                    passes.push(RasterPass {
+                        group1: self.group1(gpu, res, level)?,
+                        color,
+                        depth,
+                    });
+                }
+                let vertices = matches!(r.draw, DrawCall::Scene).then(|| (res.vertices.clone(), res.vertex_count));
+                Bound::Raster { group0, passes, vertices }
+            }
+            NodeKind::Compute(c) => {
+                let group2 = match &self.pipeline.group2 {
+                    None => None,
+                    Some(layout) => {
+                        let mut entries = Vec::new();
+                        for (i, w) in c.writes.iter().enumerate() {
+                            entries.push(wgpu::BindGroupEntry {
+                                binding: i as u32,
+                                resource: res.table(w)?.as_entire_binding(),
+                            });
+                        }
+                        Some(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                            label: None,
+                            layout,
+                            entries: &entries,
+                        }))
+                    }
+                };
+                Bound::Compute {
+                    group0,
+                    group1: self.group1(gpu, res, 0)?,
+                    group2,
+                }
+            }
+        };
+        self.bound = Some(bound);
+        Ok(())
+    }
+
+    fn group0(&self, gpu: &Gpu, shared: &Group0) -> Result<wgpu::BindGroup> {
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: shared.frame.as_entire_binding(),
+        }];
+        if self.params {
+            let buf = shared
+                .params
+                .ok_or_else(|| RuntimeError::NotFound("step binds params, but the graph has none".into()))?;
+            entries.push(wgpu::BindGroupEntry {
+                binding: 1,
+                resource: buf.as_entire_binding(),
+            });
+        }
+        if self.sampler {
+            entries.push(wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::Sampler(shared.sampler),
+            });
+        }
+        Ok(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &self.pipeline.group0,
+            entries: &entries,
+        }))
+    }
+
+    /// What the step reads, for writing mip level `level`.
+    fn group1(&self, gpu: &Gpu, res: &Resources, level: u32) -> Result<Option<wgpu::BindGroup>> {
+        let Some(layout) = &self.pipeline.group1 else { return Ok(None) };
+        let mut views = Vec::new();
+        let mut tables = Vec::new();
+        for (b, slot) in &self.reads {
+            if let Slot::Buffer { .. } = slot {
+                tables.push((b.binding, res.table(&b.texture)?));
+                continue;
+            }
+            let t = res.texture(&b.texture)?;
+            let (base, count) = match b.view {
+                View::All => (0, None),
+                View::Base => (0, Some(1)),
+                // checked at load: only in steps writing levels 1..
+                View::PreviousLevel => (level.saturating_sub(1), Some(1)),
+            };
+            views.push((
+                b.binding,
+                t.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                    base_mip_level: base,
+                    mip_level_count: count,
+                    ..Default::default()
+                }),
+            ));
+        }
+        let mut entries: Vec<wgpu::BindGroupEntry> = views
+            .iter()
+            .map(|(binding, v)| wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: wgpu::BindingResource::TextureView(v),
+            })
+            .collect();
+        entries.extend(tables.into_iter().map(|(binding, b)| wgpu::BindGroupEntry {
+            binding,
+            resource: b.as_entire_binding(),
+        }));
+        Ok(Some(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout,
+            entries: &entries,
+        })))
+    }
+
+    /// Number of render or compute passes the node records per frame (0 for a mip chain
+    /// of one level).
+    pub fn passes(&self) -> usize {
+        match &self.bound {
+            Some(Bound::Raster { passes, .. }) => passes.len(),
+            Some(Bound::Compute { .. }) => 1,
+            None => 0,
+        }
+    }
+
+    /// Record the node's passes; `stamps.begin` goes to its first pass, `stamps.end` to its last.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, res: &Resources, stamps: Option<Stamps>) -> Result<()> {
+        let bound = self
+            .bound
+            .as_ref()
+            .ok_or_else(|| RuntimeError::NotFound("no scene is bound: call bind_scene first".into()))?;
+        match (&self.kind, bound, &self.pipeline.pipeline) {
+            (NodeKind::Raster(r), Bound::Raster { group0, passes, vertices }, Pipeline::Render(pipeline)) => {
+                let last = passes.len().saturating_sub(1);
+                for (i, p) in passes.iter().enumerate() {
+                    let timestamp_writes = stamps
+                        .map(|s| wgpu::RenderPassTimestampWrites {
+                            query_set: s.set,
+                            beginning_of_pass_write_index: s.begin.filter(|_| i == 0),
+                            end_of_pass_write_index: s.end.filter(|_| i == last),
+                        })
+                        .filter(|t| t.beginning_of_pass_write_index.is_some() || t.end_of_pass_write_index.is_some());
+                    let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = p
+                        .color
+                        .iter()
+                        .zip(&r.clear)
+                        .map(|(view, clear)| {
+                            Some(wgpu::RenderPassColorAttachment {
+                                view,
+                                depth_slice: None,
+                                resolve_target: None,
+                                ops: wgpu::Operations {
+                                    load: wgpu::LoadOp::Clear(*clear),
+                                    store: wgpu::StoreOp::Store,
+                                },
+                            })
+                        })
+                        .collect();
+                    let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        label: Some(&self.label),
+                        color_attachments: &attachments,
+                        depth_stencil_attachment: p.depth.as_ref().map(|view| wgpu::RenderPassDepthStencilAttachment {
+                            view,
+                            depth_ops: Some(wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(1.0),
+                                store: wgpu::StoreOp::Store,
+                            }),
+                            stencil_ops: None,
+                        }),
+                        timestamp_writes,
+                        occlusion_query_set: None,
+                        multiview_mask: None,
+                    });
+                    rp.set_pipeline(pipeline);
+                    rp.set_bind_group(0, group0, &[]);
+                    if let Some(g1) = &p.group1 {
+                        rp.set_bind_group(1, g1, &[]);
+                    }
+                    match &r.draw {
+                        DrawCall::Scene => {
+                            if let Some((buffer, count)) = vertices
+                                && *count > 0
+                            {
+                                rp.set_vertex_buffer(0, buffer.slice(..));
+                                rp.draw(0..*count, 0..1);
+                            }
+                        }
+                        DrawCall::FullScreenTriangle => rp.draw(0..3, 0..1),
+                        DrawCall::Indirect(a) => rp.draw_indirect(&a.buffer, a.offset),
+                    }
+                }
+                Ok(())
+            }
+            (NodeKind::Compute(c), Bound::Compute { group0, group1, group2 }, Pipeline::Compute(pipeline)) => {
+                let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(&self.label),
+                    timestamp_writes: stamps
+                        .filter(|s| s.begin.is_some() || s.end.is_some())
+                        .map(|s| wgpu::ComputePassTimestampWrites {
+                            query_set: s.set,
+                            beginning_of_pass_write_index: s.begin,
+                            end_of_pass_write_index: s.end,
+                        }),
+                });
+                cpass.set_pipeline(pipeline);
+                cpass.set_bind_group(0, group0, &[]);
+                if let Some(g1) = group1 {
+                    cpass.set_bind_group(1, g1, &[]);
+                }
+                if let Some(g2) = group2 {
+                    cpass.set_bind_group(2, g2, &[]);
+                }
+                match &c.dispatch {
+                    Dispatch::ShadowMapLines => {
+                        cpass.dispatch_workgroups(res.shadow_size.div_ceil(graph::COMPUTE_WORKGROUP), 1, 1);
+                    }
+                    Dispatch::Indirect(a) => cpass.dispatch_workgroups_indirect(&a.buffer, a.offset),
+                }
+                Ok(())
+            }
+            _ => Err(RuntimeError::NotFound(format!(
+                "pass `{}`: a step's node and its pipeline disagree",
+                self.label
+            ))),
+        }
+    }
+}
+
+/// Why a pass cannot run here: features the schema expresses but this runtime does not
+/// honour yet. A graph using one is refused rather than run another way.
+pub(crate) fn unsupported(graph: &PassGraph) -> Result<()> {
+    for p in &graph.passes {
+        let refuse = |feature: &str| {
+            Err(RuntimeError::Unsupported {
+                pass: p.name.clone(),
+                feature: feature.into(),
+            })
+        };
+        if p.views == graph::Views::PerLightSample {
+            return refuse("`views: PerLightSample` (one view per light sample)");
+        }
+        if p.kind == PassKind::Geometry {
+            return refuse("a Geometry pass (primitives generated on the GPU)");
+        }
+        // Every texture is allocated at the shadow map's size.
+        let writes = p.steps.iter().flat_map(|s| &s.writes);
+        if let Some(t) = writes
+            .filter_map(|w| graph.texture(&w.texture))
+            .find(|t| t.extent == graph::Extent::Camera)
+        {
+            return refuse(&format!("texture `{}` at the camera's resolution (`extent: Camera`)", t.name));
+        }
+    }
+    Ok(())
+}
