@@ -197,7 +197,10 @@ fn compare_command_writes_the_comparison_and_its_figures() {
         nrm.to_str().unwrap(),
     ]);
     let (vis, truth, pos, nrm) = (read_pfm(&vis), read_pfm(&truth_out), read_pfm(&pos), read_pfm(&nrm));
-    assert_eq!((vis.data.len(), truth.data.len(), pos.data.len(), nrm.data.len()), (1024, 1024, 3072, 3072));
+    assert_eq!(
+        (vis.data.len(), truth.data.len(), pos.data.len(), nrm.data.len()),
+        (1024, 1024, 3072, 3072)
+    );
     // contact.ron's sphere light is centred at (-0.8, 3.2, 1.6): a pixel faces it when its
     // normal points to that side of its surface
     let centre = [-0.8f32, 3.2, 1.6];
@@ -243,8 +246,14 @@ fn compare_command_writes_the_comparison_and_its_figures() {
         let (p_rms, p_max, p_n) = printed(what);
         assert_eq!(p_n, n, "{what}: pixels\n{out}");
         // half a unit in the last printed digit, and f32 storage of the PFMs (2^-24 of 255)
-        assert!((p_rms - rms).abs() <= 0.005 + 1e-4, "{what}: RMS printed {p_rms}, recomputed {rms:.4}\n{out}");
-        assert!((p_max - max).abs() <= 0.05 + 1e-4, "{what}: max printed {p_max}, recomputed {max:.4}\n{out}");
+        assert!(
+            (p_rms - rms).abs() <= 0.005 + 1e-4,
+            "{what}: RMS printed {p_rms}, recomputed {rms:.4}\n{out}"
+        );
+        assert!(
+            (p_max - max).abs() <= 0.05 + 1e-4,
+            "{what}: max printed {p_max}, recomputed {max:.4}\n{out}"
+        );
     }
     assert!(stats(&penumbra).0 > 0.0, "PCF is not exact in the penumbra:\n{out}");
     // Temporal: the mean |change| per frame while the light moves 0.25 texel per frame. It

@@ -84,7 +84,10 @@ fn sweep_writes_a_row_per_configuration_and_the_charts() {
         // largest error it averages; the penumbra pixels are some of the facing pixels, so
         // their largest error and their sum of squared errors are at most the facing ones'.
         assert!(rms_f.is_finite() && rms_p.is_finite() && max_f.is_finite(), "{r:?}");
-        assert!(rms_f <= max_f + 2.0 * printed && rms_p <= max_p + 2.0 * printed, "RMS above max: {r:?}");
+        assert!(
+            rms_f <= max_f + 2.0 * printed && rms_p <= max_p + 2.0 * printed,
+            "RMS above max: {r:?}"
+        );
         assert!(max_p <= max_f + 2.0 * printed, "penumbra max above facing max: {r:?}");
         let sq = |rms: f64, n: f64| (rms + printed).powi(2) * n;
         assert!(

@@ -430,9 +430,17 @@ fn cssm_grid_order_filter_and_precision() {
         for p in [Precision::Unorm8, Precision::Unorm16] {
             let o = opts(&[("M", m.to_string()), ("filter", "1".into())], &[("fs", p), ("gs", p), ("zhs", p)]);
             let c = compiles("cssm", &o);
-            assert_eq!(texture(&c, "basis_sat"), with_mips(packed(p, 4 * m + 1), false), "cssm tables M = {m} {p:?}");
+            assert_eq!(
+                texture(&c, "basis_sat"),
+                with_mips(packed(p, 4 * m + 1), false),
+                "cssm tables M = {m} {p:?}"
+            );
             // the table holds the prefix sums of every layer of the blurred basis
-            assert_eq!(texture(&c, "table"), ("SummedAreaU32".into(), m + 1, false), "cssm tables M = {m} {p:?}");
+            assert_eq!(
+                texture(&c, "table"),
+                ("SummedAreaU32".into(), m + 1, false),
+                "cssm tables M = {m} {p:?}"
+            );
         }
     }
     for p in [Precision::F16, Precision::F32] {

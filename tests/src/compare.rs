@@ -46,7 +46,11 @@ impl Sample {
     /// outside the interval.
     pub fn ratio(&self) -> f64 {
         let diff = self.got - self.expected;
-        let allowance = if diff >= 0.0 { self.hi - self.expected } else { self.expected - self.lo };
+        let allowance = if diff >= 0.0 {
+            self.hi - self.expected
+        } else {
+            self.expected - self.lo
+        };
         if diff == 0.0 {
             0.0
         } else if allowance > 0.0 {
@@ -222,7 +226,13 @@ impl Comparison {
 /// Compare two equally long images or buffers value by value: `allowed(i)` gives the
 /// interval allowed about `expected[i]`, or a tie.
 pub fn compare(label: &str, layout: Layout, got: &[f64], expected: &[f64], mut allowed: impl FnMut(usize) -> Allowed) -> Comparison {
-    assert_eq!(got.len(), expected.len(), "{label}: {} values compared with {}", got.len(), expected.len());
+    assert_eq!(
+        got.len(),
+        expected.len(),
+        "{label}: {} values compared with {}",
+        got.len(),
+        expected.len()
+    );
     let mut c = Comparison::new(label, layout);
     for (i, (&g, &e)) in got.iter().zip(expected).enumerate() {
         c.push(i, g, e, &allowed(i), String::new);
