@@ -32,6 +32,13 @@ for pkg in sshc sshc-shaders-gen; do
     echo "$pkg: $(wc -l <<<"$tree") crates, none of wgpu clap image rayon sshc-runtime sshc-lab"
 done
 
+phase "the fuzz targets build"
+# A workspace of its own (compiler/fuzz, excluded from the root one). Stable Rust checks
+# it: libfuzzer-sys needs no nightly feature and no `--cfg fuzzing`; its build script
+# compiles libFuzzer's C++ (a C++ compiler is needed). Only `cargo fuzz run` needs nightly
+# (for the sanitizer flags).
+cargo check --manifest-path compiler/fuzz/Cargo.toml --bins --quiet
+
 phase "tests"
 if cargo nextest --version >/dev/null 2>&1; then
     cargo nextest run --workspace --no-fail-fast

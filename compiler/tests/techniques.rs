@@ -1,6 +1,8 @@
 //! The bundled techniques: snapshots of everything they compile to (reviewed as diffs,
-//! naga style), parameter and precision grids where every variant compiles and validates
-//! or is refused with a diagnostic naming the limit, and the CSM convergence check.
+//! naga style), parameter and precision grids where every variant compiles (codegen
+//! validates with naga) or is refused with a diagnostic naming the limit, and compiles to
+//! the textures the packing rules give and the fetches its source counts, both by hand;
+//! and the CSM convergence check.
 
 use sshc::front::ast::Precision;
 use sshc::ir::{Node, Origin};
@@ -42,32 +44,86 @@ fn snapshots_of_every_technique() {
     }
 }
 
-/// Compile a variant: it must compile and validate (codegen runs naga), or be refused with
-/// an error that names `limit`.
-fn variant(t: &str, o: &CompileOptions, refusal_names: Option<&str>) {
+/// Compile a variant: it must compile (codegen has validated every module with naga), or be
+/// refused with an error that names `limit`. Returns what it compiled to, for the grids
+/// to check against what the packing rules give by hand.
+fn variant(t: &str, o: &CompileOptions, refusal_names: Option<&str>) -> Option<sshc::Compiled> {
     let src = source(t);
     match (sshc::compile_str(&src, o), refusal_names) {
-        (Ok(c), None) => {
-            for (file, wgsl) in &c.shaders {
-                sshc::back::validate(wgsl).unwrap_or_else(|e| panic!("{t} {:?}: {file} does not validate: {e}", o.set));
-            }
-        }
+        (Ok(c), None) => Some(c),
         (Ok(_), Some(limit)) => panic!("{t} {:?} {:?}: compiled, but should be refused naming {limit}", o.set, o.precision),
         (Err(d), None) => panic!("{t} {:?} {:?}: refused\n{}", o.set, o.precision, d.render(t, &src)),
         (Err(d), Some(limit)) => {
             let text = d.render(t, &src);
             assert!(text.contains(limit), "{t} {:?}: refusal does not name `{limit}`:\n{text}", o.set);
+            None
         }
     }
+}
+
+/// [`variant`] that must compile.
+fn compiles(t: &str, o: &CompileOptions) -> sshc::Compiled {
+    variant(t, o, None).expect("compiled")
+}
+
+/// The texture `n` channels of precision `p` pack into, by the packing rules
+/// (docs/architecture.md, section 4): 1 component per texel for one channel, 2 for two,
+/// else 4; ceil(n / components) layers; the format named by precision and components.
+/// Returns (format, layers).
+fn packed(p: Precision, n: u32) -> (String, u32) {
+    let components = match n {
+        1 => 1,
+        2 => 2,
+        _ => 4,
+    };
+    let prefix = ["R", "Rg", "", "Rgba"][components as usize - 1];
+    let suffix = match p {
+        Precision::Unorm8 => "8Unorm",
+        Precision::Unorm16 => "16Unorm",
+        Precision::F16 => "16Float",
+        Precision::F32 => "32Float",
+    };
+    (format!("{prefix}{suffix}"), n.div_ceil(components))
+}
+
+/// (format, layers, mips) of the texture `name` of a compiled variant.
+fn texture(c: &sshc::Compiled, name: &str) -> (String, u32, bool) {
+    let t = c.graph.textures.iter().find(|t| t.name == name).unwrap_or_else(|| {
+        let names: Vec<&str> = c.graph.textures.iter().map(|t| t.name.as_str()).collect();
+        panic!("{}: no texture `{name}` among {names:?}", c.graph.technique)
+    });
+    (format!("{:?}", t.format), t.layers, t.mips)
+}
+
+fn has_texture(c: &sshc::Compiled, name: &str) -> bool {
+    c.graph.textures.iter().any(|t| t.name == name)
+}
+
+/// Fetches per shaded pixel: the cost of the Shade pass's step as the compiler counted it.
+fn shade_fetches(c: &sshc::Compiled) -> u32 {
+    let shade = c.graph.passes.iter().find(|p| p.name == "shade").expect("a Shade pass");
+    shade.steps.iter().map(|s| s.cost.fetches).sum()
+}
+
+/// `packed` as (format, layers, mips).
+fn with_mips((format, layers): (String, u32), mips: bool) -> (String, u32, bool) {
+    (format, layers, mips)
 }
 
 #[test]
 fn csm_grid_every_order_at_every_precision() {
     for m in [1, 2, 4, 8, 16, 32, 64] {
         for p in Precision::ALL {
-            variant("csm", &opts(&[("M", m.to_string())], &[("f", p)]), None);
+            let c = compiles("csm", &opts(&[("M", m.to_string())], &[("f", p)]));
+            // the expansion f: a cosine and a sine image per term k = 1..M, 2M channels,
+            // the mip chain built in place on the blurred copy
+            assert_eq!(texture(&c, "basis"), with_mips(packed(p, 2 * m), false), "csm M = {m} {p:?}");
+            assert_eq!(texture(&c, "blurred"), with_mips(packed(p, 2 * m), true), "csm M = {m} {p:?}");
         }
     }
+    // M = 1 at Unorm8: sin and cos in one Rg8Unorm layer; M = 64: 32 Rgba8Unorm layers
+    assert_eq!(packed(Precision::Unorm8, 2), ("Rg8Unorm".into(), 1));
+    assert_eq!(packed(Precision::Unorm8, 128), ("Rgba8Unorm".into(), 32));
     // Under a device with 16 array layers, M = 64 at unorm8 (128 channels, 32 RGBA layers)
     // does not fit and the refusal names the limit.
     let mut o = opts(&[("M", "64".into())], &[]);
@@ -78,7 +134,9 @@ fn csm_grid_every_order_at_every_precision() {
     variant("csm", &o, Some("maxTextureArrayLayers = 16"));
     for fix in 0..=2 {
         for alpha in ["0.0", "1.0", "4.0"] {
-            variant("csm", &opts(&[("fix", fix.to_string()), ("alpha", alpha.into())], &[]), None);
+            let c = compiles("csm", &opts(&[("fix", fix.to_string()), ("alpha", alpha.into())], &[]));
+            // the file's M = 4 at Unorm8: 8 channels in 2 Rgba8Unorm layers
+            assert_eq!(texture(&c, "basis"), ("Rgba8Unorm".into(), 2, false), "fix {fix} alpha {alpha}");
         }
     }
 }
@@ -91,7 +149,13 @@ fn esm_grid_exponent_precision_and_classification() {
                 let o = opts(&[("c", format!("{c:?}")), ("classify", classify.to_string())], &[("e", p)]);
                 // f16 holds exp(c z) for z in [0, 1] only while c <= ln 65504 = 11.09
                 let refused = p == Precision::F16 && c > 11.09;
-                variant("esm", &o, refused.then_some("must stay at or below 11.0898"));
+                let Some(compiled) = variant("esm", &o, refused.then_some("must stay at or below 11.0898")) else {
+                    continue;
+                };
+                // one channel e = exp(c z): one component per texel
+                assert_eq!(texture(&compiled, "esm"), with_mips(packed(p, 1), false), "esm c = {c} {p:?}");
+                // only z-max classification reads the z-max filter; the select folds otherwise
+                assert_eq!(has_texture(&compiled, "zmax"), classify == 2, "esm classify = {classify}");
             }
         }
     }
@@ -101,20 +165,29 @@ fn esm_grid_exponent_precision_and_classification() {
 fn vsm_grid_blur_and_precision() {
     for k in [1, 3, 7, 15] {
         for p in [Precision::Unorm16, Precision::F16, Precision::F32] {
-            variant("vsm", &opts(&[("K", k.to_string())], &[("m1", p), ("m2", p)]), None);
+            let c = compiles("vsm", &opts(&[("K", k.to_string())], &[("m1", p), ("m2", p)]));
+            // two moments: two components, one layer
+            assert_eq!(texture(&c, "moments"), with_mips(packed(p, 2), false), "vsm K = {k} {p:?}");
         }
     }
 }
 
 #[test]
 fn pcf_and_hard_grids() {
-    for n in 1..=8 {
-        variant("pcf", &opts(&[("N", n.to_string())], &[]), None);
+    for n in 1..=8u32 {
+        let c = compiles("pcf", &opts(&[("N", n.to_string())], &[]));
+        // `sum(i in 0..=N, sum(j in 0..=N, ... fetch(z, i - r, j - r)))`: (N + 1)^2 texels
+        assert_eq!(shade_fetches(&c), (n + 1) * (n + 1), "pcf N = {n}");
     }
     variant("pcf", &opts(&[("N", "16".into())], &[]), Some("out of range"));
     for p in Precision::ALL {
-        variant("hard", &opts(&[], &[("z", p)]), None);
-        variant("pcf", &opts(&[], &[("z", p)]), None);
+        let c = compiles("hard", &opts(&[], &[("z", p)]));
+        assert_eq!(texture(&c, "shadow"), with_mips(packed(p, 1), false), "hard {p:?}");
+        // one lookup of the receiver's texel
+        assert_eq!(shade_fetches(&c), 1, "hard {p:?}");
+        let c = compiles("pcf", &opts(&[], &[("z", p)]));
+        assert_eq!(texture(&c, "shadow"), with_mips(packed(p, 1), false), "pcf {p:?}");
+        assert_eq!(shade_fetches(&c), 16, "pcf N = 3 {p:?}");
     }
 }
 
@@ -472,12 +545,27 @@ fn cssm_grid_order_filter_and_precision() {
         // mipmaps: the CSM basis at every precision, the z-weighted basis and z/2 at every
         // precision (unorm ones with an affine encoding)
         for p in Precision::ALL {
-            variant("cssm", &opts(&[("M", m.to_string())], &[("f", p), ("g", p), ("zh", p)]), None);
+            let c = compiles("cssm", &opts(&[("M", m.to_string())], &[("f", p), ("g", p), ("zh", p)]));
+            // one precision: one texture of 2M (f) + 2M (g) + 1 (zh) = 4M + 1 channels, named
+            // after the resource; M + 1 layers of 4 components
+            assert_eq!(texture(&c, "basis"), with_mips(packed(p, 4 * m + 1), false), "cssm M = {m} {p:?}");
+            assert_eq!(packed(p, 4 * m + 1).1, m + 1);
         }
         // summed-area tables: unorm only; a float channel is refused by the pack phase
         for p in [Precision::Unorm8, Precision::Unorm16] {
             let o = opts(&[("M", m.to_string()), ("filter", "1".into())], &[("fs", p), ("gs", p), ("zhs", p)]);
-            variant("cssm", &o, None);
+            let c = compiles("cssm", &o);
+            assert_eq!(
+                texture(&c, "basis_sat"),
+                with_mips(packed(p, 4 * m + 1), false),
+                "cssm tables M = {m} {p:?}"
+            );
+            // the table holds the prefix sums of every layer of the blurred basis
+            assert_eq!(
+                texture(&c, "table"),
+                ("SummedAreaU32".into(), m + 1, false),
+                "cssm tables M = {m} {p:?}"
+            );
         }
     }
     for p in [Precision::F16, Precision::F32] {
@@ -488,26 +576,29 @@ fn cssm_grid_order_filter_and_precision() {
         for alpha in ["0.0", "1.0", "4.0"] {
             for filter in ["0", "1"] {
                 let o = opts(&[("fix", fix.to_string()), ("alpha", alpha.into()), ("filter", filter.into())], &[]);
-                variant("cssm", &o, None);
+                compiles("cssm", &o);
             }
         }
     }
     for k in [1, 3, 7] {
-        variant("cssm", &opts(&[("K", k.to_string())], &[]), None);
+        compiles("cssm", &opts(&[("K", k.to_string())], &[]));
     }
     variant("cssm", &opts(&[("filter", "2".into())], &[]), Some("out of range"));
 }
 
 #[test]
 fn pcss_grid_samples_and_precision() {
-    for n in [1, 2, 3, 6, 8, 16] {
-        for m in [1, 2, 5, 8, 16] {
-            variant("pcss", &opts(&[("N", n.to_string()), ("M", m.to_string())], &[]), None);
+    for n in [1, 2, 3, 6, 8, 16u32] {
+        for m in [1, 2, 5, 8, 16u32] {
+            let c = compiles("pcss", &opts(&[("N", n.to_string()), ("M", m.to_string())], &[]));
+            // N x N blocker-search lookups, then M x M PCF lookups, each `nearest_at(z, ...)`
+            assert_eq!(shade_fetches(&c), n * n + m * m, "pcss N = {n} M = {m}");
         }
     }
     variant("pcss", &opts(&[("N", "17".into())], &[]), Some("out of range"));
     variant("pcss", &opts(&[("M", "0".into())], &[]), Some("out of range"));
     for p in Precision::ALL {
-        variant("pcss", &opts(&[], &[("z", p)]), None);
+        let c = compiles("pcss", &opts(&[], &[("z", p)]));
+        assert_eq!(texture(&c, "shadow"), with_mips(packed(p, 1), false), "pcss {p:?}");
     }
 }

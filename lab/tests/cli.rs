@@ -44,6 +44,13 @@ fn ok(args: &[&str]) -> String {
     stdout
 }
 
+/// The number printed right after `label` in `out`.
+fn number_after(label: &str, out: &str) -> f64 {
+    let rest = &out[out.find(label).unwrap_or_else(|| panic!("{label}: {out}")) + label.len()..];
+    let token: String = rest.trim_start().chars().take_while(|c| c.is_ascii_digit() || *c == '.').collect();
+    token.parse().unwrap_or_else(|_| panic!("no number after `{label}` in:\n{out}"))
+}
+
 fn read_pfm(path: &Path) -> pxm::PFM {
     let mut f = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     pxm::PFM::read_from(&mut f).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -168,18 +175,101 @@ fn compare_command_writes_the_comparison_and_its_figures() {
     ] {
         assert!(out.contains(needle), "`{needle}` missing from:\n{out}");
     }
-    // The figures are numbers in range.
-    let number_after = |label: &str| -> f64 {
-        let rest = &out[out.find(label).unwrap_or_else(|| panic!("{label}: {out}")) + label.len()..];
-        let token: String = rest.trim_start().chars().take_while(|c| c.is_ascii_digit() || *c == '.').collect();
-        token.parse().unwrap_or_else(|_| panic!("no number after `{label}` in:\n{out}"))
+    // The figures, recomputed here from what `sshc truth` and `sshc render` write: the
+    // truth read from the cache, and the same technique's visibility, positions and normals.
+    let (vis, pos, nrm) = (dir.join("vis.pfm"), dir.join("pos.pfm"), dir.join("nrm.pfm"));
+    ok(&[
+        "render",
+        "techniques/pcf.ron",
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "32x32",
+        "--set",
+        "N=5",
+        "-o",
+        dir.join("render.png").to_str().unwrap(),
+        "--visibility",
+        vis.to_str().unwrap(),
+        "--positions",
+        pos.to_str().unwrap(),
+        "--normals",
+        nrm.to_str().unwrap(),
+    ]);
+    let (vis, truth, pos, nrm) = (read_pfm(&vis), read_pfm(&truth_out), read_pfm(&pos), read_pfm(&nrm));
+    assert_eq!(
+        (vis.data.len(), truth.data.len(), pos.data.len(), nrm.data.len()),
+        (1024, 1024, 3072, 3072)
+    );
+    // contact.ron's sphere light is centred at (-0.8, 3.2, 1.6): a pixel faces it when its
+    // normal points to that side of its surface
+    let centre = [-0.8f32, 3.2, 1.6];
+    let (mut facing, mut penumbra) = (Vec::new(), Vec::new());
+    for i in 0..1024 {
+        let (p, n) = (&pos.data[3 * i..3 * i + 3], &nrm.data[3 * i..3 * i + 3]);
+        if !p.iter().chain(n).all(|c| c.is_finite()) {
+            continue;
+        }
+        let dot: f32 = (0..3).map(|k| n[k] * (centre[k] - p[k])).sum();
+        if dot > 0.0 {
+            // signed error in 0..255 units
+            let e = 255.0 * (vis.data[i] as f64 - truth.data[i] as f64);
+            facing.push(e);
+            if truth.data[i] > 0.0 && truth.data[i] < 1.0 {
+                penumbra.push(e);
+            }
+        }
+    }
+    let stats = |e: &[f64]| {
+        let rms = (e.iter().map(|x| x * x).sum::<f64>() / e.len().max(1) as f64).sqrt();
+        (rms, e.iter().fold(0.0f64, |m, x| m.max(x.abs())), e.len())
     };
-    let rms = number_after("error facing the light: RMS");
-    let penumbra_rms = number_after("error in penumbra (0 < truth < 1): RMS");
-    let temporal = number_after("temporal: mean |change|");
-    assert!((0.0..=255.0).contains(&rms) && (0.0..=255.0).contains(&penumbra_rms), "{out}");
-    assert!(penumbra_rms > 0.0, "PCF is not exact in the penumbra:\n{out}");
-    assert!((0.0..=255.0).contains(&temporal), "{out}");
+    // "error <what>: RMS r, max m (0..255) over n px", as printed: r to 2 decimals, m to 1
+    let printed = |what: &str| -> (f64, f64, usize) {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&format!("error {what}: RMS ")))
+            .unwrap_or_else(|| panic!("no `error {what}` line in:\n{out}"));
+        let field = |after: &str, end: &str| -> String {
+            let rest = &line[line.find(after).unwrap_or_else(|| panic!("{line}")) + after.len()..];
+            rest[..rest.find(end).unwrap_or_else(|| panic!("{line}"))].to_string()
+        };
+        let parse = |t: String| -> f64 { t.parse().unwrap_or_else(|_| panic!("`{t}` in `{line}`")) };
+        (
+            parse(field("RMS ", ",")),
+            parse(field("max ", " ")),
+            parse(field("over ", " px")) as usize,
+        )
+    };
+    for (what, errors) in [("facing the light", &facing), ("in penumbra (0 < truth < 1)", &penumbra)] {
+        let (rms, max, n) = stats(errors);
+        let (p_rms, p_max, p_n) = printed(what);
+        assert_eq!(p_n, n, "{what}: pixels\n{out}");
+        // half a unit in the last printed digit, and f32 storage of the PFMs (2^-24 of 255)
+        assert!(
+            (p_rms - rms).abs() <= 0.005 + 1e-4,
+            "{what}: RMS printed {p_rms}, recomputed {rms:.4}\n{out}"
+        );
+        assert!(
+            (p_max - max).abs() <= 0.05 + 1e-4,
+            "{what}: max printed {p_max}, recomputed {max:.4}\n{out}"
+        );
+    }
+    assert!(stats(&penumbra).0 > 0.0, "PCF is not exact in the penumbra:\n{out}");
+    // Temporal: the mean |change| per frame while the light moves 0.25 texel per frame. It
+    // is above 0 (a penumbra in view moves) and below what one frame can change a PCF
+    // pixel by: N x N bilinear taps over (N + 1)^2 texels with N = 5. Moving the kernel by
+    // t texels over fixed depths changes the lit fraction by at most t / N (the weights of
+    // its first and last columns move by t, the others not: (1/N^2) N t); the depth map is
+    // rasterised anew, and an edge that moves by under a texel flips at most one texel per
+    // row of the kernel: N + 1 taps of weight at most 1/N^2. With t < 2 x 0.25 (the step is
+    // set at the scene's centre; the occluders are no nearer the light than half its
+    // distance to the centre, parallax at most doubles it), at most
+    // 255 ((N + 1) / N^2 + 0.5 / N) = 86.7 per pixel (depth tests at near-ties aside, which
+    // flip single taps of weight 1/N^2 on few pixels), so also on average.
+    let temporal = number_after("temporal: mean |change|", &out);
+    let bound = 255.0 * (6.0 / 25.0 + 0.5 / 5.0);
+    assert!(temporal > 0.0 && temporal <= bound, "temporal {temporal}, bound {bound:.1}:\n{out}");
     // Three 32-pixel panels scaled by 8, side by side, text below.
     let img = image::open(&png).unwrap().to_rgb8();
     assert!(img.width() >= 3 * 256 && img.height() > 256 + 8 * 19, "{:?}", img.dimensions());

@@ -60,11 +60,52 @@ fn sweep_writes_a_row_per_configuration_and_the_charts() {
     let rows = rows(&csv);
     // 2 + 2 + 2 GPU configurations and one CPU baseline
     assert_eq!(rows.len(), 7, "{csv}");
+    let num = |r: &Vec<String>, c: &str| -> f64 {
+        r[col(c)]
+            .parse()
+            .unwrap_or_else(|_| panic!("{c} = `{}` is not a number in {r:?}", r[col(c)]))
+    };
+    // Every row compares with the same truth over the same pixels: the camera pass of every
+    // technique (and of the CPU baseline's reference) sees the same surfaces.
+    let (facing, penumbra) = (num(&rows[0], "facing_pixels"), num(&rows[0], "penumbra_pixels"));
+    assert!(facing > 0.0 && facing <= 40.0 * 40.0 && penumbra > 0.0, "{csv}");
+    // the CSV prints errors with 3 decimals
+    let printed = 0.0005;
     for r in &rows {
         assert_eq!(r.len(), header.len(), "{r:?}");
-        for c in ["rms_facing", "max_facing", "rms_penumbra"] {
-            let v: f64 = r[col(c)].parse().unwrap();
-            assert!(v.is_finite() && (0.0..=255.0).contains(&v), "{c} = {v} in {r:?}");
+        assert_eq!((num(r, "facing_pixels"), num(r, "penumbra_pixels")), (facing, penumbra), "{r:?}");
+        let (rms_f, max_f, rms_p, max_p) = (
+            num(r, "rms_facing"),
+            num(r, "max_facing"),
+            num(r, "rms_penumbra"),
+            num(r, "max_penumbra"),
+        );
+        // What the definitions imply, whatever the technique: an RMS never exceeds the
+        // largest error it averages; the penumbra pixels are some of the facing pixels, so
+        // their largest error and their sum of squared errors are at most the facing ones'.
+        assert!(rms_f.is_finite() && rms_p.is_finite() && max_f.is_finite(), "{r:?}");
+        assert!(
+            rms_f <= max_f + 2.0 * printed && rms_p <= max_p + 2.0 * printed,
+            "RMS above max: {r:?}"
+        );
+        assert!(max_p <= max_f + 2.0 * printed, "penumbra max above facing max: {r:?}");
+        let sq = |rms: f64, n: f64| (rms + printed).powi(2) * n;
+        assert!(
+            (rms_p - printed).max(0.0).powi(2) * penumbra <= sq(rms_f, facing),
+            "penumbra sum of squares above the facing one: {r:?}"
+        );
+        if r[col("technique")] == "16 samples (CPU)" {
+            // Monte Carlo bound: the baseline is 16 stratified light samples, the truth 2
+            // runs of 16; stratified sampling's variance is at most the binomial
+            // f (1 - f) / n <= 1 / (4 n) per pixel. Whether or not the two are independent,
+            // the root-mean-square difference per pixel is at most the sum of their
+            // standard deviations, 1/8 + 1/sqrt(128) = 0.2134, or 54.4 in 0..255 units; one
+            // sample per pixel (the wrong stratification) would give up to 0.5 + 0.088.
+            // (Over a penumbra f (1 - f) averages nearer 1/6, for about 32 expected.)
+            let bound = 255.0 * (0.125 + (1.0f64 / 128.0).sqrt());
+            assert!(rms_f <= bound && rms_p <= bound, "CPU baseline RMS above {bound:.1}: {r:?}");
+            // 16 samples are not exact in the penumbra
+            assert!(rms_p > 0.0, "{r:?}");
         }
         if r[col("technique")] != "16 samples (CPU)" {
             let ratio: f64 = r[col("time_ratio")].parse().unwrap();

@@ -14,8 +14,9 @@
 //! on either side.
 
 use sshc_runtime::gpu::Gpu;
+use sshc_tests::compare::{Comparison, Layout};
 use sshc_tests::reference::cpu;
-use sshc_tests::reference::tolerance::{Allowed, allowed};
+use sshc_tests::reference::tolerance::allowed;
 use sshc_tests::reference::{DepthMap, GpuReference, LightFrame, Query, Storage, Technique, cpu_visibility};
 use std::sync::OnceLock;
 
@@ -111,21 +112,10 @@ fn queries(map: &DepthMap, seed: u64) -> Vec<Query> {
 // ---------------------------------------------------------------------------------------
 // CPU against GPU
 
+/// One configuration on one map: the comparison and the GPU time of the run.
 struct Row {
-    label: String,
-    checked: usize,
-    ties: usize,
-    max_diff: f64,
-    mean_diff: f64,
-    /// Widest allowance (half-width of the allowed interval about the CPU value).
-    max_allowed: f64,
-    /// Largest difference over its allowance.
-    worst_ratio: f64,
-    /// Queries whose allowance exceeds 0.1: where the precision leaves the result open
-    /// (VSM's Chebyshev bound at a small variance, 8-bit storage of wide ranges).
-    loose: usize,
+    cmp: Comparison,
     nanoseconds: f64,
-    failures: Vec<String>,
 }
 
 fn compare(reference: &GpuReference, label: &str, t: &Technique, map_name: &str, map: &DepthMap, seed: u64) -> Row {
@@ -135,49 +125,17 @@ fn compare(reference: &GpuReference, label: &str, t: &Technique, map_name: &str,
     let (gpu_v, ns) = reference
         .visibility(t, map, &qs)
         .unwrap_or_else(|e| panic!("{label} on {map_name}: {e}"));
-    let mut row = Row {
-        label: format!("{label} / {map_name}"),
-        checked: 0,
-        ties: 0,
-        max_diff: 0.0,
-        mean_diff: 0.0,
-        max_allowed: 0.0,
-        worst_ratio: 0.0,
-        loose: 0,
-        nanoseconds: ns,
-        failures: Vec::new(),
-    };
     assert_eq!(gpu_v.len(), qs.len(), "{label}: one visibility per query");
     for ((q, &c), &g) in qs.iter().zip(&cpu_v).zip(&gpu_v) {
-        let g = g as f64;
         assert!((0.0..=1.0).contains(&g), "{label}: GPU visibility {g} outside [0, 1] at {q:?}");
         assert!((0.0..=1.0).contains(&c), "{label}: CPU visibility {c} outside [0, 1] at {q:?}");
-        let (lo, hi) = match allowed(&pre, q) {
-            Allowed::Tie => {
-                row.ties += 1;
-                continue;
-            }
-            Allowed::Within(lo, hi) => (lo, hi),
-        };
-        row.checked += 1;
-        let diff = (g - c).abs();
-        let allowance = (c - lo).max(hi - c).max(0.0);
-        row.max_diff = row.max_diff.max(diff);
-        row.mean_diff += diff;
-        row.max_allowed = row.max_allowed.max(allowance);
-        row.loose += (allowance > 0.1) as usize;
-        if diff > 0.0 {
-            row.worst_ratio = row.worst_ratio.max(if allowance > 0.0 { diff / allowance } else { f64::INFINITY });
-        }
-        if !(lo..=hi).contains(&g) && row.failures.len() < 5 {
-            row.failures.push(format!(
-                "{}: at {q:?} the CPU gives {c:.7}, the GPU {g:.7}, outside the allowed [{lo:.7}, {hi:.7}]",
-                row.label
-            ));
-        }
     }
-    row.mean_diff /= row.checked.max(1) as f64;
-    row
+    let gpu_v: Vec<f64> = gpu_v.iter().map(|&g| g as f64).collect();
+    let mut cmp = Comparison::new(format!("{label} / {map_name}"), Layout::Buffer);
+    for (i, q) in qs.iter().enumerate() {
+        cmp.push(i, gpu_v[i], cpu_v[i], &allowed(&pre, q), || format!("{q:?}"));
+    }
+    Row { cmp, nanoseconds: ns }
 }
 
 /// Compare every configuration on every map; print a table (per technique and map: queries
@@ -199,30 +157,30 @@ fn agree_on(configs: &[(&str, Technique)], maps: &[(&'static str, DepthMap)]) {
     let mut failures = Vec::new();
     for (ci, (label, t)) in configs.iter().enumerate() {
         for (mi, (map_name, map)) in maps.iter().enumerate() {
-            let row = compare(&reference, label, t, map_name, map, (ci * 16 + mi) as u64 + 1);
+            let Row { cmp, nanoseconds } = compare(&reference, label, t, map_name, map, (ci * 16 + mi) as u64 + 1);
             eprintln!(
                 "{:<44} {:>7} {:>5} {:>10.3e} {:>10.3e} {:>10.3e} {:>7.3} {:>5} {:>10.1}",
-                row.label,
-                row.checked,
-                row.ties,
-                row.max_diff,
-                row.mean_diff,
-                row.max_allowed,
-                row.worst_ratio,
-                row.loose,
-                row.nanoseconds * 1e-3
+                cmp.label,
+                cmp.checked,
+                cmp.ties,
+                cmp.max_diff,
+                cmp.mean_diff(),
+                cmp.max_allowance(),
+                cmp.worst_ratio(),
+                cmp.loose(0.1),
+                nanoseconds * 1e-3
             );
             // The guard must not hollow the comparison out. (On the all-0 and all-1 maps
             // many receivers sit exactly at the stored depth, d = z: genuine ties.)
-            if row.checked < 100 {
+            if cmp.checked < 100 {
                 failures.push(format!(
                     "{}: {} of {} queries are ties",
-                    row.label,
-                    row.ties,
-                    row.checked + row.ties
+                    cmp.label,
+                    cmp.ties,
+                    cmp.checked + cmp.ties
                 ));
             }
-            failures.extend(row.failures);
+            failures.extend(cmp.errors());
         }
     }
     assert!(failures.is_empty(), "CPU and GPU references disagree:\n{}", failures.join("\n"));

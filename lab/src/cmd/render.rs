@@ -113,7 +113,7 @@ pub(crate) struct PassWork {
 /// Invocations, fetches and operations per frame of every pass: a step's invocations are
 /// texels for map-side steps (summed over the mip levels below the base for a mip chain),
 /// pixels for the Shade pass, and rows or columns for compute steps, whose counts are per
-/// texel of the row or column they walk.
+/// texel of the row or column they walk, in every layer of the table they write.
 pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> Vec<PassWork> {
     let texels = f64::from(shadow) * f64::from(shadow);
     graph
@@ -134,8 +134,15 @@ pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> V
                     // levels 1.. of the chain: texels (1/4 + 1/16 + ...)
                     Draw::MipLevels => (texels / 3.0, 1.0),
                     // one invocation per row or column, whose loop body (counted once)
-                    // runs once per texel of it
-                    Draw::ComputeRows | Draw::ComputeColumns => (f64::from(shadow), f64::from(shadow)),
+                    // runs once per texel of it in each layer of the table
+                    Draw::ComputeRows | Draw::ComputeColumns => {
+                        let layers = s
+                            .writes
+                            .first()
+                            .and_then(|w| graph.textures.iter().find(|t| t.name == w.texture))
+                            .map_or(1, |t| t.layers);
+                        (f64::from(shadow), f64::from(shadow) * f64::from(layers))
+                    }
                 };
                 w.invocations += n;
                 w.fetches += f64::from(s.cost.fetches) * n * runs;
@@ -210,8 +217,27 @@ fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
 mod tests {
     use super::pass_work;
 
+    /// Every pass of CSSM with summed-area tables (`filter = 1`, defaults otherwise: M = 4,
+    /// K = 3) counted by hand from its generated WGSL (the snapshots
+    /// `techniques__cssm-filter1.cssm.*.wgsl.snap`) and its graph:
+    ///
+    /// - the basis: 2M = 8 basis images `fs`, 8 z-weighted `gs` and `zhs`: 17 Unorm8
+    ///   channels, 4 per RGBA layer: 5 layers of `basis_sat`, `blurred_sat` and `table`;
+    /// - `depth`: the scene from the light, one invocation per texel, no fetch;
+    /// - `basis_sat`: one full-screen invocation per texel, one `textureLoad` of the depth;
+    /// - `blur_sat`: K = 3 taps per layer and direction. The horizontal pass writes a
+    ///   Rgba16Float intermediate (8 bytes per texel: 32 / 8 = 4 layers per render pass),
+    ///   so it takes two steps (layers 0-3: 12 loads; layer 4: 3 loads); the vertical pass
+    ///   writes Rgba8Unorm (8 layers at once): one step of 5 x 3 = 15 loads. Three
+    ///   invocations per texel, 30 loads per texel;
+    /// - `sat`: one invocation per row, then per column; each walks the 512 texels of its
+    ///   row or column in each of the 5 layers, one load per texel (rows: the blurred
+    ///   texture; columns: the table);
+    /// - `shade`: one invocation per pixel; 7 box lookups (`box_table`: 3 for the
+    ///   z-weighted numerator, layers 2-4; 2 for the blocker fraction and 2 for the final
+    ///   lookup, layers 0-1), each reading 16 prefix sums (`sat_table`: one storage load).
     #[test]
-    fn pass_work_counts_table_loads_and_compute_steps_per_texel() {
+    fn pass_work_counts_every_invocation_and_fetch_of_cssm_with_tables() {
         let src = include_str!("../../../techniques/cssm.ron");
         let opts = sshc::CompileOptions {
             set: vec![("filter".into(), "1".into())],
@@ -220,17 +246,24 @@ mod tests {
         let c = sshc::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("cssm.ron", src)));
         let (shadow, camera) = (512u32, (256u32, 128u32));
         let work = pass_work(&c.graph, shadow, camera);
-        let get = |name: &str| work.iter().find(|w| w.pass == name).unwrap_or_else(|| panic!("no pass `{name}`"));
-        // the table: one invocation per row, then per column; each reads one texel (rows:
-        // the blurred texture; columns: the table) per texel it walks
-        let sat = get("sat");
-        assert_eq!(sat.invocations, 2.0 * 512.0);
-        assert_eq!(sat.fetches, 2.0 * 512.0 * 512.0);
-        // the Shade pass reads only tables: storage-buffer loads, one invocation per pixel
-        let shade = get("shade");
-        let per_pixel = c.graph.passes.iter().find(|p| p.name == "shade").unwrap().steps[0].cost.fetches;
-        assert!(per_pixel > 0, "table lookups must count as fetches");
-        assert_eq!(shade.invocations, 256.0 * 128.0);
-        assert_eq!(shade.fetches, f64::from(per_pixel) * 256.0 * 128.0);
+        let names: Vec<&str> = work.iter().map(|w| w.pass.as_str()).collect();
+        assert_eq!(names, ["depth", "basis_sat", "blur_sat", "sat", "shade"]);
+        let texels = 512.0 * 512.0;
+        let pixels = 256.0 * 128.0;
+        // (pass, invocations, fetches), by hand as above
+        let expected = [
+            ("depth", texels, 0.0),
+            ("basis_sat", texels, texels),
+            ("blur_sat", 3.0 * texels, (12.0 + 3.0 + 15.0) * texels),
+            ("sat", 2.0 * 512.0, 2.0 * 512.0 * 5.0 * 512.0),
+            ("shade", pixels, 7.0 * 16.0 * pixels),
+        ];
+        for (w, (name, invocations, fetches)) in work.iter().zip(expected) {
+            assert_eq!(
+                (w.pass.as_str(), w.invocations, w.fetches),
+                (name, invocations, fetches),
+                "pass `{name}`: (invocations, fetches)"
+            );
+        }
     }
 }

@@ -3,6 +3,8 @@
 //! coordinates), and synthetic depth fields fed to the passes after Depth.
 #![allow(dead_code)]
 
+pub mod variant;
+
 use glam::{Mat4, Vec3};
 use sshc_lab::scene;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, SceneInputs};

@@ -1,0 +1,107 @@
+//! One selectable variant of a bundled technique, compiled by sshc and described to the
+//! hand-written references alike: shared by the agreement tests and the agreement timings
+//! (benches/agreement_timings.rs).
+
+use super::{QueryPlane, compile_source, technique_source};
+use sshc_tests::reference::{LightFrame, Storage};
+
+/// One selectable variant of a technique: params (`--set`) and the precision of its
+/// stored channel or expansion (`--precision`).
+#[derive(Clone)]
+pub struct Variant {
+    pub technique: &'static str,
+    pub params: Vec<(&'static str, f64)>,
+    pub storage: Option<Storage>,
+    /// The width of the square area light over the query plane (world units; the plane is
+    /// 2 wide), for the soft techniques.
+    pub light: Option<f64>,
+}
+
+impl Variant {
+    pub fn new(technique: &'static str, params: &[(&'static str, f64)], storage: Option<Storage>) -> Variant {
+        Variant {
+            technique,
+            params: params.to_vec(),
+            storage,
+            light: None,
+        }
+    }
+
+    /// Under a square light `width` wide.
+    pub fn lit(mut self, width: f64) -> Variant {
+        self.light = Some(width);
+        self
+    }
+
+    pub fn inputs(&self, plane: &QueryPlane) -> sshc_runtime::gpu::SceneInputs {
+        match self.light {
+            Some(w) => plane.lit_inputs(w as f32),
+            None => plane.inputs(),
+        }
+    }
+
+    pub fn label(&self) -> String {
+        let mut s = self.technique.to_string();
+        for (k, v) in &self.params {
+            s.push_str(&format!(" {k}={v}"));
+        }
+        if let Some(p) = self.storage {
+            s.push_str(&format!(" {p:?}"));
+        }
+        if let Some(w) = self.light {
+            s.push_str(&format!(" light {w}"));
+        }
+        s
+    }
+
+    /// The channels or expansions the storage override applies to, as the compiler names them.
+    pub fn stored_names(&self) -> &'static [&'static str] {
+        match self.technique {
+            "vsm" => &["m1", "m2"],
+            "esm" => &["e"],
+            "csm" => &["f"],
+            _ => &[],
+        }
+    }
+
+    pub fn compiled(&self) -> sshc::Compiled {
+        // slope-scaled bias needs screen-space derivatives the references do not model
+        let mut set: Vec<(&str, String)> = vec![("slope_bias", "0.0".into())];
+        for (k, v) in &self.params {
+            // integral values as integers: i32 params refuse `3.0`, f32 params take `3`
+            set.push((
+                k,
+                if v.fract() == 0.0 {
+                    format!("{}", *v as i64)
+                } else {
+                    format!("{v:?}")
+                },
+            ));
+        }
+        let precision: Vec<(&str, &str)> = match self.storage {
+            Some(p) => {
+                let name = match p {
+                    Storage::Unorm8 => "Unorm8",
+                    Storage::Unorm16 => "Unorm16",
+                    Storage::F16 => "F16",
+                    Storage::F32 => "F32",
+                };
+                self.stored_names().iter().map(|c| (*c, name)).collect()
+            }
+            None => vec![],
+        };
+        compile_source(self.technique, &technique_source(self.technique), &set, &precision)
+    }
+
+    pub fn reference(&self) -> sshc_tests::reference::Technique {
+        let mut t = sshc_tests::reference::Technique::new(self.technique).with("slope_bias", 0.0);
+        for (k, v) in &self.params {
+            t = t.with(k, *v);
+        }
+        t.storage = self.storage;
+        match self.light {
+            Some(w) => t.lit(LightFrame::query_plane(w)),
+            None => t,
+        }
+    }
+}
