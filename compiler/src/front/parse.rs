@@ -1,6 +1,11 @@
 //! Phase `parse`: the spanned RON tree becomes a [`Technique`] AST. Every unknown field,
 //! missing field, wrong kind of value and malformed expression string is a diagnostic
 //! at the offending text.
+//!
+//! Matches on the RON value tree accept the shapes a field may take and refuse every other
+//! with a diagnostic, so their last arm is `_`: a value kind added to the reader is refused
+//! by default, which is the behaviour wanted, not a case left out.
+#![allow(clippy::wildcard_enum_match_arm)]
 
 use crate::diag::{Diagnostic, Phase};
 use crate::front::ast::*;
@@ -55,14 +60,7 @@ impl<'a> Fields<'a> {
                 taken: Vec::new(),
                 known: Vec::new(),
             }),
-            Value::Bool(_)
-            | Value::Int(_)
-            | Value::Float(_)
-            | Value::Str(_)
-            | Value::Ident(_)
-            | Value::Tuple { .. }
-            | Value::List(_)
-            | Value::Map(_) => Err(err(
+            _ => Err(err(
                 node.span,
                 format!("expected `{what}(...)`, found {}", node.describe()),
                 format!("expected `{what}(field: value, ...)`"),
@@ -161,14 +159,7 @@ fn edit_distance(a: &str, b: &str) -> usize {
 fn string(node: &Node) -> Result<Spanned<String>, Diagnostic> {
     match &node.value {
         Value::Str(s) => Ok(Spanned::new(s.text.clone(), node.span)),
-        Value::Bool(_)
-        | Value::Int(_)
-        | Value::Float(_)
-        | Value::Ident(_)
-        | Value::Struct { .. }
-        | Value::Tuple { .. }
-        | Value::List(_)
-        | Value::Map(_) => Err(err(
+        _ => Err(err(
             node.span,
             format!("expected a string, found {}", node.describe()),
             "expected a string",
@@ -194,27 +185,18 @@ fn names(node: &Node) -> Result<Vec<Name>, Diagnostic> {
     match &node.value {
         Value::List(items) => items.iter().map(name).collect(),
         Value::Str(_) => Ok(vec![name(node)?]),
-        Value::Bool(_) | Value::Int(_) | Value::Float(_) | Value::Ident(_) | Value::Struct { .. } | Value::Tuple { .. } | Value::Map(_) => {
-            Err(err(
-                node.span,
-                format!("expected a list of names, found {}", node.describe()),
-                "expected `[\"a\", \"b\"]`",
-            ))
-        }
+        _ => Err(err(
+            node.span,
+            format!("expected a list of names, found {}", node.describe()),
+            "expected `[\"a\", \"b\"]`",
+        )),
     }
 }
 
 fn boolean(node: &Node) -> Result<bool, Diagnostic> {
     match &node.value {
         Value::Bool(b) => Ok(*b),
-        Value::Int(_)
-        | Value::Float(_)
-        | Value::Str(_)
-        | Value::Ident(_)
-        | Value::Struct { .. }
-        | Value::Tuple { .. }
-        | Value::List(_)
-        | Value::Map(_) => Err(err(
+        _ => Err(err(
             node.span,
             format!("expected `true` or `false`, found {}", node.describe()),
             "expected a boolean",
@@ -226,13 +208,11 @@ fn number(node: &Node) -> Result<Spanned<f64>, Diagnostic> {
     match &node.value {
         Value::Int(v) => Ok(Spanned::new(*v as f64, node.span)),
         Value::Float(v) => Ok(Spanned::new(*v, node.span)),
-        Value::Bool(_) | Value::Str(_) | Value::Ident(_) | Value::Struct { .. } | Value::Tuple { .. } | Value::List(_) | Value::Map(_) => {
-            Err(err(
-                node.span,
-                format!("expected a number, found {}", node.describe()),
-                "expected a number",
-            ))
-        }
+        _ => Err(err(
+            node.span,
+            format!("expected a number, found {}", node.describe()),
+            "expected a number",
+        )),
     }
 }
 
@@ -243,7 +223,7 @@ fn expression(node: &Node) -> Result<Expr, Diagnostic> {
         Value::Int(v) => Ok(Expr::new(ExprKind::Lit(Literal::Int(*v)), node.span)),
         Value::Float(v) => Ok(Expr::new(ExprKind::Lit(Literal::Float(*v)), node.span)),
         Value::Bool(v) => Ok(Expr::new(ExprKind::Lit(Literal::Bool(*v)), node.span)),
-        Value::Ident(_) | Value::Struct { .. } | Value::Tuple { .. } | Value::List(_) | Value::Map(_) => Err(err(
+        _ => Err(err(
             node.span,
             format!("expected an expression string, found {}", node.describe()),
             "expected an expression such as \"exp(c * z)\"",
@@ -260,14 +240,7 @@ fn variant(node: &Node) -> Result<(String, Span), Diagnostic> {
     match &node.value {
         Value::Ident(n) => Ok((n.clone(), node.span)),
         Value::Struct { name: Some((n, s)), .. } | Value::Tuple { name: Some((n, s)), .. } => Ok((n.clone(), *s)),
-        Value::Bool(_)
-        | Value::Int(_)
-        | Value::Float(_)
-        | Value::Str(_)
-        | Value::Struct { .. }
-        | Value::Tuple { .. }
-        | Value::List(_)
-        | Value::Map(_) => Err(err(
+        _ => Err(err(
             node.span,
             format!("expected a name such as `F32`, found {}", node.describe()),
             "expected a variant name",
@@ -287,14 +260,7 @@ fn unknown_variant(span: Span, got: &str, what: &str, options: &[&'static str]) 
 fn map_entries(node: &Node) -> Result<Vec<(Name, &Node)>, Diagnostic> {
     match &node.value {
         Value::Map(entries) => entries.iter().map(|(k, v)| Ok((name(k)?, v))).collect(),
-        Value::Bool(_)
-        | Value::Int(_)
-        | Value::Float(_)
-        | Value::Str(_)
-        | Value::Ident(_)
-        | Value::Struct { .. }
-        | Value::Tuple { .. }
-        | Value::List(_) => Err(err(
+        _ => Err(err(
             node.span,
             format!("expected a map `{{ \"name\": ... }}`, found {}", node.describe()),
             "expected a map",
@@ -311,14 +277,7 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
         None => vec![],
         Some(n) => match &n.value {
             Value::List(items) => items.iter().map(light).collect::<Result<_, _>>()?,
-            Value::Bool(_)
-            | Value::Int(_)
-            | Value::Float(_)
-            | Value::Str(_)
-            | Value::Ident(_)
-            | Value::Struct { .. }
-            | Value::Tuple { .. }
-            | Value::Map(_) => vec![light(n)?],
+            _ => vec![light(n)?],
         },
     };
     let params = match f.opt("params")? {
@@ -339,14 +298,7 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
     let passes_node = f.req("passes")?;
     let passes = match &passes_node.value {
         Value::List(items) => items.iter().map(pass).collect::<Result<_, _>>()?,
-        Value::Bool(_)
-        | Value::Int(_)
-        | Value::Float(_)
-        | Value::Str(_)
-        | Value::Ident(_)
-        | Value::Struct { .. }
-        | Value::Tuple { .. }
-        | Value::Map(_) => {
+        _ => {
             return Err(err(
                 passes_node.span,
                 format!("expected a list of passes, found {}", passes_node.describe()),
@@ -383,15 +335,7 @@ fn light(node: &Node) -> Result<Spanned<LightModel>, Diagnostic> {
         let n = f.req("samples")?;
         samples = match n.value {
             Value::Int(s) if (2..=64).contains(&s) => s as u32,
-            Value::Bool(_)
-            | Value::Int(_)
-            | Value::Float(_)
-            | Value::Str(_)
-            | Value::Ident(_)
-            | Value::Struct { .. }
-            | Value::Tuple { .. }
-            | Value::List(_)
-            | Value::Map(_) => {
+            _ => {
                 return Err(err(
                     n.span,
                     "a segment light needs between 2 and 64 samples",
@@ -420,15 +364,7 @@ fn param(name: Name, node: &Node) -> Result<Param, Diagnostic> {
         None => None,
         Some(r) => match &r.value {
             Value::Tuple { name: None, items } if items.len() == 2 => Some((number(&items[0])?, number(&items[1])?)),
-            Value::Bool(_)
-            | Value::Int(_)
-            | Value::Float(_)
-            | Value::Str(_)
-            | Value::Ident(_)
-            | Value::Struct { .. }
-            | Value::Tuple { .. }
-            | Value::List(_)
-            | Value::Map(_) => {
+            _ => {
                 return Err(err(
                     r.span,
                     format!("expected a range `(lo, hi)`, found {}", r.describe()),
@@ -519,14 +455,7 @@ fn expansion(name: Name, node: &Node) -> Result<Expansion, Diagnostic> {
     let terms = match &tn.value {
         Value::List(items) if !items.is_empty() => items.iter().map(term).collect::<Result<_, _>>()?,
         Value::List(_) => return Err(err(tn.span, "an expansion needs at least one term", "no terms")),
-        Value::Bool(_)
-        | Value::Int(_)
-        | Value::Float(_)
-        | Value::Str(_)
-        | Value::Ident(_)
-        | Value::Struct { .. }
-        | Value::Tuple { .. }
-        | Value::Map(_) => {
+        _ => {
             return Err(err(
                 tn.span,
                 format!("expected a list of terms, found {}", tn.describe()),
@@ -587,14 +516,7 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
     let (kind_name, kind_span) = match &node.value {
         Value::Struct { name: Some((n, s)), .. } | Value::Tuple { name: Some((n, s)), .. } => (n.clone(), *s),
         Value::Ident(n) => (n.clone(), node.span),
-        Value::Bool(_)
-        | Value::Int(_)
-        | Value::Float(_)
-        | Value::Str(_)
-        | Value::Struct { .. }
-        | Value::Tuple { .. }
-        | Value::List(_)
-        | Value::Map(_) => {
+        _ => {
             return Err(err(
                 node.span,
                 format!("expected a pass such as `Map(...)`, found {}", node.describe()),
