@@ -423,10 +423,33 @@ mod tests {
     use super::*;
     use crate::CompileOptions;
 
-    fn compiled(name: &str) -> Ir {
+    fn compiled_with_layout(name: &str) -> crate::Compiled {
         let path = format!("{}/../techniques/{name}.ron", env!("CARGO_MANIFEST_DIR"));
         let src = std::fs::read_to_string(path).unwrap();
-        crate::compile_str(&src, &CompileOptions::default()).unwrap().ir
+        crate::compile_str(&src, &CompileOptions::default()).unwrap()
+    }
+
+    fn compiled(name: &str) -> Ir {
+        compiled_with_layout(name).ir
+    }
+
+    #[test]
+    fn a_dangling_param_and_a_slot_outside_its_texture_are_refused() {
+        let mut ir = compiled("pcf");
+        let ghost = ParamId::new(99);
+        ir.arena.nodes.push((Node::Param(ghost), Ty::F32, Span::UNDEFINED));
+        assert!(matches!(validate_ir(&ir), Err(ValidationError::BadParam { param, .. }) if param == ghost));
+        assert!(validate_ir(&ir).unwrap_err().to_string().contains("param#99"));
+
+        let c = compiled_with_layout("vsm");
+        assert_eq!(validate(&Program::new(&c.ir, &c.layout)), Ok(()));
+        let mut layout = c.layout.clone();
+        let r = layout.resources.handles().find(|&r| !layout.resources[r].slots.is_empty()).unwrap();
+        layout.resources[r].slots[0].layer = 99;
+        assert!(matches!(
+            validate(&Program::new(&c.ir, &layout)),
+            Err(ValidationError::Slot { resource, .. }) if resource == r
+        ));
     }
 
     #[test]
