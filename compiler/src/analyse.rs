@@ -66,7 +66,7 @@ pub struct RangeEval<'a> {
     /// Map side: the range of each channel as stored in the resources the pass reads.
     channels: HashMap<ChannelId, Interval>,
     /// One runtime param evaluated over another range than its declared one.
-    pub param_range: Option<(usize, Interval)>,
+    pub param_range: Option<(ParamId, Interval)>,
     memo: HashMap<H, Interval>,
 }
 
@@ -116,10 +116,8 @@ impl<'a> RangeEval<'a> {
                 Interval { lo, hi }
             }
             Node::Channel(c) => self.channels.get(c).copied().unwrap_or(Interval::UNBOUNDED),
-            Node::Sample { channel, resource, .. } => self.ir.resources[*resource]
-                .slot_of(*channel)
-                .and_then(|s| s.range)
-                .unwrap_or(Interval::UNBOUNDED),
+            // Receiver side: a lookup's range is not known before the slot is laid out.
+            Node::Sample { .. } => Interval::UNBOUNDED,
             Node::Unary(UnOp::Neg, x) => {
                 let x = self.get(*x);
                 Interval { lo: -x.hi, hi: -x.lo }
@@ -171,7 +169,7 @@ fn mul(a: f64, b: f64) -> f64 {
 /// Ranges of every slot of every resource (indexed by resource, then slot), in pass order
 /// (no diagnostics). `param_range` overrides the range of one runtime param: the probe
 /// of the largest safe value evaluates the same IR under another environment.
-pub fn slot_ranges(ir: &Ir, param_range: Option<(usize, Interval)>) -> Vec<Vec<Interval>> {
+pub fn slot_ranges(ir: &Ir, param_range: Option<(ParamId, Interval)>) -> Vec<Vec<Interval>> {
     let mut out: Vec<Vec<Interval>> = ir.resources.iter().map(|r| vec![Interval::UNBOUNDED; r.slots.len()]).collect();
     for pass in &ir.passes {
         let Some(w) = pass.writes else { continue };
@@ -253,7 +251,7 @@ pub fn encode_for(p: Precision, r: Interval) -> Encode {
 }
 
 /// Re-evaluates one slot's range with one parameter changed: `(param, value) -> range`.
-pub type Probe<'p> = &'p dyn Fn(usize, f64, ResId, usize) -> Option<Interval>;
+pub type Probe<'p> = &'p dyn Fn(ParamId, f64, ResId, usize) -> Option<Interval>;
 
 /// Ranges and encodings of every slot (a side table: the IR is only read, so the probe
 /// may read it too), and the warnings.
@@ -306,7 +304,7 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
                 ));
             }
             let mut suggested = false;
-            for (pi, p) in ir.params.iter().enumerate() {
+            for (pi, p) in ir.params.with_handles() {
                 if matches!(p.value, ConstValue::Bool(_)) {
                     continue;
                 }

@@ -63,18 +63,14 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
             let channels = r
                 .slots
                 .iter()
-                .filter(|s| matches!(s.place, Some((i, _, _)) if i == ti))
-                .map(|s| {
-                    let (_, layer, component) = s.place.unwrap_or_default();
-                    let range = s.range.map(|r| (r.lo, r.hi)).unwrap_or((f64::NAN, f64::NAN));
-                    ChannelDecl {
-                        name: ir.channels[s.channel].name.clone(),
-                        layer,
-                        component,
-                        bias: s.encode.bias,
-                        scale: s.encode.scale,
-                        range,
-                    }
+                .filter(|s| s.texture == ti)
+                .map(|s| ChannelDecl {
+                    name: ir.channels[s.channel].name.clone(),
+                    layer: s.layer,
+                    component: s.component,
+                    bias: s.encode.bias,
+                    scale: s.encode.scale,
+                    range: (s.range.lo, s.range.hi),
                 })
                 .collect();
             textures.push(TextureDecl {

@@ -85,11 +85,13 @@ pub fn explain(c: &Compiled) -> String {
                 Origin::Declared => "declared".to_string(),
                 Origin::Basis { expansion, term, k } => format!("basis term {term} of `{}` at k = {k}", ir.expansions[expansion].name),
             };
-            let range = sl.range.map(|r| r.to_string()).unwrap_or_default();
-            let place = sl
-                .place
-                .map(|(t, l, c)| format!("{} layer {l} .{}", r.textures[t].name, ['r', 'g', 'b', 'a'][c as usize]))
-                .unwrap_or_default();
+            let range = sl.range;
+            let place = format!(
+                "{} layer {} .{}",
+                r.textures[sl.texture].name,
+                sl.layer,
+                ['r', 'g', 'b', 'a'][sl.component as usize]
+            );
             let enc = if sl.encode.is_identity() {
                 String::new()
             } else {

@@ -77,26 +77,40 @@ impl<T: Kind> fmt::Display for Handle<T> {
     }
 }
 
-/// A vector of `T` indexed by `Handle<T>`; elements are only appended.
-#[derive(Clone)]
-pub struct Arena<T> {
+/// A vector of `T` indexed by `Handle<K>`; elements are only appended. `K` is `T` but for
+/// a side table that maps the entities of another arena one to one (the laid-out
+/// resources of `pack`, indexed by the handles of the lowered ones).
+pub struct Arena<T, K = T> {
     items: Vec<T>,
+    marker: PhantomData<fn() -> K>,
 }
 
-impl<T> Default for Arena<T> {
-    fn default() -> Self {
-        Arena { items: Vec::new() }
+impl<T: Clone, K> Clone for Arena<T, K> {
+    fn clone(&self) -> Self {
+        Arena {
+            items: self.items.clone(),
+            marker: PhantomData,
+        }
     }
 }
 
-impl<T: fmt::Debug + Kind> fmt::Debug for Arena<T> {
+impl<T, K> Default for Arena<T, K> {
+    fn default() -> Self {
+        Arena {
+            items: Vec::new(),
+            marker: PhantomData,
+        }
+    }
+}
+
+impl<T: fmt::Debug, K: Kind> fmt::Debug for Arena<T, K> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_map().entries(self.with_handles()).finish()
     }
 }
 
-impl<T> Arena<T> {
-    pub fn append(&mut self, item: T) -> Handle<T> {
+impl<T, K> Arena<T, K> {
+    pub fn append(&mut self, item: T) -> Handle<K> {
         let h = Handle::new(self.items.len());
         self.items.push(item);
         h
@@ -111,20 +125,20 @@ impl<T> Arena<T> {
     }
 
     /// Whether `h` indexes an element of this arena.
-    pub fn contains(&self, h: Handle<T>) -> bool {
+    pub fn contains(&self, h: Handle<K>) -> bool {
         h.index() < self.items.len()
     }
 
-    pub fn get(&self, h: Handle<T>) -> Option<&T> {
+    pub fn get(&self, h: Handle<K>) -> Option<&T> {
         self.items.get(h.index())
     }
 
     /// Elements with their handles, in order.
-    pub fn with_handles(&self) -> impl DoubleEndedIterator<Item = (Handle<T>, &T)> + ExactSizeIterator {
+    pub fn with_handles(&self) -> impl DoubleEndedIterator<Item = (Handle<K>, &T)> + ExactSizeIterator {
         self.items.iter().enumerate().map(|(i, t)| (Handle::new(i), t))
     }
 
-    pub fn with_handles_mut(&mut self) -> impl DoubleEndedIterator<Item = (Handle<T>, &mut T)> + ExactSizeIterator {
+    pub fn with_handles_mut(&mut self) -> impl DoubleEndedIterator<Item = (Handle<K>, &mut T)> + ExactSizeIterator {
         self.items.iter_mut().enumerate().map(|(i, t)| (Handle::new(i), t))
     }
 
@@ -137,25 +151,25 @@ impl<T> Arena<T> {
         self.items.iter_mut()
     }
 
-    pub fn handles(&self) -> impl DoubleEndedIterator<Item = Handle<T>> + ExactSizeIterator + use<T> {
+    pub fn handles(&self) -> impl DoubleEndedIterator<Item = Handle<K>> + ExactSizeIterator + use<T, K> {
         (0..self.items.len()).map(Handle::new)
     }
 }
 
-impl<T> std::ops::Index<Handle<T>> for Arena<T> {
+impl<T, K> std::ops::Index<Handle<K>> for Arena<T, K> {
     type Output = T;
-    fn index(&self, h: Handle<T>) -> &T {
+    fn index(&self, h: Handle<K>) -> &T {
         &self.items[h.index()]
     }
 }
 
-impl<T> std::ops::IndexMut<Handle<T>> for Arena<T> {
-    fn index_mut(&mut self, h: Handle<T>) -> &mut T {
+impl<T, K> std::ops::IndexMut<Handle<K>> for Arena<T, K> {
+    fn index_mut(&mut self, h: Handle<K>) -> &mut T {
         &mut self.items[h.index()]
     }
 }
 
-impl<'a, T> IntoIterator for &'a Arena<T> {
+impl<'a, T, K> IntoIterator for &'a Arena<T, K> {
     type Item = &'a T;
     type IntoIter = std::slice::Iter<'a, T>;
     fn into_iter(self) -> Self::IntoIter {
@@ -163,15 +177,16 @@ impl<'a, T> IntoIterator for &'a Arena<T> {
     }
 }
 
-impl<T> FromIterator<T> for Arena<T> {
+impl<T, K> FromIterator<T> for Arena<T, K> {
     fn from_iter<I: IntoIterator<Item = T>>(iter: I) -> Self {
         Arena {
             items: iter.into_iter().collect(),
+            marker: PhantomData,
         }
     }
 }
 
-impl<T> Extend<T> for Arena<T> {
+impl<T, K> Extend<T> for Arena<T, K> {
     fn extend<I: IntoIterator<Item = T>>(&mut self, iter: I) {
         self.items.extend(iter)
     }

@@ -22,6 +22,10 @@ pub type ChannelId = Handle<IrChannel>;
 pub type ResId = Handle<IrResource>;
 /// Handle of a pass in [`Ir::passes`].
 pub type PassId = Handle<IrPass>;
+/// Handle of a param in [`Ir::params`].
+pub type ParamId = Handle<IrParam>;
+/// Handle of an expansion in [`Ir::expansions`].
+pub type ExpansionId = Handle<IrExpansion>;
 
 impl Kind for Node {
     const KIND: &'static str = "node";
@@ -29,8 +33,14 @@ impl Kind for Node {
 impl Kind for IrChannel {
     const KIND: &'static str = "channel";
 }
-impl Kind for IrResource {
+impl<S> Kind for Resource<S> {
     const KIND: &'static str = "resource";
+}
+impl Kind for IrParam {
+    const KIND: &'static str = "param";
+}
+impl Kind for IrExpansion {
+    const KIND: &'static str = "expansion";
 }
 impl Kind for IrPass {
     const KIND: &'static str = "pass";
@@ -42,8 +52,8 @@ pub enum Node {
     F32(u32),
     I32(i32),
     Bool(bool),
-    /// A runtime uniform parameter (index into [`Ir::params`]).
-    Param(usize),
+    /// A runtime uniform parameter.
+    Param(ParamId),
     Input(Input),
     /// Map side: the value of a channel at the texel being computed.
     Channel(ChannelId),
@@ -287,7 +297,7 @@ impl Arena {
                     let _ = write!(s, "params.{}", ir.params[*p].name);
                 }
                 None => {
-                    let _ = write!(s, "param{p}");
+                    let _ = write!(s, "param{}", p.index());
                 }
             },
             Node::Input(i) => s.push_str(i.name()),
@@ -437,7 +447,7 @@ pub enum Origin {
     /// Declared in `channels` with a value.
     Declared,
     /// Basis term `term` of expansion `expansion` at index `k`.
-    Basis { expansion: usize, term: usize, k: i64 },
+    Basis { expansion: ExpansionId, term: usize, k: i64 },
 }
 
 #[derive(Clone, Debug)]
@@ -529,17 +539,64 @@ impl Analysis {
     }
 }
 
-/// One channel as stored in one resource.
-#[derive(Clone, Debug)]
+/// One channel as stored in one resource, as `lower` knows it.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Slot {
     pub channel: ChannelId,
     pub precision: Precision,
-    /// Value range, from [`Analysis`] (recorded by `pack`, which lays the slot out).
-    pub range: Option<Interval>,
-    /// Storage encoding, from [`Analysis`] (recorded by `pack`).
+}
+
+/// One channel as laid out by `pack`: its range and storage encoding (from the
+/// [`Analysis`]) and its place, component `component` of layer `layer` of texture
+/// `texture` of the resource.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlacedSlot {
+    pub channel: ChannelId,
+    pub precision: Precision,
+    pub range: Interval,
     pub encode: Encode,
-    /// Placement (set by `pack`): texture index in the resource, layer, component.
-    pub place: Option<(usize, u32, u32)>,
+    pub texture: usize,
+    pub layer: u32,
+    pub component: u32,
+}
+
+impl PlacedSlot {
+    /// Texture index, layer and component.
+    pub fn place(&self) -> (usize, u32, u32) {
+        (self.texture, self.layer, self.component)
+    }
+}
+
+/// A slot as lowered or as laid out: what the IR's printer and validator read of both.
+pub trait SlotView {
+    fn channel(&self) -> ChannelId;
+    fn precision(&self) -> Precision;
+    /// The slot as laid out, after `pack`.
+    fn placed(&self) -> Option<&PlacedSlot>;
+}
+
+impl SlotView for Slot {
+    fn channel(&self) -> ChannelId {
+        self.channel
+    }
+    fn precision(&self) -> Precision {
+        self.precision
+    }
+    fn placed(&self) -> Option<&PlacedSlot> {
+        None
+    }
+}
+
+impl SlotView for PlacedSlot {
+    fn channel(&self) -> ChannelId {
+        self.channel
+    }
+    fn precision(&self) -> Precision {
+        self.precision
+    }
+    fn placed(&self) -> Option<&PlacedSlot> {
+        Some(self)
+    }
 }
 
 /// One texture of a packed resource: all its channels of one precision.
@@ -552,10 +609,12 @@ pub struct Texture {
     pub layers: u32,
 }
 
+/// A resource whose slots are `S`: [`IrResource`] as lowered, [`PlacedResource`] as laid
+/// out by `pack`.
 #[derive(Clone, Debug)]
-pub struct IrResource {
+pub struct Resource<S> {
     pub name: String,
-    pub slots: Vec<Slot>,
+    pub slots: Vec<S>,
     pub writer: PassId,
     pub mips: bool,
     pub sat: bool,
@@ -566,9 +625,14 @@ pub struct IrResource {
     pub textures: Vec<Texture>,
 }
 
-impl IrResource {
-    pub fn slot_of(&self, c: ChannelId) -> Option<&Slot> {
-        self.slots.iter().find(|s| s.channel == c)
+/// A resource as `lower` left it.
+pub type IrResource = Resource<Slot>;
+/// A resource as `pack` laid it out (in [`Layout::resources`], indexed by [`ResId`]).
+pub type PlacedResource = Resource<PlacedSlot>;
+
+impl<S: SlotView> Resource<S> {
+    pub fn slot_of(&self, c: ChannelId) -> Option<&S> {
+        self.slots.iter().find(|s| s.channel() == c)
     }
 }
 
@@ -666,9 +730,9 @@ pub struct Ir {
     pub title: Option<String>,
     pub paper: Option<String>,
     pub lights: Vec<LightModel>,
-    pub params: Vec<IrParam>,
+    pub params: Table<IrParam>,
     pub channels: Table<IrChannel>,
-    pub expansions: Vec<IrExpansion>,
+    pub expansions: Table<IrExpansion>,
     pub resources: Table<IrResource>,
     /// In execution order.
     pub passes: Table<IrPass>,
@@ -680,7 +744,8 @@ pub struct Ir {
 /// passes with their live flags, and what elimination removed.
 #[derive(Clone, Debug, Default)]
 pub struct Layout {
-    pub resources: Table<IrResource>,
+    /// One per resource of the IR, indexed by its [`ResId`].
+    pub resources: Table<PlacedResource, IrResource>,
     pub passes: Table<IrPass>,
     /// What optimisation removed, and why (reported by `explain` and the cost report).
     pub removed: Vec<String>,
@@ -688,14 +753,22 @@ pub struct Layout {
 
 /// What codegen, emit and explain read: the IR of `lower` seen through the [`Layout`] of
 /// `pack`. The fields `resources`, `passes` and `removed` are the layout's; everything
-/// else (params, channels, expansions, the arena...) derefs to the IR.
-#[derive(Clone, Copy)]
-pub struct Program<'a> {
+/// else (params, channels, expansions, the arena...) derefs to the IR. `S` is
+/// [`PlacedSlot`] but for the IR as lowered ([`Program::lowered`], slots [`Slot`]).
+pub struct Program<'a, S = PlacedSlot> {
     pub ir: &'a Ir,
-    pub resources: &'a Table<IrResource>,
+    pub resources: &'a Table<Resource<S>, IrResource>,
     pub passes: &'a Table<IrPass>,
     pub removed: &'a [String],
 }
+
+impl<S> Clone for Program<'_, S> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<S> Copy for Program<'_, S> {}
 
 impl<'a> Program<'a> {
     pub fn new(ir: &'a Ir, layout: &'a Layout) -> Program<'a> {
@@ -706,9 +779,11 @@ impl<'a> Program<'a> {
             removed: &layout.removed,
         }
     }
+}
 
+impl<'a> Program<'a, Slot> {
     /// The IR as `lower` left it (nothing laid out yet, nothing removed).
-    pub fn lowered(ir: &'a Ir) -> Program<'a> {
+    pub fn lowered(ir: &'a Ir) -> Program<'a, Slot> {
         Program {
             ir,
             resources: &ir.resources,
@@ -716,20 +791,22 @@ impl<'a> Program<'a> {
             removed: &[],
         }
     }
+}
 
+impl<'a, S> Program<'a, S> {
     pub fn shade_pass(&self) -> Option<&'a IrPass> {
         self.passes.iter().find(|p| matches!(p.kind, IrPassKind::Shade { .. }))
     }
 }
 
-impl std::ops::Deref for Program<'_> {
+impl<S> std::ops::Deref for Program<'_, S> {
     type Target = Ir;
     fn deref(&self) -> &Ir {
         self.ir
     }
 }
 
-impl fmt::Display for Program<'_> {
+impl<S: SlotView> fmt::Display for Program<'_, S> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         self.write_dump(f, None)
     }
@@ -740,8 +817,8 @@ impl Ir {
         self.passes.iter().find(|p| matches!(p.kind, IrPassKind::Shade { .. }))
     }
 
-    pub fn uniform_params(&self) -> impl Iterator<Item = (usize, &IrParam)> {
-        self.params.iter().enumerate().filter(|(_, p)| p.uniform)
+    pub fn uniform_params(&self) -> impl Iterator<Item = (ParamId, &IrParam)> {
+        self.params.with_handles().filter(|(_, p)| p.uniform)
     }
 }
 
@@ -760,9 +837,9 @@ impl fmt::Display for Ir {
     }
 }
 
-impl Program<'_> {
+impl<S: SlotView> Program<'_, S> {
     /// The text form of `--dump-ir-after`: slots show the ranges and encodings of
-    /// `analysis` when given, else those recorded in the IR (after `pack`).
+    /// `analysis` when given, else those of the layout (after `pack`).
     fn write_dump(&self, f: &mut fmt::Formatter<'_>, analysis: Option<&Analysis>) -> fmt::Result {
         writeln!(f, "technique {}", self.technique)?;
         for p in &self.params {
@@ -805,19 +882,29 @@ impl Program<'_> {
             }
             writeln!(f, ")")?;
             for s in &r.slots {
-                write!(f, "      {} : {}", self.channels[s.channel].name, s.precision.name())?;
-                let (range, encode) = match analysis.and_then(|a| a.get(rh, s.channel)) {
-                    Some(info) => (Some(info.range), info.encode),
-                    None => (s.range, s.encode),
+                write!(f, "      {} : {}", self.channels[s.channel()].name, s.precision().name())?;
+                let info = match (analysis.and_then(|a| a.get(rh, s.channel())), s.placed()) {
+                    (Some(info), _) => Some(info),
+                    (None, Some(p)) => Some(SlotInfo {
+                        range: p.range,
+                        encode: p.encode,
+                    }),
+                    (None, None) => None,
                 };
-                if let Some(range) = range {
+                if let Some(SlotInfo { range, encode }) = info {
                     write!(f, " range {range}")?;
+                    if !encode.is_identity() {
+                        write!(f, " stored as (v - ({})) * {}", short(encode.bias), short(encode.scale))?;
+                    }
                 }
-                if !encode.is_identity() {
-                    write!(f, " stored as (v - ({})) * {}", short(encode.bias), short(encode.scale))?;
-                }
-                if let Some((t, layer, comp)) = s.place {
-                    write!(f, " at {}[{layer}].{}", r.textures[t].name, ['r', 'g', 'b', 'a'][comp as usize])?;
+                if let Some(p) = s.placed() {
+                    write!(
+                        f,
+                        " at {}[{}].{}",
+                        r.textures[p.texture].name,
+                        p.layer,
+                        ['r', 'g', 'b', 'a'][p.component as usize]
+                    )?;
                 }
                 writeln!(f)?;
             }

@@ -190,7 +190,7 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         if want(DumpPhase::Lower) {
             dump = Some(ir.to_string());
         }
-        let probe = |param: usize, value: f64, res: ir::ResId, slot: usize| -> Option<ir::Interval> {
+        let probe = |param: ir::ParamId, value: f64, res: ir::ResId, slot: usize| -> Option<ir::Interval> {
             probe_range(&sym, &checked, &ir, param, value, res, slot)
         };
         let (analysis, warnings) = analyse::analyse(&ir, &probe)?;
@@ -235,7 +235,7 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
 }
 
 /// In debug builds (every test), the IR a phase hands on must pass `ir::validate`.
-fn debug_validate(ir: ir::Program, after: &str) {
+fn debug_validate<S: ir::SlotView>(ir: ir::Program<S>, after: &str) {
     if cfg!(debug_assertions)
         && let Err(e) = ir::validate::validate(&ir)
     {
@@ -250,7 +250,7 @@ fn probe_range(
     sym: &resolve::Symbols,
     checked: &check::Checked,
     ir: &ir::Ir,
-    param: usize,
+    param: ir::ParamId,
     value: f64,
     res: ir::ResId,
     slot: usize,
@@ -262,7 +262,8 @@ fn probe_range(
         return analyse::slot_ranges(ir, Some((param, over))).get(res.index())?.get(slot).copied();
     }
     let mut values = sym.values.clone();
-    values[param].value = match p.value {
+    // IR params are the technique's, in order.
+    values[param.index()].value = match p.value {
         front::ast::ConstValue::Int(_) => front::ast::ConstValue::Int(value.floor() as i64),
         front::ast::ConstValue::Float(_) | front::ast::ConstValue::Bool(_) => front::ast::ConstValue::Float(value),
     };

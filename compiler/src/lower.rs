@@ -28,7 +28,7 @@ struct Lowerer<'s, 'a> {
     /// AST channel index -> IR channel id.
     channel_ids: &'s [ChannelId],
     /// IR expansions (by AST expansion index), for `expand`.
-    expansions: &'s [IrExpansion],
+    expansions: &'s Table<IrExpansion>,
     /// For a Shade pass: what its reads carry.
     shade_reads: Option<Vec<(Item, ResId)>>,
 }
@@ -44,7 +44,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         types: &'s Types,
         arena: &'s mut Arena,
         channel_ids: &'s [ChannelId],
-        expansions: &'s [IrExpansion],
+        expansions: &'s Table<IrExpansion>,
         shade_reads: Option<Vec<(Item, ResId)>>,
     ) -> Self {
         Lowerer {
@@ -225,7 +225,8 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                         ConstValue::Bool(b) => self.arena.add(Node::Bool(b), Ty::Bool, span),
                     }
                 } else {
-                    self.arena.add(Node::Param(i), Ty::from_scalar(p.ty.value), span)
+                    // IR params are the technique's, in order.
+                    self.arena.add(Node::Param(ParamId::new(i)), Ty::from_scalar(p.ty.value), span)
                 }
             }
             Resolved::Constant(c) => self.arena.f32(c),
@@ -251,7 +252,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
             if expand {
                 let e = self.sym.expansions[target.as_str()];
                 let res = find(Item::Expansion(e)).ok_or_else(|| internal(args[0].span, "expansion not read by this pass"))?;
-                let exp = self.expansions[e].clone();
+                let exp = self.expansions[ExpansionId::new(e)].clone();
                 let mut acc = exp.constant;
                 for (coeff, ch) in exp.terms {
                     let s = self.arena.add(
@@ -296,7 +297,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
     let t = sym.t;
     let types = &checked.types;
     let mut arena = Arena::default();
-    let params: Vec<IrParam> = t
+    let params: Table<IrParam> = t
         .params
         .iter()
         .enumerate()
@@ -328,18 +329,19 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         .collect();
     let channel_ids: Vec<ChannelId> = channels.handles().collect();
 
+    let no_expansions = Table::default();
     // Channel values (map side).
     for (i, c) in t.channels.iter().enumerate() {
         if let Some(v) = &c.value {
-            let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &[], None);
+            let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &no_expansions, None);
             channels[channel_ids[i]].value = Some(l.expr_coerced(v).map_err(Diagnostics::from)?);
         }
     }
 
     // Expansions: one channel per (term, k).
-    let mut expansions = Vec::new();
+    let mut expansions: Table<IrExpansion> = Table::default();
     for (ei, e) in t.expansions.iter().enumerate() {
-        let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &[], None);
+        let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &no_expansions, None);
         let lo = l.const_int(&e.from).map_err(Diagnostics::from)?;
         let hi = l.const_int(&e.to).map_err(Diagnostics::from)?;
         if hi < lo {
@@ -380,7 +382,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     precision_overridden: sym.expansion_precision[ei] != e.precision.value,
                     value: Some(basis),
                     origin: Origin::Basis {
-                        expansion: ei,
+                        expansion: ExpansionId::new(ei),
                         term: ti,
                         k,
                     },
@@ -391,7 +393,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             l.locals.clear();
         }
         channels.extend(new_channels);
-        expansions.push(IrExpansion {
+        expansions.append(IrExpansion {
             name: e.name.value.clone(),
             constant,
             terms,
@@ -442,34 +444,19 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     let src = &resources[reads[0]];
                     let mips = matches!(p.kind, PassKind::Mipmap { .. });
                     let sat = matches!(p.kind, PassKind::SummedArea { .. });
-                    (
-                        mips,
-                        sat,
-                        src.slots
-                            .iter()
-                            .map(|s| Slot {
-                                range: None,
-                                place: None,
-                                encode: Encode::IDENTITY,
-                                ..s.clone()
-                            })
-                            .collect(),
-                    )
+                    (mips, sat, src.slots.clone())
                 }
                 PassKind::Depth { .. } | PassKind::Map { .. } | PassKind::Geometry { .. } | PassKind::Shade { .. } => {
                     let mut slots = Vec::new();
                     for item in &checked.items[&w.value] {
                         let ids: Vec<ChannelId> = match item {
                             Item::Channel(c) => vec![channel_ids[*c]],
-                            Item::Expansion(e) => expansions[*e].terms.iter().map(|(_, c)| *c).collect(),
+                            Item::Expansion(e) => expansions[ExpansionId::new(*e)].terms.iter().map(|(_, c)| *c).collect(),
                         };
                         for c in ids {
                             slots.push(Slot {
                                 channel: c,
                                 precision: channels[c].precision,
-                                range: None,
-                                encode: Encode::IDENTITY,
-                                place: None,
                             });
                         }
                     }

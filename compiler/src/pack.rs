@@ -5,8 +5,9 @@
 
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::Precision;
+use crate::handle::Arena as Table;
 use crate::ir::*;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 
 /// The device limits a technique is compiled against (default: WebGPU's).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,8 +43,15 @@ pub fn texel_bytes(p: Precision, components: u32) -> u32 {
     p.bytes() * components
 }
 
+/// The resources and passes of the IR while `pack` works on them: slots not laid out yet.
+struct Working {
+    resources: Table<IrResource>,
+    passes: Table<IrPass>,
+    removed: Vec<String>,
+}
+
 /// Remove what the Shade pass cannot reach.
-pub fn eliminate(ir: &Ir, lay: &mut Layout) {
+fn eliminate(ir: &Ir, lay: &mut Working) {
     let Some((shade, _)) = lay.passes.with_handles().find(|(_, p)| matches!(p.kind, IrPassKind::Shade { .. })) else {
         return;
     };
@@ -129,19 +137,14 @@ pub fn eliminate(ir: &Ir, lay: &mut Layout) {
 /// (resources and passes as laid out, with each slot's range and encoding from
 /// `analysis`; what is dead removed, the rest placed).
 pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Diagnostics> {
-    let mut lay = Layout {
+    let mut lay = Working {
         resources: ir.resources.clone(),
         passes: ir.passes.clone(),
         removed: Vec::new(),
     };
-    for (ri, res) in lay.resources.with_handles_mut() {
-        for s in &mut res.slots {
-            if let Some(info) = analysis.get(ri, s.channel) {
-                s.range = Some(info.range);
-                s.encode = info.encode;
-            }
-        }
-    }
+    let mut infos: HashMap<(ResId, ChannelId), SlotInfo> = analysis.slots.clone();
+    // Placement of each slot: texture index in its resource, layer, component.
+    let mut places: HashMap<(ResId, ChannelId), (usize, u32, u32)> = HashMap::new();
     eliminate(ir, &mut lay);
     let mut diags = Diagnostics::default();
     // A Mipmap pass builds the chain in place: its output shares the textures of its input,
@@ -153,18 +156,15 @@ pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Dia
             let out_slots = lay.resources[src].slots.clone();
             let needed_missing = lay.resources[w].slots.iter().any(|s| !keep.contains(&s.channel));
             debug_assert!(!needed_missing, "mip output needs a channel its input lost");
-            let ranges: Vec<_> = out_slots
-                .iter()
-                .map(|s| lay.resources[w].slot_of(s.channel).map(|o| (o.range, o.encode)))
-                .collect();
-            lay.resources[w].slots = out_slots
-                .into_iter()
-                .zip(ranges)
-                .map(|(s, r)| match r {
-                    Some((range, encode)) => Slot { range, encode, ..s },
-                    None => s,
-                })
-                .collect();
+            // A channel the output does not need keeps the range and encoding of the input.
+            for s in &out_slots {
+                if lay.resources[w].slot_of(s.channel).is_none()
+                    && let Some(info) = infos.get(&(src, s.channel)).copied()
+                {
+                    infos.insert((w, s.channel), info);
+                }
+            }
+            lay.resources[w].slots = out_slots;
         }
     }
     for ri in lay.resources.handles() {
@@ -174,7 +174,7 @@ pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Dia
         if let Some(src) = table_source(ir, ri) {
             // A summed-area table sums the unorm codes of its source, texel for texel: same
             // layers and components, its own (u32) storage.
-            let (textures, slots) = (lay.resources[src].textures.clone(), lay.resources[src].slots.clone());
+            let textures = lay.resources[src].textures.clone();
             let res = &mut lay.resources[ri];
             let name = res.name.clone();
             let single = textures.len() == 1;
@@ -189,8 +189,10 @@ pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Dia
                     ..t
                 })
                 .collect();
-            for s in res.slots.iter_mut() {
-                s.place = slots.iter().find(|o| o.channel == s.channel).and_then(|o| o.place);
+            for s in &res.slots {
+                if let Some(p) = places.get(&(src, s.channel)).copied() {
+                    places.insert((ri, s.channel), p);
+                }
                 if !matches!(s.precision, Precision::Unorm8 | Precision::Unorm16) {
                     diags.push(
                         Diagnostic::error(
@@ -211,11 +213,13 @@ pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Dia
         }
         if let Some(src) = mip_source(ir, ri) {
             // packed identically to its source (processed earlier: passes run in order)
-            let (textures, slots) = (lay.resources[src].textures.clone(), lay.resources[src].slots.clone());
+            let textures = lay.resources[src].textures.clone();
             let res = &mut lay.resources[ri];
             res.textures = textures;
-            for s in res.slots.iter_mut() {
-                s.place = slots.iter().find(|o| o.channel == s.channel).and_then(|o| o.place);
+            for s in &res.slots {
+                if let Some(p) = places.get(&(src, s.channel)).copied() {
+                    places.insert((ri, s.channel), p);
+                }
             }
             continue;
         }
@@ -251,7 +255,7 @@ pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Dia
                 );
             }
             for (j, &i) in idx.iter().enumerate() {
-                res.slots[i].place = Some((ti, j as u32 / comps, j as u32 % comps));
+                places.insert((ri, res.slots[i].channel), (ti, j as u32 / comps, j as u32 % comps));
             }
             res.textures.push(Texture {
                 name,
@@ -261,6 +265,54 @@ pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Dia
             });
         }
     }
+    let Working {
+        resources,
+        passes,
+        removed,
+    } = lay;
+    let mut placed: Table<PlacedResource, IrResource> = Table::default();
+    for (ri, res) in resources.with_handles() {
+        let mut slots = Vec::with_capacity(res.slots.len());
+        for s in &res.slots {
+            let (Some(info), Some(&(texture, layer, component))) = (infos.get(&(ri, s.channel)), places.get(&(ri, s.channel))) else {
+                diags.push(
+                    Diagnostic::error(
+                        Phase::Pack,
+                        format!(
+                            "internal compiler error: channel `{}` of `{}` was not laid out",
+                            ir.channels[s.channel].name, res.name
+                        ),
+                    )
+                    .at(res.span, "here"),
+                );
+                continue;
+            };
+            slots.push(PlacedSlot {
+                channel: s.channel,
+                precision: s.precision,
+                range: info.range,
+                encode: info.encode,
+                texture,
+                layer,
+                component,
+            });
+        }
+        placed.append(Resource {
+            name: res.name.clone(),
+            slots,
+            writer: res.writer,
+            mips: res.mips,
+            sat: res.sat,
+            span: res.span,
+            live: res.live,
+            textures: res.textures.clone(),
+        });
+    }
+    let lay = Layout {
+        resources: placed,
+        passes,
+        removed,
+    };
     // Sampled textures per shader stage.
     for pass in lay.passes.iter().filter(|p| p.live) {
         let n: usize = pass.reads.iter().map(|&r| lay.resources[r].textures.len()).sum();

@@ -198,7 +198,7 @@ fn csm_reconstruction(m: i64, n: usize) -> Vec<Vec<f64>> {
     let o = opts(&[("M", m.to_string()), ("alpha", "0.0".into()), ("fix", "0".into())], &[]);
     let c = sshc::compile_str(&source("csm"), &o).unwrap();
     let ir = c.ir;
-    let e = &ir.expansions[0];
+    let e = ir.expansions.iter().next().unwrap();
     let at = |i: usize| i as f64 / n as f64;
     let params = &ir.params;
     let receiver = |d: f64| {

@@ -173,7 +173,7 @@ impl<'a> Emitter<'a> {
         let slot = r
             .slot_of(ch)
             .ok_or_else(|| internal(format!("channel {} missing from `{}`", self.ir.channels[ch].name, r.name)))?;
-        let (t, layer, comp) = slot.place.ok_or_else(|| internal("channel not packed"))?;
+        let (t, layer, comp) = slot.place();
         let name = r.textures[t].name.clone();
         let b = self.binding(&name, view);
         Ok((b, layer, comp, slot.encode))
@@ -295,7 +295,7 @@ impl<'a> Emitter<'a> {
                 let call = match how.desc().wgsl {
                     SampleWgsl::SummedAreaTable => {
                         let r = &self.ir.resources[res];
-                        let t = r.slot_of(ch).and_then(|s| s.place).map(|p| &r.textures[p.0]);
+                        let t = r.slot_of(ch).map(|s| &r.textures[s.texture]);
                         let scale = match t.map(|t| t.precision) {
                             Some(Precision::Unorm8) => 255,
                             Some(Precision::Unorm16) => 65535,
@@ -542,7 +542,7 @@ fn depth(ir: &Program, pass: &IrPass) -> Result<(String, Vec<Step>), Diagnostic>
     let w = pass.writes.ok_or_else(|| internal("depth pass without output"))?;
     let res = &ir.resources[w];
     let slot = res.slots.first().ok_or_else(|| internal("depth resource without channel"))?;
-    let (t, layer, comp) = slot.place.ok_or_else(|| internal("unpacked"))?;
+    let (t, layer, comp) = slot.place();
     let tex = &res.textures[t];
     let mut s = header(ir, pass);
     s.push_str(FRAME_WGSL);
@@ -613,12 +613,8 @@ fn map(ir: &Program, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step
             let mut outs = Vec::new();
             for (oi, &layer) in chunk.iter().enumerate() {
                 let mut comps = vec!["0.0f".to_string(); 4];
-                for slot in res
-                    .slots
-                    .iter()
-                    .filter(|s| matches!(s.place, Some((t, l, _)) if t == ti && l == layer))
-                {
-                    let (_, _, comp) = slot.place.unwrap_or_default();
+                for slot in res.slots.iter().filter(|s| s.texture == ti && s.layer == layer) {
+                    let comp = slot.component;
                     let v = ir.channels[slot.channel]
                         .value
                         .ok_or_else(|| internal("map channel without value"))?;
@@ -757,8 +753,8 @@ fn filter(
                         let mut fix = Vec::new();
                         let mut any = false;
                         for c in 0..4u32 {
-                            let enc_in = src.slots.iter().find(|sl| sl.place == Some((ti, layer, c))).map(|sl| sl.encode);
-                            let enc_out = dst.slots.iter().find(|sl| sl.place == Some((ti, layer, c))).map(|sl| sl.encode);
+                            let enc_in = src.slots.iter().find(|sl| sl.place() == (ti, layer, c)).map(|sl| sl.encode);
+                            let enc_out = dst.slots.iter().find(|sl| sl.place() == (ti, layer, c)).map(|sl| sl.encode);
                             match (enc_in, enc_out) {
                                 (Some(i), Some(o)) if i != o || sum_w != 1.0 => {
                                     any = true;

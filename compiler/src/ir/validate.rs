@@ -33,7 +33,7 @@ pub enum ValidationError {
     },
     BadParam {
         node: H,
-        param: usize,
+        param: ParamId,
     },
     BadChannel {
         at: String,
@@ -49,7 +49,7 @@ pub enum ValidationError {
     },
     BadExpansion {
         at: String,
-        expansion: usize,
+        expansion: ExpansionId,
     },
     /// A root expression (channel value, coefficient, visibility...) that is not an f32.
     RootType {
@@ -98,11 +98,11 @@ impl fmt::Display for ValidationError {
             ValidationError::OperandOrder { node, operand } => write!(f, "{node:?} uses {operand:?}, which does not precede it"),
             ValidationError::BadNode { at, node } => write!(f, "{at}: {node:?} is not in the expression arena"),
             ValidationError::NodeType { node, ty, why } => write!(f, "{node:?} has type {ty}: {why}"),
-            ValidationError::BadParam { node, param } => write!(f, "{node:?} reads param {param}, which does not exist"),
+            ValidationError::BadParam { node, param } => write!(f, "{node:?} reads {param:?}, which does not exist"),
             ValidationError::BadChannel { at, channel } => write!(f, "{at}: {channel:?} does not exist"),
             ValidationError::BadResource { at, resource } => write!(f, "{at}: {resource:?} does not exist"),
             ValidationError::BadPass { at, pass } => write!(f, "{at}: {pass:?} does not exist"),
-            ValidationError::BadExpansion { at, expansion } => write!(f, "{at}: expansion {expansion} does not exist"),
+            ValidationError::BadExpansion { at, expansion } => write!(f, "{at}: {expansion:?} does not exist"),
             ValidationError::RootType { at, ty } => write!(f, "{at} has type {ty}, not f32"),
             ValidationError::WrongSide { at, node } => write!(f, "{at} reaches {node:?}, which belongs to the other side"),
             ValidationError::BadLookup { node, why } => write!(f, "lookup {node:?}: {why}"),
@@ -126,13 +126,13 @@ pub fn validate_ir(ir: &Ir) -> Result<(), ValidationError> {
 
 /// Check the invariants of an IR seen through its layout (after `pack`), or as lowered
 /// ([`Program::lowered`]).
-pub fn validate(ir: &Program) -> Result<(), ValidationError> {
+pub fn validate<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
     nodes(ir)?;
     channels(ir)?;
     resources_and_passes(ir)
 }
 
-fn nodes(ir: &Program) -> Result<(), ValidationError> {
+fn nodes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
     let a = &ir.arena;
     for i in 0..a.len() {
         let h = H::new(i);
@@ -247,7 +247,7 @@ fn nodes(ir: &Program) -> Result<(), ValidationError> {
 
 /// A root expression: in the arena, an f32, and only of its side (`map`: channels, no
 /// lookups; receiver: lookups, no channels).
-fn root(ir: &Program, h: H, at: &str, map: bool) -> Result<(), ValidationError> {
+fn root<S: SlotView>(ir: &Program<S>, h: H, at: &str, map: bool) -> Result<(), ValidationError> {
     if h.index() >= ir.arena.len() {
         return Err(ValidationError::BadNode {
             at: at.to_string(),
@@ -282,13 +282,13 @@ fn root(ir: &Program, h: H, at: &str, map: bool) -> Result<(), ValidationError> 
     Ok(())
 }
 
-fn channels(ir: &Program) -> Result<(), ValidationError> {
+fn channels<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
     for (c, ch) in ir.channels.with_handles() {
         if let Some(v) = ch.value {
             root(ir, v, &format!("the value of {c:?} `{}`", ch.name), true)?;
         }
         if let Origin::Basis { expansion, .. } = ch.origin
-            && expansion >= ir.expansions.len()
+            && !ir.expansions.contains(expansion)
         {
             return Err(ValidationError::BadExpansion {
                 at: format!("the origin of {c:?}"),
@@ -311,7 +311,7 @@ fn channels(ir: &Program) -> Result<(), ValidationError> {
     Ok(())
 }
 
-fn resources_and_passes(ir: &Program) -> Result<(), ValidationError> {
+fn resources_and_passes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
     for (r, res) in ir.resources.with_handles() {
         let Some(w) = ir.passes.get(res.writer) else {
             return Err(ValidationError::BadPass {
@@ -327,25 +327,29 @@ fn resources_and_passes(ir: &Program) -> Result<(), ValidationError> {
         }
         let mut seen = HashSet::new();
         for s in &res.slots {
-            if !ir.channels.contains(s.channel) {
+            let channel = s.channel();
+            if !ir.channels.contains(channel) {
                 return Err(ValidationError::BadChannel {
                     at: format!("a slot of {r:?}"),
-                    channel: s.channel,
+                    channel,
                 });
             }
-            let slot_err = |why: String| ValidationError::Slot {
-                resource: r,
-                channel: s.channel,
-                why,
-            };
-            if !seen.insert(s.channel) {
+            let slot_err = |why: String| ValidationError::Slot { resource: r, channel, why };
+            if !seen.insert(channel) {
                 return Err(slot_err("the channel is stored twice".into()));
             }
-            if let Some((t, layer, comp)) = s.place {
+            if let Some(&PlacedSlot {
+                texture: t,
+                layer,
+                component: comp,
+                precision,
+                ..
+            }) = s.placed()
+            {
                 let Some(tex) = res.textures.get(t) else {
                     return Err(slot_err(format!("placed in texture {t} of {}", res.textures.len())));
                 };
-                if layer >= tex.layers || comp >= tex.components || tex.precision != s.precision {
+                if layer >= tex.layers || comp >= tex.components || tex.precision != precision {
                     return Err(slot_err(format!(
                         "placed at layer {layer}, component {comp} of `{}` ({} layers of {} components at {})",
                         tex.name,
@@ -419,10 +423,33 @@ mod tests {
     use super::*;
     use crate::CompileOptions;
 
-    fn compiled(name: &str) -> Ir {
+    fn compiled_with_layout(name: &str) -> crate::Compiled {
         let path = format!("{}/../techniques/{name}.ron", env!("CARGO_MANIFEST_DIR"));
         let src = std::fs::read_to_string(path).unwrap();
-        crate::compile_str(&src, &CompileOptions::default()).unwrap().ir
+        crate::compile_str(&src, &CompileOptions::default()).unwrap()
+    }
+
+    fn compiled(name: &str) -> Ir {
+        compiled_with_layout(name).ir
+    }
+
+    #[test]
+    fn a_dangling_param_and_a_slot_outside_its_texture_are_refused() {
+        let mut ir = compiled("pcf");
+        let ghost = ParamId::new(99);
+        ir.arena.nodes.push((Node::Param(ghost), Ty::F32, Span::UNDEFINED));
+        assert!(matches!(validate_ir(&ir), Err(ValidationError::BadParam { param, .. }) if param == ghost));
+        assert!(validate_ir(&ir).unwrap_err().to_string().contains("param#99"));
+
+        let c = compiled_with_layout("vsm");
+        assert_eq!(validate(&Program::new(&c.ir, &c.layout)), Ok(()));
+        let mut layout = c.layout.clone();
+        let r = layout.resources.handles().find(|&r| !layout.resources[r].slots.is_empty()).unwrap();
+        layout.resources[r].slots[0].layer = 99;
+        assert!(matches!(
+            validate(&Program::new(&c.ir, &layout)),
+            Err(ValidationError::Slot { resource, .. }) if resource == r
+        ));
     }
 
     #[test]
