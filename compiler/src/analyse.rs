@@ -17,49 +17,6 @@ pub const F32_MAX: f64 = f32::MAX as f64;
 /// The smallest positive normal f16.
 pub const F16_MIN_NORMAL: f64 = 6.103515625e-5;
 
-impl Interval {
-    pub fn point(v: f64) -> Interval {
-        Interval { lo: v, hi: v }
-    }
-
-    pub const UNBOUNDED: Interval = Interval {
-        lo: f64::NEG_INFINITY,
-        hi: f64::INFINITY,
-    };
-    pub const UNIT: Interval = Interval { lo: 0.0, hi: 1.0 };
-
-    pub(crate) fn hull(a: Interval, b: Interval) -> Interval {
-        Interval {
-            lo: a.lo.min(b.lo),
-            hi: a.hi.max(b.hi),
-        }
-    }
-
-    pub(crate) fn of(vals: &[f64]) -> Interval {
-        let lo = vals
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, |a, b| if b.is_nan() { f64::NEG_INFINITY } else { a.min(b) });
-        let hi = vals
-            .iter()
-            .copied()
-            .fold(f64::NEG_INFINITY, |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
-        Interval { lo, hi }
-    }
-
-    pub fn is_finite(&self) -> bool {
-        self.lo.is_finite() && self.hi.is_finite()
-    }
-
-    pub fn magnitude(&self) -> f64 {
-        self.lo.abs().max(self.hi.abs())
-    }
-
-    pub(crate) fn monotone(self, f: impl Fn(f64) -> f64) -> Interval {
-        Interval::of(&[f(self.lo), f(self.hi)])
-    }
-}
-
 /// Range of every expression node under given channel ranges.
 pub struct RangeEval<'a> {
     ir: &'a Ir,

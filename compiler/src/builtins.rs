@@ -6,7 +6,7 @@
 //! match on the function themselves.
 
 use crate::front::ast::{ConstValue, ScalarTy};
-use crate::ir::Interval;
+use crate::interval::Interval;
 use std::f64::consts::PI;
 use std::fmt;
 
@@ -376,7 +376,7 @@ pub enum Func {
 
 /// Everything the compiler knows about one built-in function. check types a call with
 /// [`Builtin::sig`], lower coerces its arguments with it, the arena folds it with
-/// [`Builtin::fold`] (`ir::eval_call`), analyse bounds it with [`Builtin::range`], codegen
+/// [`Builtin::fold`] (through [`fold_call`]), analyse bounds it with [`Builtin::range`], codegen
 /// writes it with [`Builtin::wgsl`].
 pub struct Builtin {
     pub name: &'static str,

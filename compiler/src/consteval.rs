@@ -137,7 +137,7 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Vec<(String, ConstValue)>) -> Res
                     _ => Err(NotConst::NoValue),
                 };
             }
-            crate::ir::eval_call(f, &vals).ok_or(NotConst::NoValue)?
+            crate::builtins::fold_call(f, &vals).ok_or(NotConst::NoValue)?
         }
         ExprKind::Member(..) => return Err(NotConst::NoValue),
         ExprKind::Let { name, value, body, .. } => {

@@ -8,6 +8,7 @@ use crate::consteval;
 use crate::front::ast::{ConstValue, LightModel, LightView, Precision, Primitive, Reduce, Resolve, ScalarTy};
 use crate::front::expr::{BinOp, UnOp, fmt_float};
 use crate::handle::{Arena as Table, Handle, Kind};
+pub use crate::interval::{Interval, short};
 use crate::span::Span;
 use std::collections::HashMap;
 use std::fmt::{self, Write as _};
@@ -470,37 +471,6 @@ pub struct IrExpansion {
     /// Unrolled terms: receiver-side coefficient and the basis channel it multiplies.
     pub terms: Vec<(H, ChannelId)>,
     pub span: Span,
-}
-
-/// A closed interval of real values; infinite ends mean unbounded.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Interval {
-    pub lo: f64,
-    pub hi: f64,
-}
-
-impl fmt::Display for Interval {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "[{}, {}]", short(self.lo), short(self.hi))
-    }
-}
-
-/// A number in at most 4 significant digits.
-pub fn short(v: f64) -> String {
-    if v.is_infinite() {
-        return if v > 0.0 { "inf".into() } else { "-inf".into() };
-    }
-    if v == 0.0 {
-        return "0".into();
-    }
-    let a = v.abs();
-    if (1e-3..1e5).contains(&a) {
-        let s = format!("{v:.4}");
-        let s = s.trim_end_matches('0').trim_end_matches('.');
-        s.to_string()
-    } else {
-        format!("{v:.3e}")
-    }
 }
 
 /// How a channel value is stored: `stored = (value - bias) * scale`, decoded as `stored / scale + bias`.
