@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs what sshc needs beyond Rust when it is missing: the Vulkan loader and Mesa's
 # lavapipe CPU driver (a Vulkan adapter for machines without a GPU), and with `--test`
-# also the validators the tests use (spirv-tools, naga-cli). As root it installs them;
+# also the validators the tests use (spirv-tools). As root it installs them;
 # otherwise it names the command to run and fails.
 # Usage: scripts/setup.sh [--test]
 set -euo pipefail
@@ -21,10 +21,6 @@ if [ ${#missing[@]} -gt 0 ]; then
         echo "install them with: sudo apt-get install -y ${missing[*]}"
         exit 1
     fi
-fi
-if [ "${1:-}" = "--test" ] && ! command -v naga >/dev/null 2>&1; then
-    echo "installing the naga command-line validator (naga-cli 30.0.1)"
-    cargo install naga-cli --version 30.0.1 --locked --quiet
 fi
 # lavapipe: two rendering threads (the machines have two cores); no display server needed.
 export LP_NUM_THREADS=${LP_NUM_THREADS:-2}

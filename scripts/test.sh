@@ -8,7 +8,7 @@ phase() { printf '\n== %s (at %ss)\n' "$1" "$(( $(date +%s) - start ))"; }
 
 phase "set-up"
 source scripts/setup.sh --test
-echo "naga: $(naga --version 2>&1 | head -1); spirv-val: $(spirv-val --version 2>&1 | head -1)"
+echo "spirv-val: $(spirv-val --version 2>&1 | head -1)"
 
 phase "format"
 cargo fmt --all -- --check
