@@ -162,7 +162,26 @@ pub fn compile_file(path: &Path, opts: &CompileOptions) -> Result<Compiled, Stri
     compile_str(&source, opts).map_err(|d| d.render(&path.display().to_string(), &source))
 }
 
+/// Stack of the thread the phases run on. Resolve, check and lower recurse over expression
+/// trees, which the parser bounds to `front::expr::MAX_TREE_DEPTH` levels; an unoptimised
+/// build takes about 13 KB of stack per level, more than a test thread's 2 MB holds at 256
+/// levels, so the phases get a stack of their own with a wide margin.
+const PHASE_STACK: usize = 64 << 20;
+
 fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
+    std::thread::scope(|s| {
+        match std::thread::Builder::new()
+            .name("sshc-compile".into())
+            .stack_size(PHASE_STACK)
+            .spawn_scoped(s, || run_phases(source, opts, until))
+        {
+            Ok(h) => h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)),
+            Err(_) => run_phases(source, opts, until),
+        }
+    })
+}
+
+fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
     let mut dump = None;
     let want = |p: DumpPhase| opts.dump_after == Some(p);
     let result = (|| {

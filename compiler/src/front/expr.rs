@@ -12,6 +12,12 @@ use logos::Logos;
 use std::fmt;
 
 const MAX_DEPTH: usize = 64;
+/// The deepest expression tree accepted, counting every operator of a chain such as
+/// `a + b + c` as one level (the tree as built, left-associative): later phases recurse over
+/// the tree, so this bounds their stack.
+pub const MAX_TREE_DEPTH: u32 = 256;
+/// The most nodes one expression string may have.
+pub const MAX_NODES: u32 = 65_536;
 
 #[derive(Logos, Clone, Copy, Debug, PartialEq)]
 #[logos(skip r"[ \t\r\n\f]+")]
@@ -168,15 +174,52 @@ pub enum ExprKind {
     },
 }
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, PartialEq)]
 pub struct Expr {
     pub kind: ExprKind,
     pub span: Span,
+    /// Height of the tree below and including this node (a leaf is 1).
+    height: u32,
+    /// Number of nodes of the tree below and including this node.
+    nodes: u32,
 }
 
 impl Expr {
     pub fn new(kind: ExprKind, span: Span) -> Expr {
-        Expr { kind, span }
+        let (mut h, mut n) = (0u32, 0u32);
+        let mut add = |e: &Expr| {
+            h = h.max(e.height);
+            n = n.saturating_add(e.nodes);
+        };
+        match &kind {
+            ExprKind::Lit(_) | ExprKind::Name(_) => {}
+            ExprKind::Unary(_, a) | ExprKind::Member(a, _) => add(a),
+            ExprKind::Binary(_, a, b) => {
+                add(a);
+                add(b);
+            }
+            ExprKind::Call { args, .. } => args.iter().for_each(&mut add),
+            ExprKind::Let { value, body, .. } => {
+                add(value);
+                add(body);
+            }
+            ExprKind::Sum { from, to, body, .. } => {
+                add(from);
+                add(to);
+                add(body);
+            }
+        }
+        Expr {
+            kind,
+            span,
+            height: h.saturating_add(1),
+            nodes: n.saturating_add(1),
+        }
+    }
+
+    /// Height of the expression tree (a leaf is 1), chains included.
+    pub fn height(&self) -> u32 {
+        self.height
     }
 
     /// Visit this expression and all sub-expressions, parents first.
@@ -204,9 +247,15 @@ impl Expr {
 
     /// Number of nodes, used to bound unrolled series.
     pub fn size(&self) -> usize {
-        let mut n = 0;
-        self.walk(&mut |_| n += 1);
-        n
+        self.nodes as usize
+    }
+}
+
+/// The debug form (used by `--dump-ir-after parse`) prints the expression as source text
+/// with its span: the derived, indented form costs time in the product of size and depth.
+impl fmt::Debug for Expr {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Expr(`{self}` @ {:?})", self.span)
     }
 }
 
@@ -297,6 +346,28 @@ pub fn parse(lit: &StrLit) -> Result<Expr, Diagnostic> {
 }
 
 impl Parser<'_> {
+    /// Build a node, refusing a tree deeper than [`MAX_TREE_DEPTH`] or larger than
+    /// [`MAX_NODES`] as soon as it is built, so that no later phase recurses deeper.
+    fn node(&self, kind: ExprKind, span: Span) -> Result<Expr, Diagnostic> {
+        let e = Expr::new(kind, span);
+        if e.height > MAX_TREE_DEPTH {
+            return Err(Diagnostic::error(
+                Phase::Syntax,
+                format!("expression is deeper than {MAX_TREE_DEPTH} levels (each operator of a chain such as `a + b + c` is a level)"),
+            )
+            .at(span, "too deep")
+            .help("split it with `let` bindings, or write a long series as `sum(k in a..=b, e)`"));
+        }
+        if e.nodes > MAX_NODES {
+            return Err(
+                Diagnostic::error(Phase::Syntax, format!("expression has more than {MAX_NODES} terms and operators"))
+                    .at(span, "too large")
+                    .help("split it into parameters or passes"),
+            );
+        }
+        Ok(e)
+    }
+
     fn map(&self, s: Span) -> Span {
         self.lit.map_span(s)
     }
@@ -361,7 +432,7 @@ impl Parser<'_> {
             self.expect(Tok::Semi, "`;` after a `let` binding")?;
             let body = self.block()?;
             let span = self.map(let_span).join(body.span);
-            Ok(Expr::new(
+            self.node(
                 ExprKind::Let {
                     name,
                     name_span: self.map(name_span),
@@ -369,7 +440,7 @@ impl Parser<'_> {
                     body: Box::new(body),
                 },
                 span,
-            ))
+            )
         } else {
             self.expr(0)
         };
@@ -426,7 +497,7 @@ impl Parser<'_> {
                     .help("combine them with `&&`"));
             }
             let span = lhs.span.join(rhs.span);
-            lhs = Expr::new(ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span);
+            lhs = self.node(ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span)?;
         }
         self.depth -= 1;
         Ok(lhs)
@@ -440,7 +511,7 @@ impl Parser<'_> {
                 let op = if t == Tok::Minus { UnOp::Neg } else { UnOp::Not };
                 let a = self.unary()?;
                 let span = self.map(span).join(a.span);
-                Ok(Expr::new(ExprKind::Unary(op, Box::new(a)), span))
+                self.node(ExprKind::Unary(op, Box::new(a)), span)
             }
             _ => self.postfix(),
         };
@@ -454,7 +525,7 @@ impl Parser<'_> {
             self.bump();
             let s = self.expect(Tok::Ident, "a component name such as `x` after `.`")?;
             let span = e.span.join(self.map(s));
-            e = Expr::new(ExprKind::Member(Box::new(e), self.text[s.range()].to_string()), span);
+            e = self.node(ExprKind::Member(Box::new(e), self.text[s.range()].to_string()), span)?;
         }
         Ok(e)
     }
@@ -468,14 +539,14 @@ impl Parser<'_> {
         let fspan = self.map(span);
         match tok {
             Tok::Int => match text.parse::<i64>() {
-                Ok(v) if v <= i32::MAX as i64 + 1 => Ok(Expr::new(ExprKind::Lit(Literal::Int(v)), fspan)),
+                Ok(v) if v <= i32::MAX as i64 + 1 => self.node(ExprKind::Lit(Literal::Int(v)), fspan),
                 _ => Err(Diagnostic::error(Phase::Syntax, format!("integer literal `{text}` does not fit in i32")).at(fspan, "too large")),
             },
             Tok::Float => match text.parse::<f64>() {
-                Ok(v) if v.is_finite() && v.abs() <= f32::MAX as f64 => Ok(Expr::new(ExprKind::Lit(Literal::Float(v)), fspan)),
+                Ok(v) if v.is_finite() && v.abs() <= f32::MAX as f64 => self.node(ExprKind::Lit(Literal::Float(v)), fspan),
                 _ => Err(Diagnostic::error(Phase::Syntax, format!("float literal `{text}` does not fit in f32")).at(fspan, "too large")),
             },
-            Tok::Ident if text == "true" || text == "false" => Ok(Expr::new(ExprKind::Lit(Literal::Bool(text == "true")), fspan)),
+            Tok::Ident if text == "true" || text == "false" => self.node(ExprKind::Lit(Literal::Bool(text == "true")), fspan),
             Tok::Ident if text == "let" => Err(Diagnostic::error(
                 Phase::Syntax,
                 "`let` is only allowed at the start of an expression or inside parentheses",
@@ -500,16 +571,16 @@ impl Parser<'_> {
                         }
                     };
                     let span = fspan.join(self.map(end));
-                    Ok(Expr::new(
+                    self.node(
                         ExprKind::Call {
                             name: text.to_string(),
                             name_span: fspan,
                             args,
                         },
                         span,
-                    ))
+                    )
                 } else {
-                    Ok(Expr::new(ExprKind::Name(text.to_string()), fspan))
+                    self.node(ExprKind::Name(text.to_string()), fspan)
                 }
             }
             Tok::LParen => {
@@ -559,7 +630,7 @@ impl Parser<'_> {
         self.expect(Tok::Comma, "`,` before the series term")?;
         let body = self.block()?;
         let end = self.expect(Tok::RParen, "`)`")?;
-        Ok(Expr::new(
+        self.node(
             ExprKind::Sum {
                 var,
                 var_span: self.map(var_span),
@@ -568,7 +639,7 @@ impl Parser<'_> {
                 body: Box::new(body),
             },
             start.join(self.map(end)),
-        ))
+        )
     }
 }
 
