@@ -159,3 +159,21 @@ fn dump_after_parse_is_linear_in_a_chain() {
     assert!(dump.len() < 64 * src.len(), "dump of {} bytes", dump.len());
     assert!(took < Duration::from_secs(1), "took {took:?}");
 }
+
+#[test]
+fn too_many_passes_are_refused_at_compile_time() {
+    // 2,100 passes compiled and then failed at render ("4204 is too many queries for a
+    // single QuerySet"); at most 256 passes are accepted.
+    let mut passes = vec![r#"        Depth(name: "depth", writes: "shadow", channel: "z"),"#.to_string()];
+    for i in 0..2_100 {
+        passes.push(format!(
+            r#"        Filter(name: "f{i}", reads: "shadow", writes: "s{i}", kernel: Box(size: 3)),"#
+        ));
+    }
+    passes.push(r#"        Shade(name: "shade", reads: ["shadow"], visibility: "1.0"),"#.to_string());
+    let src = format!(
+        "Technique(\n    name: \"many\",\n    channels: {{ \"z\": Channel(precision: F32) }},\n    passes: [\n{}\n    ],\n)\n",
+        passes.join("\n")
+    );
+    refused(&src, "technique has 2102 passes: at most 256", "t.ron:261:", Duration::from_secs(2));
+}

@@ -13,6 +13,10 @@ use crate::front::expr::{self, Expr, ExprKind, Literal};
 use crate::front::ron::{self, Field, Node, Value};
 use crate::span::{Span, Spanned};
 
+/// The most passes a technique may have: each pass takes two timestamp queries of one
+/// query set at render time (wgpu allows 4,096 queries in a set), with a wide margin.
+pub const MAX_PASSES: usize = 256;
+
 /// Read a technique from RON text.
 pub fn parse(source: &str) -> Result<Technique, Diagnostic> {
     let root = ron::parse(source)?;
@@ -297,6 +301,14 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
     };
     let passes_node = f.req("passes")?;
     let passes = match &passes_node.value {
+        Value::List(items) if items.len() > MAX_PASSES => {
+            return Err(err(
+                items[MAX_PASSES].span,
+                format!("technique has {} passes: at most {MAX_PASSES}", items.len()),
+                "one pass too many",
+            )
+            .help("each pass takes two GPU timestamp queries and a dispatch or draw; merge passes"));
+        }
         Value::List(items) => items.iter().map(pass).collect::<Result<_, _>>()?,
         _ => {
             return Err(err(
