@@ -719,6 +719,9 @@ impl<'s, 'a> Typer<'s, 'a> {
                     self.settle(a, to)?;
                     self.settle(b, to)?;
                 }
+                if matches!(op, BinOp::Div | BinOp::Rem) && matches!(t, Ty::I32 | Ty::AbstractInt) {
+                    self.integer_division(*op, a, b, e.span)?;
+                }
                 if op.is_comparison() {
                     if matches!(t, Ty::Vec(_)) {
                         return Err(mismatch());
@@ -829,6 +832,30 @@ impl<'s, 'a> Typer<'s, 'a> {
                 }
                 Ok(t)
             }
+        }
+    }
+
+    /// An integer `/` or `%` whose divisor is a constant 0, or that divides the constant
+    /// -2147483648 by -1, has no i32 value: WGSL refuses it, so it is refused here, in the
+    /// technique file, not as an internal error in the generated shader.
+    fn integer_division(&self, op: BinOp, a: &Expr, b: &Expr, span: Span) -> Result<(), Diagnostic> {
+        let mut env = Vec::new();
+        match consteval::eval(self.sym, b, &mut env) {
+            Ok(ConstValue::Int(0)) => Err(Self::err(
+                b.span,
+                format!("integer {} by zero", if op == BinOp::Div { "division" } else { "remainder" }),
+                "this divisor is 0",
+            )
+            .also(span, "in this integer operation")
+            .help("an integer division by zero has no value; for a float, write the operands as floats (`7.0 / 0.0`)")),
+            Ok(ConstValue::Int(-1)) if matches!(consteval::eval(self.sym, a, &mut env), Ok(ConstValue::Int(v)) if v == i32::MIN as i64) => {
+                Err(Self::err(
+                    span,
+                    format!("integer overflow: -2147483648 {} -1 does not fit in i32", op.symbol()),
+                    "overflows i32",
+                ))
+            }
+            _ => Ok(()),
         }
     }
 

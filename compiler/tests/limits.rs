@@ -177,3 +177,35 @@ fn too_many_passes_are_refused_at_compile_time() {
     );
     refused(&src, "technique has 2102 passes: at most 256", "t.ron:261:", Duration::from_secs(2));
 }
+
+#[test]
+fn constant_integer_division_by_zero_or_overflow_is_refused_in_the_technique() {
+    // These gave an internal error located in the generated WGSL (`wgsl:79:14`).
+    let bound = Duration::from_secs(2);
+    refused(&technique("f32(7 / 0)"), "integer division by zero", "t.ron:6:", bound);
+    refused(&technique("f32(7 % 0)"), "integer remainder by zero", "t.ron:6:", bound);
+    refused(
+        &technique("f32(i32(d * 4.0) / (2 - 2))"),
+        "integer division by zero",
+        "t.ron:6:",
+        bound,
+    );
+    refused(
+        &technique("f32((-2147483647 - 1) / -1)"),
+        "integer overflow: -2147483648 / -1 does not fit in i32",
+        "t.ron:6:",
+        bound,
+    );
+    // Divisions with a value compile.
+    let opts = sshc::CompileOptions::default();
+    for vis in [
+        "f32(7 / 2) * 0.25",
+        "f32(i32(d * 4.0) % 3) * 0.5",
+        "f32((-2147483647 - 1) / 2) * 0.0",
+    ] {
+        let src = technique(&format!("clamp({vis}, 0.0, 1.0)"));
+        if let Err(e) = sshc::compile_str(&src, &opts) {
+            panic!("{vis}: {}", e.render("t.ron", &src));
+        }
+    }
+}
