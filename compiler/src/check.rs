@@ -597,6 +597,8 @@ struct Typer<'s, 'a> {
     /// For a Shade pass: channels and expansions its reads carry, and the resource of each.
     /// What a Shade pass's reads carry: (item, resource, whether a summed-area table).
     available: Option<Vec<(Item, String, bool)>>,
+    /// Product of the term counts of the enclosing series (1 outside any).
+    unroll: i64,
 }
 
 impl<'s, 'a> Typer<'s, 'a> {
@@ -609,6 +611,7 @@ impl<'s, 'a> Typer<'s, 'a> {
             locals: vec![],
             uses: vec![],
             available: None,
+            unroll: 1,
         }
     }
 
@@ -804,16 +807,31 @@ impl<'s, 'a> Typer<'s, 'a> {
                 self.mode = mode;
                 // Bounds that do not depend on an enclosing series are known now.
                 let mut env = Vec::new();
+                let mut terms = 1;
                 if let (Ok(ConstValue::Int(lo)), Ok(ConstValue::Int(hi))) =
                     (consteval::eval(self.sym, from, &mut env), consteval::eval(self.sym, to, &mut env))
-                    && hi - lo + 1 > MAX_SERIES
                 {
+                    if hi - lo + 1 > MAX_SERIES {
+                        return Err(Self::err(
+                            e.span,
+                            format!("series of {} terms: at most {MAX_SERIES} unroll", hi - lo + 1),
+                            "too long",
+                        ));
+                    }
+                    terms = (hi - lo + 1).max(1);
+                }
+                // Nested series unroll the product of their term counts.
+                let outer = self.unroll;
+                let total = outer.saturating_mul(terms);
+                if total > MAX_SERIES {
                     return Err(Self::err(
                         e.span,
-                        format!("series of {} terms: at most {MAX_SERIES} unroll", hi - lo + 1),
-                        "too long",
-                    ));
+                        format!("nested series unroll {total} terms: at most {MAX_SERIES} in all"),
+                        format!("{terms} terms, inside series of {outer} terms in all"),
+                    )
+                    .help("the terms of nested series multiply; lower the bounds"));
                 }
+                self.unroll = total;
                 self.locals.push(Local {
                     name: var.clone(),
                     ty: Ty::I32,
@@ -821,6 +839,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                     konst: true,
                 });
                 let r = self.infer(body);
+                self.unroll = outer;
                 self.locals.pop();
                 let t = r?;
                 if !t.is_numeric() {

@@ -209,3 +209,26 @@ fn constant_integer_division_by_zero_or_overflow_is_refused_in_the_technique() {
         }
     }
 }
+
+#[test]
+fn nested_series_are_limited_in_their_product() {
+    // Three nested series of 4,096 terms each (each within the limit) hung: 6.9e10 terms.
+    let vis = "clamp(sum(i in 0..=4095, sum(j in 0..=4095, sum(k in 0..=4095, d * 0.0))), 0.0, 1.0)";
+    refused(
+        &technique(vis),
+        "nested series unroll 16777216 terms: at most 4096 in all",
+        "t.ron:6:",
+        Duration::from_secs(2),
+    );
+    refused(
+        &technique("clamp(sum(i in 0..=64, sum(j in 0..=63, d * 0.0)), 0.0, 1.0)"),
+        "nested series unroll 4160 terms",
+        "t.ron:6:",
+        Duration::from_secs(2),
+    );
+    // 64 x 64 = 4,096 compiles.
+    let src = technique("clamp(sum(i in 0..=63, sum(j in 0..=63, d * 0.0)), 0.0, 1.0)");
+    if let Err(e) = sshc::compile_str(&src, &sshc::CompileOptions::default()) {
+        panic!("{}", e.render("t.ron", &src));
+    }
+}
