@@ -175,6 +175,7 @@ pub const COMPUTE_WORKGROUP: u32 = 64;
 pub const FRAME_SIZE: u32 = frame_size();
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PassGraph {
     pub version: u32,
     pub technique: String,
@@ -305,6 +306,7 @@ pub enum ParamType {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ParamDecl {
     pub name: String,
     pub ty: ParamType,
@@ -376,6 +378,7 @@ pub enum Extent {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct TextureDecl {
     pub name: String,
     pub format: Format,
@@ -390,6 +393,7 @@ pub struct TextureDecl {
 
 /// Where a channel lives in a texture and how to decode it: `value = stored / scale + bias`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ChannelDecl {
     pub name: String,
     pub layer: u32,
@@ -412,6 +416,7 @@ pub enum PassKind {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PassDecl {
     pub name: String,
     pub kind: PassKind,
@@ -459,6 +464,7 @@ pub enum View {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Binding {
     pub binding: u32,
     pub texture: String,
@@ -466,6 +472,7 @@ pub struct Binding {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Target {
     pub texture: String,
     pub layer: u32,
@@ -473,12 +480,14 @@ pub struct Target {
 
 /// Operation counts of one invocation of an entry point, counted on the naga IR.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct OpCount {
     pub fetches: u32,
     pub ops: u32,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Step {
     pub vertex: Option<String>,
     pub fragment: Option<String>,
@@ -497,10 +506,51 @@ pub struct Step {
 /// Why a graph was refused.
 #[derive(Clone, Debug, PartialEq)]
 pub enum GraphError {
-    Syntax { message: String, line: usize, column: usize },
-    Version { found: u32, expected: u32 },
-    Path { pass: String, path: String },
-    Reference { pass: String, name: String },
+    Syntax {
+        message: String,
+        line: usize,
+        column: usize,
+    },
+    Version {
+        found: u32,
+        expected: u32,
+    },
+    Path {
+        pass: String,
+        path: String,
+    },
+    Reference {
+        pass: String,
+        name: String,
+    },
+    /// A param whose value or range is not finite, or whose value lies outside its range.
+    Param {
+        param: String,
+        message: String,
+    },
+    /// Two textures, passes or params of the same name.
+    Duplicate {
+        what: &'static str,
+        name: String,
+    },
+    /// A pass reads a texture that no earlier step writes.
+    Unwritten {
+        pass: String,
+        texture: String,
+    },
+    /// A pass writes a layer the texture does not have.
+    Layer {
+        pass: String,
+        texture: String,
+        layer: u32,
+        layers: u32,
+    },
+    /// A texture field with a value no texture can have.
+    Texture {
+        texture: String,
+        field: &'static str,
+        message: String,
+    },
 }
 
 impl fmt::Display for GraphError {
@@ -516,6 +566,21 @@ impl fmt::Display for GraphError {
                 "pass `{pass}` names shader `{path}`, which is not a plain file name inside the graph's folder"
             ),
             GraphError::Reference { pass, name } => write!(f, "pass `{pass}` refers to texture `{name}`, which the graph does not declare"),
+            GraphError::Param { param, message } => write!(f, "param `{param}`: {message}"),
+            GraphError::Duplicate { what, name } => write!(f, "two {what}s are named `{name}`"),
+            GraphError::Unwritten { pass, texture } => {
+                write!(f, "pass `{pass}` reads texture `{texture}`, which no earlier step writes")
+            }
+            GraphError::Layer {
+                pass,
+                texture,
+                layer,
+                layers,
+            } => write!(
+                f,
+                "pass `{pass}` writes layer {layer} of texture `{texture}`, which has {layers} layer(s)"
+            ),
+            GraphError::Texture { texture, field, message } => write!(f, "texture `{texture}`, field `{field}`: {message}"),
         }
     }
 }
@@ -559,6 +624,19 @@ impl PassGraph {
                 expected: SCHEMA_VERSION,
             });
         }
+        g.check_params()?;
+        check_unique("texture", g.textures.iter().map(|t| &t.name))?;
+        check_unique("pass", g.passes.iter().map(|p| &p.name))?;
+        check_unique("param", g.params.iter().map(|p| &p.name))?;
+        for t in &g.textures {
+            if t.layers == 0 {
+                return Err(GraphError::Texture {
+                    texture: t.name.clone(),
+                    field: "layers",
+                    message: "0 layers; a texture has at least 1".into(),
+                });
+            }
+        }
         for p in &g.passes {
             if !is_plain_file_name(&p.shader) {
                 return Err(GraphError::Path {
@@ -578,12 +656,80 @@ impl PassGraph {
                 }
             }
         }
+        g.check_order()?;
         Ok(g)
+    }
+
+    /// Every param value and range finite, and every value within its range.
+    fn check_params(&self) -> Result<(), GraphError> {
+        for p in &self.params {
+            let bad = |message: String| {
+                Err(GraphError::Param {
+                    param: p.name.clone(),
+                    message,
+                })
+            };
+            if !p.value.is_finite() {
+                return bad(format!("value {} is not a finite number", p.value));
+            }
+            if let Some((lo, hi)) = p.range {
+                if !lo.is_finite() || !hi.is_finite() || lo > hi {
+                    return bad(format!("range [{lo}, {hi}] is not a finite interval"));
+                }
+                if !(lo..=hi).contains(&p.value) {
+                    return bad(format!("value {} lies outside its range [{lo}, {hi}]", p.value));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Every texture a step reads is written by an earlier step (of an earlier pass, or
+    /// earlier in the same pass; a mip chain's step reads the levels of the texture it
+    /// writes), and every written layer lies within its texture.
+    fn check_order(&self) -> Result<(), GraphError> {
+        let mut written: Vec<&str> = Vec::new();
+        for p in &self.passes {
+            for s in &p.steps {
+                for b in &s.reads {
+                    let same_step = b.view == View::PreviousLevel && s.writes.iter().any(|w| w.texture == b.texture);
+                    if !same_step && !written.contains(&b.texture.as_str()) {
+                        return Err(GraphError::Unwritten {
+                            pass: p.name.clone(),
+                            texture: b.texture.clone(),
+                        });
+                    }
+                }
+                for w in &s.writes {
+                    let layers = self.texture(&w.texture).map_or(0, |t| t.layers);
+                    if w.layer >= layers {
+                        return Err(GraphError::Layer {
+                            pass: p.name.clone(),
+                            texture: w.texture.clone(),
+                            layer: w.layer,
+                            layers,
+                        });
+                    }
+                    written.push(&w.texture);
+                }
+            }
+        }
+        Ok(())
     }
 
     pub fn texture(&self, name: &str) -> Option<&TextureDecl> {
         self.textures.iter().find(|t| t.name == name)
     }
+}
+
+fn check_unique<'a>(what: &'static str, names: impl Iterator<Item = &'a String>) -> Result<(), GraphError> {
+    let mut seen = std::collections::HashSet::new();
+    for n in names {
+        if !seen.insert(n.as_str()) {
+            return Err(GraphError::Duplicate { what, name: n.clone() });
+        }
+    }
+    Ok(())
 }
 
 /// A file name with no directory part, no `..`, not absolute.
@@ -679,5 +825,165 @@ mod tests {
             PassGraph::from_ron("PassGraph(version: 1"),
             Err(GraphError::Syntax { .. })
         ));
+    }
+
+    /// `tiny` plus a param and a Shade pass reading the depth: a valid graph as RON text.
+    fn valid_text() -> String {
+        let mut g = tiny();
+        g.params.push(ParamDecl {
+            name: "bias".into(),
+            ty: ParamType::F32,
+            value: 0.5,
+            range: Some((0.0, 1.0)),
+            offset: None,
+            doc: None,
+        });
+        let mut shade = g.passes[0].clone();
+        shade.name = "shade".into();
+        shade.kind = PassKind::Shade;
+        shade.steps[0].writes.clear();
+        shade.steps[0].reads.push(Binding {
+            binding: 0,
+            texture: "z".into(),
+            view: View::All,
+        });
+        g.passes.push(shade);
+        let text = g.to_ron();
+        assert_eq!(PassGraph::from_ron(&text).unwrap(), g);
+        text
+    }
+
+    /// `valid_text` with the one occurrence of `from` replaced.
+    fn changed(from: &str, to: &str) -> Result<PassGraph, GraphError> {
+        let text = valid_text();
+        assert_eq!(text.matches(from).count(), 1, "`{from}` in {text}");
+        PassGraph::from_ron(&text.replacen(from, to, 1))
+    }
+
+    #[test]
+    fn refuses_unknown_fields() {
+        let e = changed("params_size: 0,", "params_size: 0, extra: 1,").unwrap_err();
+        assert!(matches!(e, GraphError::Syntax { .. }) && e.to_string().contains("extra"), "{e}");
+        let e = changed("mips: false,", "mips: false, sparse: true,").unwrap_err();
+        assert!(e.to_string().contains("sparse"), "{e}");
+    }
+
+    #[test]
+    fn refuses_nan_param() {
+        let e = changed("value: 0.5,", "value: NaN,").unwrap_err();
+        assert!(matches!(&e, GraphError::Param { param, .. } if param == "bias"), "{e}");
+        assert!(e.to_string().contains("`bias`") && e.to_string().contains("finite"), "{e}");
+    }
+
+    #[test]
+    fn refuses_infinite_param() {
+        let e = changed("value: 0.5,", "value: inf,").unwrap_err();
+        assert!(matches!(&e, GraphError::Param { param, .. } if param == "bias"), "{e}");
+    }
+
+    #[test]
+    fn refuses_param_outside_its_range() {
+        let e = changed("value: 0.5,", "value: 1.5,").unwrap_err();
+        assert!(e.to_string().contains("outside its range"), "{e}");
+        let e = changed("range: Some((0.0, 1.0)),", "range: Some((0.0, inf)),").unwrap_err();
+        assert!(matches!(&e, GraphError::Param { param, .. } if param == "bias"), "{e}");
+    }
+
+    #[test]
+    fn refuses_duplicate_texture_names() {
+        let mut g = tiny();
+        g.textures.push(g.textures[0].clone());
+        let e = PassGraph::from_ron(&g.to_ron()).unwrap_err();
+        assert_eq!(
+            e,
+            GraphError::Duplicate {
+                what: "texture",
+                name: "z".into()
+            }
+        );
+    }
+
+    #[test]
+    fn refuses_duplicate_pass_names() {
+        let e = changed("name: \"shade\",", "name: \"depth\",").unwrap_err();
+        assert_eq!(
+            e,
+            GraphError::Duplicate {
+                what: "pass",
+                name: "depth".into()
+            }
+        );
+    }
+
+    #[test]
+    fn refuses_duplicate_param_names() {
+        let mut g = tiny();
+        let p = ParamDecl {
+            name: "k".into(),
+            ty: ParamType::I32,
+            value: 1.0,
+            range: None,
+            offset: None,
+            doc: None,
+        };
+        g.params = vec![p.clone(), p];
+        let e = PassGraph::from_ron(&g.to_ron()).unwrap_err();
+        assert_eq!(
+            e,
+            GraphError::Duplicate {
+                what: "param",
+                name: "k".into()
+            }
+        );
+    }
+
+    #[test]
+    fn refuses_reading_an_unwritten_texture() {
+        // The depth pass no longer writes `z`, which the shade pass reads.
+        let mut g = tiny();
+        g.textures.push(TextureDecl {
+            name: "other".into(),
+            ..g.textures[0].clone()
+        });
+        let text = valid_text().replacen("texture: \"z\",\n", "texture: \"other\",\n", 1);
+        let e = PassGraph::from_ron(&text.replacen(
+            "textures: [",
+            &format!("textures: [{},", ron::to_string(&g.textures[1]).unwrap()),
+            1,
+        ))
+        .unwrap_err();
+        assert_eq!(
+            e,
+            GraphError::Unwritten {
+                pass: "shade".into(),
+                texture: "z".into()
+            }
+        );
+        assert!(e.to_string().contains("pass `shade` reads texture `z`"), "{e}");
+    }
+
+    #[test]
+    fn refuses_a_target_layer_outside_the_texture() {
+        let e = changed("layer: 0,", "layer: 99,").unwrap_err();
+        assert_eq!(
+            e,
+            GraphError::Layer {
+                pass: "depth".into(),
+                texture: "z".into(),
+                layer: 99,
+                layers: 1
+            }
+        );
+        assert!(e.to_string().contains("pass `depth` writes layer 99"), "{e}");
+    }
+
+    #[test]
+    fn refuses_zero_layers() {
+        let e = changed("layers: 1,", "layers: 0,").unwrap_err();
+        assert!(
+            matches!(&e, GraphError::Texture { texture, field: "layers", .. } if texture == "z"),
+            "{e}"
+        );
+        assert!(e.to_string().contains("texture `z`, field `layers`"), "{e}");
     }
 }

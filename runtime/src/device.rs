@@ -42,6 +42,12 @@ pub enum RuntimeError {
         pass: String,
         feature: String,
     },
+    /// A pass wrote values outside what its output may hold (non-finite, or visibility
+    /// outside [0, 1]); they are never passed on.
+    Output {
+        pass: String,
+        message: String,
+    },
     Param(String),
     NotFound(String),
 }
@@ -59,6 +65,7 @@ impl fmt::Display for RuntimeError {
             RuntimeError::Unsupported { pass, feature } => {
                 write!(f, "pass `{pass}` needs {feature}, which this runtime does not support yet")
             }
+            RuntimeError::Output { pass, message } => write!(f, "pass `{pass}` wrote {message}"),
             RuntimeError::Param(m) => write!(f, "{m}"),
             RuntimeError::NotFound(m) => write!(f, "{m}"),
         }

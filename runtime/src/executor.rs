@@ -12,6 +12,70 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
+/// The largest graph file the runtime reads.
+pub const MAX_GRAPH_BYTES: u64 = 4 << 20;
+/// The largest shader file the runtime reads.
+pub const MAX_SHADER_BYTES: u64 = 16 << 20;
+
+/// The most passes a graph may have: two timestamp queries each must fit one query set
+/// (`wgpu::QUERY_SET_MAX_QUERIES`). Applied on every device, with or without timestamps.
+pub const MAX_PASSES: usize = wgpu::QUERY_SET_MAX_QUERIES as usize / 2;
+
+/// How far outside [0, 1] a visibility may lie (rounding of the technique's arithmetic).
+pub const VISIBILITY_EPSILON: f32 = 1e-3;
+
+/// Check a visibility image (row-major, `width` per row) that pass `pass` wrote: every value
+/// finite and within [0, 1] up to [`VISIBILITY_EPSILON`]; the first bad pixel is named.
+pub fn check_visibility(values: &[f32], width: u32, pass: &str) -> Result<()> {
+    let bad = |v: f32| !v.is_finite() || !(-VISIBILITY_EPSILON..=1.0 + VISIBILITY_EPSILON).contains(&v);
+    let count = values.iter().filter(|v| bad(**v)).count();
+    match values.iter().position(|v| bad(*v)) {
+        None => Ok(()),
+        Some(i) => {
+            let w = width.max(1) as usize;
+            Err(RuntimeError::Output {
+                pass: pass.to_string(),
+                message: format!(
+                    "visibility {} at pixel ({}, {}) ({count} pixel(s) non-finite or outside [0, 1] by more than {VISIBILITY_EPSILON}); the image is refused",
+                    values[i],
+                    i % w,
+                    i / w
+                ),
+            })
+        }
+    }
+}
+
+/// Read a UTF-8 file of at most `cap` bytes, and only a regular file (after links): a FIFO,
+/// a device or anything else is refused before it is opened for reading, and the read is
+/// bounded, so a file that grows past the cap is refused too.
+pub fn read_capped(path: &Path, cap: u64) -> Result<String> {
+    use std::io::Read;
+    let err = |message: String| RuntimeError::File {
+        path: path.to_path_buf(),
+        message,
+    };
+    let meta = std::fs::metadata(path).map_err(|e| err(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(err("is not a regular file (a FIFO, device or folder); refused".into()));
+    }
+    if meta.len() > cap {
+        return Err(err(format!("is {} bytes, above the limit of {cap} bytes", meta.len())));
+    }
+    let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
+    // Checked again on the open file: the path may have been replaced since.
+    let meta = file.metadata().map_err(|e| err(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(err("is not a regular file (a FIFO, device or folder); refused".into()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len().min(cap) as usize);
+    file.take(cap + 1).read_to_end(&mut bytes).map_err(|e| err(e.to_string()))?;
+    if bytes.len() as u64 > cap {
+        return Err(err(format!("is above the limit of {cap} bytes")));
+    }
+    String::from_utf8(bytes).map_err(|e| err(format!("is not UTF-8: {e}")))
+}
+
 /// GPU time of each pass of one frame, in milliseconds (None without timestamp queries).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameTimes {
@@ -58,7 +122,7 @@ impl<'g> Executor<'g> {
             path: path.to_path_buf(),
             message: e.to_string(),
         };
-        let text = std::fs::read_to_string(graph_path).map_err(|e| io(graph_path, e))?;
+        let text = read_capped(graph_path, MAX_GRAPH_BYTES)?;
         let graph = PassGraph::from_ron(&text)?;
         let dir = graph_path.parent().unwrap_or(Path::new("."));
         let canon_dir = dir.canonicalize().map_err(|e| io(dir, e))?;
@@ -72,7 +136,13 @@ impl<'g> Executor<'g> {
                     message: "lies outside the graph's folder (through a link)".into(),
                 });
             }
-            let src = std::fs::read_to_string(&canon).map_err(|e| io(&path, e))?;
+            let src = read_capped(&canon, MAX_SHADER_BYTES).map_err(|e| match e {
+                RuntimeError::File { message, .. } => RuntimeError::File {
+                    path: path.clone(),
+                    message,
+                },
+                e => e,
+            })?;
             shaders.push((p.shader.clone(), src));
         }
         Executor::new(gpu, graph, shaders)
@@ -85,6 +155,19 @@ impl<'g> Executor<'g> {
         // before creating anything.
         let text = graph.to_ron();
         let graph = PassGraph::from_ron(&text)?;
+        if graph.passes.is_empty() {
+            return Err(RuntimeError::NotFound(format!(
+                "technique `{}`: the graph has no passes; there is nothing to run",
+                graph.technique
+            )));
+        }
+        if graph.passes.len() > MAX_PASSES {
+            return Err(RuntimeError::Limit {
+                what: format!("technique `{}`: passes (two GPU timestamps each, one query set)", graph.technique),
+                needed: graph.passes.len() as u64,
+                limit: MAX_PASSES as u64,
+            });
+        }
         steps::unsupported(&graph)?;
         let mut sources: HashMap<String, Arc<str>> = HashMap::new();
         for p in &graph.passes {
@@ -412,7 +495,18 @@ impl<'g> Executor<'g> {
             CameraOutput::Position => Format::Rgba32Float,
             CameraOutput::Normal => Format::Rgba16Float,
         };
-        read_back(self.gpu, &b.camera[which as usize], 0, 0, w, h, format)
+        let img = read_back(self.gpu, &b.camera[which as usize], 0, 0, w, h, format)?;
+        if which == CameraOutput::Visibility {
+            let shade = self
+                .graph
+                .passes
+                .iter()
+                .rev()
+                .find(|p| p.kind == graph::PassKind::Shade)
+                .map_or("shade", |p| p.name.as_str());
+            check_visibility(&img.channel(0), w, shade)?;
+        }
+        Ok(img)
     }
 
     /// Bytes of every texture at the bound sizes: (name, bytes); transient ones included.

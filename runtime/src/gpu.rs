@@ -18,7 +18,9 @@
 //! before anything is allocated (lavapipe keeps allocating past its limits).
 
 pub use crate::device::{Gpu, INSTALL_HINT, Result, RuntimeError};
-pub use crate::executor::{CameraOutput, Executor, FrameTimes};
+pub use crate::executor::{
+    CameraOutput, Executor, FrameTimes, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility, read_capped,
+};
 pub use crate::frame::SceneInputs;
 pub use crate::image::Image;
 pub use crate::resources::mip_count;
