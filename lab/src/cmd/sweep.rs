@@ -342,6 +342,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         if !truths.iter().any(|(k, _)| *k == key) {
             truths.push((key, (truth.clone(), se, facing.clone())));
         }
+        metrics::check_visibility(&format!("the visibility of {}", c.label), &vis, &facing).map_err(|e| format!("error: {e}"))?;
         let acc = metrics::accuracy(&vis, &truth, &facing).map_err(|e| format!("error: {e}"))?;
         rows.push(Row {
             scene: stem(&file.scenes[c.scene]),
