@@ -14,6 +14,9 @@ use plotters::prelude::*;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
 use std::path::PathBuf;
 
+/// The most frames of the temporal-stability run (each frame's visibility is kept).
+pub const MAX_STABILITY_FRAMES: usize = 1024;
+
 #[derive(clap::Args)]
 pub struct CompareArgs {
     /// A technique (`.ron`) or a compiled pass graph (`.graph.ron`).
@@ -112,6 +115,12 @@ struct Figures {
 }
 
 pub fn compare(a: CompareArgs) -> Result<(), String> {
+    if a.stability_frames > MAX_STABILITY_FRAMES {
+        return Err(format!(
+            "error: `--stability-frames {}` is above the limit of {MAX_STABILITY_FRAMES}: every frame's visibility is kept in memory",
+            a.stability_frames
+        ));
+    }
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
     let light = scene
