@@ -1045,6 +1045,8 @@ pub const MIN_SCALE: f32 = 1e-10;
 /// Largest camera `near`, `far` and position-to-target distance: the projection multiplies
 /// near by far, which must stay within f32.
 pub const MAX_CAMERA_DISTANCE: f32 = 1e15;
+/// Most pixels of the scene's camera (4096 x 4096).
+pub const MAX_CAMERA_PIXELS: u64 = 4096 * 4096;
 
 fn finite3(v: Vec3) -> bool {
     v.is_finite()
@@ -1132,6 +1134,14 @@ fn validate_camera(camera: &Camera) -> Result<(), SceneError> {
             at("width"),
             "the image has no pixels",
             "write a width and height of at least 1",
+        ));
+    }
+    let pixels = u64::from(*width) * u64::from(*height);
+    if pixels > MAX_CAMERA_PIXELS {
+        return Err(SceneError::invalid(
+            at("width"),
+            format!("{width} x {height} is {pixels} pixels, above the limit of {MAX_CAMERA_PIXELS} (4096 x 4096)"),
+            "write a smaller camera size: the read-backs hold several float images of this size",
         ));
     }
     match camera {

@@ -535,6 +535,10 @@ fn tiny_scales_and_huge_camera_distances_say_what_is_wrong() {
     let err = Scene::from_str(&camera("", "(0.0, 3.0, 1e30)"), ".").unwrap_err();
     assert_eq!(err.at(), Some("camera (Perspective).target"), "{err}");
     assert!(!err.message().contains("`up`"), "{err}");
+    let big = "Scene(camera: Perspective(position: (0.0, 3.0, 5.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 45.0, width: 8192, height: 8192), shadow_map: 8)";
+    let err = Scene::from_str(big, ".").unwrap_err();
+    assert_eq!(err.at(), Some("camera (Perspective).width"), "{err}");
+    assert!(err.message().contains("above the limit of 16777216"), "{err}");
     let ok = Scene::from_str(&camera(", far: 1e6", "(0.0, 3.0, 5.0)"), ".").unwrap();
     assert!(ok.camera_view_proj().is_finite());
 }
