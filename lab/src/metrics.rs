@@ -86,6 +86,34 @@ fn signed_error(estimate: f32, truth: f32) -> Option<f64> {
     e.is_finite().then_some(e)
 }
 
+/// Visibility values a technique may hand to the metrics: within [-1, 2] (a generous
+/// margin around [0, 1]: anything beyond is a broken shader, not an error to average).
+pub const VISIBILITY_RANGE: (f32, f32) = (-1.0, 2.0);
+
+/// Refuses a visibility buffer with a non-finite value, or one outside
+/// [`VISIBILITY_RANGE`], at a pixel of `mask`: the error names `what`, the first such
+/// pixel and value, and how many there are. `compare` and `sweep` call it before any
+/// figure, so a NaN or 1e30 never becomes an RMS.
+pub fn check_visibility(what: &str, values: &[f32], mask: &[bool]) -> Result<(), MetricsError> {
+    same_len("visibility and mask", values.len(), mask.len())?;
+    let (lo, hi) = VISIBILITY_RANGE;
+    let bad = |v: f32| !(v.is_finite() && v >= lo && v <= hi);
+    let mut count = 0usize;
+    let mut first = None;
+    for (i, (&v, &m)) in values.iter().zip(mask).enumerate() {
+        if m && bad(v) {
+            count += 1;
+            first.get_or_insert((i, v));
+        }
+    }
+    match first {
+        None => Ok(()),
+        Some((i, v)) => Err(MetricsError(format!(
+            "{what}: {count} pixel(s) hold a visibility that is not finite or outside [{lo}, {hi}] (first: pixel {i}, value {v}); the technique's shader is broken"
+        ))),
+    }
+}
+
 /// True for each pixel whose surface faces the light: a finite position and normal with
 /// `n . l > 0`, where `l` points from the position to the light's centre, or is the
 /// direction of a light at infinity.

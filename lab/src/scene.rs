@@ -546,12 +546,43 @@ impl Scene {
 
     fn build(mut desc: SceneDesc, base: &Path) -> Result<Scene, SceneError> {
         validate(&mut desc)?;
+        // The analytic meshes' triangles, all counted before any is built.
+        let mut planned = 0usize;
+        for (i, object) in desc.objects.iter().enumerate() {
+            planned = planned.saturating_add(analytic_triangles(&object.mesh).unwrap_or(0));
+            if planned > MAX_SCENE_TRIANGLES {
+                return Err(SceneError::invalid(
+                    format!("objects[{i}].mesh"),
+                    format!("the scene's meshes reach {planned} triangles by this object, above the limit of {MAX_SCENE_TRIANGLES}"),
+                    "use coarser meshes (fewer sphere segments) or fewer objects",
+                ));
+            }
+        }
         let mut triangles = Vec::new();
         let mut normals = Vec::new();
         let mut object_triangles = Vec::with_capacity(desc.objects.len());
         for (i, object) in desc.objects.iter().enumerate() {
             let start = triangles.len();
+            let too_many = |count: usize| {
+                let at = match &object.name {
+                    Some(n) => format!("objects[{i}] (\"{n}\").mesh"),
+                    None => format!("objects[{i}].mesh"),
+                };
+                SceneError::invalid(
+                    at,
+                    format!("the scene reaches {count} triangles with this object, above the limit of {MAX_SCENE_TRIANGLES}"),
+                    "use coarser meshes or fewer objects",
+                )
+            };
+            if let Some(n) = analytic_triangles(&object.mesh)
+                && start.saturating_add(n) > MAX_SCENE_TRIANGLES
+            {
+                return Err(too_many(start.saturating_add(n)));
+            }
             let mesh = build_mesh(i, object, base)?;
+            if start.saturating_add(mesh.triangles.len()) > MAX_SCENE_TRIANGLES {
+                return Err(too_many(start.saturating_add(mesh.triangles.len())));
+            }
             place(&mesh, object, &mut triangles, &mut normals);
             object_triangles.push(start..triangles.len());
         }
@@ -1002,6 +1033,21 @@ fn orthographic_view(direction: Vec3, bounds: (Vec3, Vec3)) -> LightView {
 // Validation
 // ---------------------------------------------------------------------------------------
 
+/// Most segments of a `Sphere` mesh (it has `segments * max(2, segments / 2) * 2`
+/// triangles: 1,048,576 at this limit).
+pub const MAX_SPHERE_SEGMENTS: u32 = 1024;
+/// Most triangles in a scene, all objects together (checked before allocating).
+pub const MAX_SCENE_TRIANGLES: usize = 1 << 24;
+/// Largest OBJ file read, in bytes (256 MiB).
+pub const MAX_OBJ_BYTES: u64 = 256 << 20;
+/// Smallest magnitude of a scale component: below it the object's triangles underflow f32.
+pub const MIN_SCALE: f32 = 1e-10;
+/// Largest camera `near`, `far` and position-to-target distance: the projection multiplies
+/// near by far, which must stay within f32.
+pub const MAX_CAMERA_DISTANCE: f32 = 1e15;
+/// Most pixels of the scene's camera (4096 x 4096).
+pub const MAX_CAMERA_PIXELS: u64 = 4096 * 4096;
+
 fn finite3(v: Vec3) -> bool {
     v.is_finite()
 }
@@ -1068,6 +1114,14 @@ fn validate_camera(camera: &Camera) -> Result<(), SceneError> {
             "move `target` away from `position`",
         ));
     }
+    let distance = (target.as_dvec3() - position.as_dvec3()).length();
+    if distance > f64::from(MAX_CAMERA_DISTANCE) {
+        return Err(SceneError::invalid(
+            at("target"),
+            format!("`target` is {distance:e} from `position`, beyond the limit of {MAX_CAMERA_DISTANCE:e} (f32 cannot hold the view)"),
+            "bring the camera closer to its target, or scale the scene down",
+        ));
+    }
     if up.length_squared() == 0.0 || dir.normalize().cross(up.normalize()).length() < 1e-4 {
         return Err(SceneError::invalid(
             at("up"),
@@ -1080,6 +1134,14 @@ fn validate_camera(camera: &Camera) -> Result<(), SceneError> {
             at("width"),
             "the image has no pixels",
             "write a width and height of at least 1",
+        ));
+    }
+    let pixels = u64::from(*width) * u64::from(*height);
+    if pixels > MAX_CAMERA_PIXELS {
+        return Err(SceneError::invalid(
+            at("width"),
+            format!("{width} x {height} is {pixels} pixels, above the limit of {MAX_CAMERA_PIXELS} (4096 x 4096)"),
+            "write a smaller camera size: the read-backs hold several float images of this size",
         ));
     }
     match camera {
@@ -1107,6 +1169,19 @@ fn validate_camera(camera: &Camera) -> Result<(), SceneError> {
             format!("near {n} is not positive"),
             "write a positive near distance or leave it out",
         ));
+    }
+    for (field, v) in [("near", near), ("far", far)] {
+        if let Some(v) = v
+            && *v > MAX_CAMERA_DISTANCE
+        {
+            return Err(SceneError::invalid(
+                at(field),
+                format!(
+                    "{field} {v:e} is beyond the limit of {MAX_CAMERA_DISTANCE:e}: the projection multiplies near by far, which overflows f32"
+                ),
+                "write near and far of at most 1e15, or leave them out to fit the scene",
+            ));
+        }
     }
     if let Some(f) = far
         && !(*f > near.unwrap_or(0.0) && f.is_finite())
@@ -1214,11 +1289,22 @@ fn validate_object(object: &Object, at: &dyn Fn(&str) -> String) -> Result<(), S
             "write finite numbers",
         ));
     }
-    if t.scale.x * t.scale.y * t.scale.z == 0.0 {
+    let s = t.scale;
+    if s.x == 0.0 || s.y == 0.0 || s.z == 0.0 {
         return Err(SceneError::invalid(
             at("transform.scale"),
-            "a scale of 0 flattens the object",
+            format!("a scale of 0 flattens the object (scale ({}, {}, {}))", s.x, s.y, s.z),
             "write non-zero scales",
+        ));
+    }
+    if s.abs().min_element() < MIN_SCALE {
+        return Err(SceneError::invalid(
+            at("transform.scale"),
+            format!(
+                "scale ({:e}, {:e}, {:e}) is too small: below {MIN_SCALE:e} the object degenerates in f32 (its triangles lose their area)",
+                s.x, s.y, s.z
+            ),
+            "write scales of at least 1e-10 in magnitude, or change the scene's units",
         ));
     }
     match &t.rotate {
@@ -1258,6 +1344,11 @@ fn validate_object(object: &Object, at: &dyn Fn(&str) -> String) -> Result<(), S
             at("mesh.segments"),
             format!("{segments} segments cannot make a sphere"),
             "write at least 3 segments",
+        )),
+        Mesh::Sphere { segments, .. } if *segments > MAX_SPHERE_SEGMENTS => Err(SceneError::invalid(
+            at("mesh.segments"),
+            format!("{segments} segments is above the limit of {MAX_SPHERE_SEGMENTS}"),
+            format!("write at most {MAX_SPHERE_SEGMENTS} segments (a sphere of {MAX_SPHERE_SEGMENTS} segments has 1,048,576 triangles)"),
         )),
         Mesh::Triangle { a, b, c } if !(a.is_finite() && b.is_finite() && c.is_finite()) => {
             Err(SceneError::invalid(at("mesh"), "a corner is not finite", "write finite numbers"))
@@ -1304,6 +1395,20 @@ fn build_mesh(index: usize, object: &Object, base: &Path) -> Result<MeshData, Sc
             load_obj(path, base).map_err(|e| e.with_at(at))?
         }
     })
+}
+
+/// Triangles an analytic mesh makes (`None` for OBJ files, counted once read).
+fn analytic_triangles(mesh: &Mesh) -> Option<usize> {
+    match mesh {
+        Mesh::Plane { .. } | Mesh::Quad { .. } => Some(2),
+        Mesh::Box { .. } => Some(12),
+        Mesh::Triangle { .. } => Some(1),
+        Mesh::Sphere { segments, .. } => {
+            let s = *segments as usize;
+            Some(s.saturating_mul((s / 2).max(2)).saturating_mul(2))
+        }
+        Mesh::Obj { .. } => None,
+    }
 }
 
 fn box_triangles(h: Vec3) -> Vec<[Vec3; 3]> {
@@ -1397,9 +1502,11 @@ fn resolve_inside(rel: &str, base: &Path) -> Result<PathBuf, SceneError> {
 
 fn load_obj(rel: &str, base: &Path) -> Result<MeshData, SceneError> {
     let path = resolve_inside(rel, base)?;
-    let bytes = std::fs::read(&path).map_err(|e| {
-        SceneError::new(SceneErrorKind::Io, format!("cannot read the OBJ file `{}`: {e}", path.display()))
-            .with_hint("check that the mesh file is readable")
+    let bytes = read_capped(&path, MAX_OBJ_BYTES).map_err(|e| {
+        SceneError::new(SceneErrorKind::Io, format!("cannot read the OBJ file `{}`: {e}", path.display())).with_hint(format!(
+            "give a regular file (not a pipe or device) of at most {} MiB",
+            MAX_OBJ_BYTES >> 20
+        ))
     })?;
     let options = tobj::LoadOptions {
         single_index: true,
@@ -1461,6 +1568,29 @@ fn load_obj(rel: &str, base: &Path) -> Result<MeshData, SceneError> {
         triangles,
         normals: Some(normals),
     })
+}
+
+/// Reads a regular file of at most `cap` bytes; anything else (a FIFO, a device, a folder,
+/// a larger file) is refused without reading it (or, if it grows, past `cap + 1` bytes).
+fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(std::io::Error::other("it is not a regular file"));
+    }
+    if meta.len() > cap {
+        return Err(std::io::Error::other(format!(
+            "it has {} bytes, above the limit of {cap}",
+            meta.len()
+        )));
+    }
+    let file = std::fs::File::open(path)?;
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(cap + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > cap {
+        return Err(std::io::Error::other(format!("it grew above the limit of {cap} bytes")));
+    }
+    Ok(bytes)
 }
 
 /// Transforms a mesh to world space, drops degenerate triangles, and appends it.

@@ -94,7 +94,47 @@ pub struct TruthOpts {
     pub no_cache: bool,
 }
 
+/// The most light samples one truth may take: samples per run (as the stratified grid
+/// rounds them, or `--max-samples` with `--target-se`) x runs x pixels.
+pub const MAX_TRUTH_SAMPLES: u64 = 1 << 36;
+
+/// The most pixels a camera may have (4096 x 4096): read-backs hold several float images
+/// of this size.
+pub const MAX_CAMERA_PIXELS: u64 = 4096 * 4096;
+
 impl TruthOpts {
+    /// Refuses a truth over [`MAX_TRUTH_SAMPLES`] for `pixels` pixels, naming the arguments
+    /// and their product; and a `--cache` that is not a folder.
+    pub fn check(&self, pixels: u64) -> Result<(), String> {
+        // The n x n grid `truth::strata` rounds to, in u64 (n * n overflows u32 near u32::MAX).
+        let per_pixel = |n: u32| {
+            let s = u64::from(n.max(1));
+            let mut a = (s as f64).sqrt().floor() as u64;
+            while a * a < s {
+                a += 1;
+            }
+            a * a
+        };
+        let (flag, n) = match self.target_se {
+            Some(_) => ("--max-samples", self.max_samples.max(self.samples)),
+            None => ("--samples", self.samples),
+        };
+        let total = u128::from(per_pixel(n)) * u128::from(self.runs) * u128::from(pixels);
+        if total > u128::from(MAX_TRUTH_SAMPLES) {
+            return Err(format!(
+                "error: `{flag} {n}` x `--runs {}` x {pixels} pixels = {total} light samples, above the budget of 2^36 ({MAX_TRUTH_SAMPLES}); lower the samples, the runs or the camera size",
+                self.runs
+            ));
+        }
+        if !self.no_cache && self.cache.exists() && !self.cache.is_dir() {
+            return Err(format!(
+                "error: `--cache {}` is a file, not a folder: name a folder for the truth cache (it is created if missing), or pass --no-cache",
+                self.cache.display()
+            ));
+        }
+        Ok(())
+    }
+
     pub fn settings(&self) -> TruthSettings {
         TruthSettings {
             samples: self.samples,
@@ -114,6 +154,12 @@ pub fn size(s: &str) -> Result<(u32, u32), String> {
     );
     if w == 0 || h == 0 {
         return Err(format!("`{s}`: the image needs at least one pixel"));
+    }
+    let pixels = u64::from(w) * u64::from(h);
+    if pixels > MAX_CAMERA_PIXELS {
+        return Err(format!(
+            "`{s}` is {pixels} pixels, above the limit of {MAX_CAMERA_PIXELS} (4096x4096): the read-backs would not fit in memory"
+        ));
     }
     Ok((w, h))
 }
@@ -186,6 +232,7 @@ pub fn positions_normals(ex: &Executor) -> Result<(Vec<Vec3>, Vec<Vec3>), String
 /// on a terminal. Prints where it came from.
 pub fn truth_at(scene: &Scene, positions: &[Vec3], normals: &[Vec3], opts: &TruthOpts) -> Result<(Truth, Source), String> {
     let (w, h) = scene.camera_size();
+    opts.check(u64::from(w) * u64::from(h))?;
     let cache = (!opts.no_cache).then(|| TruthCache::new(&opts.cache));
     let bar = indicatif::ProgressBar::new(0);
     bar.set_style(

@@ -304,3 +304,73 @@ fn bad_arguments_are_errors_that_say_why() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("at least one pixel"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Runs `sshc` expecting a refusal within `secs` seconds; returns its standard error.
+fn refused(args: &[&str], secs: u64) -> String {
+    let start = std::time::Instant::now();
+    let out = sshc(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "sshc {} succeeded:\n{stderr}", args.join(" "));
+    assert!(
+        start.elapsed().as_secs() < secs,
+        "sshc {} took {:?}",
+        args.join(" "),
+        start.elapsed()
+    );
+    stderr
+}
+
+#[test]
+fn huge_truth_budgets_sizes_frames_and_a_cache_file_are_refused_at_once() {
+    // Bound: each refusal within 60 s (before: hours, or gigabytes of memory).
+    let e = refused(
+        &["truth", "--scene", "scenes/edge.ron", "--samples", "4294967295", "--no-cache"],
+        60,
+    );
+    assert!(
+        e.contains("`--samples 4294967295` x `--runs 4` x 65536 pixels") && e.contains("above the budget of 2^36"),
+        "{e}"
+    );
+    let e = refused(&["truth", "--scene", "scenes/edge.ron", "--runs", "1000000000", "--no-cache"], 60);
+    assert!(
+        e.contains("`--runs 1000000000`") && e.contains("light samples, above the budget"),
+        "{e}"
+    );
+    let dir = temp_dir("refusals");
+    let file = dir.join("cache-file");
+    std::fs::write(&file, "x").unwrap();
+    let out = dir.join("t.pfm");
+    let e = refused(
+        &[
+            "truth",
+            "--scene",
+            "scenes/edge.ron",
+            "--size",
+            "8x8",
+            "--cache",
+            file.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        60,
+    );
+    assert!(e.contains("is a file, not a folder") && !e.contains("os error 17"), "{e}");
+    let e = refused(&["truth", "--scene", "scenes/edge.ron", "--size", "8192x8192", "--no-cache"], 60);
+    assert!(e.contains("above the limit of 16777216 (4096x4096)"), "{e}");
+    let e = refused(
+        &[
+            "compare",
+            "techniques/hard.ron",
+            "--scene",
+            "scenes/edge.ron",
+            "--size",
+            "8x8",
+            "--stability-frames",
+            "1000000",
+            "--no-cache",
+        ],
+        60,
+    );
+    assert!(e.contains("`--stability-frames 1000000` is above the limit of 1024"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

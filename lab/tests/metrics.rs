@@ -160,3 +160,23 @@ fn mean_frame_change_averages_absolute_steps_over_the_mask() {
     assert_eq!(metrics::mean_frame_change(&frames[..1], &mask).unwrap(), 0.0);
     assert_eq!(metrics::mean_frame_change(&frames, &[false; 3]).unwrap(), 0.0);
 }
+
+#[test]
+fn a_non_finite_or_absurd_visibility_is_refused_before_any_figure() {
+    let n = 64 * 64;
+    let mask = vec![true; n];
+    let mut vis = vec![0.5f32; n];
+    assert!(metrics::check_visibility("v", &vis, &mask).is_ok());
+    vis[100] = f32::NAN;
+    vis[200] = 1e30;
+    let err = metrics::check_visibility("the technique's visibility", &vis, &mask).unwrap_err();
+    assert!(err.0.contains("the technique's visibility: 2 pixel(s)"), "{err}");
+    assert!(err.0.contains("pixel 100, value NaN"), "{err}");
+    vis[100] = f32::INFINITY;
+    assert!(metrics::check_visibility("v", &vis, &mask).is_err());
+    // Outside the mask (background pixels) anything goes.
+    let mut masked = mask.clone();
+    masked[100] = false;
+    masked[200] = false;
+    assert!(metrics::check_visibility("v", &vis, &masked).is_ok());
+}

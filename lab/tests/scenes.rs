@@ -443,3 +443,102 @@ fn a_straight_edge_under_a_distant_disk_matches_the_closed_form() {
     }
     assert!(worst > 0.0, "a penumbra was sampled");
 }
+
+/// Runs `f` on a thread and fails unless it ends within `secs` seconds.
+fn within<T: Send + 'static>(secs: u64, f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(std::time::Duration::from_secs(secs))
+        .unwrap_or_else(|_| panic!("not done within {secs} s"))
+}
+
+#[test]
+fn huge_spheres_and_triangle_counts_are_refused_before_allocating() {
+    // Bound: each refusal in under 5 s and without building a mesh (100,000 segments would
+    // take 4.8 GB).
+    for segments in [100_000u64, 4_294_967_295, 1025] {
+        let err = within(5, move || {
+            let text = format!("Scene({CAMERA}, shadow_map: 8, objects: [Object(mesh: Sphere(radius: 0.5, segments: {segments}))])");
+            Scene::from_str(&text, ".").unwrap_err()
+        });
+        assert_eq!(err.kind(), SceneErrorKind::Invalid, "{err}");
+        assert_eq!(err.at(), Some("objects[0].mesh.segments"), "{err}");
+        assert!(err.message().contains("limit of 1024"), "{err}");
+    }
+    // 1024 segments is allowed (1,048,576 triangles), but 17 of them exceed 2^24 triangles:
+    // refused before any is built.
+    let objects = vec!["Object(mesh: Sphere(radius: 0.5, segments: 1024))"; 17].join(", ");
+    let err = within(5, move || {
+        let text = format!("Scene({CAMERA}, shadow_map: 8, objects: [{objects}])");
+        Scene::from_str(&text, ".").unwrap_err()
+    });
+    assert_eq!(err.at(), Some("objects[16].mesh"), "{err}");
+    assert!(err.message().contains("above the limit of 16777216"), "{err}");
+}
+
+#[test]
+fn obj_files_must_be_regular_and_below_the_size_cap() {
+    let dir = temp_dir("objcap");
+    let scene = |path: &str| format!("Scene({CAMERA}, shadow_map: 8, objects: [Object(mesh: Obj(path: {path:?}))])");
+    // A sparse file just over 256 MiB: refused from its size, without reading it.
+    let big = std::fs::File::create(dir.join("big.obj")).unwrap();
+    big.set_len((256 << 20) + 1).unwrap();
+    drop(big);
+    let d = dir.clone();
+    let text = scene("big.obj");
+    let err = within(5, move || Scene::from_str(&text, &d).unwrap_err());
+    assert_eq!(err.at(), Some("objects[0].mesh.path"), "{err}");
+    assert!(err.message().contains("above the limit of 268435456"), "{err}");
+    // A folder is not a regular file.
+    std::fs::create_dir_all(dir.join("folder.obj")).unwrap();
+    let err = Scene::from_str(&scene("folder.obj"), &dir).unwrap_err();
+    assert!(err.message().contains("not a regular file"), "{err}");
+    // A FIFO would block a read forever: refused at once.
+    #[cfg(unix)]
+    {
+        let fifo = dir.join("fifo.obj");
+        let ok = std::process::Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success());
+        if ok {
+            let d = dir.clone();
+            let text = scene("fifo.obj");
+            let err = within(5, move || Scene::from_str(&text, &d).unwrap_err());
+            assert!(err.message().contains("not a regular file"), "{err}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn tiny_scales_and_huge_camera_distances_say_what_is_wrong() {
+    let object = |scale: &str| {
+        format!("Scene({CAMERA}, shadow_map: 8, objects: [Object(mesh: Box(size: (1.0, 1.0, 1.0)), transform: (scale: {scale}))])")
+    };
+    let err = Scene::from_str(&object("(1e-30, 1e-30, 1e-30)"), ".").unwrap_err();
+    assert_eq!(err.at(), Some("objects[0].transform.scale"), "{err}");
+    assert!(err.message().contains("too small") && err.message().contains("1e-30"), "{err}");
+    assert!(!err.message().contains("scale of 0"), "{err}");
+    let err = Scene::from_str(&object("(0.0, 1.0, 1.0)"), ".").unwrap_err();
+    assert!(err.message().contains("scale of 0"), "{err}");
+    assert!(Scene::from_str(&object("(1e-3, 1e-3, 1e-3)"), ".").is_ok());
+
+    let camera = |extra: &str, position: &str| {
+        format!(
+            "Scene(camera: Perspective(position: {position}, target: (0.0, 0.0, 0.0), fov_y_degrees: 45.0, width: 8, height: 8{extra}), shadow_map: 8, objects: [Object(mesh: Box(size: (1.0, 1.0, 1.0)))])"
+        )
+    };
+    // far 1e30 made the default near 1e27 and near x far overflow f32 (a NaN projection).
+    let err = Scene::from_str(&camera(", far: 1e30", "(0.0, 3.0, 5.0)"), ".").unwrap_err();
+    assert_eq!(err.at(), Some("camera (Perspective).far"), "{err}");
+    assert!(err.message().contains("overflows f32") && !err.message().contains("up"), "{err}");
+    let err = Scene::from_str(&camera("", "(0.0, 3.0, 1e30)"), ".").unwrap_err();
+    assert_eq!(err.at(), Some("camera (Perspective).target"), "{err}");
+    assert!(!err.message().contains("`up`"), "{err}");
+    let big = "Scene(camera: Perspective(position: (0.0, 3.0, 5.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 45.0, width: 8192, height: 8192), shadow_map: 8)";
+    let err = Scene::from_str(big, ".").unwrap_err();
+    assert_eq!(err.at(), Some("camera (Perspective).width"), "{err}");
+    assert!(err.message().contains("above the limit of 16777216"), "{err}");
+    let ok = Scene::from_str(&camera(", far: 1e6", "(0.0, 3.0, 5.0)"), ".").unwrap();
+    assert!(ok.camera_view_proj().is_finite());
+}

@@ -14,6 +14,9 @@ use plotters::prelude::*;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
 use std::path::PathBuf;
 
+/// The most frames of the temporal-stability run (each frame's visibility is kept).
+pub const MAX_STABILITY_FRAMES: usize = 1024;
+
 #[derive(clap::Args)]
 pub struct CompareArgs {
     /// A technique (`.ron`) or a compiled pass graph (`.graph.ron`).
@@ -112,6 +115,12 @@ struct Figures {
 }
 
 pub fn compare(a: CompareArgs) -> Result<(), String> {
+    if a.stability_frames > MAX_STABILITY_FRAMES {
+        return Err(format!(
+            "error: `--stability-frames {}` is above the limit of {MAX_STABILITY_FRAMES}: every frame's visibility is kept in memory",
+            a.stability_frames
+        ));
+    }
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
     let light = scene
@@ -149,6 +158,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
 
     let (truth, source) = truth_at(&scene, &positions, &normals, &a.truth)?;
     let facing = metrics::facing_light(&positions, &normals, &light).map_err(|e| format!("error: {e}"))?;
+    metrics::check_visibility("the technique's visibility", &visibility, &facing).map_err(|e| format!("error: {e}"))?;
     let acc = metrics::accuracy(&visibility, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;
     let range = match a.range {
         Some(r) => r,
@@ -157,6 +167,10 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     let error = metrics::error_image(&visibility, &truth.visibility, Some(&facing), w, h, range).map_err(|e| format!("error: {e}"))?;
     let stability = if a.stability_frames >= 2 {
         let frames = moving_light_frames(&mut ex, &scene, visibility.clone(), a.stability_frames, a.stability_step)?;
+        for (k, f) in frames.iter().enumerate() {
+            metrics::check_visibility(&format!("the technique's visibility in stability frame {k}"), f, &facing)
+                .map_err(|e| format!("error: {e}"))?;
+        }
         Some(metrics::mean_frame_change(&frames, &facing).map_err(|e| format!("error: {e}"))?)
     } else {
         None

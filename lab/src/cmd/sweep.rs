@@ -226,6 +226,59 @@ fn work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> (f64, f64) {
         .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops))
 }
 
+/// The most light samples per pixel of a `stochastic` baseline: 2^36 light samples
+/// (`session::MAX_TRUTH_SAMPLES`) over a camera of up to 4096 x 4096 pixels.
+pub const MAX_STOCHASTIC_SAMPLES: u32 = 4096;
+
+/// Refuses empty axes, a `shadow_map` value below 1 texel or not whole, a `light_scale`
+/// that is not finite or is negative, and a `stochastic` count above
+/// [`MAX_STOCHASTIC_SAMPLES`], naming the technique and the axis.
+fn check_axes(file: &SweepFile) -> Result<(), String> {
+    for (i, t) in file.techniques.iter().enumerate() {
+        let name = t.label.clone().unwrap_or_else(|| t.file.clone());
+        for (axis, values) in &t.axes {
+            let at = format!("techniques[{i}] (`{name}`), axis `{axis}`");
+            if values.is_empty() {
+                return Err(format!(
+                    "{at}: the list of values is empty, so the sweep would run nothing; give at least one value"
+                ));
+            }
+            for v in values {
+                let x = match v {
+                    ron::Value::Number(n) => Some(n.into_f64()),
+                    _ => None,
+                };
+                match axis.as_str() {
+                    "shadow_map" => match x {
+                        Some(x) if x.fract() == 0.0 && x >= 1.0 && x <= f64::from(u32::MAX) => {}
+                        _ => {
+                            return Err(format!(
+                                "{at}: `{}`: the shadow map needs a whole number of at least 1 texel",
+                                value_text(v)
+                            ));
+                        }
+                    },
+                    "light_scale" => match x {
+                        Some(x) if x.is_finite() && x >= 0.0 => {}
+                        _ => {
+                            return Err(format!("{at}: `{}`: a light scale must be a finite number >= 0", value_text(v)));
+                        }
+                    },
+                    _ => {}
+                }
+            }
+        }
+    }
+    for (k, &n) in file.stochastic.iter().enumerate() {
+        if n == 0 || n > MAX_STOCHASTIC_SAMPLES {
+            return Err(format!(
+                "stochastic[{k}] = {n} light samples per pixel is outside 1..={MAX_STOCHASTIC_SAMPLES} (the budget is 2^36 light samples over up to 4096x4096 pixels)"
+            ));
+        }
+    }
+    Ok(())
+}
+
 pub fn sweep(a: SweepArgs) -> Result<(), String> {
     let text = read(&a.sweep)?;
     let file: SweepFile = ron::from_str(&text).map_err(|e| {
@@ -240,6 +293,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     if file.scenes.is_empty() || (file.techniques.is_empty() && file.stochastic.is_empty()) {
         return Err(format!("error: {}: a sweep needs scenes and techniques", a.sweep.display()));
     }
+    check_axes(&file).map_err(|e| format!("error: {}: {e}", a.sweep.display()))?;
     let base = a.sweep.parent().unwrap_or(Path::new(".")).to_path_buf();
     let resolve = |p: &str| -> PathBuf { base.join(p) };
     let all = configs(&file);
@@ -342,6 +396,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         if !truths.iter().any(|(k, _)| *k == key) {
             truths.push((key, (truth.clone(), se, facing.clone())));
         }
+        metrics::check_visibility(&format!("the visibility of {}", c.label), &vis, &facing).map_err(|e| format!("error: {e}"))?;
         let acc = metrics::accuracy(&vis, &truth, &facing).map_err(|e| format!("error: {e}"))?;
         rows.push(Row {
             scene: stem(&file.scenes[c.scene]),
@@ -644,6 +699,38 @@ mod tests {
     fn pareto_front_keeps_only_undominated_points() {
         let f = pareto_front(&[(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (0.5, 9.0)]);
         assert_eq!(f, vec![(0.5, 9.0), (1.0, 5.0), (2.0, 3.0), (4.0, 1.0)]);
+    }
+
+    #[test]
+    fn bad_axes_and_huge_stochastic_counts_are_refused_with_the_axis_named() {
+        let file = |axes: &str, stochastic: &str| -> SweepFile {
+            ron::from_str(&format!(
+                r#"(scenes: ["a.ron"], reference: "h.ron", stochastic: [{stochastic}], techniques: [(file: "p.ron", axes: {{ {axes} }})])"#
+            ))
+            .unwrap()
+        };
+        assert_eq!(check_axes(&file(r#""shadow_map": [16], "light_scale": [0.5, 2.0]"#, "16")), Ok(()));
+        for (axes, want) in [
+            (
+                r#""light_scale": [NaN]"#,
+                "axis `light_scale`: `NaN`: a light scale must be a finite number >= 0",
+            ),
+            (
+                r#""light_scale": [-1.0]"#,
+                "axis `light_scale`: `-1`: a light scale must be a finite number >= 0",
+            ),
+            (
+                r#""shadow_map": [0]"#,
+                "axis `shadow_map`: `0`: the shadow map needs a whole number of at least 1 texel",
+            ),
+            (r#""r": []"#, "axis `r`: the list of values is empty"),
+        ] {
+            let e = check_axes(&file(axes, "")).unwrap_err();
+            assert!(e.contains("techniques[0] (`p.ron`)") && e.contains(want), "{axes}: {e}");
+            assert!(!e.contains("device"), "{e}");
+        }
+        let e = check_axes(&file("", "4294967295")).unwrap_err();
+        assert!(e.contains("stochastic[0] = 4294967295") && e.contains("1..=4096"), "{e}");
     }
 
     #[test]

@@ -51,6 +51,8 @@ pub fn truth(a: TruthArgs) -> Result<(), String> {
     if a.truth.runs < 2 {
         return Err("error: `--runs` must be at least 2: the standard error is measured from independent runs".into());
     }
+    let (w, h) = scene.camera_size();
+    a.truth.check(u64::from(w) * u64::from(h))?;
     let gpu = Gpu::new().map_err(rt)?;
     let mut ex = compile_executor(&gpu, Path::new("techniques/hard.ron"), HARD, &[], &[])?;
     let inputs = crate::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
