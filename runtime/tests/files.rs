@@ -3,6 +3,8 @@
 
 use sshc_runtime::gpu::{Executor, Gpu, MAX_GRAPH_BYTES, MAX_SHADER_BYTES, RuntimeError, read_capped};
 use sshc_runtime::graph::*;
+
+mod common;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Duration;
@@ -14,47 +16,10 @@ fn fresh_dir(name: &str) -> PathBuf {
     d
 }
 
-/// A one-pass graph naming `t.depth.wgsl`, written to `dir/t.graph.ron`.
+/// The one-pass graph of the other runtime tests, naming `t.depth.wgsl`, written to
+/// `dir/t.graph.ron` (the shader file is left to each test).
 fn write_graph(dir: &Path) -> PathBuf {
-    let g = PassGraph {
-        version: SCHEMA_VERSION,
-        technique: "t".into(),
-        title: None,
-        paper: None,
-        lights: vec![LightModel::Any],
-        params: vec![],
-        params_size: 0,
-        textures: vec![TextureDecl {
-            name: "z".into(),
-            format: Format::R32Float,
-            layers: 1,
-            extent: Extent::ShadowMap,
-            mips: false,
-            transient: false,
-            channels: vec![],
-        }],
-        passes: vec![PassDecl {
-            name: "depth".into(),
-            kind: PassKind::Depth,
-            views: Views::LightCenter,
-            shader: "t.depth.wgsl".into(),
-            steps: vec![Step {
-                vertex: Some("vs".into()),
-                fragment: Some("fs".into()),
-                compute: None,
-                draw: Draw::SceneFromLight,
-                reads: vec![],
-                writes: vec![Target {
-                    texture: "z".into(),
-                    layer: 0,
-                }],
-                params: false,
-                sampler: false,
-                cost: OpCount::default(),
-            }],
-        }],
-        removed: vec![],
-    };
+    let (g, _) = common::depth_graph(Views::LightCenter);
     let p = dir.join("t.graph.ron");
     std::fs::write(&p, g.to_ron()).unwrap();
     p
