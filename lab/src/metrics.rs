@@ -86,9 +86,10 @@ fn signed_error(estimate: f32, truth: f32) -> Option<f64> {
     e.is_finite().then_some(e)
 }
 
-/// Visibility values a technique may hand to the metrics: within [-1, 2] (a generous
-/// margin around [0, 1]: anything beyond is a broken shader, not an error to average).
-pub const VISIBILITY_RANGE: (f32, f32) = (-1.0, 2.0);
+/// Visibility values a technique may hand to the metrics: the runtime's own rule for what
+/// a Shade pass may write, [0, 1] within `VISIBILITY_EPSILON` (one rule for both; anything
+/// beyond is a broken shader, not an error to average).
+pub const VISIBILITY_RANGE: (f32, f32) = (-sshc_runtime::gpu::VISIBILITY_EPSILON, 1.0 + sshc_runtime::gpu::VISIBILITY_EPSILON);
 
 /// Refuses a visibility buffer with a non-finite value, or one outside
 /// [`VISIBILITY_RANGE`], at a pixel of `mask`: the error names `what`, the first such
