@@ -2,7 +2,7 @@
 //!
 //! A scene file is one `Scene(...)` value (the format is documented in scenes/README.md and docs/truth.md). Reading it builds the
 //! world-space triangle list once; the GPU executor takes it as [`Scene::vertex_data`],
-//! the CPU ground truth ([`crate::visibility`]) as [`Scene::triangles`].
+//! the CPU ground truth (`sshc_lab::visibility`) as [`Scene::triangles`].
 //!
 //! ```ron
 //! Scene(
@@ -128,7 +128,7 @@ fn default_up() -> Vec3 {
 }
 
 /// A light. Visibility from a point is the fraction of the light that the point sees
-/// (the ground truth of docs/truth.md); how each kind is sampled is in [`crate::visibility`].
+/// (the ground truth of docs/truth.md); how each kind is sampled is in `sshc_lab::visibility`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum Light {
