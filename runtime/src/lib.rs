@@ -6,6 +6,7 @@
 //! schema is the crate `sshc-graph`, re-exported here as [`graph`] so that a program that
 //! runs graphs needs one dependency.
 
+pub mod adjacency;
 mod device;
 mod executor;
 mod frame;

@@ -1,0 +1,314 @@
+//! Edge adjacency of a scene's meshes, built once on the CPU when a scene is bound: the
+//! input of the silhouette classification that Geometry passes run on the GPU every frame.
+//!
+//! Penumbra maps (Wyman & Hansen 2003, section 3) draw a cone at every silhouette vertex
+//! and a sheet along every silhouette edge "as seen from the center of the light"; penumbra
+//! limit maps and smoothies (Lawlor 2006; Chan & Durand 2003) draw ribbons along the same
+//! edges. An edge is a silhouette when the faces around it do not all face the light the
+//! same way. Meshes in scenes are not always closed manifolds (the bunny has holes; a
+//! plane is a single quad; a fin may share one edge among three faces), so the rule is
+//! stated for any number of faces per edge:
+//!
+//! - 1 face (an open boundary): always a silhouette;
+//! - 2 faces (manifold): a silhouette when one faces the light and the other does not;
+//! - 3 or more faces (non-manifold): a silhouette when the faces are not all on the same
+//!   side, i.e. the 2-face rule applied to every pair.
+//!
+//! A face faces a point light at `L` when `L` lies strictly in front of its plane
+//! (`n . L + d > 0`), and a distant light of direction `D` (towards the light) when
+//! `n . D > 0`. An edge-on face counts as facing away, so a silhouette seen edge-on is
+//! still classified, never both or neither.
+//!
+//! Vertices are welded within one mesh by exact position (the scene's triangles are a
+//! soup, but vertices that an indexed mesh shares transform to bit-identical positions);
+//! meshes are never welded to each other, so a box resting on the floor stays two meshes.
+//! Degenerate triangles (two equal welded vertices, zero area or a non-finite vertex)
+//! are skipped and counted: they have no plane and cannot cast a silhouette.
+//!
+//! Sizes are known from the triangle count before anything is allocated: at most
+//! `3 t` edges, `t` planes and `3 t` face references for `t` triangles
+//! ([`Adjacency::max_bytes`]).
+
+use std::collections::HashMap;
+use std::ops::Range;
+
+/// One edge as the GPU reads it (std430, 32 bytes): its two welded end points and the
+/// range of its faces in [`Adjacency::edge_faces`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct GpuEdge {
+    pub a: [f32; 3],
+    /// First entry of this edge's faces in [`Adjacency::edge_faces`].
+    pub first_face: u32,
+    pub b: [f32; 3],
+    /// Number of faces around the edge (1: open boundary, 2: manifold, more: non-manifold).
+    pub face_count: u32,
+}
+
+/// What [`Adjacency::build`] found, for `sshc render` and the tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AdjacencyCounts {
+    pub meshes: u32,
+    pub edges: u32,
+    /// Edges with one face.
+    pub boundary: u32,
+    /// Edges with two faces.
+    pub manifold: u32,
+    /// Edges with three or more faces.
+    pub non_manifold: u32,
+    /// Triangles skipped: repeated welded vertex, zero area or non-finite.
+    pub degenerate_faces: u32,
+}
+
+/// The edge adjacency of every mesh of a scene, in the layout the GPU reads.
+#[derive(Clone, Debug, Default)]
+pub struct Adjacency {
+    pub edges: Vec<GpuEdge>,
+    /// Face planes: unit normal `xyz` and offset `w = -n . p` for a point `p` of the face.
+    pub planes: Vec<[f32; 4]>,
+    /// Per edge, its faces' indices into [`Adjacency::planes`] (see [`GpuEdge::first_face`]).
+    pub edge_faces: Vec<u32>,
+    pub counts: AdjacencyCounts,
+}
+
+impl Adjacency {
+    /// Bytes of the storage buffers for `triangles` triangles, at most, known before
+    /// building: every triangle contributes at most 3 edges, 1 plane and 3 face references.
+    pub const fn max_bytes(triangles: u64) -> u64 {
+        triangles * (3 * size_of::<GpuEdge>() as u64 + size_of::<[f32; 4]>() as u64 + 3 * 4)
+    }
+
+    /// Build the adjacency of `meshes`, each a range of triangles of `triangles` (world
+    /// space). Ranges outside `triangles` are clipped to it.
+    pub fn build(triangles: &[[[f32; 3]; 3]], meshes: &[Range<usize>]) -> Adjacency {
+        let mut out = Adjacency::default();
+        let mut faces_of: Vec<(u32, u32, u32)> = Vec::new(); // (lo vertex, hi vertex, plane)
+        for range in meshes {
+            let range = range.start.min(triangles.len())..range.end.min(triangles.len());
+            out.counts.meshes += 1;
+            let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
+            let mut welded: Vec<[f32; 3]> = Vec::new();
+            faces_of.clear();
+            for tri in &triangles[range] {
+                let ids = tri.map(|p| {
+                    let next = welded.len() as u32;
+                    *weld.entry(p.map(f32::to_bits)).or_insert_with(|| {
+                        welded.push(p);
+                        next
+                    })
+                });
+                let Some(plane) = plane(tri).filter(|_| ids[0] != ids[1] && ids[1] != ids[2] && ids[0] != ids[2]) else {
+                    out.counts.degenerate_faces += 1;
+                    continue;
+                };
+                let f = out.planes.len() as u32;
+                out.planes.push(plane);
+                for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+                    let (lo, hi) = if ids[i] < ids[j] { (ids[i], ids[j]) } else { (ids[j], ids[i]) };
+                    faces_of.push((lo, hi, f));
+                }
+            }
+            // Group the face references by edge: sorting keeps the result independent of
+            // hash order, so the buffers are the same on every run.
+            faces_of.sort_unstable();
+            for group in faces_of.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+                let (lo, hi, _) = group[0];
+                let first_face = out.edge_faces.len() as u32;
+                out.edge_faces.extend(group.iter().map(|g| g.2));
+                let face_count = group.len() as u32;
+                match face_count {
+                    1 => out.counts.boundary += 1,
+                    2 => out.counts.manifold += 1,
+                    _ => out.counts.non_manifold += 1,
+                }
+                out.edges.push(GpuEdge {
+                    a: welded[lo as usize],
+                    first_face,
+                    b: welded[hi as usize],
+                    face_count,
+                });
+            }
+        }
+        out.counts.edges = out.edges.len() as u32;
+        out
+    }
+
+    /// The faces of edge `e`, as indices into [`Adjacency::planes`].
+    pub fn faces(&self, e: &GpuEdge) -> &[u32] {
+        let start = e.first_face as usize;
+        &self.edge_faces[start..start + e.face_count as usize]
+    }
+
+    /// Whether edge `e` is a silhouette from a light at `light`: `xyz` a position with
+    /// `w = 1`, or a direction towards the light with `w = 0` (the module's rule). The
+    /// CPU statement of what the GPU classification computes.
+    pub fn is_silhouette(&self, e: &GpuEdge, light: [f32; 4]) -> bool {
+        let faces = self.faces(e);
+        if faces.len() == 1 {
+            return true;
+        }
+        let facing = |f: &u32| {
+            let [nx, ny, nz, d] = self.planes[*f as usize];
+            nx * light[0] + ny * light[1] + nz * light[2] + d * light[3] > 0.0
+        };
+        let first = facing(&faces[0]);
+        faces[1..].iter().any(|f| facing(f) != first)
+    }
+
+    /// Number of silhouette edges from `light` (see [`Adjacency::is_silhouette`]).
+    pub fn silhouette_count(&self, light: [f32; 4]) -> usize {
+        self.edges.iter().filter(|e| self.is_silhouette(e, light)).count()
+    }
+}
+
+/// The plane of a triangle (unit normal, offset), or `None` when it has no area or a
+/// non-finite vertex.
+fn plane(t: &[[f32; 3]; 3]) -> Option<[f32; 4]> {
+    let sub = |p: [f32; 3], q: [f32; 3]| [f64::from(p[0] - q[0]), f64::from(p[1] - q[1]), f64::from(p[2] - q[2])];
+    let (e1, e2) = (sub(t[1], t[0]), sub(t[2], t[0]));
+    let n = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if !(len.is_finite() && len > 0.0) {
+        return None;
+    }
+    let n = n.map(|c| c / len);
+    let p = t[0].map(f64::from);
+    let d = -(n[0] * p[0] + n[1] * p[1] + n[2] * p[2]);
+    let plane = [n[0] as f32, n[1] as f32, n[2] as f32, d as f32];
+    plane.iter().all(|c| c.is_finite()).then_some(plane)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An axis-aligned unit cube centred on the origin, 12 outward-facing triangles.
+    fn cube() -> Vec<[[f32; 3]; 3]> {
+        let mut tris = Vec::new();
+        for axis in 0..3 {
+            for sign in [-0.5f32, 0.5] {
+                let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                let corner = |a: f32, b: f32| {
+                    let mut p = [0.0; 3];
+                    p[axis] = sign;
+                    p[u] = a;
+                    p[v] = b;
+                    p
+                };
+                let (p00, p10, p11, p01) = (corner(-0.5, -0.5), corner(0.5, -0.5), corner(0.5, 0.5), corner(-0.5, 0.5));
+                // Counter-clockwise seen from outside: u x v points along +axis.
+                if sign > 0.0 {
+                    tris.push([p00, p10, p11]);
+                    tris.push([p00, p11, p01]);
+                } else {
+                    tris.push([p00, p11, p10]);
+                    tris.push([p00, p01, p11]);
+                }
+            }
+        }
+        tris
+    }
+
+    #[test]
+    fn a_closed_cube_is_manifold_and_its_silhouette_from_above_is_the_top_square() {
+        let tris = cube();
+        // Outward normals: the plane offset puts the centre behind every face.
+        let adj = Adjacency::build(&tris, &[0..tris.len()]);
+        for p in &adj.planes {
+            assert!(p[3] < 0.0, "face {p:?} does not face outwards");
+        }
+        let c = adj.counts;
+        assert_eq!(
+            (c.edges, c.manifold, c.boundary, c.non_manifold, c.degenerate_faces),
+            (18, 18, 0, 0, 0)
+        );
+        // A point light straight above the top face sees the top face only: its 4 outer
+        // edges are silhouettes, its diagonal is not.
+        assert_eq!(adj.silhouette_count([0.0, 10.0, 0.0, 1.0]), 4);
+        // A light off a corner sees three faces: the silhouette is a hexagon.
+        assert_eq!(adj.silhouette_count([10.0, 10.0, 10.0, 1.0]), 6);
+        // A distant light from above, and from below (w = 0): the same square.
+        assert_eq!(adj.silhouette_count([0.0, 1.0, 0.0, 0.0]), 4);
+        assert_eq!(adj.silhouette_count([0.0, -1.0, 0.0, 0.0]), 4);
+        // Inside the cube every face faces away: no silhouette.
+        assert_eq!(adj.silhouette_count([0.0, 0.0, 0.0, 1.0]), 0);
+    }
+
+    #[test]
+    fn open_boundaries_are_always_silhouettes() {
+        let q = [[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [-1.0, 0.0, 1.0]];
+        let quad = vec![[q[0], q[2], q[1]], [q[0], q[3], q[2]]];
+        let adj = Adjacency::build(&quad, &[0..2]);
+        let c = adj.counts;
+        assert_eq!((c.edges, c.boundary, c.manifold), (5, 4, 1));
+        for light in [[0.0, 3.0, 0.0, 1.0], [0.0, -3.0, 0.0, 1.0], [0.3, 1.0, 0.2, 0.0]] {
+            assert_eq!(adj.silhouette_count(light), 4, "light {light:?}");
+        }
+        // The cube with its top face removed: the top square becomes a boundary.
+        let open: Vec<_> = cube().into_iter().filter(|t| t.iter().any(|p| p[1] < 0.5)).collect();
+        let adj = Adjacency::build(&open, &[0..open.len()]);
+        assert_eq!((adj.counts.boundary, adj.counts.manifold), (4, 13));
+        assert_eq!(adj.silhouette_count([0.0, 10.0, 0.0, 1.0]), 4);
+    }
+
+    #[test]
+    fn an_edge_shared_by_three_faces_is_non_manifold_and_classified_by_all_of_them() {
+        // Three fins around the edge x = 0, z = 0, y in [0, 1].
+        let (a, b) = ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let fins = vec![[a, b, [1.0, 0.0, 0.0]], [a, b, [-0.5, 0.0, 0.8]], [b, a, [-0.5, 0.0, -0.8]]];
+        let adj = Adjacency::build(&fins, &[0..3]);
+        assert_eq!(adj.counts.non_manifold, 1);
+        let shared = adj.edges.iter().find(|e| e.face_count == 3).expect("the shared edge");
+        // Around the edge, the light is on the front of some fins and the back of others, or
+        // (in some sectors) on the same side of all three. The side of each fin, from its
+        // vertices by a triple product (not from the stored planes):
+        let side = |t: &[[f32; 3]; 3], l: [f32; 3]| {
+            let sub = |p: [f32; 3], q: [f32; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+            let (u, v, w) = (sub(t[1], t[0]), sub(t[2], t[0]), sub(l, t[0]));
+            u[0] * (v[1] * w[2] - v[2] * w[1]) + u[1] * (v[2] * w[0] - v[0] * w[2]) + u[2] * (v[0] * w[1] - v[1] * w[0]) > 0.0
+        };
+        let mut seen = [false; 2];
+        for angle in 0..72 {
+            let t = angle as f32 * std::f32::consts::TAU / 72.0 + 0.01;
+            let l = [3.0 * t.cos(), 0.5, 3.0 * t.sin()];
+            let sides: Vec<bool> = fins.iter().map(|f| side(f, l)).collect();
+            let split = sides.iter().any(|&s| s != sides[0]);
+            assert_eq!(adj.is_silhouette(shared, [l[0], l[1], l[2], 1.0]), split, "angle {t}");
+            seen[usize::from(split)] = true;
+        }
+        assert_eq!(seen, [true, true], "both cases occur around a three-fin edge");
+    }
+
+    #[test]
+    fn meshes_are_not_welded_to_each_other_and_degenerate_faces_are_counted() {
+        let mut tris = cube();
+        let n = tris.len();
+        tris.extend(cube()); // a second cube at the same place: a separate mesh
+        tris.push([[0.0; 3], [0.0; 3], [1.0, 0.0, 0.0]]); // repeated vertex
+        tris.push([[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]); // zero area
+        tris.push([[f32::NAN, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]); // non-finite
+        let adj = Adjacency::build(&tris, &[0..n, n..tris.len()]);
+        assert_eq!(adj.counts.meshes, 2);
+        assert_eq!(adj.counts.manifold, 36, "two closed cubes, no edge shared between them");
+        assert_eq!(adj.counts.degenerate_faces, 3);
+        assert_eq!(adj.edges.len(), 36);
+        // Within the bound computed before building.
+        let bytes = (adj.edges.len() * size_of::<GpuEdge>() + adj.planes.len() * 16 + adj.edge_faces.len() * 4) as u64;
+        assert!(bytes <= Adjacency::max_bytes(tris.len() as u64));
+        assert_eq!(size_of::<GpuEdge>(), 32, "std430 layout of the GPU's edge struct");
+    }
+
+    #[test]
+    fn out_of_range_meshes_are_clipped_and_empty_input_is_empty() {
+        let adj = Adjacency::build(&[], &[0..10]);
+        assert_eq!(adj.counts.edges, 0);
+        let tris = cube();
+        let adj = Adjacency::build(&tris, &[6..100]);
+        assert_eq!(adj.counts.edges as usize, adj.edges.len());
+        assert!(adj.counts.boundary > 0);
+    }
+}
