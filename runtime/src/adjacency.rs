@@ -80,7 +80,7 @@ impl Adjacency {
 
     /// Build the adjacency of `meshes`, each a range of triangles of `triangles` (world
     /// space). Ranges outside `triangles` are clipped to it.
-    pub fn build(triangles: &[[[f32; 3]; 3]], meshes: &[Range<usize>]) -> Adjacency {
+    pub fn build(triangles: &[[[f32; 3]; 3]], meshes: impl IntoIterator<Item = Range<usize>>) -> Adjacency {
         let mut out = Adjacency::default();
         let mut faces_of: Vec<(u32, u32, u32)> = Vec::new(); // (lo vertex, hi vertex, plane)
         for range in meshes {
@@ -185,6 +185,7 @@ fn plane(t: &[[f32; 3]; 3]) -> Option<[f32; 4]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::iter::once;
 
     /// An axis-aligned unit cube centred on the origin, 12 outward-facing triangles.
     fn cube() -> Vec<[[f32; 3]; 3]> {
@@ -217,7 +218,7 @@ mod tests {
     fn a_closed_cube_is_manifold_and_its_silhouette_from_above_is_the_top_square() {
         let tris = cube();
         // Outward normals: the plane offset puts the centre behind every face.
-        let adj = Adjacency::build(&tris, &[0..tris.len()]);
+        let adj = Adjacency::build(&tris, once(0..tris.len()));
         for p in &adj.planes {
             assert!(p[3] < 0.0, "face {p:?} does not face outwards");
         }
@@ -242,7 +243,7 @@ mod tests {
     fn open_boundaries_are_always_silhouettes() {
         let q = [[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [-1.0, 0.0, 1.0]];
         let quad = vec![[q[0], q[2], q[1]], [q[0], q[3], q[2]]];
-        let adj = Adjacency::build(&quad, &[0..2]);
+        let adj = Adjacency::build(&quad, once(0..2));
         let c = adj.counts;
         assert_eq!((c.edges, c.boundary, c.manifold), (5, 4, 1));
         for light in [[0.0, 3.0, 0.0, 1.0], [0.0, -3.0, 0.0, 1.0], [0.3, 1.0, 0.2, 0.0]] {
@@ -250,7 +251,7 @@ mod tests {
         }
         // The cube with its top face removed: the top square becomes a boundary.
         let open: Vec<_> = cube().into_iter().filter(|t| t.iter().any(|p| p[1] < 0.5)).collect();
-        let adj = Adjacency::build(&open, &[0..open.len()]);
+        let adj = Adjacency::build(&open, once(0..open.len()));
         assert_eq!((adj.counts.boundary, adj.counts.manifold), (4, 13));
         assert_eq!(adj.silhouette_count([0.0, 10.0, 0.0, 1.0]), 4);
     }
@@ -260,7 +261,7 @@ mod tests {
         // Three fins around the edge x = 0, z = 0, y in [0, 1].
         let (a, b) = ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
         let fins = vec![[a, b, [1.0, 0.0, 0.0]], [a, b, [-0.5, 0.0, 0.8]], [b, a, [-0.5, 0.0, -0.8]]];
-        let adj = Adjacency::build(&fins, &[0..3]);
+        let adj = Adjacency::build(&fins, once(0..3));
         assert_eq!(adj.counts.non_manifold, 1);
         let shared = adj.edges.iter().find(|e| e.face_count == 3).expect("the shared edge");
         // Around the edge, the light is on the front of some fins and the back of others, or
@@ -291,7 +292,7 @@ mod tests {
         tris.push([[0.0; 3], [0.0; 3], [1.0, 0.0, 0.0]]); // repeated vertex
         tris.push([[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]); // zero area
         tris.push([[f32::NAN, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]); // non-finite
-        let adj = Adjacency::build(&tris, &[0..n, n..tris.len()]);
+        let adj = Adjacency::build(&tris, [0..n, n..tris.len()]);
         assert_eq!(adj.counts.meshes, 2);
         assert_eq!(adj.counts.manifold, 36, "two closed cubes, no edge shared between them");
         assert_eq!(adj.counts.degenerate_faces, 3);
@@ -304,10 +305,10 @@ mod tests {
 
     #[test]
     fn out_of_range_meshes_are_clipped_and_empty_input_is_empty() {
-        let adj = Adjacency::build(&[], &[0..10]);
+        let adj = Adjacency::build(&[], once(0..10));
         assert_eq!(adj.counts.edges, 0);
         let tris = cube();
-        let adj = Adjacency::build(&tris, &[6..100]);
+        let adj = Adjacency::build(&tris, once(6..100));
         assert_eq!(adj.counts.edges as usize, adj.edges.len());
         assert!(adj.counts.boundary > 0);
     }
