@@ -133,6 +133,7 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
         params,
         params_size,
         textures,
+        buffers: vec![],
         passes,
         removed: ir.removed.to_vec(),
     }

@@ -188,6 +188,9 @@ pub struct PassGraph {
     /// Bytes of the `Params` uniform (0: none).
     pub params_size: u32,
     pub textures: Vec<TextureDecl>,
+    /// Buffers generated on the GPU (Geometry passes); absent when there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub buffers: Vec<BufferDecl>,
     /// In execution order.
     pub passes: Vec<PassDecl>,
     /// What the compiler removed, and why.
@@ -437,7 +440,7 @@ pub enum Views {
 }
 
 /// What one step draws or dispatches.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Draw {
     /// The scene rasterised from the light.
     SceneFromLight,
@@ -451,7 +454,56 @@ pub enum Draw {
     ComputeRows,
     /// A compute dispatch with one invocation per column of the shadow map (64 per workgroup).
     ComputeColumns,
+    /// A compute dispatch with one invocation per edge of the scene's meshes (64 per
+    /// workgroup): it classifies the edge as seen from the light's centre and, for a
+    /// silhouette, appends one record to `buffer` and adds the record's vertices to the
+    /// buffer's draw arguments (Geometry passes; the runtime's `adjacency` module states
+    /// the silhouette rule). The runtime resets the vertex count before the dispatch. The
+    /// dispatch may be two-dimensional (at most 65,535 workgroups along x): the edge index is
+    /// `id.x + id.y * 64 * num_workgroups.x`, and indices past the edge count do nothing.
+    Silhouettes { buffer: String },
+    /// The primitives of the records in `buffer`, drawn indirectly with the arguments a
+    /// `Silhouettes` step wrote (the vertex stage reads the records: vertex pulling, one
+    /// record per `vertices_per_record` vertices), overlaps resolved by `resolve`.
+    Primitives { buffer: String, resolve: Resolve },
 }
+
+/// How the fragments of overlapping generated primitives combine in a target (the three
+/// overlap rules of Wyman & Hansen 2003, figure 6, and the lightest), by blending:
+/// every target starts at the rule's identity.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Resolve {
+    /// The smallest value wins (the darkest shadow); targets start at 1.
+    KeepMin,
+    /// The largest value wins; targets start at 0.
+    KeepMax,
+    /// Shadow contributions add: each fragment writes its shadow amount `1 - v`, and the
+    /// target keeps `1 - sum(1 - v)` (clamp it to [0, 1] when reading); targets start at 1.
+    Add,
+    /// Values multiply; targets start at 1.
+    Multiply,
+}
+
+/// A buffer of records generated on the GPU by a `Silhouettes` step: 16 bytes of draw
+/// arguments (`vertex_count`, `instance_count`, `first_vertex`, `first_instance`: what
+/// `draw_indirect` reads) followed by at most one record of `record_bytes` per edge of
+/// the scene's meshes. The runtime sizes it from the edge count before allocation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BufferDecl {
+    pub name: String,
+    /// Bytes per record: a multiple of 16, at most [`MAX_RECORD_BYTES`].
+    pub record_bytes: u32,
+    /// Vertices drawn per record, at most [`MAX_VERTICES_PER_RECORD`].
+    pub vertices_per_record: u32,
+}
+
+/// Largest record of a generated buffer, bytes.
+pub const MAX_RECORD_BYTES: u32 = 1024;
+/// Most vertices drawn per generated record.
+pub const MAX_VERTICES_PER_RECORD: u32 = 4096;
+/// Bytes of the draw arguments at the start of a generated buffer.
+pub const DRAW_ARGS_BYTES: u32 = 16;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum View {
@@ -551,6 +603,11 @@ pub enum GraphError {
         field: &'static str,
         message: String,
     },
+    /// A generated buffer that is undeclared, malformed, or drawn before it is written.
+    Buffer {
+        buffer: String,
+        message: String,
+    },
 }
 
 impl fmt::Display for GraphError {
@@ -581,6 +638,7 @@ impl fmt::Display for GraphError {
                 "pass `{pass}` writes layer {layer} of texture `{texture}`, which has {layers} layer(s)"
             ),
             GraphError::Texture { texture, field, message } => write!(f, "texture `{texture}`, field `{field}`: {message}"),
+            GraphError::Buffer { buffer, message } => write!(f, "buffer `{buffer}`: {message}"),
         }
     }
 }
@@ -628,6 +686,8 @@ impl PassGraph {
         check_unique("texture", g.textures.iter().map(|t| &t.name))?;
         check_unique("pass", g.passes.iter().map(|p| &p.name))?;
         check_unique("param", g.params.iter().map(|p| &p.name))?;
+        check_unique("buffer", g.buffers.iter().map(|b| &b.name))?;
+        g.check_buffers()?;
         for t in &g.textures {
             if t.layers == 0 {
                 return Err(GraphError::Texture {
@@ -720,6 +780,65 @@ impl PassGraph {
     pub fn texture(&self, name: &str) -> Option<&TextureDecl> {
         self.textures.iter().find(|t| t.name == name)
     }
+
+    pub fn buffer(&self, name: &str) -> Option<&BufferDecl> {
+        self.buffers.iter().find(|b| b.name == name)
+    }
+
+    /// Every generated buffer well formed, every step naming a declared one, and drawn
+    /// only after a `Silhouettes` step wrote it.
+    fn check_buffers(&self) -> Result<(), GraphError> {
+        for b in &self.buffers {
+            let bad = |message: String| {
+                Err(GraphError::Buffer {
+                    buffer: b.name.clone(),
+                    message,
+                })
+            };
+            if b.record_bytes == 0 || b.record_bytes % 16 != 0 || b.record_bytes > MAX_RECORD_BYTES {
+                return bad(format!(
+                    "record_bytes {} is not a multiple of 16 in 16..={MAX_RECORD_BYTES}",
+                    b.record_bytes
+                ));
+            }
+            if b.vertices_per_record == 0 || b.vertices_per_record > MAX_VERTICES_PER_RECORD {
+                return bad(format!(
+                    "vertices_per_record {} is outside 1..={MAX_VERTICES_PER_RECORD}",
+                    b.vertices_per_record
+                ));
+            }
+        }
+        let mut written: Vec<&str> = Vec::new();
+        for p in &self.passes {
+            for s in &p.steps {
+                let (name, writes) = match &s.draw {
+                    Draw::Silhouettes { buffer } => (buffer, true),
+                    Draw::Primitives { buffer, .. } => (buffer, false),
+                    Draw::SceneFromLight
+                    | Draw::SceneFromCamera
+                    | Draw::FullScreen
+                    | Draw::MipLevels
+                    | Draw::ComputeRows
+                    | Draw::ComputeColumns => continue,
+                };
+                let bad = |message: String| {
+                    Err(GraphError::Buffer {
+                        buffer: name.clone(),
+                        message,
+                    })
+                };
+                if self.buffer(name).is_none() {
+                    return bad(format!("pass `{}` names it, but the graph does not declare it", p.name));
+                }
+                if writes {
+                    written.push(name);
+                } else if !written.contains(&name.as_str()) {
+                    return bad(format!("pass `{}` draws it, but no earlier Silhouettes step writes it", p.name));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 fn check_unique<'a>(what: &'static str, names: impl Iterator<Item = &'a String>) -> Result<(), GraphError> {
@@ -759,6 +878,7 @@ mod tests {
                 transient: false,
                 channels: vec![],
             }],
+            buffers: vec![],
             passes: vec![PassDecl {
                 name: "depth".into(),
                 kind: PassKind::Depth,

@@ -13,6 +13,13 @@ pub fn scene_inputs(scene: &Scene) -> Result<SceneInputs, String> {
     let cam = scene.camera_position();
     Ok(SceneInputs {
         vertices: scene.vertex_data(),
+        // One mesh per object: Geometry passes find edges within each.
+        meshes: (0..scene.objects().len())
+            .map(|i| {
+                let r = scene.object_triangles(i);
+                r.start as u32..r.end as u32
+            })
+            .collect(),
         camera_view_proj: scene.camera_view_proj().to_cols_array(),
         camera_position: cam.to_array(),
         camera_size: scene.camera_size(),

@@ -27,13 +27,14 @@
 //!
 //! Sizes are known from the triangle count before anything is allocated: at most
 //! `3 t` edges, `t` planes and `3 t` face references for `t` triangles
-//! ([`Adjacency::max_bytes`]).
+//! ([`Adjacency::max_bytes`]). Triangle indices are below 2^31 (a scene holds at most
+//! 2^24 triangles), so a face reference fits a `u32` with its direction bit.
 
 use std::collections::HashMap;
 use std::ops::Range;
 
 /// One edge as the GPU reads it (std430, 32 bytes): its two welded end points and the
-/// range of its faces in [`Adjacency::edge_faces`].
+/// range of its face references in [`Adjacency::edge_faces`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
 pub struct GpuEdge {
@@ -64,9 +65,14 @@ pub struct AdjacencyCounts {
 #[derive(Clone, Debug, Default)]
 pub struct Adjacency {
     pub edges: Vec<GpuEdge>,
-    /// Face planes: unit normal `xyz` and offset `w = -n . p` for a point `p` of the face.
+    /// One plane per triangle of the input (degenerate ones all zero): unit normal `xyz`
+    /// (by the triangle's winding, `(v1 - v0) x (v2 - v0)`) and offset `w = -n . p` for a
+    /// point `p` of the triangle.
     pub planes: Vec<[f32; 4]>,
-    /// Per edge, its faces' indices into [`Adjacency::planes`] (see [`GpuEdge::first_face`]).
+    /// Per edge, its face references (see [`GpuEdge::first_face`]): the triangle's index
+    /// into [`Adjacency::planes`] times 2, plus 1 when the triangle's winding runs along
+    /// the edge from `b` to `a`. The triangle's interior lies along `n x (q - p)` for the
+    /// winding's direction `p -> q`: `n x (b - a)` without the bit, `n x (a - b)` with it.
     pub edge_faces: Vec<u32>,
     pub counts: AdjacencyCounts,
 }
@@ -82,14 +88,17 @@ impl Adjacency {
     /// space). Ranges outside `triangles` are clipped to it.
     pub fn build(triangles: &[[[f32; 3]; 3]], meshes: impl IntoIterator<Item = Range<usize>>) -> Adjacency {
         let mut out = Adjacency::default();
-        let mut faces_of: Vec<(u32, u32, u32)> = Vec::new(); // (lo vertex, hi vertex, plane)
+        // (lo vertex, hi vertex, face reference), per mesh
+        let mut faces_of: Vec<(u32, u32, u32)> = Vec::new();
+        out.planes = vec![[0.0; 4]; triangles.len()];
         for range in meshes {
             let range = range.start.min(triangles.len())..range.end.min(triangles.len());
             out.counts.meshes += 1;
             let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
             let mut welded: Vec<[f32; 3]> = Vec::new();
             faces_of.clear();
-            for tri in &triangles[range] {
+            for (t, tri) in triangles[range.clone()].iter().enumerate() {
+                let t = range.start + t;
                 let ids = tri.map(|p| {
                     let next = welded.len() as u32;
                     *weld.entry(p.map(f32::to_bits)).or_insert_with(|| {
@@ -101,11 +110,15 @@ impl Adjacency {
                     out.counts.degenerate_faces += 1;
                     continue;
                 };
-                let f = out.planes.len() as u32;
-                out.planes.push(plane);
+                out.planes[t] = plane;
                 for (i, j) in [(0, 1), (1, 2), (2, 0)] {
-                    let (lo, hi) = if ids[i] < ids[j] { (ids[i], ids[j]) } else { (ids[j], ids[i]) };
-                    faces_of.push((lo, hi, f));
+                    // The winding runs ids[i] -> ids[j]: from b to a when ids[i] is the higher.
+                    let (lo, hi, back) = if ids[i] < ids[j] {
+                        (ids[i], ids[j], 0)
+                    } else {
+                        (ids[j], ids[i], 1)
+                    };
+                    faces_of.push((lo, hi, ((t as u32) << 1) | back));
                 }
             }
             // Group the face references by edge: sorting keeps the result independent of
@@ -133,7 +146,7 @@ impl Adjacency {
         out
     }
 
-    /// The faces of edge `e`, as indices into [`Adjacency::planes`].
+    /// The face references of edge `e` (see [`Adjacency::edge_faces`]).
     pub fn faces(&self, e: &GpuEdge) -> &[u32] {
         let start = e.first_face as usize;
         &self.edge_faces[start..start + e.face_count as usize]
@@ -148,7 +161,7 @@ impl Adjacency {
             return true;
         }
         let facing = |f: &u32| {
-            let [nx, ny, nz, d] = self.planes[*f as usize];
+            let [nx, ny, nz, d] = self.planes[(*f >> 1) as usize];
             nx * light[0] + ny * light[1] + nz * light[2] + d * light[3] > 0.0
         };
         let first = facing(&faces[0]);
@@ -237,6 +250,37 @@ mod tests {
         assert_eq!(adj.silhouette_count([0.0, -1.0, 0.0, 0.0]), 4);
         // Inside the cube every face faces away: no silhouette.
         assert_eq!(adj.silhouette_count([0.0, 0.0, 0.0, 1.0]), 0);
+    }
+
+    #[test]
+    fn direction_bits_point_each_face_reference_at_its_interior() {
+        let mut tris = cube();
+        let q = [[-1.0, 2.0, -1.0], [1.0, 2.0, -1.0], [1.0, 2.0, 1.0]];
+        tris.push(q);
+        let adj = Adjacency::build(&tris, [0..12, 12..13]);
+        let (sub, dot) = (
+            |p: [f32; 3], q: [f32; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]],
+            |p: [f32; 3], q: [f32; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2],
+        );
+        let cross = |u: [f32; 3], v: [f32; 3]| [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+        let mut checked = 0;
+        for e in &adj.edges {
+            let bits: Vec<u32> = adj.faces(e).iter().map(|f| f & 1).collect();
+            if bits.len() == 2 {
+                assert_ne!(bits[0], bits[1], "a consistently wound closed mesh runs each edge both ways");
+            }
+            for f in adj.faces(e) {
+                let t = tris[(f >> 1) as usize];
+                let n = adj.planes[(f >> 1) as usize];
+                let dir = if f & 1 == 1 { sub(e.a, e.b) } else { sub(e.b, e.a) };
+                let inward = cross([n[0], n[1], n[2]], dir);
+                // The triangle's vertex off the edge lies on the inward side.
+                let third = t.iter().find(|p| **p != e.a && **p != e.b).expect("a vertex off the edge");
+                assert!(dot(inward, sub(*third, e.a)) > 0.0, "edge {e:?}, face {f}");
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 3 * 13);
     }
 
     #[test]

@@ -114,7 +114,10 @@ impl Gpu {
             apply_limit_buckets: false,
         }))
         .map_err(|e| RuntimeError::NoAdapter(format!("{e}; {INSTALL_HINT}")))?;
-        let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::FLOAT32_FILTERABLE | wgpu::Features::TEXTURE_FORMAT_16BIT_NORM;
+        let wanted = wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::FLOAT32_FILTERABLE
+            | wgpu::Features::FLOAT32_BLENDABLE
+            | wgpu::Features::TEXTURE_FORMAT_16BIT_NORM;
         let features = adapter.features() & wanted;
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

@@ -98,6 +98,17 @@ struct Timestamps {
     read: wgpu::Buffer,
 }
 
+/// What a frame generated into one buffer ([`Executor::generated`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Generated {
+    /// Records appended (silhouette edges, for the Geometry passes of this runtime).
+    pub records: u32,
+    /// Vertices the indirect draw drew: `records` times the buffer's `vertices_per_record`.
+    pub vertices: u32,
+    /// Instances of the indirect draw (1).
+    pub instances: u32,
+}
+
 /// A loaded pass graph, ready to run.
 pub struct Executor<'g> {
     gpu: &'g Gpu,
@@ -522,6 +533,39 @@ impl<'g> Executor<'g> {
                 (t.name.clone(), if t.mips { per * 4 / 3 } else { per })
             })
             .collect())
+    }
+
+    /// What the last frame generated into buffer `name` (a Geometry pass's records): read
+    /// back from the draw arguments at the buffer's start, so this waits for the GPU.
+    pub fn generated(&self, name: &str) -> Result<Generated> {
+        let b = self.bound()?;
+        let decl = self
+            .graph
+            .buffer(name)
+            .ok_or_else(|| RuntimeError::NotFound(format!("no generated buffer `{name}`")))?;
+        let gpu = self.gpu;
+        let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("draw arguments read-back"),
+            size: graph::DRAW_ARGS_BYTES as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(b.generated(name)?, 0, &read, 0, graph::DRAW_ARGS_BYTES as u64);
+        gpu.scoped("reading draw arguments", || gpu.queue.submit([encoder.finish()]))?;
+        let raw = gpu.map_read(&read)?;
+        let word = |i: usize| u32::from_le_bytes([raw[4 * i], raw[4 * i + 1], raw[4 * i + 2], raw[4 * i + 3]]);
+        let vertices = word(0);
+        Ok(Generated {
+            records: vertices / decl.vertices_per_record,
+            vertices,
+            instances: word(1),
+        })
+    }
+
+    /// The edge adjacency the bound scene gave the Geometry passes (`None` without them).
+    pub fn edge_counts(&self) -> Result<Option<crate::adjacency::AdjacencyCounts>> {
+        Ok(self.bound()?.edges.as_ref().map(|e| e.counts))
     }
 
     /// The bound scene's shadow-map resolution.

@@ -9,6 +9,9 @@ use crate::graph::FrameUniform;
 pub struct SceneInputs {
     /// Interleaved world-space position xyz and normal xyz, three vertices per triangle.
     pub vertices: Vec<f32>,
+    /// The scene's meshes as ranges of triangles (indices into `vertices / 18`). Geometry
+    /// passes find edges within each mesh, never across two; empty: one mesh of all.
+    pub meshes: Vec<std::ops::Range<u32>>,
     pub camera_view_proj: [f32; 16],
     pub camera_position: [f32; 3],
     pub camera_size: (u32, u32),

@@ -6,7 +6,10 @@
 //! - `device`: [`Gpu`], [`RuntimeError`], error scopes, the caches;
 //! - `pipeline`: the pipeline key (everything a pipeline is built from) and its building;
 //! - `steps`: the step nodes (raster and compute) and the refusals of unsupported features;
-//! - `resources`: textures, tables and attachments at a scene's sizes;
+//! - `resources`: textures, tables, attachments, edge adjacency and generated buffers at
+//!   a scene's sizes;
+//! - `adjacency` (public): the edge adjacency of a scene's meshes, built on the CPU for
+//!   Geometry passes, and the silhouette rule;
 //! - `executor`: [`Executor`]: load, bind, run, read back;
 //! - `frame`: [`SceneInputs`] and the `Frame` uniform's values;
 //! - `image`: [`Image`] and texel decoding (the PNG and PFM writers are in the lab);
@@ -19,7 +22,8 @@
 
 pub use crate::device::{Gpu, INSTALL_HINT, Result, RuntimeError};
 pub use crate::executor::{
-    CameraOutput, Executor, FrameTimes, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility, read_capped,
+    CameraOutput, Executor, FrameTimes, Generated, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility,
+    read_capped,
 };
 pub use crate::frame::SceneInputs;
 pub use crate::image::Image;

@@ -60,6 +60,41 @@ pub(crate) struct BindingLayout {
     pub reads: Vec<(u32, Slot)>,
     /// Group 2 (compute steps): what the step writes, bindings 0, 1, ...
     pub writes: Vec<Slot>,
+    /// Group 3 (Geometry passes): the edge adjacency and a generated buffer.
+    pub geometry: Option<GeometryGroup>,
+}
+
+/// What group 3 of a Geometry pass's step binds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum GeometryGroup {
+    /// A `Silhouettes` step (compute): 0 edges, 1 face planes, 2 edge faces (read-only
+    /// storage), 3 the generated buffer (read-write storage).
+    Classify,
+    /// A `Primitives` step (raster): 0 the generated buffer (read-only storage, vertex and
+    /// fragment stages).
+    Draw,
+}
+
+impl GeometryGroup {
+    fn entries(self) -> Vec<wgpu::BindGroupLayoutEntry> {
+        let buffer = |binding, read_only, visibility| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        match self {
+            GeometryGroup::Classify => {
+                let c = wgpu::ShaderStages::COMPUTE;
+                vec![buffer(0, true, c), buffer(1, true, c), buffer(2, true, c), buffer(3, false, c)]
+            }
+            GeometryGroup::Draw => vec![buffer(0, true, wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT)],
+        }
+    }
 }
 
 /// One binding of group 1 or 2.
@@ -79,6 +114,8 @@ pub(crate) struct StepPipeline {
     pub group1: Option<wgpu::BindGroupLayout>,
     /// What a compute step writes.
     pub group2: Option<wgpu::BindGroupLayout>,
+    /// The Geometry pass's buffers.
+    pub group3: Option<wgpu::BindGroupLayout>,
 }
 
 pub(crate) enum Pipeline {
@@ -170,12 +207,15 @@ impl StepPipeline {
         };
         let reads: Vec<_> = l.reads.iter().map(|(b, s)| s.entry(*b)).collect();
         let writes: Vec<_> = l.writes.iter().enumerate().map(|(i, s)| s.entry(i as u32)).collect();
-        // An empty group 1 keeps group 2 at its index when a compute step reads nothing.
-        let group1 = (!reads.is_empty() || compute).then(|| layout_of("reads", &reads));
-        let group2 = compute.then(|| layout_of("writes", &writes));
+        // Empty groups 1 and 2 keep the later groups at their indices.
+        let geometry = l.geometry.is_some();
+        let group1 = (!reads.is_empty() || compute || geometry).then(|| layout_of("reads", &reads));
+        let group2 = (compute || geometry).then(|| layout_of("writes", &writes));
+        let group3 = l.geometry.map(|g| layout_of("geometry", &g.entries()));
         let mut layouts: Vec<Option<&wgpu::BindGroupLayout>> = vec![Some(&group0)];
         layouts.extend(group1.iter().map(Some));
         layouts.extend(group2.iter().map(Some));
+        layouts.extend(group3.iter().map(Some));
         let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(label),
             bind_group_layouts: &layouts,
@@ -257,6 +297,7 @@ impl StepPipeline {
             group0,
             group1,
             group2,
+            group3,
         })
     }
 }

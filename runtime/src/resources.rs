@@ -3,9 +3,10 @@
 //! `Frame` uniform. Sizes are checked against the device before anything is allocated
 //! (lavapipe keeps allocating past its limits).
 
+use crate::adjacency::{Adjacency, AdjacencyCounts, GpuEdge};
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
-use crate::graph::{FRAME_SIZE, Format, PassGraph, TextureDecl};
+use crate::graph::{DRAW_ARGS_BYTES, FRAME_SIZE, Format, PassGraph, TextureDecl};
 use crate::pipeline::DEPTH_FORMAT;
 use std::collections::HashMap;
 
@@ -51,6 +52,28 @@ pub(crate) fn f32_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
+/// The scene's edge adjacency on the GPU, for Geometry passes (group 3 of their
+/// `Silhouettes` steps; layout in [`crate::adjacency`]).
+pub(crate) struct EdgeBuffers {
+    pub edges: wgpu::Buffer,
+    pub planes: wgpu::Buffer,
+    pub edge_faces: wgpu::Buffer,
+    pub counts: AdjacencyCounts,
+}
+
+/// The triangles of `s` as position triples (normals dropped).
+fn triangles(s: &SceneInputs) -> Vec<[[f32; 3]; 3]> {
+    s.vertices
+        .chunks_exact(18)
+        .map(|t| [[t[0], t[1], t[2]], [t[6], t[7], t[8]], [t[12], t[13], t[14]]])
+        .collect()
+}
+
+/// Bytes of a generated buffer for `edges` edges: the draw arguments and one record per edge.
+pub(crate) fn generated_bytes(record_bytes: u32, edges: u64) -> u64 {
+    DRAW_ARGS_BYTES as u64 + record_bytes as u64 * edges
+}
+
 /// The resources of one graph bound to one scene.
 pub(crate) struct Resources {
     pub shadow_size: u32,
@@ -65,6 +88,10 @@ pub(crate) struct Resources {
     pub camera: Vec<wgpu::Texture>,
     pub camera_depth: wgpu::Texture,
     pub frame: wgpu::Buffer,
+    /// The edge adjacency, when the graph has Geometry passes.
+    pub edges: Option<EdgeBuffers>,
+    /// Buffers generated on the GPU, by name.
+    generated: HashMap<String, wgpu::Buffer>,
 }
 
 impl Resources {
@@ -119,6 +146,43 @@ impl Resources {
                 limit: gpu.limits.max_buffer_size,
             });
         }
+        // Geometry passes: the edge adjacency, bounded from the triangle count before it is
+        // built, and the generated buffers, bounded from the edge count it gives.
+        let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+        let adjacency = if graph.buffers.is_empty() {
+            None
+        } else {
+            let tris = (s.vertices.len() / 18) as u64;
+            let bound = Adjacency::max_bytes(tris);
+            if bytes.saturating_add(bound) > max_bytes {
+                return Err(RuntimeError::Limit {
+                    what: format!("edge adjacency of {tris} triangles, with the textures (bytes)"),
+                    needed: bytes.saturating_add(bound),
+                    limit: max_bytes,
+                });
+            }
+            let adj = Adjacency::build(&triangles(s), meshes(s));
+            let edges = adj.edges.len() as u64;
+            for b in &graph.buffers {
+                let size = generated_bytes(b.record_bytes, edges);
+                if size > storage_limit {
+                    return Err(RuntimeError::Limit {
+                        what: format!("generated buffer `{}` ({edges} edges x {} bytes)", b.name, b.record_bytes),
+                        needed: size,
+                        limit: storage_limit,
+                    });
+                }
+                bytes += size;
+            }
+            if bytes > max_bytes {
+                return Err(RuntimeError::Limit {
+                    what: "textures and generated buffers of this graph at this scene's sizes (bytes)".into(),
+                    needed: bytes,
+                    limit: max_bytes,
+                });
+            }
+            Some(adj)
+        };
         gpu.scoped("scene resources", || {
             let vertices = gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("scene vertices"),
@@ -191,6 +255,38 @@ impl Resources {
                 mapped_at_creation: false,
             });
             gpu.queue.write_buffer(&frame, 0, &s.frame().to_bytes());
+            // A storage binding may not be empty: every buffer holds at least one element.
+            let storage = |label: &str, data: &[u8], min: usize, usage: wgpu::BufferUsages| {
+                let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: data.len().max(min) as u64,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | usage,
+                    mapped_at_creation: false,
+                });
+                if !data.is_empty() {
+                    gpu.queue.write_buffer(&buf, 0, data);
+                }
+                buf
+            };
+            let mut generated = HashMap::new();
+            let edges = adjacency.map(|adj| {
+                for b in &graph.buffers {
+                    let size = generated_bytes(b.record_bytes, adj.edges.len() as u64) as usize;
+                    // vertex_count 0 (reset every frame), instance_count 1, first vertex and instance 0
+                    let args: Vec<u8> = [0u32, 1, 0, 0].iter().flat_map(|x| x.to_le_bytes()).collect();
+                    let buf = storage(&b.name, &args, size, wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC);
+                    generated.insert(b.name.clone(), buf);
+                }
+                let edge_bytes: Vec<u8> = adj.edges.iter().flat_map(edge_bytes).collect();
+                let plane_bytes: Vec<u8> = adj.planes.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+                let face_bytes: Vec<u8> = adj.edge_faces.iter().flat_map(|x| x.to_le_bytes()).collect();
+                EdgeBuffers {
+                    edges: storage("edges", &edge_bytes, 32, wgpu::BufferUsages::empty()),
+                    planes: storage("face planes", &plane_bytes, 16, wgpu::BufferUsages::empty()),
+                    edge_faces: storage("edge faces", &face_bytes, 4, wgpu::BufferUsages::empty()),
+                    counts: adj.counts,
+                }
+            });
             Resources {
                 shadow_size: s.shadow_size,
                 camera_size: s.camera_size,
@@ -202,6 +298,8 @@ impl Resources {
                 camera,
                 camera_depth,
                 frame,
+                edges,
+                generated,
             }
         })
     }
@@ -212,9 +310,45 @@ impl Resources {
             .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{name}`")))
     }
 
+    pub fn generated(&self, name: &str) -> Result<&wgpu::Buffer> {
+        self.generated
+            .get(name)
+            .ok_or_else(|| RuntimeError::NotFound(format!("no generated buffer `{name}`")))
+    }
+
+    pub fn edges(&self) -> Result<&EdgeBuffers> {
+        self.edges
+            .as_ref()
+            .ok_or_else(|| RuntimeError::NotFound("the graph has no Geometry pass: no edge adjacency was built".into()))
+    }
+
     pub fn table(&self, name: &str) -> Result<&wgpu::Buffer> {
         self.tables
             .get(name)
             .ok_or_else(|| RuntimeError::NotFound(format!("no summed-area table `{name}`")))
     }
+}
+
+/// The mesh ranges of `s` as triangle index ranges (one mesh of everything when none is given).
+fn meshes(s: &SceneInputs) -> Vec<std::ops::Range<usize>> {
+    let n = s.vertices.len() / 18;
+    if s.meshes.is_empty() {
+        std::iter::once(0..n).collect()
+    } else {
+        s.meshes.iter().map(|r| r.start as usize..r.end as usize).collect()
+    }
+}
+
+/// An edge in its std430 layout (32 bytes, little-endian).
+fn edge_bytes(e: &GpuEdge) -> Vec<u8> {
+    let mut out = Vec::with_capacity(32);
+    for x in e.a {
+        out.extend(x.to_le_bytes());
+    }
+    out.extend(e.first_face.to_le_bytes());
+    for x in e.b {
+        out.extend(x.to_le_bytes());
+    }
+    out.extend(e.face_count.to_le_bytes());
+    out
 }

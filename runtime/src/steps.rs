@@ -4,8 +4,10 @@
 //! [`Draw`]: what a step draws or dispatches is decided there and nowhere else.
 
 use crate::device::{Gpu, Result, RuntimeError};
-use crate::graph::{self, Binding, Draw, Format, PassGraph, PassKind, Target, View};
-use crate::pipeline::{BindingLayout, ColorTarget, DEPTH_FORMAT, DepthState, Pipeline, PipelineKey, Slot, Stages, StepPipeline};
+use crate::graph::{self, Binding, Draw, Format, PassGraph, PassKind, Resolve, Target, View};
+use crate::pipeline::{
+    BindingLayout, ColorTarget, DEPTH_FORMAT, DepthState, GeometryGroup, Pipeline, PipelineKey, Slot, Stages, StepPipeline,
+};
 use crate::resources::{CAMERA_FORMATS, Resources, mip_count, wgpu_format};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -44,6 +46,8 @@ struct RasterStep {
     depth: Option<DepthTarget>,
     draw: DrawCall,
     levels: Levels,
+    /// How overlapping fragments combine (generated primitives), or none (they replace).
+    blend: Option<wgpu::BlendState>,
 }
 
 enum Targets {
@@ -65,9 +69,9 @@ enum DrawCall {
     Scene,
     /// One full-screen triangle (3 vertices, no vertex buffer).
     FullScreenTriangle,
-    /// Arguments a compute step wrote (`draw_indirect`).
-    #[expect(dead_code, reason = "the Geometry passes will draw generated primitives indirectly")]
-    Indirect(IndirectArgs),
+    /// The primitives of a generated buffer, with the draw arguments at its start that a
+    /// `Silhouettes` step wrote (`draw_indirect`).
+    Generated(String),
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -83,6 +87,9 @@ struct ComputeStep {
     /// The summed-area tables it writes (group 2).
     writes: Vec<String>,
     dispatch: Dispatch,
+    /// The generated buffer a `Silhouettes` step appends to (group 3); its vertex count is
+    /// reset before the dispatch.
+    generated: Option<String>,
 }
 
 /// How many workgroups a compute step runs.
@@ -90,6 +97,9 @@ enum Dispatch {
     /// One invocation per row (or column) of the shadow map, [`graph::COMPUTE_WORKGROUP`]
     /// per workgroup.
     ShadowMapLines,
+    /// One invocation per edge of the scene's meshes, [`graph::COMPUTE_WORKGROUP`] per
+    /// workgroup.
+    Edges,
     /// Arguments in a buffer, written on the GPU (`dispatch_workgroups_indirect`).
     #[expect(dead_code, reason = "the Geometry passes will size their dispatches on the GPU")]
     Indirect(IndirectArgs),
@@ -109,11 +119,18 @@ enum Bound {
         /// One render pass per level.
         passes: Vec<RasterPass>,
         vertices: Option<(wgpu::Buffer, u32)>,
+        /// Empty groups 1 and 2 and the generated buffer (group 3) of a `Primitives` step.
+        geometry: Option<[wgpu::BindGroup; 3]>,
+        /// The buffer whose first 16 bytes are the draw arguments.
+        indirect: Option<wgpu::Buffer>,
     },
     Compute {
         group0: wgpu::BindGroup,
         group1: Option<wgpu::BindGroup>,
         group2: Option<wgpu::BindGroup>,
+        /// The edge adjacency and the generated buffer of a `Silhouettes` step, with the
+        /// buffer (to reset) and the number of edges (invocations).
+        geometry: Option<(wgpu::BindGroup, wgpu::Buffer, u32)>,
     },
 }
 
@@ -194,9 +211,10 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     depth,
                     draw,
                     levels,
+                    blend: None,
                 })
             };
-            let kind = match step.draw {
+            let kind = match &step.draw {
                 Draw::SceneFromLight => raster(
                     Targets::Textures(step.writes.clone()),
                     // no occluder: the far plane
@@ -229,7 +247,37 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 Draw::ComputeRows | Draw::ComputeColumns => NodeKind::Compute(ComputeStep {
                     writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
                     dispatch: Dispatch::ShadowMapLines,
+                    generated: None,
                 }),
+                Draw::Silhouettes { buffer } => NodeKind::Compute(ComputeStep {
+                    writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
+                    dispatch: Dispatch::Edges,
+                    generated: Some(buffer.clone()),
+                }),
+                Draw::Primitives { buffer, resolve } => {
+                    let (clear, blend) = resolve_state(*resolve);
+                    let formats = step.writes.iter().map(|t| texture_format(&t.texture)).collect::<Result<Vec<_>>>()?;
+                    let float32 = formats.iter().any(|f| {
+                        matches!(
+                            f,
+                            wgpu::TextureFormat::R32Float | wgpu::TextureFormat::Rg32Float | wgpu::TextureFormat::Rgba32Float
+                        )
+                    });
+                    if float32 && !gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+                        return Err(RuntimeError::Device(format!(
+                            "pass `{}` blends generated primitives into a 32-bit float texture, but this device cannot blend 32-bit floats; use F16 or a unorm precision",
+                            pass.name
+                        )));
+                    }
+                    NodeKind::Raster(RasterStep {
+                        targets: Targets::Textures(step.writes.clone()),
+                        clear: vec![clear; n],
+                        depth: None,
+                        draw: DrawCall::Generated(buffer.clone()),
+                        levels: Levels::Base,
+                        blend: Some(blend),
+                    })
+                }
             };
             // What the step reads (group 1).
             let mut reads = Vec::new();
@@ -268,7 +316,7 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                         Targets::Textures(t) => t.iter().map(|t| texture_format(&t.texture)).collect::<Result<_>>()?,
                     }
                     .into_iter()
-                    .map(|format| ColorTarget { format, blend: None })
+                    .map(|format| ColorTarget { format, blend: r.blend })
                     .collect(),
                     depth: r.depth.map(|_| DepthState {
                         format: DEPTH_FORMAT,
@@ -300,6 +348,16 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     sampler: step.sampler,
                     reads,
                     writes,
+                    geometry: match &step.draw {
+                        Draw::Silhouettes { .. } => Some(GeometryGroup::Classify),
+                        Draw::Primitives { .. } => Some(GeometryGroup::Draw),
+                        Draw::SceneFromLight
+                        | Draw::SceneFromCamera
+                        | Draw::FullScreen
+                        | Draw::MipLevels
+                        | Draw::ComputeRows
+                        | Draw::ComputeColumns => None,
+                    },
                 },
             };
             let label = format!("pipeline of pass `{}` ({:?})", pass.name, step.fragment);
@@ -364,7 +422,22 @@ impl StepNode {
                     });
                 }
                 let vertices = matches!(r.draw, DrawCall::Scene).then(|| (res.vertices.clone(), res.vertex_count));
-                Bound::Raster { group0, passes, vertices }
+                let (geometry, indirect) = match &r.draw {
+                    DrawCall::Generated(name) => {
+                        let buf = res.generated(name)?;
+                        let groups = self.empty_groups(gpu)?;
+                        let g3 = self.group3(gpu, &[buf])?;
+                        (Some([groups.0, groups.1, g3]), Some(buf.clone()))
+                    }
+                    DrawCall::Scene | DrawCall::FullScreenTriangle => (None, None),
+                };
+                Bound::Raster {
+                    group0,
+                    passes,
+                    vertices,
+                    geometry,
+                    indirect,
+                }
             }
             NodeKind::Compute(c) => {
                 let group2 = match &self.pipeline.group2 {
@@ -384,10 +457,19 @@ impl StepNode {
                         }))
                     }
                 };
+                let geometry = match &c.generated {
+                    Some(name) => {
+                        let (e, buf) = (res.edges()?, res.generated(name)?);
+                        let g3 = self.group3(gpu, &[&e.edges, &e.planes, &e.edge_faces, buf])?;
+                        Some((g3, buf.clone(), e.counts.edges))
+                    }
+                    None => None,
+                };
                 Bound::Compute {
                     group0,
                     group1: self.group1(gpu, res, 0)?,
                     group2,
+                    geometry,
                 }
             }
         };
@@ -420,6 +502,45 @@ impl StepNode {
             layout: &self.pipeline.group0,
             entries: &entries,
         }))
+    }
+
+    /// Group 3 of a Geometry pass's step: `buffers` at bindings 0, 1, ...
+    fn group3(&self, gpu: &Gpu, buffers: &[&wgpu::Buffer]) -> Result<wgpu::BindGroup> {
+        let layout = self
+            .pipeline
+            .group3
+            .as_ref()
+            .ok_or_else(|| RuntimeError::NotFound(format!("pass `{}`: a Geometry step without its group 3", self.label)))?;
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        Ok(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("geometry"),
+            layout,
+            entries: &entries,
+        }))
+    }
+
+    /// The empty groups 1 and 2 that keep a raster step's group 3 at its index.
+    fn empty_groups(&self, gpu: &Gpu) -> Result<(wgpu::BindGroup, wgpu::BindGroup)> {
+        let empty = |layout: &Option<wgpu::BindGroupLayout>| {
+            layout
+                .as_ref()
+                .map(|layout| {
+                    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: None,
+                        layout,
+                        entries: &[],
+                    })
+                })
+                .ok_or_else(|| RuntimeError::NotFound(format!("pass `{}`: a Geometry step without groups 1 and 2", self.label)))
+        };
+        Ok((empty(&self.pipeline.group1)?, empty(&self.pipeline.group2)?))
     }
 
     /// What the step reads, for writing mip level `level`.
@@ -484,7 +605,17 @@ impl StepNode {
             .as_ref()
             .ok_or_else(|| RuntimeError::NotFound("no scene is bound: call bind_scene first".into()))?;
         match (&self.kind, bound, &self.pipeline.pipeline) {
-            (NodeKind::Raster(r), Bound::Raster { group0, passes, vertices }, Pipeline::Render(pipeline)) => {
+            (
+                NodeKind::Raster(r),
+                Bound::Raster {
+                    group0,
+                    passes,
+                    vertices,
+                    geometry,
+                    indirect,
+                },
+                Pipeline::Render(pipeline),
+            ) => {
                 let last = passes.len().saturating_sub(1);
                 for (i, p) in passes.iter().enumerate() {
                     let timestamp_writes = stamps
@@ -530,6 +661,13 @@ impl StepNode {
                     if let Some(g1) = &p.group1 {
                         rp.set_bind_group(1, g1, &[]);
                     }
+                    if let Some([g1, g2, g3]) = geometry {
+                        if p.group1.is_none() {
+                            rp.set_bind_group(1, g1, &[]);
+                        }
+                        rp.set_bind_group(2, g2, &[]);
+                        rp.set_bind_group(3, g3, &[]);
+                    }
                     match &r.draw {
                         DrawCall::Scene => {
                             if let Some((buffer, count)) = vertices
@@ -540,12 +678,29 @@ impl StepNode {
                             }
                         }
                         DrawCall::FullScreenTriangle => rp.draw(0..3, 0..1),
-                        DrawCall::Indirect(a) => rp.draw_indirect(&a.buffer, a.offset),
+                        DrawCall::Generated(_) => {
+                            if let Some(buffer) = indirect {
+                                rp.draw_indirect(buffer, 0);
+                            }
+                        }
                     }
                 }
                 Ok(())
             }
-            (NodeKind::Compute(c), Bound::Compute { group0, group1, group2 }, Pipeline::Compute(pipeline)) => {
+            (
+                NodeKind::Compute(c),
+                Bound::Compute {
+                    group0,
+                    group1,
+                    group2,
+                    geometry,
+                },
+                Pipeline::Compute(pipeline),
+            ) => {
+                // A fresh count of generated vertices every frame (instance_count stays 1).
+                if let Some((_, buffer, _)) = geometry {
+                    encoder.clear_buffer(buffer, 0, Some(4));
+                }
                 let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some(&self.label),
                     timestamp_writes: stamps
@@ -564,9 +719,23 @@ impl StepNode {
                 if let Some(g2) = group2 {
                     cpass.set_bind_group(2, g2, &[]);
                 }
+                if let Some((g3, _, _)) = geometry {
+                    cpass.set_bind_group(3, g3, &[]);
+                }
                 match &c.dispatch {
                     Dispatch::ShadowMapLines => {
                         cpass.dispatch_workgroups(res.shadow_size.div_ceil(graph::COMPUTE_WORKGROUP), 1, 1);
+                    }
+                    Dispatch::Edges => {
+                        let edges = geometry.as_ref().map_or(0, |g| g.2);
+                        // Workgroups per dimension are limited (WebGPU guarantees 65,535):
+                        // edges beyond 64 x 65,535 spread over y, and the shader skips
+                        // indices past the edge count (see `Draw::Silhouettes`).
+                        let groups = edges.div_ceil(graph::COMPUTE_WORKGROUP);
+                        let max = 65_535;
+                        if groups > 0 {
+                            cpass.dispatch_workgroups(groups.min(max), groups.div_ceil(max), 1);
+                        }
                     }
                     Dispatch::Indirect(a) => cpass.dispatch_workgroups_indirect(&a.buffer, a.offset),
                 }
@@ -593,9 +762,6 @@ pub(crate) fn unsupported(graph: &PassGraph) -> Result<()> {
         if p.views == graph::Views::PerLightSample {
             return refuse("`views: PerLightSample` (one view per light sample)");
         }
-        if p.kind == PassKind::Geometry {
-            return refuse("a Geometry pass (primitives generated on the GPU)");
-        }
         // Every texture is allocated at the shadow map's size.
         let writes = p.steps.iter().flat_map(|s| &s.writes);
         if let Some(t) = writes
@@ -606,4 +772,30 @@ pub(crate) fn unsupported(graph: &PassGraph) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The clear value and blend state of a resolve rule (see [`Resolve`]).
+fn resolve_state(resolve: Resolve) -> (wgpu::Color, wgpu::BlendState) {
+    use wgpu::{BlendComponent as C, BlendFactor as F, BlendOperation as O};
+    let one = |operation| C {
+        src_factor: F::One,
+        dst_factor: F::One,
+        operation,
+    };
+    let (clear, c) = match resolve {
+        Resolve::KeepMin => (WHITE, one(O::Min)),
+        Resolve::KeepMax => (wgpu::Color::TRANSPARENT, one(O::Max)),
+        // target - shadow amount
+        Resolve::Add => (WHITE, one(O::ReverseSubtract)),
+        // target * value
+        Resolve::Multiply => (
+            WHITE,
+            C {
+                src_factor: F::Zero,
+                dst_factor: F::Src,
+                operation: O::Add,
+            },
+        ),
+    };
+    (clear, wgpu::BlendState { color: c, alpha: c })
 }

@@ -128,7 +128,7 @@ pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> V
             };
             for s in &p.steps {
                 // (invocations, how many times the counted code runs)
-                let (n, runs) = match s.draw {
+                let (n, runs) = match &s.draw {
                     Draw::SceneFromCamera => (f64::from(camera.0) * f64::from(camera.1), 1.0),
                     Draw::SceneFromLight | Draw::FullScreen => (texels, 1.0),
                     // levels 1.. of the chain: texels (1/4 + 1/16 + ...)
@@ -143,6 +143,11 @@ pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> V
                             .map_or(1, |t| t.layers);
                         (f64::from(shadow), f64::from(shadow) * f64::from(layers))
                     }
+                    // Geometry passes: one invocation per edge, and the generated
+                    // primitives' fragments; neither follows from the graph and the sizes
+                    // (the executor knows them after a frame: `edge_counts`, `generated`),
+                    // so they are not counted here yet.
+                    Draw::Silhouettes { .. } | Draw::Primitives { .. } => (0.0, 0.0),
                 };
                 w.invocations += n;
                 w.fetches += f64::from(s.cost.fetches) * n * runs;

@@ -35,6 +35,7 @@ struct VOut {{ @builtin(position) pos: vec4<f32>, @location(0) d: f32 }}
             transient: false,
             channels: vec![],
         }],
+        buffers: vec![],
         passes: vec![PassDecl {
             name: "depth".into(),
             kind: PassKind::Depth,

@@ -77,6 +77,7 @@ impl QueryPlane {
         let camera_proj = scene::orthographic(-1.0, 1.0, -1.0, 1.0, 0.1, 40.0);
         SceneInputs {
             vertices,
+            meshes: vec![],
             camera_view_proj: (camera_proj * view).to_cols_array(),
             camera_position: [0.0, EYE, 0.0],
             camera_size: (self.camera, self.camera),
