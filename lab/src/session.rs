@@ -168,7 +168,15 @@ pub fn rt(e: RuntimeError) -> String {
     format!("error: {e}")
 }
 
-/// Loads a scene and applies the size and shadow-map overrides.
+/// Warnings about lights inside or on the scene's geometry
+/// ([`crate::visibility::Visibility::light_warnings`]; builds the scene's BVH).
+pub fn light_warnings(scene: &Scene) -> Vec<String> {
+    crate::visibility::Visibility::new(scene).light_warnings(scene)
+}
+
+/// Loads a scene and applies the size and shadow-map overrides, then checks its precision
+/// budget again (the shadow map's resolution is part of it), and prints a warning for each
+/// light inside or on its geometry (once per file).
 pub fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>) -> Result<Scene, String> {
     let mut scene = Scene::load(path).map_err(|e| e.to_string())?;
     if let Some(n) = shadow_map {
@@ -179,6 +187,17 @@ pub fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>
     }
     if let Some((w, h)) = size {
         scene.set_camera_size(w, h);
+    }
+    // The precision budget depends on the shadow map's resolution: checked again.
+    scene.check_precision().map_err(|e| e.to_string())?;
+    // Lights inside or on the geometry: warned once per scene file and process.
+    static WARNED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+    let mut warned = WARNED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if !warned.iter().any(|p| p == path) {
+        warned.push(path.to_path_buf());
+        for w in light_warnings(&scene) {
+            eprintln!("warning: {}: {w}", path.display());
+        }
     }
     Ok(scene)
 }

@@ -3,7 +3,10 @@
 //! CPU visibility query ([`crate::visibility`]).
 //!
 //! The inputs are the camera pass's position and normal buffers as the runtime rendered
-//! them (one entry per pixel, rows top first). A pixel with a non-finite position shows no
+//! them (one entry per pixel, rows top first). The normal is the camera pass's, turned
+//! towards the camera (surfaces are two-sided; the receiver is the side the camera sees),
+//! and is taken as given: light behind its tangent plane is blocked
+//! ([`crate::visibility`]). A pixel with a non-finite position shows no
 //! surface: its truth is 1 (lit, as the visibility buffer reads there) with no error. The
 //! scene's first light is used, as [`crate::bind::scene_inputs`] binds it for the GPU.
 //!
@@ -41,7 +44,7 @@ use crate::visibility::Visibility;
 
 /// Version of the ground-truth computation, part of every cache key: bump it whenever the
 /// sampling (here or in [`crate::visibility`]) changes what a given key computes.
-pub const TRUTH_VERSION: u32 = 1;
+pub const TRUTH_VERSION: u32 = 2;
 
 /// Pixels per task handed to the visibility query; each chunk of each run has its own
 /// seed, so the result does not depend on the thread count (but does on this constant,

@@ -20,20 +20,34 @@
 //! | sphere | uniform in solid angle over the cone it subtends; a ray ends where it meets the sphere; a receiver inside the sphere sees all of it |
 //! | distant disk | uniform over its disk in the tangent plane: direction `d + tan(angle/2) p` with `p` uniform in the unit disk (concentric map), i.e. within the cone of half-angle `angle/2` |
 //!
-//! Ray origins: rays start at the receiver and hits closer than [`Visibility::epsilon`]
-//! (1e-4 of the scene bounds' diagonal, at least 32 ulp of the largest coordinate) are
-//! ignored. When the receiver's normal is known, the origin is also moved by epsilon
-//! along the normal, to the side of the light's centre. Both only affect occluders within
-//! epsilon of the receiver (contact shadows narrower than epsilon).
+//! Ray origins (Wächter and Binder, "A Fast and Robust Method for Avoiding
+//! Self-Intersection", Ray Tracing Gems, chapter 6: an offset scaled to the point's own
+//! floating-point precision, and no distance threshold along the ray). The offset at a
+//! point `x` is [`OFFSET_RELATIVE`] = 2^-16 of its largest coordinate magnitude (128 to 256
+//! ulp of it), and at least [`OFFSET_SCENE`] = 2^-19 of the scene's largest coordinate
+//! magnitude (8 to 16 ulp: the error of a point interpolated on a triangle whose corners
+//! are larger than the point, near the origin). With the receiver's normal, the origin
+//! moves by that offset along the normal and rays count every hit at `t > 0`; without one,
+//! hits within the offset of `x` are ignored instead. A ray to a point on a light ends the
+//! light point's own offset short of it. Under a distant light at elevation `e` the offset
+//! moves a shadow edge by `offset / tan e` (1.1e-4 at 5 degrees for a point at 1 unit from
+//! the origin; the former 1e-4 of the scene's diagonal moved it by 100 times that).
 //!
+//! Two-sided surfaces (the scene format's convention, scenes/README.md): every triangle
+//! blocks light from both sides, and a receiver is the side of its surface that the camera
+//! sees. The normal given with a point is that side's normal (the camera pass writes it
+//! turned towards the camera); light arriving from behind its tangent plane is blocked by
+//! the surface itself: a sample direction `w` with `w . n <= 0` counts as blocked.
+
 //! Skipping: before sampling, each object's bounding box is tested against the region
 //! where an occluder could be. An object cannot occlude if it lies entirely on or behind a
 //! plane through the ray origin that has the whole light strictly in front (the plane
 //! towards the light's centre, and the receiver's tangent plane when the light lies wholly
 //! above it), or if its bounding sphere misses the cone from the origin that holds the
 //! whole light (and, for a light at a finite position, lies beyond it). When no object
-//! can occlude, the answer is 1 without casting a ray. The test is conservative: it never
-//! changes a result.
+//! can occlude, the answer is 1 without casting a ray; it is tried only when the whole
+//! light lies in front of the receiver's tangent plane (a light wholly behind it gives 0
+//! without a ray). The test is conservative: it never changes a result.
 
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, TAU};
 use std::time::Duration;
@@ -49,7 +63,155 @@ use rayon::prelude::*;
 use crate::scene::{Light, Scene, corners};
 
 /// Barycentric tolerance of the ray-triangle test (see the module docs).
-const BARY_TOLERANCE: f32 = 1e-6;
+pub const BARY_TOLERANCE: f32 = 1e-6;
+
+/// The ray origin's offset at a point, relative to the point's largest coordinate
+/// magnitude: 2^-16, 128 to 256 ulp of it (see the module docs).
+pub const OFFSET_RELATIVE: f32 = 1.0 / 65536.0;
+
+/// The smallest ray origin offset, relative to the scene's largest coordinate magnitude:
+/// 2^-19, 8 to 16 ulp of it (see the module docs).
+pub const OFFSET_SCENE: f32 = 1.0 / 524288.0;
+
+/// A light centre closer than this many ray offsets to a triangle lies on its surface
+/// ([`Visibility::light_warnings`]).
+pub const LIGHT_CONTACT_OFFSETS: f32 = 4.0;
+
+/// Rays cast from a light's centre to tell whether it lies inside a closed mesh
+/// ([`Visibility::light_warnings`]).
+pub const INSIDE_RAYS: u32 = 64;
+
+/// The point of triangle `t` nearest to `p` (Ericson, "Real-Time Collision Detection",
+/// section 5.1.5, by the Voronoi regions of the corners and edges).
+fn closest_on_triangle(p: Vec3, t: &[Vec3; 3]) -> Vec3 {
+    let [a, b, c] = *t;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+/// True when the area light meets triangle `t`: a sphere with the triangle within its
+/// radius; a disk or rectangle whose plane cuts the triangle in a segment that meets the
+/// light's outline; a segment light crossing it (the ray-triangle test).
+fn light_meets(light: &Light, t: &[Vec3; 3]) -> bool {
+    // The segment in which the plane (point `c`, unit normal `n`) cuts the triangle.
+    let cut = |c: Vec3, n: Vec3| -> Option<(Vec3, Vec3)> {
+        let d = t.map(|p| (p - c).dot(n));
+        let mut pts = [Vec3::ZERO; 3];
+        let mut k = 0;
+        for i in 0..3 {
+            let j = (i + 1) % 3;
+            if d[i] == 0.0 {
+                pts[k] = t[i];
+                k += 1;
+            } else if (d[i] < 0.0) != (d[j] < 0.0) && d[j] != 0.0 {
+                pts[k] = t[i] + (t[j] - t[i]) * (d[i] / (d[i] - d[j]));
+                k += 1;
+            }
+        }
+        (k >= 2).then(|| (pts[0], pts[k - 1]))
+    };
+    // Nothing farther than the light's bounding sphere can meet it.
+    if let Some(c) = light.center() {
+        let r = light.bounding_radius();
+        let (lo, hi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+        if c.clamp(lo, hi).distance(c) > r {
+            return false;
+        }
+    }
+    match light {
+        Light::Sphere { center, radius } => *radius > 0.0 && closest_on_triangle(*center, t).distance(*center) < *radius,
+        Light::Disk { center, normal, radius } => {
+            let Some((p, q)) = cut(*center, normal.normalize_or(Vec3::Y)) else {
+                return false;
+            };
+            // Distance from the centre to the segment pq.
+            let pq = q - p;
+            let s = if pq.length_squared() > 0.0 {
+                ((*center - p).dot(pq) / pq.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (p + pq * s).distance(*center) < *radius
+        }
+        Light::Rectangle {
+            center,
+            normal,
+            u_axis,
+            half_width,
+            half_height,
+        } => {
+            let n = normal.normalize_or(Vec3::Y);
+            let Some((p, q)) = cut(*center, n) else { return false };
+            let u = u_axis.normalize_or(Vec3::X);
+            let v = n.cross(u);
+            // Liang–Barsky: clip the segment to |u| <= half_width, |v| <= half_height.
+            let (p2, q2) = (
+                Vec2::new((p - *center).dot(u), (p - *center).dot(v)),
+                Vec2::new((q - *center).dot(u), (q - *center).dot(v)),
+            );
+            let d = q2 - p2;
+            let (mut lo, mut hi) = (0.0f32, 1.0f32);
+            for (pk, qk) in [
+                (-d.x, p2.x + half_width),
+                (d.x, half_width - p2.x),
+                (-d.y, p2.y + half_height),
+                (d.y, half_height - p2.y),
+            ] {
+                if pk == 0.0 {
+                    if qk < 0.0 {
+                        return false;
+                    }
+                } else {
+                    let r = qk / pk;
+                    if pk < 0.0 {
+                        lo = lo.max(r);
+                    } else {
+                        hi = hi.min(r);
+                    }
+                }
+            }
+            lo <= hi
+        }
+        Light::Segment { a, b } => {
+            let d = *b - *a;
+            let len = d.length();
+            let tri = RtTriangle {
+                v0: t[0].into(),
+                e1: (t[1] - t[0]).into(),
+                e2: (t[2] - t[0]).into(),
+            };
+            len > 0.0 && tri.hit(Vec3A::from(*a), Vec3A::from(d / len), 0.0, len).is_some()
+        }
+        Light::Point { .. } | Light::Directional { .. } | Light::DistantDisk { .. } => false,
+    }
+}
 
 /// A triangle prepared for Möller–Trumbore: a corner and the two edges from it.
 #[derive(Clone, Copy, Debug)]
@@ -177,6 +339,9 @@ pub struct Visibility {
     /// For each of `triangles`, its index in [`Scene::triangles`].
     original: Vec<u32>,
     objects: Vec<ObjectBounds>,
+    /// The smallest offset (see [`OFFSET_SCENE`]).
+    floor: f32,
+    /// The largest offset anywhere in the scene's bounds.
     epsilon: f32,
 }
 
@@ -195,9 +360,8 @@ impl Visibility {
         let tris = scene.triangles();
         let (lo, hi) = scene.bounds();
         let largest = lo.abs().max(hi.abs()).max_element();
-        let epsilon = (1e-4 * (hi - lo).length())
-            .max(32.0 * f32::EPSILON * largest)
-            .max(f32::MIN_POSITIVE);
+        let floor = (OFFSET_SCENE * largest).max(f32::MIN_POSITIVE);
+        let epsilon = (OFFSET_RELATIVE * largest).max(floor);
         let objects = (0..scene.objects().len())
             .filter_map(|i| {
                 let range = scene.object_triangles(i);
@@ -222,6 +386,7 @@ impl Visibility {
                 triangles: Vec::new(),
                 original: Vec::new(),
                 objects,
+                floor,
                 epsilon,
             };
         }
@@ -252,14 +417,22 @@ impl Visibility {
             triangles,
             original,
             objects,
+            floor,
             epsilon,
         }
     }
 
-    /// The ray offset: hits closer than this to the receiver are ignored (1e-4 of the
-    /// scene bounds' diagonal, at least 32 ulp of the largest coordinate).
+    /// The largest ray origin offset anywhere within the scene's bounds (that of the
+    /// bounds' largest coordinate): a point moved by a few times this off a surface is
+    /// clear of it.
     pub fn epsilon(&self) -> f32 {
         self.epsilon
+    }
+
+    /// The ray origin offset at `x` (see the module docs): [`OFFSET_RELATIVE`] of its
+    /// largest coordinate magnitude, at least [`OFFSET_SCENE`] of the scene's.
+    pub fn offset_at(&self, x: Vec3) -> f32 {
+        (OFFSET_RELATIVE * x.abs().max_element()).max(self.floor)
     }
 
     /// Number of triangles in the BVH.
@@ -268,21 +441,23 @@ impl Visibility {
     }
 
     /// True when a triangle crosses the segment from `origin` to `target`, ignoring
-    /// epsilon at either end.
+    /// each end's offset ([`Visibility::offset_at`]) at either end.
     pub fn occluded(&self, origin: Vec3, target: Vec3) -> bool {
         let d = target - origin;
         let len = d.length();
-        if !(len.is_finite() && len > 2.0 * self.epsilon) {
+        let (a, b) = (self.offset_at(origin), self.offset_at(target));
+        if !(len.is_finite() && len > a + b) {
             return false;
         }
-        self.ray_blocked(origin, d / len, self.epsilon, len - self.epsilon)
+        self.ray_blocked(origin, d / len, a, len - b)
     }
 
     /// What the camera of `scene` (the scene this query was built from) sees through the
     /// image point `(u, v)` (0..1 across, 0..1 down; pixel centres at `(x + 0.5) / width`):
     /// the nearest surface point on the ray between the near and far planes and the face
-    /// normal of its triangle, or `None` where the ray meets nothing. A CPU G-buffer, for
-    /// checking what the GPU shaded.
+    /// normal of its triangle turned towards the camera (the side it sees, as the camera
+    /// pass writes it), or `None` where the ray meets nothing. A CPU G-buffer, for checking
+    /// what the GPU shaded.
     pub fn seen_by_camera(&self, scene: &Scene, u: f32, v: f32) -> Option<(Vec3, Vec3)> {
         let inv = scene.camera_view_proj().inverse();
         let at = |z| {
@@ -293,17 +468,18 @@ impl Visibility {
         let d = (p1 - p0).normalize();
         let (t, i) = self.closest_hit(p0, d, (p1 - p0).length())?;
         let [a, b, c] = *scene.triangles().get(i)?;
-        Some((p0 + d * t, (b - a).cross(c - a).normalize()))
+        let n = (b - a).cross(c - a).normalize();
+        Some((p0 + d * t, if n.dot(d) > 0.0 { -n } else { n }))
     }
 
     /// The nearest triangle along the ray from `origin` in unit direction `dir` with
-    /// `epsilon < t < t_max`: its distance `t` and its index in [`Scene::triangles`].
+    /// `0 < t < t_max`: its distance `t` and its index in [`Scene::triangles`].
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<(f32, usize)> {
         let bvh = self.bvh.as_ref()?;
-        if !(origin.is_finite() && dir.is_finite() && t_max > self.epsilon) {
+        if !(origin.is_finite() && dir.is_finite() && t_max > 0.0) {
             return None;
         }
-        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), self.epsilon, t_max);
+        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, t_max);
         let mut hit = RayHit::none();
         bvh.ray_traverse(ray, &mut hit, |ray, id| {
             self.triangles[id]
@@ -337,10 +513,11 @@ impl Visibility {
         self.fraction(x, None, light, samples, seed, true)
     }
 
-    /// As [`Visibility::visible_fraction`], with the receiver's surface normal: the ray
-    /// origin moves epsilon off the surface, and the surface's own half-space is excluded
-    /// from the skip test, so that most lit points cost no ray at all. A zero or
-    /// non-finite normal is ignored.
+    /// As [`Visibility::visible_fraction`], with the receiver's surface normal on the side
+    /// it is seen from (the camera's side; see the module docs on two-sided surfaces): the
+    /// ray origin moves off the surface along it, light behind its tangent plane is
+    /// blocked, and the surface's own half-space is excluded from the skip test, so that
+    /// most lit points cost no ray at all. A zero or non-finite normal is ignored.
     pub fn visible_fraction_at(&self, x: Vec3, normal: Vec3, light: &Light, samples: u32, seed: u64) -> f32 {
         self.fraction(x, Some(normal), light, samples, seed, true)
     }
@@ -380,33 +557,39 @@ impl Visibility {
         if !x.is_finite() || self.bvh.is_none() {
             return 1.0;
         }
-        let eps = self.epsilon;
         let shaft = shaft(light);
-        let towards = match shaft {
-            Shaft::Local { centre, .. } => centre - x,
-            Shaft::Distant { direction, .. } => direction,
+        // The normal of the side the receiver is seen from; the origin moves along it and
+        // every hit at t > 0 counts. Without one, hits within the offset are ignored.
+        let normal = normal.filter(|n| n.is_finite() && n.length_squared() > 0.0).map(Vec3::normalize);
+        let offset = self.offset_at(x);
+        let (o, t_min) = match normal {
+            Some(n) => (x + n * offset, 0.0),
+            None => (x, offset),
         };
-        // The normal, turned to the side of the light's centre; the origin moves along it.
-        let normal = normal.filter(|n| n.is_finite() && n.length_squared() > 0.0).map(|n| {
-            let n = n.normalize();
-            if n.dot(towards) < 0.0 { -n } else { n }
-        });
-        let o = match normal {
-            Some(n) => x + n * eps,
-            None => x,
-        };
+        if let Some(n) = normal
+            && self.wholly_behind(o, n, shaft)
+        {
+            return 0.0;
+        }
         if skip && self.nothing_between(o, normal, shaft) {
             return 1.0;
         }
+        // Light from behind the receiver's tangent plane is blocked by its own surface.
+        let in_front = |w: Vec3| normal.is_none_or(|n| w.dot(n) > 0.0);
         let n = samples.max(1);
         let total = n * n;
         let mut rng = Rng::new(seed);
         let to_point = |l: Vec3| {
             let d = l - o;
             let len = d.length();
-            len.is_nan() || len <= 2.0 * eps || !self.ray_blocked(o, d / len, eps, len - eps)
+            let end = self.offset_at(l);
+            if len.is_nan() || len <= t_min + end {
+                return true;
+            }
+            let w = d / len;
+            in_front(w) && !self.ray_blocked(o, w, t_min, len - end)
         };
-        let along = |dir: Vec3| !self.ray_blocked(o, dir, eps, f32::INFINITY);
+        let along = |dir: Vec3| in_front(dir) && !self.ray_blocked(o, dir, t_min, f32::INFINITY);
         match light {
             Light::Point { position } => f32::from(u8::from(to_point(*position))),
             Light::Directional { direction } => f32::from(u8::from(along(direction.normalize_or(Vec3::Y)))),
@@ -459,7 +642,7 @@ impl Visibility {
                     // Distance to the near side of the sphere along w.
                     let disc = (radius * radius - dist * dist * sin_t * sin_t).max(0.0);
                     let t_hit = dist * cos_t - disc.sqrt();
-                    !self.ray_blocked(o, w, eps, t_hit - eps)
+                    in_front(w) && !self.ray_blocked(o, w, t_min, t_hit - self.offset_at(o + w * t_hit))
                 })
             }
             Light::DistantDisk { direction, angle_degrees } => {
@@ -477,8 +660,98 @@ impl Visibility {
         }
     }
 
+    /// Warnings about lights inside or on the geometry, each naming the light and the
+    /// object (`scene` is the scene this query was built from). Such a light has no
+    /// defined shadow: the techniques and the truth each read it their own way (a point
+    /// light on the floor: csm 0.47 against a truth of 0.95). Warned:
+    ///
+    /// - a light's centre within [`LIGHT_CONTACT_OFFSETS`] = 4 ray offsets
+    ///   ([`Visibility::offset_at`]) of a triangle (it lies on a surface);
+    /// - an area light meeting a triangle: a sphere with a triangle within its radius, a
+    ///   disk or rectangle crossed by one (exact tests), a segment through one (a ray);
+    /// - a light's centre inside a closed mesh: of [`INSIDE_RAYS`] = 64 rays from it in
+    ///   directions spread over the sphere (a Fibonacci lattice), more than half hit the
+    ///   back (the side the winding does not face) of one object's triangles.
+    pub fn light_warnings(&self, scene: &Scene) -> Vec<String> {
+        let tris = scene.triangles();
+        let object_of = |t: usize| (0..scene.objects().len()).find(|&i| scene.object_triangles(i).contains(&t));
+        let name = |i: usize| match &scene.objects()[i].name {
+            Some(n) => format!("objects[{i}] (\"{n}\")"),
+            None => format!("objects[{i}]"),
+        };
+        let mut out = Vec::new();
+        for (li, light) in scene.lights.iter().enumerate() {
+            let Some(c) = light.center() else { continue };
+            let what = format!("lights[{li}] ({})", light.kind_name());
+            // The nearest triangle to the centre.
+            let nearest = tris
+                .iter()
+                .enumerate()
+                .map(|(i, t)| (i, closest_on_triangle(c, t).distance(c)))
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            let Some((t, dist)) = nearest else { continue };
+            let contact = LIGHT_CONTACT_OFFSETS * self.offset_at(c);
+            if dist <= contact {
+                if let Some(o) = object_of(t) {
+                    out.push(format!(
+                        "{what} has its centre {dist:e} from a surface of {}, within {contact:e} (4 ray offsets): a light on a surface has no defined shadow, and the techniques and the truth disagree there; move it off the surface",
+                        name(o)
+                    ));
+                }
+                continue;
+            }
+            // Area lights meeting a triangle.
+            if let Some(t) = tris.iter().position(|t| light_meets(light, t)) {
+                if let Some(o) = object_of(t) {
+                    out.push(format!(
+                        "{what} passes through {}: part of the light lies inside or behind its surface, which the techniques and the truth treat differently; move the light clear of it",
+                        name(o)
+                    ));
+                }
+                continue;
+            }
+            // Inside a closed mesh: most rays hit back faces of one object.
+            let mut back = vec![0u32; scene.objects().len()];
+            for k in 0..INSIDE_RAYS {
+                // Fibonacci lattice on the sphere.
+                let z = 1.0 - (2.0 * k as f32 + 1.0) / INSIDE_RAYS as f32;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = k as f32 * 2.399_963;
+                let dir = Vec3::new(r * phi.cos(), z, r * phi.sin());
+                if let Some((_, t)) = self.closest_hit(c, dir, f32::INFINITY) {
+                    let [a, b, cc] = tris[t];
+                    if (b - a).cross(cc - a).dot(dir) > 0.0
+                        && let Some(o) = object_of(t)
+                    {
+                        back[o] += 1;
+                    }
+                }
+            }
+            if let Some((o, &n)) = back.iter().enumerate().max_by_key(|(_, n)| **n)
+                && 2 * n > INSIDE_RAYS
+            {
+                out.push(format!(
+                    "{what} has its centre inside {} ({n} of {INSIDE_RAYS} rays from it hit the inside of its surface): its light cannot leave the mesh, which the techniques and the truth treat differently; move the light outside",
+                    name(o)
+                ));
+            }
+        }
+        out
+    }
+
+    /// True when the whole light lies behind the plane through `o` with unit normal `n`
+    /// (the receiver's tangent plane): every sample is blocked by the receiver's surface.
+    fn wholly_behind(&self, o: Vec3, n: Vec3, shaft: Shaft) -> bool {
+        match shaft {
+            Shaft::Local { centre, radius } => (centre - o).dot(n) <= -radius * (1.0 + 1e-4),
+            Shaft::Distant { direction, half_angle } => direction.dot(n) <= -half_angle.sin() - 1e-4,
+        }
+    }
+
     /// True when no object can lie between `o` and the light (see the module docs).
-    /// `normal` is the receiver's unit normal turned towards the light's centre.
+    /// `normal` is the receiver's unit normal (the side it is seen from); a light not
+    /// wholly in front of its tangent plane is partly blocked by the receiver itself, so
+    /// the answer is then false.
     fn nothing_between(&self, o: Vec3, normal: Option<Vec3>, shaft: Shaft) -> bool {
         // Planes through `o` with the whole light strictly in front.
         let mut planes: [Option<Vec3>; 2] = [None, None];
@@ -493,18 +766,20 @@ impl Visibility {
                 }
                 let axis = d / dist;
                 planes[0] = Some(axis);
-                if let Some(n) = normal
-                    && d.dot(n) > radius * (1.0 + 1e-4) + self.epsilon
-                {
+                if let Some(n) = normal {
+                    if d.dot(n) <= radius * (1.0 + 1e-4) + self.epsilon {
+                        return false;
+                    }
                     planes[1] = Some(n);
                 }
                 (axis, (radius / dist).min(1.0).asin(), dist + radius)
             }
             Shaft::Distant { direction, half_angle } => {
                 planes[0] = Some(direction);
-                if let Some(n) = normal
-                    && direction.dot(n) > half_angle.sin() + 1e-4
-                {
+                if let Some(n) = normal {
+                    if direction.dot(n) <= half_angle.sin() + 1e-4 {
+                        return false;
+                    }
                     planes[1] = Some(n);
                 }
                 (direction, half_angle, f32::INFINITY)
@@ -589,9 +864,7 @@ mod tests {
                         let without = vis.fraction(x, normal, light, 3, k as u64, false);
                         assert_eq!(with, without, "{name}: {light:?} at {x} (normal {normal:?})");
                     }
-                    let towards = light.center().map_or_else(|| light.direction().unwrap(), |c| c - x);
-                    let n = if n.dot(towards) < 0.0 { -n } else { n };
-                    skipped += usize::from(vis.nothing_between(x + n * vis.epsilon(), Some(n), shaft(light)));
+                    skipped += usize::from(vis.nothing_between(x + n * vis.offset_at(x), Some(n), shaft(light)));
                 }
             }
             // The edge scene's occluder hangs over every point the camera sees.

@@ -76,10 +76,10 @@ fn closed_form(scene: &Scene, p: Vec3) -> f64 {
 }
 
 /// Bias bound of the ray caster on edge.ron, in visibility units. The estimator is
-/// unbiased (jittered stratified samples); what remains is geometric. Rays start epsilon
-/// = 1e-4 of the scene's diagonal (3e-4 here) above the floor, which narrows the penumbra
-/// by a fraction 3e-4 and moves f by at most |df/du| * |u| * 3e-4 <= (2 / pi) * 3e-4 =
-/// 2e-4; the barycentric tolerance (1e-6 of the occluder's size) and f32 rounding of
+/// unbiased (jittered stratified samples); what remains is geometric. Rays start at most
+/// 2^-16 of the point's largest coordinate (at most 3e-5 here, see `visibility`) above
+/// the floor, which narrows the penumbra by a fraction 3e-5 and moves f by at most
+/// |df/du| * |u| * 3e-5 <= (2 / pi) * 3e-5 = 2e-5; the barycentric tolerance (1e-6 of the occluder's size) and f32 rounding of
 /// positions (1e-7) move the chord far less. 1e-3 bounds them all with margin.
 const EDGE_BIAS: f64 = 1e-3;
 

@@ -995,7 +995,13 @@ fn vs_shade(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) ->
 
 @fragment
 fn fs_shade(in: ShadeVarying) -> ShadeOut {
-    let n = normalize(in.normal);
+    // Two-sided surfaces: the receiver is the side the camera sees. The triangle's own
+    // normal from screen-space derivatives, cross(dpdy, dpdx) of the world position, faces
+    // the camera whatever the winding (framebuffer y runs down); the interpolated normal is
+    // turned to its side, so a smooth normal at a silhouette keeps its sign.
+    let in_face = cross(dpdy(in.world), dpdx(in.world));
+    let in_smooth = normalize(in.normal);
+    let n = select(in_smooth, -in_smooth, dot(in_smooth, in_face) < 0.0);
     let world = vec4<f32>(in.world, 1.0);
     let in_d_world = -(frame.light_view * world).z;
     let in_d = (in_d_world - frame.depth_range.x) * frame.depth_range.z;
@@ -1024,9 +1030,10 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {
     s.push_str(&em.body);
     let _ = write!(
         s,
-        "    // outputs stay finite and in [0, 1]
+        "    // outputs stay finite and in [0, 1]; a receiver facing away from the light's centre
+    // is shadowed by its own surface
     let raw = {v};
-    let vis = select(clamp(raw, 0.0, 1.0), 1.0, raw != raw);
+    let vis = select(select(clamp(raw, 0.0, 1.0), 1.0, raw != raw), 0.0, in_ndotl <= 0.0);
     let lambert = max(in_ndotl, 0.0);
     var out: ShadeOut;
     out.visibility = vec4<f32>(vis, 0.0, 0.0, 1.0);

@@ -33,6 +33,11 @@
 //! value's path in the file, such as `lights[0] (Disk).radius`; syntax and type errors
 //! name the line and column that `ron` reports.
 //!
+//! Surfaces are two-sided: a triangle occludes light from both sides, and a receiver is
+//! the side of its surface that the camera sees, which blocks every light direction behind
+//! its tangent plane (the back of an open mesh is in its own shadow, in the techniques and
+//! the ground truth alike; scenes/README.md).
+//!
 //! OBJ paths are relative to the folder of the scene file and must stay inside it: an
 //! absolute path, a `..` component or a symbolic link leading out is refused. Material
 //! libraries named by an OBJ file are never opened.
@@ -209,8 +214,9 @@ pub struct Object {
     pub flat_normals: bool,
 }
 
-/// A mesh in object space. Triangles are counter-clockwise seen from their front side;
-/// shadow rays hit both sides.
+/// A mesh in object space. Triangles are counter-clockwise seen from their front side,
+/// which gives the default normals; every surface is two-sided (see the module docs):
+/// shadow rays hit both sides, and either side can be a receiver.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum Mesh {
@@ -587,7 +593,7 @@ impl Scene {
             object_triangles.push(start..triangles.len());
         }
         let bounds = bounds_of(triangles.iter().flatten().copied());
-        Ok(Scene {
+        let scene = Scene {
             camera: desc.camera,
             shadow_map: desc.shadow_map,
             lights: desc.lights,
@@ -597,7 +603,116 @@ impl Scene {
             normals,
             object_triangles,
             bounds,
-        })
+        };
+        scene.check_precision()?;
+        Ok(scene)
+    }
+
+    /// Checks the scene's precision budget in f32 (called when the scene is built; call
+    /// it again after changing `shadow_map` or `lights`):
+    ///
+    /// - **Extent against objects.** At the scene's largest coordinate magnitude `M`, f32
+    ///   resolves `M * 2^-23` (one ulp); the ground truth moves ray origins by up to
+    ///   2^-16 of a point's coordinates (`sshc_lab::visibility`) and the light views
+    ///   quantise depth over the whole extent. An object smaller (bounds' diagonal) than
+    ///   [`PRECISION_RATIO`] `* M` = 2^-16 `* M` (128 to 256 ulp at `M`) cannot be resolved
+    ///   beside it: the scene is refused, naming the object that reaches `M` and the
+    ///   smallest object.
+    /// - **Local lights far beyond the scene.** A light at a finite position (point,
+    ///   sphere, disk, rectangle, segment) at distance `d` from the centre of the scene's
+    ///   bounds (radius `R`) sees the scene through a view whose coordinates are about `d`:
+    ///   f32 resolves them to `d * 2^-23`, while one shadow-map texel covers about
+    ///   `2 R / N` (`N` = `shadow_map`). Past [`LIGHT_PRECISION_MARGIN`] = 16 ulp per
+    ///   texel, `d * 2^-23 * 16 > 2 R / N`, depth tests and light-space positions are
+    ///   coarser than a texel, and every technique loses the shadows: the light is
+    ///   refused, with its distant equivalent as the hint (`Directional`, or `DistantDisk`
+    ///   with `angle_degrees = 2 atan(r / d)` for a light of radius `r`).
+    pub fn check_precision(&self) -> Result<(), SceneError> {
+        if self.triangles.is_empty() {
+            return Ok(());
+        }
+        let (lo, hi) = self.bounds;
+        let name = |i: usize| match &self.objects[i].name {
+            Some(n) => format!("objects[{i}] (\"{n}\")"),
+            None => format!("objects[{i}]"),
+        };
+        // Extent against the smallest object.
+        let largest = lo.abs().max(hi.abs()).max_element();
+        // Each object's size and reach (largest coordinate magnitude).
+        let sized: Vec<(usize, f32, f32)> = (0..self.objects.len())
+            .filter(|&i| !self.object_triangles[i].is_empty())
+            .map(|i| {
+                let (olo, ohi) = bounds_of(self.triangles[self.object_triangles[i].clone()].iter().flatten().copied());
+                (i, (ohi - olo).length(), olo.abs().max(ohi.abs()).max_element())
+            })
+            .collect();
+        // The object that reaches farthest, and the smallest of the others (itself when alone).
+        let reaching = sized.iter().copied().max_by(|a, b| a.2.total_cmp(&b.2)).map(|(i, _, r)| (i, r));
+        let smallest = sized
+            .iter()
+            .copied()
+            .filter(|(i, ..)| sized.len() == 1 || Some(*i) != reaching.map(|r| r.0))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, s, _)| (i, s));
+        if let (Some((small, size)), Some((far, _))) = (smallest, reaching)
+            && size < PRECISION_RATIO * largest
+        {
+            return Err(SceneError::invalid(
+                name(far),
+                format!(
+                    "the scene reaches {largest:e} here, where f32 resolves {:e} (the ground truth's ray offset is {:e}), but {} is only {size:e} across: the scene's extent leaves it unresolved (an object must be at least 2^-16 = 1.5e-5 of the largest coordinate)",
+                    largest * f32::EPSILON,
+                    PRECISION_RATIO * largest,
+                    name(small),
+                ),
+                "move the far object nearer the others, or remove it; objects far apart belong in separate scenes",
+            ));
+        }
+        // Local lights against the light view's resolution.
+        let centre = (lo + hi) * 0.5;
+        let radius = (0.5 * (hi - lo).length()).max(f32::MIN_POSITIVE);
+        let texel = 2.0 * radius / self.shadow_map.max(1) as f32;
+        for (i, light) in self.lights.iter().enumerate() {
+            let Some(c) = light.center() else { continue };
+            // In f64: the square of 1e30 overflows f32.
+            let (c, centre) = (c.as_dvec3(), centre.as_dvec3());
+            let d = c.distance(centre);
+            let (eps, texel) = (f64::from(f32::EPSILON), f64::from(texel));
+            let margin = f64::from(LIGHT_PRECISION_MARGIN);
+            if d * eps * margin <= texel {
+                continue;
+            }
+            let field = match light {
+                Light::Point { .. } => "position",
+                Light::Segment { .. } => "a",
+                _ => "center",
+            };
+            let dir = (c - centre) / d;
+            let dir = format!("({}, {}, {})", dir.x, dir.y, dir.z);
+            let r = light.bounding_radius();
+            let hint = if r > 0.0 {
+                let angle = 2.0 * f64::from(r).atan2(d).to_degrees();
+                format!(
+                    "a light this far acts as a distant one: write `DistantDisk(direction: {dir}, angle_degrees: {:e})` (2 atan(r / d) for its radius {r:e}), or `Directional(direction: {dir})`",
+                    angle as f32
+                )
+            } else {
+                format!("a light this far acts as a distant one: write `Directional(direction: {dir})`")
+            };
+            return Err(SceneError::invalid(
+                format!("lights[{i}] ({}).{field}", light.kind_name()),
+                format!(
+                    "the light is {:e} from the centre of the scene (radius {radius:e}): its view resolves positions to {:e}, coarser than 1/{LIGHT_PRECISION_MARGIN} of a shadow-map texel ({:e} at {} texels), so no shadow map can resolve the scene (the limit is {:e})",
+                    d as f32,
+                    (d * eps) as f32,
+                    texel as f32,
+                    self.shadow_map,
+                    (texel / (eps * margin)) as f32
+                ),
+                hint,
+            ));
+        }
+        Ok(())
     }
 
     /// The scene file this scene was loaded from, if any.
@@ -1047,6 +1162,13 @@ pub const MIN_SCALE: f32 = 1e-10;
 pub const MAX_CAMERA_DISTANCE: f32 = 1e15;
 /// Most pixels of the scene's camera (4096 x 4096).
 pub const MAX_CAMERA_PIXELS: u64 = 4096 * 4096;
+/// Smallest object size (bounds' diagonal) relative to the scene's largest coordinate
+/// magnitude: 2^-16, the ground truth's ray offset relative to a point's coordinates
+/// (128 to 256 ulp); see [`Scene::check_precision`].
+pub const PRECISION_RATIO: f32 = 1.0 / 65536.0;
+/// f32 ulps of a local light's distance allowed per shadow-map texel of the scene: the
+/// light view's coordinates must resolve 1/16 of a texel; see [`Scene::check_precision`].
+pub const LIGHT_PRECISION_MARGIN: f32 = 16.0;
 
 fn finite3(v: Vec3) -> bool {
     v.is_finite()
