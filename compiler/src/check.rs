@@ -578,6 +578,31 @@ pub struct Use {
     pub via: Option<Span>,
 }
 
+/// Every name `e` reads (a superset of its free names: names bound inside it count too).
+fn free_names<'e>(e: &'e Expr, out: &mut std::collections::HashSet<&'e str>) {
+    match &e.kind {
+        ExprKind::Lit(_) => {}
+        ExprKind::Name(n) => {
+            out.insert(n.as_str());
+        }
+        ExprKind::Unary(_, a) | ExprKind::Member(a, _) => free_names(a, out),
+        ExprKind::Binary(_, a, b) => {
+            free_names(a, out);
+            free_names(b, out);
+        }
+        ExprKind::Call { args, .. } => args.iter().for_each(|a| free_names(a, out)),
+        ExprKind::Let { value, body, .. } => {
+            free_names(value, out);
+            free_names(body, out);
+        }
+        ExprKind::Sum { from, to, body, .. } => {
+            free_names(from, out);
+            free_names(to, out);
+            free_names(body, out);
+        }
+    }
+}
+
 struct Local<'a> {
     name: String,
     ty: Ty,
@@ -648,7 +673,7 @@ impl<'s, 'a> Typer<'s, 'a> {
         if self.types.ty(e) != Some(Ty::AbstractInt) {
             return Ok(());
         }
-        match consteval::eval(self.sym, e, &mut Vec::new()) {
+        match consteval::eval(self.sym, e, &mut self.scope()) {
             // depends on a series variable: its value is known only when unrolled
             Ok(_) | Err(NotConst::Runtime(_)) => {}
             Err(NotConst::NoValue) => {
@@ -710,7 +735,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                 if !all_known && i == 0 {
                     return None;
                 }
-                consteval::eval(self.sym, x, &mut Vec::new()).ok()
+                consteval::eval(self.sym, x, &mut self.scope()).ok()
             })
             .collect();
         match consteval::int_fault(Phase::Check, op, &vals, IntSpans { op: e.span, divisor }) {
@@ -936,49 +961,92 @@ impl<'s, 'a> Typer<'s, 'a> {
         }
     }
 
+    /// The locals in scope, each hiding any param of its name, with no value: for
+    /// evaluating what does not depend on them.
+    fn scope(&self) -> consteval::Env {
+        self.locals.iter().map(|l| (l.name.clone(), None)).collect()
+    }
+
     /// The bounds of a series `from..=to` for each term of the enclosing series (one per
     /// entry of `envs`; `None` where a bound cannot be evaluated here), and whether they are
-    /// the same constants for all.
+    /// the same constants for all (bounds that use no local).
     fn series_bounds(&self, from: &Expr, to: &Expr) -> (Vec<Option<(i64, i64)>>, bool) {
-        let mut empty = Vec::new();
-        if let (Ok(ConstValue::Int(lo)), Ok(ConstValue::Int(hi))) = (
-            consteval::eval(self.sym, from, &mut empty),
-            consteval::eval(self.sym, to, &mut empty),
-        ) {
-            return (vec![Some((lo, hi)); self.envs.len()], true);
+        let eval = |env: &mut consteval::Env| match (consteval::eval(self.sym, from, env), consteval::eval(self.sym, to, env)) {
+            (Ok(ConstValue::Int(lo)), Ok(ConstValue::Int(hi))) => Some((lo, hi)),
+            _ => None,
+        };
+        if let Some(b) = eval(&mut self.scope()) {
+            return (vec![Some(b); self.envs.len()], true);
+        }
+        // The locals the bounds use, through the `let`s they name.
+        let mut needed = std::collections::HashSet::new();
+        free_names(from, &mut needed);
+        free_names(to, &mut needed);
+        for l in self.locals.iter().rev() {
+            if let (true, Bind::Let(x)) = (needed.contains(l.name.as_str()), &l.bind) {
+                free_names(x, &mut needed);
+            }
+        }
+        // What each needed local holds, in scope order: a `let` that depends on no series
+        // variable is evaluated once here, the others once per enclosing term below.
+        enum Slot<'x> {
+            Known(Option<ConstValue>),
+            Series(usize),
+            Let(&'x Expr),
+        }
+        let mut plan: Vec<(&str, Slot)> = Vec::new();
+        let mut once: consteval::Env = Vec::new();
+        let mut dependent = std::collections::HashSet::new();
+        let mut series = 0;
+        for l in &self.locals {
+            let name = l.name.as_str();
+            let slot = match &l.bind {
+                Bind::Series => {
+                    series += 1;
+                    Slot::Series(series - 1)
+                }
+                Bind::Let(x) => {
+                    let mut uses = std::collections::HashSet::new();
+                    free_names(x, &mut uses);
+                    if uses.iter().any(|n| dependent.contains(n)) {
+                        Slot::Let(x)
+                    } else {
+                        Slot::Known(consteval::eval(self.sym, x, &mut once).ok())
+                    }
+                }
+                Bind::Other => Slot::Known(None),
+            };
+            match &slot {
+                Slot::Known(v) => {
+                    dependent.remove(name);
+                    once.push((name.to_string(), *v));
+                }
+                Slot::Series(_) | Slot::Let(_) => {
+                    dependent.insert(name);
+                    once.push((name.to_string(), None));
+                }
+            }
+            if needed.contains(name) {
+                plan.push((name, slot));
+            }
         }
         let bounds = self
             .envs
             .iter()
             .map(|env| {
-                let mut c = self.const_env(env);
-                match (consteval::eval(self.sym, from, &mut c), consteval::eval(self.sym, to, &mut c)) {
-                    (Ok(ConstValue::Int(lo)), Ok(ConstValue::Int(hi))) => Some((lo, hi)),
-                    _ => None,
+                let mut c: consteval::Env = Vec::with_capacity(plan.len());
+                for (name, slot) in &plan {
+                    let v = match slot {
+                        Slot::Known(v) => *v,
+                        Slot::Series(i) => env[*i].map(ConstValue::Int),
+                        Slot::Let(x) => consteval::eval(self.sym, x, &mut c).ok(),
+                    };
+                    c.push((name.to_string(), v));
                 }
+                eval(&mut c)
             })
             .collect();
         (bounds, false)
-    }
-
-    /// The compile-time values of the locals in scope for one term of the enclosing series:
-    /// its series variables, and the `let`s of compile-time values evaluated with them. A
-    /// local whose value is not known here hides any outer one of its name.
-    fn const_env(&self, env: &[Option<i64>]) -> Vec<(String, ConstValue)> {
-        let mut c: Vec<(String, ConstValue)> = Vec::new();
-        let mut series = env.iter();
-        for l in &self.locals {
-            let v = match &l.bind {
-                Bind::Series => series.next().copied().flatten().map(ConstValue::Int),
-                Bind::Let(x) => consteval::eval(self.sym, x, &mut c).ok(),
-                Bind::Other => None,
-            };
-            match v {
-                Some(v) => c.push((l.name.clone(), v)),
-                None => c.retain(|(n, _)| *n != l.name),
-            }
-        }
-        c
     }
 
     fn name(&mut self, e: &Expr, n: &str, span: Span) -> Result<Ty, Diagnostic> {

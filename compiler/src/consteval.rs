@@ -196,8 +196,12 @@ pub fn const_eval(sym: &Symbols, e: &Expr) -> Result<ConstValue, Diagnostic> {
     }
 }
 
-/// [`const_eval`] with local bindings in scope (innermost last).
-pub fn eval(sym: &Symbols, e: &Expr, env: &mut Vec<(String, ConstValue)>) -> Result<ConstValue, NotConst> {
+/// Local bindings in scope, innermost last: a name with its compile-time value, or `None`
+/// for a local whose value is not known here (it still hides a param of its name).
+pub type Env = Vec<(String, Option<ConstValue>)>;
+
+/// [`const_eval`] with local bindings in scope.
+pub fn eval(sym: &Symbols, e: &Expr, env: &mut Env) -> Result<ConstValue, NotConst> {
     use ConstValue::*;
     let lift = |x: ConstValue, y: ConstValue| match (x, y) {
         (Int(i), Float(_)) => (Float(i as f64), y),
@@ -236,7 +240,7 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Vec<(String, ConstValue)>) -> Res
         ExprKind::Member(..) => return Err(NotConst::NoValue),
         ExprKind::Let { name, value, body, .. } => {
             let v = eval(sym, value, env)?;
-            env.push((name.clone(), v));
+            env.push((name.clone(), Some(v)));
             let r = eval(sym, body, env);
             env.pop();
             r?
@@ -250,7 +254,7 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Vec<(String, ConstValue)>) -> Res
             }
             let mut acc = Int(0);
             for k in lo..=hi {
-                env.push((var.clone(), Int(k)));
+                env.push((var.clone(), Some(Int(k))));
                 let t = eval(sym, body, env);
                 env.pop();
                 let (a, t) = lift(acc, t?);
@@ -267,9 +271,13 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Vec<(String, ConstValue)>) -> Res
     represent(v).ok_or(NotConst::NoValue)
 }
 
-fn name(sym: &Symbols, n: &str, span: Span, env: &[(String, ConstValue)]) -> Result<ConstValue, NotConst> {
+fn name(sym: &Symbols, n: &str, span: Span, env: &[(String, Option<ConstValue>)]) -> Result<ConstValue, NotConst> {
     if let Some((_, v)) = env.iter().rev().find(|(l, _)| l == n) {
-        return Ok(*v);
+        return v.ok_or_else(|| {
+            NotConst::Runtime(
+                Diagnostic::error(Phase::Check, format!("`{n}` is not known at compile time")).at(span, "not a compile-time value"),
+            )
+        });
     }
     if let Some((i, p)) = sym.param(n) {
         if !p.fixed {

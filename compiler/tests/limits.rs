@@ -354,7 +354,33 @@ fn nested_series_with_dependent_bounds_are_counted_term_by_term() {
         "t.ron:6:",
         Duration::from_secs(2),
     );
+    // ... and a bound through a `let` outside the series (counted 1 term before): 5,151.
+    refused(
+        &technique("clamp(let a = 100; sum(i in 0..=a, sum(j in 0..=i, d * 0.0)), 0.0, 1.0)"),
+        "nested series unroll 5151 terms",
+        "t.ron:6:",
+        Duration::from_secs(2),
+    );
     let opts = sshc::CompileOptions::default();
+    // Within the limit: 4,095 terms; 1,001 + ... + 1,004 = 4,010 terms through two `let`s;
+    // and locals named like a fixed param N = 5000 hide it (its value gave 5,001 terms).
+    let n = |vis: &str| {
+        technique(vis).replace(
+            "    channels:",
+            "    params: { \"N\": Param(ty: I32, default: 5000, fixed: true) },\n    channels:",
+        )
+    };
+    for src in [
+        technique("clamp(sum(i in 0..=89, sum(j in 0..=i, d * 0.0)), 0.0, 1.0)"),
+        technique("clamp(let a = 100; sum(i in 0..=3, let b = a * 10; sum(j in 0..=b + i, d * 0.0)), 0.0, 1.0)"),
+        n("clamp(sum(N in 0..=3, sum(j in 0..=N, d * 0.0)), 0.0, 1.0)"),
+        n("clamp(let N = 3; sum(j in 0..=N, d * 0.0), 0.0, 1.0)"),
+        n("clamp(let N = 1; f32(2147480000 + N), 0.0, 1.0)"),
+    ] {
+        if let Err(e) = sshc::compile_str(&src, &opts) {
+            panic!("{}", e.render("t.ron", &src));
+        }
+    }
     let src = technique("clamp(sum(i in 0..=89, sum(j in 0..=i, d * 0.0)), 0.0, 1.0)");
     if let Err(e) = sshc::compile_str(&src, &opts) {
         panic!("{}", e.render("t.ron", &src));
