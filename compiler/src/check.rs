@@ -5,7 +5,7 @@
 //! in their ranges; filter sizes are odd and within bounds.
 
 use crate::builtins::{Func, Input, SampleFn, Side, Ty, constant, unify};
-use crate::consteval::{self, MAX_SERIES, NotConst};
+use crate::consteval::{self, IntOp, IntSpans, MAX_SERIES, NotConst};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::*;
 use crate::front::expr::{BinOp, Expr, ExprKind, Literal, UnOp};
@@ -378,6 +378,7 @@ fn check_expansion(sym: &Symbols, e: &Expansion, types: &mut Types, diags: &mut 
         ty: Ty::I32,
         uses: vec![],
         konst: true,
+        bind: Bind::Other,
     });
     for (name, value) in &e.lets {
         ty.uses.clear();
@@ -391,6 +392,7 @@ fn check_expansion(sym: &Symbols, e: &Expansion, types: &mut Types, diags: &mut 
                     ty: t.concrete(),
                     uses,
                     konst,
+                    bind: Bind::Other,
                 });
             }
             Err(d) => {
@@ -576,13 +578,50 @@ pub struct Use {
     pub via: Option<Span>,
 }
 
-struct Local {
+/// Every name `e` reads (a superset of its free names: names bound inside it count too).
+fn free_names<'e>(e: &'e Expr, out: &mut std::collections::HashSet<&'e str>) {
+    match &e.kind {
+        ExprKind::Lit(_) => {}
+        ExprKind::Name(n) => {
+            out.insert(n.as_str());
+        }
+        ExprKind::Unary(_, a) | ExprKind::Member(a, _) => free_names(a, out),
+        ExprKind::Binary(_, a, b) => {
+            free_names(a, out);
+            free_names(b, out);
+        }
+        ExprKind::Call { args, .. } => args.iter().for_each(|a| free_names(a, out)),
+        ExprKind::Let { value, body, .. } => {
+            free_names(value, out);
+            free_names(body, out);
+        }
+        ExprKind::Sum { from, to, body, .. } => {
+            free_names(from, out);
+            free_names(to, out);
+            free_names(body, out);
+        }
+    }
+}
+
+struct Local<'a> {
     name: String,
     ty: Ty,
     uses: Vec<Use>,
     /// Known at compile time (a series variable, an expansion index, or a `let` of
     /// compile-time values), so usable where a constant is needed.
     konst: bool,
+    /// What the series limit needs to know of its value.
+    bind: Bind<'a>,
+}
+
+/// How a local gets its value, for counting the terms of series whose bounds use it.
+enum Bind<'a> {
+    /// A series variable: one value per term of its series.
+    Series,
+    /// A `let` of compile-time values (evaluated with the series variables in scope).
+    Let(&'a Expr),
+    /// Anything else: not known to the series limit.
+    Other,
 }
 
 /// Type inference for one expression in one context; what it infers goes into `types`.
@@ -592,13 +631,14 @@ struct Typer<'s, 'a> {
     /// Uses of values not known at compile time so far (to tell constant `let`s).
     runtime: usize,
     mode: Mode,
-    locals: Vec<Local>,
+    locals: Vec<Local<'a>>,
     uses: Vec<Use>,
     /// For a Shade pass: channels and expansions its reads carry, and the resource of each.
     /// What a Shade pass's reads carry: (item, resource, whether a summed-area table).
     available: Option<Vec<(Item, String, bool)>>,
-    /// Product of the term counts of the enclosing series (1 outside any).
-    unroll: i64,
+    /// One entry per term the enclosing series unroll to (one empty entry outside any):
+    /// the values of their variables, outermost first (`None` where a bound was not known).
+    envs: Vec<Vec<Option<i64>>>,
 }
 
 impl<'s, 'a> Typer<'s, 'a> {
@@ -611,7 +651,7 @@ impl<'s, 'a> Typer<'s, 'a> {
             locals: vec![],
             uses: vec![],
             available: None,
-            unroll: 1,
+            envs: vec![vec![]],
         }
     }
 
@@ -621,7 +661,7 @@ impl<'s, 'a> Typer<'s, 'a> {
 
     /// Infer the type of `e` where the context needs `want` (F32 or I32): an abstract
     /// integer is settled to it.
-    fn infer_as(&mut self, e: &Expr, want: Ty) -> Result<Ty, Diagnostic> {
+    fn infer_as(&mut self, e: &'a Expr, want: Ty) -> Result<Ty, Diagnostic> {
         let t = self.infer(e)?;
         self.settle(e, want)?;
         Ok(t)
@@ -633,7 +673,7 @@ impl<'s, 'a> Typer<'s, 'a> {
         if self.types.ty(e) != Some(Ty::AbstractInt) {
             return Ok(());
         }
-        match consteval::eval(self.sym, e, &mut Vec::new()) {
+        match consteval::eval(self.sym, e, &mut self.scope()) {
             // depends on a series variable: its value is known only when unrolled
             Ok(_) | Err(NotConst::Runtime(_)) => {}
             Err(NotConst::NoValue) => {
@@ -651,13 +691,60 @@ impl<'s, 'a> Typer<'s, 'a> {
         Ok(())
     }
 
-    fn infer(&mut self, e: &Expr) -> Result<Ty, Diagnostic> {
+    fn infer(&mut self, e: &'a Expr) -> Result<Ty, Diagnostic> {
+        let runtime = self.runtime;
         let t = self.infer_kind(e)?;
         self.types.set(e, t);
+        // An integer operation on values known here (all but series variables, whose
+        // values `lower` checks as it unrolls) must have an i32 value. Operands that read
+        // a runtime value are not evaluated, except a divisor, which alone can be 0.
+        if matches!(t, Ty::I32 | Ty::AbstractInt) {
+            self.int_fault(e, self.runtime == runtime)?;
+        }
         Ok(t)
     }
 
-    fn infer_kind(&mut self, e: &Expr) -> Result<Ty, Diagnostic> {
+    /// [`consteval::int_fault`] for `e`, its operands evaluated without series variables.
+    fn int_fault(&self, e: &Expr, all_known: bool) -> Result<(), Diagnostic> {
+        let (op, operands, divisor): (IntOp, Vec<&Expr>, Span) = match &e.kind {
+            ExprKind::Unary(UnOp::Neg, a) => (IntOp::Neg, vec![a], e.span),
+            ExprKind::Binary(op @ (BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem), a, b) => {
+                (IntOp::Binary(*op), vec![a, b], b.span)
+            }
+            ExprKind::Call { name, args, .. } if Func::from_name(name) == Some(Func::Abs) => {
+                (IntOp::Call(Func::Abs), args.iter().collect(), e.span)
+            }
+            ExprKind::Lit(_)
+            | ExprKind::Name(_)
+            | ExprKind::Unary(..)
+            | ExprKind::Binary(..)
+            | ExprKind::Call { .. }
+            | ExprKind::Member(..)
+            | ExprKind::Let { .. }
+            | ExprKind::Sum { .. } => return Ok(()),
+        };
+        let divides = matches!(op, IntOp::Binary(BinOp::Div | BinOp::Rem));
+        if !all_known && !divides {
+            return Ok(());
+        }
+        let vals: Vec<Option<ConstValue>> = operands
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                // a runtime dividend cannot be known; the divisor may still be
+                if !all_known && i == 0 {
+                    return None;
+                }
+                consteval::eval(self.sym, x, &mut self.scope()).ok()
+            })
+            .collect();
+        match consteval::int_fault(Phase::Check, op, &vals, IntSpans { op: e.span, divisor }) {
+            Some(d) => Err(d),
+            None => Ok(()),
+        }
+    }
+
+    fn infer_kind(&mut self, e: &'a Expr) -> Result<Ty, Diagnostic> {
         match &e.kind {
             ExprKind::Lit(Literal::Int(v)) => {
                 if i32::try_from(*v).is_err() {
@@ -722,9 +809,6 @@ impl<'s, 'a> Typer<'s, 'a> {
                     self.settle(a, to)?;
                     self.settle(b, to)?;
                 }
-                if matches!(op, BinOp::Div | BinOp::Rem) && matches!(t, Ty::I32 | Ty::AbstractInt) {
-                    self.integer_division(*op, a, b, e.span)?;
-                }
                 if op.is_comparison() {
                     if matches!(t, Ty::Vec(_)) {
                         return Err(mismatch());
@@ -764,11 +848,13 @@ impl<'s, 'a> Typer<'s, 'a> {
                 let runtime = self.runtime;
                 let t = self.infer_as(value, Ty::I32)?;
                 let uses: Vec<Use> = self.uses.drain(before..).collect();
+                let konst = self.runtime == runtime;
                 self.locals.push(Local {
                     name: name.clone(),
                     ty: t.concrete(),
                     uses,
-                    konst: self.runtime == runtime,
+                    konst,
+                    bind: if konst { Bind::Let(value) } else { Bind::Other },
                 });
                 let r = self.infer(body);
                 self.locals.pop();
@@ -805,41 +891,62 @@ impl<'s, 'a> Typer<'s, 'a> {
                     }
                 }
                 self.mode = mode;
-                // Bounds that do not depend on an enclosing series are known now.
-                let mut env = Vec::new();
-                let mut terms = 1;
-                if let (Ok(ConstValue::Int(lo)), Ok(ConstValue::Int(hi))) =
-                    (consteval::eval(self.sym, from, &mut env), consteval::eval(self.sym, to, &mut env))
-                {
-                    if hi - lo + 1 > MAX_SERIES {
-                        return Err(Self::err(
-                            e.span,
-                            format!("series of {} terms: at most {MAX_SERIES} unroll", hi - lo + 1),
-                            "too long",
-                        ));
-                    }
-                    terms = (hi - lo + 1).max(1);
+                // Nested series unroll, for each term of the enclosing series, the terms of
+                // the inner one: counted exactly, term by term where a bound depends on an
+                // enclosing series variable (`sum(j in 0..=i, ..)`), so that the limit holds
+                // for the product however the bounds are written.
+                let outer = self.envs.len() as i64;
+                let (bounds, konst_bounds) = self.series_bounds(from, to);
+                // an unknown bound counts one term here; lower checks it as it unrolls
+                let counts: Vec<i64> = bounds.iter().map(|b| b.map_or(1, |(lo, hi)| (hi - lo + 1).max(0))).collect();
+                let max = counts.iter().copied().max().unwrap_or(0);
+                if max > MAX_SERIES {
+                    return Err(Self::err(
+                        e.span,
+                        format!("series of {max} terms: at most {MAX_SERIES} unroll"),
+                        "too long",
+                    ));
                 }
-                // Nested series unroll the product of their term counts.
-                let outer = self.unroll;
-                let total = outer.saturating_mul(terms);
+                let total: i64 = counts.iter().sum();
                 if total > MAX_SERIES {
+                    let label = if konst_bounds {
+                        format!("{max} terms, inside series of {outer} terms in all")
+                    } else {
+                        let min = counts.iter().copied().min().unwrap_or(0);
+                        format!("{min} to {max} terms (bounds that depend on an enclosing series), for each of {outer} enclosing terms")
+                    };
                     return Err(Self::err(
                         e.span,
                         format!("nested series unroll {total} terms: at most {MAX_SERIES} in all"),
-                        format!("{terms} terms, inside series of {outer} terms in all"),
+                        label,
                     )
                     .help("the terms of nested series multiply; lower the bounds"));
                 }
-                self.unroll = total;
+                let mut inner: Vec<Vec<Option<i64>>> = Vec::with_capacity(total as usize);
+                for (env, b) in self.envs.iter().zip(&bounds) {
+                    match *b {
+                        Some((lo, hi)) => inner.extend((lo..=hi).map(|k| {
+                            let mut v = env.clone();
+                            v.push(Some(k));
+                            v
+                        })),
+                        None => {
+                            let mut v = env.clone();
+                            v.push(None);
+                            inner.push(v);
+                        }
+                    }
+                }
+                let outer_envs = std::mem::replace(&mut self.envs, inner);
                 self.locals.push(Local {
                     name: var.clone(),
                     ty: Ty::I32,
                     uses: vec![],
                     konst: true,
+                    bind: Bind::Series,
                 });
                 let r = self.infer(body);
-                self.unroll = outer;
+                self.envs = outer_envs;
                 self.locals.pop();
                 let t = r?;
                 if !t.is_numeric() {
@@ -854,28 +961,92 @@ impl<'s, 'a> Typer<'s, 'a> {
         }
     }
 
-    /// An integer `/` or `%` whose divisor is a constant 0, or that divides the constant
-    /// -2147483648 by -1, has no i32 value: WGSL refuses it, so it is refused here, in the
-    /// technique file, not as an internal error in the generated shader.
-    fn integer_division(&self, op: BinOp, a: &Expr, b: &Expr, span: Span) -> Result<(), Diagnostic> {
-        let mut env = Vec::new();
-        match consteval::eval(self.sym, b, &mut env) {
-            Ok(ConstValue::Int(0)) => Err(Self::err(
-                b.span,
-                format!("integer {} by zero", if op == BinOp::Div { "division" } else { "remainder" }),
-                "this divisor is 0",
-            )
-            .also(span, "in this integer operation")
-            .help("an integer division by zero has no value; for a float, write the operands as floats (`7.0 / 0.0`)")),
-            Ok(ConstValue::Int(-1)) if matches!(consteval::eval(self.sym, a, &mut env), Ok(ConstValue::Int(v)) if v == i32::MIN as i64) => {
-                Err(Self::err(
-                    span,
-                    format!("integer overflow: -2147483648 {} -1 does not fit in i32", op.symbol()),
-                    "overflows i32",
-                ))
-            }
-            _ => Ok(()),
+    /// The locals in scope, each hiding any param of its name, with no value: for
+    /// evaluating what does not depend on them.
+    fn scope(&self) -> consteval::Env {
+        self.locals.iter().map(|l| (l.name.clone(), None)).collect()
+    }
+
+    /// The bounds of a series `from..=to` for each term of the enclosing series (one per
+    /// entry of `envs`; `None` where a bound cannot be evaluated here), and whether they are
+    /// the same constants for all (bounds that use no local).
+    fn series_bounds(&self, from: &Expr, to: &Expr) -> (Vec<Option<(i64, i64)>>, bool) {
+        let eval = |env: &mut consteval::Env| match (consteval::eval(self.sym, from, env), consteval::eval(self.sym, to, env)) {
+            (Ok(ConstValue::Int(lo)), Ok(ConstValue::Int(hi))) => Some((lo, hi)),
+            _ => None,
+        };
+        if let Some(b) = eval(&mut self.scope()) {
+            return (vec![Some(b); self.envs.len()], true);
         }
+        // The locals the bounds use, through the `let`s they name.
+        let mut needed = std::collections::HashSet::new();
+        free_names(from, &mut needed);
+        free_names(to, &mut needed);
+        for l in self.locals.iter().rev() {
+            if let (true, Bind::Let(x)) = (needed.contains(l.name.as_str()), &l.bind) {
+                free_names(x, &mut needed);
+            }
+        }
+        // What each needed local holds, in scope order: a `let` that depends on no series
+        // variable is evaluated once here, the others once per enclosing term below.
+        enum Slot<'x> {
+            Known(Option<ConstValue>),
+            Series(usize),
+            Let(&'x Expr),
+        }
+        let mut plan: Vec<(&str, Slot)> = Vec::new();
+        let mut once: consteval::Env = Vec::new();
+        let mut dependent = std::collections::HashSet::new();
+        let mut series = 0;
+        for l in &self.locals {
+            let name = l.name.as_str();
+            let slot = match &l.bind {
+                Bind::Series => {
+                    series += 1;
+                    Slot::Series(series - 1)
+                }
+                Bind::Let(x) => {
+                    let mut uses = std::collections::HashSet::new();
+                    free_names(x, &mut uses);
+                    if uses.iter().any(|n| dependent.contains(n)) {
+                        Slot::Let(x)
+                    } else {
+                        Slot::Known(consteval::eval(self.sym, x, &mut once).ok())
+                    }
+                }
+                Bind::Other => Slot::Known(None),
+            };
+            match &slot {
+                Slot::Known(v) => {
+                    dependent.remove(name);
+                    once.push((name.to_string(), *v));
+                }
+                Slot::Series(_) | Slot::Let(_) => {
+                    dependent.insert(name);
+                    once.push((name.to_string(), None));
+                }
+            }
+            if needed.contains(name) {
+                plan.push((name, slot));
+            }
+        }
+        let bounds = self
+            .envs
+            .iter()
+            .map(|env| {
+                let mut c: consteval::Env = Vec::with_capacity(plan.len());
+                for (name, slot) in &plan {
+                    let v = match slot {
+                        Slot::Known(v) => *v,
+                        Slot::Series(i) => env[*i].map(ConstValue::Int),
+                        Slot::Let(x) => consteval::eval(self.sym, x, &mut c).ok(),
+                    };
+                    c.push((name.to_string(), v));
+                }
+                eval(&mut c)
+            })
+            .collect();
+        (bounds, false)
     }
 
     fn name(&mut self, e: &Expr, n: &str, span: Span) -> Result<Ty, Diagnostic> {
@@ -987,7 +1158,7 @@ impl<'s, 'a> Typer<'s, 'a> {
         Err(d)
     }
 
-    fn call(&mut self, name: &str, name_span: Span, args: &[Expr], span: Span) -> Result<Ty, Diagnostic> {
+    fn call(&mut self, name: &str, name_span: Span, args: &'a [Expr], span: Span) -> Result<Ty, Diagnostic> {
         if let Some((how, expand)) = SampleFn::from_name(name) {
             if self.mode != Mode::Shade {
                 return Err(Self::err(

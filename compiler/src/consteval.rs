@@ -80,6 +80,100 @@ pub fn binary(op: BinOp, x: ConstValue, y: ConstValue) -> Option<ConstValue> {
     })
 }
 
+/// An integer operation whose operands may be known at compile time, for [`int_fault`].
+#[derive(Clone, Copy, Debug)]
+pub enum IntOp {
+    Neg,
+    Binary(BinOp),
+    Call(Func),
+}
+
+/// Where an integer operation stands in the technique file, for [`int_fault`].
+#[derive(Clone, Copy, Debug)]
+pub struct IntSpans {
+    /// The whole operation.
+    pub op: Span,
+    /// The divisor of a `/` or `%` (the operation's span where there is none to point at).
+    pub divisor: Span,
+}
+
+/// Why an integer (i32) operation on operands known at compile time has no i32 value, as a
+/// diagnostic at the operation in the technique file: a `/` or `%` by 0 (the divisor alone
+/// decides), -2147483648 / -1 or % -1, or a `+`, `-`, `*`, negation or `abs` whose exact
+/// value lies outside i32. `None` where the value exists or an operand is not known. WGSL
+/// refuses such a constant expression (a shader-creation error), so without this the
+/// failure would surface as an internal error located in the generated shader. `check`
+/// calls it for the operations it can evaluate, `lower` for those inside series (the
+/// series variable known only when unrolled), one rule and one message for both.
+pub fn int_fault(phase: Phase, op: IntOp, args: &[Option<ConstValue>], at: IntSpans) -> Option<Diagnostic> {
+    use ConstValue::Int;
+    let int = |i: usize| match args.get(i) {
+        Some(Some(Int(v))) => Some(*v),
+        _ => None,
+    };
+    let fits = |v: i128| i32::try_from(v).is_ok();
+    let overflow = |what: String, exact: Option<i128>| {
+        let mut d = Diagnostic::error(phase, format!("integer overflow: {what} does not fit in i32")).at(at.op, "overflows i32");
+        if let Some(v) = exact {
+            d = d.note(format!(
+                "its exact value is {v}; integers are i32, from {} to {}",
+                i32::MIN,
+                i32::MAX
+            ));
+        }
+        Some(d.help("integer expressions are computed in i32; write float literals (`2.0`) for larger values"))
+    };
+    match op {
+        IntOp::Binary(op @ (BinOp::Div | BinOp::Rem)) => {
+            let y = int(1)?;
+            if y == 0 {
+                let what = if op == BinOp::Div { "division" } else { "remainder" };
+                return Some(
+                    Diagnostic::error(phase, format!("integer {what} by zero"))
+                        .at(at.divisor, "this divisor is 0")
+                        .also(at.op, "in this integer operation")
+                        .help("an integer division by zero has no value; for a float, write the operands as floats (`7.0 / 0.0`)"),
+                );
+            }
+            let x = int(0)?;
+            (y == -1 && x == i32::MIN as i64).then(|| {
+                Diagnostic::error(phase, format!("integer overflow: {x} {} {y} does not fit in i32", op.symbol()))
+                    .at(at.op, "overflows i32")
+            })
+        }
+        IntOp::Binary(op @ (BinOp::Add | BinOp::Sub | BinOp::Mul)) => {
+            let (x, y) = (int(0)? as i128, int(1)? as i128);
+            let v = if op == BinOp::Add {
+                x + y
+            } else if op == BinOp::Sub {
+                x - y
+            } else {
+                x * y
+            };
+            if fits(v) {
+                return None;
+            }
+            overflow(format!("{x} {} {y}", op.symbol()), Some(v))
+        }
+        IntOp::Binary(_) => None,
+        IntOp::Neg => {
+            let x = int(0)? as i128;
+            if fits(-x) {
+                return None;
+            }
+            overflow(format!("-({x})"), Some(-x))
+        }
+        IntOp::Call(Func::Abs) => {
+            let x = int(0)? as i128;
+            if fits(x.abs()) {
+                return None;
+            }
+            overflow(format!("abs({x})"), Some(x.abs()))
+        }
+        IntOp::Call(_) => None,
+    }
+}
+
 /// Why an expression has no compile-time value.
 pub enum NotConst {
     /// A name that is not known at compile time (the diagnostic says which and why).
@@ -102,8 +196,12 @@ pub fn const_eval(sym: &Symbols, e: &Expr) -> Result<ConstValue, Diagnostic> {
     }
 }
 
-/// [`const_eval`] with local bindings in scope (innermost last).
-pub fn eval(sym: &Symbols, e: &Expr, env: &mut Vec<(String, ConstValue)>) -> Result<ConstValue, NotConst> {
+/// Local bindings in scope, innermost last: a name with its compile-time value, or `None`
+/// for a local whose value is not known here (it still hides a param of its name).
+pub type Env = Vec<(String, Option<ConstValue>)>;
+
+/// [`const_eval`] with local bindings in scope.
+pub fn eval(sym: &Symbols, e: &Expr, env: &mut Env) -> Result<ConstValue, NotConst> {
     use ConstValue::*;
     let lift = |x: ConstValue, y: ConstValue| match (x, y) {
         (Int(i), Float(_)) => (Float(i as f64), y),
@@ -142,7 +240,7 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Vec<(String, ConstValue)>) -> Res
         ExprKind::Member(..) => return Err(NotConst::NoValue),
         ExprKind::Let { name, value, body, .. } => {
             let v = eval(sym, value, env)?;
-            env.push((name.clone(), v));
+            env.push((name.clone(), Some(v)));
             let r = eval(sym, body, env);
             env.pop();
             r?
@@ -156,7 +254,7 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Vec<(String, ConstValue)>) -> Res
             }
             let mut acc = Int(0);
             for k in lo..=hi {
-                env.push((var.clone(), Int(k)));
+                env.push((var.clone(), Some(Int(k))));
                 let t = eval(sym, body, env);
                 env.pop();
                 let (a, t) = lift(acc, t?);
@@ -173,9 +271,13 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Vec<(String, ConstValue)>) -> Res
     represent(v).ok_or(NotConst::NoValue)
 }
 
-fn name(sym: &Symbols, n: &str, span: Span, env: &[(String, ConstValue)]) -> Result<ConstValue, NotConst> {
+fn name(sym: &Symbols, n: &str, span: Span, env: &[(String, Option<ConstValue>)]) -> Result<ConstValue, NotConst> {
     if let Some((_, v)) = env.iter().rev().find(|(l, _)| l == n) {
-        return Ok(*v);
+        return v.ok_or_else(|| {
+            NotConst::Runtime(
+                Diagnostic::error(Phase::Check, format!("`{n}` is not known at compile time")).at(span, "not a compile-time value"),
+            )
+        });
     }
     if let Some((i, p)) = sym.param(n) {
         if !p.fixed {

@@ -5,10 +5,10 @@
 
 use crate::builtins::{Func, SampleFn, Ty};
 use crate::check::Checked;
-use crate::consteval::MAX_SERIES;
+use crate::consteval::{self, IntOp, IntSpans, MAX_SERIES};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::*;
-use crate::front::expr::{BinOp, Expr, ExprKind, Literal};
+use crate::front::expr::{BinOp, Expr, ExprKind, Literal, UnOp};
 use crate::handle::Arena as Table;
 use crate::ir::*;
 use crate::resolve::{Item, Symbols};
@@ -25,6 +25,8 @@ struct Lowerer<'s, 'a> {
     types: &'s Types,
     arena: &'s mut Arena,
     locals: Vec<(String, H)>,
+    /// The series variables being unrolled and their values, innermost last (for messages).
+    series: Vec<(String, i64)>,
     /// AST channel index -> IR channel id.
     channel_ids: &'s [ChannelId],
     /// IR expansions (by AST expansion index), for `expand`.
@@ -52,6 +54,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
             types,
             arena,
             locals: vec![],
+            series: vec![],
             channel_ids,
             expansions,
             shade_reads,
@@ -87,6 +90,30 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         Ok(self.coerce(e, h))
     }
 
+    /// An integer operation whose operands unrolling made constants (a series variable
+    /// among them: `check` has refused the others) must have an i32 value; WGSL would
+    /// refuse the constant expression, so it is refused here, at the operation.
+    fn int_fault(&self, op: IntOp, operands: &[H], ty: Ty, span: Span, divisor: Span) -> Result<(), Diagnostic> {
+        if ty != Ty::I32 {
+            return Ok(());
+        }
+        let vals: Vec<Option<ConstValue>> = operands.iter().map(|h| self.arena.as_const(*h)).collect();
+        match consteval::int_fault(Phase::Lower, op, &vals, IntSpans { op: span, divisor }) {
+            Some(d) => Err(self.in_series(d)),
+            None => Ok(()),
+        }
+    }
+
+    /// Name the values of the series variables in scope (the term being unrolled).
+    fn in_series(&self, d: Diagnostic) -> Diagnostic {
+        let vars: Vec<String> = self.series.iter().map(|(n, k)| format!("`{n}` = {k}")).collect();
+        if vars.is_empty() {
+            d
+        } else {
+            d.note(format!("in the term with {}", vars.join(", ")))
+        }
+    }
+
     fn budget(&self, span: Span) -> Result<(), Diagnostic> {
         if self.arena.len() > MAX_NODES {
             return Err(Self::err(
@@ -112,6 +139,9 @@ impl<'s, 'a> Lowerer<'s, 'a> {
             ExprKind::Unary(op, a) => {
                 let h = self.expr(a)?;
                 let ty = self.ty(e)?;
+                if *op == UnOp::Neg {
+                    self.int_fault(IntOp::Neg, &[h], ty, e.span, e.span)?;
+                }
                 self.arena.add(Node::Unary(*op, h), ty, e.span)
             }
             ExprKind::Binary(op, a, b) => {
@@ -120,6 +150,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 let ha = self.coerce(a, ha);
                 let hb = self.coerce(b, hb);
                 let ty = self.ty(e)?;
+                self.int_fault(IntOp::Binary(*op), &[ha, hb], ty, e.span, b.span)?;
                 self.arena.add(Node::Binary(*op, ha, hb), ty, e.span)
             }
             ExprKind::Call { name, args, .. } => self.call(name, args, e)?,
@@ -160,12 +191,18 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 for k in lo..=hi {
                     let kh = self.arena.i32(k as i32);
                     self.locals.push((var.clone(), kh));
+                    self.series.push((var.clone(), k));
                     let term = self.expr(body);
+                    self.series.pop();
                     self.locals.pop();
                     let term = term?;
                     acc = Some(match acc {
                         None => term,
-                        Some(a) => self.arena.add(Node::Binary(BinOp::Add, a, term), ty, e.span),
+                        Some(a) => {
+                            // the running sum of an integer series must stay in i32 too
+                            self.int_fault(IntOp::Binary(BinOp::Add), &[a, term], ty, e.span, e.span)?;
+                            self.arena.add(Node::Binary(BinOp::Add, a, term), ty, e.span)
+                        }
                     });
                 }
                 match acc {
@@ -289,6 +326,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         let lowered = args.iter().map(|a| self.expr(a)).collect::<Result<Vec<_>, _>>()?;
         let hs: Vec<H> = lowered.into_iter().zip(args).map(|(h, a)| self.coerce(a, h)).collect();
         let ty = self.ty(e)?;
+        self.int_fault(IntOp::Call(f), &hs, ty, span, span)?;
         Ok(self.arena.add(Node::Call(f, hs), ty, span))
     }
 }

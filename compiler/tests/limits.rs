@@ -232,3 +232,182 @@ fn nested_series_are_limited_in_their_product() {
         panic!("{}", e.render("t.ron", &src));
     }
 }
+
+/// `compile` refuses `source` (`check` may accept it: the operation is inside a series,
+/// whose variable is known only as `lower` unrolls it) with `want` at `at`, never an
+/// internal error or a place in the generated WGSL.
+fn compile_refused(source: &str, want: &str, at: &str) {
+    let e = sshc::compile_str(source, &sshc::CompileOptions::default()).expect_err("compile refuses it");
+    let got = e.render("t.ron", source);
+    assert!(got.contains(want), "{got}");
+    assert!(got.contains(at), "expected a diagnostic at {at}:\n{got}");
+    assert!(!got.contains("internal compiler error") && !got.contains("wgsl:"), "{got}");
+}
+
+#[test]
+fn constant_integer_overflow_is_refused_in_the_technique() {
+    // Folded by check (literals, fixed params, built-ins), each at its operation.
+    let bound = Duration::from_secs(2);
+    let n = |vis: &str| {
+        technique(vis).replace(
+            "    channels:",
+            "    params: { \"N\": Param(ty: I32, default: 65536, fixed: true) },\n    channels:",
+        )
+    };
+    for (vis, want) in [
+        ("f32(2147483647 + 1)", "integer overflow: 2147483647 + 1 does not fit in i32"),
+        ("f32(-2147483647 - 2)", "integer overflow: -2147483647 - 2 does not fit in i32"),
+        ("f32(-(-2147483647 - 1))", "integer overflow: -(-2147483648) does not fit in i32"),
+        ("f32(46341 * 46341)", "integer overflow: 46341 * 46341 does not fit in i32"),
+        (
+            "f32(abs(-2147483647 - 1))",
+            "integer overflow: abs(-2147483648) does not fit in i32",
+        ),
+        (
+            "f32(max(2147483647, 0) + i32(1.0))",
+            "integer overflow: 2147483647 + 1 does not fit in i32",
+        ),
+        (
+            "f32((-2147483647 - 1) % -1)",
+            "integer overflow: -2147483648 % -1 does not fit in i32",
+        ),
+    ] {
+        refused(&technique(vis), want, "t.ron:6:", bound);
+    }
+    // Arithmetic on a fixed I32 param N = 65536, as a value and as a series bound.
+    refused(
+        &n("f32(N * N)"),
+        "integer overflow: 65536 * 65536 does not fit in i32",
+        "t.ron:7:",
+        bound,
+    );
+    refused(
+        &n("sum(k in 0..=N * N, 1.0)"),
+        "integer overflow: 65536 * 65536 does not fit in i32",
+        "t.ron:7:",
+        bound,
+    );
+    refused(&n("sum(k in 0..=N, 1.0)"), "series of 65537 terms: at most 4096", "t.ron:7:", bound);
+    // Inside a series the variable is known only as lower unrolls it: refused there, at the
+    // operation, naming the term (these were internal errors located in the generated WGSL
+    // for `/` and `%`, and "has no finite value" for the others).
+    for (vis, want) in [
+        ("sum(k in 0..=1, f32(7 / k))", "integer division by zero"),
+        ("sum(k in 0..=1, f32(7 % k))", "integer remainder by zero"),
+        ("sum(k in -1..=0, f32((-2147483647 - 1) / k))", "integer overflow: -2147483648 / -1"),
+        (
+            "sum(k in 2147483640..=2147483647, f32(k + 10))",
+            "integer overflow: 2147483640 + 10",
+        ),
+        ("sum(k in 0..=4000, f32(1000000 * k))", "integer overflow: 1000000 * 2148"),
+        (
+            "sum(k in 0..=4, f32(abs(k - 2147483647 - 1)))",
+            "integer overflow: abs(-2147483648)",
+        ),
+        ("f32(let a = 2147483647; a + 1)", "integer overflow: 2147483647 + 1"),
+        // the running sum of an integer series
+        ("f32(sum(k in 0..=4000, 1000000 * k))", "integer overflow: 2145000000 + 66000000"),
+    ] {
+        compile_refused(&technique(vis), want, "t.ron:6:");
+    }
+    // The values next to the limits compile, and the WGSL validates.
+    for vis in [
+        "f32(2147483646 + 1)",
+        "f32(-(-2147483647))",
+        "f32(46340 * 46340)",
+        "f32(abs(-2147483647))",
+        "f32(-2147483647 - 1)",
+        "sum(k in 2147483640..=2147483647, f32(k - 10))",
+        "sum(k in 1..=3, f32(7 / k + 7 % k))",
+        "f32(sum(k in 0..=64, 1000000 * k))",
+    ] {
+        let src = technique(&format!("clamp({vis}, 0.0, 1.0)"));
+        if let Err(e) = sshc::compile_str(&src, &sshc::CompileOptions::default()) {
+            panic!("{vis}: {}", e.render("t.ron", &src));
+        }
+    }
+}
+
+#[test]
+fn nested_series_with_dependent_bounds_are_counted_term_by_term() {
+    // A bound that uses an enclosing series variable counted 1 term, so the product limit
+    // did not hold: three levels of `0..=4095` nested this way are 1.1e10 terms. They are
+    // counted term by term (at most 4,096 evaluations of the bounds per series), so the
+    // refusal is immediate: < 2 s for check and compile together, debug build.
+    refused(
+        &technique("clamp(sum(i in 0..=4095, sum(j in 0..=i, sum(k in 0..=j, d * 0.0))), 0.0, 1.0)"),
+        "nested series unroll 8390656 terms: at most 4096 in all",
+        "t.ron:6:",
+        Duration::from_secs(2),
+    );
+    // 0..=90 then 0..=i: 91 * 92 / 2 = 4,186 terms; 0..=89: 4,095, within the limit.
+    refused(
+        &technique("clamp(sum(i in 0..=90, sum(j in 0..=i, d * 0.0)), 0.0, 1.0)"),
+        "nested series unroll 4186 terms",
+        "t.ron:6:",
+        Duration::from_secs(2),
+    );
+    // A bound through a `let` of the outer variable is counted the same way.
+    refused(
+        &technique("clamp(sum(i in 0..=3, let m = i * 1000; sum(j in 0..=m, d * 0.0)), 0.0, 1.0)"),
+        "nested series unroll 6004 terms",
+        "t.ron:6:",
+        Duration::from_secs(2),
+    );
+    // ... and a bound through a `let` outside the series (counted 1 term before): 5,151.
+    refused(
+        &technique("clamp(let a = 100; sum(i in 0..=a, sum(j in 0..=i, d * 0.0)), 0.0, 1.0)"),
+        "nested series unroll 5151 terms",
+        "t.ron:6:",
+        Duration::from_secs(2),
+    );
+    let opts = sshc::CompileOptions::default();
+    // Within the limit: 4,095 terms; 1,001 + ... + 1,004 = 4,010 terms through two `let`s;
+    // and locals named like a fixed param N = 5000 hide it (its value gave 5,001 terms).
+    let n = |vis: &str| {
+        technique(vis).replace(
+            "    channels:",
+            "    params: { \"N\": Param(ty: I32, default: 5000, fixed: true) },\n    channels:",
+        )
+    };
+    for src in [
+        technique("clamp(sum(i in 0..=89, sum(j in 0..=i, d * 0.0)), 0.0, 1.0)"),
+        technique("clamp(let a = 100; sum(i in 0..=3, let b = a * 10; sum(j in 0..=b + i, d * 0.0)), 0.0, 1.0)"),
+        n("clamp(sum(N in 0..=3, sum(j in 0..=N, d * 0.0)), 0.0, 1.0)"),
+        n("clamp(let N = 3; sum(j in 0..=N, d * 0.0), 0.0, 1.0)"),
+        n("clamp(let N = 1; f32(2147480000 + N), 0.0, 1.0)"),
+    ] {
+        if let Err(e) = sshc::compile_str(&src, &opts) {
+            panic!("{}", e.render("t.ron", &src));
+        }
+    }
+    let src = technique("clamp(sum(i in 0..=89, sum(j in 0..=i, d * 0.0)), 0.0, 1.0)");
+    if let Err(e) = sshc::compile_str(&src, &opts) {
+        panic!("{}", e.render("t.ron", &src));
+    }
+    // A legal dependent triple nest (4,060 terms) has the value of the same sum on the CPU.
+    let src = technique("f32(sum(i in 0..=27, sum(j in 0..=i, sum(k in 0..=j, i * j + k))))");
+    let c = sshc::compile_str(&src, &opts).unwrap_or_else(|e| panic!("{}", e.render("t.ron", &src)));
+    let mut want = 0i64;
+    let mut terms = 0;
+    for i in 0..=27i64 {
+        for j in 0..=i {
+            for k in 0..=j {
+                want += i * j + k;
+                terms += 1;
+            }
+        }
+    }
+    assert_eq!(terms, 4060);
+    let shade = c.ir.shade_pass().unwrap();
+    let sshc::ir::IrPassKind::Shade { visibility } = shade.kind else {
+        unreachable!()
+    };
+    // 1,222,263 < 2^24: exact in f32
+    assert_eq!(
+        c.ir.arena.as_const(visibility),
+        Some(sshc::front::ast::ConstValue::Float(want as f64)),
+        "{}",
+        c.ir.arena.display(visibility, Some(&c.ir))
+    );
+}

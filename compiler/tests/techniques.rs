@@ -422,7 +422,12 @@ fn check_and_compile_agree_on_integer_literals() {
         "select(0.0, 1.0, d_biased <= nearest(z)) * (2147483647 + 1)",
     );
     let d = sshc::check_str(&src, &CompileOptions::default()).unwrap_err();
-    assert!(d.render("hard", &src).contains("has no i32 value"), "{}", d.render("hard", &src));
+    assert!(
+        d.render("hard", &src)
+            .contains("integer overflow: 2147483647 + 1 does not fit in i32"),
+        "{}",
+        d.render("hard", &src)
+    );
 }
 
 /// Every error fixture: what compile refuses in a front-end phase, check refuses with the

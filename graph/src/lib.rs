@@ -624,7 +624,11 @@ impl fmt::Display for GraphError {
             ),
             GraphError::Reference { pass, name } => write!(f, "pass `{pass}` refers to texture `{name}`, which the graph does not declare"),
             GraphError::Param { param, message } => write!(f, "param `{param}`: {message}"),
-            GraphError::Duplicate { what, name } => write!(f, "two {what}s are named `{name}`"),
+            GraphError::Duplicate { what, name } => {
+                // "two passes", "two textures", "two params"
+                let plural = if what.ends_with('s') { "es" } else { "s" };
+                write!(f, "two {what}{plural} are named `{name}`")
+            }
             GraphError::Unwritten { pass, texture } => {
                 write!(f, "pass `{pass}` reads texture `{texture}`, which no earlier step writes")
             }
@@ -1033,6 +1037,7 @@ mod tests {
                 name: "depth".into()
             }
         );
+        assert_eq!(e.to_string(), "two passes are named `depth`");
     }
 
     #[test]

@@ -134,7 +134,14 @@ impl<'g> Executor<'g> {
             message: e.to_string(),
         };
         let text = read_capped(graph_path, MAX_GRAPH_BYTES)?;
-        let graph = PassGraph::from_ron(&text)?;
+        // A syntax error has a line and column: named with the file (file:line:column).
+        let graph = PassGraph::from_ron(&text).map_err(|e| match e {
+            graph::GraphError::Syntax { message, line, column } => RuntimeError::File {
+                path: format!("{}:{line}:{column}", graph_path.display()).into(),
+                message: format!("not a valid pass graph: {message}"),
+            },
+            e => RuntimeError::Graph(e),
+        })?;
         let dir = graph_path.parent().unwrap_or(Path::new("."));
         let canon_dir = dir.canonicalize().map_err(|e| io(dir, e))?;
         let mut shaders = Vec::new();
@@ -496,8 +503,14 @@ impl<'g> Executor<'g> {
         read_back(self.gpu, b.texture(name)?, layer, level, size, size, decl.format)
     }
 
-    /// Read a camera output of the Shade pass.
+    /// Read a camera output of the Shade pass. The visibility (and the colour, computed from
+    /// it) is refused where it is not finite or lies outside [0, 1] (`check_visibility`).
     pub fn read_camera(&self, which: CameraOutput) -> Result<Image> {
+        if which == CameraOutput::Color {
+            // The shaded colour is computed from the visibility: a visibility the check
+            // refuses is not passed on through the colour either.
+            self.read_camera(CameraOutput::Visibility)?;
+        }
         let b = self.bound()?;
         let (w, h) = b.camera_size;
         let format = match which {
