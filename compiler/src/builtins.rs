@@ -84,6 +84,9 @@ pub enum Side {
     Receiver,
     Map,
     Both,
+    /// Fragments of the primitives a Geometry pass generates: only in the values of the
+    /// channels it writes (which may also read map-side channels at the fragment's texel).
+    Geometry,
 }
 
 /// Built-in inputs. Everything about one input is its [`InputDesc`] (see [`Input::desc`]).
@@ -123,6 +126,14 @@ pub enum Input {
     /// per unit of distance between blocker and receiver (Lawlor 2006's distant disk);
     /// 0 for local lights, whose spread is `light_width / d` instead.
     LightSpread,
+    /// Z_F of penumbra maps (Wyman & Hansen 2003, eq. 1): the light-view distance of the
+    /// generated primitive's fragment, world units.
+    ZFrag,
+    /// Z_v: the light-view distance of the silhouette vertex the fragment's cone or sheet
+    /// grows from (interpolated along a sheet), world units.
+    ZVertex,
+    /// The radius of the fragment's cone at its distance, `(Z_F - Z_v) L_r / Z_v`, world units.
+    ConeRadius,
 }
 
 /// Everything the compiler knows about one built-in input: check reads its name, type and
@@ -141,7 +152,7 @@ pub struct InputDesc {
 }
 
 impl Input {
-    pub const ALL: [Input; 15] = [
+    pub const ALL: [Input; 18] = [
         Input::D,
         Input::DWorld,
         Input::Uv,
@@ -157,13 +168,16 @@ impl Input {
         Input::LightSize,
         Input::LightWidth,
         Input::LightSpread,
+        Input::ZFrag,
+        Input::ZVertex,
+        Input::ConeRadius,
     ];
 
     /// The descriptor: adding an input means adding a variant, its entry in
     /// [`Input::ALL`] and its arm here (and its `in_*` local in the Shade prelude of
     /// `back/wgsl.rs` when it is receiver-side).
     pub fn desc(self) -> &'static InputDesc {
-        use Side::{Both, Receiver};
+        use Side::{Both, Geometry, Receiver};
         match self {
             Input::D => &InputDesc {
                 name: "d",
@@ -285,6 +299,30 @@ impl Input {
                 range: (0.0, 4.0),
                 wgsl: "(2.0 * tan(0.5 * frame.light_size.y))",
                 doc: "angular width 2 tan(angle / 2) of a distant light: penumbra width per unit of blocker-receiver distance; 0 for local lights",
+            },
+            Input::ZFrag => &InputDesc {
+                name: "z_frag",
+                ty: Ty::F32,
+                side: Geometry,
+                range: (0.0, 1e4),
+                wgsl: "in_z_frag",
+                doc: "light-view distance of the generated primitive's fragment (Z_F of Wyman & Hansen eq. 1, world units)",
+            },
+            Input::ZVertex => &InputDesc {
+                name: "z_vertex",
+                ty: Ty::F32,
+                side: Geometry,
+                range: (0.0, 1e4),
+                wgsl: "in_z_vertex",
+                doc: "light-view distance of the fragment's silhouette vertex (Z_v, interpolated along a sheet; world units)",
+            },
+            Input::ConeRadius => &InputDesc {
+                name: "cone_radius",
+                ty: Ty::F32,
+                side: Geometry,
+                range: (0.0, 1e4),
+                wgsl: "in_cone_radius",
+                doc: "radius of the fragment's cone at its distance, (Z_F - Z_v) L_r / Z_v (world units)",
             },
         }
     }
@@ -1366,7 +1404,7 @@ mod tests {
             assert!(is_reserved(input.name()));
         }
         assert_eq!(
-            Input::LightSpread as usize + 1,
+            Input::ConeRadius as usize + 1,
             Input::ALL.len(),
             "an Input is missing from Input::ALL"
         );
@@ -1530,6 +1568,7 @@ mod tests {
                 Side::Receiver => "receiver",
                 Side::Map => "map",
                 Side::Both => "both",
+                Side::Geometry => "geometry",
             };
             let row = format!("| `{}` | {ty} | {side} |", d.name);
             assert!(inputs.contains(&row), "docs/language.md 8.5 lacks the row `{row}`");
@@ -1558,7 +1597,7 @@ mod tests {
         };
         for i in Input::ALL {
             let d = i.desc();
-            if d.side == Side::Receiver {
+            if matches!(d.side, Side::Receiver | Side::Geometry) {
                 body.push_str(&format!("    let {}: {} = {};\n", d.wgsl, d.ty.wgsl(), arg(d.ty)));
             }
         }

@@ -149,6 +149,35 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                     "channel values are computed per shadow-map texel, before any receiver is known",
                 ));
             }
+            // Geometry inputs exist per fragment of generated primitives: only in channels
+            // that Geometry passes, and nothing else, write.
+            let writers: Vec<&Pass> = t
+                .passes
+                .iter()
+                .filter(|p| match &p.kind {
+                    PassKind::Map { channels, .. } | PassKind::Geometry { channels, .. } => {
+                        channels.iter().any(|n| n.value == c.name.value)
+                    }
+                    PassKind::Depth { .. }
+                    | PassKind::Filter { .. }
+                    | PassKind::Mipmap { .. }
+                    | PassKind::SummedArea { .. }
+                    | PassKind::Shade { .. } => false,
+                })
+                .collect();
+            if let Some(p) = writers.iter().find(|p| !matches!(p.kind, PassKind::Geometry { .. })) {
+                for u in ty.uses.iter().filter(|u| u.side == Side::Geometry) {
+                    diags.push(geometry_only(
+                        u,
+                        &format!(
+                            "channel `{}` is computed by the {} pass `{}`, per shadow-map texel",
+                            c.name.value,
+                            p.kind.kind_name(),
+                            p.name.value
+                        ),
+                    ));
+                }
+            }
         }
     }
 
@@ -216,6 +245,9 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                 match ty.infer_as(visibility, Ty::F32) {
                     Ok(t) => expect_f32(t, visibility.span, "the visibility", &mut diags),
                     Err(d) => diags.push(d),
+                }
+                for u in ty.uses.iter().filter(|u| u.side == Side::Geometry) {
+                    diags.push(geometry_only(u, "the visibility is computed per camera pixel"));
                 }
             }
             PassKind::Depth { .. } | PassKind::Mipmap { .. } | PassKind::SummedArea { .. } | PassKind::Geometry { .. } => {}
@@ -364,6 +396,9 @@ fn check_expansion(sym: &Symbols, e: &Expansion, types: &mut Types, diags: &mut 
         Ok(t) => expect_f32(t, e.constant.span, "the constant term", diags),
         Err(d) => diags.push(d),
     }
+    for u in ty.uses.iter().filter(|u| u.side == Side::Geometry) {
+        diags.push(geometry_only(u, "an expansion's constant is computed per receiver"));
+    }
     for u in ty.uses.drain(..).filter(|u| u.side == Side::Map) {
         diags.push(side_error(
             &u,
@@ -407,6 +442,9 @@ fn check_expansion(sym: &Symbols, e: &Expansion, types: &mut Types, diags: &mut 
             Ok(t) => expect_f32(t, term.coeff.span, "a coefficient", diags),
             Err(d) => diags.push(d),
         }
+        for u in ty.uses.iter().filter(|u| u.side == Side::Geometry) {
+            diags.push(geometry_only(u, "an expansion's coefficients are computed per receiver"));
+        }
         for u in ty.uses.drain(..).filter(|u| u.side == Side::Map) {
             diags.push(
                 side_error(
@@ -423,16 +461,36 @@ fn check_expansion(sym: &Symbols, e: &Expansion, types: &mut Types, diags: &mut 
             Ok(t) => expect_f32(t, term.basis.span, "a basis function", diags),
             Err(d) => diags.push(d),
         }
+        for u in ty.uses.iter().filter(|u| u.side == Side::Geometry) {
+            diags.push(geometry_only(u, "an expansion's basis functions are computed per shadow-map texel"));
+        }
         for u in ty.uses.drain(..).filter(|u| u.side == Side::Receiver) {
             diags.push(side_error(&u, "a basis function of expansion", &e.name.value, "basis functions B_i(z) are stored per shadow-map texel and prefiltered, so they may use map-side inputs only (Annen eq. 5.6)").help("move the factor that depends on the receiver into `coeff`"));
         }
     }
 }
 
+/// A Geometry-side input used where no generated primitive's fragment exists.
+fn geometry_only(u: &Use, where_: &str) -> Diagnostic {
+    let mut d = Diagnostic::error(
+        Phase::Check,
+        format!("`{}` exists only per fragment of a Geometry pass's primitives", u.name),
+    )
+    .at(u.span, "not available here")
+    .note(format!(
+        "{where_}; geometry inputs may be used in the values of channels that only Geometry passes write"
+    ));
+    if let Some(via) = u.via {
+        d = d.also(via, "used through this binding");
+    }
+    d
+}
+
 fn side_error(u: &Use, what: &str, owner: &str, why: &str) -> Diagnostic {
     let side = match u.side {
         Side::Receiver => "a receiver-side input",
         Side::Map | Side::Both => "a map-side channel",
+        Side::Geometry => "an input of Geometry passes' fragments",
     };
     let mut d = Diagnostic::error(
         Phase::Check,

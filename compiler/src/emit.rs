@@ -133,7 +133,7 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
         params,
         params_size,
         textures,
-        buffers: vec![],
+        buffers: out.modules.iter().flat_map(|m| m.buffers.iter().cloned()).collect(),
         passes,
         removed: ir.removed.to_vec(),
     }

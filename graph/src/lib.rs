@@ -464,7 +464,9 @@ pub enum Draw {
     Silhouettes { buffer: String },
     /// The primitives of the records in `buffer`, drawn indirectly with the arguments a
     /// `Silhouettes` step wrote (the vertex stage reads the records: vertex pulling, one
-    /// record per `vertices_per_record` vertices), overlaps resolved by `resolve`.
+    /// record per `vertices_per_record` vertices), overlaps resolved by `resolve`. Group 3
+    /// binds the buffer at binding 4 (read-only); a `Silhouettes` step binds the edges,
+    /// face planes and face references at 0 to 2 and the buffer at 3 (read-write).
     Primitives { buffer: String, resolve: Resolve },
 }
 

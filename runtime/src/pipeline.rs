@@ -70,8 +70,9 @@ pub(crate) enum GeometryGroup {
     /// A `Silhouettes` step (compute): 0 edges, 1 face planes, 2 edge faces (read-only
     /// storage), 3 the generated buffer (read-write storage).
     Classify,
-    /// A `Primitives` step (raster): 0 the generated buffer (read-only storage, vertex and
-    /// fragment stages).
+    /// A `Primitives` step (raster): 4 the generated buffer (read-only storage, vertex and
+    /// fragment stages). Binding 4, so that one module can hold both steps' entry points:
+    /// the classification's bindings 0 to 3 and the draw's are distinct variables.
     Draw,
 }
 
@@ -92,7 +93,7 @@ impl GeometryGroup {
                 let c = wgpu::ShaderStages::COMPUTE;
                 vec![buffer(0, true, c), buffer(1, true, c), buffer(2, true, c), buffer(3, false, c)]
             }
-            GeometryGroup::Draw => vec![buffer(0, true, wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT)],
+            GeometryGroup::Draw => vec![buffer(4, true, wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT)],
         }
     }
 }

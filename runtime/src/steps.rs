@@ -119,8 +119,9 @@ enum Bound {
         /// One render pass per level.
         passes: Vec<RasterPass>,
         vertices: Option<(wgpu::Buffer, u32)>,
-        /// Empty groups 1 and 2 and the generated buffer (group 3) of a `Primitives` step.
-        geometry: Option<[wgpu::BindGroup; 3]>,
+        /// An empty group 1 (when the step reads nothing), an empty group 2 and the
+        /// generated buffer (group 3) of a `Primitives` step.
+        geometry: Option<(Option<wgpu::BindGroup>, wgpu::BindGroup, wgpu::BindGroup)>,
         /// The buffer whose first 16 bytes are the draw arguments.
         indirect: Option<wgpu::Buffer>,
     },
@@ -425,9 +426,14 @@ impl StepNode {
                 let (geometry, indirect) = match &r.draw {
                     DrawCall::Generated(name) => {
                         let buf = res.generated(name)?;
-                        let groups = self.empty_groups(gpu)?;
-                        let g3 = self.group3(gpu, &[buf])?;
-                        (Some([groups.0, groups.1, g3]), Some(buf.clone()))
+                        let g1 = if self.reads.is_empty() {
+                            Some(self.empty_group(gpu, 1)?)
+                        } else {
+                            None
+                        };
+                        let g2 = self.empty_group(gpu, 2)?;
+                        let g3 = self.group3(gpu, 4, &[buf])?;
+                        (Some((g1, g2, g3)), Some(buf.clone()))
                     }
                     DrawCall::Scene | DrawCall::FullScreenTriangle => (None, None),
                 };
@@ -460,7 +466,7 @@ impl StepNode {
                 let geometry = match &c.generated {
                     Some(name) => {
                         let (e, buf) = (res.edges()?, res.generated(name)?);
-                        let g3 = self.group3(gpu, &[&e.edges, &e.planes, &e.edge_faces, buf])?;
+                        let g3 = self.group3(gpu, 0, &[&e.edges, &e.planes, &e.edge_faces, buf])?;
                         Some((g3, buf.clone(), e.counts.edges))
                     }
                     None => None,
@@ -504,8 +510,8 @@ impl StepNode {
         }))
     }
 
-    /// Group 3 of a Geometry pass's step: `buffers` at bindings 0, 1, ...
-    fn group3(&self, gpu: &Gpu, buffers: &[&wgpu::Buffer]) -> Result<wgpu::BindGroup> {
+    /// Group 3 of a Geometry pass's step: `buffers` at bindings `first`, `first + 1`, ...
+    fn group3(&self, gpu: &Gpu, first: u32, buffers: &[&wgpu::Buffer]) -> Result<wgpu::BindGroup> {
         let layout = self
             .pipeline
             .group3
@@ -515,7 +521,7 @@ impl StepNode {
             .iter()
             .enumerate()
             .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
+                binding: first + i as u32,
                 resource: b.as_entire_binding(),
             })
             .collect();
@@ -526,21 +532,19 @@ impl StepNode {
         }))
     }
 
-    /// The empty groups 1 and 2 that keep a raster step's group 3 at its index.
-    fn empty_groups(&self, gpu: &Gpu) -> Result<(wgpu::BindGroup, wgpu::BindGroup)> {
-        let empty = |layout: &Option<wgpu::BindGroupLayout>| {
-            layout
-                .as_ref()
-                .map(|layout| {
-                    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: None,
-                        layout,
-                        entries: &[],
-                    })
+    /// An empty group 1 or 2, keeping a raster step's group 3 at its index.
+    fn empty_group(&self, gpu: &Gpu, index: u32) -> Result<wgpu::BindGroup> {
+        let layout = if index == 1 { &self.pipeline.group1 } else { &self.pipeline.group2 };
+        layout
+            .as_ref()
+            .map(|layout| {
+                gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: None,
+                    layout,
+                    entries: &[],
                 })
-                .ok_or_else(|| RuntimeError::NotFound(format!("pass `{}`: a Geometry step without groups 1 and 2", self.label)))
-        };
-        Ok((empty(&self.pipeline.group1)?, empty(&self.pipeline.group2)?))
+            })
+            .ok_or_else(|| RuntimeError::NotFound(format!("pass `{}`: a Geometry step without group {index}", self.label)))
     }
 
     /// What the step reads, for writing mip level `level`.
@@ -661,8 +665,8 @@ impl StepNode {
                     if let Some(g1) = &p.group1 {
                         rp.set_bind_group(1, g1, &[]);
                     }
-                    if let Some([g1, g2, g3]) = geometry {
-                        if p.group1.is_none() {
+                    if let Some((g1, g2, g3)) = geometry {
+                        if let Some(g1) = g1 {
                             rp.set_bind_group(1, g1, &[]);
                         }
                         rp.set_bind_group(2, g2, &[]);

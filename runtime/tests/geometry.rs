@@ -56,7 +56,7 @@ fn cs_silhouettes(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_wor
     let draw = "
 struct Record { a: vec4<f32>, b: vec4<f32> }
 struct Generated { vertex_count: u32, instance_count: u32, first_vertex: u32, first_instance: u32, records: array<Record> }
-@group(3) @binding(0) var<storage, read> gen: Generated;
+@group(3) @binding(4) var<storage, read> gen: Generated;
 struct VOut { @builtin(position) pos: vec4<f32>, @location(0) @interpolate(flat) v: f32 }
 @vertex fn vs_prim(@builtin(vertex_index) vi: u32) -> VOut {
     let r = gen.records[vi / 3u];

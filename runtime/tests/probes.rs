@@ -89,6 +89,7 @@ fn colour(gpu: &Gpu, value: &str) -> Result<Vec<f32>, RuntimeError> {
     ex.bind_scene(&SceneInputs {
         // one triangle covering the camera's view
         vertices: vec![-1., -1., 0.5, 0., 0., 1., 3., -1., 0.5, 0., 0., 1., -1., 3., 0.5, 0., 0., 1.],
+        meshes: vec![],
         camera_view_proj: identity,
         camera_position: [0.0; 3],
         camera_size: (4, 4),

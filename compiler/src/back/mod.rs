@@ -1,5 +1,6 @@
 //! Back end: WGSL generation, naga validation, and operation counts on the naga IR.
 
+pub mod geometry;
 pub mod wgsl;
 
 use sshc_graph::OpCount;

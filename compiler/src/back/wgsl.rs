@@ -4,9 +4,10 @@
 //! texture reads of one texel of one layer are fetched once and shared by its channels.
 //! Every module is validated with naga inside the compiler.
 
+use crate::back::geometry;
 use crate::builtins::{Func, Input, SampleFn, SampleWgsl, Sig, Ty, Wgsl};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
-use crate::front::ast::{ConstValue, Precision, Reduce};
+use crate::front::ast::{ConstValue, Precision, Primitive, Reduce, Resolve};
 use crate::front::expr::{BinOp, UnOp};
 use crate::ir::*;
 use crate::pack::{Limits, layers_per_subpass, table_source};
@@ -21,6 +22,8 @@ pub struct Module {
     pub file: String,
     pub source: String,
     pub steps: Vec<Step>,
+    /// Buffers its steps generate on the GPU (Geometry passes).
+    pub buffers: Vec<graph::BufferDecl>,
 }
 
 /// Intermediate textures a module needs besides the IR's (the separable filters' scratch).
@@ -104,6 +107,9 @@ const COMP: [char; 4] = ['x', 'y', 'z', 'w'];
 enum Side {
     /// Per shadow-map texel (`texel` is the integer coordinate).
     Map,
+    /// Per fragment of a Geometry pass's primitives (`texel` is the fragment's shadow-map
+    /// texel; the geometry inputs are `in_*` locals).
+    Geometry,
     /// Per camera pixel in the Shade pass.
     Receiver,
 }
@@ -162,8 +168,13 @@ impl<'a> Emitter<'a> {
     }
 
     fn input(&mut self, i: Input) -> String {
-        // check refuses receiver inputs on the map side
-        debug_assert!(matches!(self.side, Side::Receiver) || i.side() == crate::builtins::Side::Both);
+        // check refuses receiver inputs on the map side and geometry inputs outside
+        // Geometry passes' channels
+        debug_assert!(match self.side {
+            Side::Receiver => i.side() != crate::builtins::Side::Geometry,
+            Side::Geometry => matches!(i.side(), crate::builtins::Side::Both | crate::builtins::Side::Geometry),
+            Side::Map => i.side() == crate::builtins::Side::Both,
+        });
         i.desc().wgsl.to_string()
     }
 
@@ -519,17 +530,19 @@ pub fn codegen(ir: &Program, limits: &Limits) -> Result<Output, Diagnostics> {
             IrPassKind::Mipmap { reduce } => mipmap(ir, pass, *reduce, limits),
             IrPassKind::Shade { visibility } => shade(ir, pass, *visibility),
             IrPassKind::SummedArea => summed_area(ir, pass),
-            IrPassKind::Geometry { .. } => Err(Diagnostic::error(Phase::Codegen, format!("pass `{}`: Geometry passes are checked, but the runtime that generates primitives is not built yet", pass.name))
-                .at(pass.span, "cannot generate code for this pass yet")
-                .note("`sshc check` accepts the technique; compiling it needs the Geometry runtime (compute-generated primitives drawn indirectly)")),
+            IrPassKind::Geometry { primitive, resolve, .. } => geometry(ir, pass, *primitive, *resolve, limits),
         };
         match r {
-            Ok((source, steps)) => modules.push(Module {
-                pass: pi,
-                file,
-                source,
-                steps,
-            }),
+            Ok((source, steps)) => {
+                let buffers = geometry_buffers(pass, &steps);
+                modules.push(Module {
+                    pass: pi,
+                    file,
+                    source,
+                    steps,
+                    buffers,
+                })
+            }
             Err(d) => diags.push(d),
         }
     }
@@ -645,6 +658,162 @@ fn map(ir: &Program, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step
         "{}{}\n{structs}\n{FULLSCREEN_VS}{bodies}",
         header(ir, pass),
         decl_emitter.declarations(ir)
+    );
+    Ok((src, steps))
+}
+
+/// The buffer a Geometry pass's classification appends to.
+fn geometry_buffer_name(pass: &IrPass) -> String {
+    format!("{}.silhouettes", pass.name)
+}
+
+/// The generated buffers of a module: one per `Silhouettes` step.
+fn geometry_buffers(pass: &IrPass, steps: &[Step]) -> Vec<graph::BufferDecl> {
+    steps
+        .iter()
+        .filter(|s| matches!(s.draw, Draw::Silhouettes { .. }))
+        .map(|_| graph::BufferDecl {
+            name: geometry_buffer_name(pass),
+            record_bytes: geometry::CONES_AND_SHEETS_RECORD_BYTES,
+            vertices_per_record: geometry::CONES_AND_SHEETS_VERTICES,
+        })
+        .collect()
+}
+
+fn graph_resolve(r: Resolve) -> graph::Resolve {
+    match r {
+        Resolve::KeepMin => graph::Resolve::KeepMin,
+        Resolve::KeepMax => graph::Resolve::KeepMax,
+        Resolve::Add => graph::Resolve::Add,
+        Resolve::Multiply => graph::Resolve::Multiply,
+    }
+}
+
+/// A Geometry pass: the primitive kind's library (classification on the GPU, primitives
+/// pulled from its records; `back/geometry.rs`) and one fragment entry per group of
+/// layers, writing the pass's channels per fragment; overlaps combine by the resolve
+/// rule's blending (graph `Resolve`). `Add` keeps `1 - sum(1 - v)`: its fragments write
+/// the shadow amount `1 - v`.
+fn geometry(
+    ir: &Program,
+    pass: &IrPass,
+    primitive: Primitive,
+    resolve: Resolve,
+    limits: &Limits,
+) -> Result<(String, Vec<Step>), Diagnostic> {
+    match primitive {
+        Primitive::ConesAndSheets => {}
+        Primitive::Ribbons | Primitive::Skins => {
+            return Err(Diagnostic::error(
+                Phase::Codegen,
+                format!("pass `{}`: `primitive: {primitive:?}` has no primitive builder yet", pass.name),
+            )
+            .at(pass.span, "cannot generate code for this pass yet")
+            .note("`ConesAndSheets` (penumbra maps) is built; ribbons and skins come with penumbra limit maps and linear lights"));
+        }
+    }
+    let w = pass.writes.ok_or_else(|| internal("geometry pass without output"))?;
+    let res = &ir.resources[w];
+    for tex in &res.textures {
+        if tex.precision == Precision::F32 {
+            let ch = res
+                .slots
+                .iter()
+                .find(|s| res.textures[s.texture].name == tex.name)
+                .map(|s| ir.channels[s.channel].name.clone())
+                .unwrap_or_default();
+            return Err(Diagnostic::error(
+                Phase::Codegen,
+                format!(
+                    "pass `{}` blends channel `{ch}` at F32: WebGPU blends 32-bit float targets only with an optional feature",
+                    pass.name
+                ),
+            )
+            .at(pass.span, "overlapping primitives are resolved by blending")
+            .help("declare the channel F16, Unorm8 or Unorm16"));
+        }
+    }
+    let buffer = geometry_buffer_name(pass);
+    let mut bodies = String::new();
+    let mut steps = vec![Step {
+        vertex: None,
+        fragment: None,
+        compute: Some(geometry::CONES_AND_SHEETS_COMPUTE.into()),
+        draw: Draw::Silhouettes { buffer: buffer.clone() },
+        reads: vec![],
+        writes: vec![],
+        params: false,
+        sampler: false,
+        cost: OpCount::default(),
+    }];
+    let mut decl_emitter = Emitter::new(ir, Side::Geometry, pass.reads.clone());
+    let mut structs = String::new();
+    for (ti, tex) in res.textures.iter().enumerate() {
+        for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
+            let entry = format!("fs_{}_{ci}", tex.name);
+            let out_name = format!("Out_{}_{ci}", tex.name);
+            structs.push_str(&out_struct(&out_name, chunk.len()));
+            let mut em = Emitter::new(ir, Side::Geometry, pass.reads.clone());
+            em.bindings = decl_emitter.bindings.clone();
+            let mut outs = Vec::new();
+            for (oi, &layer) in chunk.iter().enumerate() {
+                let mut comps = vec!["0.0f".to_string(); 4];
+                for slot in res.slots.iter().filter(|s| s.texture == ti && s.layer == layer) {
+                    let v = ir.channels[slot.channel]
+                        .value
+                        .ok_or_else(|| internal("geometry channel without value"))?;
+                    if !slot.encode.is_identity() && matches!(resolve, Resolve::Add | Resolve::Multiply) {
+                        return Err(Diagnostic::error(
+                            Phase::Codegen,
+                            format!(
+                                "pass `{}` adds or multiplies channel `{}`, whose storage is scaled to its range",
+                                pass.name, ir.channels[slot.channel].name
+                            ),
+                        )
+                        .at(pass.span, "sums and products of scaled values are not the scaled sum or product")
+                        .help("give the channel a range inside [0, 1], or resolve with KeepMin or KeepMax"));
+                    }
+                    let name = em.emit(v)?;
+                    let stored = encode_expr(&name, slot.encode);
+                    comps[slot.component as usize] = match resolve {
+                        Resolve::Add => format!("1.0 - {stored}"),
+                        Resolve::KeepMin | Resolve::KeepMax | Resolve::Multiply => stored,
+                    };
+                }
+                outs.push(format!("    out.o{oi} = vec4<f32>({});", comps.join(", ")));
+            }
+            let _ = write!(
+                bodies,
+                "\n@fragment\nfn {entry}(in: ConesAndSheetsVarying) -> {out_name} {{\n    let texel = vec2<i32>(in.clip.xy);\n    let in_z_frag = in.z_frag;\n    let in_z_vertex = in.z_vertex;\n    let in_cone_radius = in.cone_radius;\n{}    var out: {out_name};\n{}\n    return out;\n}}\n",
+                em.body,
+                outs.join("\n")
+            );
+            decl_emitter.bindings = em.bindings.clone();
+            decl_emitter.uses_params |= em.uses_params;
+            let mut step = fullscreen_step(
+                entry,
+                Draw::Primitives {
+                    buffer: buffer.clone(),
+                    resolve: graph_resolve(resolve),
+                },
+                vec![],
+                &tex.name,
+                &chunk,
+            );
+            step.vertex = Some(geometry::CONES_AND_SHEETS_VERTEX.into());
+            steps.push(step);
+        }
+    }
+    let bindings = decl_emitter.graph_bindings();
+    for s in steps.iter_mut().skip(1) {
+        s.reads = bindings.clone();
+        s.params = decl_emitter.uses_params;
+    }
+    let src = format!(
+        "{}{}\n{}\n{structs}{bodies}",
+        header(ir, pass),
+        decl_emitter.declarations(ir),
+        geometry::cones_and_sheets()
     );
     Ok((src, steps))
 }

@@ -202,6 +202,7 @@ pub enum Resolve {
     KeepMin,
     KeepMax,
     Add,
+    Multiply,
 }
 
 #[derive(Clone, Debug, PartialEq)]

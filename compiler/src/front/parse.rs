@@ -597,7 +597,8 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
                 "KeepMin" => Resolve::KeepMin,
                 "KeepMax" => Resolve::KeepMax,
                 "Add" => Resolve::Add,
-                _ => return Err(unknown_variant(rs, &r, "resolve rule", &["KeepMin", "KeepMax", "Add"])),
+                "Multiply" => Resolve::Multiply,
+                _ => return Err(unknown_variant(rs, &r, "resolve rule", &["KeepMin", "KeepMax", "Add", "Multiply"])),
             };
             let view = light_view(&mut f)?;
             PassKind::Geometry {
