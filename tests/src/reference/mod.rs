@@ -25,9 +25,14 @@
 //! distances of the fitted depth range and its projection ([`LightFrame`], set with
 //! [`Technique::lit`]). A receiver's view distance is `d_world = near + d (far - near)`
 //! (the Depth pass's linear normalisation, docs/language.md section 7).
+//!
+//! [`penumbra`] is a separate f64 reference of penumbra maps (Wyman & Hansen 2003): silhouettes,
+//! a ray-cast shadow map, exact cones and sheets, the resolve rules and the final lookup, from
+//! world triangles rather than a depth map.
 
 pub mod cpu;
 pub mod gpu;
+pub mod penumbra;
 pub mod tolerance;
 
 pub use cpu::cpu_visibility;
