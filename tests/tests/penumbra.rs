@@ -1,0 +1,152 @@
+//! Penumbra maps (`techniques/penumbra-maps.ron`, Wyman & Hansen 2003) as the compiler
+//! generates them, run on a GPU (lavapipe without one), against the f64 CPU reference
+//! (`sshc_tests::reference::penumbra`, written from the paper alone), texel by texel of
+//! the penumbra map; and the limits the issue names: a light of radius 0 gives exactly the
+//! hard shadow map, and open or non-manifold meshes give finite values in [0, 1].
+
+mod support;
+
+use sshc_lab::scene::Scene;
+use sshc_runtime::adjacency::Adjacency;
+use sshc_runtime::gpu::{CameraOutput, Executor, SceneInputs};
+use sshc_tests::reference::penumbra::{self as reference, AreaLight, LightProjection, PenumbraSetup, Primitive, Resolve};
+use support::{compile_source, gpu, technique_source};
+
+const TECHNIQUE: &str = "penumbra-maps";
+
+/// Cones are drawn with `CONE_SEGMENTS` = 16 triangles whose base polygon is circumscribed
+/// about the cone's circle, so the drawn cone is up to 1 / cos(pi / 16) - 1 = 1.96 % wider
+/// than the paper's: at a texel it meets the drawn cone nearer its tip, `Z_F - Z_v` (and
+/// with it eq. 1's I) smaller by up to that fraction. The Bernstein interpolant's slope is
+/// at most 3/2, so s differs by at most 1.5 x 0.0196 = 0.029 where a cone wins.
+const CONE_TOLERANCE: f64 = 1.5 * 0.019_6;
+/// Sheets of an edge whose end points lie at one light distance are planar and drawn
+/// exactly; what remains is the f16 target (11 significant bits: 2^-11 of a value <= 1)
+/// and f32 arithmetic on Z (a few ulp of Z, relative 1e-6, divided by Z_P - Z_v, which is
+/// at least a tenth of Z here: 1e-5).
+const SHEET_TOLERANCE: f64 = 1.0 / 2048.0 + 1e-5;
+
+/// A 1.5-wide square 2 units above a floor, a sphere light of radius `radius` 6 units above
+/// the floor's centre.
+fn scene(radius: f32, shadow: u32) -> Scene {
+    let text = format!(
+        "Scene(
+    camera: Perspective(position: (0.0, 6.0, 6.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 40.0, width: 32, height: 32),
+    shadow_map: {shadow},
+    lights: [Sphere(center: (0.0, 6.0, 0.0), radius: {radius})],
+    objects: [
+        Object(name: \"floor\", mesh: Plane(size: (6.0, 6.0))),
+        Object(name: \"square\", mesh: Plane(size: (1.5, 1.5)), transform: (translate: (0.0, 2.0, 0.0))),
+    ],
+)"
+    );
+    Scene::from_str(&text, ".").unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The reference's view of the scene: the same triangles, light view and depth range.
+fn setup(inputs: &SceneInputs, resolve: Resolve) -> PenumbraSetup {
+    PenumbraSetup {
+        view: inputs.light_view.map(f64::from),
+        projection: LightProjection::Perspective {
+            f: f64::from(inputs.light_proj_y),
+        },
+        near: f64::from(inputs.near),
+        far: f64::from(inputs.far),
+        size: inputs.shadow_size as usize,
+        light: AreaLight::Sphere {
+            radius: f64::from(inputs.light_size),
+        },
+        resolve,
+    }
+}
+
+fn triangles(scene: &Scene) -> Vec<[[f64; 3]; 3]> {
+    scene.triangles().iter().map(|t| t.map(|p| p.to_array().map(f64::from))).collect()
+}
+
+fn meshes(scene: &Scene) -> Vec<std::ops::Range<usize>> {
+    (0..scene.objects().len()).map(|i| scene.object_triangles(i)).collect()
+}
+
+/// Run the generated technique on `scene`: the penumbra map (row 0 at the top), the hard
+/// test's inputs and the visibility buffer.
+fn run(scene: &Scene, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Executor<'static>) {
+    let compiled = compile_source(TECHNIQUE, &technique_source(TECHNIQUE), set, &[]);
+    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    let inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+    let pmap = ex.read_texture("pmap", 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0);
+    let vis = ex
+        .read_camera(CameraOutput::Visibility)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .channel(0);
+    (pmap, vis, inputs, ex)
+}
+
+#[test]
+fn the_generated_penumbra_map_agrees_with_the_f64_reference() {
+    let scene = scene(0.5, 128);
+    let (pmap, _, inputs, ex) = run(&scene, &[]);
+    let setup = setup(&inputs, Resolve::KeepMin);
+    let tris = triangles(&scene);
+    let r = reference::PenumbraReference::new(&tris, &meshes(&scene), &setup).unwrap_or_else(|e| panic!("{e}"));
+
+    // The silhouettes the GPU classified: the two quads' 8 boundary edges (their
+    // diagonals are not silhouettes), as the CPU rule and the reference count them.
+    let generated = ex.generated("penumbra.silhouettes").unwrap_or_else(|e| panic!("{e}"));
+    let f32_tris: Vec<[[f32; 3]; 3]> = scene.triangles().iter().map(|t| t.map(|p| p.to_array())).collect();
+    let adj = Adjacency::build(&f32_tris, meshes(&scene));
+    assert_eq!(generated.records as usize, adj.silhouette_count(inputs.light_position));
+    assert_eq!(generated.records as usize, r.silhouettes.edges.len());
+    assert_eq!(generated.records, 8);
+
+    let n = setup.size;
+    let (mut worst_cone, mut worst_sheet, mut penumbra) = (0.0f64, 0.0f64, 0);
+    for j in 0..n {
+        for i in 0..n {
+            let want = r.penumbra.value[j * n + i];
+            let got = f64::from(pmap[j * n + i]);
+            assert!(got.is_finite() && (0.0..=1.0).contains(&got), "texel ({i}, {j}): {got}");
+            let frags = reference::fragments(&r.primitives, &r.shadow, &setup, i, j);
+            let cone = frags.iter().any(|f| matches!(f.primitive, Primitive::Cone(_)));
+            let err = (got - want).abs();
+            if want < 1.0 {
+                penumbra += 1;
+            }
+            // A texel covered only by the drawn (wider) cone, or only by the exact one,
+            // lies at the cone's rim, where s is within the cone tolerance of 1.
+            if cone || frags.is_empty() {
+                worst_cone = worst_cone.max(err);
+                assert!(err <= CONE_TOLERANCE, "texel ({i}, {j}): generated {got}, reference {want} (cone)");
+            } else {
+                worst_sheet = worst_sheet.max(err);
+                assert!(
+                    err <= SHEET_TOLERANCE,
+                    "texel ({i}, {j}): generated {got}, reference {want} (sheet)"
+                );
+            }
+        }
+    }
+    eprintln!("{penumbra} penumbra texels; worst error: {worst_cone:.2e} where cones win, {worst_sheet:.2e} on sheets");
+    assert!(penumbra > 4 * 64, "the test must see a penumbra: {penumbra} texels");
+}
+
+#[test]
+fn a_light_of_radius_zero_gives_exactly_the_hard_shadow_map() {
+    let scene = scene(0.0, 64);
+    let (pmap, vis, _, ex) = run(&scene, &[]);
+    assert!(pmap.iter().all(|&p| p == 1.0), "no penumbra without a light radius");
+    drop(ex);
+    let hard = compile_source("hard", &technique_source("hard"), &[], &[]);
+    let mut ex = Executor::new(gpu(), hard.graph, hard.shaders).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(&sshc_lab::bind::scene_inputs(&scene).unwrap_or_else(|e| panic!("{e}")))
+        .unwrap_or_else(|e| panic!("{e}"));
+    ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+    let hard_vis = ex
+        .read_camera(CameraOutput::Visibility)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .channel(0);
+    assert_eq!(vis, hard_vis, "same bias, same test, penumbra 1 everywhere");
+    assert!(vis.iter().any(|&v| v == 0.0) && vis.iter().any(|&v| v == 1.0));
+}
