@@ -134,6 +134,9 @@ pub enum Input {
     ZVertex,
     /// The radius of the fragment's cone at its distance, `(Z_F - Z_v) L_r / Z_v`, world units.
     ConeRadius,
+    /// Z_P: the light-view distance of the foremost surface the light sees at the
+    /// fragment's texel (the Depth resource the Geometry pass reads), world units.
+    ZSurface,
 }
 
 /// Everything the compiler knows about one built-in input: check reads its name, type and
@@ -152,7 +155,7 @@ pub struct InputDesc {
 }
 
 impl Input {
-    pub const ALL: [Input; 18] = [
+    pub const ALL: [Input; 19] = [
         Input::D,
         Input::DWorld,
         Input::Uv,
@@ -171,6 +174,7 @@ impl Input {
         Input::ZFrag,
         Input::ZVertex,
         Input::ConeRadius,
+        Input::ZSurface,
     ];
 
     /// The descriptor: adding an input means adding a variant, its entry in
@@ -323,6 +327,14 @@ impl Input {
                 range: (0.0, 1e4),
                 wgsl: "in_cone_radius",
                 doc: "radius of the fragment's cone at its distance, (Z_F - Z_v) L_r / Z_v (world units)",
+            },
+            Input::ZSurface => &InputDesc {
+                name: "z_surface",
+                ty: Ty::F32,
+                side: Geometry,
+                range: (0.0, 1e4),
+                wgsl: "in_z_surface",
+                doc: "light-view distance of the foremost surface the light sees at the fragment's texel (Z_P of Wyman & Hansen eq. 1, world units)",
             },
         }
     }
@@ -1404,7 +1416,7 @@ mod tests {
             assert!(is_reserved(input.name()));
         }
         assert_eq!(
-            Input::ConeRadius as usize + 1,
+            Input::ZSurface as usize + 1,
             Input::ALL.len(),
             "an Input is missing from Input::ALL"
         );

@@ -466,7 +466,8 @@ pub enum Draw {
     /// `Silhouettes` step wrote (the vertex stage reads the records: vertex pulling, one
     /// record per `vertices_per_record` vertices), overlaps resolved by `resolve`. Group 3
     /// binds the buffer at binding 4 (read-only); a `Silhouettes` step binds the edges,
-    /// face planes and face references at 0 to 2 and the buffer at 3 (read-write).
+    /// face planes and face references at 0 to 2, the buffer at 3 and one `u32` claim per
+    /// welded vertex at 5 (read-write, cleared before the dispatch).
     Primitives { buffer: String, resolve: Resolve },
 }
 
@@ -477,7 +478,8 @@ pub enum Draw {
 pub enum Resolve {
     /// The smallest value wins (the darkest shadow); targets start at 1.
     KeepMin,
-    /// The largest value wins; targets start at 0.
+    /// The largest value wins; targets start at 0 (the identity of `max`), so a texel no
+    /// fragment covers reads 0: a technique using it reads coverage from the value.
     KeepMax,
     /// Shadow contributions add: each fragment writes its shadow amount `1 - v`, and the
     /// target keeps `1 - sum(1 - v)` (clamp it to [0, 1] when reading); targets start at 1.

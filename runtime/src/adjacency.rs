@@ -33,8 +33,10 @@
 use std::collections::HashMap;
 use std::ops::Range;
 
-/// One edge as the GPU reads it (std430, 32 bytes): its two welded end points and the
-/// range of its face references in [`Adjacency::edge_faces`].
+/// One edge as the GPU reads it (std430, 48 bytes): its two welded end points, the range
+/// of its face references in [`Adjacency::edge_faces`], and its end points' indices among
+/// all welded vertices of the scene (so that something drawn once per silhouette vertex,
+/// such as a penumbra map's cone, can be claimed by exactly one of its edges).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
 pub struct GpuEdge {
@@ -44,6 +46,10 @@ pub struct GpuEdge {
     pub b: [f32; 3],
     /// Number of faces around the edge (1: open boundary, 2: manifold, more: non-manifold).
     pub face_count: u32,
+    /// Indices of `a` and `b` among the scene's welded vertices (below [`Adjacency::vertices`]).
+    pub ia: u32,
+    pub ib: u32,
+    pub pad: [u32; 2],
 }
 
 /// What [`Adjacency::build`] found, for `sshc render` and the tests.
@@ -74,14 +80,17 @@ pub struct Adjacency {
     /// the edge from `b` to `a`. The triangle's interior lies along `n x (q - p)` for the
     /// winding's direction `p -> q`: `n x (b - a)` without the bit, `n x (a - b)` with it.
     pub edge_faces: Vec<u32>,
+    /// Number of welded vertices over all meshes.
+    pub vertices: u32,
     pub counts: AdjacencyCounts,
 }
 
 impl Adjacency {
     /// Bytes of the storage buffers for `triangles` triangles, at most, known before
-    /// building: every triangle contributes at most 3 edges, 1 plane and 3 face references.
+    /// building: every triangle contributes at most 3 edges, 1 plane, 3 face references
+    /// and 3 welded vertices (a `u32` each where something is claimed per vertex).
     pub const fn max_bytes(triangles: u64) -> u64 {
-        triangles * (3 * size_of::<GpuEdge>() as u64 + size_of::<[f32; 4]>() as u64 + 3 * 4)
+        triangles * (3 * size_of::<GpuEdge>() as u64 + size_of::<[f32; 4]>() as u64 + 3 * 4 + 3 * 4)
     }
 
     /// Build the adjacency of `meshes`, each a range of triangles of `triangles` (world
@@ -139,8 +148,12 @@ impl Adjacency {
                     first_face,
                     b: welded[hi as usize],
                     face_count,
+                    ia: out.vertices + lo,
+                    ib: out.vertices + hi,
+                    pad: [0; 2],
                 });
             }
+            out.vertices += welded.len() as u32;
         }
         out.counts.edges = out.edges.len() as u32;
         out
@@ -344,7 +357,11 @@ mod tests {
         // Within the bound computed before building.
         let bytes = (adj.edges.len() * size_of::<GpuEdge>() + adj.planes.len() * 16 + adj.edge_faces.len() * 4) as u64;
         assert!(bytes <= Adjacency::max_bytes(tris.len() as u64));
-        assert_eq!(size_of::<GpuEdge>(), 32, "std430 layout of the GPU's edge struct");
+        assert_eq!(size_of::<GpuEdge>(), 48, "std430 layout of the GPU's edge struct");
+        // 8 welded corners per cube (not shared between the meshes), and the degenerate
+        // triangles' 5 distinct points (welded before their degeneracy shows).
+        assert_eq!(adj.vertices, 8 + 8 + 5);
+        assert!(adj.edges.iter().all(|e| e.ia < adj.vertices && e.ib < adj.vertices && e.ia != e.ib));
     }
 
     #[test]

@@ -68,7 +68,7 @@ pub(crate) struct BindingLayout {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) enum GeometryGroup {
     /// A `Silhouettes` step (compute): 0 edges, 1 face planes, 2 edge faces (read-only
-    /// storage), 3 the generated buffer (read-write storage).
+    /// storage), 3 the generated buffer and 5 the vertex claims (read-write storage).
     Classify,
     /// A `Primitives` step (raster): 4 the generated buffer (read-only storage, vertex and
     /// fragment stages). Binding 4, so that one module can hold both steps' entry points:
@@ -91,7 +91,13 @@ impl GeometryGroup {
         match self {
             GeometryGroup::Classify => {
                 let c = wgpu::ShaderStages::COMPUTE;
-                vec![buffer(0, true, c), buffer(1, true, c), buffer(2, true, c), buffer(3, false, c)]
+                vec![
+                    buffer(0, true, c),
+                    buffer(1, true, c),
+                    buffer(2, true, c),
+                    buffer(3, false, c),
+                    buffer(5, false, c),
+                ]
             }
             GeometryGroup::Draw => vec![buffer(4, true, wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT)],
         }

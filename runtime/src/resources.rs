@@ -58,6 +58,9 @@ pub(crate) struct EdgeBuffers {
     pub edges: wgpu::Buffer,
     pub planes: wgpu::Buffer,
     pub edge_faces: wgpu::Buffer,
+    /// One `u32` per welded vertex, cleared before each classification: the first edge
+    /// to claim a vertex draws what is drawn once per silhouette vertex.
+    pub claims: wgpu::Buffer,
     pub counts: AdjacencyCounts,
 }
 
@@ -281,9 +284,10 @@ impl Resources {
                 let plane_bytes: Vec<u8> = adj.planes.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
                 let face_bytes: Vec<u8> = adj.edge_faces.iter().flat_map(|x| x.to_le_bytes()).collect();
                 EdgeBuffers {
-                    edges: storage("edges", &edge_bytes, 32, wgpu::BufferUsages::empty()),
+                    edges: storage("edges", &edge_bytes, 48, wgpu::BufferUsages::empty()),
                     planes: storage("face planes", &plane_bytes, 16, wgpu::BufferUsages::empty()),
                     edge_faces: storage("edge faces", &face_bytes, 4, wgpu::BufferUsages::empty()),
+                    claims: storage("vertex claims", &[], 4 * adj.vertices as usize + 4, wgpu::BufferUsages::empty()),
                     counts: adj.counts,
                 }
             });
@@ -339,9 +343,9 @@ fn meshes(s: &SceneInputs) -> Vec<std::ops::Range<usize>> {
     }
 }
 
-/// An edge in its std430 layout (32 bytes, little-endian).
+/// An edge in its std430 layout (48 bytes, little-endian).
 fn edge_bytes(e: &GpuEdge) -> Vec<u8> {
-    let mut out = Vec::with_capacity(32);
+    let mut out = Vec::with_capacity(48);
     for x in e.a {
         out.extend(x.to_le_bytes());
     }
@@ -349,6 +353,8 @@ fn edge_bytes(e: &GpuEdge) -> Vec<u8> {
     for x in e.b {
         out.extend(x.to_le_bytes());
     }
-    out.extend(e.face_count.to_le_bytes());
+    for x in [e.face_count, e.ia, e.ib, e.pad[0], e.pad[1]] {
+        out.extend(x.to_le_bytes());
+    }
     out
 }

@@ -130,8 +130,9 @@ enum Bound {
         group1: Option<wgpu::BindGroup>,
         group2: Option<wgpu::BindGroup>,
         /// The edge adjacency and the generated buffer of a `Silhouettes` step, with the
-        /// buffer (to reset) and the number of edges (invocations).
-        geometry: Option<(wgpu::BindGroup, wgpu::Buffer, u32)>,
+        /// buffers to reset (the generated one's count, the vertex claims) and the number
+        /// of edges (invocations).
+        geometry: Option<(wgpu::BindGroup, [wgpu::Buffer; 2], u32)>,
     },
 }
 
@@ -432,7 +433,7 @@ impl StepNode {
                             None
                         };
                         let g2 = self.empty_group(gpu, 2)?;
-                        let g3 = self.group3(gpu, 4, &[buf])?;
+                        let g3 = self.group3(gpu, &[(4, buf)])?;
                         (Some((g1, g2, g3)), Some(buf.clone()))
                     }
                     DrawCall::Scene | DrawCall::FullScreenTriangle => (None, None),
@@ -466,8 +467,8 @@ impl StepNode {
                 let geometry = match &c.generated {
                     Some(name) => {
                         let (e, buf) = (res.edges()?, res.generated(name)?);
-                        let g3 = self.group3(gpu, 0, &[&e.edges, &e.planes, &e.edge_faces, buf])?;
-                        Some((g3, buf.clone(), e.counts.edges))
+                        let g3 = self.group3(gpu, &[(0, &e.edges), (1, &e.planes), (2, &e.edge_faces), (3, buf), (5, &e.claims)])?;
+                        Some((g3, [buf.clone(), e.claims.clone()], e.counts.edges))
                     }
                     None => None,
                 };
@@ -510,8 +511,8 @@ impl StepNode {
         }))
     }
 
-    /// Group 3 of a Geometry pass's step: `buffers` at bindings `first`, `first + 1`, ...
-    fn group3(&self, gpu: &Gpu, first: u32, buffers: &[&wgpu::Buffer]) -> Result<wgpu::BindGroup> {
+    /// Group 3 of a Geometry pass's step: (binding, buffer) pairs.
+    fn group3(&self, gpu: &Gpu, buffers: &[(u32, &wgpu::Buffer)]) -> Result<wgpu::BindGroup> {
         let layout = self
             .pipeline
             .group3
@@ -519,9 +520,8 @@ impl StepNode {
             .ok_or_else(|| RuntimeError::NotFound(format!("pass `{}`: a Geometry step without its group 3", self.label)))?;
         let entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: first + i as u32,
+            .map(|(binding, b)| wgpu::BindGroupEntry {
+                binding: *binding,
                 resource: b.as_entire_binding(),
             })
             .collect();
@@ -701,9 +701,11 @@ impl StepNode {
                 },
                 Pipeline::Compute(pipeline),
             ) => {
-                // A fresh count of generated vertices every frame (instance_count stays 1).
-                if let Some((_, buffer, _)) = geometry {
+                // A fresh count of generated vertices and fresh vertex claims every frame
+                // (instance_count stays 1).
+                if let Some((_, [buffer, claims], _)) = geometry {
                     encoder.clear_buffer(buffer, 0, Some(4));
+                    encoder.clear_buffer(claims, 0, None);
                 }
                 let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some(&self.label),

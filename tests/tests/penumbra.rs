@@ -25,10 +25,21 @@ const CONE_TOLERANCE: f64 = 1.5 * 0.019_6;
 /// and f32 arithmetic on Z (a few ulp of Z, relative 1e-6, divided by Z_P - Z_v, which is
 /// at least a tenth of Z here: 1e-5).
 const SHEET_TOLERANCE: f64 = 1.0 / 2048.0 + 1e-5;
+/// The smallest s on the part of a drawn cone outside the exact cone: there I >= cos(pi/16),
+/// so s >= 3 c^2 - 2 c^3 for c = cos(pi / 16) = 0.98079 (0.99889), less one f16 step.
+const RIM_S: f64 = 0.998_89 - 1.0 / 2048.0;
 
 /// A 1.5-wide square 2 units above a floor, a sphere light of radius `radius` 6 units above
 /// the floor's centre.
 fn scene(radius: f32, shadow: u32) -> Scene {
+    scene_with(
+        radius,
+        shadow,
+        "Object(name: \"square\", mesh: Plane(size: (1.5, 1.5)), transform: (translate: (0.0, 2.0, 0.0))),",
+    )
+}
+
+fn scene_with(radius: f32, shadow: u32, objects: &str) -> Scene {
     let text = format!(
         "Scene(
     camera: Perspective(position: (0.0, 6.0, 6.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 40.0, width: 32, height: 32),
@@ -36,7 +47,7 @@ fn scene(radius: f32, shadow: u32) -> Scene {
     lights: [Sphere(center: (0.0, 6.0, 0.0), radius: {radius})],
     objects: [
         Object(name: \"floor\", mesh: Plane(size: (6.0, 6.0))),
-        Object(name: \"square\", mesh: Plane(size: (1.5, 1.5)), transform: (translate: (0.0, 2.0, 0.0))),
+        {objects}
     ],
 )"
     );
@@ -71,7 +82,11 @@ fn meshes(scene: &Scene) -> Vec<std::ops::Range<usize>> {
 /// Run the generated technique on `scene`: the penumbra map (row 0 at the top), the hard
 /// test's inputs and the visibility buffer.
 fn run(scene: &Scene, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Executor<'static>) {
-    let compiled = compile_source(TECHNIQUE, &technique_source(TECHNIQUE), set, &[]);
+    run_source(scene, &technique_source(TECHNIQUE), set)
+}
+
+fn run_source(scene: &Scene, source: &str, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Executor<'static>) {
+    let compiled = compile_source(TECHNIQUE, source, set, &[]);
     let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));
     ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
@@ -149,4 +164,95 @@ fn a_light_of_radius_zero_gives_exactly_the_hard_shadow_map() {
         .channel(0);
     assert_eq!(vis, hard_vis, "same bias, same test, penumbra 1 everywhere");
     assert!(vis.iter().any(|&v| v == 0.0) && vis.iter().any(|&v| v == 1.0));
+}
+
+/// Fragments of overlapping penumbrae combine by each resolve rule (the paper's figure 6
+/// and the lightest): two squares whose penumbrae overlap on the floor, the technique's
+/// `resolve` changed in its source, against the reference's combination of its exact
+/// fragments. Each fragment's s carries its own error (the tolerances above), so a texel
+/// of k fragments is within k times the tolerance for `Add` and `Multiply` (values <= 1)
+/// and within one for `KeepMin` and `KeepMax`; each blend rounds to f16 once more.
+#[test]
+fn every_resolve_rule_agrees_with_the_reference() {
+    let scene = scene_with(
+        0.6,
+        128,
+        "Object(name: \"a\", mesh: Plane(size: (1.2, 1.2)), transform: (translate: (-0.75, 2.0, 0.0))),
+        Object(name: \"b\", mesh: Plane(size: (1.2, 1.2)), transform: (translate: (0.75, 2.5, 0.3))),",
+    );
+    for (rule, name) in [
+        (Resolve::KeepMin, "KeepMin"),
+        (Resolve::KeepMax, "KeepMax"),
+        (Resolve::Add, "Add"),
+        (Resolve::Multiply, "Multiply"),
+    ] {
+        let source = technique_source(TECHNIQUE).replace("resolve: KeepMin", &format!("resolve: {name}"));
+        let (pmap, _, inputs, _ex) = run_source(&scene, &source, &[]);
+        let setup = setup(&inputs, rule);
+        let r = reference::PenumbraReference::new(&triangles(&scene), &meshes(&scene), &setup).unwrap_or_else(|e| panic!("{e}"));
+        let n = setup.size;
+        let (mut worst, mut overlaps, mut rim) = (0.0f64, 0, 0);
+        let covered = |i: usize, j: usize| r.penumbra.fragments[j * n + i] > 0;
+        for j in 0..n {
+            for i in 0..n {
+                let mut want = r.penumbra.value[j * n + i];
+                let raw = f64::from(pmap[j * n + i]);
+                assert!(raw.is_finite() && raw <= 1.0, "{name}, texel ({i}, {j}): {raw}");
+                // `Add` keeps 1 - sum(1 - s), below 0 where the shadows add past full
+                // shadow: read clamped to [0, 1] (as the reference combines).
+                let got = raw.max(0.0);
+                assert!(rule == Resolve::Add || raw >= 0.0, "{name}, texel ({i}, {j}): {raw}");
+                if rule == Resolve::KeepMax {
+                    // KeepMax blends from its identity, 0, so a texel no fragment covers
+                    // reads 0 (the reference reads 1 there). At the rim of the primitives
+                    // the drawn cones cover texels the exact ones do not: those texels,
+                    // with a neighbour of the other kind, are counted and left out.
+                    let around =
+                        (j.saturating_sub(1)..(j + 2).min(n)).flat_map(|y| (i.saturating_sub(1)..(i + 2).min(n)).map(move |x| (x, y)));
+                    let kinds: Vec<bool> = around.map(|(x, y)| covered(x, y)).collect();
+                    if kinds.iter().any(|&k| k != kinds[0]) {
+                        rim += 1;
+                        continue;
+                    }
+                    if !covered(i, j) {
+                        want = 0.0;
+                    }
+                }
+                let frags = reference::fragments(&r.primitives, &r.shadow, &setup, i, j);
+                let cone = frags.iter().any(|f| matches!(f.primitive, Primitive::Cone(_)));
+                let per = if cone || frags.is_empty() {
+                    CONE_TOLERANCE
+                } else {
+                    SHEET_TOLERANCE
+                };
+                let k = match rule {
+                    Resolve::Add | Resolve::Multiply => frags.len().max(1) as f64,
+                    Resolve::KeepMin | Resolve::KeepMax => 1.0,
+                };
+                let tol = k * (per + 1.0 / 2048.0);
+                let sheets = frags.iter().filter(|f| matches!(f.primitive, Primitive::Sheet(_))).count();
+                if sheets > 1 {
+                    overlaps += 1;
+                }
+                // KeepMax also keeps the fragments at the rim of a drawn cone outside the
+                // exact one, where eq. 1 gives I >= cos(pi / 16) and s >= RIM_S: a texel
+                // reading at least that where the reference's fragments are darker is one.
+                if rule == Resolve::KeepMax && got > want + tol && got >= RIM_S {
+                    rim += 1;
+                    continue;
+                }
+                worst = worst.max((got - want).abs() / tol);
+                assert!(
+                    (got - want).abs() <= tol,
+                    "{name}, texel ({i}, {j}): generated {got}, reference {want} ({} fragments)",
+                    frags.len()
+                );
+            }
+        }
+        eprintln!("{name}: {overlaps} texels where sheets overlap; worst error {worst:.2} of its tolerance; {rim} rim texels left out");
+        assert!(overlaps > 10, "{name}: the penumbrae must overlap ({overlaps} texels)");
+        // The rim is one or two texels wide around every primitive's outline: far fewer
+        // texels than the map holds.
+        assert!(rim < n * n / 8, "{name}: {rim} rim texels");
+    }
 }

@@ -21,12 +21,18 @@ struct Edge {
     first_face: u32,
     b: vec3<f32>,
     face_count: u32,
+    // the end points' indices among the scene's welded vertices
+    ia: u32,
+    ib: u32,
+    pad: vec2<u32>,
 }
 
 // One silhouette edge in light view space (the light looks down -z): the end points (xyz)
 // with their cone radius on the far plane (w); `outward` the unit direction, in the far
 // plane, from the edge's shadow towards its penumbra (xy), z = 1 when the sheet is drawn
-// (0 for an edge seen end-on, whose cones cover its penumbra).
+// (0 for an edge seen end-on, whose cones cover its penumbra), w the cones this edge draws
+// (bit 0: at a, bit 1: at b): the paper draws one cone per silhouette vertex, so of the
+// silhouette edges meeting at a vertex exactly one (the first to claim it) draws its cone.
 struct ConeSheet {
     a: vec4<f32>,
     b: vec4<f32>,
@@ -158,8 +164,15 @@ fn cs_cones_and_sheets(@builtin(global_invocation_id) id: vec3<u32>, @builtin(nu
         }
         sheet = 1.0;
     }
+    var cones = 0u;
+    if atomicAdd(&cs_claims[e.ia], 1u) == 0u {
+        cones |= 1u;
+    }
+    if atomicAdd(&cs_claims[e.ib], 1u) == 0u {
+        cones |= 2u;
+    }
     let at = atomicAdd(&cs_out.vertex_count, VERTICES_PER_RECORD) / VERTICES_PER_RECORD;
-    cs_out.records[at] = ConeSheet(vec4<f32>(a, ra), vec4<f32>(b, rb), vec4<f32>(normal, sheet, 0.0));
+    cs_out.records[at] = ConeSheet(vec4<f32>(a, ra), vec4<f32>(b, rb), vec4<f32>(normal, sheet, f32(cones)));
 }
 
 // One vertex of a primitive, in view space, with its vertex distance.
@@ -188,7 +201,9 @@ fn vs_cones_and_sheets(@builtin(vertex_index) vi: u32) -> ConesAndSheetsVarying 
         let k = (local % cone) / 3u;
         let corner = local % 3u;
         let zv = -end.z;
-        if corner == 0u {
+        // a cone another edge draws: every corner at the tip, nothing rasterised
+        let mine = (u32(r.outward.w) & select(1u, 2u, local >= cone)) != 0u;
+        if corner == 0u || !mine {
             return cs_emit(end.xyz, zv);
         }
         let step = 6.283185307179586 / f32(CONE_SEGMENTS);

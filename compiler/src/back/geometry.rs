@@ -34,6 +34,7 @@ const VERTICES_PER_RECORD: u32 = {CONES_AND_SHEETS_VERTICES}u;
 @group(3) @binding(2) var<storage, read> cs_edge_faces: array<u32>;
 @group(3) @binding(3) var<storage, read_write> cs_out: GeneratedRw;
 @group(3) @binding(4) var<storage, read> cs_records: Generated;
+@group(3) @binding(5) var<storage, read_write> cs_claims: array<atomic<u32>>;
 "
     )
 }

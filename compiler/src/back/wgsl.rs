@@ -733,6 +733,20 @@ fn geometry(
             .help("declare the channel F16, Unorm8 or Unorm16"));
         }
     }
+    // The foremost surface the light sees: the channel of the Depth resource the pass
+    // reads. The penumbra map holds the penumbrae of those surfaces only (Wyman & Hansen
+    // 2003, section 3), so fragments behind it are discarded (the paper's fragment
+    // program, line 4).
+    let surface = pass
+        .reads
+        .iter()
+        .find(|&&r| matches!(ir.passes[ir.resources[r].writer].kind, IrPassKind::Depth { .. }))
+        .and_then(|&r| ir.resources[r].slots.first().map(|s| s.channel))
+        .ok_or_else(|| {
+            Diagnostic::error(Phase::Codegen, format!("Geometry pass `{}` reads no Depth resource", pass.name))
+                .at(pass.span, "cones and sheets need the surface the light sees at each texel")
+                .help("add the Depth pass's resource to `reads`")
+        })?;
     let buffer = geometry_buffer_name(pass);
     let mut bodies = String::new();
     let mut steps = vec![Step {
@@ -755,6 +769,11 @@ fn geometry(
             structs.push_str(&out_struct(&out_name, chunk.len()));
             let mut em = Emitter::new(ir, Side::Geometry, pass.reads.clone());
             em.bindings = decl_emitter.bindings.clone();
+            let z = em.load_map_channel(surface)?;
+            em.line(&format!(
+                "let in_z_surface = frame.depth_range.x + {z} * (frame.depth_range.y - frame.depth_range.x);"
+            ));
+            em.line("if in_z_frag > in_z_surface {\n        discard;\n    }");
             let mut outs = Vec::new();
             for (oi, &layer) in chunk.iter().enumerate() {
                 let mut comps = vec!["0.0f".to_string(); 4];
