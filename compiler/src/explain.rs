@@ -47,7 +47,26 @@ pub fn explain(c: &Compiled) -> String {
             ),
             IrPassKind::Mipmap { reduce } => format!("builds a {reduce:?} mip chain in place"),
             IrPassKind::SummedArea => "builds a summed-area table".to_string(),
-            IrPassKind::Geometry { primitive, .. } => format!("generates {primitive:?} at silhouettes"),
+            IrPassKind::Geometry { primitive, resolve, .. } => {
+                let buffers: Vec<String> = g
+                    .buffers
+                    .iter()
+                    .filter(|b| g.passes.iter().any(|gp| gp.name == p.name && gp.steps.iter().any(|st| matches!(&st.draw, sshc_graph::Draw::Silhouettes { buffer } if *buffer == b.name))))
+                    .map(|b| {
+                        format!(
+                            "buffer `{}`: {} bytes of draw arguments and at most one {}-byte record per edge of the scene's meshes, {} vertices drawn per record",
+                            b.name,
+                            sshc_graph::DRAW_ARGS_BYTES,
+                            b.record_bytes,
+                            b.vertices_per_record
+                        )
+                    })
+                    .collect();
+                format!(
+                    "generates {primitive:?} at the silhouette edges seen from the light's centre (a compute step classifies every edge and appends a record per silhouette; a draw pulls the primitives from the records, indirectly), overlaps resolved by {resolve:?}; {}",
+                    buffers.join("; ")
+                )
+            }
             IrPassKind::Shade { .. } => "evaluates visibility per camera pixel".to_string(),
         };
         let steps = g.passes.iter().find(|gp| gp.name == p.name).map(|gp| gp.steps.len()).unwrap_or(0);

@@ -9,7 +9,7 @@ use sshc::ir::{Node, Origin};
 use sshc::{CompileOptions, Limits};
 use std::path::{Path, PathBuf};
 
-pub const TECHNIQUES: [&str; 7] = ["hard", "pcf", "vsm", "esm", "csm", "cssm", "pcss"];
+pub const TECHNIQUES: [&str; 8] = ["hard", "pcf", "vsm", "esm", "csm", "cssm", "pcss", "penumbra-maps"];
 
 fn path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

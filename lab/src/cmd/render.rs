@@ -79,7 +79,27 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         println!("| {name} | {bytes} |");
     }
     println!("| peak (all textures resident) | {total} |");
-    let work = pass_work(&ex.graph, scene.shadow_map, scene.camera_size());
+    // Geometry passes: the scene's edges and what the last frame generated from them.
+    let edges = ex.edge_counts().map_err(rt)?;
+    if let Some(c) = edges {
+        println!(
+            "edges: {} in {} mesh(es): {} open boundary, {} non-manifold; {} degenerate triangle(s) skipped",
+            c.edges, c.meshes, c.boundary, c.non_manifold, c.degenerate_faces
+        );
+        for b in &ex.graph.buffers {
+            let g = ex.generated(&b.name).map_err(rt)?;
+            println!(
+                "{}: {} silhouette edge(s) in the last frame, {} primitive vertices drawn",
+                b.name, g.records, g.vertices
+            );
+        }
+    }
+    let work = pass_work(
+        &ex.graph,
+        scene.shadow_map,
+        scene.camera_size(),
+        edges.map_or(0, |c| u64::from(c.edges)),
+    );
     println!(
         "| pass | GPU ms (median of {} frame(s)) | invocations | fetches | operations |\n|---|---|---|---|---|",
         all.len()
@@ -114,7 +134,7 @@ pub(crate) struct PassWork {
 /// texels for map-side steps (summed over the mip levels below the base for a mip chain),
 /// pixels for the Shade pass, and rows or columns for compute steps, whose counts are per
 /// texel of the row or column they walk, in every layer of the table they write.
-pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> Vec<PassWork> {
+pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edges: u64) -> Vec<PassWork> {
     let texels = f64::from(shadow) * f64::from(shadow);
     graph
         .passes
@@ -143,11 +163,11 @@ pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> V
                             .map_or(1, |t| t.layers);
                         (f64::from(shadow), f64::from(shadow) * f64::from(layers))
                     }
-                    // Geometry passes: one invocation per edge, and the generated
-                    // primitives' fragments; neither follows from the graph and the sizes
-                    // (the executor knows them after a frame: `edge_counts`, `generated`),
-                    // so they are not counted here yet.
-                    Draw::Silhouettes { .. } | Draw::Primitives { .. } => (0.0, 0.0),
+                    // Geometry passes: one classification per edge of the scene's meshes
+                    Draw::Silhouettes { .. } => (edges as f64, 1.0),
+                    // and the generated primitives' fragments, which no count of the graph
+                    // and the sizes gives (`sshc render` prints the vertices drawn)
+                    Draw::Primitives { .. } => (0.0, 0.0),
                 };
                 w.invocations += n;
                 w.fetches += f64::from(s.cost.fetches) * n * runs;
@@ -250,7 +270,7 @@ mod tests {
         };
         let c = sshc::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("cssm.ron", src)));
         let (shadow, camera) = (512u32, (256u32, 128u32));
-        let work = pass_work(&c.graph, shadow, camera);
+        let work = pass_work(&c.graph, shadow, camera, 0);
         let names: Vec<&str> = work.iter().map(|w| w.pass.as_str()).collect();
         assert_eq!(names, ["depth", "basis_sat", "blur_sat", "sat", "shade"]);
         let texels = 512.0 * 512.0;

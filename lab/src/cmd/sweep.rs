@@ -220,8 +220,8 @@ fn time_frames(ex: &mut Executor, frames: usize) -> Result<Option<f64>, String> 
 }
 
 /// Fetches and operations per frame, summed over the passes of [`crate::cmd::render::pass_work`].
-fn work(graph: &PassGraph, shadow: u32, camera: (u32, u32)) -> (f64, f64) {
-    crate::cmd::render::pass_work(graph, shadow, camera)
+fn work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edges: u64) -> (f64, f64) {
+    crate::cmd::render::pass_work(graph, shadow, camera, edges)
         .iter()
         .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops))
 }
@@ -374,11 +374,14 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         if let Some(l) = scene.lights.first_mut() {
             scale_light(l, light_scale as f32);
         }
+        // The axes change the shadow map and the light: the precision budget again.
+        scene.check_precision().map_err(|e| e.to_string())?;
         let path = resolve(&file.techniques[c.technique].file);
         let compiled = compile(&path, &sources[c.technique], &set, &precision)?;
-        let (fetches, ops) = work(&compiled.graph, scene.shadow_map, scene.camera_size());
         let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
         ex.bind_scene(&crate::bind::scene_inputs(&scene)?).map_err(rt)?;
+        let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
+        let (fetches, ops) = work(&ex.graph, scene.shadow_map, scene.camera_size(), edges);
         let ms = time_frames(&mut ex, file.frames)?;
         let vis = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
         let peak = ex.memory().map_err(rt)?.iter().map(|(_, b)| b).sum();
