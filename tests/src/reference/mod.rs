@@ -28,11 +28,13 @@
 //!
 //! [`penumbra`] is a separate f64 reference of penumbra maps (Wyman & Hansen 2003): silhouettes,
 //! a ray-cast shadow map, exact cones and sheets, the resolve rules and the final lookup, from
-//! world triangles rather than a depth map.
+//! world triangles rather than a depth map; [`penumbra_gpu`] is a hand-written WGSL penumbra map
+//! (analytic cones and sheets in f32) to compare with it texel by texel.
 
 pub mod cpu;
 pub mod gpu;
 pub mod penumbra;
+pub mod penumbra_gpu;
 pub mod tolerance;
 
 pub use cpu::cpu_visibility;

@@ -1137,7 +1137,8 @@ mod tests {
             tris.push([c(f[0]), c(f[2]), c(f[3])]);
         }
         let setup = sphere(0.3, 32, Resolve::KeepMin);
-        let sil = silhouettes(&tris, &[0..12], &setup).unwrap();
+        let meshes = vec![0..tris.len()];
+        let sil = silhouettes(&tris, &meshes, &setup).unwrap();
         assert_eq!(sil.all_edges, 18);
         assert_eq!(sil.edges.len(), 4);
         for e in &sil.edges {
