@@ -256,3 +256,127 @@ fn every_resolve_rule_agrees_with_the_reference() {
         assert!(rim < n * n / 8, "{name}: {rim} rim texels");
     }
 }
+
+/// `edge.ron`: a straight edge 1 above the floor under a distant disk of 10 degrees. The
+/// paper's sheet from the edge grows by tan(5 deg) per unit of depth, so on the floor it
+/// covers the outer band 0 < x < w = h tan(5 deg) = 0.0875 beside the edge's shadow line
+/// x = 0, where eq. 1 gives I = x / w exactly (the sheet is planar: the edge lies at one
+/// light distance). The generated map against that closed form, texel by texel, in the
+/// middle of the edge (|z| < 0.5, away from the corners' cones), and the band's width in
+/// texels.
+#[test]
+fn the_penumbra_width_on_the_straight_edge_is_the_closed_form() {
+    let scene = Scene::load(support::root().join("scenes/edge.ron")).unwrap_or_else(|e| panic!("{e}"));
+    let (pmap, vis, inputs, _ex) = run(&scene, &[]);
+    assert!(vis.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
+    let w = 1.0 * (5.0f64).to_radians().tan();
+    let n = inputs.shadow_size as usize;
+    let half = 1.0 / f64::from(inputs.light_proj_y);
+    let texel = 2.0 * half / n as f64;
+    let to_world = glam::Mat4::from_cols_array(&inputs.light_view).inverse();
+    let (mut checked, mut widths) = (0, Vec::new());
+    for j in 0..n {
+        let mut band = 0;
+        let mut row_in_middle = false;
+        for i in 0..n {
+            // the texel's centre on the floor (y = 0), through the orthographic view
+            let x_ndc = 2.0 * (i as f32 + 0.5) / n as f32 - 1.0;
+            let y_ndc = 1.0 - 2.0 * (j as f32 + 0.5) / n as f32;
+            let o = to_world.transform_point3(glam::Vec3::new(x_ndc * half as f32, y_ndc * half as f32, 0.0));
+            let d = to_world.transform_vector3(glam::Vec3::new(0.0, 0.0, -1.0));
+            let p = o + d * (-o.y / d.y);
+            if p.z.abs() >= 0.5 || p.x.abs() > 0.5 {
+                continue;
+            }
+            row_in_middle = true;
+            let got = f64::from(pmap[j * n + i]);
+            let x = f64::from(p.x);
+            if x > 0.0 && got < 1.0 {
+                band += 1;
+            }
+            // Away from the band's two ends by the floor position's f32 error and one
+            // texel's coverage rule: the closed form at the texel centre.
+            if x > texel && x < w - texel {
+                let i_ = x / w;
+                let want = i_ * i_ * (3.0 - 2.0 * i_);
+                assert!(
+                    (got - want).abs() <= SHEET_TOLERANCE,
+                    "texel ({i}, {j}) at x = {x}: {got} against {want}"
+                );
+                checked += 1;
+            }
+        }
+        if row_in_middle && band > 0 {
+            widths.push(band);
+        }
+    }
+    let want = w / texel;
+    eprintln!(
+        "band {want:.2} texels wide by the closed form; rows measure {:?}",
+        widths.iter().min().zip(widths.iter().max())
+    );
+    assert!(checked > 100, "{checked} texels checked");
+    // The band holds the texel centres with 0 < x < w: floor(w / texel) or one more.
+    for b in &widths {
+        assert!(
+            (*b as f64 - want).abs() <= 1.0,
+            "a row's band is {b} texels, the closed form {want:.2}"
+        );
+    }
+}
+
+/// Meshes that are not closed manifolds, contact and edge-on silhouettes: an open quad, a
+/// fin of three triangles sharing one edge (from an OBJ file), a box resting on the floor
+/// (Z_P - Z_v -> 0 along its foot), a vertical quad seen edge-on by the light overhead, and
+/// the bunny. No NaN or Inf and values in [0, 1] in the penumbra map and the visibility;
+/// the silhouette edges the generated classification appends are the CPU rule's count.
+#[test]
+fn open_non_manifold_contact_and_edge_on_meshes_stay_finite_and_count_their_silhouettes() {
+    let dir = std::env::temp_dir().join(format!("sshc-penumbra-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+    std::fs::write(
+        dir.join("fins.obj"),
+        "v 0 0 0\nv 0 1 0\nv 1 0 0\nv -0.5 0 0.8\nv -0.5 0 -0.8\nf 1 2 3\nf 1 2 4\nf 2 1 5\n",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let objects = "Object(name: \"floor\", mesh: Plane(size: (6.0, 6.0))),
+        Object(name: \"quad\", mesh: Plane(size: (0.8, 0.8)), transform: (translate: (-1.5, 1.5, -1.0))),
+        Object(name: \"fins\", mesh: Obj(path: \"fins.obj\"), transform: (translate: (1.2, 0.8, 0.6))),
+        Object(name: \"box\", mesh: Box(size: (0.8, 0.8, 0.8)), transform: (translate: (0.0, 0.4, 1.2))),
+        Object(name: \"wall\", mesh: Quad(a: (-0.5, 0.0, -1.8), b: (-0.5, 1.0, -1.8), c: (0.5, 1.0, -1.8), d: (0.5, 0.0, -1.8))),";
+    let mut scenes = Vec::new();
+    for light in [
+        "Sphere(center: (0.0, 6.0, 0.0), radius: 0.5)",
+        "DistantDisk(direction: (0.0, 1.0, 0.0), angle_degrees: 8.0)",
+    ] {
+        let text = format!(
+            "Scene(
+    camera: Perspective(position: (0.0, 5.0, 5.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 50.0, width: 48, height: 48),
+    shadow_map: 128,
+    lights: [{light}],
+    objects: [{objects}],
+)"
+        );
+        scenes.push(Scene::from_str(&text, &dir).unwrap_or_else(|e| panic!("{e}")));
+    }
+    scenes.push(Scene::load(support::root().join("scenes/bunny.ron")).unwrap_or_else(|e| panic!("{e}")));
+    for scene in &scenes {
+        let (pmap, vis, inputs, ex) = run(scene, &[]);
+        assert!(pmap.iter().all(|p| p.is_finite() && (0.0..=1.0).contains(p)), "penumbra map");
+        assert!(vis.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)), "visibility");
+        assert!(pmap.iter().any(|&p| p < 0.5), "a penumbra is drawn");
+        let tris: Vec<[[f32; 3]; 3]> = scene.triangles().iter().map(|t| t.map(|p| p.to_array())).collect();
+        let adj = Adjacency::build(&tris, meshes(scene));
+        let generated = ex.generated("penumbra.silhouettes").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(generated.records as usize, adj.silhouette_count(inputs.light_position));
+        let counts = ex.edge_counts().unwrap_or_else(|e| panic!("{e}")).expect("edges");
+        assert_eq!(counts, adj.counts);
+    }
+    let c = Adjacency::build(
+        &scenes[0].triangles().iter().map(|t| t.map(|p| p.to_array())).collect::<Vec<_>>(),
+        meshes(&scenes[0]),
+    )
+    .counts;
+    assert_eq!(c.non_manifold, 1, "the fins' shared edge");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1137,8 +1137,7 @@ mod tests {
             tris.push([c(f[0]), c(f[2]), c(f[3])]);
         }
         let setup = sphere(0.3, 32, Resolve::KeepMin);
-        let meshes = vec![0..tris.len()];
-        let sil = silhouettes(&tris, &meshes, &setup).unwrap();
+        let sil = silhouettes(&tris, std::slice::from_ref(&(0..tris.len())), &setup).unwrap();
         assert_eq!(sil.all_edges, 18);
         assert_eq!(sil.edges.len(), 4);
         for e in &sil.edges {
