@@ -110,7 +110,8 @@ impl Adjacency {
                 let t = range.start + t;
                 let ids = tri.map(|p| {
                     let next = welded.len() as u32;
-                    *weld.entry(p.map(f32::to_bits)).or_insert_with(|| {
+                    // -0.0 and 0.0 are one position (`+ 0.0` turns the first into the second)
+                    *weld.entry(p.map(|c| (c + 0.0).to_bits())).or_insert_with(|| {
                         welded.push(p);
                         next
                     })
@@ -351,6 +352,12 @@ mod tests {
         tris.push([[f32::NAN, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]); // non-finite
         let adj = Adjacency::build(&tris, [0..n, n..tris.len()]);
         assert_eq!(adj.counts.meshes, 2);
+        // A signed zero welds with zero: two triangles meeting at (0, 0, -0) and (0, 0, 0).
+        let z = [
+            [[0.0, 0.0, -0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]],
+        ];
+        assert_eq!(Adjacency::build(&z, once(0..2)).counts.manifold, 1);
         assert_eq!(adj.counts.manifold, 36, "two closed cubes, no edge shared between them");
         assert_eq!(adj.counts.degenerate_faces, 3);
         assert_eq!(adj.edges.len(), 36);

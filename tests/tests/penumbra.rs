@@ -380,3 +380,20 @@ fn open_non_manifold_contact_and_edge_on_meshes_stay_finite_and_count_their_silh
     assert_eq!(c.non_manifold, 1, "the fins' shared edge");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The built-in sphere is a closed manifold: its seam and poles weld, so no spurious
+/// boundary edge is a silhouette all around it.
+#[test]
+fn the_built_in_sphere_is_closed() {
+    for segments in [3, 8, 32, 101] {
+        let text = format!(
+            "Scene(camera: Perspective(position: (0.0, 0.0, 5.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 40.0, width: 8, height: 8),
+             shadow_map: 16, lights: [Point(position: (0.0, 5.0, 0.0))],
+             objects: [Object(mesh: Sphere(radius: 1.0, segments: {segments}))])"
+        );
+        let scene = Scene::from_str(&text, ".").unwrap_or_else(|e| panic!("{e}"));
+        let tris: Vec<[[f32; 3]; 3]> = scene.triangles().iter().map(|t| t.map(|p| p.to_array())).collect();
+        let c = Adjacency::build(&tris, meshes(&scene)).counts;
+        assert_eq!((c.boundary, c.non_manifold), (0, 0), "{segments} segments: {c:?}");
+    }
+}

@@ -1555,7 +1555,12 @@ fn box_triangles(h: Vec3) -> Vec<[Vec3; 3]> {
 
 fn sphere(radius: f32, segments: u32) -> MeshData {
     let rings = (segments / 2).max(2);
+    // The poles are exact points (f32's sin(pi) is not 0), so that their triangles share
+    // one vertex and the mesh is closed: edge adjacency (silhouettes) welds by position.
     let point = |ring: u32, seg: u32| {
+        if ring == 0 || ring == rings {
+            return Vec3::new(0.0, if ring == 0 { 1.0 } else { -1.0 }, 0.0);
+        }
         let theta = std::f32::consts::PI * ring as f32 / rings as f32;
         let phi = std::f32::consts::TAU * (seg % segments) as f32 / segments as f32;
         Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin())
