@@ -163,7 +163,7 @@ fn a_light_of_radius_zero_gives_exactly_the_hard_shadow_map() {
         .unwrap_or_else(|e| panic!("{e}"))
         .channel(0);
     assert_eq!(vis, hard_vis, "same bias, same test, penumbra 1 everywhere");
-    assert!(vis.iter().any(|&v| v == 0.0) && vis.iter().any(|&v| v == 1.0));
+    assert!(vis.contains(&0.0) && vis.contains(&1.0));
 }
 
 /// Fragments of overlapping penumbrae combine by each resolve rule (the paper's figure 6
