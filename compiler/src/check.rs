@@ -28,6 +28,8 @@ pub struct Checked {
     pub items: IndexMap<String, Vec<Item>>,
     /// The resolved kernel of each Filter pass (by pass index).
     pub kernels: Vec<Option<IrKernel>>,
+    /// The resolve rule of each Geometry pass (by pass index).
+    pub resolves: Vec<Option<Resolve>>,
     /// The type of every expression, what every name resolves to, and where abstract
     /// integers become f32: what `lower` builds the IR from.
     pub types: Types,
@@ -182,6 +184,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
     }
 
     let mut kernels = vec![None; t.passes.len()];
+    let mut resolves = vec![None; t.passes.len()];
     for &pi in &order {
         let p = &t.passes[pi];
         match &p.kind {
@@ -227,6 +230,10 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                 Ok(k) => kernels[pi] = Some(k),
                 Err(d) => diags.push(d),
             },
+            PassKind::Geometry { resolve, .. } => match resolve_rule(sym, resolve, &mut types) {
+                Ok(r) => resolves[pi] = Some(r),
+                Err(d) => diags.push(d),
+            },
             PassKind::Shade { reads, visibility } => {
                 let carried: Vec<(Item, String, bool)> = reads
                     .iter()
@@ -250,7 +257,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                     diags.push(geometry_only(u, "the visibility is computed per camera pixel"));
                 }
             }
-            PassKind::Depth { .. } | PassKind::Mipmap { .. } | PassKind::SummedArea { .. } | PassKind::Geometry { .. } => {}
+            PassKind::Depth { .. } | PassKind::Mipmap { .. } | PassKind::SummedArea { .. } => {}
         }
     }
     diags.check()?;
@@ -258,6 +265,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
         order,
         items,
         kernels,
+        resolves,
         types,
     })
 }
@@ -502,6 +510,28 @@ fn side_error(u: &Use, what: &str, owner: &str, why: &str) -> Diagnostic {
         d = d.also(via, "used through this binding");
     }
     d
+}
+
+/// A Geometry pass's resolve rule: named, or the index a compile-time integer gives.
+fn resolve_rule(sym: &Symbols, spec: &ResolveSpec, types: &mut Types) -> Result<Resolve, Diagnostic> {
+    let e = match spec {
+        ResolveSpec::Rule(r) => return Ok(*r),
+        ResolveSpec::Expr(e) => e,
+    };
+    const_typed(sym, e, types, Ty::I32, "a resolve rule", "an integer")?;
+    let names = "0 KeepMin, 1 KeepMax, 2 Add, 3 Multiply";
+    match consteval::const_eval(sym, e)? {
+        ConstValue::Int(n) if (0..Resolve::ALL.len() as i64).contains(&n) => Ok(Resolve::ALL[n as usize]),
+        ConstValue::Int(n) => {
+            Err(Diagnostic::error(Phase::Check, format!("resolve rule {n} does not exist: {names}"))
+                .at(e.span, format!("evaluates to {n}")))
+        }
+        other @ (ConstValue::Float(_) | ConstValue::Bool(_)) => Err(Diagnostic::error(
+            Phase::Check,
+            format!("type mismatch: a resolve rule must be an integer ({names}), found {other}"),
+        )
+        .at(e.span, "not an integer")),
+    }
 }
 
 fn kernel_size(sym: &Symbols, e: &Expr, types: &mut Types) -> Result<u32, Diagnostic> {

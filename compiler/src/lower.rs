@@ -456,11 +456,9 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             },
             PassKind::Mipmap { reduce, .. } => IrPassKind::Mipmap { reduce: *reduce },
             PassKind::SummedArea { .. } => IrPassKind::SummedArea,
-            PassKind::Geometry {
-                primitive, resolve, view, ..
-            } => IrPassKind::Geometry {
+            PassKind::Geometry { primitive, view, .. } => IrPassKind::Geometry {
                 primitive: *primitive,
-                resolve: *resolve,
+                resolve: checked.resolves[pi].ok_or_else(|| internal(p.span, "Geometry pass without its checked resolve rule"))?,
                 view: *view,
             },
             PassKind::Shade { reads: rnames, visibility } => {

@@ -168,7 +168,7 @@ fn a_light_of_radius_zero_gives_exactly_the_hard_shadow_map() {
 
 /// Fragments of overlapping penumbrae combine by each resolve rule (the paper's figure 6
 /// and the lightest): two squares whose penumbrae overlap on the floor, the technique's
-/// `resolve` changed in its source, against the reference's combination of its exact
+/// fixed param `rule` set to each, against the reference's combination of its exact
 /// fragments. Each fragment's s carries its own error (the tolerances above), so a texel
 /// of k fragments is within k times the tolerance for `Add` and `Multiply` (values <= 1)
 /// and within one for `KeepMin` and `KeepMax`; each blend rounds to f16 once more.
@@ -180,14 +180,22 @@ fn every_resolve_rule_agrees_with_the_reference() {
         "Object(name: \"a\", mesh: Plane(size: (1.2, 1.2)), transform: (translate: (-0.75, 2.0, 0.0))),
         Object(name: \"b\", mesh: Plane(size: (1.2, 1.2)), transform: (translate: (0.75, 2.5, 0.3))),",
     );
-    for (rule, name) in [
+    for (index, (rule, name)) in [
         (Resolve::KeepMin, "KeepMin"),
         (Resolve::KeepMax, "KeepMax"),
         (Resolve::Add, "Add"),
         (Resolve::Multiply, "Multiply"),
-    ] {
-        let source = technique_source(TECHNIQUE).replace("resolve: KeepMin", &format!("resolve: {name}"));
-        let (pmap, _, inputs, _ex) = run_source(&scene, &source, &[]);
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        // the technique's fixed param `rule` picks the resolve rule
+        let (pmap, _, inputs, ex) = run(&scene, &[("rule", index.to_string())]);
+        let drawn = ex.graph.passes.iter().flat_map(|p| &p.steps).find_map(|st| match &st.draw {
+            sshc_runtime::graph::Draw::Primitives { resolve, .. } => Some(format!("{resolve:?}")),
+            _ => None,
+        });
+        assert_eq!(drawn.as_deref(), Some(name));
         let setup = setup(&inputs, rule);
         let r = reference::PenumbraReference::new(&triangles(&scene), &meshes(&scene), &setup).unwrap_or_else(|e| panic!("{e}"));
         let n = setup.size;

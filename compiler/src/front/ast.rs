@@ -205,6 +205,19 @@ pub enum Resolve {
     Multiply,
 }
 
+impl Resolve {
+    /// In the order of the integer a `resolve` expression gives (0 to 3).
+    pub const ALL: [Resolve; 4] = [Resolve::KeepMin, Resolve::KeepMax, Resolve::Add, Resolve::Multiply];
+}
+
+/// A Geometry pass's resolve rule: named, or an integer known at compile time (a fixed
+/// param, so that sweeps vary it) indexing [`Resolve::ALL`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum ResolveSpec {
+    Rule(Resolve),
+    Expr(Expr),
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum Kernel {
     Box {
@@ -256,7 +269,7 @@ pub enum PassKind {
         writes: Name,
         primitive: Primitive,
         channels: Vec<Name>,
-        resolve: Resolve,
+        resolve: ResolveSpec,
         view: LightView,
     },
     Shade {

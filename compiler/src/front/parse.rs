@@ -592,13 +592,18 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
             };
             let channels = names(f.req("channels")?)?;
             let rn = f.req("resolve")?;
-            let (r, rs) = variant(rn)?;
-            let resolve = match r.as_str() {
-                "KeepMin" => Resolve::KeepMin,
-                "KeepMax" => Resolve::KeepMax,
-                "Add" => Resolve::Add,
-                "Multiply" => Resolve::Multiply,
-                _ => return Err(unknown_variant(rs, &r, "resolve rule", &["KeepMin", "KeepMax", "Add", "Multiply"])),
+            // A rule's name, or an expression string giving its index (a fixed param).
+            let resolve = if let Value::Str(_) = &rn.value {
+                ResolveSpec::Expr(expression(rn)?)
+            } else {
+                let (r, rs) = variant(rn)?;
+                ResolveSpec::Rule(match r.as_str() {
+                    "KeepMin" => Resolve::KeepMin,
+                    "KeepMax" => Resolve::KeepMax,
+                    "Add" => Resolve::Add,
+                    "Multiply" => Resolve::Multiply,
+                    _ => return Err(unknown_variant(rs, &r, "resolve rule", &["KeepMin", "KeepMax", "Add", "Multiply"])),
+                })
             };
             let view = light_view(&mut f)?;
             PassKind::Geometry {
