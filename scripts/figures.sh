@@ -18,10 +18,11 @@ out=docs/gpu-times.md
     echo "On lavapipe (Mesa's CPU Vulkan driver) these times rank CPU rasterisation and texture"
     echo "filtering on this 2-core machine, not GPUs; compare techniques only as ratios taken in"
     echo "one run. The first frame of each run compiles pipelines and is included in the median's"
-    echo "population but not its middle."
+    echo "population but not its middle. Running the same on a machine with a GPU but no Rust"
+    echo "toolchain: [gpu-machine.md](gpu-machine.md)."
     echo
 } > "$out"
-for t in hard pcf vsm esm csm cssm pcss; do
+for t in hard pcf vsm esm csm cssm pcss penumbra-maps; do
     log=$(./target/release/sshc render "techniques/$t.ron" --scene scenes/bunny.ron -o "docs/images/bunny-$t.png" --frames "$frames")
     device=$(echo "$log" | sed -n 's/^device: //p')
     {
