@@ -610,56 +610,109 @@ fn encode_expr(v: &str, e: Encode) -> String {
 }
 
 fn map(ir: &Program, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step>), Diagnostic> {
-    let w = pass.writes.ok_or_else(|| internal("map pass without output"))?;
+    let entries = channel_entries(
+        ir,
+        pass,
+        Side::Map,
+        limits,
+        EntryForm {
+            signature: "@builtin(position) pos: vec4<f32>",
+            head: "    let texel = vec2<i32>(pos.xy);\n",
+            prelude: &|_| Ok(()),
+            store: &|_, stored| Ok(stored),
+            step: &|entry, texture, chunk| fullscreen_step(entry, Draw::FullScreen, vec![], texture, chunk),
+        },
+    )?;
+    let src = format!(
+        "{}{}\n{}\n{FULLSCREEN_VS}{}",
+        header(ir, pass),
+        entries.decl.declarations(ir),
+        entries.structs,
+        entries.bodies
+    );
+    Ok((src, entries.steps))
+}
+
+/// How [`channel_entries`] writes one fragment entry.
+struct EntryForm<'f, 'a> {
+    /// The entry's parameters.
+    signature: &'f str,
+    /// Its first lines: `texel`, and the inputs as `in_*` locals.
+    head: &'f str,
+    /// Lines emitted through the entry's emitter before the values.
+    prelude: &'f dyn Fn(&mut Emitter<'a>) -> Result<(), Diagnostic>,
+    /// The stored expression of a component (given the slot and the encoded value).
+    store: &'f dyn Fn(&PlacedSlot, String) -> Result<String, Diagnostic>,
+    /// The step that runs an entry over some layers of a texture.
+    step: &'f dyn Fn(String, &str, &[u32]) -> Step,
+}
+
+/// The fragment entries of a Map or Geometry pass: one per group of layers of each texture
+/// of the resource it writes, computing its channels from their `value`s.
+struct ChannelEntries<'a> {
+    structs: String,
+    bodies: String,
+    /// In texture and layer order, with their reads and params.
+    steps: Vec<Step>,
+    /// Holds every binding and whether params are used, for the module's declarations.
+    decl: Emitter<'a>,
+}
+
+fn channel_entries<'a>(
+    ir: &'a Program,
+    pass: &IrPass,
+    side: Side,
+    limits: &Limits,
+    form: EntryForm<'_, 'a>,
+) -> Result<ChannelEntries<'a>, Diagnostic> {
+    let w = pass.writes.ok_or_else(|| internal("a pass computing channels without output"))?;
     let res = &ir.resources[w];
-    let mut bodies = String::new();
-    let mut steps = Vec::new();
-    let mut decl_emitter = Emitter::new(ir, Side::Map, pass.reads.clone());
-    let mut structs = String::new();
+    let (mut bodies, mut structs, mut steps) = (String::new(), String::new(), Vec::new());
+    let mut decl = Emitter::new(ir, side, pass.reads.clone());
     for (ti, tex) in res.textures.iter().enumerate() {
         for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
             let entry = format!("fs_{}_{ci}", tex.name);
             let out_name = format!("Out_{}_{ci}", tex.name);
             structs.push_str(&out_struct(&out_name, chunk.len()));
-            let mut em = Emitter::new(ir, Side::Map, pass.reads.clone());
-            em.bindings = decl_emitter.bindings.clone();
+            let mut em = Emitter::new(ir, side, pass.reads.clone());
+            em.bindings = decl.bindings.clone();
+            (form.prelude)(&mut em)?;
             let mut outs = Vec::new();
             for (oi, &layer) in chunk.iter().enumerate() {
                 let mut comps = vec!["0.0f".to_string(); 4];
                 for slot in res.slots.iter().filter(|s| s.texture == ti && s.layer == layer) {
-                    let comp = slot.component;
                     let v = ir.channels[slot.channel]
                         .value
-                        .ok_or_else(|| internal("map channel without value"))?;
+                        .ok_or_else(|| internal(format!("channel `{}` without value", ir.channels[slot.channel].name)))?;
                     let name = em.emit(v)?;
-                    comps[comp as usize] = encode_expr(&name, slot.encode);
+                    comps[slot.component as usize] = (form.store)(slot, encode_expr(&name, slot.encode))?;
                 }
                 outs.push(format!("    out.o{oi} = vec4<f32>({});", comps.join(", ")));
             }
             let _ = write!(
                 bodies,
-                "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let texel = vec2<i32>(pos.xy);\n{}    var out: {out_name};\n{}\n    return out;\n}}\n",
+                "\n@fragment\nfn {entry}({}) -> {out_name} {{\n{}{}    var out: {out_name};\n{}\n    return out;\n}}\n",
+                form.signature,
+                form.head,
                 em.body,
                 outs.join("\n")
             );
-            decl_emitter.bindings = em.bindings.clone();
-            decl_emitter.uses_params |= em.uses_params;
-            let mut step = fullscreen_step(entry, Draw::FullScreen, vec![], &tex.name, &chunk);
-            step.params = em.uses_params;
-            steps.push(step);
+            decl.bindings = em.bindings.clone();
+            decl.uses_params |= em.uses_params;
+            steps.push((form.step)(entry, &tex.name, &chunk));
         }
     }
-    let bindings = decl_emitter.graph_bindings();
+    let bindings = decl.graph_bindings();
     for s in &mut steps {
         s.reads = bindings.clone();
-        s.params = decl_emitter.uses_params;
+        s.params = decl.uses_params;
     }
-    let src = format!(
-        "{}{}\n{structs}\n{FULLSCREEN_VS}{bodies}",
-        header(ir, pass),
-        decl_emitter.declarations(ir)
-    );
-    Ok((src, steps))
+    Ok(ChannelEntries {
+        structs,
+        bodies,
+        steps,
+        decl,
+    })
 }
 
 /// The buffer a Geometry pass's classification appends to.
@@ -748,8 +801,7 @@ fn geometry(
                 .help("add the Depth pass's resource to `reads`")
         })?;
     let buffer = geometry_buffer_name(pass);
-    let mut bodies = String::new();
-    let mut steps = vec![Step {
+    let classify = Step {
         vertex: None,
         fragment: None,
         compute: Some(geometry::CONES_AND_SHEETS_COMPUTE.into()),
@@ -759,80 +811,65 @@ fn geometry(
         params: false,
         sampler: false,
         cost: OpCount::default(),
-    }];
-    let mut decl_emitter = Emitter::new(ir, Side::Geometry, pass.reads.clone());
-    let mut structs = String::new();
-    for (ti, tex) in res.textures.iter().enumerate() {
-        for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
-            let entry = format!("fs_{}_{ci}", tex.name);
-            let out_name = format!("Out_{}_{ci}", tex.name);
-            structs.push_str(&out_struct(&out_name, chunk.len()));
-            let mut em = Emitter::new(ir, Side::Geometry, pass.reads.clone());
-            em.bindings = decl_emitter.bindings.clone();
-            let z = em.load_map_channel(surface)?;
-            em.line(&format!(
-                "let in_z_surface = frame.depth_range.x + {z} * (frame.depth_range.y - frame.depth_range.x);"
-            ));
-            em.line("if in_z_frag > in_z_surface {\n        discard;\n    }");
-            let mut outs = Vec::new();
-            for (oi, &layer) in chunk.iter().enumerate() {
-                let mut comps = vec!["0.0f".to_string(); 4];
-                for slot in res.slots.iter().filter(|s| s.texture == ti && s.layer == layer) {
-                    let v = ir.channels[slot.channel]
-                        .value
-                        .ok_or_else(|| internal("geometry channel without value"))?;
-                    if !slot.encode.is_identity() && matches!(resolve, Resolve::Add | Resolve::Multiply) {
-                        return Err(Diagnostic::error(
-                            Phase::Codegen,
-                            format!(
-                                "pass `{}` adds or multiplies channel `{}`, whose storage is scaled to its range",
-                                pass.name, ir.channels[slot.channel].name
-                            ),
-                        )
-                        .at(pass.span, "sums and products of scaled values are not the scaled sum or product")
-                        .help("give the channel a range inside [0, 1], or resolve with KeepMin or KeepMax"));
-                    }
-                    let name = em.emit(v)?;
-                    let stored = encode_expr(&name, slot.encode);
-                    comps[slot.component as usize] = match resolve {
-                        Resolve::Add => format!("1.0 - {stored}"),
-                        Resolve::KeepMin | Resolve::KeepMax | Resolve::Multiply => stored,
-                    };
+    };
+    let entries = channel_entries(
+        ir,
+        pass,
+        Side::Geometry,
+        limits,
+        EntryForm {
+            signature: "in: ConesAndSheetsVarying",
+            head: "    let texel = vec2<i32>(in.clip.xy);\n    let in_z_frag = in.z_frag;\n    let in_z_vertex = in.z_vertex;\n    let in_cone_radius = in.cone_radius;\n",
+            prelude: &|em| {
+                let z = em.load_map_channel(surface)?;
+                em.line(&format!(
+                    "let in_z_surface = frame.depth_range.x + {z} * (frame.depth_range.y - frame.depth_range.x);"
+                ));
+                em.line("if in_z_frag > in_z_surface {\n        discard;\n    }");
+                Ok(())
+            },
+            store: &|slot, stored| {
+                if !slot.encode.is_identity() && matches!(resolve, Resolve::Add | Resolve::Multiply) {
+                    return Err(Diagnostic::error(
+                        Phase::Codegen,
+                        format!(
+                            "pass `{}` adds or multiplies channel `{}`, whose storage is scaled to its range",
+                            pass.name, ir.channels[slot.channel].name
+                        ),
+                    )
+                    .at(pass.span, "sums and products of scaled values are not the scaled sum or product")
+                    .help("give the channel a range inside [0, 1], or resolve with KeepMin or KeepMax"));
                 }
-                outs.push(format!("    out.o{oi} = vec4<f32>({});", comps.join(", ")));
-            }
-            let _ = write!(
-                bodies,
-                "\n@fragment\nfn {entry}(in: ConesAndSheetsVarying) -> {out_name} {{\n    let texel = vec2<i32>(in.clip.xy);\n    let in_z_frag = in.z_frag;\n    let in_z_vertex = in.z_vertex;\n    let in_cone_radius = in.cone_radius;\n{}    var out: {out_name};\n{}\n    return out;\n}}\n",
-                em.body,
-                outs.join("\n")
-            );
-            decl_emitter.bindings = em.bindings.clone();
-            decl_emitter.uses_params |= em.uses_params;
-            let mut step = fullscreen_step(
-                entry,
-                Draw::Primitives {
-                    buffer: buffer.clone(),
-                    resolve: graph_resolve(resolve),
-                },
-                vec![],
-                &tex.name,
-                &chunk,
-            );
-            step.vertex = Some(geometry::CONES_AND_SHEETS_VERTEX.into());
-            steps.push(step);
-        }
-    }
-    let bindings = decl_emitter.graph_bindings();
-    for s in steps.iter_mut().skip(1) {
-        s.reads = bindings.clone();
-        s.params = decl_emitter.uses_params;
-    }
+                Ok(match resolve {
+                    Resolve::Add => format!("1.0 - {stored}"),
+                    Resolve::KeepMin | Resolve::KeepMax | Resolve::Multiply => stored,
+                })
+            },
+            step: &|entry, texture, chunk| {
+                let mut step = fullscreen_step(
+                    entry,
+                    Draw::Primitives {
+                        buffer: buffer.clone(),
+                        resolve: graph_resolve(resolve),
+                    },
+                    vec![],
+                    texture,
+                    chunk,
+                );
+                step.vertex = Some(geometry::CONES_AND_SHEETS_VERTEX.into());
+                step
+            },
+        },
+    )?;
+    let mut steps = vec![classify];
+    steps.extend(entries.steps);
     let src = format!(
-        "{}{}\n{}\n{structs}{bodies}",
+        "{}{}\n{}\n{}{}",
         header(ir, pass),
-        decl_emitter.declarations(ir),
-        geometry::cones_and_sheets()
+        entries.decl.declarations(ir),
+        geometry::cones_and_sheets(),
+        entries.structs,
+        entries.bodies
     );
     Ok((src, steps))
 }
