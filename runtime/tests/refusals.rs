@@ -1,15 +1,11 @@
 //! A graph whose features this runtime cannot honour is refused at load, naming the pass
 //! and the feature, rather than run another way.
 
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError, SceneInputs};
+use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
 use sshc_runtime::graph::*;
 
 mod common;
-use common::depth_graph;
-
-fn identity() -> [f32; 16] {
-    [1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.]
-}
+use common::{depth_graph, one_triangle};
 
 #[test]
 fn per_light_sample_views_are_refused_and_light_centre_runs() {
@@ -27,26 +23,7 @@ fn per_light_sample_views_are_refused_and_light_centre_runs() {
     // The same graph from the light's centre loads and runs.
     let (g, shaders) = depth_graph(Views::LightCenter);
     let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&SceneInputs {
-        // one triangle covering the light's view
-        vertices: vec![-1., -1., 0.5, 0., 0., 1., 3., -1., 0.5, 0., 0., 1., -1., 3., 0.5, 0., 0., 1.],
-        meshes: vec![],
-        camera_view_proj: identity(),
-        camera_position: [0.0; 3],
-        camera_size: (4, 4),
-        shadow_size: 4,
-        light_view: identity(),
-        light_view_proj: identity(),
-        light_position: [0., 0., 1., 1.],
-        near: 0.1,
-        far: 10.0,
-        light_size: 0.0,
-        light_half_extents: [0.0; 2],
-        light_angle: 0.0,
-        light_proj_y: 1.0,
-        light_orthographic: false,
-    })
-    .unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(&one_triangle()).unwrap_or_else(|e| panic!("{e}"));
     let times = ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(times.passes.len(), 1);
     let z = ex.read_texture("z", 0, 0).unwrap_or_else(|e| panic!("{e}"));
@@ -112,91 +89,13 @@ fn graphs_with_more_passes_than_timestamps_are_refused() {
     Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
 }
 
-/// `depth_graph` plus a hand-written Shade pass whose visibility is `value` (WGSL) everywhere.
-fn shade_graph(value: &str) -> (PassGraph, Vec<(String, String)>) {
-    let (mut g, mut shaders) = depth_graph(Views::LightCenter);
-    let shader = format!(
-        "{FRAME_WGSL}
-@group(0) @binding(0) var<uniform> frame: Frame;
-struct VOut {{ @builtin(position) pos: vec4<f32> }}
-struct ShadeOut {{
-    @location(0) visibility: vec4<f32>,
-    @location(1) color: vec4<f32>,
-    @location(2) position: vec4<f32>,
-    @location(3) normal: vec4<f32>,
-}}
-@vertex fn vs_shade(@location(0) p: vec3<f32>, @location(1) n: vec3<f32>) -> VOut {{
-    var o: VOut;
-    o.pos = frame.camera_view_proj * vec4<f32>(p, 1.0);
-    return o;
-}}
-@fragment fn fs_shade(i: VOut) -> ShadeOut {{
-    // a runtime zero, so that naga's constant evaluation does not see the value
-    let zero = u32(frame.target_size.x) * 0u;
-    let v = {value};
-    var o: ShadeOut;
-    o.visibility = vec4<f32>(v, 0.0, 0.0, 1.0);
-    o.color = vec4<f32>(1.0);
-    o.position = vec4<f32>(0.0);
-    o.normal = vec4<f32>(0.0, 0.0, 1.0, 0.0);
-    return o;
-}}
-"
-    );
-    g.passes.push(PassDecl {
-        name: "tampered_shade".into(),
-        kind: PassKind::Shade,
-        views: Views::LightCenter,
-        shader: "t.shade.wgsl".into(),
-        steps: vec![Step {
-            vertex: Some("vs_shade".into()),
-            fragment: Some("fs_shade".into()),
-            compute: None,
-            draw: Draw::SceneFromCamera,
-            reads: vec![],
-            writes: vec![],
-            params: false,
-            sampler: false,
-            cost: OpCount::default(),
-        }],
-    });
-    shaders.push(("t.shade.wgsl".into(), shader));
-    (g, shaders)
-}
-
-fn run_shade(gpu: &Gpu, value: &str) -> Result<Vec<f32>, RuntimeError> {
-    let (g, shaders) = shade_graph(value);
-    let mut ex = Executor::new(gpu, g, shaders)?;
-    ex.bind_scene(&SceneInputs {
-        // one triangle covering the camera's view
-        vertices: vec![-1., -1., 0.5, 0., 0., 1., 3., -1., 0.5, 0., 0., 1., -1., 3., 0.5, 0., 0., 1.],
-        meshes: vec![],
-        camera_view_proj: identity(),
-        camera_position: [0.0; 3],
-        camera_size: (4, 4),
-        shadow_size: 4,
-        light_view: identity(),
-        light_view_proj: identity(),
-        light_position: [0., 0., 1., 1.],
-        near: 0.1,
-        far: 10.0,
-        light_size: 0.0,
-        light_half_extents: [0.0; 2],
-        light_angle: 0.0,
-        light_proj_y: 1.0,
-        light_orthographic: false,
-    })?;
-    ex.run_frame()?;
-    Ok(ex.read_camera(CameraOutput::Visibility)?.channel(0))
-}
-
 #[test]
 fn a_shade_pass_writing_nan_or_out_of_range_visibility_is_an_error() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
-    let ok = run_shade(&gpu, "0.25 + f32(zero)").unwrap_or_else(|e| panic!("{e}"));
+    let ok = common::run_shade(&gpu, "0.25 + f32(zero)", CameraOutput::Visibility).unwrap_or_else(|e| panic!("{e}"));
     assert!(ok.iter().all(|v| *v == 0.25), "{ok:?}");
     for value in ["bitcast<f32>(0x7fc00000u + zero)", "1e30 + f32(zero)", "-0.5 + f32(zero)"] {
-        let e = run_shade(&gpu, value)
+        let e = common::run_shade(&gpu, value, CameraOutput::Visibility)
             .err()
             .unwrap_or_else(|| panic!("visibility `{value}` must be refused"));
         assert!(

@@ -1,6 +1,8 @@
-//! The graph the runtime's integration tests load: one Depth pass drawing the scene from
-//! the light into `z`, with its shader.
+//! What the runtime's integration tests share: a one-pass depth graph, a Shade pass whose
+//! visibility a test writes directly, and a scene of one triangle covering both views.
+#![allow(dead_code)]
 
+use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError, SceneInputs};
 use sshc_runtime::graph::*;
 
 /// One Depth pass drawing the scene from the light into `z`.
@@ -59,4 +61,92 @@ struct VOut {{ @builtin(position) pos: vec4<f32>, @location(0) d: f32 }}
         removed: vec![],
     };
     (graph, vec![("t.depth.wgsl".into(), shader)])
+}
+
+pub fn identity() -> [f32; 16] {
+    [1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.]
+}
+
+/// One triangle covering the light's and the camera's view (both identity).
+pub fn one_triangle() -> SceneInputs {
+    SceneInputs {
+        vertices: vec![-1., -1., 0.5, 0., 0., 1., 3., -1., 0.5, 0., 0., 1., -1., 3., 0.5, 0., 0., 1.],
+        meshes: vec![],
+        camera_view_proj: identity(),
+        camera_position: [0.0; 3],
+        camera_size: (4, 4),
+        shadow_size: 4,
+        light_view: identity(),
+        light_view_proj: identity(),
+        light_position: [0., 0., 1., 1.],
+        near: 0.1,
+        far: 10.0,
+        light_size: 0.0,
+        light_half_extents: [0.0; 2],
+        light_angle: 0.0,
+        light_proj_y: 1.0,
+        light_orthographic: false,
+    }
+}
+
+/// `depth_graph` plus a hand-written Shade pass whose visibility is `value` (WGSL) everywhere.
+pub fn shade_graph(value: &str) -> (PassGraph, Vec<(String, String)>) {
+    let (mut g, mut shaders) = depth_graph(Views::LightCenter);
+    let shader = format!(
+        "{FRAME_WGSL}
+@group(0) @binding(0) var<uniform> frame: Frame;
+struct VOut {{ @builtin(position) pos: vec4<f32> }}
+struct ShadeOut {{
+    @location(0) visibility: vec4<f32>,
+    @location(1) color: vec4<f32>,
+    @location(2) position: vec4<f32>,
+    @location(3) normal: vec4<f32>,
+}}
+@vertex fn vs_shade(@location(0) p: vec3<f32>, @location(1) n: vec3<f32>) -> VOut {{
+    var o: VOut;
+    o.pos = frame.camera_view_proj * vec4<f32>(p, 1.0);
+    return o;
+}}
+@fragment fn fs_shade(i: VOut) -> ShadeOut {{
+    // a runtime zero, so that naga's constant evaluation does not see the value
+    let zero = u32(frame.target_size.x) * 0u;
+    let v = {value};
+    var o: ShadeOut;
+    o.visibility = vec4<f32>(v, 0.0, 0.0, 1.0);
+    o.color = vec4<f32>(1.0);
+    o.position = vec4<f32>(0.0);
+    o.normal = vec4<f32>(0.0, 0.0, 1.0, 0.0);
+    return o;
+}}
+"
+    );
+    g.passes.push(PassDecl {
+        name: "tampered_shade".into(),
+        kind: PassKind::Shade,
+        views: Views::LightCenter,
+        shader: "t.shade.wgsl".into(),
+        steps: vec![Step {
+            vertex: Some("vs_shade".into()),
+            fragment: Some("fs_shade".into()),
+            compute: None,
+            draw: Draw::SceneFromCamera,
+            reads: vec![],
+            writes: vec![],
+            params: false,
+            sampler: false,
+            cost: OpCount::default(),
+        }],
+    });
+    shaders.push(("t.shade.wgsl".into(), shader));
+    (g, shaders)
+}
+
+/// Run the depth graph and a Shade pass writing visibility `value` on [`one_triangle`];
+/// read back camera output `which`.
+pub fn run_shade(gpu: &Gpu, value: &str, which: CameraOutput) -> Result<Vec<f32>, RuntimeError> {
+    let (g, shaders) = shade_graph(value);
+    let mut ex = Executor::new(gpu, g, shaders)?;
+    ex.bind_scene(&one_triangle())?;
+    ex.run_frame()?;
+    Ok(ex.read_camera(which)?.channel(0))
 }
