@@ -317,8 +317,15 @@ fn planned_triangles(text: &str) -> usize {
         .fold(0usize, usize::saturating_add)
 }
 
+/// `SSHC_FUZZ_ALL_SIZES=1` turns the skip off (to replay an input at the limit, and see
+/// its time and memory).
+fn skip_large() -> bool {
+    static SKIP: OnceLock<bool> = OnceLock::new();
+    *SKIP.get_or_init(|| std::env::var_os("SSHC_FUZZ_ALL_SIZES").is_none())
+}
+
 fn drive(text: &str) {
-    if (MAX_FUZZ_TRIANGLES + 1..=MAX_SCENE_TRIANGLES).contains(&planned_triangles(text)) {
+    if skip_large() && (MAX_FUZZ_TRIANGLES + 1..=MAX_SCENE_TRIANGLES).contains(&planned_triangles(text)) {
         return;
     }
     let scene = match Scene::from_str(text, base()) {
