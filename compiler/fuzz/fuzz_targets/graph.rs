@@ -38,6 +38,17 @@ const SHADERS: &[&str] = &[
 ];
 const ENTRIES: &[&str] = &["vs", "fs_main", "cs_rows", ""];
 const WORDS: &[&str] = &[
+    "buffers",
+    "record_bytes",
+    "vertices_per_record",
+    "buffer",
+    "resolve",
+    "Silhouettes",
+    "Primitives",
+    "KeepMin",
+    "KeepMax",
+    "Add",
+    "Multiply",
     "version",
     "technique",
     "title",
@@ -218,14 +229,19 @@ fn step(u: &mut Unstructured) -> Result<Step> {
         vertex: entry(u)?,
         fragment: entry(u)?,
         compute: entry(u)?,
-        draw: *u.choose(&[
-            Draw::SceneFromLight,
-            Draw::SceneFromCamera,
-            Draw::FullScreen,
-            Draw::MipLevels,
-            Draw::ComputeRows,
-            Draw::ComputeColumns,
-        ])?,
+        draw: match u.int_in_range(0..=7)? {
+            0 => Draw::SceneFromLight,
+            1 => Draw::SceneFromCamera,
+            2 => Draw::FullScreen,
+            3 => Draw::MipLevels,
+            4 => Draw::ComputeRows,
+            5 => Draw::ComputeColumns,
+            6 => Draw::Silhouettes { buffer: name(u)? },
+            _ => Draw::Primitives {
+                buffer: name(u)?,
+                resolve: *u.choose(&[Resolve::KeepMin, Resolve::KeepMax, Resolve::Add, Resolve::Multiply])?,
+            },
+        },
         reads,
         writes,
         params: u.arbitrary()?,
@@ -265,6 +281,16 @@ fn graph(u: &mut Unstructured) -> Result<PassGraph> {
         params: (0..u.int_in_range(0..=4)?).map(|_| param(u)).collect::<Result<_>>()?,
         params_size: small_u32(u)?,
         textures: (0..u.int_in_range(0..=5)?).map(|_| texture(u)).collect::<Result<_>>()?,
+        buffers: (0..u.int_in_range(0..=2)?)
+            .map(|_| {
+                Ok(BufferDecl {
+                    name: name(u)?,
+                    // around the limits: 0, off the 16-byte grid, the largest, beyond
+                    record_bytes: *u.choose(&[0, 16, 24, 48, 1024, 1040, u32::MAX])?,
+                    vertices_per_record: *u.choose(&[0, 1, 120, 4096, 4097, u32::MAX])?,
+                })
+            })
+            .collect::<Result<_>>()?,
         passes: (0..u.int_in_range(0..=6)?).map(|_| pass(u)).collect::<Result<_>>()?,
         removed: (0..u.int_in_range(0..=2)?).map(|_| name(u)).collect::<Result<_>>()?,
     })
@@ -295,6 +321,31 @@ fn check_accepted(g: &PassGraph, text: &str) {
         "duplicate param: {text}"
     );
     assert!(g.textures.iter().all(|t| t.layers >= 1));
+    assert!(
+        unique(g.buffers.iter().map(|b| b.name.as_str()).collect()),
+        "duplicate buffer: {text}"
+    );
+    for b in &g.buffers {
+        assert!(b.record_bytes >= 16 && b.record_bytes % 16 == 0 && b.record_bytes <= MAX_RECORD_BYTES);
+        assert!((1..=MAX_VERTICES_PER_RECORD).contains(&b.vertices_per_record));
+    }
+    // Generated buffers: declared, and drawn only after a Silhouettes step wrote them.
+    let mut generated: Vec<&str> = Vec::new();
+    for st in g.passes.iter().flat_map(|p| &p.steps) {
+        match &st.draw {
+            Draw::Silhouettes { buffer } => {
+                assert!(g.buffer(buffer).is_some(), "undeclared buffer: {text}");
+                generated.push(buffer);
+            }
+            Draw::Primitives { buffer, .. } => assert!(generated.contains(&buffer.as_str()), "drawn before written: {text}"),
+            Draw::SceneFromLight
+            | Draw::SceneFromCamera
+            | Draw::FullScreen
+            | Draw::MipLevels
+            | Draw::ComputeRows
+            | Draw::ComputeColumns => {}
+        }
+    }
     let mut written: Vec<&str> = Vec::new();
     for p in &g.passes {
         let s = p.shader.as_str();
