@@ -38,7 +38,7 @@ phase "fuzz (short run)"
 # instrumentation, no sanitizer (RUSTC_BOOTSTRAP=1 on stable; libfuzzer-sys's build script
 # compiles libFuzzer's C++, so a C++ compiler is needed), then runs each on its seeds plus
 # 20 s of mutation; a crash, a timeout or an out-of-memory fails the phase and leaves the
-# input in compiler/fuzz/artifacts/<target>/. About 4.5 minutes on a 2-core machine from
+# input in compiler/fuzz/artifacts/<target>/. About 5 minutes on a 2-core machine from
 # a clean compiler/fuzz/target, 1.5 with it warm (docs/fuzzing.md).
 scripts/fuzz.sh ci 20
 
