@@ -11,6 +11,9 @@ use sshc_runtime::adjacency::Adjacency;
 use sshc_runtime::gpu::{Executor, Gpu, RuntimeError, SceneInputs};
 use sshc_runtime::graph::*;
 
+mod common;
+use common::identity;
+
 /// Vertices per record in the test's primitive draw: one full-screen triangle.
 const VERTS: u32 = 3;
 
@@ -203,10 +206,6 @@ fn meshes() -> (Vec<[[f32; 3]; 3]>, Vec<std::ops::Range<u32>>) {
     tris.extend([[a, b, [-2.0, 0.0, 0.0]], [a, b, [-3.5, 0.0, 0.8]], [b, a, [-3.5, 0.0, -0.8]]]);
     let fins_end = tris.len() as u32;
     (tris, vec![0..cube_end, cube_end..quad_end, quad_end..fins_end])
-}
-
-fn identity() -> [f32; 16] {
-    [1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.]
 }
 
 fn inputs(tris: &[[[f32; 3]; 3]], meshes: Vec<std::ops::Range<u32>>, light: [f32; 4]) -> SceneInputs {
