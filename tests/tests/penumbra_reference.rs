@@ -39,6 +39,7 @@
 //! [`Target::F16`] adds one f16 ulp of the value (either rounding direction).
 
 use sshc_runtime::gpu::Gpu;
+use sshc_tests::reference::penumbra::fixtures::{quad, scene, sphere};
 use sshc_tests::reference::penumbra::{
     AreaLight, LightProjection, PenumbraReference, PenumbraSetup, Primitives, Resolve, fragments, primitives, silhouettes,
 };
@@ -59,35 +60,6 @@ const BOUNDARY_SHARE: f64 = 0.01;
 fn gpu() -> &'static Gpu {
     static GPU: OnceLock<Gpu> = OnceLock::new();
     GPU.get_or_init(|| Gpu::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}")))
-}
-
-/// An axis-aligned quad at height z (two triangles wound towards +z, the light).
-fn quad(x0: f64, x1: f64, y0: f64, y1: f64, z: f64) -> Vec<[V3; 3]> {
-    vec![[[x0, y0, z], [x1, y0, z], [x1, y1, z]], [[x0, y0, z], [x1, y1, z], [x0, y1, z]]]
-}
-
-fn scene(parts: &[Vec<[V3; 3]>]) -> (Vec<[V3; 3]>, Vec<Range<usize>>) {
-    let mut tris = Vec::new();
-    let mut meshes = Vec::new();
-    for p in parts {
-        let start = tris.len();
-        tris.extend_from_slice(p);
-        meshes.push(start..tris.len());
-    }
-    (tris, meshes)
-}
-
-/// Perspective light at the origin looking down -z, covering [-5, 5] at depth 10.
-fn sphere(radius: f64, size: usize, resolve: Resolve) -> PenumbraSetup {
-    PenumbraSetup {
-        view: IDENTITY,
-        projection: LightProjection::Perspective { f: 2.0 },
-        near: 1.0,
-        far: 12.0,
-        size,
-        light: AreaLight::Sphere { radius },
-        resolve,
-    }
 }
 
 /// Orthographic light down -z covering [-4, 4], a distant disk with tan(angle / 2) = tan_half.

@@ -844,31 +844,33 @@ impl PenumbraReference {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// Scenes and lights the reference's tests and the WGSL reference's tests share: quads in
+/// the light's view space (the light at the origin looking down -z, the view the identity).
+pub mod fixtures {
+    use super::{AreaLight, LightProjection, PenumbraSetup, Resolve, V3};
+    use std::ops::Range;
 
     const IDENTITY: [f64; 16] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0];
 
     /// An axis-aligned quad at height z (two triangles wound towards +z, the light).
-    fn quad(x0: f64, x1: f64, y0: f64, y1: f64, z: f64) -> [[V3; 3]; 2] {
-        [[[x0, y0, z], [x1, y0, z], [x1, y1, z]], [[x0, y0, z], [x1, y1, z], [x0, y1, z]]]
+    pub fn quad(x0: f64, x1: f64, y0: f64, y1: f64, z: f64) -> Vec<[V3; 3]> {
+        vec![[[x0, y0, z], [x1, y0, z], [x1, y1, z]], [[x0, y0, z], [x1, y1, z], [x0, y1, z]]]
     }
 
-    /// Meshes from lists of triangles.
-    fn scene(parts: &[&[[V3; 3]]]) -> (Vec<[V3; 3]>, Vec<Range<usize>>) {
+    /// One mesh per list of triangles.
+    pub fn scene<T: AsRef<[[V3; 3]]>>(parts: &[T]) -> (Vec<[V3; 3]>, Vec<Range<usize>>) {
         let mut tris = Vec::new();
         let mut meshes = Vec::new();
         for p in parts {
             let start = tris.len();
-            tris.extend_from_slice(p);
+            tris.extend_from_slice(p.as_ref());
             meshes.push(start..tris.len());
         }
         (tris, meshes)
     }
 
     /// Perspective light at the origin looking down -z, covering [-5, 5] at depth 10.
-    fn sphere(radius: f64, size: usize, resolve: Resolve) -> PenumbraSetup {
+    pub fn sphere(radius: f64, size: usize, resolve: Resolve) -> PenumbraSetup {
         PenumbraSetup {
             view: IDENTITY,
             projection: LightProjection::Perspective { f: 2.0 },
@@ -879,6 +881,14 @@ mod tests {
             resolve,
         }
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fixtures::{quad, scene, sphere};
+    use super::*;
+
+    const IDENTITY: [f64; 16] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0];
 
     fn all_valid(r: &PenumbraReference) {
         for (k, v) in r.penumbra.value.iter().enumerate() {
