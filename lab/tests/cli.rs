@@ -2,20 +2,11 @@
 //! without a GPU), at tiny resolutions. They never skip: with no adapter the commands
 //! fail, and so do these tests (`scripts/test.sh` installs lavapipe).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// A fresh empty folder under the system's temporary folder.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("sshc-gpu-cli-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::{root, temp_dir};
 
 fn sshc(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_sshc"))

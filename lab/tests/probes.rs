@@ -11,22 +11,13 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+mod common;
+use common::{root, temp_dir};
+
 /// Address space allowed to each run, in KiB (2 GiB).
 const MEMORY_KIB: u64 = 2 << 20;
 /// Time allowed to each refusal.
 const TIME: Duration = Duration::from_secs(20);
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// A fresh empty folder under the system's temporary folder.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("sshc-probes-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// Runs `sshc` from the repository root under the memory limit; (status, stdout, stderr).
 fn sshc(args: &[&str]) -> (Option<i32>, String, String) {

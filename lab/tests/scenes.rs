@@ -8,6 +8,9 @@ use glam::{Vec3, Vec4};
 use sshc_lab::scene::{Light, Scene, SceneErrorKind, corners};
 use sshc_lab::visibility::Visibility;
 
+mod common;
+use common::temp_dir;
+
 const BUNDLED: [&str; 5] = ["bunny", "contact", "fence", "edge", "triangle"];
 
 fn scenes_dir() -> PathBuf {
@@ -17,14 +20,6 @@ fn scenes_dir() -> PathBuf {
 fn bundled(name: &str) -> Scene {
     let path = scenes_dir().join(format!("{name}.ron"));
     Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// A fresh empty folder under the system's temporary folder.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("sshc-scene-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 const CAMERA: &str = "camera: Perspective(position: (0.0, 3.0, 5.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 45.0, width: 32, height: 32)";

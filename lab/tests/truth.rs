@@ -12,6 +12,9 @@ use sshc_lab::scene::{Light, Scene};
 use sshc_lab::truth::{self, CacheLookup, Points, Source, Truth, TruthCache, TruthError, TruthSettings};
 use sshc_lab::visibility::Visibility;
 
+mod common;
+use common::temp_dir;
+
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
 }
@@ -20,14 +23,6 @@ fn edge(size: u32) -> Scene {
     let mut s = Scene::load(scenes_dir().join("edge.ron")).unwrap_or_else(|e| panic!("{e}"));
     s.set_camera_size(size, size);
     s
-}
-
-/// A fresh empty folder under the system's temporary folder.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("sshc-truth-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// World position and normal of the surface each pixel's centre sees (NaN where none),
