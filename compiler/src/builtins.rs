@@ -5,7 +5,7 @@
 //! lower, the arena's folding, analyse and codegen read these descriptors and do not
 //! match on the function themselves.
 
-use crate::front::ast::{ConstValue, ScalarTy};
+use crate::front::ast::{ConstValue, Primitive, ScalarTy};
 use crate::interval::Interval;
 use std::f64::consts::PI;
 use std::fmt;
@@ -137,6 +137,18 @@ pub enum Input {
     /// Z_P: the light-view distance of the foremost surface the light sees at the
     /// fragment's texel (the Depth resource the Geometry pass reads), world units.
     ZSurface,
+    /// 1 for a distant light (orthographic light view), 0 for a local one.
+    LightDistant,
+    /// c of penumbra limit maps (Lawlor 2006, section 3): the normalised depth of the
+    /// silhouette edge point nearest the ribbon fragment.
+    OccluderDepth,
+    /// p_i of penumbra limit maps (Lawlor 2006, eq. 1 and section 3, `p_i = w s r`): the
+    /// fragment's signed distance from the silhouette edge (positive outward) times the
+    /// light's depth rate, in normalised depth units.
+    PenumbraLimit,
+    /// The normalised depth of the penumbra-limit surface at the ribbon fragment (where
+    /// the penumbra begins below the edge): the depth its depth test keeps the nearest of.
+    LimitDepth,
 }
 
 /// Everything the compiler knows about one built-in input: check reads its name, type and
@@ -155,7 +167,7 @@ pub struct InputDesc {
 }
 
 impl Input {
-    pub const ALL: [Input; 19] = [
+    pub const ALL: [Input; 23] = [
         Input::D,
         Input::DWorld,
         Input::Uv,
@@ -175,7 +187,26 @@ impl Input {
         Input::ZVertex,
         Input::ConeRadius,
         Input::ZSurface,
+        Input::LightDistant,
+        Input::OccluderDepth,
+        Input::PenumbraLimit,
+        Input::LimitDepth,
     ];
+
+    /// The Geometry primitives whose fragments have this input (every one for the others).
+    pub fn primitives(self) -> &'static [Primitive] {
+        match self {
+            Input::ZFrag => &[Primitive::ConesAndSheets, Primitive::BackFaces],
+            Input::ZVertex | Input::ConeRadius | Input::ZSurface => &[Primitive::ConesAndSheets],
+            Input::OccluderDepth | Input::PenumbraLimit | Input::LimitDepth => &[Primitive::Ribbons],
+            _ => &[
+                Primitive::ConesAndSheets,
+                Primitive::Ribbons,
+                Primitive::Skins,
+                Primitive::BackFaces,
+            ],
+        }
+    }
 
     /// The descriptor: adding an input means adding a variant, its entry in
     /// [`Input::ALL`] and its arm here (and its `in_*` local in the Shade prelude of
@@ -335,6 +366,38 @@ impl Input {
                 range: (0.0, 1e4),
                 wgsl: "in_z_surface",
                 doc: "light-view distance of the foremost surface the light sees at the fragment's texel (Z_P of Wyman & Hansen eq. 1, world units)",
+            },
+            Input::LightDistant => &InputDesc {
+                name: "light_distant",
+                ty: Ty::F32,
+                side: Both,
+                range: (0.0, 1.0),
+                wgsl: "select(0.0, 1.0, frame.light_position.w == 0.0)",
+                doc: "1 for a distant light (orthographic light view), 0 for a local one",
+            },
+            Input::OccluderDepth => &InputDesc {
+                name: "occluder_depth",
+                ty: Ty::F32,
+                side: Geometry,
+                range: (0.0, 1.0),
+                wgsl: "in_occluder_depth",
+                doc: "c of penumbra limit maps (Lawlor 2006, section 3): normalised depth of the silhouette edge point nearest the ribbon fragment",
+            },
+            Input::PenumbraLimit => &InputDesc {
+                name: "penumbra_limit",
+                ty: Ty::F32,
+                side: Geometry,
+                range: (-1e4, 1e4),
+                wgsl: "in_penumbra_limit",
+                doc: "p_i of penumbra limit maps (Lawlor 2006, eq. 1, p_i = w s r): signed distance from the silhouette edge (positive outward) times the light's depth rate, normalised depth units",
+            },
+            Input::LimitDepth => &InputDesc {
+                name: "limit_depth",
+                ty: Ty::F32,
+                side: Geometry,
+                range: (0.0, 1.0),
+                wgsl: "in_limit_depth",
+                doc: "normalised depth of the penumbra-limit surface at the ribbon fragment (the depth Nearest keeps the smallest of)",
             },
         }
     }
@@ -1416,7 +1479,7 @@ mod tests {
             assert!(is_reserved(input.name()));
         }
         assert_eq!(
-            Input::ZSurface as usize + 1,
+            Input::LimitDepth as usize + 1,
             Input::ALL.len(),
             "an Input is missing from Input::ALL"
         );

@@ -180,6 +180,16 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                     ));
                 }
             }
+            // Each primitive's fragments have their own geometry inputs.
+            for p in &writers {
+                if let PassKind::Geometry { primitive, .. } = &p.kind {
+                    for u in ty.uses.iter().filter(|u| u.side == Side::Geometry) {
+                        if let Some(i) = Input::from_name(&u.name).filter(|i| !i.primitives().contains(primitive)) {
+                            diags.push(primitive_input(u, i, *primitive, &p.name.value));
+                        }
+                    }
+                }
+            }
         }
     }
 
@@ -188,11 +198,31 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
     for &pi in &order {
         let p = &t.passes[pi];
         match &p.kind {
-            PassKind::Map { reads, channels, .. } => {
+            PassKind::Map { reads, channels, .. } | PassKind::Geometry { reads, channels, .. } => {
                 let carried: Vec<Item> = reads
                     .iter()
                     .flat_map(|r| items.get(&r.value).cloned().unwrap_or_default())
                     .collect();
+                if let PassKind::Geometry {
+                    resolve,
+                    primitive,
+                    keep,
+                    ..
+                } = &p.kind
+                {
+                    match resolve_rule(sym, resolve, &mut types) {
+                        Ok(r) => {
+                            if let Err(d) = primitive_resolve(p, *primitive, r, resolve) {
+                                diags.push(d);
+                            }
+                            resolves[pi] = Some(r);
+                        }
+                        Err(d) => diags.push(d),
+                    }
+                    if let Some(k) = keep {
+                        check_keep(sym, p, *primitive, k, &carried, &mut types, &mut diags);
+                    }
+                }
                 for n in channels {
                     let needed = map_inputs(sym, &n.value);
                     for (ch, span) in needed {
@@ -201,8 +231,11 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                                 Diagnostic::error(
                                     Phase::Check,
                                     format!(
-                                        "Map pass `{}` computes `{}` from channel `{}`, which none of its reads carries",
-                                        p.name.value, n.value, t.channels[ch].name.value
+                                        "{} pass `{}` computes `{}` from channel `{}`, which none of its reads carries",
+                                        p.kind.kind_name(),
+                                        p.name.value,
+                                        n.value,
+                                        t.channels[ch].name.value
                                     ),
                                 )
                                 .at(n.span, "computed here")
@@ -228,10 +261,6 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
             }
             PassKind::Filter { kernel, .. } => match resolve_kernel(sym, kernel, &mut types) {
                 Ok(k) => kernels[pi] = Some(k),
-                Err(d) => diags.push(d),
-            },
-            PassKind::Geometry { resolve, .. } => match resolve_rule(sym, resolve, &mut types) {
-                Ok(r) => resolves[pi] = Some(r),
                 Err(d) => diags.push(d),
             },
             PassKind::Shade { reads, visibility } => {
@@ -476,6 +505,104 @@ fn check_expansion(sym: &Symbols, e: &Expansion, types: &mut Types, diags: &mut 
             diags.push(side_error(&u, "a basis function of expansion", &e.name.value, "basis functions B_i(z) are stored per shadow-map texel and prefiltered, so they may use map-side inputs only (Annen eq. 5.6)").help("move the factor that depends on the receiver into `coeff`"));
         }
     }
+}
+
+/// A geometry input used in a channel a pass of another primitive writes.
+fn primitive_input(u: &Use, input: Input, primitive: Primitive, pass: &str) -> Diagnostic {
+    let has: Vec<String> = input.primitives().iter().map(|p| format!("{p:?}")).collect();
+    let mut d = Diagnostic::error(
+        Phase::Check,
+        format!("`{}` exists only per fragment of {} primitives", u.name, has.join(" and ")),
+    )
+    .at(u.span, format!("pass `{pass}` draws {primitive:?}"))
+    .note("docs/language.md section 8.5 lists each geometry input's primitives");
+    if let Some(via) = u.via {
+        d = d.also(via, "used through this binding");
+    }
+    d
+}
+
+/// A resolve rule a primitive cannot use: Ribbons and BackFaces keep the nearest fragment
+/// (a depth test on their depth); the cones and sheets of penumbra maps write no depth.
+fn primitive_resolve(p: &Pass, primitive: Primitive, r: Resolve, spec: &ResolveSpec) -> Result<(), Diagnostic> {
+    let (span, label) = match spec {
+        ResolveSpec::Expr(e) => (e.span, "this resolve rule"),
+        ResolveSpec::Rule(_) => (p.kind_span, "this pass's `resolve`"),
+    };
+    let nearest = matches!(primitive, Primitive::Ribbons | Primitive::BackFaces);
+    if nearest == (r == Resolve::Nearest) || primitive == Primitive::Skins {
+        return Ok(());
+    }
+    let d = Diagnostic::error(
+        Phase::Check,
+        format!("Geometry pass `{}` draws {primitive:?} with resolve {r:?}", p.name.value),
+    )
+    .at(span, label);
+    Err(if nearest {
+        d.note("ribbons and back faces write a depth, and the fragment nearest the light wins (Lawlor 2006, section 3.1)")
+            .help("write `resolve: Nearest`")
+    } else {
+        d.note("cones and sheets write no depth: overlaps combine by blending (Wyman & Hansen 2003, figure 6)")
+            .help("use KeepMin, KeepMax, Add or Multiply")
+    })
+}
+
+/// A Geometry pass's `keep`: a bool per fragment over map-side values, the pass's reads
+/// at the fragment's texel and its primitive's geometry inputs.
+fn check_keep(
+    sym: &Symbols,
+    p: &Pass,
+    primitive: Primitive,
+    keep: &Expr,
+    carried: &[Item],
+    types: &mut Types,
+    diags: &mut Diagnostics,
+) {
+    let mut ty = Typer::new(sym, Mode::ChannelValue, types);
+    match ty.infer_as(keep, Ty::Bool) {
+        Ok(Ty::Bool) => {}
+        Ok(other) => diags.push(
+            Diagnostic::error(Phase::Check, format!("type mismatch: `keep` must be bool, found {other}"))
+                .at(keep.span, format!("this is {other}"))
+                .help("compare, e.g. `z_frag > near + c * (far - near)`"),
+        ),
+        Err(d) => diags.push(d),
+    }
+    for u in &ty.uses {
+        match u.side {
+            Side::Receiver => diags.push(side_error(
+                u,
+                "the `keep` of pass",
+                &p.name.value,
+                "`keep` runs per fragment drawn from the light, before any receiver is known",
+            )),
+            Side::Geometry => {
+                if let Some(i) = Input::from_name(&u.name).filter(|i| !i.primitives().contains(&primitive)) {
+                    diags.push(primitive_input(u, i, primitive, &p.name.value));
+                }
+            }
+            Side::Map | Side::Both => {}
+        }
+    }
+    let mut seen = Vec::new();
+    keep.walk(&mut |x| {
+        if let ExprKind::Name(n) = &x.kind
+            && let Some(&c) = sym.channels.get(n)
+            && !seen.contains(&c)
+        {
+            seen.push(c);
+            if !carried.contains(&Item::Channel(c)) {
+                diags.push(
+                    Diagnostic::error(
+                        Phase::Check,
+                        format!("the `keep` of pass `{}` reads channel `{n}`, which none of its reads carries", p.name.value),
+                    )
+                    .at(x.span, "channel used here")
+                    .help("add the resource holding it to `reads`"),
+                );
+            }
+        }
+    });
 }
 
 /// A Geometry-side input used where no generated primitive's fragment exists.

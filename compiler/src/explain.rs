@@ -3,6 +3,7 @@
 
 use crate::Compiled;
 use crate::ir::{IrPassKind, Origin, Program, short};
+use crate::front::ast::{Primitive, Resolve};
 use std::fmt::Write as _;
 
 pub fn explain(c: &Compiled) -> String {
@@ -47,7 +48,17 @@ pub fn explain(c: &Compiled) -> String {
             ),
             IrPassKind::Mipmap { reduce } => format!("builds a {reduce:?} mip chain in place"),
             IrPassKind::SummedArea => "builds a summed-area table".to_string(),
-            IrPassKind::Geometry { primitive, resolve, .. } => {
+            IrPassKind::Geometry {
+                primitive: Primitive::BackFaces,
+                keep,
+                ..
+            } => format!(
+                "rasterises the scene's triangles that face away from the light, the nearest kept by a depth test (Lawlor 2006, section 3.1, step 3){}",
+                if keep.is_some() { ", fragments failing `keep` discarded" } else { "" }
+            ),
+            IrPassKind::Geometry {
+                primitive, resolve, keep, ..
+            } => {
                 let buffers: Vec<String> = g
                     .buffers
                     .iter()
@@ -62,8 +73,14 @@ pub fn explain(c: &Compiled) -> String {
                         )
                     })
                     .collect();
+                let how = if *resolve == Resolve::Nearest {
+                    "the fragment nearest the light kept by a depth test".to_string()
+                } else {
+                    format!("overlaps resolved by {resolve:?}")
+                };
                 format!(
-                    "generates {primitive:?} at the silhouette edges seen from the light's centre (a compute step classifies every edge and appends a record per silhouette; a draw pulls the primitives from the records, indirectly), overlaps resolved by {resolve:?}; {}",
+                    "generates {primitive:?} at the silhouette edges seen from the light's centre (a compute step classifies every edge and appends a record per silhouette; a draw pulls the primitives from the records, indirectly), {how}{}; {}",
+                    if keep.is_some() { ", fragments failing `keep` discarded" } else { "" },
                     buffers.join("; ")
                 )
             }

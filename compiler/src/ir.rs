@@ -663,6 +663,8 @@ pub enum IrPassKind {
         primitive: Primitive,
         resolve: Resolve,
         view: LightView,
+        /// Fragments for which this bool is false are discarded.
+        keep: Option<H>,
     },
     Shade {
         visibility: H,
@@ -899,6 +901,9 @@ impl<S: SlotView> Program<'_, S> {
                 IrPassKind::Filter { kernel } => write!(f, " kernel {kernel:?}")?,
                 IrPassKind::Mipmap { reduce } => write!(f, " reduce {reduce:?}")?,
                 IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self.ir)))?,
+                IrPassKind::Geometry { keep: Some(k), .. } => {
+                    write!(f, "\n      keep = {}", self.arena.display(*k, Some(self.ir)))?
+                }
                 IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::SummedArea | IrPassKind::Geometry { .. } => {}
             }
             writeln!(f)?;

@@ -456,10 +456,19 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             },
             PassKind::Mipmap { reduce, .. } => IrPassKind::Mipmap { reduce: *reduce },
             PassKind::SummedArea { .. } => IrPassKind::SummedArea,
-            PassKind::Geometry { primitive, view, .. } => IrPassKind::Geometry {
+            PassKind::Geometry {
+                primitive, view, keep, ..
+            } => IrPassKind::Geometry {
                 primitive: *primitive,
                 resolve: checked.resolves[pi].ok_or_else(|| internal(p.span, "Geometry pass without its checked resolve rule"))?,
                 view: *view,
+                keep: match keep {
+                    Some(k) => {
+                        let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &no_expansions, None);
+                        Some(l.expr(k).map_err(Diagnostics::from)?)
+                    }
+                    None => None,
+                },
             },
             PassKind::Shade { reads: rnames, visibility } => {
                 let mut shade_reads = Vec::new();

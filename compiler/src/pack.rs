@@ -82,7 +82,10 @@ fn eliminate(ir: &Ir, lay: &mut Working) {
         let carrier = |c: ChannelId| reads.iter().copied().find(|&r| lay.resources[r].slot_of(c).is_some());
         match lay.passes[pi].kind {
             IrPassKind::Map | IrPassKind::Geometry { .. } => {
-                let roots: Vec<H> = needed.iter().filter_map(|&c| ir.channels[c].value).collect();
+                let mut roots: Vec<H> = needed.iter().filter_map(|&c| ir.channels[c].value).collect();
+                if let IrPassKind::Geometry { keep: Some(k), .. } = lay.passes[pi].kind {
+                    roots.push(k);
+                }
                 for h in ir.arena.postorder(&roots) {
                     if let Node::Channel(c) = ir.arena.node(h)
                         && let Some(r) = carrier(*c)

@@ -220,15 +220,18 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
             );
             continue;
         };
-        if let Some(&i) = channels.get(name) {
-            channel_precision[i] = p;
-        } else if let Some(&i) = expansions.get(name) {
-            expansion_precision[i] = p;
-        } else {
-            diags.push(Diagnostic::error(
-                Phase::Cli,
-                format!("`--precision {name}=...`: no channel or expansion named `{name}`"),
-            ));
+        // `a,b,c=...` sets several at once (a sweep axis over a packed texture's channels)
+        for one in name.split(',').map(str::trim) {
+            if let Some(&i) = channels.get(one) {
+                channel_precision[i] = p;
+            } else if let Some(&i) = expansions.get(one) {
+                expansion_precision[i] = p;
+            } else {
+                diags.push(Diagnostic::error(
+                    Phase::Cli,
+                    format!("`--precision {name}=...`: no channel or expansion named `{one}`"),
+                ));
+            }
         }
     }
 

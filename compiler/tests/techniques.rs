@@ -9,7 +9,18 @@ use sshc::ir::{Node, Origin};
 use sshc::{CompileOptions, Limits};
 use std::path::{Path, PathBuf};
 
-pub const TECHNIQUES: [&str; 8] = ["hard", "pcf", "vsm", "esm", "csm", "cssm", "pcss", "penumbra-maps"];
+pub const TECHNIQUES: [&str; 10] = [
+    "hard",
+    "pcf",
+    "vsm",
+    "esm",
+    "csm",
+    "cssm",
+    "pcss",
+    "penumbra-maps",
+    "penumbra-limit-maps",
+    "smoothies",
+];
 
 fn path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

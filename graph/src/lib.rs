@@ -471,9 +471,9 @@ pub enum Draw {
     Primitives { buffer: String, resolve: Resolve },
 }
 
-/// How the fragments of overlapping generated primitives combine in a target (the three
-/// overlap rules of Wyman & Hansen 2003, figure 6, and the lightest), by blending:
-/// every target starts at the rule's identity.
+/// How the fragments of overlapping generated primitives combine in a target: the three
+/// overlap rules of Wyman & Hansen 2003, figure 6, and the lightest, by blending (every
+/// target starts at the rule's identity); or a depth test (`Nearest`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Resolve {
     /// The smallest value wins (the darkest shadow); targets start at 1.
@@ -486,6 +486,12 @@ pub enum Resolve {
     Add,
     /// Values multiply; targets start at 1.
     Multiply,
+    /// The fragment nearest the light wins, by a depth test (`Less`) on the depth the
+    /// fragment writes (`@builtin(frag_depth)`, or its rasterised depth): no blending;
+    /// targets and depth start at 1. Every channel of the winning fragment is kept
+    /// together, so values written by one fragment stay consistent (Lawlor 2006,
+    /// section 3.1: "highest penumbra limit wins").
+    Nearest,
 }
 
 /// A buffer of records generated on the GPU by a `Silhouettes` step: 16 bytes of draw

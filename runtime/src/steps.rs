@@ -258,6 +258,8 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 }),
                 Draw::Primitives { buffer, resolve } => {
                     let (clear, blend) = resolve_state(*resolve);
+                    // A depth test: the light's depth attachment (cleared to 1), no blending.
+                    let depth = (*resolve == Resolve::Nearest).then_some(DepthTarget::Light);
                     let formats = step.writes.iter().map(|t| texture_format(&t.texture)).collect::<Result<Vec<_>>>()?;
                     let float32 = formats.iter().any(|f| {
                         matches!(
@@ -265,7 +267,7 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                             wgpu::TextureFormat::R32Float | wgpu::TextureFormat::Rg32Float | wgpu::TextureFormat::Rgba32Float
                         )
                     });
-                    if float32 && !gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+                    if float32 && blend.is_some() && !gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
                         return Err(RuntimeError::Device(format!(
                             "pass `{}` blends generated primitives into a 32-bit float texture, but this device cannot blend 32-bit floats; use F16 or a unorm precision",
                             pass.name
@@ -274,10 +276,10 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     NodeKind::Raster(RasterStep {
                         targets: Targets::Textures(step.writes.clone()),
                         clear: vec![clear; n],
-                        depth: None,
+                        depth,
                         draw: DrawCall::Generated(buffer.clone()),
                         levels: Levels::Base,
-                        blend: Some(blend),
+                        blend,
                     })
                 }
             };
@@ -780,8 +782,9 @@ pub(crate) fn unsupported(graph: &PassGraph) -> Result<()> {
     Ok(())
 }
 
-/// The clear value and blend state of a resolve rule (see [`Resolve`]).
-fn resolve_state(resolve: Resolve) -> (wgpu::Color, wgpu::BlendState) {
+/// The clear value and blend state of a resolve rule (see [`Resolve`]); `Nearest` does not
+/// blend (a depth test picks the fragment).
+fn resolve_state(resolve: Resolve) -> (wgpu::Color, Option<wgpu::BlendState>) {
     use wgpu::{BlendComponent as C, BlendFactor as F, BlendOperation as O};
     let one = |operation| C {
         src_factor: F::One,
@@ -802,6 +805,7 @@ fn resolve_state(resolve: Resolve) -> (wgpu::Color, wgpu::BlendState) {
                 operation: O::Add,
             },
         ),
+        Resolve::Nearest => return (WHITE, None),
     };
-    (clear, wgpu::BlendState { color: c, alpha: c })
+    (clear, Some(wgpu::BlendState { color: c, alpha: c }))
 }

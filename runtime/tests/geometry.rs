@@ -55,7 +55,9 @@ fn cs_silhouettes(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_wor
     );
     // Each record draws a full-screen triangle whose fragments write a value derived from
     // the record: the same 1/64 shadow amount for `Add`, 0.9 for `Multiply`, and
-    // (a.x + 2) / 4 of its first end point for `KeepMin` and `KeepMax`.
+    // (a.x + 2) / 4 of its first end point for `KeepMin` and `KeepMax`; for `Nearest`,
+    // that as its depth and 1 minus it as its value (the value of the nearest fragment
+    // is kept, not the smallest value).
     let draw = "
 struct Record { a: vec4<f32>, b: vec4<f32> }
 struct Generated { vertex_count: u32, instance_count: u32, first_vertex: u32, first_instance: u32, records: array<Record> }
@@ -72,6 +74,8 @@ struct VOut { @builtin(position) pos: vec4<f32>, @location(0) @interpolate(flat)
 @fragment fn fs_add(i: VOut) -> @location(0) vec4<f32> { return vec4<f32>(1.0 / 64.0); }
 @fragment fn fs_multiply(i: VOut) -> @location(0) vec4<f32> { return vec4<f32>(0.9); }
 @fragment fn fs_value(i: VOut) -> @location(0) vec4<f32> { return vec4<f32>(i.v); }
+struct DOut { @location(0) c: vec4<f32>, @builtin(frag_depth) depth: f32 }
+@fragment fn fs_nearest(i: VOut) -> DOut { return DOut(vec4<f32>(1.0 - i.v), i.v); }
 "
     .to_string();
     (classify, draw)
@@ -133,7 +137,15 @@ fn graph() -> (PassGraph, Vec<(String, String)>) {
         lights: vec![LightModel::Any],
         params: vec![],
         params_size: 0,
-        textures: ["add", "multiply", "min", "max"].map(texture).into(),
+        textures: {
+            let mut t: Vec<TextureDecl> = ["add", "multiply", "min", "max"].map(texture).into();
+            // a depth test blends nothing: a 32-bit float target is allowed
+            t.push(TextureDecl {
+                format: Format::R32Float,
+                ..texture("nearest")
+            });
+            t
+        },
         buffers: vec![BufferDecl {
             name: "sil".into(),
             record_bytes: 32,
@@ -163,6 +175,7 @@ fn graph() -> (PassGraph, Vec<(String, String)>) {
                     prims("fs_multiply", Resolve::Multiply, "multiply"),
                     prims("fs_value", Resolve::KeepMin, "min"),
                     prims("fs_value", Resolve::KeepMax, "max"),
+                    prims("fs_nearest", Resolve::Nearest, "nearest"),
                 ],
             },
         ],
@@ -285,6 +298,10 @@ fn silhouettes_classified_on_the_gpu_match_the_cpu_count_and_draw_under_every_re
         }
         for v in texel("max") {
             assert!((v - max).abs() <= ulp, "max: {v} against {max}");
+        }
+        // f32 target; the depth buffer's 32-bit float orders the records' depths exactly
+        for v in texel("nearest") {
+            assert!((v - (1.0 - min)).abs() <= f32::EPSILON, "nearest: {v} against {}", 1.0 - min);
         }
     }
     // The lights see different silhouettes (the test is not one case five times).

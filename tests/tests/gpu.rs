@@ -19,7 +19,18 @@ fn root() -> PathBuf {
 }
 
 const SCENES: [&str; 5] = ["bunny", "contact", "fence", "edge", "triangle"];
-const TECHNIQUES: [&str; 8] = ["hard", "pcf", "vsm", "esm", "csm", "cssm", "pcss", "penumbra-maps"];
+const TECHNIQUES: [&str; 10] = [
+    "hard",
+    "pcf",
+    "vsm",
+    "esm",
+    "csm",
+    "cssm",
+    "pcss",
+    "penumbra-maps",
+    "penumbra-limit-maps",
+    "smoothies",
+];
 
 fn compile(technique: &str, set: &[(&str, &str)]) -> sshc::Compiled {
     let src = std::fs::read_to_string(root().join("techniques").join(format!("{technique}.ron"))).unwrap();

@@ -1,10 +1,15 @@
-//! Library code of Geometry passes: for each `primitive` kind, the WGSL that classifies
-//! silhouette edges on the GPU and builds the primitives from the records it appends. A
-//! technique's Geometry pass supplies only what each fragment writes (its channel
-//! expressions); code generation appends its fragment entry to this library.
+//! Library code of Geometry passes: for each `primitive` kind built from silhouettes, the
+//! WGSL that classifies silhouette edges on the GPU and builds the primitives from the
+//! records it appends. A technique's Geometry pass supplies only what each fragment writes
+//! (its channel expressions); code generation appends its fragment entry to this library.
 //!
-//! `ConesAndSheets` (penumbra maps, Wyman & Hansen 2003, section 3): `cones_and_sheets.wgsl`.
+//! - `silhouettes.wgsl`: the edges, the silhouette rule and the light-view helpers, shared.
+//! - `ConesAndSheets` (penumbra maps, Wyman & Hansen 2003, section 3): `cones_and_sheets.wgsl`.
+//! - `Ribbons` (penumbra limit maps, Lawlor 2006, section 3.1): `ribbons.wgsl`.
+//!
+//! `BackFaces` draws the scene's own triangles and needs no library (`wgsl.rs`).
 
+use crate::front::ast::Primitive;
 use sshc_graph::FRAME_WGSL;
 
 /// Triangles per cone (the base polygon is circumscribed about the cone's circle).
@@ -13,46 +18,102 @@ pub const CONE_SEGMENTS: u32 = 16;
 pub const SHEET_STRIPS: u32 = 4;
 /// Vertices drawn per silhouette edge: two cones and a sheet.
 pub const CONES_AND_SHEETS_VERTICES: u32 = 2 * 3 * CONE_SEGMENTS + 6 * SHEET_STRIPS;
-/// Bytes of one record (`ConeSheet`: three `vec4<f32>`).
-pub const CONES_AND_SHEETS_RECORD_BYTES: u32 = 48;
-/// Entry points of the library.
-pub const CONES_AND_SHEETS_COMPUTE: &str = "cs_cones_and_sheets";
-pub const CONES_AND_SHEETS_VERTEX: &str = "vs_cones_and_sheets";
+/// Texels a ribbon reaches past the penumbra's widest extent (Lawlor 2006, section 3.1:
+/// "bias up ... to expand the penumbra limit over a few extra pixels"), so that bilinear
+/// interpolation at the ribbon's border reads the ribbon's values.
+pub const RIBBON_MARGIN: u32 = 2;
 
+const SILHOUETTES: &str = include_str!("silhouettes.wgsl");
 const CONES_AND_SHEETS: &str = include_str!("cones_and_sheets.wgsl");
+const RIBBONS: &str = include_str!("ribbons.wgsl");
 
-/// The library of `ConesAndSheets` with its constants and the group 3 bindings (see
-/// `sshc_graph::Draw::Primitives`), to follow the module's `Frame` declaration.
-pub fn cones_and_sheets() -> String {
-    format!(
-        "const CONE_SEGMENTS: u32 = {CONE_SEGMENTS}u;
-const SHEET_STRIPS: u32 = {SHEET_STRIPS}u;
-const VERTICES_PER_RECORD: u32 = {CONES_AND_SHEETS_VERTICES}u;
-{CONES_AND_SHEETS}
+/// The library of one primitive kind: its entry points, record layout and what its
+/// fragments provide.
+pub struct Library {
+    /// The compute entry appending one record per silhouette edge.
+    pub compute: &'static str,
+    /// The vertex entry pulling the primitives from the records.
+    pub vertex: &'static str,
+    /// Bytes of one record (the WGSL struct's size).
+    pub record_bytes: u32,
+    /// The record's WGSL struct name.
+    pub record: &'static str,
+    pub vertices_per_record: u32,
+    /// The fragment entries' parameter type.
+    pub varying: &'static str,
+    /// WGSL lines defining the `in_*` locals of the primitive's geometry inputs.
+    pub inputs: &'static str,
+    /// The depth each fragment writes (a WGSL expression over the inputs), when the
+    /// primitive resolves by a depth test.
+    pub depth: Option<&'static str>,
+    /// The library's source with its constants and the group 3 bindings (see
+    /// `sshc_graph::Draw::Primitives`), to follow the module's `Frame` declaration.
+    pub source: String,
+}
+
+/// The library of `primitive`, or `None` for a primitive not built from silhouettes.
+pub fn library(primitive: Primitive) -> Option<Library> {
+    let bindings = "
 @group(3) @binding(0) var<storage, read> cs_edges: array<Edge>;
 @group(3) @binding(1) var<storage, read> cs_planes: array<vec4<f32>>;
 @group(3) @binding(2) var<storage, read> cs_edge_faces: array<u32>;
 @group(3) @binding(3) var<storage, read_write> cs_out: GeneratedRw;
 @group(3) @binding(4) var<storage, read> cs_records: Generated;
 @group(3) @binding(5) var<storage, read_write> cs_claims: array<atomic<u32>>;
-"
-    )
+";
+    match primitive {
+        Primitive::ConesAndSheets => Some(Library {
+            compute: "cs_cones_and_sheets",
+            vertex: "vs_cones_and_sheets",
+            record_bytes: 48,
+            record: "ConeSheet",
+            vertices_per_record: CONES_AND_SHEETS_VERTICES,
+            varying: "ConesAndSheetsVarying",
+            inputs: "    let in_z_frag = in.z_frag;\n    let in_z_vertex = in.z_vertex;\n    let in_cone_radius = in.cone_radius;\n",
+            depth: None,
+            source: format!(
+                "const CONE_SEGMENTS: u32 = {CONE_SEGMENTS}u;
+const SHEET_STRIPS: u32 = {SHEET_STRIPS}u;
+const VERTICES_PER_RECORD: u32 = {CONES_AND_SHEETS_VERTICES}u;
+{SILHOUETTES}
+{CONES_AND_SHEETS}{bindings}"
+            ),
+        }),
+        Primitive::Ribbons => Some(Library {
+            compute: "cs_ribbons",
+            vertex: "vs_ribbons",
+            record_bytes: 48,
+            record: "Ribbon",
+            vertices_per_record: 6,
+            varying: "RibbonsVarying",
+            inputs: "    let ribbon = rb_inputs(in);\n    let in_occluder_depth = ribbon.c;\n    let in_penumbra_limit = ribbon.p;\n    let in_limit_depth = ribbon.limit;\n",
+            depth: Some("ribbon.depth"),
+            source: format!(
+                "const RIBBON_MARGIN: u32 = {RIBBON_MARGIN}u;
+const VERTICES_PER_RECORD: u32 = 6u;
+{SILHOUETTES}
+{RIBBONS}{bindings}"
+            ),
+        }),
+        Primitive::Skins | Primitive::BackFaces => None,
+    }
 }
 
-/// A whole module around the library: the `Frame` declaration and a fragment entry
-/// writing `value` (a WGSL expression of `in: ConesAndSheetsVarying`). For tests and
-/// for the runtime's reference of the machinery.
-pub fn cones_and_sheets_module(value: &str) -> String {
-    format!(
+/// A whole module around a library: the `Frame` declaration and a fragment entry writing
+/// `value` (a WGSL expression of `in`, the library's varying). For tests and for the
+/// runtime's reference of the machinery.
+pub fn module(primitive: Primitive, value: &str) -> Option<String> {
+    let lib = library(primitive)?;
+    Some(format!(
         "{FRAME_WGSL}@group(0) @binding(0) var<uniform> frame: Frame;
 {}
 @fragment
-fn fs_value(in: ConesAndSheetsVarying) -> @location(0) vec4<f32> {{
-    return vec4<f32>({value});
+fn fs_value(in: {}) -> @location(0) vec4<f32> {{
+{}    return vec4<f32>({value});
 }}
 ",
-        cones_and_sheets()
-    )
+        lib.source, lib.varying, lib.inputs
+    ))
 }
 
 #[cfg(test)]
@@ -60,20 +121,27 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_cones_and_sheets_library_validates_and_has_its_entry_points() {
-        let src = cones_and_sheets_module("in.z_frag - in.z_vertex");
-        let module = crate::back::validate(&src).unwrap_or_else(|e| panic!("{e}\n{src}"));
-        let entries: Vec<&str> = module.entry_points.iter().map(|e| e.name.as_str()).collect();
-        for want in [CONES_AND_SHEETS_COMPUTE, CONES_AND_SHEETS_VERTEX, "fs_value"] {
-            assert!(entries.contains(&want), "{entries:?}");
+    fn every_library_validates_and_has_its_entry_points_and_record_size() {
+        for (primitive, value) in [
+            (Primitive::ConesAndSheets, "in.z_frag - in.z_vertex"),
+            (Primitive::Ribbons, "in_occluder_depth + in_penumbra_limit + in_limit_depth"),
+        ] {
+            let lib = library(primitive).expect("a library");
+            let src = module(primitive, value).expect("a module");
+            let module = crate::back::validate(&src).unwrap_or_else(|e| panic!("{e}\n{src}"));
+            let entries: Vec<&str> = module.entry_points.iter().map(|e| e.name.as_str()).collect();
+            for want in [lib.compute, lib.vertex, "fs_value"] {
+                assert!(entries.contains(&want), "{primitive:?}: {entries:?}");
+            }
+            // The record's WGSL size is the graph's record_bytes.
+            let size = module
+                .types
+                .iter()
+                .find(|(_, t)| t.name.as_deref() == Some(lib.record))
+                .map(|(_, t)| t.inner.size(module.to_ctx()))
+                .expect("the record is declared");
+            assert_eq!(size, lib.record_bytes, "{primitive:?}");
         }
-        // The record's WGSL size is the graph's record_bytes.
-        let ty = module
-            .types
-            .iter()
-            .find(|(_, t)| t.name.as_deref() == Some("ConeSheet"))
-            .map(|(_, t)| t.inner.size(module.to_ctx()))
-            .expect("ConeSheet is declared");
-        assert_eq!(ty, CONES_AND_SHEETS_RECORD_BYTES);
+        assert!(library(Primitive::BackFaces).is_none());
     }
 }

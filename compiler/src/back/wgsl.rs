@@ -505,10 +505,13 @@ fn fullscreen_step(entry: String, draw: Draw, reads: Vec<Binding>, texture: &str
     }
 }
 
-fn out_struct(name: &str, n: usize) -> String {
+fn out_struct(name: &str, n: usize, depth: bool) -> String {
     let mut s = format!("struct {name} {{\n");
     for i in 0..n {
         let _ = writeln!(s, "    @location({i}) o{i}: vec4<f32>,");
+    }
+    if depth {
+        s.push_str("    @builtin(frag_depth) depth: f32,\n");
     }
     s.push_str("}\n");
     s
@@ -530,7 +533,9 @@ pub fn codegen(ir: &Program, limits: &Limits) -> Result<Output, Diagnostics> {
             IrPassKind::Mipmap { reduce } => mipmap(ir, pass, *reduce, limits),
             IrPassKind::Shade { visibility } => shade(ir, pass, *visibility),
             IrPassKind::SummedArea => summed_area(ir, pass),
-            IrPassKind::Geometry { primitive, resolve, .. } => geometry(ir, pass, *primitive, *resolve, limits),
+            IrPassKind::Geometry {
+                primitive, resolve, keep, ..
+            } => geometry(ir, pass, *primitive, *resolve, *keep, limits),
         };
         match r {
             Ok((source, steps)) => {
@@ -621,6 +626,7 @@ fn map(ir: &Program, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step
             prelude: &|_| Ok(()),
             store: &|_, stored| Ok(stored),
             step: &|entry, texture, chunk| fullscreen_step(entry, Draw::FullScreen, vec![], texture, chunk),
+            depth: None,
         },
     )?;
     let src = format!(
@@ -645,6 +651,8 @@ struct EntryForm<'f, 'a> {
     store: &'f dyn Fn(&PlacedSlot, String) -> Result<String, Diagnostic>,
     /// The step that runs an entry over some layers of a texture.
     step: &'f dyn Fn(String, &str, &[u32]) -> Step,
+    /// The depth the entry writes (`@builtin(frag_depth)`), a WGSL expression.
+    depth: Option<&'f str>,
 }
 
 /// The fragment entries of a Map or Geometry pass: one per group of layers of each texture
@@ -673,7 +681,7 @@ fn channel_entries<'a>(
         for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
             let entry = format!("fs_{}_{ci}", tex.name);
             let out_name = format!("Out_{}_{ci}", tex.name);
-            structs.push_str(&out_struct(&out_name, chunk.len()));
+            structs.push_str(&out_struct(&out_name, chunk.len(), form.depth.is_some()));
             let mut em = Emitter::new(ir, side, pass.reads.clone());
             em.bindings = decl.bindings.clone();
             (form.prelude)(&mut em)?;
@@ -688,6 +696,9 @@ fn channel_entries<'a>(
                     comps[slot.component as usize] = (form.store)(slot, encode_expr(&name, slot.encode))?;
                 }
                 outs.push(format!("    out.o{oi} = vec4<f32>({});", comps.join(", ")));
+            }
+            if let Some(d) = form.depth {
+                outs.push(format!("    out.depth = {d};"));
             }
             let _ = write!(
                 bodies,
@@ -720,15 +731,22 @@ fn geometry_buffer_name(pass: &IrPass) -> String {
     format!("{}.silhouettes", pass.name)
 }
 
-/// The generated buffers of a module: one per `Silhouettes` step.
+/// The generated buffers of a module: one per `Silhouettes` step, laid out as its
+/// primitive's library says.
 fn geometry_buffers(pass: &IrPass, steps: &[Step]) -> Vec<graph::BufferDecl> {
+    let IrPassKind::Geometry { primitive, .. } = pass.kind else {
+        return vec![];
+    };
+    let Some(lib) = geometry::library(primitive) else {
+        return vec![];
+    };
     steps
         .iter()
         .filter(|s| matches!(s.draw, Draw::Silhouettes { .. }))
         .map(|_| graph::BufferDecl {
             name: geometry_buffer_name(pass),
-            record_bytes: geometry::CONES_AND_SHEETS_RECORD_BYTES,
-            vertices_per_record: geometry::CONES_AND_SHEETS_VERTICES,
+            record_bytes: lib.record_bytes,
+            vertices_per_record: lib.vertices_per_record,
         })
         .collect()
 }
@@ -739,36 +757,54 @@ fn graph_resolve(r: Resolve) -> graph::Resolve {
         Resolve::KeepMax => graph::Resolve::KeepMax,
         Resolve::Add => graph::Resolve::Add,
         Resolve::Multiply => graph::Resolve::Multiply,
+        Resolve::Nearest => graph::Resolve::Nearest,
     }
 }
 
-/// A Geometry pass: the primitive kind's library (classification on the GPU, primitives
-/// pulled from its records; `back/geometry.rs`) and one fragment entry per group of
-/// layers, writing the pass's channels per fragment; overlaps combine by the resolve
-/// rule's blending (graph `Resolve`). `Add` keeps `1 - sum(1 - v)`: its fragments write
-/// the shadow amount `1 - v`.
+/// The vertex stage of `BackFaces`: the scene from the light, with the fragment's
+/// light-view distance.
+const BACK_FACES_VS: &str = "struct BackFacesVarying {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) view_distance: f32,
+}
+
+@vertex
+fn vs_back_faces(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> BackFacesVarying {
+    var out: BackFacesVarying;
+    let world = vec4<f32>(position, 1.0);
+    out.clip = frame.light_view_proj * world;
+    out.view_distance = -(frame.light_view * world).z;
+    return out;
+}
+";
+
+/// A Geometry pass: one fragment entry per group of layers, writing the pass's channels
+/// per fragment of its primitives; overlaps combine by the resolve rule (graph
+/// `Resolve`): blending, or a depth test (`Nearest`). `Add` keeps `1 - sum(1 - v)`: its
+/// fragments write the shadow amount `1 - v`. Primitives built from silhouettes come
+/// from their library (classification on the GPU, primitives pulled from its records;
+/// `back/geometry.rs`); `BackFaces` draws the scene's triangles that face away from the
+/// light (Lawlor 2006, section 3.1, step 3). Fragments failing `keep` are discarded.
 fn geometry(
     ir: &Program,
     pass: &IrPass,
     primitive: Primitive,
     resolve: Resolve,
+    keep: Option<H>,
     limits: &Limits,
 ) -> Result<(String, Vec<Step>), Diagnostic> {
-    match primitive {
-        Primitive::ConesAndSheets => {}
-        Primitive::Ribbons | Primitive::Skins => {
-            return Err(Diagnostic::error(
-                Phase::Codegen,
-                format!("pass `{}`: `primitive: {primitive:?}` has no primitive builder yet", pass.name),
-            )
-            .at(pass.span, "cannot generate code for this pass yet")
-            .note("`ConesAndSheets` (penumbra maps) is built; ribbons and skins come with penumbra limit maps and linear lights"));
-        }
+    if primitive == Primitive::Skins {
+        return Err(Diagnostic::error(
+            Phase::Codegen,
+            format!("pass `{}`: `primitive: {primitive:?}` has no primitive builder yet", pass.name),
+        )
+        .at(pass.span, "cannot generate code for this pass yet")
+        .note("`ConesAndSheets`, `Ribbons` and `BackFaces` are built; skins come with linear lights"));
     }
     let w = pass.writes.ok_or_else(|| internal("geometry pass without output"))?;
     let res = &ir.resources[w];
     for tex in &res.textures {
-        if tex.precision == Precision::F32 {
+        if tex.precision == Precision::F32 && resolve != Resolve::Nearest {
             let ch = res
                 .slots
                 .iter()
@@ -786,31 +822,36 @@ fn geometry(
             .help("declare the channel F16, Unorm8 or Unorm16"));
         }
     }
+    let lib = geometry::library(primitive);
     // The foremost surface the light sees: the channel of the Depth resource the pass
     // reads. The penumbra map holds the penumbrae of those surfaces only (Wyman & Hansen
     // 2003, section 3), so fragments behind it are discarded (the paper's fragment
     // program, line 4).
-    let surface = pass
-        .reads
-        .iter()
-        .find(|&&r| matches!(ir.passes[ir.resources[r].writer].kind, IrPassKind::Depth { .. }))
-        .and_then(|&r| ir.resources[r].slots.first().map(|s| s.channel))
-        .ok_or_else(|| {
-            Diagnostic::error(Phase::Codegen, format!("Geometry pass `{}` reads no Depth resource", pass.name))
-                .at(pass.span, "cones and sheets need the surface the light sees at each texel")
-                .help("add the Depth pass's resource to `reads`")
-        })?;
+    let surface = if primitive == Primitive::ConesAndSheets {
+        Some(
+            pass.reads
+                .iter()
+                .find(|&&r| matches!(ir.passes[ir.resources[r].writer].kind, IrPassKind::Depth { .. }))
+                .and_then(|&r| ir.resources[r].slots.first().map(|s| s.channel))
+                .ok_or_else(|| {
+                    Diagnostic::error(Phase::Codegen, format!("Geometry pass `{}` reads no Depth resource", pass.name))
+                        .at(pass.span, "cones and sheets need the surface the light sees at each texel")
+                        .help("add the Depth pass's resource to `reads`")
+                })?,
+        )
+    } else {
+        None
+    };
     let buffer = geometry_buffer_name(pass);
-    let classify = Step {
-        vertex: None,
-        fragment: None,
-        compute: Some(geometry::CONES_AND_SHEETS_COMPUTE.into()),
-        draw: Draw::Silhouettes { buffer: buffer.clone() },
-        reads: vec![],
-        writes: vec![],
-        params: false,
-        sampler: false,
-        cost: OpCount::default(),
+    let (signature, head) = match &lib {
+        Some(lib) => (
+            format!("in: {}", lib.varying),
+            format!("    let texel = vec2<i32>(in.clip.xy);\n{}", lib.inputs),
+        ),
+        None => (
+            "in: BackFacesVarying, @builtin(front_facing) front: bool".to_string(),
+            "    let texel = vec2<i32>(in.clip.xy);\n    let in_z_frag = in.view_distance;\n".to_string(),
+        ),
     };
     let entries = channel_entries(
         ir,
@@ -818,14 +859,24 @@ fn geometry(
         Side::Geometry,
         limits,
         EntryForm {
-            signature: "in: ConesAndSheetsVarying",
-            head: "    let texel = vec2<i32>(in.clip.xy);\n    let in_z_frag = in.z_frag;\n    let in_z_vertex = in.z_vertex;\n    let in_cone_radius = in.cone_radius;\n",
+            signature: &signature,
+            head: &head,
             prelude: &|em| {
-                let z = em.load_map_channel(surface)?;
-                em.line(&format!(
-                    "let in_z_surface = frame.depth_range.x + {z} * (frame.depth_range.y - frame.depth_range.x);"
-                ));
-                em.line("if in_z_frag > in_z_surface {\n        discard;\n    }");
+                if let Some(surface) = surface {
+                    let z = em.load_map_channel(surface)?;
+                    em.line(&format!(
+                        "let in_z_surface = frame.depth_range.x + {z} * (frame.depth_range.y - frame.depth_range.x);"
+                    ));
+                    em.line("if in_z_frag > in_z_surface {\n        discard;\n    }");
+                }
+                if lib.is_none() {
+                    // winding seen from the light: counter-clockwise faces it
+                    em.line("if front {\n        discard;\n    }");
+                }
+                if let Some(k) = keep {
+                    let k = em.emit(k)?;
+                    em.line(&format!("if !({k}) {{\n        discard;\n    }}"));
+                }
                 Ok(())
             },
             store: &|slot, stored| {
@@ -842,32 +893,57 @@ fn geometry(
                 }
                 Ok(match resolve {
                     Resolve::Add => format!("1.0 - {stored}"),
-                    Resolve::KeepMin | Resolve::KeepMax | Resolve::Multiply => stored,
+                    Resolve::KeepMin | Resolve::KeepMax | Resolve::Multiply | Resolve::Nearest => stored,
                 })
             },
-            step: &|entry, texture, chunk| {
-                let mut step = fullscreen_step(
-                    entry,
-                    Draw::Primitives {
-                        buffer: buffer.clone(),
-                        resolve: graph_resolve(resolve),
-                    },
-                    vec![],
-                    texture,
-                    chunk,
-                );
-                step.vertex = Some(geometry::CONES_AND_SHEETS_VERTEX.into());
-                step
+            step: &|entry, texture, chunk| match &lib {
+                Some(lib) => {
+                    let mut step = fullscreen_step(
+                        entry,
+                        Draw::Primitives {
+                            buffer: buffer.clone(),
+                            resolve: graph_resolve(resolve),
+                        },
+                        vec![],
+                        texture,
+                        chunk,
+                    );
+                    step.vertex = Some(lib.vertex.into());
+                    step
+                }
+                None => {
+                    let mut step = fullscreen_step(entry, Draw::SceneFromLight, vec![], texture, chunk);
+                    step.vertex = Some("vs_back_faces".into());
+                    step
+                }
             },
+            depth: lib.as_ref().and_then(|l| l.depth),
         },
     )?;
-    let mut steps = vec![classify];
+    let mut steps = Vec::new();
+    if let Some(lib) = &lib {
+        steps.push(Step {
+            vertex: None,
+            fragment: None,
+            compute: Some(lib.compute.into()),
+            draw: Draw::Silhouettes { buffer: buffer.clone() },
+            reads: vec![],
+            writes: vec![],
+            params: false,
+            sampler: false,
+            cost: OpCount::default(),
+        });
+    }
     steps.extend(entries.steps);
+    let library = match &lib {
+        Some(lib) => lib.source.clone(),
+        None => BACK_FACES_VS.to_string(),
+    };
     let src = format!(
         "{}{}\n{}\n{}{}",
         header(ir, pass),
         entries.decl.declarations(ir),
-        geometry::cones_and_sheets(),
+        library,
         entries.structs,
         entries.bodies
     );
@@ -920,7 +996,7 @@ fn filter(
             for (ci, chunk) in layer_chunks(written, limits).iter().enumerate() {
                 let entry = format!("fs_{}_{axis}_{ci}", tex.name);
                 let out_name = format!("Out_{}_{axis}_{ci}", tex.name);
-                s.push_str(&out_struct(&out_name, chunk.len()));
+                s.push_str(&out_struct(&out_name, chunk.len(), false));
                 let _ = write!(
                     s,
                     "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let texel = vec2<i32>(pos.xy);\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n"
@@ -1151,7 +1227,7 @@ fn mipmap(ir: &Program, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Resul
         for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
             let entry = format!("fs_{}_{ci}", tex.name);
             let out_name = format!("Out_{}_{ci}", tex.name);
-            s.push_str(&out_struct(&out_name, chunk.len()));
+            s.push_str(&out_struct(&out_name, chunk.len(), false));
             let _ = write!(
                 s,
                 "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let src = vec2<i32>(pos.xy) * 2i;\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n"

@@ -195,6 +195,14 @@ pub enum Primitive {
     Ribbons,
     /// Heidrich et al.: skins between depth discontinuities, warped into another view.
     Skins,
+    /// The scene's triangles that face away from the light, rasterised from it (Lawlor
+    /// 2006, section 3.1, step 3).
+    BackFaces,
+}
+
+impl Primitive {
+    /// The names a technique writes, in declaration order.
+    pub const NAMES: [&'static str; 4] = ["ConesAndSheets", "Ribbons", "Skins", "BackFaces"];
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -203,6 +211,8 @@ pub enum Resolve {
     KeepMax,
     Add,
     Multiply,
+    /// The fragment nearest the light wins (a depth test); Ribbons and BackFaces.
+    Nearest,
 }
 
 impl Resolve {
@@ -271,6 +281,9 @@ pub enum PassKind {
         channels: Vec<Name>,
         resolve: ResolveSpec,
         view: LightView,
+        /// Fragments for which this is false are discarded before the channels are
+        /// computed (a bool per fragment).
+        keep: Option<Expr>,
     },
     Shade {
         reads: Vec<Name>,

@@ -588,7 +588,8 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
                 "ConesAndSheets" => Primitive::ConesAndSheets,
                 "Ribbons" => Primitive::Ribbons,
                 "Skins" => Primitive::Skins,
-                _ => return Err(unknown_variant(ps, &p, "primitive", &["ConesAndSheets", "Ribbons", "Skins"])),
+                "BackFaces" => Primitive::BackFaces,
+                _ => return Err(unknown_variant(ps, &p, "primitive", &Primitive::NAMES)),
             };
             let channels = names(f.req("channels")?)?;
             let rn = f.req("resolve")?;
@@ -602,10 +603,19 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
                     "KeepMax" => Resolve::KeepMax,
                     "Add" => Resolve::Add,
                     "Multiply" => Resolve::Multiply,
-                    _ => return Err(unknown_variant(rs, &r, "resolve rule", &["KeepMin", "KeepMax", "Add", "Multiply"])),
+                    "Nearest" => Resolve::Nearest,
+                    _ => {
+                        return Err(unknown_variant(
+                            rs,
+                            &r,
+                            "resolve rule",
+                            &["KeepMin", "KeepMax", "Add", "Multiply", "Nearest"],
+                        ));
+                    }
                 })
             };
             let view = light_view(&mut f)?;
+            let keep = f.opt("keep")?.map(expression).transpose()?;
             PassKind::Geometry {
                 reads,
                 writes,
@@ -613,6 +623,7 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
                 channels,
                 resolve,
                 view,
+                keep,
             }
         }
         _ => PassKind::Shade {
