@@ -169,3 +169,54 @@ fn no_nan_where_the_receiver_meets_the_occluder() {
         }
     }
 }
+
+/// Lawlor's step 3 draws the faces turned away from the light: for a box floating above a
+/// floor under a light straight overhead, the lower limit at the box's centre texel is the
+/// box's bottom (1.5 - 0.5 = 1.0 above the floor), not its top or the floor (both facing
+/// the light). Without `keep`, every back face counts.
+#[test]
+fn back_faces_are_those_turned_away_from_the_light() {
+    let src = r#"Technique(
+    name: "back_faces",
+    channels: { "b": Channel(precision: F32, value: "clamp((z_frag - near) / (far - near), 0.0, 1.0)") },
+    passes: [
+        Geometry(name: "back", reads: [], writes: "lower", primitive: BackFaces, channels: ["b"], resolve: Nearest),
+        Shade(name: "shade", reads: ["lower"], visibility: "sample(b)"),
+    ],
+)"#;
+    let scene = Scene::from_str(
+        "Scene(
+    camera: Orthographic(position: (0.0, 3.0, 0.0), target: (0.0, 0.0, 0.0), up: (0.0, 0.0, -1.0), half_height: 1.0, width: 8, height: 8),
+    shadow_map: 64,
+    lights: [DistantDisk(direction: (0.0, 1.0, 0.0), angle_degrees: 2.0)],
+    objects: [
+        Object(name: \"floor\", mesh: Plane(size: (4.0, 4.0))),
+        Object(name: \"box\", mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (0.0, 1.5, 0.0))),
+    ],
+)",
+        ".",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let compiled = compile_source("back_faces", src, &[], &[]);
+    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    let inputs = sshc_lab::bind::scene_inputs(&scene).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+    let b = ex.read_texture("lower", 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0);
+    let (near, far) = (f64::from(inputs.near), f64::from(inputs.far));
+    // the normalised light depth of the point at height y on the vertical through the centre
+    let view = glam::Mat4::from_cols_array(&inputs.light_view);
+    let depth = |y: f32| (f64::from(-view.transform_point3(glam::Vec3::new(0.0, y, 0.0)).z) - near) / (far - near);
+    let n = 64;
+    let centre = b[(n / 2) * n + n / 2];
+    // The floor faces the light: outside the box nothing is drawn (the clear, 1).
+    assert_eq!(b[0], 1.0, "the floor is not a back face");
+    // The box's bottom at height 1.0, its top at 2.0. F32 target and f32 view transform:
+    // a few ulp of depths below 1.
+    let (want_bottom, want_top) = (depth(1.0), depth(2.0));
+    let got = f64::from(centre);
+    assert!(
+        (got - want_bottom).abs() < 1e-5,
+        "centre texel: {got}, the bottom is {want_bottom}, the top {want_top} (near {near}, far {far})"
+    );
+}
