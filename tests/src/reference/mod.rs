@@ -35,6 +35,8 @@ pub mod cpu;
 pub mod gpu;
 pub mod penumbra;
 pub mod penumbra_gpu;
+pub mod plm;
+pub mod plm_gpu;
 pub mod tolerance;
 
 pub use cpu::cpu_visibility;
