@@ -28,6 +28,8 @@ const Z_E: f64 = 2.0;
 const Z_F: f64 = 3.0;
 /// The receiver bias of the lookups (linear normalised depth).
 const BIAS: f64 = 1e-4;
+/// The largest slope `df/dl` of the limb-darkened table: `2 (0.8 + 0.3 pi) / (0.8 pi)`.
+const LIMB_SLOPE: f64 = 2.0 * (0.8 + 0.3 * std::f64::consts::PI) / (0.8 * std::f64::consts::PI);
 const STORAGES: [Option<Storage>; 5] = [
     None,
     Some(Storage::F32),
@@ -96,7 +98,8 @@ fn half_step(storage: Option<Storage>) -> f64 {
 /// `l_g = l`) and outside it saturates, and `sat` is 1-Lipschitz; the uniform disk's table has
 /// `df/dl = (4 / pi) sqrt(1 - u^2) <= 4 / pi`. So the visibility is within
 /// `(4 / pi) |l' - l|` of the closed form (plus 1e-12 for f64 rounding). At Unorm8 that is
-/// `1.9 / 255` in the penumbra.
+/// `1.9 / 255` in the penumbra. The limb-darkened table's slope is `2 (0.8 a + 0.3 pi a^2) /
+/// (0.8 pi)` with `a = sqrt(1 - u^2) <= 1` ([`LIMB_SLOPE`]).
 #[test]
 fn straight_edge_is_exact_up_to_the_storage_precision() {
     let (tris, meshes) = edge_scene();
@@ -140,6 +143,13 @@ fn straight_edge_is_exact_up_to_the_storage_precision() {
                     assert!(
                         err <= tol,
                         "{n} texels, {storage:?}, s {s}, y {y}: {v} vs the closed form {want} (error {err:e} > {tol:e})"
+                    );
+                    // the limb-darkened table: the same l, through its own slope bound
+                    let limb = plm_visibility(&setup, &r.maps, p, BIAS, storage, Table::LimbDarkened);
+                    let want = Table::LimbDarkened.illumination(0.5 + 0.5 * u.clamp(-1.0, 1.0));
+                    assert!(
+                        (limb - want).abs() <= LIMB_SLOPE * dl + 1e-12,
+                        "{n} texels, {storage:?}, s {s}: limb-darkened {limb} vs {want}"
                     );
                     if u.abs() <= 1.0 {
                         sq += err * err;

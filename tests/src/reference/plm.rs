@@ -254,6 +254,9 @@ impl PlmSetup {
         let (near, far) = (self.light.near, self.light.far);
         let k = 1.0 / near - 1.0 / far;
         let h = sat((1.0 / near - 1.0 / self.distance(c)) / k + p_i.abs());
+        if h >= 1.0 {
+            return 1.0; // far, exactly
+        }
         sat(self.linear(1.0 / (1.0 / near - h * k)))
     }
 }
@@ -781,6 +784,101 @@ mod tests {
         // "covering up the first 10% of the diameter of a disk light source decreases the
         // delivered illumination by less than 6%"
         assert!(1.0 - Table::UniformDisk.illumination(0.9) < 0.06);
+    }
+
+    use crate::reference::penumbra::Resolve;
+    use crate::reference::penumbra::fixtures::{quad, scene, sphere};
+
+    const IDENTITY: [f64; 16] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+
+    fn disk(size: usize) -> PlmSetup {
+        PlmSetup::new(PenumbraSetup {
+            view: IDENTITY,
+            projection: LightProjection::Orthographic { half_height: 4.0 },
+            near: 1.0,
+            far: 11.0,
+            size,
+            light: AreaLight::DistantDisk { angle: 0.2 },
+            resolve: Resolve::KeepMin,
+        })
+    }
+
+    /// A closed box (outward winding), as in the penumbra reference's tests.
+    fn cuboid(lo: V3, hi: V3) -> Vec<[V3; 3]> {
+        let c = |i: usize| {
+            [
+                if i & 1 == 0 { lo[0] } else { hi[0] },
+                if i & 2 == 0 { lo[1] } else { hi[1] },
+                if i & 4 == 0 { lo[2] } else { hi[2] },
+            ]
+        };
+        let faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        let mut tris = Vec::new();
+        for f in faces {
+            tris.push([c(f[0]), c(f[1]), c(f[2])]);
+            tris.push([c(f[0]), c(f[2]), c(f[3])]);
+        }
+        tris
+    }
+
+    #[test]
+    fn ribbons_point_away_from_the_lit_face() {
+        // a closed box: its top outline, each ribbon's outward side away from the box, under a
+        // distant disk and a sphere light (where the sides of the box also face away)
+        let (tris, meshes) = scene(&[cuboid([-1.0, -1.0, -6.0], [1.0, 1.0, -4.0])]);
+        for setup in [disk(32), PlmSetup::new(sphere(0.5, 32, Resolve::KeepMin))] {
+            let (sil, rbs) = ribbons(&tris, &meshes, &setup).unwrap();
+            assert_eq!(rbs.len(), 4, "{:?}", setup.light.projection);
+            for rb in &rbs {
+                let e = sil.edges[rb.edge];
+                assert!(sil.vertices[e.a].position[2] == -4.0 && sil.vertices[e.b].position[2] == -4.0);
+                let mid = [(rb.a[0] + rb.b[0]) / 2.0, (rb.a[1] + rb.b[1]) / 2.0];
+                // the outward normal points from the edge's middle away from the box's centre
+                assert!(mid[0] * rb.outward[0] + mid[1] * rb.outward[1] > 0.0);
+                assert!((rb.outward[0].hypot(rb.outward[1]) - 1.0).abs() < 1e-12);
+            }
+        }
+        // one-sided quads wound either way: the same outward side (the face's, not its winding)
+        for z in [-5.0] {
+            let up = quad(-1.0, 0.0, -1.0, 1.0, z);
+            let down: Vec<[V3; 3]> = up.iter().map(|t| [t[0], t[2], t[1]]).collect();
+            for q in [up, down] {
+                let (tris, meshes) = scene(&[q]);
+                let (_, rbs) = ribbons(&tris, &meshes, &disk(32)).unwrap();
+                let right = rbs.iter().find(|rb| rb.a[0] == 0.0 && rb.b[0] == 0.0).unwrap();
+                assert_eq!(right.outward, [1.0, 0.0]);
+            }
+        }
+    }
+
+    #[test]
+    fn keys_pick_the_highest_penumbra_limit() {
+        // two parallel edges at different depths covering one point: the one whose penumbra
+        // limit surface is higher (smaller key) wins, whichever is drawn first
+        let (tris, meshes) = scene(&[quad(-3.0, 0.0, -3.0, 3.0, -3.0), quad(-3.0, 0.3, -3.0, 3.0, -6.0)]);
+        let setup = disk(64);
+        let (_, rbs) = ribbons(&tris, &meshes, &setup).unwrap();
+        let q = [0.2, 0.0];
+        let (k, s) = winner(&setup, &rbs, q).unwrap();
+        let all: Vec<RibbonSample> = rbs.iter().filter_map(|r| r.at(&setup, q)).collect();
+        assert!(all.len() >= 2);
+        assert!(all.iter().all(|o| o.key >= s.key));
+        let mut reversed = rbs.clone();
+        reversed.reverse();
+        let (k2, s2) = winner(&setup, &reversed, q).unwrap();
+        assert_eq!(rbs[k], reversed[k2]);
+        assert_eq!(s, s2);
+        // the winner is the upper edge (x = 0 at depth 3): c there, p_i = 0.2 / S
+        assert!((s.c - setup.linear(3.0)).abs() < 1e-12);
+        assert!((s.p_i - 0.2 / setup.limit_scale()).abs() < 1e-12);
+        // a local light's key is the penumbra limit surface's linear depth: at p_i = 0 it is c,
+        // and it grows with |p_i| up to 1
+        let local = PlmSetup::new(sphere(0.5, 32, Resolve::KeepMin));
+        for c in [0.0, 0.2, 0.7, 1.0] {
+            assert!((local.key(c, 0.0) - c).abs() < 1e-12);
+            assert!(local.key(c, 0.1) > c || c == 1.0);
+            assert_eq!(local.key(c, 5.0), 1.0);
+        }
     }
 
     #[test]

@@ -97,6 +97,9 @@ fn key_of(c: f32, p_i: f32) -> f32 {
     let k = 1.0 / params.near - 1.0 / params.far;
     let cz = params.near + c * (params.far - params.near);
     let h = clamp((1.0 / params.near - 1.0 / cz) / k + abs(p_i), 0.0, 1.0);
+    if (h >= 1.0) {
+        return 1.0; // far, exactly
+    }
     return clamp(linear(1.0 / (1.0 / params.near - h * k)), 0.0, 1.0);
 }
 
