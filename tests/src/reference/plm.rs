@@ -455,6 +455,34 @@ pub struct PlmMaps {
     pub winner: Vec<Option<usize>>,
 }
 
+impl PlmMaps {
+    /// Maps read back from a penumbra limit map as stored (Lawlor section 2.2: `c`, `g`, `b` and
+    /// `p = p_i / 4 + 1/2`, each `size x size`, row-major, row 0 first) and the unraised depth
+    /// (smoothies' hard test), e.g. a generated map to shade with [`plm_shade`]; `key` and
+    /// `winner` are unknown (NaN, `None`). Refused when a channel has the wrong length.
+    pub fn from_stored(size: usize, depth: &[f64], g: &[f64], c: &[f64], b: &[f64], p: &[f64]) -> Result<PlmMaps, String> {
+        let texels = size * size;
+        for (name, v) in [("depth", depth), ("g", g), ("c", c), ("b", b), ("p", p)] {
+            if size == 0 || v.len() != texels {
+                return Err(format!(
+                    "channel `{name}` has {} values; a {size} x {size} map needs {texels}",
+                    v.len()
+                ));
+            }
+        }
+        Ok(PlmMaps {
+            size,
+            depth: depth.to_vec(),
+            g: g.to_vec(),
+            c: c.to_vec(),
+            b: b.to_vec(),
+            p_i: p.iter().map(|p| 4.0 * (p - 0.5)).collect(),
+            key: vec![f64::NAN; texels],
+            winner: vec![None; texels],
+        })
+    }
+}
+
 /// Ray-triangle intersection (Moller-Trumbore, edges included): the ray parameter.
 fn ray_triangle(o: V3, d: V3, tri: &[V3; 3]) -> Option<f64> {
     let e1 = sub(tri[1], tri[0]);
@@ -879,6 +907,29 @@ mod tests {
             assert!(local.key(c, 0.1) > c || c == 1.0);
             assert_eq!(local.key(c, 5.0), 1.0);
         }
+    }
+
+    #[test]
+    fn stored_maps_shade_as_the_reference() {
+        let (tris, meshes) = scene(&[quad(-6.0, 6.0, -6.0, 6.0, -10.0), quad(-1.0, 1.0, -1.0, 1.0, -5.0)]);
+        let setup = disk(32);
+        let r = PlmReference::new(&tris, &meshes, &setup).unwrap();
+        let m = &r.maps;
+        let p: Vec<f64> = m.p_i.iter().map(|p| p / 4.0 + 0.5).collect();
+        let stored = PlmMaps::from_stored(32, &m.depth, &m.g, &m.c, &m.b, &p).unwrap();
+        for k in 0..200 {
+            let x = -3.0 + 6.0 * k as f64 / 200.0;
+            let pt = [x, 0.3, -10.0];
+            for storage in [None, Some(Storage::Unorm8)] {
+                let (a, b) = (
+                    plm_visibility(&setup, m, pt, 1e-4, storage, Table::UniformDisk),
+                    plm_visibility(&setup, &stored, pt, 1e-4, storage, Table::UniformDisk),
+                );
+                assert!((a - b).abs() < 1e-12, "{x}: {a} vs {b}");
+            }
+        }
+        let err = PlmMaps::from_stored(32, &m.depth, &m.g, &m.c[1..], &m.b, &p).unwrap_err();
+        assert!(err.contains("channel `c` has 1023 values"), "{err}");
     }
 
     #[test]
