@@ -26,8 +26,9 @@
 //!   penumbra limit `p_i = w / S` with `S = tan(angle / 2) (far - near)` (distant) or
 //!   `S = L_r (1 / near - 1 / far)` (local) (Lawlor section 3: `p_i = w s r`,
 //!   `r = 1 / tan(lightAngle / 2)`, here in normalised depth so that equation 1 reads
-//!   `l = 1/2 + 1/2 p_i / delta`; a light of size 0 gives `p_i = 2 sign(w)`); the depth-test key ("highest penumbra limit wins") is the
-//!   penumbra-limit surface's linear normalised depth, `c + |p_i|` (distant) or, for a local
+//!   `l = 1/2 + 1/2 p_i / delta`; a light of size 0 gives `p_i = 2 sign(w)`); the depth-test
+//!   key ("highest penumbra limit wins") is the penumbra-limit surface's linear normalised
+//!   depth, `c + |p_i|` (distant) or, for a local
 //!   light, the hyperbolic `H = (1 / near - 1 / C) / (1 / near - 1 / far) + |p_i|` taken back
 //!   to a linear depth; clamped to `[0, 1]`. A texel takes the `c`, `p_i` of the ribbon with
 //!   the smallest key at its centre (ties: the first ribbon in silhouette-edge order);
@@ -54,7 +55,8 @@
 //! `fract(uv N - 0.5)`, each texel value first quantised to the storage precision
 //! ([`quantise`]). [`plm_visibility`] evaluates equation 1 with `delta = d - c` (distant) or
 //! `delta = (1 / C - 1 / Z) / (1 / near - 1 / far)` (local; Lawlor section 5: the hyperbolic
-//! depth makes a local light distant), `l = sat(1/2 + 1/2 p_i / max(delta, 1e-6))`, then the
+//! depth makes a local light distant; `Z` is the view distance of the receiver depth `d` after
+//! the bias, as `d - c` is for a distant light), `l = sat(1/2 + 1/2 p_i / max(delta, 1e-6))`, then the
 //! clamped equation 2, `l_g = sat(l + 4 [d < g] - 2 [d < c] + [d < b] - 1)`, and the
 //! visibility-to-illumination table of appendix A ([`Table`], computed exactly rather than
 //! looked up in a 1D texture). [`smoothie_visibility`] is the hard shadow map (nearest texel of
