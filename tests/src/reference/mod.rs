@@ -30,11 +30,18 @@
 //! a ray-cast shadow map, exact cones and sheets, the resolve rules and the final lookup, from
 //! world triangles rather than a depth map; [`penumbra_gpu`] is a hand-written WGSL penumbra map
 //! (analytic cones and sheets in f32) to compare with it texel by texel.
+//!
+//! [`plm`] is a separate f64 reference of penumbra limit maps (Lawlor 2006) and smoothies:
+//! ribbons per silhouette edge, the maps `g`, `c`, `b`, `p_i`, equations 1 and 2 and the
+//! visibility-to-illumination tables; [`plm_gpu`] is its hand-written WGSL twin (ribbons and
+//! `b` in f32).
 
 pub mod cpu;
 pub mod gpu;
 pub mod penumbra;
 pub mod penumbra_gpu;
+pub mod plm;
+pub mod plm_gpu;
 pub mod tolerance;
 
 pub use cpu::cpu_visibility;
