@@ -9,6 +9,9 @@ mod support;
 
 use sshc_lab::scene::Scene;
 use sshc_runtime::gpu::{CameraOutput, Executor};
+use sshc_tests::reference::Storage;
+use sshc_tests::reference::penumbra::{AreaLight, LightProjection, PenumbraSetup, Resolve};
+use sshc_tests::reference::plm;
 use support::{compile_source, gpu, root, technique_source};
 
 const PLM: &str = "penumbra-limit-maps";
@@ -219,4 +222,149 @@ fn back_faces_are_those_turned_away_from_the_light() {
         (got - want_bottom).abs() < 1e-5,
         "centre texel: {got}, the bottom is {want_bottom}, the top {want_top} (near {near}, far {far})"
     );
+}
+
+/// The reference's view of a bound scene: the same light view, depth range and map size.
+/// The generator draws every ribbon at twice the penumbra's reach (one primitive serves
+/// penumbra limit maps and smoothies), the reference's `reach_scale = 2`.
+fn plm_setup(inputs: &sshc_runtime::gpu::SceneInputs) -> plm::PlmSetup {
+    let light = PenumbraSetup {
+        view: inputs.light_view.map(f64::from),
+        projection: if inputs.light_orthographic {
+            LightProjection::Orthographic {
+                half_height: 1.0 / f64::from(inputs.light_proj_y),
+            }
+        } else {
+            LightProjection::Perspective {
+                f: f64::from(inputs.light_proj_y),
+            }
+        },
+        near: f64::from(inputs.near),
+        far: f64::from(inputs.far),
+        size: inputs.shadow_size as usize,
+        light: if inputs.light_orthographic {
+            AreaLight::DistantDisk {
+                angle: f64::from(inputs.light_angle),
+            }
+        } else {
+            AreaLight::Sphere {
+                radius: f64::from(inputs.light_size),
+            }
+        },
+        resolve: Resolve::KeepMin,
+    };
+    plm::PlmSetup {
+        reach_scale: 2.0,
+        ..plm::PlmSetup::new(light)
+    }
+}
+
+/// A 1.5-wide square 2 above a floor under a sphere light 6 above it (a local light: the
+/// projective form of eq. 1), and a box floating above the floor (closed: back faces).
+fn local_scene(objects: &str, shadow: u32) -> Scene {
+    Scene::from_str(
+        &format!(
+            "Scene(
+    camera: Perspective(position: (0.0, 6.0, 6.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 40.0, width: 64, height: 64),
+    shadow_map: {shadow},
+    lights: [Sphere(center: (0.0, 6.0, 0.0), radius: 0.5)],
+    objects: [
+        Object(name: \"floor\", mesh: Plane(size: (6.0, 6.0))),
+        {objects}
+    ],
+)"
+        ),
+        ".",
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The generated penumbra limit map (Unorm8, as the paper stores it) against the
+/// independent f64 reference (`sshc_tests::reference::plm`, written from the paper alone),
+/// texel by texel for c, g, b and p = p_i / 4 + 1/2. Both quantise to 8 bits, so a texel
+/// agrees when it is within one step (1/255: a value within f32 error of a rounding
+/// boundary rounds either way). Where ribbons' penumbra limits tie within f32 error (1e-5)
+/// the depth test may pick any of them: texels where the tied ribbons store different
+/// values are not compared, and there must be few of them.
+#[test]
+fn the_generated_map_agrees_with_the_f64_reference() {
+    let scenes = [
+        ("edge", edge(64, 10.0)),
+        (
+            "square, sphere light",
+            local_scene("Object(name: \"square\", mesh: Plane(size: (1.5, 1.5)), transform: (translate: (0.0, 2.0, 0.0))),", 96),
+        ),
+        (
+            "box, sphere light",
+            local_scene("Object(name: \"box\", mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (0.3, 1.5, 0.0))),", 96),
+        ),
+    ];
+    for (name, scene) in scenes {
+        let (_, _, ex) = run(PLM, &scene, &[]);
+        let inputs = sshc_lab::bind::scene_inputs(&scene).unwrap_or_else(|e| panic!("{e}"));
+        let setup = plm_setup(&inputs);
+        let tris: Vec<[[f64; 3]; 3]> = scene.triangles().iter().map(|t| t.map(|p| p.to_array().map(f64::from))).collect();
+        let meshes: Vec<std::ops::Range<usize>> = (0..scene.objects().len()).map(|i| scene.object_triangles(i)).collect();
+        let r = plm::PlmReference::new(&tris, &meshes, &setup).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            ex.generated("ribbons.silhouettes").unwrap_or_else(|e| panic!("{e}")).records as usize,
+            r.ribbons.len(),
+            "{name}: ribbons"
+        );
+        let got = ex.read_texture("plm", 0, 0).unwrap_or_else(|e| panic!("{e}"));
+        let n = setup.light.size;
+        let m = &r.maps;
+        let step = 1.0 / 255.0 + 1e-6;
+        let (mut compared, mut ties, mut worst) = (0, 0, [0.0f64; 4]);
+        for j in 0..n {
+            for i in 0..n {
+                let k = j * n + i;
+                // Ribbons whose penumbra limits tie with the best within f32 error: the
+                // depth test may keep any of them. Ties of equal values (beyond the shared
+                // end point of two edges both ribbons measure the distance to that point)
+                // are compared; ties of different values are counted and skipped.
+                let q = setup.texel_centre(i, j);
+                let samples: Vec<plm::RibbonSample> = r.ribbons.iter().filter_map(|rb| rb.at(&setup, q)).collect();
+                let best = samples.iter().map(|s| s.key).fold(f64::INFINITY, f64::min);
+                let tied: Vec<&plm::RibbonSample> = samples.iter().filter(|s| s.key - best < 1e-5).collect();
+                let q8 = |v: f64| plm::quantise(v, Some(Storage::Unorm8));
+                if tied
+                    .iter()
+                    .any(|s| q8(s.c) != q8(tied[0].c) || q8(s.p_i / 4.0 + 0.5) != q8(tied[0].p_i / 4.0 + 0.5))
+                {
+                    ties += 1;
+                    continue;
+                }
+                let want = [q8(m.c[k]), q8(m.g[k]), q8(m.b[k]), q8(m.p_i[k] / 4.0 + 0.5)];
+                let px = got.rgba[k];
+                for ch in 0..4 {
+                    let e = (f64::from(px[ch]) - want[ch]).abs();
+                    worst[ch] = worst[ch].max(e);
+                    assert!(
+                        e <= step,
+                        "{name}: texel ({i}, {j}) channel {}: generated {} reference {} (unquantised c {} g {} b {} p_i {})",
+                        ["c", "g", "b", "p"][ch],
+                        px[ch],
+                        want[ch],
+                        m.c[k],
+                        m.g[k],
+                        m.b[k],
+                        m.p_i[k]
+                    );
+                }
+                compared += 1;
+            }
+        }
+        eprintln!(
+            "{name}: {compared} texels agree (worst c {:.2}, g {:.2}, b {:.2}, p {:.2} steps of 1/255), {ties} ties skipped, {} ribbons",
+            worst[0] * 255.0,
+            worst[1] * 255.0,
+            worst[2] * 255.0,
+            worst[3] * 255.0,
+            r.ribbons.len()
+        );
+        // A tie of different values is a texel centre equidistant from two edges, one on
+        // each side (a corner's bisector through texel centres): a few lines of texels.
+        assert!(ties <= 4 * n, "{name}: {ties} ties");
+    }
 }

@@ -19,11 +19,12 @@
 //   radius L_r the depth is made projective (section 5: a perspective transform puts the
 //   light at infinity), p_i = (w / Z_far) / (L_r (1 / near - 1 / far)), and eq. 1 holds with
 //   z - c measured in (1 / near - 1 / Z) / (1 / near - 1 / far);
-// - the penumbra-limit surface's normalised depth: c + |p_i|, mapped back to linear depth for
-//   a local light; `limit_depth` is it clamped to [0, 1]. The fragment writes k / (1 + k) of
-//   it, k >= 0, as its depth (an order-preserving map into [0, 1), so that limits below the
-//   far plane still win over the cleared depth): the depth test keeps the highest penumbra
-//   limit ("highest penumbra limit wins").
+// - the penumbra-limit surface's normalised depth: k = c + |p_i| for a distant light; for a
+//   local one k = (1/near - 1/C) / (1/near - 1/far) + |p_i| is projective, mapped back to
+//   linear depth for `limit_depth` (clamped to [0, 1]). The fragment writes k / (1 + k) as
+//   its depth (an order-preserving map into [0, 1), so that limits past the far plane
+//   still win over the cleared depth): the depth test keeps the highest penumbra limit
+//   ("highest penumbra limit wins").
 // A light without size (angle 0, radius 0) has no penumbra: no ribbons are drawn.
 //
 // Constants prepended by the compiler: RIBBON_MARGIN, VERTICES_PER_RECORD.
@@ -140,23 +141,27 @@ fn rb_inputs(in: RibbonsVarying) -> RibbonInputs {
     let near = frame.depth_range.x;
     let far = frame.depth_range.y;
     var out: RibbonInputs;
+    // the order key of the penumbra limit (>= 0): its normalised depth, linear for a
+    // distant light, projective for a local one (both grow with the limit's distance)
+    var key: f32;
     if cs_distant() {
         let z = mix(r.a.z, r.b.z, f);
         out.c = (z - near) * frame.depth_range.z;
         out.p = w / max(tan(0.5 * frame.light_size.y) * (far - near), 1e-30);
-        out.limit = out.c + abs(out.p);
+        key = out.c + abs(out.p);
+        out.limit = key;
     } else {
         let z = 1.0 / mix(1.0 / r.a.z, 1.0 / r.b.z, f);
         out.c = (z - near) * frame.depth_range.z;
         let k = 1.0 / near - 1.0 / far;
         out.p = (w / far) / max(frame.light_size.x * k, 1e-30);
-        let hyper = (1.0 / near - 1.0 / z) / k + abs(out.p);
-        // past the far plane (hyper >= 1) the limit is far or beyond: keep it ordered
-        let zl = 1.0 / max(1.0 / near - hyper * k, 1e-30);
+        key = (1.0 / near - 1.0 / z) / k + abs(out.p);
+        // at or past the far plane (key >= 1) the limit is the far plane
+        let zl = 1.0 / max(1.0 / near - min(key, 1.0) * k, 1e-30);
         out.limit = (zl - near) * frame.depth_range.z;
     }
-    let k = max(out.limit, 0.0);
-    out.depth = k / (1.0 + k);
-    out.limit = min(k, 1.0);
+    key = max(key, 0.0);
+    out.depth = key / (1.0 + key);
+    out.limit = clamp(out.limit, 0.0, 1.0);
     return out;
 }
