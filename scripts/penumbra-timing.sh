@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
-# Penumbra maps' passes against the triangle count: a sphere of 32 to 320 segments (1.4k to
-# 153k edges) over a floor under a sphere light, rendered at a 1024 shadow map, 9 frames
-# (median GPU ms per pass). Prints the edges, the silhouettes the last frame generated and
-# the per-pass table of `sshc render`. Usage: scripts/penumbra-timing.sh [sshc binary]
+# A Geometry-pass technique's passes against the triangle count: a sphere of 32 to 320
+# segments (1.4k to 153k edges) over a floor under a sphere light, rendered at a 1024 shadow
+# map, 9 frames (median GPU ms per pass). Prints the edges, the silhouettes the last frame
+# generated and the per-pass rows of `sshc render`.
+# Usage: scripts/penumbra-timing.sh [sshc binary] [technique, default penumbra maps]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 sshc=${1:-target/release/sshc}
+technique=${2:-techniques/penumbra-maps.ron}
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 for s in 32 64 112 160 224 320; do
@@ -21,6 +23,6 @@ Scene(
 )
 SCENE
     echo "== sphere of $s segments"
-    "$sshc" render techniques/penumbra-maps.ron --scene "$dir/sphere$s.ron" -o "$dir/sphere$s.png" --frames 9 \
-        | grep -E "^edges:|silhouettes:|^\| (depth|penumbra|shade) "
+    "$sshc" render "$technique" --scene "$dir/sphere$s.ron" -o "$dir/sphere$s.png" --frames 9 \
+        | grep -E "^edges:|silhouettes:|^\| [a-z_]+ \| [0-9.]+ \|"
 done
