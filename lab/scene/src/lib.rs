@@ -14,12 +14,13 @@
 //!         height: 256,
 //!     ),
 //!     shadow_map: 512,
+//!     shadow_fit: Scene, // or Casters: fitted to the objects that cast (see `ShadowFit`)
 //!     lights: [
 //!         Rectangle(center: (1.0, 3.0, 0.5), normal: (0.0, -1.0, 0.0), u_axis: (1.0, 0.0, 0.0),
 //!                   half_width: 0.4, half_height: 0.4),
 //!     ],
 //!     objects: [
-//!         Object(name: "floor", mesh: Plane(size: (6.0, 6.0))),
+//!         Object(name: "floor", mesh: Plane(size: (6.0, 6.0)), casts: false), // receives only
 //!         Object(mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (0.0, 0.5, 0.0))),
 //!         Object(mesh: Obj(path: "bunny.obj"), transform: (scale: (0.1, 0.1, 0.1))),
 //!     ],
