@@ -867,7 +867,8 @@ mod tests {
     /// same answers (same samples, same seed) at the points each bundled scene shows.
     #[test]
     fn skipping_never_changes_a_result() {
-        for name in ["bunny", "contact", "fence", "edge", "triangle"] {
+        // triangle-lawlor: a ground that casts no shadow (left out of the possible occluders)
+        for name in ["bunny", "contact", "fence", "edge", "triangle", "triangle-lawlor"] {
             let path = format!("{}/../scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
             let scene = Scene::load(&path).unwrap();
             let vis = Visibility::new(&scene);
