@@ -256,7 +256,8 @@ pub fn shadow_on_ground(
         out[i] = (-1..=1).any(|dx| {
             (-1..=1).any(|dy| {
                 (-1..=1).any(|dz| {
-                    grid.get(&(x + dx, y + dy, z + dz))
+                    // cells saturate at the ends of i64 (a tiny reach far from the origin)
+                    grid.get(&(x.saturating_add(dx), y.saturating_add(dy), z.saturating_add(dz)))
                         .is_some_and(|ps| ps.iter().any(|q| q.distance_squared(p) <= r2))
                 })
             })

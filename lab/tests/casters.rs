@@ -240,6 +240,11 @@ fn the_shadow_on_the_ground_is_the_shadow_and_the_penumbra_reach_around_it() {
     assert_eq!((0..n).filter(|&i| set[i]).collect::<Vec<_>>(), (20..30).collect::<Vec<_>>());
     // Lengths must agree.
     assert!(metrics::shadow_on_ground(&truth, &positions[1..], &ground, &facing, 0.1).is_err());
+    // A reach so small that the grid's cells saturate i64: no overflow, the shadow only.
+    // (x / 1e-30 is past i64::MAX for every pixel but the first, so their cells are all
+    // i64::MAX, whose neighbours would overflow.)
+    let set = metrics::shadow_on_ground(&truth, &positions, &ground, &facing, 1e-30).unwrap();
+    assert_eq!((0..n).filter(|&i| set[i]).count(), 10);
     // In 3D: a pixel 0.05 above the shadow's plane is within a reach of 0.055.
     let p = vec![Vec3::ZERO, Vec3::new(0.0, 0.05, 0.0), Vec3::new(0.0, 0.06, 0.0)];
     let set = metrics::shadow_on_ground(&[0.0, 1.0, 1.0], &p, &[true; 3], &[true; 3], 0.055).unwrap();
