@@ -4,22 +4,47 @@ use crate::scene::Scene;
 use sshc_runtime::gpu::SceneInputs;
 
 /// The scene's geometry, camera and first light, as the executor needs them.
+///
+/// The vertex buffer lists the objects that cast shadows first, in file order, then those
+/// that do not (`casts: false`), in file order: the light's draws take only the first
+/// `casting_vertices`, and the meshes whose edges Geometry passes extrude are the casters
+/// only. With every object casting, the buffer is [`Scene::vertex_data`] as it is.
+/// The light's view is fitted as the scene's `shadow_fit` says ([`Scene::light_view`]).
 pub fn scene_inputs(scene: &Scene) -> Result<SceneInputs, String> {
     let light = scene
         .lights
         .first()
         .ok_or_else(|| "the scene has no light: add one to `lights`".to_string())?;
-    let v = light.view(scene.bounds());
+    let v = scene.light_view(light);
     let cam = scene.camera_position();
+    let all = scene.vertex_data();
+    let n = scene.objects().len();
+    let order: Vec<usize> = (0..n)
+        .filter(|&i| scene.casts(i))
+        .chain((0..n).filter(|&i| !scene.casts(i)))
+        .collect();
+    let mut vertices = Vec::with_capacity(all.len());
+    // One mesh per casting object: Geometry passes find edges within each.
+    let mut meshes = Vec::new();
+    let mut casting = 0usize;
+    for &i in &order {
+        let r = scene.object_triangles(i);
+        let start = vertices.len() / 18;
+        vertices.extend_from_slice(&all[r.start * 18..r.end * 18]);
+        if scene.casts(i) {
+            meshes.push(start as u32..(vertices.len() / 18) as u32);
+            casting = vertices.len() / 6;
+        }
+    }
+    if meshes.is_empty() {
+        // no caster: an empty mesh (an empty list would mean one mesh of everything)
+        meshes.push(0..0);
+    }
+    let every = casting == vertices.len() / 6;
     Ok(SceneInputs {
-        vertices: scene.vertex_data(),
-        // One mesh per object: Geometry passes find edges within each.
-        meshes: (0..scene.objects().len())
-            .map(|i| {
-                let r = scene.object_triangles(i);
-                r.start as u32..r.end as u32
-            })
-            .collect(),
+        vertices,
+        meshes,
+        casting_vertices: (!every).then_some(casting as u32),
         camera_view_proj: scene.camera_view_proj().to_cols_array(),
         camera_position: cam.to_array(),
         camera_size: scene.camera_size(),

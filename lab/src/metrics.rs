@@ -10,6 +10,15 @@
 //!   ([`penumbra`]: `0 < truth < 1`), since lit floor in frame dilutes the first figure.
 //!   Pixels that face away receive no light whatever their visibility, so they are left
 //!   out of both.
+//! - [`shadow_on_ground`]: Lawlor 2006's pixel set for figure 10, "the shadow cast on the
+//!   ground plane": facing pixels on objects that cast no shadow (`casts: false`, the
+//!   ground) whose truth is below 1, or lies within the penumbra's reach `R` (world
+//!   distance) of such a pixel. `R` is the scene's largest penumbra reach
+//!   (`Scene::penumbra_reach`: for a distant disk, the casters' height above the lowest
+//!   receiver times tan(angle / 2)): the farthest a true penumbra extends past the shadow's
+//!   outline, so the set holds the whole shadow plus a band as wide as the widest penumbra
+//!   around it, where a technique that spreads its penumbra too far shows its error.
+//!   [`Accuracy::ground`] gives the error over it where the scene has such objects.
 //! - A visibility that is not finite counts as the largest error, 255, and is counted.
 //! - [`error_image`] draws the signed error `estimate - truth` with the diverging
 //!   red-blue colour map of `colorous` (d3's continuous RdBu, a B-spline through
@@ -68,6 +77,9 @@ pub struct Accuracy {
     pub facing: ErrorStats,
     /// Facing pixels with `0 < truth < 1`.
     pub penumbra: ErrorStats,
+    /// The shadow on the ground ([`shadow_on_ground`]), where the scene has objects that
+    /// cast no shadow (`None` otherwise; [`accuracy`] leaves it `None`).
+    pub ground: Option<ErrorStats>,
 }
 
 fn same_len(what: &str, a: usize, b: usize) -> Result<(), MetricsError> {
@@ -179,7 +191,79 @@ pub fn accuracy(estimate: &[f32], truth: &[f32], facing: &[bool]) -> Result<Accu
     Ok(Accuracy {
         facing: error_stats(estimate, truth, facing)?,
         penumbra: error_stats(estimate, truth, &pen)?,
+        ground: None,
     })
+}
+
+/// The error over Lawlor's shadow on the ground ([`shadow_on_ground`]) of `scene`'s first
+/// light, with the ground the pixels on objects that cast no shadow: the pixel set, or
+/// `None` when every object casts (the set is then not defined).
+pub fn ground_set(
+    scene: &crate::scene::Scene,
+    truth: &[f32],
+    positions: &[Vec3],
+    facing: &[bool],
+) -> Result<Option<Vec<bool>>, MetricsError> {
+    if (0..scene.objects().len()).all(|i| scene.casts(i)) {
+        return Ok(None);
+    }
+    let light = scene
+        .lights
+        .first()
+        .ok_or_else(|| MetricsError("the scene has no light: add one to `lights`".into()))?;
+    let ground = crate::visibility::Visibility::new(scene).on_non_casters(scene, positions);
+    shadow_on_ground(truth, positions, &ground, facing, scene.penumbra_reach(light)).map(Some)
+}
+
+/// Lawlor's "shadow on the ground plane" (see the module docs): the pixels of `facing`
+/// that are on `ground` (a surface that casts no shadow) and whose truth is below 1, or
+/// whose world position lies within `reach` of the position of such a pixel. `reach` <= 0
+/// or not finite keeps only the pixels whose truth is below 1.
+pub fn shadow_on_ground(
+    truth: &[f32],
+    positions: &[Vec3],
+    ground: &[bool],
+    facing: &[bool],
+    reach: f32,
+) -> Result<Vec<bool>, MetricsError> {
+    same_len("truth and positions", truth.len(), positions.len())?;
+    same_len("truth and ground mask", truth.len(), ground.len())?;
+    same_len("truth and mask", truth.len(), facing.len())?;
+    let candidate = |i: usize| facing[i] && ground[i] && positions[i].is_finite();
+    let mut out: Vec<bool> = (0..truth.len()).map(|i| candidate(i) && truth[i] < 1.0).collect();
+    if !(reach.is_finite() && reach > 0.0) {
+        return Ok(out);
+    }
+    // The shadowed ground pixels hashed on a grid of cells `reach` wide: a pixel within
+    // `reach` of one lies in one of the 27 cells around its own.
+    let cell = |p: Vec3| {
+        let c = (p / reach).floor();
+        (c.x as i64, c.y as i64, c.z as i64)
+    };
+    let mut grid: std::collections::HashMap<(i64, i64, i64), Vec<Vec3>> = std::collections::HashMap::new();
+    for (i, &o) in out.iter().enumerate() {
+        if o {
+            grid.entry(cell(positions[i])).or_default().push(positions[i]);
+        }
+    }
+    let r2 = reach * reach;
+    for i in 0..truth.len() {
+        if out[i] || !candidate(i) {
+            continue;
+        }
+        let p = positions[i];
+        let (x, y, z) = cell(p);
+        out[i] = (-1..=1).any(|dx| {
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dz| {
+                    // cells saturate at the ends of i64 (a tiny reach far from the origin)
+                    grid.get(&(x.saturating_add(dx), y.saturating_add(dy), z.saturating_add(dz)))
+                        .is_some_and(|ps| ps.iter().any(|q| q.distance_squared(p) <= r2))
+                })
+            })
+        });
+    }
+    Ok(out)
 }
 
 /// The colour of a signed error `e` for a symmetric range `[-range, range]` (values

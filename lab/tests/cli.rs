@@ -365,3 +365,50 @@ fn huge_truth_budgets_sizes_frames_and_a_cache_file_are_refused_at_once() {
     assert!(e.contains("`--stability-frames 1000000` is above the limit of 1024"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `sshc render` states the shadow map's fit and the world size of one texel: on
+/// triangle-lawlor.ron the map is fitted to the triangle (half-width 0.5) padded by the
+/// penumbra's reach 0.6 tan(5 degrees) and one guard texel a side, so a texel is
+/// 2 (0.5 + 0.0525) / (n - 2); on triangle.ron, the whole scene.
+#[test]
+fn render_states_the_fit_and_the_texel_size() {
+    let dir = temp_dir("fit");
+    let png = dir.join("r.png");
+    let png = png.to_str().unwrap();
+    let reach = 0.6 * 5f64.to_radians().tan();
+    for n in [16u32, 32] {
+        let out = ok(&[
+            "render",
+            "techniques/hard.ron",
+            "--scene",
+            "scenes/triangle-lawlor.ron",
+            "--size",
+            "8x8",
+            "--shadow-map",
+            &n.to_string(),
+            "-o",
+            png,
+        ]);
+        assert!(out.contains("shadow map fitted to the casters (1 of 2 objects)"), "{out}");
+        let texel = number_after("one texel =", &out);
+        let expected = 2.0 * (0.5 + reach) / f64::from(n - 2);
+        // printed with 4 decimals
+        assert!((texel - expected).abs() < 6e-5, "{n} texels: {texel} against {expected}\n{out}");
+        assert!((number_after("penumbra's reach", &out) - reach).abs() < 6e-5, "{out}");
+    }
+    let out = ok(&[
+        "render",
+        "techniques/hard.ron",
+        "--scene",
+        "scenes/triangle.ron",
+        "--size",
+        "8x8",
+        "--shadow-map",
+        "16",
+        "-o",
+        png,
+    ]);
+    assert!(out.contains("shadow map fitted to the whole scene (2 objects)"), "{out}");
+    assert!(number_after("one texel =", &out) > 0.15, "{out}");
+    let _ = std::fs::remove_dir_all(dir);
+}

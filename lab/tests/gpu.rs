@@ -79,3 +79,72 @@ fn an_open_quad_is_shadowed_seen_from_behind_and_lit_seen_from_the_front() {
         assert!(mean > 0.9, "{t}, from above: mean visibility {mean}, the quad should be lit");
     }
 }
+
+/// A 3 x 3 ground at y = 0 and a quad at height 0.5 over x in [-2, 0] under a distant disk
+/// straight overhead, seen from straight above by an orthographic camera at height 0.25
+/// (the quad is behind it). The ground comes first in the file, so the executor's vertex
+/// buffer reorders it behind the caster.
+fn ground_scene(ground_casts: bool, quad_casts: bool, fit: &str) -> Scene {
+    let text = format!(
+        "Scene(camera: Orthographic(position: (0.0, 0.25, 0.0), target: (0.0, 0.0, 0.0), up: (0.0, 0.0, -1.0), half_height: 1.0, width: 16, height: 16),
+               shadow_map: 64, shadow_fit: {fit},
+               lights: [DistantDisk(direction: (0.0, 1.0, 0.0), angle_degrees: 10.0)],
+               objects: [Object(name: \"ground\", mesh: Plane(size: (3.0, 3.0)), casts: {ground_casts}),
+                         Object(name: \"quad\", mesh: Quad(a: (-2.0, 0.5, -2.0), b: (-2.0, 0.5, 2.0), c: (0.0, 0.5, 2.0), d: (0.0, 0.5, -2.0)), casts: {quad_casts})])"
+    );
+    Scene::from_str(&text, ".").unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Per pixel: the technique's visibility, the world position and the truth.
+fn render_positions(gpu: &Gpu, technique: &str, scene: &Scene) -> Vec<(f32, Vec3, f32)> {
+    let path = root().join("techniques").join(format!("{technique}.ron"));
+    let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut ex = compile_executor(gpu, &path, &source, &[], &[]).unwrap_or_else(|e| panic!("{technique}: {e}"));
+    ex.bind_scene(&sshc_lab::bind::scene_inputs(scene).unwrap())
+        .unwrap_or_else(|e| panic!("{technique}: {e}"));
+    ex.run_frame().unwrap_or_else(|e| panic!("{technique}: {e}"));
+    let vis = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
+    let (positions, normals) = positions_normals(&ex).unwrap();
+    let truth = Visibility::new(scene).visible_fractions(&positions, &normals, &scene.lights[0], 8);
+    positions
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.is_finite())
+        .map(|(i, p)| (vis[i], *p, truth[i]))
+        .collect()
+}
+
+/// A ground marked `casts: false` still receives the quad's shadow, with either fit, in
+/// the depth-map techniques and the Geometry-pass one (penumbra maps, whose edges now come
+/// from the quad alone), and the truth agrees; a quad marked `casts: false` casts none.
+/// Without the runtime drawing only the casters from the light, the quad-less cases would
+/// be shadowed wherever the ground's own depth shadows it; without the truth skipping
+/// non-casters, the truth under a non-casting quad would be 0.
+#[test]
+fn a_non_casting_ground_receives_shadows_and_a_non_casting_occluder_casts_none() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
+    // Outside the penumbra (reach 0.5 tan 5 degrees = 0.044) by more than a few texels and pixels.
+    let (umbra, lit) = (-0.4f32, 0.4f32);
+    for t in ["hard", "pcf", "pcss", "penumbra-maps"] {
+        for fit in ["Scene", "Casters"] {
+            let seen = render_positions(&gpu, t, &ground_scene(false, true, fit));
+            assert!(seen.len() > 200, "{t}, {fit}: {} pixels", seen.len());
+            let (mut dark, mut light) = (0, 0);
+            for &(v, p, truth) in &seen {
+                if p.x < umbra {
+                    assert!(v < 0.05 && truth == 0.0, "{t}, {fit}: under the quad at {p}: {v}, truth {truth}");
+                    dark += 1;
+                } else if p.x > lit {
+                    assert!(v > 0.95 && truth == 1.0, "{t}, {fit}: beside the quad at {p}: {v}, truth {truth}");
+                    light += 1;
+                }
+            }
+            assert!(dark > 50 && light > 50, "{t}, {fit}: {dark} shadowed and {light} lit pixels");
+        }
+        // The quad does not cast: the ground is lit everywhere, in the technique and the truth.
+        let seen = render_positions(&gpu, t, &ground_scene(false, false, "Scene"));
+        for &(v, p, truth) in &seen {
+            assert!(v > 0.95 && truth == 1.0, "{t}, non-casting quad: at {p}: {v}, truth {truth}");
+        }
+    }
+}

@@ -7,10 +7,13 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn run(out: &Path, extra: &[&str]) -> String {
-    let sweep = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/sweep.ron");
+    run_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/sweep.ron"), out, extra)
+}
+
+fn run_file(sweep: &Path, out: &Path, extra: &[&str]) -> String {
     let o = Command::new(env!("CARGO_BIN_EXE_sshc"))
         .arg("sweep")
-        .arg(&sweep)
+        .arg(sweep)
         .arg("-o")
         .arg(out)
         .args(["--samples", "16", "--runs", "2", "--cache"])
@@ -153,4 +156,60 @@ fn sweep_writes_a_row_per_configuration_and_the_charts() {
     for d in [out, a, b] {
         let _ = std::fs::remove_dir_all(d);
     }
+}
+
+/// `pixels: ShadowOnGround` (Lawlor's set, on triangle-lawlor.ron): every row has its error
+/// over the same ground pixels, fewer than the facing ones, and the Markdown table and the
+/// charts rank by it. A sweep over a scene where every object casts is refused before any
+/// GPU work, naming the scene and the fix.
+#[test]
+fn a_sweep_over_the_shadow_on_the_ground_reports_it() {
+    let out = tmp("ground");
+    let csv = run_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/sweep-ground.ron"), &out, &[]);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
+    let rows = rows(&csv);
+    assert_eq!(rows.len(), 3, "{csv}");
+    let num = |r: &Vec<String>, c: &str| -> f64 { r[col(c)].parse().unwrap_or_else(|_| panic!("{c} in {r:?}")) };
+    let ground = num(&rows[0], "ground_pixels");
+    for r in &rows {
+        assert_eq!(num(r, "ground_pixels"), ground, "{r:?}");
+        assert!(ground > 0.0 && ground < num(r, "facing_pixels"), "{r:?}");
+        let (rms, max) = (num(r, "rms_ground"), num(r, "max_ground"));
+        assert!(rms.is_finite() && rms > 0.0 && rms <= max + 0.001, "{r:?}");
+    }
+    let md = std::fs::read_to_string(out.join("sweep.md")).unwrap();
+    assert!(md.contains("| technique | config | RMS shadow on ground | RMS facing |"), "{md}");
+    let svg = std::fs::read_to_string(out.join("pareto-triangle-lawlor-time.svg")).unwrap();
+    assert!(svg.contains("shadow on the ground"), "the chart's axis names the pixel set");
+    let _ = std::fs::remove_dir_all(&out);
+
+    let bad = tmp("ground-refused");
+    std::fs::create_dir_all(&bad).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let file = bad.join("bad.ron");
+    std::fs::write(
+        &file,
+        format!(
+            "(scenes: [\"{0}/scenes/triangle.ron\"], camera: Some((8, 8)), reference: \"{0}/techniques/hard.ron\", pixels: ShadowOnGround, techniques: [(file: \"{0}/techniques/hard.ron\")])",
+            root.display()
+        ),
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_sshc"))
+        .arg("sweep")
+        .arg(&file)
+        .arg("-o")
+        .arg(bad.join("out"))
+        .output()
+        .expect("sshc runs");
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        text.contains("`pixels: ShadowOnGround` needs a ground that casts no shadow")
+            && text.contains("triangle.ron")
+            && text.contains("casts: false"),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&bad);
 }

@@ -12,6 +12,10 @@ pub struct SceneInputs {
     /// The scene's meshes as ranges of triangles (indices into `vertices / 18`). Geometry
     /// passes find edges within each mesh, never across two; empty: one mesh of all.
     pub meshes: Vec<std::ops::Range<u32>>,
+    /// How many of the first `vertices` are drawn from the light (`Draw::SceneFromLight`):
+    /// the shadow casters, listed first; the rest (objects that cast no shadow, such as a
+    /// ground plane) are drawn by the camera only. `None`: every vertex casts.
+    pub casting_vertices: Option<u32>,
     pub camera_view_proj: [f32; 16],
     pub camera_position: [f32; 3],
     pub camera_size: (u32, u32),

@@ -72,9 +72,11 @@ fn triangles(s: &SceneInputs) -> Vec<[[f32; 3]; 3]> {
         .collect()
 }
 
-/// Bytes of a generated buffer for `edges` edges: the draw arguments and one record per edge.
+/// Bytes of a generated buffer for `edges` edges: the draw arguments and one record per edge,
+/// at least one record (a scene with no edge, such as one whose objects all have `casts:
+/// false`, still binds a buffer as large as the shader's record array needs).
 pub(crate) fn generated_bytes(record_bytes: u32, edges: u64) -> u64 {
-    DRAW_ARGS_BYTES as u64 + record_bytes as u64 * edges
+    DRAW_ARGS_BYTES as u64 + record_bytes as u64 * edges.max(1)
 }
 
 /// The resources of one graph bound to one scene.
@@ -83,6 +85,8 @@ pub(crate) struct Resources {
     pub camera_size: (u32, u32),
     pub vertices: wgpu::Buffer,
     pub vertex_count: u32,
+    /// The leading vertices drawn from the light ([`SceneInputs::casting_vertices`]).
+    pub casting_vertex_count: u32,
     textures: HashMap<String, wgpu::Texture>,
     /// Summed-area tables, by texture name.
     tables: HashMap<String, wgpu::Buffer>,
@@ -141,6 +145,7 @@ impl Resources {
             }
         }
         let vertex_count = (s.vertices.len() / 6) as u32;
+        let casting_vertex_count = s.casting_vertices.map_or(vertex_count, |n| n.min(vertex_count));
         let vb_size = (s.vertices.len() * 4).max(24) as u64;
         if vb_size > gpu.limits.max_buffer_size {
             return Err(RuntimeError::Limit {
@@ -296,6 +301,7 @@ impl Resources {
                 camera_size: s.camera_size,
                 vertices,
                 vertex_count,
+                casting_vertex_count,
                 textures,
                 tables,
                 light_depth,

@@ -425,7 +425,12 @@ impl StepNode {
                         depth,
                     });
                 }
-                let vertices = matches!(r.draw, DrawCall::Scene).then(|| (res.vertices.clone(), res.vertex_count));
+                // Seen from the light, only the shadow casters (listed first) are drawn.
+                let count = match r.depth {
+                    Some(DepthTarget::Light) => res.casting_vertex_count,
+                    _ => res.vertex_count,
+                };
+                let vertices = matches!(r.draw, DrawCall::Scene).then(|| (res.vertices.clone(), count));
                 let (geometry, indirect) = match &r.draw {
                     DrawCall::Generated(name) => {
                         let buf = res.generated(name)?;

@@ -279,6 +279,7 @@ fn object(u: &mut Unstructured) -> Result<Object> {
             scale: if u.arbitrary()? { Vec3::ONE } else { vec3(u)? },
         },
         flat_normals: u.arbitrary()?,
+        casts: u.arbitrary()?,
     })
 }
 
@@ -288,6 +289,7 @@ fn scene(u: &mut Unstructured) -> Result<SceneDesc> {
         shadow_map: size(u)?,
         lights: (0..u.int_in_range(0..=4)?).map(|_| light(u)).collect::<Result<_>>()?,
         objects: (0..u.int_in_range(0..=6)?).map(|_| object(u)).collect::<Result<_>>()?,
+        shadow_fit: if u.arbitrary()? { ShadowFit::Casters } else { ShadowFit::Scene },
     })
 }
 
@@ -356,6 +358,9 @@ fn drive(text: &str) {
     let _ = scene.fingerprint();
     for l in &scene.lights {
         let _ = l.view(scene.bounds());
+        let _ = scene.light_view(l);
+        let _ = scene.fit_report(l);
+        let _ = scene.penumbra_reach(l);
         let _ = l.segment_samples(4);
     }
 }

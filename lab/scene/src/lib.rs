@@ -14,12 +14,13 @@
 //!         height: 256,
 //!     ),
 //!     shadow_map: 512,
+//!     shadow_fit: Scene, // or Casters: fitted to the objects that cast (see `ShadowFit`)
 //!     lights: [
 //!         Rectangle(center: (1.0, 3.0, 0.5), normal: (0.0, -1.0, 0.0), u_axis: (1.0, 0.0, 0.0),
 //!                   half_width: 0.4, half_height: 0.4),
 //!     ],
 //!     objects: [
-//!         Object(name: "floor", mesh: Plane(size: (6.0, 6.0))),
+//!         Object(name: "floor", mesh: Plane(size: (6.0, 6.0)), casts: false), // receives only
 //!         Object(mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (0.0, 0.5, 0.0))),
 //!         Object(mesh: Obj(path: "bunny.obj"), transform: (scale: (0.1, 0.1, 0.1))),
 //!     ],
@@ -70,6 +71,30 @@ pub struct SceneDesc {
     /// The geometry. May be empty.
     #[serde(default)]
     pub objects: Vec<Object>,
+    /// What the light's view (the shadow map) is fitted to: `Scene` (default, every
+    /// object) or `Casters` (the objects with `casts: true`, padded by the reach of their
+    /// penumbra; see [`ShadowFit`]).
+    #[serde(default)]
+    pub shadow_fit: ShadowFit,
+}
+
+/// What the light's view, and so the shadow map, is fitted to.
+///
+/// - `Scene` (the default): the bounds of every object.
+/// - `Casters`: laterally, the corners of the casting objects' triangles (`casts: true`),
+///   padded on every side by the farthest reach of their penumbra ([`Scene::penumbra_reach`])
+///   and then by one guard texel (so that the map's outermost texels never hold a caster
+///   and a lookup clamped to the map's edge reads no occluder); in depth, the bounds of
+///   every object, so that near and far still cover every receiver (depth is normalised
+///   between them). This is how Lawlor 2006 frames his figure 11: the map fitted to the
+///   occluder, not to the ground. At least one object must cast.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ShadowFit {
+    /// Fitted to the bounds of the whole scene.
+    #[default]
+    Scene,
+    /// Fitted to the casting objects, padded by their penumbra's reach.
+    Casters,
 }
 
 /// The camera of the shaded image. `position` looks at `target`; `up` (default +Y) picks
@@ -212,6 +237,20 @@ pub struct Object {
     /// (default false).
     #[serde(default)]
     pub flat_normals: bool,
+    /// Whether the object casts shadows (default true). A non-caster (a ground plane) is
+    /// seen by the camera and receives shadows, but is not drawn from the light (not in
+    /// Depth passes nor in the edges of Geometry passes) and blocks no shadow ray of the
+    /// ground truth.
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    pub casts: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn is_true(b: &bool) -> bool {
+    *b
 }
 
 /// A mesh in object space. Triangles are counter-clockwise seen from their front side,
@@ -476,6 +515,7 @@ pub struct Scene {
     pub shadow_map: u32,
     /// The lights.
     pub lights: Vec<Light>,
+    shadow_fit: ShadowFit,
     objects: Vec<Object>,
     source: Option<PathBuf>,
     triangles: Vec<[Vec3; 3]>,
@@ -597,6 +637,7 @@ impl Scene {
             camera: desc.camera,
             shadow_map: desc.shadow_map,
             lights: desc.lights,
+            shadow_fit: desc.shadow_fit,
             objects: desc.objects,
             source: None,
             triangles,
@@ -605,7 +646,248 @@ impl Scene {
             bounds,
         };
         scene.check_precision()?;
+        scene.check_fit(scene.shadow_fit)?;
         Ok(scene)
+    }
+
+    /// Refuses `Casters` when no object casts a triangle.
+    fn check_fit(&self, fit: ShadowFit) -> Result<(), SceneError> {
+        if fit == ShadowFit::Casters && self.caster_triangles() == 0 {
+            let why = if self.objects.iter().any(|o| o.casts) {
+                "every object with `casts: true` has no triangle (all were degenerate)"
+            } else {
+                "every object has `casts: false`"
+            };
+            return Err(SceneError::invalid(
+                "shadow_fit",
+                format!("`shadow_fit: Casters` fits the shadow map to the casting objects, but {why}"),
+                "mark at least one object `casts: true` (the default), or write `shadow_fit: Scene`",
+            ));
+        }
+        Ok(())
+    }
+
+    /// What the light's view is fitted to (see [`ShadowFit`]).
+    pub fn shadow_fit(&self) -> ShadowFit {
+        self.shadow_fit
+    }
+
+    /// Changes what the light's view is fitted to; `Casters` is refused when no object
+    /// casts a triangle.
+    pub fn set_shadow_fit(&mut self, fit: ShadowFit) -> Result<(), SceneError> {
+        self.check_fit(fit)?;
+        self.shadow_fit = fit;
+        Ok(())
+    }
+
+    /// Whether object `i` casts shadows (`casts` in the file; default true).
+    pub fn casts(&self, i: usize) -> bool {
+        self.objects[i].casts
+    }
+
+    /// For each triangle of [`Scene::triangles`], whether its object casts shadows.
+    pub fn casting_triangles(&self) -> Vec<bool> {
+        let mut out = vec![true; self.triangles.len()];
+        for (i, o) in self.objects.iter().enumerate() {
+            if !o.casts {
+                out[self.object_triangles[i].clone()].fill(false);
+            }
+        }
+        out
+    }
+
+    /// Number of triangles of casting objects.
+    pub fn caster_triangles(&self) -> usize {
+        (0..self.objects.len())
+            .filter(|&i| self.objects[i].casts)
+            .map(|i| self.object_triangles[i].len())
+            .sum()
+    }
+
+    /// The object that triangle `t` of [`Scene::triangles`] belongs to.
+    pub fn object_of_triangle(&self, t: usize) -> Option<usize> {
+        // object ranges are in file order and do not overlap
+        let i = self.object_triangles.partition_point(|r| r.end <= t);
+        (i < self.object_triangles.len() && self.object_triangles[i].contains(&t)).then_some(i)
+    }
+
+    /// The corners of the casting objects' triangles.
+    fn caster_points(&self) -> impl Iterator<Item = Vec3> + '_ {
+        (0..self.objects.len())
+            .filter(|&i| self.objects[i].casts)
+            .flat_map(|i| self.triangles[self.object_triangles[i].clone()].iter().flatten().copied())
+    }
+
+    /// The farthest reach of the casters' penumbra under `light`, in world units: how far
+    /// beyond a caster's shadow outline (its outline seen from the light's centre) the
+    /// penumbra can extend on a receiver.
+    ///
+    /// - A distant disk of angular diameter `a`: `h tan(a / 2)`, `h` the largest height of
+    ///   a caster corner above the lowest point of any object, both measured along the
+    ///   light's direction (rays from a receiver within the cone of half-angle `a / 2`
+    ///   around the direction meet a caster `h` above it at most `h tan(a / 2)` to the
+    ///   side). A directional light: 0.
+    /// - A light at a finite position with bounding radius `s` ([`Light::bounding_radius`]):
+    ///   `s (d_r - d_c) / d_c`, `d_c` the smallest distance of a caster corner from the
+    ///   light's centre along its view axis and `d_r` the largest of any object's corner
+    ///   (the penumbra width of a caster at `d_c` on a receiver at `d_r`, by similar
+    ///   triangles). In the view's tangent space this is `s (1 / d_c - 1 / d_r)`, what the
+    ///   `Casters` fit pads the view's half-angle tangent by.
+    ///
+    /// 0 when no object casts.
+    pub fn penumbra_reach(&self, light: &Light) -> f32 {
+        match light.center() {
+            None => {
+                let dir = light.direction().unwrap_or(Vec3::Y);
+                let top = self.caster_points().map(|p| p.dot(dir)).fold(f32::NEG_INFINITY, f32::max);
+                let low = self.triangles.iter().flatten().map(|p| p.dot(dir)).fold(f32::INFINITY, f32::min);
+                if !(top.is_finite() && low.is_finite()) {
+                    return 0.0;
+                }
+                (top - low).max(0.0) * (0.5 * light.angle()).tan()
+            }
+            Some(_) => match self.local_reach(light) {
+                Some((_, dc, dr, s)) => s * (dr - dc) / dc,
+                None => 0.0,
+            },
+        }
+    }
+
+    /// For a light at a finite position: its view fitted to the casters, the nearest
+    /// caster distance `d_c` and farthest object distance `d_r` along that view's axis
+    /// (`d_c` at least the view's near distance), and the light's bounding radius.
+    fn local_reach(&self, light: &Light) -> Option<(LightView, f32, f32, f32)> {
+        let eye = light.center()?;
+        let cb = bounds_of(self.caster_points());
+        if self.caster_triangles() == 0 {
+            return None;
+        }
+        let forward = enclosing_axis(eye, padded(cb));
+        let view = look_at(eye, eye + forward, any_perpendicular_up(forward));
+        let (lo, hi) = depth_range(&view, padded(self.bounds));
+        let far = (hi * 1.001).max(1e-6);
+        let near = (lo * 0.999).max(far * 1e-4);
+        let dc = self
+            .caster_points()
+            .map(|p| -view.transform_point3(p).z)
+            .fold(f32::INFINITY, f32::min)
+            .max(near);
+        let dr = self
+            .triangles
+            .iter()
+            .flatten()
+            .map(|p| -view.transform_point3(*p).z)
+            .fold(dc, f32::max);
+        let base = LightView {
+            view,
+            proj: Mat4::IDENTITY,
+            view_proj: Mat4::IDENTITY,
+            near,
+            far,
+            position_or_direction: eye.extend(1.0),
+            size: 0.0,
+            half_extents: Vec2::ZERO,
+            angle: 0.0,
+            orthographic: false,
+        };
+        Some((base, dc, dr, light.bounding_radius()))
+    }
+
+    /// The view of `light` for rasterising the shadow map, fitted as [`Scene::shadow_fit`]
+    /// says: [`Light::view`] of the whole scene's bounds for `Scene`; for `Casters`, see
+    /// [`ShadowFit`] (an orthographic view centred on the casters for a light at infinity;
+    /// a perspective view along the axis of the narrowest cone holding the casters for a
+    /// light at a finite position, its half-angle tangent that of the casters plus the
+    /// penumbra's reach in tangent units).
+    pub fn light_view(&self, light: &Light) -> LightView {
+        if self.shadow_fit == ShadowFit::Scene || self.caster_triangles() == 0 {
+            return light.view(self.bounds);
+        }
+        let n = self.shadow_map.max(1);
+        let guard = fit_guard(n);
+        let v = match light.center() {
+            None => {
+                let dir = light.direction().unwrap_or(Vec3::Y);
+                let up = any_perpendicular_up(dir);
+                let cb = bounds_of(self.caster_points());
+                let cc = (cb.0 + cb.1) * 0.5;
+                let v0 = look_at(cc + dir, cc, up);
+                let (mut x0, mut x1, mut y0, mut y1) = (f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY);
+                for p in self.caster_points() {
+                    let q = v0.transform_point3(p);
+                    (x0, x1, y0, y1) = (x0.min(q.x), x1.max(q.x), y0.min(q.y), y1.max(q.y));
+                }
+                let (right, upv) = (v0.row(0).truncate(), v0.row(1).truncate());
+                let centre = cc + right * (0.5 * (x0 + x1)) + upv * (0.5 * (y0 + y1));
+                let half_c = (0.5 * (x1 - x0)).max(0.5 * (y1 - y0));
+                let scene = padded(self.bounds);
+                let (sc, radius) = ((scene.0 + scene.1) * 0.5, 0.5 * (scene.1 - scene.0).length());
+                let eye = centre + dir * (2.0 * radius + centre.distance(sc));
+                let view = look_at(eye, centre, up);
+                let (lo, hi) = depth_range(&view, scene);
+                let margin = radius * 1e-3;
+                let far = hi + margin;
+                let near = (lo - margin).max(far * 1e-4);
+                let half = ((half_c + self.penumbra_reach(light)) * guard).max(radius * 1e-4);
+                let proj = orthographic(-half, half, -half, half, near, far);
+                LightView {
+                    view,
+                    proj,
+                    view_proj: proj * view,
+                    near,
+                    far,
+                    position_or_direction: dir.extend(0.0),
+                    size: 0.0,
+                    half_extents: Vec2::ZERO,
+                    angle: 0.0,
+                    orthographic: true,
+                }
+            }
+            Some(_) => {
+                let Some((mut v, dc, dr, s)) = self.local_reach(light) else {
+                    return light.view(self.bounds);
+                };
+                let mut tan = 0.0f32;
+                for p in self.caster_points() {
+                    let q = v.view.transform_point3(p);
+                    let depth = (-q.z).max(v.near);
+                    tan = tan.max(q.x.abs() / depth).max(q.y.abs() / depth);
+                }
+                let reach = s * (1.0 / dc - 1.0 / dr);
+                let tan = ((tan + reach) * guard).clamp(1e-6, 80f32.to_radians().tan());
+                v.proj = perspective(2.0 * tan.atan(), 1.0, v.near, v.far);
+                v.view_proj = v.proj * v.view;
+                v
+            }
+        };
+        light.with_extent(v)
+    }
+
+    /// How the shadow map of `light` is fitted, for reports: the fit, the penumbra's reach
+    /// it was padded by (0 for `Scene`), and the world size of one texel (for a
+    /// perspective view, at the distance of the fitted bounds' centre along its axis).
+    pub fn fit_report(&self, light: &Light) -> FitReport {
+        let v = self.light_view(light);
+        let n = self.shadow_map.max(1);
+        let casters = self.shadow_fit == ShadowFit::Casters && self.caster_triangles() > 0;
+        let span = 2.0 / (v.proj.y_axis.y * n as f32);
+        let texel = if v.orthographic {
+            span
+        } else {
+            let b = if casters { bounds_of(self.caster_points()) } else { self.bounds };
+            span * (-v.view.transform_point3((b.0 + b.1) * 0.5).z).max(v.near)
+        };
+        FitReport {
+            fit: if casters { ShadowFit::Casters } else { ShadowFit::Scene },
+            reach: if casters { self.penumbra_reach(light) } else { 0.0 },
+            texel,
+            texels: n,
+            width: texel * n as f32,
+            near: v.near,
+            far: v.far,
+            casters: (0..self.objects.len()).filter(|&i| self.objects[i].casts).count(),
+            objects: self.objects.len(),
+        }
     }
 
     /// Checks the scene's precision budget in f32 (called when the scene is built; call
@@ -848,6 +1130,14 @@ impl Scene {
         }
         let rest = ron::to_string(&(&self.camera, self.shadow_map, &self.lights)).unwrap_or_default();
         eat(rest.as_bytes());
+        // Which objects cast (only when some does not, so that the keys of scenes where
+        // every object casts stay as they were).
+        if self.objects.iter().any(|o| !o.casts) {
+            eat(b"casts");
+            for o in &self.objects {
+                eat(&[u8::from(o.casts)]);
+            }
+        }
         h
     }
 }
@@ -1012,10 +1302,15 @@ impl Light {
     /// distant-disk lights get an orthographic view along their direction fitted to the
     /// bounds.
     pub fn view(&self, bounds: (Vec3, Vec3)) -> LightView {
-        let mut v = match self.center() {
+        let v = match self.center() {
             Some(eye) => perspective_view(eye, bounds),
             None => orthographic_view(self.direction().unwrap_or(Vec3::Y), bounds),
         };
+        self.with_extent(v)
+    }
+
+    /// `v` with the light's `size`, `half_extents` and `angle` filled in.
+    fn with_extent(&self, mut v: LightView) -> LightView {
         v.size = match self {
             Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius,
             Light::Rectangle {
@@ -1056,6 +1351,53 @@ impl Light {
     /// are 0.
     pub fn view_from(eye: Vec3, bounds: (Vec3, Vec3)) -> LightView {
         perspective_view(eye, bounds)
+    }
+}
+
+/// The `Casters` fit's guard band: the lateral extent is multiplied by `n / (n - 2)` for a
+/// map of `n >= 3` texels, which adds one texel on each side (a caster never reaches the
+/// outermost texels, which a lookup clamped to the map's edge reads); `1.001` below that
+/// (the rounding margin of the `Scene` fit).
+pub fn fit_guard(n: u32) -> f32 {
+    if n >= 3 { n as f32 / (n - 2) as f32 } else { 1.001 }
+}
+
+/// How a light's shadow map is fitted ([`Scene::fit_report`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FitReport {
+    /// What the view was fitted to (`Scene` when `Casters` was asked but nothing casts).
+    pub fit: ShadowFit,
+    /// The penumbra's reach the `Casters` fit padded by, world units; 0 for `Scene`.
+    pub reach: f32,
+    /// World size of one texel (for a perspective view, at the fitted bounds' centre).
+    pub texel: f32,
+    /// Texels per side.
+    pub texels: u32,
+    /// World width of the map (`texel * texels`).
+    pub width: f32,
+    /// Near and far distances of the view (depth is normalised between them).
+    pub near: f32,
+    pub far: f32,
+    /// Objects that cast, of all objects.
+    pub casters: usize,
+    pub objects: usize,
+}
+
+impl fmt::Display for FitReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.fit {
+            ShadowFit::Scene => write!(f, "shadow map fitted to the whole scene ({} objects)", self.objects)?,
+            ShadowFit::Casters => write!(
+                f,
+                "shadow map fitted to the casters ({} of {} objects), padded by the penumbra's reach {:.4} and one guard texel",
+                self.casters, self.objects, self.reach
+            )?,
+        }
+        write!(
+            f,
+            ": {} x {} texels over {:.4} world units, one texel = {:.4} world units; depth from {:.4} to {:.4}",
+            self.texels, self.texels, self.width, self.texel, self.near, self.far
+        )
     }
 }
 

@@ -46,17 +46,10 @@ pub struct CompareArgs {
     truth: TruthOpts,
 }
 
-/// World size of one shadow-map texel of `light` near the centre of the scene bounds.
+/// World size of one shadow-map texel of `light` near the centre of what the map is fitted
+/// to ([`Scene::fit_report`]).
 fn texel_world(light: &Light, scene: &Scene) -> f32 {
-    let bounds = scene.bounds();
-    let v = light.view(bounds);
-    let span = 2.0 / (v.proj.y_axis.y * scene.shadow_map.max(1) as f32);
-    if v.orthographic {
-        span
-    } else {
-        let centre = (bounds.0 + bounds.1) * 0.5;
-        span * (-v.view.transform_point3(centre).z).max(v.near)
-    }
+    scene.fit_report(light).texel
 }
 
 /// `light` moved by `texels` shadow-map texels (at the centre of the scene) along its
@@ -64,7 +57,7 @@ fn texel_world(light: &Light, scene: &Scene) -> f32 {
 /// by the angle that moves a point half the bounds' diagonal from the centre by that much.
 pub(crate) fn moved_light(light: &Light, scene: &Scene, texels: f32) -> Light {
     let bounds = scene.bounds();
-    let v = light.view(bounds);
+    let v = scene.light_view(light);
     let right = v.view.inverse().transform_vector3(Vec3::X).normalize_or(Vec3::X);
     let d = right * texels * texel_world(light, scene);
     let mut l = light.clone();
@@ -159,7 +152,10 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     let (truth, source) = truth_at(&scene, &positions, &normals, &a.truth)?;
     let facing = metrics::facing_light(&positions, &normals, &light).map_err(|e| format!("error: {e}"))?;
     metrics::check_visibility("the technique's visibility", &visibility, &facing).map_err(|e| format!("error: {e}"))?;
-    let acc = metrics::accuracy(&visibility, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;
+    let mut acc = metrics::accuracy(&visibility, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;
+    if let Some(set) = metrics::ground_set(&scene, &truth.visibility, &positions, &facing).map_err(|e| format!("error: {e}"))? {
+        acc.ground = Some(metrics::error_stats(&visibility, &truth.visibility, &set).map_err(|e| format!("error: {e}"))?);
+    }
     let range = match a.range {
         Some(r) => r,
         None => metrics::error_range(&visibility, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?,
@@ -192,6 +188,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
             }
         ),
         acc,
+        fit: scene.fit_report(&light).to_string(),
         stability,
         stability_frames: a.stability_frames,
         step: a.stability_step,
@@ -224,6 +221,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
 struct FigureInputs<'a> {
     title: String,
     acc: Accuracy,
+    fit: String,
     stability: Option<f64>,
     stability_frames: usize,
     step: f32,
@@ -243,10 +241,16 @@ fn figure_lines(f: &FigureInputs) -> Vec<String> {
         }
         l
     };
-    vec![
+    let mut lines = vec![
         f.title.clone(),
+        f.fit.clone(),
         stats("facing the light", &f.acc.facing),
         stats("in penumbra (0 < truth < 1)", &f.acc.penumbra),
+    ];
+    if let Some(g) = &f.acc.ground {
+        lines.push(stats("on the shadow on the ground (Lawlor 2006, fig. 10)", g));
+    }
+    lines.extend([
         match f.stability {
             Some(s) => format!(
                 "temporal: mean |change| {s:.3} per frame (0..255), {} frames, light moving {} texel per frame",
@@ -274,7 +278,8 @@ fn figure_lines(f: &FigureInputs) -> Vec<String> {
             "error colours: red = technique brighter than truth, blue = darker, range ±{} (0..255); grey = faces away",
             f.range
         ),
-    ]
+    ]);
+    lines
 }
 
 /// A visibility buffer as an RGB image: grey levels, magenta where not finite.

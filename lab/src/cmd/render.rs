@@ -70,6 +70,9 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         dump(&ex, dir).map_err(rt)?;
     }
     println!("device: {}", gpu.describe());
+    if let Some(light) = scene.lights.first() {
+        println!("{}", scene.fit_report(light));
+    }
     // Every texture is allocated when the scene is bound and lives for the whole frame, so
     // the peak is the sum.
     let memory = ex.memory().map_err(rt)?;

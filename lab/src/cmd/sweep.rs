@@ -65,6 +65,37 @@ struct SweepFile {
     /// "16 samples" row). Not timed on the GPU.
     #[serde(default)]
     stochastic: Vec<u32>,
+    /// The pixel set of the charts' error axis and the Markdown table's first error
+    /// column: `Penumbra` (default: facing pixels with 0 < truth < 1) or `ShadowOnGround`
+    /// (Lawlor 2006's "shadow on the ground plane", `metrics::shadow_on_ground`; every
+    /// scene needs an object with `casts: false`). The CSV has every set's figures.
+    #[serde(default)]
+    pixels: PixelSet,
+}
+
+/// The pixel set a sweep's charts rank by.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+enum PixelSet {
+    #[default]
+    Penumbra,
+    ShadowOnGround,
+}
+
+impl PixelSet {
+    /// The RMS error of `r` over this set.
+    fn rms(self, r: &Row) -> f64 {
+        match self {
+            PixelSet::Penumbra => r.acc.penumbra.rms,
+            PixelSet::ShadowOnGround => r.acc.ground.map_or(f64::NAN, |g| g.rms),
+        }
+    }
+
+    fn describe(self) -> &'static str {
+        match self {
+            PixelSet::Penumbra => "RMS error in penumbra (0..255)",
+            PixelSet::ShadowOnGround => "RMS error, shadow on the ground (0..255)",
+        }
+    }
 }
 
 fn default_frames() -> usize {
@@ -176,9 +207,10 @@ fn scale_light(l: &mut Light, f: f32) {
     }
 }
 
-/// The truth of one scene at one light scale: visibility, its largest standard error, and
-/// which pixels face the light.
-type SceneTruth = (Vec<f32>, f64, Vec<bool>);
+/// The truth of one scene at one light scale: visibility, its largest standard error,
+/// which pixels face the light, and the shadow on the ground (`metrics::ground_set`;
+/// `None` where every object casts).
+type SceneTruth = (Vec<f32>, f64, Vec<bool>, Option<Vec<bool>>);
 
 /// One measured row.
 #[derive(Clone, Debug)]
@@ -296,6 +328,17 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     check_axes(&file).map_err(|e| format!("error: {}: {e}", a.sweep.display()))?;
     let base = a.sweep.parent().unwrap_or(Path::new(".")).to_path_buf();
     let resolve = |p: &str| -> PathBuf { base.join(p) };
+    if file.pixels == PixelSet::ShadowOnGround {
+        for scene_path in &file.scenes {
+            let scene = load_scene(&resolve(scene_path), file.camera, None)?;
+            if (0..scene.objects().len()).all(|i| scene.casts(i)) {
+                return Err(format!(
+                    "error: {}: `pixels: ShadowOnGround` needs a ground that casts no shadow, but every object of `{scene_path}` casts; mark the ground `casts: false` or write `pixels: Penumbra`",
+                    a.sweep.display()
+                ));
+            }
+        }
+    }
     let all = configs(&file);
     let (si, sn) = a.shard;
     let mine: Vec<Config> = all
@@ -386,21 +429,24 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         let vis = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
         let peak = ex.memory().map_err(rt)?.iter().map(|(_, b)| b).sum();
         let key = (c.scene, format!("{light_scale}"));
-        let (truth, se, facing) = match truths.iter().find(|(k, _)| *k == key) {
+        let (truth, se, facing, ground) = match truths.iter().find(|(k, _)| *k == key) {
             Some((_, t)) => t.clone(),
             None => {
                 let (p, n) = positions_normals(&ex)?;
-                bar.suspend(|| truth_at(&scene, &p, &n, &a.truth)).map(|(t, _)| {
-                    let facing = metrics::facing_light(&p, &n, &scene.lights[0]).unwrap_or_default();
-                    (t.visibility.clone(), t.max_std_error() as f64, facing)
-                })?
+                let (t, _) = bar.suspend(|| truth_at(&scene, &p, &n, &a.truth))?;
+                let facing = metrics::facing_light(&p, &n, &scene.lights[0]).unwrap_or_default();
+                let ground = metrics::ground_set(&scene, &t.visibility, &p, &facing).map_err(|e| format!("error: {e}"))?;
+                (t.visibility.clone(), t.max_std_error() as f64, facing, ground)
             }
         };
         if !truths.iter().any(|(k, _)| *k == key) {
-            truths.push((key, (truth.clone(), se, facing.clone())));
+            truths.push((key, (truth.clone(), se, facing.clone(), ground.clone())));
         }
         metrics::check_visibility(&format!("the visibility of {}", c.label), &vis, &facing).map_err(|e| format!("error: {e}"))?;
-        let acc = metrics::accuracy(&vis, &truth, &facing).map_err(|e| format!("error: {e}"))?;
+        let mut acc = metrics::accuracy(&vis, &truth, &facing).map_err(|e| format!("error: {e}"))?;
+        if let Some(g) = &ground {
+            acc.ground = Some(metrics::error_stats(&vis, &truth, g).map_err(|e| format!("error: {e}"))?);
+        }
         rows.push(Row {
             scene: stem(&file.scenes[c.scene]),
             label: c.label.clone(),
@@ -437,7 +483,10 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
                 let est = vis.visible_fractions_seeded(&p, &nrm, &scene.lights[0], per_axis, 0x5eed_0000 + n as u64);
                 let est: Vec<f32> = est.iter().zip(&p).map(|(v, p)| if p.is_finite() { *v } else { 1.0 }).collect();
                 let facing = metrics::facing_light(&p, &nrm, &scene.lights[0]).unwrap_or_default();
-                let acc = metrics::accuracy(&est, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;
+                let mut acc = metrics::accuracy(&est, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;
+                if let Some(g) = metrics::ground_set(&scene, &truth.visibility, &p, &facing).map_err(|e| format!("error: {e}"))? {
+                    acc.ground = Some(metrics::error_stats(&est, &truth.visibility, &g).map_err(|e| format!("error: {e}"))?);
+                }
                 rows.push(Row {
                     scene: stem(&file.scenes[sc]),
                     label: format!("{n} samples (CPU)"),
@@ -479,7 +528,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         Ok(())
     };
     write("sweep.csv", &csv(&rows, &device, a.shard))?;
-    write("sweep.md", &markdown(&rows, &device, &file.reference))?;
+    write("sweep.md", &markdown(&rows, &device, &file.reference, file.pixels))?;
     for scene in file.scenes.iter().map(|s| stem(s)) {
         let these: Vec<&Row> = rows.iter().filter(|r| r.scene == scene).collect();
         if these.iter().all(|r| r.ms.is_none()) {
@@ -499,12 +548,17 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         ] {
             for ext in ["svg", "png"] {
                 let p = a.out.join(format!("pareto-{scene}-{what}.{ext}"));
+                let set = match file.pixels {
+                    PixelSet::Penumbra => "penumbra",
+                    PixelSet::ShadowOnGround => "shadow-on-ground",
+                };
                 pareto(
                     &p,
                     &these,
                     x_of,
                     x_label,
-                    &format!("{scene}: RMS penumbra error vs {what} on {short}"),
+                    file.pixels,
+                    &format!("{scene}: RMS {set} error vs {what} on {short}"),
                 )?;
                 println!("wrote {}", p.display());
             }
@@ -531,12 +585,12 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 
 fn csv(rows: &[Row], device: &str, (si, sn): (usize, usize)) -> String {
     let mut s = String::from(
-        "shard,device,scene,technique,config,shadow_map,light_scale,gpu_ms,reference_ms,time_ratio,peak_bytes,fetches,ops,rms_facing,max_facing,rms_penumbra,max_penumbra,facing_pixels,penumbra_pixels,truth_max_se\n",
+        "shard,device,scene,technique,config,shadow_map,light_scale,gpu_ms,reference_ms,time_ratio,peak_bytes,fetches,ops,rms_facing,max_facing,rms_penumbra,max_penumbra,facing_pixels,penumbra_pixels,truth_max_se,rms_ground,max_ground,ground_pixels\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{si}/{sn},\"{device}\",{},{},\"{}\",{},{},{},{},{},{},{:.0},{:.0},{:.3},{:.3},{:.3},{:.3},{},{},{:.5}",
+            "{si}/{sn},\"{device}\",{},{},\"{}\",{},{},{},{},{},{},{:.0},{:.0},{:.3},{:.3},{:.3},{:.3},{},{},{:.5},{},{},{}",
             r.scene,
             r.label,
             r.config,
@@ -554,25 +608,44 @@ fn csv(rows: &[Row], device: &str, (si, sn): (usize, usize)) -> String {
             r.acc.penumbra.max,
             r.acc.facing.pixels,
             r.acc.penumbra.pixels,
-            r.truth_se
+            r.truth_se,
+            opt(r.acc.ground.map(|g| g.rms), 3),
+            opt(r.acc.ground.map(|g| g.max), 3),
+            r.acc.ground.map(|g| g.pixels.to_string()).unwrap_or_default(),
         );
     }
     s
 }
 
-fn markdown(rows: &[Row], device: &str, reference: &str) -> String {
+fn markdown(rows: &[Row], device: &str, reference: &str, pixels: PixelSet) -> String {
     let mut s = format!(
-        "Device: {device}. Errors in 0..255 units against the ground truth (RMS over pixels facing the light, and over penumbra pixels); time as a ratio to `{reference}` timed in the same run (median of repeated frames).\n\n"
+        "Device: {device}. Errors in 0..255 units against the ground truth (RMS over pixels facing the light, and over penumbra pixels{}); time as a ratio to `{reference}` timed in the same run (median of repeated frames).\n\n",
+        match pixels {
+            PixelSet::Penumbra => "",
+            PixelSet::ShadowOnGround => ", first over Lawlor's shadow on the ground plane",
+        }
     );
     let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     scenes.dedup();
     for scene in scenes {
         let _ = writeln!(s, "### {scene}\n");
-        s.push_str("| technique | config | RMS facing | RMS penumbra | max penumbra | time ratio | GPU ms | peak MiB | fetches/frame | ops/frame |\n|---|---|---|---|---|---|---|---|---|---|\n");
+        let ground = pixels == PixelSet::ShadowOnGround;
+        if ground {
+            s.push_str("| technique | config | RMS shadow on ground | ");
+        } else {
+            s.push_str("| technique | config | ");
+        }
+        s.push_str("RMS facing | RMS penumbra | max penumbra | time ratio | GPU ms | peak MiB | fetches/frame | ops/frame |\n|---|---|---|---|---|---|---|---|---|---|");
+        s.push_str(if ground { "---|\n" } else { "\n" });
         for r in rows.iter().filter(|r| r.scene == scene) {
+            let first = if ground {
+                format!(" {} |", opt(r.acc.ground.map(|g| g.rms), 2))
+            } else {
+                String::new()
+            };
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.2} | {:.2} | {:.1} | {} | {} | {:.2} | {:.3e} | {:.3e} |",
+                "| {} | {} |{first} {:.2} | {:.2} | {:.1} | {} | {} | {:.2} | {:.3e} | {:.3e} |",
                 r.label,
                 r.config,
                 r.acc.facing.rms,
@@ -605,10 +678,10 @@ fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
 
 const FONT: &str = "sshc-sweep";
 
-fn pareto(path: &Path, rows: &[&Row], x_of: fn(&Row) -> Option<f64>, x_label: &str, title: &str) -> Result<(), String> {
+fn pareto(path: &Path, rows: &[&Row], x_of: fn(&Row) -> Option<f64>, x_label: &str, set: PixelSet, title: &str) -> Result<(), String> {
     let pts: Vec<(String, f64, f64)> = rows
         .iter()
-        .filter_map(|r| Some((r.label.clone(), x_of(r)?, r.acc.penumbra.rms)))
+        .filter_map(|r| Some((r.label.clone(), x_of(r)?, set.rms(r))))
         .filter(|(_, x, y)| x.is_finite() && y.is_finite() && *x > 0.0)
         .collect();
     if pts.is_empty() {
@@ -621,12 +694,12 @@ fn pareto(path: &Path, rows: &[&Row], x_of: fn(&Row) -> Option<f64>, x_label: &s
         .map_err(|_| "error: the bundled font cannot be read".to_string())?;
     if svg {
         let root = SVGBackend::new(path, size).into_drawing_area();
-        draw(&root, &pts, x_label, title, FONT)
+        draw(&root, &pts, x_label, set.describe(), title, FONT)
     } else {
         let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
         {
             let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
-            draw(&root, &pts, x_label, title, FONT)?;
+            draw(&root, &pts, x_label, set.describe(), title, FONT)?;
         }
         image::RgbImage::from_raw(size.0, size.1, buf)
             .ok_or_else(|| "error: chart buffer of the wrong size".to_string())?
@@ -639,6 +712,7 @@ fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     pts: &[(String, f64, f64)],
     x_label: &str,
+    y_label: &str,
     title: &str,
     font: &str,
 ) -> Result<(), String>
@@ -659,7 +733,7 @@ where
     chart
         .configure_mesh()
         .x_desc(x_label)
-        .y_desc("RMS error in penumbra (0..255)")
+        .y_desc(y_label)
         .label_style((font, 13))
         .draw()
         .map_err(e)?;

@@ -72,6 +72,7 @@ pub fn one_triangle() -> SceneInputs {
     SceneInputs {
         vertices: vec![-1., -1., 0.5, 0., 0., 1., 3., -1., 0.5, 0., 0., 1., -1., 3., 0.5, 0., 0., 1.],
         meshes: vec![],
+        casting_vertices: None,
         camera_view_proj: identity(),
         camera_position: [0.0; 3],
         camera_size: (4, 4),

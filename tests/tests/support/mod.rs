@@ -78,6 +78,7 @@ impl QueryPlane {
         SceneInputs {
             vertices,
             meshes: vec![],
+            casting_vertices: None,
             camera_view_proj: (camera_proj * view).to_cols_array(),
             camera_position: [0.0, EYE, 0.0],
             camera_size: (self.camera, self.camera),
