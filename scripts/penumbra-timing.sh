@@ -24,5 +24,5 @@ Scene(
 SCENE
     echo "== sphere of $s segments"
     "$sshc" render "$technique" --scene "$dir/sphere$s.ron" -o "$dir/sphere$s.png" --frames 9 \
-        | grep -E "^edges:|silhouettes:|^\| [a-z_]+ \| [0-9.]+ \|"
+        | grep -E "^edges:|silhouettes:|^\| [a-z_]+ \| [0-9.]+ \| [0-9.]+e[0-9]+ \|"
 done
