@@ -199,7 +199,22 @@ impl Input {
             Input::ZFrag => &[Primitive::ConesAndSheets, Primitive::BackFaces],
             Input::ZVertex | Input::ConeRadius | Input::ZSurface => &[Primitive::ConesAndSheets],
             Input::OccluderDepth | Input::PenumbraLimit | Input::LimitDepth => &[Primitive::Ribbons],
-            _ => &[
+            Input::D
+            | Input::DWorld
+            | Input::Uv
+            | Input::Tf
+            | Input::NdotL
+            | Input::Slope
+            | Input::TexelSize
+            | Input::TexelDepth
+            | Input::DepthSlope
+            | Input::ShadowSize
+            | Input::Near
+            | Input::Far
+            | Input::LightSize
+            | Input::LightWidth
+            | Input::LightSpread
+            | Input::LightDistant => &[
                 Primitive::ConesAndSheets,
                 Primitive::Ribbons,
                 Primitive::Skins,

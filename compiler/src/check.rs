@@ -204,10 +204,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                     .flat_map(|r| items.get(&r.value).cloned().unwrap_or_default())
                     .collect();
                 if let PassKind::Geometry {
-                    resolve,
-                    primitive,
-                    keep,
-                    ..
+                    resolve, primitive, keep, ..
                 } = &p.kind
                 {
                     match resolve_rule(sym, resolve, &mut types) {
@@ -549,15 +546,7 @@ fn primitive_resolve(p: &Pass, primitive: Primitive, r: Resolve, spec: &ResolveS
 
 /// A Geometry pass's `keep`: a bool per fragment over map-side values, the pass's reads
 /// at the fragment's texel and its primitive's geometry inputs.
-fn check_keep(
-    sym: &Symbols,
-    p: &Pass,
-    primitive: Primitive,
-    keep: &Expr,
-    carried: &[Item],
-    types: &mut Types,
-    diags: &mut Diagnostics,
-) {
+fn check_keep(sym: &Symbols, p: &Pass, primitive: Primitive, keep: &Expr, carried: &[Item], types: &mut Types, diags: &mut Diagnostics) {
     let mut ty = Typer::new(sym, Mode::ChannelValue, types);
     match ty.infer_as(keep, Ty::Bool) {
         Ok(Ty::Bool) => {}
@@ -595,7 +584,10 @@ fn check_keep(
                 diags.push(
                     Diagnostic::error(
                         Phase::Check,
-                        format!("the `keep` of pass `{}` reads channel `{n}`, which none of its reads carries", p.name.value),
+                        format!(
+                            "the `keep` of pass `{}` reads channel `{n}`, which none of its reads carries",
+                            p.name.value
+                        ),
                     )
                     .at(x.span, "channel used here")
                     .help("add the resource holding it to `reads`"),

@@ -2,8 +2,8 @@
 //! channels and how they are packed, cost, and what was removed.
 
 use crate::Compiled;
-use crate::ir::{IrPassKind, Origin, Program, short};
 use crate::front::ast::{Primitive, Resolve};
+use crate::ir::{IrPassKind, Origin, Program, short};
 use std::fmt::Write as _;
 
 pub fn explain(c: &Compiled) -> String {
@@ -54,7 +54,11 @@ pub fn explain(c: &Compiled) -> String {
                 ..
             } => format!(
                 "rasterises the scene's triangles that face away from the light, the nearest kept by a depth test (Lawlor 2006, section 3.1, step 3){}",
-                if keep.is_some() { ", fragments failing `keep` discarded" } else { "" }
+                if keep.is_some() {
+                    ", fragments failing `keep` discarded"
+                } else {
+                    ""
+                }
             ),
             IrPassKind::Geometry {
                 primitive, resolve, keep, ..
@@ -80,7 +84,11 @@ pub fn explain(c: &Compiled) -> String {
                 };
                 format!(
                     "generates {primitive:?} at the silhouette edges seen from the light's centre (a compute step classifies every edge and appends a record per silhouette; a draw pulls the primitives from the records, indirectly), {how}{}; {}",
-                    if keep.is_some() { ", fragments failing `keep` discarded" } else { "" },
+                    if keep.is_some() {
+                        ", fragments failing `keep` discarded"
+                    } else {
+                        ""
+                    },
                     buffers.join("; ")
                 )
             }

@@ -901,9 +901,7 @@ impl<S: SlotView> Program<'_, S> {
                 IrPassKind::Filter { kernel } => write!(f, " kernel {kernel:?}")?,
                 IrPassKind::Mipmap { reduce } => write!(f, " reduce {reduce:?}")?,
                 IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self.ir)))?,
-                IrPassKind::Geometry { keep: Some(k), .. } => {
-                    write!(f, "\n      keep = {}", self.arena.display(*k, Some(self.ir)))?
-                }
+                IrPassKind::Geometry { keep: Some(k), .. } => write!(f, "\n      keep = {}", self.arena.display(*k, Some(self.ir)))?,
                 IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::SummedArea | IrPassKind::Geometry { .. } => {}
             }
             writeln!(f)?;

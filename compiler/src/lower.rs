@@ -456,9 +456,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             },
             PassKind::Mipmap { reduce, .. } => IrPassKind::Mipmap { reduce: *reduce },
             PassKind::SummedArea { .. } => IrPassKind::SummedArea,
-            PassKind::Geometry {
-                primitive, view, keep, ..
-            } => IrPassKind::Geometry {
+            PassKind::Geometry { primitive, view, keep, .. } => IrPassKind::Geometry {
                 primitive: *primitive,
                 resolve: checked.resolves[pi].ok_or_else(|| internal(p.span, "Geometry pass without its checked resolve rule"))?,
                 view: *view,

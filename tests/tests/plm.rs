@@ -81,8 +81,15 @@ fn penumbra_limit_maps_are_exact_on_a_straight_edge_up_to_depth_quantisation() {
             count += 1;
         }
         let rms = (sum / count as f64).sqrt();
-        eprintln!("{n} texels: RMS {:.3}/255, worst {:.3}/255 over {count} floor pixels ({penumbra} in the penumbra)", rms * 255.0, worst * 255.0);
-        assert!(count > 60_000 && penumbra > 10_000, "{count} floor pixels, {penumbra} in the penumbra");
+        eprintln!(
+            "{n} texels: RMS {:.3}/255, worst {:.3}/255 over {count} floor pixels ({penumbra} in the penumbra)",
+            rms * 255.0,
+            worst * 255.0
+        );
+        assert!(
+            count > 60_000 && penumbra > 10_000,
+            "{count} floor pixels, {penumbra} in the penumbra"
+        );
         assert!(rms < 2.0 / 255.0, "{n} texels: RMS {} / 255", rms * 255.0);
         // One silhouette edge per open boundary edge of the two quads (4 + 4).
         let g = ex.generated("ribbons.silhouettes").unwrap_or_else(|e| panic!("{e}"));
@@ -159,11 +166,7 @@ fn no_nan_where_the_receiver_meets_the_occluder() {
     ] {
         let s = Scene::load(root().join(scene)).unwrap_or_else(|e| panic!("{e}"));
         for technique in [PLM, SMOOTHIES] {
-            let prec: Vec<(&str, &str)> = if technique == PLM {
-                vec![("c,g,b,p", precision)]
-            } else {
-                vec![]
-            };
+            let prec: Vec<(&str, &str)> = if technique == PLM { vec![("c,g,b,p", precision)] } else { vec![] };
             let (vis, _, _) = run(technique, &s, &prec);
             let bad = vis.iter().filter(|v| !(v.is_finite() && (0.0..=1.0).contains(*v))).count();
             assert_eq!(bad, 0, "{technique} on {scene} at {precision}");
@@ -292,11 +295,17 @@ fn the_generated_map_agrees_with_the_f64_reference() {
         ("edge", edge(64, 10.0)),
         (
             "square, sphere light",
-            local_scene("Object(name: \"square\", mesh: Plane(size: (1.5, 1.5)), transform: (translate: (0.0, 2.0, 0.0))),", 96),
+            local_scene(
+                "Object(name: \"square\", mesh: Plane(size: (1.5, 1.5)), transform: (translate: (0.0, 2.0, 0.0))),",
+                96,
+            ),
         ),
         (
             "box, sphere light",
-            local_scene("Object(name: \"box\", mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (0.3, 1.5, 0.0))),", 96),
+            local_scene(
+                "Object(name: \"box\", mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (0.3, 1.5, 0.0))),",
+                96,
+            ),
         ),
     ];
     for (name, scene) in scenes {
