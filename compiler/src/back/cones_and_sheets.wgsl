@@ -26,22 +26,6 @@ struct ConeSheet {
     outward: vec4<f32>,
 }
 
-struct GeneratedRw {
-    vertex_count: atomic<u32>,
-    instance_count: u32,
-    first_vertex: u32,
-    first_instance: u32,
-    records: array<ConeSheet>,
-}
-
-struct Generated {
-    vertex_count: u32,
-    instance_count: u32,
-    first_vertex: u32,
-    first_instance: u32,
-    records: array<ConeSheet>,
-}
-
 struct ConesAndSheetsVarying {
     @builtin(position) clip: vec4<f32>,
     // Z_F: the fragment's light-view distance (interpolated along the cone or sheet)

@@ -61,6 +61,28 @@ pub fn library(primitive: Primitive) -> Option<Library> {
 @group(3) @binding(4) var<storage, read> cs_records: Generated;
 @group(3) @binding(5) var<storage, read_write> cs_claims: array<atomic<u32>>;
 ";
+    // the generated buffer of a record type: draw arguments, then the records
+    let generated = |record: &str| {
+        format!(
+            "
+struct GeneratedRw {{
+    vertex_count: atomic<u32>,
+    instance_count: u32,
+    first_vertex: u32,
+    first_instance: u32,
+    records: array<{record}>,
+}}
+
+struct Generated {{
+    vertex_count: u32,
+    instance_count: u32,
+    first_vertex: u32,
+    first_instance: u32,
+    records: array<{record}>,
+}}
+"
+        )
+    };
     match primitive {
         Primitive::ConesAndSheets => Some(Library {
             compute: "cs_cones_and_sheets",
@@ -76,7 +98,8 @@ pub fn library(primitive: Primitive) -> Option<Library> {
 const SHEET_STRIPS: u32 = {SHEET_STRIPS}u;
 const VERTICES_PER_RECORD: u32 = {CONES_AND_SHEETS_VERTICES}u;
 {SILHOUETTES}
-{CONES_AND_SHEETS}{bindings}"
+{CONES_AND_SHEETS}{}{bindings}",
+                generated("ConeSheet")
             ),
         }),
         Primitive::Ribbons => Some(Library {
@@ -92,7 +115,8 @@ const VERTICES_PER_RECORD: u32 = {CONES_AND_SHEETS_VERTICES}u;
                 "const RIBBON_MARGIN: u32 = {RIBBON_MARGIN}u;
 const VERTICES_PER_RECORD: u32 = 6u;
 {SILHOUETTES}
-{RIBBONS}{bindings}"
+{RIBBONS}{}{bindings}",
+                generated("Ribbon")
             ),
         }),
         Primitive::Skins | Primitive::BackFaces => None,

@@ -37,22 +37,6 @@ struct Ribbon {
     outward: vec4<f32>,
 }
 
-struct GeneratedRw {
-    vertex_count: atomic<u32>,
-    instance_count: u32,
-    first_vertex: u32,
-    first_instance: u32,
-    records: array<Ribbon>,
-}
-
-struct Generated {
-    vertex_count: u32,
-    instance_count: u32,
-    first_vertex: u32,
-    first_instance: u32,
-    records: array<Ribbon>,
-}
-
 struct RibbonsVarying {
     @builtin(position) clip: vec4<f32>,
     // t along the edge from a, s across it (positive outward), far-plane units

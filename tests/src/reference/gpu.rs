@@ -18,6 +18,7 @@
 //! mipmapped, or summed into u32 tables (`sat.wgsl`: rows, then columns) in one storage
 //! buffer. PCSS reads the r32float depth directly.
 
+use super::compute::map_read;
 use super::{DepthMap, Kind, Query, Resolved, Storage, StoredChannel, Technique, check_map, resolve};
 use sshc_runtime::gpu::Gpu;
 use std::collections::HashMap;
@@ -922,21 +923,4 @@ fn cssm_sets(r: &Resolved) -> (Vec<StoredChannel>, Vec<StoredChannel>) {
     let mut series = r.stored_channels();
     let weighted = series.split_off(2 * r.int("M") as usize);
     (series, weighted)
-}
-
-fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, String> {
-    let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| format!("waiting for the GPU: {e}"))?;
-    rx.recv()
-        .map_err(|e| format!("reading back: {e}"))?
-        .map_err(|e| format!("reading back: {e}"))?;
-    let data = slice.get_mapped_range().map_err(|e| format!("reading back: {e}"))?.to_vec();
-    buffer.unmap();
-    Ok(data)
 }

@@ -36,6 +36,7 @@
 //! visibility-to-illumination tables; [`plm_gpu`] is its hand-written WGSL twin (ribbons and
 //! `b` in f32).
 
+pub mod compute;
 pub mod cpu;
 pub mod gpu;
 pub mod penumbra;

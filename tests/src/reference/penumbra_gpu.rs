@@ -21,9 +21,9 @@
 //! `r16float` target stores it (WGSL lets that conversion round either way to a neighbour,
 //! so results are within one f16 ulp of the f32 map).
 
+use super::compute::{self, Input};
 use super::penumbra::{LightProjection, PenumbraSetup, Primitives, Resolve, ShadowMap};
 use sshc_runtime::gpu::Gpu;
-use wgpu::util::DeviceExt;
 
 const SHADER: &str = include_str!("shaders/penumbra.wgsl");
 
@@ -134,74 +134,32 @@ pub fn penumbra_map_gpu_at(
     let depth: Vec<f32> = shadow.depth.iter().map(|&z| z as f32).collect();
 
     let run = || -> Result<GpuPenumbra, String> {
-        let device = &gpu.device;
-        let buffer = |label: &str, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
-        let uniform = buffer("penumbra params", &params, wgpu::BufferUsages::UNIFORM);
-        let depth = buffer("penumbra Z_P", &words(&depth), wgpu::BufferUsages::STORAGE);
-        let cones = buffer("penumbra cones", &words(&cones), wgpu::BufferUsages::STORAGE);
-        let sheets = buffer("penumbra sheets", &words(&sheets), wgpu::BufferUsages::STORAGE);
+        let storage = wgpu::BufferUsages::STORAGE;
         let bytes = 4 * (n * n) as u64;
-        let out = |label: &str| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            })
-        };
-        let (value, count) = (out("penumbra value"), out("penumbra count"));
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("penumbra read-back"),
-            size: 2 * bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("penumbra.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("penumbra.wgsl"),
-            layout: None,
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let layout = pipeline.get_bind_group_layout(0);
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("penumbra"),
-            layout: &layout,
-            entries: &[&uniform, &depth, &cones, &sheets, &value, &count]
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect::<Vec<_>>(),
-        });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("penumbra") });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("penumbra map"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(groups, groups, 1);
-        }
-        encoder.copy_buffer_to_buffer(&value, 0, &readback, 0, bytes);
-        encoder.copy_buffer_to_buffer(&count, 0, &readback, bytes, bytes);
-        gpu.queue.submit([encoder.finish()]);
-        let raw = map_read(gpu, &readback)?;
-        let (v, c) = raw.split_at(bytes as usize);
+        let inputs = [
+            Input {
+                label: "penumbra params",
+                bytes: &params,
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+            Input {
+                label: "penumbra Z_P",
+                bytes: &words(&depth),
+                usage: storage,
+            },
+            Input {
+                label: "penumbra cones",
+                bytes: &words(&cones),
+                usage: storage,
+            },
+            Input {
+                label: "penumbra sheets",
+                bytes: &words(&sheets),
+                usage: storage,
+            },
+        ];
+        let out = compute::run(gpu, "penumbra.wgsl", SHADER, &inputs, &[bytes, bytes], (groups, groups))?;
+        let (v, c) = (&out[0], &out[1]);
         Ok(GpuPenumbra {
             size: n,
             value: v.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
@@ -210,21 +168,4 @@ pub fn penumbra_map_gpu_at(
     };
     gpu.scoped("running the hand-written WGSL penumbra map", run)
         .map_err(|e| e.to_string())?
-}
-
-fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, String> {
-    let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| format!("waiting for the GPU: {e}"))?;
-    rx.recv()
-        .map_err(|e| format!("reading back: {e}"))?
-        .map_err(|e| format!("reading back: {e}"))?;
-    let data = slice.get_mapped_range().map_err(|e| format!("reading back: {e}"))?.to_vec();
-    buffer.unmap();
-    Ok(data)
 }

@@ -12,11 +12,11 @@
 //! choice are shared, the ribbon geometry is not), the triangles in view space, and the
 //! unraised nearest-surface depth (the Depth pass, [`PlmMaps::depth`]).
 
+use super::compute::{self, Input};
 use super::penumbra::LightProjection;
 use super::plm::{PlmMaps, PlmReference, PlmSetup};
 use sshc_runtime::gpu::Gpu;
 use std::ops::Range;
-use wgpu::util::DeviceExt;
 
 type V3 = [f64; 3];
 
@@ -109,75 +109,33 @@ pub fn plm_maps_gpu(
     let depth: Vec<f32> = r.maps.depth.iter().map(|&z| z as f32).collect();
 
     let run = || -> Result<GpuPlmMaps, String> {
-        let device = &gpu.device;
-        let buffer = |label: &str, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
-        let uniform = buffer("plm params", &params, wgpu::BufferUsages::UNIFORM);
-        let depth = buffer("plm depth", &words(&depth), wgpu::BufferUsages::STORAGE);
-        let edges = buffer("plm edges", &words(&edges), wgpu::BufferUsages::STORAGE);
-        let tris = buffer("plm triangles", &words(&tris), wgpu::BufferUsages::STORAGE);
+        let storage = wgpu::BufferUsages::STORAGE;
         let map_bytes = 16 * (n * n) as u64;
         let win_bytes = 4 * (n * n) as u64;
-        let out = |label: &str, size| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            })
-        };
-        let (maps, win) = (out("plm maps", map_bytes), out("plm winner", win_bytes));
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("plm read-back"),
-            size: map_bytes + win_bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("plm.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("plm.wgsl"),
-            layout: None,
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let layout = pipeline.get_bind_group_layout(0);
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("plm"),
-            layout: &layout,
-            entries: &[&uniform, &depth, &edges, &tris, &maps, &win]
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect::<Vec<_>>(),
-        });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("plm") });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("plm maps"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(groups, groups, 1);
-        }
-        encoder.copy_buffer_to_buffer(&maps, 0, &readback, 0, map_bytes);
-        encoder.copy_buffer_to_buffer(&win, 0, &readback, map_bytes, win_bytes);
-        gpu.queue.submit([encoder.finish()]);
-        let raw = map_read(gpu, &readback)?;
-        let (m, w) = raw.split_at(map_bytes as usize);
+        let inputs = [
+            Input {
+                label: "plm params",
+                bytes: &params,
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+            Input {
+                label: "plm depth",
+                bytes: &words(&depth),
+                usage: storage,
+            },
+            Input {
+                label: "plm edges",
+                bytes: &words(&edges),
+                usage: storage,
+            },
+            Input {
+                label: "plm triangles",
+                bytes: &words(&tris),
+                usage: storage,
+            },
+        ];
+        let out = compute::run(gpu, "plm.wgsl", SHADER, &inputs, &[map_bytes, win_bytes], (groups, groups))?;
+        let (m, w) = (&out[0], &out[1]);
         let f: Vec<f32> = m.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
         let channel = |c: usize| f.iter().skip(c).step_by(4).copied().collect::<Vec<f32>>();
         Ok(GpuPlmMaps {
@@ -211,21 +169,4 @@ pub fn as_maps(gpu: &GpuPlmMaps, depth: &[f64]) -> PlmMaps {
         key: vec![f64::NAN; gpu.size * gpu.size],
         winner: gpu.winner.clone(),
     }
-}
-
-fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, String> {
-    let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| format!("waiting for the GPU: {e}"))?;
-    rx.recv()
-        .map_err(|e| format!("reading back: {e}"))?
-        .map_err(|e| format!("reading back: {e}"))?;
-    let data = slice.get_mapped_range().map_err(|e| format!("reading back: {e}"))?.to_vec();
-    buffer.unmap();
-    Ok(data)
 }
