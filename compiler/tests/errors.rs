@@ -83,4 +83,16 @@ fn command_line_overrides_are_checked() {
     )
     .unwrap_err();
     assert!(e.render("csm.ron", &src).contains("unknown precision"));
+
+    // several channels at once (`c,g,b,p=...`), each name checked
+    let plm = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../techniques/penumbra-limit-maps.ron")).unwrap();
+    let prec = |name: &str| sshc::CompileOptions {
+        precision: vec![(name.into(), "f16".into())],
+        ..Default::default()
+    };
+    let c = sshc::compile_str(&plm, &prec("c, g,b,p")).unwrap_or_else(|e| panic!("{}", e.render("plm", &plm)));
+    let packed = c.graph.textures.iter().find(|t| t.name == "plm").expect("the packed map");
+    assert_eq!(packed.format, sshc_graph::Format::Rgba16Float, "all four channels at F16");
+    let e = sshc::compile_str(&plm, &prec("c,q")).unwrap_err();
+    assert!(e.render("plm", &plm).contains("no channel or expansion named `q`"), "{}", e.render("plm", &plm));
 }
