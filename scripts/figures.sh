@@ -22,7 +22,7 @@ out=docs/gpu-times.md
     echo "toolchain: [gpu-machine.md](gpu-machine.md)."
     echo
 } > "$out"
-for t in hard pcf vsm esm csm cssm pcss penumbra-maps penumbra-limit-maps smoothies; do
+for t in hard pcf vsm esm csm cssm pcss penumbra-maps penumbra-limit-maps smoothies single-sample; do
     log=$(./target/release/sshc render "techniques/$t.ron" --scene scenes/bunny.ron -o "docs/images/bunny-$t.png" --frames "$frames")
     device=$(echo "$log" | sed -n 's/^device: //p')
     {

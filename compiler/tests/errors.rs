@@ -94,5 +94,9 @@ fn command_line_overrides_are_checked() {
     let packed = c.graph.textures.iter().find(|t| t.name == "plm").expect("the packed map");
     assert_eq!(packed.format, sshc_graph::Format::Rgba16Float, "all four channels at F16");
     let e = sshc::compile_str(&plm, &prec("c,q")).unwrap_err();
-    assert!(e.render("plm", &plm).contains("no channel or expansion named `q`"), "{}", e.render("plm", &plm));
+    assert!(
+        e.render("plm", &plm).contains("no channel or expansion named `q`"),
+        "{}",
+        e.render("plm", &plm)
+    );
 }

@@ -9,7 +9,7 @@ use sshc::ir::{Node, Origin};
 use sshc::{CompileOptions, Limits};
 use std::path::{Path, PathBuf};
 
-pub const TECHNIQUES: [&str; 10] = [
+pub const TECHNIQUES: [&str; 11] = [
     "hard",
     "pcf",
     "vsm",
@@ -20,6 +20,7 @@ pub const TECHNIQUES: [&str; 10] = [
     "penumbra-maps",
     "penumbra-limit-maps",
     "smoothies",
+    "single-sample",
 ];
 
 fn path(name: &str) -> PathBuf {

@@ -19,7 +19,7 @@ fn root() -> PathBuf {
 }
 
 const SCENES: [&str; 5] = ["bunny", "contact", "fence", "edge", "triangle"];
-const TECHNIQUES: [&str; 10] = [
+const TECHNIQUES: [&str; 11] = [
     "hard",
     "pcf",
     "vsm",
@@ -30,6 +30,7 @@ const TECHNIQUES: [&str; 10] = [
     "penumbra-maps",
     "penumbra-limit-maps",
     "smoothies",
+    "single-sample",
 ];
 
 fn compile(technique: &str, set: &[(&str, &str)]) -> sshc::Compiled {

@@ -165,7 +165,7 @@ fn no_nan_where_the_receiver_meets_the_occluder() {
         ("scenes/triangle.ron", "F32"),
     ] {
         let s = Scene::load(root().join(scene)).unwrap_or_else(|e| panic!("{e}"));
-        for technique in [PLM, SMOOTHIES] {
+        for technique in [PLM, SMOOTHIES, "single-sample"] {
             let prec: Vec<(&str, &str)> = if technique == PLM { vec![("c,g,b,p", precision)] } else { vec![] };
             let (vis, _, _) = run(technique, &s, &prec);
             let bad = vis.iter().filter(|v| !(v.is_finite() && (0.0..=1.0).contains(*v))).count();
@@ -376,4 +376,35 @@ fn the_generated_map_agrees_with_the_f64_reference() {
         // each side (a corner's bisector through texel centres): a few lines of texels.
         assert!(ties <= 4 * n, "{name}: {ties} ties");
     }
+}
+
+/// Single-sample soft shadows (Kirsch & Doellner, as Lawlor 2006 describes them) keep the
+/// lit side whole and place the whole penumbra inside the hard shadow: 1 beyond the edge,
+/// then 1 - w / (2 h tan(angle / 2)) at w inside it, 0 past twice the reach. Same F16
+/// storage and texel cuts as smoothies.
+#[test]
+fn single_sample_shadows_are_an_inner_penumbra_only() {
+    let n = 128;
+    let scene = edge(n, 10.0);
+    let (vis, pos, _) = run("single-sample", &scene, &[]);
+    let w = (5.0f64).to_radians().tan();
+    let texel = 2.0 / f64::from(n);
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for (v, p) in vis.iter().zip(&pos) {
+        assert!(v.is_finite() && (0.0..=1.0).contains(v), "{v}");
+        if !p[0].is_finite() {
+            continue;
+        }
+        let x = f64::from(p[0]);
+        if x > texel {
+            assert_eq!(*v, 1.0, "outside the hard shadow at x = {x}");
+        } else if x < -texel && (x + 2.0 * w).abs() > texel {
+            let want = (1.0 + x / (2.0 * w)).max(0.0);
+            worst = worst.max((f64::from(*v) - want).abs());
+            checked += 1;
+        }
+    }
+    eprintln!("inner ramp: worst {:.3}/255 over {checked} pixels", worst * 255.0);
+    assert!(checked > 20_000);
+    assert!(worst < 1.0 / 255.0, "worst {}/255", worst * 255.0);
 }
