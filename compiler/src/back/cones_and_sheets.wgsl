@@ -12,7 +12,8 @@
 // vertex and emits the vertex's place on cone a, cone b or the sheet. The technique's
 // fragment entry (generated) reads `ConesAndSheetsVarying`.
 //
-// Constants prepended by the compiler: CONE_SEGMENTS, SHEET_STRIPS, VERTICES_PER_RECORD.
+// Constants prepended by the compiler: CONE_SEGMENTS, SHEET_STRIPS, VERTICES_PER_RECORD; the generated
+// buffer's structs (`GeneratedRw`, `Generated`) and the group 3 bindings follow (geometry.rs).
 
 // One silhouette edge in light view space (the light looks down -z): the end points (xyz)
 // with their cone radius on the far plane (w); `outward` the unit direction, in the far

@@ -27,7 +27,8 @@
 //   ("highest penumbra limit wins").
 // A light without size (angle 0, radius 0) has no penumbra: no ribbons are drawn.
 //
-// Constants prepended by the compiler: RIBBON_MARGIN, VERTICES_PER_RECORD.
+// Constants prepended by the compiler: RIBBON_MARGIN, VERTICES_PER_RECORD; the generated
+// buffer's structs (`GeneratedRw`, `Generated`) and the group 3 bindings follow (geometry.rs).
 
 // One ribbon: the end points' far-plane positions (xy) and view distances (z), the unit
 // outward direction (xy) and the half-width h (z), in far-plane units.
