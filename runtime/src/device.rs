@@ -92,6 +92,9 @@ pub struct Gpu {
     pub info: wgpu::AdapterInfo,
     pub features: wgpu::Features,
     pub limits: wgpu::Limits,
+    /// The 16-bit norm formats the device can render to (an adapter-specific format
+    /// feature beyond `TEXTURE_FORMAT_16BIT_NORM`).
+    pub renderable_norm16: Vec<wgpu::TextureFormat>,
     uncaptured: Arc<Mutex<Vec<String>>>,
     /// Pipelines by everything that determines them ([`PipelineKey`]): lavapipe compiles
     /// each pipeline through LLVM, so executors of one technique on several scenes share them.
@@ -117,7 +120,10 @@ impl Gpu {
         let wanted = wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::FLOAT32_FILTERABLE
             | wgpu::Features::FLOAT32_BLENDABLE
-            | wgpu::Features::TEXTURE_FORMAT_16BIT_NORM;
+            | wgpu::Features::TEXTURE_FORMAT_16BIT_NORM
+            // what the adapter allows beyond WebGPU's guarantees: 16-bit norm formats as
+            // render targets (Unorm16 channels written by raster passes)
+            | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
         let features = adapter.features() & wanted;
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -134,12 +140,31 @@ impl Gpu {
                 v.push(e.to_string());
             }
         }));
+        let renderable_norm16 = if features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM) {
+            [
+                wgpu::TextureFormat::R16Unorm,
+                wgpu::TextureFormat::Rg16Unorm,
+                wgpu::TextureFormat::Rgba16Unorm,
+            ]
+            .into_iter()
+            .filter(|f| {
+                features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+                    && adapter
+                        .get_texture_format_features(*f)
+                        .allowed_usages
+                        .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
+            })
+            .collect()
+        } else {
+            vec![]
+        };
         Ok(Gpu {
             device,
             queue,
             info: adapter.get_info(),
             features,
             limits,
+            renderable_norm16,
             uncaptured,
             pipelines: Mutex::new(HashMap::new()),
             modules: Mutex::new(HashMap::new()),

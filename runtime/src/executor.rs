@@ -227,6 +227,21 @@ impl<'g> Executor<'g> {
                     t.name, t.format
                 )));
             }
+            // Rendering to a 16-bit norm format is an adapter-specific feature.
+            let rendered = graph
+                .passes
+                .iter()
+                .flat_map(|p| &p.steps)
+                .any(|s| s.compute.is_none() && s.writes.iter().any(|w| w.texture == t.name));
+            if let (true, Some(f)) = (rendered, crate::resources::wgpu_format(t.format))
+                && matches!(t.format, Format::R16Unorm | Format::Rg16Unorm | Format::Rgba16Unorm)
+                && !gpu.renderable_norm16.contains(&f)
+            {
+                return Err(RuntimeError::Device(format!(
+                    "texture `{}` is {:?}, which this device cannot render to (a raster pass writes it); use F16 or Unorm8",
+                    t.name, t.format
+                )));
+            }
         }
         // Params: the uniform must fit the device, and every field must lie inside it.
         let max_uniform = gpu.limits.max_uniform_buffer_binding_size;
