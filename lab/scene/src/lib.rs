@@ -829,19 +829,7 @@ impl Scene {
                 let far = hi + margin;
                 let near = (lo - margin).max(far * 1e-4);
                 let half = ((half_c + self.penumbra_reach(light)) * guard).max(radius * 1e-4);
-                let proj = orthographic(-half, half, -half, half, near, far);
-                LightView {
-                    view,
-                    proj,
-                    view_proj: proj * view,
-                    near,
-                    far,
-                    position_or_direction: dir.extend(0.0),
-                    size: 0.0,
-                    half_extents: Vec2::ZERO,
-                    angle: 0.0,
-                    orthographic: true,
-                }
+                ortho_light_view(view, dir, half, near, far)
             }
             Some(_) => {
                 let Some((mut v, dc, dr, s)) = self.local_reach(light) else {
@@ -1476,7 +1464,12 @@ fn orthographic_view(direction: Vec3, bounds: (Vec3, Vec3)) -> LightView {
         let p = view.transform_point3(c);
         half = half.max(p.x.abs()).max(p.y.abs());
     }
-    let half = half * 1.001;
+    ortho_light_view(view, dir, half * 1.001, near, far)
+}
+
+/// An orthographic light view looking down `view`'s -z towards a light in direction `dir`,
+/// covering `[-half, half]` on both axes and `[near, far]` in depth.
+fn ortho_light_view(view: Mat4, dir: Vec3, half: f32, near: f32, far: f32) -> LightView {
     let proj = orthographic(-half, half, -half, half, near, far);
     LightView {
         view,

@@ -438,7 +438,7 @@ impl ShadowMap {
 
 /// Ray-triangle intersection (Moller-Trumbore, both sides, edges included): the ray
 /// parameter, `None` for a miss or a triangle seen edge-on.
-fn ray_triangle(o: V3, d: V3, tri: &[V3; 3]) -> Option<f64> {
+pub(crate) fn ray_triangle(o: V3, d: V3, tri: &[V3; 3]) -> Option<f64> {
     let e1 = sub(tri[1], tri[0]);
     let e2 = sub(tri[2], tri[0]);
     let p = cross(d, e2);

@@ -66,7 +66,7 @@
 //! Bilinear weights are exact here; GPU samplers quantise them (commonly to 8 fractional bits).
 
 use super::Storage;
-use super::penumbra::{AreaLight, LightProjection, PenumbraSetup, Silhouettes, shadow_map, silhouettes};
+use super::penumbra::{AreaLight, LightProjection, PenumbraSetup, Silhouettes, ray_triangle, shadow_map, silhouettes};
 use std::collections::HashMap;
 use std::ops::Range;
 
@@ -483,30 +483,6 @@ impl PlmMaps {
             winner: vec![None; texels],
         })
     }
-}
-
-/// Ray-triangle intersection (Moller-Trumbore, edges included): the ray parameter.
-fn ray_triangle(o: V3, d: V3, tri: &[V3; 3]) -> Option<f64> {
-    let e1 = sub(tri[1], tri[0]);
-    let e2 = sub(tri[2], tri[0]);
-    let p = cross(d, e2);
-    let det = dot(e1, p);
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = sub(o, tri[0]);
-    let u = dot(s, p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = cross(s, e1);
-    let v = dot(d, q) * inv;
-    if !(v >= 0.0 && u + v <= 1.0) {
-        return None;
-    }
-    let t = dot(e2, q) * inv;
-    t.is_finite().then_some(t)
 }
 
 /// Whether a view-space triangle faces away from the light (see the module documentation).
