@@ -710,6 +710,36 @@ impl PassGraph {
                     message: "0 layers; a texture has at least 1".into(),
                 });
             }
+            // The channel table describes the storage (decoding, dumps): finite numbers,
+            // places inside the texture.
+            for c in &t.channels {
+                let bad = |field: &'static str, message: String| GraphError::Texture {
+                    texture: t.name.clone(),
+                    field,
+                    message: format!("channel `{}`: {message}", c.name),
+                };
+                if !(c.bias.is_finite() && c.scale.is_finite() && c.scale != 0.0) {
+                    return Err(bad(
+                        "channels",
+                        format!("bias {} and scale {} must be finite, the scale non-zero", c.bias, c.scale),
+                    ));
+                }
+                if !(c.range.0.is_finite() && c.range.1.is_finite() && c.range.0 <= c.range.1) {
+                    return Err(bad(
+                        "channels",
+                        format!("range ({}, {}) must be finite and ordered", c.range.0, c.range.1),
+                    ));
+                }
+                if c.layer >= t.layers || c.component > 3 {
+                    return Err(bad(
+                        "channels",
+                        format!(
+                            "layer {} component {} lies outside the texture's {} layer(s) of 4 components",
+                            c.layer, c.component, t.layers
+                        ),
+                    ));
+                }
+            }
         }
         for p in &g.passes {
             if !is_plain_file_name(&p.shader) {
@@ -930,6 +960,39 @@ mod tests {
         }
         assert_eq!(LightKind::DistantDisk as usize + 1, LightKind::ALL.len());
         assert_eq!(LightModel::Any.kind(), None);
+    }
+
+    #[test]
+    fn refuses_channel_tables_that_do_not_describe_the_storage() {
+        let channel = |bias: f64, scale: f64, range: (f64, f64), layer: u32, component: u32| ChannelDecl {
+            name: "z".into(),
+            layer,
+            component,
+            bias,
+            scale,
+            range,
+        };
+        let ok = channel(0.0, 1.0, (0.0, 1.0), 0, 0);
+        let mut g = tiny();
+        g.textures[0].channels = vec![ok.clone()];
+        assert!(PassGraph::from_ron(&g.to_ron()).is_ok());
+        for bad in [
+            channel(f64::NAN, 1.0, (0.0, 1.0), 0, 0),
+            channel(0.0, f64::INFINITY, (0.0, 1.0), 0, 0),
+            channel(0.0, 0.0, (0.0, 1.0), 0, 0),
+            channel(0.0, 1.0, (f64::NAN, 1.0), 0, 0),
+            channel(0.0, 1.0, (1.0, 0.0), 0, 0),
+            channel(0.0, 1.0, (0.0, 1.0), 1, 0),
+            channel(0.0, 1.0, (0.0, 1.0), 0, 4),
+        ] {
+            let mut g = tiny();
+            g.textures[0].channels = vec![bad.clone()];
+            let e = PassGraph::from_ron(&g.to_ron()).expect_err("refused");
+            assert!(
+                matches!(&e, GraphError::Texture { field: "channels", message, .. } if message.starts_with("channel `z`")),
+                "{bad:?}: {e:?}"
+            );
+        }
     }
 
     #[test]
