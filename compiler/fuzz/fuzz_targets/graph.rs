@@ -321,6 +321,16 @@ fn check_accepted(g: &PassGraph, text: &str) {
         "duplicate param: {text}"
     );
     assert!(g.textures.iter().all(|t| t.layers >= 1));
+    for t in &g.textures {
+        for c in &t.channels {
+            assert!(
+                c.bias.is_finite() && c.scale.is_finite() && c.scale != 0.0,
+                "accepted a channel's bias or scale: {text}"
+            );
+            assert!(c.range.0.is_finite() && c.range.1.is_finite() && c.range.0 <= c.range.1);
+            assert!(c.layer < t.layers && c.component <= 3, "a channel outside its texture: {text}");
+        }
+    }
     assert!(
         unique(g.buffers.iter().map(|b| b.name.as_str()).collect()),
         "duplicate buffer: {text}"
@@ -367,7 +377,7 @@ fn check_accepted(g: &PassGraph, text: &str) {
         }
     }
     // Round trip: what the compiler would write for this graph reads back as the same
-    // graph. (Compared as text: a channel's bias may be NaN, which `==` never equals.)
+    // graph (compared as text, as the target always has).
     let again = g.to_ron();
     let back = PassGraph::from_ron(&again).unwrap_or_else(|e| panic!("round trip refused: {e}\n{again}"));
     assert_eq!(back.to_ron(), again, "round trip changed the graph");
