@@ -17,20 +17,27 @@ pub fn scene_inputs(scene: &Scene) -> Result<SceneInputs, String> {
         .ok_or_else(|| "the scene has no light: add one to `lights`".to_string())?;
     let v = scene.light_view(light);
     let cam = scene.camera_position();
-    let all = scene.vertex_data();
     let n = scene.objects().len();
     let order: Vec<usize> = (0..n)
         .filter(|&i| scene.casts(i))
         .chain((0..n).filter(|&i| !scene.casts(i)))
         .collect();
-    let mut vertices = Vec::with_capacity(all.len());
+    // Built straight from the triangles: one copy of the geometry (1.2 GB at the scene
+    // limit of 2^24 triangles), not a second for `Scene::vertex_data`'s order.
+    let (tris, normals) = (scene.triangles(), scene.normals());
+    let mut vertices = Vec::with_capacity(tris.len() * 18);
     // One mesh per casting object: Geometry passes find edges within each.
     let mut meshes = Vec::new();
     let mut casting = 0usize;
     for &i in &order {
         let r = scene.object_triangles(i);
         let start = vertices.len() / 18;
-        vertices.extend_from_slice(&all[r.start * 18..r.end * 18]);
+        for (tri, nrm) in tris[r.clone()].iter().zip(&normals[r]) {
+            for k in 0..3 {
+                vertices.extend_from_slice(&tri[k].to_array());
+                vertices.extend_from_slice(&nrm[k].to_array());
+            }
+        }
         if scene.casts(i) {
             meshes.push(start as u32..(vertices.len() / 18) as u32);
             casting = vertices.len() / 6;
