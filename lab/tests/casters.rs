@@ -275,3 +275,17 @@ fn the_ground_set_of_a_scene_follows_its_non_casters() {
     let set = metrics::ground_set(&s, &truth, &p2, &[true; 4]).unwrap().unwrap();
     assert_eq!(set, vec![true, true, false, false], "reach {reach}");
 }
+
+/// The precision budget (`Scene::check_precision`) takes the fitted map's texels: a
+/// 2 cm caster on a 200-unit ground under a sphere light 1000 units away resolves within
+/// the whole scene's texels (2 x 141 / 64 = 4.4 units, against f32's 1000 x 2^-23 x 16 =
+/// 0.0019) but not within the casters' (about 2 x 0.011 / 64 = 0.00034).
+#[test]
+fn the_precision_budget_uses_the_casters_texels() {
+    let light = "Sphere(center: (0.0, 1000.0, 0.0), radius: 0.5)";
+    let objects = "Object(name: \"ground\", mesh: Plane(size: (200.0, 200.0)), casts: false), \
+        Object(name: \"chip\", mesh: Quad(a: (-0.01, 0.5, -0.01), b: (-0.01, 0.5, 0.01), c: (0.01, 0.5, 0.01), d: (0.01, 0.5, -0.01)))";
+    assert!(scene("", light, objects).is_ok(), "the whole scene's texels resolve");
+    let e = scene("shadow_fit: Casters,", light, objects).expect_err("the casters' texels do not");
+    assert!(e.contains("coarser than 1/16 of a shadow-map texel"), "{e}");
+}

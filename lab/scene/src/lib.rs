@@ -947,6 +947,18 @@ impl Scene {
             // In f64: the square of 1e30 overflows f32.
             let (c, centre) = (c.as_dvec3(), centre.as_dvec3());
             let d = c.distance(centre);
+            // Under `shadow_fit: Casters` the map's texels are the fitted view's, finer than
+            // the whole scene's when the casters are small: the smaller one decides (a
+            // non-finite fitted size, from a view no map resolves, leaves the scene's).
+            let texel = match self.shadow_fit {
+                ShadowFit::Scene => texel,
+                ShadowFit::Casters => {
+                    let v = self.light_view(light);
+                    let per_unit = 2.0 / (v.proj.y_axis.y * self.shadow_map.max(1) as f32);
+                    let fitted = if v.orthographic { per_unit } else { per_unit * d as f32 };
+                    texel.min(fitted)
+                }
+            };
             let (eps, texel) = (f64::from(f32::EPSILON), f64::from(texel));
             let margin = f64::from(LIGHT_PRECISION_MARGIN);
             if d * eps * margin <= texel {
