@@ -18,20 +18,19 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-const SCENES: [&str; 5] = ["bunny", "contact", "fence", "edge", "triangle"];
-const TECHNIQUES: [&str; 11] = [
-    "hard",
-    "pcf",
-    "vsm",
-    "esm",
-    "csm",
-    "cssm",
-    "pcss",
-    "penumbra-maps",
-    "penumbra-limit-maps",
-    "smoothies",
-    "single-sample",
-];
+/// The `.ron` files of a folder of the repository, by name, sorted: every bundled
+/// technique and scene is tested without being listed here.
+fn bundled(folder: &str) -> Vec<String> {
+    let dir = root().join(folder);
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    names.sort();
+    names
+}
 
 fn compile(technique: &str, set: &[(&str, &str)]) -> sshc::Compiled {
     let src = std::fs::read_to_string(root().join("techniques").join(format!("{technique}.ron"))).unwrap();
@@ -149,9 +148,11 @@ fn unambiguous_with(s: &Scene, f: &Frame, footprint_of: &dyn Fn(usize) -> f32) -
 #[test]
 fn every_technique_on_every_scene_is_finite_and_in_range() {
     let gpu = gpu();
-    for t in TECHNIQUES {
+    let (techniques, scenes) = (bundled("techniques"), bundled("scenes"));
+    assert!(techniques.len() >= 11 && scenes.len() >= 6, "{techniques:?} {scenes:?}");
+    for t in &techniques {
         let c = compile(t, &[]);
-        for sc in SCENES {
+        for sc in &scenes {
             let s = scene(sc, 48, 256);
             let f = render(gpu, &c, &s);
             for (i, v) in f.visibility.channel(0).iter().enumerate() {
@@ -175,7 +176,7 @@ fn hard_shadow_map_is_zero_where_the_light_centre_is_hidden_and_one_where_it_is_
     // tan(acos 0.3) = 3.2): 6 texels covers both.
     let gpu = gpu();
     let c = compile("hard", &[]);
-    for sc in SCENES {
+    for sc in &bundled("scenes") {
         let s = scene(sc, 48, 512);
         let f = render(gpu, &c, &s);
         let checked = unambiguous(&s, &f, 6.0);
@@ -198,7 +199,7 @@ fn pcf_is_one_where_lit_and_zero_where_hidden_beyond_its_footprint() {
     // N = 3 a footprint of 10 texels is safely outside every tap.
     let gpu = gpu();
     let c = compile("pcf", &[("N", "3")]);
-    for sc in SCENES {
+    for sc in &bundled("scenes") {
         let s = scene(sc, 48, 512);
         let f = render(gpu, &c, &s);
         let checked = unambiguous(&s, &f, 10.0);
@@ -433,7 +434,7 @@ fn prefiltered_techniques_read_one_where_fully_lit_beyond_their_footprint() {
         ("csm", vec![("fix", "2")], 1.3 / 255.0),
     ] {
         let c = compile(t, &set);
-        for sc in SCENES {
+        for sc in &bundled("scenes") {
             let s = scene(sc, 48, 512);
             let f = render(gpu, &c, &s);
             let vis = f.visibility.channel(0);

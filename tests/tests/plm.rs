@@ -131,9 +131,18 @@ fn penumbra_limit_maps_at_light_angle_zero_are_the_hard_shadow_map() {
 /// ramp's end, kinks that bilinear interpolation rounds over a texel.
 #[test]
 fn smoothies_are_an_outer_penumbra_only() {
+    one_sided_penumbra(SMOOTHIES, 1.0);
+}
+
+/// A one-sided technique on `edge.ron` at 128 texels: on the side `sign` points away from
+/// (the hard shadow for smoothies, `sign` 1; the lit side for single-sample shadows, -1)
+/// the hard map's value exactly; on the other, the ramp over twice the penumbra's reach
+/// w = h tan(angle / 2), from the edge's value to the far side's, within 1/255 away by a
+/// texel from the edge and from the ramp's end.
+fn one_sided_penumbra(technique: &str, sign: f64) {
     let n = 128;
     let scene = edge(n, 10.0);
-    let (vis, pos, _) = run(SMOOTHIES, &scene, &[]);
+    let (vis, pos, _) = run(technique, &scene, &[]);
     let w = (5.0f64).to_radians().tan();
     let texel = 2.0 / f64::from(n);
     let (mut checked, mut worst) = (0, 0.0f64);
@@ -142,18 +151,21 @@ fn smoothies_are_an_outer_penumbra_only() {
         if !p[0].is_finite() {
             continue;
         }
-        let x = f64::from(p[0]);
+        // distance into the ramp's side
+        let x = sign * f64::from(p[0]);
         if x < -texel {
-            assert_eq!(*v, 0.0, "inside the hard shadow at x = {x}");
+            let hard = if sign > 0.0 { 0.0 } else { 1.0 };
+            assert_eq!(f64::from(*v), hard, "{technique}: on the hard side at x = {}", p[0]);
         } else if x > texel && (x - 2.0 * w).abs() > texel {
-            let want = (x / (2.0 * w)).min(1.0);
+            let ramp = (x / (2.0 * w)).min(1.0);
+            let want = if sign > 0.0 { ramp } else { 1.0 - ramp };
             worst = worst.max((f64::from(*v) - want).abs());
             checked += 1;
         }
     }
-    eprintln!("smoothie ramp: worst {:.3}/255 over {checked} pixels", worst * 255.0);
-    assert!(checked > 20_000);
-    assert!(worst < 1.0 / 255.0, "worst {}/255", worst * 255.0);
+    eprintln!("{technique} ramp: worst {:.3}/255 over {checked} pixels", worst * 255.0);
+    assert!(checked > 20_000, "{technique}: {checked} pixels");
+    assert!(worst < 1.0 / 255.0, "{technique}: worst {}/255", worst * 255.0);
 }
 
 /// Receivers at the occluder's own depth (the triangle touching the ground, the contact
@@ -387,27 +399,5 @@ fn the_generated_map_agrees_with_the_f64_reference() {
 /// storage and texel cuts as smoothies.
 #[test]
 fn single_sample_shadows_are_an_inner_penumbra_only() {
-    let n = 128;
-    let scene = edge(n, 10.0);
-    let (vis, pos, _) = run("single-sample", &scene, &[]);
-    let w = (5.0f64).to_radians().tan();
-    let texel = 2.0 / f64::from(n);
-    let (mut checked, mut worst) = (0, 0.0f64);
-    for (v, p) in vis.iter().zip(&pos) {
-        assert!(v.is_finite() && (0.0..=1.0).contains(v), "{v}");
-        if !p[0].is_finite() {
-            continue;
-        }
-        let x = f64::from(p[0]);
-        if x > texel {
-            assert_eq!(*v, 1.0, "outside the hard shadow at x = {x}");
-        } else if x < -texel && (x + 2.0 * w).abs() > texel {
-            let want = (1.0 + x / (2.0 * w)).max(0.0);
-            worst = worst.max((f64::from(*v) - want).abs());
-            checked += 1;
-        }
-    }
-    eprintln!("inner ramp: worst {:.3}/255 over {checked} pixels", worst * 255.0);
-    assert!(checked > 20_000);
-    assert!(worst < 1.0 / 255.0, "worst {}/255", worst * 255.0);
+    one_sided_penumbra("single-sample", -1.0);
 }

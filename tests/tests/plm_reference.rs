@@ -12,7 +12,7 @@
 
 use sshc_runtime::gpu::Gpu;
 use sshc_tests::reference::Storage;
-use sshc_tests::reference::penumbra::fixtures::{quad, scene, sphere};
+use sshc_tests::reference::penumbra::fixtures::{cuboid, quad, scene, sphere};
 use sshc_tests::reference::penumbra::{AreaLight, LightProjection, PenumbraSetup, Resolve};
 use sshc_tests::reference::plm::*;
 use sshc_tests::reference::plm_gpu::{as_maps, plm_maps_gpu};
@@ -310,24 +310,6 @@ fn smoothies_have_the_outer_penumbra_only() {
             assert!(off > 0.1, "{off}");
         }
     }
-}
-
-/// A closed box (outward winding).
-fn cuboid(lo: V3, hi: V3) -> Vec<[V3; 3]> {
-    let c = |i: usize| {
-        [
-            if i & 1 == 0 { lo[0] } else { hi[0] },
-            if i & 2 == 0 { lo[1] } else { hi[1] },
-            if i & 4 == 0 { lo[2] } else { hi[2] },
-        ]
-    };
-    let faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-    let mut tris = Vec::new();
-    for f in faces {
-        tris.push([c(f[0]), c(f[1]), c(f[2])]);
-        tris.push([c(f[0]), c(f[2]), c(f[3])]);
-    }
-    tris
 }
 
 /// Figure 7's stacked occluders: a small square (view distance 3) above a large slab (a closed

@@ -565,21 +565,9 @@ fn depth(ir: &Program, pass: &IrPass) -> Result<(String, Vec<Step>), Diagnostic>
     let mut s = header(ir, pass);
     s.push_str(FRAME_WGSL);
     s.push_str("@group(0) @binding(0) var<uniform> frame: Frame;\n\n");
+    s.push_str(SCENE_FROM_LIGHT_VS);
     s.push_str(
-        "struct DepthVarying {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) view_distance: f32,
-}
-
-@vertex
-fn vs_depth(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> DepthVarying {
-    var out: DepthVarying;
-    let world = vec4<f32>(position, 1.0);
-    out.clip = frame.light_view_proj * world;
-    out.view_distance = -(frame.light_view * world).z;
-    return out;
-}
-
+        "
 @fragment
 fn fs_depth(in: DepthVarying) -> @location(0) vec4<f32> {
     // linear depth in [0, 1] between the fitted near and far planes (Annen 6.2.1 uses linear z)
@@ -761,16 +749,16 @@ fn graph_resolve(r: Resolve) -> graph::Resolve {
     }
 }
 
-/// The vertex stage of `BackFaces`: the scene from the light, with the fragment's
-/// light-view distance.
-const BACK_FACES_VS: &str = "struct BackFacesVarying {
+/// The scene drawn from the light, with each fragment's light-view distance: the vertex
+/// stage of Depth passes and of `BackFaces`.
+const SCENE_FROM_LIGHT_VS: &str = "struct DepthVarying {
     @builtin(position) clip: vec4<f32>,
     @location(0) view_distance: f32,
 }
 
 @vertex
-fn vs_back_faces(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> BackFacesVarying {
-    var out: BackFacesVarying;
+fn vs_depth(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> DepthVarying {
+    var out: DepthVarying;
     let world = vec4<f32>(position, 1.0);
     out.clip = frame.light_view_proj * world;
     out.view_distance = -(frame.light_view * world).z;
@@ -849,7 +837,7 @@ fn geometry(
             format!("    let texel = vec2<i32>(in.clip.xy);\n{}", lib.inputs),
         ),
         None => (
-            "in: BackFacesVarying, @builtin(front_facing) front: bool".to_string(),
+            "in: DepthVarying, @builtin(front_facing) front: bool".to_string(),
             "    let texel = vec2<i32>(in.clip.xy);\n    let in_z_frag = in.view_distance;\n".to_string(),
         ),
     };
@@ -913,7 +901,7 @@ fn geometry(
                 }
                 None => {
                     let mut step = fullscreen_step(entry, Draw::SceneFromLight, vec![], texture, chunk);
-                    step.vertex = Some("vs_back_faces".into());
+                    step.vertex = Some("vs_depth".into());
                     step
                 }
             },
@@ -937,7 +925,7 @@ fn geometry(
     steps.extend(entries.steps);
     let library = match &lib {
         Some(lib) => lib.source.clone(),
-        None => BACK_FACES_VS.to_string(),
+        None => SCENE_FROM_LIGHT_VS.to_string(),
     };
     let src = format!(
         "{}{}\n{}\n{}{}",

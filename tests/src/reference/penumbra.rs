@@ -852,6 +852,25 @@ pub mod fixtures {
 
     const IDENTITY: [f64; 16] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0];
 
+    /// A closed axis-aligned box from corner `lo` to corner `hi`, wound outwards.
+    pub fn cuboid(lo: V3, hi: V3) -> Vec<[V3; 3]> {
+        let c = |i: usize| {
+            [
+                if i & 1 == 0 { lo[0] } else { hi[0] },
+                if i & 2 == 0 { lo[1] } else { hi[1] },
+                if i & 4 == 0 { lo[2] } else { hi[2] },
+            ]
+        };
+        // faces as quads of corner indices wound outwards
+        let faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        let mut tris = Vec::new();
+        for f in faces {
+            tris.push([c(f[0]), c(f[1]), c(f[2])]);
+            tris.push([c(f[0]), c(f[2]), c(f[3])]);
+        }
+        tris
+    }
+
     /// An axis-aligned quad at height z (two triangles wound towards +z, the light).
     pub fn quad(x0: f64, x1: f64, y0: f64, y1: f64, z: f64) -> Vec<[V3; 3]> {
         vec![[[x0, y0, z], [x1, y0, z], [x1, y1, z]], [[x0, y0, z], [x1, y1, z], [x0, y1, z]]]
@@ -1132,20 +1151,7 @@ mod tests {
         // a closed cube under the light: the silhouette is the top face's outline, each edge
         // with one outer side, away from the cube
         let (lo, hi) = ([-1.0, -1.0, -6.0], [1.0, 1.0, -4.0]);
-        let c = |i: usize| {
-            [
-                if i & 1 == 0 { lo[0] } else { hi[0] },
-                if i & 2 == 0 { lo[1] } else { hi[1] },
-                if i & 4 == 0 { lo[2] } else { hi[2] },
-            ]
-        };
-        // faces as quads of corner indices wound outwards
-        let faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-        let mut tris = Vec::new();
-        for f in faces {
-            tris.push([c(f[0]), c(f[1]), c(f[2])]);
-            tris.push([c(f[0]), c(f[2]), c(f[3])]);
-        }
+        let tris = fixtures::cuboid(lo, hi);
         let setup = sphere(0.3, 32, Resolve::KeepMin);
         let sil = silhouettes(&tris, std::slice::from_ref(&(0..tris.len())), &setup).unwrap();
         assert_eq!(sil.all_edges, 18);

@@ -793,7 +793,7 @@ mod tests {
     }
 
     use crate::reference::penumbra::Resolve;
-    use crate::reference::penumbra::fixtures::{quad, scene, sphere};
+    use crate::reference::penumbra::fixtures::{cuboid, quad, scene, sphere};
 
     const IDENTITY: [f64; 16] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0];
 
@@ -807,24 +807,6 @@ mod tests {
             light: AreaLight::DistantDisk { angle: 0.2 },
             resolve: Resolve::KeepMin,
         })
-    }
-
-    /// A closed box (outward winding), as in the penumbra reference's tests.
-    fn cuboid(lo: V3, hi: V3) -> Vec<[V3; 3]> {
-        let c = |i: usize| {
-            [
-                if i & 1 == 0 { lo[0] } else { hi[0] },
-                if i & 2 == 0 { lo[1] } else { hi[1] },
-                if i & 4 == 0 { lo[2] } else { hi[2] },
-            ]
-        };
-        let faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-        let mut tris = Vec::new();
-        for f in faces {
-            tris.push([c(f[0]), c(f[1]), c(f[2])]);
-            tris.push([c(f[0]), c(f[2]), c(f[3])]);
-        }
-        tris
     }
 
     #[test]
