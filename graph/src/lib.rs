@@ -166,6 +166,64 @@ frame_uniform! {
     /// world size of one shadow-map texel: x per unit of view distance (perspective light),
     /// y constant (orthographic light); the size at distance D is x * D + y
     texel_world: Vec4,
+    /// x: index of the light-sample view being rendered (0 outside per-sample passes),
+    /// y: number of light samples, z: 1 where the samples close a loop (the edges of a
+    /// triangle or rectangle light), else 0
+    sample: Vec4,
+}
+
+/// The most light samples a pass graph may render views of ([`PassGraph::samples`]).
+pub const MAX_LIGHT_SAMPLES: u32 = 16;
+
+/// The `LightSamples` uniform at `@group(0) @binding(3)` of steps with
+/// [`Step::light_samples`]: one [`SampleViewUniform`] per light sample, `MAX_LIGHT_SAMPLES`
+/// of them (unused ones zero).
+pub const LIGHT_SAMPLES_WGSL: &str = "struct SampleView {
+    // world -> this sample's light clip space
+    view_proj: mat4x4<f32>,
+    // world -> this sample's light view space (looking down -z)
+    view: mat4x4<f32>,
+    // xyz: the sample's position (w = 1)
+    position: vec4<f32>,
+    // x: near, y: far (view distances), z: 1 / (far - near)
+    depth_range: vec4<f32>,
+    // x: weight of the segment before the sample, y: of the segment after it (0 where
+    // there is none); z: world size of one texel per unit of view distance
+    weights: vec4<f32>,
+}
+struct LightSamples {
+    views: array<SampleView, 16>,
+}
+";
+
+/// Bytes of one `SampleView` of [`LIGHT_SAMPLES_WGSL`].
+pub const SAMPLE_VIEW_SIZE: u32 = 176;
+/// Bytes of the `LightSamples` uniform.
+pub const LIGHT_SAMPLES_SIZE: u32 = SAMPLE_VIEW_SIZE * MAX_LIGHT_SAMPLES;
+
+/// One light sample's view, as the `LightSamples` uniform holds it (matrices column-major).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SampleViewUniform {
+    pub view_proj: [f32; 16],
+    pub view: [f32; 16],
+    pub position: [f32; 4],
+    pub depth_range: [f32; 4],
+    pub weights: [f32; 4],
+}
+
+impl SampleViewUniform {
+    /// The bytes of `views` as the `LightSamples` uniform ([`LIGHT_SAMPLES_SIZE`] bytes;
+    /// views past [`MAX_LIGHT_SAMPLES`] are dropped, missing ones zero).
+    pub fn to_bytes(views: &[SampleViewUniform]) -> Vec<u8> {
+        let mut out = Vec::with_capacity(LIGHT_SAMPLES_SIZE as usize);
+        for k in 0..MAX_LIGHT_SAMPLES as usize {
+            let v = views.get(k).copied().unwrap_or_default();
+            for x in v.view_proj.iter().chain(&v.view).chain(&v.position).chain(&v.depth_range).chain(&v.weights) {
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        out
+    }
 }
 
 /// Workgroup size of compute steps ([`Draw::ComputeRows`], [`Draw::ComputeColumns`]).
@@ -188,6 +246,10 @@ pub struct PassGraph {
     /// Bytes of the `Params` uniform (0: none).
     pub params_size: u32,
     pub textures: Vec<TextureDecl>,
+    /// Light samples the `PerLightSample` passes render one view each of, 1 to
+    /// [`MAX_LIGHT_SAMPLES`] (1 when there are none).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub samples: u32,
     /// Buffers generated on the GPU (Geometry passes); absent when there are none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub buffers: Vec<BufferDecl>,
@@ -392,6 +454,18 @@ pub struct TextureDecl {
     /// Only used within one pass (the intermediate of a separable filter).
     pub transient: bool,
     pub channels: Vec<ChannelDecl>,
+    /// Views the texture holds (written by a `PerLightSample` pass: [`PassGraph::samples`];
+    /// else 1): `layers` array layers per view, view k's layer l at `k * layers + l`.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub views: u32,
+}
+
+fn one() -> u32 {
+    1
+}
+
+fn is_one(v: &u32) -> bool {
+    *v == 1
 }
 
 /// Where a channel lives in a texture and how to decode it: `value = stored / scale + bias`.
@@ -469,6 +543,26 @@ pub enum Draw {
     /// face planes and face references at 0 to 2, the buffer at 3 and one `u32` claim per
     /// welded vertex at 5 (read-write, cleared before the dispatch).
     Primitives { buffer: String, resolve: Resolve },
+    /// A compute dispatch with one invocation per cell of the mesh joining the shadow
+    /// map's texel centres ((size - 1)^2 cells; x the column, y the row, 64 per workgroup
+    /// along x), over the view `source` of a `PerLightSample` pass: the cell's depth
+    /// discontinuities become records appended to `buffer` as a `Silhouettes` step does
+    /// (Heidrich et al. 2000, section 3.2). Run once per view k of the pass, before the
+    /// view's `Primitives` step; group 3 binds the buffer at 3. The buffer holds at most
+    /// [`MAX_DISCONTINUITY_RECORDS`] records; the shader drops records past its capacity.
+    Discontinuities { buffer: String, source: Neighbour },
+}
+
+/// The most records a [`Draw::Discontinuities`] buffer holds (or one per cell, if fewer).
+pub const MAX_DISCONTINUITY_RECORDS: u32 = 1 << 18;
+
+/// Which view's depth discontinuities a `Skins` pass warps into view k.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Neighbour {
+    /// View k - 1 (none for view 0, unless the samples close a loop).
+    Previous,
+    /// View k + 1 (none for the last view, unless the samples close a loop).
+    Next,
 }
 
 /// How the fragments of overlapping generated primitives combine in a target: the three
@@ -561,6 +655,9 @@ pub struct Step {
     pub params: bool,
     /// Binds the filtering sampler.
     pub sampler: bool,
+    /// Binds the `LightSamples` uniform ([`LIGHT_SAMPLES_WGSL`]) at group 0, binding 3.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub light_samples: bool,
     /// Per fragment or compute invocation.
     pub cost: OpCount,
 }
@@ -618,6 +715,9 @@ pub enum GraphError {
         buffer: String,
         message: String,
     },
+    /// Light-sample views that do not fit together: the count, a per-sample pass writing
+    /// a texture of one view, or reading one across views.
+    Samples(String),
 }
 
 impl fmt::Display for GraphError {
@@ -653,6 +753,7 @@ impl fmt::Display for GraphError {
             ),
             GraphError::Texture { texture, field, message } => write!(f, "texture `{texture}`, field `{field}`: {message}"),
             GraphError::Buffer { buffer, message } => write!(f, "buffer `{buffer}`: {message}"),
+            GraphError::Samples(message) => write!(f, "light samples: {message}"),
         }
     }
 }
@@ -702,7 +803,20 @@ impl PassGraph {
         check_unique("param", g.params.iter().map(|p| &p.name))?;
         check_unique("buffer", g.buffers.iter().map(|b| &b.name))?;
         g.check_buffers()?;
+        if g.samples == 0 || g.samples > MAX_LIGHT_SAMPLES {
+            return Err(GraphError::Samples(format!(
+                "samples {} is outside 1..={MAX_LIGHT_SAMPLES}",
+                g.samples
+            )));
+        }
         for t in &g.textures {
+            if t.views != 1 && t.views != g.samples {
+                return Err(GraphError::Texture {
+                    texture: t.name.clone(),
+                    field: "views",
+                    message: format!("{} views; a texture holds 1 or the graph's {} samples", t.views, g.samples),
+                });
+            }
             if t.layers == 0 {
                 return Err(GraphError::Texture {
                     texture: t.name.clone(),
@@ -748,7 +862,23 @@ impl PassGraph {
                     path: p.shader.clone(),
                 });
             }
+            let per_sample = p.views == Views::PerLightSample;
             for s in &p.steps {
+                for w in &s.writes {
+                    let views = g.texture(&w.texture).map_or(1, |t| t.views);
+                    if per_sample && views != g.samples || !per_sample && views != 1 {
+                        return Err(GraphError::Samples(format!(
+                            "pass `{}` ({:?}) writes texture `{}` of {views} view(s)",
+                            p.name, p.views, w.texture
+                        )));
+                    }
+                }
+                if matches!(s.draw, Draw::Discontinuities { .. }) && !per_sample {
+                    return Err(GraphError::Samples(format!(
+                        "pass `{}` finds discontinuities between sample views, but renders the light's centre only",
+                        p.name
+                    )));
+                }
                 let names = s.reads.iter().map(|b| &b.texture).chain(s.writes.iter().map(|t| &t.texture));
                 for n in names {
                     if !g.textures.iter().any(|t| &t.name == n) {
@@ -856,7 +986,7 @@ impl PassGraph {
         for p in &self.passes {
             for s in &p.steps {
                 let (name, writes) = match &s.draw {
-                    Draw::Silhouettes { buffer } => (buffer, true),
+                    Draw::Silhouettes { buffer } | Draw::Discontinuities { buffer, .. } => (buffer, true),
                     Draw::Primitives { buffer, .. } => (buffer, false),
                     Draw::SceneFromLight
                     | Draw::SceneFromCamera
@@ -921,7 +1051,9 @@ mod tests {
                 mips: false,
                 transient: false,
                 channels: vec![],
+                views: 1,
             }],
+            samples: 1,
             buffers: vec![],
             passes: vec![PassDecl {
                 name: "depth".into(),
@@ -940,6 +1072,7 @@ mod tests {
                     }],
                     params: false,
                     sampler: false,
+                    light_samples: false,
                     cost: OpCount::default(),
                 }],
             }],

@@ -66,5 +66,7 @@ pub fn scene_inputs(scene: &Scene) -> Result<SceneInputs, String> {
         light_angle: v.angle,
         light_proj_y: v.proj.y_axis.y,
         light_orthographic: v.orthographic,
+        samples: Vec::new(),
+        samples_closed: false,
     })
 }

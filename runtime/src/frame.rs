@@ -2,7 +2,27 @@
 //! from it. The uniform's layout has one definition, [`crate::graph::FrameUniform`] (with
 //! [`crate::graph::FRAME_WGSL`] and [`crate::graph::FRAME_FIELDS`] derived from it).
 
-use crate::graph::FrameUniform;
+use crate::graph::{FrameUniform, SampleViewUniform};
+
+/// One light sample's view, for the passes that render one view per light sample
+/// (`views: PerLightSample`; Heidrich et al. 2000). Its near and far bound its own linear
+/// depth, as the centre's do.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleView {
+    pub light_view: [f32; 16],
+    pub light_view_proj: [f32; 16],
+    /// The sample's position, world space.
+    pub position: [f32; 3],
+    pub near: f32,
+    pub far: f32,
+    /// Element [1][1] of the view's perspective projection (1 / tan(fov / 2)).
+    pub light_proj_y: f32,
+    /// Weights of the segment of light before the sample and of the one after it (their
+    /// share of the light; 0 where there is none). A lone sample takes 1 and 1: each
+    /// segment's visibility channels start at one half (section 3.2), so a lit point's
+    /// visibilities sum to the weights' half-sums, 1 over the whole light.
+    pub weights: [f32; 2],
+}
 
 /// Everything the executor needs from a scene, as plain data (column-major matrices).
 #[derive(Clone, Debug, PartialEq)]
@@ -35,6 +55,12 @@ pub struct SceneInputs {
     /// Element [1][1] of the light's projection (1 / tan(fov / 2), or 2 / height for an orthographic light).
     pub light_proj_y: f32,
     pub light_orthographic: bool,
+    /// The light's sample views, in order along the light (empty: the scene binds no
+    /// per-sample graph).
+    pub samples: Vec<SampleView>,
+    /// The samples close a loop (the edges of a triangle or rectangle light): the last
+    /// one's next is the first.
+    pub samples_closed: bool,
 }
 
 impl SceneInputs {
@@ -65,7 +91,38 @@ impl SceneInputs {
             } else {
                 [texel, 0.0, 0.0, 0.0]
             },
+            sample: [0.0, self.samples.len() as f32, if self.samples_closed { 1.0 } else { 0.0 }, 0.0],
         }
+    }
+
+    /// The `Frame` uniform of sample view `k`: the centre's, with the sample's matrices,
+    /// position, depth range and texel size, and `sample.x = k`.
+    pub fn sample_frame(&self, k: usize) -> Option<FrameUniform> {
+        let s = self.samples.get(k)?;
+        let mut f = self.frame();
+        let n = self.shadow_size as f32;
+        f.light_view_proj = s.light_view_proj;
+        f.light_view = s.light_view;
+        f.light_position = [s.position[0], s.position[1], s.position[2], 1.0];
+        f.depth_range = [s.near, s.far, 1.0 / (s.far - s.near).max(f32::MIN_POSITIVE), 0.0];
+        f.texel_world = [2.0 / (s.light_proj_y.max(f32::MIN_POSITIVE) * n), 0.0, 0.0, 0.0];
+        f.sample[0] = k as f32;
+        Some(f)
+    }
+
+    /// The `LightSamples` uniform: every sample's view.
+    pub fn light_samples(&self) -> Vec<SampleViewUniform> {
+        let n = self.shadow_size as f32;
+        self.samples
+            .iter()
+            .map(|s| SampleViewUniform {
+                view_proj: s.light_view_proj,
+                view: s.light_view,
+                position: [s.position[0], s.position[1], s.position[2], 1.0],
+                depth_range: [s.near, s.far, 1.0 / (s.far - s.near).max(f32::MIN_POSITIVE), 0.0],
+                weights: [s.weights[0], s.weights[1], 2.0 / (s.light_proj_y.max(f32::MIN_POSITIVE) * n), 0.0],
+            })
+            .collect()
     }
 }
 

@@ -25,7 +25,7 @@ pub use crate::executor::{
     CameraOutput, Executor, FrameTimes, Generated, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility,
     read_capped,
 };
-pub use crate::frame::SceneInputs;
+pub use crate::frame::{SampleView, SceneInputs};
 pub use crate::image::Image;
 pub use crate::resources::mip_count;
 pub use crate::validate::validate_wgsl;

@@ -256,6 +256,12 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     dispatch: Dispatch::Edges,
                     generated: Some(buffer.clone()),
                 }),
+                Draw::Discontinuities { .. } => {
+                    return Err(RuntimeError::Unsupported {
+                        pass: pass.name.clone(),
+                        feature: "depth discontinuities between light-sample views".into(),
+                    });
+                }
                 Draw::Primitives { buffer, resolve } => {
                     let (clear, blend) = resolve_state(*resolve);
                     // A depth test: the light's depth attachment (cleared to 1), no blending.
@@ -353,7 +359,7 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     reads,
                     writes,
                     geometry: match &step.draw {
-                        Draw::Silhouettes { .. } => Some(GeometryGroup::Classify),
+                        Draw::Silhouettes { .. } | Draw::Discontinuities { .. } => Some(GeometryGroup::Classify),
                         Draw::Primitives { .. } => Some(GeometryGroup::Draw),
                         Draw::SceneFromLight
                         | Draw::SceneFromCamera

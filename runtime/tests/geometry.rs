@@ -90,6 +90,7 @@ fn texture(name: &str) -> TextureDecl {
         mips: false,
         transient: false,
         channels: vec![],
+        views: 1,
     }
 }
 
@@ -109,6 +110,7 @@ fn step(vertex: Option<&str>, fragment: Option<&str>, compute: Option<&str>, dra
             .collect(),
         params: false,
         sampler: false,
+        light_samples: false,
         cost: OpCount::default(),
     }
 }
@@ -137,6 +139,7 @@ fn graph() -> (PassGraph, Vec<(String, String)>) {
         lights: vec![LightModel::Any],
         params: vec![],
         params_size: 0,
+        samples: 1,
         textures: {
             let mut t: Vec<TextureDecl> = ["add", "multiply", "min", "max"].map(texture).into();
             // a depth test blends nothing: a 32-bit float target is allowed
@@ -240,6 +243,8 @@ fn inputs(tris: &[[[f32; 3]; 3]], meshes: Vec<std::ops::Range<u32>>, light: [f32
         light_angle: 0.0,
         light_proj_y: 1.0,
         light_orthographic: light[3] == 0.0,
+        samples: Vec::new(),
+        samples_closed: false,
     }
 }
 

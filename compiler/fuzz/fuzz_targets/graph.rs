@@ -246,6 +246,7 @@ fn step(u: &mut Unstructured) -> Result<Step> {
         writes,
         params: u.arbitrary()?,
         sampler: u.arbitrary()?,
+        light_samples: false,
         cost: OpCount {
             fetches: small_u32(u)?,
             ops: small_u32(u)?,
@@ -280,6 +281,7 @@ fn graph(u: &mut Unstructured) -> Result<PassGraph> {
         lights: (0..u.int_in_range(0..=3)?).map(|_| light_model(u)).collect::<Result<_>>()?,
         params: (0..u.int_in_range(0..=4)?).map(|_| param(u)).collect::<Result<_>>()?,
         params_size: small_u32(u)?,
+        samples: 1,
         textures: (0..u.int_in_range(0..=5)?).map(|_| texture(u)).collect::<Result<_>>()?,
         buffers: (0..u.int_in_range(0..=2)?)
             .map(|_| {

@@ -501,6 +501,7 @@ fn fullscreen_step(entry: String, draw: Draw, reads: Vec<Binding>, texture: &str
             .collect(),
         params: false,
         sampler: false,
+        light_samples: false,
         cost: OpCount::default(),
     }
 }
@@ -589,6 +590,7 @@ fn fs_depth(in: DepthVarying) -> @location(0) vec4<f32> {
         }],
         params: false,
         sampler: false,
+        light_samples: false,
         cost: OpCount::default(),
     };
     Ok((s, vec![step]))
@@ -919,6 +921,7 @@ fn geometry(
             writes: vec![],
             params: false,
             sampler: false,
+            light_samples: false,
             cost: OpCount::default(),
         });
     }
@@ -1182,6 +1185,7 @@ fn cs_columns(@builtin(global_invocation_id) id: vec3<u32>) {{
         writes: writes.clone(),
         params: false,
         sampler: false,
+        light_samples: false,
         cost: OpCount::default(),
     };
     let reads = src
@@ -1342,6 +1346,7 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {
         writes: vec![],
         params: em.uses_params,
         sampler: em.uses_sampler,
+        light_samples: false,
         cost: OpCount::default(),
     };
     Ok((s, vec![step]))

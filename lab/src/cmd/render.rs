@@ -4,7 +4,7 @@
 use crate::image_io::ImageFiles;
 use crate::session::{Overrides, rt};
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
-use sshc_runtime::graph::{Draw, PassGraph};
+use sshc_runtime::graph::{Draw, PassGraph, Views};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -168,6 +168,11 @@ pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edge
                     }
                     // Geometry passes: one classification per edge of the scene's meshes
                     Draw::Silhouettes { .. } => (edges as f64, 1.0),
+                    // skins: one invocation per cell of the mesh of texel centres
+                    Draw::Discontinuities { .. } => {
+                        let cells = f64::from(shadow.saturating_sub(1));
+                        (cells * cells, 1.0)
+                    }
                     // and the generated primitives' fragments, which no count of the graph
                     // and the sizes gives (`sshc render` prints the vertices drawn)
                     Draw::Primitives { .. } => (0.0, 0.0),
@@ -175,6 +180,11 @@ pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edge
                 w.invocations += n;
                 w.fetches += f64::from(s.cost.fetches) * n * runs;
                 w.ops += f64::from(s.cost.ops) * n * runs;
+            }
+            // a per-sample pass runs once per light sample
+            if p.views == Views::PerLightSample {
+                let k = f64::from(graph.samples);
+                (w.invocations, w.fetches, w.ops) = (w.invocations * k, w.fetches * k, w.ops * k);
             }
             w
         })

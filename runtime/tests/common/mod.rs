@@ -28,6 +28,7 @@ struct VOut {{ @builtin(position) pos: vec4<f32>, @location(0) d: f32 }}
         lights: vec![LightModel::Any],
         params: vec![],
         params_size: 0,
+        samples: 1,
         textures: vec![TextureDecl {
             name: "z".into(),
             format: Format::R32Float,
@@ -36,6 +37,7 @@ struct VOut {{ @builtin(position) pos: vec4<f32>, @location(0) d: f32 }}
             mips: false,
             transient: false,
             channels: vec![],
+            views: 1,
         }],
         buffers: vec![],
         passes: vec![PassDecl {
@@ -55,6 +57,7 @@ struct VOut {{ @builtin(position) pos: vec4<f32>, @location(0) d: f32 }}
                 }],
                 params: false,
                 sampler: false,
+                light_samples: false,
                 cost: OpCount::default(),
             }],
         }],
@@ -87,6 +90,8 @@ pub fn one_triangle() -> SceneInputs {
         light_angle: 0.0,
         light_proj_y: 1.0,
         light_orthographic: false,
+        samples: Vec::new(),
+        samples_closed: false,
     }
 }
 
@@ -135,6 +140,7 @@ struct ShadeOut {{
             writes: vec![],
             params: false,
             sampler: false,
+            light_samples: false,
             cost: OpCount::default(),
         }],
     });

@@ -93,6 +93,8 @@ impl QueryPlane {
             light_angle: 0.0,
             light_proj_y: proj.y_axis.y,
             light_orthographic: true,
+            samples: Vec::new(),
+            samples_closed: false,
         }
     }
 
