@@ -68,7 +68,7 @@ impl<'a> RangeEval<'a> {
                     (None, _) => Interval::UNBOUNDED,
                 }
             }
-            Node::Input(i) => {
+            Node::Input(i, _) => {
                 let (lo, hi) = i.range();
                 Interval { lo, hi }
             }

@@ -149,6 +149,14 @@ pub enum Input {
     /// The normalised depth of the penumbra-limit surface at the ribbon fragment (where
     /// the penumbra begins below the edge): the depth its depth test keeps the nearest of.
     LimitDepth,
+    /// Inside `at_sample(k, ..)`: the weight of the segment of light before sample k (0
+    /// for the first of an open chain; 1 for a lone sample).
+    SegmentBefore,
+    /// Inside `at_sample(k, ..)`: the weight of the segment after sample k.
+    SegmentAfter,
+    /// The Gouraud value of a skin fragment (Heidrich et al. 2000, section 3.2): 0 on the
+    /// occluder edge, 1 on the receiver, interpolated across the skin.
+    Skin,
 }
 
 /// Everything the compiler knows about one built-in input: check reads its name, type and
@@ -167,7 +175,7 @@ pub struct InputDesc {
 }
 
 impl Input {
-    pub const ALL: [Input; 23] = [
+    pub const ALL: [Input; 26] = [
         Input::D,
         Input::DWorld,
         Input::Uv,
@@ -191,12 +199,16 @@ impl Input {
         Input::OccluderDepth,
         Input::PenumbraLimit,
         Input::LimitDepth,
+        Input::SegmentBefore,
+        Input::SegmentAfter,
+        Input::Skin,
     ];
 
     /// The Geometry primitives whose fragments have this input (every one for the others).
     pub fn primitives(self) -> &'static [Primitive] {
         match self {
-            Input::ZFrag => &[Primitive::ConesAndSheets, Primitive::BackFaces],
+            Input::ZFrag => &[Primitive::ConesAndSheets, Primitive::BackFaces, Primitive::Skins],
+            Input::Skin => &[Primitive::Skins],
             Input::ZVertex | Input::ConeRadius | Input::ZSurface => &[Primitive::ConesAndSheets],
             Input::OccluderDepth | Input::PenumbraLimit | Input::LimitDepth => &[Primitive::Ribbons],
             Input::D
@@ -214,6 +226,8 @@ impl Input {
             | Input::LightSize
             | Input::LightWidth
             | Input::LightSpread
+            | Input::SegmentBefore
+            | Input::SegmentAfter
             | Input::LightDistant => &[
                 Primitive::ConesAndSheets,
                 Primitive::Ribbons,
@@ -414,7 +428,36 @@ impl Input {
                 wgsl: "in_limit_depth",
                 doc: "normalised depth of the penumbra-limit surface at the ribbon fragment (the depth Nearest keeps the smallest of)",
             },
+            Input::SegmentBefore => &InputDesc {
+                name: "segment_before",
+                ty: Ty::F32,
+                side: Receiver,
+                range: (0.0, 1.0),
+                wgsl: "in_segment_before",
+                doc: "inside at_sample(k, ..): weight of the light segment before sample k (its share of the light; 0 for the first sample of an open chain, 1 for a lone sample)",
+            },
+            Input::SegmentAfter => &InputDesc {
+                name: "segment_after",
+                ty: Ty::F32,
+                side: Receiver,
+                range: (0.0, 1.0),
+                wgsl: "in_segment_after",
+                doc: "inside at_sample(k, ..): weight of the light segment after sample k (0 for the last sample of an open chain, 1 for a lone sample)",
+            },
+            Input::Skin => &InputDesc {
+                name: "skin",
+                ty: Ty::F32,
+                side: Geometry,
+                range: (0.0, 1.0),
+                wgsl: "in_skin",
+                doc: "Skins only: the skin's Gouraud value, 0 on the occluder edge and 1 on the receiver (Heidrich et al. 2000, section 3.2)",
+            },
         }
+    }
+
+    /// Inputs that exist only for one light sample (inside `at_sample`).
+    pub fn per_sample(self) -> bool {
+        matches!(self, Input::SegmentBefore | Input::SegmentAfter)
     }
 
     pub fn name(self) -> &'static str {
@@ -1311,7 +1354,7 @@ pub enum SampleWgsl {
     /// module binds the filtering sampler `smp` when `sampler` is set.
     Texture {
         sampler: bool,
-        read: fn(&str, u32, &[String]) -> String,
+        read: fn(&str, &str, &[String]) -> String,
     },
     /// A box sum over a summed-area table, through the module's `box_<table>` function.
     SummedAreaTable,
@@ -1367,7 +1410,7 @@ impl SampleFn {
                 extra_args: &[],
                 wgsl: Texture {
                     sampler: true,
-                    read: |tex, layer, _| format!("textureSample({tex}, smp, in_uv, {layer}i)"),
+                    read: |tex, layer, _| format!("textureSample({tex}, smp, in_uv, {layer})"),
                 },
             },
             SampleFn::SampleLod => &SampleDesc {
@@ -1376,7 +1419,7 @@ impl SampleFn {
                 extra_args: &[Ty::F32],
                 wgsl: Texture {
                     sampler: true,
-                    read: |tex, layer, a| format!("textureSampleLevel({tex}, smp, in_uv, {layer}i, {})", a[0]),
+                    read: |tex, layer, a| format!("textureSampleLevel({tex}, smp, in_uv, {layer}, {})", a[0]),
                 },
             },
             SampleFn::SampleWidth => &SampleDesc {
@@ -1387,7 +1430,7 @@ impl SampleFn {
                     sampler: true,
                     read: |tex, layer, a| {
                         format!(
-                            "textureSampleLevel({tex}, smp, in_uv, {layer}i, log2(max({} * frame.shadow_size.x, 1.0)))",
+                            "textureSampleLevel({tex}, smp, in_uv, {layer}, log2(max({} * frame.shadow_size.x, 1.0)))",
                             a[0]
                         )
                     },
@@ -1401,7 +1444,7 @@ impl SampleFn {
                     sampler: false,
                     read: |tex, layer, _| {
                         format!(
-                            "textureLoad({tex}, clamp(vec2<i32>(floor(in_uv * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)"
+                            "textureLoad({tex}, clamp(vec2<i32>(floor(in_uv * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}, 0i)"
                         )
                     },
                 },
@@ -1414,7 +1457,7 @@ impl SampleFn {
                     sampler: false,
                     read: |tex, layer, a| {
                         format!(
-                            "textureLoad({tex}, clamp(in_base + vec2<i32>({}, {}), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)",
+                            "textureLoad({tex}, clamp(in_base + vec2<i32>({}, {}), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}, 0i)",
                             a[0], a[1]
                         )
                     },
@@ -1428,7 +1471,7 @@ impl SampleFn {
                     sampler: false,
                     read: |tex, layer, a| {
                         format!(
-                            "textureLoad({tex}, clamp(vec2<i32>(floor((in_uv + vec2<f32>({}, {})) * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}i, 0i)",
+                            "textureLoad({tex}, clamp(vec2<i32>(floor((in_uv + vec2<f32>({}, {})) * frame.shadow_size.xy)), vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), {layer}, 0i)",
                             a[0], a[1]
                         )
                     },

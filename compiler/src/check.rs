@@ -11,6 +11,7 @@ use crate::front::ast::*;
 use crate::front::expr::{BinOp, Expr, ExprKind, Literal, UnOp};
 use crate::front::parse::closest;
 use crate::ir::IrKernel;
+use crate::lower::AT_SAMPLE;
 use crate::resolve::{Item, Symbols};
 use crate::span::Span;
 use crate::types::{Resolved, Types, comp_index};
@@ -33,6 +34,8 @@ pub struct Checked {
     /// The type of every expression, what every name resolves to, and where abstract
     /// integers become f32: what `lower` builds the IR from.
     pub types: Types,
+    /// Light samples the per-sample passes render (`light_samples`, 1 when absent).
+    pub samples: u32,
 }
 
 pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
@@ -193,6 +196,16 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
         }
     }
 
+    let samples = match &t.light_samples {
+        None => 1,
+        Some(e) => light_samples(sym, e, &mut types).unwrap_or_else(|d| {
+            diags.push(d);
+            1
+        }),
+    };
+    let per_sample = per_sample_resources(sym);
+    check_sample_views(sym, &per_sample, &mut diags);
+
     let mut kernels = vec![None; t.passes.len()];
     let mut resolves = vec![None; t.passes.len()];
     for &pi in &order {
@@ -275,6 +288,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                     .collect();
                 let mut ty = Typer::new(sym, Mode::Shade, &mut types);
                 ty.available = Some(carried);
+                ty.per_sample = per_sample.clone();
                 match ty.infer_as(visibility, Ty::F32) {
                     Ok(t) => expect_f32(t, visibility.span, "the visibility", &mut diags),
                     Err(d) => diags.push(d),
@@ -293,7 +307,144 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
         kernels,
         resolves,
         types,
+        samples,
     })
+}
+
+/// The most light samples a technique renders views of (`light_samples`).
+pub const MAX_LIGHT_SAMPLES: u32 = sshc_graph::MAX_LIGHT_SAMPLES;
+
+/// `light_samples`: an integer known at compile time in 1..=MAX_LIGHT_SAMPLES.
+fn light_samples(sym: &Symbols, e: &Expr, types: &mut Types) -> Result<u32, Diagnostic> {
+    const_typed(sym, e, types, Ty::I32, "`light_samples`", "an integer")?;
+    match consteval::const_eval(sym, e)? {
+        ConstValue::Int(n) if (1..=i64::from(MAX_LIGHT_SAMPLES)).contains(&n) => Ok(n as u32),
+        ConstValue::Int(n) => Err(Diagnostic::error(
+            Phase::Check,
+            format!("{n} light samples: a technique renders 1 to {MAX_LIGHT_SAMPLES} sample views"),
+        )
+        .at(e.span, format!("evaluates to {n}"))
+        .note("each sample is a view of its own: a depth map, and a layer block of every per-sample resource")),
+        other @ (ConstValue::Float(_) | ConstValue::Bool(_)) => Err(Diagnostic::error(
+            Phase::Check,
+            format!("type mismatch: `light_samples` must be an integer, found {other}"),
+        )
+        .at(e.span, "not an integer")),
+    }
+}
+
+/// Resources written by `view: PerSample` passes: one layer block per light sample.
+fn per_sample_resources(sym: &Symbols) -> Vec<String> {
+    sym.t
+        .passes
+        .iter()
+        .filter(|p| {
+            matches!(
+                p.kind,
+                PassKind::Depth {
+                    view: LightView::PerSample,
+                    ..
+                } | PassKind::Geometry {
+                    view: LightView::PerSample,
+                    ..
+                }
+            )
+        })
+        .filter_map(|p| p.kind.writes().map(|w| w.value.clone()))
+        .collect()
+}
+
+/// Which passes may read per-sample resources, and what a `Skins` pass needs: a per-sample
+/// Geometry pass reads only per-sample resources (each view its own layer block), a
+/// centre-view pass none; Shade reads them through `at_sample` (checked by the typer).
+/// `Skins` run per sample, resolve by the depth test and name the neighbour they warp;
+/// the other primitives grow from the silhouettes seen from the light's centre.
+fn check_sample_views(sym: &Symbols, per_sample: &[String], diags: &mut Diagnostics) {
+    for p in &sym.t.passes {
+        let sampled = match &p.kind {
+            PassKind::Geometry { view, .. } => *view == LightView::PerSample,
+            PassKind::Shade { .. } | PassKind::Depth { .. } => continue,
+            PassKind::Map { .. } | PassKind::Filter { .. } | PassKind::Mipmap { .. } | PassKind::SummedArea { .. } => false,
+        };
+        for r in p.kind.reads() {
+            let is = per_sample.contains(&r.value);
+            if is != sampled {
+                let d = Diagnostic::error(
+                    Phase::Check,
+                    if is {
+                        format!(
+                            "{} pass `{}` reads `{}`, which holds one view per light sample",
+                            p.kind.kind_name(),
+                            p.name.value,
+                            r.value
+                        )
+                    } else {
+                        format!(
+                            "Geometry pass `{}` renders one view per light sample but reads `{}`, seen from the light's centre",
+                            p.name.value, r.value
+                        )
+                    },
+                )
+                .at(r.span, "read here");
+                diags.push(if is {
+                    d.note("per-sample resources are read by per-sample Geometry passes and, through `at_sample(k, ..)`, by the Shade pass")
+                } else {
+                    d.help("read resources written with `view: PerSample`")
+                });
+            }
+        }
+        if let PassKind::Geometry {
+            primitive, view, from, ..
+        } = &p.kind
+        {
+            let skins = *primitive == Primitive::Skins;
+            if skins && *view != LightView::PerSample {
+                diags.push(
+                    Diagnostic::error(Phase::Check, format!("Geometry pass `{}` draws Skins from the light's centre", p.name.value))
+                        .at(p.kind_span, "skins join two sample views")
+                        .note("skins are depth discontinuities of one sample's map warped into its neighbour's view (Heidrich et al. 2000, section 3.2)")
+                        .help("write `view: PerSample`"),
+                );
+            }
+            if !skins && *view == LightView::PerSample {
+                diags.push(
+                    Diagnostic::error(
+                        Phase::Check,
+                        format!("Geometry pass `{}` draws {primitive:?} once per light sample", p.name.value),
+                    )
+                    .at(p.kind_span, "only Skins are drawn per sample")
+                    .note("cones, sheets, ribbons and back faces grow from the silhouettes seen from the light's centre"),
+                );
+            }
+            match (skins, from) {
+                (true, None) => diags.push(
+                    Diagnostic::error(Phase::Check, format!("Skins pass `{}` does not say which neighbour it warps", p.name.value))
+                        .at(p.kind_span, "missing `from`")
+                        .help("add `from: Previous` (skins of sample k - 1 into view k) or `from: Next` (of sample k + 1)"),
+                ),
+                (false, Some(f)) => diags.push(
+                    Diagnostic::error(Phase::Check, format!("`from` is a field of Skins passes, not of {primitive:?}"))
+                        .at(f.span, "remove this"),
+                ),
+                _ => {}
+            }
+            if skins && !p.kind.reads().iter().any(|r| is_depth_resource(sym, &r.value)) {
+                diags.push(
+                    Diagnostic::error(Phase::Check, format!("Skins pass `{}` reads no per-sample Depth resource", p.name.value))
+                        .at(p.kind_span, "skins are found in the samples' depth maps")
+                        .help("add the resource of a `Depth(view: PerSample)` pass to `reads`"),
+                );
+            }
+        }
+    }
+}
+
+/// Whether `name` is written by a Depth pass.
+fn is_depth_resource(sym: &Symbols, name: &str) -> bool {
+    sym.t
+        .passes
+        .iter()
+        .any(|p| matches!(p.kind, PassKind::Depth { .. }) && p.kind.writes().is_some_and(|w| w.value == name))
 }
 
 fn expect_f32(t: Ty, span: Span, what: &str, diags: &mut Diagnostics) {
@@ -843,6 +994,10 @@ struct Typer<'s, 'a> {
     /// For a Shade pass: channels and expansions its reads carry, and the resource of each.
     /// What a Shade pass's reads carry: (item, resource, whether a summed-area table).
     available: Option<Vec<(Item, String, bool)>>,
+    /// For a Shade pass: the resources that hold one view per light sample.
+    per_sample: Vec<String>,
+    /// Inside `at_sample(k, ..)`.
+    in_sample: bool,
     /// One entry per term the enclosing series unroll to (one empty entry outside any):
     /// the values of their variables, outermost first (`None` where a bound was not known).
     envs: Vec<Vec<Option<i64>>>,
@@ -858,6 +1013,8 @@ impl<'s, 'a> Typer<'s, 'a> {
             locals: vec![],
             uses: vec![],
             available: None,
+            per_sample: vec![],
+            in_sample: false,
             envs: vec![vec![]],
         }
     }
@@ -1309,6 +1466,11 @@ impl<'s, 'a> Typer<'s, 'a> {
             if self.mode == Mode::Const {
                 return Err(Self::err(span, format!("`{n}` is not known at compile time"), "a per-pixel input").note(input.doc()));
             }
+            if input.per_sample() && !self.in_sample {
+                return Err(Self::err(span, format!("`{n}` belongs to one light sample"), "outside `at_sample`")
+                    .note(input.doc())
+                    .help(format!("use it inside `at_sample(k, ...)`")));
+            }
             if input.side() != Side::Both {
                 self.uses.push(Use {
                     name: n.to_string(),
@@ -1365,7 +1527,51 @@ impl<'s, 'a> Typer<'s, 'a> {
         Err(d)
     }
 
+    /// `at_sample(k, body)`: k an integer known at compile time (a literal, a fixed param
+    /// or a series variable), body any value, evaluated with the receiver seen from light
+    /// sample k; in the Shade pass only, and not nested.
+    fn at_sample(&mut self, name_span: Span, args: &'a [Expr], span: Span) -> Result<Ty, Diagnostic> {
+        if self.mode != Mode::Shade {
+            return Err(Self::err(
+                name_span,
+                format!("`{AT_SAMPLE}` is only available in a Shade pass"),
+                "it picks a light sample's view of the receiver",
+            ));
+        }
+        if self.in_sample {
+            return Err(Self::err(name_span, format!("`{AT_SAMPLE}` inside `{AT_SAMPLE}`"), "nested").help("one sample's view at a time"));
+        }
+        if args.len() != 2 {
+            return Err(Self::err(
+                span,
+                format!("`{AT_SAMPLE}` takes 2 arguments (a sample index and a value), found {}", args.len()),
+                "wrong number of arguments",
+            ));
+        }
+        let mode = self.mode;
+        self.mode = Mode::Const;
+        let k = self.infer_as(&args[0], Ty::I32);
+        self.mode = mode;
+        match k? {
+            Ty::I32 | Ty::AbstractInt => {}
+            t => {
+                return Err(Self::err(
+                    args[0].span,
+                    format!("type mismatch: a sample index is an integer, found {t}"),
+                    format!("this is {t}"),
+                ));
+            }
+        }
+        self.in_sample = true;
+        let t = self.infer(&args[1]);
+        self.in_sample = false;
+        t
+    }
+
     fn call(&mut self, name: &str, name_span: Span, args: &'a [Expr], span: Span) -> Result<Ty, Diagnostic> {
+        if name == AT_SAMPLE {
+            return self.at_sample(name_span, args, span);
+        }
         if let Some((how, expand)) = SampleFn::from_name(name) {
             if self.mode != Mode::Shade {
                 return Err(Self::err(
@@ -1433,6 +1639,25 @@ impl<'s, 'a> Typer<'s, 'a> {
                     .help("read only one version of it"));
                 }
                 let (holder, table) = holders[0];
+                let sampled = self.per_sample.iter().any(|r| r == holder);
+                if sampled != self.in_sample {
+                    return Err(if sampled {
+                        Self::err(
+                            args[0].span,
+                            format!("`{target}` is held once per light sample by `{holder}`: say which sample"),
+                            "which sample's view?",
+                        )
+                        .help(format!("look it up inside `at_sample(k, ...)`, e.g. `sum(k in 0..=N - 1, at_sample(k, {name}({target}...)))`"))
+                    } else {
+                        Self::err(
+                            args[0].span,
+                            format!("`{target}` is seen from the light's centre, but this lookup is inside `at_sample`"),
+                            "a centre-view channel",
+                        )
+                        .note("inside `at_sample(k, ..)` the receiver's uv and depth are those of sample k's view")
+                        .help("look it up outside `at_sample`")
+                    });
+                }
                 if table != (how == SampleFn::Box) {
                     let d = if table {
                         Self::err(

@@ -81,7 +81,7 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
                 mips,
                 transient: false,
                 channels,
-                views: 1,
+                views: if ir.per_sample(ri) { ir.samples } else { 1 },
             });
         }
     }
@@ -134,7 +134,7 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
         params,
         params_size,
         textures,
-        samples: 1,
+        samples: ir.samples,
         buffers: out.modules.iter().flat_map(|m| m.buffers.iter().cloned()).collect(),
         passes,
         removed: ir.removed.to_vec(),

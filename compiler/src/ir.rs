@@ -5,7 +5,7 @@
 
 use crate::builtins::{Func, Input, SampleFn, Ty};
 use crate::consteval;
-use crate::front::ast::{ConstValue, LightModel, LightView, Precision, Primitive, Reduce, Resolve, ScalarTy};
+use crate::front::ast::{ConstValue, LightModel, LightView, Neighbour, Precision, Primitive, Reduce, Resolve, ScalarTy};
 use crate::front::expr::{BinOp, UnOp, fmt_float};
 use crate::handle::{Arena as Table, Handle, Kind};
 pub use crate::interval::{Interval, short};
@@ -55,7 +55,9 @@ pub enum Node {
     Bool(bool),
     /// A runtime uniform parameter.
     Param(ParamId),
-    Input(Input),
+    /// A built-in input; receiver-side inputs inside `at_sample(k, ..)` carry the sample
+    /// view k (`Some(k)`): the receiver seen from light sample k.
+    Input(Input, Option<u8>),
     /// Map side: the value of a channel at the texel being computed.
     Channel(ChannelId),
     /// Receiver side: a lookup of `channel` in `resource`.
@@ -64,6 +66,9 @@ pub enum Node {
         resource: ResId,
         how: SampleFn,
         args: Vec<H>,
+        /// The light sample's view inside `at_sample(k, ..)` (the channel's resource holds
+        /// one layer block per sample); `None` for the centre.
+        view: Option<u8>,
     },
     Unary(UnOp, H),
     Binary(BinOp, H, H),
@@ -113,7 +118,7 @@ impl Arena {
             Node::I32(v) => Some(ConstValue::Int(*v as i64)),
             Node::Bool(v) => Some(ConstValue::Bool(*v)),
             Node::Param(_)
-            | Node::Input(_)
+            | Node::Input(..)
             | Node::Channel(_)
             | Node::Sample { .. }
             | Node::Unary(..)
@@ -225,7 +230,7 @@ impl Arena {
             | Node::I32(_)
             | Node::Bool(_)
             | Node::Param(_)
-            | Node::Input(_)
+            | Node::Input(..)
             | Node::Channel(_)
             | Node::Sample { .. }
             | Node::Swizzle(..) => None,
@@ -268,7 +273,7 @@ impl Arena {
             Node::Unary(_, a) | Node::Swizzle(a, _) => vec![*a],
             Node::Binary(_, a, b) => vec![*a, *b],
             Node::Call(_, args) | Node::Sample { args, .. } => args.clone(),
-            Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(_) | Node::Channel(_) => vec![],
+            Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(_) => vec![],
         }
     }
 
@@ -301,7 +306,12 @@ impl Arena {
                     let _ = write!(s, "param{}", p.index());
                 }
             },
-            Node::Input(i) => s.push_str(i.name()),
+            Node::Input(i, view) => {
+                s.push_str(i.name());
+                if let Some(k) = view {
+                    let _ = write!(s, "@{k}");
+                }
+            }
             Node::Channel(c) => s.push_str(&chan(*c)),
             Node::Sample { channel, how, args, .. } => {
                 let _ = write!(s, "{}({}", how.name(false), chan(*channel));
@@ -404,7 +414,7 @@ impl Arena {
                         .collect();
                     eval_call_f64(*f, &args).unwrap_or(f64::NAN)
                 }
-                other @ (Node::Param(_) | Node::Input(_) | Node::Channel(_) | Node::Sample { .. } | Node::Swizzle(..)) => {
+                other @ (Node::Param(_) | Node::Input(..) | Node::Channel(_) | Node::Sample { .. } | Node::Swizzle(..)) => {
                     leaf(other).unwrap_or(f64::NAN)
                 }
             };
@@ -665,6 +675,8 @@ pub enum IrPassKind {
         view: LightView,
         /// Fragments for which this bool is false are discarded.
         keep: Option<H>,
+        /// `Skins`: the neighbouring sample whose discontinuities are warped in.
+        from: Option<Neighbour>,
     },
     Shade {
         visibility: H,
@@ -709,6 +721,27 @@ pub struct Ir {
     /// In execution order.
     pub passes: Table<IrPass>,
     pub arena: Arena,
+    /// Light samples the per-sample passes render one view each of (1 without any).
+    pub samples: u32,
+}
+
+impl Ir {
+    /// Whether resource `r` holds one layer block per light sample (a per-sample pass
+    /// writes it).
+    pub fn per_sample(&self, r: ResId) -> bool {
+        self.passes.iter().any(|p| {
+            p.writes == Some(r)
+                && matches!(
+                    p.kind,
+                    IrPassKind::Depth {
+                        view: LightView::PerSample
+                    } | IrPassKind::Geometry {
+                        view: LightView::PerSample,
+                        ..
+                    }
+                )
+        })
+    }
 }
 
 /// The product of `pack`, beside the IR (which `pack` only reads): the resources with

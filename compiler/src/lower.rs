@@ -15,6 +15,9 @@ use crate::resolve::{Item, Symbols};
 use crate::span::Span;
 use crate::types::{Resolved, Types, comp_index};
 
+/// `at_sample(k, body)`: `body` with the receiver seen from light sample `k`.
+pub const AT_SAMPLE: &str = "at_sample";
+
 /// Lowering stops past this many distinct expression nodes.
 pub const MAX_NODES: usize = 1 << 20;
 
@@ -33,6 +36,10 @@ struct Lowerer<'s, 'a> {
     expansions: &'s Table<IrExpansion>,
     /// For a Shade pass: what its reads carry.
     shade_reads: Option<Vec<(Item, ResId)>>,
+    /// Inside `at_sample(k, ..)`: the light sample k.
+    view: Option<u8>,
+    /// Light samples of the technique (`at_sample`'s index runs over 0..samples).
+    samples: u32,
 }
 
 /// An invariant `check` established does not hold: a compiler bug, reported as a value.
@@ -58,6 +65,8 @@ impl<'s, 'a> Lowerer<'s, 'a> {
             channel_ids,
             expansions,
             shade_reads,
+            view: None,
+            samples: 1,
         }
     }
 
@@ -267,13 +276,43 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 }
             }
             Resolved::Constant(c) => self.arena.f32(c),
-            Resolved::Input(input) => self.arena.add(Node::Input(input), input.ty(), span),
+            Resolved::Input(input) => {
+                // receiver-side inputs (and the sample's segment weights) are the view's
+                let view = if input.side() == crate::builtins::Side::Receiver {
+                    self.view
+                } else {
+                    None
+                };
+                self.arena.add(Node::Input(input, view), input.ty(), span)
+            }
             Resolved::Channel(c) => self.arena.add(Node::Channel(self.channel_ids[c]), Ty::F32, span),
         })
     }
 
     fn call(&mut self, name: &str, args: &[Expr], e: &Expr) -> Result<H, Diagnostic> {
         let span = e.span;
+        if name == AT_SAMPLE {
+            // `at_sample(k, body)`: body with the receiver seen from light sample k
+            let k = self.expr(&args[0])?;
+            let k = match self.arena.as_const(k) {
+                Some(ConstValue::Int(v)) => v,
+                _ => return Err(internal(args[0].span, "`at_sample` index not known at compile time")),
+            };
+            if !(0..i64::from(self.samples)).contains(&k) {
+                return Err(self.in_series(
+                    Self::err(
+                        args[0].span,
+                        format!("light sample {k} does not exist: the technique has {} (`light_samples`)", self.samples),
+                        "sample index out of range",
+                    )
+                    .help(format!("sample indices run from 0 to {}", self.samples.saturating_sub(1))),
+                ));
+            }
+            let outer = self.view.replace(k as u8);
+            let r = self.expr_coerced(&args[1]);
+            self.view = outer;
+            return r;
+        }
         if let Some((how, expand)) = SampleFn::from_name(name) {
             let Some(reads) = self.shade_reads.clone() else {
                 return Err(internal(span, "lookup outside a Shade pass"));
@@ -298,6 +337,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                             resource: res,
                             how,
                             args: extra.clone(),
+                            view: self.view,
                         },
                         Ty::F32,
                         span,
@@ -317,6 +357,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                     resource: res,
                     how,
                     args: extra,
+                    view: self.view,
                 },
                 Ty::F32,
                 span,
@@ -456,8 +497,11 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             },
             PassKind::Mipmap { reduce, .. } => IrPassKind::Mipmap { reduce: *reduce },
             PassKind::SummedArea { .. } => IrPassKind::SummedArea,
-            PassKind::Geometry { primitive, view, keep, .. } => IrPassKind::Geometry {
+            PassKind::Geometry {
+                primitive, view, keep, from, ..
+            } => IrPassKind::Geometry {
                 primitive: *primitive,
+                from: from.as_ref().map(|f| f.value),
                 resolve: checked.resolves[pi].ok_or_else(|| internal(p.span, "Geometry pass without its checked resolve rule"))?,
                 view: *view,
                 keep: match keep {
@@ -477,6 +521,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     }
                 }
                 let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &expansions, Some(shade_reads));
+                l.samples = checked.samples;
                 let v = l.expr_coerced(visibility).map_err(Diagnostics::from)?;
                 IrPassKind::Shade { visibility: v }
             }
@@ -540,5 +585,6 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         resources,
         passes,
         arena,
+        samples: checked.samples,
     })
 }

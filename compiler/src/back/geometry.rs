@@ -6,6 +6,9 @@
 //! - `silhouettes.wgsl`: the edges, the silhouette rule and the light-view helpers, shared.
 //! - `ConesAndSheets` (penumbra maps, Wyman & Hansen 2003, section 3): `cones_and_sheets.wgsl`.
 //! - `Ribbons` (penumbra limit maps, Lawlor 2006, section 3.1): `ribbons.wgsl`.
+//! - `Skins` (linear lights, Heidrich et al. 2000, section 3.2): `skins.wgsl`, built from
+//!   the depth discontinuities of a neighbouring sample's map rather than from silhouettes;
+//!   the compiler prepends `SKIN_FROM`, `sk_depth` and `sk_threshold` (`wgsl.rs`).
 //!
 //! `BackFaces` draws the scene's own triangles and needs no library (`wgsl.rs`).
 
@@ -26,6 +29,11 @@ pub const RIBBON_MARGIN: u32 = 2;
 const SILHOUETTES: &str = include_str!("silhouettes.wgsl");
 const CONES_AND_SHEETS: &str = include_str!("cones_and_sheets.wgsl");
 const RIBBONS: &str = include_str!("ribbons.wgsl");
+const SKINS: &str = include_str!("skins.wgsl");
+
+/// The technique param a `Skins` pass reads its discontinuity threshold from (normalised
+/// depth; `skins.wgsl` states the detector).
+pub const SKIN_THRESHOLD_PARAM: &str = "skin_threshold";
 
 /// The library of one primitive kind: its entry points, record layout and what its
 /// fragments provide.
@@ -119,7 +127,25 @@ const VERTICES_PER_RECORD: u32 = 6u;
                 generated("Ribbon")
             ),
         }),
-        Primitive::Skins | Primitive::BackFaces => None,
+        Primitive::Skins => Some(Library {
+            compute: "cs_skins",
+            vertex: "vs_skins",
+            record_bytes: 48,
+            record: "Skin",
+            vertices_per_record: 3,
+            varying: "SkinsVarying",
+            inputs: "    let in_skin = in.skin;\n    let in_z_frag = in.z_frag;\n",
+            depth: None,
+            // no edges: the records come from a depth map (group 1)
+            source: format!(
+                "{SKINS}{}
+@group(3) @binding(3) var<storage, read_write> cs_out: GeneratedRw;
+@group(3) @binding(4) var<storage, read> cs_records: Generated;
+",
+                generated("Skin")
+            ),
+        }),
+        Primitive::BackFaces => None,
     }
 }
 

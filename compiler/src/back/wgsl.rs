@@ -7,7 +7,7 @@
 use crate::back::geometry;
 use crate::builtins::{Func, Input, SampleFn, SampleWgsl, Sig, Ty, Wgsl};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
-use crate::front::ast::{ConstValue, Precision, Primitive, Reduce, Resolve};
+use crate::front::ast::{ConstValue, LightView, Precision, Primitive, Reduce, Resolve};
 use crate::front::expr::{BinOp, UnOp};
 use crate::ir::*;
 use crate::pack::{Limits, layers_per_subpass, table_source};
@@ -130,6 +130,11 @@ struct Emitter<'a> {
     /// Map side: the resources the pass reads.
     reads: Vec<ResId>,
     counter: usize,
+    /// Receiver side: the light samples whose views `at_sample` used.
+    views: std::collections::BTreeSet<u8>,
+    /// Map and geometry side, in a per-sample pass: per-sample resources are read at the
+    /// layer block of the view being rendered (`frame.sample.x`).
+    per_sample_pass: bool,
 }
 
 impl<'a> Emitter<'a> {
@@ -146,6 +151,20 @@ impl<'a> Emitter<'a> {
             uses_sampler: false,
             reads,
             counter: 0,
+            views: Default::default(),
+            per_sample_pass: false,
+        }
+    }
+
+    /// The layer of `layer` of texture `t` of resource `res` in sample view `view`, as WGSL:
+    /// a per-sample resource holds one block of `t.layers` layers per sample.
+    fn view_layer(&self, res: ResId, t: usize, layer: u32, view: Option<u8>) -> String {
+        let r = &self.ir.resources[res];
+        let per = r.textures[t].layers;
+        match view {
+            Some(k) => format!("{}i", u32::from(k) * per + layer),
+            None if self.per_sample_pass && self.ir.per_sample(res) => format!("(i32(frame.sample.x) * {per}i + {layer}i)"),
+            None => format!("{layer}i"),
         }
     }
 
@@ -179,15 +198,17 @@ impl<'a> Emitter<'a> {
     }
 
     /// The WGSL texture name and decode of a channel in a resource: (binding, layer, component, encode).
-    fn locate(&mut self, res: ResId, ch: ChannelId, view: View) -> Result<(String, u32, u32, Encode), Diagnostic> {
+    fn locate(&mut self, res: ResId, ch: ChannelId, view: View, sample: Option<u8>) -> Result<(String, String, u32, Encode), Diagnostic> {
         let r = &self.ir.resources[res];
         let slot = r
             .slot_of(ch)
             .ok_or_else(|| internal(format!("channel {} missing from `{}`", self.ir.channels[ch].name, r.name)))?;
         let (t, layer, comp) = slot.place();
         let name = r.textures[t].name.clone();
+        let (comp, encode) = (comp, slot.encode);
+        let layer = self.view_layer(res, t, layer, sample);
         let b = self.binding(&name, view);
-        Ok((b, layer, comp, slot.encode))
+        Ok((b, layer, comp, encode))
     }
 
     fn decode(stored: &str, e: Encode) -> String {
@@ -207,7 +228,7 @@ impl<'a> Emitter<'a> {
             let node = self.ir.arena.node(h);
             let leaf = matches!(
                 node,
-                Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(_) | Node::Channel(_)
+                Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(_)
             );
             if leaf {
                 self.names.insert(h, e);
@@ -254,14 +275,19 @@ impl<'a> Emitter<'a> {
                     format!("params.{}", prm.name)
                 }
             }
-            Node::Input(i) => self.input(i),
+            Node::Input(i, None) => self.input(i),
+            Node::Input(i, Some(k)) => {
+                self.views.insert(k);
+                format!("{}_v{k}", self.input(i))
+            }
             Node::Channel(c) => self.load_map_channel(c)?,
             Node::Sample {
                 channel,
                 resource,
                 how,
                 args,
-            } => self.sample(channel, resource, how, &args)?,
+                view,
+            } => self.sample(channel, resource, how, &args, view)?,
             Node::Unary(UnOp::Neg, x) => format!("-{}", self.n(x)),
             Node::Unary(UnOp::Not, x) => format!("!{}", self.n(x)),
             Node::Binary(op, x, y) => format!("{} {} {}", self.n(x), op.symbol(), self.n(y)),
@@ -281,13 +307,13 @@ impl<'a> Emitter<'a> {
             .copied()
             .find(|&r| self.ir.resources[r].slot_of(c).is_some())
             .ok_or_else(|| internal("map channel not read"))?;
-        let (tex, layer, comp, enc) = self.locate(res, c, View::Base)?;
+        let (tex, layer, comp, enc) = self.locate(res, c, View::Base, None)?;
         let key = format!("{tex}/{layer}");
         let v = match self.fetches.get(&key) {
             Some(v) => v.clone(),
             None => {
                 let v = self.fresh("texel_");
-                self.line(&format!("let {v} = textureLoad({tex}, texel, {layer}i, 0i);"));
+                self.line(&format!("let {v} = textureLoad({tex}, texel, {layer}, 0i);"));
                 self.fetches.insert(key, v.clone());
                 v
             }
@@ -295,8 +321,11 @@ impl<'a> Emitter<'a> {
         Ok(Self::decode(&format!("{v}.{}", COMP[comp as usize]), enc))
     }
 
-    fn sample(&mut self, ch: ChannelId, res: ResId, how: SampleFn, args: &[H]) -> Result<String, Diagnostic> {
-        let (tex, layer, comp, enc) = self.locate(res, ch, View::All)?;
+    fn sample(&mut self, ch: ChannelId, res: ResId, how: SampleFn, args: &[H], view: Option<u8>) -> Result<String, Diagnostic> {
+        if let Some(k) = view {
+            self.views.insert(k);
+        }
+        let (tex, layer, comp, enc) = self.locate(res, ch, View::All, view)?;
         let args: Vec<String> = args.iter().map(|a| self.n(*a).to_string()).collect();
         let key = format!("{tex}/{layer}/{how:?}/{}", args.join(","));
         let v = match self.fetches.get(&key) {
@@ -321,12 +350,17 @@ impl<'a> Emitter<'a> {
                         if !self.tables.iter().any(|(n, _)| *n == name) {
                             self.tables.push((name.clone(), scale));
                         }
-                        format!("box_{name}(in_uv, vec2<f32>({}, {}), {layer}i)", args[0], args[1])
+                        format!("box_{name}(in_uv, vec2<f32>({}, {}), {layer})", args[0], args[1])
                     }
                     SampleWgsl::Texture { sampler, read } => {
                         self.uses_sampler |= sampler;
-                        read(&tex, layer, &args)
+                        read(&tex, &layer, &args)
                     }
+                };
+                // inside `at_sample(k, ..)`, the receiver's coordinates in view k
+                let call = match view {
+                    Some(k) => in_view(&call, k),
+                    None => call,
                 };
                 self.line(&format!("let {v} = {call};"));
                 self.fetches.insert(key, v.clone());
@@ -347,6 +381,10 @@ impl<'a> Emitter<'a> {
         }
         if self.uses_sampler {
             s.push_str("@group(0) @binding(2) var smp: sampler;\n");
+        }
+        if !self.views.is_empty() {
+            s.push_str(graph::LIGHT_SAMPLES_WGSL);
+            s.push_str("@group(0) @binding(3) var<uniform> light_samples: LightSamples;\n");
         }
         for (i, (name, _)) in self.bindings.iter().enumerate() {
             match self.tables.iter().find(|(n, _)| n == name) {
@@ -440,6 +478,64 @@ fn box_{name}(uv: vec2<f32>, w: vec2<f32>, layer: i32) -> vec4<f32> {{
         c10 = rect(2, 3, 0, 1),
         c01 = rect(0, 1, 2, 3),
         c11 = rect(2, 3, 2, 3),
+    )
+}
+
+/// `wgsl` with the receiver's shadow-map coordinates (`in_uv`, `in_base`) replaced by
+/// those of light sample `k`'s view.
+fn in_view(wgsl: &str, k: u8) -> String {
+    let mut out = String::with_capacity(wgsl.len() + 8);
+    let mut rest = wgsl;
+    while let Some(i) = rest.find("in_") {
+        let (head, tail) = rest.split_at(i);
+        out.push_str(head);
+        let boundary = head.chars().last().is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
+        let word = ["in_uv", "in_base"]
+            .into_iter()
+            .find(|w| tail.starts_with(w) && !tail[w.len()..].starts_with(|c: char| c.is_alphanumeric() || c == '_'));
+        match word {
+            Some(w) if boundary => {
+                out.push_str(&format!("{w}_v{k}"));
+                rest = &tail[w.len()..];
+            }
+            _ => {
+                out.push_str("in_");
+                rest = &tail[3..];
+            }
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The receiver seen from light sample `k`: the `in_*_v{k}` locals of every receiver-side
+/// input, as the centre's are computed from `frame`, from the sample's view in
+/// `light_samples` (its own matrices, depth range and texel size; the weights of its
+/// segments).
+fn sample_prologue(k: u8) -> String {
+    format!(
+        "    // the receiver seen from light sample {k}
+    let sv{k} = light_samples.views[{k}];
+    let in_d_world_v{k} = -(sv{k}.view * world).z;
+    let in_d_v{k} = (in_d_world_v{k} - sv{k}.depth_range.x) * sv{k}.depth_range.z;
+    let light_clip_v{k} = sv{k}.view_proj * world;
+    let in_uv_v{k} = light_clip_v{k}.xy / light_clip_v{k}.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+    let in_ndotl_v{k} = dot(n, normalize(sv{k}.position.xyz - in.world));
+    let in_slope_v{k} = min(sqrt(max(1.0 - in_ndotl_v{k} * in_ndotl_v{k}, 0.0)) / max(abs(in_ndotl_v{k}), 0.01), 100.0);
+    let texel_pos_v{k} = in_uv_v{k} * frame.shadow_size.xy - 0.5;
+    let in_tf_v{k} = fract(texel_pos_v{k});
+    let in_texel_depth_v{k} = sv{k}.weights.z * in_d_world_v{k} * sv{k}.depth_range.z;
+    let in_base_v{k} = vec2<i32>(floor(texel_pos_v{k}));
+    let duv_dx_v{k} = dpdx(in_uv_v{k});
+    let duv_dy_v{k} = dpdy(in_uv_v{k});
+    let dd_dx_v{k} = dpdx(in_d_v{k});
+    let dd_dy_v{k} = dpdy(in_d_v{k});
+    let det_v{k} = duv_dx_v{k}.x * duv_dy_v{k}.y - duv_dx_v{k}.y * duv_dy_v{k}.x;
+    let g_v{k} = vec2<f32>(dd_dx_v{k} * duv_dy_v{k}.y - duv_dx_v{k}.y * dd_dy_v{k}, duv_dx_v{k}.x * dd_dy_v{k} - dd_dx_v{k} * duv_dy_v{k}.x);
+    let in_depth_slope_v{k} = select(0.0, min(length(g_v{k} / det_v{k}) * frame.shadow_size.z, 0.1), abs(det_v{k}) > 1e-14);
+    let in_segment_before_v{k} = sv{k}.weights.x;
+    let in_segment_after_v{k} = sv{k}.weights.y;
+"
     )
 }
 
@@ -666,13 +762,23 @@ fn channel_entries<'a>(
     let w = pass.writes.ok_or_else(|| internal("a pass computing channels without output"))?;
     let res = &ir.resources[w];
     let (mut bodies, mut structs, mut steps) = (String::new(), String::new(), Vec::new());
+    // a per-sample pass reads per-sample resources in the view it renders
+    let per_sample = matches!(
+        pass.kind,
+        IrPassKind::Geometry {
+            view: LightView::PerSample,
+            ..
+        }
+    );
     let mut decl = Emitter::new(ir, side, pass.reads.clone());
+    decl.per_sample_pass = per_sample;
     for (ti, tex) in res.textures.iter().enumerate() {
         for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
             let entry = format!("fs_{}_{ci}", tex.name);
             let out_name = format!("Out_{}_{ci}", tex.name);
             structs.push_str(&out_struct(&out_name, chunk.len(), form.depth.is_some()));
             let mut em = Emitter::new(ir, side, pass.reads.clone());
+            em.per_sample_pass = per_sample;
             em.bindings = decl.bindings.clone();
             (form.prelude)(&mut em)?;
             let mut outs = Vec::new();
@@ -783,14 +889,6 @@ fn geometry(
     keep: Option<H>,
     limits: &Limits,
 ) -> Result<(String, Vec<Step>), Diagnostic> {
-    if primitive == Primitive::Skins {
-        return Err(Diagnostic::error(
-            Phase::Codegen,
-            format!("pass `{}`: `primitive: {primitive:?}` has no primitive builder yet", pass.name),
-        )
-        .at(pass.span, "cannot generate code for this pass yet")
-        .note("`ConesAndSheets`, `Ribbons` and `BackFaces` are built; skins come with linear lights"));
-    }
     let w = pass.writes.ok_or_else(|| internal("geometry pass without output"))?;
     let res = &ir.resources[w];
     for tex in &res.textures {
@@ -829,6 +927,39 @@ fn geometry(
                         .help("add the Depth pass's resource to `reads`")
                 })?,
         )
+    } else {
+        None
+    };
+    // Skins: the per-sample Depth resource whose discontinuities they span, and the
+    // detector's threshold.
+    let skins = if primitive == Primitive::Skins {
+        let depth = pass
+            .reads
+            .iter()
+            .copied()
+            .find(|&r| matches!(ir.passes[ir.resources[r].writer].kind, IrPassKind::Depth { .. }))
+            .ok_or_else(|| internal("Skins pass without a Depth resource (check refuses it)"))?;
+        let threshold = ir
+            .params
+            .iter()
+            .find(|p| p.name == geometry::SKIN_THRESHOLD_PARAM)
+            .ok_or_else(|| {
+                Diagnostic::error(
+                    Phase::Codegen,
+                    format!("Skins pass `{}` needs the param `{}`", pass.name, geometry::SKIN_THRESHOLD_PARAM),
+                )
+                .at(pass.span, "its discontinuity detector has no threshold")
+                .note("a skin spans a depth step larger than the threshold (normalised depth) where the map's 3x3 Laplacian of Gaussian exceeds it too")
+                .help(format!(
+                    "declare `{}: (type: F32, default: 0.02)` in `params`",
+                    geometry::SKIN_THRESHOLD_PARAM
+                ))
+            })?;
+        let from = match pass.kind {
+            IrPassKind::Geometry { from: Some(f), .. } => f,
+            _ => return Err(internal("Skins pass without `from` (check refuses it)")),
+        };
+        Some((depth, threshold, from))
     } else {
         None
     };
@@ -910,8 +1041,68 @@ fn geometry(
             depth: lib.as_ref().and_then(|l| l.depth),
         },
     )?;
+    let mut entries = entries;
     let mut steps = Vec::new();
-    if let Some(lib) = &lib {
+    let mut prefix = String::new();
+    if let Some((depth, threshold, from)) = skins {
+        // the source map's depth, decoded, and the threshold, ahead of the library
+        let r = &ir.resources[depth];
+        let slot = r.slots.first().ok_or_else(|| internal("depth resource without channel"))?;
+        let (t, layer, comp) = slot.place();
+        let per = r.textures[t].layers;
+        let tex = entries.decl.binding(&r.textures[t].name, View::Base);
+        let stored = format!("textureLoad({tex}, clamp(t, vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), view * {per}i + {layer}i, 0i).{}", COMP[comp as usize]);
+        let tau = if threshold.uniform {
+            entries.decl.uses_params = true;
+            format!("params.{}", threshold.name)
+        } else {
+            f32_lit(threshold.value.as_f64() as f32)
+        };
+        let _ = write!(
+            prefix,
+            "{}@group(0) @binding(3) var<uniform> light_samples: LightSamples;
+
+const SKIN_FROM: i32 = {};
+
+// linear depth of sample view `view` at texel t (clamped to the map)
+fn sk_depth(t: vec2<i32>, view: i32) -> f32 {{
+    return {};
+}}
+
+// the discontinuity threshold, normalised depth (param `{}`)
+fn sk_threshold() -> f32 {{
+    return {tau};
+}}
+",
+            graph::LIGHT_SAMPLES_WGSL,
+            match from {
+                graph::Neighbour::Previous => "-1i",
+                graph::Neighbour::Next => "1i",
+            },
+            Emitter::decode(&stored, slot.encode),
+            threshold.name
+        );
+        let bindings = entries.decl.graph_bindings();
+        for s in &mut entries.steps {
+            s.reads = bindings.clone();
+            s.params = entries.decl.uses_params;
+        }
+        steps.push(Step {
+            vertex: None,
+            fragment: None,
+            compute: Some("cs_skins".into()),
+            draw: Draw::Discontinuities {
+                buffer: buffer.clone(),
+                source: from,
+            },
+            reads: bindings,
+            writes: vec![],
+            params: entries.decl.uses_params,
+            sampler: false,
+            light_samples: true,
+            cost: OpCount::default(),
+        });
+    } else if let Some(lib) = &lib {
         steps.push(Step {
             vertex: None,
             fragment: None,
@@ -927,7 +1118,7 @@ fn geometry(
     }
     steps.extend(entries.steps);
     let library = match &lib {
-        Some(lib) => lib.source.clone(),
+        Some(lib) => format!("{prefix}{}", lib.source),
         None => SCENE_FROM_LIGHT_VS.to_string(),
     };
     let src = format!(
@@ -1320,6 +1511,9 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {
     let in_depth_slope = select(0.0, min(length(g / det) * frame.shadow_size.z, 0.1), abs(det) > 1e-14);
 ",
     );
+    for &k in &em.views {
+        s.push_str(&sample_prologue(k));
+    }
     s.push_str(&em.body);
     let _ = write!(
         s,
@@ -1346,7 +1540,7 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {
         writes: vec![],
         params: em.uses_params,
         sampler: em.uses_sampler,
-        light_samples: false,
+        light_samples: !em.views.is_empty(),
         cost: OpCount::default(),
     };
     Ok((s, vec![step]))

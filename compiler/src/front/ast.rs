@@ -17,12 +17,15 @@ pub struct Technique {
     pub channels: Vec<Channel>,
     pub expansions: Vec<Expansion>,
     pub passes: Vec<Pass>,
+    /// `light_samples`: how many light samples the `PerSample` passes render views of, a
+    /// compile-time expression (a fixed param); absent: 1.
+    pub light_samples: Option<Expr>,
     pub span: Span,
 }
 
 /// The light model a technique assumes: the pass-graph schema's type, so the compiler
 /// and the runtime share one list of light kinds.
-pub use sshc_graph::{LightKind, LightModel};
+pub use sshc_graph::{LightKind, LightModel, Neighbour};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum ScalarTy {
@@ -284,6 +287,8 @@ pub enum PassKind {
         /// Fragments for which this is false are discarded before the channels are
         /// computed (a bool per fragment).
         keep: Option<Expr>,
+        /// `Skins`: the neighbouring sample whose depth discontinuities are warped in.
+        from: Option<Spanned<Neighbour>>,
     },
     Shade {
         reads: Vec<Name>,

@@ -318,6 +318,7 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
             ));
         }
     };
+    let light_samples = f.opt("light_samples")?.map(expression).transpose()?;
     f.finish()?;
     Ok(Technique {
         name,
@@ -328,6 +329,7 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
         channels,
         expansions,
         passes,
+        light_samples,
         span: root.span,
     })
 }
@@ -616,6 +618,18 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
             };
             let view = light_view(&mut f)?;
             let keep = f.opt("keep")?.map(expression).transpose()?;
+            let from = match f.opt("from")? {
+                None => None,
+                Some(n) => {
+                    let (v, span) = variant(n)?;
+                    let value = match v.as_str() {
+                        "Previous" => Neighbour::Previous,
+                        "Next" => Neighbour::Next,
+                        _ => return Err(unknown_variant(span, &v, "neighbouring sample", &["Previous", "Next"])),
+                    };
+                    Some(Spanned { value, span })
+                }
+            };
             PassKind::Geometry {
                 reads,
                 writes,
@@ -624,6 +638,7 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
                 resolve,
                 view,
                 keep,
+                from,
             }
         }
         _ => PassKind::Shade {

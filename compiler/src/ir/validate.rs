@@ -154,7 +154,7 @@ fn nodes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
                 };
                 expect(Ty::from_scalar(param.ty), "the param")?;
             }
-            Node::Input(input) => expect(input.ty(), "the input")?,
+            Node::Input(input, _) => expect(input.ty(), "the input")?,
             Node::Channel(c) => {
                 if !ir.channels.contains(*c) {
                     return Err(ValidationError::BadChannel {
@@ -169,6 +169,7 @@ fn nodes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
                 resource,
                 how,
                 args,
+                ..
             } => {
                 if !ir.channels.contains(*channel) {
                     return Err(ValidationError::BadChannel {
@@ -266,7 +267,7 @@ fn root<S: SlotView>(ir: &Program<S>, h: H, at: &str, map: bool) -> Result<(), V
             | Node::I32(_)
             | Node::Bool(_)
             | Node::Param(_)
-            | Node::Input(_)
+            | Node::Input(..)
             | Node::Unary(..)
             | Node::Binary(..)
             | Node::Call(..)
