@@ -1755,7 +1755,7 @@ mod tests {
             match d.wgsl {
                 SampleWgsl::Texture { read, .. } => {
                     let args: Vec<String> = d.extra_args.iter().map(|t| arg(*t)).collect();
-                    body.push_str(&format!("    let lookup{k}: vec4<f32> = {};\n", read("t_x", 1, &args)));
+                    body.push_str(&format!("    let lookup{k}: vec4<f32> = {};\n", read("t_x", "1i", &args)));
                 }
                 // the box function is written per table by the code generator
                 SampleWgsl::SummedAreaTable => {}

@@ -188,7 +188,8 @@ pub const LIGHT_SAMPLES_WGSL: &str = "struct SampleView {
     // x: near, y: far (view distances), z: 1 / (far - near)
     depth_range: vec4<f32>,
     // x: weight of the segment before the sample, y: of the segment after it (0 where
-    // there is none); z: world size of one texel per unit of view distance
+    // there is none); z: world size of one texel per unit of view distance; w: tan of half
+    // the (square, symmetric) perspective view's field of view
     weights: vec4<f32>,
 }
 struct LightSamples {
@@ -458,6 +459,13 @@ pub struct TextureDecl {
     /// else 1): `layers` array layers per view, view k's layer l at `k * layers + l`.
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub views: u32,
+}
+
+impl TextureDecl {
+    /// Array layers the texture is allocated with: `layers` per view.
+    pub fn array_layers(&self) -> u32 {
+        self.layers.saturating_mul(self.views)
+    }
 }
 
 fn one() -> u32 {

@@ -206,10 +206,10 @@ impl<'g> Executor<'g> {
         }
         for t in &graph.textures {
             let limit = gpu.limits.max_texture_array_layers;
-            if t.layers > limit {
+            if t.array_layers() > limit {
                 return Err(RuntimeError::Limit {
                     what: format!("texture `{}` (array layers)", t.name),
-                    needed: t.layers as u64,
+                    needed: t.array_layers() as u64,
                     limit: limit as u64,
                 });
             }
@@ -349,8 +349,20 @@ impl<'g> Executor<'g> {
         let gpu = self.gpu;
         self.bound = None;
         let res = Resources::new(gpu, &self.graph, s, self.max_bytes)?;
+        if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample)
+            && s.samples.len() != self.graph.samples as usize
+        {
+            return Err(RuntimeError::Param(format!(
+                "technique `{}` renders {} light-sample view(s), but the scene gives {} (`SceneInputs::samples`)",
+                self.graph.technique,
+                self.graph.samples,
+                s.samples.len()
+            )));
+        }
         let shared = Group0 {
             frame: &res.frame,
+            sample_frames: &res.sample_frames,
+            light_samples: &res.light_samples,
             params: self.params_buf.as_ref(),
             sampler: &self.sampler,
         };
@@ -449,15 +461,19 @@ impl<'g> Executor<'g> {
                     continue;
                 }
                 // The pass's first render or compute pass writes its start, the last its end.
-                let recording: Vec<_> = pass.steps.iter().filter(|n| n.passes() > 0).collect();
+                // A per-sample pass records all its steps for one view, then the next.
+                let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
+                let recording: Vec<_> = (0..views)
+                    .flat_map(|v| pass.steps.iter().filter(move |n| n.passes() > 0 && v < n.views()).map(move |n| (n, v)))
+                    .collect();
                 let last = recording.len().saturating_sub(1);
-                for (i, node) in recording.into_iter().enumerate() {
+                for (i, (node, view)) in recording.into_iter().enumerate() {
                     let stamps = self.timestamps.as_ref().map(|t| Stamps {
                         set: &t.set,
                         begin: (i == 0).then_some(2 * pi as u32),
                         end: (i == last).then_some(2 * pi as u32 + 1),
                     });
-                    node.record(&mut encoder, res, stamps)?;
+                    node.record(&mut encoder, res, stamps, view)?;
                 }
             }
             Ok(())
@@ -497,10 +513,10 @@ impl<'g> Executor<'g> {
             .graph
             .texture(name)
             .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{name}`")))?;
-        if layer >= decl.layers {
+        if layer >= decl.array_layers() {
             return Err(RuntimeError::NotFound(format!(
                 "texture `{name}` has {} layer(s), not {}",
-                decl.layers,
+                decl.array_layers(),
                 layer + 1
             )));
         }
@@ -557,7 +573,7 @@ impl<'g> Executor<'g> {
             .textures
             .iter()
             .map(|t: &TextureDecl| {
-                let per = t.format.bytes_per_texel() as u64 * t.layers as u64 * texels;
+                let per = t.format.bytes_per_texel() as u64 * t.array_layers() as u64 * texels;
                 (t.name.clone(), if t.mips { per * 4 / 3 } else { per })
             })
             .collect())

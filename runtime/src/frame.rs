@@ -120,7 +120,12 @@ impl SceneInputs {
                 view: s.light_view,
                 position: [s.position[0], s.position[1], s.position[2], 1.0],
                 depth_range: [s.near, s.far, 1.0 / (s.far - s.near).max(f32::MIN_POSITIVE), 0.0],
-                weights: [s.weights[0], s.weights[1], 2.0 / (s.light_proj_y.max(f32::MIN_POSITIVE) * n), 0.0],
+                weights: [
+                    s.weights[0],
+                    s.weights[1],
+                    2.0 / (s.light_proj_y.max(f32::MIN_POSITIVE) * n),
+                    1.0 / s.light_proj_y.max(f32::MIN_POSITIVE),
+                ],
             })
             .collect()
     }

@@ -56,6 +56,8 @@ pub(crate) struct BindingLayout {
     pub params: bool,
     /// Group 0 binding 2: the filtering sampler.
     pub sampler: bool,
+    /// Group 0 binding 3: the `LightSamples` uniform.
+    pub light_samples: bool,
     /// Group 1: what the step reads.
     pub reads: Vec<(u32, Slot)>,
     /// Group 2 (compute steps): what the step writes, bindings 0, 1, ...
@@ -70,6 +72,8 @@ pub(crate) enum GeometryGroup {
     /// A `Silhouettes` step (compute): 0 edges, 1 face planes, 2 edge faces (read-only
     /// storage), 3 the generated buffer and 5 the vertex claims (read-write storage).
     Classify,
+    /// A `Discontinuities` step (compute): 3 the generated buffer (read-write storage).
+    Discontinuities,
     /// A `Primitives` step (raster): 4 the generated buffer (read-only storage, vertex and
     /// fragment stages). Binding 4, so that one module can hold both steps' entry points:
     /// the classification's bindings 0 to 3 and the draw's are distinct variables.
@@ -99,6 +103,7 @@ impl GeometryGroup {
                     buffer(5, false, c),
                 ]
             }
+            GeometryGroup::Discontinuities => vec![buffer(3, false, wgpu::ShaderStages::COMPUTE)],
             GeometryGroup::Draw => vec![buffer(4, true, wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT)],
         }
     }
@@ -180,6 +185,9 @@ fn group0_layout(gpu: &Gpu, l: &BindingLayout) -> wgpu::BindGroupLayout {
             ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
             count: None,
         });
+    }
+    if l.light_samples {
+        entries.push(uniform(3));
     }
     gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("frame"),

