@@ -14,24 +14,28 @@ const LINEAR: &str = "linear-light";
 const POINTS: &str = "point-samples";
 const HARD: &str = "hard";
 
-/// A blocker (a quad) 1 above a floor, under a segment light from `a` to `b`.
-fn scene(a: [f32; 3], b: [f32; 3], shadow: u32) -> Scene {
-    let t = |p: [f32; 3]| format!("({:?}, {:?}, {:?})", p[0], p[1], p[2]);
+/// A blocker (a quad) 1 above a floor, under `light`; the floor casts, so that the sample
+/// maps hold the receiver (skins join an occluder to the receiver behind it, section 3.2).
+fn scene_with(light: &str, shadow: u32) -> Scene {
     let text = format!(
         "Scene(
     camera: Orthographic(position: (0.0, 3.0, 0.0), target: (0.0, 0.0, 0.0), up: (0.0, 0.0, -1.0),
         half_height: 1.0, width: 128, height: 128),
     shadow_map: {shadow},
-    lights: [Segment(a: {}, b: {})],
+    lights: [{light}],
     objects: [
         Object(name: \"floor\", mesh: Plane(size: (4.0, 4.0))),
         Object(name: \"blocker\", mesh: Quad(a: (-0.4, 1.0, -0.3), b: (-0.4, 1.0, 0.3), c: (0.4, 1.0, 0.3), d: (0.4, 1.0, -0.3))),
     ],
-)",
-        t(a),
-        t(b)
+)"
     );
     Scene::from_str(&text, root().join("scenes")).unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+/// [`scene_with`] under a segment light from `a` to `b`.
+fn scene(a: [f32; 3], b: [f32; 3], shadow: u32) -> Scene {
+    let t = |p: [f32; 3]| format!("({:?}, {:?}, {:?})", p[0], p[1], p[2]);
+    scene_with(&format!("Segment(a: {}, b: {})", t(a), t(b)), shadow)
 }
 
 /// The scene's inputs with `n` light-sample views along its segment light.
@@ -81,6 +85,41 @@ fn run_full(technique: &str, set: &[(&str, String)], inputs: &SceneInputs) -> (V
     let p = ex.read_camera(CameraOutput::Position).unwrap_or_else(|e| panic!("{e}")).rgba;
     let n = ex.read_camera(CameraOutput::Normal).unwrap_or_else(|e| panic!("{e}")).rgba;
     (v, p, n)
+}
+
+/// Every camera pixel of two runs equal (the same shadow tests of the same depth maps).
+fn assert_same(what: &str, a: &[f32], b: &[f32]) {
+    let differ = a.iter().zip(b).filter(|(x, y)| x != y).count();
+    assert_eq!(differ, 0, "{what}: {differ} of {} pixels differ", a.len());
+}
+
+/// One sample at the light's centre is the hard shadow map: the same depth map (the sample's
+/// view is the point light's at the centre) and the same test; its two segment weights are
+/// 1 and its channels keep their initial one half, so the sum is the test itself.
+#[test]
+fn one_sample_is_the_hard_shadow_map() {
+    let s = scene([-0.5, 2.0, 0.0], [0.5, 2.0, 0.0], 128);
+    let point = scene_with("Point(position: (0.0, 2.0, 0.0))", 128);
+    let hard = run(HARD, &[], &sshc_lab::bind::scene_inputs(&point).unwrap());
+    for t in [LINEAR, POINTS] {
+        let v = run(t, &[("N", "1".into())], &sample_inputs(&s, 1));
+        assert_same(t, &v, &hard);
+    }
+}
+
+/// A segment of length 0: every sample sees what the point light there sees, the skins
+/// between coinciding views have no area (none is drawn), and the weights sum to 1.
+#[test]
+fn a_segment_of_length_zero_is_the_hard_shadow_map_for_every_n() {
+    let s = scene([0.2, 2.0, 0.1], [0.2, 2.0, 0.1], 128);
+    let point = scene_with("Point(position: (0.2, 2.0, 0.1))", 128);
+    let hard = run(HARD, &[], &sshc_lab::bind::scene_inputs(&point).unwrap());
+    for n in [2, 3, 5] {
+        for t in [LINEAR, POINTS] {
+            let v = run(t, &[("N", n.to_string())], &sample_inputs(&s, n));
+            assert_same(&format!("{t} N={n}"), &v, &hard);
+        }
+    }
 }
 
 #[test]
