@@ -219,7 +219,14 @@ impl SampleViewUniform {
         let mut out = Vec::with_capacity(LIGHT_SAMPLES_SIZE as usize);
         for k in 0..MAX_LIGHT_SAMPLES as usize {
             let v = views.get(k).copied().unwrap_or_default();
-            for x in v.view_proj.iter().chain(&v.view).chain(&v.position).chain(&v.depth_range).chain(&v.weights) {
+            for x in v
+                .view_proj
+                .iter()
+                .chain(&v.view)
+                .chain(&v.position)
+                .chain(&v.depth_range)
+                .chain(&v.weights)
+            {
                 out.extend_from_slice(&x.to_le_bytes());
             }
         }
@@ -276,10 +283,13 @@ pub enum LightKind {
     Segment,
     /// A disk at infinity given by its angular diameter (Lawlor 2006).
     DistantDisk,
+    /// A triangle; per-sample techniques take its edges as linear lights (Heidrich et al.
+    /// 2000, section 4, figure 8).
+    Triangle,
 }
 
 impl LightKind {
-    pub const ALL: [LightKind; 7] = [
+    pub const ALL: [LightKind; 8] = [
         LightKind::Point,
         LightKind::Directional,
         LightKind::Sphere,
@@ -287,6 +297,7 @@ impl LightKind {
         LightKind::Rectangle,
         LightKind::Segment,
         LightKind::DistantDisk,
+        LightKind::Triangle,
     ];
 
     /// The name scene and technique files write.
@@ -299,6 +310,7 @@ impl LightKind {
             LightKind::Rectangle => "Rectangle",
             LightKind::Segment => "Segment",
             LightKind::DistantDisk => "DistantDisk",
+            LightKind::Triangle => "Triangle",
         }
     }
 
@@ -310,7 +322,9 @@ impl LightKind {
     pub fn is_distant(self) -> bool {
         match self {
             LightKind::Directional | LightKind::DistantDisk => true,
-            LightKind::Point | LightKind::Sphere | LightKind::Disk | LightKind::Rectangle | LightKind::Segment => false,
+            LightKind::Point | LightKind::Sphere | LightKind::Disk | LightKind::Rectangle | LightKind::Segment | LightKind::Triangle => {
+                false
+            }
         }
     }
 }
@@ -327,6 +341,7 @@ pub enum LightModel {
     Rectangle,
     Segment { samples: u32 },
     DistantDisk,
+    Triangle,
 }
 
 impl LightModel {
@@ -341,6 +356,7 @@ impl LightModel {
             LightModel::Rectangle => Some(LightKind::Rectangle),
             LightModel::Segment { .. } => Some(LightKind::Segment),
             LightModel::DistantDisk => Some(LightKind::DistantDisk),
+            LightModel::Triangle => Some(LightKind::Triangle),
         }
     }
 
@@ -355,6 +371,7 @@ impl LightModel {
             LightKind::Rectangle => LightModel::Rectangle,
             LightKind::Segment => LightModel::Segment { samples },
             LightKind::DistantDisk => LightModel::DistantDisk,
+            LightKind::Triangle => LightModel::Triangle,
         }
     }
 
@@ -1099,7 +1116,7 @@ mod tests {
             // the model's serialised name is the kind's
             assert!(ron::to_string(&m).unwrap().starts_with(k.name()));
         }
-        assert_eq!(LightKind::DistantDisk as usize + 1, LightKind::ALL.len());
+        assert_eq!(LightKind::Triangle as usize + 1, LightKind::ALL.len());
         assert_eq!(LightModel::Any.kind(), None);
     }
 

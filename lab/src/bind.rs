@@ -1,7 +1,8 @@
 //! From a [`Scene`] to the plain data the executor binds ([`SceneInputs`]).
 
-use crate::scene::Scene;
-use sshc_runtime::gpu::SceneInputs;
+use crate::scene::{Light, Scene};
+use sshc_runtime::gpu::{SampleView, SceneInputs};
+use sshc_runtime::graph::{MAX_LIGHT_SAMPLES, PassGraph, Views};
 
 /// The scene's geometry, camera and first light, as the executor needs them.
 ///
@@ -10,12 +11,37 @@ use sshc_runtime::gpu::SceneInputs;
 /// `casting_vertices`, and the meshes whose edges Geometry passes extrude are the casters
 /// only. With every object casting, the buffer is [`Scene::vertex_data`] as it is.
 /// The light's view is fitted as the scene's `shadow_fit` says ([`Scene::light_view`]).
+/// No light samples: for graphs without `PerLightSample` passes (see
+/// [`scene_inputs_for`] and [`scene_inputs_with_samples`]).
 pub fn scene_inputs(scene: &Scene) -> Result<SceneInputs, String> {
+    scene_inputs_with_samples(scene, 0)
+}
+
+/// The light samples `graph` renders views of: [`PassGraph::samples`] when some pass has
+/// `views: PerLightSample`, else 0 (bind none).
+pub fn graph_samples(graph: &PassGraph) -> u32 {
+    if graph.passes.iter().any(|p| p.views == Views::PerLightSample) {
+        graph.samples
+    } else {
+        0
+    }
+}
+
+/// [`scene_inputs_with_samples`] with the samples `graph` renders ([`graph_samples`]): what
+/// every command binds a scene for a graph with.
+pub fn scene_inputs_for(scene: &Scene, graph: &PassGraph) -> Result<SceneInputs, String> {
+    scene_inputs_with_samples(scene, graph_samples(graph))
+}
+
+/// [`scene_inputs`] with `n` light-sample views of the scene's first light (Heidrich et
+/// al. 2000), as [`light_samples`] makes them; `n = 0` binds none.
+pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, String> {
     let light = scene
         .lights
         .first()
         .ok_or_else(|| "the scene has no light: add one to `lights`".to_string())?;
     let v = scene.light_view(light);
+    let (samples, samples_closed) = light_samples(scene, light, n)?;
     let cam = scene.camera_position();
     let n = scene.objects().len();
     let order: Vec<usize> = (0..n)
@@ -66,7 +92,280 @@ pub fn scene_inputs(scene: &Scene) -> Result<SceneInputs, String> {
         light_angle: v.angle,
         light_proj_y: v.proj.y_axis.y,
         light_orthographic: v.orthographic,
-        samples: Vec::new(),
-        samples_closed: false,
+        samples,
+        samples_closed,
     })
+}
+
+/// `n` sample views of `light` in `scene`, in order along the light, and whether they
+/// close a loop (issue 14's conventions, after Heidrich et al. 2000, sections 3 and 4):
+///
+/// - positions: [`Light::sample_chain`] (a segment's evenly spaced points, ends included;
+///   a triangle's or rectangle's perimeter, corners included, `n` a multiple of the
+///   edges, closed; `n = 1`: the centre of any light at a finite position);
+/// - each view is the one a point light at the sample would get
+///   ([`Scene::light_view`] of `Light::Point`, so the scene's `shadow_fit` holds), with its
+///   own near, far and projection;
+/// - weights: each segment between consecutive samples weighs its length over the chain's
+///   total (N - 1 segments when open, N when closed); a sample carries the weights of the
+///   segments before and after it (0 where there is none); a lone sample carries [1, 1]
+///   (its two channels start at one half, section 3.2, so a lit point sums to 1). A chain
+///   of zero length (a segment with a = b) weighs its segments equally.
+///
+/// Errors: `n` above [`MAX_LIGHT_SAMPLES`], a light at infinity, a point, sphere or disk
+/// with `n > 1`, `n` not a multiple of a triangle's or rectangle's edges.
+pub fn light_samples(scene: &Scene, light: &Light, n: u32) -> Result<(Vec<SampleView>, bool), String> {
+    let (points, closed) = light
+        .sample_chain(n, MAX_LIGHT_SAMPLES)
+        .map_err(|e| format!("the scene's light ({}): {e}", light.kind_name()))?;
+    let k = points.len();
+    // segment i joins sample i and sample i + 1 (mod k when closed)
+    let segments = if k < 2 {
+        0
+    } else if closed {
+        k
+    } else {
+        k - 1
+    };
+    let lengths: Vec<f32> = (0..segments).map(|i| points[i].distance(points[(i + 1) % k])).collect();
+    let total: f32 = lengths.iter().sum();
+    let weight = |i: usize| {
+        if total > 0.0 && total.is_finite() {
+            lengths[i] / total
+        } else {
+            1.0 / segments as f32
+        }
+    };
+    let views = points
+        .iter()
+        .enumerate()
+        .map(|(i, &position)| {
+            let v = scene.light_view(&Light::Point { position });
+            let weights = if k == 1 {
+                [1.0, 1.0]
+            } else {
+                let before = if i > 0 { Some(i - 1) } else { closed.then_some(k - 1) };
+                let after = (i + 1 < k || closed).then_some(i);
+                [before.map_or(0.0, weight), after.map_or(0.0, weight)]
+            };
+            SampleView {
+                light_view: v.view.to_cols_array(),
+                light_view_proj: v.view_proj.to_cols_array(),
+                position: position.to_array(),
+                near: v.near,
+                far: v.far,
+                light_proj_y: v.proj.y_axis.y,
+                weights,
+            }
+        })
+        .collect();
+    Ok((views, closed))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::ShadowFit;
+    use glam::{Mat4, Vec3, Vec4};
+
+    fn scene(light: &str, fit: &str) -> Scene {
+        let text = format!(
+            "Scene(camera: Perspective(position: (0.0, 3.4, 3.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 45.0, width: 8, height: 8),
+             shadow_map: 64, shadow_fit: {fit}, lights: [{light}],
+             objects: [Object(mesh: Plane(size: (4.0, 4.0)), casts: false),
+                       Object(mesh: Quad(a: (-0.5, 1.0, 0.45), b: (0.5, 1.0, 0.45), c: (0.35, 1.3, -0.45), d: (-0.2, 1.0, -0.35))),
+                       Object(mesh: Box(size: (0.3, 0.3, 0.3)), transform: (translate: (1.2, 0.5, 0.8)))])"
+        );
+        Scene::from_str(&text, ".").unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    const SEGMENT: &str = "Segment(a: (-0.6, 2.5, 0.0), b: (0.6, 2.5, 0.0))";
+    const TRIANGLE: &str = "Triangle(a: (-0.6, 2.5, 0.3), b: (0.6, 2.5, 0.3), c: (0.0, 2.5, -0.5))";
+    const RECTANGLE: &str =
+        "Rectangle(center: (0.0, 2.5, 0.0), normal: (0.0, -1.0, 0.0), u_axis: (1.0, 0.0, 0.0), half_width: 0.6, half_height: 0.3)";
+
+    fn positions(s: &SceneInputs) -> Vec<Vec3> {
+        s.samples.iter().map(|v| Vec3::from_array(v.position)).collect()
+    }
+
+    /// Each weight is a ratio of f32 lengths summed in f32: a few ulps of 1 per sample.
+    fn sum_tolerance(n: usize) -> f32 {
+        4.0 * n as f32 * f32::EPSILON
+    }
+
+    fn half_sums(s: &SceneInputs) -> f32 {
+        s.samples.iter().map(|v| 0.5 * (v.weights[0] + v.weights[1])).sum()
+    }
+
+    #[test]
+    fn no_samples_unless_asked() {
+        let s = scene(SEGMENT, "Scene");
+        let plain = scene_inputs(&s).unwrap();
+        assert!(plain.samples.is_empty() && !plain.samples_closed);
+        assert_eq!(scene_inputs_with_samples(&s, 0).unwrap(), plain);
+    }
+
+    #[test]
+    fn segment_samples_are_evenly_spaced_with_their_ends_and_weigh_their_segments() {
+        let s = scene(SEGMENT, "Scene");
+        let (a, b) = (Vec3::new(-0.6, 2.5, 0.0), Vec3::new(0.6, 2.5, 0.0));
+        for n in 2..=MAX_LIGHT_SAMPLES {
+            let inputs = scene_inputs_with_samples(&s, n).unwrap();
+            assert!(!inputs.samples_closed);
+            let p = positions(&inputs);
+            assert_eq!(p.len(), n as usize);
+            for (k, q) in p.iter().enumerate() {
+                let want = a.lerp(b, k as f32 / (n - 1) as f32);
+                assert!(q.distance(want) < 1e-6, "n = {n}, sample {k}: {q} != {want}");
+            }
+            // equal segments: 1 / (n - 1) each, none before the first or after the last
+            let w = 1.0 / (n - 1) as f32;
+            let first = inputs.samples[0].weights;
+            let last = inputs.samples[n as usize - 1].weights;
+            assert_eq!(first[0], 0.0);
+            assert_eq!(last[1], 0.0);
+            assert!((first[1] - w).abs() < 1e-6 && (last[0] - w).abs() < 1e-6, "{first:?} {last:?}");
+            let sum = half_sums(&inputs);
+            assert!((sum - 1.0).abs() <= sum_tolerance(n as usize), "n = {n}: {sum}");
+        }
+    }
+
+    #[test]
+    fn one_sample_is_the_centre_with_both_weights_one() {
+        for (light, centre) in [
+            (SEGMENT, Vec3::new(0.0, 2.5, 0.0)),
+            (TRIANGLE, Vec3::new(0.0, 2.5, 0.1 / 3.0)),
+            (RECTANGLE, Vec3::new(0.0, 2.5, 0.0)),
+            ("Point(position: (0.2, 2.5, 0.1))", Vec3::new(0.2, 2.5, 0.1)),
+            ("Sphere(center: (0.2, 2.5, 0.1), radius: 0.2)", Vec3::new(0.2, 2.5, 0.1)),
+            (
+                "Disk(center: (0.2, 2.5, 0.1), normal: (0.0, -1.0, 0.0), radius: 0.2)",
+                Vec3::new(0.2, 2.5, 0.1),
+            ),
+        ] {
+            let s = scene(light, "Scene");
+            let inputs = scene_inputs_with_samples(&s, 1).unwrap();
+            assert_eq!(inputs.samples.len(), 1, "{light}");
+            let v = &inputs.samples[0];
+            assert!(Vec3::from_array(v.position).distance(centre) < 1e-6, "{light}: {:?}", v.position);
+            assert_eq!(v.weights, [1.0, 1.0], "{light}");
+            assert!(!inputs.samples_closed);
+            // the view of a point light at the centre
+            let position = s.lights[0].center().unwrap();
+            let p = s.light_view(&Light::Point { position });
+            assert_eq!(v.light_view_proj, p.view_proj.to_cols_array(), "{light}");
+            assert_eq!((v.near, v.far, v.light_proj_y), (p.near, p.far, p.proj.y_axis.y), "{light}");
+        }
+    }
+
+    #[test]
+    fn area_lights_walk_their_edges_corners_included_and_close_the_loop() {
+        let tri = [Vec3::new(-0.6, 2.5, 0.3), Vec3::new(0.6, 2.5, 0.3), Vec3::new(0.0, 2.5, -0.5)];
+        let rect = [
+            Vec3::new(-0.6, 2.5, -0.3),
+            Vec3::new(0.6, 2.5, -0.3),
+            Vec3::new(0.6, 2.5, 0.3),
+            Vec3::new(-0.6, 2.5, 0.3),
+        ];
+        for (light, corners) in [(TRIANGLE, &tri[..]), (RECTANGLE, &rect[..])] {
+            let s = scene(light, "Scene");
+            let e = corners.len();
+            let perimeter: f32 = (0..e).map(|i| corners[i].distance(corners[(i + 1) % e])).sum();
+            for n in (e..=MAX_LIGHT_SAMPLES as usize).step_by(e) {
+                let inputs = scene_inputs_with_samples(&s, n as u32).unwrap();
+                assert!(inputs.samples_closed, "{light}");
+                let p = positions(&inputs);
+                assert_eq!(p.len(), n);
+                let per = n / e;
+                for (k, q) in p.iter().enumerate() {
+                    let (edge, j) = (k / per, k % per);
+                    let want = corners[edge].lerp(corners[(edge + 1) % e], j as f32 / per as f32);
+                    assert!(q.distance(want) < 1e-6, "{light}, n = {n}, sample {k}: {q} != {want}");
+                }
+                // every segment: its length over the perimeter; sample k's after is
+                // sample k + 1's before, and the last's after is the first's before
+                for k in 0..n {
+                    let len = p[k].distance(p[(k + 1) % n]);
+                    let after = inputs.samples[k].weights[1];
+                    let before = inputs.samples[(k + 1) % n].weights[0];
+                    assert!((after - len / perimeter).abs() < 1e-6, "{light}, n = {n}, segment {k}");
+                    assert_eq!(after, before, "{light}, n = {n}, segment {k}");
+                }
+                let sum = half_sums(&inputs);
+                assert!((sum - 1.0).abs() <= sum_tolerance(n), "{light}, n = {n}: {sum}");
+            }
+        }
+    }
+
+    #[test]
+    fn samples_that_cannot_be_are_refused_with_the_reason() {
+        for (light, n, want) in [
+            ("Point(position: (0.0, 2.5, 0.0))", 2, "no edges to sample"),
+            ("Sphere(center: (0.0, 2.5, 0.0), radius: 0.2)", 3, "no edges to sample"),
+            (
+                "Disk(center: (0.0, 2.5, 0.0), normal: (0.0, -1.0, 0.0), radius: 0.2)",
+                2,
+                "no edges to sample",
+            ),
+            ("Directional(direction: (0.0, 1.0, 0.0))", 1, "at infinity"),
+            ("DistantDisk(direction: (0.0, 1.0, 0.0), angle_degrees: 5.0)", 2, "at infinity"),
+            (TRIANGLE, 4, "multiple of 3, not 4"),
+            (RECTANGLE, 6, "multiple of 4, not 6"),
+            (SEGMENT, MAX_LIGHT_SAMPLES + 1, "above the limit of 16"),
+        ] {
+            let s = scene(light, "Scene");
+            let e = scene_inputs_with_samples(&s, n).expect_err(light);
+            assert!(e.contains(want), "{light}, {n}: {e}");
+            assert!(e.starts_with("the scene's light ("), "{e}");
+        }
+    }
+
+    /// Under either fit, every corner of every caster is inside each sample's clip volume
+    /// and its linear depth in [0, 1]: each sample's map holds every caster.
+    #[test]
+    fn every_sample_view_sees_every_caster() {
+        for fit in ["Scene", "Casters"] {
+            for (light, n) in [(SEGMENT, 9), (SEGMENT, 2), (TRIANGLE, 12), (RECTANGLE, 16), (SEGMENT, 1)] {
+                let s = scene(light, fit);
+                assert_eq!(s.shadow_fit() == ShadowFit::Casters, fit == "Casters");
+                let inputs = scene_inputs_with_samples(&s, n).unwrap();
+                let casting = s.casting_triangles();
+                for (k, v) in inputs.samples.iter().enumerate() {
+                    let (vp, view) = (Mat4::from_cols_array(&v.light_view_proj), Mat4::from_cols_array(&v.light_view));
+                    for (t, tri) in s.triangles().iter().enumerate().filter(|(t, _)| casting[*t]) {
+                        for c in tri {
+                            let clip: Vec4 = vp * c.extend(1.0);
+                            let w = clip.w;
+                            // f32 rounding of the projection (the fits pad by 0.1 % or a texel)
+                            let tol = 1e-5 * w;
+                            assert!(w > 0.0, "{fit} {light} view {k}: triangle {t} behind");
+                            assert!(
+                                clip.x.abs() <= w + tol && clip.y.abs() <= w + tol,
+                                "{fit} {light} view {k}: corner {c} outside ({clip})"
+                            );
+                            let depth = (-(view * c.extend(1.0)).z - v.near) / (v.far - v.near);
+                            assert!((-1e-5..=1.0 + 1e-5).contains(&depth), "{fit} {light} view {k}: depth {depth}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_graph_says_how_many_samples_to_bind() {
+        let source = include_str!("../../techniques/hard.ron");
+        let mut g = sshc::compile_str(source, &sshc::CompileOptions::default()).unwrap().graph;
+        let s = scene(SEGMENT, "Casters");
+        // no per-sample pass: none bound, whatever `samples` says
+        g.samples = 5;
+        assert_eq!(graph_samples(&g), 0);
+        assert!(scene_inputs_for(&s, &g).unwrap().samples.is_empty());
+        g.passes[0].views = Views::PerLightSample;
+        for n in [1, 2, 5, 9, 16] {
+            g.samples = n;
+            assert_eq!(graph_samples(&g), n);
+            assert_eq!(scene_inputs_for(&s, &g).unwrap().samples.len(), n as usize);
+        }
+    }
 }

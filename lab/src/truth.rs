@@ -285,6 +285,7 @@ fn is_binary(light: &Light) -> bool {
             half_width, half_height, ..
         } => *half_width <= 0.0 && *half_height <= 0.0,
         Light::Segment { a, b } => a == b,
+        Light::Triangle { a, b, c } => a == b && b == c,
         Light::DistantDisk { angle_degrees, .. } => *angle_degrees <= 0.0,
     }
 }

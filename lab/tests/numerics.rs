@@ -440,6 +440,16 @@ fn area_lights_through_geometry_are_warned() {
         ),
         // a segment through the box
         ("Segment(a: (-1.0, 0.5, 0.0), b: (1.0, 0.5, 0.0))", "objects[1] (\"box\")"),
+        // a triangle through the box, its centroid outside (an edge crosses the box)
+        (
+            "Triangle(a: (-1.0, 0.5, 0.3), b: (1.0, 0.5, 0.3), c: (0.0, 0.5, 1.5))",
+            "objects[1] (\"box\")",
+        ),
+        // a triangle the box's edges pierce, its corners all outside the box
+        (
+            "Triangle(a: (-3.0, 0.5, -3.0), b: (3.0, 0.5, -3.0), c: (0.0, 0.5, 3.0))",
+            "objects[1] (\"box\")",
+        ),
     ];
     for (light, object) in cases {
         let w = warnings(light, FLOOR_AND_BOX);
@@ -457,11 +467,21 @@ fn clean_scenes_give_no_warning() {
         "Rectangle(center: (0.0, 1.5, 0.0), normal: (0.0, -1.0, 0.0), u_axis: (1.0, 0.0, 0.0), half_width: 2.0, half_height: 2.0)",
         "Segment(a: (-1.0, 1.5, 0.0), b: (1.0, 1.5, 0.0))",
         "DistantDisk(direction: (0.0, 1.0, 0.0), angle_degrees: 5.0)",
+        "Triangle(a: (-1.0, 1.5, 0.0), b: (1.0, 1.5, 0.0), c: (0.0, 1.5, 1.0))",
     ] {
         let w = warnings(light, FLOOR_AND_BOX);
         assert!(w.is_empty(), "{light}: {w:?}");
     }
-    for name in ["bunny", "contact", "fence", "edge", "triangle"] {
+    for name in [
+        "bunny",
+        "contact",
+        "fence",
+        "edge",
+        "triangle",
+        "linear",
+        "linear-triangle",
+        "linear-rectangle",
+    ] {
         let path = format!("{}/../scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
         let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
         let w = sshc_lab::session::light_warnings(&scene);

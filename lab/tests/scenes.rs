@@ -11,7 +11,16 @@ use sshc_lab::visibility::Visibility;
 mod common;
 use common::temp_dir;
 
-const BUNDLED: [&str; 5] = ["bunny", "contact", "fence", "edge", "triangle"];
+const BUNDLED: [&str; 8] = [
+    "bunny",
+    "contact",
+    "fence",
+    "edge",
+    "triangle",
+    "linear",
+    "linear-triangle",
+    "linear-rectangle",
+];
 
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
@@ -272,6 +281,11 @@ fn light_views_hold_the_whole_scene() {
                     direction: d,
                     angle_degrees: 5.0,
                 },
+                Light::Triangle {
+                    a: p - Vec3::X,
+                    b: p + Vec3::X,
+                    c: p + Vec3::Z,
+                },
             ];
             for light in &lights {
                 check_view(&format!("{light:?} over {bounds:?}"), light, bounds);
@@ -318,6 +332,61 @@ fn light_view_describes_the_light() {
     assert_eq!(v.angle, 0.0);
     let seg = Light::Segment { a: Vec3::ZERO, b: Vec3::X };
     assert_eq!(seg.segment_samples(3).unwrap(), vec![Vec3::ZERO, Vec3::X * 0.5, Vec3::X]);
+}
+
+/// The linear-light scenes (Heidrich et al. 2000, figure 9's setting): the whole shadow
+/// (every ground point that does not see all of the light, on a grid of 0.05 over the
+/// 4 x 4 ground) is inside the camera's frame with a 5 % margin and clear of the ground's
+/// edge, and there are wide penumbrae: under the segment light, the grid row z = -0.3
+/// across the blocker has over 0.9 of partly lit ground (its two side edges' penumbrae,
+/// about 0.75 and 1.1 wide there by similar triangles; 1.9 measured).
+#[test]
+fn the_linear_scenes_show_their_whole_shadow() {
+    for name in ["linear", "linear-triangle", "linear-rectangle"] {
+        let scene = bundled(name);
+        let vis = Visibility::new(&scene);
+        let light = &scene.lights[0];
+        let vp = scene.camera_view_proj();
+        let (mut shadowed, mut partial) = (0, 0);
+        for i in 0..=80 {
+            for j in 0..=80 {
+                let p = Vec3::new(-2.0 + 0.05 * i as f32, 0.0, -2.0 + 0.05 * j as f32);
+                // 16 x 16 stratified samples: a point sharing a few percent of the light
+                // with the blocker is found
+                let v = vis.visible_fraction_at(p, Vec3::Y, light, 16, (i * 81 + j) as u64);
+                if v >= 1.0 {
+                    continue;
+                }
+                shadowed += 1;
+                partial += usize::from(v > 0.0);
+                assert!(
+                    p.x.abs() < 1.9 && p.z.abs() < 1.9,
+                    "{name}: the shadow reaches the ground's edge at {p}"
+                );
+                let c = vp * p.extend(1.0);
+                assert!(
+                    c.w > 0.0 && c.x.abs() < 0.95 * c.w && c.y.abs() < 0.95 * c.w,
+                    "{name}: shadowed ground at {p} is out of frame ({c})"
+                );
+            }
+        }
+        eprintln!("{name}: {shadowed} grid points shadowed, {partial} partly");
+        assert!(
+            shadowed > 400 && partial > shadowed / 2,
+            "{name}: {shadowed} shadowed, {partial} partly"
+        );
+    }
+    // the wide penumbrae: z = -0.3, across the blocker's side edges (the one down from the
+    // raised corner (0.35, 1.3, -0.45) to (0.5, 1.0, 0.45), and (-0.2, 1.0, -0.35) to
+    // (-0.5, 1.0, 0.45))
+    let scene = bundled("linear");
+    let vis = Visibility::new(&scene);
+    let row: Vec<f32> = (0..=80)
+        .map(|i| vis.visible_fraction_at(Vec3::new(-2.0 + 0.05 * i as f32, 0.0, -0.3), Vec3::Y, &scene.lights[0], 16, i))
+        .collect();
+    let wide = row.iter().filter(|v| **v > 0.0 && **v < 1.0).count() as f32 * 0.05;
+    eprintln!("linear: {wide} of partly lit ground along z = -0.3");
+    assert!(wide > 0.9, "{wide} of partly lit ground along z = -0.3: {row:?}");
 }
 
 #[test]

@@ -219,6 +219,17 @@ pub enum Light {
         /// Full angular diameter in degrees, in [0, 180). The sun is about 0.53.
         angle_degrees: f32,
     },
+    /// A triangle, sampled uniformly over its area (two-sided, as every light here).
+    /// Per-sample techniques take its three edges as linear lights (Heidrich et al. 2000,
+    /// section 4, figure 8: the "crude approximation" of an area light by its outline).
+    Triangle {
+        /// First corner, world space.
+        a: Vec3,
+        /// Second corner, world space.
+        b: Vec3,
+        /// Third corner, world space.
+        c: Vec3,
+    },
 }
 
 /// One piece of geometry: a mesh placed by a transform.
@@ -545,12 +556,13 @@ pub struct LightView {
     /// the light (directional and distant-disk lights).
     pub position_or_direction: Vec4,
     /// Radius (sphere, disk), half of the larger side (rectangle), half length (segment),
-    /// 0 for point and directional lights, and `tan(angle / 2)` for a distant disk (the
+    /// the farthest corner's distance from the centroid (triangle), 0 for point and directional lights, and `tan(angle / 2)` for a distant disk (the
     /// radius of its disk in the tangent plane at unit distance).
     pub size: f32,
     /// Half-extents of the light's outline along the view's x and y axes (the shadow map's
     /// u and v): r for a sphere, a disk or rectangle projected onto each axis, half the
-    /// projected length for a segment, 0 for the rest.
+    /// projected length for a segment, the farthest corner's projected offset from the
+    /// centroid for a triangle, 0 for the rest.
     pub half_extents: Vec2,
     /// Full angular diameter in radians for a distant disk, else 0.
     pub angle: f32,
@@ -889,8 +901,8 @@ impl Scene {
     ///   beside it: the scene is refused, naming the object that reaches `M` and the
     ///   smallest object.
     /// - **Local lights far beyond the scene.** A light at a finite position (point,
-    ///   sphere, disk, rectangle, segment) at distance `d` from the centre of the scene's
-    ///   bounds (radius `R`) sees the scene through a view whose coordinates are about `d`:
+    ///   sphere, disk, rectangle, segment, triangle) at distance `d` from the centre of the
+    ///   scene's bounds (radius `R`) sees the scene through a view whose coordinates are about `d`:
     ///   f32 resolves them to `d * 2^-23`, while one shadow-map texel covers about
     ///   `2 R / N` (`N` = `shadow_map`). Past [`LIGHT_PRECISION_MARGIN`] = 16 ulp per
     ///   texel, `d * 2^-23 * 16 > 2 R / N`, depth tests and light-space positions are
@@ -966,7 +978,7 @@ impl Scene {
             }
             let field = match light {
                 Light::Point { .. } => "position",
-                Light::Segment { .. } => "a",
+                Light::Segment { .. } | Light::Triangle { .. } => "a",
                 _ => "center",
             };
             let dir = (c - centre) / d;
@@ -1212,6 +1224,7 @@ impl Light {
             Light::Rectangle { .. } => LightKind::Rectangle,
             Light::Segment { .. } => LightKind::Segment,
             Light::DistantDisk { .. } => LightKind::DistantDisk,
+            Light::Triangle { .. } => LightKind::Triangle,
         }
     }
 
@@ -1232,6 +1245,7 @@ impl Light {
             Light::Point { position } => Some(*position),
             Light::Sphere { center, .. } | Light::Disk { center, .. } | Light::Rectangle { center, .. } => Some(*center),
             Light::Segment { a, b } => Some((*a + *b) * 0.5),
+            Light::Triangle { a, b, c } => Some((*a + *b + *c) / 3.0),
             Light::Directional { .. } | Light::DistantDisk { .. } => None,
         }
     }
@@ -1240,7 +1254,12 @@ impl Light {
     pub fn direction(&self) -> Option<Vec3> {
         match self {
             Light::Directional { direction } | Light::DistantDisk { direction, .. } => Some(direction.normalize_or(Vec3::Y)),
-            Light::Point { .. } | Light::Sphere { .. } | Light::Disk { .. } | Light::Rectangle { .. } | Light::Segment { .. } => None,
+            Light::Point { .. }
+            | Light::Sphere { .. }
+            | Light::Disk { .. }
+            | Light::Rectangle { .. }
+            | Light::Segment { .. }
+            | Light::Triangle { .. } => None,
         }
     }
 
@@ -1253,6 +1272,10 @@ impl Light {
                 half_width, half_height, ..
             } => half_width.hypot(*half_height),
             Light::Segment { a, b } => 0.5 * a.distance(*b),
+            Light::Triangle { a, b, c } => {
+                let m = (*a + *b + *c) / 3.0;
+                m.distance(*a).max(m.distance(*b)).max(m.distance(*c))
+            }
             Light::Point { .. } | Light::Directional { .. } | Light::DistantDisk { .. } => 0.0,
         }
     }
@@ -1266,7 +1289,8 @@ impl Light {
             | Light::Sphere { .. }
             | Light::Disk { .. }
             | Light::Rectangle { .. }
-            | Light::Segment { .. } => 0.0,
+            | Light::Segment { .. }
+            | Light::Triangle { .. } => 0.0,
         }
     }
 
@@ -1285,13 +1309,93 @@ impl Light {
             | Light::Sphere { .. }
             | Light::Disk { .. }
             | Light::Rectangle { .. }
+            | Light::Triangle { .. }
             | Light::DistantDisk { .. } => None,
         }
     }
 
+    /// The corners of a triangle or rectangle light in order around its outline (a
+    /// rectangle's from `center - u half_width - v half_height`, `v = normal x u_axis`,
+    /// counter-clockwise about `normal`); `None` for other kinds.
+    pub fn outline(&self) -> Option<Vec<Vec3>> {
+        match self {
+            Light::Triangle { a, b, c } => Some(vec![*a, *b, *c]),
+            Light::Rectangle {
+                center,
+                normal,
+                u_axis,
+                half_width,
+                half_height,
+            } => {
+                let u = u_axis.normalize_or(Vec3::X) * *half_width;
+                let v = normal.normalize_or(Vec3::Y).cross(u_axis.normalize_or(Vec3::X)) * *half_height;
+                Some(vec![*center - u - v, *center + u - v, *center + u + v, *center - u + v])
+            }
+            Light::Point { .. }
+            | Light::Directional { .. }
+            | Light::Sphere { .. }
+            | Light::Disk { .. }
+            | Light::Segment { .. }
+            | Light::DistantDisk { .. } => None,
+        }
+    }
+
+    /// The positions of `n` light samples for techniques that render one view per sample
+    /// (Heidrich et al. 2000), and whether they close a loop:
+    ///
+    /// - `n = 1`, a light at a finite position: its centre ([`Light::center`]; a
+    ///   segment's midpoint, a triangle's centroid), open.
+    /// - a segment, `n >= 2`: [`Light::segment_samples`] (ends included), open.
+    /// - a triangle or rectangle, `n` a multiple of its edge count E (3 or 4): its outline
+    ///   (paper section 4, figure 8: an area light approximated by the linear lights of its
+    ///   edges), `n / E` samples per edge starting at each corner of [`Light::outline`]
+    ///   (corners included), closed: the last sample's next is the first.
+    ///
+    /// `n = 0`: no samples. Anything else is an error naming what would fit: `n` above
+    /// `max`, a light at infinity (no position to see from), a point, sphere or disk with
+    /// `n > 1`, or `n` not a multiple of the edges.
+    pub fn sample_chain(&self, n: u32, max: u32) -> Result<(Vec<Vec3>, bool), String> {
+        let name = self.kind_name();
+        if n > max {
+            return Err(format!("{n} light samples is above the limit of {max}: write N in 1..={max}"));
+        }
+        if n == 0 {
+            return Ok((Vec::new(), false));
+        }
+        let Some(centre) = self.center() else {
+            return Err(format!(
+                "a {name} light is at infinity: per-sample views look from points on the light, so they need a light at a finite position (Segment, Triangle, Rectangle, or any local light with N = 1)"
+            ));
+        };
+        if n == 1 {
+            return Ok((vec![centre], false));
+        }
+        if let Some(points) = self.segment_samples(n) {
+            return Ok((points, false));
+        }
+        let Some(corners) = self.outline() else {
+            return Err(format!(
+                "a {name} light has no edges to sample: {n} light samples need a Segment, Triangle or Rectangle light (N = 1 takes the light's centre)"
+            ));
+        };
+        let e = corners.len() as u32;
+        if !n.is_multiple_of(e) {
+            return Err(format!(
+                "a {name} light's samples walk its {e} edges with the same count per edge, so N must be a multiple of {e}, not {n}"
+            ));
+        }
+        let per = n / e;
+        let mut out = Vec::with_capacity(n as usize);
+        for (i, &p) in corners.iter().enumerate() {
+            let q = corners[(i + 1) % corners.len()];
+            out.extend((0..per).map(|j| p.lerp(q, j as f32 / per as f32)));
+        }
+        Ok((out, true))
+    }
+
     /// The light's view for rasterising a shadow map of the geometry in `bounds`.
     ///
-    /// Point-like lights (point, sphere, disk, rectangle, segment) get a square
+    /// Point-like lights (point, sphere, disk, rectangle, segment, triangle) get a square
     /// perspective frustum from the light's centre, wide enough for every corner of
     /// `bounds`, with near/far fitted to the corners (near at least far * 1e-4). It looks
     /// along the axis of the narrowest cone that holds the corners, which is the direction
@@ -1318,6 +1422,7 @@ impl Light {
             } => half_width.max(*half_height),
             Light::Segment { a, b } => 0.5 * a.distance(*b),
             Light::DistantDisk { angle_degrees, .. } => (0.5 * angle_degrees.to_radians()).tan(),
+            Light::Triangle { .. } => self.bounding_radius(),
             Light::Point { .. } | Light::Directional { .. } => 0.0,
         };
         // half-extents along the shadow map's u and v axes (the view's x and y): the
@@ -1338,6 +1443,12 @@ impl Light {
                     half_width * u_axis.dot(axis).abs() + half_height * w.dot(axis).abs()
                 }
                 Light::Segment { a, b } => 0.5 * (*b - *a).dot(axis).abs(),
+                // about the centroid: the farthest corner's offset (at least half the
+                // projected width, and all of it on the side the centroid is near)
+                Light::Triangle { a, b, c } => {
+                    let m = (*a + *b + *c) / 3.0;
+                    [a, b, c].iter().map(|p| (**p - m).dot(axis).abs()).fold(0.0, f32::max)
+                }
                 Light::Point { .. } | Light::Directional { .. } | Light::DistantDisk { .. } => 0.0,
             }
         };
@@ -1740,6 +1851,11 @@ fn validate_light(light: &mut Light, at: &dyn Fn(&str) -> String) -> Result<(), 
         Light::Segment { a, b } => {
             check_point(a, at("a"))?;
             check_point(b, at("b"))
+        }
+        Light::Triangle { a, b, c } => {
+            check_point(a, at("a"))?;
+            check_point(b, at("b"))?;
+            check_point(c, at("c"))
         }
         Light::DistantDisk { direction, angle_degrees } => {
             check_unit(direction, at("direction"))?;
@@ -2171,6 +2287,7 @@ mod tests {
                 direction: d,
                 angle_degrees: 1.0,
             },
+            Light::Triangle { a: p, b: d, c: Vec3::X },
         ];
         let kinds: Vec<LightKind> = lights.iter().map(Light::kind).collect();
         assert_eq!(kinds, LightKind::ALL);

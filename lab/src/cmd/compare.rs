@@ -68,6 +68,11 @@ pub(crate) fn moved_light(light: &Light, scene: &Scene, texels: f32) -> Light {
             *a += d;
             *b += d;
         }
+        Light::Triangle { a, b, c } => {
+            *a += d;
+            *b += d;
+            *c += d;
+        }
         Light::Directional { direction } | Light::DistantDisk { direction, .. } => {
             let half_diagonal = (0.5 * (bounds.1 - bounds.0).length()).max(f32::MIN_POSITIVE);
             let angle = texels * texel_world(light, scene) / half_diagonal;
@@ -93,7 +98,7 @@ pub(crate) fn moving_light_frames(
     for i in 1..frames {
         let mut s = scene.clone();
         s.lights[0] = moved_light(light, scene, i as f32 * step);
-        let inputs = crate::bind::scene_inputs(&s).map_err(|e| format!("error: {e}"))?;
+        let inputs = crate::bind::scene_inputs_for(&s, &ex.graph).map_err(|e| format!("error: {e}"))?;
         ex.bind_scene(&inputs).map_err(rt)?;
         ex.run_frame().map_err(rt)?;
         out.push(ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0));
@@ -132,7 +137,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     {
         return Err(format!("error: `--range {r}`: expected a half-width > 0 in 0..255 units"));
     }
-    let inputs = crate::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
+    let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
     ex.bind_scene(&inputs).map_err(rt)?;
     let mut frame_ms = Vec::new();
     for _ in 0..a.frames.max(1) {

@@ -39,7 +39,7 @@ pub struct RenderArgs {
 pub fn render(a: RenderArgs) -> Result<(), String> {
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
-    let inputs = crate::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
+    let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
     ex.bind_scene(&inputs).map_err(rt)?;
     let mut all: Vec<Vec<Option<f64>>> = Vec::new();
     let mut names = Vec::new();

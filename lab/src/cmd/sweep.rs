@@ -179,6 +179,40 @@ fn configs(file: &SweepFile) -> Vec<Config> {
     out
 }
 
+/// What one configuration's axis values set.
+#[derive(Clone, Debug, PartialEq)]
+struct Settings {
+    /// The `shadow_map` axis (else the scene's own).
+    shadow_map: Option<u32>,
+    /// The `light_scale` axis (else 1).
+    light_scale: f64,
+    /// Params, compiled in as `--set` values: each configuration compiles its technique
+    /// afresh, so a fixed param (an I32 `N` of light samples) takes its value there, and
+    /// the binding reads the sample count from the compiled graph
+    /// ([`crate::bind::scene_inputs_for`]).
+    set: Vec<(String, String)>,
+    /// `precision:NAME` axes.
+    precision: Vec<(String, String)>,
+}
+
+fn settings(c: &Config) -> Result<Settings, String> {
+    let mut out = Settings {
+        shadow_map: None,
+        light_scale: 1.0,
+        set: Vec::new(),
+        precision: Vec::new(),
+    };
+    for (k, v) in &c.values {
+        match k.as_str() {
+            "shadow_map" => out.shadow_map = Some(v.parse().map_err(|_| format!("error: shadow_map = `{v}` is not a whole number"))?),
+            "light_scale" => out.light_scale = v.parse().map_err(|_| format!("error: light_scale = `{v}` is not a number"))?,
+            k if k.starts_with("precision:") => out.precision.push((k["precision:".len()..].to_string(), v.clone())),
+            k => out.set.push((k.to_string(), v.clone())),
+        }
+    }
+    Ok(out)
+}
+
 fn stem(p: &str) -> String {
     Path::new(p)
         .file_stem()
@@ -187,7 +221,7 @@ fn stem(p: &str) -> String {
 }
 
 /// Scale a light's extent (radius, half-extents, segment length about its midpoint,
-/// angular diameter).
+/// triangle about its centroid, angular diameter).
 fn scale_light(l: &mut Light, f: f32) {
     match l {
         Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius *= f,
@@ -201,6 +235,12 @@ fn scale_light(l: &mut Light, f: f32) {
             let m = (*a + *b) * 0.5;
             *a = m + (*a - m) * f;
             *b = m + (*b - m) * f;
+        }
+        Light::Triangle { a, b, c } => {
+            let m = (*a + *b + *c) / 3.0;
+            for p in [a, b, c] {
+                *p = m + (*p - m) * f;
+            }
         }
         Light::DistantDisk { angle_degrees, .. } => *angle_degrees *= f,
         Light::Point { .. } | Light::Directional { .. } => {}
@@ -385,7 +425,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         }
         let scene = load_scene(&resolve(scene_path), file.camera, None)?;
         let c = compile(&resolve(&file.reference), &reference_source, &[], &[])?;
-        let inputs = crate::bind::scene_inputs(&scene)?;
+        let inputs = crate::bind::scene_inputs_for(&scene, &c.graph)?;
         reference_runs.push(Some((c, inputs, Vec::new())));
     }
     let time_references = |runs: &mut Vec<Option<ReferenceRun>>| -> Result<(), String> {
@@ -403,16 +443,14 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         }
         bar.set_message(format!("{} {} {}", stem(&file.scenes[c.scene]), c.label, c.describe()));
         let mut scene = load_scene(&resolve(&file.scenes[c.scene]), file.camera, None)?;
-        let mut set = Vec::new();
-        let mut precision = Vec::new();
-        let mut light_scale = 1.0f64;
-        for (k, v) in &c.values {
-            match k.as_str() {
-                "shadow_map" => scene.shadow_map = v.parse().map_err(|_| format!("error: shadow_map = `{v}` is not a whole number"))?,
-                "light_scale" => light_scale = v.parse().map_err(|_| format!("error: light_scale = `{v}` is not a number"))?,
-                k if k.starts_with("precision:") => precision.push((k["precision:".len()..].to_string(), v.clone())),
-                k => set.push((k.to_string(), v.clone())),
-            }
+        let Settings {
+            shadow_map,
+            light_scale,
+            set,
+            precision,
+        } = settings(c)?;
+        if let Some(n) = shadow_map {
+            scene.shadow_map = n;
         }
         if let Some(l) = scene.lights.first_mut() {
             scale_light(l, light_scale as f32);
@@ -422,7 +460,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         let path = resolve(&file.techniques[c.technique].file);
         let compiled = compile(&path, &sources[c.technique], &set, &precision)?;
         let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
-        ex.bind_scene(&crate::bind::scene_inputs(&scene)?).map_err(rt)?;
+        ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
         let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
         let (fetches, ops) = work(&ex.graph, scene.shadow_map, scene.camera_size(), edges);
         let ms = time_frames(&mut ex, file.frames)?;
@@ -472,7 +510,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
                 let scene = load_scene(&resolve(scene_path), file.camera, None)?;
                 let c = compile(&resolve(&file.reference), &reference_source, &[], &[])?;
                 let mut ex = Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?;
-                ex.bind_scene(&crate::bind::scene_inputs(&scene)?).map_err(rt)?;
+                ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
                 ex.run_frame().map_err(rt)?;
                 let (p, nrm) = positions_normals(&ex)?;
                 let (truth, _) = bar.suspend(|| truth_at(&scene, &p, &nrm, &a.truth))?;
@@ -826,5 +864,50 @@ mod tests {
         assert_eq!(c[6].describe(), "precision:f=Unorm8");
         assert_eq!(shard("1/3"), Ok((1, 3)));
         assert!(shard("3/3").is_err());
+    }
+
+    /// sweeps/linear.ron: a fixed I32 param axis (`N`, light samples) gives one
+    /// configuration per value, each compiling its technique with that value (`--set`),
+    /// which a fixed param takes at compile time: the compiled graph's param holds it, and
+    /// the binding reads the sample count from the graph.
+    #[test]
+    fn a_fixed_param_axis_recompiles_each_value() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let f: SweepFile = ron::from_str(&std::fs::read_to_string(root.join("sweeps/linear.ron")).unwrap()).unwrap();
+        assert_eq!(check_axes(&f), Ok(()));
+        assert_eq!(f.scenes, ["../scenes/linear.ron"]);
+        let c = configs(&f);
+        let got: Vec<(String, Settings)> = c.iter().map(|c| (c.label.clone(), settings(c).unwrap())).collect();
+        let want = |label: &str, n: &str| {
+            (
+                label.to_string(),
+                Settings {
+                    shadow_map: None,
+                    light_scale: 1.0,
+                    set: vec![("N".to_string(), n.to_string())],
+                    precision: vec![],
+                },
+            )
+        };
+        assert_eq!(
+            got,
+            [
+                want("linear-light", "2"),
+                want("linear-light", "3"),
+                want("linear-light", "5"),
+                want("linear-light", "9"),
+                want("point-samples", "2"),
+                want("point-samples", "10"),
+            ]
+        );
+        // A bundled technique with a fixed I32 param (PCSS's `N`), compiled per value as
+        // the sweep does: the value is compiled in, so each configuration's graph differs.
+        let pcss = root.join("techniques/pcss.ron");
+        let source = std::fs::read_to_string(&pcss).unwrap();
+        for n in ["4", "8"] {
+            let g = compile(&pcss, &source, &[("N".to_string(), n.to_string())], &[]).unwrap().graph;
+            let p = g.params.iter().find(|p| p.name == "N").unwrap();
+            assert_eq!((p.value, p.offset), (n.parse::<f64>().unwrap(), None), "N = {n}");
+        }
     }
 }

@@ -55,7 +55,7 @@ pub fn truth(a: TruthArgs) -> Result<(), String> {
     a.truth.check(u64::from(w) * u64::from(h))?;
     let gpu = Gpu::new().map_err(rt)?;
     let mut ex = compile_executor(&gpu, Path::new("techniques/hard.ron"), HARD, &[], &[])?;
-    let inputs = crate::bind::scene_inputs(&scene).map_err(|e| format!("error: {e}"))?;
+    let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
     ex.bind_scene(&inputs).map_err(rt)?;
     ex.run_frame().map_err(rt)?;
     let (positions, normals) = positions_normals(&ex)?;
