@@ -56,7 +56,7 @@ struct Frame {
 
 fn render(gpu: &Gpu, c: &sshc::Compiled, s: &Scene) -> Frame {
     let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&sshc_lab::bind::scene_inputs(s).unwrap())
+    ex.bind_scene(&sshc_lab::bind::scene_inputs_for(s, &c.graph).unwrap_or_else(|e| panic!("{e}")))
         .unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     Frame {
@@ -150,10 +150,23 @@ fn every_technique_on_every_scene_is_finite_and_in_range() {
     let gpu = gpu();
     let (techniques, scenes) = (bundled("techniques"), bundled("scenes"));
     assert!(techniques.len() >= 11 && scenes.len() >= 6, "{techniques:?} {scenes:?}");
+    let mut sampled = 0;
     for t in &techniques {
         let c = compile(t, &[]);
         for sc in &scenes {
             let s = scene(sc, 48, 256);
+            // A technique of light samples runs under the lights that have its samples (a
+            // segment; N a multiple of the edges of a triangle or rectangle); on the others
+            // binding refuses it, saying why.
+            if sshc_lab::bind::graph_samples(&c.graph) > 0 {
+                match sshc_lab::bind::scene_inputs_for(&s, &c.graph) {
+                    Ok(_) => sampled += 1,
+                    Err(e) => {
+                        assert!(e.contains("sample"), "{t} on {sc}: {e}");
+                        continue;
+                    }
+                }
+            }
             let f = render(gpu, &c, &s);
             for (i, v) in f.visibility.channel(0).iter().enumerate() {
                 assert!(
@@ -167,6 +180,8 @@ fn every_technique_on_every_scene_is_finite_and_in_range() {
             }
         }
     }
+    // the light-sample techniques ran on the linear-light scenes at least
+    assert!(sampled >= 3, "{sampled} runs of light-sample techniques");
 }
 
 #[test]

@@ -6,8 +6,8 @@
 
 mod support;
 
-use sshc_lab::scene::{Light, Scene};
-use sshc_runtime::gpu::{CameraOutput, Executor, SampleView, SceneInputs};
+use sshc_lab::scene::Scene;
+use sshc_runtime::gpu::{CameraOutput, Executor, SceneInputs};
 use support::{compile_source, gpu, root, technique_source};
 
 const LINEAR: &str = "linear-light";
@@ -38,32 +38,9 @@ fn scene(a: [f32; 3], b: [f32; 3], shadow: u32) -> Scene {
     scene_with(&format!("Segment(a: {}, b: {})", t(a), t(b)), shadow)
 }
 
-/// The scene's inputs with `n` light-sample views along its segment light.
+/// The scene's inputs with `n` light-sample views along its light.
 fn sample_inputs(scene: &Scene, n: u32) -> SceneInputs {
-    let mut inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));
-    let light = &scene.lights[0];
-    let points = light.segment_samples(n).expect("a segment light");
-    let total: f32 = points.windows(2).map(|w| w[0].distance(w[1])).sum();
-    let len = |i: usize, j: usize| if total > 0.0 { points[i].distance(points[j]) / total } else { 1.0 / (n - 1) as f32 };
-    inputs.samples = points
-        .iter()
-        .enumerate()
-        .map(|(k, p)| {
-            let v = scene.light_view(&Light::Point { position: *p });
-            let before = if n == 1 { 1.0 } else if k == 0 { 0.0 } else { len(k - 1, k) };
-            let after = if n == 1 { 1.0 } else if k + 1 == n as usize { 0.0 } else { len(k, k + 1) };
-            SampleView {
-                light_view: v.view.to_cols_array(),
-                light_view_proj: v.view_proj.to_cols_array(),
-                position: p.to_array(),
-                near: v.near,
-                far: v.far,
-                light_proj_y: v.proj.y_axis.y,
-                weights: [before, after],
-            }
-        })
-        .collect();
-    inputs
+    sshc_lab::bind::scene_inputs_with_samples(scene, n).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The visibility of every camera pixel.
