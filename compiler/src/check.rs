@@ -393,10 +393,7 @@ fn check_sample_views(sym: &Symbols, per_sample: &[String], diags: &mut Diagnost
                 });
             }
         }
-        if let PassKind::Geometry {
-            primitive, view, from, ..
-        } = &p.kind
-        {
+        if let PassKind::Geometry { primitive, view, from, .. } = &p.kind {
             let skins = *primitive == Primitive::Skins;
             if skins && *view != LightView::PerSample {
                 diags.push(
@@ -418,9 +415,12 @@ fn check_sample_views(sym: &Symbols, per_sample: &[String], diags: &mut Diagnost
             }
             match (skins, from) {
                 (true, None) => diags.push(
-                    Diagnostic::error(Phase::Check, format!("Skins pass `{}` does not say which neighbour it warps", p.name.value))
-                        .at(p.kind_span, "missing `from`")
-                        .help("add `from: Previous` (skins of sample k - 1 into view k) or `from: Next` (of sample k + 1)"),
+                    Diagnostic::error(
+                        Phase::Check,
+                        format!("Skins pass `{}` does not say which neighbour it warps", p.name.value),
+                    )
+                    .at(p.kind_span, "missing `from`")
+                    .help("add `from: Previous` (skins of sample k - 1 into view k) or `from: Next` (of sample k + 1)"),
                 ),
                 (false, Some(f)) => diags.push(
                     Diagnostic::error(Phase::Check, format!("`from` is a field of Skins passes, not of {primitive:?}"))
@@ -430,9 +430,12 @@ fn check_sample_views(sym: &Symbols, per_sample: &[String], diags: &mut Diagnost
             }
             if skins && !p.kind.reads().iter().any(|r| is_depth_resource(sym, &r.value)) {
                 diags.push(
-                    Diagnostic::error(Phase::Check, format!("Skins pass `{}` reads no per-sample Depth resource", p.name.value))
-                        .at(p.kind_span, "skins are found in the samples' depth maps")
-                        .help("add the resource of a `Depth(view: PerSample)` pass to `reads`"),
+                    Diagnostic::error(
+                        Phase::Check,
+                        format!("Skins pass `{}` reads no per-sample Depth resource", p.name.value),
+                    )
+                    .at(p.kind_span, "skins are found in the samples' depth maps")
+                    .help("add the resource of a `Depth(view: PerSample)` pass to `reads`"),
                 );
             }
         }
@@ -1647,7 +1650,9 @@ impl<'s, 'a> Typer<'s, 'a> {
                             format!("`{target}` is held once per light sample by `{holder}`: say which sample"),
                             "which sample's view?",
                         )
-                        .help(format!("look it up inside `at_sample(k, ...)`, e.g. `sum(k in 0..=N - 1, at_sample(k, {name}({target}...)))`"))
+                        .help(format!(
+                            "look it up inside `at_sample(k, ...)`, e.g. `sum(k in 0..=N - 1, at_sample(k, {name}({target}...)))`"
+                        ))
                     } else {
                         Self::err(
                             args[0].span,

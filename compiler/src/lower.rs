@@ -302,7 +302,10 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 return Err(self.in_series(
                     Self::err(
                         args[0].span,
-                        format!("light sample {k} does not exist: the technique has {} (`light_samples`)", self.samples),
+                        format!(
+                            "light sample {k} does not exist: the technique has {} (`light_samples`)",
+                            self.samples
+                        ),
                         "sample index out of range",
                     )
                     .help(format!("sample indices run from 0 to {}", self.samples.saturating_sub(1))),
@@ -498,7 +501,11 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             PassKind::Mipmap { reduce, .. } => IrPassKind::Mipmap { reduce: *reduce },
             PassKind::SummedArea { .. } => IrPassKind::SummedArea,
             PassKind::Geometry {
-                primitive, view, keep, from, ..
+                primitive,
+                view,
+                keep,
+                from,
+                ..
             } => IrPassKind::Geometry {
                 primitive: *primitive,
                 from: from.as_ref().map(|f| f.value),

@@ -217,7 +217,9 @@ fn csm_reconstruction(m: i64, n: usize) -> Vec<Vec<f64>> {
     let receiver = |d: f64| {
         move |node: &Node| match node {
             Node::Input(sshc::builtins::Input::D, _) => Some(d),
-            Node::Input(sshc::builtins::Input::Slope | sshc::builtins::Input::TexelDepth | sshc::builtins::Input::DepthSlope, _) => Some(0.0),
+            Node::Input(sshc::builtins::Input::Slope | sshc::builtins::Input::TexelDepth | sshc::builtins::Input::DepthSlope, _) => {
+                Some(0.0)
+            }
             Node::Param(p) => Some(params[*p].value.as_f64()),
             _ => None,
         }

@@ -349,9 +349,7 @@ impl<'g> Executor<'g> {
         let gpu = self.gpu;
         self.bound = None;
         let res = Resources::new(gpu, &self.graph, s, self.max_bytes)?;
-        if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample)
-            && s.samples.len() != self.graph.samples as usize
-        {
+        if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
             return Err(RuntimeError::Param(format!(
                 "technique `{}` renders {} light-sample view(s), but the scene gives {} (`SceneInputs::samples`)",
                 self.graph.technique,
@@ -464,7 +462,12 @@ impl<'g> Executor<'g> {
                 // A per-sample pass records all its steps for one view, then the next.
                 let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
                 let recording: Vec<_> = (0..views)
-                    .flat_map(|v| pass.steps.iter().filter(move |n| n.passes() > 0 && v < n.views()).map(move |n| (n, v)))
+                    .flat_map(|v| {
+                        pass.steps
+                            .iter()
+                            .filter(move |n| n.passes() > 0 && v < n.views())
+                            .map(move |n| (n, v))
+                    })
                     .collect();
                 let last = recording.len().saturating_sub(1);
                 for (i, (node, view)) in recording.into_iter().enumerate() {

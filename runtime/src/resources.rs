@@ -288,7 +288,8 @@ impl Resources {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            gpu.queue.write_buffer(&light_samples, 0, &SampleViewUniform::to_bytes(&s.light_samples()));
+            gpu.queue
+                .write_buffer(&light_samples, 0, &SampleViewUniform::to_bytes(&s.light_samples()));
             // A storage binding may not be empty: every buffer holds at least one element.
             let storage = |label: &str, data: &[u8], min: usize, usage: wgpu::BufferUsages| {
                 let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {

@@ -1057,7 +1057,10 @@ fn geometry(
         let (t, layer, comp) = slot.place();
         let per = r.textures[t].layers;
         let tex = entries.decl.binding(&r.textures[t].name, View::Base);
-        let stored = format!("textureLoad({tex}, clamp(t, vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), view * {per}i + {layer}i, 0i).{}", COMP[comp as usize]);
+        let stored = format!(
+            "textureLoad({tex}, clamp(t, vec2<i32>(0i), vec2<i32>(frame.shadow_size.xy) - 1i), view * {per}i + {layer}i, 0i).{}",
+            COMP[comp as usize]
+        );
         let tau = if threshold.uniform {
             entries.decl.uses_params = true;
             format!("params.{}", threshold.name)
