@@ -12,8 +12,12 @@
 //! `f(x) = clamp((L/2 - x - (e - x) H / h) / L, 0, 1)`: linear in `x`, eq. 1 with equal slopes
 //! `m = n` of light and receiver.
 
+use sshc_runtime::gpu::Gpu;
 use sshc_tests::reference::linear::fixtures::{quad, segment_views};
 use sshc_tests::reference::linear::*;
+use sshc_tests::reference::linear_gpu::{GpuChannel, channels_gpu};
+use sshc_tests::reference::penumbra::fixtures::cuboid;
+use std::sync::OnceLock;
 
 const H: f64 = 4.0;
 const HO: f64 = 2.0;
@@ -422,4 +426,248 @@ fn bad_setups_are_refused() {
     assert!(e.contains("outside [0, 1]"), "{e}");
     let e = linear_maps_from_depth(vec![vec![0.5; 64], vec![0.5; 63]], &good).unwrap_err();
     assert!(e.contains("63 texels"), "{e}");
+}
+
+fn gpu() -> &'static Gpu {
+    static GPU: OnceLock<Gpu> = OnceLock::new();
+    GPU.get_or_init(|| Gpu::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}")))
+}
+
+/// How one channel's texels compare.
+#[derive(Debug, Default)]
+struct Agreement {
+    /// Same winner (or none in both), value and depth within tolerance.
+    same: usize,
+    /// Different winners whose fragments have the same value and depth within tolerance (a
+    /// texel centre on an edge two skins share, or two skins at equal depth).
+    ties: usize,
+    /// Different results where the texel centre lies within f32 rounding of an edge of either
+    /// winner, or either winner's keep test or the depth test between them is within rounding.
+    edge: usize,
+    /// Anything else.
+    failures: Vec<String>,
+    worst_value: f64,
+    covered: usize,
+}
+
+const EPS32: f64 = f32::EPSILON as f64;
+
+/// Compare the WGSL channel of view `j` (skins of view `i`) with the f64 one.
+///
+/// Tolerances, from f32: the WGSL places a corner by a 3 x 3 solve whose terms are world
+/// coordinates up to `R` (the largest coordinate of a skin corner or of the views'
+/// translations) and projects it, each step a few roundings; we allow 32 roundings of `R`:
+/// a world error `32 eps R`, which at view distance `>= near_j` is a screen error of
+/// `dq = 32 eps (R / near_j) (S / 2)` texels (the map spans `2 dist / f` world units at `dist`,
+/// `f >= 1` here). An edge function of an edge `L` texels long is then off by `2 L dq`, so a
+/// texel centre's distance to an edge by `2 dq` (the edge margin), and a screen barycentric
+/// (edge function over twice the area) by `2 dq / h`, `h` the triangle's smallest height in
+/// texels; the perspective weights `l_k / w_k` over their sum multiply that by at most
+/// `w_max / w_min` of the corners. Values are barycentric mixes of 0 and 1: `tol_v = 2 dq
+/// (w_max / w_min) / h + 8 eps`. Depths mix the corners' depths (each off by `32 eps R /
+/// (far - near)`): `tol_d = tol_v + 32 eps R / (far_j - near_j)`.
+fn agree(setup: &LinearSetup, maps: &LinearMaps, i: usize, j: usize, cpu: &Channel, gpu: &GpuChannel) -> Agreement {
+    let n = setup.size;
+    let vj = &setup.views[j];
+    let skins = &maps.skins[i];
+    let mut r = 0.0f64;
+    for sk in skins {
+        for p in sk.world {
+            r = r.max(p.iter().fold(0.0f64, |m, c| m.max(c.abs())));
+        }
+    }
+    for v in &setup.views {
+        r = r.max(v.view[12].abs()).max(v.view[13].abs()).max(v.view[14].abs());
+    }
+    let dq = 32.0 * EPS32 * (r / vj.near) * (n as f64 / 2.0);
+    let margin = 2.0 * dq;
+    let d_tol_extra = 32.0 * EPS32 * r / (vj.far - vj.near);
+    let find = |idx: u32| skins.binary_search_by_key(&idx, |s| s.index).ok().map(|k| &skins[k]);
+    let tol_v = |sk: &Skin| -> f64 {
+        let Some(pr) = project(sk, vj, n) else { return f64::INFINITY };
+        let len = |a: usize, b: usize| ((pr.q[b][0] - pr.q[a][0]).powi(2) + (pr.q[b][1] - pr.q[a][1]).powi(2)).sqrt();
+        let area2 = ((pr.q[1][0] - pr.q[0][0]) * (pr.q[2][1] - pr.q[0][1]) - (pr.q[1][1] - pr.q[0][1]) * (pr.q[2][0] - pr.q[0][0])).abs();
+        let h = [area2 / len(1, 2), area2 / len(2, 0), area2 / len(0, 1)]
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        let wr = pr.w.iter().fold(0.0f64, |m, w| m.max(*w)) / pr.w.iter().fold(f64::INFINITY, |m, w| m.min(*w));
+        2.0 * dq * wr / h + 8.0 * EPS32
+    };
+    let mut a = Agreement::default();
+    for y in 0..n {
+        for x in 0..n {
+            let t = y * n + x;
+            let (cw, gw) = (cpu.winner[t], gpu.winner[t]);
+            a.covered += cw.is_some() as usize;
+            let dv = (cpu.value[t] - gpu.value[t] as f64).abs();
+            let dd = (cpu.depth[t] - gpu.depth[t] as f64).abs();
+            if cw.is_some() && gw.is_some() {
+                a.worst_value = a.worst_value.max(dv);
+            }
+            let tv = cw
+                .and_then(find)
+                .map(tol_v)
+                .unwrap_or(8.0 * EPS32)
+                .max(gw.and_then(find).map(tol_v).unwrap_or(8.0 * EPS32));
+            let close = dv <= tv && (cw.is_none() || dd <= tv + d_tol_extra);
+            if cw == gw {
+                // one skin's fragment in both: its value and depth are continuous across the
+                // texel, so no rounding of an edge or test excuses a difference
+                if close {
+                    a.same += 1;
+                } else {
+                    a.failures.push(format!(
+                        "texel ({x}, {y}): skin {cw:?}: f64 value {} depth {}, WGSL value {} depth {} (tolerance {tv:e})",
+                        cpu.value[t], cpu.depth[t], gpu.value[t], gpu.depth[t]
+                    ));
+                }
+                continue;
+            }
+            if cw != gw && cw.is_some() && gw.is_some() && close {
+                a.ties += 1;
+                continue;
+            }
+            // within rounding of an edge, of the keep test or of the depth test?
+            let mut borderline = false;
+            let mut frags = Vec::new();
+            for w in [cw, gw].into_iter().flatten() {
+                let Some(sk) = find(w) else { continue };
+                if let Some(e) = edge_distances(sk, setup, j, x, y)
+                    && e.iter().any(|d| d.abs() <= margin)
+                {
+                    borderline = true;
+                }
+                if let Some(f) = fragment(sk, setup, j, x, y) {
+                    let tol_d = tol_v(sk) + d_tol_extra;
+                    if (f.depth - (maps.depth[j][t] + setup.keep_bias)).abs() <= tol_d {
+                        borderline = true;
+                    }
+                    frags.push((f.depth, tol_d));
+                }
+            }
+            if let [(d0, t0), (d1, t1)] = frags[..]
+                && (d0 - d1).abs() <= t0.max(t1)
+            {
+                borderline = true;
+            }
+            if borderline {
+                a.edge += 1;
+            } else {
+                a.failures.push(format!(
+                    "texel ({x}, {y}): f64 {:?} value {} depth {}, WGSL {:?} value {} depth {} (tolerance {tv:e})",
+                    cw, cpu.value[t], cpu.depth[t], gw, gpu.value[t], gpu.depth[t]
+                ));
+            }
+        }
+    }
+    a
+}
+
+fn check_agreement(name: &str, setup: &LinearSetup, scene: &[[V3; 3]]) -> (usize, usize, usize) {
+    let maps = linear_maps(scene, setup).unwrap();
+    let g = channels_gpu(gpu(), setup, &maps.depth).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (mut covered, mut ties, mut edge) = (0, 0, 0);
+    for j in 0..setup.views.len() {
+        for (src, cpu, gpu_ch, what) in [
+            (setup.prev_of(j), &maps.v_prev[j], &g.v_prev[j], "v_prev"),
+            (setup.next_of(j), &maps.v_next[j], &g.v_next[j], "v_next"),
+        ] {
+            let Some(i) = src else {
+                assert!(gpu_ch.value.iter().all(|v| *v == 0.5) && cpu.value.iter().all(|v| *v == 0.5));
+                continue;
+            };
+            let a = agree(setup, &maps, i, j, cpu, gpu_ch);
+            assert!(
+                a.failures.is_empty(),
+                "{name}, {what} of view {j}: {} texels disagree:\n{}",
+                a.failures.len(),
+                a.failures.join("\n")
+            );
+            // texels decided within rounding lie within `margin` (1e-4 texels here) of an edge
+            // or of a keep or depth test: at most a few per channel unless geometry puts
+            // centres exactly on them
+            assert!(
+                a.edge <= 2 + a.covered / 100,
+                "{name}, {what} of view {j}: {} of {} covered texels decided by rounding",
+                a.edge,
+                a.covered
+            );
+            eprintln!(
+                "{name}, {what} of view {j}: {} covered, {} same, {} ties, {} edge cases, largest value difference {:.2e}",
+                a.covered, a.same, a.ties, a.edge, a.worst_value
+            );
+            covered += a.covered;
+            ties += a.ties;
+            edge += a.edge;
+        }
+    }
+    (covered, ties, edge)
+}
+
+/// The WGSL channels against the f64 ones: a tilted light, three samples, views turned off
+/// the axes, a bar at 20 degrees and a box (both interpolations); and the figure-2 scene,
+/// whose views share an orientation so that the mesh's rows land exactly on texel centres.
+#[test]
+fn the_wgsl_channels_agree_with_the_f64_reference() {
+    let size = 32;
+    let mut scene = bar_scene(20f64.to_radians(), E - 0.6, E + 0.6);
+    scene.extend(cuboid([0.6, -1.3, 1.2], [1.3, -0.55, 2.4]));
+    for interpolation in [Interpolation::Perspective, Interpolation::Screen] {
+        let s = LinearSetup {
+            views: segment_views(
+                [-1.0, -0.3, 4.1],
+                [1.0, 0.37, 3.9],
+                3,
+                [0.05, -0.03, -1.0],
+                [0.1, 1.0, 0.0],
+                std::f64::consts::FRAC_PI_2,
+                NEAR,
+                FAR,
+            ),
+            closed: false,
+            size,
+            skin_threshold: TAU,
+            keep_bias: KEEP_BIAS,
+            bias: BIAS,
+            interpolation,
+        };
+        let (covered, _, edge) = check_agreement(&format!("tilted ({interpolation:?})"), &s, &scene);
+        assert!(covered > 300, "only {covered} covered texels");
+        eprintln!("tilted ({interpolation:?}): {edge} edge cases in {covered} covered texels");
+    }
+    let s = light(2, size, Interpolation::Perspective);
+    let (covered, ties, edge) = check_agreement("figure 2", &s, &edge_scene(0.0, E));
+    eprintln!("figure 2: {covered} covered texels, {ties} ties, {edge} edge cases");
+}
+
+/// The WGSL reference refuses what the f64 one refuses.
+#[test]
+fn the_wgsl_reference_refuses_bad_inputs() {
+    let s = light(2, 8, Interpolation::Perspective);
+    let e = channels_gpu(gpu(), &s, &[vec![0.5; 64]]).unwrap_err();
+    assert!(e.contains("1 depth maps for 2 samples"), "{e}");
+    let mut bad = s.clone();
+    bad.size = 0;
+    assert!(channels_gpu(gpu(), &bad, &[vec![0.5; 64], vec![0.5; 64]]).is_err());
+}
+
+/// A runtime sample view converts field by field.
+#[test]
+fn a_runtime_sample_view_converts() {
+    let v = light(2, 8, Interpolation::Perspective).views[1];
+    let f = |m: &[f64; 16]| m.map(|x| x as f32);
+    let s = sshc_runtime::gpu::SampleView {
+        light_view: f(&v.view),
+        light_view_proj: f(&v.view_proj),
+        position: [1.0, 0.0, 4.0],
+        near: 1.0,
+        far: 6.0,
+        light_proj_y: 1.0,
+        weights: [1.0, 0.0],
+    };
+    let w = LinearView::from_sample(&s);
+    assert_eq!((w.near, w.far, w.weights), (1.0, 6.0, [1.0, 0.0]));
+    for k in 0..16 {
+        assert!((w.view[k] - v.view[k]).abs() < 1e-6 && (w.view_proj[k] - v.view_proj[k]).abs() < 1e-6);
+    }
 }

@@ -133,6 +133,17 @@ fn finite(p: V3) -> bool {
 }
 
 impl LinearView {
+    /// The view of a runtime light sample (its f32 matrices, near, far and weights widened).
+    pub fn from_sample(s: &sshc_runtime::gpu::SampleView) -> LinearView {
+        LinearView {
+            view: s.light_view.map(f64::from),
+            view_proj: s.light_view_proj.map(f64::from),
+            near: f64::from(s.near),
+            far: f64::from(s.far),
+            weights: s.weights.map(f64::from),
+        }
+    }
+
     /// View distance `dist = -(view p).z` of a world point.
     pub fn dist(&self, p: V3) -> f64 {
         -apply(row(&self.view, 2), p)
@@ -452,6 +463,27 @@ fn edge_fn(skin: &Skin, pr: &Projected, a: usize, b: usize, p: [f64; 2]) -> f64 
     let (first, second, sign) = if key(a) <= key(b) { (a, b, 1.0) } else { (b, a, -1.0) };
     let (qa, qb) = (pr.q[first], pr.q[second]);
     sign * ((qb[0] - qa[0]) * (p[1] - qa[1]) - (qb[1] - qa[1]) * (p[0] - qa[0]))
+}
+
+/// The signed distances, in texels of view `j`, from the centre of texel `(x, y)` to the three
+/// edges of `skin` projected into view `j` (edge `k` opposite corner `k`), positive inside for
+/// either winding; `None` where a corner lies at or behind the eye or the projection has no
+/// area.
+pub fn edge_distances(skin: &Skin, setup: &LinearSetup, j: usize, x: usize, y: usize) -> Option<[f64; 3]> {
+    let pr = project(skin, &setup.views[j], setup.size)?;
+    let p = [x as f64 + 0.5, y as f64 + 0.5];
+    let e = [
+        edge_fn(skin, &pr, 1, 2, p),
+        edge_fn(skin, &pr, 2, 0, p),
+        edge_fn(skin, &pr, 0, 1, p),
+    ];
+    let area = e[0] + e[1] + e[2];
+    if area == 0.0 || !area.is_finite() {
+        return None;
+    }
+    let len = |a: usize, b: usize| ((pr.q[b][0] - pr.q[a][0]).powi(2) + (pr.q[b][1] - pr.q[a][1]).powi(2)).sqrt();
+    let l = [len(1, 2), len(2, 0), len(0, 1)];
+    Some([0, 1, 2].map(|k| e[k] * area.signum() / l[k]))
 }
 
 fn interpolate(skin: &Skin, setup: &LinearSetup, view: &LinearView, bary: [f64; 3], screen: Option<[f64; 3]>) -> Option<Fragment> {
