@@ -13,7 +13,7 @@
 //! `m = n` of light and receiver.
 
 use sshc_runtime::gpu::Gpu;
-use sshc_tests::reference::linear::fixtures::{quad, segment_views};
+use sshc_tests::reference::linear::fixtures::{self, quad, segment_views};
 use sshc_tests::reference::linear::*;
 use sshc_tests::reference::linear_gpu::{GpuChannel, channels_gpu};
 use sshc_tests::reference::penumbra::fixtures::cuboid;
@@ -179,6 +179,85 @@ fn receiver_grid(count: usize) -> Vec<V3> {
         }
     }
     out
+}
+
+/// (a, section 3.3) Figure 2 with three samples (ends and middle): each half of the light is a
+/// linear light of half the weight; the middle sample sums both halves' channels. With screen
+/// interpolation the shade is again the exact linear fraction: on `[2e - 1, 2e]` only the
+/// right sample sees, `V = v_prev / 2` rising 0 -> 1/2; on `[2e, 2e + 1]` the middle and right
+/// samples see, `V = 1/2 + v_prev / 2` of the middle sample, rising 1/2 -> 1. The tolerance is
+/// figure 2's: the same slope (1/2 per world unit), texels and ends; except within one receiver
+/// texel of `x = 2e`, the middle sample's shadow edge, where the texel of view 1 holding `p` can
+/// see the receiver while `p` lies in its shadow (or the reverse) and the right sample's
+/// `v_prev` (the middle sample's skin, near its receiver end: about 1) is summed with the middle
+/// sample's `v_next` (0.5): `V` overshoots to about 0.8 where `f` is 0.5. Unlike the end
+/// samples' edges (where `f` is 1 and the clamp hides the overshoot) this is visible; it is
+/// bounded there by the weights: `V - f <= w_after_1 / 2 + (1 - f)`.
+#[test]
+fn figure_2_three_samples_ramp() {
+    let size = 64;
+    let tol = ramp_tolerance(size);
+    let t_r = 8.0 / size as f64;
+    let s = light(3, size, Interpolation::Screen);
+    assert_eq!(s.views[1].weights, [0.5, 0.5]);
+    let maps = linear_maps(&edge_scene(0.0, E), &s).unwrap();
+    let (mut worst, mut overshoot) = (0.0f64, 0.0f64);
+    for p in receiver_line(-1.6, 1.6, 400) {
+        let v = visibility_clamped(&s, &maps, p);
+        let f = exact_fraction(p[0]);
+        if (p[0] - 2.0 * E).abs() < t_r {
+            overshoot = overshoot.max(v - f);
+            assert!(v - f <= 0.25 + (1.0 - f), "x = {}: V = {v}, exact {f}", p[0]);
+            continue;
+        }
+        worst = worst.max((v - f).abs());
+        assert!((v - f).abs() <= tol, "x = {}: V = {v}, exact {f} (tolerance {tol})", p[0]);
+    }
+    eprintln!(
+        "figure 2, three samples, S = {size}: |V - f| <= {worst:.4} (tolerance {tol:.4}) away from the middle sample's shadow edge, V - f up to {overshoot:.4} within a texel of it"
+    );
+}
+
+/// A closed chain (a triangle light's edges, paper section 4): three corner samples, each
+/// edge a third of the perimeter, so every sample carries [1/3, 1/3]; sample 0's `v_prev` is
+/// made of sample 2's skins; a receiver point every sample sees with no skin on it (beyond the
+/// occluder's every shadow, inside every map) shades 1, one in the umbra 0.
+#[test]
+fn a_closed_chain_links_the_last_sample_to_the_first() {
+    let size = 32;
+    let corners = [[-1.0, -0.6, H], [1.0, -0.6, H], [0.0, 1.1, H]];
+    let proj = fixtures::perspective(std::f64::consts::FRAC_PI_2, NEAR, FAR);
+    let views = corners
+        .iter()
+        .map(|&eye| {
+            let view = fixtures::look_at(eye, [eye[0], eye[1], 0.0], [0.0, 1.0, 0.0]);
+            LinearView {
+                view,
+                view_proj: fixtures::mul(&proj, &view),
+                near: NEAR,
+                far: FAR,
+                weights: [1.0 / 3.0; 2],
+            }
+        })
+        .collect();
+    let s = LinearSetup {
+        views,
+        closed: true,
+        size,
+        skin_threshold: TAU,
+        keep_bias: KEEP_BIAS,
+        bias: BIAS,
+        interpolation: Interpolation::Perspective,
+    };
+    let mut scene = receiver();
+    scene.extend(quad(-0.9, 0.9, -0.9, 0.9, HO));
+    let maps = linear_maps(&scene, &s).unwrap();
+    let direct = warp(&maps.skins[2], &maps.depth[0], &s, 0);
+    assert!(maps.v_prev[0].value == direct.value && maps.v_prev[0].winner == direct.winner);
+    assert!(maps.v_prev[0].winner.iter().any(|w| w.is_some()));
+    let lit = visibility(&s, &maps, [-2.6, 3.1, 0.0]);
+    assert!((lit - 1.0).abs() < 1e-12, "lit receiver: {lit}");
+    assert_eq!(visibility(&s, &maps, [0.013, 0.021, 0.0]), 0.0);
 }
 
 /// (b) One sample (the midpoint, weights [1, 1]): no channel is written (no neighbours), and
