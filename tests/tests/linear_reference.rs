@@ -252,7 +252,7 @@ fn a_closed_chain_links_the_last_sample_to_the_first() {
     let mut scene = receiver();
     scene.extend(quad(-0.9, 0.9, -0.9, 0.9, HO));
     let maps = linear_maps(&scene, &s).unwrap();
-    let direct = warp(&maps.skins[2], &maps.depth[0], &s, 0);
+    let direct = warp(&maps.skins[2], &maps.depth[0], &s, 0).unwrap();
     assert!(maps.v_prev[0].value == direct.value && maps.v_prev[0].winner == direct.winner);
     assert!(maps.v_prev[0].winner.iter().any(|w| w.is_some()));
     let lit = visibility(&s, &maps, [-2.6, 3.1, 0.0]);
@@ -505,6 +505,16 @@ fn bad_setups_are_refused() {
     assert!(e.contains("outside [0, 1]"), "{e}");
     let e = linear_maps_from_depth(vec![vec![0.5; 64], vec![0.5; 63]], &good).unwrap_err();
     assert!(e.contains("63 texels"), "{e}");
+    // the parts refuse what does not fit too
+    assert!(depth_map(&receiver(), &good, 2).unwrap_err().contains("no sample 2"));
+    assert!(skins(&[0.5; 63], &good, 0).unwrap_err().contains("63 texels"));
+    assert!(warp(&[], &[0.5; 64], &good, 5).unwrap_err().contains("no sample 5"));
+    assert!(laplacian(&[0.5; 3], 2).is_err());
+    let maps = linear_maps(&receiver(), &good).unwrap();
+    let mut other = good.clone();
+    other.views.push(other.views[0]);
+    assert!(!lit(&other, &maps, 2, [0.0, 0.0, 0.0]));
+    assert!(visibility(&other, &maps, [0.0, 0.0, 0.0]).is_finite());
 }
 
 fn gpu() -> &'static Gpu {

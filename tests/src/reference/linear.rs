@@ -281,11 +281,26 @@ impl LinearSetup {
     }
 }
 
+fn check_view(setup: &LinearSetup, k: usize) -> Result<&LinearView, String> {
+    setup.check()?;
+    setup
+        .views
+        .get(k)
+        .ok_or_else(|| format!("no sample {k}: the set-up has {}", setup.views.len()))
+}
+
+fn check_len(what: &str, v: &[f64], size: usize) -> Result<(), String> {
+    if v.len() != size * size {
+        return Err(format!("{what} has {} texels, not {}", v.len(), size * size));
+    }
+    Ok(())
+}
+
 /// The depth map of view `k` (linear depth of the nearest of `triangles` at each texel
 /// centre, 1 where the ray meets none between near and far).
-pub fn depth_map(triangles: &[[V3; 3]], setup: &LinearSetup, k: usize) -> Vec<f64> {
+pub fn depth_map(triangles: &[[V3; 3]], setup: &LinearSetup, k: usize) -> Result<Vec<f64>, String> {
+    let view = check_view(setup, k)?;
     let n = setup.size;
-    let view = &setup.views[k];
     let tris: Vec<&[V3; 3]> = triangles.iter().filter(|t| t.iter().all(|p| finite(*p))).collect();
     let mut z = vec![1.0; n * n];
     for y in 0..n {
@@ -301,11 +316,12 @@ pub fn depth_map(triangles: &[[V3; 3]], setup: &LinearSetup, k: usize) -> Vec<f6
             }
         }
     }
-    z
+    Ok(z)
 }
 
 /// The detector's Laplacian `4 z(t) - z(t-x) - z(t+x) - z(t-y) - z(t+y)`, neighbours clamped.
-pub fn laplacian(depth: &[f64], size: usize) -> Vec<f64> {
+pub fn laplacian(depth: &[f64], size: usize) -> Result<Vec<f64>, String> {
+    check_len("the depth map", depth, size)?;
     let n = size;
     let at = |x: usize, y: usize| depth[y * n + x];
     let mut out = vec![0.0; n * n];
@@ -315,7 +331,7 @@ pub fn laplacian(depth: &[f64], size: usize) -> Vec<f64> {
             out[y * n + x] = 4.0 * at(x, y) - l;
         }
     }
-    out
+    Ok(out)
 }
 
 /// A skin triangle of a source view.
@@ -344,11 +360,11 @@ pub fn cell_corners(x: usize, y: usize, half: u32) -> [(usize, usize); 3] {
 }
 
 /// The skins of source view `i` given its depth map.
-pub fn skins(depth: &[f64], setup: &LinearSetup, i: usize) -> Vec<Skin> {
+pub fn skins(depth: &[f64], setup: &LinearSetup, i: usize) -> Result<Vec<Skin>, String> {
+    let view = check_view(setup, i)?;
     let n = setup.size;
-    let view = &setup.views[i];
     let tau = setup.skin_threshold;
-    let log = laplacian(depth, n);
+    let log = laplacian(depth, n)?;
     let mut out = Vec::new();
     for y in 0..n - 1 {
         for x in 0..n - 1 {
@@ -386,7 +402,7 @@ pub fn skins(depth: &[f64], setup: &LinearSetup, i: usize) -> Vec<Skin> {
             }
         }
     }
-    out
+    Ok(out)
 }
 
 /// Ray-triangle intersection with barycentrics (Moller-Trumbore, both sides, edges included):
@@ -470,7 +486,7 @@ fn edge_fn(skin: &Skin, pr: &Projected, a: usize, b: usize, p: [f64; 2]) -> f64 
 /// either winding; `None` where a corner lies at or behind the eye or the projection has no
 /// area.
 pub fn edge_distances(skin: &Skin, setup: &LinearSetup, j: usize, x: usize, y: usize) -> Option<[f64; 3]> {
-    let pr = project(skin, &setup.views[j], setup.size)?;
+    let pr = project(skin, setup.views.get(j)?, setup.size)?;
     let p = [x as f64 + 0.5, y as f64 + 0.5];
     let e = [
         edge_fn(skin, &pr, 1, 2, p),
@@ -539,7 +555,7 @@ fn ray_fragment(skin: &Skin, setup: &LinearSetup, view: &LinearView, x: usize, y
 /// The fragment of `skin` at texel `(x, y)` of view `j`, if it covers the texel centre
 /// between the near and far planes.
 pub fn fragment(skin: &Skin, setup: &LinearSetup, j: usize, x: usize, y: usize) -> Option<Fragment> {
-    let view = &setup.views[j];
+    let view = setup.views.get(j)?;
     match project(skin, view, setup.size) {
         Some(pr) => raster_fragment(skin, &pr, setup, view, x, y),
         None => ray_fragment(skin, setup, view, x, y),
@@ -569,9 +585,10 @@ impl Channel {
 }
 
 /// The skins of a source view warped into view `j` with depth map `depth_j`.
-pub fn warp(skins: &[Skin], depth_j: &[f64], setup: &LinearSetup, j: usize) -> Channel {
+pub fn warp(skins: &[Skin], depth_j: &[f64], setup: &LinearSetup, j: usize) -> Result<Channel, String> {
+    let view = check_view(setup, j)?;
     let n = setup.size;
-    let view = &setup.views[j];
+    check_len("the target's depth map", depth_j, n)?;
     let mut ch = Channel::clear(n);
     let last = n as f64 - 1.0;
     for skin in skins {
@@ -608,7 +625,7 @@ pub fn warp(skins: &[Skin], depth_j: &[f64], setup: &LinearSetup, j: usize) -> C
             }
         }
     }
-    ch
+    Ok(ch)
 }
 
 /// Every map of the technique.
@@ -639,13 +656,19 @@ pub fn linear_maps_from_depth(depth: Vec<Vec<f64>>, setup: &LinearSetup) -> Resu
             return Err(format!("depth map {k} holds {z}, outside [0, 1]"));
         }
     }
-    let skins: Vec<Vec<Skin>> = (0..depth.len()).map(|i| self::skins(&depth[i], setup, i)).collect();
+    let skins = (0..depth.len())
+        .map(|i| self::skins(&depth[i], setup, i))
+        .collect::<Result<Vec<_>, _>>()?;
     let channel = |src: Option<usize>, j: usize| match src {
         Some(i) => warp(&skins[i], &depth[j], setup, j),
-        None => Channel::clear(n),
+        None => Ok(Channel::clear(n)),
     };
-    let v_prev = (0..depth.len()).map(|j| channel(setup.prev_of(j), j)).collect();
-    let v_next = (0..depth.len()).map(|j| channel(setup.next_of(j), j)).collect();
+    let v_prev = (0..depth.len())
+        .map(|j| channel(setup.prev_of(j), j))
+        .collect::<Result<Vec<_>, _>>()?;
+    let v_next = (0..depth.len())
+        .map(|j| channel(setup.next_of(j), j))
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(LinearMaps {
         size: n,
         depth,
@@ -658,21 +681,25 @@ pub fn linear_maps_from_depth(depth: Vec<Vec<f64>>, setup: &LinearSetup) -> Resu
 /// The maps of world-space caster `triangles` (depth maps ray-cast, then skins and channels).
 pub fn linear_maps(triangles: &[[V3; 3]], setup: &LinearSetup) -> Result<LinearMaps, String> {
     setup.check()?;
-    let depth = (0..setup.views.len()).map(|k| depth_map(triangles, setup, k)).collect();
+    let depth = (0..setup.views.len())
+        .map(|k| depth_map(triangles, setup, k))
+        .collect::<Result<Vec<_>, _>>()?;
     linear_maps_from_depth(depth, setup)
 }
 
 /// Whether sample `k` sees `p` (the shadow-map test with the shade's bias); false at or
-/// behind the eye.
+/// behind the eye, and for a sample or texel the maps do not hold.
 pub fn lit(setup: &LinearSetup, maps: &LinearMaps, k: usize, p: V3) -> bool {
-    let view = &setup.views[k];
-    match view.texel_of(p, maps.size) {
-        Some((x, y)) => view.depth(p) - setup.bias <= maps.depth[k][y * maps.size + x],
+    let (Some(view), Some(depth)) = (setup.views.get(k), maps.depth.get(k)) else {
+        return false;
+    };
+    match view.texel_of(p, maps.size).and_then(|(x, y)| depth.get(y * maps.size + x)) {
+        Some(z) => view.depth(p) - setup.bias <= *z,
         None => false,
     }
 }
 
-/// The shaded visibility of a world point, unclamped:
+/// The shaded visibility of a world point, unclamped (a channel the maps lack reads 0.5):
 /// `sum_k lit_k (w_before_k v_prev_k + w_after_k v_next_k)`.
 pub fn visibility(setup: &LinearSetup, maps: &LinearMaps, p: V3) -> f64 {
     let mut v = 0.0;
@@ -682,7 +709,8 @@ pub fn visibility(setup: &LinearSetup, maps: &LinearMaps, p: V3) -> f64 {
         }
         let Some((x, y)) = view.texel_of(p, maps.size) else { continue };
         let t = y * maps.size + x;
-        v += view.weights[0] * maps.v_prev[k].value[t] + view.weights[1] * maps.v_next[k].value[t];
+        let read = |c: &[Channel]| c.get(k).and_then(|c| c.value.get(t)).copied().unwrap_or(0.5);
+        v += view.weights[0] * read(&maps.v_prev) + view.weights[1] * read(&maps.v_next);
     }
     v
 }
