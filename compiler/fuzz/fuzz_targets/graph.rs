@@ -196,6 +196,7 @@ fn texture(u: &mut Unstructured) -> Result<TextureDecl> {
         mips: u.arbitrary()?,
         transient: u.arbitrary()?,
         channels,
+        views: u.int_in_range(0..=17)?,
     })
 }
 
@@ -229,7 +230,7 @@ fn step(u: &mut Unstructured) -> Result<Step> {
         vertex: entry(u)?,
         fragment: entry(u)?,
         compute: entry(u)?,
-        draw: match u.int_in_range(0..=7)? {
+        draw: match u.int_in_range(0..=8)? {
             0 => Draw::SceneFromLight,
             1 => Draw::SceneFromCamera,
             2 => Draw::FullScreen,
@@ -237,6 +238,10 @@ fn step(u: &mut Unstructured) -> Result<Step> {
             4 => Draw::ComputeRows,
             5 => Draw::ComputeColumns,
             6 => Draw::Silhouettes { buffer: name(u)? },
+            7 => Draw::Discontinuities {
+                buffer: name(u)?,
+                source: *u.choose(&[Neighbour::Previous, Neighbour::Next])?,
+            },
             _ => Draw::Primitives {
                 buffer: name(u)?,
                 resolve: *u.choose(&[Resolve::KeepMin, Resolve::KeepMax, Resolve::Add, Resolve::Multiply])?,
@@ -246,7 +251,7 @@ fn step(u: &mut Unstructured) -> Result<Step> {
         writes,
         params: u.arbitrary()?,
         sampler: u.arbitrary()?,
-        light_samples: false,
+        light_samples: u.arbitrary()?,
         cost: OpCount {
             fetches: small_u32(u)?,
             ops: small_u32(u)?,
@@ -281,7 +286,7 @@ fn graph(u: &mut Unstructured) -> Result<PassGraph> {
         lights: (0..u.int_in_range(0..=3)?).map(|_| light_model(u)).collect::<Result<_>>()?,
         params: (0..u.int_in_range(0..=4)?).map(|_| param(u)).collect::<Result<_>>()?,
         params_size: small_u32(u)?,
-        samples: 1,
+        samples: u.int_in_range(0..=17)?,
         textures: (0..u.int_in_range(0..=5)?).map(|_| texture(u)).collect::<Result<_>>()?,
         buffers: (0..u.int_in_range(0..=2)?)
             .map(|_| {
@@ -341,11 +346,21 @@ fn check_accepted(g: &PassGraph, text: &str) {
         assert!(b.record_bytes >= 16 && b.record_bytes % 16 == 0 && b.record_bytes <= MAX_RECORD_BYTES);
         assert!((1..=MAX_VERTICES_PER_RECORD).contains(&b.vertices_per_record));
     }
+    // Light samples: 1 to MAX_LIGHT_SAMPLES; a texture holds one view or one per sample,
+    // and per-sample passes write only per-sample textures.
+    assert!((1..=MAX_LIGHT_SAMPLES).contains(&g.samples), "samples {}: {text}", g.samples);
+    for p in &g.passes {
+        for w in p.steps.iter().flat_map(|s| &s.writes) {
+            let views = g.texture(&w.texture).map_or(1, |t| t.views);
+            let want = if p.views == Views::PerLightSample { g.samples } else { 1 };
+            assert_eq!(views, want, "pass {} writes a texture of {views} view(s): {text}", p.name);
+        }
+    }
     // Generated buffers: declared, and drawn only after a Silhouettes step wrote them.
     let mut generated: Vec<&str> = Vec::new();
     for st in g.passes.iter().flat_map(|p| &p.steps) {
         match &st.draw {
-            Draw::Silhouettes { buffer } => {
+            Draw::Silhouettes { buffer } | Draw::Discontinuities { buffer, .. } => {
                 assert!(g.buffer(buffer).is_some(), "undeclared buffer: {text}");
                 generated.push(buffer);
             }

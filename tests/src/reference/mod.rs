@@ -35,10 +35,17 @@
 //! ribbons per silhouette edge, the maps `g`, `c`, `b`, `p_i`, equations 1 and 2 and the
 //! visibility-to-illumination tables; [`plm_gpu`] is its hand-written WGSL twin (ribbons and
 //! `b` in f32).
+//!
+//! [`linear`] is a separate f64 reference of soft shadow maps for linear lights (Heidrich,
+//! Brabec & Seidel 2000): per-sample depth maps, skins warped between neighbouring samples into
+//! two visibility channels, and the shade; [`linear_gpu`] is its hand-written WGSL twin (the
+//! detector and the warp in f32) to compare with it channel by channel.
 
 pub mod compute;
 pub mod cpu;
 pub mod gpu;
+pub mod linear;
+pub mod linear_gpu;
 pub mod penumbra;
 pub mod penumbra_gpu;
 pub mod plm;
