@@ -100,6 +100,9 @@ pub(crate) struct Resources {
     pub sample_frames: Vec<wgpu::Buffer>,
     /// The `LightSamples` uniform (every sample's view).
     pub light_samples: wgpu::Buffer,
+    /// Light samples bound, and whether they close a loop.
+    pub samples: u32,
+    pub samples_closed: bool,
     /// The edge adjacency, when the graph has Geometry passes.
     pub edges: Option<EdgeBuffers>,
     /// Buffers generated on the GPU, by name.
@@ -338,6 +341,8 @@ impl Resources {
                 frame,
                 sample_frames,
                 light_samples,
+                samples: s.samples.len() as u32,
+                samples_closed: s.samples_closed,
                 edges,
                 generated,
             }

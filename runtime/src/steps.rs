@@ -110,8 +110,10 @@ enum Dispatch {
     /// workgroup.
     Edges,
     /// One invocation per cell of the mesh of texel centres ((size - 1)^2), x the column
-    /// ([`graph::COMPUTE_WORKGROUP`] per workgroup), y the row.
-    Cells,
+    /// ([`graph::COMPUTE_WORKGROUP`] per workgroup), y the row, over the map of the view's
+    /// neighbour `source`; nothing where the view has no such neighbour (the ends of an
+    /// open chain of samples).
+    Cells(graph::Neighbour),
     /// Arguments in a buffer, written on the GPU (`dispatch_workgroups_indirect`).
     #[expect(dead_code, reason = "the Geometry passes will size their dispatches on the GPU")]
     Indirect(IndirectArgs),
@@ -271,9 +273,9 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     dispatch: Dispatch::Edges,
                     generated: Some(buffer.clone()),
                 }),
-                Draw::Discontinuities { buffer, .. } => NodeKind::Compute(ComputeStep {
+                Draw::Discontinuities { buffer, source } => NodeKind::Compute(ComputeStep {
                     writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
-                    dispatch: Dispatch::Cells,
+                    dispatch: Dispatch::Cells(*source),
                     generated: Some(buffer.clone()),
                 }),
                 Draw::Primitives { buffer, resolve } => {
@@ -529,7 +531,7 @@ impl StepNode {
                     }
                 };
                 let geometry = match (&c.generated, &c.dispatch) {
-                    (Some(name), Dispatch::Cells) => {
+                    (Some(name), Dispatch::Cells(_)) => {
                         let buf = res.generated(name)?;
                         let g3 = self.group3(gpu, &[(3, buf)])?;
                         let cells = res.shadow_size.saturating_sub(1);
@@ -825,9 +827,18 @@ impl StepNode {
                             cpass.dispatch_workgroups(groups.min(max), groups.div_ceil(max), 1);
                         }
                     }
-                    Dispatch::Cells => {
+                    Dispatch::Cells(source) => {
                         let cells = geometry.as_ref().map_or(0, |g| g.2);
-                        if cells > 0 {
+                        // the shader would find no source view and return at once (it
+                        // checks too); on lavapipe a dispatch of empty invocations costs
+                        // as much as half a full one
+                        let n = res.samples;
+                        let has_source = res.samples_closed
+                            || match source {
+                                graph::Neighbour::Previous => view > 0,
+                                graph::Neighbour::Next => view + 1 < n,
+                            };
+                        if cells > 0 && has_source {
                             cpass.dispatch_workgroups(cells.div_ceil(graph::COMPUTE_WORKGROUP), cells, 1);
                         }
                     }

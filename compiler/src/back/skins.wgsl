@@ -140,6 +140,13 @@ fn cs_skins(@builtin(global_invocation_id) id: vec3<u32>) {
     let z10 = sk_depth(c10, view);
     let z01 = sk_depth(c01, view);
     let z11 = sk_depth(c11, view);
+    // a cell whose depths spread no more than tau holds no skin: skip the 20 loads of its
+    // corners' Laplacians (most cells of a map)
+    let lo = min(min(z00, z10), min(z01, z11));
+    let hi = max(max(z00, z10), max(z01, z11));
+    if hi - lo <= sk_threshold() {
+        return;
+    }
     let l00 = sk_log(c00, view);
     let l10 = sk_log(c10, view);
     let l01 = sk_log(c01, view);
