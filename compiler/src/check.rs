@@ -1472,7 +1472,7 @@ impl<'s, 'a> Typer<'s, 'a> {
             if input.per_sample() && !self.in_sample {
                 return Err(Self::err(span, format!("`{n}` belongs to one light sample"), "outside `at_sample`")
                     .note(input.doc())
-                    .help(format!("use it inside `at_sample(k, ...)`")));
+                    .help("use it inside `at_sample(k, ...)`"));
             }
             if input.side() != Side::Both {
                 self.uses.push(Use {
@@ -1557,7 +1557,7 @@ impl<'s, 'a> Typer<'s, 'a> {
         self.mode = mode;
         match k? {
             Ty::I32 | Ty::AbstractInt => {}
-            t => {
+            t @ (Ty::F32 | Ty::Bool | Ty::Vec(_)) => {
                 return Err(Self::err(
                     args[0].span,
                     format!("type mismatch: a sample index is an integer, found {t}"),

@@ -277,9 +277,8 @@ fn the_channels_agree_with_the_f64_reference() {
             };
             let maps = linear_maps_from_depth(depth, &setup).unwrap_or_else(|e| panic!("{e}"));
             for (texture, reference) in [("vis_prev", &maps.v_prev), ("vis_next", &maps.v_next)] {
-                for k in 0..n as usize {
+                for (k, want) in reference.iter().enumerate() {
                     let got = ex.read_texture(texture, k as u32, 0).unwrap().channel(0);
-                    let want = &reference[k];
                     let (mut covered, mut differ, mut worst) = (0usize, 0usize, 0.0f64);
                     for (t, g) in got.iter().enumerate() {
                         let (ours, theirs) = (*g < 0.75, want.winner[t].is_some());

@@ -824,13 +824,14 @@ fn channel_entries<'a>(
 
 /// The buffer a Geometry pass's classification appends to.
 fn geometry_buffer_name(pass: &IrPass) -> String {
-    match pass.kind {
+    let skins = matches!(
+        pass.kind,
         IrPassKind::Geometry {
             primitive: Primitive::Skins,
             ..
-        } => format!("{}.skins", pass.name),
-        _ => format!("{}.silhouettes", pass.name),
-    }
+        }
+    );
+    format!("{}.{}", pass.name, if skins { "skins" } else { "silhouettes" })
 }
 
 /// The generated buffers of a module: one per `Silhouettes` step, laid out as its
@@ -961,9 +962,8 @@ fn geometry(
                     geometry::SKIN_THRESHOLD_PARAM
                 ))
             })?;
-        let from = match pass.kind {
-            IrPassKind::Geometry { from: Some(f), .. } => f,
-            _ => return Err(internal("Skins pass without `from` (check refuses it)")),
+        let IrPassKind::Geometry { from: Some(from), .. } = pass.kind else {
+            return Err(internal("Skins pass without `from` (check refuses it)"));
         };
         Some((depth, threshold, from))
     } else {

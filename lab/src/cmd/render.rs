@@ -92,18 +92,18 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         for b in &ex.graph.buffers {
             let g = ex.generated(&b.name).map_err(rt)?;
             // skins come from a neighbouring sample's depth steps, the rest from silhouettes
-            let skins = ex.graph.passes.iter().flat_map(|p| &p.steps).any(
-                |s| matches!(&s.draw, sshc_runtime::graph::Draw::Discontinuities { buffer, .. } if *buffer == b.name),
-            );
+            let skins = ex
+                .graph
+                .passes
+                .iter()
+                .flat_map(|p| &p.steps)
+                .any(|s| matches!(&s.draw, sshc_runtime::graph::Draw::Discontinuities { buffer, .. } if *buffer == b.name));
             let what = if skins {
                 "skin triangle(s) in the last view of the last frame"
             } else {
                 "silhouette edge(s) in the last frame"
             };
-            println!(
-                "{}: {} {what}, {} primitive vertices drawn",
-                b.name, g.records, g.vertices
-            );
+            println!("{}: {} {what}, {} primitive vertices drawn", b.name, g.records, g.vertices);
         }
     }
     let work = pass_work(
