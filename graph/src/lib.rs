@@ -8,6 +8,9 @@
 //!   [`PassGraph::params_size`] > 0; every field is 4 bytes at [`ParamDecl::offset`].
 //! - `@group(0) @binding(2)`: a filtering sampler (linear, mipmap linear, clamp to edge),
 //!   present when [`Step::sampler`] is true.
+//! - `@group(0) @binding(3)`: the [`LIGHT_SAMPLES_WGSL`] uniform `light_samples` (every
+//!   light sample's view), present when [`Step::light_samples`] is true. A step of a
+//!   `PerLightSample` pass runs once per sample k with view k's `frame` (`sample.x = k`).
 //! - `@group(1) @binding(i)`: the textures in [`Step::reads`], in order; a summed-area table
 //!   ([`Format::SummedAreaU32`]) is a read-only storage buffer `array<vec4<u32>>`, one
 //!   element per texel, rows of the shadow map's width, layers one after another.
