@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Renders every bundled technique on scenes/bunny.ron into docs/images/ and measures
-# per-pass GPU times (median of repeated frames) into docs/gpu-times.md.
+# Renders every bundled technique on scenes/bunny.ron (the light-sample ones, whose rectangle
+# light would need N a multiple of 4, on scenes/linear.ron's segment light) into
+# docs/images/ and measures per-pass GPU times (median of repeated frames) into
+# docs/gpu-times.md.
 # Usage: scripts/figures.sh [frames]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -34,4 +36,16 @@ for t in hard pcf vsm esm csm cssm pcss penumbra-maps penumbra-limit-maps smooth
         echo
     } >> "$out"
 done
-echo "wrote docs/images/bunny-*.png and $out"
+for t in point-samples linear-light; do
+    log=$(./target/release/sshc render "techniques/$t.ron" --scene scenes/linear.ron -o "docs/images/linear-$t.png" --frames "$frames")
+    device=$(echo "$log" | sed -n 's/^device: //p')
+    {
+        echo "## $t (on \`scenes/linear.ron\`, 2 light samples, 512 x 512 maps)"
+        echo
+        echo "Device: $device"
+        echo
+        echo "$log" | sed -n '/^| pass/,$p'
+        echo
+    } >> "$out"
+done
+echo "wrote docs/images/bunny-*.png, docs/images/linear-*.png and $out"
