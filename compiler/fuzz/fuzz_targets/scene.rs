@@ -71,6 +71,7 @@ const WORDS: &[&str] = &[
     "Disk",
     "Rectangle",
     "Segment",
+    "Triangle",
     "DistantDisk",
     "direction",
     "center",
@@ -202,7 +203,7 @@ fn camera(u: &mut Unstructured) -> Result<Camera> {
 }
 
 fn light(u: &mut Unstructured) -> Result<Light> {
-    Ok(match u.int_in_range(0..=6u8)? {
+    Ok(match u.int_in_range(0..=7u8)? {
         0 => Light::Point { position: vec3(u)? },
         1 => Light::Directional { direction: vec3(u)? },
         2 => Light::Sphere {
@@ -222,6 +223,11 @@ fn light(u: &mut Unstructured) -> Result<Light> {
             half_height: float(u)?,
         },
         5 => Light::Segment { a: vec3(u)?, b: vec3(u)? },
+        6 => Light::Triangle {
+            a: vec3(u)?,
+            b: vec3(u)?,
+            c: vec3(u)?,
+        },
         _ => Light::DistantDisk {
             direction: vec3(u)?,
             angle_degrees: float(u)?,
@@ -362,6 +368,12 @@ fn drive(text: &str) {
         let _ = scene.fit_report(l);
         let _ = scene.penumbra_reach(l);
         let _ = l.segment_samples(4);
+        // the light-sample chains of per-sample techniques (segment, triangle, rectangle)
+        for n in [1, 3, 4, 12, 17] {
+            if let Ok((points, _)) = l.sample_chain(n, 16) {
+                assert_eq!(points.len(), n as usize, "{n} samples asked: {text}");
+            }
+        }
     }
 }
 
