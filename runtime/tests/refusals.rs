@@ -1,26 +1,49 @@
 //! A graph whose features this runtime cannot honour is refused at load, naming the pass
-//! and the feature, rather than run another way.
+//! and the feature, rather than run another way; and light-sample views, which it honours.
 
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
+use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError, SampleView};
 use sshc_runtime::graph::*;
 
 mod common;
-use common::{depth_graph, one_triangle};
+use common::{depth_graph, identity, one_triangle};
 
+/// A pass with one view per light sample runs once per sample, each view into its own layer
+/// block with its own `Frame` (`sample.x = k`); a scene that gives another number of samples
+/// is refused at binding, naming both counts.
 #[test]
-fn per_light_sample_views_are_refused_and_light_centre_runs() {
+fn per_light_sample_views_render_one_layer_block_each() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
-    let (g, shaders) = depth_graph(Views::PerLightSample);
-    let e = Executor::new(&gpu, g, shaders)
-        .err()
-        .expect("a PerLightSample graph must be refused");
+    let (mut g, shaders) = depth_graph(Views::PerLightSample);
+    g.samples = 3;
+    g.textures[0].views = 3;
+    let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
+    let e = ex.bind_scene(&one_triangle()).expect_err("no samples bound");
     assert!(
-        matches!(&e, RuntimeError::Unsupported { pass, feature } if pass == "depth" && feature.contains("PerLightSample")),
+        matches!(&e, RuntimeError::Param(m) if m.contains("3 light-sample view(s)") && m.contains("gives 0")),
         "{e}"
     );
-    assert!(e.to_string().contains("pass `depth`"), "{e}");
+    let mut inputs = one_triangle();
+    inputs.samples = (0..3)
+        .map(|k| SampleView {
+            light_view: identity(),
+            light_view_proj: identity(),
+            position: [k as f32, 0.0, 1.0],
+            near: 0.1,
+            far: 10.0,
+            light_proj_y: 1.0,
+            weights: [0.5, 0.5],
+        })
+        .collect();
+    ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+    for k in 0..3 {
+        let z = ex.read_texture("z", k, 0).unwrap_or_else(|e| panic!("{e}"));
+        let want = 0.5 + k as f32;
+        assert!(z.rgba.iter().all(|p| p[0] == want), "layer {k}: {:?}", z.rgba);
+    }
+    assert!(ex.read_texture("z", 3, 0).is_err(), "three layers, not four");
 
-    // The same graph from the light's centre loads and runs.
+    // The same graph from the light's centre writes one layer with sample.x = 0.
     let (g, shaders) = depth_graph(Views::LightCenter);
     let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
     ex.bind_scene(&one_triangle()).unwrap_or_else(|e| panic!("{e}"));

@@ -17,7 +17,8 @@ struct VOut {{ @builtin(position) pos: vec4<f32>, @location(0) d: f32 }}
     o.d = 0.5;
     return o;
 }}
-@fragment fn fs_depth(i: VOut) -> @location(0) f32 {{ return i.d; }}
+// 0.5 from the light's centre, 0.5 + k from light sample k
+@fragment fn fs_depth(i: VOut) -> @location(0) f32 {{ return i.d + frame.sample.x; }}
 "
     );
     let graph = PassGraph {
