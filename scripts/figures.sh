@@ -24,28 +24,24 @@ out=docs/gpu-times.md
     echo "toolchain: [gpu-machine.md](gpu-machine.md)."
     echo
 } > "$out"
-for t in hard pcf vsm esm csm cssm pcss penumbra-maps penumbra-limit-maps smoothies single-sample; do
-    log=$(./target/release/sshc render "techniques/$t.ron" --scene scenes/bunny.ron -o "docs/images/bunny-$t.png" --frames "$frames")
+# render technique $1 on scene $2 into docs/images/$3.png; its per-pass table under heading $4
+figure() {
+    local log device
+    log=$(./target/release/sshc render "techniques/$1.ron" --scene "scenes/$2.ron" -o "docs/images/$3.png" --frames "$frames")
     device=$(echo "$log" | sed -n 's/^device: //p')
     {
-        echo "## $t"
+        echo "## $4"
         echo
         echo "Device: $device"
         echo
         echo "$log" | sed -n '/^| pass/,$p'
         echo
     } >> "$out"
+}
+for t in hard pcf vsm esm csm cssm pcss penumbra-maps penumbra-limit-maps smoothies single-sample; do
+    figure "$t" bunny "bunny-$t" "$t"
 done
 for t in point-samples linear-light; do
-    log=$(./target/release/sshc render "techniques/$t.ron" --scene scenes/linear.ron -o "docs/images/linear-$t.png" --frames "$frames")
-    device=$(echo "$log" | sed -n 's/^device: //p')
-    {
-        echo "## $t (on \`scenes/linear.ron\`, 2 light samples, 512 x 512 maps)"
-        echo
-        echo "Device: $device"
-        echo
-        echo "$log" | sed -n '/^| pass/,$p'
-        echo
-    } >> "$out"
+    figure "$t" linear "linear-$t" "$t (on \`scenes/linear.ron\`, 2 light samples, 512 x 512 maps)"
 done
 echo "wrote docs/images/bunny-*.png, docs/images/linear-*.png and $out"

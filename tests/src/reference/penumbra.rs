@@ -437,28 +437,10 @@ impl ShadowMap {
 }
 
 /// Ray-triangle intersection (Moller-Trumbore, both sides, edges included): the ray
-/// parameter, `None` for a miss or a triangle seen edge-on.
+/// parameter, `None` for a miss or a triangle seen edge-on (`linear::ray_hit` without the
+/// barycentrics).
 pub(crate) fn ray_triangle(o: V3, d: V3, tri: &[V3; 3]) -> Option<f64> {
-    let e1 = sub(tri[1], tri[0]);
-    let e2 = sub(tri[2], tri[0]);
-    let p = cross(d, e2);
-    let det = dot(e1, p);
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = sub(o, tri[0]);
-    let u = dot(s, p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = cross(s, e1);
-    let v = dot(d, q) * inv;
-    if !(v >= 0.0 && u + v <= 1.0) {
-        return None;
-    }
-    let t = dot(e2, q) * inv;
-    t.is_finite().then_some(t)
+    crate::reference::linear::ray_hit(o, d, tri).map(|(t, _)| t)
 }
 
 /// The shadow map of world-space `triangles` (first pass of section 3), by ray casting.
