@@ -158,8 +158,14 @@ impl Cost {
             .textures
             .iter()
             .map(|t| {
-                let base = (t.format.bytes_per_texel() * t.layers) as f64;
-                (t.name.clone(), t.format, t.layers, if t.mips { base * 4.0 / 3.0 } else { base })
+                // a per-sample texture holds `layers` per light sample
+                let base = (t.format.bytes_per_texel() * t.array_layers()) as f64;
+                (
+                    t.name.clone(),
+                    t.format,
+                    t.array_layers(),
+                    if t.mips { base * 4.0 / 3.0 } else { base },
+                )
             })
             .collect();
         let mut shade = OpCount::default();

@@ -2,7 +2,7 @@
 //! channels and how they are packed, cost, and what was removed.
 
 use crate::Compiled;
-use crate::front::ast::{Primitive, Resolve};
+use crate::front::ast::{LightView, Primitive, Resolve};
 use crate::ir::{IrPassKind, Origin, Program, short};
 use std::fmt::Write as _;
 
@@ -35,7 +35,13 @@ pub fn explain(c: &Compiled) -> String {
             .filter(|r| ir.resources[**r].live)
             .map(|r| ir.resources[*r].name.as_str())
             .collect();
+        let samples = ir.samples;
         let what = match &p.kind {
+            IrPassKind::Depth {
+                view: LightView::PerSample,
+            } => format!(
+                "rasterises the scene once from each of the {samples} light samples and stores linear depth, one layer block per sample"
+            ),
             IrPassKind::Depth { .. } => "rasterises the scene from the light and stores linear depth".to_string(),
             IrPassKind::Map => "computes channels per shadow-map texel".to_string(),
             IrPassKind::Filter { kernel } => format!(
@@ -54,6 +60,23 @@ pub fn explain(c: &Compiled) -> String {
                 ..
             } => format!(
                 "rasterises the scene's triangles that face away from the light, the nearest kept by a depth test (Lawlor 2006, section 3.1, step 3){}",
+                if keep.is_some() {
+                    ", fragments failing `keep` discarded"
+                } else {
+                    ""
+                }
+            ),
+            IrPassKind::Geometry {
+                primitive: Primitive::Skins,
+                from,
+                keep,
+                ..
+            } => format!(
+                "for each of the {samples} light samples, warps the skins of the {} sample's depth discontinuities into its view (Heidrich et al. 2000, section 3.2: a compute step finds them in every cell of the map and appends them; a draw pulls them from the buffer, indirectly), the skin nearest the sample kept by a depth test{}",
+                match from {
+                    Some(sshc_graph::Neighbour::Next) => "next",
+                    _ => "previous",
+                },
                 if keep.is_some() {
                     ", fragments failing `keep` discarded"
                 } else {

@@ -313,13 +313,19 @@ impl Arena {
                 }
             }
             Node::Channel(c) => s.push_str(&chan(*c)),
-            Node::Sample { channel, how, args, .. } => {
+            Node::Sample {
+                channel, how, args, view, ..
+            } => {
                 let _ = write!(s, "{}({}", how.name(false), chan(*channel));
                 for a in args {
                     s.push_str(", ");
                     self.write(s, *a, ir, depth + 1);
                 }
                 s.push(')');
+                // inside `at_sample(k, ..)`: the lookup reads sample k's view
+                if let Some(k) = view {
+                    let _ = write!(s, "@{k}");
+                }
             }
             Node::Unary(op, a) => {
                 s.push_str(if *op == UnOp::Neg { "-" } else { "!" });
