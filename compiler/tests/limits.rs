@@ -411,3 +411,52 @@ fn nested_series_with_dependent_bounds_are_counted_term_by_term() {
         c.ir.arena.display(visibility, Some(&c.ir))
     );
 }
+
+/// Every receiver-side input inside `at_sample`, alone and all together, in two samples'
+/// views: each compiles to a module naga validates, and a sample's prologue computes only
+/// what its inputs need (an input's local appears exactly when it is read).
+#[test]
+fn every_receiver_input_of_a_sample_view_compiles_alone_and_together() {
+    let inputs = [
+        "d",
+        "d_world",
+        "uv.x",
+        "tf.y",
+        "ndotl",
+        "slope",
+        "texel_depth",
+        "depth_slope",
+        "segment_before",
+        "segment_after",
+    ];
+    let src = |body: &str| {
+        format!(
+            r#"Technique(
+    name: "views",
+    params: {{ "N": Param(ty: I32, default: 2, fixed: true) }},
+    light_samples: "N",
+    channels: {{ "z": Channel(precision: F32) }},
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z", view: PerSample),
+        Shade(name: "shade", reads: ["shadow"], visibility: "sum(k in 0..=N - 1, at_sample(k, {body}))"),
+    ],
+)"#
+        )
+    };
+    let all = inputs.join(" + ");
+    for body in inputs
+        .iter()
+        .map(|s| s.to_string())
+        .chain([all.clone(), "fetch(z, 1, 0) + nearest(z)".into()])
+    {
+        let c = sshc::compile_str(&src(&body), &sshc::CompileOptions::default())
+            .unwrap_or_else(|d| panic!("{body}: {}", d.render("views.ron", &src(&body))));
+        let shade = c.shaders.iter().find(|(f, _)| f.ends_with(".shade.wgsl")).expect("a shade module");
+        for k in 0..2 {
+            assert!(shade.1.contains(&format!("light_samples.views[{k}]")), "{body}: sample {k}");
+            // the slope's derivatives only where the depth slope is read
+            let derivative = shade.1.contains(&format!("dpdx(in_uv_v{k})"));
+            assert_eq!(derivative, body.contains("depth_slope"), "{body}: sample {k}'s derivatives");
+        }
+    }
+}

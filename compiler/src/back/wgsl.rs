@@ -130,8 +130,9 @@ struct Emitter<'a> {
     /// Map side: the resources the pass reads.
     reads: Vec<ResId>,
     counter: usize,
-    /// Receiver side: the light samples whose views `at_sample` used.
-    views: std::collections::BTreeSet<u8>,
+    /// Receiver side: the light samples whose views `at_sample` used, with the `in_*`
+    /// locals of each view the body reads (the prologue computes only those).
+    views: std::collections::BTreeMap<u8, std::collections::BTreeSet<&'static str>>,
     /// Map and geometry side, in a per-sample pass: per-sample resources are read at the
     /// layer block of the view being rendered (`frame.sample.x`).
     per_sample_pass: bool,
@@ -277,8 +278,9 @@ impl<'a> Emitter<'a> {
             }
             Node::Input(i, None) => self.input(i),
             Node::Input(i, Some(k)) => {
-                self.views.insert(k);
-                format!("{}_v{k}", self.input(i))
+                let name = self.input(i);
+                self.views.entry(k).or_default().insert(i.desc().wgsl);
+                format!("{name}_v{k}")
             }
             Node::Channel(c) => self.load_map_channel(c)?,
             Node::Sample {
@@ -323,7 +325,7 @@ impl<'a> Emitter<'a> {
 
     fn sample(&mut self, ch: ChannelId, res: ResId, how: SampleFn, args: &[H], view: Option<u8>) -> Result<String, Diagnostic> {
         if let Some(k) = view {
-            self.views.insert(k);
+            self.views.entry(k).or_default();
         }
         let (tex, layer, comp, enc) = self.locate(res, ch, View::All, view)?;
         let args: Vec<String> = args.iter().map(|a| self.n(*a).to_string()).collect();
@@ -359,7 +361,15 @@ impl<'a> Emitter<'a> {
                 };
                 // inside `at_sample(k, ..)`, the receiver's coordinates in view k
                 let call = match view {
-                    Some(k) => in_view(&call, k),
+                    Some(k) => {
+                        let used = self.views.entry(k).or_default();
+                        for local in ["in_uv", "in_base"] {
+                            if call.contains(local) {
+                                used.insert(local);
+                            }
+                        }
+                        in_view(&call, k)
+                    }
                     None => call,
                 };
                 self.line(&format!("let {v} = {call};"));
@@ -508,35 +518,75 @@ fn in_view(wgsl: &str, k: u8) -> String {
     out
 }
 
-/// The receiver seen from light sample `k`: the `in_*_v{k}` locals of every receiver-side
-/// input, as the centre's are computed from `frame`, from the sample's view in
-/// `light_samples` (its own matrices, depth range and texel size; the weights of its
-/// segments).
-fn sample_prologue(k: u8) -> String {
-    format!(
-        "    // the receiver seen from light sample {k}
-    let sv{k} = light_samples.views[{k}];
-    let in_d_world_v{k} = -(sv{k}.view * world).z;
-    let in_d_v{k} = (in_d_world_v{k} - sv{k}.depth_range.x) * sv{k}.depth_range.z;
-    let light_clip_v{k} = sv{k}.view_proj * world;
-    let in_uv_v{k} = light_clip_v{k}.xy / light_clip_v{k}.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
-    let in_ndotl_v{k} = dot(n, normalize(sv{k}.position.xyz - in.world));
-    let in_slope_v{k} = min(sqrt(max(1.0 - in_ndotl_v{k} * in_ndotl_v{k}, 0.0)) / max(abs(in_ndotl_v{k}), 0.01), 100.0);
-    let texel_pos_v{k} = in_uv_v{k} * frame.shadow_size.xy - 0.5;
-    let in_tf_v{k} = fract(texel_pos_v{k});
-    let in_texel_depth_v{k} = sv{k}.weights.z * in_d_world_v{k} * sv{k}.depth_range.z;
-    let in_base_v{k} = vec2<i32>(floor(texel_pos_v{k}));
-    let duv_dx_v{k} = dpdx(in_uv_v{k});
-    let duv_dy_v{k} = dpdy(in_uv_v{k});
-    let dd_dx_v{k} = dpdx(in_d_v{k});
-    let dd_dy_v{k} = dpdy(in_d_v{k});
-    let det_v{k} = duv_dx_v{k}.x * duv_dy_v{k}.y - duv_dx_v{k}.y * duv_dy_v{k}.x;
-    let g_v{k} = vec2<f32>(dd_dx_v{k} * duv_dy_v{k}.y - duv_dx_v{k}.y * dd_dy_v{k}, duv_dx_v{k}.x * dd_dy_v{k} - dd_dx_v{k} * duv_dy_v{k}.x);
-    let in_depth_slope_v{k} = select(0.0, min(length(g_v{k} / det_v{k}) * frame.shadow_size.z, 0.1), abs(det_v{k}) > 1e-14);
-    let in_segment_before_v{k} = sv{k}.weights.x;
-    let in_segment_after_v{k} = sv{k}.weights.y;
-"
-    )
+/// The receiver seen from light sample `k`: the `in_*_v{k}` locals that `used` names (and
+/// what they are computed from), as the centre's are computed from `frame`, from the
+/// sample's view in `light_samples` (its own matrices, depth range and texel size; the
+/// weights of its segments). Unused inputs are not emitted, so each sample costs only what
+/// its lookups and inputs need.
+fn sample_prologue(k: u8, used: &std::collections::BTreeSet<&'static str>) -> String {
+    let uses = |names: &[&str]| names.iter().any(|n| used.contains(n));
+    let slope = uses(&["in_depth_slope"]);
+    let d = uses(&["in_d"]) || slope;
+    let d_world = d || uses(&["in_d_world", "in_texel_depth"]);
+    let texel_pos = uses(&["in_tf", "in_base"]);
+    let uv = texel_pos || slope || uses(&["in_uv"]);
+    let ndotl = uses(&["in_ndotl", "in_slope"]);
+    let mut s = format!("    // the receiver seen from light sample {k}\n    let sv{k} = light_samples.views[{k}];\n");
+    let mut line = |on: bool, text: String| {
+        if on {
+            s.push_str("    ");
+            s.push_str(&text);
+            s.push('\n');
+        }
+    };
+    line(d_world, format!("let in_d_world_v{k} = -(sv{k}.view * world).z;"));
+    line(
+        d,
+        format!("let in_d_v{k} = (in_d_world_v{k} - sv{k}.depth_range.x) * sv{k}.depth_range.z;"),
+    );
+    line(uv, format!("let light_clip_v{k} = sv{k}.view_proj * world;"));
+    line(
+        uv,
+        format!("let in_uv_v{k} = light_clip_v{k}.xy / light_clip_v{k}.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);"),
+    );
+    line(
+        ndotl,
+        format!("let in_ndotl_v{k} = dot(n, normalize(sv{k}.position.xyz - in.world));"),
+    );
+    line(
+        uses(&["in_slope"]),
+        format!("let in_slope_v{k} = min(sqrt(max(1.0 - in_ndotl_v{k} * in_ndotl_v{k}, 0.0)) / max(abs(in_ndotl_v{k}), 0.01), 100.0);"),
+    );
+    line(texel_pos, format!("let texel_pos_v{k} = in_uv_v{k} * frame.shadow_size.xy - 0.5;"));
+    line(uses(&["in_tf"]), format!("let in_tf_v{k} = fract(texel_pos_v{k});"));
+    line(
+        uses(&["in_texel_depth"]),
+        format!("let in_texel_depth_v{k} = sv{k}.weights.z * in_d_world_v{k} * sv{k}.depth_range.z;"),
+    );
+    line(uses(&["in_base"]), format!("let in_base_v{k} = vec2<i32>(floor(texel_pos_v{k}));"));
+    if slope {
+        for text in [
+            format!("let duv_dx_v{k} = dpdx(in_uv_v{k});"),
+            format!("let duv_dy_v{k} = dpdy(in_uv_v{k});"),
+            format!("let dd_dx_v{k} = dpdx(in_d_v{k});"),
+            format!("let dd_dy_v{k} = dpdy(in_d_v{k});"),
+            format!("let det_v{k} = duv_dx_v{k}.x * duv_dy_v{k}.y - duv_dx_v{k}.y * duv_dy_v{k}.x;"),
+            format!(
+                "let g_v{k} = vec2<f32>(dd_dx_v{k} * duv_dy_v{k}.y - duv_dx_v{k}.y * dd_dy_v{k}, duv_dx_v{k}.x * dd_dy_v{k} - dd_dx_v{k} * duv_dy_v{k}.x);"
+            ),
+            format!(
+                "let in_depth_slope_v{k} = select(0.0, min(length(g_v{k} / det_v{k}) * frame.shadow_size.z, 0.1), abs(det_v{k}) > 1e-14);"
+            ),
+        ] {
+            line(true, text);
+        }
+    }
+    line(
+        uses(&["in_segment_before"]),
+        format!("let in_segment_before_v{k} = sv{k}.weights.x;"),
+    );
+    line(uses(&["in_segment_after"]), format!("let in_segment_after_v{k} = sv{k}.weights.y;"));
+    s
 }
 
 fn internal(msg: impl Into<String>) -> Diagnostic {
@@ -1520,8 +1570,8 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {
     let in_depth_slope = select(0.0, min(length(g / det) * frame.shadow_size.z, 0.1), abs(det) > 1e-14);
 ",
     );
-    for &k in &em.views {
-        s.push_str(&sample_prologue(k));
+    for (&k, used) in &em.views {
+        s.push_str(&sample_prologue(k, used));
     }
     s.push_str(&em.body);
     let _ = write!(
