@@ -16,6 +16,8 @@
 //! the rule's error is O(h^2) ~ 1e-7; a closed form (the circular segment cut by the
 //! curb's top edge) checks it at points where only that edge crosses the disk.
 
+mod common;
+
 use glam::{DVec3, Vec3};
 use sshc_lab::scene::Scene;
 use sshc_lab::truth::{self, Points, TruthSettings};
@@ -472,16 +474,7 @@ fn clean_scenes_give_no_warning() {
         let w = warnings(light, FLOOR_AND_BOX);
         assert!(w.is_empty(), "{light}: {w:?}");
     }
-    for name in [
-        "bunny",
-        "contact",
-        "fence",
-        "edge",
-        "triangle",
-        "linear",
-        "linear-triangle",
-        "linear-rectangle",
-    ] {
+    for name in common::bundled_scenes() {
         let path = format!("{}/../scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
         let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
         let w = sshc_lab::session::light_warnings(&scene);

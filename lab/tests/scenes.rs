@@ -9,18 +9,7 @@ use sshc_lab::scene::{Light, Scene, SceneErrorKind, corners};
 use sshc_lab::visibility::Visibility;
 
 mod common;
-use common::temp_dir;
-
-const BUNDLED: [&str; 8] = [
-    "bunny",
-    "contact",
-    "fence",
-    "edge",
-    "triangle",
-    "linear",
-    "linear-triangle",
-    "linear-rectangle",
-];
+use common::{bundled_scenes, temp_dir};
 
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
@@ -40,7 +29,10 @@ fn scene_with(lights: &str, objects: &str) -> Scene {
 
 #[test]
 fn every_bundled_scene_loads() {
-    for name in BUNDLED {
+    let names = bundled_scenes();
+    assert!(names.len() >= 9, "{names:?}");
+    for name in &names {
+        let name = name.as_str();
         let scene = bundled(name);
         let tris = scene.triangles();
         assert!(!tris.is_empty(), "{name}: no triangles");
@@ -52,7 +44,11 @@ fn every_bundled_scene_loads() {
         );
         assert!(!scene.lights.is_empty(), "{name}: no light");
         assert_eq!(scene.camera_size(), (256, 256), "{name}");
-        assert_eq!(scene.shadow_map, 512, "{name}");
+        // 512 texels but where a paper's set-up says otherwise (triangle-lawlor: 32)
+        assert!(
+            scene.shadow_map.is_power_of_two() && (16..=2048).contains(&scene.shadow_map),
+            "{name}"
+        );
         for n in scene.normals().iter().flatten() {
             assert!((n.length() - 1.0).abs() < 1e-4, "{name}: normal {n}");
         }
@@ -241,7 +237,8 @@ fn check_view(what: &str, light: &Light, bounds: (Vec3, Vec3)) {
 
 #[test]
 fn light_views_hold_the_whole_scene() {
-    for name in BUNDLED {
+    for name in bundled_scenes() {
+        let name = name.as_str();
         let scene = bundled(name);
         for light in &scene.lights {
             check_view(name, light, scene.bounds());
