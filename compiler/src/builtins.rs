@@ -1161,6 +1161,23 @@ impl Func {
 }
 
 impl Sig {
+    /// The call's shape in words, with `arity` parameters named as docs/language.md
+    /// section 8.6 writes them (for diagnostics).
+    pub fn describe(self, name: &str, arity: usize) -> String {
+        let params = |names: &[&str]| format!("{name}({})", names[..arity.min(names.len())].join(", "));
+        match self {
+            Sig::Float => format!("{}: f32 or vectors of one size", params(&["x", "y", "z"])),
+            Sig::Numeric => format!("{}: one number (f32, i32 or a vector)", params(&["x"])),
+            Sig::SameNumeric => format!("{}: numbers of one type", params(&["a", "b", "c"])),
+            Sig::Select => "select(f, t, cond): `f` and `t` of one type, `cond` a bool".to_string(),
+            Sig::Convert(_) => format!("{}: one scalar (f32, i32 or bool)", params(&["x"])),
+            Sig::Construct(n) => format!("{}: {n} f32 components", params(&["x", "y", "z", "w"])),
+            Sig::Scalars => format!("{}: f32 scalars", params(&["a", "b", "c", "d"])),
+            Sig::Length => format!("{}: one vector", params(&["v"])),
+            Sig::Dot => format!("{}: two vectors of one size", params(&["a", "b"])),
+        }
+    }
+
     fn result(self, name: &str, args: &[Ty]) -> Result<Ty, String> {
         let same = |tys: &[Ty]| -> Option<Ty> { tys.iter().try_fold(tys[0], |acc, t| unify(acc, *t)) };
         match self {

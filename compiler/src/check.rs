@@ -1709,6 +1709,15 @@ impl<'s, 'a> Typer<'s, 'a> {
             }
             return Err(d);
         };
+        let d = f.desc();
+        if args.len() != d.arity {
+            return Err(Self::err(
+                span,
+                format!("`{name}` takes {} argument(s), found {}", d.arity, args.len()),
+                "wrong number of arguments",
+            )
+            .note(d.sig.describe(name, d.arity)));
+        }
         let tys = args.iter().map(|a| self.infer(a)).collect::<Result<Vec<_>, _>>()?;
         let ty = f
             .result(&tys)
