@@ -289,6 +289,10 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                 let mut ty = Typer::new(sym, Mode::Shade, &mut types);
                 ty.available = Some(carried);
                 ty.per_sample = per_sample.clone();
+                ty.carriers = items
+                    .iter()
+                    .flat_map(|(r, list)| list.iter().map(move |i| (*i, r.clone())))
+                    .collect();
                 match ty.infer_as(visibility, Ty::F32) {
                     Ok(t) => expect_f32(t, visibility.span, "the visibility", &mut diags),
                     Err(d) => diags.push(d),
@@ -999,6 +1003,8 @@ struct Typer<'s, 'a> {
     available: Option<Vec<(Item, String, bool)>>,
     /// For a Shade pass: the resources that hold one view per light sample.
     per_sample: Vec<String>,
+    /// For a Shade pass: what every resource carries (to name where a lookup's channel is).
+    carriers: Vec<(Item, String)>,
     /// Inside `at_sample(k, ..)`.
     in_sample: bool,
     /// One entry per term the enclosing series unroll to (one empty entry outside any):
@@ -1017,6 +1023,7 @@ impl<'s, 'a> Typer<'s, 'a> {
             uses: vec![],
             available: None,
             per_sample: vec![],
+            carriers: vec![],
             in_sample: false,
             envs: vec![vec![]],
         }
@@ -1189,11 +1196,20 @@ impl<'s, 'a> Typer<'s, 'a> {
             ExprKind::Member(base, m) => {
                 let t = self.infer(base)?;
                 let Ty::Vec(n) = t else {
-                    return Err(Self::err(
+                    let mut d = Self::err(
                         e.span,
                         format!("type mismatch: `.{m}` needs a vector, found {t}"),
                         format!("this is {t}"),
-                    ));
+                    );
+                    // `1.e-5`: a number, a point, then an exponent read as a member
+                    if let ExprKind::Lit(Literal::Int(v)) = &base.kind
+                        && m.starts_with(['e', 'E'])
+                    {
+                        d = d.help(format!(
+                            "a float literal needs a digit after its point: write `{v}.0{m}...` (as in `1.0e-5`)"
+                        ));
+                    }
+                    return Err(d);
                 };
                 let ok = !m.is_empty() && m.len() <= 4 && m.chars().all(|c| comp_index(c).is_some_and(|i| i < n as usize));
                 if !ok {
@@ -1623,12 +1639,22 @@ impl<'s, 'a> Typer<'s, 'a> {
             if let Some(avail) = &self.available {
                 let holders: Vec<(&String, bool)> = avail.iter().filter(|(i, _, _)| *i == item).map(|(_, r, t)| (r, *t)).collect();
                 if holders.is_empty() {
+                    let carriers: Vec<String> = self
+                        .carriers
+                        .iter()
+                        .filter(|(i, _)| *i == item)
+                        .map(|(_, r)| format!("`{r}`"))
+                        .collect();
                     return Err(Self::err(
                         args[0].span,
                         format!("`{target}` is not carried by any resource this Shade pass reads"),
                         "not available here",
                     )
-                    .help("add the resource that holds it to the Shade pass's `reads`"));
+                    .help(if carriers.is_empty() {
+                        "no pass writes it: list it in the `channels` of a Map, Geometry or Depth pass".to_string()
+                    } else {
+                        format!("add {} (which carries it) to the Shade pass's `reads`", carriers.join(" or "))
+                    }));
                 }
                 if holders.len() > 1 {
                     return Err(Self::err(
