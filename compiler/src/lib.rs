@@ -101,6 +101,8 @@ pub struct CompileOptions {
     pub precision: Vec<(String, String)>,
     pub limits: Limits,
     pub dump_after: Option<DumpPhase>,
+    /// Where long generated bodies are split into functions (`back::parts`).
+    pub split: back::parts::Split,
 }
 
 /// A compiled technique.
@@ -221,7 +223,7 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         if want(DumpPhase::Pack) {
             dump = Some(program.to_string());
         }
-        let out = back::wgsl::codegen(&program, &opts.limits)?;
+        let out = back::wgsl::codegen(&program, &opts.limits, opts.split)?;
         if want(DumpPhase::Codegen) {
             dump = Some(
                 out.modules

@@ -460,3 +460,21 @@ fn every_receiver_input_of_a_sample_view_compiles_alone_and_together() {
         }
     }
 }
+
+#[test]
+fn a_series_of_fetches_at_the_limit_compiles_in_linear_time() {
+    // 4,096 fetches (the series limit) make about 60,000 naga expressions. In one function
+    // they took 3.3 s in a release build, 101 s in the fuzzing build: naga's WGSL front end
+    // is quadratic in a function's expressions (docs/fuzzing.md, finding 1). Split into
+    // functions of 128 lets (`back::parts`) they take 0.22 s in release; the bound leaves
+    // room for this crate's unoptimised build (naga is optimised in the dev profile) and a
+    // loaded machine, and is under the 3.3 s the unsplit code took in release.
+    let src = technique("sum(i in 0..=63, sum(j in 0..=63, fetch(z, i - 32, j - 32))) / 4096.0");
+    let t = Instant::now();
+    let c = sshc::compile_str(&src, &sshc::CompileOptions::default()).unwrap_or_else(|e| panic!("{}", e.render("t.ron", &src)));
+    let took = t.elapsed();
+    assert_eq!(c.cost.shade.fetches, 4096);
+    let shade = &c.shaders.iter().find(|(f, _)| f.ends_with("shade.wgsl")).expect("a shade module").1;
+    assert!(shade.contains("fn fs_shade_part8_f("), "the body is split into parts");
+    assert!(took < Duration::from_secs(3), "took {took:?}");
+}

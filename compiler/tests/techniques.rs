@@ -623,3 +623,70 @@ fn pcss_grid_samples_and_precision() {
         assert_eq!(texture(&c, "shadow"), with_mips(packed(p, 1), false), "pcss {p:?}");
     }
 }
+
+/// The compulsory bytes of each pass (`sshc_graph::traffic`), derived by hand from the
+/// formats: at 2048^2 texels and 1920 x 1080 pixels.
+#[test]
+fn compulsory_bytes_follow_from_the_formats_and_sizes() {
+    use sshc_graph::traffic::{Sizes, passes};
+    let sizes = Sizes {
+        shadow: 2048,
+        camera: (1920, 1080),
+    };
+    let (texels, pixels) = (2048.0 * 2048.0, 1920.0 * 1080.0);
+    let of = |c: &sshc::Compiled, pass: &str| {
+        passes(&c.graph, sizes)
+            .into_iter()
+            .find(|p| p.0 == pass)
+            .unwrap_or_else(|| panic!("no pass {pass}"))
+            .1
+    };
+    let esm = compiles("esm", &CompileOptions::default());
+    // the depth pass writes its R32Float channel and the Depth32Float attachment
+    let t = of(&esm, "depth");
+    assert_eq!((t.read, t.written), (0.0, 8.0 * texels));
+    // `exponential` reads one R32Float texel and writes one: 33.5 MB, 0.60 ms on an H100
+    // in the measurement, 56 GB/s
+    let t = of(&esm, "exponential");
+    assert_eq!((t.read, t.written), (4.0 * texels, 4.0 * texels));
+    assert!((t.bound_ms(3350.0) - 0.010).abs() < 0.0005, "{}", t.bound_ms(3350.0));
+    // the separable blur: two steps, each reading and writing every texel once
+    let t = of(&esm, "blur");
+    assert_eq!((t.read, t.written), (8.0 * texels, 8.0 * texels));
+    // the Shade writes its four targets and depth; what it reads depends on the view
+    let t = of(&esm, "shade");
+    assert_eq!((t.read, t.written), (0.0, 36.0 * pixels));
+    // a mip chain: the levels below the base written (1/3 of it), each reading the level
+    // above (4/3 of the base in all)
+    let vsm = compiles("vsm", &CompileOptions::default());
+    let mip = vsm
+        .graph
+        .passes
+        .iter()
+        .find(|p| p.kind == sshc_graph::PassKind::Mipmap)
+        .expect("vsm mipmaps");
+    let tex = &mip.steps[0].writes[0].texture;
+    let bpt = f64::from(vsm.graph.textures.iter().find(|t| &t.name == tex).unwrap().format.bytes_per_texel());
+    let t = of(&vsm, &mip.name);
+    let layers = mip.steps.iter().map(|s| s.writes.len()).sum::<usize>() as f64;
+    assert!((t.written - bpt * texels * layers / 3.0).abs() < 1.0, "{t:?}");
+    assert!((t.read - bpt * texels * layers * 4.0 / 3.0).abs() < 1.0, "{t:?}");
+    // a per-sample depth pass runs once per light sample
+    let linear = compiles("linear-light", &CompileOptions::default());
+    let depth = linear.graph.passes.iter().find(|p| p.kind == sshc_graph::PassKind::Depth).unwrap();
+    let t = of(&linear, &depth.name);
+    let fmt = |name: &str| {
+        f64::from(
+            linear
+                .graph
+                .textures
+                .iter()
+                .find(|t| t.name == name)
+                .unwrap()
+                .format
+                .bytes_per_texel(),
+        )
+    };
+    let per_view: f64 = depth.steps[0].writes.iter().map(|w| fmt(&w.texture)).sum::<f64>() + 4.0;
+    assert_eq!(t.written, f64::from(linear.graph.samples) * per_view * texels, "{t:?}");
+}

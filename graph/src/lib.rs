@@ -18,6 +18,8 @@
 //! - Scene draws use one vertex buffer: `@location(0)` position and `@location(1)` normal,
 //!   `vec3<f32>` each, interleaved (24-byte stride), in world space.
 
+pub mod traffic;
+
 use serde::{Deserialize, Serialize};
 use std::fmt;
 

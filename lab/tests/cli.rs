@@ -412,3 +412,94 @@ fn render_states_the_fit_and_the_texel_size() {
     assert!(number_after("one texel =", &out) > 0.15, "{out}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// `sshc render` sets each pass's time against its compulsory bytes: at 1024^2 texels
+/// esm's `exponential` reads and writes one R32Float texel (8.39 MB), which at a given
+/// 100 GB/s bound it to 0.084 ms; without `--bandwidth` the bandwidth is measured.
+#[test]
+fn render_sets_each_pass_against_its_bytes_bound() {
+    let dir = temp_dir("bytes");
+    let png = dir.join("r.png");
+    let png = png.to_str().unwrap();
+    let args = [
+        "render",
+        "techniques/esm.ron",
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "8x8",
+        "--shadow-map",
+        "1024",
+        "-o",
+        png,
+    ];
+    let out = ok(&[&args[..], &["--bandwidth", "100"]].concat());
+    assert!(out.contains("bandwidth: 100.0 GB/s (given)"), "{out}");
+    assert!(out.contains("| compulsory MB | GB/s | bound ms | ms / bound |"), "{out}");
+    let row: Vec<&str> = out
+        .lines()
+        .find(|l| l.starts_with("| exponential |"))
+        .unwrap_or_else(|| panic!("{out}"))
+        .split('|')
+        .map(str::trim)
+        .collect();
+    // | pass | ms | invocations | fetches | operations | MB | GB/s | bound | ratio |
+    let num = |i: usize| row[i].parse::<f64>().unwrap_or_else(|_| panic!("column {i} of {row:?}"));
+    assert_eq!(row[6], "8.39", "{row:?}");
+    assert_eq!(row[8], "0.084", "{row:?}");
+    // achieved GB/s and the ratio follow from the measured time, printed to 3 decimals
+    // (a relative rounding of 0.0005 / ms) and themselves printed to 1 (0.05)
+    let ms = num(2);
+    assert!(ms > 0.0, "{row:?}");
+    let rel = 0.0005 / ms;
+    assert!((num(7) - 8.388608 / ms).abs() <= 0.05 + rel * num(7) * 1.01, "{row:?}");
+    assert!((num(9) - ms / 0.08388608).abs() <= 0.05 + rel * num(9) * 1.01, "{row:?}");
+    let out = ok(&args);
+    assert!(number_after("bandwidth:", &out) > 0.0, "{out}");
+    assert!(out.contains("(measured: a copy of 64 MiB, read and written, median of 5)"), "{out}");
+    let bad = sshc(&[&args[..], &["--bandwidth", "-1"]].concat());
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--bandwidth -1: a bandwidth is a positive number of GB/s"));
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// `scripts/gpu-bench.sh`, the script for GPU machines without a toolchain, runs from a
+/// given binary and reports every bundled technique at every map size asked for.
+#[test]
+fn the_gpu_bench_script_reports_every_technique() {
+    let dir = temp_dir("gpu-bench");
+    let report = dir.join("gpu.md");
+    let out = Command::new("bash")
+        .args([
+            "scripts/gpu-bench.sh",
+            env!("CARGO_BIN_EXE_sshc"),
+            report.to_str().unwrap(),
+            "16x16",
+            "8,16",
+            "1",
+        ])
+        .current_dir(root())
+        .env("LP_NUM_THREADS", "2")
+        .output()
+        .expect("bash runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let md = std::fs::read_to_string(&report).unwrap();
+    assert!(md.contains("Device: ") && md.contains("bandwidth: "), "{md}");
+    let techniques = std::fs::read_dir(root().join("techniques"))
+        .unwrap()
+        .filter(|e| e.as_ref().is_ok_and(|e| e.path().extension().is_some_and(|x| x == "ron")))
+        .count();
+    for map in ["## Shadow map 8^2", "## Shadow map 16^2"] {
+        assert!(md.contains(map), "{md}");
+    }
+    assert_eq!(md.matches("### ").count(), 2 * techniques, "{md}");
+    // every technique's table has its shade row, with a bound
+    assert_eq!(
+        md.lines()
+            .filter(|l| l.starts_with("| shade |") || l.starts_with("| shade|"))
+            .count(),
+        2 * techniques,
+        "{md}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

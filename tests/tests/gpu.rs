@@ -252,6 +252,41 @@ fn shadow_maps_of_one_texel_and_2048_squared_render() {
     }
 }
 
+/// Long bodies are emitted as functions (`sshc::back::parts`: naga's WGSL front end is
+/// quadratic in a function's expressions). Split at every fifth `let` here, every bundled
+/// technique's passes run as chains of small functions, and the visibility is the same, bit
+/// for bit: the split moves code into functions that the shader compiler inlines, in the
+/// same order, so no rounding may differ.
+#[test]
+fn bodies_split_into_functions_compute_the_same_visibility() {
+    let gpu = gpu();
+    let tiny = sshc::back::parts::Split { max_run: 4, part: 3 };
+    let mut split_passes = 0;
+    for t in bundled("techniques") {
+        let src = std::fs::read_to_string(root().join("techniques").join(format!("{t}.ron"))).unwrap();
+        let whole = compile(&t, &[]);
+        let opts = sshc::CompileOptions {
+            split: tiny,
+            ..Default::default()
+        };
+        let split = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(&t, &src)));
+        let parts = split.shaders.iter().filter(|(_, s)| s.contains("_part1_f(")).count();
+        assert!(parts >= 1, "{t}: no pass was split");
+        split_passes += parts;
+        // the same operation counts: a called function counts at its call site
+        assert_eq!(whole.cost.passes, split.cost.passes, "{t}");
+        let sc = if sshc_lab::bind::graph_samples(&whole.graph) > 0 {
+            "linear"
+        } else {
+            "contact"
+        };
+        let s = scene(sc, 32, 128);
+        let (a, b) = (render(gpu, &whole, &s), render(gpu, &split, &s));
+        assert_eq!(a.visibility.channel(0), b.visibility.channel(0), "{t} on {sc}");
+    }
+    assert!(split_passes >= 13, "{split_passes} split passes");
+}
+
 fn write_compiled(c: &sshc::Compiled, dir: &Path) -> PathBuf {
     let _ = std::fs::remove_dir_all(dir);
     sshc::write_outputs(c, dir).unwrap();

@@ -1,6 +1,7 @@
 //! Back end: WGSL generation, naga validation, and operation counts on the naga IR.
 
 pub mod geometry;
+pub mod parts;
 pub mod wgsl;
 
 use sshc_graph::OpCount;

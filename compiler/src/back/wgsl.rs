@@ -5,6 +5,7 @@
 //! Every module is validated with naga inside the compiler.
 
 use crate::back::geometry;
+use crate::back::parts::{self, Line, Split};
 use crate::builtins::{Func, Input, SampleFn, SampleWgsl, Sig, Ty, Wgsl};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::{ConstValue, LightView, Precision, Primitive, Reduce, Resolve};
@@ -118,7 +119,12 @@ enum Side {
 struct Emitter<'a> {
     ir: &'a Program<'a>,
     side: Side,
-    body: String,
+    body: Vec<Line>,
+    /// What the code after the body reads: every value `emit` returned (a name, or an
+    /// expression of names).
+    roots: std::collections::HashSet<String>,
+    /// Where long bodies are split into functions.
+    split: Split,
     names: HashMap<H, String>,
     fetches: HashMap<String, String>,
     /// Textures this module reads: (name, binding).
@@ -143,7 +149,9 @@ impl<'a> Emitter<'a> {
         Emitter {
             ir,
             side,
-            body: String::new(),
+            body: Vec::new(),
+            roots: Default::default(),
+            split: Split::default(),
             names: HashMap::new(),
             fetches: HashMap::new(),
             bindings: vec![],
@@ -182,9 +190,21 @@ impl<'a> Emitter<'a> {
     }
 
     fn line(&mut self, s: &str) {
-        self.body.push_str("    ");
-        self.body.push_str(s);
-        self.body.push('\n');
+        self.body.push(Line::Raw(s.to_string()));
+    }
+
+    fn let_line(&mut self, name: &str, ty: &'static str, rhs: String) {
+        self.body.push(Line::Let {
+            name: name.to_string(),
+            ty,
+            rhs,
+        });
+    }
+
+    /// The body's text and the functions it calls (long bodies are split: `back::parts`).
+    /// `entry` names the entry point.
+    fn finish(&self, entry: &str) -> (String, String) {
+        parts::split(&self.body, entry, &self.roots, self.split)
     }
 
     fn input(&mut self, i: Input) -> String {
@@ -235,11 +255,13 @@ impl<'a> Emitter<'a> {
                 self.names.insert(h, e);
             } else {
                 let name = format!("e{}", h.index());
-                self.line(&format!("let {name} = {e};"));
+                self.let_line(&name, self.ir.arena.ty(h).wgsl(), e);
                 self.names.insert(h, name);
             }
         }
-        Ok(self.names[&root].clone())
+        let name = self.names[&root].clone();
+        self.roots.insert(name.clone());
+        Ok(name)
     }
 
     fn n(&self, h: H) -> &str {
@@ -315,7 +337,7 @@ impl<'a> Emitter<'a> {
             Some(v) => v.clone(),
             None => {
                 let v = self.fresh("texel_");
-                self.line(&format!("let {v} = textureLoad({tex}, texel, {layer}, 0i);"));
+                self.let_line(&v, "vec4<f32>", format!("textureLoad({tex}, texel, {layer}, 0i)"));
                 self.fetches.insert(key, v.clone());
                 v
             }
@@ -372,7 +394,8 @@ impl<'a> Emitter<'a> {
                     }
                     None => call,
                 };
-                self.line(&format!("let {v} = {call};"));
+                // every lookup returns the texel's four components
+                self.let_line(&v, "vec4<f32>", call);
                 self.fetches.insert(key, v.clone());
                 v
             }
@@ -664,7 +687,7 @@ fn out_struct(name: &str, n: usize, depth: bool) -> String {
     s
 }
 
-pub fn codegen(ir: &Program, limits: &Limits) -> Result<Output, Diagnostics> {
+pub fn codegen(ir: &Program, limits: &Limits, split: Split) -> Result<Output, Diagnostics> {
     let mut modules = Vec::new();
     let mut scratch = Vec::new();
     let mut diags = Diagnostics::default();
@@ -675,14 +698,14 @@ pub fn codegen(ir: &Program, limits: &Limits) -> Result<Output, Diagnostics> {
         let file = format!("{}.{}.wgsl", ir.technique, pass.name);
         let r = match &pass.kind {
             IrPassKind::Depth { .. } => depth(ir, pass),
-            IrPassKind::Map => map(ir, pass, limits),
+            IrPassKind::Map => map(ir, pass, limits, split),
             IrPassKind::Filter { kernel } => filter(ir, pass, kernel, limits, &mut scratch),
             IrPassKind::Mipmap { reduce } => mipmap(ir, pass, *reduce, limits),
-            IrPassKind::Shade { visibility } => shade(ir, pass, *visibility),
+            IrPassKind::Shade { visibility } => shade(ir, pass, *visibility, split),
             IrPassKind::SummedArea => summed_area(ir, pass),
             IrPassKind::Geometry {
                 primitive, resolve, keep, ..
-            } => geometry(ir, pass, *primitive, *resolve, *keep, limits),
+            } => geometry(ir, pass, *primitive, *resolve, *keep, limits, split),
         };
         match r {
             Ok((source, steps)) => {
@@ -750,7 +773,7 @@ fn encode_expr(v: &str, e: Encode) -> String {
     }
 }
 
-fn map(ir: &Program, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step>), Diagnostic> {
+fn map(ir: &Program, pass: &IrPass, limits: &Limits, split: Split) -> Result<(String, Vec<Step>), Diagnostic> {
     let entries = channel_entries(
         ir,
         pass,
@@ -763,6 +786,7 @@ fn map(ir: &Program, pass: &IrPass, limits: &Limits) -> Result<(String, Vec<Step
             store: &|_, stored| Ok(stored),
             step: &|entry, texture, chunk| fullscreen_step(entry, Draw::FullScreen, vec![], texture, chunk),
             depth: None,
+            split,
         },
     )?;
     let src = format!(
@@ -789,6 +813,8 @@ struct EntryForm<'f, 'a> {
     step: &'f dyn Fn(String, &str, &[u32]) -> Step,
     /// The depth the entry writes (`@builtin(frag_depth)`), a WGSL expression.
     depth: Option<&'f str>,
+    /// Where long bodies are split into functions.
+    split: Split,
 }
 
 /// The fragment entries of a Map or Geometry pass: one per group of layers of each texture
@@ -829,6 +855,7 @@ fn channel_entries<'a>(
             structs.push_str(&out_struct(&out_name, chunk.len(), form.depth.is_some()));
             let mut em = Emitter::new(ir, side, pass.reads.clone());
             em.per_sample_pass = per_sample;
+            em.split = form.split;
             em.bindings = decl.bindings.clone();
             (form.prelude)(&mut em)?;
             let mut outs = Vec::new();
@@ -846,12 +873,14 @@ fn channel_entries<'a>(
             if let Some(d) = form.depth {
                 outs.push(format!("    out.depth = {d};"));
             }
+            let (functions, body) = em.finish(&entry);
+            bodies.push_str(&functions);
             let _ = write!(
                 bodies,
                 "\n@fragment\nfn {entry}({}) -> {out_name} {{\n{}{}    var out: {out_name};\n{}\n    return out;\n}}\n",
                 form.signature,
                 form.head,
-                em.body,
+                body,
                 outs.join("\n")
             );
             decl.bindings = em.bindings.clone();
@@ -945,6 +974,7 @@ fn geometry(
     resolve: Resolve,
     keep: Option<H>,
     limits: &Limits,
+    split: Split,
 ) -> Result<(String, Vec<Step>), Diagnostic> {
     let w = pass.writes.ok_or_else(|| internal("geometry pass without output"))?;
     let res = &ir.resources[w];
@@ -1095,6 +1125,7 @@ fn geometry(
                 }
             },
             depth: lib.as_ref().and_then(|l| l.depth),
+            split,
         },
     )?;
     let mut entries = entries;
@@ -1505,11 +1536,14 @@ fn mipmap(ir: &Program, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Resul
     Ok((s, steps))
 }
 
-fn shade(ir: &Program, pass: &IrPass, visibility: H) -> Result<(String, Vec<Step>), Diagnostic> {
+fn shade(ir: &Program, pass: &IrPass, visibility: H, split: Split) -> Result<(String, Vec<Step>), Diagnostic> {
     let mut em = Emitter::new(ir, Side::Receiver, pass.reads.clone());
+    em.split = split;
     let v = em.emit(visibility)?;
     let mut s = header(ir, pass);
     s.push_str(&em.declarations(ir));
+    let (functions, body) = em.finish("fs_shade");
+    s.push_str(&functions);
     s.push_str(
         "
 struct ShadeVarying {
@@ -1573,7 +1607,7 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {
     for (&k, used) in &em.views {
         s.push_str(&sample_prologue(k, used));
     }
-    s.push_str(&em.body);
+    s.push_str(&body);
     let _ = write!(
         s,
         "    // outputs stay finite and in [0, 1]; a receiver facing away from the light's centre

@@ -4,7 +4,7 @@
 use crate::image_io::ImageFiles;
 use crate::session::{Overrides, rt};
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
-use sshc_runtime::graph::{Draw, PassGraph, Views};
+use sshc_runtime::graph::{Draw, PassGraph, Views, traffic};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -34,9 +34,23 @@ pub struct RenderArgs {
     /// Frames to run; GPU times per pass are the median over them.
     #[arg(long, default_value_t = 1)]
     frames: usize,
+    /// The device's memory bandwidth in GB/s, for each pass's lower bound (its compulsory
+    /// bytes over the bandwidth). Default: measured on the device by a buffer copy of
+    /// 64 MiB (median of 5).
+    #[arg(long, allow_negative_numbers = true)]
+    bandwidth: Option<f64>,
 }
 
+/// Bytes of the copy that measures the bandwidth, and how many times it runs.
+const BANDWIDTH_COPY_BYTES: u64 = 64 << 20;
+const BANDWIDTH_RUNS: usize = 5;
+
 pub fn render(a: RenderArgs) -> Result<(), String> {
+    if let Some(b) = a.bandwidth
+        && !(b.is_finite() && b > 0.0)
+    {
+        return Err(format!("error: --bandwidth {b}: a bandwidth is a positive number of GB/s"));
+    }
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
     let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
@@ -112,21 +126,52 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         scene.camera_size(),
         edges.map_or(0, |c| u64::from(c.edges)),
     );
+    let sizes = traffic::Sizes {
+        shadow: scene.shadow_map,
+        camera: scene.camera_size(),
+    };
+    let bytes = traffic::passes(&ex.graph, sizes);
+    let gbps = match a.bandwidth {
+        Some(b) => {
+            println!("bandwidth: {b:.1} GB/s (given)");
+            b
+        }
+        None => {
+            let b = gpu.copy_bandwidth(BANDWIDTH_COPY_BYTES, BANDWIDTH_RUNS).map_err(rt)?;
+            println!(
+                "bandwidth: {b:.1} GB/s (measured: a copy of {} MiB, read and written, median of {BANDWIDTH_RUNS})",
+                BANDWIDTH_COPY_BYTES >> 20
+            );
+            b
+        }
+    };
     println!(
-        "| pass | GPU ms (median of {} frame(s)) | invocations | fetches | operations |\n|---|---|---|---|---|",
+        "| pass | GPU ms (median of {} frame(s)) | invocations | fetches | operations | compulsory MB | GB/s | bound ms | ms / bound |\n|---|---|---|---|---|---|---|---|---|",
         all.len()
     );
     for (i, n) in names.iter().enumerate() {
         let mut v: Vec<f64> = all.iter().filter_map(|f| f[i]).collect();
         v.sort_by(f64::total_cmp);
-        let shown = v
-            .get(v.len() / 2)
+        let median = v.get(v.len() / 2).copied();
+        let shown = median
             .map(|m| format!("{m:.3}"))
             .unwrap_or_else(|| "n/a (no timestamp queries)".into());
-        match work.iter().find(|w| &w.pass == n) {
-            Some(w) => println!("| {n} | {shown} | {:.3e} | {:.3e} | {:.3e} |", w.invocations, w.fetches, w.ops),
-            None => println!("| {n} | {shown} | | | |"),
-        }
+        let counts = match work.iter().find(|w| &w.pass == n) {
+            Some(w) => format!("{:.3e} | {:.3e} | {:.3e}", w.invocations, w.fetches, w.ops),
+            None => " | ".into(),
+        };
+        let memory = match bytes.iter().find(|b| &b.0 == n) {
+            Some((_, t)) => {
+                let bound = t.bound_ms(gbps);
+                let (achieved, ratio) = match median {
+                    Some(ms) if ms > 0.0 => (format!("{:.1}", t.total() / (ms * 1e-3) / 1e9), format!("{:.1}", ms / bound)),
+                    _ => (String::new(), String::new()),
+                };
+                format!("{:.2} | {achieved} | {bound:.3} | {ratio}", t.total() / 1e6)
+            }
+            None => " | | | ".into(),
+        };
+        println!("| {n} | {shown} | {counts} | {memory} |");
     }
     Ok(())
 }
