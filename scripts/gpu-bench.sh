@@ -3,8 +3,8 @@
 # `sshc` (no Rust toolchain needed: the GPU machines have none, docs/gpu-machine.md), and
 # writes a Markdown report. Per technique and shadow-map size: each pass's median GPU time
 # over the frames, its compulsory bytes (sshc_graph::traffic), the GB/s they imply and the
-# time over the bound at the device's bandwidth (measured once by `sshc render`: a 64 MiB
-# buffer copy). The light-sample techniques run on scenes/linear.ron's segment light, the
+# time over the bound at the device's bandwidth (measured once, by the first `sshc render`:
+# a 64 MiB buffer copy). The light-sample techniques run on scenes/linear.ron's segment light, the
 # others on scenes/bunny.ron.
 #
 # Usage: scripts/gpu-bench.sh [SSHC] [OUT] [CAMERA] [MAPS] [FRAMES]
@@ -30,6 +30,9 @@ trap 'rm -rf "$tmp"' EXIT
 start=$(date +%s)
 body=$tmp/body.md
 device=""
+# the first run measures the bandwidth; the others are given it, so that every bound
+# is taken at the same figure
+bw=()
 : > "$body"
 for map in ${maps//,/ }; do
     echo "## Shadow map ${map}^2" >> "$body"
@@ -39,9 +42,11 @@ for map in ${maps//,/ }; do
         scene=scenes/bunny.ron
         grep -q 'light_samples' "$t" && scene=scenes/linear.ron
         log=$("$bin" render "$t" --scene "$scene" --size "$camera" --shadow-map "$map" \
-            --frames "$frames" -o "$tmp/$name.png")
-        # the device and its bandwidth, from the first run
-        [ -n "$device" ] || device="$(echo "$log" | sed -n 's/^device: //p'); $(echo "$log" | grep '^bandwidth:')"
+            --frames "$frames" -o "$tmp/$name.png" "${bw[@]}")
+        if [ -z "$device" ]; then
+            device="$(echo "$log" | sed -n 's/^device: //p'); $(echo "$log" | grep '^bandwidth:')"
+            bw=(--bandwidth "$(echo "$log" | sed -n 's|^bandwidth: \([0-9.]*\) GB/s.*|\1|p')")
+        fi
         {
             echo "### $name (on $(basename "$scene"))"
             echo
