@@ -1,23 +1,26 @@
 #!/usr/bin/env bash
-# Measures every bundled technique's passes against their memory bound, from a prebuilt
-# `sshc` (no Rust toolchain needed: the GPU machines have none, docs/gpu-machine.md), and
-# writes a Markdown report. Per technique and shadow-map size: each pass's median GPU time
-# over the frames, its compulsory bytes (sshc_graph::traffic), the GB/s they imply and the
-# time over the bound at the device's bandwidth (measured once, by the first `sshc render`:
-# a 64 MiB buffer copy). The light-sample techniques run on scenes/linear.ron's segment light, the
-# others on scenes/bunny.ron.
+# Measures every bundled technique's passes under each schedule and against their memory
+# bound, from a prebuilt `sshc` (no Rust toolchain needed: the GPU machines have none,
+# docs/gpu-machine.md), and writes a Markdown report. Per technique and shadow-map size:
+# each pass's median GPU time over the frames with its Map passes run as fragment and as
+# compute (`--schedule '*=fragment'`, `'*=compute'`), their ratio, the pass's compulsory
+# bytes (sshc_graph::traffic) and the time the faster schedule takes over their bound at
+# the device's bandwidth (measured once, by the first `sshc render`: a 64 MiB buffer copy).
+# The light-sample techniques run on scenes/linear.ron's segment light, the others on
+# scenes/bunny.ron.
 #
 # Usage: scripts/gpu-bench.sh [SSHC] [OUT] [CAMERA] [MAPS] [FRAMES]
-#   SSHC    the binary (default target/release/sshc, or .gpu/sshc where it exists)
+#   SSHC    the binary (default target/release/sshc, or .gpu/sshc where that is missing)
 #   OUT     the report (default docs/gpu.md)
 #   CAMERA  camera size (default 1920x1080)
 #   MAPS    shadow-map sizes, comma-separated (default 1024,2048)
 #   FRAMES  frames per run (default 9)
-# Issue 15 adds a schedule axis (fragment against compute) and the agreement timings.
+# Issue 15 adds the other pass kinds' schedules and the agreement timings.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# a build here first; on a GPU machine (no toolchain, no target/) the carried copy
 default_bin=target/release/sshc
-[ -x .gpu/sshc ] && default_bin=.gpu/sshc
+[ -x "$default_bin" ] || default_bin=.gpu/sshc
 bin=${1:-$default_bin}
 out=${2:-docs/gpu.md}
 camera=${3:-1920x1080}
@@ -41,18 +44,26 @@ for map in ${maps//,/ }; do
         name=$(basename "$t" .ron)
         scene=scenes/bunny.ron
         grep -q 'light_samples' "$t" && scene=scenes/linear.ron
-        log=$("$bin" render "$t" --scene "$scene" --size "$camera" --shadow-map "$map" \
-            --frames "$frames" -o "$tmp/$name.png" "${bw[@]}")
-        if [ -z "$device" ]; then
-            device="$(echo "$log" | sed -n 's/^device: //p'); $(echo "$log" | grep '^bandwidth:')"
-            bw=(--bandwidth "$(echo "$log" | sed -n 's|^bandwidth: \([0-9.]*\) GB/s.*|\1|p')")
-        fi
+        # the same technique under each schedule of its Map passes (`--schedule '*=...'`;
+        # a technique without one runs the same code twice)
+        for sch in fragment compute; do
+            log=$("$bin" render "$t" --scene "$scene" --size "$camera" --shadow-map "$map" \
+                --frames "$frames" --schedule "*=$sch" -o "$tmp/$name.png" "${bw[@]}")
+            if [ -z "$device" ]; then
+                device="$(echo "$log" | sed -n 's/^device: //p'); $(echo "$log" | grep '^bandwidth:')"
+                bw=(--bandwidth "$(echo "$log" | sed -n 's|^bandwidth: \([0-9.]*\) GB/s.*|\1|p')")
+            fi
+            echo "$log" | sed -n '/^| pass/,$p' | tail -n +3 > "$tmp/$sch.rows"
+        done
         {
             echo "### $name (on $(basename "$scene"))"
             echo
-            echo "| pass | GPU ms | compulsory MB | GB/s | bound ms | ms / bound |"
-            echo "|---|---|---|---|---|---|"
-            echo "$log" | sed -n '/^| pass/,$p' | tail -n +3 | awk -F'|' '{printf "|%s|%s|%s|%s|%s|%s|\n", $2, $3, $7, $8, $9, $10}'
+            echo "| pass | fragment ms | compute ms | compute / fragment | compulsory MB | bound ms | best / bound | schedule run by the compute row |"
+            echo "|---|---|---|---|---|---|---|---|"
+            # columns of render's table: 2 pass, 3 ms, 7 MB, 9 bound, 11 schedule
+            paste -d'\n' "$tmp/fragment.rows" "$tmp/compute.rows" | awk -F'|' 'NR % 2 == 1 { f = $3 + 0; next }
+                { c = $3 + 0; b = $9 + 0; best = (c < f ? c : f);
+                  printf "|%s| %.3f | %.3f | %.2f |%s|%s| %.1f |%s|\n", $2, f, c, (f > 0 ? c / f : 0), $7, $9, (b > 0 ? best / b : 0), $11 }'
             echo
         } >> "$body"
         echo "$name at ${map}^2: done ($(($(date +%s) - start)) s)" >&2
@@ -63,10 +74,12 @@ done
     echo
     echo "Produced by \`scripts/gpu-bench.sh $bin $out $camera $maps $frames\` on $(date -u +%Y-%m-%d)."
     echo "Camera $camera; median of $frames frames per run, in milliseconds, measured with"
-    echo "timestamp queries. *Compulsory MB*: the bytes any schedule of the pass must move at a"
-    echo "perfect cache (docs/architecture.md section 7); *bound ms*: those bytes at the device's"
-    echo "bandwidth; *ms / bound*: how far the pass is from it (1 is at the bound). A Shade's"
-    echo "bytes are its writes only (what it reads depends on the view)."
+    echo "timestamp queries. Each technique runs twice in turn: its Map passes as fragment, then as"
+    echo "compute (a technique without one, or whose formats are not storage formats, runs the same"
+    echo "code twice: its ratios show the noise). *Compulsory MB*: the bytes any schedule of the pass"
+    echo "must move at a perfect cache (docs/architecture.md section 7); *bound ms*: those bytes at"
+    echo "the device's bandwidth; *best / bound*: how far the faster schedule is from it (1 is at the"
+    echo "bound). A Shade's bytes are its writes only (what it reads depends on the view)."
     echo
     echo "Device: $device."
     echo

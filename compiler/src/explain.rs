@@ -2,7 +2,7 @@
 //! channels and how they are packed, cost, and what was removed.
 
 use crate::Compiled;
-use crate::front::ast::{LightView, Primitive, Resolve};
+use crate::front::ast::{LightView, Primitive, Resolve, Schedule};
 use crate::ir::{IrPassKind, Origin, Program, short};
 use std::fmt::Write as _;
 
@@ -43,13 +43,33 @@ pub fn explain(c: &Compiled) -> String {
                 "rasterises the scene once from each of the {samples} light samples and stores linear depth, one layer block per sample"
             ),
             IrPassKind::Depth { .. } => "rasterises the scene from the light and stores linear depth".to_string(),
-            IrPassKind::Map => "computes channels per shadow-map texel".to_string(),
+            IrPassKind::Map => match p.schedule {
+                Schedule::Fragment => "computes channels per shadow-map texel (schedule: fragment, a full-screen triangle)".to_string(),
+                Schedule::Compute if crate::back::wgsl::map_runs_as_compute(ir, p) => {
+                    "computes channels per shadow-map texel (schedule: compute, 8 x 8 texels per workgroup, storage-texture writes)"
+                        .to_string()
+                }
+                Schedule::Compute => format!(
+                    "computes channels per shadow-map texel (schedule: fragment; compute was asked for, but {})",
+                    crate::back::wgsl::compute_refusal(ir, p).unwrap_or_default()
+                ),
+            },
             IrPassKind::Filter { kernel } => format!(
-                "filters with {kernel:?}{}",
+                "filters with {kernel:?}{} ({})",
                 if kernel.separable() {
                     " (separable: horizontal then vertical)"
                 } else {
                     ""
+                },
+                match p.schedule {
+                    Schedule::Fragment => "schedule: fragment, a full-screen triangle per step".to_string(),
+                    Schedule::Compute if crate::back::wgsl::map_runs_as_compute(ir, p) => {
+                        "schedule: compute, 8 x 8 texels per workgroup, each workgroup loading its tile and apron into workgroup memory once per layer".to_string()
+                    }
+                    Schedule::Compute => format!(
+                        "schedule: fragment; compute was asked for, but {}",
+                        crate::back::wgsl::compute_refusal(ir, p).unwrap_or_default()
+                    ),
                 }
             ),
             IrPassKind::Mipmap { reduce } => format!("builds a {reduce:?} mip chain in place"),

@@ -698,6 +698,8 @@ pub struct IrPass {
     pub span: Span,
     /// False once dead-code elimination removed it.
     pub live: bool,
+    /// How a Map pass runs (every other pass: `Fragment`, their one schedule so far).
+    pub schedule: crate::front::ast::Schedule,
 }
 
 impl IrPass {

@@ -99,6 +99,9 @@ pub struct CompileOptions {
     pub set: Vec<(String, String)>,
     /// `--precision NAME=P` overrides of channel or expansion precision.
     pub precision: Vec<(String, String)>,
+    /// `--schedule PASS=S` overrides of a pass's schedule (`fragment`, `compute`; `*` for
+    /// every Map pass).
+    pub schedule: Vec<(String, String)>,
     pub limits: Limits,
     pub dump_after: Option<DumpPhase>,
     /// Where long generated bodies are split into functions (`back::parts`).

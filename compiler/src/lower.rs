@@ -578,6 +578,9 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             writes,
             span: p.span,
             live: true,
+            // measured on lavapipe: fragment (docs/gpu.md); the default until a device
+            // class measures otherwise
+            schedule: sym.schedules[pi].unwrap_or_default(),
         });
     }
 

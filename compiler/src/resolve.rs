@@ -39,6 +39,8 @@ pub struct Symbols<'a> {
     /// Channel and expansion precisions after `--precision` overrides.
     pub channel_precision: Vec<Precision>,
     pub expansion_precision: Vec<Precision>,
+    /// Per pass: its schedule after `--schedule` overrides (None: the compiler's default).
+    pub schedules: Vec<Option<Schedule>>,
 }
 
 impl<'a> Symbols<'a> {
@@ -55,6 +57,7 @@ impl<'a> Symbols<'a> {
             overridden: self.overridden.clone(),
             channel_precision: self.channel_precision.clone(),
             expansion_precision: self.expansion_precision.clone(),
+            schedules: self.schedules.clone(),
         }
     }
 
@@ -235,6 +238,53 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         }
     }
 
+    let mut schedules: Vec<Option<Schedule>> = t
+        .passes
+        .iter()
+        .map(|p| {
+            if let PassKind::Map { schedule, .. } = &p.kind {
+                schedule.as_ref().map(|s| s.value)
+            } else {
+                None
+            }
+        })
+        .collect();
+    for (name, text) in &opts.schedule {
+        let Some(sch) = Schedule::parse(text) else {
+            diags.push(
+                Diagnostic::error(Phase::Cli, format!("`--schedule {name}={text}`: unknown schedule"))
+                    .note("expected one of: fragment, compute"),
+            );
+            continue;
+        };
+        // `*` names every pass that has schedules (a sweep axis over a technique's schedules)
+        let mut named = false;
+        for (i, p) in t.passes.iter().enumerate() {
+            if name != "*" && p.name.value != *name {
+                continue;
+            }
+            named = true;
+            if p.kind.schedulable() {
+                schedules[i] = Some(sch);
+            } else if name != "*" {
+                diags.push(
+                    Diagnostic::error(
+                        Phase::Cli,
+                        format!("`--schedule {name}={text}`: pass `{name}` is a {} pass", p.kind.kind_name()),
+                    )
+                    .at(p.kind_span, "declared here")
+                    .note("only Map and Filter passes have schedules so far"),
+                );
+            }
+        }
+        if !named {
+            diags.push(Diagnostic::error(
+                Phase::Cli,
+                format!("`--schedule {name}={text}`: no pass named `{name}`"),
+            ));
+        }
+    }
+
     diags.check()?;
     Ok(Symbols {
         t,
@@ -247,5 +297,6 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         overridden,
         channel_precision,
         expansion_precision,
+        schedules,
     })
 }

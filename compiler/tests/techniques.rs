@@ -690,3 +690,70 @@ fn compulsory_bytes_follow_from_the_formats_and_sizes() {
     let per_view: f64 = depth.steps[0].writes.iter().map(|w| fmt(&w.texture)).sum::<f64>() + 4.0;
     assert_eq!(t.written, f64::from(linear.graph.samples) * per_view * texels, "{t:?}");
 }
+
+/// Schedules of Map passes: fragment by default, compute where asked (in the technique or
+/// by `--schedule`) and every written format is a storage format, else fragment with the
+/// reason in `explain`; `--schedule` names Map passes only.
+#[test]
+fn map_pass_schedules() {
+    use sshc_graph::Draw;
+    let sched = |pairs: &[(&str, &str)], precision: &[(&str, Precision)]| {
+        let mut o = opts(&[], precision);
+        o.schedule = pairs.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
+        o
+    };
+    let draws = |c: &sshc::Compiled, pass: &str| -> Vec<Draw> {
+        c.graph
+            .passes
+            .iter()
+            .find(|p| p.name == pass)
+            .unwrap()
+            .steps
+            .iter()
+            .map(|s| s.draw.clone())
+            .collect()
+    };
+    let vsm = compiles("vsm", &CompileOptions::default());
+    assert_eq!(draws(&vsm, "moments"), [Draw::FullScreen]);
+    assert!(sshc::explain::explain(&vsm).contains("(schedule: fragment, a full-screen triangle)"));
+    for name in ["moments", "*"] {
+        let c = compiles("vsm", &sched(&[(name, "compute")], &[]));
+        assert_eq!(draws(&c, "moments"), [Draw::ComputeTexels], "{name}");
+        let step = &c.graph.passes.iter().find(|p| p.name == "moments").unwrap().steps[0];
+        assert_eq!((step.vertex.as_deref(), step.compute.as_deref()), (None, Some("cs_moments_0")));
+        // the same expression per texel, and the edge check (a conversion, a comparison
+        // and `any`: 3 operations) the workgroups' overhang needs
+        for (a, b) in c.cost.passes.iter().zip(&vsm.cost.passes) {
+            match (a.0.as_str(), name) {
+                ("moments", _) => assert_eq!((a.3.fetches, a.3.ops), (b.3.fetches, b.3.ops + 3), "{a:?} {b:?}"),
+                // `*` runs the blur (Box 3 on one Rg32Float layer) as compute too: each
+                // step's workgroup loads its 8 x 8 texels and the apron, 10 x 8 texels, by
+                // 64 invocations: 2 loads each instead of 3 taps, 4 for both steps
+                ("blur", "*") => assert_eq!((a.3.fetches, b.3.fetches), (4, 6), "{a:?} {b:?}"),
+                _ => assert_eq!(a.3, b.3, "{a:?} {b:?}"),
+            }
+        }
+        assert!(sshc::explain::explain(&c).contains("(schedule: compute, 8 x 8 texels per workgroup"));
+    }
+    // Rg16Unorm is not a storage format: fragment, and why
+    let c = compiles(
+        "vsm",
+        &sched(&[("*", "compute")], &[("m1", Precision::Unorm16), ("m2", Precision::Unorm16)]),
+    );
+    assert_eq!(draws(&c, "moments"), [Draw::FullScreen]);
+    assert!(
+        sshc::explain::explain(&c).contains("compute was asked for, but Rg16Unorm is not a storage format"),
+        "{}",
+        sshc::explain::explain(&c)
+    );
+    // refused: a pass that is not a Map pass, no such pass, no such schedule
+    for (pairs, want) in [
+        (("shade", "compute"), "`--schedule shade=compute`: pass `shade` is a Shade pass"),
+        (("nope", "compute"), "`--schedule nope=compute`: no pass named `nope`"),
+        (("moments", "tiled"), "`--schedule moments=tiled`: unknown schedule"),
+    ] {
+        let e = sshc::compile_str(&source("vsm"), &sched(&[pairs], &[])).expect_err("refused");
+        let text = e.render("vsm.ron", &source("vsm"));
+        assert!(text.contains(want), "{text}");
+    }
+}

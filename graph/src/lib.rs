@@ -241,6 +241,8 @@ impl SampleViewUniform {
 
 /// Workgroup size of compute steps ([`Draw::ComputeRows`], [`Draw::ComputeColumns`]).
 pub const COMPUTE_WORKGROUP: u32 = 64;
+/// Workgroup side of [`Draw::ComputeTexels`] steps (8 x 8 invocations).
+pub const TEXEL_WORKGROUP: u32 = 8;
 
 /// Size in bytes of [`FRAME_WGSL`]'s `Frame`.
 pub const FRAME_SIZE: u32 = frame_size();
@@ -436,6 +438,15 @@ impl Format {
         }
     }
 
+    /// Whether WebGPU can write the format from a shader without an optional feature
+    /// (`textureStore` into a storage texture): the compute schedule's condition.
+    pub fn storable(self) -> bool {
+        matches!(
+            self,
+            Format::Rgba8Unorm | Format::Rgba16Float | Format::R32Float | Format::Rg32Float | Format::Rgba32Float
+        )
+    }
+
     /// The WGSL storage format name, as in `texture_storage_2d<...>`.
     pub fn wgsl(self) -> &'static str {
         match self {
@@ -558,6 +569,14 @@ pub enum Draw {
     ComputeRows,
     /// A compute dispatch with one invocation per column of the shadow map (64 per workgroup).
     ComputeColumns,
+    /// A compute dispatch with one invocation per texel of the shadow map
+    /// ([`TEXEL_WORKGROUP`] x [`TEXEL_WORKGROUP`] per workgroup, x the column, y the row;
+    /// invocations past the map's edge do nothing): the compute schedule of a Map pass. It
+    /// writes its targets with `textureStore`: group 2 binds write `i` at binding `i` as a
+    /// `texture_storage_2d_array<format, write>` of the texture's base level, all layers
+    /// (the target's `layer` is the layer the entry stores); each written format must be
+    /// a storage format ([`Format::storable`]).
+    ComputeTexels,
     /// A compute dispatch with one invocation per edge of the scene's meshes (64 per
     /// workgroup): it classifies the edge as seen from the light's centre and, for a
     /// silhouette, appends one record to `buffer` and adds the record's vertices to the
@@ -965,6 +984,19 @@ impl PassGraph {
                     }
                 }
                 for w in &s.writes {
+                    if s.draw == Draw::ComputeTexels
+                        && let Some(t) = self.texture(&w.texture)
+                        && !t.format.storable()
+                    {
+                        return Err(GraphError::Texture {
+                            texture: w.texture.clone(),
+                            field: "format",
+                            message: format!(
+                                "pass `{}` writes it from a compute step, but {:?} is not a storage format",
+                                p.name, t.format
+                            ),
+                        });
+                    }
                     let layers = self.texture(&w.texture).map_or(0, |t| t.layers);
                     if w.layer >= layers {
                         return Err(GraphError::Layer {
@@ -1023,7 +1055,8 @@ impl PassGraph {
                     | Draw::FullScreen
                     | Draw::MipLevels
                     | Draw::ComputeRows
-                    | Draw::ComputeColumns => continue,
+                    | Draw::ComputeColumns
+                    | Draw::ComputeTexels => continue,
                 };
                 let bad = |message: String| {
                     Err(GraphError::Buffer {
@@ -1154,6 +1187,39 @@ mod tests {
             assert!(
                 matches!(&e, GraphError::Texture { field: "channels", message, .. } if message.starts_with("channel `z`")),
                 "{bad:?}: {e:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn compute_steps_store_only_into_storage_formats() {
+        let with = |format: Format| {
+            let mut g = tiny();
+            g.textures[0].format = format;
+            g.passes[0].steps[0].draw = Draw::ComputeTexels;
+            PassGraph::from_ron(&g.to_ron())
+        };
+        for f in [
+            Format::R32Float,
+            Format::Rg32Float,
+            Format::Rgba32Float,
+            Format::Rgba16Float,
+            Format::Rgba8Unorm,
+        ] {
+            assert!(f.storable() && with(f).is_ok(), "{f:?}");
+        }
+        for f in [
+            Format::R8Unorm,
+            Format::Rg8Unorm,
+            Format::R16Float,
+            Format::Rg16Float,
+            Format::R16Unorm,
+            Format::Rgba16Unorm,
+        ] {
+            let e = with(f).expect_err("refused");
+            assert!(
+                matches!(&e, GraphError::Texture { field: "format", message, .. } if message.contains("not a storage format")),
+                "{f:?}: {e:?}"
             );
         }
     }

@@ -30,6 +30,9 @@ struct Common {
     /// Override the precision of a channel or expansion: NAME=unorm8|unorm16|f16|f32. Repeatable.
     #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
     precision: Vec<(String, String)>,
+    /// Override the schedule of a Map pass: PASS=fragment|compute (`*` for every Map pass). Repeatable.
+    #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
+    schedule: Vec<(String, String)>,
     /// Print the IR after this phase.
     #[arg(long = "dump-ir-after", value_name = "PHASE", value_parser = dump_phase)]
     dump_ir_after: Option<DumpPhase>,
@@ -90,6 +93,7 @@ fn options(c: &Common) -> CompileOptions {
     CompileOptions {
         set: c.set.clone(),
         precision: c.precision.clone(),
+        schedule: c.schedule.clone(),
         dump_after: c.dump_ir_after,
         ..Default::default()
     }

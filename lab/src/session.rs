@@ -48,6 +48,9 @@ pub struct Overrides {
     /// Precision override of a channel or expansion, NAME=PRECISION (techniques only). Repeatable.
     #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
     pub precision: Vec<(String, String)>,
+    /// Schedule override of a Map pass, PASS=fragment|compute (`*`: every Map pass; techniques only). Repeatable.
+    #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
+    pub schedule: Vec<(String, String)>,
     /// Override the scene's shadow-map resolution.
     #[arg(long)]
     pub shadow_map: Option<u32>,
@@ -61,7 +64,13 @@ impl Overrides {
     /// `input` (a technique compiled with the overrides, or a graph with params set).
     pub fn load<'g>(&self, gpu: &'g Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor<'g>), String> {
         let scene = load_scene(scene, self.size, self.shadow_map)?;
-        let ex = executor(gpu, input, &self.set, &self.precision)?;
+        let opts = sshc::CompileOptions {
+            set: self.set.clone(),
+            precision: self.precision.clone(),
+            schedule: self.schedule.clone(),
+            ..Default::default()
+        };
+        let ex = executor(gpu, input, &opts)?;
         Ok((scene, ex))
     }
 }
@@ -204,35 +213,29 @@ pub fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>
 
 /// An executor for a technique (`.ron`, compiled with the overrides) or a compiled graph
 /// (`.graph.ron`, params set as uniforms), as `sshc render` does.
-pub fn executor<'g>(gpu: &'g Gpu, input: &Path, set: &[(String, String)], precision: &[(String, String)]) -> Result<Executor<'g>, String> {
+/// `opts` holds the command line's `--set`, `--precision` and `--schedule`; a graph takes
+/// `--set` only.
+pub fn executor<'g>(gpu: &'g Gpu, input: &Path, opts: &sshc::CompileOptions) -> Result<Executor<'g>, String> {
     if input.to_string_lossy().ends_with(".graph.ron") {
-        if !precision.is_empty() {
+        if !opts.precision.is_empty() {
             return Err("error: `--precision` needs a technique, not a compiled graph".into());
         }
+        if !opts.schedule.is_empty() {
+            return Err("error: `--schedule` needs a technique, not a compiled graph".into());
+        }
         let mut ex = Executor::load(gpu, input).map_err(rt)?;
-        for (k, v) in set {
+        for (k, v) in &opts.set {
             let v: f64 = v.parse().map_err(|_| format!("error: `--set {k}={v}`: expected a number"))?;
             ex.set_param(k, v).map_err(rt)?;
         }
         return Ok(ex);
     }
     let source = read(input)?;
-    compile_executor(gpu, input, &source, set, precision)
+    compile_executor(gpu, input, &source, opts)
 }
 
-pub fn compile_executor<'g>(
-    gpu: &'g Gpu,
-    path: &Path,
-    source: &str,
-    set: &[(String, String)],
-    precision: &[(String, String)],
-) -> Result<Executor<'g>, String> {
-    let opts = sshc::CompileOptions {
-        set: set.to_vec(),
-        precision: precision.to_vec(),
-        ..Default::default()
-    };
-    let c = sshc::compile_str(source, &opts).map_err(|d| {
+pub fn compile_executor<'g>(gpu: &'g Gpu, path: &Path, source: &str, opts: &sshc::CompileOptions) -> Result<Executor<'g>, String> {
+    let c = sshc::compile_str(source, opts).map_err(|d| {
         report(&d, path, source);
         String::new()
     })?;

@@ -435,7 +435,7 @@ fn render_sets_each_pass_against_its_bytes_bound() {
     ];
     let out = ok(&[&args[..], &["--bandwidth", "100"]].concat());
     assert!(out.contains("bandwidth: 100.0 GB/s (given)"), "{out}");
-    assert!(out.contains("| compulsory MB | GB/s | bound ms | ms / bound |"), "{out}");
+    assert!(out.contains("| compulsory MB | GB/s | bound ms | ms / bound | schedule |"), "{out}");
     let row: Vec<&str> = out
         .lines()
         .find(|l| l.starts_with("| exponential |"))
@@ -443,7 +443,8 @@ fn render_sets_each_pass_against_its_bytes_bound() {
         .split('|')
         .map(str::trim)
         .collect();
-    // | pass | ms | invocations | fetches | operations | MB | GB/s | bound | ratio |
+    // | pass | ms | invocations | fetches | operations | MB | GB/s | bound | ratio | schedule |
+    assert_eq!(row[10], "fragment", "{row:?}");
     let num = |i: usize| row[i].parse::<f64>().unwrap_or_else(|_| panic!("column {i} of {row:?}"));
     assert_eq!(row[6], "8.39", "{row:?}");
     assert_eq!(row[8], "0.084", "{row:?}");
@@ -454,6 +455,13 @@ fn render_sets_each_pass_against_its_bytes_bound() {
     let rel = 0.0005 / ms;
     assert!((num(7) - 8.388608 / ms).abs() <= 0.05 + rel * num(7) * 1.01, "{row:?}");
     assert!((num(9) - ms / 0.08388608).abs() <= 0.05 + rel * num(9) * 1.01, "{row:?}");
+    // the compute schedule, asked for on the command line, shows in the table
+    let out = ok(&[&args[..], &["--bandwidth", "100", "--schedule", "exponential=compute"]].concat());
+    let row = out
+        .lines()
+        .find(|l| l.starts_with("| exponential |"))
+        .unwrap_or_else(|| panic!("{out}"));
+    assert!(row.ends_with("| compute |"), "{row}");
     let out = ok(&args);
     assert!(number_after("bandwidth:", &out) > 0.0, "{out}");
     assert!(out.contains("(measured: a copy of 64 MiB, read and written, median of 5)"), "{out}");

@@ -35,7 +35,7 @@ fn quad_scene(eye: Vec3) -> Scene {
 fn render(gpu: &Gpu, technique: &str, scene: &Scene) -> Vec<(f32, Vec3, f32)> {
     let path = root().join("techniques").join(format!("{technique}.ron"));
     let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut ex = compile_executor(gpu, &path, &source, &[], &[]).unwrap_or_else(|e| panic!("{technique}: {e}"));
+    let mut ex = compile_executor(gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{technique}: {e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap();
     ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{technique}: {e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{technique}: {e}"));
@@ -99,7 +99,7 @@ fn ground_scene(ground_casts: bool, quad_casts: bool, fit: &str) -> Scene {
 fn render_positions(gpu: &Gpu, technique: &str, scene: &Scene) -> Vec<(f32, Vec3, f32)> {
     let path = root().join("techniques").join(format!("{technique}.ron"));
     let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut ex = compile_executor(gpu, &path, &source, &[], &[]).unwrap_or_else(|e| panic!("{technique}: {e}"));
+    let mut ex = compile_executor(gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{technique}: {e}"));
     ex.bind_scene(&sshc_lab::bind::scene_inputs(scene).unwrap())
         .unwrap_or_else(|e| panic!("{technique}: {e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{technique}: {e}"));

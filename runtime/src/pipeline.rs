@@ -116,6 +116,8 @@ pub(crate) enum Slot {
     Texture { filterable: bool },
     /// A storage buffer (a summed-area table).
     Buffer { read_only: bool },
+    /// A write-only `texture_storage_2d_array` of the format (a `ComputeTexels` step's target).
+    StorageTexture { format: wgpu::TextureFormat },
 }
 
 /// A built pipeline and its bind group layouts.
@@ -148,9 +150,14 @@ impl Slot {
                 has_dynamic_offset: false,
                 min_binding_size: None,
             },
+            Slot::StorageTexture { format } => wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+            },
         };
         let visibility = match self {
-            Slot::Buffer { read_only: false } => wgpu::ShaderStages::COMPUTE,
+            Slot::Buffer { read_only: false } | Slot::StorageTexture { .. } => wgpu::ShaderStages::COMPUTE,
             _ => wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
         };
         wgpu::BindGroupLayoutEntry {

@@ -212,6 +212,19 @@ impl Resources {
             }
             let mut textures = HashMap::new();
             let mut tables = HashMap::new();
+            // textures a compute step stores into (the compute schedule of a Map pass)
+            let storage = |name: &str| {
+                let stored = graph
+                    .passes
+                    .iter()
+                    .flat_map(|p| &p.steps)
+                    .any(|st| st.draw == graph::Draw::ComputeTexels && st.writes.iter().any(|w| w.texture == name));
+                if stored {
+                    wgpu::TextureUsages::STORAGE_BINDING
+                } else {
+                    wgpu::TextureUsages::empty()
+                }
+            };
             for t in &graph.textures {
                 let Some(format) = wgpu_format(t.format) else {
                     let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -237,7 +250,8 @@ impl Resources {
                     usage: wgpu::TextureUsages::RENDER_ATTACHMENT
                         | wgpu::TextureUsages::TEXTURE_BINDING
                         | wgpu::TextureUsages::COPY_SRC
-                        | wgpu::TextureUsages::COPY_DST,
+                        | wgpu::TextureUsages::COPY_DST
+                        | storage(&t.name),
                     view_formats: &[],
                 });
                 textures.insert(t.name.clone(), tex);

@@ -93,7 +93,7 @@ enum Levels {
 
 /// A compute step: one compute pass.
 struct ComputeStep {
-    /// The summed-area tables it writes (group 2).
+    /// The summed-area tables or storage textures it writes (group 2).
     writes: Vec<String>,
     dispatch: Dispatch,
     /// The generated buffer a `Silhouettes` step appends to (group 3); its vertex count is
@@ -109,6 +109,9 @@ enum Dispatch {
     /// One invocation per edge of the scene's meshes, [`graph::COMPUTE_WORKGROUP`] per
     /// workgroup.
     Edges,
+    /// One invocation per texel of the shadow map, [`graph::TEXEL_WORKGROUP`] squared per
+    /// workgroup.
+    Texels,
     /// One invocation per cell of the mesh of texel centres ((size - 1)^2), x the column
     /// ([`graph::COMPUTE_WORKGROUP`] per workgroup), y the row, over the map of the view's
     /// neighbour `source`; nothing where the view has no such neighbour (the ends of an
@@ -268,6 +271,11 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     dispatch: Dispatch::ShadowMapLines,
                     generated: None,
                 }),
+                Draw::ComputeTexels => NodeKind::Compute(ComputeStep {
+                    writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
+                    dispatch: Dispatch::Texels,
+                    generated: None,
+                }),
                 Draw::Silhouettes { buffer } => NodeKind::Compute(ComputeStep {
                     writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
                     dispatch: Dispatch::Edges,
@@ -351,9 +359,13 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     }),
                 },
                 NodeKind::Compute(c) => {
-                    if let Some(w) = c.writes.iter().find(|w| !is_table(w)) {
+                    // a `ComputeTexels` step stores into textures (of storage formats:
+                    // `PassGraph::from_ron` checks), the others into tables
+                    let texels = matches!(c.dispatch, Dispatch::Texels);
+                    if let Some(w) = c.writes.iter().find(|w| is_table(w) == texels) {
+                        let what = if texels { "a summed-area table" } else { "not a summed-area table" };
                         return Err(RuntimeError::NotFound(format!(
-                            "a compute step of pass `{}` writes `{w}`, which is not a summed-area table",
+                            "a compute step of pass `{}` writes `{w}`, which is {what}",
                             pass.name
                         )));
                     }
@@ -363,6 +375,11 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 }
             };
             let writes = match &kind {
+                NodeKind::Compute(c) if matches!(c.dispatch, Dispatch::Texels) => c
+                    .writes
+                    .iter()
+                    .map(|w| texture_format(w).map(|format| Slot::StorageTexture { format }))
+                    .collect::<Result<_>>()?,
                 NodeKind::Compute(c) => vec![Slot::Buffer { read_only: false }; c.writes.len()],
                 NodeKind::Raster(_) => vec![],
             };
@@ -384,7 +401,8 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                         | Draw::FullScreen
                         | Draw::MipLevels
                         | Draw::ComputeRows
-                        | Draw::ComputeColumns => None,
+                        | Draw::ComputeColumns
+                        | Draw::ComputeTexels => None,
                     },
                 },
             };
@@ -517,10 +535,25 @@ impl StepNode {
                     None => None,
                     Some(layout) => {
                         let mut entries = Vec::new();
+                        // storage textures: the base level, every layer
+                        let mut views = Vec::new();
+                        if matches!(c.dispatch, Dispatch::Texels) {
+                            for w in &c.writes {
+                                views.push(res.texture(w)?.create_view(&wgpu::TextureViewDescriptor {
+                                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                                    base_mip_level: 0,
+                                    mip_level_count: Some(1),
+                                    ..Default::default()
+                                }));
+                            }
+                        }
                         for (i, w) in c.writes.iter().enumerate() {
                             entries.push(wgpu::BindGroupEntry {
                                 binding: i as u32,
-                                resource: res.table(w)?.as_entire_binding(),
+                                resource: match views.get(i) {
+                                    Some(v) => wgpu::BindingResource::TextureView(v),
+                                    None => res.table(w)?.as_entire_binding(),
+                                },
                             });
                         }
                         Some(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -815,6 +848,10 @@ impl StepNode {
                 match &c.dispatch {
                     Dispatch::ShadowMapLines => {
                         cpass.dispatch_workgroups(res.shadow_size.div_ceil(graph::COMPUTE_WORKGROUP), 1, 1);
+                    }
+                    Dispatch::Texels => {
+                        let n = res.shadow_size.div_ceil(graph::TEXEL_WORKGROUP);
+                        cpass.dispatch_workgroups(n, n, 1);
                     }
                     Dispatch::Edges => {
                         let edges = geometry.as_ref().map_or(0, |g| g.2);

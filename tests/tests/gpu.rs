@@ -252,6 +252,21 @@ fn shadow_maps_of_one_texel_and_2048_squared_render() {
     }
 }
 
+/// Two images equal bit for bit; otherwise how many pixels differ and the first.
+fn same_bits(a: &[f32], b: &[f32], what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}");
+    let diff: Vec<usize> = (0..a.len()).filter(|&i| a[i].to_bits() != b[i].to_bits()).collect();
+    if let Some(&i) = diff.first() {
+        panic!(
+            "{what}: {} of {} pixels differ; the first, {i}: {} against {}",
+            diff.len(),
+            a.len(),
+            a[i],
+            b[i]
+        );
+    }
+}
+
 /// Long bodies are emitted as functions (`sshc::back::parts`: naga's WGSL front end is
 /// quadratic in a function's expressions). Split at every fifth `let` here, every bundled
 /// technique's passes run as chains of small functions, and the visibility is the same, bit
@@ -282,9 +297,79 @@ fn bodies_split_into_functions_compute_the_same_visibility() {
         };
         let s = scene(sc, 32, 128);
         let (a, b) = (render(gpu, &whole, &s), render(gpu, &split, &s));
-        assert_eq!(a.visibility.channel(0), b.visibility.channel(0), "{t} on {sc}");
+        same_bits(&a.visibility.channel(0), &b.visibility.channel(0), &format!("{t} on {sc}"));
     }
     assert!(split_passes >= 13, "{split_passes} split passes");
+}
+
+/// The compute schedule of Map and Filter passes (`--schedule *=compute`): every bundled
+/// technique with such a pass whose formats a compute step can store runs it as
+/// `ComputeTexels` steps (a Filter reading its tile and apron from workgroup memory), and
+/// the visibility is the same as under the fragment schedule, bit for bit: the same
+/// expression per texel, the same taps in the same order, stored at the same format.
+#[test]
+fn map_and_filter_passes_give_the_same_visibility_under_either_schedule() {
+    let gpu = gpu();
+    let mut computed = Vec::new();
+    for t in bundled("techniques") {
+        let src = std::fs::read_to_string(root().join("techniques").join(format!("{t}.ron"))).unwrap();
+        let fragment = compile(&t, &[]);
+        let opts = sshc::CompileOptions {
+            schedule: vec![("*".into(), "compute".into())],
+            ..Default::default()
+        };
+        let compute = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(&t, &src)));
+        let texels = |c: &sshc::Compiled| {
+            c.graph
+                .passes
+                .iter()
+                .flat_map(|p| &p.steps)
+                .filter(|s| s.draw == sshc_runtime::graph::Draw::ComputeTexels)
+                .count()
+        };
+        assert_eq!(texels(&fragment), 0, "{t}: the default schedule is fragment");
+        // a Map or Filter pass runs as compute where its formats allow it
+        use sshc_runtime::graph::PassKind;
+        let maps = fragment
+            .graph
+            .passes
+            .iter()
+            .filter(|p| matches!(p.kind, PassKind::Map | PassKind::Filter));
+        let storable = maps
+            .filter(|p| {
+                p.steps
+                    .iter()
+                    .flat_map(|s| &s.writes)
+                    .all(|w| fragment.graph.texture(&w.texture).is_some_and(|x| x.format.storable()))
+            })
+            .map(|p| p.steps.len())
+            .sum::<usize>();
+        assert_eq!(texels(&compute), storable, "{t}");
+        if storable == 0 {
+            continue;
+        }
+        computed.push(t.clone());
+        let sc = if sshc_lab::bind::graph_samples(&fragment.graph) > 0 {
+            "linear"
+        } else {
+            "contact"
+        };
+        let s = scene(sc, 32, 128);
+        let (a, b) = (render(gpu, &fragment, &s), render(gpu, &compute, &s));
+        same_bits(&a.visibility.channel(0), &b.visibility.channel(0), &format!("{t} on {sc}"));
+    }
+    // esm's exponential map and blur (R32Float) at least; the others as their formats allow
+    assert!(computed.contains(&"esm".to_string()), "{computed:?}");
+    let esm = sshc::compile_str(
+        &std::fs::read_to_string(root().join("techniques/esm.ron")).unwrap(),
+        &sshc::CompileOptions {
+            schedule: vec![("blur".into(), "compute".into())],
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let blur = esm.graph.passes.iter().find(|p| p.name == "blur").unwrap();
+    assert!(blur.steps.iter().all(|s| s.draw == sshc_runtime::graph::Draw::ComputeTexels));
 }
 
 fn write_compiled(c: &sshc::Compiled, dir: &Path) -> PathBuf {

@@ -106,6 +106,7 @@ const WORDS: &[&str] = &[
     "FullScreen",
     "MipLevels",
     "ComputeRows",
+    "ComputeTexels",
     "Any",
     "Point",
     "F32",
@@ -230,7 +231,7 @@ fn step(u: &mut Unstructured) -> Result<Step> {
         vertex: entry(u)?,
         fragment: entry(u)?,
         compute: entry(u)?,
-        draw: match u.int_in_range(0..=8)? {
+        draw: match u.int_in_range(0..=9)? {
             0 => Draw::SceneFromLight,
             1 => Draw::SceneFromCamera,
             2 => Draw::FullScreen,
@@ -238,6 +239,7 @@ fn step(u: &mut Unstructured) -> Result<Step> {
             4 => Draw::ComputeRows,
             5 => Draw::ComputeColumns,
             6 => Draw::Silhouettes { buffer: name(u)? },
+            9 => Draw::ComputeTexels,
             7 => Draw::Discontinuities {
                 buffer: name(u)?,
                 source: *u.choose(&[Neighbour::Previous, Neighbour::Next])?,
@@ -371,6 +373,13 @@ fn check_accepted(g: &PassGraph, text: &str) {
             | Draw::MipLevels
             | Draw::ComputeRows
             | Draw::ComputeColumns => {}
+            // what a compute step stores into has a storage format
+            Draw::ComputeTexels => {
+                for w in &st.writes {
+                    let t = g.textures.iter().find(|t| t.name == w.texture).expect("a declared texture");
+                    assert!(t.format.storable(), "compute writes {:?}: {text}", t.format);
+                }
+            }
         }
     }
     let mut written: Vec<&str> = Vec::new();

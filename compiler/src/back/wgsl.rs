@@ -8,7 +8,7 @@ use crate::back::geometry;
 use crate::back::parts::{self, Line, Split};
 use crate::builtins::{Func, Input, SampleFn, SampleWgsl, Sig, Ty, Wgsl};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
-use crate::front::ast::{ConstValue, LightView, Precision, Primitive, Reduce, Resolve};
+use crate::front::ast::{ConstValue, LightView, Precision, Primitive, Reduce, Resolve, Schedule};
 use crate::front::expr::{BinOp, UnOp};
 use crate::ir::*;
 use crate::pack::{Limits, layers_per_subpass, table_source};
@@ -774,19 +774,39 @@ fn encode_expr(v: &str, e: Encode) -> String {
 }
 
 fn map(ir: &Program, pass: &IrPass, limits: &Limits, split: Split) -> Result<(String, Vec<Step>), Diagnostic> {
+    let compute = map_runs_as_compute(ir, pass);
+    let (signature, head) = if compute {
+        (
+            "@builtin(global_invocation_id) id: vec3<u32>",
+            "    // invocations past the map's edge (the last workgroups) store nothing
+    if any(vec2<f32>(id.xy) >= frame.shadow_size.xy) {
+        return;
+    }
+    let texel = vec2<i32>(id.xy);\n",
+        )
+    } else {
+        ("@builtin(position) pos: vec4<f32>", "    let texel = vec2<i32>(pos.xy);\n")
+    };
     let entries = channel_entries(
         ir,
         pass,
         Side::Map,
         limits,
         EntryForm {
-            signature: "@builtin(position) pos: vec4<f32>",
-            head: "    let texel = vec2<i32>(pos.xy);\n",
+            signature,
+            head,
             prelude: &|_| Ok(()),
             store: &|_, stored| Ok(stored),
-            step: &|entry, texture, chunk| fullscreen_step(entry, Draw::FullScreen, vec![], texture, chunk),
+            step: &|entry, texture, chunk| {
+                let mut s = fullscreen_step(entry, Draw::FullScreen, vec![], texture, chunk);
+                if compute {
+                    (s.vertex, s.compute, s.draw) = (None, s.fragment.take(), Draw::ComputeTexels);
+                }
+                s
+            },
             depth: None,
             split,
+            compute,
         },
     )?;
     let src = format!(
@@ -797,6 +817,63 @@ fn map(ir: &Program, pass: &IrPass, limits: &Limits, split: Split) -> Result<(St
         entries.bodies
     );
     Ok((src, entries.steps))
+}
+
+/// Whether a Map or Filter pass runs as compute: its schedule asks for it and nothing
+/// refuses it ([`compute_refusal`]).
+pub fn map_runs_as_compute(ir: &Program, pass: &IrPass) -> bool {
+    pass.schedule == Schedule::Compute && compute_refusal(ir, pass).is_none()
+}
+
+/// WebGPU's guaranteed workgroup memory (`maxComputeWorkgroupStorageSize`), bytes.
+const WORKGROUP_MEMORY: u32 = 16384;
+
+/// A Filter's workgroup tile in the compute schedule: (apron x, apron y, width, height) in
+/// texels for a workgroup of [`graph::TEXEL_WORKGROUP`] squared invocations, on one axis
+/// of a separable kernel (`horizontal`) or both (the 3 x 3 LoG).
+fn filter_tile(kernel: &IrKernel, horizontal: bool) -> (i32, i32, i32, i32) {
+    let r = (kernel.size() as i32 - 1) / 2;
+    let (ax, ay) = match (kernel.separable(), horizontal) {
+        (false, _) => (r, r),
+        (true, true) => (r, 0),
+        (true, false) => (0, r),
+    };
+    let g = graph::TEXEL_WORKGROUP as i32;
+    (ax, ay, g + 2 * ax, g + 2 * ay)
+}
+
+/// Why a Map or Filter pass that asks for the compute schedule runs as fragment, or None:
+/// a written format that is not a storage format, or a Filter's tile and apron that do not
+/// fit WebGPU's workgroup memory.
+pub fn compute_refusal(ir: &Program, pass: &IrPass) -> Option<String> {
+    let w = pass.writes?;
+    let mut formats: Vec<graph::Format> = ir.resources[w].textures.iter().map(texture_format).collect();
+    if let IrPassKind::Filter { kernel } = &pass.kind {
+        if kernel.separable() {
+            formats.extend(ir.resources[w].textures.iter().map(|t| {
+                texture_format(&Texture {
+                    precision: scratch_precision(t.precision),
+                    ..t.clone()
+                })
+            }));
+        }
+        let bytes = [true, false]
+            .iter()
+            .map(|&h| {
+                let (_, _, tw, th) = filter_tile(kernel, h);
+                (tw * th * 16) as u32
+            })
+            .max()
+            .unwrap_or(0);
+        if bytes > WORKGROUP_MEMORY {
+            return Some(format!(
+                "its tile and apron need {bytes} bytes of workgroup memory, above WebGPU's {WORKGROUP_MEMORY}"
+            ));
+        }
+    }
+    let mut bad: Vec<String> = formats.iter().filter(|f| !f.storable()).map(|f| format!("{f:?}")).collect();
+    bad.dedup();
+    (!bad.is_empty()).then(|| format!("{} is not a storage format", bad.join(" and ")))
 }
 
 /// How [`channel_entries`] writes one fragment entry.
@@ -815,6 +892,9 @@ struct EntryForm<'f, 'a> {
     depth: Option<&'f str>,
     /// Where long bodies are split into functions.
     split: Split,
+    /// Compute entries storing into storage textures (`Draw::ComputeTexels`) instead of
+    /// fragment entries writing colour targets; `signature`, `head` and `step` fit them.
+    compute: bool,
 }
 
 /// The fragment entries of a Map or Geometry pass: one per group of layers of each texture
@@ -849,10 +929,21 @@ fn channel_entries<'a>(
     let mut decl = Emitter::new(ir, side, pass.reads.clone());
     decl.per_sample_pass = per_sample;
     for (ti, tex) in res.textures.iter().enumerate() {
+        if form.compute {
+            // group 2 binds the step's one written texture at binding 0
+            let _ = writeln!(
+                structs,
+                "@group(2) @binding(0) var w_{}: texture_storage_2d_array<{}, write>;",
+                tex.name,
+                texture_format(tex).wgsl()
+            );
+        }
         for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
-            let entry = format!("fs_{}_{ci}", tex.name);
+            let entry = format!("{}_{}_{ci}", if form.compute { "cs" } else { "fs" }, tex.name);
             let out_name = format!("Out_{}_{ci}", tex.name);
-            structs.push_str(&out_struct(&out_name, chunk.len(), form.depth.is_some()));
+            if !form.compute {
+                structs.push_str(&out_struct(&out_name, chunk.len(), form.depth.is_some()));
+            }
             let mut em = Emitter::new(ir, side, pass.reads.clone());
             em.per_sample_pass = per_sample;
             em.split = form.split;
@@ -868,21 +959,41 @@ fn channel_entries<'a>(
                     let name = em.emit(v)?;
                     comps[slot.component as usize] = (form.store)(slot, encode_expr(&name, slot.encode))?;
                 }
-                outs.push(format!("    out.o{oi} = vec4<f32>({});", comps.join(", ")));
+                outs.push(if form.compute {
+                    format!(
+                        "    textureStore(w_{}, texel, {layer}i, vec4<f32>({}));",
+                        tex.name,
+                        comps.join(", ")
+                    )
+                } else {
+                    format!("    out.o{oi} = vec4<f32>({});", comps.join(", "))
+                });
             }
             if let Some(d) = form.depth {
                 outs.push(format!("    out.depth = {d};"));
             }
             let (functions, body) = em.finish(&entry);
             bodies.push_str(&functions);
-            let _ = write!(
-                bodies,
-                "\n@fragment\nfn {entry}({}) -> {out_name} {{\n{}{}    var out: {out_name};\n{}\n    return out;\n}}\n",
-                form.signature,
-                form.head,
-                body,
-                outs.join("\n")
-            );
+            if form.compute {
+                let g = graph::TEXEL_WORKGROUP;
+                let _ = write!(
+                    bodies,
+                    "\n@compute @workgroup_size({g}, {g})\nfn {entry}({}) {{\n{}{}{}\n}}\n",
+                    form.signature,
+                    form.head,
+                    body,
+                    outs.join("\n")
+                );
+            } else {
+                let _ = write!(
+                    bodies,
+                    "\n@fragment\nfn {entry}({}) -> {out_name} {{\n{}{}    var out: {out_name};\n{}\n    return out;\n}}\n",
+                    form.signature,
+                    form.head,
+                    body,
+                    outs.join("\n")
+                );
+            }
             decl.bindings = em.bindings.clone();
             decl.uses_params |= em.uses_params;
             steps.push((form.step)(entry, &tex.name, &chunk));
@@ -1126,6 +1237,7 @@ fn geometry(
             },
             depth: lib.as_ref().and_then(|l| l.depth),
             split,
+            compute: false,
         },
     )?;
     let mut entries = entries;
@@ -1242,6 +1354,7 @@ fn filter(
     let r = (size - 1) / 2;
     // out = ((f / scale_in + bias_in * W) - bias_out) * scale_out, W = sum of weights
     let sum_w = if matches!(kernel, IrKernel::LoG) { 0.0 } else { 1.0 };
+    let compute = map_runs_as_compute(ir, pass);
     for (ti, tex) in dst.textures.iter().enumerate() {
         let src_tex = &src.textures[ti];
         let tmp_tex = Texture {
@@ -1265,14 +1378,44 @@ fn filter(
         for (axis, horizontal) in passes {
             // each axis writes as many layers at once as its target's format allows
             let written = if kernel.separable() && horizontal { &tmp_tex } else { tex };
-            for (ci, chunk) in layer_chunks(written, limits).iter().enumerate() {
-                let entry = format!("fs_{}_{axis}_{ci}", tex.name);
-                let out_name = format!("Out_{}_{axis}_{ci}", tex.name);
-                s.push_str(&out_struct(&out_name, chunk.len(), false));
-                let _ = write!(
+            let (ax, ay, tw, th) = filter_tile(kernel, horizontal);
+            if compute {
+                let _ = writeln!(
                     s,
-                    "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let texel = vec2<i32>(pos.xy);\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n"
+                    "@group(2) @binding(0) var w_{}: texture_storage_2d_array<{}, write>;",
+                    written.name,
+                    texture_format(written).wgsl()
                 );
+            }
+            for (ci, chunk) in layer_chunks(written, limits).iter().enumerate() {
+                let entry = format!("{}_{}_{axis}_{ci}", if compute { "cs" } else { "fs" }, tex.name);
+                let out_name = format!("Out_{}_{axis}_{ci}", tex.name);
+                let tile = format!("tile_{}_{axis}_{ci}", tex.name);
+                if compute {
+                    let g = graph::TEXEL_WORKGROUP;
+                    let _ = write!(
+                        s,
+                        "\n// the workgroup's {g} x {g} texels and the kernel's apron, one layer at a time
+var<workgroup> {tile}: array<vec4<f32>, {}>;
+
+@compute @workgroup_size({g}, {g})
+fn {entry}(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {{
+    let texel = vec2<i32>(id.xy);
+    let last = vec2<i32>(textureDimensions(t_src)) - 1i;
+    // no early return: every invocation takes part in the loads and barriers
+    let inside = all(vec2<f32>(id.xy) < frame.shadow_size.xy);
+    let origin = vec2<i32>(wg.xy) * {g}i - vec2<i32>({ax}i, {ay}i);
+    let local = vec2<i32>(i32(li % {g}u), i32(li / {g}u));
+",
+                        tw * th
+                    );
+                } else {
+                    s.push_str(&out_struct(&out_name, chunk.len(), false));
+                    let _ = write!(
+                        s,
+                        "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let texel = vec2<i32>(pos.xy);\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n"
+                    );
+                }
                 for (oi, &layer) in chunk.iter().enumerate() {
                     let taps: Vec<(i32, i32, f64)> = match kernel {
                         IrKernel::LoG => (0..9)
@@ -1293,11 +1436,40 @@ fn filter(
                         }
                     };
                     let _ = writeln!(s, "    // layer {layer}");
-                    for (k, (dx, dy, _)) in taps.iter().enumerate() {
-                        let _ = writeln!(
-                            s,
-                            "    let a{oi}_{k} = textureLoad(t_src, clamp(texel + vec2<i32>({dx}i, {dy}i), vec2<i32>(0i), last), {layer}i, 0i);"
-                        );
+                    if compute {
+                        // each invocation loads every 64th texel of the tile: one global
+                        // load per texel and layer instead of one per tap
+                        let n = tw * th;
+                        let g2 = (graph::TEXEL_WORKGROUP * graph::TEXEL_WORKGROUP) as i32;
+                        for j in 0..(n + g2 - 1) / g2 {
+                            let _ = writeln!(s, "    let k{oi}_{j} = i32(li) + {}i;", j * g2);
+                            let load = format!(
+                                "{tile}[k{oi}_{j}] = textureLoad(t_src, clamp(origin + vec2<i32>(k{oi}_{j} % {tw}i, k{oi}_{j} / {tw}i), vec2<i32>(0i), last), {layer}i, 0i);"
+                            );
+                            if (j + 1) * g2 > n {
+                                let _ = writeln!(s, "    if k{oi}_{j} < {n}i {{\n        {load}\n    }}");
+                            } else {
+                                let _ = writeln!(s, "    {load}");
+                            }
+                        }
+                        s.push_str("    workgroupBarrier();\n");
+                        for (k, (dx, dy, _)) in taps.iter().enumerate() {
+                            let _ = writeln!(
+                                s,
+                                "    let a{oi}_{k} = {tile}[(local.y + {}i) * {tw}i + local.x + {}i];",
+                                ay + dy,
+                                ax + dx
+                            );
+                        }
+                        // the next layer's loads overwrite the tile
+                        s.push_str("    workgroupBarrier();\n");
+                    } else {
+                        for (k, (dx, dy, _)) in taps.iter().enumerate() {
+                            let _ = writeln!(
+                                s,
+                                "    let a{oi}_{k} = textureLoad(t_src, clamp(texel + vec2<i32>({dx}i, {dy}i), vec2<i32>(0i), last), {layer}i, 0i);"
+                            );
+                        }
                     }
                     let combined = match kernel {
                         IrKernel::Max(_) => taps
@@ -1342,15 +1514,23 @@ fn filter(
                             value = format!("({value}) * vec4<f32>({}) + vec4<f32>({})", m.join(", "), b.join(", "));
                         }
                     }
-                    let _ = writeln!(s, "    out.o{oi} = {value};");
+                    if compute {
+                        let _ = writeln!(
+                            s,
+                            "    if inside {{\n        textureStore(w_{}, texel, {layer}i, {value});\n    }}",
+                            written.name
+                        );
+                    } else {
+                        let _ = writeln!(s, "    out.o{oi} = {value};");
+                    }
                 }
-                s.push_str("    return out;\n}\n");
+                s.push_str(if compute { "}\n" } else { "    return out;\n}\n" });
                 let (read, write) = match (kernel.separable(), horizontal) {
                     (true, true) => (src_tex.name.clone(), tmp.clone()),
                     (true, false) => (tmp.clone(), tex.name.clone()),
                     _ => (src_tex.name.clone(), tex.name.clone()),
                 };
-                steps.push(fullscreen_step(
+                let mut step = fullscreen_step(
                     entry,
                     Draw::FullScreen,
                     vec![Binding {
@@ -1360,7 +1540,11 @@ fn filter(
                     }],
                     &write,
                     chunk,
-                ));
+                );
+                if compute {
+                    (step.vertex, step.compute, step.draw) = (None, step.fragment.take(), Draw::ComputeTexels);
+                }
+                steps.push(step);
             }
         }
     }

@@ -183,6 +183,59 @@ pub enum LightView {
     PerSample,
 }
 
+/// How a pass runs on the GPU (issue 15: the technique says what is computed, the
+/// schedule how). Map and Filter passes so far.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Schedule {
+    /// One full-screen triangle; a fragment per texel writes the channels as colour targets.
+    #[default]
+    Fragment,
+    /// One compute invocation per texel (8 x 8 per workgroup), storing into storage
+    /// textures; only where every written format is a storage format. A Filter's
+    /// workgroup loads its tile and the kernel's apron into workgroup memory once per
+    /// layer and filters from there.
+    Compute,
+}
+
+impl PassKind {
+    /// The schedule a technique gives a pass (Map and Filter passes have one).
+    pub fn schedule(&self) -> Option<Schedule> {
+        match self {
+            PassKind::Map { schedule, .. } | PassKind::Filter { schedule, .. } => schedule.as_ref().map(|s| s.value),
+            PassKind::Depth { .. }
+            | PassKind::Mipmap { .. }
+            | PassKind::SummedArea { .. }
+            | PassKind::Geometry { .. }
+            | PassKind::Shade { .. } => None,
+        }
+    }
+
+    /// Whether a pass kind has schedules to choose from.
+    pub fn schedulable(&self) -> bool {
+        matches!(self, PassKind::Map { .. } | PassKind::Filter { .. })
+    }
+}
+
+impl Schedule {
+    pub const NAMES: [&'static str; 2] = ["Fragment", "Compute"];
+
+    /// A schedule by its name in a technique (`Compute`) or on the command line (`compute`).
+    pub fn parse(s: &str) -> Option<Schedule> {
+        match s {
+            "Fragment" | "fragment" => Some(Schedule::Fragment),
+            "Compute" | "compute" => Some(Schedule::Compute),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Schedule::Fragment => "fragment",
+            Schedule::Compute => "compute",
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reduce {
     Mean,
@@ -262,11 +315,15 @@ pub enum PassKind {
         writes: Name,
         /// Channels and expansions (all of an expansion's basis channels) to compute.
         channels: Vec<Name>,
+        /// How it runs; the compiler's default where absent.
+        schedule: Option<Spanned<Schedule>>,
     },
     Filter {
         reads: Name,
         writes: Name,
         kernel: Spanned<Kernel>,
+        /// How it runs; the compiler's default where absent.
+        schedule: Option<Spanned<Schedule>>,
     },
     Mipmap {
         reads: Name,

@@ -526,6 +526,20 @@ fn light_view(f: &mut Fields) -> Result<LightView, Diagnostic> {
     }
 }
 
+/// A pass's optional `schedule: Fragment | Compute`.
+fn schedule(f: &mut Fields) -> Result<Option<Spanned<Schedule>>, Diagnostic> {
+    match f.opt("schedule")? {
+        None => Ok(None),
+        Some(n) => {
+            let (v, span) = variant(n)?;
+            let value = Schedule::parse(&v)
+                .filter(|_| v.starts_with(char::is_uppercase))
+                .ok_or_else(|| unknown_variant(span, &v, "schedule", &Schedule::NAMES))?;
+            Ok(Some(Spanned { value, span }))
+        }
+    }
+}
+
 fn pass(node: &Node) -> Result<Pass, Diagnostic> {
     let (kind_name, kind_span) = match &node.value {
         Value::Struct { name: Some((n, s)), .. } | Value::Tuple { name: Some((n, s)), .. } => (n.clone(), *s),
@@ -554,11 +568,13 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
             reads: names(f.req("reads")?)?,
             writes: self::name(f.req("writes")?)?,
             channels: names(f.req("channels")?)?,
+            schedule: schedule(&mut f)?,
         },
         "Filter" => PassKind::Filter {
             reads: self::name(f.req("reads")?)?,
             writes: self::name(f.req("writes")?)?,
             kernel: kernel(f.req("kernel")?)?,
+            schedule: schedule(&mut f)?,
         },
         "Mipmap" => {
             let reads = self::name(f.req("reads")?)?;

@@ -146,7 +146,7 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         }
     };
     println!(
-        "| pass | GPU ms (median of {} frame(s)) | invocations | fetches | operations | compulsory MB | GB/s | bound ms | ms / bound |\n|---|---|---|---|---|---|---|---|---|",
+        "| pass | GPU ms (median of {} frame(s)) | invocations | fetches | operations | compulsory MB | GB/s | bound ms | ms / bound | schedule |\n|---|---|---|---|---|---|---|---|---|---|",
         all.len()
     );
     for (i, n) in names.iter().enumerate() {
@@ -171,9 +171,25 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
             }
             None => " | | | ".into(),
         };
-        println!("| {n} | {shown} | {counts} | {memory} |");
+        let schedule = ex.graph.passes.iter().find(|p| &p.name == n).map_or("", |p| schedule(&p.steps));
+        println!("| {n} | {shown} | {counts} | {memory} | {schedule} |");
     }
     Ok(())
+}
+
+/// How a pass's steps run: `compute` (a dispatch), `fragment` (full-screen triangles over
+/// a texture) or `raster` (the scene or generated primitives); `mixed` for several kinds.
+fn schedule(steps: &[sshc_runtime::graph::Step]) -> &'static str {
+    let kind = |d: &Draw| match d {
+        Draw::FullScreen | Draw::MipLevels => "fragment",
+        Draw::SceneFromLight | Draw::SceneFromCamera | Draw::Primitives { .. } => "raster",
+        Draw::ComputeRows | Draw::ComputeColumns | Draw::ComputeTexels | Draw::Silhouettes { .. } | Draw::Discontinuities { .. } => {
+            "compute"
+        }
+    };
+    let mut kinds = steps.iter().map(|s| kind(&s.draw));
+    let first = kinds.next().unwrap_or("");
+    if kinds.all(|k| k == first) { first } else { "mixed" }
 }
 
 /// The work of one pass in a frame.
@@ -207,7 +223,7 @@ pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edge
                 // (invocations, how many times the counted code runs)
                 let (n, runs) = match &s.draw {
                     Draw::SceneFromCamera => (f64::from(camera.0) * f64::from(camera.1), 1.0),
-                    Draw::SceneFromLight | Draw::FullScreen => (texels, 1.0),
+                    Draw::SceneFromLight | Draw::FullScreen | Draw::ComputeTexels => (texels, 1.0),
                     // levels 1.. of the chain: texels (1/4 + 1/16 + ...)
                     Draw::MipLevels => (texels / 3.0, 1.0),
                     // one invocation per row or column, whose loop body (counted once)

@@ -1,5 +1,7 @@
 //! `sshc sweep <sweep.ron>`: techniques x their own parameter axes x scenes, each
-//! configuration rendered, timed (median of repeated frames, as a ratio to a reference
+//! configuration rendered (axes: params by name, `shadow_map`, `light_scale`,
+//! `precision:NAMES` and `schedule:PASS` or `schedule:*`, as the command line's
+//! `--precision` and `--schedule`), timed (median of repeated frames, as a ratio to a reference
 //! technique timed in the same run) and compared with the cached ground truth; a CSV, a
 //! Markdown table and Pareto charts (error against time, error against memory).
 //!
@@ -193,6 +195,8 @@ struct Settings {
     set: Vec<(String, String)>,
     /// `precision:NAME` axes.
     precision: Vec<(String, String)>,
+    /// `schedule:PASS` axes (`schedule:*`: every Map pass).
+    schedule: Vec<(String, String)>,
 }
 
 fn settings(c: &Config) -> Result<Settings, String> {
@@ -201,12 +205,14 @@ fn settings(c: &Config) -> Result<Settings, String> {
         light_scale: 1.0,
         set: Vec::new(),
         precision: Vec::new(),
+        schedule: Vec::new(),
     };
     for (k, v) in &c.values {
         match k.as_str() {
             "shadow_map" => out.shadow_map = Some(v.parse().map_err(|_| format!("error: shadow_map = `{v}` is not a whole number"))?),
             "light_scale" => out.light_scale = v.parse().map_err(|_| format!("error: light_scale = `{v}` is not a number"))?,
             k if k.starts_with("precision:") => out.precision.push((k["precision:".len()..].to_string(), v.clone())),
+            k if k.starts_with("schedule:") => out.schedule.push((k["schedule:".len()..].to_string(), v.clone())),
             k => out.set.push((k.to_string(), v.clone())),
         }
     }
@@ -424,7 +430,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
             continue;
         }
         let scene = load_scene(&resolve(scene_path), file.camera, None)?;
-        let c = compile(&resolve(&file.reference), &reference_source, &[], &[])?;
+        let c = compile(&resolve(&file.reference), &reference_source, &[], &[], &[])?;
         let inputs = crate::bind::scene_inputs_for(&scene, &c.graph)?;
         reference_runs.push(Some((c, inputs, Vec::new())));
     }
@@ -448,6 +454,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
             light_scale,
             set,
             precision,
+            schedule,
         } = settings(c)?;
         if let Some(n) = shadow_map {
             scene.shadow_map = n;
@@ -458,7 +465,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         // The axes change the shadow map and the light: the precision budget again.
         scene.check_precision().map_err(|e| e.to_string())?;
         let path = resolve(&file.techniques[c.technique].file);
-        let compiled = compile(&path, &sources[c.technique], &set, &precision)?;
+        let compiled = compile(&path, &sources[c.technique], &set, &precision, &schedule)?;
         let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
         ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
         let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
@@ -508,7 +515,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         for (sc, scene_path) in file.scenes.iter().enumerate() {
             for &n in &file.stochastic {
                 let scene = load_scene(&resolve(scene_path), file.camera, None)?;
-                let c = compile(&resolve(&file.reference), &reference_source, &[], &[])?;
+                let c = compile(&resolve(&file.reference), &reference_source, &[], &[], &[])?;
                 let mut ex = Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?;
                 ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
                 ex.run_frame().map_err(rt)?;
@@ -605,15 +612,22 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     Ok(())
 }
 
-fn compile(path: &Path, source: &str, set: &[(String, String)], precision: &[(String, String)]) -> Result<sshc::Compiled, String> {
+fn compile(
+    path: &Path,
+    source: &str,
+    set: &[(String, String)],
+    precision: &[(String, String)],
+    schedule: &[(String, String)],
+) -> Result<sshc::Compiled, String> {
     let opts = sshc::CompileOptions {
         set: set.to_vec(),
         precision: precision.to_vec(),
+        schedule: schedule.to_vec(),
         ..Default::default()
     };
     sshc::compile_str(source, &opts).map_err(|d| {
         report(&d, path, source);
-        format!("error: {} does not compile with {set:?} {precision:?}", path.display())
+        format!("error: {} does not compile with {set:?} {precision:?} {schedule:?}", path.display())
     })
 }
 
@@ -871,6 +885,24 @@ mod tests {
     /// which a fixed param takes at compile time: the compiled graph's param holds it, and
     /// the binding reads the sample count from the graph.
     #[test]
+    fn schedule_and_precision_axes_become_compile_options() {
+        let c = Config {
+            scene: 0,
+            technique: 0,
+            label: "vsm".into(),
+            values: vec![
+                ("schedule:*".into(), "compute".into()),
+                ("precision:m1,m2".into(), "F16".into()),
+                ("shadow_map".into(), "64".into()),
+            ],
+        };
+        let s = settings(&c).unwrap();
+        assert_eq!(s.schedule, [("*".to_string(), "compute".to_string())]);
+        assert_eq!(s.precision, [("m1,m2".to_string(), "F16".to_string())]);
+        assert_eq!((s.shadow_map, s.set.len()), (Some(64), 0));
+    }
+
+    #[test]
     fn a_fixed_param_axis_recompiles_each_value() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
         let f: SweepFile = ron::from_str(&std::fs::read_to_string(root.join("sweeps/linear.ron")).unwrap()).unwrap();
@@ -886,6 +918,7 @@ mod tests {
                     light_scale: 1.0,
                     set: vec![("N".to_string(), n.to_string())],
                     precision: vec![],
+                    schedule: vec![],
                 },
             )
         };
@@ -905,7 +938,9 @@ mod tests {
         let pcss = root.join("techniques/pcss.ron");
         let source = std::fs::read_to_string(&pcss).unwrap();
         for n in ["4", "8"] {
-            let g = compile(&pcss, &source, &[("N".to_string(), n.to_string())], &[]).unwrap().graph;
+            let g = compile(&pcss, &source, &[("N".to_string(), n.to_string())], &[], &[])
+                .unwrap()
+                .graph;
             let p = g.params.iter().find(|p| p.name == "N").unwrap();
             assert_eq!((p.value, p.offset), (n.parse::<f64>().unwrap(), None), "N = {n}");
         }

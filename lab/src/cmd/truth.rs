@@ -54,7 +54,7 @@ pub fn truth(a: TruthArgs) -> Result<(), String> {
     let (w, h) = scene.camera_size();
     a.truth.check(u64::from(w) * u64::from(h))?;
     let gpu = Gpu::new().map_err(rt)?;
-    let mut ex = compile_executor(&gpu, Path::new("techniques/hard.ron"), HARD, &[], &[])?;
+    let mut ex = compile_executor(&gpu, Path::new("techniques/hard.ron"), HARD, &Default::default())?;
     let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
     ex.bind_scene(&inputs).map_err(rt)?;
     ex.run_frame().map_err(rt)?;
