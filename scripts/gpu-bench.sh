@@ -2,7 +2,7 @@
 # Measures every bundled technique's passes under each schedule and against their memory
 # bound, from a prebuilt `sshc` (no Rust toolchain needed: the GPU machines have none,
 # docs/gpu-machine.md), and writes a Markdown report. Per technique and shadow-map size:
-# each pass's median GPU time over the frames with its Map passes run as fragment and as
+# each pass's median GPU time over the frames with its Map, Filter and Mipmap passes run as fragment and as
 # compute (`--schedule '*=fragment'`, `'*=compute'`), their ratio, the pass's compulsory
 # bytes (sshc_graph::traffic) and the time the faster schedule takes over their bound at
 # the device's bandwidth (measured once, by the first `sshc render`: a 64 MiB buffer copy).
@@ -44,7 +44,7 @@ for map in ${maps//,/ }; do
         name=$(basename "$t" .ron)
         scene=scenes/bunny.ron
         grep -q 'light_samples' "$t" && scene=scenes/linear.ron
-        # the same technique under each schedule of its Map passes (`--schedule '*=...'`;
+        # the same technique under each schedule of its Map, Filter and Mipmap passes (`--schedule '*=...'`;
         # a technique without one runs the same code twice)
         for sch in fragment compute; do
             log=$("$bin" render "$t" --scene "$scene" --size "$camera" --shadow-map "$map" \
@@ -74,7 +74,7 @@ done
     echo
     echo "Produced by \`scripts/gpu-bench.sh $bin $out $camera $maps $frames\` on $(date -u +%Y-%m-%d)."
     echo "Camera $camera; median of $frames frames per run, in milliseconds, measured with"
-    echo "timestamp queries. Each technique runs twice in turn: its Map passes as fragment, then as"
+    echo "timestamp queries. Each technique runs twice in turn: its Map, Filter and Mipmap passes as fragment, then as"
     echo "compute (a technique without one, or whose formats are not storage formats, runs the same"
     echo "code twice: its ratios show the noise). *Compulsory MB*: the bytes any schedule of the pass"
     echo "must move at a perfect cache (docs/architecture.md section 7); *bound ms*: those bytes at"

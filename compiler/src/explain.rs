@@ -72,7 +72,19 @@ pub fn explain(c: &Compiled) -> String {
                     ),
                 }
             ),
-            IrPassKind::Mipmap { reduce } => format!("builds a {reduce:?} mip chain in place"),
+            IrPassKind::Mipmap { reduce } => format!(
+                "builds a {reduce:?} mip chain in place ({})",
+                match p.schedule {
+                    Schedule::Fragment => "schedule: fragment, a full-screen triangle per level".to_string(),
+                    Schedule::Compute if crate::back::wgsl::map_runs_as_compute(ir, p) => {
+                        "schedule: compute, one dispatch per level, 8 x 8 texels per workgroup".to_string()
+                    }
+                    Schedule::Compute => format!(
+                        "schedule: fragment; compute was asked for, but {}",
+                        crate::back::wgsl::compute_refusal(ir, p).unwrap_or_default()
+                    ),
+                }
+            ),
             IrPassKind::SummedArea => "builds a summed-area table".to_string(),
             IrPassKind::Geometry {
                 primitive: Primitive::BackFaces,

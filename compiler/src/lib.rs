@@ -100,7 +100,7 @@ pub struct CompileOptions {
     /// `--precision NAME=P` overrides of channel or expansion precision.
     pub precision: Vec<(String, String)>,
     /// `--schedule PASS=S` overrides of a pass's schedule (`fragment`, `compute`; `*` for
-    /// every Map pass).
+    /// every Map, Filter and Mipmap pass).
     pub schedule: Vec<(String, String)>,
     pub limits: Limits,
     pub dump_after: Option<DumpPhase>,

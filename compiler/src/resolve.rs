@@ -273,7 +273,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
                         format!("`--schedule {name}={text}`: pass `{name}` is a {} pass", p.kind.kind_name()),
                     )
                     .at(p.kind_span, "declared here")
-                    .note("only Map and Filter passes have schedules so far"),
+                    .note("only Map, Filter and Mipmap passes have schedules so far"),
                 );
             }
         }

@@ -691,9 +691,9 @@ fn compulsory_bytes_follow_from_the_formats_and_sizes() {
     assert_eq!(t.written, f64::from(linear.graph.samples) * per_view * texels, "{t:?}");
 }
 
-/// Schedules of Map passes: fragment by default, compute where asked (in the technique or
-/// by `--schedule`) and every written format is a storage format, else fragment with the
-/// reason in `explain`; `--schedule` names Map passes only.
+/// Schedules of Map, Filter and Mipmap passes: fragment by default, compute where asked (in
+/// the technique or by `--schedule`) and every written format is a storage format, else
+/// fragment with the reason in `explain`; `--schedule` names those passes only.
 #[test]
 fn map_pass_schedules() {
     use sshc_graph::Draw;
@@ -730,6 +730,9 @@ fn map_pass_schedules() {
                 // step's workgroup loads its 8 x 8 texels and the apron, 10 x 8 texels, by
                 // 64 invocations: 2 loads each instead of 3 taps, 4 for both steps
                 ("blur", "*") => assert_eq!((a.3.fetches, b.3.fetches), (4, 6), "{a:?} {b:?}"),
+                // the mip chain as compute: the same loads, and its edge check (a comparison
+                // and `any` against the level's size)
+                ("mips", "*") => assert_eq!((a.3.fetches, a.3.ops), (b.3.fetches, b.3.ops + 2), "{a:?} {b:?}"),
                 _ => assert_eq!(a.3, b.3, "{a:?} {b:?}"),
             }
         }

@@ -241,6 +241,21 @@ impl SampleViewUniform {
 
 /// Workgroup size of compute steps ([`Draw::ComputeRows`], [`Draw::ComputeColumns`]).
 pub const COMPUTE_WORKGROUP: u32 = 64;
+impl Draw {
+    /// Whether the step is a compute dispatch (else a raster draw).
+    pub fn is_dispatch(&self) -> bool {
+        match self {
+            Draw::ComputeRows
+            | Draw::ComputeColumns
+            | Draw::ComputeTexels
+            | Draw::ComputeMipLevels
+            | Draw::Silhouettes { .. }
+            | Draw::Discontinuities { .. } => true,
+            Draw::SceneFromLight | Draw::SceneFromCamera | Draw::FullScreen | Draw::MipLevels | Draw::Primitives { .. } => false,
+        }
+    }
+}
+
 /// Workgroup side of [`Draw::ComputeTexels`] steps (8 x 8 invocations).
 pub const TEXEL_WORKGROUP: u32 = 8;
 
@@ -577,6 +592,11 @@ pub enum Draw {
     /// (the target's `layer` is the layer the entry stores); each written format must be
     /// a storage format ([`Format::storable`]).
     ComputeTexels,
+    /// The compute schedule of a Mipmap pass: for each mip level k >= 1 of the targets, a
+    /// dispatch with one invocation per texel of level k (as [`Draw::ComputeTexels`]),
+    /// reading level k - 1 (`View::PreviousLevel`) and storing into level k (group 2
+    /// binding 0: a storage view of that level, all layers).
+    ComputeMipLevels,
     /// A compute dispatch with one invocation per edge of the scene's meshes (64 per
     /// workgroup): it classifies the edge as seen from the light's centre and, for a
     /// silhouette, appends one record to `buffer` and adds the record's vertices to the
@@ -767,6 +787,11 @@ pub enum GraphError {
     /// Light-sample views that do not fit together: the count, a per-sample pass writing
     /// a texture of one view, or reading one across views.
     Samples(String),
+    /// A step whose entry points do not fit what it draws or dispatches.
+    Step {
+        pass: String,
+        message: String,
+    },
 }
 
 impl fmt::Display for GraphError {
@@ -803,6 +828,7 @@ impl fmt::Display for GraphError {
             GraphError::Texture { texture, field, message } => write!(f, "texture `{texture}`, field `{field}`: {message}"),
             GraphError::Buffer { buffer, message } => write!(f, "buffer `{buffer}`: {message}"),
             GraphError::Samples(message) => write!(f, "light samples: {message}"),
+            GraphError::Step { pass, message } => write!(f, "pass `{pass}`: {message}"),
         }
     }
 }
@@ -974,6 +1000,28 @@ impl PassGraph {
         let mut written: Vec<&str> = Vec::new();
         for p in &self.passes {
             for s in &p.steps {
+                // a dispatch names a compute entry and nothing else; a draw a vertex and a
+                // fragment entry and no compute entry
+                let dispatch = s.draw.is_dispatch();
+                let fits = if dispatch {
+                    s.compute.is_some() && s.vertex.is_none() && s.fragment.is_none()
+                } else {
+                    s.compute.is_none() && s.vertex.is_some() && s.fragment.is_some()
+                };
+                if !fits {
+                    return Err(GraphError::Step {
+                        pass: p.name.clone(),
+                        message: format!(
+                            "a {:?} step needs {}",
+                            s.draw,
+                            if dispatch {
+                                "a compute entry point and no vertex or fragment entry"
+                            } else {
+                                "vertex and fragment entry points and no compute entry"
+                            }
+                        ),
+                    });
+                }
                 for b in &s.reads {
                     let same_step = b.view == View::PreviousLevel && s.writes.iter().any(|w| w.texture == b.texture);
                     if !same_step && !written.contains(&b.texture.as_str()) {
@@ -984,7 +1032,7 @@ impl PassGraph {
                     }
                 }
                 for w in &s.writes {
-                    if s.draw == Draw::ComputeTexels
+                    if matches!(s.draw, Draw::ComputeTexels | Draw::ComputeMipLevels)
                         && let Some(t) = self.texture(&w.texture)
                         && !t.format.storable()
                     {
@@ -1056,7 +1104,8 @@ impl PassGraph {
                     | Draw::MipLevels
                     | Draw::ComputeRows
                     | Draw::ComputeColumns
-                    | Draw::ComputeTexels => continue,
+                    | Draw::ComputeTexels
+                    | Draw::ComputeMipLevels => continue,
                 };
                 let bad = |message: String| {
                     Err(GraphError::Buffer {
@@ -1192,11 +1241,30 @@ mod tests {
     }
 
     #[test]
+    fn steps_name_the_entry_points_their_draw_needs() {
+        let mut g = tiny();
+        g.passes[0].steps[0].compute = Some("cs".into());
+        let e = PassGraph::from_ron(&g.to_ron()).expect_err("a draw with a compute entry");
+        assert!(
+            matches!(&e, GraphError::Step { message, .. } if message.contains("no compute entry")),
+            "{e}"
+        );
+        let mut g = tiny();
+        g.passes[0].steps[0].draw = Draw::ComputeTexels;
+        let e = PassGraph::from_ron(&g.to_ron()).expect_err("a dispatch with raster entries");
+        assert!(
+            matches!(&e, GraphError::Step { message, .. } if message.contains("needs a compute entry point")),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn compute_steps_store_only_into_storage_formats() {
         let with = |format: Format| {
             let mut g = tiny();
             g.textures[0].format = format;
-            g.passes[0].steps[0].draw = Draw::ComputeTexels;
+            let s = &mut g.passes[0].steps[0];
+            (s.vertex, s.fragment, s.compute, s.draw) = (None, None, Some("cs".into()), Draw::ComputeTexels);
             PassGraph::from_ron(&g.to_ron())
         };
         for f in [

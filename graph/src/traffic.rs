@@ -69,7 +69,13 @@ pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffi
     let base = sizes.texels(Extent::ShadowMap);
     let mut t = Traffic::default();
     // the levels below the base of a chain: 1/4 + 1/16 + ... of it
-    let chain = |d: &Draw| if matches!(d, Draw::MipLevels) { 1.0 / 3.0 } else { 1.0 };
+    let chain = |d: &Draw| {
+        if matches!(d, Draw::MipLevels | Draw::ComputeMipLevels) {
+            1.0 / 3.0
+        } else {
+            1.0
+        }
+    };
     for w in &s.writes {
         if let Some(tex) = texture(&w.texture) {
             t.written += f64::from(tex.format.bytes_per_texel()) * sizes.texels(tex.extent) * chain(&s.draw);

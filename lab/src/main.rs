@@ -30,7 +30,7 @@ struct Common {
     /// Override the precision of a channel or expansion: NAME=unorm8|unorm16|f16|f32. Repeatable.
     #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
     precision: Vec<(String, String)>,
-    /// Override the schedule of a Map pass: PASS=fragment|compute (`*` for every Map pass). Repeatable.
+    /// Override the schedule of a Map, Filter or Mipmap pass: PASS=fragment|compute (`*` for all of them). Repeatable.
     #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
     schedule: Vec<(String, String)>,
     /// Print the IR after this phase.

@@ -48,7 +48,7 @@ pub struct Overrides {
     /// Precision override of a channel or expansion, NAME=PRECISION (techniques only). Repeatable.
     #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
     pub precision: Vec<(String, String)>,
-    /// Schedule override of a Map pass, PASS=fragment|compute (`*`: every Map pass; techniques only). Repeatable.
+    /// Schedule override of a Map, Filter or Mipmap pass, PASS=fragment|compute (`*`: all of them; techniques only). Repeatable.
     #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
     pub schedule: Vec<(String, String)>,
     /// Override the scene's shadow-map resolution.

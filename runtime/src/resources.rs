@@ -214,11 +214,10 @@ impl Resources {
             let mut tables = HashMap::new();
             // textures a compute step stores into (the compute schedule of a Map pass)
             let storage = |name: &str| {
-                let stored = graph
-                    .passes
-                    .iter()
-                    .flat_map(|p| &p.steps)
-                    .any(|st| st.draw == graph::Draw::ComputeTexels && st.writes.iter().any(|w| w.texture == name));
+                let stored = graph.passes.iter().flat_map(|p| &p.steps).any(|st| {
+                    matches!(st.draw, graph::Draw::ComputeTexels | graph::Draw::ComputeMipLevels)
+                        && st.writes.iter().any(|w| w.texture == name)
+                });
                 if stored {
                     wgpu::TextureUsages::STORAGE_BINDING
                 } else {

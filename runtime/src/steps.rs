@@ -112,6 +112,8 @@ enum Dispatch {
     /// One invocation per texel of the shadow map, [`graph::TEXEL_WORKGROUP`] squared per
     /// workgroup.
     Texels,
+    /// One dispatch per mip level k >= 1 of the target, one invocation per texel of it.
+    MipTexels,
     /// One invocation per cell of the mesh of texel centres ((size - 1)^2), x the column
     /// ([`graph::COMPUTE_WORKGROUP`] per workgroup), y the row, over the map of the view's
     /// neighbour `source`; nothing where the view has no such neighbour (the ends of an
@@ -150,6 +152,9 @@ enum Bound {
         /// buffers to reset (the generated one's count, the vertex claims) and the number
         /// of edges (invocations).
         geometry: Option<(wgpu::BindGroup, [wgpu::Buffer; 2], u32)>,
+        /// A `ComputeMipLevels` step: per level k >= 1, group 1 (level k - 1), group 2
+        /// (level k, storage) and the level's size; `group1`, `group2` are then unused.
+        levels: Vec<(Option<wgpu::BindGroup>, wgpu::BindGroup, u32)>,
     },
 }
 
@@ -276,6 +281,11 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     dispatch: Dispatch::Texels,
                     generated: None,
                 }),
+                Draw::ComputeMipLevels => NodeKind::Compute(ComputeStep {
+                    writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
+                    dispatch: Dispatch::MipTexels,
+                    generated: None,
+                }),
                 Draw::Silhouettes { buffer } => NodeKind::Compute(ComputeStep {
                     writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
                     dispatch: Dispatch::Edges,
@@ -331,7 +341,8 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                         pass.name, b.texture
                     )));
                 }
-                let below_base = matches!(&kind, NodeKind::Raster(r) if r.levels == Levels::BelowBase);
+                let below_base = matches!(&kind, NodeKind::Raster(r) if r.levels == Levels::BelowBase)
+                    || matches!(&kind, NodeKind::Compute(c) if matches!(c.dispatch, Dispatch::MipTexels));
                 if b.view == View::PreviousLevel && !below_base {
                     return Err(RuntimeError::NotFound(format!(
                         "pass `{}` reads `{}` at the previous mip level outside a MipLevels step",
@@ -361,7 +372,7 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 NodeKind::Compute(c) => {
                     // a `ComputeTexels` step stores into textures (of storage formats:
                     // `PassGraph::from_ron` checks), the others into tables
-                    let texels = matches!(c.dispatch, Dispatch::Texels);
+                    let texels = matches!(c.dispatch, Dispatch::Texels | Dispatch::MipTexels);
                     if let Some(w) = c.writes.iter().find(|w| is_table(w) == texels) {
                         let what = if texels { "a summed-area table" } else { "not a summed-area table" };
                         return Err(RuntimeError::NotFound(format!(
@@ -375,7 +386,7 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 }
             };
             let writes = match &kind {
-                NodeKind::Compute(c) if matches!(c.dispatch, Dispatch::Texels) => c
+                NodeKind::Compute(c) if matches!(c.dispatch, Dispatch::Texels | Dispatch::MipTexels) => c
                     .writes
                     .iter()
                     .map(|w| texture_format(w).map(|format| Slot::StorageTexture { format }))
@@ -402,7 +413,8 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                         | Draw::MipLevels
                         | Draw::ComputeRows
                         | Draw::ComputeColumns
-                        | Draw::ComputeTexels => None,
+                        | Draw::ComputeTexels
+                        | Draw::ComputeMipLevels => None,
                     },
                 },
             };
@@ -531,7 +543,44 @@ impl StepNode {
                 }
             }
             NodeKind::Compute(c) => {
+                // the storage view of every written texture at one mip level, all layers
+                let storage = |level: u32| -> Result<Option<wgpu::BindGroup>> {
+                    let Some(layout) = &self.pipeline.group2 else { return Ok(None) };
+                    let mut views = Vec::new();
+                    for w in &c.writes {
+                        views.push(res.texture(w)?.create_view(&wgpu::TextureViewDescriptor {
+                            dimension: Some(wgpu::TextureViewDimension::D2Array),
+                            base_mip_level: level,
+                            mip_level_count: Some(1),
+                            ..Default::default()
+                        }));
+                    }
+                    let entries: Vec<wgpu::BindGroupEntry> = views
+                        .iter()
+                        .enumerate()
+                        .map(|(i, v)| wgpu::BindGroupEntry {
+                            binding: i as u32,
+                            resource: wgpu::BindingResource::TextureView(v),
+                        })
+                        .collect();
+                    Ok(Some(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: None,
+                        layout,
+                        entries: &entries,
+                    })))
+                };
+                let mut levels = Vec::new();
+                if matches!(c.dispatch, Dispatch::MipTexels) {
+                    for level in 1..mip_count(res.shadow_size) {
+                        let g2 = storage(level)?.ok_or_else(|| {
+                            RuntimeError::NotFound(format!("pass `{}`: a mip chain's compute step without storage", self.label))
+                        })?;
+                        levels.push((self.group1(gpu, res, level)?, g2, (res.shadow_size >> level).max(1)));
+                    }
+                }
                 let group2 = match &self.pipeline.group2 {
+                    // a mip chain binds each level's storage view (`levels`)
+                    _ if matches!(c.dispatch, Dispatch::MipTexels) => None,
                     None => None,
                     Some(layout) => {
                         let mut entries = Vec::new();
@@ -582,6 +631,7 @@ impl StepNode {
                     group1: self.group1(gpu, res, 0)?,
                     group2,
                     geometry,
+                    levels,
                 }
             }
         };
@@ -813,6 +863,7 @@ impl StepNode {
                     group1,
                     group2,
                     geometry,
+                    levels,
                 },
                 Pipeline::Compute(pipeline),
             ) => {
@@ -852,6 +903,18 @@ impl StepNode {
                     Dispatch::Texels => {
                         let n = res.shadow_size.div_ceil(graph::TEXEL_WORKGROUP);
                         cpass.dispatch_workgroups(n, n, 1);
+                    }
+                    // level by level, each reading the one above (wgpu orders the
+                    // dispatches of a pass that write and read the same texture)
+                    Dispatch::MipTexels => {
+                        for (g1, g2, size) in levels {
+                            if let Some(g1) = g1 {
+                                cpass.set_bind_group(1, g1, &[]);
+                            }
+                            cpass.set_bind_group(2, g2, &[]);
+                            let n = size.div_ceil(graph::TEXEL_WORKGROUP);
+                            cpass.dispatch_workgroups(n, n, 1);
+                        }
                     }
                     Dispatch::Edges => {
                         let edges = geometry.as_ref().map_or(0, |g| g.2);

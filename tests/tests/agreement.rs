@@ -208,6 +208,8 @@ fn vsm_agrees() {
     // F16 moments: the variance is then not determined by the precision at small
     // variances (the allowance says so); a larger minimum variance keeps it meaningful
     v.push(Variant::new("vsm", &[("min_variance", 0.001)], Some(Storage::F16)));
+    // the compute schedule of its Map and Filter passes (issue 15)
+    v.push(Variant::new("vsm", &[], None).scheduled("compute"));
     agree("vsm", &v, &all_fields());
 }
 
@@ -220,6 +222,7 @@ fn esm_agrees() {
     v.push(Variant::new("esm", &[("K", 1.0)], None));
     // F16 needs c <= ln 65504 = 11.09 (the compiler refuses more)
     v.push(Variant::new("esm", &[("c", 10.0)], Some(Storage::F16)));
+    v.push(Variant::new("esm", &[], None).scheduled("compute"));
     agree("esm", &v, &all_fields());
 }
 
@@ -233,6 +236,7 @@ fn csm_agrees() {
         v.push(Variant::new("csm", &[("M", m), ("fix", fix)], None));
     }
     v.push(Variant::new("csm", &[("K", 1.0), ("alpha", 0.0)], None));
+    v.push(Variant::new("csm", &[], None).scheduled("compute"));
     agree("csm", &v, &all_fields());
 }
 
@@ -245,6 +249,7 @@ fn cssm_agrees() {
     // a longer series, no blur, no sharpening; and a light of width 0 (plain CSM)
     v.push(Variant::new("cssm", &[("M", 8.0), ("K", 1.0), ("A", 0.0)], None).lit(1.0));
     v.push(Variant::new("cssm", &[("filter", 1.0)], None).lit(0.0));
+    v.push(Variant::new("cssm", &[("filter", 0.0)], None).lit(1.0).scheduled("compute"));
     // the CPU error model of CSSM evaluates the series at many perturbed kernels per query:
     // the fields that exercise it differently (an edge, noise, no occluder, two scenes)
     agree("cssm", &v, &["step", "noise", "one", "bunny", "fence"]);

@@ -302,13 +302,14 @@ fn bodies_split_into_functions_compute_the_same_visibility() {
     assert!(split_passes >= 13, "{split_passes} split passes");
 }
 
-/// The compute schedule of Map and Filter passes (`--schedule *=compute`): every bundled
-/// technique with such a pass whose formats a compute step can store runs it as
-/// `ComputeTexels` steps (a Filter reading its tile and apron from workgroup memory), and
+/// The compute schedule of Map, Filter and Mipmap passes (`--schedule *=compute`): every
+/// bundled technique with such a pass whose formats a compute step can store runs it as
+/// `ComputeTexels` steps (a Filter reading its tile and apron from workgroup memory) or
+/// `ComputeMipLevels` steps (one dispatch per level), and
 /// the visibility is the same as under the fragment schedule, bit for bit: the same
 /// expression per texel, the same taps in the same order, stored at the same format.
 #[test]
-fn map_and_filter_passes_give_the_same_visibility_under_either_schedule() {
+fn map_filter_and_mipmap_passes_give_the_same_visibility_under_either_schedule() {
     let gpu = gpu();
     let mut computed = Vec::new();
     for t in bundled("techniques") {
@@ -324,17 +325,17 @@ fn map_and_filter_passes_give_the_same_visibility_under_either_schedule() {
                 .passes
                 .iter()
                 .flat_map(|p| &p.steps)
-                .filter(|s| s.draw == sshc_runtime::graph::Draw::ComputeTexels)
+                .filter(|s| matches!(s.draw, Draw::ComputeTexels | Draw::ComputeMipLevels))
                 .count()
         };
         assert_eq!(texels(&fragment), 0, "{t}: the default schedule is fragment");
-        // a Map or Filter pass runs as compute where its formats allow it
-        use sshc_runtime::graph::PassKind;
+        // a Map, Filter or Mipmap pass runs as compute where its formats allow it
+        use sshc_runtime::graph::{Draw, PassKind};
         let maps = fragment
             .graph
             .passes
             .iter()
-            .filter(|p| matches!(p.kind, PassKind::Map | PassKind::Filter));
+            .filter(|p| matches!(p.kind, PassKind::Map | PassKind::Filter | PassKind::Mipmap));
         let storable = maps
             .filter(|p| {
                 p.steps

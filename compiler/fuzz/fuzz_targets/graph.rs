@@ -107,6 +107,7 @@ const WORDS: &[&str] = &[
     "MipLevels",
     "ComputeRows",
     "ComputeTexels",
+    "ComputeMipLevels",
     "Any",
     "Point",
     "F32",
@@ -231,7 +232,7 @@ fn step(u: &mut Unstructured) -> Result<Step> {
         vertex: entry(u)?,
         fragment: entry(u)?,
         compute: entry(u)?,
-        draw: match u.int_in_range(0..=9)? {
+        draw: match u.int_in_range(0..=10)? {
             0 => Draw::SceneFromLight,
             1 => Draw::SceneFromCamera,
             2 => Draw::FullScreen,
@@ -240,6 +241,7 @@ fn step(u: &mut Unstructured) -> Result<Step> {
             5 => Draw::ComputeColumns,
             6 => Draw::Silhouettes { buffer: name(u)? },
             9 => Draw::ComputeTexels,
+            10 => Draw::ComputeMipLevels,
             7 => Draw::Discontinuities {
                 buffer: name(u)?,
                 source: *u.choose(&[Neighbour::Previous, Neighbour::Next])?,
@@ -358,6 +360,14 @@ fn check_accepted(g: &PassGraph, text: &str) {
             assert_eq!(views, want, "pass {} writes a texture of {views} view(s): {text}", p.name);
         }
     }
+    // Steps name the entry points their draw needs.
+    for st in g.passes.iter().flat_map(|p| &p.steps) {
+        if st.draw.is_dispatch() {
+            assert!(st.compute.is_some() && st.vertex.is_none() && st.fragment.is_none(), "dispatch entries: {text}");
+        } else {
+            assert!(st.compute.is_none() && st.vertex.is_some() && st.fragment.is_some(), "draw entries: {text}");
+        }
+    }
     // Generated buffers: declared, and drawn only after a Silhouettes step wrote them.
     let mut generated: Vec<&str> = Vec::new();
     for st in g.passes.iter().flat_map(|p| &p.steps) {
@@ -374,7 +384,7 @@ fn check_accepted(g: &PassGraph, text: &str) {
             | Draw::ComputeRows
             | Draw::ComputeColumns => {}
             // what a compute step stores into has a storage format
-            Draw::ComputeTexels => {
+            Draw::ComputeTexels | Draw::ComputeMipLevels => {
                 for w in &st.writes {
                     let t = g.textures.iter().find(|t| t.name == w.texture).expect("a declared texture");
                     assert!(t.format.storable(), "compute writes {:?}: {text}", t.format);

@@ -819,7 +819,7 @@ fn map(ir: &Program, pass: &IrPass, limits: &Limits, split: Split) -> Result<(St
     Ok((src, entries.steps))
 }
 
-/// Whether a Map or Filter pass runs as compute: its schedule asks for it and nothing
+/// Whether a Map, Filter or Mipmap pass runs as compute: its schedule asks for it and nothing
 /// refuses it ([`compute_refusal`]).
 pub fn map_runs_as_compute(ir: &Program, pass: &IrPass) -> bool {
     pass.schedule == Schedule::Compute && compute_refusal(ir, pass).is_none()
@@ -842,7 +842,7 @@ fn filter_tile(kernel: &IrKernel, horizontal: bool) -> (i32, i32, i32, i32) {
     (ax, ay, g + 2 * ax, g + 2 * ay)
 }
 
-/// Why a Map or Filter pass that asks for the compute schedule runs as fragment, or None:
+/// Why a Map, Filter or Mipmap pass that asks for the compute schedule runs as fragment, or None:
 /// a written format that is not a storage format, or a Filter's tile and apron that do not
 /// fit WebGPU's workgroup memory.
 pub fn compute_refusal(ir: &Program, pass: &IrPass) -> Option<String> {
@@ -1674,6 +1674,7 @@ fn cs_columns(@builtin(global_invocation_id) id: vec3<u32>) {{
 
 fn mipmap(ir: &Program, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Result<(String, Vec<Step>), Diagnostic> {
     let dst = &ir.resources[pass.writes.ok_or_else(|| internal("mipmap without output"))?];
+    let compute = map_runs_as_compute(ir, pass);
     let mut s = header(ir, pass);
     s.push_str(FRAME_WGSL);
     s.push_str("@group(0) @binding(0) var<uniform> frame: Frame;\n");
@@ -1681,14 +1682,31 @@ fn mipmap(ir: &Program, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Resul
     s.push_str(FULLSCREEN_VS);
     let mut steps = Vec::new();
     for tex in &dst.textures {
-        for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
-            let entry = format!("fs_{}_{ci}", tex.name);
-            let out_name = format!("Out_{}_{ci}", tex.name);
-            s.push_str(&out_struct(&out_name, chunk.len(), false));
-            let _ = write!(
+        if compute {
+            let _ = writeln!(
                 s,
-                "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let src = vec2<i32>(pos.xy) * 2i;\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n"
+                "// the level being written\n@group(2) @binding(0) var w_{}: texture_storage_2d_array<{}, write>;",
+                tex.name,
+                texture_format(tex).wgsl()
             );
+        }
+        for (ci, chunk) in layer_chunks(tex, limits).into_iter().enumerate() {
+            let entry = format!("{}_{}_{ci}", if compute { "cs" } else { "fs" }, tex.name);
+            let out_name = format!("Out_{}_{ci}", tex.name);
+            if compute {
+                let g = graph::TEXEL_WORKGROUP;
+                let _ = write!(
+                    s,
+                    "\n@compute @workgroup_size({g}, {g})\nfn {entry}(@builtin(global_invocation_id) id: vec3<u32>) {{\n    // invocations past the level's edge store nothing\n    if any(id.xy >= textureDimensions(w_{})) {{\n        return;\n    }}\n    let texel = vec2<i32>(id.xy);\n    let src = texel * 2i;\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n",
+                    tex.name
+                );
+            } else {
+                s.push_str(&out_struct(&out_name, chunk.len(), false));
+                let _ = write!(
+                    s,
+                    "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let src = vec2<i32>(pos.xy) * 2i;\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n"
+                );
+            }
             for (oi, &layer) in chunk.iter().enumerate() {
                 for (k, (dx, dy)) in [(0, 0), (1, 0), (0, 1), (1, 1)].iter().enumerate() {
                     let _ = writeln!(
@@ -1701,10 +1719,14 @@ fn mipmap(ir: &Program, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Resul
                     Reduce::Max => format!("max(max(a{oi}_0, a{oi}_1), max(a{oi}_2, a{oi}_3))"),
                     Reduce::Min => format!("min(min(a{oi}_0, a{oi}_1), min(a{oi}_2, a{oi}_3))"),
                 };
-                let _ = writeln!(s, "    out.o{oi} = {v};");
+                if compute {
+                    let _ = writeln!(s, "    textureStore(w_{}, texel, {layer}i, {v});", tex.name);
+                } else {
+                    let _ = writeln!(s, "    out.o{oi} = {v};");
+                }
             }
-            s.push_str("    return out;\n}\n");
-            steps.push(fullscreen_step(
+            s.push_str(if compute { "}\n" } else { "    return out;\n}\n" });
+            let mut step = fullscreen_step(
                 entry,
                 Draw::MipLevels,
                 vec![Binding {
@@ -1714,7 +1736,11 @@ fn mipmap(ir: &Program, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Resul
                 }],
                 &tex.name,
                 &chunk,
-            ));
+            );
+            if compute {
+                (step.vertex, step.compute, step.draw) = (None, step.fragment.take(), Draw::ComputeMipLevels);
+            }
+            steps.push(step);
         }
     }
     Ok((s, steps))

@@ -184,7 +184,7 @@ pub enum LightView {
 }
 
 /// How a pass runs on the GPU (issue 15: the technique says what is computed, the
-/// schedule how). Map and Filter passes so far.
+/// schedule how). Map, Filter and Mipmap passes so far.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Schedule {
     /// One full-screen triangle; a fragment per texel writes the channels as colour targets.
@@ -198,21 +198,19 @@ pub enum Schedule {
 }
 
 impl PassKind {
-    /// The schedule a technique gives a pass (Map and Filter passes have one).
+    /// The schedule a technique gives a pass (Map, Filter and Mipmap passes have one).
     pub fn schedule(&self) -> Option<Schedule> {
         match self {
-            PassKind::Map { schedule, .. } | PassKind::Filter { schedule, .. } => schedule.as_ref().map(|s| s.value),
-            PassKind::Depth { .. }
-            | PassKind::Mipmap { .. }
-            | PassKind::SummedArea { .. }
-            | PassKind::Geometry { .. }
-            | PassKind::Shade { .. } => None,
+            PassKind::Map { schedule, .. } | PassKind::Filter { schedule, .. } | PassKind::Mipmap { schedule, .. } => {
+                schedule.as_ref().map(|s| s.value)
+            }
+            PassKind::Depth { .. } | PassKind::SummedArea { .. } | PassKind::Geometry { .. } | PassKind::Shade { .. } => None,
         }
     }
 
     /// Whether a pass kind has schedules to choose from.
     pub fn schedulable(&self) -> bool {
-        matches!(self, PassKind::Map { .. } | PassKind::Filter { .. })
+        matches!(self, PassKind::Map { .. } | PassKind::Filter { .. } | PassKind::Mipmap { .. })
     }
 }
 
@@ -329,6 +327,8 @@ pub enum PassKind {
         reads: Name,
         writes: Name,
         reduce: Reduce,
+        /// How it runs; the compiler's default where absent.
+        schedule: Option<Spanned<Schedule>>,
     },
     SummedArea {
         reads: Name,

@@ -591,7 +591,12 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
                     }
                 }
             };
-            PassKind::Mipmap { reads, writes, reduce }
+            PassKind::Mipmap {
+                reads,
+                writes,
+                reduce,
+                schedule: schedule(&mut f)?,
+            }
         }
         "SummedArea" => PassKind::SummedArea {
             reads: self::name(f.req("reads")?)?,

@@ -183,9 +183,12 @@ fn schedule(steps: &[sshc_runtime::graph::Step]) -> &'static str {
     let kind = |d: &Draw| match d {
         Draw::FullScreen | Draw::MipLevels => "fragment",
         Draw::SceneFromLight | Draw::SceneFromCamera | Draw::Primitives { .. } => "raster",
-        Draw::ComputeRows | Draw::ComputeColumns | Draw::ComputeTexels | Draw::Silhouettes { .. } | Draw::Discontinuities { .. } => {
-            "compute"
-        }
+        Draw::ComputeRows
+        | Draw::ComputeColumns
+        | Draw::ComputeTexels
+        | Draw::ComputeMipLevels
+        | Draw::Silhouettes { .. }
+        | Draw::Discontinuities { .. } => "compute",
     };
     let mut kinds = steps.iter().map(|s| kind(&s.draw));
     let first = kinds.next().unwrap_or("");
@@ -225,7 +228,7 @@ pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edge
                     Draw::SceneFromCamera => (f64::from(camera.0) * f64::from(camera.1), 1.0),
                     Draw::SceneFromLight | Draw::FullScreen | Draw::ComputeTexels => (texels, 1.0),
                     // levels 1.. of the chain: texels (1/4 + 1/16 + ...)
-                    Draw::MipLevels => (texels / 3.0, 1.0),
+                    Draw::MipLevels | Draw::ComputeMipLevels => (texels / 3.0, 1.0),
                     // one invocation per row or column, whose loop body (counted once)
                     // runs once per texel of it in each layer of the table
                     Draw::ComputeRows | Draw::ComputeColumns => {

@@ -195,7 +195,7 @@ struct Settings {
     set: Vec<(String, String)>,
     /// `precision:NAME` axes.
     precision: Vec<(String, String)>,
-    /// `schedule:PASS` axes (`schedule:*`: every Map pass).
+    /// `schedule:PASS` axes (`schedule:*`: every Map, Filter and Mipmap pass).
     schedule: Vec<(String, String)>,
 }
 

@@ -2,7 +2,7 @@
 //! hand-written references alike: shared by the agreement tests and the agreement timings
 //! (benches/agreement_timings.rs).
 
-use super::{QueryPlane, compile_source, technique_source};
+use super::{QueryPlane, technique_source};
 use sshc_tests::reference::{LightFrame, Storage};
 
 /// One selectable variant of a technique: params (`--set`) and the precision of its
@@ -15,6 +15,8 @@ pub struct Variant {
     /// The width of the square area light over the query plane (world units; the plane is
     /// 2 wide), for the soft techniques.
     pub light: Option<f64>,
+    /// The schedule of every Map, Filter and Mipmap pass (`--schedule *=...`), else the default.
+    pub schedule: Option<&'static str>,
 }
 
 impl Variant {
@@ -24,7 +26,14 @@ impl Variant {
             params: params.to_vec(),
             storage,
             light: None,
+            schedule: None,
         }
+    }
+
+    /// With every Map, Filter and Mipmap pass under `schedule` (`compute`).
+    pub fn scheduled(mut self, schedule: &'static str) -> Variant {
+        self.schedule = Some(schedule);
+        self
     }
 
     /// Under a square light `width` wide.
@@ -50,6 +59,9 @@ impl Variant {
         }
         if let Some(w) = self.light {
             s.push_str(&format!(" light {w}"));
+        }
+        if let Some(sch) = self.schedule {
+            s.push_str(&format!(" schedule {sch}"));
         }
         s
     }
@@ -90,7 +102,14 @@ impl Variant {
             }
             None => vec![],
         };
-        compile_source(self.technique, &technique_source(self.technique), &set, &precision)
+        let src = technique_source(self.technique);
+        let opts = sshc::CompileOptions {
+            set: set.iter().map(|(a, b)| (a.to_string(), b.clone())).collect(),
+            precision: precision.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect(),
+            schedule: self.schedule.iter().map(|s| ("*".to_string(), s.to_string())).collect(),
+            ..Default::default()
+        };
+        sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(self.technique, &src)))
     }
 
     pub fn reference(&self) -> sshc_tests::reference::Technique {
