@@ -248,6 +248,14 @@ impl Gpu {
         Ok(p)
     }
 
+    /// Block until the device has finished everything submitted.
+    pub fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| RuntimeError::Device(e.to_string()))
+    }
+
     /// The device's memory bandwidth as a copy achieves it: a buffer-to-buffer copy of
     /// `bytes`, timed on the host from submission to completion, after one untimed copy;
     /// bytes read plus written over the median time of `runs`, in GB/s (10^9 bytes a

@@ -57,8 +57,15 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
     ex.bind_scene(&inputs).map_err(rt)?;
     let mut all: Vec<Vec<Option<f64>>> = Vec::new();
     let mut names = Vec::new();
+    // the wall time of each frame, submission to completion: on lavapipe a compute pass's
+    // end timestamp does not wait for its dispatches (docs/gpu.md), so schedules are
+    // compared there by this
+    let mut walls = Vec::new();
     for _ in 0..a.frames.max(1) {
+        let start = std::time::Instant::now();
         let t = ex.run_frame().map_err(rt)?;
+        gpu.wait().map_err(rt)?;
+        walls.push(start.elapsed().as_secs_f64() * 1e3);
         names = t.passes.iter().map(|p| p.0.clone()).collect();
         all.push(t.passes.into_iter().map(|p| p.1).collect());
     }
@@ -145,6 +152,12 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
             b
         }
     };
+    walls.sort_by(f64::total_cmp);
+    println!(
+        "frame wall time: {:.3} ms (median of {} frame(s), submission to completion)",
+        walls[walls.len() / 2],
+        walls.len()
+    );
     println!(
         "| pass | GPU ms (median of {} frame(s)) | invocations | fetches | operations | compulsory MB | GB/s | bound ms | ms / bound | schedule |\n|---|---|---|---|---|---|---|---|---|---|",
         all.len()
