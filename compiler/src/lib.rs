@@ -236,6 +236,8 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
             );
         }
         let graph = emit::graph(&program, &out);
+        let mut warnings = warnings;
+        warnings.extend(back::wgsl::render_target_warnings(&program, &graph, &opts.limits));
         if want(DumpPhase::Emit) {
             dump = Some(graph.to_ron());
         }

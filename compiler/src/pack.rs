@@ -16,6 +16,11 @@ pub struct Limits {
     pub max_color_attachment_bytes_per_sample: u32,
     pub max_sampled_textures_per_shader_stage: u32,
     pub max_texture_array_layers: u32,
+    /// Whether the device renders to 16-bit norm formats (`R16Unorm`, `Rg16Unorm`,
+    /// `Rgba16Unorm`): not in WebGPU's core, an adapter-specific feature beyond
+    /// `TEXTURE_FORMAT_16BIT_NORM` (lavapipe has it). Where not, a raster pass writing one
+    /// is warned about at compile time (`back::wgsl::render_target_warnings`).
+    pub renderable_norm16: bool,
 }
 
 impl Default for Limits {
@@ -25,6 +30,7 @@ impl Default for Limits {
             max_color_attachment_bytes_per_sample: 32,
             max_sampled_textures_per_shader_stage: 16,
             max_texture_array_layers: 256,
+            renderable_norm16: false,
         }
     }
 }

@@ -760,3 +760,30 @@ fn map_pass_schedules() {
         assert!(text.contains(want), "{text}");
     }
 }
+
+/// A raster pass rendering into a 16-bit norm format is warned about at compile time, the
+/// channels and the fix named, unless the limits profile renders to them (issue 17; the
+/// runtime refuses such a graph on a device without the feature).
+#[test]
+fn unorm16_render_targets_are_warned_about_against_the_profile() {
+    let warned = |o: &CompileOptions| -> Vec<String> {
+        let c = compiles("vsm", o);
+        c.warnings
+            .iter()
+            .map(|w| w.render("vsm.ron", &source("vsm")))
+            .filter(|w| w.contains("16-bit norm"))
+            .collect()
+    };
+    let unorm16 = opts(&[], &[("m1", Precision::Unorm16), ("m2", Precision::Unorm16)]);
+    let w = warned(&unorm16);
+    // the moments pass and the blur render into Rg16Unorm (the mip chain too, one warning
+    // per texture: moments and blurred)
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(w[0].contains("pass `moments` renders `m1`, `m2` into Rg16Unorm"), "{}", w[0]);
+    assert!(w[0].contains("store them at F16"), "{}", w[0]);
+    let mut capable = unorm16.clone();
+    capable.limits.renderable_norm16 = true;
+    assert!(warned(&capable).is_empty());
+    assert!(warned(&opts(&[], &[("m1", Precision::F16), ("m2", Precision::F16)])).is_empty());
+    assert!(warned(&CompileOptions::default()).is_empty());
+}
