@@ -162,8 +162,83 @@ impl Arena {
         self.intern(node, ty, span)
     }
 
+    /// The components of a vector constructor (`vec2`..`vec4` of scalars), by handle.
+    fn components(&self, h: H) -> Option<Vec<H>> {
+        match self.node(h) {
+            Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, args) if args.iter().all(|a| self.ty(*a) == Ty::F32) => Some(args.clone()),
+            _ => None,
+        }
+    }
+
+    /// Whether `h` is the scalar `v` or a vector constructor of `v`s.
+    fn is_splat_of(&self, h: H, v: f64) -> bool {
+        let is = |h: H| self.as_const(h).is_some_and(|c| c.as_f64() == v);
+        is(h) || self.components(h).is_some_and(|c| c.iter().all(|&x| is(x)))
+    }
+
+    /// Vector folds that only ever remove work (a fold that split one vector operation
+    /// into several scalar ones would add operations: docs/language.md section 8.9):
+    /// identities with a constant operand of zeros or ones, operations whose operands
+    /// are all constant components, and a single-component swizzle of a constructor.
+    fn fold_vector(&mut self, node: &Node, ty: Ty, span: Span) -> Option<H> {
+        match node {
+            Node::Binary(op, a, b) if matches!(ty, Ty::Vec(_)) => {
+                let (a, b) = (*a, *b);
+                // identities: the kept operand already has the result's type
+                let keep = |h: H| (self.ty(h) == ty).then_some(h);
+                match op {
+                    BinOp::Add if self.is_splat_of(a, 0.0) => return keep(b),
+                    BinOp::Add | BinOp::Sub if self.is_splat_of(b, 0.0) => {
+                        if let Some(h) = keep(a) {
+                            return Some(h);
+                        }
+                    }
+                    BinOp::Mul if self.is_splat_of(a, 1.0) => return keep(b),
+                    BinOp::Mul | BinOp::Div if self.is_splat_of(b, 1.0) => {
+                        if let Some(h) = keep(a) {
+                            return Some(h);
+                        }
+                    }
+                    _ => {}
+                }
+                if !matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div) {
+                    return None;
+                }
+                // all components constant on both sides (a scalar constant broadcasts)
+                let n = match ty {
+                    Ty::Vec(n) => n as usize,
+                    _ => return None,
+                };
+                let side = |h: H| -> Option<Vec<ConstValue>> {
+                    match self.components(h) {
+                        Some(c) if c.len() == n => c.iter().map(|&x| self.as_const(x)).collect(),
+                        Some(_) => None,
+                        None => self.as_const(h).map(|c| vec![c; n]),
+                    }
+                };
+                let (x, y) = (side(a)?, side(b)?);
+                let mut comps = Vec::with_capacity(n);
+                for (x, y) in x.into_iter().zip(y) {
+                    let v = consteval::binary(*op, x, y)?;
+                    comps.push(self.constant(v, Ty::F32, span)?);
+                }
+                let f = match n {
+                    2 => Func::Vec2,
+                    3 => Func::Vec3,
+                    _ => Func::Vec4,
+                };
+                Some(self.intern(Node::Call(f, comps), ty, span))
+            }
+            Node::Swizzle(a, comps) if comps.len() == 1 => self.components(*a).and_then(|c| c.get(comps[0] as usize).copied()),
+            _ => None,
+        }
+    }
+
     fn fold(&mut self, node: &Node, ty: Ty, span: Span) -> Option<H> {
         use ConstValue::*;
+        if let Some(h) = self.fold_vector(node, ty, span) {
+            return Some(h);
+        }
         match node {
             Node::Unary(op, a) => {
                 let v = consteval::unary(*op, self.as_const(*a)?)?;

@@ -787,3 +787,42 @@ fn unorm16_render_targets_are_warned_about_against_the_profile() {
     assert!(warned(&opts(&[], &[("m1", Precision::F16), ("m2", Precision::F16)])).is_empty());
     assert!(warned(&CompileOptions::default()).is_empty());
 }
+
+/// Vector constant folding (issue 17): identities with constant zeros and ones, operations
+/// on constant components and swizzles of constructors fold, so that an expression written
+/// with them costs what its hand-simplified form costs; no bundled technique's counts move
+/// (the folds never split a vector operation into scalar ones).
+#[test]
+fn vector_constants_fold_to_the_hand_simplified_cost() {
+    let tech = |vis: &str| {
+        format!(
+            r#"Technique(
+    name: "vf",
+    params: {{ "c": Param(ty: F32, default: 0.5, range: (0.0, 1.0), doc: "a uniform") }},
+    channels: {{ "z": Channel(precision: F32) }},
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Shade(name: "shade", reads: ["shadow"], visibility: "{vis}"),
+    ],
+)
+"#
+        )
+    };
+    let ops = |vis: &str| {
+        let src = tech(vis);
+        let c = sshc::compile_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("vf.ron", &src)));
+        let shade = c.shaders.iter().find(|(f, _)| f.ends_with("shade.wgsl")).unwrap().1.clone();
+        (c.cost.shade, shade)
+    };
+    let lookup = "step(d, nearest_at(z, o.x * 0.001, o.y * 0.001))";
+    let (folded, src) = ops(&format!(
+        "let o = vec2(c, c) + vec2(0.0, 0.0) + vec2(0.25, 0.5) * vec2(2.0, 2.0) * 1.0 + vec2(0.0, 0.0) - 0.0; {lookup}"
+    ));
+    let (by_hand, _) = ops(&format!("let o = vec2(c, c) + vec2(0.5, 1.0); {lookup}"));
+    assert_eq!(folded, by_hand, "{src}");
+    assert!(!src.contains("vec2<f32>(0.0f, 0.0f)"), "{src}");
+    // a component of a constructor is that argument
+    let (picked, _) = ops("step(d, nearest_at(z, vec2(c * 0.001, 7.0).x, vec2(3.0, c * 0.002).y))");
+    let (plain, _) = ops("step(d, nearest_at(z, c * 0.001, c * 0.002))");
+    assert_eq!(picked, plain);
+}
