@@ -164,10 +164,12 @@ impl Arena {
 
     /// The components of a vector constructor (`vec2`..`vec4` of scalars), by handle.
     fn components(&self, h: H) -> Option<Vec<H>> {
-        match self.node(h) {
-            Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, args) if args.iter().all(|a| self.ty(*a) == Ty::F32) => Some(args.clone()),
-            _ => None,
+        if let Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, args) = self.node(h)
+            && args.iter().all(|a| self.ty(*a) == Ty::F32)
+        {
+            return Some(args.clone());
         }
+        None
     }
 
     /// Whether `h` is the scalar `v` or a vector constructor of `v`s.
@@ -199,7 +201,19 @@ impl Arena {
                             return Some(h);
                         }
                     }
-                    _ => {}
+                    BinOp::Add
+                    | BinOp::Sub
+                    | BinOp::Mul
+                    | BinOp::Div
+                    | BinOp::Rem
+                    | BinOp::Lt
+                    | BinOp::Le
+                    | BinOp::Gt
+                    | BinOp::Ge
+                    | BinOp::Eq
+                    | BinOp::Ne
+                    | BinOp::And
+                    | BinOp::Or => {}
                 }
                 if !matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div) {
                     return None;
@@ -207,7 +221,7 @@ impl Arena {
                 // all components constant on both sides (a scalar constant broadcasts)
                 let n = match ty {
                     Ty::Vec(n) => n as usize,
-                    _ => return None,
+                    Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt => return None,
                 };
                 let side = |h: H| -> Option<Vec<ConstValue>> {
                     match self.components(h) {
@@ -230,7 +244,17 @@ impl Arena {
                 Some(self.intern(Node::Call(f, comps), ty, span))
             }
             Node::Swizzle(a, comps) if comps.len() == 1 => self.components(*a).and_then(|c| c.get(comps[0] as usize).copied()),
-            _ => None,
+            Node::Binary(..)
+            | Node::Swizzle(..)
+            | Node::F32(_)
+            | Node::I32(_)
+            | Node::Bool(_)
+            | Node::Param(_)
+            | Node::Input(..)
+            | Node::Channel(_)
+            | Node::Sample { .. }
+            | Node::Unary(..)
+            | Node::Call(..) => None,
         }
     }
 
