@@ -43,17 +43,15 @@ pub fn explain(c: &Compiled) -> String {
                 "rasterises the scene once from each of the {samples} light samples and stores linear depth, one layer block per sample"
             ),
             IrPassKind::Depth { .. } => "rasterises the scene from the light and stores linear depth".to_string(),
-            IrPassKind::Map => match p.schedule {
-                Schedule::Fragment => "computes channels per shadow-map texel (schedule: fragment, a full-screen triangle)".to_string(),
-                Schedule::Compute if crate::back::wgsl::map_runs_as_compute(ir, p) => {
-                    "computes channels per shadow-map texel (schedule: compute, 8 x 8 texels per workgroup, storage-texture writes)"
-                        .to_string()
-                }
-                Schedule::Compute => format!(
-                    "computes channels per shadow-map texel (schedule: fragment; compute was asked for, but {})",
-                    crate::back::wgsl::compute_refusal(ir, p).unwrap_or_default()
-                ),
-            },
+            IrPassKind::Map => format!(
+                "computes channels per shadow-map texel ({})",
+                schedule(
+                    ir,
+                    p,
+                    "a full-screen triangle",
+                    "8 x 8 texels per workgroup, storage-texture writes"
+                )
+            ),
             IrPassKind::Filter { kernel } => format!(
                 "filters with {kernel:?}{} ({})",
                 if kernel.separable() {
@@ -61,29 +59,21 @@ pub fn explain(c: &Compiled) -> String {
                 } else {
                     ""
                 },
-                match p.schedule {
-                    Schedule::Fragment => "schedule: fragment, a full-screen triangle per step".to_string(),
-                    Schedule::Compute if crate::back::wgsl::map_runs_as_compute(ir, p) => {
-                        "schedule: compute, 8 x 8 texels per workgroup, each workgroup loading its tile and apron into workgroup memory once per layer".to_string()
-                    }
-                    Schedule::Compute => format!(
-                        "schedule: fragment; compute was asked for, but {}",
-                        crate::back::wgsl::compute_refusal(ir, p).unwrap_or_default()
-                    ),
-                }
+                schedule(
+                    ir,
+                    p,
+                    "a full-screen triangle per step",
+                    "8 x 8 texels per workgroup, each workgroup loading its tile and apron into workgroup memory once per layer"
+                )
             ),
             IrPassKind::Mipmap { reduce } => format!(
                 "builds a {reduce:?} mip chain in place ({})",
-                match p.schedule {
-                    Schedule::Fragment => "schedule: fragment, a full-screen triangle per level".to_string(),
-                    Schedule::Compute if crate::back::wgsl::map_runs_as_compute(ir, p) => {
-                        "schedule: compute, one dispatch per level, 8 x 8 texels per workgroup".to_string()
-                    }
-                    Schedule::Compute => format!(
-                        "schedule: fragment; compute was asked for, but {}",
-                        crate::back::wgsl::compute_refusal(ir, p).unwrap_or_default()
-                    ),
-                }
+                schedule(
+                    ir,
+                    p,
+                    "a full-screen triangle per level",
+                    "one dispatch per level, 8 x 8 texels per workgroup"
+                )
             ),
             IrPassKind::SummedArea => "builds a summed-area table".to_string(),
             IrPassKind::Geometry {
@@ -225,4 +215,17 @@ pub fn explain(c: &Compiled) -> String {
         }
     }
     s
+}
+
+/// How a Map, Filter or Mipmap pass runs: `fragment` and `compute` describe each form; a
+/// compute schedule that cannot be honoured says why.
+fn schedule(ir: &Program, p: &crate::ir::IrPass, fragment: &str, compute: &str) -> String {
+    match p.schedule {
+        Schedule::Fragment => format!("schedule: fragment, {fragment}"),
+        Schedule::Compute if crate::back::wgsl::map_runs_as_compute(ir, p) => format!("schedule: compute, {compute}"),
+        Schedule::Compute => format!(
+            "schedule: fragment; compute was asked for, but {}",
+            crate::back::wgsl::compute_refusal(ir, p).unwrap_or_default()
+        ),
+    }
 }
