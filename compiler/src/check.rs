@@ -612,7 +612,7 @@ fn check_expansion(sym: &Symbols, e: &Expansion, types: &mut Types, diags: &mut 
         let before = ty.runtime;
         match ty.infer_as(value, Ty::I32) {
             Ok(t) => {
-                let uses = std::mem::take(&mut ty.uses);
+                let uses = distinct_sites(std::mem::take(&mut ty.uses));
                 let konst = ty.runtime == before;
                 ty.locals.push(Local {
                     name: name.value.clone(),
@@ -943,6 +943,14 @@ pub struct Use {
     pub via: Option<Span>,
 }
 
+/// Each input site once (the first binding it was read through): a binding's value may read
+/// another binding many times, and copying its uses per reference grows as 2^n along a chain
+/// of bindings each read twice by the next.
+fn distinct_sites(uses: impl IntoIterator<Item = Use>) -> Vec<Use> {
+    let mut seen = std::collections::HashSet::new();
+    uses.into_iter().filter(|u| seen.insert(u.span)).collect()
+}
+
 /// Every name `e` reads (a superset of its free names: names bound inside it count too).
 fn free_names<'e>(e: &'e Expr, out: &mut std::collections::HashSet<&'e str>) {
     match &e.kind {
@@ -1230,7 +1238,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                 let before = self.uses.len();
                 let runtime = self.runtime;
                 let t = self.infer_as(value, Ty::I32)?;
-                let uses: Vec<Use> = self.uses.drain(before..).collect();
+                let uses = distinct_sites(self.uses.drain(before..));
                 let konst = self.runtime == runtime;
                 self.locals.push(Local {
                     name: name.clone(),
