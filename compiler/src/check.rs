@@ -273,7 +273,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                 Ok(k) => kernels[pi] = Some(k),
                 Err(d) => diags.push(d),
             },
-            PassKind::Shade { reads, visibility } => {
+            PassKind::Shade { reads, visibility, .. } => {
                 let carried: Vec<(Item, String, bool)> = reads
                     .iter()
                     .flat_map(|r| {

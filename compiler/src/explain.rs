@@ -137,7 +137,17 @@ pub fn explain(c: &Compiled) -> String {
                     buffers.join("; ")
                 )
             }
-            IrPassKind::Shade { .. } => "evaluates visibility per camera pixel".to_string(),
+            IrPassKind::Shade { .. } => format!(
+                "evaluates visibility per camera pixel; {}",
+                match p.schedule {
+                    Schedule::Fragment => "schedule: fragment (forward), the camera raster's fragments evaluate it".to_string(),
+                    Schedule::Compute if crate::back::wgsl::shade_is_deferred(ir, p) => "schedule: compute (deferred), a camera raster writes a G-buffer of 32 bytes a pixel (world position and depth slope, normal, uv footprint), then one compute invocation per pixel (8 x 8 per workgroup) evaluates it from there".to_string(),
+                    Schedule::Compute => format!(
+                        "schedule: fragment (forward); compute (deferred) was asked for, but {}",
+                        crate::back::wgsl::shade_refusal(ir, p).unwrap_or_default()
+                    ),
+                }
+            ),
         };
         let steps = g.passes.iter().find(|gp| gp.name == p.name).map(|gp| gp.steps.len()).unwrap_or(0);
         let _ = write!(s, "  {}. {} ({}): {what}", i + 1, p.name, p.kind_name());

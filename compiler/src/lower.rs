@@ -519,7 +519,9 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     None => None,
                 },
             },
-            PassKind::Shade { reads: rnames, visibility } => {
+            PassKind::Shade {
+                reads: rnames, visibility, ..
+            } => {
                 let mut shade_reads = Vec::new();
                 for r in rnames {
                     let rid = res_index[&r.value];

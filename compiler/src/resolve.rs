@@ -238,17 +238,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         }
     }
 
-    let mut schedules: Vec<Option<Schedule>> = t
-        .passes
-        .iter()
-        .map(|p| {
-            if let PassKind::Map { schedule, .. } = &p.kind {
-                schedule.as_ref().map(|s| s.value)
-            } else {
-                None
-            }
-        })
-        .collect();
+    let mut schedules: Vec<Option<Schedule>> = t.passes.iter().map(|p| p.kind.schedule()).collect();
     for (name, text) in &opts.schedule {
         let Some(sch) = Schedule::parse(text) else {
             diags.push(
@@ -273,7 +263,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
                         format!("`--schedule {name}={text}`: pass `{name}` is a {} pass", p.kind.kind_name()),
                     )
                     .at(p.kind_span, "declared here")
-                    .note("only Map, Filter and Mipmap passes have schedules so far"),
+                    .note("only Map, Filter, Mipmap and Shade passes have schedules"),
                 );
             }
         }

@@ -249,15 +249,38 @@ impl Draw {
             | Draw::ComputeColumns
             | Draw::ComputeTexels
             | Draw::ComputeMipLevels
+            | Draw::ComputePixels
             | Draw::Silhouettes { .. }
             | Draw::Discontinuities { .. } => true,
-            Draw::SceneFromLight | Draw::SceneFromCamera | Draw::FullScreen | Draw::MipLevels | Draw::Primitives { .. } => false,
+            Draw::SceneFromLight
+            | Draw::SceneFromCamera
+            | Draw::CameraGBuffer
+            | Draw::FullScreen
+            | Draw::MipLevels
+            | Draw::Primitives { .. } => false,
         }
     }
 }
 
-/// Workgroup side of [`Draw::ComputeTexels`] steps (8 x 8 invocations).
+/// Workgroup side of [`Draw::ComputeTexels`] and [`Draw::ComputePixels`] steps (8 x 8
+/// invocations).
 pub const TEXEL_WORKGROUP: u32 = 8;
+
+/// The G-buffer a deferred Shade pass writes in its [`Draw::CameraGBuffer`] step and reads
+/// in its [`Draw::ComputePixels`] step, one texture per entry at the camera's resolution,
+/// the same for every technique (32 bytes a pixel, WebGPU's limit on colour attachments):
+/// - `Rgba32Float`: xyz the receiver's world position, w the receiver-plane depth slope
+///   of the light's centre view (`depth_slope`, >= 0); the clear value, where the camera
+///   sees no surface, has w = -1;
+/// - `Rg32Float`: the world normal turned to the camera's side (`n`), octahedral encoding
+///   (Cigolle et al. 2014);
+/// - `Rgba16Float`: the screen-space derivatives of the centre view's shadow-map
+///   coordinates, xy `dpdx(uv)`, zw `dpdy(uv)` (the footprint of implicit-LOD lookups).
+pub const GBUFFER: [Format; 3] = [Format::Rgba32Float, Format::Rg32Float, Format::Rgba16Float];
+
+/// The four camera outputs of a Shade pass, in the order of [`Draw::SceneFromCamera`]'s
+/// targets and [`Draw::ComputePixels`]'s bindings.
+pub const CAMERA_OUTPUTS: [Format; 4] = [Format::R32Float, Format::Rgba8Unorm, Format::Rgba32Float, Format::Rgba16Float];
 
 /// Size in bytes of [`FRAME_WGSL`]'s `Frame`.
 pub const FRAME_SIZE: u32 = frame_size();
@@ -574,8 +597,22 @@ pub enum Views {
 pub enum Draw {
     /// The scene rasterised from the light.
     SceneFromLight,
-    /// The scene rasterised from the camera.
+    /// The scene rasterised from the camera, into the four camera outputs (visibility
+    /// `r32float`, colour `rgba8unorm`, world position `rgba32float`, world normal
+    /// `rgba16float`) and the camera's depth: a forward Shade pass.
     SceneFromCamera,
+    /// The scene rasterised from the camera into the runtime's G-buffer ([`GBUFFER`]) and
+    /// the camera's depth: the first step of a deferred Shade pass. Background texels keep
+    /// the clear value, NaN.
+    CameraGBuffer,
+    /// One invocation per camera pixel ([`TEXEL_WORKGROUP`] x [`TEXEL_WORKGROUP`] per
+    /// workgroup, x the column, y the row; invocations past the target's edge do nothing):
+    /// the second step of a deferred Shade pass, after a [`Draw::CameraGBuffer`] step. Group
+    /// 2 binds the four camera outputs (in [`Draw::SceneFromCamera`]'s order) at bindings 0
+    /// to 3 as `texture_storage_2d_array<format, write>` of one layer; group 3 binds the
+    /// G-buffer's textures at bindings 0 to 2 as `texture_2d<f32>` (read with
+    /// `textureLoad`). The step writes every pixel, the background's included.
+    ComputePixels,
     /// One full-screen triangle (3 vertices, no vertex buffer) over the targets.
     FullScreen,
     /// One full-screen triangle per mip level 1.. of the targets, each reading the level above.
@@ -1022,6 +1059,25 @@ impl PassGraph {
                         ),
                     });
                 }
+                // a deferred Shade: the G-buffer, then the pixels that read it
+                if matches!(s.draw, Draw::CameraGBuffer | Draw::ComputePixels) && p.kind != PassKind::Shade {
+                    return Err(GraphError::Step {
+                        pass: p.name.clone(),
+                        message: format!("a {:?} step belongs to a Shade pass, not a {:?} pass", s.draw, p.kind),
+                    });
+                }
+                if s.draw == Draw::ComputePixels
+                    && !p
+                        .steps
+                        .iter()
+                        .take_while(|t| !std::ptr::eq(*t, s))
+                        .any(|t| t.draw == Draw::CameraGBuffer)
+                {
+                    return Err(GraphError::Step {
+                        pass: p.name.clone(),
+                        message: "a ComputePixels step reads the G-buffer, which no earlier CameraGBuffer step of its pass writes".into(),
+                    });
+                }
                 for b in &s.reads {
                     let same_step = b.view == View::PreviousLevel && s.writes.iter().any(|w| w.texture == b.texture);
                     if !same_step && !written.contains(&b.texture.as_str()) {
@@ -1100,11 +1156,13 @@ impl PassGraph {
                     Draw::Primitives { buffer, .. } => (buffer, false),
                     Draw::SceneFromLight
                     | Draw::SceneFromCamera
+                    | Draw::CameraGBuffer
                     | Draw::FullScreen
                     | Draw::MipLevels
                     | Draw::ComputeRows
                     | Draw::ComputeColumns
                     | Draw::ComputeTexels
+                    | Draw::ComputePixels
                     | Draw::ComputeMipLevels => continue,
                 };
                 let bad = |message: String| {

@@ -9,7 +9,9 @@
 //!
 //! - writes: every target layer at its format over its extent (a mip chain's levels below
 //!   the base: a third of the base); a depth pass's `Depth32Float` attachment (4 bytes a
-//!   texel); the Shade's four camera targets ([`CAMERA_BYTES_PER_PIXEL`]) and its depth; a
+//!   texel); the Shade's four camera targets ([`CAMERA_BYTES_PER_PIXEL`]) and its depth
+//!   (a deferred Shade: the G-buffer, [`GBUFFER_BYTES_PER_PIXEL`], and the depth, then the
+//!   four targets from the compute step, which reads the G-buffer back once); a
 //!   summed-area table's 16-byte cells;
 //! - reads, for steps over the shadow map: each texture it binds, over the base level, in
 //!   as many layers as the step writes where the two textures have the same layer count (a
@@ -24,6 +26,8 @@ use crate::{Draw, Extent, PassGraph, PassKind, Step, View, Views};
 /// The Shade pass's targets: visibility (r32float), colour (rgba8unorm), position
 /// (rgba32float) and normal (rgba16float).
 pub const CAMERA_BYTES_PER_PIXEL: f64 = 32.0;
+/// A deferred Shade's G-buffer ([`crate::GBUFFER`]): 16 + 8 + 8 bytes.
+pub const GBUFFER_BYTES_PER_PIXEL: f64 = 32.0;
 /// `Depth32Float`.
 pub const DEPTH_BYTES_PER_TEXEL: f64 = 4.0;
 
@@ -85,6 +89,14 @@ pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffi
         Draw::SceneFromLight => t.written += DEPTH_BYTES_PER_TEXEL * base,
         Draw::SceneFromCamera => {
             t.written += (CAMERA_BYTES_PER_PIXEL + DEPTH_BYTES_PER_TEXEL) * sizes.texels(Extent::Camera);
+        }
+        // a deferred Shade: the G-buffer written, then read back and the outputs stored
+        Draw::CameraGBuffer => {
+            t.written += (GBUFFER_BYTES_PER_PIXEL + DEPTH_BYTES_PER_TEXEL) * sizes.texels(Extent::Camera);
+        }
+        Draw::ComputePixels => {
+            t.read += GBUFFER_BYTES_PER_PIXEL * sizes.texels(Extent::Camera);
+            t.written += CAMERA_BYTES_PER_PIXEL * sizes.texels(Extent::Camera);
         }
         _ => {}
     }

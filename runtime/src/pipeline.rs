@@ -66,7 +66,7 @@ pub(crate) struct BindingLayout {
     pub geometry: Option<GeometryGroup>,
 }
 
-/// What group 3 of a Geometry pass's step binds.
+/// What group 3 of a Geometry pass's step, or of a deferred Shade's compute step, binds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) enum GeometryGroup {
     /// A `Silhouettes` step (compute): 0 edges, 1 face planes, 2 edge faces (read-only
@@ -78,6 +78,9 @@ pub(crate) enum GeometryGroup {
     /// fragment stages). Binding 4, so that one module can hold both steps' entry points:
     /// the classification's bindings 0 to 3 and the draw's are distinct variables.
     Draw,
+    /// A `ComputePixels` step: 0 to 2 the G-buffer (`sshc_graph::GBUFFER`), read with
+    /// `textureLoad`.
+    GBuffer,
 }
 
 impl GeometryGroup {
@@ -105,6 +108,18 @@ impl GeometryGroup {
             }
             GeometryGroup::Discontinuities => vec![buffer(3, false, wgpu::ShaderStages::COMPUTE)],
             GeometryGroup::Draw => vec![buffer(4, true, wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT)],
+            GeometryGroup::GBuffer => (0..sshc_graph::GBUFFER.len() as u32)
+                .map(|binding| wgpu::BindGroupLayoutEntry {
+                    binding,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                })
+                .collect(),
         }
     }
 }

@@ -94,6 +94,9 @@ pub(crate) struct Resources {
     /// Visibility, colour, position, normal ([`CAMERA_FORMATS`]).
     pub camera: Vec<wgpu::Texture>,
     pub camera_depth: wgpu::Texture,
+    /// A deferred Shade's G-buffer ([`graph::GBUFFER`]), at the camera's size; empty when
+    /// no step draws one.
+    pub gbuffer: Vec<wgpu::Texture>,
     pub frame: wgpu::Buffer,
     /// The `Frame` of each light-sample view (`SceneInputs::sample_frame`), for the passes
     /// that render one view per sample.
@@ -255,7 +258,14 @@ impl Resources {
                 });
                 textures.insert(t.name.clone(), tex);
             }
-            let plain = |label: &str, w: u32, h: u32, format: wgpu::TextureFormat| {
+            let draws = |d: graph::Draw| graph.passes.iter().flat_map(|p| &p.steps).any(|st| st.draw == d);
+            // a deferred Shade stores the camera outputs from a compute step
+            let camera_usage = if draws(graph::Draw::ComputePixels) {
+                wgpu::TextureUsages::STORAGE_BINDING
+            } else {
+                wgpu::TextureUsages::empty()
+            };
+            let plain = |label: &str, w: u32, h: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
                 gpu.device.create_texture(&wgpu::TextureDescriptor {
                     label: Some(label),
                     size: wgpu::Extent3d {
@@ -267,17 +277,27 @@ impl Resources {
                     sample_count: 1,
                     dimension: wgpu::TextureDimension::D2,
                     format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC | usage,
                     view_formats: &[],
                 })
             };
-            let light_depth = plain("light depth", s.shadow_size, s.shadow_size, DEPTH_FORMAT);
+            let none = wgpu::TextureUsages::empty();
+            let light_depth = plain("light depth", s.shadow_size, s.shadow_size, DEPTH_FORMAT, none);
             let camera = ["visibility", "color", "position", "normal"]
                 .iter()
                 .zip(CAMERA_FORMATS)
-                .map(|(n, f)| plain(n, cw, ch, f))
+                .map(|(n, f)| plain(n, cw, ch, f, camera_usage))
                 .collect();
-            let camera_depth = plain("camera depth", cw, ch, DEPTH_FORMAT);
+            let camera_depth = plain("camera depth", cw, ch, DEPTH_FORMAT, none);
+            let gbuffer = if draws(graph::Draw::CameraGBuffer) {
+                ["g-buffer world", "g-buffer normal", "g-buffer footprint"]
+                    .iter()
+                    .zip(graph::GBUFFER)
+                    .filter_map(|(n, f)| wgpu_format(f).map(|f| plain(n, cw, ch, f, wgpu::TextureUsages::TEXTURE_BINDING)))
+                    .collect()
+            } else {
+                Vec::new()
+            };
             let frame = gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("frame"),
                 size: FRAME_SIZE as u64,
@@ -351,6 +371,7 @@ impl Resources {
                 light_depth,
                 camera,
                 camera_depth,
+                gbuffer,
                 frame,
                 sample_frames,
                 light_samples,

@@ -64,6 +64,8 @@ enum Targets {
     Textures(Vec<Target>),
     /// The four camera outputs.
     Camera,
+    /// The G-buffer of a deferred Shade.
+    GBuffer,
 }
 
 #[derive(Clone, Copy)]
@@ -114,6 +116,8 @@ enum Dispatch {
     Texels,
     /// One dispatch per mip level k >= 1 of the target, one invocation per texel of it.
     MipTexels,
+    /// One invocation per camera pixel, [`graph::TEXEL_WORKGROUP`] squared per workgroup.
+    Pixels,
     /// One invocation per cell of the mesh of texel centres ((size - 1)^2), x the column
     /// ([`graph::COMPUTE_WORKGROUP`] per workgroup), y the row, over the map of the view's
     /// neighbour `source`; nothing where the view has no such neighbour (the ends of an
@@ -155,6 +159,8 @@ enum Bound {
         /// A `ComputeMipLevels` step: per level k >= 1, group 1 (level k - 1), group 2
         /// (level k, storage) and the level's size; `group1`, `group2` are then unused.
         levels: Vec<(Option<wgpu::BindGroup>, wgpu::BindGroup, u32)>,
+        /// A deferred Shade's G-buffer, read at group 3.
+        gbuffer: Option<wgpu::BindGroup>,
     },
 }
 
@@ -211,6 +217,17 @@ const CAMERA_CLEAR: [wgpu::Color; 4] = [
     NAN,
     NAN,
 ];
+/// The G-buffer where the camera sees no surface: world w = -1 (see [`graph::GBUFFER`]).
+const GBUFFER_CLEAR: [wgpu::Color; 3] = [
+    wgpu::Color {
+        r: 0.0,
+        g: 0.0,
+        b: 0.0,
+        a: -1.0,
+    },
+    wgpu::Color::TRANSPARENT,
+    wgpu::Color::TRANSPARENT,
+];
 
 /// Build the node of every step: decide from its [`Draw`] what it records, check what it
 /// binds against the graph and the device, and build (or find) its pipeline.
@@ -257,6 +274,18 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     DrawCall::Scene,
                     Levels::Base,
                 ),
+                Draw::CameraGBuffer => raster(
+                    Targets::GBuffer,
+                    GBUFFER_CLEAR.to_vec(),
+                    Some(DepthTarget::Camera),
+                    DrawCall::Scene,
+                    Levels::Base,
+                ),
+                Draw::ComputePixels => NodeKind::Compute(ComputeStep {
+                    writes: vec![],
+                    dispatch: Dispatch::Pixels,
+                    generated: None,
+                }),
                 Draw::FullScreen => raster(
                     Targets::Textures(step.writes.clone()),
                     vec![wgpu::Color::TRANSPARENT; n],
@@ -358,6 +387,7 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     scene_vertices: matches!(r.draw, DrawCall::Scene),
                     targets: match &r.targets {
                         Targets::Camera => CAMERA_FORMATS.to_vec(),
+                        Targets::GBuffer => graph::GBUFFER.iter().filter_map(|f| wgpu_format(*f)).collect(),
                         Targets::Textures(t) => t.iter().map(|t| texture_format(&t.texture)).collect::<Result<_>>()?,
                     }
                     .into_iter()
@@ -391,6 +421,10 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     .iter()
                     .map(|w| texture_format(w).map(|format| Slot::StorageTexture { format }))
                     .collect::<Result<_>>()?,
+                // the camera outputs, stored per pixel
+                NodeKind::Compute(c) if matches!(c.dispatch, Dispatch::Pixels) => {
+                    CAMERA_FORMATS.iter().map(|&format| Slot::StorageTexture { format }).collect()
+                }
                 NodeKind::Compute(c) => vec![Slot::Buffer { read_only: false }; c.writes.len()],
                 NodeKind::Raster(_) => vec![],
             };
@@ -407,7 +441,9 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                         Draw::Silhouettes { .. } => Some(GeometryGroup::Classify),
                         Draw::Discontinuities { .. } => Some(GeometryGroup::Discontinuities),
                         Draw::Primitives { .. } => Some(GeometryGroup::Draw),
+                        Draw::ComputePixels => Some(GeometryGroup::GBuffer),
                         Draw::SceneFromLight
+                        | Draw::CameraGBuffer
                         | Draw::SceneFromCamera
                         | Draw::FullScreen
                         | Draw::MipLevels
@@ -487,6 +523,7 @@ impl StepNode {
                 for level in levels {
                     let color = match &r.targets {
                         Targets::Camera => res.camera.iter().map(|t| t.create_view(&Default::default())).collect(),
+                        Targets::GBuffer => res.gbuffer.iter().map(|t| t.create_view(&Default::default())).collect(),
                         Targets::Textures(ts) => ts
                             .iter()
                             .zip(&self.view_layers)
@@ -581,6 +618,20 @@ impl StepNode {
                 let group2 = match &self.pipeline.group2 {
                     // a mip chain binds each level's storage view (`levels`)
                     _ if matches!(c.dispatch, Dispatch::MipTexels) => None,
+                    // the camera outputs as one-layer arrays
+                    Some(layout) if matches!(c.dispatch, Dispatch::Pixels) => {
+                        let views: Vec<wgpu::TextureView> = res
+                            .camera
+                            .iter()
+                            .map(|t| {
+                                t.create_view(&wgpu::TextureViewDescriptor {
+                                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                                    ..Default::default()
+                                })
+                            })
+                            .collect();
+                        Some(bind_views(gpu, layout, &views))
+                    }
                     None => None,
                     Some(layout) => {
                         let mut entries = Vec::new();
@@ -626,12 +677,24 @@ impl StepNode {
                     }
                     (None, _) => None,
                 };
+                // a deferred Shade's G-buffer (group 3)
+                let gbuffer = match (&c.dispatch, &self.pipeline.group3) {
+                    (Dispatch::Pixels, Some(layout)) => {
+                        if res.gbuffer.is_empty() {
+                            return Err(RuntimeError::NotFound(format!("pass `{}`: no G-buffer was allocated", self.label)));
+                        }
+                        let views: Vec<wgpu::TextureView> = res.gbuffer.iter().map(|t| t.create_view(&Default::default())).collect();
+                        Some(bind_views(gpu, layout, &views))
+                    }
+                    _ => None,
+                };
                 Bound::Compute {
                     group0,
                     group1: self.group1(gpu, res, 0)?,
                     group2,
                     geometry,
                     levels,
+                    gbuffer,
                 }
             }
         };
@@ -864,6 +927,7 @@ impl StepNode {
                     group2,
                     geometry,
                     levels,
+                    gbuffer,
                 },
                 Pipeline::Compute(pipeline),
             ) => {
@@ -896,6 +960,9 @@ impl StepNode {
                 if let Some((g3, _, _)) = geometry {
                     cpass.set_bind_group(3, g3, &[]);
                 }
+                if let Some(g3) = gbuffer {
+                    cpass.set_bind_group(3, g3, &[]);
+                }
                 match &c.dispatch {
                     Dispatch::ShadowMapLines => {
                         cpass.dispatch_workgroups(res.shadow_size.div_ceil(graph::COMPUTE_WORKGROUP), 1, 1);
@@ -903,6 +970,10 @@ impl StepNode {
                     Dispatch::Texels => {
                         let n = res.shadow_size.div_ceil(graph::TEXEL_WORKGROUP);
                         cpass.dispatch_workgroups(n, n, 1);
+                    }
+                    Dispatch::Pixels => {
+                        let (w, h) = res.camera_size;
+                        cpass.dispatch_workgroups(w.div_ceil(graph::TEXEL_WORKGROUP), h.div_ceil(graph::TEXEL_WORKGROUP), 1);
                     }
                     // level by level, each reading the one above (wgpu orders the
                     // dispatches of a pass that write and read the same texture)
@@ -952,6 +1023,23 @@ impl StepNode {
             ))),
         }
     }
+}
+
+/// A bind group of `views` at bindings 0, 1, ...
+fn bind_views(gpu: &Gpu, layout: &wgpu::BindGroupLayout, views: &[wgpu::TextureView]) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = views
+        .iter()
+        .enumerate()
+        .map(|(i, v)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: wgpu::BindingResource::TextureView(v),
+        })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout,
+        entries: &entries,
+    })
 }
 
 /// Why a pass cannot run here: features the schema expresses but this runtime does not

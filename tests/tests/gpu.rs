@@ -310,13 +310,21 @@ fn bodies_split_into_functions_compute_the_same_visibility() {
 /// expression per texel, the same taps in the same order, stored at the same format.
 #[test]
 fn map_filter_and_mipmap_passes_give_the_same_visibility_under_either_schedule() {
+    use sshc_runtime::graph::{Draw, PassKind};
     let gpu = gpu();
     let mut computed = Vec::new();
     for t in bundled("techniques") {
         let src = std::fs::read_to_string(root().join("techniques").join(format!("{t}.ron"))).unwrap();
         let fragment = compile(&t, &[]);
+        // every Map, Filter and Mipmap pass as compute (`*` would make the Shade deferred too)
         let opts = sshc::CompileOptions {
-            schedule: vec![("*".into(), "compute".into())],
+            schedule: fragment
+                .graph
+                .passes
+                .iter()
+                .filter(|p| matches!(p.kind, PassKind::Map | PassKind::Filter | PassKind::Mipmap))
+                .map(|p| (p.name.clone(), "compute".into()))
+                .collect(),
             ..Default::default()
         };
         let compute = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(&t, &src)));
@@ -330,7 +338,6 @@ fn map_filter_and_mipmap_passes_give_the_same_visibility_under_either_schedule()
         };
         assert_eq!(texels(&fragment), 0, "{t}: the default schedule is fragment");
         // a Map, Filter or Mipmap pass runs as compute where its formats allow it
-        use sshc_runtime::graph::{Draw, PassKind};
         let maps = fragment
             .graph
             .passes
@@ -647,4 +654,122 @@ fn pipelines_are_built_once_per_device() {
     let _ = Executor::new(&gpu, c2.graph.clone(), c2.shaders.clone()).unwrap();
     let blur_steps = c2.graph.passes.iter().find(|p| p.name == "blur").map(|p| p.steps.len()).unwrap();
     assert_eq!(gpu.cached_pipelines(), steps + blur_steps);
+}
+
+/// The Shade pass of every bundled technique deferred (the compute schedule: a G-buffer
+/// raster, then one compute invocation per pixel) against forward (the default).
+///
+/// Both compute the receiver's inputs by the same code from the same f32 values, with one
+/// exception: the footprint of implicit-LOD lookups (`sample`), `dpdx(uv)` and `dpdy(uv)`,
+/// which the G-buffer holds at F16 (relative error 2^-11, a level of detail off by up to
+/// log2(1 + 2^-11) = 7e-4 of a level; the normal goes through an octahedral f32 encoding,
+/// which here changes no value). So a technique with no implicit-LOD lookup gives the same
+/// visibility bit for bit; one with them (CSM, VSM) may differ where the level of detail
+/// moves the trilinear weight across one of its quanta (8 bits on lavapipe, as few as 4 in
+/// Vulkan), which its reconstruction then amplifies: that is the 8-bit filtering term of the
+/// agreement tests' error model, and tests/tests/agreement.rs checks both techniques'
+/// compute variants (`*=compute`, the deferred Shade included) against the f64 reference
+/// with it. Here their differences are only reported. Position is bit for bit, the normal
+/// within one F16 ulp, the background the forward form's clear values.
+#[test]
+fn a_deferred_shade_gives_the_forward_values() {
+    use sshc_runtime::graph::{Draw, PassKind};
+    let gpu = gpu();
+    let mut deferred_ones = Vec::new();
+    for t in bundled("techniques") {
+        let src = std::fs::read_to_string(root().join("techniques").join(format!("{t}.ron"))).unwrap();
+        let forward = compile(&t, &[]);
+        let shade = forward
+            .graph
+            .passes
+            .iter()
+            .find(|p| p.kind == PassKind::Shade)
+            .expect("a Shade pass");
+        let opts = sshc::CompileOptions {
+            schedule: vec![(shade.name.clone(), "compute".into())],
+            ..Default::default()
+        };
+        let deferred = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(&t, &src)));
+        let draws = |c: &sshc::Compiled| -> Vec<Draw> {
+            let p = c.graph.passes.iter().find(|p| p.kind == PassKind::Shade).unwrap();
+            p.steps.iter().map(|s| s.draw.clone()).collect()
+        };
+        assert_eq!(draws(&forward), [Draw::SceneFromCamera], "{t}: the default is forward");
+        let text = sshc::explain::explain(&deferred);
+        if draws(&deferred) == [Draw::SceneFromCamera] {
+            assert!(
+                text.contains("compute (deferred) was asked for, but"),
+                "{t}: the refusal is explained\n{text}"
+            );
+            continue;
+        }
+        assert_eq!(draws(&deferred), [Draw::CameraGBuffer, Draw::ComputePixels], "{t}");
+        assert!(text.contains("schedule: compute (deferred)"), "{t}\n{text}");
+        deferred_ones.push(t.clone());
+        // implicit-LOD lookups in the Shade (`textureSample`, forward)
+        let implicit_lod = forward
+            .shaders
+            .iter()
+            .any(|(f, src)| f.ends_with("shade.wgsl") && src.contains("textureSample("));
+        let sc = if sshc_lab::bind::graph_samples(&forward.graph) > 0 {
+            "linear"
+        } else {
+            "contact"
+        };
+        let s = scene(sc, 48, 128);
+        let outputs = |c: &sshc::Compiled| {
+            let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+            ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&s, &c.graph).unwrap_or_else(|e| panic!("{e}")))
+                .unwrap_or_else(|e| panic!("{e}"));
+            ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+            [
+                CameraOutput::Visibility,
+                CameraOutput::Color,
+                CameraOutput::Position,
+                CameraOutput::Normal,
+            ]
+            .map(|o| ex.read_camera(o).unwrap_or_else(|e| panic!("{e}")))
+        };
+        let (a, b) = (outputs(&forward), outputs(&deferred));
+        let what = format!("{t} on {sc}");
+        let mut background = 0;
+        let (mut vis_max, mut vis_diff) = (0.0f32, 0);
+        for y in 0..a[0].height {
+            for x in 0..a[0].width {
+                let [va, ca, pa, na] = [0, 1, 2, 3].map(|i| a[i].at(x, y));
+                let [vb, cb, pb, nb] = [0, 1, 2, 3].map(|i| b[i].at(x, y));
+                if pa[0].is_nan() {
+                    // the background: the forward form's clear values
+                    background += 1;
+                    assert!(pb.iter().chain(&nb).all(|v| v.is_nan()), "{what} ({x}, {y}): {pb:?} {nb:?}");
+                    assert_eq!((va[0], ca), (vb[0], cb), "{what} ({x}, {y})");
+                    continue;
+                }
+                assert_eq!(pa.map(f32::to_bits), pb.map(f32::to_bits), "{what} ({x}, {y}): position");
+                for (u, v) in na.iter().zip(&nb) {
+                    assert!(
+                        (u - v).abs() <= u.abs().max(v.abs()) * 2f32.powi(-10),
+                        "{what} ({x}, {y}): normal {na:?} {nb:?}"
+                    );
+                }
+                let d = (va[0] - vb[0]).abs();
+                vis_max = vis_max.max(d);
+                vis_diff += usize::from(d > 0.0);
+                assert!(
+                    implicit_lod || va[0].to_bits() == vb[0].to_bits(),
+                    "{what} ({x}, {y}): visibility {} against {}",
+                    va[0],
+                    vb[0]
+                );
+            }
+        }
+        eprintln!("{what}: {background} background pixels; visibility differs at {vis_diff} pixels, at most {vis_max:e}");
+        assert!(
+            background > 0 && background < a[0].width * a[0].height,
+            "{what}: the view holds surface and background"
+        );
+    }
+    // every technique but the two that read a light sample's view's derivatives
+    // (linear-light and point-samples: `depth_slope` inside `at_sample`), which stay forward
+    assert_eq!(deferred_ones.len(), 11, "{deferred_ones:?}");
 }

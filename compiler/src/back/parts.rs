@@ -57,7 +57,8 @@ pub enum Line {
 }
 
 /// The WGSL type of an entry point's local that generated code may read: the `in_*`
-/// inputs, the integer texel coordinates `texel` and `in_base`, and their per-sample copies
+/// inputs, the integer texel coordinates `texel` and `in_base`, a deferred Shade's
+/// `in_duv_dx` and `in_duv_dy`, and their per-sample copies
 /// `NAME_vK` (`at_sample`). `None` for anything else (globals, functions, fields).
 fn local_ty(name: &str) -> Option<&'static str> {
     let base = match name.rsplit_once("_v") {
@@ -66,6 +67,8 @@ fn local_ty(name: &str) -> Option<&'static str> {
     };
     match base {
         "texel" | "in_base" => Some("vec2<i32>"),
+        // a deferred Shade's screen-space footprint of `in_uv` (implicit-LOD lookups)
+        "in_duv_dx" | "in_duv_dy" => Some("vec2<f32>"),
         _ => Input::ALL.iter().find(|i| i.desc().wgsl == base).map(|i| i.desc().ty.wgsl()),
     }
 }

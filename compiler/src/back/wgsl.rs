@@ -142,6 +142,10 @@ struct Emitter<'a> {
     /// Map and geometry side, in a per-sample pass: per-sample resources are read at the
     /// layer block of the view being rendered (`frame.sample.x`).
     per_sample_pass: bool,
+    /// Receiver side, in a deferred Shade's compute step: implicit-LOD lookups take their
+    /// footprint from the G-buffer (`textureSampleGrad`), compute stages having no
+    /// screen-space derivatives.
+    deferred: bool,
 }
 
 impl<'a> Emitter<'a> {
@@ -162,6 +166,7 @@ impl<'a> Emitter<'a> {
             counter: 0,
             views: Default::default(),
             per_sample_pass: false,
+            deferred: false,
         }
     }
 
@@ -375,6 +380,11 @@ impl<'a> Emitter<'a> {
                             self.tables.push((name.clone(), scale));
                         }
                         format!("box_{name}(in_uv, vec2<f32>({}, {}), {layer})", args[0], args[1])
+                    }
+                    // `shade_refusal` keeps per-sample implicit-LOD lookups forward
+                    SampleWgsl::Texture { sampler, .. } if self.deferred && how == SampleFn::Sample && view.is_none() => {
+                        self.uses_sampler |= sampler;
+                        format!("textureSampleGrad({tex}, smp, in_uv, {layer}, in_duv_dx, in_duv_dy)")
                     }
                     SampleWgsl::Texture { sampler, read } => {
                         self.uses_sampler |= sampler;
@@ -1811,31 +1821,17 @@ fn mipmap(ir: &Program, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Resul
     Ok((s, steps))
 }
 
-fn shade(ir: &Program, pass: &IrPass, visibility: H, split: Split) -> Result<(String, Vec<Step>), Diagnostic> {
-    let mut em = Emitter::new(ir, Side::Receiver, pass.reads.clone());
-    em.split = split;
-    let v = em.emit(visibility)?;
-    let mut s = header(ir, pass);
-    s.push_str(&em.declarations(ir));
-    let (functions, body) = em.finish("fs_shade");
-    s.push_str(&functions);
-    s.push_str(
-        "
+/// What the camera raster of both Shade schedules interpolates.
+const SHADE_VARYING: &str = "
 struct ShadeVarying {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
 }
+";
 
-// visibility (r32float), shaded colour (rgba8unorm), world position (rgba32float) and
-// world normal (rgba16float): 32 bytes per sample, WebGPU's limit.
-struct ShadeOut {
-    @location(0) visibility: vec4<f32>,
-    @location(1) color: vec4<f32>,
-    @location(2) position: vec4<f32>,
-    @location(3) normal: vec4<f32>,
-}
-
+/// The camera raster's vertex stage: the scene's world position and normal.
+const SHADE_VERTEX: &str = "
 @vertex
 fn vs_shade(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> ShadeVarying {
     var out: ShadeVarying;
@@ -1844,18 +1840,20 @@ fn vs_shade(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) ->
     out.normal = normal;
     return out;
 }
+";
 
-@fragment
-fn fs_shade(in: ShadeVarying) -> ShadeOut {
-    // Two-sided surfaces: the receiver is the side the camera sees. The triangle's own
+/// The receiver's normal, in a fragment entry taking `in: ShadeVarying`.
+const SHADE_NORMAL: &str = "    // Two-sided surfaces: the receiver is the side the camera sees. The triangle's own
     // normal from screen-space derivatives, cross(dpdy, dpdx) of the world position, faces
     // the camera whatever the winding (framebuffer y runs down); the interpolated normal is
     // turned to its side, so a smooth normal at a silhouette keeps its sign.
     let in_face = cross(dpdy(in.world), dpdx(in.world));
     let in_smooth = normalize(in.normal);
     let n = select(in_smooth, -in_smooth, dot(in_smooth, in_face) < 0.0);
-    let world = vec4<f32>(in.world, 1.0);
-    let in_d_world = -(frame.light_view * world).z;
+";
+
+/// The receiver seen from the light's centre, from `in.world`, `world` and `n`.
+const SHADE_RECEIVER: &str = "    let in_d_world = -(frame.light_view * world).z;
     let in_d = (in_d_world - frame.depth_range.x) * frame.depth_range.z;
     let light_clip = frame.light_view_proj * world;
     let in_uv = light_clip.xy / light_clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
@@ -1868,7 +1866,10 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {
     // one shadow-map texel at the receiver, in normalised depth units
     let in_texel_depth = (frame.texel_world.x * in_d_world + frame.texel_world.y) * frame.depth_range.z;
     let in_base = vec2<i32>(floor(texel_pos));
-    // receiver-plane depth gradient over uv from screen-space derivatives (Isidoro 2006):
+";
+
+/// The receiver-plane depth slope, in a fragment entry (screen-space derivatives).
+const SHADE_SLOPE: &str = "    // receiver-plane depth gradient over uv from screen-space derivatives (Isidoro 2006):
     // solve [duv/dx; duv/dy] g = [dd/dx; dd/dy]; 0 where the Jacobian is singular
     let duv_dx = dpdx(in_uv);
     let duv_dy = dpdy(in_uv);
@@ -1877,41 +1878,197 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {
     let det = duv_dx.x * duv_dy.y - duv_dx.y * duv_dy.x;
     let g = vec2<f32>(dd_dx * duv_dy.y - duv_dx.y * dd_dy, duv_dx.x * dd_dy - dd_dx * duv_dy.x);
     let in_depth_slope = select(0.0, min(length(g / det) * frame.shadow_size.z, 0.1), abs(det) > 1e-14);
-",
-    );
-    for (&k, used) in &em.views {
-        s.push_str(&sample_prologue(k, used));
+";
+
+/// Why a Shade pass that asks for the compute (deferred) schedule runs forward, or None:
+/// what the G-buffer does not carry, the screen-space derivatives of a light sample's view
+/// (its `depth_slope`, the footprint of its implicit-LOD `sample`).
+pub fn shade_refusal(ir: &Program, pass: &IrPass) -> Option<String> {
+    let IrPassKind::Shade { visibility } = pass.kind else { return None };
+    let arena = &ir.ir.arena;
+    // the per-sample lookups and inputs
+    for h in arena.postorder(&[visibility]) {
+        match arena.node(h) {
+            Node::Input(Input::DepthSlope, Some(k)) => {
+                return Some(format!(
+                    "it reads `depth_slope` in light sample {k}'s view, and the G-buffer carries the centre view's only"
+                ));
+            }
+            Node::Sample {
+                how: SampleFn::Sample,
+                view: Some(k),
+                ..
+            } => {
+                return Some(format!(
+                    "its `sample` in light sample {k}'s view needs that view's screen-space footprint, and the G-buffer carries the centre view's only"
+                ));
+            }
+            _ => {}
+        }
     }
-    s.push_str(&body);
-    let _ = write!(
-        s,
-        "    // outputs stay finite and in [0, 1]; a receiver facing away from the light's centre
+    None
+}
+
+/// Whether a Shade pass runs deferred: its schedule asks for compute and nothing refuses it
+/// ([`shade_refusal`]).
+pub fn shade_is_deferred(ir: &Program, pass: &IrPass) -> bool {
+    pass.schedule == Schedule::Compute && shade_refusal(ir, pass).is_none()
+}
+
+/// A Shade pass: forward, one camera raster whose fragments evaluate the visibility; or
+/// deferred (the compute schedule), a camera raster writing the G-buffer
+/// ([`graph::GBUFFER`]) and then one compute invocation per pixel evaluating it from there.
+/// Both compute the receiver's inputs the same way from the same values, except that the
+/// deferred form reads the normal through an octahedral f32 encoding and the footprint of
+/// implicit-LOD lookups at F16.
+fn shade(ir: &Program, pass: &IrPass, visibility: H, split: Split) -> Result<(String, Vec<Step>), Diagnostic> {
+    let deferred = shade_is_deferred(ir, pass);
+    let mut em = Emitter::new(ir, Side::Receiver, pass.reads.clone());
+    em.split = split;
+    em.deferred = deferred;
+    let v = em.emit(visibility)?;
+    let mut s = header(ir, pass);
+    s.push_str(&em.declarations(ir));
+    let entry = if deferred { "cs_shade" } else { "fs_shade" };
+    let (functions, body) = em.finish(entry);
+    s.push_str(&functions);
+    s.push_str(SHADE_VARYING);
+    let prologues: String = em.views.iter().map(|(&k, used)| sample_prologue(k, used)).collect();
+    let outputs = |store: &dyn Fn(&str, &str) -> String| {
+        format!(
+            "    // outputs stay finite and in [0, 1]; a receiver facing away from the light's centre
     // is shadowed by its own surface
     let raw = {v};
     let vis = select(select(clamp(raw, 0.0, 1.0), 1.0, raw != raw), 0.0, in_ndotl <= 0.0);
     let lambert = max(in_ndotl, 0.0);
-    var out: ShadeOut;
-    out.visibility = vec4<f32>(vis, 0.0, 0.0, 1.0);
-    out.color = vec4<f32>(vec3<f32>(0.12 + 0.88 * vis * lambert), 1.0);
-    out.position = vec4<f32>(in.world, 1.0);
-    out.normal = vec4<f32>(n, 0.0);
-    return out;
-}}
-"
-    );
-    let step = Step {
-        vertex: Some("vs_shade".into()),
-        fragment: Some("fs_shade".into()),
-        compute: None,
-        draw: Draw::SceneFromCamera,
-        reads: em.graph_bindings(),
+{}{}{}{}",
+            store("visibility", "vec4<f32>(vis, 0.0, 0.0, 1.0)"),
+            store("color", "vec4<f32>(vec3<f32>(0.12 + 0.88 * vis * lambert), 1.0)"),
+            store("position", "vec4<f32>(in.world, 1.0)"),
+            store("normal", "vec4<f32>(n, 0.0)"),
+        )
+    };
+    let step = |vertex: Option<&str>, fragment: Option<&str>, compute: Option<&str>, draw: Draw, reads: bool| Step {
+        vertex: vertex.map(str::to_string),
+        fragment: fragment.map(str::to_string),
+        compute: compute.map(str::to_string),
+        draw,
+        reads: if reads { em.graph_bindings() } else { vec![] },
         writes: vec![],
-        params: em.uses_params,
-        sampler: em.uses_sampler,
-        light_samples: !em.views.is_empty(),
+        params: reads && em.uses_params,
+        sampler: reads && em.uses_sampler,
+        light_samples: reads && !em.views.is_empty(),
         cost: OpCount::default(),
     };
-    Ok((s, vec![step]))
+    if !deferred {
+        let _ = write!(
+            s,
+            "
+// visibility (r32float), shaded colour (rgba8unorm), world position (rgba32float) and
+// world normal (rgba16float): 32 bytes per sample, WebGPU's limit.
+struct ShadeOut {{
+    @location(0) visibility: vec4<f32>,
+    @location(1) color: vec4<f32>,
+    @location(2) position: vec4<f32>,
+    @location(3) normal: vec4<f32>,
+}}
+{SHADE_VERTEX}
+@fragment
+fn fs_shade(in: ShadeVarying) -> ShadeOut {{
+{SHADE_NORMAL}    let world = vec4<f32>(in.world, 1.0);
+{SHADE_RECEIVER}{SHADE_SLOPE}{prologues}{body}{}    return out;
+}}
+",
+            outputs(&|field, value| {
+                let decl = if field == "visibility" { "    var out: ShadeOut;\n" } else { "" };
+                format!("{decl}    out.{field} = {value};\n")
+            })
+        );
+        let forward = step(Some("vs_shade"), Some("fs_shade"), None, Draw::SceneFromCamera, true);
+        return Ok((s, vec![forward]));
+    }
+    s.push_str(SHADE_VERTEX);
+    let _ = write!(
+        s,
+        "
+// The G-buffer (sshc_graph::GBUFFER): world position and the centre view's depth slope,
+// the normal (octahedral, f32), the footprint of the centre view's uv (f16).
+struct GBufferOut {{
+    @location(0) world: vec4<f32>,
+    @location(1) normal: vec2<f32>,
+    @location(2) duv: vec4<f32>,
+}}
+
+// Octahedral encoding of a unit vector (Cigolle et al. 2014, section 3.1).
+fn octahedral(v: vec3<f32>) -> vec2<f32> {{
+    let p = v.xy / (abs(v.x) + abs(v.y) + abs(v.z));
+    let sign = select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+    return select((1.0 - abs(p.yx)) * sign, p, v.z >= 0.0);
+}}
+
+fn from_octahedral(e: vec2<f32>) -> vec3<f32> {{
+    var v = vec3<f32>(e, 1.0 - abs(e.x) - abs(e.y));
+    let t = max(-v.z, 0.0);
+    let sign = select(vec2<f32>(1.0), vec2<f32>(-1.0), v.xy >= vec2<f32>(0.0));
+    v = vec3<f32>(v.xy + t * sign, v.z);
+    return normalize(v);
+}}
+
+@fragment
+fn fs_gbuffer(in: ShadeVarying) -> GBufferOut {{
+{SHADE_NORMAL}    let world = vec4<f32>(in.world, 1.0);
+    let in_d = (-(frame.light_view * world).z - frame.depth_range.x) * frame.depth_range.z;
+    let light_clip = frame.light_view_proj * world;
+    let in_uv = light_clip.xy / light_clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+{SHADE_SLOPE}    var out: GBufferOut;
+    out.world = vec4<f32>(in.world, in_depth_slope);
+    out.normal = octahedral(n);
+    out.duv = vec4<f32>(duv_dx, duv_dy);
+    return out;
+}}
+
+// The camera outputs (sshc_graph::CAMERA_OUTPUTS) and the G-buffer.
+@group(2) @binding(0) var o_visibility: texture_storage_2d_array<r32float, write>;
+@group(2) @binding(1) var o_color: texture_storage_2d_array<rgba8unorm, write>;
+@group(2) @binding(2) var o_position: texture_storage_2d_array<rgba32float, write>;
+@group(2) @binding(3) var o_normal: texture_storage_2d_array<rgba16float, write>;
+@group(3) @binding(0) var g_world: texture_2d<f32>;
+@group(3) @binding(1) var g_normal: texture_2d<f32>;
+@group(3) @binding(2) var g_duv: texture_2d<f32>;
+
+@compute @workgroup_size({wg}, {wg})
+fn cs_shade(@builtin(global_invocation_id) id: vec3<u32>) {{
+    // invocations past the target's edge store nothing
+    if any(id.xy >= textureDimensions(o_visibility)) {{
+        return;
+    }}
+    let pixel = vec2<i32>(id.xy);
+    let gbuffer = textureLoad(g_world, pixel, 0i);
+    // where the camera sees no surface (the G-buffer's clear value has w = -1): the forward
+    // form's clear values, visibility 1, a dark background, position and normal NaN
+    if gbuffer.w < 0.0 {{
+        let nan = bitcast<f32>(0x7fc00000u);
+        textureStore(o_visibility, pixel, 0i, vec4<f32>(1.0, 0.0, 0.0, 1.0));
+        textureStore(o_color, pixel, 0i, vec4<f32>(0.02, 0.02, 0.03, 1.0));
+        textureStore(o_position, pixel, 0i, vec4<f32>(nan));
+        textureStore(o_normal, pixel, 0i, vec4<f32>(nan));
+        return;
+    }}
+    let in = ShadeVarying(vec4<f32>(0.0), gbuffer.xyz, vec3<f32>(0.0));
+    let n = from_octahedral(textureLoad(g_normal, pixel, 0i).xy);
+    let world = vec4<f32>(in.world, 1.0);
+{SHADE_RECEIVER}    let in_depth_slope = gbuffer.w;
+    let footprint = textureLoad(g_duv, pixel, 0i);
+    let in_duv_dx = footprint.xy;
+    let in_duv_dy = footprint.zw;
+{prologues}{body}{}}}
+",
+        outputs(&|field, value| format!("    textureStore(o_{field}, pixel, 0i, {value});\n")),
+        wg = graph::TEXEL_WORKGROUP,
+    );
+    let gbuffer = step(Some("vs_shade"), Some("fs_gbuffer"), None, Draw::CameraGBuffer, false);
+    let pixels = step(None, None, Some("cs_shade"), Draw::ComputePixels, true);
+    Ok((s, vec![gbuffer, pixels]))
 }
 
 /// Parse and validate every module with naga, and count each entry point's operations.

@@ -184,33 +184,39 @@ pub enum LightView {
 }
 
 /// How a pass runs on the GPU (issue 15: the technique says what is computed, the
-/// schedule how). Map, Filter and Mipmap passes so far.
+/// schedule how). Map, Filter, Mipmap and Shade passes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Schedule {
     /// One full-screen triangle; a fragment per texel writes the channels as colour targets.
+    /// A Shade pass: forward, the camera raster's fragments evaluate the visibility.
     #[default]
     Fragment,
     /// One compute invocation per texel (8 x 8 per workgroup), storing into storage
     /// textures; only where every written format is a storage format. A Filter's
     /// workgroup loads its tile and the kernel's apron into workgroup memory once per
-    /// layer and filters from there.
+    /// layer and filters from there. A Shade pass: deferred, a camera raster writes a
+    /// G-buffer and one compute invocation per pixel evaluates the visibility from it.
     Compute,
 }
 
 impl PassKind {
-    /// The schedule a technique gives a pass (Map, Filter and Mipmap passes have one).
+    /// The schedule a technique gives a pass (Map, Filter, Mipmap and Shade passes have one).
     pub fn schedule(&self) -> Option<Schedule> {
         match self {
-            PassKind::Map { schedule, .. } | PassKind::Filter { schedule, .. } | PassKind::Mipmap { schedule, .. } => {
-                schedule.as_ref().map(|s| s.value)
-            }
-            PassKind::Depth { .. } | PassKind::SummedArea { .. } | PassKind::Geometry { .. } | PassKind::Shade { .. } => None,
+            PassKind::Map { schedule, .. }
+            | PassKind::Filter { schedule, .. }
+            | PassKind::Mipmap { schedule, .. }
+            | PassKind::Shade { schedule, .. } => schedule.as_ref().map(|s| s.value),
+            PassKind::Depth { .. } | PassKind::SummedArea { .. } | PassKind::Geometry { .. } => None,
         }
     }
 
     /// Whether a pass kind has schedules to choose from.
     pub fn schedulable(&self) -> bool {
-        matches!(self, PassKind::Map { .. } | PassKind::Filter { .. } | PassKind::Mipmap { .. })
+        matches!(
+            self,
+            PassKind::Map { .. } | PassKind::Filter { .. } | PassKind::Mipmap { .. } | PassKind::Shade { .. }
+        )
     }
 }
 
@@ -350,6 +356,8 @@ pub enum PassKind {
     Shade {
         reads: Vec<Name>,
         visibility: Expr,
+        /// How it runs; the compiler's default where absent.
+        schedule: Option<Spanned<Schedule>>,
     },
 }
 

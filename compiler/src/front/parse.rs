@@ -665,6 +665,7 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
         _ => PassKind::Shade {
             reads: names(f.req("reads")?)?,
             visibility: expression(f.req("visibility")?)?,
+            schedule: schedule(&mut f)?,
         },
     };
     f.finish()?;

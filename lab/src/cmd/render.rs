@@ -191,14 +191,19 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
 }
 
 /// How a pass's steps run: `compute` (a dispatch), `fragment` (full-screen triangles over
-/// a texture) or `raster` (the scene or generated primitives); `mixed` for several kinds.
+/// a texture) or `raster` (the scene or generated primitives), `deferred` for a deferred
+/// Shade (a G-buffer raster, then a compute step per pixel); `mixed` for several kinds.
 fn schedule(steps: &[sshc_runtime::graph::Step]) -> &'static str {
+    if steps.iter().any(|s| s.draw == Draw::ComputePixels) {
+        return "deferred";
+    }
     let kind = |d: &Draw| match d {
         Draw::FullScreen | Draw::MipLevels => "fragment",
-        Draw::SceneFromLight | Draw::SceneFromCamera | Draw::Primitives { .. } => "raster",
+        Draw::SceneFromLight | Draw::SceneFromCamera | Draw::CameraGBuffer | Draw::Primitives { .. } => "raster",
         Draw::ComputeRows
         | Draw::ComputeColumns
         | Draw::ComputeTexels
+        | Draw::ComputePixels
         | Draw::ComputeMipLevels
         | Draw::Silhouettes { .. }
         | Draw::Discontinuities { .. } => "compute",
@@ -238,7 +243,7 @@ pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edge
             for s in &p.steps {
                 // (invocations, how many times the counted code runs)
                 let (n, runs) = match &s.draw {
-                    Draw::SceneFromCamera => (f64::from(camera.0) * f64::from(camera.1), 1.0),
+                    Draw::SceneFromCamera | Draw::CameraGBuffer | Draw::ComputePixels => (f64::from(camera.0) * f64::from(camera.1), 1.0),
                     Draw::SceneFromLight | Draw::FullScreen | Draw::ComputeTexels => (texels, 1.0),
                     // levels 1.. of the chain: texels (1/4 + 1/16 + ...)
                     Draw::MipLevels | Draw::ComputeMipLevels => (texels / 3.0, 1.0),
