@@ -1316,6 +1316,54 @@ mod tests {
         );
     }
 
+    /// A deferred Shade: a `CameraGBuffer` step, then a `ComputePixels` step reading it, in
+    /// a Shade pass only.
+    #[test]
+    fn a_deferred_shade_draws_its_g_buffer_before_reading_it() {
+        let shade = |draws: &[Draw]| {
+            let mut g = tiny();
+            let step = g.passes[0].steps[0].clone();
+            g.passes.push(PassDecl {
+                name: "shade".into(),
+                kind: PassKind::Shade,
+                views: Views::LightCenter,
+                shader: "t.shade.wgsl".into(),
+                steps: draws
+                    .iter()
+                    .map(|d| {
+                        let mut s = step.clone();
+                        s.writes.clear();
+                        s.draw = d.clone();
+                        if d.is_dispatch() {
+                            (s.vertex, s.fragment, s.compute) = (None, None, Some("cs_shade".into()));
+                        }
+                        s
+                    })
+                    .collect(),
+            });
+            g
+        };
+        let ok = shade(&[Draw::CameraGBuffer, Draw::ComputePixels]);
+        assert_eq!(PassGraph::from_ron(&ok.to_ron()).map(|g| g.passes.len()), Ok(2));
+        let e = PassGraph::from_ron(&shade(&[Draw::ComputePixels]).to_ron()).expect_err("no G-buffer drawn");
+        assert!(
+            matches!(&e, GraphError::Step { message, .. } if message.contains("no earlier CameraGBuffer step")),
+            "{e}"
+        );
+        let e = PassGraph::from_ron(&shade(&[Draw::ComputePixels, Draw::CameraGBuffer]).to_ron()).expect_err("read before drawn");
+        assert!(
+            matches!(&e, GraphError::Step { message, .. } if message.contains("no earlier CameraGBuffer step")),
+            "{e}"
+        );
+        let mut g = ok.clone();
+        g.passes[1].kind = PassKind::Map;
+        let e = PassGraph::from_ron(&g.to_ron()).expect_err("a G-buffer in a Map pass");
+        assert!(
+            matches!(&e, GraphError::Step { message, .. } if message.contains("belongs to a Shade pass")),
+            "{e}"
+        );
+    }
+
     #[test]
     fn compute_steps_store_only_into_storage_formats() {
         let with = |format: Format| {

@@ -232,7 +232,7 @@ fn step(u: &mut Unstructured) -> Result<Step> {
         vertex: entry(u)?,
         fragment: entry(u)?,
         compute: entry(u)?,
-        draw: match u.int_in_range(0..=10)? {
+        draw: match u.int_in_range(0..=12)? {
             0 => Draw::SceneFromLight,
             1 => Draw::SceneFromCamera,
             2 => Draw::FullScreen,
@@ -242,6 +242,8 @@ fn step(u: &mut Unstructured) -> Result<Step> {
             6 => Draw::Silhouettes { buffer: name(u)? },
             9 => Draw::ComputeTexels,
             10 => Draw::ComputeMipLevels,
+            11 => Draw::CameraGBuffer,
+            12 => Draw::ComputePixels,
             7 => Draw::Discontinuities {
                 buffer: name(u)?,
                 source: *u.choose(&[Neighbour::Previous, Neighbour::Next])?,
@@ -383,6 +385,15 @@ fn check_accepted(g: &PassGraph, text: &str) {
             | Draw::MipLevels
             | Draw::ComputeRows
             | Draw::ComputeColumns => {}
+            // a deferred Shade: in a Shade pass, the G-buffer drawn before it is read
+            Draw::CameraGBuffer | Draw::ComputePixels => {
+                let p = g.passes.iter().find(|p| p.steps.iter().any(|x| std::ptr::eq(x, st))).expect("its pass");
+                assert_eq!(p.kind, PassKind::Shade, "a deferred Shade's step in a {:?} pass: {text}", p.kind);
+                if st.draw == Draw::ComputePixels {
+                    let before = p.steps.iter().take_while(|x| !std::ptr::eq(*x, st));
+                    assert!(before.into_iter().any(|x| x.draw == Draw::CameraGBuffer), "no G-buffer drawn: {text}");
+                }
+            }
             // what a compute step stores into has a storage format
             Draw::ComputeTexels | Draw::ComputeMipLevels => {
                 for w in &st.writes {
