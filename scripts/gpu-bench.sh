@@ -2,8 +2,10 @@
 # Measures every bundled technique's passes under each schedule and against their memory
 # bound, from a prebuilt `sshc` (no Rust toolchain needed: the GPU machines have none,
 # docs/gpu-machine.md), and writes a Markdown report. Per technique and shadow-map size:
-# each pass's median GPU time over the frames with its Map, Filter and Mipmap passes run as fragment and as
-# compute (`--schedule '*=fragment'`, `'*=compute'`), their ratio, the pass's compulsory
+# each pass's median GPU time over the frames with its passes run as fragment and as
+# compute (`--schedule '*=fragment'`, `'*=compute'`: Map, Filter and Mipmap passes as
+# compute, the Shade deferred), their ratio, and the whole frame's wall time of both and of
+# a third run with only the Shade deferred; the pass's compulsory
 # bytes (sshc_graph::traffic) and the time the faster schedule takes over their bound at
 # the device's bandwidth (measured once, by the first `sshc render`: a 64 MiB buffer copy).
 # The light-sample techniques run on scenes/linear.ron's segment light, the others on
@@ -49,11 +51,16 @@ for map in ${maps//,/ }; do
         name=$(basename "$t" .ron)
         scene=scenes/bunny.ron
         grep -q 'light_samples' "$t" && scene=scenes/linear.ron
-        # the same technique under each schedule of its Map, Filter and Mipmap passes (`--schedule '*=...'`;
-        # a technique without one runs the same code twice)
-        for sch in fragment compute; do
+        # the same technique under each schedule of its passes (`--schedule '*=...'`: Map,
+        # Filter, Mipmap and Shade; a technique whose formats refuse compute runs the same code
+        # twice), then with only its Shade deferred (`deferred`)
+        for sch in fragment compute deferred; do
+            case $sch in
+                deferred) schedule=(--schedule '*=fragment' --schedule 'shade=compute') ;;
+                *) schedule=(--schedule "*=$sch") ;;
+            esac
             log=$("$bin" render "$t" --scene "$scene" --size "$camera" --shadow-map "$map" \
-                --frames "$frames" --schedule "*=$sch" -o "$tmp/$name.png" "${bw[@]}")
+                --frames "$frames" "${schedule[@]}" -o "$tmp/$name.png" "${bw[@]}")
             if [ -z "$device" ]; then
                 device="$(echo "$log" | sed -n 's/^device: //p'); $(echo "$log" | grep '^bandwidth:')"
                 bw=(--bandwidth "$(echo "$log" | sed -n 's|^bandwidth: \([0-9.]*\) GB/s.*|\1|p')")
@@ -72,8 +79,9 @@ for map in ${maps//,/ }; do
                   printf "|%s| %.3f | %.3f | %.2f |%s|%s| %.1f |%s|\n", $2, f, c, (f > 0 ? c / f : 0), $7, $9, (b > 0 ? best / b : 0), $11 }'
             # the whole frame by the wall clock: the comparison that holds on lavapipe,
             # whose compute passes' end timestamps do not wait for their dispatches
-            f=$(cat "$tmp/fragment.wall"); c=$(cat "$tmp/compute.wall")
+            f=$(cat "$tmp/fragment.wall"); c=$(cat "$tmp/compute.wall"); d=$(cat "$tmp/deferred.wall")
             awk -v f="$f" -v c="$c" 'BEGIN { printf "| **whole frame, wall clock** | %.3f | %.3f | %.2f | | | | |\n", f, c, (f > 0 ? c / f : 0) }'
+            awk -v f="$f" -v d="$d" 'BEGIN { printf "| **whole frame, wall clock, only the Shade deferred** | %.3f | %.3f | %.2f | | | | |\n", f, d, (f > 0 ? d / f : 0) }'
             echo
         } >> "$body"
         echo "$name at ${map}^2: done ($(($(date +%s) - start)) s)" >&2
@@ -93,9 +101,10 @@ fi
     echo
     echo "Produced by \`scripts/gpu-bench.sh $bin $out $camera $maps $frames\` on $(date -u +%Y-%m-%d)."
     echo "Camera $camera; median of $frames frames per run, in milliseconds, measured with"
-    echo "timestamp queries. Each technique runs twice in turn: its Map, Filter and Mipmap passes as fragment, then as"
-    echo "compute (a technique without one, or whose formats are not storage formats, runs the same"
-    echo "code twice: its ratios show the noise). *Compulsory MB*: the bytes any schedule of the pass"
+    echo "timestamp queries. Each technique runs three times in turn: every pass as fragment (the Shade"
+    echo "forward), then as compute (the Map, Filter and Mipmap passes whose formats allow it, and the"
+    echo "Shade deferred: a G-buffer raster, then a compute step per pixel), then as fragment with only"
+    echo "the Shade deferred (its own wall-clock row). *Compulsory MB*: the bytes any schedule of the pass"
     echo "must move at a perfect cache (docs/architecture.md section 7); *bound ms*: those bytes at"
     echo "the device's bandwidth; *best / bound*: how far the faster schedule is from it (1 is at the"
     echo "bound). A Shade's bytes are its writes only (what it reads depends on the view). The last"

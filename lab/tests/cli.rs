@@ -509,5 +509,18 @@ fn the_gpu_bench_script_reports_every_technique() {
         2 * techniques,
         "{md}"
     );
+    // the compute row runs the Shade deferred where the technique allows it (11 of the 13
+    // bundled ones: linear-light and point-samples read a light sample's depth slope), and
+    // every table ends with the two wall-clock rows
+    let deferred = md
+        .lines()
+        .filter(|l| l.starts_with("| shade") && l.trim_end().ends_with("deferred |"))
+        .count();
+    assert_eq!(deferred, 2 * (techniques - 2), "{md}");
+    assert_eq!(
+        md.matches("| **whole frame, wall clock, only the Shade deferred** |").count(),
+        2 * techniques,
+        "{md}"
+    );
     let _ = std::fs::remove_dir_all(dir);
 }
