@@ -138,6 +138,7 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
         buffers: out.modules.iter().flat_map(|m| m.buffers.iter().cloned()).collect(),
         passes,
         removed: ir.removed.to_vec(),
+        specialised: ir.ir.specialised.as_ref().map(|s| s.facts.clone()),
     }
 }
 

@@ -224,6 +224,43 @@ pub fn explain(c: &Compiled) -> String {
             let _ = writeln!(s, "  {r}");
         }
     }
+    if let Some(sp) = &c.ir.specialised {
+        let _ = writeln!(
+            s,
+            "\nSpecialised for scene {} (a {} light; the runtime refuses a scene whose light is of another kind):",
+            sp.facts.scene,
+            sp.facts.light.name()
+        );
+        for f in &sp.folded {
+            let _ = writeln!(s, "  {f}");
+        }
+    }
+    s
+}
+
+/// What specialising for a scene changed (`sshc explain --scene`): per pass, the fetches
+/// and operations per invocation of the generic build and of the specialised one, and what
+/// elimination removed in the one and not in the other.
+pub fn specialisation(generic: &Compiled, specialised: &Compiled) -> String {
+    let mut s = String::from("\nSpecialisation against the generic build (per invocation of each pass):\n");
+    let _ = writeln!(
+        s,
+        "  | pass | fetches generic | fetches specialised | operations generic | operations specialised |"
+    );
+    let _ = writeln!(s, "  |---|---|---|---|---|");
+    for (name, _, _, g) in &generic.cost.passes {
+        match specialised.cost.passes.iter().find(|p| &p.0 == name) {
+            Some((_, _, _, c)) => {
+                let _ = writeln!(s, "  | {name} | {} | {} | {} | {} |", g.fetches, c.fetches, g.ops, c.ops);
+            }
+            None => {
+                let _ = writeln!(s, "  | {name} | {} | removed | {} | removed |", g.fetches, g.ops);
+            }
+        }
+    }
+    for r in specialised.graph.removed.iter().filter(|r| !generic.graph.removed.contains(r)) {
+        let _ = writeln!(s, "  removed besides: {r}");
+    }
     s
 }
 

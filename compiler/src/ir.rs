@@ -830,6 +830,16 @@ pub struct Ir {
     pub arena: Arena,
     /// Light samples the per-sample passes render one view each of (1 without any).
     pub samples: u32,
+    /// The scene it was specialised for (`--scene`), and what that folded.
+    pub specialised: Option<Specialised>,
+}
+
+/// A compilation specialised for a scene's facts (issue 16).
+#[derive(Clone, Debug)]
+pub struct Specialised {
+    pub facts: sshc_graph::SceneFacts,
+    /// What the facts folded, one line each (shown by `explain`).
+    pub folded: Vec<String>,
 }
 
 impl Ir {

@@ -106,6 +106,9 @@ pub struct CompileOptions {
     pub dump_after: Option<DumpPhase>,
     /// Where long generated bodies are split into functions (`back::parts`).
     pub split: back::parts::Split,
+    /// `--scene`: specialise for the scene's facts (issue 16): refuse a scene light the
+    /// technique's `light:` list does not admit, fold the light inputs that are 0 for it.
+    pub scene: Option<sshc_graph::SceneFacts>,
 }
 
 /// A compiled technique.
@@ -133,6 +136,23 @@ pub struct Outcome {
 enum Until {
     Check,
     Emit,
+}
+
+pub use sshc_graph::SceneFacts;
+
+/// Whether the technique's `light:` list admits a light of `kind` (an absent list, or
+/// `Any`, admits every kind); true where the source does not parse, so that compiling it
+/// reports the error.
+pub fn admits(source: &str, kind: sshc_graph::LightKind) -> bool {
+    match front::parse::parse(source) {
+        Ok(t) => {
+            t.lights.is_empty()
+                || t.lights
+                    .iter()
+                    .any(|l| l.value == sshc_graph::LightModel::Any || l.value.kind() == Some(kind))
+        }
+        Err(_) => true,
+    }
 }
 
 /// Compile technique source text.

@@ -276,6 +276,27 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 }
             }
             Resolved::Constant(c) => self.arena.f32(c),
+            // specialised for a scene whose light makes it 0 (`SceneFacts::zero_inputs`)
+            Resolved::Input(input)
+                if self
+                    .sym
+                    .scene
+                    .as_ref()
+                    .is_some_and(|f| f.zero_inputs().contains(&input.desc().name)) =>
+            {
+                match input.ty() {
+                    Ty::Vec(n) => {
+                        let zero = self.arena.f32(0.0);
+                        let f = match n {
+                            2 => Func::Vec2,
+                            3 => Func::Vec3,
+                            _ => Func::Vec4,
+                        };
+                        self.arena.add(Node::Call(f, vec![zero; n as usize]), input.ty(), span)
+                    }
+                    _ => self.arena.f32(0.0),
+                }
+            }
             Resolved::Input(input) => {
                 // receiver-side inputs (and the sample's segment weights) are the view's
                 let view = if input.side() == crate::builtins::Side::Receiver {
@@ -598,5 +619,26 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         passes,
         arena,
         samples: checked.samples,
+        specialised: sym.scene.as_ref().map(|facts| Specialised {
+            facts: facts.clone(),
+            folded: facts
+                .zero_inputs()
+                .iter()
+                .filter(|name| {
+                    crate::builtins::Input::ALL
+                        .iter()
+                        .any(|i| i.desc().name == **name && types.reads_input(*i))
+                })
+                .map(|name| format!("`{name}` is 0 for a {} light: folded", facts.light.name()))
+                .chain(std::iter::once(format!(
+                    "the light is {}: the Shade's direction to the light and texel size take that form only",
+                    if facts.light.is_distant() {
+                        "at infinity"
+                    } else {
+                        "at a finite position"
+                    }
+                )))
+                .collect(),
+        }),
     })
 }

@@ -41,6 +41,8 @@ pub struct Symbols<'a> {
     pub expansion_precision: Vec<Precision>,
     /// Per pass: its schedule after `--schedule` overrides (None: the compiler's default).
     pub schedules: Vec<Option<Schedule>>,
+    /// `--scene`: the facts to specialise for, admitted by the technique's `light:` list.
+    pub scene: Option<sshc_graph::SceneFacts>,
 }
 
 impl<'a> Symbols<'a> {
@@ -58,6 +60,7 @@ impl<'a> Symbols<'a> {
             channel_precision: self.channel_precision.clone(),
             expansion_precision: self.expansion_precision.clone(),
             schedules: self.schedules.clone(),
+            scene: self.scene.clone(),
         }
     }
 
@@ -275,6 +278,36 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         }
     }
 
+    // A scene's light must be one the technique admits (an absent `light:` admits any).
+    if let Some(facts) = &opts.scene {
+        let admits = t.lights.is_empty()
+            || t.lights
+                .iter()
+                .any(|l| l.value == sshc_graph::LightModel::Any || l.value.kind() == Some(facts.light));
+        // (`crate::admits` answers the same from the source, for the command line)
+        if !admits {
+            let names: Vec<&str> = t.lights.iter().filter_map(|l| l.value.kind()).map(|k| k.name()).collect();
+            let span = t.lights.iter().map(|l| l.span).reduce(|a, b| a.join(b)).unwrap_or(t.name.span);
+            diags.push(
+                Diagnostic::error(
+                    Phase::Resolve,
+                    format!(
+                        "technique `{}` does not admit the {} light of scene {}",
+                        t.name.value,
+                        facts.light.name(),
+                        facts.scene
+                    ),
+                )
+                .at(span, format!("admits {}", names.join(", ")))
+                .note("specialising for a scene (`--scene`) checks the technique's `light:` list")
+                .help(format!(
+                    "add `{}` to `light:` where the technique handles such a light, or compile without `--scene`",
+                    facts.light.name()
+                )),
+            );
+        }
+    }
+
     diags.check()?;
     Ok(Symbols {
         t,
@@ -288,5 +321,6 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         channel_precision,
         expansion_precision,
         schedules,
+        scene: opts.scene.clone(),
     })
 }

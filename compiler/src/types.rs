@@ -51,6 +51,11 @@ impl Types {
         self.types.insert(ExprId::of(e), ty);
     }
 
+    /// Whether any name resolved to `input`.
+    pub fn reads_input(&self, input: crate::builtins::Input) -> bool {
+        self.names.values().any(|r| matches!(r, Resolved::Input(i) if *i == input))
+    }
+
     pub fn set_name(&mut self, e: &Expr, r: Resolved) {
         self.names.insert(ExprId::of(e), r);
     }

@@ -310,6 +310,42 @@ pub struct PassGraph {
     pub passes: Vec<PassDecl>,
     /// What the compiler removed, and why.
     pub removed: Vec<String>,
+    /// The scene facts the graph was specialised for (`sshc compile --scene`); the runtime
+    /// refuses a scene that breaks them. Absent for a generic graph.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specialised: Option<SceneFacts>,
+}
+
+/// What a graph specialised for a scene assumes of it (issue 16): the kind of its light,
+/// from which the compiler folds the light inputs that are 0 for every light of that kind
+/// ([`SceneFacts::zero_inputs`]).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFacts {
+    /// The scene file it was specialised for (for messages).
+    pub scene: String,
+    /// The kind of the scene's light.
+    pub light: LightKind,
+}
+
+impl SceneFacts {
+    /// The light inputs (by their names in techniques) that are 0 for every light of the
+    /// kind: a light's size, radius or half-extent and its width are 0 for a point, a
+    /// directional light and a distant disk (whose extent is its angle); the spread is 0
+    /// for every light but a distant disk.
+    pub fn zero_inputs(&self) -> Vec<&'static str> {
+        let mut zero = Vec::new();
+        if matches!(self.light, LightKind::Point | LightKind::Directional) {
+            zero.push("light_size");
+        }
+        if matches!(self.light, LightKind::Point | LightKind::Directional | LightKind::DistantDisk) {
+            zero.push("light_width");
+        }
+        if self.light != LightKind::DistantDisk {
+            zero.push("light_spread");
+        }
+        zero
+    }
 }
 
 /// The kinds of light. This is the one list: a technique's [`LightModel`] is `Any` or one
@@ -317,7 +353,7 @@ pub struct PassGraph {
 /// light, which adds the geometry, says its kind with `Light::kind`. Adding a kind means
 /// a variant here, its entry in [`LightKind::ALL`], and the arms the compiler then asks
 /// for (names, [`LightModel`], the scene's geometry).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum LightKind {
     Point,
     Directional,
@@ -1247,6 +1283,7 @@ mod tests {
                 }],
             }],
             removed: vec![],
+            specialised: None,
         }
     }
 

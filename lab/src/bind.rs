@@ -94,6 +94,7 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
         light_orthographic: v.orthographic,
         samples,
         samples_closed,
+        light: scene.lights.first().map(|l| l.kind()),
     })
 }
 

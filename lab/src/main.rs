@@ -30,12 +30,16 @@ struct Common {
     /// Override the precision of a channel or expansion: NAME=unorm8|unorm16|f16|f32. Repeatable.
     #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
     precision: Vec<(String, String)>,
-    /// Override the schedule of a Map, Filter or Mipmap pass: PASS=fragment|compute (`*` for all of them). Repeatable.
+    /// Override the schedule of a Map, Filter, Mipmap or Shade pass: PASS=fragment|compute (`*` for all of them). Repeatable.
     #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
     schedule: Vec<(String, String)>,
     /// Print the IR after this phase.
     #[arg(long = "dump-ir-after", value_name = "PHASE", value_parser = dump_phase)]
     dump_ir_after: Option<DumpPhase>,
+    /// Specialise for this scene (RON): refuse it if the technique's `light:` list does not
+    /// admit its light, fold the light inputs that are 0 for it, record it in the graph.
+    #[arg(long)]
+    scene: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -89,20 +93,28 @@ fn dump_phase(s: &str) -> Result<DumpPhase, String> {
     s.parse()
 }
 
-fn options(c: &Common) -> CompileOptions {
-    CompileOptions {
+fn options(c: &Common) -> Result<CompileOptions, String> {
+    let scene = match &c.scene {
+        Some(path) => {
+            let scene = sshc_lab::session::load_scene(path, None, None)?;
+            Some(sshc_lab::session::scene_facts(path, &scene).ok_or_else(|| format!("error: {} has no light", path.display()))?)
+        }
+        None => None,
+    };
+    Ok(CompileOptions {
         set: c.set.clone(),
         precision: c.precision.clone(),
         schedule: c.schedule.clone(),
         dump_after: c.dump_ir_after,
+        scene,
         ..Default::default()
-    }
+    })
 }
 
 /// Compile the technique of `common`, printing the IR dump asked for and every diagnostic.
 fn compile_reported(common: &Common) -> Result<sshc::Compiled, String> {
     let source = read(&common.technique)?;
-    let outcome = sshc::compile_with_dump(&source, &options(common));
+    let outcome = sshc::compile_with_dump(&source, &options(common)?);
     if let Some(d) = &outcome.dump {
         print!("{d}");
     }
@@ -143,7 +155,7 @@ fn run(cli: Cli) -> Result<(), String> {
         }
         Command::Check { common } => {
             let source = read(&common.technique)?;
-            let opts = options(&common);
+            let opts = options(&common)?;
             if opts.dump_after.is_some_and(|p| p > DumpPhase::Check) {
                 let phase = opts.dump_after.map(DumpPhase::name).unwrap_or_default();
                 return Err(format!(
@@ -164,6 +176,17 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Explain { common } => {
             let c = compile_reported(&common)?;
             print!("{}", sshc::explain::explain(&c));
+            if common.scene.is_some() {
+                let generic = Common {
+                    scene: None,
+                    ..common.clone()
+                };
+                let g = sshc::compile_str(&read(&common.technique)?, &options(&generic)?).map_err(|d| {
+                    report(&d, &common.technique, &read(&common.technique).unwrap_or_default());
+                    String::new()
+                })?;
+                print!("{}", sshc::explain::specialisation(&g, &c));
+            }
             Ok(())
         }
         Command::BenchCompile { techniques, runs, set } => {

@@ -48,9 +48,14 @@ pub struct Overrides {
     /// Precision override of a channel or expansion, NAME=PRECISION (techniques only). Repeatable.
     #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
     pub precision: Vec<(String, String)>,
-    /// Schedule override of a Map, Filter or Mipmap pass, PASS=fragment|compute (`*`: all of them; techniques only). Repeatable.
+    /// Schedule override of a Map, Filter, Mipmap or Shade pass, PASS=fragment|compute (`*`: all of them; techniques only). Repeatable.
     #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
     pub schedule: Vec<(String, String)>,
+    /// Compile the technique for any scene instead of specialising it for this one (by
+    /// default a technique is specialised for the scene's light where its `light:` list
+    /// admits it: the light inputs that are 0 for it fold).
+    #[arg(long)]
+    pub generic: bool,
     /// Override the scene's shadow-map resolution.
     #[arg(long)]
     pub shadow_map: Option<u32>,
@@ -63,13 +68,15 @@ impl Overrides {
     /// The scene at `path` with the size and shadow-map overrides, and an executor of
     /// `input` (a technique compiled with the overrides, or a graph with params set).
     pub fn load<'g>(&self, gpu: &'g Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor<'g>), String> {
-        let scene = load_scene(scene, self.size, self.shadow_map)?;
-        let opts = sshc::CompileOptions {
+        let path = scene;
+        let scene = load_scene(path, self.size, self.shadow_map)?;
+        let mut opts = sshc::CompileOptions {
             set: self.set.clone(),
             precision: self.precision.clone(),
             schedule: self.schedule.clone(),
             ..Default::default()
         };
+        specialise(&mut opts, input, path, &scene, self.generic)?;
         let ex = executor(gpu, input, &opts)?;
         Ok((scene, ex))
     }
@@ -240,6 +247,38 @@ pub fn compile_executor<'g>(gpu: &'g Gpu, path: &Path, source: &str, opts: &sshc
         String::new()
     })?;
     Executor::new(gpu, c.graph, c.shaders).map_err(rt)
+}
+
+/// The facts a technique is specialised for on `scene` (read from `path`): its first
+/// light's kind (the light the techniques render). None for a scene without a light.
+pub fn scene_facts(path: &Path, scene: &Scene) -> Option<sshc::SceneFacts> {
+    scene.lights.first().map(|l| sshc::SceneFacts {
+        scene: path.display().to_string(),
+        light: l.kind(),
+    })
+}
+
+/// Compile options specialised for `scene` where the technique at `input` admits its light
+/// (issue 16), else generic with a warning on stderr naming both files; generic for a
+/// compiled graph (which carries its own facts, checked when bound) or with `generic`.
+pub fn specialise(opts: &mut sshc::CompileOptions, input: &Path, scene_path: &Path, scene: &Scene, generic: bool) -> Result<(), String> {
+    if generic || input.to_string_lossy().ends_with(".graph.ron") {
+        return Ok(());
+    }
+    let Some(facts) = scene_facts(scene_path, scene) else {
+        return Ok(());
+    };
+    if sshc::admits(&read(input)?, facts.light) {
+        opts.scene = Some(facts);
+    } else {
+        eprintln!(
+            "warning: {} does not admit the {} light of {} (its `light:` list): compiled for any scene, not specialised (`sshc compile --scene` refuses it)",
+            input.display(),
+            facts.light.name(),
+            scene_path.display()
+        );
+    }
+    Ok(())
 }
 
 /// The camera pass's world positions and normals (NaN where no surface is seen).

@@ -524,3 +524,50 @@ fn the_gpu_bench_script_reports_every_technique() {
     );
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Scene specialisation on the command line (issue 16): `compile --scene` records the
+/// facts and refuses a light the technique does not admit, naming both files; `explain
+/// --scene` says what folded and compares the work with the generic build; `render`
+/// specialises by default where admitted, warns and stays generic where not, and a
+/// graph specialised for one light kind is refused on a scene with another.
+#[test]
+fn scene_specialisation_is_recorded_explained_and_enforced() {
+    let dir = std::env::temp_dir().join(format!("sshc-specialise-{}", std::process::id()));
+    let out = dir.to_string_lossy().into_owned();
+    ok(&["compile", "techniques/pcss.ron", "--scene", "scenes/contact.ron", "-o", &out]);
+    let graph = std::fs::read_to_string(dir.join("pcss.graph.ron")).unwrap();
+    assert!(graph.contains("specialised: Some((") && graph.contains("light: Sphere"), "{graph}");
+    let e = refused(
+        &["compile", "techniques/penumbra-maps.ron", "--scene", "scenes/bunny.ron", "-o", &out],
+        30,
+    );
+    assert!(e.contains("does not admit the Rectangle light of scene scenes/bunny.ron"), "{e}");
+    assert!(e.contains("techniques/penumbra-maps.ron:22:13"), "{e}");
+    let text = ok(&["explain", "techniques/pcss.ron", "--scene", "scenes/contact.ron"]);
+    assert!(text.contains("`light_spread` is 0 for a Sphere light: folded"), "{text}");
+    assert!(text.contains("| shade | 100 | 100 |"), "{text}");
+    // render: specialised by default; not where the list does not admit the light
+    let png = dir.join("r.png").to_string_lossy().into_owned();
+    let small = ["--size", "16x16", "--shadow-map", "32", "-o", &png];
+    let r = sshc(
+        &[
+            &["render", "techniques/penumbra-maps.ron", "--scene", "scenes/bunny.ron"][..],
+            &small[..],
+        ]
+        .concat(),
+    );
+    assert!(r.status.success());
+    assert!(
+        String::from_utf8_lossy(&r.stderr)
+            .contains("warning: techniques/penumbra-maps.ron does not admit the Rectangle light of scenes/bunny.ron")
+    );
+    // the graph specialised for contact's sphere, run on bunny's rectangle
+    let g = dir.join("pcss.graph.ron").to_string_lossy().into_owned();
+    let e = refused(&[&["render", &g, "--scene", "scenes/bunny.ron"][..], &small[..]].concat(), 60);
+    assert!(
+        e.contains("was specialised for the Sphere light of scene scenes/contact.ron, but this scene's light is Rectangle"),
+        "{e}"
+    );
+    ok(&[&["render", &g, "--scene", "scenes/contact.ron"][..], &small[..]].concat());
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -348,6 +348,18 @@ impl<'g> Executor<'g> {
     pub fn bind_scene(&mut self, s: &SceneInputs) -> Result<()> {
         let gpu = self.gpu;
         self.bound = None;
+        // a graph specialised for a scene's light kind folded inputs another kind needs
+        if let Some(facts) = &self.graph.specialised
+            && s.light != Some(facts.light)
+        {
+            return Err(RuntimeError::Param(format!(
+                "technique `{}` was specialised for the {} light of scene {}, but this scene's light is {}; compile it for this scene (`--scene`) or without one",
+                self.graph.technique,
+                facts.light.name(),
+                facts.scene,
+                s.light.map_or("not given (`SceneInputs::light`)", |k| k.name())
+            )));
+        }
         let res = Resources::new(gpu, &self.graph, s, self.max_bytes)?;
         if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
             return Err(RuntimeError::Param(format!(

@@ -61,6 +61,9 @@ pub struct SceneInputs {
     /// The samples close a loop (the edges of a triangle or rectangle light): the last
     /// one's next is the first.
     pub samples_closed: bool,
+    /// The kind of the scene's light, checked against a graph specialised for one
+    /// (`PassGraph::specialised`); `None` runs only generic graphs.
+    pub light: Option<crate::graph::LightKind>,
 }
 
 impl SceneInputs {

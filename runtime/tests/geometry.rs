@@ -183,6 +183,7 @@ fn graph() -> (PassGraph, Vec<(String, String)>) {
             },
         ],
         removed: vec![],
+        specialised: None,
     };
     (graph, vec![("classify.wgsl".into(), classify), ("draw.wgsl".into(), draw)])
 }
@@ -245,6 +246,7 @@ fn inputs(tris: &[[[f32; 3]; 3]], meshes: Vec<std::ops::Range<u32>>, light: [f32
         light_orthographic: light[3] == 0.0,
         samples: Vec::new(),
         samples_closed: false,
+        light: None,
     }
 }
 

@@ -306,6 +306,14 @@ fn graph(u: &mut Unstructured) -> Result<PassGraph> {
             .collect::<Result<_>>()?,
         passes: (0..u.int_in_range(0..=6)?).map(|_| pass(u)).collect::<Result<_>>()?,
         removed: (0..u.int_in_range(0..=2)?).map(|_| name(u)).collect::<Result<_>>()?,
+        specialised: if u.arbitrary()? {
+            Some(SceneFacts {
+                scene: name(u)?,
+                light: *u.choose(&LightKind::ALL)?,
+            })
+        } else {
+            None
+        },
     })
 }
 

@@ -1852,21 +1852,40 @@ const SHADE_NORMAL: &str = "    // Two-sided surfaces: the receiver is the side 
     let n = select(in_smooth, -in_smooth, dot(in_smooth, in_face) < 0.0);
 ";
 
-/// The receiver seen from the light's centre, from `in.world`, `world` and `n`.
-const SHADE_RECEIVER: &str = "    let in_d_world = -(frame.light_view * world).z;
+/// The receiver seen from the light's centre, from `in.world`, `world` and `n`; `distant`,
+/// where the graph is specialised for a scene (issue 16), keeps only the form of the
+/// direction to the light and of the texel's size that the light's kind takes.
+fn shade_receiver(distant: Option<bool>) -> String {
+    let to_light = match distant {
+        None => {
+            "select(normalize(frame.light_position.xyz - in.world), normalize(frame.light_position.xyz), frame.light_position.w == 0.0)"
+        }
+        Some(false) => "normalize(frame.light_position.xyz - in.world)",
+        Some(true) => "normalize(frame.light_position.xyz)",
+    };
+    let texel = match distant {
+        None => "frame.texel_world.x * in_d_world + frame.texel_world.y",
+        // perspective: y is 0; orthographic: x is 0 (sshc_graph's `texel_world`)
+        Some(false) => "frame.texel_world.x * in_d_world",
+        Some(true) => "frame.texel_world.y",
+    };
+    format!(
+        "    let in_d_world = -(frame.light_view * world).z;
     let in_d = (in_d_world - frame.depth_range.x) * frame.depth_range.z;
     let light_clip = frame.light_view_proj * world;
     let in_uv = light_clip.xy / light_clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
-    let to_light = select(normalize(frame.light_position.xyz - in.world), normalize(frame.light_position.xyz), frame.light_position.w == 0.0);
+    let to_light = {to_light};
     let in_ndotl = dot(n, to_light);
     // tan(acos(ndotl)), for slope-scaled bias
     let in_slope = min(sqrt(max(1.0 - in_ndotl * in_ndotl, 0.0)) / max(abs(in_ndotl), 0.01), 100.0);
     let texel_pos = in_uv * frame.shadow_size.xy - 0.5;
     let in_tf = fract(texel_pos);
     // one shadow-map texel at the receiver, in normalised depth units
-    let in_texel_depth = (frame.texel_world.x * in_d_world + frame.texel_world.y) * frame.depth_range.z;
+    let in_texel_depth = ({texel}) * frame.depth_range.z;
     let in_base = vec2<i32>(floor(texel_pos));
-";
+"
+    )
+}
 
 /// The receiver-plane depth slope, in a fragment entry (screen-space derivatives).
 const SHADE_SLOPE: &str = "    // receiver-plane depth gradient over uv from screen-space derivatives (Isidoro 2006):
@@ -1934,6 +1953,7 @@ fn shade(ir: &Program, pass: &IrPass, visibility: H, split: Split) -> Result<(St
     s.push_str(&functions);
     s.push_str(SHADE_VARYING);
     let prologues: String = em.views.iter().map(|(&k, used)| sample_prologue(k, used)).collect();
+    let receiver = shade_receiver(ir.ir.specialised.as_ref().map(|s| s.facts.light.is_distant()));
     let outputs = |store: &dyn Fn(&str, &str) -> String| {
         format!(
             "    // outputs stay finite and in [0, 1]; a receiver facing away from the light's centre
@@ -1976,7 +1996,7 @@ struct ShadeOut {{
 @fragment
 fn fs_shade(in: ShadeVarying) -> ShadeOut {{
 {SHADE_NORMAL}    let world = vec4<f32>(in.world, 1.0);
-{SHADE_RECEIVER}{SHADE_SLOPE}{prologues}{body}{}    return out;
+{receiver}{SHADE_SLOPE}{prologues}{body}{}    return out;
 }}
 ",
             outputs(&|field, value| {
@@ -2057,7 +2077,7 @@ fn cs_shade(@builtin(global_invocation_id) id: vec3<u32>) {{
     let in = ShadeVarying(vec4<f32>(0.0), gbuffer.xyz, vec3<f32>(0.0));
     let n = from_octahedral(textureLoad(g_normal, pixel, 0i).xy);
     let world = vec4<f32>(in.world, 1.0);
-{SHADE_RECEIVER}    let in_depth_slope = gbuffer.w;
+{receiver}    let in_depth_slope = gbuffer.w;
     let footprint = textureLoad(g_duv, pixel, 0i);
     let in_duv_dx = footprint.xy;
     let in_duv_dy = footprint.zw;

@@ -465,7 +465,10 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         // The axes change the shadow map and the light: the precision budget again.
         scene.check_precision().map_err(|e| e.to_string())?;
         let path = resolve(&file.techniques[c.technique].file);
-        let compiled = compile(&path, &sources[c.technique], &set, &precision, &schedule)?;
+        // specialised for the scene's light where the technique admits it (issue 16)
+        let scene_path = resolve(&file.scenes[c.scene]);
+        let facts = crate::session::scene_facts(&scene_path, &scene).filter(|f| sshc::admits(&sources[c.technique], f.light));
+        let compiled = compile_for(&path, &sources[c.technique], &set, &precision, &schedule, facts)?;
         let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
         ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
         let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
@@ -619,10 +622,23 @@ fn compile(
     precision: &[(String, String)],
     schedule: &[(String, String)],
 ) -> Result<sshc::Compiled, String> {
+    compile_for(path, source, set, precision, schedule, None)
+}
+
+/// [`compile`], specialised for `scene` where given (issue 16).
+fn compile_for(
+    path: &Path,
+    source: &str,
+    set: &[(String, String)],
+    precision: &[(String, String)],
+    schedule: &[(String, String)],
+    scene: Option<sshc::SceneFacts>,
+) -> Result<sshc::Compiled, String> {
     let opts = sshc::CompileOptions {
         set: set.to_vec(),
         precision: precision.to_vec(),
         schedule: schedule.to_vec(),
+        scene,
         ..Default::default()
     };
     sshc::compile_str(source, &opts).map_err(|d| {

@@ -63,6 +63,7 @@ struct VOut {{ @builtin(position) pos: vec4<f32>, @location(0) d: f32 }}
             }],
         }],
         removed: vec![],
+        specialised: None,
     };
     (graph, vec![("t.depth.wgsl".into(), shader)])
 }
@@ -93,6 +94,7 @@ pub fn one_triangle() -> SceneInputs {
         light_orthographic: false,
         samples: Vec::new(),
         samples_closed: false,
+        light: None,
     }
 }
 

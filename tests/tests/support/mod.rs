@@ -95,6 +95,7 @@ impl QueryPlane {
             light_orthographic: true,
             samples: Vec::new(),
             samples_closed: false,
+            light: None,
         }
     }
 
