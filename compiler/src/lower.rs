@@ -294,7 +294,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                         };
                         self.arena.add(Node::Call(f, vec![zero; n as usize]), input.ty(), span)
                     }
-                    _ => self.arena.f32(0.0),
+                    Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt => self.arena.f32(0.0),
                 }
             }
             Resolved::Input(input) => {

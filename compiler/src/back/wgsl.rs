@@ -1906,26 +1906,24 @@ pub fn shade_refusal(ir: &Program, pass: &IrPass) -> Option<String> {
     let IrPassKind::Shade { visibility } = pass.kind else { return None };
     let arena = &ir.ir.arena;
     // the per-sample lookups and inputs
-    for h in arena.postorder(&[visibility]) {
-        match arena.node(h) {
-            Node::Input(Input::DepthSlope, Some(k)) => {
-                return Some(format!(
-                    "it reads `depth_slope` in light sample {k}'s view, and the G-buffer carries the centre view's only"
-                ));
-            }
-            Node::Sample {
-                how: SampleFn::Sample,
-                view: Some(k),
-                ..
-            } => {
-                return Some(format!(
-                    "its `sample` in light sample {k}'s view needs that view's screen-space footprint, and the G-buffer carries the centre view's only"
-                ));
-            }
-            _ => {}
+    arena.postorder(&[visibility]).into_iter().find_map(|h| {
+        if let Node::Input(Input::DepthSlope, Some(k)) = arena.node(h) {
+            return Some(format!(
+                "it reads `depth_slope` in light sample {k}'s view, and the G-buffer carries the centre view's only"
+            ));
         }
-    }
-    None
+        if let Node::Sample {
+            how: SampleFn::Sample,
+            view: Some(k),
+            ..
+        } = arena.node(h)
+        {
+            return Some(format!(
+                "its `sample` in light sample {k}'s view needs that view's screen-space footprint, and the G-buffer carries the centre view's only"
+            ));
+        }
+        None
+    })
 }
 
 /// Whether a Shade pass runs deferred: its schedule asks for compute and nothing refuses it
