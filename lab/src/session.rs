@@ -30,6 +30,16 @@ pub fn report(diags: &Diagnostics, path: &Path, source: &str) {
     }
 }
 
+/// Parses `--fit`: `scene`, `casters` or `view`.
+pub fn shadow_fit(s: &str) -> Result<sshc_scene::ShadowFit, String> {
+    match s {
+        "scene" => Ok(sshc_scene::ShadowFit::Scene),
+        "casters" => Ok(sshc_scene::ShadowFit::Casters),
+        "view" => Ok(sshc_scene::ShadowFit::View),
+        _ => Err(format!("unknown fit `{s}`: expected scene, casters or view")),
+    }
+}
+
 /// Parses `NAME=VALUE` (the `--set` and `--precision` arguments).
 pub fn pair(s: &str) -> Result<(String, String), String> {
     match s.split_once('=') {
@@ -56,6 +66,11 @@ pub struct Overrides {
     /// admits it: the light inputs that are 0 for it fold).
     #[arg(long)]
     pub generic: bool,
+    /// Override what the light's view is fitted to: scene (every object), casters (the
+    /// casting objects and their penumbra) or view (what the camera sees and the casters
+    /// over it).
+    #[arg(long, value_parser = shadow_fit)]
+    pub fit: Option<sshc_scene::ShadowFit>,
     /// Override the scene's shadow-map resolution.
     #[arg(long)]
     pub shadow_map: Option<u32>,
@@ -69,7 +84,11 @@ impl Overrides {
     /// `input` (a technique compiled with the overrides, or a graph with params set).
     pub fn load<'g>(&self, gpu: &'g Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor<'g>), String> {
         let path = scene;
-        let scene = load_scene(path, self.size, self.shadow_map)?;
+        let mut scene = load_scene(path, self.size, self.shadow_map)?;
+        if let Some(fit) = self.fit {
+            scene.set_shadow_fit(fit).map_err(|e| e.to_string())?;
+            scene.check_precision().map_err(|e| e.to_string())?;
+        }
         let mut opts = sshc::CompileOptions {
             set: self.set.clone(),
             precision: self.precision.clone(),

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Vec3, Vec4};
-use sshc_lab::scene::{Light, Scene, SceneErrorKind, corners};
+use sshc_lab::scene::{Light, Scene, SceneErrorKind, ShadowFit, corners};
 use sshc_lab::visibility::Visibility;
 
 mod common;
@@ -602,4 +602,57 @@ fn tiny_scales_and_huge_camera_distances_say_what_is_wrong() {
     assert!(err.message().contains("above the limit of 16777216"), "{err}");
     let ok = Scene::from_str(&camera(", far: 1e6", "(0.0, 3.0, 5.0)"), ".").unwrap();
     assert!(ok.camera_view_proj().is_finite());
+}
+
+/// The `View` fit (issue 16) holds every point the camera sees inside the light's view,
+/// laterally and in depth, on every bundled scene, with texels at the receivers no larger
+/// than the whole-scene fit's; a caster over the visible receivers lies within its depth
+/// range even when all its corners lie outside the footprint (the edge scene's half-plane).
+#[test]
+fn the_view_fit_holds_what_the_camera_sees_in_finer_texels() {
+    let names: Vec<String> = std::fs::read_dir(scenes_dir())
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    assert!(names.len() >= 9, "{names:?}");
+    for name in names {
+        let mut s = bundled(&name);
+        let light = s.lights[0].clone();
+        // against the whole-scene fit (triangle-lawlor fits its casters, finer still there:
+        // its seen ground is wider than the triangle's shadow)
+        s.set_shadow_fit(ShadowFit::Scene).unwrap();
+        let before = s.fit_report(&light);
+        s.set_shadow_fit(ShadowFit::View).unwrap();
+        let after = s.fit_report(&light);
+        assert_eq!(after.fit, ShadowFit::View, "{name}");
+        let v = s.light_view(&light);
+        let seen = s.visible_points();
+        assert!(!seen.is_empty(), "{name}");
+        // f32 rounding of the transforms: a few ulps of the clip coordinates
+        let eps = 1e-5;
+        for p in &seen {
+            let c = v.view_proj * p.extend(1.0);
+            let ndc = c.truncate() / c.w;
+            assert!(ndc.x.abs() <= 1.0 + eps && ndc.y.abs() <= 1.0 + eps, "{name}: {p} at {ndc}");
+            let d = -v.view.transform_point3(*p).z;
+            assert!(
+                d >= v.near * (1.0 - eps) && d <= v.far * (1.0 + eps),
+                "{name}: {p} at depth {d} outside [{}, {}]",
+                v.near,
+                v.far
+            );
+        }
+        assert!(
+            after.at_receivers <= before.at_receivers * (1.0 + eps),
+            "{name}: {} against {}",
+            after.at_receivers,
+            before.at_receivers
+        );
+        if name == "edge" {
+            // the half-plane caster above the receiver: its depth, not only the receiver's
+            assert!(after.far - after.near > 0.5 * (before.far - before.near), "{name}: {after}");
+        }
+    }
 }
