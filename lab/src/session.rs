@@ -268,6 +268,14 @@ pub fn compile_executor<'g>(gpu: &'g Gpu, path: &Path, source: &str, opts: &sshc
     Executor::new(gpu, c.graph, c.shaders).map_err(rt)
 }
 
+/// `scene` with its light `i` alone (issue 16: a scene of several lights is rendered one
+/// light at a time, each with its own light views and truth).
+pub fn single_light(scene: &Scene, i: usize) -> Scene {
+    let mut s = scene.clone();
+    s.lights = vec![scene.lights[i].clone()];
+    s
+}
+
 /// The facts a technique is specialised for on `scene` (read from `path`): its first
 /// light's kind (the light the techniques render). None for a scene without a light.
 pub fn scene_facts(path: &Path, scene: &Scene) -> Option<sshc::SceneFacts> {
@@ -287,6 +295,15 @@ pub fn specialise(opts: &mut sshc::CompileOptions, input: &Path, scene_path: &Pa
     let Some(facts) = scene_facts(scene_path, scene) else {
         return Ok(());
     };
+    // one graph serves every light: specialised only where they are all of one kind
+    if scene.lights.iter().any(|l| l.kind() != facts.light) {
+        eprintln!(
+            "note: {} has lights of several kinds: {} compiled for any scene, not specialised",
+            scene_path.display(),
+            input.display()
+        );
+        return Ok(());
+    }
     if sshc::admits(&read(input)?, facts.light) {
         opts.scene = Some(facts);
     } else {

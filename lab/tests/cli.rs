@@ -571,3 +571,78 @@ fn scene_specialisation_is_recorded_explained_and_enforced() {
     ok(&[&["render", &g, "--scene", "scenes/contact.ron"][..], &small[..]].concat());
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Several lights (issue 16): `render` runs the graph once per light, each alone in the
+/// scene: light i's visibility file is byte for byte a render of the scene with that light
+/// only; the memory peak is one light's; `compare` gives each light its own truth and error.
+#[test]
+fn each_light_of_a_scene_renders_and_compares_alone() {
+    let dir = std::env::temp_dir().join(format!("sshc-lights-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    let small = ["--size", "24x24", "--shadow-map", "64"];
+    let out = ok(&[
+        &[
+            "render",
+            "techniques/pcf.ron",
+            "--scene",
+            "scenes/three-lights.ron",
+            "--visibility",
+            &p("v.pfm"),
+            "-o",
+            &p("v.png"),
+        ][..],
+        &small[..],
+    ]
+    .concat());
+    assert!(out.contains("| 1 | Sphere |") && out.contains("| 2 | DistantDisk |"), "{out}");
+    let peak = |out: &str| out.lines().find(|l| l.starts_with("| peak")).map(str::to_string);
+    // the sphere alone, from the same file with the other lights removed
+    let text = std::fs::read_to_string(root().join("scenes/three-lights.ron")).unwrap();
+    let (head, rest) = text.split_once("    lights: [").unwrap();
+    let (_, tail) = rest.split_once("\n    ],").unwrap();
+    let sphere = text.lines().find(|l| l.trim_start().starts_with("Sphere(")).unwrap();
+    std::fs::write(dir.join("sphere.ron"), format!("{head}    lights: [\n{sphere}\n    ],{tail}")).unwrap();
+    let alone = ok(&[
+        &[
+            "render",
+            "techniques/pcf.ron",
+            "--scene",
+            &p("sphere.ron"),
+            "--visibility",
+            &p("s.pfm"),
+            "-o",
+            &p("s.png"),
+        ][..],
+        &small[..],
+    ]
+    .concat());
+    assert_eq!(
+        std::fs::read(dir.join("v.light1.pfm")).unwrap(),
+        std::fs::read(dir.join("s.pfm")).unwrap()
+    );
+    assert_ne!(std::fs::read(dir.join("v.pfm")).unwrap(), std::fs::read(dir.join("s.pfm")).unwrap());
+    assert_eq!(peak(&out), peak(&alone), "the textures are reused from light to light");
+    let cmp = ok(&[
+        &[
+            "compare",
+            "techniques/pcf.ron",
+            "--scene",
+            "scenes/three-lights.ron",
+            "--stability-frames",
+            "0",
+            "-o",
+            &p("c.png"),
+        ][..],
+        &small[..],
+    ]
+    .concat());
+    for want in [
+        "light 1 (Sphere): error facing the light: RMS",
+        "light 2 (DistantDisk): error facing the light: RMS",
+        "lights: 3",
+    ] {
+        assert!(cmp.contains(want), "{cmp}");
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

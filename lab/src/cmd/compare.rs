@@ -205,6 +205,37 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
         device: gpu.describe(),
         range,
     });
+    // Several lights (issue 16): each light alone, its own truth and error; the panels
+    // show light 0.
+    let mut lines = lines;
+    for i in 1..scene.lights.len() {
+        let alone = crate::session::single_light(&scene, i);
+        let inputs = crate::bind::scene_inputs_for(&alone, &ex.graph).map_err(|e| format!("error: light {i}: {e}"))?;
+        ex.bind_scene(&inputs).map_err(rt)?;
+        ex.run_frame().map_err(rt)?;
+        let vis = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
+        let (t, _) = truth_at(&alone, &positions, &normals, &a.truth)?;
+        let facing = metrics::facing_light(&positions, &normals, &alone.lights[0]).map_err(|e| format!("error: {e}"))?;
+        metrics::check_visibility(&format!("the technique's visibility under light {i}"), &vis, &facing)
+            .map_err(|e| format!("error: {e}"))?;
+        let acc = metrics::accuracy(&vis, &t.visibility, &facing).map_err(|e| format!("error: {e}"))?;
+        lines.push(format!(
+            "light {i} ({}): error facing the light: RMS {:.2}, max {:.1} over {} px; in penumbra RMS {:.2} over {} px",
+            alone.lights[0].kind().name(),
+            acc.facing.rms,
+            acc.facing.max,
+            acc.facing.pixels,
+            acc.penumbra.rms,
+            acc.penumbra.pixels
+        ));
+    }
+    if scene.lights.len() > 1 {
+        lines.push(format!(
+            "lights: {}; the figures above the per-light lines and the panels are light 0's ({})",
+            scene.lights.len(),
+            light.kind().name()
+        ));
+    }
     let figures = Figures { lines, range };
     let panels = [
         ("technique visibility", grey(&visibility, w, h)),

@@ -17,7 +17,8 @@ pub struct RenderArgs {
     /// The shaded image (PNG).
     #[arg(short, long, default_value = "render.png")]
     out: PathBuf,
-    /// The visibility buffer: one-channel float PFM at camera resolution (1 where no surface is seen).
+    /// The visibility buffer: one-channel float PFM at camera resolution (1 where no surface
+    /// is seen); with several lights, light i > 0's goes to `NAME.light<i>.pfm`.
     #[arg(long)]
     visibility: Option<PathBuf>,
     /// World-space position of the surface seen at each pixel: three-channel PFM (NaN where none).
@@ -39,6 +40,20 @@ pub struct RenderArgs {
     /// 64 MiB (median of 5).
     #[arg(long, allow_negative_numbers = true)]
     bandwidth: Option<f64>,
+}
+
+/// The median of `v` (0 for none).
+fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// `vis.pfm` for light 0, `vis.light1.pfm` for light 1, ...
+fn per_light_path(p: &Path, i: usize) -> PathBuf {
+    let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = p.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
+    p.with_file_name(format!("{stem}.light{i}{ext}"))
 }
 
 /// Bytes of the copy that measures the bandwidth, and how many times it runs.
@@ -69,9 +84,7 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         names = t.passes.iter().map(|p| p.0.clone()).collect();
         all.push(t.passes.into_iter().map(|p| p.1).collect());
     }
-    let color = ex.read_camera(CameraOutput::Color).map_err(rt)?;
-    color.write_png(&a.out, None, (0.0, 1.0)).map_err(rt)?;
-    println!("wrote {}", a.out.display());
+    let mut color = ex.read_camera(CameraOutput::Color).map_err(rt)?;
     if let Some(p) = &a.visibility {
         ex.read_camera(CameraOutput::Visibility)
             .map_err(rt)?
@@ -79,6 +92,65 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
             .map_err(rt)?;
         println!("wrote {}", p.display());
     }
+    // Several lights (issue 16): the graph runs once per light, that light alone in the
+    // scene, on the same textures (rebinding replaces them: the peak stays one light's);
+    // the image is the mean of the lights' shaded images, and each light's visibility
+    // goes to its own file.
+    let mut lights = vec![(scene.lights.first().map(|l| l.kind().name()).unwrap_or("none"), median(&walls))];
+    let first = (names.clone(), all.clone(), walls.clone());
+    for i in 1..scene.lights.len() {
+        let alone = crate::session::single_light(&scene, i);
+        let inputs = crate::bind::scene_inputs_for(&alone, &ex.graph).map_err(|e| format!("error: light {i}: {e}"))?;
+        ex.bind_scene(&inputs).map_err(|e| format!("error: light {i}: {}", rt(e)))?;
+        let mut w = Vec::new();
+        for _ in 0..a.frames.max(1) {
+            let start = std::time::Instant::now();
+            ex.run_frame().map_err(rt)?;
+            gpu.wait().map_err(rt)?;
+            w.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+        lights.push((scene.lights[i].kind().name(), median(&w)));
+        let c = ex.read_camera(CameraOutput::Color).map_err(rt)?;
+        for (a, b) in color.rgba.iter_mut().zip(&c.rgba) {
+            for k in 0..3 {
+                a[k] += b[k];
+            }
+        }
+        if let Some(p) = &a.visibility {
+            let file = per_light_path(p, i);
+            ex.read_camera(CameraOutput::Visibility)
+                .map_err(rt)?
+                .write_pfm_gray(&file, 0)
+                .map_err(rt)?;
+            println!("wrote {} (light {i})", file.display());
+        }
+    }
+    let (names, all, mut walls) = first;
+    if lights.len() > 1 {
+        // back to light 0, whose tables follow
+        ex.bind_scene(&inputs).map_err(rt)?;
+        ex.run_frame().map_err(rt)?;
+        let n = lights.len() as f32;
+        for px in color.rgba.iter_mut() {
+            for v in px.iter_mut().take(3) {
+                *v /= n;
+            }
+        }
+        println!(
+            "| light | kind | frame wall ms (median of {} frame(s)) |\n|---|---|---|",
+            a.frames.max(1)
+        );
+        for (i, (kind, ms)) in lights.iter().enumerate() {
+            println!("| {i} | {kind} | {ms:.3} |");
+        }
+        println!(
+            "lights: {}, frame wall time {:.3} ms in all; the tables below are light 0's",
+            lights.len(),
+            lights.iter().map(|l| l.1).sum::<f64>()
+        );
+    }
+    color.write_png(&a.out, None, (0.0, 1.0)).map_err(rt)?;
+    println!("wrote {}", a.out.display());
     if let Some(p) = &a.positions {
         ex.read_camera(CameraOutput::Position).map_err(rt)?.write_pfm_rgb(p).map_err(rt)?;
         println!("wrote {}", p.display());
