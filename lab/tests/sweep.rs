@@ -213,3 +213,25 @@ fn a_sweep_over_the_shadow_on_the_ground_reports_it() {
     );
     let _ = std::fs::remove_dir_all(&bad);
 }
+
+/// A scene of several lights (issue 16) is swept one light at a time: each light gets its
+/// own rows, truth and figures, named `SCENE light K`.
+#[test]
+fn a_sweep_over_several_lights_reports_each_light() {
+    let out = tmp("lights");
+    let csv = run_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/sweep-lights.ron"), &out, &[]);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let scene = header.iter().position(|h| *h == "scene").expect("a scene column");
+    let rms = header.iter().position(|h| *h == "rms_facing").expect("an rms_facing column");
+    let rows = rows(&csv);
+    let scenes: Vec<&str> = rows.iter().map(|r| r[scene].as_str()).collect();
+    assert_eq!(
+        scenes,
+        ["three-lights light 0", "three-lights light 1", "three-lights light 2"],
+        "{csv}"
+    );
+    // three lights of different kinds: three different errors
+    let errors: Vec<&str> = rows.iter().map(|r| r[rms].as_str()).collect();
+    assert!(errors[0] != errors[1] && errors[1] != errors[2], "{csv}");
+    let _ = std::fs::remove_dir_all(out);
+}

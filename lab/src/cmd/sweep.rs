@@ -220,10 +220,23 @@ fn settings(c: &Config) -> Result<Settings, String> {
 }
 
 fn stem(p: &str) -> String {
-    Path::new(p)
+    let (path, light) = split_entry(p);
+    let s = Path::new(path)
         .file_stem()
         .map(|s| s.to_string_lossy().trim_end_matches(".graph").to_string())
-        .unwrap_or_else(|| p.to_string())
+        .unwrap_or_else(|| path.to_string());
+    match light {
+        Some(k) => format!("{s} light {k}"),
+        None => s,
+    }
+}
+
+/// A scene entry `PATH` or `PATH#k` (light k alone): the path and the light.
+fn split_entry(entry: &str) -> (&str, Option<usize>) {
+    match entry.rsplit_once('#') {
+        Some((path, k)) if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) => (path, k.parse().ok()),
+        _ => (entry, None),
+    }
 }
 
 /// Scale a light's extent (radius, half-extents, segment length about its midpoint,
@@ -374,9 +387,31 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     check_axes(&file).map_err(|e| format!("error: {}: {e}", a.sweep.display()))?;
     let base = a.sweep.parent().unwrap_or(Path::new(".")).to_path_buf();
     let resolve = |p: &str| -> PathBuf { base.join(p) };
+    // Several lights (issue 16): a scene of n lights becomes n entries `PATH#k`, each that
+    // light alone (its own truth, metrics and rows).
+    let mut file = file;
+    let mut entries = Vec::new();
+    for path in &file.scenes {
+        let scene = load_scene(&resolve(path), file.camera, None)?;
+        if scene.lights.len() > 1 {
+            entries.extend((0..scene.lights.len()).map(|k| format!("{path}#{k}")));
+        } else {
+            entries.push(path.clone());
+        }
+    }
+    file.scenes = entries;
+    // an entry's scene: the file, with light k alone for `PATH#k`
+    let load_entry = |entry: &str, camera: Option<(u32, u32)>| -> Result<crate::scene::Scene, String> {
+        let (path, light) = split_entry(entry);
+        let scene = load_scene(&resolve(path), camera, None)?;
+        Ok(match light {
+            Some(k) if k < scene.lights.len() => crate::session::single_light(&scene, k),
+            _ => scene,
+        })
+    };
     if file.pixels == PixelSet::ShadowOnGround {
         for scene_path in &file.scenes {
-            let scene = load_scene(&resolve(scene_path), file.camera, None)?;
+            let scene = load_entry(scene_path, file.camera)?;
             if (0..scene.objects().len()).all(|i| scene.casts(i)) {
                 return Err(format!(
                     "error: {}: `pixels: ShadowOnGround` needs a ground that casts no shadow, but every object of `{scene_path}` casts; mark the ground `casts: false` or write `pixels: Penumbra`",
@@ -429,7 +464,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
             reference_runs.push(None);
             continue;
         }
-        let scene = load_scene(&resolve(scene_path), file.camera, None)?;
+        let scene = load_entry(scene_path, file.camera)?;
         let c = compile(&resolve(&file.reference), &reference_source, &[], &[], &[])?;
         let inputs = crate::bind::scene_inputs_for(&scene, &c.graph)?;
         reference_runs.push(Some((c, inputs, Vec::new())));
@@ -448,7 +483,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
             time_references(&mut reference_runs)?;
         }
         bar.set_message(format!("{} {} {}", stem(&file.scenes[c.scene]), c.label, c.describe()));
-        let mut scene = load_scene(&resolve(&file.scenes[c.scene]), file.camera, None)?;
+        let mut scene = load_entry(&file.scenes[c.scene], file.camera)?;
         let Settings {
             shadow_map,
             light_scale,
@@ -466,7 +501,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         scene.check_precision().map_err(|e| e.to_string())?;
         let path = resolve(&file.techniques[c.technique].file);
         // specialised for the scene's light where the technique admits it (issue 16)
-        let scene_path = resolve(&file.scenes[c.scene]);
+        let scene_path = resolve(split_entry(&file.scenes[c.scene]).0);
         let facts = crate::session::scene_facts(&scene_path, &scene).filter(|f| sshc::admits(&sources[c.technique], f.light));
         let compiled = compile_for(&path, &sources[c.technique], &set, &precision, &schedule, facts)?;
         let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
@@ -517,7 +552,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     if si == 0 {
         for (sc, scene_path) in file.scenes.iter().enumerate() {
             for &n in &file.stochastic {
-                let scene = load_scene(&resolve(scene_path), file.camera, None)?;
+                let scene = load_entry(scene_path, file.camera)?;
                 let c = compile(&resolve(&file.reference), &reference_source, &[], &[], &[])?;
                 let mut ex = Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?;
                 ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
