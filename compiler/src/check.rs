@@ -1018,6 +1018,15 @@ struct Typer<'s, 'a> {
     /// One entry per term the enclosing series unroll to (one empty entry outside any):
     /// the values of their variables, outermost first (`None` where a bound was not known).
     envs: Vec<Vec<Option<i64>>>,
+    /// Locals below this index belong to the callers of the function bodies being checked:
+    /// a body sees its parameters, not its caller's `let`s (series variables below it still
+    /// count in `envs`, so nested series stay limited through calls).
+    floor: usize,
+    /// The functions whose bodies are being checked, outermost first (recursion is refused).
+    calling: Vec<usize>,
+    /// Expression nodes of function bodies checked so far in this context (each call
+    /// inlines its body), limited to `front::expr::MAX_NODES`.
+    inlined: usize,
 }
 
 impl<'s, 'a> Typer<'s, 'a> {
@@ -1034,6 +1043,9 @@ impl<'s, 'a> Typer<'s, 'a> {
             carriers: vec![],
             in_sample: false,
             envs: vec![vec![]],
+            floor: 0,
+            calling: vec![],
+            inlined: 0,
         }
     }
 
@@ -1355,7 +1367,7 @@ impl<'s, 'a> Typer<'s, 'a> {
     /// The locals in scope, each hiding any param of its name, with no value: for
     /// evaluating what does not depend on them.
     fn scope(&self) -> consteval::Env {
-        self.locals.iter().map(|l| (l.name.clone(), None)).collect()
+        self.locals[self.floor..].iter().map(|l| (l.name.clone(), None)).collect()
     }
 
     /// The bounds of a series `from..=to` for each term of the enclosing series (one per
@@ -1373,7 +1385,7 @@ impl<'s, 'a> Typer<'s, 'a> {
         let mut needed = std::collections::HashSet::new();
         free_names(from, &mut needed);
         free_names(to, &mut needed);
-        for l in self.locals.iter().rev() {
+        for l in self.locals[self.floor..].iter().rev() {
             if let (true, Bind::Let(x)) = (needed.contains(l.name.as_str()), &l.bind) {
                 free_names(x, &mut needed);
             }
@@ -1389,7 +1401,7 @@ impl<'s, 'a> Typer<'s, 'a> {
         let mut once: consteval::Env = Vec::new();
         let mut dependent = std::collections::HashSet::new();
         let mut series = 0;
-        for l in &self.locals {
+        for (li, l) in self.locals.iter().enumerate() {
             let name = l.name.as_str();
             let slot = match &l.bind {
                 Bind::Series => {
@@ -1417,7 +1429,8 @@ impl<'s, 'a> Typer<'s, 'a> {
                     once.push((name.to_string(), None));
                 }
             }
-            if needed.contains(name) {
+            // a caller's locals (below the floor) are not in a function body's scope
+            if needed.contains(name) && li >= self.floor {
                 plan.push((name, slot));
             }
         }
@@ -1447,7 +1460,7 @@ impl<'s, 'a> Typer<'s, 'a> {
     }
 
     fn resolve_name(&mut self, n: &str, span: Span) -> Result<(Ty, Resolved), Diagnostic> {
-        if let Some(l) = self.locals.iter().rev().find(|l| l.name == n) {
+        if let Some(l) = self.locals[self.floor..].iter().rev().find(|l| l.name == n) {
             let ty = l.ty;
             if !l.konst {
                 if self.mode == Mode::Const {
@@ -1545,7 +1558,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                 .help(format!("evaluate it with `expand({n})` in the Shade pass")));
         }
         let names = self.sym.visible_names();
-        let local_names: Vec<&str> = self.locals.iter().map(|l| l.name.as_str()).collect();
+        let local_names: Vec<&str> = self.locals[self.floor..].iter().map(|l| l.name.as_str()).collect();
         let all: Vec<&str> = names.into_iter().chain(local_names).collect();
         let mut d = Self::err(span, format!("unknown name `{n}`"), "not a param, channel, input or binding");
         if let Some(s) = closest(n, &all) {
@@ -1595,9 +1608,96 @@ impl<'s, 'a> Typer<'s, 'a> {
         t
     }
 
+    /// A call of the technique's function `fi`: its arguments against the parameters'
+    /// types, then its body in the caller's context with only the parameters (bound to the
+    /// arguments) as locals.
+    fn call_function(&mut self, fi: usize, name_span: Span, args: &'a [Expr], span: Span) -> Result<Ty, Diagnostic> {
+        let f = &self.sym.t.functions[fi];
+        let name = f.name.value.as_str();
+        let signature = || {
+            let ps: Vec<String> = f.params.iter().map(|(p, t)| format!("{}: {}", p.value, t.value)).collect();
+            format!("{name}({})", ps.join(", "))
+        };
+        if args.len() != f.params.len() {
+            return Err(Self::err(
+                span,
+                format!("`{name}` takes {} argument(s), found {}", f.params.len(), args.len()),
+                "wrong number of arguments",
+            )
+            .also(f.name.span, format!("declared here: {}", signature())));
+        }
+        if let Some(pos) = self.calling.iter().position(|&c| c == fi) {
+            let chain: Vec<&str> = self.calling[pos..]
+                .iter()
+                .map(|&c| self.sym.t.functions[c].name.value.as_str())
+                .chain(std::iter::once(name))
+                .collect();
+            return Err(Self::err(name_span, format!("recursive call of `{name}`"), "calls itself")
+                .also(f.name.span, "declared here")
+                .note(format!("calls: {}", chain.join(" -> ")))
+                .help("functions are inlined at every call, so they cannot recurse; unroll it with `sum`"));
+        }
+        let nodes = {
+            let mut n = 0usize;
+            f.body.walk(&mut |_| n += 1);
+            n
+        };
+        self.inlined += nodes;
+        let limit = crate::front::expr::MAX_NODES as usize;
+        if self.inlined > limit {
+            return Err(Self::err(
+                name_span,
+                format!("calls of the technique's functions inline more than {limit} expression nodes here"),
+                "inlined here",
+            )
+            .note("every call inlines its function's body; calls inside function bodies multiply")
+            .help("call the functions fewer times, or bind a result with `let` and reuse it"));
+        }
+        // the arguments, in the caller's scope
+        let mut bound = Vec::with_capacity(args.len());
+        for (a, (p, want)) in args.iter().zip(&f.params) {
+            let before = self.uses.len();
+            let runtime = self.runtime;
+            let t = self.infer(a)?;
+            if unify(t, want.value) != Some(want.value) {
+                return Err(Self::err(
+                    a.span,
+                    format!("type mismatch: parameter `{}` of `{name}` is {}, found {t}", p.value, want.value),
+                    format!("this is {t}"),
+                )
+                .also(p.span, format!("declared here: {}", signature())));
+            }
+            // an abstract integer argument takes the parameter's scalar type
+            if matches!(want.value, Ty::I32 | Ty::F32) {
+                self.settle(a, want.value)?;
+            }
+            let uses = distinct_sites(self.uses.drain(before..));
+            bound.push(Local {
+                name: p.value.clone(),
+                ty: want.value,
+                uses,
+                konst: self.runtime == runtime,
+                bind: Bind::Other,
+            });
+        }
+        // the body, seeing the parameters only
+        let (floor, depth) = (self.floor, self.locals.len());
+        self.floor = depth;
+        self.locals.extend(bound);
+        self.calling.push(fi);
+        let r = self.infer(&f.body);
+        self.calling.pop();
+        self.locals.truncate(depth);
+        self.floor = floor;
+        r.map_err(|d| d.also(name_span, format!("in this call of `{name}`")))
+    }
+
     fn call(&mut self, name: &str, name_span: Span, args: &'a [Expr], span: Span) -> Result<Ty, Diagnostic> {
         if name == AT_SAMPLE {
             return self.at_sample(name_span, args, span);
+        }
+        if let Some(&fi) = self.sym.functions.get(name) {
+            return self.call_function(fi, name_span, args, span);
         }
         if let Some((how, expand)) = SampleFn::from_name(name) {
             if self.mode != Mode::Shade {

@@ -40,6 +40,8 @@ struct Lowerer<'s, 'a> {
     view: Option<u8>,
     /// Light samples of the technique (`at_sample`'s index runs over 0..samples).
     samples: u32,
+    /// Locals below this index are the callers' of the function bodies being inlined.
+    floor: usize,
 }
 
 /// An invariant `check` established does not hold: a compiler bug, reported as a value.
@@ -67,6 +69,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
             shade_reads,
             view: None,
             samples: 1,
+            floor: 0,
         }
     }
 
@@ -254,8 +257,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         let r = self.types.name(e).ok_or_else(|| internal(span, "name not resolved by check"))?;
         Ok(match r {
             Resolved::Local => {
-                let (_, h) = self
-                    .locals
+                let (_, h) = self.locals[self.floor..]
                     .iter()
                     .rev()
                     .find(|l| l.0 == n)
@@ -312,6 +314,22 @@ impl<'s, 'a> Lowerer<'s, 'a> {
 
     fn call(&mut self, name: &str, args: &[Expr], e: &Expr) -> Result<H, Diagnostic> {
         let span = e.span;
+        if let Some(&fi) = self.sym.functions.get(name) {
+            // inlined: the arguments in the caller's scope, the body with only the
+            // parameters bound to them (check refused recursion and bounded the size)
+            let f = &self.sym.t.functions[fi];
+            let mut bound = Vec::with_capacity(args.len());
+            for (a, (p, _)) in args.iter().zip(&f.params) {
+                bound.push((p.value.clone(), self.expr_coerced(a)?));
+            }
+            let (floor, depth) = (self.floor, self.locals.len());
+            self.floor = depth;
+            self.locals.extend(bound);
+            let r = self.expr_coerced(&f.body);
+            self.locals.truncate(depth);
+            self.floor = floor;
+            return r;
+        }
         if name == AT_SAMPLE {
             // `at_sample(k, body)`: body with the receiver seen from light sample k
             let k = self.expr(&args[0])?;

@@ -30,6 +30,8 @@ pub struct Symbols<'a> {
     pub params: IndexMap<String, usize>,
     pub channels: IndexMap<String, usize>,
     pub expansions: IndexMap<String, usize>,
+    /// The technique's functions, by name (index into `Technique::functions`).
+    pub functions: IndexMap<String, usize>,
     pub passes: IndexMap<String, usize>,
     pub resources: IndexMap<String, Resource>,
     /// Parameter values after `--set` overrides, with the span that set them.
@@ -53,6 +55,7 @@ impl<'a> Symbols<'a> {
             params: self.params.clone(),
             channels: self.channels.clone(),
             expansions: self.expansions.clone(),
+            functions: self.functions.clone(),
             passes: self.passes.clone(),
             resources: self.resources.clone(),
             values: self.values.clone(),
@@ -97,7 +100,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
                 Diagnostic::error(Phase::Resolve, format!("duplicate name `{}`", name.value))
                     .at(name.span, format!("{what} `{}` declared again here", name.value))
                     .also(*first, "first declared here")
-                    .help("params, channels and expansions share one namespace; rename one of them"),
+                    .help("params, channels, expansions and functions share one namespace; rename one of them"),
             );
         } else {
             seen.insert(name.value.clone(), name.span);
@@ -127,6 +130,34 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
     for (i, e) in t.expansions.iter().enumerate() {
         declare(&e.name, "expansion", &mut diags);
         expansions.entry(e.name.value.clone()).or_insert(i);
+    }
+    let mut functions = IndexMap::new();
+    for (i, f) in t.functions.iter().enumerate() {
+        declare(&f.name, "function", &mut diags);
+        functions.entry(f.name.value.clone()).or_insert(i);
+        let mut names: Vec<&Name> = Vec::new();
+        for (p, _) in &f.params {
+            if builtins::is_reserved(&p.value) {
+                diags.push(
+                    Diagnostic::error(
+                        Phase::Resolve,
+                        format!("`{}` is a built-in name and cannot name a parameter", p.value),
+                    )
+                    .at(p.span, "reserved")
+                    .help("choose another name"),
+                );
+            } else if let Some(first) = names.iter().find(|n| n.value == p.value) {
+                diags.push(
+                    Diagnostic::error(
+                        Phase::Resolve,
+                        format!("function `{}` has two parameters named `{}`", f.name.value, p.value),
+                    )
+                    .at(p.span, "declared again here")
+                    .also(first.span, "first declared here"),
+                );
+            }
+            names.push(p);
+        }
     }
 
     let mut passes = IndexMap::new();
@@ -314,6 +345,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         params,
         channels,
         expansions,
+        functions,
         passes,
         resources,
         values,

@@ -16,6 +16,8 @@ pub struct Technique {
     pub params: Vec<Param>,
     pub channels: Vec<Channel>,
     pub expansions: Vec<Expansion>,
+    /// Functions the expressions may call, inlined at each call (docs/language.md 8.10).
+    pub functions: Vec<Function>,
     pub passes: Vec<Pass>,
     /// `light_samples`: how many light samples the `PerSample` passes render views of, a
     /// compile-time expression (a fixed param); absent: 1.
@@ -81,6 +83,19 @@ pub struct Param {
     pub range: Option<(Spanned<f64>, Spanned<f64>)>,
     /// Fixed at compile time (substituted, series unrolled) or a runtime uniform.
     pub fixed: bool,
+    pub doc: Option<String>,
+    pub span: Span,
+}
+
+/// A function declared in the technique: typed parameters and a body expression, inlined
+/// at every call, in the caller's context (its pass, its lookups), seeing its parameters,
+/// the technique's params and the built-in inputs but not the caller's `let`s.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Function {
+    pub name: Name,
+    /// In call order: each parameter's name and type (`F32`, `I32`, `Bool`, `Vec2` to `Vec4`).
+    pub params: Vec<(Name, Spanned<crate::builtins::Ty>)>,
+    pub body: Expr,
     pub doc: Option<String>,
     pub span: Span,
 }

@@ -299,6 +299,10 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
             .map(|(k, v)| expansion(k, v))
             .collect::<Result<_, _>>()?,
     };
+    let functions = match f.opt("functions")? {
+        None => vec![],
+        Some(n) => map_entries(n)?.into_iter().map(|(k, v)| function(k, v)).collect::<Result<_, _>>()?,
+    };
     let passes_node = f.req("passes")?;
     let passes = match &passes_node.value {
         Value::List(items) if items.len() > MAX_PASSES => {
@@ -328,9 +332,52 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
         params,
         channels,
         expansions,
+        functions,
         passes,
         light_samples,
         span: root.span,
+    })
+}
+
+/// `"name": Function(params: { "x": F32, ... }, body: "...", doc: "...")`.
+fn function(name: Name, node: &Node) -> Result<Function, Diagnostic> {
+    use crate::builtins::Ty;
+    let mut f = Fields::of(node, "Function")?;
+    let params = match f.opt("params")? {
+        None => vec![],
+        Some(n) => map_entries(n)?
+            .into_iter()
+            .map(|(k, v)| {
+                let (t, span) = variant(v)?;
+                let ty = match t.as_str() {
+                    "F32" => Ty::F32,
+                    "I32" => Ty::I32,
+                    "Bool" => Ty::Bool,
+                    "Vec2" => Ty::Vec(2),
+                    "Vec3" => Ty::Vec(3),
+                    "Vec4" => Ty::Vec(4),
+                    _ => {
+                        return Err(unknown_variant(
+                            span,
+                            &t,
+                            "parameter type",
+                            &["F32", "I32", "Bool", "Vec2", "Vec3", "Vec4"],
+                        ));
+                    }
+                };
+                Ok((k, Spanned::new(ty, v.span)))
+            })
+            .collect::<Result<_, _>>()?,
+    };
+    let body = expression(f.req("body")?)?;
+    let doc = opt_string(&mut f, "doc")?;
+    f.finish()?;
+    Ok(Function {
+        name,
+        params,
+        body,
+        doc,
+        span: node.span,
     })
 }
 

@@ -1,0 +1,196 @@
+//! Functions declared in a technique (issue 17): typed parameters, inlined at every call,
+//! in the caller's context; recursion, wrong calls and runaway inlining refused with
+//! diagnostics at file:line:column.
+
+use sshc::CompileOptions;
+use std::time::{Duration, Instant};
+
+fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn vsm() -> String {
+    std::fs::read_to_string(root().join("techniques/vsm.ron")).unwrap()
+}
+
+/// VSM with `functions` declared before its passes and `visibility` as its Shade's body.
+fn vsm_with(functions: &str, visibility: &str) -> String {
+    let src = vsm();
+    let (head, rest) = src.split_once("    passes: [").unwrap();
+    let (passes, _) = rest.split_once("        Shade(").unwrap();
+    format!(
+        "{head}    functions: {{\n{functions}\n    }},\n    passes: [{passes}        Shade(name: \"shade\", reads: [\"filtered\"], visibility: \"{visibility}\"),\n    ],\n)\n"
+    )
+}
+
+fn compile(src: &str) -> Result<sshc::Compiled, String> {
+    sshc::compile_str(src, &CompileOptions::default()).map_err(|d| d.render("t.ron", src))
+}
+
+fn refused(src: &str, want: &[&str]) {
+    let e = compile(src).expect_err("refused");
+    for w in want {
+        assert!(e.contains(w), "expected `{w}` in:\n{e}");
+    }
+}
+
+/// `text` with every `e<digits>` identifier renamed `v<k>`, k its order of first appearance.
+fn renumbered(text: &str) -> String {
+    let mut seen: Vec<String> = Vec::new();
+    let mut out = String::new();
+    let b = text.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        let starts = b[i] == b'e' && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_'));
+        let digits = b[i + 1..].iter().take_while(|c| c.is_ascii_digit()).count();
+        let ends = b.get(i + 1 + digits).is_none_or(|c| !(c.is_ascii_alphanumeric() || *c == b'_'));
+        if starts && digits > 0 && ends {
+            let id = &text[i..i + 1 + digits];
+            let k = seen.iter().position(|s| s == id).unwrap_or_else(|| {
+                seen.push(id.to_string());
+                seen.len() - 1
+            });
+            out += &format!("v{k}");
+            i += 1 + digits;
+        } else {
+            out.push(b[i] as char);
+            i += 1;
+        }
+    }
+    out
+}
+
+const CHEBYSHEV: &str = r#"        "chebyshev": Function(
+            params: { "mean": F32, "second": F32, "t": F32 },
+            body: "let variance = max(second - mean * mean, min_variance); let delta = t - mean; select(1.0, variance / (variance + delta * delta), t > mean)",
+            doc: "Chebyshev's one-sided bound (Donnelly & Lauritzen 2006, eq. 5)",
+        ),"#;
+
+/// The bundled VSM's Shade, its bound written as a function: the same shader and the
+/// same operation counts (inlining then the arena's sharing leave nothing of the call).
+#[test]
+fn a_function_compiles_to_the_code_written_inline() {
+    let bundled = compile(&vsm()).unwrap();
+    let src = vsm_with(
+        CHEBYSHEV,
+        "let d_biased = d - bias - slope_bias * depth_slope; linstep(bleed, 1.0, chebyshev(sample(m1), sample(m2), d_biased))",
+    );
+    let with = compile(&src).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(with.cost.shade, bundled.cost.shade);
+    let shade = |c: &sshc::Compiled| c.shaders.iter().find(|(f, _)| f.ends_with("shade.wgsl")).unwrap().1.clone();
+    // the same code, but for the numbering of the emitted `let`s (the arena numbers nodes
+    // in the order it met them)
+    assert_eq!(renumbered(&shade(&with)), renumbered(&shade(&bundled)));
+    // called twice with other arguments: two bounds, each argument's own
+    let twice = vsm_with(
+        CHEBYSHEV,
+        "let t = d - bias; 0.5 * (chebyshev(sample(m1), sample(m2), t) + chebyshev(sample(m1), sample(m2), t - 0.01))",
+    );
+    let c = compile(&twice).unwrap_or_else(|e| panic!("{e}"));
+    assert!(c.cost.shade.ops > bundled.cost.shade.ops, "{:?}", c.cost.shade);
+}
+
+/// Functions call functions; integer and vector parameters; an abstract integer argument
+/// takes its parameter's type.
+#[test]
+fn functions_call_functions_with_every_parameter_type() {
+    let src = vsm_with(
+        r#"        "square": Function(params: { "x": F32 }, body: "x * x"),
+        "norm2": Function(params: { "v": Vec2 }, body: "square(v.x) + square(v.y)"),
+        "pick": Function(params: { "k": I32, "on": Bool }, body: "select(0.0, f32(k), on)"),"#,
+        "clamp(norm2(vec2(d, sample(m1))) + pick(2, d > 0.5) * 0.0, 0.0, 1.0)",
+    );
+    compile(&src).unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn recursion_is_refused_with_the_chain_of_calls() {
+    refused(
+        &vsm_with(r#"        "f": Function(params: { "x": F32 }, body: "f(x) + 1.0"),"#, "f(d)"),
+        &["error[check]: recursive call of `f`", "calls: f -> f", "t.ron:"],
+    );
+    refused(
+        &vsm_with(
+            r#"        "f": Function(params: { "x": F32 }, body: "g(x)"),
+        "g": Function(params: { "x": F32 }, body: "f(x * 0.5)"),"#,
+            "f(d)",
+        ),
+        &["recursive call of `f`", "calls: f -> g -> f"],
+    );
+}
+
+#[test]
+fn wrong_calls_name_the_signature() {
+    refused(
+        &vsm_with(CHEBYSHEV, "chebyshev(d, d)"),
+        &[
+            "`chebyshev` takes 3 argument(s), found 2",
+            "declared here: chebyshev(mean: f32, second: f32, t: f32)",
+        ],
+    );
+    refused(
+        &vsm_with(CHEBYSHEV, "chebyshev(d, d, vec2(d, d))"),
+        &["type mismatch: parameter `t` of `chebyshev` is f32, found vec2<f32>"],
+    );
+}
+
+/// A body sees its parameters, the technique's params and the inputs, not its caller's
+/// `let`s; it runs in its caller's context (a lookup in a Map pass's channel is refused
+/// there, at the lookup, with the call named).
+#[test]
+fn a_body_sees_its_parameters_in_its_callers_context() {
+    refused(
+        &vsm_with(
+            r#"        "f": Function(params: { "x": F32 }, body: "x + hidden"),"#,
+            "let hidden = 1.0; f(d)",
+        ),
+        &["unknown name `hidden`"],
+    );
+    let src = vsm().replace(
+        "\"m2\": Channel(precision: F32, value: \"z * z\"",
+        "\"m2\": Channel(precision: F32, value: \"f(z)\"",
+    );
+    let src = src.replace(
+        "    passes: [",
+        "    functions: { \"f\": Function(params: { \"x\": F32 }, body: \"x * sample(m1)\") },\n    passes: [",
+    );
+    refused(&src, &["`sample` is only available in a Shade pass", "in this call of `f`"]);
+}
+
+#[test]
+fn names_are_checked_like_the_other_declarations() {
+    refused(
+        &vsm_with(r#"        "min": Function(params: { "x": F32 }, body: "x"),"#, "d"),
+        &["`min` is a built-in name and cannot name a function"],
+    );
+    refused(
+        &vsm_with(r#"        "bias": Function(params: { "x": F32 }, body: "x"),"#, "d"),
+        &["duplicate name `bias`"],
+    );
+    refused(
+        &vsm_with(r#"        "f": Function(params: { "x": F32, "x": I32 }, body: "x"),"#, "f(d, 1)"),
+        &["two parameters named `x`"],
+    );
+    refused(
+        &vsm_with(r#"        "f": Function(params: { "x": F64 }, body: "x"),"#, "f(d)"),
+        &["unknown parameter type `F64`"],
+    );
+}
+
+/// Inlining is bounded: 40 functions each calling the previous twice would inline 2^40
+/// bodies; the inlined nodes are counted as they are checked and refused past the
+/// expression limit, within a second.
+#[test]
+fn runaway_inlining_is_refused_at_once() {
+    let mut fns = String::from("        \"g0\": Function(params: { \"x\": F32 }, body: \"x * 0.5\"),\n");
+    for i in 1..40 {
+        fns += &format!(
+            "        \"g{i}\": Function(params: {{ \"x\": F32 }}, body: \"g{}(x) + g{}(x * 0.5)\"),\n",
+            i - 1,
+            i - 1
+        );
+    }
+    let t = Instant::now();
+    refused(&vsm_with(&fns, "g39(d)"), &["inline more than 65536 expression nodes"]);
+    assert!(t.elapsed() < Duration::from_secs(2), "{:?}", t.elapsed());
+}
