@@ -157,6 +157,10 @@ pub enum Input {
     /// The Gouraud value of a skin fragment (Heidrich et al. 2000, section 3.2): 0 on the
     /// occluder edge, 1 on the receiver, interpolated across the skin.
     Skin,
+    /// The camera pixel being shaded, integer coordinates from the top-left as floats.
+    Pixel,
+    /// Frames run since the scene was bound (0, 1, 2, ...).
+    Frame,
 }
 
 /// Everything the compiler knows about one built-in input: check reads its name, type and
@@ -175,7 +179,7 @@ pub struct InputDesc {
 }
 
 impl Input {
-    pub const ALL: [Input; 26] = [
+    pub const ALL: [Input; 28] = [
         Input::D,
         Input::DWorld,
         Input::Uv,
@@ -202,6 +206,8 @@ impl Input {
         Input::SegmentBefore,
         Input::SegmentAfter,
         Input::Skin,
+        Input::Pixel,
+        Input::Frame,
     ];
 
     /// The Geometry primitives whose fragments have this input (every one for the others).
@@ -228,6 +234,8 @@ impl Input {
             | Input::LightSpread
             | Input::SegmentBefore
             | Input::SegmentAfter
+            | Input::Pixel
+            | Input::Frame
             | Input::LightDistant => &[
                 Primitive::ConesAndSheets,
                 Primitive::Ribbons,
@@ -444,6 +452,22 @@ impl Input {
                 wgsl: "in_segment_after",
                 doc: "inside at_sample(k, ..): weight of the light segment after sample k (0 for the last sample of an open chain, 1 for a lone sample)",
             },
+            Input::Pixel => &InputDesc {
+                name: "pixel",
+                ty: Ty::Vec(2),
+                side: Receiver,
+                range: (0.0, 16384.0),
+                wgsl: "in_pixel",
+                doc: "the camera pixel being shaded: integer coordinates (x, y) from the top-left, as floats",
+            },
+            Input::Frame => &InputDesc {
+                name: "frame",
+                ty: Ty::I32,
+                side: Both,
+                range: (0.0, 16777216.0),
+                wgsl: "i32(frame.counters.x)",
+                doc: "frames run since the scene was bound: 0, 1, 2, ... (for noise that changes from frame to frame)",
+            },
             Input::Skin => &InputDesc {
                 name: "skin",
                 ty: Ty::F32,
@@ -543,7 +567,30 @@ pub enum Func {
     /// `uv_width(len, dist)`: the shadow-map uv extent of a world length `len` lying across
     /// the light's view at view distance `dist` (perspective or orthographic light).
     UvWidth,
+    /// `noise(x, y, k)`: a stated hash of the integers floor(x), floor(y), floor(k) to a
+    /// float uniform in [0, 1) (PCG3D: Jarzynski & Olano 2020, "Hash functions for GPU
+    /// rendering"), for per-pixel and per-frame random numbers: `noise(pixel.x, pixel.y,
+    /// f32(frame))`.
+    Noise,
 }
+
+/// The WGSL of [`Func::Noise`], added to a module whose code calls it: PCG3D
+/// (Jarzynski & Olano 2020, "Hash functions for GPU rendering", section 2) on the three
+/// integers, the top 24 bits of the first word as a float in [0, 1).
+pub const NOISE_WGSL: &str = "
+fn sshc_noise(x: f32, y: f32, k: f32) -> f32 {
+    var v = vec3<u32>(vec3<i32>(floor(vec3<f32>(x, y, k))));
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    v ^= v >> vec3<u32>(16u);
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    return f32(v.x >> 8u) * (1.0 / 16777216.0);
+}
+";
 
 /// Everything the compiler knows about one built-in function. check types a call with
 /// [`Builtin::sig`], lower coerces its arguments with it, the arena folds it with
@@ -622,7 +669,7 @@ impl fmt::Debug for Builtin {
 }
 
 impl Func {
-    pub const ALL: [Func; 39] = [
+    pub const ALL: [Func; 40] = [
         Func::Abs,
         Func::Exp,
         Func::Exp2,
@@ -662,6 +709,7 @@ impl Func {
         Func::Dot,
         Func::DivOr,
         Func::UvWidth,
+        Func::Noise,
     ];
 
     /// The descriptor: adding a function means adding a variant, its entry in
@@ -1105,6 +1153,16 @@ impl Func {
                     )
                 }),
             },
+            Func::Noise => &Builtin {
+                name: "noise",
+                arity: 3,
+                sig: Scalars,
+                // a hash: folded only by the GPU's integer arithmetic
+                fold: Never,
+                range: |_| Interval { lo: 0.0, hi: 1.0 },
+                // the module defines `sshc_noise` where a body calls it (`NOISE_WGSL`)
+                wgsl: Callee("sshc_noise"),
+            },
             Func::UvWidth => &Builtin {
                 name: "uv_width",
                 arity: 2,
@@ -1547,13 +1605,13 @@ mod tests {
             assert_eq!(Func::from_name(f.name()), Some(f));
             assert!(is_reserved(f.name()));
         }
-        assert_eq!(Func::UvWidth as usize + 1, Func::ALL.len(), "a Func is missing from Func::ALL");
+        assert_eq!(Func::Noise as usize + 1, Func::ALL.len(), "a Func is missing from Func::ALL");
         for (i, input) in Input::ALL.into_iter().enumerate() {
             assert_eq!(input as usize, i, "Input::ALL out of declaration order at {input:?}");
             assert_eq!(Input::from_name(input.name()), Some(input));
             assert!(is_reserved(input.name()));
         }
-        assert_eq!(Input::Skin as usize + 1, Input::ALL.len(), "an Input is missing from Input::ALL");
+        assert_eq!(Input::Frame as usize + 1, Input::ALL.len(), "an Input is missing from Input::ALL");
         let mut names: Vec<&str> = SampleFn::ALL.iter().map(|s| s.name(false)).collect();
         names.extend(SampleFn::ALL.iter().map(|s| s.name(true)));
         assert_eq!(names, SampleFn::NAMES, "SampleFn::NAMES disagrees with the descriptors");
@@ -1774,8 +1832,9 @@ mod tests {
                 SampleWgsl::SummedAreaTable => {}
             }
         }
+        body.push_str("    let in_pixel_used = in_pixel;\n");
         let module = format!(
-            "{}@group(0) @binding(0) var<uniform> frame: Frame;
+            "{}{}@group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(2) var smp: sampler;
 @group(1) @binding(0) var t_x: texture_2d_array<f32>;
 
@@ -1791,6 +1850,7 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {{
 {body}    return vec4<f32>(0.0);
 }}
 ",
+            crate::builtins::NOISE_WGSL,
             sshc_graph::FRAME_WGSL
         );
         if let Err(e) = crate::back::validate(&module) {

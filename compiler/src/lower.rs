@@ -301,7 +301,8 @@ impl<'s, 'a> Lowerer<'s, 'a> {
             }
             Resolved::Input(input) => {
                 // receiver-side inputs (and the sample's segment weights) are the view's
-                let view = if input.side() == crate::builtins::Side::Receiver {
+                // (the pixel is the same in every view)
+                let view = if input.side() == crate::builtins::Side::Receiver && input != crate::builtins::Input::Pixel {
                     self.view
                 } else {
                     None

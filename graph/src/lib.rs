@@ -175,6 +175,8 @@ frame_uniform! {
     /// y: number of light samples, z: 1 where the samples close a loop (the edges of a
     /// triangle or rectangle light), else 0
     sample: Vec4,
+    /// x: frames run since the scene was bound (the `frame` input; exact to 2^24), yzw 0
+    counters: Vec4,
 }
 
 /// The most light samples a pass graph may render views of ([`PassGraph::samples`]).

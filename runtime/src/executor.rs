@@ -459,6 +459,17 @@ impl<'g> Executor<'g> {
             gpu.queue.write_buffer(buf, 0, &self.params);
         }
         let res = self.bound()?;
+        // the `frame` input: frames run since the scene was bound, in every `Frame` buffer
+        let counters = [res.frames_run.get() as f32, 0.0, 0.0, 0.0];
+        let at = graph::FRAME_FIELDS
+            .iter()
+            .position(|f| f.name == "counters")
+            .map(|i| graph::frame_offset(i) as u64)
+            .ok_or_else(|| RuntimeError::NotFound("no `counters` field in the Frame uniform".into()))?;
+        for buf in std::iter::once(&res.frame).chain(&res.sample_frames) {
+            gpu.queue.write_buffer(buf, at, &crate::resources::f32_bytes(&counters));
+        }
+        res.frames_run.set(res.frames_run.get() + 1);
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });

@@ -95,6 +95,8 @@ impl SceneInputs {
                 [texel, 0.0, 0.0, 0.0]
             },
             sample: [0.0, self.samples.len() as f32, if self.samples_closed { 1.0 } else { 0.0 }, 0.0],
+            // `counters.x`, the frame index, is written by `Executor::run_frame`
+            counters: [0.0; 4],
         }
     }
 

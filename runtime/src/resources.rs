@@ -101,6 +101,8 @@ pub(crate) struct Resources {
     /// The `Frame` of each light-sample view (`SceneInputs::sample_frame`), for the passes
     /// that render one view per sample.
     pub sample_frames: Vec<wgpu::Buffer>,
+    /// Frames run on these resources (the `frame` input of the next one).
+    pub frames_run: std::cell::Cell<u32>,
     /// The `LightSamples` uniform (every sample's view).
     pub light_samples: wgpu::Buffer,
     /// Light samples bound, and whether they close a loop.
@@ -374,6 +376,7 @@ impl Resources {
                 gbuffer,
                 frame,
                 sample_frames,
+                frames_run: std::cell::Cell::new(0),
                 light_samples,
                 samples: s.samples.len() as u32,
                 samples_closed: s.samples_closed,

@@ -836,3 +836,72 @@ fn specialised_builds_give_the_generic_visibility_bit_for_bit() {
     eprintln!("{checked} technique-scene pairs; {folded_ops} operations per invocation folded in all");
     assert!(checked >= 40 && folded_ops > 0, "{checked} {folded_ops}");
 }
+
+/// PCG3D (Jarzynski & Olano 2020, section 2), as `noise` states it: the CPU reference.
+fn pcg3d_noise(x: i32, y: i32, k: i32) -> f32 {
+    let mut v = [x as u32, y as u32, k as u32].map(|c| c.wrapping_mul(1_664_525).wrapping_add(1_013_904_223));
+    let mix = |v: &mut [u32; 3]| {
+        v[0] = v[0].wrapping_add(v[1].wrapping_mul(v[2]));
+        v[1] = v[1].wrapping_add(v[2].wrapping_mul(v[0]));
+        v[2] = v[2].wrapping_add(v[0].wrapping_mul(v[1]));
+    };
+    mix(&mut v);
+    for c in &mut v {
+        *c ^= *c >> 16;
+    }
+    mix(&mut v);
+    (v[0] >> 8) as f32 / 16_777_216.0
+}
+
+/// The `pixel` and `frame` inputs and `noise` (issue 17): a Shade whose visibility is
+/// `noise(pixel.x, pixel.y, f32(frame))` gives, at every pixel it lights, the CPU
+/// reference of the stated hash bit for bit (24 bits of an integer, exact in f32), for
+/// frames 0 and 1, forward and deferred.
+#[test]
+fn pixel_frame_and_noise_give_the_stated_hash_per_pixel_and_frame() {
+    let gpu = gpu();
+    let src = r#"Technique(
+    name: "noisy",
+    channels: { "z": Channel(precision: F32) },
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Shade(name: "shade", reads: ["shadow"], visibility: "noise(pixel.x, pixel.y, f32(frame)) + 0.0 * nearest(z)"),
+    ],
+)"#;
+    let s = scene("contact", 32, 64);
+    for schedule in ["fragment", "compute"] {
+        let opts = sshc::CompileOptions {
+            schedule: vec![("shade".into(), schedule.into())],
+            ..Default::default()
+        };
+        let c = sshc::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("noisy.ron", src)));
+        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+        ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&s, &c.graph).unwrap()).unwrap();
+        for frame in 0..2 {
+            ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+            let vis = ex.read_camera(CameraOutput::Visibility).unwrap();
+            let pos = ex.read_camera(CameraOutput::Position).unwrap();
+            let (mut lit, mut surface) = (0, 0);
+            for y in 0..vis.height {
+                for x in 0..vis.width {
+                    if pos.at(x, y)[0].is_nan() {
+                        continue;
+                    }
+                    surface += 1;
+                    let v = vis.at(x, y)[0];
+                    // 0 where the receiver faces away from the light
+                    if v != 0.0 {
+                        lit += 1;
+                        let want = pcg3d_noise(x as i32, y as i32, frame);
+                        assert_eq!(
+                            v.to_bits(),
+                            want.to_bits(),
+                            "{schedule}, frame {frame}, ({x}, {y}): {v} against {want}"
+                        );
+                    }
+                }
+            }
+            assert!(2 * lit > surface, "{schedule}: {lit} of {surface} pixels lit");
+        }
+    }
+}

@@ -732,6 +732,12 @@ pub fn codegen(ir: &Program, limits: &Limits, split: Split) -> Result<Output, Di
         }
     }
     diags.check()?;
+    // the helper functions the code calls
+    for m in &mut modules {
+        if m.source.contains("sshc_noise(") {
+            m.source.push_str(crate::builtins::NOISE_WGSL);
+        }
+    }
     validate_all(&mut modules)?;
     Ok(Output { modules, scratch })
 }
@@ -1952,6 +1958,15 @@ fn shade(ir: &Program, pass: &IrPass, visibility: H, split: Split) -> Result<(St
     s.push_str(SHADE_VARYING);
     let prologues: String = em.views.iter().map(|(&k, used)| sample_prologue(k, used)).collect();
     let receiver = shade_receiver(ir.ir.specialised.as_ref().map(|s| s.facts.light.is_distant()));
+    // the `pixel` input, where the code reads it
+    let uses_pixel = body.contains("in_pixel") || functions.contains("in_pixel");
+    let pixel = |from: &str| {
+        if uses_pixel {
+            format!("    let in_pixel = {from};\n")
+        } else {
+            String::new()
+        }
+    };
     let outputs = |store: &dyn Fn(&str, &str) -> String| {
         format!(
             "    // outputs stay finite and in [0, 1]; a receiver facing away from the light's centre
@@ -1994,9 +2009,10 @@ struct ShadeOut {{
 @fragment
 fn fs_shade(in: ShadeVarying) -> ShadeOut {{
 {SHADE_NORMAL}    let world = vec4<f32>(in.world, 1.0);
-{receiver}{SHADE_SLOPE}{prologues}{body}{}    return out;
+{receiver}{SHADE_SLOPE}{}{prologues}{body}{}    return out;
 }}
 ",
+            pixel("floor(in.clip.xy)"),
             outputs(&|field, value| {
                 let decl = if field == "visibility" { "    var out: ShadeOut;\n" } else { "" };
                 format!("{decl}    out.{field} = {value};\n")
@@ -2079,8 +2095,9 @@ fn cs_shade(@builtin(global_invocation_id) id: vec3<u32>) {{
     let footprint = textureLoad(g_duv, pixel, 0i);
     let in_duv_dx = footprint.xy;
     let in_duv_dy = footprint.zw;
-{prologues}{body}{}}}
+{}{prologues}{body}{}}}
 ",
+        pixel("vec2<f32>(pixel)"),
         outputs(&|field, value| format!("    textureStore(o_{field}, pixel, 0i, {value});\n")),
         wg = graph::TEXEL_WORKGROUP,
     );
