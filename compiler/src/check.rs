@@ -138,6 +138,29 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
     for e in &t.expansions {
         check_expansion(sym, e, &mut types, &mut diags);
     }
+    // The elements of constant arrays: known at compile time, of the array's type.
+    for a in &t.arrays {
+        for v in &a.values {
+            let mut ty = Typer::new(sym, Mode::Const, &mut types);
+            match ty.infer_as(v, a.ty.value) {
+                Ok(got) if unify(got, a.ty.value) == Some(a.ty.value) => {
+                    if matches!(a.ty.value, Ty::F32 | Ty::I32)
+                        && let Err(d) = ty.settle(v, a.ty.value)
+                    {
+                        diags.push(d);
+                    }
+                }
+                Ok(got) => diags.push(
+                    Diagnostic::error(
+                        Phase::Check,
+                        format!("type mismatch: `{}` holds {}, found {got}", a.name.value, a.ty.value),
+                    )
+                    .at(v.span, format!("this is {got}")),
+                ),
+                Err(d) => diags.push(d),
+            }
+        }
+    }
     // Channel values are computed per shadow-map texel.
     for c in &t.channels {
         if let Some(v) = &c.value {
@@ -958,7 +981,7 @@ fn free_names<'e>(e: &'e Expr, out: &mut std::collections::HashSet<&'e str>) {
         ExprKind::Name(n) => {
             out.insert(n.as_str());
         }
-        ExprKind::Unary(_, a) | ExprKind::Member(a, _) => free_names(a, out),
+        ExprKind::Unary(_, a) | ExprKind::Member(a, _) | ExprKind::Index { index: a, .. } => free_names(a, out),
         ExprKind::Binary(_, a, b) => {
             free_names(a, out);
             free_names(b, out);
@@ -1114,6 +1137,7 @@ impl<'s, 'a> Typer<'s, 'a> {
             | ExprKind::Binary(..)
             | ExprKind::Call { .. }
             | ExprKind::Member(..)
+            | ExprKind::Index { .. }
             | ExprKind::Let { .. }
             | ExprKind::Sum { .. } => return Ok(()),
         };
@@ -1213,6 +1237,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                 }
             }
             ExprKind::Call { name, name_span, args } => self.call(name, *name_span, args, e.span),
+            ExprKind::Index { name, name_span, index } => self.index(name, *name_span, index),
             ExprKind::Member(base, m) => {
                 let t = self.infer(base)?;
                 let Ty::Vec(n) = t else {
@@ -1570,6 +1595,48 @@ impl<'s, 'a> Typer<'s, 'a> {
     /// `at_sample(k, body)`: k an integer known at compile time (a literal, a fixed param
     /// or a series variable), body any value, evaluated with the receiver seen from light
     /// sample k; in the Shade pass only, and not nested.
+    /// `name[index]`: an element of a constant array, the index an integer known at compile
+    /// time, within the array where its value is known here (lower checks the others as it
+    /// unrolls).
+    fn index(&mut self, name: &str, name_span: Span, index: &'a Expr) -> Result<Ty, Diagnostic> {
+        let Some(&ai) = self.sym.arrays.get(name) else {
+            let cands: Vec<&str> = self.sym.arrays.keys().map(String::as_str).collect();
+            let mut d = Self::err(name_span, format!("`{name}` is not a constant array"), "indexed here")
+                .note("only the technique's `arrays` can be indexed");
+            if let Some(s) = closest(name, &cands) {
+                d = d.help(format!("did you mean `{s}`?"));
+            }
+            return Err(d);
+        };
+        let a = &self.sym.t.arrays[ai];
+        let mode = self.mode;
+        self.mode = Mode::Const;
+        let k = self.infer_as(index, Ty::I32);
+        self.mode = mode;
+        match k? {
+            Ty::I32 | Ty::AbstractInt => {}
+            t @ (Ty::F32 | Ty::Bool | Ty::Vec(_)) => {
+                return Err(Self::err(
+                    index.span,
+                    format!("type mismatch: an array index is an integer, found {t}"),
+                    format!("this is {t}"),
+                ));
+            }
+        }
+        let len = a.values.len() as i64;
+        let (known, _) = self.series_bounds(index, index);
+        if let Some(k) = known.iter().flatten().map(|b| b.0).find(|k| !(0..len).contains(k)) {
+            return Err(Self::err(
+                index.span,
+                format!("index {k} is outside `{name}`, which has {len} elements"),
+                "out of range",
+            )
+            .also(a.name.span, "declared here")
+            .help(format!("indices run from 0 to {}", len - 1)));
+        }
+        Ok(a.ty.value)
+    }
+
     fn at_sample(&mut self, name_span: Span, args: &'a [Expr], span: Span) -> Result<Ty, Diagnostic> {
         if self.mode != Mode::Shade {
             return Err(Self::err(

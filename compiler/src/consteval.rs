@@ -238,6 +238,15 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Env) -> Result<ConstValue, NotCon
             crate::builtins::fold_call(f, &vals).ok_or(NotConst::NoValue)?
         }
         ExprKind::Member(..) => return Err(NotConst::NoValue),
+        // an element of a constant array: its expression, which sees no local
+        ExprKind::Index { name, index, .. } => {
+            let a = sym.arrays.get(name).map(|&a| &sym.t.arrays[a]).ok_or(NotConst::NoValue)?;
+            let Int(k) = eval(sym, index, env)? else {
+                return Err(NotConst::NoValue);
+            };
+            let v = usize::try_from(k).ok().and_then(|k| a.values.get(k)).ok_or(NotConst::NoValue)?;
+            eval(sym, v, &mut Vec::new())?
+        }
         ExprKind::Let { name, value, body, .. } => {
             let v = eval(sym, value, env)?;
             env.push((name.clone(), Some(v)));

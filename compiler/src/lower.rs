@@ -166,6 +166,35 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 self.arena.add(Node::Binary(*op, ha, hb), ty, e.span)
             }
             ExprKind::Call { name, args, .. } => self.call(name, args, e)?,
+            ExprKind::Index { name, index, .. } => {
+                let k = self.expr(index)?;
+                let k = match self.arena.as_const(k) {
+                    Some(ConstValue::Int(v)) => v,
+                    _ => return Err(internal(index.span, "array index not known at compile time")),
+                };
+                let a = self
+                    .sym
+                    .arrays
+                    .get(name)
+                    .map(|&a| &self.sym.t.arrays[a])
+                    .ok_or_else(|| internal(e.span, "unknown array"))?;
+                let Some(v) = usize::try_from(k).ok().and_then(|k| a.values.get(k)) else {
+                    return Err(self.in_series(
+                        Self::err(
+                            index.span,
+                            format!("index {k} is outside `{name}`, which has {} elements", a.values.len()),
+                            "out of range",
+                        )
+                        .also(a.name.span, "declared here"),
+                    ));
+                };
+                // the element sees no local
+                let (floor, depth) = (self.floor, self.locals.len());
+                self.floor = depth;
+                let r = self.expr_coerced(v);
+                self.floor = floor;
+                r?
+            }
             ExprKind::Member(base, m) => {
                 let h = self.expr(base)?;
                 let comps: Vec<u8> = m

@@ -32,6 +32,8 @@ pub struct Symbols<'a> {
     pub expansions: IndexMap<String, usize>,
     /// The technique's functions, by name (index into `Technique::functions`).
     pub functions: IndexMap<String, usize>,
+    /// The technique's constant arrays, by name (index into `Technique::arrays`).
+    pub arrays: IndexMap<String, usize>,
     pub passes: IndexMap<String, usize>,
     pub resources: IndexMap<String, Resource>,
     /// Parameter values after `--set` overrides, with the span that set them.
@@ -56,6 +58,7 @@ impl<'a> Symbols<'a> {
             channels: self.channels.clone(),
             expansions: self.expansions.clone(),
             functions: self.functions.clone(),
+            arrays: self.arrays.clone(),
             passes: self.passes.clone(),
             resources: self.resources.clone(),
             values: self.values.clone(),
@@ -100,7 +103,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
                 Diagnostic::error(Phase::Resolve, format!("duplicate name `{}`", name.value))
                     .at(name.span, format!("{what} `{}` declared again here", name.value))
                     .also(*first, "first declared here")
-                    .help("params, channels, expansions and functions share one namespace; rename one of them"),
+                    .help("params, channels, expansions, functions and arrays share one namespace; rename one of them"),
             );
         } else {
             seen.insert(name.value.clone(), name.span);
@@ -158,6 +161,11 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
             }
             names.push(p);
         }
+    }
+    let mut arrays = IndexMap::new();
+    for (i, a) in t.arrays.iter().enumerate() {
+        declare(&a.name, "array", &mut diags);
+        arrays.entry(a.name.value.clone()).or_insert(i);
     }
 
     let mut passes = IndexMap::new();
@@ -346,6 +354,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         channels,
         expansions,
         functions,
+        arrays,
         passes,
         resources,
         values,

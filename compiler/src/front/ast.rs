@@ -18,6 +18,8 @@ pub struct Technique {
     pub expansions: Vec<Expansion>,
     /// Functions the expressions may call, inlined at each call (docs/language.md 8.10).
     pub functions: Vec<Function>,
+    /// Constant arrays the expressions index with compile-time integers (8.11).
+    pub arrays: Vec<ArrayDecl>,
     pub passes: Vec<Pass>,
     /// `light_samples`: how many light samples the `PerSample` passes render views of, a
     /// compile-time expression (a fixed param); absent: 1.
@@ -96,6 +98,18 @@ pub struct Function {
     /// In call order: each parameter's name and type (`F32`, `I32`, `Bool`, `Vec2` to `Vec4`).
     pub params: Vec<(Name, Spanned<crate::builtins::Ty>)>,
     pub body: Expr,
+    pub doc: Option<String>,
+    pub span: Span,
+}
+
+/// A constant array of the technique: elements of one type, each an expression known at
+/// compile time (literals, fixed params, constants), read as `name[i]` with `i` an integer
+/// known at compile time (a literal or a series variable).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArrayDecl {
+    pub name: Name,
+    pub ty: Spanned<crate::builtins::Ty>,
+    pub values: Vec<Expr>,
     pub doc: Option<String>,
     pub span: Span,
 }

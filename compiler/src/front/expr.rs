@@ -71,6 +71,10 @@ enum Tok {
     OrOr,
     #[token("!")]
     Bang,
+    #[token("[")]
+    LBracket,
+    #[token("]")]
+    RBracket,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -157,6 +161,13 @@ pub enum ExprKind {
     },
     /// `base.x`, `base.xy`, ...
     Member(Box<Expr>, String),
+    /// `name[index]`: an element of a constant array of the technique, `index` an integer
+    /// known at compile time.
+    Index {
+        name: String,
+        name_span: Span,
+        index: Box<Expr>,
+    },
     /// `let name = value; body`
     Let {
         name: String,
@@ -193,7 +204,7 @@ impl Expr {
         };
         match &kind {
             ExprKind::Lit(_) | ExprKind::Name(_) => {}
-            ExprKind::Unary(_, a) | ExprKind::Member(a, _) => add(a),
+            ExprKind::Unary(_, a) | ExprKind::Member(a, _) | ExprKind::Index { index: a, .. } => add(a),
             ExprKind::Binary(_, a, b) => {
                 add(a);
                 add(b);
@@ -227,7 +238,7 @@ impl Expr {
         f(self);
         match &self.kind {
             ExprKind::Lit(_) | ExprKind::Name(_) => {}
-            ExprKind::Unary(_, a) | ExprKind::Member(a, _) => a.walk(f),
+            ExprKind::Unary(_, a) | ExprKind::Member(a, _) | ExprKind::Index { index: a, .. } => a.walk(f),
             ExprKind::Binary(_, a, b) => {
                 a.walk(f);
                 b.walk(f);
@@ -280,6 +291,7 @@ impl fmt::Display for Expr {
                 write!(f, ")")
             }
             ExprKind::Member(a, m) => write!(f, "{a}.{m}"),
+            ExprKind::Index { name, index, .. } => write!(f, "{name}[{index}]"),
             ExprKind::Let { name, value, body, .. } => write!(f, "let {name} = {value}; {body}"),
             ExprKind::Sum { var, from, to, body, .. } => write!(f, "sum({var} in {from}..={to}, {body})"),
         }
@@ -473,6 +485,8 @@ impl Parser<'_> {
             | Tok::Dot
             | Tok::DotDotEq
             | Tok::Assign
+            | Tok::LBracket
+            | Tok::RBracket
             | Tok::Bang => return None,
         })
     }
@@ -579,6 +593,19 @@ impl Parser<'_> {
                         },
                         span,
                     )
+                } else if self.peek() == Some(Tok::LBracket) {
+                    self.bump();
+                    let index = self.block()?;
+                    let end = self.expect(Tok::RBracket, "`]`")?;
+                    let span = fspan.join(self.map(end));
+                    self.node(
+                        ExprKind::Index {
+                            name: text.to_string(),
+                            name_span: fspan,
+                            index: Box::new(index),
+                        },
+                        span,
+                    )
                 } else {
                     self.node(ExprKind::Name(text.to_string()), fspan)
                 }
@@ -590,6 +617,8 @@ impl Parser<'_> {
                 Ok(e)
             }
             Tok::RParen
+            | Tok::LBracket
+            | Tok::RBracket
             | Tok::Comma
             | Tok::Semi
             | Tok::Dot

@@ -303,6 +303,10 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
         None => vec![],
         Some(n) => map_entries(n)?.into_iter().map(|(k, v)| function(k, v)).collect::<Result<_, _>>()?,
     };
+    let arrays = match f.opt("arrays")? {
+        None => vec![],
+        Some(n) => map_entries(n)?.into_iter().map(|(k, v)| array(k, v)).collect::<Result<_, _>>()?,
+    };
     let passes_node = f.req("passes")?;
     let passes = match &passes_node.value {
         Value::List(items) if items.len() > MAX_PASSES => {
@@ -333,40 +337,80 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
         channels,
         expansions,
         functions,
+        arrays,
         passes,
         light_samples,
         span: root.span,
     })
 }
 
+/// A value type of the expression language: `F32`, `I32`, `Bool`, `Vec2` to `Vec4`.
+fn value_ty(v: &Node, what: &str) -> Result<Spanned<crate::builtins::Ty>, Diagnostic> {
+    use crate::builtins::Ty;
+    let (t, span) = variant(v)?;
+    let ty = match t.as_str() {
+        "F32" => Ty::F32,
+        "I32" => Ty::I32,
+        "Bool" => Ty::Bool,
+        "Vec2" => Ty::Vec(2),
+        "Vec3" => Ty::Vec(3),
+        "Vec4" => Ty::Vec(4),
+        _ => return Err(unknown_variant(span, &t, what, &["F32", "I32", "Bool", "Vec2", "Vec3", "Vec4"])),
+    };
+    Ok(Spanned::new(ty, v.span))
+}
+
+/// `"name": Array(ty: Vec2, values: ["vec2(0.5, 0.25)", ...], doc: "...")`; a number may
+/// stand for an expression.
+fn array(name: Name, node: &Node) -> Result<ArrayDecl, Diagnostic> {
+    let mut f = Fields::of(node, "Array")?;
+    let ty = value_ty(f.req("ty")?, "element type")?;
+    let vn = f.req("values")?;
+    let values = match &vn.value {
+        Value::List(items) if items.is_empty() => {
+            return Err(err(vn.span, "an array needs at least one value", "empty"));
+        }
+        Value::List(items) => items
+            .iter()
+            .map(|v| match &v.value {
+                Value::Int(i) => Ok(crate::front::expr::Expr::new(
+                    crate::front::expr::ExprKind::Lit(crate::front::expr::Literal::Int(*i)),
+                    v.span,
+                )),
+                Value::Float(x) => Ok(crate::front::expr::Expr::new(
+                    crate::front::expr::ExprKind::Lit(crate::front::expr::Literal::Float(*x)),
+                    v.span,
+                )),
+                _ => expression(v),
+            })
+            .collect::<Result<_, _>>()?,
+        _ => {
+            return Err(err(
+                vn.span,
+                format!("expected a list of values, found {}", vn.describe()),
+                "expected `[...]`",
+            ));
+        }
+    };
+    let doc = opt_string(&mut f, "doc")?;
+    f.finish()?;
+    Ok(ArrayDecl {
+        name,
+        ty,
+        values,
+        doc,
+        span: node.span,
+    })
+}
+
 /// `"name": Function(params: { "x": F32, ... }, body: "...", doc: "...")`.
 fn function(name: Name, node: &Node) -> Result<Function, Diagnostic> {
-    use crate::builtins::Ty;
     let mut f = Fields::of(node, "Function")?;
     let params = match f.opt("params")? {
         None => vec![],
         Some(n) => map_entries(n)?
             .into_iter()
-            .map(|(k, v)| {
-                let (t, span) = variant(v)?;
-                let ty = match t.as_str() {
-                    "F32" => Ty::F32,
-                    "I32" => Ty::I32,
-                    "Bool" => Ty::Bool,
-                    "Vec2" => Ty::Vec(2),
-                    "Vec3" => Ty::Vec(3),
-                    "Vec4" => Ty::Vec(4),
-                    _ => {
-                        return Err(unknown_variant(
-                            span,
-                            &t,
-                            "parameter type",
-                            &["F32", "I32", "Bool", "Vec2", "Vec3", "Vec4"],
-                        ));
-                    }
-                };
-                Ok((k, Spanned::new(ty, v.span)))
-            })
+            .map(|(k, v)| Ok((k, value_ty(v, "parameter type")?)))
             .collect::<Result<_, _>>()?,
     };
     let body = expression(f.req("body")?)?;
