@@ -1408,6 +1408,8 @@ pub enum SampleFn {
     /// `sample_box(ch, wx, wy)`: the mean over a `wx` x `wy` box (shadow-map uv units, at least
     /// one texel each way) centred at `uv`, from a summed-area table.
     Box,
+    /// `sample_at(ch, du, dv)`: hardware-filtered (bilinear) at `uv + (du, dv)`, level 0.
+    SampleAt,
 }
 
 /// Everything the compiler knows about one lookup function.
@@ -1445,7 +1447,7 @@ impl fmt::Debug for SampleWgsl {
 }
 
 impl SampleFn {
-    pub const ALL: [SampleFn; 7] = [
+    pub const ALL: [SampleFn; 8] = [
         SampleFn::Sample,
         SampleFn::SampleLod,
         SampleFn::SampleWidth,
@@ -1453,11 +1455,12 @@ impl SampleFn {
         SampleFn::Fetch,
         SampleFn::Box,
         SampleFn::NearestAt,
+        SampleFn::SampleAt,
     ];
 
     /// Every lookup function of the language (the names of [`SampleFn::ALL`], then their
     /// `expand` forms).
-    pub const NAMES: [&'static str; 14] = [
+    pub const NAMES: [&'static str; 16] = [
         "sample",
         "sample_lod",
         "sample_width",
@@ -1465,6 +1468,7 @@ impl SampleFn {
         "fetch",
         "sample_box",
         "nearest_at",
+        "sample_at",
         "expand",
         "expand_lod",
         "expand_width",
@@ -1472,6 +1476,7 @@ impl SampleFn {
         "expand_fetch",
         "expand_box",
         "expand_nearest_at",
+        "expand_at",
     ];
 
     /// The descriptor: adding a lookup means adding a variant, its entries in
@@ -1552,6 +1557,20 @@ impl SampleFn {
                     },
                 },
             },
+            SampleFn::SampleAt => &SampleDesc {
+                name: "sample_at",
+                expand_name: "expand_at",
+                extra_args: &[Ty::F32, Ty::F32],
+                wgsl: Texture {
+                    sampler: true,
+                    read: |tex, layer, a| {
+                        format!(
+                            "textureSampleLevel({tex}, smp, in_uv + vec2<f32>({}, {}), {layer}, 0.0)",
+                            a[0], a[1]
+                        )
+                    },
+                },
+            },
             SampleFn::Box => &SampleDesc {
                 name: "sample_box",
                 expand_name: "expand_box",
@@ -1625,7 +1644,7 @@ mod tests {
         order.sort_unstable();
         assert_eq!(order, (0..SampleFn::ALL.len()).collect::<Vec<_>>());
         assert_eq!(
-            SampleFn::Box as usize + 1,
+            SampleFn::SampleAt as usize + 1,
             SampleFn::ALL.len(),
             "a SampleFn is missing from SampleFn::ALL"
         );

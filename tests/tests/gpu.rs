@@ -905,3 +905,45 @@ fn pixel_frame_and_noise_give_the_stated_hash_per_pixel_and_frame() {
         }
     }
 }
+
+/// `sample_at(ch, du, dv)` (issue 17): a bilinear tap at an offset. One texel to the right,
+/// it is the bilinear blend of the four texels one to the right of the receiver's, with
+/// the receiver's own weights `tf`, up to the GPU's filtering precision: Vulkan gives
+/// bilinear weights at least 8 bits (lavapipe 8), so a weight is off by at most 2^-8 and
+/// the blend of depths in [0, 1] by at most 2^-8, plus f32 rounding.
+#[test]
+fn a_bilinear_tap_at_an_offset_is_the_blend_of_the_shifted_texels() {
+    let gpu = gpu();
+    let technique = |vis: &str| {
+        format!(
+            r#"Technique(
+    name: "tap",
+    channels: {{ "z": Channel(precision: F32) }},
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Shade(name: "shade", reads: ["shadow"], visibility: "{vis}"),
+    ],
+)"#
+        )
+    };
+    let s = scene("contact", 32, 64);
+    let render = |vis: &str| {
+        let src = technique(vis);
+        let c = sshc::compile_str(&src, &sshc::CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("tap.ron", &src)));
+        render(gpu, &c, &s)
+    };
+    let tap = render("sample_at(z, texel_size, 0.0)");
+    let blend = render("mix(mix(fetch(z, 1, 0), fetch(z, 2, 0), tf.x), mix(fetch(z, 1, 1), fetch(z, 2, 1), tf.x), tf.y)");
+    let (a, b) = (tap.visibility.channel(0), blend.visibility.channel(0));
+    let tolerance = 2f32.powi(-8) + 4.0 * f32::EPSILON;
+    let mut compared = 0;
+    for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+        // 0 where the receiver faces away; 1 on the background (both forms)
+        if tap.position.rgba[i][0].is_nan() || (*x == 0.0 && *y == 0.0) {
+            continue;
+        }
+        assert!((x - y).abs() <= tolerance, "pixel {i}: {x} against {y}");
+        compared += 1;
+    }
+    assert!(compared > 200, "{compared}");
+}
