@@ -72,7 +72,7 @@ impl<'a> RangeEval<'a> {
                 let (lo, hi) = i.range();
                 Interval { lo, hi }
             }
-            Node::Channel(c) => self.channels.get(c).copied().unwrap_or(Interval::UNBOUNDED),
+            Node::Channel(c, _) => self.channels.get(c).copied().unwrap_or(Interval::UNBOUNDED),
             // Receiver side: a lookup's range is not known before the slot is laid out.
             Node::Sample { .. } => Interval::UNBOUNDED,
             Node::Unary(UnOp::Neg, x) => {

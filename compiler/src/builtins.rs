@@ -1605,12 +1605,18 @@ impl SampleFn {
 }
 
 /// Every name reserved by the language (declarations may not take them).
+/// `neighbour(ch, dx, dy)`: on the map side, channel `ch` of the texel `(dx, dy)` texels
+/// away, clamped to the map's edge; `dx`, `dy` integers known at compile time.
+pub const NEIGHBOUR: &str = "neighbour";
+/// The farthest a `neighbour` reads, in texels along each axis (the kernels' limit).
+pub const MAX_NEIGHBOUR: i64 = 31;
+
 pub fn is_reserved(name: &str) -> bool {
     Input::from_name(name).is_some()
         || constant(name).is_some()
         || Func::from_name(name).is_some()
         || SampleFn::from_name(name).is_some()
-        || matches!(name, "let" | "sum" | "in" | "true" | "false" | "at_sample")
+        || matches!(name, "let" | "sum" | "in" | "true" | "false" | "at_sample" | NEIGHBOUR)
 }
 
 #[cfg(test)]

@@ -1595,6 +1595,73 @@ impl<'s, 'a> Typer<'s, 'a> {
     /// `at_sample(k, body)`: k an integer known at compile time (a literal, a fixed param
     /// or a series variable), body any value, evaluated with the receiver seen from light
     /// sample k; in the Shade pass only, and not nested.
+    /// `neighbour(ch, dx, dy)`: a channel of the map at a texel offset known at compile time,
+    /// on the map side only (a Map pass's channel values and basis functions).
+    fn neighbour(&mut self, name_span: Span, args: &'a [Expr], span: Span) -> Result<Ty, Diagnostic> {
+        use crate::builtins::{MAX_NEIGHBOUR, NEIGHBOUR};
+        if !matches!(self.mode, Mode::ChannelValue | Mode::Basis) {
+            return Err(Self::err(
+                name_span,
+                format!("`{NEIGHBOUR}` reads the map around the texel being computed"),
+                "not on the map side",
+            )
+            .note("it is available in channel values and basis functions, which Map passes compute per texel")
+            .help("in a Shade pass, `fetch(ch, dx, dy)` reads texels around the receiver's"));
+        }
+        if args.len() != 3 {
+            return Err(Self::err(
+                span,
+                format!(
+                    "`{NEIGHBOUR}` takes 3 arguments (a channel and two texel offsets), found {}",
+                    args.len()
+                ),
+                "wrong number of arguments",
+            ));
+        }
+        let ExprKind::Name(ch) = &args[0].kind else {
+            return Err(Self::err(
+                args[0].span,
+                format!("the first argument of `{NEIGHBOUR}` names a channel"),
+                "expected a channel name",
+            ));
+        };
+        if !self.sym.channels.contains_key(ch) {
+            return Err(Self::err(args[0].span, format!("unknown channel `{ch}`"), "not a declared channel"));
+        }
+        self.infer(&args[0])?;
+        let mode = self.mode;
+        self.mode = Mode::Const;
+        for a in &args[1..] {
+            let t = self.infer_as(a, Ty::I32);
+            if let Err(d) = t {
+                self.mode = mode;
+                return Err(d);
+            }
+            match t {
+                Ok(Ty::I32 | Ty::AbstractInt) => {}
+                Ok(t) => {
+                    self.mode = mode;
+                    return Err(Self::err(
+                        a.span,
+                        format!("type mismatch: a texel offset is an integer, found {t}"),
+                        format!("this is {t}"),
+                    ));
+                }
+                Err(_) => {}
+            }
+            let (known, _) = self.series_bounds(a, a);
+            if let Some(k) = known.iter().flatten().map(|b| b.0).find(|k| k.abs() > MAX_NEIGHBOUR) {
+                self.mode = mode;
+                return Err(
+                    Self::err(a.span, format!("offset {k} is farther than {MAX_NEIGHBOUR} texels"), "too far")
+                        .help("a Map pass reads at most 31 texels away along each axis"),
+                );
+            }
+        }
+        self.mode = mode;
+        Ok(Ty::F32)
+    }
+
     /// `name[index]`: an element of a constant array, the index an integer known at compile
     /// time, within the array where its value is known here (lower checks the others as it
     /// unrolls).
@@ -1765,6 +1832,9 @@ impl<'s, 'a> Typer<'s, 'a> {
         }
         if let Some(&fi) = self.sym.functions.get(name) {
             return self.call_function(fi, name_span, args, span);
+        }
+        if name == crate::builtins::NEIGHBOUR {
+            return self.neighbour(name_span, args, span);
         }
         if let Some((how, expand)) = SampleFn::from_name(name) {
             if self.mode != Mode::Shade {

@@ -58,8 +58,9 @@ pub enum Node {
     /// A built-in input; receiver-side inputs inside `at_sample(k, ..)` carry the sample
     /// view k (`Some(k)`): the receiver seen from light sample k.
     Input(Input, Option<u8>),
-    /// Map side: the value of a channel at the texel being computed.
-    Channel(ChannelId),
+    /// Map side: the value of a channel at the texel being computed, or at the texel that
+    /// many texels away (`neighbour(ch, dx, dy)`), clamped to the map's edge.
+    Channel(ChannelId, [i32; 2]),
     /// Receiver side: a lookup of `channel` in `resource`.
     Sample {
         channel: ChannelId,
@@ -119,7 +120,7 @@ impl Arena {
             Node::Bool(v) => Some(ConstValue::Bool(*v)),
             Node::Param(_)
             | Node::Input(..)
-            | Node::Channel(_)
+            | Node::Channel(..)
             | Node::Sample { .. }
             | Node::Unary(..)
             | Node::Binary(..)
@@ -251,7 +252,7 @@ impl Arena {
             | Node::Bool(_)
             | Node::Param(_)
             | Node::Input(..)
-            | Node::Channel(_)
+            | Node::Channel(..)
             | Node::Sample { .. }
             | Node::Unary(..)
             | Node::Call(..) => None,
@@ -330,7 +331,7 @@ impl Arena {
             | Node::Bool(_)
             | Node::Param(_)
             | Node::Input(..)
-            | Node::Channel(_)
+            | Node::Channel(..)
             | Node::Sample { .. }
             | Node::Swizzle(..) => None,
         }
@@ -372,7 +373,7 @@ impl Arena {
             Node::Unary(_, a) | Node::Swizzle(a, _) => vec![*a],
             Node::Binary(_, a, b) => vec![*a, *b],
             Node::Call(_, args) | Node::Sample { args, .. } => args.clone(),
-            Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(_) => vec![],
+            Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(..) => vec![],
         }
     }
 
@@ -411,7 +412,10 @@ impl Arena {
                     let _ = write!(s, "@{k}");
                 }
             }
-            Node::Channel(c) => s.push_str(&chan(*c)),
+            Node::Channel(c, [0, 0]) => s.push_str(&chan(*c)),
+            Node::Channel(c, [dx, dy]) => {
+                let _ = write!(s, "neighbour({}, {dx}, {dy})", chan(*c));
+            }
             Node::Sample {
                 channel, how, args, view, ..
             } => {
@@ -519,7 +523,7 @@ impl Arena {
                         .collect();
                     eval_call_f64(*f, &args).unwrap_or(f64::NAN)
                 }
-                other @ (Node::Param(_) | Node::Input(..) | Node::Channel(_) | Node::Sample { .. } | Node::Swizzle(..)) => {
+                other @ (Node::Param(_) | Node::Input(..) | Node::Channel(..) | Node::Sample { .. } | Node::Swizzle(..)) => {
                     leaf(other).unwrap_or(f64::NAN)
                 }
             };

@@ -338,12 +338,30 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 };
                 self.arena.add(Node::Input(input, view), input.ty(), span)
             }
-            Resolved::Channel(c) => self.arena.add(Node::Channel(self.channel_ids[c]), Ty::F32, span),
+            Resolved::Channel(c) => self.arena.add(Node::Channel(self.channel_ids[c], [0, 0]), Ty::F32, span),
         })
     }
 
     fn call(&mut self, name: &str, args: &[Expr], e: &Expr) -> Result<H, Diagnostic> {
         let span = e.span;
+        if name == crate::builtins::NEIGHBOUR {
+            let Some(Resolved::Channel(c)) = self.types.name(&args[0]) else {
+                return Err(internal(args[0].span, "`neighbour` of something other than a channel"));
+            };
+            let mut offset = [0i32; 2];
+            for (o, a) in offset.iter_mut().zip(&args[1..]) {
+                let k = self.const_int(a)?;
+                if k.abs() > crate::builtins::MAX_NEIGHBOUR {
+                    return Err(self.in_series(Self::err(
+                        a.span,
+                        format!("offset {k} is farther than {} texels", crate::builtins::MAX_NEIGHBOUR),
+                        "too far",
+                    )));
+                }
+                *o = k as i32;
+            }
+            return Ok(self.arena.add(Node::Channel(self.channel_ids[c], offset), Ty::F32, span));
+        }
         if let Some(&fi) = self.sym.functions.get(name) {
             // inlined: the arguments in the caller's scope, the body with only the
             // parameters bound to them (check refused recursion and bounded the size)

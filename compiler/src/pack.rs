@@ -93,7 +93,7 @@ fn eliminate(ir: &Ir, lay: &mut Working) {
                     roots.push(k);
                 }
                 for h in ir.arena.postorder(&roots) {
-                    if let Node::Channel(c) = ir.arena.node(h)
+                    if let Node::Channel(c, _) = ir.arena.node(h)
                         && let Some(r) = carrier(*c)
                     {
                         live.insert((r, *c));

@@ -194,3 +194,25 @@ fn runaway_inlining_is_refused_at_once() {
     refused(&vsm_with(&fns, "g39(d)"), &["inline more than 65536 expression nodes"]);
     assert!(t.elapsed() < Duration::from_secs(2), "{:?}", t.elapsed());
 }
+
+/// `neighbour(ch, dx, dy)` (issue 17): map side only, offsets known at compile time and at
+/// most 31 texels away; each offset a texel load of its own.
+#[test]
+fn neighbourhood_reads_are_map_side_and_bounded() {
+    let with_value = |value: &str| {
+        vsm().replace(
+            "\"m2\": Channel(precision: F32, value: \"z * z\"",
+            &format!("\"m2\": Channel(precision: F32, value: \"{value}\""),
+        )
+    };
+    let c = compile(&with_value("sum(dx in -2..=2, neighbour(z, dx, 0) * neighbour(z, dx, 0)) / 5.0")).unwrap_or_else(|e| panic!("{e}"));
+    let moments = c.cost.passes.iter().find(|p| p.0 == "moments").unwrap();
+    assert_eq!(moments.3.fetches, 5, "{moments:?}");
+    refused(&with_value("neighbour(z, 32, 0)"), &["offset 32 is farther than 31 texels"]);
+    refused(&with_value("neighbour(z, i32(z), 0)"), &["is not known at compile time"]);
+    refused(&with_value("neighbour(nope, 0, 0)"), &["unknown channel `nope`"]);
+    refused(
+        &vsm_with("", "neighbour(m1, 1, 0)"),
+        &["`neighbour` reads the map around the texel being computed", "fetch(ch, dx, dy)"],
+    );
+}

@@ -254,7 +254,7 @@ impl<'a> Emitter<'a> {
             let node = self.ir.arena.node(h);
             let leaf = matches!(
                 node,
-                Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(_)
+                Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(..)
             );
             if leaf {
                 self.names.insert(h, e);
@@ -309,7 +309,7 @@ impl<'a> Emitter<'a> {
                 self.views.entry(k).or_default().insert(i.desc().wgsl);
                 format!("{name}_v{k}")
             }
-            Node::Channel(c) => self.load_map_channel(c)?,
+            Node::Channel(c, offset) => self.load_map_channel(c, offset)?,
             Node::Sample {
                 channel,
                 resource,
@@ -329,7 +329,7 @@ impl<'a> Emitter<'a> {
     }
 
     /// Map side: the value of a channel at this texel, read from the resource that carries it.
-    fn load_map_channel(&mut self, c: ChannelId) -> Result<String, Diagnostic> {
+    fn load_map_channel(&mut self, c: ChannelId, [dx, dy]: [i32; 2]) -> Result<String, Diagnostic> {
         let res = self
             .reads
             .iter()
@@ -337,12 +337,22 @@ impl<'a> Emitter<'a> {
             .find(|&r| self.ir.resources[r].slot_of(c).is_some())
             .ok_or_else(|| internal("map channel not read"))?;
         let (tex, layer, comp, enc) = self.locate(res, c, View::Base, None)?;
-        let key = format!("{tex}/{layer}");
+        let key = format!("{tex}/{layer}/{dx},{dy}");
         let v = match self.fetches.get(&key) {
             Some(v) => v.clone(),
             None => {
                 let v = self.fresh("texel_");
-                self.let_line(&v, "vec4<f32>", format!("textureLoad({tex}, texel, {layer}, 0i)"));
+                // a neighbour: its texel, clamped to the map's edge
+                let at = if (dx, dy) == (0, 0) {
+                    "texel".to_string()
+                } else {
+                    format!(
+                        "clamp(texel + vec2<i32>({}, {}), vec2<i32>(0i), vec2<i32>(textureDimensions({tex}).xy) - 1i)",
+                        i32_lit(dx),
+                        i32_lit(dy)
+                    )
+                };
+                self.let_line(&v, "vec4<f32>", format!("textureLoad({tex}, {at}, {layer}, 0i)"));
                 self.fetches.insert(key, v.clone());
                 v
             }
@@ -1262,7 +1272,7 @@ fn geometry(
             head: &head,
             prelude: &|em| {
                 if let Some(surface) = surface {
-                    let z = em.load_map_channel(surface)?;
+                    let z = em.load_map_channel(surface, [0, 0])?;
                     em.line(&format!(
                         "let in_z_surface = frame.depth_range.x + {z} * (frame.depth_range.y - frame.depth_range.x);"
                     ));

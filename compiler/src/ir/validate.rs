@@ -155,7 +155,7 @@ fn nodes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
                 expect(Ty::from_scalar(param.ty), "the param")?;
             }
             Node::Input(input, _) => expect(input.ty(), "the input")?,
-            Node::Channel(c) => {
+            Node::Channel(c, _) => {
                 if !ir.channels.contains(*c) {
                     return Err(ValidationError::BadChannel {
                         at: format!("{h:?}"),
@@ -261,7 +261,7 @@ fn root<S: SlotView>(ir: &Program<S>, h: H, at: &str, map: bool) -> Result<(), V
     }
     for n in ir.arena.postorder(&[h]) {
         let wrong = match ir.arena.node(n) {
-            Node::Channel(_) => !map,
+            Node::Channel(..) => !map,
             Node::Sample { .. } => map,
             Node::F32(_)
             | Node::I32(_)
@@ -495,7 +495,7 @@ mod tests {
     fn dangling_references_are_refused() {
         let mut ir = compiled("hard");
         let ghost = ChannelId::new(99);
-        ir.arena.nodes.push((Node::Channel(ghost), Ty::F32, Span::UNDEFINED));
+        ir.arena.nodes.push((Node::Channel(ghost, [0, 0]), Ty::F32, Span::UNDEFINED));
         assert!(matches!(validate_ir(&ir), Err(ValidationError::BadChannel { channel, .. }) if channel == ghost));
 
         let mut ir = compiled("hard");
