@@ -236,7 +236,7 @@ fn csm_reconstruction(m: i64, n: usize) -> Vec<Vec<f64>> {
     let bases: Vec<Vec<f64>> = (0..=n)
         .map(|j| {
             let z = at(j);
-            let leaf = |node: &Node| matches!(node, Node::Channel(_)).then_some(z);
+            let leaf = |node: &Node| matches!(node, Node::Channel(..)).then_some(z);
             e.terms
                 .iter()
                 .map(|(_, ch)| {
