@@ -1617,6 +1617,7 @@ pub fn is_reserved(name: &str) -> bool {
         || Func::from_name(name).is_some()
         || SampleFn::from_name(name).is_some()
         || matches!(name, "let" | "sum" | "in" | "true" | "false" | "at_sample" | NEIGHBOUR)
+        || name == crate::front::expr::COMPARE_AT
 }
 
 #[cfg(test)]

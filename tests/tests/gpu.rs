@@ -994,3 +994,45 @@ fn a_map_over_a_neighbourhood_computes_the_box_filter() {
         assert!(got.iter().any(|v| *v > 0.0 && *v < 1.0), "the map holds depths");
     }
 }
+
+/// `compare_at(ch, r, dx, dy)` (issue 17): the bilinear PCF tap of the bundled PCF at
+/// offset (0, 0) is `compare_at(z, d - bias, 0, 0)`: the same visibility bit for bit as
+/// the four tests and weights written out, and a 3 x 3 grid of taps is a 4 x 4 PCF.
+#[test]
+fn a_comparison_tap_at_an_offset_is_the_written_out_bilinear_test() {
+    let gpu = gpu();
+    let technique = |vis: &str| {
+        format!(
+            r#"Technique(
+    name: "taps",
+    params: {{ "bias": Param(ty: F32, default: 0.003) }},
+    channels: {{ "z": Channel(precision: F32) }},
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Shade(name: "shade", reads: ["shadow"], visibility: "{vis}"),
+    ],
+)"#
+        )
+    };
+    let s = scene("contact", 32, 64);
+    let vis = |v: &str| {
+        let src = technique(v);
+        let c = sshc::compile_str(&src, &sshc::CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("taps.ron", &src)));
+        render(gpu, &c, &s).visibility.channel(0)
+    };
+    let t = |i: i32, j: i32| format!("select(0.0, 1.0, d - bias <= fetch(z, {i}, {j}))");
+    let written = format!(
+        "mix(mix({}, {}, tf.x), mix({}, {}, tf.x), tf.y)",
+        t(0, 0),
+        t(1, 0),
+        t(0, 1),
+        t(1, 1)
+    );
+    same_bits(
+        &vis("compare_at(z, d - bias, 0, 0)"),
+        &vis(&written),
+        "compare_at against the written-out tap",
+    );
+    let grid = vis("sum(j in -1..=1, sum(i in -1..=1, compare_at(z, d - bias, i, j))) / 9.0");
+    assert!(grid.iter().any(|v| *v > 0.0 && *v < 1.0), "a 4 x 4 PCF has a penumbra");
+}

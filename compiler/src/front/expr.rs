@@ -18,6 +18,10 @@ const MAX_DEPTH: usize = 64;
 pub const MAX_TREE_DEPTH: u32 = 256;
 /// The most nodes one expression string may have.
 pub const MAX_NODES: u32 = 65_536;
+/// `compare_at(ch, r, dx, dy)`: a bilinear-weighted depth test at a texel offset, written
+/// out by the parser ([`Parser::compare_at`]); the name its `r` is bound to.
+pub const COMPARE_AT: &str = "compare_at";
+pub const COMPARE_AT_REF: &str = "compare_at_ref";
 
 #[derive(Logos, Clone, Copy, Debug, PartialEq)]
 #[logos(skip r"[ \t\r\n\f]+")]
@@ -360,6 +364,46 @@ pub fn parse(lit: &StrLit) -> Result<Expr, Diagnostic> {
 impl Parser<'_> {
     /// Build a node, refusing a tree deeper than [`MAX_TREE_DEPTH`] or larger than
     /// [`MAX_NODES`] as soon as it is built, so that no later phase recurses deeper.
+    /// `compare_at(ch, r, dx, dy)`, written out: the bilinear blend, with the receiver's
+    /// weights `tf`, of the depth tests `r <= ch` at the four texels from `(dx, dy)` to
+    /// `(dx + 1, dy + 1)` past the receiver's base texel (what a comparison sampler
+    /// computes at that offset). `r` is bound once, to `compare_at_ref` (which the offsets
+    /// must not name).
+    fn compare_at(&self, args: Vec<Expr>, name_span: Span, span: Span) -> Result<Expr, Diagnostic> {
+        let [ch, r, dx, dy]: [Expr; 4] = args
+            .try_into()
+            .map_err(|_| Diagnostic::error(Phase::Syntax, "compare_at takes 4 arguments").at(span, "here"))?;
+        let node = |kind: ExprKind| Expr::new(kind, span);
+        let name = |n: &str| node(ExprKind::Name(n.to_string()));
+        let int = |v: i64| node(ExprKind::Lit(Literal::Int(v)));
+        let float = |v: f64| node(ExprKind::Lit(Literal::Float(v)));
+        let call = |f: &str, args: Vec<Expr>| {
+            node(ExprKind::Call {
+                name: f.to_string(),
+                name_span,
+                args,
+            })
+        };
+        let plus = |a: &Expr, k: i64| node(ExprKind::Binary(BinOp::Add, Box::new(a.clone()), Box::new(int(k))));
+        let test = |i: i64, j: i64| {
+            let texel = call("fetch", vec![ch.clone(), plus(&dx, i), plus(&dy, j)]);
+            let lit = node(ExprKind::Binary(BinOp::Le, Box::new(name(COMPARE_AT_REF)), Box::new(texel)));
+            call("select", vec![float(0.0), float(1.0), lit])
+        };
+        let tf = |c: &str| node(ExprKind::Member(Box::new(name("tf")), c.to_string()));
+        let row = |j: i64| call("mix", vec![test(0, j), test(1, j), tf("x")]);
+        let body = call("mix", vec![row(0), row(1), tf("y")]);
+        self.node(
+            ExprKind::Let {
+                name: COMPARE_AT_REF.to_string(),
+                name_span,
+                value: Box::new(r),
+                body: Box::new(body),
+            },
+            span,
+        )
+    }
+
     fn node(&self, kind: ExprKind, span: Span) -> Result<Expr, Diagnostic> {
         let e = Expr::new(kind, span);
         if e.height > MAX_TREE_DEPTH {
@@ -585,6 +629,9 @@ impl Parser<'_> {
                         }
                     };
                     let span = fspan.join(self.map(end));
+                    if text == COMPARE_AT && args.len() == 4 {
+                        return self.compare_at(args, fspan, span);
+                    }
                     self.node(
                         ExprKind::Call {
                             name: text.to_string(),
