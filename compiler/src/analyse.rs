@@ -6,6 +6,7 @@
 //! states the largest safe value of each parameter it depends on, found by bisection
 //! (e.g. ESM with c = 80 at f16: c must stay at or below ln 65504 = 11.09 for z in [0, 1]).
 
+use crate::builtins::Ty;
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::{ConstValue, Precision, Reduce};
 use crate::front::expr::{BinOp, UnOp};
@@ -52,10 +53,23 @@ impl<'a> RangeEval<'a> {
     }
 
     fn node(&self, h: H) -> Interval {
+        let r = self.node_exact(h);
+        // u32 arithmetic wraps: a range that leaves [0, 2^32 - 1] may hold any u32
+        if self.ir.arena.ty(h) == Ty::U32 && !(r.lo >= 0.0 && r.hi <= u32::MAX as f64) {
+            Interval::U32
+        } else {
+            r
+        }
+    }
+
+    /// The range of `h`'s value computed without wrapping.
+    fn node_exact(&self, h: H) -> Interval {
         let a = &self.ir.arena;
+        let integers = || if a.ty(h) == Ty::U32 { Interval::U32 } else { Interval::I32 };
         match a.node(h) {
             Node::F32(b) => Interval::point(f32::from_bits(*b) as f64),
             Node::I32(v) => Interval::point(*v as f64),
+            Node::U32(v) => Interval::point(*v as f64),
             Node::Bool(v) => Interval::point(*v as i32 as f64),
             Node::Param(p) if self.param_range.is_some_and(|(o, _)| o == *p) => {
                 self.param_range.map(|(_, r)| r).unwrap_or(Interval::UNBOUNDED)
@@ -80,6 +94,15 @@ impl<'a> RangeEval<'a> {
                 Interval { lo: -x.hi, hi: -x.lo }
             }
             Node::Unary(UnOp::Not, _) => Interval::UNIT,
+            // ~x is -x - 1 on i32, 2^32 - 1 - x on u32
+            Node::Unary(UnOp::BitNot, x) => {
+                let x = self.get(*x);
+                let top = if a.ty(h) == Ty::U32 { u32::MAX as f64 } else { -1.0 };
+                Interval {
+                    lo: top - x.hi,
+                    hi: top - x.lo,
+                }
+            }
             Node::Binary(op, x, y) => {
                 let (x, y) = (self.get(*x), self.get(*y));
                 match op {
@@ -107,6 +130,15 @@ impl<'a> RangeEval<'a> {
                         }
                     }
                     BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne | BinOp::And | BinOp::Or => Interval::UNIT,
+                    // of non-negative operands, `&` is at most the smaller one
+                    BinOp::BitAnd if x.lo >= 0.0 && y.lo >= 0.0 => Interval {
+                        lo: 0.0,
+                        hi: x.hi.min(y.hi),
+                    },
+                    BinOp::BitAnd | BinOp::BitOr | BinOp::BitXor | BinOp::Shl => integers(),
+                    // a right shift of a non-negative value only shrinks it
+                    BinOp::Shr if x.lo >= 0.0 => Interval { lo: 0.0, hi: x.hi },
+                    BinOp::Shr => integers(),
                 }
             }
             Node::Swizzle(x, _) => self.get(*x),

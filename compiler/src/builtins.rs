@@ -15,6 +15,9 @@ use std::fmt;
 pub enum Ty {
     F32,
     I32,
+    /// Unsigned 32-bit integers, modulo 2^32 (hashes, bit patterns): never abstract, never
+    /// implied; written `7u`, `0x9e3779b9u` or converted with `u32(x)`.
+    U32,
     Bool,
     /// `vecN<f32>`, N in 2..=4.
     Vec(u8),
@@ -39,14 +42,27 @@ impl Ty {
         matches!(self, Ty::F32 | Ty::Vec(_) | Ty::AbstractInt)
     }
 
+    /// f32, i32 and vectors (what negation, `abs` and `sign` take); u32 is not among them.
     pub fn is_numeric(self) -> bool {
         matches!(self, Ty::F32 | Ty::I32 | Ty::Vec(_) | Ty::AbstractInt)
+    }
+
+    /// What arithmetic (`+ - * / %`), comparisons, `min`/`max`/`clamp` and series take:
+    /// the numeric types and u32.
+    pub fn is_arithmetic(self) -> bool {
+        self.is_numeric() || self == Ty::U32
+    }
+
+    /// i32, u32 or an abstract integer: what the bit operators take.
+    pub fn is_integer(self) -> bool {
+        matches!(self, Ty::I32 | Ty::U32 | Ty::AbstractInt)
     }
 
     pub fn wgsl(self) -> &'static str {
         match self.concrete() {
             Ty::F32 => "f32",
             Ty::I32 => "i32",
+            Ty::U32 => "u32",
             Ty::Bool => "bool",
             Ty::Vec(2) => "vec2<f32>",
             Ty::Vec(3) => "vec3<f32>",
@@ -61,7 +77,7 @@ impl fmt::Display for Ty {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Ty::AbstractInt => write!(f, "integer"),
-            t @ (Ty::F32 | Ty::I32 | Ty::Bool | Ty::Vec(_)) => write!(f, "{}", t.wgsl()),
+            t @ (Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::Vec(_)) => write!(f, "{}", t.wgsl()),
         }
     }
 }
@@ -70,7 +86,7 @@ impl fmt::Display for Ty {
 pub fn unify(a: Ty, b: Ty) -> Option<Ty> {
     match (a, b) {
         _ if a == b => Some(a),
-        (Ty::AbstractInt, t @ (Ty::F32 | Ty::I32)) | (t @ (Ty::F32 | Ty::I32), Ty::AbstractInt) => Some(t),
+        (Ty::AbstractInt, t @ (Ty::F32 | Ty::I32 | Ty::U32)) | (t @ (Ty::F32 | Ty::I32 | Ty::U32), Ty::AbstractInt) => Some(t),
         // scalar * vector broadcasts
         (Ty::Vec(n), Ty::F32 | Ty::AbstractInt) | (Ty::F32 | Ty::AbstractInt, Ty::Vec(n)) => Some(Ty::Vec(n)),
         _ => None,
@@ -556,6 +572,7 @@ pub enum Func {
     Select,
     ToF32,
     ToI32,
+    ToU32,
     Vec2,
     Vec3,
     Vec4,
@@ -669,7 +686,7 @@ impl fmt::Debug for Builtin {
 }
 
 impl Func {
-    pub const ALL: [Func; 40] = [
+    pub const ALL: [Func; 41] = [
         Func::Abs,
         Func::Exp,
         Func::Exp2,
@@ -702,6 +719,7 @@ impl Func {
         Func::Select,
         Func::ToF32,
         Func::ToI32,
+        Func::ToU32,
         Func::Vec2,
         Func::Vec3,
         Func::Vec4,
@@ -1044,7 +1062,7 @@ impl Func {
                 fold: Custom(|v| match v[2] {
                     ConstValue::Bool(true) => Some(v[1]),
                     ConstValue::Bool(false) => Some(v[0]),
-                    ConstValue::Int(_) | ConstValue::Float(_) => None,
+                    ConstValue::Int(_) | ConstValue::Uint(_) | ConstValue::Float(_) => None,
                 }),
                 range: |v| Interval::hull(v[0], v[1]),
                 wgsl: Same,
@@ -1055,6 +1073,7 @@ impl Func {
                 sig: Convert(Ty::F32),
                 fold: Custom(|v| match v[0] {
                     ConstValue::Int(a) => Some(ConstValue::Float(a as f64)),
+                    ConstValue::Uint(a) => finite_f32(a as f64),
                     ConstValue::Float(x) => finite_f32(x),
                     ConstValue::Bool(b) => finite_f32(b as i64 as f64),
                 }),
@@ -1067,6 +1086,8 @@ impl Func {
                 sig: Convert(Ty::I32),
                 fold: Custom(|v| match v[0] {
                     ConstValue::Int(a) => Some(ConstValue::Int(a)),
+                    // the same bits (WGSL's i32(u32))
+                    ConstValue::Uint(a) => Some(ConstValue::Int(a as i32 as i64)),
                     ConstValue::Float(x) if x.is_finite() => {
                         Some(ConstValue::Int(x.trunc().clamp(i32::MIN as f64, i32::MAX as f64) as i64))
                     }
@@ -1074,6 +1095,26 @@ impl Func {
                     ConstValue::Bool(b) => Some(ConstValue::Int(b as i64)),
                 }),
                 range: |v| v[0].monotone(f64::trunc),
+                wgsl: Same,
+            },
+            Func::ToU32 => &Builtin {
+                name: "u32",
+                arity: 1,
+                sig: Convert(Ty::U32),
+                fold: Custom(|v| match v[0] {
+                    // the same bits (WGSL's u32(i32)): u32(-1) is 4294967295u
+                    ConstValue::Int(a) => Some(ConstValue::Uint(a as i32 as u32)),
+                    ConstValue::Uint(a) => Some(ConstValue::Uint(a)),
+                    // rounded towards zero and clamped to the u32 range, as for i32
+                    ConstValue::Float(x) if x.is_finite() => Some(ConstValue::Uint(x.trunc().clamp(0.0, u32::MAX as f64) as u32)),
+                    ConstValue::Float(_) => None,
+                    ConstValue::Bool(b) => Some(ConstValue::Uint(b as u32)),
+                }),
+                range: |v| {
+                    let t = v[0].monotone(f64::trunc);
+                    // a negative i32 becomes a large u32: anything
+                    if t.lo < 0.0 { Interval::U32 } else { t.meet(Interval::U32) }
+                },
                 wgsl: Same,
             },
             Func::Vec2 => &Builtin {
@@ -1226,9 +1267,9 @@ impl Sig {
         match self {
             Sig::Float => format!("{}: f32 or vectors of one size", params(&["x", "y", "z"])),
             Sig::Numeric => format!("{}: one number (f32, i32 or a vector)", params(&["x"])),
-            Sig::SameNumeric => format!("{}: numbers of one type", params(&["a", "b", "c"])),
+            Sig::SameNumeric => format!("{}: numbers of one type (f32, i32, u32 or vectors)", params(&["a", "b", "c"])),
             Sig::Select => "select(f, t, cond): `f` and `t` of one type, `cond` a bool".to_string(),
-            Sig::Convert(_) => format!("{}: one scalar (f32, i32 or bool)", params(&["x"])),
+            Sig::Convert(_) => format!("{}: one scalar (f32, i32, u32 or bool)", params(&["x"])),
             Sig::Construct(n) => format!("{}: {n} f32 components", params(&["x", "y", "z", "w"])),
             Sig::Scalars => format!("{}: f32 scalars", params(&["a", "b", "c", "d"])),
             Sig::Length => format!("{}: one vector", params(&["v"])),
@@ -1244,7 +1285,7 @@ impl Sig {
                 t => Err(format!("`{name}` expects a number, found {t}")),
             },
             Sig::SameNumeric => match same(args) {
-                Some(t) if t.is_numeric() => Ok(t.concrete()),
+                Some(t) if t.is_arithmetic() => Ok(t.concrete()),
                 _ => Err(format!("`{name}` expects arguments of one numeric type, found {}", list(args))),
             },
             Sig::Select => match (unify(args[0], args[1]), args[2]) {
@@ -1253,7 +1294,7 @@ impl Sig {
                 (_, c) => Err(format!("`select(f, t, cond)` needs a bool condition, found {c}")),
             },
             Sig::Convert(to) => match args[0] {
-                Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt => Ok(to),
+                Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => Ok(to),
                 t @ Ty::Vec(_) => Err(format!("`{name}` converts a scalar, found {t}")),
             },
             Sig::Construct(n) => {
@@ -1265,11 +1306,11 @@ impl Sig {
             }
             Sig::Length => match args[0] {
                 Ty::Vec(_) | Ty::F32 | Ty::AbstractInt => Ok(Ty::F32),
-                t @ (Ty::I32 | Ty::Bool) => Err(format!("`{name}` expects a vector, found {t}")),
+                t @ (Ty::I32 | Ty::U32 | Ty::Bool) => Err(format!("`{name}` expects a vector, found {t}")),
             },
             Sig::Dot => match same(args) {
                 Some(Ty::Vec(_)) => Ok(Ty::F32),
-                Some(Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt) | None => {
+                Some(Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt) | None => {
                     Err(format!("`{name}` expects two vectors of one size, found {}", list(args)))
                 }
             },
@@ -1320,6 +1361,7 @@ pub fn fold_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
             .map(|c| match c {
                 ConstValue::Float(x) => Some(*x),
                 ConstValue::Int(x) => Some(*x as f64),
+                ConstValue::Uint(x) => Some(*x as f64),
                 ConstValue::Bool(_) => None,
             })
             .collect()
@@ -1328,11 +1370,22 @@ pub fn fold_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
         Fold::Never => None,
         Fold::Float(g) => finite_f32(g(&floats()?)?),
         Fold::IntOrFloat(int, g) => {
+            // u32 arguments (`min`, `max`, `clamp` of u32): their result is one of them
+            if let Some(a) = v
+                .iter()
+                .map(|c| match c {
+                    ConstValue::Uint(a) => Some(*a as i64),
+                    ConstValue::Int(_) | ConstValue::Float(_) | ConstValue::Bool(_) => None,
+                })
+                .collect::<Option<Vec<i64>>>()
+            {
+                return int(&a).and_then(|r| u32::try_from(r).ok()).map(ConstValue::Uint);
+            }
             let ints: Option<Vec<i64>> = v
                 .iter()
                 .map(|c| match c {
                     ConstValue::Int(a) => Some(*a),
-                    ConstValue::Float(_) | ConstValue::Bool(_) => None,
+                    ConstValue::Uint(_) | ConstValue::Float(_) | ConstValue::Bool(_) => None,
                 })
                 .collect();
             match ints {
@@ -1668,12 +1721,12 @@ mod tests {
     /// Argument types a call may take: every uniform choice the signature accepts.
     fn signatures(f: Func) -> Vec<Vec<Ty>> {
         let n = f.arity();
-        let mut out: Vec<Vec<Ty>> = [Ty::F32, Ty::Vec(2), Ty::Vec(3), Ty::Vec(4), Ty::I32, Ty::Bool]
+        let mut out: Vec<Vec<Ty>> = [Ty::F32, Ty::Vec(2), Ty::Vec(3), Ty::Vec(4), Ty::I32, Ty::U32, Ty::Bool]
             .into_iter()
             .map(|t| vec![t; n])
             .collect();
         if n == 3 {
-            for t in [Ty::F32, Ty::Vec(2), Ty::I32] {
+            for t in [Ty::F32, Ty::Vec(2), Ty::I32, Ty::U32] {
                 out.push(vec![t, t, Ty::Bool]);
             }
         }
@@ -1739,6 +1792,10 @@ mod tests {
                                 match sig[i] {
                                     // integers: the point rounded, if still inside the box
                                     Ty::I32 => (lo..=hi).contains(&x.round()).then_some(ConstValue::Int(x.round() as i64)),
+                                    Ty::U32 => (lo..=hi)
+                                        .contains(&x.round())
+                                        .then_some(x.round())
+                                        .and_then(|v| (v >= 0.0).then_some(ConstValue::Uint(v as u32))),
                                     Ty::Bool => Some(ConstValue::Bool(x > lo)),
                                     Ty::F32 | Ty::Vec(_) | Ty::AbstractInt => Some(ConstValue::Float(x as f32 as f64)),
                                 }
@@ -1792,7 +1849,7 @@ mod tests {
             let d = i.desc();
             let ty = match d.ty {
                 Ty::Vec(n) => format!("vec{n}"),
-                t @ (Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt) => t.to_string(),
+                t @ (Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt) => t.to_string(),
             };
             let side = match d.side {
                 Side::Receiver => "receiver",
@@ -1822,6 +1879,7 @@ mod tests {
         let arg = |t: Ty| match t {
             Ty::F32 | Ty::AbstractInt => "a_f32".to_string(),
             Ty::I32 => "a_i32".to_string(),
+            Ty::U32 => "a_u32".to_string(),
             Ty::Bool => "a_bool".to_string(),
             Ty::Vec(n) => format!("a_vec{n}"),
         };
@@ -1871,6 +1929,7 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {{
     let a_vec3 = frame.shadow_size.xyz;
     let a_vec4 = frame.shadow_size;
     let a_i32 = i32(frame.shadow_size.x);
+    let a_u32 = u32(frame.shadow_size.x);
     let a_bool = frame.shadow_size.x > 1.0;
     let in_base = vec2<i32>(floor(a_vec2));
 {body}    return vec4<f32>(0.0);

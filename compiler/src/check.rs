@@ -352,7 +352,7 @@ fn light_samples(sym: &Symbols, e: &Expr, types: &mut Types) -> Result<u32, Diag
         )
         .at(e.span, format!("evaluates to {n}"))
         .note("each sample is a view of its own: a depth map, and a layer block of every per-sample resource")),
-        other @ (ConstValue::Float(_) | ConstValue::Bool(_)) => Err(Diagnostic::error(
+        other @ (ConstValue::Float(_) | ConstValue::Bool(_) | ConstValue::Uint(_)) => Err(Diagnostic::error(
             Phase::Check,
             format!("type mismatch: `light_samples` must be an integer, found {other}"),
         )
@@ -826,7 +826,7 @@ fn resolve_rule(sym: &Symbols, spec: &ResolveSpec, types: &mut Types) -> Result<
             Err(Diagnostic::error(Phase::Check, format!("resolve rule {n} does not exist: {names}"))
                 .at(e.span, format!("evaluates to {n}")))
         }
-        other @ (ConstValue::Float(_) | ConstValue::Bool(_)) => Err(Diagnostic::error(
+        other @ (ConstValue::Float(_) | ConstValue::Bool(_) | ConstValue::Uint(_)) => Err(Diagnostic::error(
             Phase::Check,
             format!("type mismatch: a resolve rule must be an integer ({names}), found {other}"),
         )
@@ -850,7 +850,7 @@ fn kernel_size(sym: &Symbols, e: &Expr, types: &mut Types) -> Result<u32, Diagno
         } else {
             format!("use a size in 1..={MAX_KERNEL}")
         })),
-        other @ (ConstValue::Float(_) | ConstValue::Bool(_)) => Err(Diagnostic::error(
+        other @ (ConstValue::Float(_) | ConstValue::Bool(_) | ConstValue::Uint(_)) => Err(Diagnostic::error(
             Phase::Check,
             format!("type mismatch: a filter size must be an integer, found {other}"),
         )
@@ -1091,6 +1091,11 @@ impl<'s, 'a> Typer<'s, 'a> {
             return Ok(());
         }
         match consteval::eval(self.sym, e, &mut self.scope()) {
+            Ok(ConstValue::Int(v)) if to == Ty::U32 && u32::try_from(v).is_err() => {
+                return Err(Self::err(e.span, format!("{v} is not a u32"), "used as a u32 here")
+                    .note(format!("a u32 lies from 0 to {}", u32::MAX))
+                    .help("write the bit pattern you mean as a u32 literal (`0xffffffffu`), or convert with `u32(...)`"));
+            }
             // depends on a series variable: its value is known only when unrolled
             Ok(_) | Err(NotConst::Runtime(_)) => {}
             Err(NotConst::NoValue) => {
@@ -1105,6 +1110,9 @@ impl<'s, 'a> Typer<'s, 'a> {
         if matches!(to, Ty::F32 | Ty::Vec(_)) {
             self.types.convert_to_f32(e);
         }
+        if to == Ty::U32 {
+            self.types.convert_to_u32(e);
+        }
         Ok(())
     }
 
@@ -1115,7 +1123,7 @@ impl<'s, 'a> Typer<'s, 'a> {
         // An integer operation on values known here (all but series variables, whose
         // values `lower` checks as it unrolls) must have an i32 value. Operands that read
         // a runtime value are not evaluated, except a divisor, which alone can be 0.
-        if matches!(t, Ty::I32 | Ty::AbstractInt) {
+        if t.is_integer() {
             self.int_fault(e, self.runtime == runtime)?;
         }
         Ok(t)
@@ -1125,7 +1133,7 @@ impl<'s, 'a> Typer<'s, 'a> {
     fn int_fault(&self, e: &Expr, all_known: bool) -> Result<(), Diagnostic> {
         let (op, operands, divisor): (IntOp, Vec<&Expr>, Span) = match &e.kind {
             ExprKind::Unary(UnOp::Neg, a) => (IntOp::Neg, vec![a], e.span),
-            ExprKind::Binary(op @ (BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem), a, b) => {
+            ExprKind::Binary(op @ (BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem | BinOp::Shl | BinOp::Shr), a, b) => {
                 (IntOp::Binary(*op), vec![a, b], b.span)
             }
             ExprKind::Call { name, args, .. } if Func::from_name(name) == Some(Func::Abs) => {
@@ -1141,7 +1149,8 @@ impl<'s, 'a> Typer<'s, 'a> {
             | ExprKind::Let { .. }
             | ExprKind::Sum { .. } => return Ok(()),
         };
-        let divides = matches!(op, IntOp::Binary(BinOp::Div | BinOp::Rem));
+        // a divisor or a shift count may be known where the other operand is not
+        let divides = matches!(op, IntOp::Binary(BinOp::Div | BinOp::Rem | BinOp::Shl | BinOp::Shr));
         if !all_known && !divides {
             return Ok(());
         }
@@ -1162,6 +1171,30 @@ impl<'s, 'a> Typer<'s, 'a> {
         }
     }
 
+    /// `x << n`, `x >> n`: `x` an integer (its type is the result's), `n` a u32 (an
+    /// abstract integer becomes one), as in WGSL.
+    fn shift(&mut self, e: &Expr, op: BinOp, (a, ta): (&Expr, Ty), (b, tb): (&Expr, Ty)) -> Result<Ty, Diagnostic> {
+        if !ta.is_integer() {
+            return Err(Self::err(
+                a.span,
+                format!("type mismatch: `{}` shifts an integer (i32 or u32), found {ta}", op.symbol()),
+                format!("this is {ta}"),
+            )
+            .also(e.span, "in this shift"));
+        }
+        if !matches!(tb, Ty::U32 | Ty::AbstractInt) {
+            return Err(Self::err(
+                b.span,
+                format!("type mismatch: the count of `{}` is a u32, found {tb}", op.symbol()),
+                format!("this is {tb}"),
+            )
+            .also(e.span, "in this shift")
+            .help("convert it with `u32(...)`"));
+        }
+        self.settle(b, Ty::U32)?;
+        Ok(ta)
+    }
+
     fn infer_kind(&mut self, e: &'a Expr) -> Result<Ty, Diagnostic> {
         match &e.kind {
             ExprKind::Lit(Literal::Int(v)) => {
@@ -1174,6 +1207,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                 }
                 Ok(Ty::AbstractInt)
             }
+            ExprKind::Lit(Literal::Uint(_)) => Ok(Ty::U32),
             ExprKind::Lit(Literal::Float(_)) => Ok(Ty::F32),
             ExprKind::Lit(Literal::Bool(_)) => Ok(Ty::Bool),
             ExprKind::Name(n) => self.name(e, n, e.span),
@@ -1182,9 +1216,17 @@ impl<'s, 'a> Typer<'s, 'a> {
                 match (op, t) {
                     (UnOp::Neg, t) if t.is_numeric() => Ok(t),
                     (UnOp::Not, Ty::Bool) => Ok(Ty::Bool),
+                    (UnOp::BitNot, t) if t.is_integer() => Ok(t),
+                    (UnOp::Neg, Ty::U32) => Err(Self::err(e.span, "type mismatch: cannot negate u32", "this is u32")
+                        .help("a u32 has no sign: write `0u - x` for its negation modulo 2^32, or convert with `i32(...)`")),
                     (UnOp::Neg, t) => Err(Self::err(
                         e.span,
                         format!("type mismatch: cannot negate {t}"),
+                        format!("this is {t}"),
+                    )),
+                    (UnOp::BitNot, t) => Err(Self::err(
+                        e.span,
+                        format!("type mismatch: `~` needs an integer (i32 or u32), found {t}"),
                         format!("this is {t}"),
                     )),
                     (UnOp::Not, t) => Err(Self::err(
@@ -1217,8 +1259,22 @@ impl<'s, 'a> Typer<'s, 'a> {
                         Err(mismatch())
                     };
                 }
+                if op.is_shift() {
+                    return self.shift(e, *op, (a, ta), (b, tb));
+                }
+                if op.is_bitwise() {
+                    let t = unify(ta, tb).filter(|t| t.is_integer()).ok_or_else(|| {
+                        mismatch()
+                            .help("`&`, `|` and `^` take two integers of one type (i32 or u32); convert with `u32(...)` or `i32(...)`")
+                    })?;
+                    if t != Ty::AbstractInt {
+                        self.settle(a, t)?;
+                        self.settle(b, t)?;
+                    }
+                    return Ok(t);
+                }
                 let t = unify(ta, tb)
-                    .filter(|t| t.is_numeric() || (t == &Ty::Bool && matches!(op, BinOp::Eq | BinOp::Ne)))
+                    .filter(|t| t.is_arithmetic() || (t == &Ty::Bool && matches!(op, BinOp::Eq | BinOp::Ne)))
                     .ok_or_else(mismatch)?;
                 // An abstract operand takes the other's type (a scalar beside a vector
                 // broadcasts as f32); two abstract operands stay abstract, unless compared.
@@ -1377,7 +1433,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                 self.envs = outer_envs;
                 self.locals.pop();
                 let t = r?;
-                if !t.is_numeric() {
+                if !t.is_arithmetic() {
                     return Err(Self::err(
                         body.span,
                         format!("type mismatch: a series sums numbers, found {t}"),
@@ -1682,10 +1738,10 @@ impl<'s, 'a> Typer<'s, 'a> {
         self.mode = mode;
         match k? {
             Ty::I32 | Ty::AbstractInt => {}
-            t @ (Ty::F32 | Ty::Bool | Ty::Vec(_)) => {
+            t @ (Ty::F32 | Ty::U32 | Ty::Bool | Ty::Vec(_)) => {
                 return Err(Self::err(
                     index.span,
-                    format!("type mismatch: an array index is an integer, found {t}"),
+                    format!("type mismatch: an array index is an i32, found {t}"),
                     format!("this is {t}"),
                 ));
             }
@@ -1728,10 +1784,10 @@ impl<'s, 'a> Typer<'s, 'a> {
         self.mode = mode;
         match k? {
             Ty::I32 | Ty::AbstractInt => {}
-            t @ (Ty::F32 | Ty::Bool | Ty::Vec(_)) => {
+            t @ (Ty::F32 | Ty::U32 | Ty::Bool | Ty::Vec(_)) => {
                 return Err(Self::err(
                     args[0].span,
-                    format!("type mismatch: a sample index is an integer, found {t}"),
+                    format!("type mismatch: a sample index is an i32, found {t}"),
                     format!("this is {t}"),
                 ));
             }
@@ -1802,7 +1858,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                 .also(p.span, format!("declared here: {}", signature())));
             }
             // an abstract integer argument takes the parameter's scalar type
-            if matches!(want.value, Ty::I32 | Ty::F32) {
+            if matches!(want.value, Ty::I32 | Ty::U32 | Ty::F32) {
                 self.settle(a, want.value)?;
             }
             let uses = distinct_sites(self.uses.drain(before..));

@@ -1,8 +1,9 @@
 //! Constant evaluation, shared by `check` (filter sizes, sigmas, expansion bounds, the
 //! value of abstract integer expressions) and by the IR arena's folding (`ir::Arena::add`
 //! folds unary and binary operations through [`unary`] and [`binary`]). One set of rules:
-//! integers are i32 (a result outside i32 is not a constant), floats are rounded to f32
-//! after every operation, division by zero is not a constant.
+//! integers are i32 (a result outside i32 is not a constant), u32 arithmetic wraps modulo
+//! 2^32 (as on the GPU), floats are rounded to f32 after every operation, division by zero
+//! and a shift by 32 or more are not constants.
 
 use crate::builtins::{Func, constant};
 use crate::diag::{Diagnostic, Phase};
@@ -10,6 +11,7 @@ use crate::front::ast::ConstValue;
 use crate::front::expr::{BinOp, Expr, ExprKind, Literal, UnOp};
 use crate::resolve::Symbols;
 use crate::span::Span;
+use ConstValue::{Bool, Float, Int, Uint};
 
 /// Unrolling stops past this many terms in one series (also bounds constant evaluation).
 pub const MAX_SERIES: i64 = 4096;
@@ -22,24 +24,46 @@ pub fn represent(v: ConstValue) -> Option<ConstValue> {
             f.is_finite().then_some(ConstValue::Float(f as f64))
         }
         ConstValue::Int(i) => i32::try_from(i).ok().map(|i| ConstValue::Int(i as i64)),
+        ConstValue::Uint(u) => Some(ConstValue::Uint(u)),
         ConstValue::Bool(b) => Some(ConstValue::Bool(b)),
     }
 }
 
 /// A unary operation on a constant (not yet rounded: see [`represent`]).
 pub fn unary(op: UnOp, v: ConstValue) -> Option<ConstValue> {
-    use ConstValue::*;
     match (op, v) {
         (UnOp::Neg, Float(x)) => Some(Float(-x)),
         (UnOp::Neg, Int(x)) => Some(Int(x.checked_neg()?)),
         (UnOp::Not, Bool(x)) => Some(Bool(!x)),
-        (UnOp::Neg, Bool(_)) | (UnOp::Not, Float(_) | Int(_)) => None,
+        (UnOp::BitNot, Int(x)) => Some(Int(!x)),
+        (UnOp::BitNot, Uint(x)) => Some(Uint(!x)),
+        (UnOp::Neg, Bool(_) | Uint(_)) | (UnOp::Not, Float(_) | Int(_) | Uint(_)) | (UnOp::BitNot, Float(_) | Bool(_)) => None,
     }
+}
+
+/// A shift count: below 32 (WGSL refuses a constant count of 32 or more).
+fn shift_count(y: ConstValue) -> Option<u32> {
+    let c = match y {
+        Int(c) => u32::try_from(c).ok()?,
+        Uint(c) => c,
+        Float(_) | Bool(_) => return None,
+    };
+    (c < 32).then_some(c)
 }
 
 /// A binary operation on two constants of one type (not yet rounded: see [`represent`]).
 pub fn binary(op: BinOp, x: ConstValue, y: ConstValue) -> Option<ConstValue> {
-    use ConstValue::*;
+    // shifts: the count is u32 (or an abstract integer) whatever the shifted type
+    if op.is_shift() {
+        let c = shift_count(y)?;
+        return Some(match (op, x) {
+            (BinOp::Shl, Int(x)) => Int((x as i32).wrapping_shl(c) as i64),
+            (BinOp::Shr, Int(x)) => Int(((x as i32) >> c) as i64),
+            (BinOp::Shl, Uint(x)) => Uint(x.wrapping_shl(c)),
+            (BinOp::Shr, Uint(x)) => Uint(x >> c),
+            _ => return None,
+        });
+    }
     Some(match (x, y) {
         (Float(x), Float(y)) => match op {
             BinOp::Add => Float(x + y),
@@ -54,6 +78,24 @@ pub fn binary(op: BinOp, x: ConstValue, y: ConstValue) -> Option<ConstValue> {
             BinOp::Eq => Bool(x == y),
             BinOp::Ne => Bool(x != y),
             BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
+            BinOp::BitAnd | BinOp::BitOr | BinOp::BitXor | BinOp::Shl | BinOp::Shr => return None,
+        },
+        (Uint(x), Uint(y)) => match op {
+            BinOp::Add => Uint(x.wrapping_add(y)),
+            BinOp::Sub => Uint(x.wrapping_sub(y)),
+            BinOp::Mul => Uint(x.wrapping_mul(y)),
+            BinOp::Div if y != 0 => Uint(x / y),
+            BinOp::Rem if y != 0 => Uint(x % y),
+            BinOp::Lt => Bool(x < y),
+            BinOp::Le => Bool(x <= y),
+            BinOp::Gt => Bool(x > y),
+            BinOp::Ge => Bool(x >= y),
+            BinOp::Eq => Bool(x == y),
+            BinOp::Ne => Bool(x != y),
+            BinOp::BitAnd => Uint(x & y),
+            BinOp::BitOr => Uint(x | y),
+            BinOp::BitXor => Uint(x ^ y),
+            BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or | BinOp::Shl | BinOp::Shr => return None,
         },
         (Int(x), Int(y)) => match op {
             BinOp::Add => Int(x.checked_add(y)?),
@@ -67,16 +109,36 @@ pub fn binary(op: BinOp, x: ConstValue, y: ConstValue) -> Option<ConstValue> {
             BinOp::Ge => Bool(x >= y),
             BinOp::Eq => Bool(x == y),
             BinOp::Ne => Bool(x != y),
-            BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
+            // on the i32 bits
+            BinOp::BitAnd => Int(((x as i32) & (y as i32)) as i64),
+            BinOp::BitOr => Int(((x as i32) | (y as i32)) as i64),
+            BinOp::BitXor => Int(((x as i32) ^ (y as i32)) as i64),
+            BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or | BinOp::Shl | BinOp::Shr => return None,
         },
         (Bool(x), Bool(y)) => match op {
             BinOp::And => Bool(x && y),
             BinOp::Or => Bool(x || y),
             BinOp::Eq => Bool(x == y),
             BinOp::Ne => Bool(x != y),
-            BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem | BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge => return None,
+            BinOp::Add
+            | BinOp::Sub
+            | BinOp::Mul
+            | BinOp::Div
+            | BinOp::Rem
+            | BinOp::Lt
+            | BinOp::Le
+            | BinOp::Gt
+            | BinOp::Ge
+            | BinOp::BitAnd
+            | BinOp::BitOr
+            | BinOp::BitXor
+            | BinOp::Shl
+            | BinOp::Shr => return None,
         },
-        (Float(_), Int(_) | Bool(_)) | (Int(_), Float(_) | Bool(_)) | (Bool(_), Float(_) | Int(_)) => return None,
+        (Float(_), Int(_) | Uint(_) | Bool(_))
+        | (Int(_), Float(_) | Uint(_) | Bool(_))
+        | (Uint(_), Float(_) | Int(_) | Bool(_))
+        | (Bool(_), Float(_) | Int(_) | Uint(_)) => return None,
     })
 }
 
@@ -106,9 +168,13 @@ pub struct IntSpans {
 /// calls it for the operations it can evaluate, `lower` for those inside series (the
 /// series variable known only when unrolled), one rule and one message for both.
 pub fn int_fault(phase: Phase, op: IntOp, args: &[Option<ConstValue>], at: IntSpans) -> Option<Diagnostic> {
-    use ConstValue::Int;
     let int = |i: usize| match args.get(i) {
         Some(Some(Int(v))) => Some(*v),
+        _ => None,
+    };
+    // u32 operations wrap: only a division by zero and a shift count have no value
+    let uint = |i: usize| match args.get(i) {
+        Some(Some(Uint(v))) => Some(*v as i64),
         _ => None,
     };
     let fits = |v: i128| i32::try_from(v).is_ok();
@@ -124,8 +190,17 @@ pub fn int_fault(phase: Phase, op: IntOp, args: &[Option<ConstValue>], at: IntSp
         Some(d.help("integer expressions are computed in i32; write float literals (`2.0`) for larger values"))
     };
     match op {
+        IntOp::Binary(op @ (BinOp::Shl | BinOp::Shr)) => {
+            let c = int(1).or(uint(1))?;
+            (!(0..32).contains(&c)).then(|| {
+                Diagnostic::error(phase, format!("shift by {c}: the count of `{}` must be from 0 to 31", op.symbol()))
+                    .at(at.divisor, format!("this count is {c}"))
+                    .also(at.op, "in this shift")
+                    .help("WGSL refuses a constant shift of the integer's width or more; shift in two steps or mask the count (`n & 31u`)")
+            })
+        }
         IntOp::Binary(op @ (BinOp::Div | BinOp::Rem)) => {
-            let y = int(1)?;
+            let y = int(1).or(uint(1))?;
             if y == 0 {
                 let what = if op == BinOp::Div { "division" } else { "remainder" };
                 return Some(
@@ -136,7 +211,7 @@ pub fn int_fault(phase: Phase, op: IntOp, args: &[Option<ConstValue>], at: IntSp
                 );
             }
             let x = int(0)?;
-            (y == -1 && x == i32::MIN as i64).then(|| {
+            (y == -1 && x == i32::MIN as i64 && int(1).is_some()).then(|| {
                 Diagnostic::error(phase, format!("integer overflow: {x} {} {y} does not fit in i32", op.symbol()))
                     .at(at.op, "overflows i32")
             })
@@ -202,14 +277,17 @@ pub type Env = Vec<(String, Option<ConstValue>)>;
 
 /// [`const_eval`] with local bindings in scope.
 pub fn eval(sym: &Symbols, e: &Expr, env: &mut Env) -> Result<ConstValue, NotConst> {
-    use ConstValue::*;
+    // an abstract integer beside a float is a float, beside a u32 a u32 (if it is one)
     let lift = |x: ConstValue, y: ConstValue| match (x, y) {
-        (Int(i), Float(_)) => (Float(i as f64), y),
-        (Float(_), Int(i)) => (x, Float(i as f64)),
-        _ => (x, y),
+        (Int(i), Float(_)) => Some((Float(i as f64), y)),
+        (Float(_), Int(i)) => Some((x, Float(i as f64))),
+        (Int(i), Uint(_)) => Some((Uint(u32::try_from(i).ok()?), y)),
+        (Uint(_), Int(i)) => Some((x, Uint(u32::try_from(i).ok()?))),
+        _ => Some((x, y)),
     };
     let v = match &e.kind {
         ExprKind::Lit(Literal::Int(v)) => Int(*v),
+        ExprKind::Lit(Literal::Uint(v)) => Uint(*v),
         ExprKind::Lit(Literal::Float(v)) => Float(*v),
         ExprKind::Lit(Literal::Bool(b)) => Bool(*b),
         ExprKind::Name(n) => name(sym, n, e.span, env)?,
@@ -223,7 +301,12 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Env) -> Result<ConstValue, NotCon
                 _ => {}
             }
             let y = eval(sym, b, env)?;
-            let (x, y) = lift(x, y);
+            // a shift count stays as it is: it need not have the shifted value's type
+            let (x, y) = if op.is_shift() {
+                (x, y)
+            } else {
+                lift(x, y).ok_or(NotConst::NoValue)?
+            };
             binary(*op, x, y).ok_or(NotConst::NoValue)?
         }
         ExprKind::Call { name, args, .. } => {
@@ -266,7 +349,7 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Env) -> Result<ConstValue, NotCon
                 env.push((var.clone(), Some(Int(k))));
                 let t = eval(sym, body, env);
                 env.pop();
-                let (a, t) = lift(acc, t?);
+                let (a, t) = lift(acc, t?).ok_or(NotConst::NoValue)?;
                 acc = if k == lo {
                     t
                 } else {
@@ -313,7 +396,6 @@ fn name(sym: &Symbols, n: &str, span: Span, env: &[(String, Option<ConstValue>)]
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ConstValue::*;
 
     #[test]
     fn integers_stay_in_i32_and_floats_round_to_f32() {

@@ -32,7 +32,7 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
         };
         let value = match p.value {
             ConstValue::Bool(b) => b as i32 as f64,
-            v @ (ConstValue::Int(_) | ConstValue::Float(_)) => v.as_f64(),
+            v @ (ConstValue::Int(_) | ConstValue::Uint(_) | ConstValue::Float(_)) => v.as_f64(),
         };
         let off = if p.uniform {
             offset += 4;

@@ -45,6 +45,23 @@ impl Interval {
         hi: f64::INFINITY,
     };
     pub const UNIT: Interval = Interval { lo: 0.0, hi: 1.0 };
+    /// Every u32 value.
+    pub const U32: Interval = Interval {
+        lo: 0.0,
+        hi: u32::MAX as f64,
+    };
+    /// Every i32 value.
+    pub const I32: Interval = Interval {
+        lo: i32::MIN as f64,
+        hi: i32::MAX as f64,
+    };
+
+    /// The part of `self` inside `other` (`other` where they do not overlap: a value of
+    /// the type lies in it whatever `self` said).
+    pub(crate) fn meet(self, other: Interval) -> Interval {
+        let (lo, hi) = (self.lo.max(other.lo), self.hi.min(other.hi));
+        if lo <= hi { Interval { lo, hi } } else { other }
+    }
 
     pub(crate) fn hull(a: Interval, b: Interval) -> Interval {
         Interval {

@@ -52,6 +52,7 @@ pub enum Node {
     /// An f32 constant, by its bits.
     F32(u32),
     I32(i32),
+    U32(u32),
     Bool(bool),
     /// A runtime uniform parameter.
     Param(ParamId),
@@ -117,6 +118,7 @@ impl Arena {
         match self.node(h) {
             Node::F32(b) => Some(ConstValue::Float(f32::from_bits(*b) as f64)),
             Node::I32(v) => Some(ConstValue::Int(*v as i64)),
+            Node::U32(v) => Some(ConstValue::Uint(*v)),
             Node::Bool(v) => Some(ConstValue::Bool(*v)),
             Node::Param(_)
             | Node::Input(..)
@@ -139,6 +141,7 @@ impl Arena {
                 Node::F32(f.to_bits())
             }
             (ConstValue::Int(i), Ty::I32) => Node::I32(i32::try_from(i).ok()?),
+            (ConstValue::Uint(u), Ty::U32) => Node::U32(u),
             (ConstValue::Bool(b), Ty::Bool) => Node::Bool(b),
             _ => return None,
         };
@@ -214,7 +217,12 @@ impl Arena {
                     | BinOp::Eq
                     | BinOp::Ne
                     | BinOp::And
-                    | BinOp::Or => {}
+                    | BinOp::Or
+                    | BinOp::BitAnd
+                    | BinOp::BitOr
+                    | BinOp::BitXor
+                    | BinOp::Shl
+                    | BinOp::Shr => {}
                 }
                 if !matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div) {
                     return None;
@@ -222,7 +230,7 @@ impl Arena {
                 // all components constant on both sides (a scalar constant broadcasts)
                 let n = match ty {
                     Ty::Vec(n) => n as usize,
-                    Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt => return None,
+                    Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => return None,
                 };
                 let side = |h: H| -> Option<Vec<ConstValue>> {
                     match self.components(h) {
@@ -249,6 +257,7 @@ impl Arena {
             | Node::Swizzle(..)
             | Node::F32(_)
             | Node::I32(_)
+            | Node::U32(_)
             | Node::Bool(_)
             | Node::Param(_)
             | Node::Input(..)
@@ -272,7 +281,7 @@ impl Arena {
             Node::Binary(op, a, b) => {
                 let (x, y) = (self.as_const(*a), self.as_const(*b));
                 // Identities that hold for every finite value.
-                if ty == Ty::F32 || ty == Ty::I32 {
+                if matches!(ty, Ty::F32 | Ty::I32 | Ty::U32) {
                     let is = |c: Option<ConstValue>, v: f64| c.is_some_and(|c| c.as_f64() == v);
                     match op {
                         BinOp::Add if is(x, 0.0) => return Some(*b),
@@ -291,7 +300,12 @@ impl Arena {
                         | BinOp::Eq
                         | BinOp::Ne
                         | BinOp::And
-                        | BinOp::Or => {}
+                        | BinOp::Or
+                        | BinOp::BitAnd
+                        | BinOp::BitOr
+                        | BinOp::BitXor
+                        | BinOp::Shl
+                        | BinOp::Shr => {}
                     }
                 }
                 // (c1 * x) / c2 -> (c1 / c2) * x
@@ -316,10 +330,10 @@ impl Arena {
             Node::Call(Func::Select, args) => match self.as_const(args[2])? {
                 Bool(true) => Some(args[1]),
                 Bool(false) => Some(args[0]),
-                Int(_) | Float(_) => None,
+                Int(_) | Uint(_) | Float(_) => None,
             },
             Node::Call(f, args) => {
-                if ty != Ty::F32 && ty != Ty::I32 {
+                if !matches!(ty, Ty::F32 | Ty::I32 | Ty::U32) {
                     return None;
                 }
                 let vals: Vec<ConstValue> = args.iter().map(|a| self.as_const(*a)).collect::<Option<_>>()?;
@@ -328,6 +342,7 @@ impl Arena {
             }
             Node::F32(_)
             | Node::I32(_)
+            | Node::U32(_)
             | Node::Bool(_)
             | Node::Param(_)
             | Node::Input(..)
@@ -373,7 +388,9 @@ impl Arena {
             Node::Unary(_, a) | Node::Swizzle(a, _) => vec![*a],
             Node::Binary(_, a, b) => vec![*a, *b],
             Node::Call(_, args) | Node::Sample { args, .. } => args.clone(),
-            Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(..) => vec![],
+            Node::F32(_) | Node::I32(_) | Node::U32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(..) => {
+                vec![]
+            }
         }
     }
 
@@ -394,6 +411,9 @@ impl Arena {
             Node::F32(b) => s.push_str(&fmt_float(f32::from_bits(*b) as f64)),
             Node::I32(v) => {
                 let _ = write!(s, "{v}");
+            }
+            Node::U32(v) => {
+                let _ = write!(s, "{v}u");
             }
             Node::Bool(v) => {
                 let _ = write!(s, "{v}");
@@ -431,7 +451,7 @@ impl Arena {
                 }
             }
             Node::Unary(op, a) => {
-                s.push_str(if *op == UnOp::Neg { "-" } else { "!" });
+                s.push_str(op.symbol());
                 s.push('(');
                 self.write(s, *a, ir, depth + 1);
                 s.push(')');
@@ -475,9 +495,20 @@ impl Arena {
             let v = match self.node(n) {
                 Node::F32(b) => f32::from_bits(*b) as f64,
                 Node::I32(v) => *v as f64,
+                Node::U32(v) => *v as f64,
                 Node::Bool(b) => *b as i32 as f64,
                 Node::Unary(UnOp::Neg, x) => -get(x),
                 Node::Unary(UnOp::Not, x) => (get(x) == 0.0) as i32 as f64,
+                Node::Unary(UnOp::BitNot, x) => match self.ty(n) {
+                    Ty::U32 => !(get(x) as u32) as f64,
+                    _ => !(get(x) as i32) as f64,
+                },
+                // integer operations of u32 (and bit operations of i32) with their wrapping
+                Node::Binary(op, x, y) if self.ty(n) == Ty::U32 || op.is_bitwise() => {
+                    let (x, y) = (get(x), get(y));
+                    let v = consteval::binary(*op, int_const(x, self.ty(n)), int_const(y, self.ty(n)));
+                    v.map_or(f64::NAN, ConstValue::as_f64)
+                }
                 Node::Binary(op, x, y) => {
                     let (x, y) = (get(x), get(y));
                     let int = self.ty(n) == Ty::I32;
@@ -501,6 +532,8 @@ impl Arena {
                         BinOp::Ne => (x != y) as i32 as f64,
                         BinOp::And => (x != 0.0 && y != 0.0) as i32 as f64,
                         BinOp::Or => (x != 0.0 || y != 0.0) as i32 as f64,
+                        // the guard above takes these
+                        BinOp::BitAnd | BinOp::BitOr | BinOp::BitXor | BinOp::Shl | BinOp::Shr => f64::NAN,
                     }
                 }
                 Node::Call(Func::Select, a) => {
@@ -513,12 +546,9 @@ impl Arena {
                 Node::Call(f, a) => {
                     let args: Vec<ConstValue> = a
                         .iter()
-                        .map(|x| {
-                            if self.ty(*x) == Ty::I32 {
-                                Int(get(x) as i64)
-                            } else {
-                                Float(get(x))
-                            }
+                        .map(|x| match self.ty(*x) {
+                            t @ (Ty::I32 | Ty::U32) => int_const(get(x), t),
+                            _ => Float(get(x)),
                         })
                         .collect();
                     eval_call_f64(*f, &args).unwrap_or(f64::NAN)
@@ -534,10 +564,15 @@ impl Arena {
 }
 
 fn eval_call_f64(f: Func, v: &[ConstValue]) -> Option<f64> {
-    match eval_call(f, v)? {
-        ConstValue::Float(x) => Some(x),
-        ConstValue::Int(x) => Some(x as f64),
-        ConstValue::Bool(b) => Some(b as i32 as f64),
+    eval_call(f, v).map(ConstValue::as_f64)
+}
+
+/// The constant of integer type `ty` holding `x` (a shift count is u32 whatever `ty`).
+fn int_const(x: f64, ty: Ty) -> ConstValue {
+    if ty == Ty::U32 {
+        ConstValue::Uint(x as u32)
+    } else {
+        ConstValue::Int(x as i64)
     }
 }
 

@@ -310,7 +310,9 @@ fn probe_range(
     // IR params are the technique's, in order.
     values[param.index()].value = match p.value {
         front::ast::ConstValue::Int(_) => front::ast::ConstValue::Int(value.floor() as i64),
-        front::ast::ConstValue::Float(_) | front::ast::ConstValue::Bool(_) => front::ast::ConstValue::Float(value),
+        front::ast::ConstValue::Float(_) | front::ast::ConstValue::Bool(_) | front::ast::ConstValue::Uint(_) => {
+            front::ast::ConstValue::Float(value)
+        }
     };
     let sym2 = resolve::Symbols {
         values,

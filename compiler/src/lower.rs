@@ -93,6 +93,13 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         {
             return self.arena.f32(v as f64);
         }
+        // check has made sure the value is a u32
+        if self.types.converts_to_u32(e)
+            && let Some(ConstValue::Int(v)) = self.arena.as_const(h)
+            && let Ok(v) = u32::try_from(v)
+        {
+            return self.arena.add(Node::U32(v), Ty::U32, e.span);
+        }
         h
     }
 
@@ -106,7 +113,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
     /// among them: `check` has refused the others) must have an i32 value; WGSL would
     /// refuse the constant expression, so it is refused here, at the operation.
     fn int_fault(&self, op: IntOp, operands: &[H], ty: Ty, span: Span, divisor: Span) -> Result<(), Diagnostic> {
-        if ty != Ty::I32 {
+        if !matches!(ty, Ty::I32 | Ty::U32) {
             return Ok(());
         }
         let vals: Vec<Option<ConstValue>> = operands.iter().map(|h| self.arena.as_const(*h)).collect();
@@ -145,6 +152,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 let v = i32::try_from(*v).map_err(|_| internal(e.span, "integer literal out of i32 range"))?;
                 self.arena.i32(v)
             }
+            ExprKind::Lit(Literal::Uint(v)) => self.arena.add(Node::U32(*v), Ty::U32, e.span),
             ExprKind::Lit(Literal::Float(v)) => self.arena.f32(*v),
             ExprKind::Lit(Literal::Bool(b)) => self.arena.add(Node::Bool(*b), Ty::Bool, e.span),
             ExprKind::Name(n) => self.name(e, n)?,
@@ -260,6 +268,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         match ty {
             Ty::F32 => self.arena.f32(0.0),
             Ty::I32 | Ty::AbstractInt => self.arena.i32(0),
+            Ty::U32 => self.arena.add(Node::U32(0), Ty::U32, span),
             Ty::Bool => self.arena.add(Node::Bool(false), Ty::Bool, span),
             Ty::Vec(n) => {
                 let z = self.arena.f32(0.0);
@@ -298,6 +307,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 if p.fixed {
                     match self.sym.values[i].value {
                         ConstValue::Int(x) => self.arena.i32(x as i32),
+                        ConstValue::Uint(x) => self.arena.add(Node::U32(x), Ty::U32, span),
                         ConstValue::Float(x) => self.arena.f32(x),
                         ConstValue::Bool(b) => self.arena.add(Node::Bool(b), Ty::Bool, span),
                     }
@@ -325,7 +335,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                         };
                         self.arena.add(Node::Call(f, vec![zero; n as usize]), input.ty(), span)
                     }
-                    Ty::F32 | Ty::I32 | Ty::Bool | Ty::AbstractInt => self.arena.f32(0.0),
+                    Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => self.arena.f32(0.0),
                 }
             }
             Resolved::Input(input) => {

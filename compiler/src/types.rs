@@ -44,6 +44,7 @@ pub struct Types {
     types: HashMap<ExprId, Ty>,
     names: HashMap<ExprId, Resolved>,
     to_f32: HashSet<ExprId>,
+    to_u32: HashSet<ExprId>,
 }
 
 impl Types {
@@ -73,6 +74,16 @@ impl Types {
     /// What the name `e` resolves to.
     pub fn name(&self, e: &Expr) -> Option<Resolved> {
         self.names.get(&ExprId::of(e)).copied()
+    }
+
+    /// Record that the abstract integer expression `e` is a u32 where it is used.
+    pub fn convert_to_u32(&mut self, e: &Expr) {
+        self.to_u32.insert(ExprId::of(e));
+    }
+
+    /// Whether the abstract integer `e` becomes a u32 constant where it is used.
+    pub fn converts_to_u32(&self, e: &Expr) -> bool {
+        self.to_u32.contains(&ExprId::of(e))
     }
 
     /// Whether the abstract integer `e` becomes an f32 constant where it is used.

@@ -216,3 +216,16 @@ fn neighbourhood_reads_are_map_side_and_bounded() {
         &["`neighbour` reads the map around the texel being computed", "fetch(ch, dx, dy)"],
     );
 }
+
+/// `techniques/examples/vsm-bleeding.ron`, the bundled VSM with its bound and its
+/// light-bleeding reduction written as functions, compiles to the same Shade code and the
+/// same operation counts as `techniques/vsm.ron`.
+#[test]
+fn the_vsm_example_written_with_functions_is_the_bundled_vsm() {
+    let example = std::fs::read_to_string(root().join("techniques/examples/vsm-bleeding.ron")).unwrap();
+    let (a, b) = (compile(&vsm()).unwrap(), compile(&example).unwrap_or_else(|e| panic!("{e}")));
+    assert_eq!(a.cost.shade, b.cost.shade);
+    assert_eq!(a.cost.passes, b.cost.passes);
+    let shade = |c: &sshc::Compiled| c.shaders.iter().find(|(f, _)| f.ends_with("shade.wgsl")).unwrap().1.clone();
+    assert_eq!(renumbered(&shade(&a)), renumbered(&shade(&b)).replace("vsm_bleeding", "vsm"));
+}

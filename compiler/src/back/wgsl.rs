@@ -254,7 +254,7 @@ impl<'a> Emitter<'a> {
             let node = self.ir.arena.node(h);
             let leaf = matches!(
                 node,
-                Node::F32(_) | Node::I32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(..)
+                Node::F32(_) | Node::I32(_) | Node::U32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(..)
             );
             if leaf {
                 self.names.insert(h, e);
@@ -293,6 +293,7 @@ impl<'a> Emitter<'a> {
         Ok(match node {
             Node::F32(b) => f32_lit(f32::from_bits(b)),
             Node::I32(v) => i32_lit(v),
+            Node::U32(v) => format!("{v}u"),
             Node::Bool(v) => v.to_string(),
             Node::Param(p) => {
                 self.uses_params = true;
@@ -319,6 +320,7 @@ impl<'a> Emitter<'a> {
             } => self.sample(channel, resource, how, &args, view)?,
             Node::Unary(UnOp::Neg, x) => format!("-{}", self.n(x)),
             Node::Unary(UnOp::Not, x) => format!("!{}", self.n(x)),
+            Node::Unary(UnOp::BitNot, x) => format!("~{}", self.n(x)),
             Node::Binary(op, x, y) => format!("{} {} {}", self.n(x), op.symbol(), self.n(y)),
             Node::Swizzle(x, c) => format!("{}.{}", self.n(x), c.iter().map(|i| COMP[*i as usize]).collect::<String>()),
             Node::Call(f, args) => {
@@ -643,7 +645,7 @@ pub fn params_struct(ir: &Program) -> String {
         let ty = match p.value {
             ConstValue::Float(_) => "f32",
             ConstValue::Int(_) => "i32",
-            ConstValue::Bool(_) => "u32",
+            ConstValue::Bool(_) | ConstValue::Uint(_) => "u32",
         };
         let _ = writeln!(s, "    {}: {ty},", p.name);
     }

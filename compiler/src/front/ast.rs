@@ -52,6 +52,8 @@ impl ScalarTy {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ConstValue {
     Int(i64),
+    /// A u32 (its arithmetic wraps modulo 2^32, at compile time as on the GPU).
+    Uint(u32),
     Float(f64),
     Bool(bool),
 }
@@ -60,6 +62,7 @@ impl ConstValue {
     pub fn as_f64(self) -> f64 {
         match self {
             ConstValue::Int(v) => v as f64,
+            ConstValue::Uint(v) => v as f64,
             ConstValue::Float(v) => v,
             ConstValue::Bool(b) => b as i64 as f64,
         }
@@ -70,6 +73,7 @@ impl std::fmt::Display for ConstValue {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             ConstValue::Int(v) => write!(f, "{v}"),
+            ConstValue::Uint(v) => write!(f, "{v}u"),
             ConstValue::Float(v) => write!(f, "{}", crate::front::expr::fmt_float(*v)),
             ConstValue::Bool(v) => write!(f, "{v}"),
         }
@@ -95,7 +99,7 @@ pub struct Param {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Function {
     pub name: Name,
-    /// In call order: each parameter's name and type (`F32`, `I32`, `Bool`, `Vec2` to `Vec4`).
+    /// In call order: each parameter's name and type (`F32`, `I32`, `U32`, `Bool`, `Vec2` to `Vec4`).
     pub params: Vec<(Name, Spanned<crate::builtins::Ty>)>,
     pub body: Expr,
     pub doc: Option<String>,

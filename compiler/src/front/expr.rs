@@ -31,6 +31,12 @@ enum Tok {
     Float,
     #[regex(r"[0-9]+")]
     Int,
+    /// `123u`, `0x9e3779b9u`: a u32 literal.
+    #[regex(r"[0-9]+u|0[xX][0-9a-fA-F]+u")]
+    Uint,
+    /// `0xff`: an abstract integer written in hexadecimal.
+    #[regex(r"0[xX][0-9a-fA-F]+")]
+    Hex,
     #[regex(r"[A-Za-z_][A-Za-z0-9_]*")]
     Ident,
     #[token("(")]
@@ -75,6 +81,18 @@ enum Tok {
     OrOr,
     #[token("!")]
     Bang,
+    #[token("&")]
+    Amp,
+    #[token("|")]
+    Pipe,
+    #[token("^")]
+    Caret,
+    #[token("<<")]
+    Shl,
+    #[token(">>")]
+    Shr,
+    #[token("~")]
+    Tilde,
     #[token("[")]
     LBracket,
     #[token("]")]
@@ -85,6 +103,18 @@ enum Tok {
 pub enum UnOp {
     Neg,
     Not,
+    /// `~`: the bitwise complement of an integer.
+    BitNot,
+}
+
+impl UnOp {
+    pub fn symbol(self) -> &'static str {
+        match self {
+            UnOp::Neg => "-",
+            UnOp::Not => "!",
+            UnOp::BitNot => "~",
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -102,6 +132,13 @@ pub enum BinOp {
     Ne,
     And,
     Or,
+    /// `&`, `|`, `^`: bitwise, on integers of one type.
+    BitAnd,
+    BitOr,
+    BitXor,
+    /// `<<`, `>>`: an integer shifted by a u32 count below 32 (arithmetic `>>` on i32).
+    Shl,
+    Shr,
 }
 
 impl BinOp {
@@ -120,7 +157,21 @@ impl BinOp {
             BinOp::Ne => "!=",
             BinOp::And => "&&",
             BinOp::Or => "||",
+            BinOp::BitAnd => "&",
+            BinOp::BitOr => "|",
+            BinOp::BitXor => "^",
+            BinOp::Shl => "<<",
+            BinOp::Shr => ">>",
         }
+    }
+
+    /// `&`, `|`, `^`, `<<`, `>>`: defined on integers only.
+    pub fn is_bitwise(self) -> bool {
+        matches!(self, BinOp::BitAnd | BinOp::BitOr | BinOp::BitXor | BinOp::Shl | BinOp::Shr)
+    }
+
+    pub fn is_shift(self) -> bool {
+        matches!(self, BinOp::Shl | BinOp::Shr)
     }
 
     pub fn is_comparison(self) -> bool {
@@ -136,17 +187,23 @@ impl BinOp {
             BinOp::Or => 1,
             BinOp::And => 2,
             BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne => 3,
-            BinOp::Add | BinOp::Sub => 4,
-            BinOp::Mul | BinOp::Div | BinOp::Rem => 5,
+            // as in Rust: bitwise operators bind tighter than comparisons
+            BinOp::BitOr => 4,
+            BinOp::BitXor => 5,
+            BinOp::BitAnd => 6,
+            BinOp::Shl | BinOp::Shr => 7,
+            BinOp::Add | BinOp::Sub => 8,
+            BinOp::Mul | BinOp::Div | BinOp::Rem => 9,
         }
     }
 }
 
-/// A literal as written: integer literals are abstract (they become f32 or i32 by context,
-/// as in WGSL), float literals are f32.
+/// A literal as written: integer literals are abstract (they become f32, i32 or u32 by
+/// context, as in WGSL), float literals are f32, `u`-suffixed literals u32.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Literal {
     Int(i64),
+    Uint(u32),
     Float(f64),
     Bool(bool),
 }
@@ -278,11 +335,13 @@ impl fmt::Display for Expr {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match &self.kind {
             ExprKind::Lit(Literal::Int(v)) => write!(f, "{v}"),
+            ExprKind::Lit(Literal::Uint(v)) => write!(f, "{v}u"),
             ExprKind::Lit(Literal::Float(v)) => write!(f, "{}", fmt_float(*v)),
             ExprKind::Lit(Literal::Bool(v)) => write!(f, "{v}"),
             ExprKind::Name(n) => write!(f, "{n}"),
             ExprKind::Unary(UnOp::Neg, a) => write!(f, "-({a})"),
             ExprKind::Unary(UnOp::Not, a) => write!(f, "!({a})"),
+            ExprKind::Unary(UnOp::BitNot, a) => write!(f, "~({a})"),
             ExprKind::Binary(op, a, b) => write!(f, "({a} {} {b})", op.symbol()),
             ExprKind::Call { name, args, .. } => {
                 write!(f, "{name}(")?;
@@ -334,7 +393,7 @@ pub fn parse(lit: &StrLit) -> Result<Expr, Diagnostic> {
                     format!("unexpected character `{}` in expression", &text[lex.span()].escape_debug()),
                 )
                 .at(lit.map_span(span), "not part of the expression language")
-                .help("expressions use numbers, names, `+ - * / %`, comparisons, `&& || !`, calls `f(x)`, `let x = e;` and `sum(k in a..=b, e)`"));
+                .help("expressions use numbers, names, `+ - * / %`, comparisons, `&& || !`, bit operations `& | ^ ~ << >>`, calls `f(x)`, `let x = e;` and `sum(k in a..=b, e)`"));
             }
         }
     }
@@ -519,8 +578,16 @@ impl Parser<'_> {
             Tok::Ne => BinOp::Ne,
             Tok::AndAnd => BinOp::And,
             Tok::OrOr => BinOp::Or,
+            Tok::Amp => BinOp::BitAnd,
+            Tok::Pipe => BinOp::BitOr,
+            Tok::Caret => BinOp::BitXor,
+            Tok::Shl => BinOp::Shl,
+            Tok::Shr => BinOp::Shr,
             Tok::Float
             | Tok::Int
+            | Tok::Uint
+            | Tok::Hex
+            | Tok::Tilde
             | Tok::Ident
             | Tok::LParen
             | Tok::RParen
@@ -564,9 +631,13 @@ impl Parser<'_> {
     fn unary(&mut self) -> Result<Expr, Diagnostic> {
         self.enter()?;
         let r = match self.peek() {
-            Some(Tok::Minus) | Some(Tok::Bang) => {
+            Some(Tok::Minus | Tok::Bang | Tok::Tilde) => {
                 let (t, span) = self.bump().unwrap_or((Tok::Minus, Span::UNDEFINED));
-                let op = if t == Tok::Minus { UnOp::Neg } else { UnOp::Not };
+                let op = match t {
+                    Tok::Minus => UnOp::Neg,
+                    Tok::Bang => UnOp::Not,
+                    _ => UnOp::BitNot,
+                };
                 let a = self.unary()?;
                 let span = self.map(span).join(a.span);
                 self.node(ExprKind::Unary(op, Box::new(a)), span)
@@ -600,6 +671,29 @@ impl Parser<'_> {
                 Ok(v) if v <= i32::MAX as i64 + 1 => self.node(ExprKind::Lit(Literal::Int(v)), fspan),
                 _ => Err(Diagnostic::error(Phase::Syntax, format!("integer literal `{text}` does not fit in i32")).at(fspan, "too large")),
             },
+            Tok::Hex => match i64::from_str_radix(&text[2..], 16) {
+                Ok(v) if v <= i32::MAX as i64 => self.node(ExprKind::Lit(Literal::Int(v)), fspan),
+                _ => Err(
+                    Diagnostic::error(Phase::Syntax, format!("integer literal `{text}` does not fit in i32"))
+                        .at(fspan, "too large")
+                        .help(format!("a u32 takes the suffix `u`: `{text}u`")),
+                ),
+            },
+            Tok::Uint => {
+                let digits = &text[..text.len() - 1];
+                let v = match digits.strip_prefix("0x").or_else(|| digits.strip_prefix("0X")) {
+                    Some(hex) => u32::from_str_radix(hex, 16),
+                    None => digits.parse::<u32>(),
+                };
+                match v {
+                    Ok(v) => self.node(ExprKind::Lit(Literal::Uint(v)), fspan),
+                    Err(_) => Err(
+                        Diagnostic::error(Phase::Syntax, format!("integer literal `{text}` does not fit in u32"))
+                            .at(fspan, "too large")
+                            .note(format!("a u32 lies from 0 to {}", u32::MAX)),
+                    ),
+                }
+            }
             Tok::Float => match text.parse::<f64>() {
                 Ok(v) if v.is_finite() && v.abs() <= f32::MAX as f64 => self.node(ExprKind::Lit(Literal::Float(v)), fspan),
                 _ => Err(Diagnostic::error(Phase::Syntax, format!("float literal `{text}` does not fit in f32")).at(fspan, "too large")),
@@ -684,6 +778,12 @@ impl Parser<'_> {
             | Tok::Ne
             | Tok::AndAnd
             | Tok::OrOr
+            | Tok::Amp
+            | Tok::Pipe
+            | Tok::Caret
+            | Tok::Shl
+            | Tok::Shr
+            | Tok::Tilde
             | Tok::Bang => {
                 self.pos -= 1;
                 Err(self.err_here("a value"))

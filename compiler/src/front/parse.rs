@@ -344,18 +344,26 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
     })
 }
 
-/// A value type of the expression language: `F32`, `I32`, `Bool`, `Vec2` to `Vec4`.
+/// A value type of the expression language: `F32`, `I32`, `U32`, `Bool`, `Vec2` to `Vec4`.
 fn value_ty(v: &Node, what: &str) -> Result<Spanned<crate::builtins::Ty>, Diagnostic> {
     use crate::builtins::Ty;
     let (t, span) = variant(v)?;
     let ty = match t.as_str() {
         "F32" => Ty::F32,
         "I32" => Ty::I32,
+        "U32" => Ty::U32,
         "Bool" => Ty::Bool,
         "Vec2" => Ty::Vec(2),
         "Vec3" => Ty::Vec(3),
         "Vec4" => Ty::Vec(4),
-        _ => return Err(unknown_variant(span, &t, what, &["F32", "I32", "Bool", "Vec2", "Vec3", "Vec4"])),
+        _ => {
+            return Err(unknown_variant(
+                span,
+                &t,
+                what,
+                &["F32", "I32", "U32", "Bool", "Vec2", "Vec3", "Vec4"],
+            ));
+        }
     };
     Ok(Spanned::new(ty, v.span))
 }

@@ -147,6 +147,7 @@ fn nodes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
         match a.node(h) {
             Node::F32(_) => expect(Ty::F32, "an f32 constant")?,
             Node::I32(_) => expect(Ty::I32, "an i32 constant")?,
+            Node::U32(_) => expect(Ty::U32, "a u32 constant")?,
             Node::Bool(_) => expect(Ty::Bool, "a bool constant")?,
             Node::Param(p) => {
                 let Some(param) = ir.params.get(*p) else {
@@ -195,7 +196,8 @@ fn nodes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
                 match op {
                     UnOp::Neg if matches!(t, Ty::F32 | Ty::I32 | Ty::Vec(_)) => expect(t, "a negation of its operand's type")?,
                     UnOp::Not if t == Ty::Bool => expect(Ty::Bool, "`!`")?,
-                    UnOp::Neg | UnOp::Not => return bad(format!("`{op:?}` of {t}")),
+                    UnOp::BitNot if matches!(t, Ty::I32 | Ty::U32) => expect(t, "`~` of its operand's type")?,
+                    UnOp::Neg | UnOp::Not | UnOp::BitNot => return bad(format!("`{op:?}` of {t}")),
                 }
             }
             Node::Binary(op, x, y) => {
@@ -205,8 +207,19 @@ fn nodes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
                         return bad(format!("`{}` of {tx} and {ty_}", op.symbol()));
                     }
                     expect(Ty::Bool, "a logic operation")?;
+                } else if op.is_shift() {
+                    // an integer shifted by a u32 count
+                    if !matches!(tx, Ty::I32 | Ty::U32) || ty_ != Ty::U32 {
+                        return bad(format!("`{}` of {tx} by {ty_}", op.symbol()));
+                    }
+                    expect(tx, "the shifted operand's type")?;
+                } else if op.is_bitwise() {
+                    if tx != ty_ || !matches!(tx, Ty::I32 | Ty::U32) {
+                        return bad(format!("`{}` between {tx} and {ty_}", op.symbol()));
+                    }
+                    expect(tx, "the type of its operands")?;
                 } else if op.is_comparison() {
-                    let same = tx == ty_ && matches!(tx, Ty::F32 | Ty::I32)
+                    let same = tx == ty_ && matches!(tx, Ty::F32 | Ty::I32 | Ty::U32)
                         || (tx == Ty::Bool && ty_ == Ty::Bool && matches!(op, BinOp::Eq | BinOp::Ne));
                     if !same {
                         return bad(format!("`{}` between {tx} and {ty_}", op.symbol()));
@@ -215,7 +228,7 @@ fn nodes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
                 } else {
                     // arithmetic: one type, or a scalar f32 beside a vector
                     let result = match (tx, ty_) {
-                        (t, u) if t == u && matches!(t, Ty::F32 | Ty::I32 | Ty::Vec(_)) => Some(t),
+                        (t, u) if t == u && matches!(t, Ty::F32 | Ty::I32 | Ty::U32 | Ty::Vec(_)) => Some(t),
                         (Ty::Vec(n), Ty::F32) | (Ty::F32, Ty::Vec(n)) => Some(Ty::Vec(n)),
                         _ => None,
                     };
@@ -265,6 +278,7 @@ fn root<S: SlotView>(ir: &Program<S>, h: H, at: &str, map: bool) -> Result<(), V
             Node::Sample { .. } => map,
             Node::F32(_)
             | Node::I32(_)
+            | Node::U32(_)
             | Node::Bool(_)
             | Node::Param(_)
             | Node::Input(..)
