@@ -499,10 +499,13 @@ impl Arena {
                 Node::Bool(b) => *b as i32 as f64,
                 Node::Unary(UnOp::Neg, x) => -get(x),
                 Node::Unary(UnOp::Not, x) => (get(x) == 0.0) as i32 as f64,
-                Node::Unary(UnOp::BitNot, x) => match self.ty(n) {
-                    Ty::U32 => !(get(x) as u32) as f64,
-                    _ => !(get(x) as i32) as f64,
-                },
+                Node::Unary(UnOp::BitNot, x) => {
+                    if self.ty(n) == Ty::U32 {
+                        !(get(x) as u32) as f64
+                    } else {
+                        !(get(x) as i32) as f64
+                    }
+                }
                 // integer operations of u32 (and bit operations of i32) with their wrapping
                 Node::Binary(op, x, y) if self.ty(n) == Ty::U32 || op.is_bitwise() => {
                     let (x, y) = (get(x), get(y));
@@ -548,7 +551,7 @@ impl Arena {
                         .iter()
                         .map(|x| match self.ty(*x) {
                             t @ (Ty::I32 | Ty::U32) => int_const(get(x), t),
-                            _ => Float(get(x)),
+                            Ty::F32 | Ty::Bool | Ty::Vec(_) | Ty::AbstractInt => Float(get(x)),
                         })
                         .collect();
                     eval_call_f64(*f, &args).unwrap_or(f64::NAN)

@@ -633,10 +633,12 @@ impl Parser<'_> {
         let r = match self.peek() {
             Some(Tok::Minus | Tok::Bang | Tok::Tilde) => {
                 let (t, span) = self.bump().unwrap_or((Tok::Minus, Span::UNDEFINED));
-                let op = match t {
-                    Tok::Minus => UnOp::Neg,
-                    Tok::Bang => UnOp::Not,
-                    _ => UnOp::BitNot,
+                let op = if t == Tok::Minus {
+                    UnOp::Neg
+                } else if t == Tok::Bang {
+                    UnOp::Not
+                } else {
+                    UnOp::BitNot
                 };
                 let a = self.unary()?;
                 let span = self.map(span).join(a.span);
