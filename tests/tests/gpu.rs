@@ -894,28 +894,29 @@ fn pcg3d_noise(x: i32, y: i32, k: i32) -> f32 {
     (v[0] >> 8) as f32 / 16_777_216.0
 }
 
-/// The `pixel` and `frame` inputs and `noise` (issue 17): a Shade whose visibility is
-/// `noise(pixel.x, pixel.y, f32(frame))` gives, at every pixel it lights, the CPU
-/// reference of the stated hash bit for bit (24 bits of an integer, exact in f32), for
-/// frames 0 and 1, forward and deferred.
-#[test]
-fn pixel_frame_and_noise_give_the_stated_hash_per_pixel_and_frame() {
+/// Renders the visibility expression `visibility` (over a depth channel `z`) on the contact
+/// scene under each Shade schedule, frames 0 and 1, and asserts that every lit pixel
+/// holds the CPU reference `pcg3d_noise(x, y, frame)` bit for bit (24 bits of an integer,
+/// exact in f32), and that most surface pixels are lit.
+fn assert_pcg3d_per_pixel(visibility: &str, schedules: &[&str]) {
     let gpu = gpu();
-    let src = r#"Technique(
-    name: "noisy",
-    channels: { "z": Channel(precision: F32) },
+    let src = format!(
+        r#"Technique(
+    name: "hashed",
+    channels: {{ "z": Channel(precision: F32) }},
     passes: [
         Depth(name: "depth", writes: "shadow", channel: "z"),
-        Shade(name: "shade", reads: ["shadow"], visibility: "noise(pixel.x, pixel.y, f32(frame)) + 0.0 * nearest(z)"),
+        Shade(name: "shade", reads: ["shadow"], visibility: "{visibility}"),
     ],
-)"#;
+)"#
+    );
     let s = scene("contact", 32, 64);
-    for schedule in ["fragment", "compute"] {
+    for schedule in schedules {
         let opts = sshc::CompileOptions {
-            schedule: vec![("shade".into(), schedule.into())],
+            schedule: vec![("shade".into(), schedule.to_string())],
             ..Default::default()
         };
-        let c = sshc::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("noisy.ron", src)));
+        let c = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render("hashed.ron", &src)));
         let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
         ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&s, &c.graph).unwrap()).unwrap();
         for frame in 0..2 {
@@ -947,15 +948,21 @@ fn pixel_frame_and_noise_give_the_stated_hash_per_pixel_and_frame() {
     }
 }
 
+/// The `pixel` and `frame` inputs and `noise` (issue 17): a Shade whose visibility is
+/// `noise(pixel.x, pixel.y, f32(frame))` gives, at every pixel it lights, the CPU
+/// reference of the stated hash, for frames 0 and 1, forward and deferred.
+#[test]
+fn pixel_frame_and_noise_give_the_stated_hash_per_pixel_and_frame() {
+    assert_pcg3d_per_pixel("noise(pixel.x, pixel.y, f32(frame)) + 0.0 * nearest(z)", &["fragment", "compute"]);
+}
+
 /// `u32` and the bit operators on the GPU (issue 17): PCG3D written in the language
 /// (wrapping products, `^`, `>>`, conversions between f32, i32 and u32) gives the
-/// built-in `noise` bit for bit, at every lit pixel of frames 0 and 1 (the CPU reference
-/// `pcg3d_noise` states both); its arithmetic `>>` of an i32 and its `&`, `|`, `~` on i32
-/// bits give the CPU's values too (their result is folded into the check so that a wrong
-/// bit makes the visibility differ).
+/// built-in `noise` bit for bit, at every lit pixel of frames 0 and 1; its arithmetic
+/// `>>` of an i32 and its `&`, `|`, `~` on i32 bits give the CPU's values too (a wrong
+/// one turns the visibility into 2, clamped to 1, which is not the hash).
 #[test]
 fn a_hash_written_with_u32_operations_matches_the_builtin_noise() {
-    let gpu = gpu();
     let hash = "let hx = u32(i32(floor(pixel.x))) * 1664525u + 1013904223u; \
          let hy = u32(i32(floor(pixel.y))) * 1664525u + 1013904223u; \
          let hk = u32(frame) * 1664525u + 1013904223u; \
@@ -965,42 +972,7 @@ fn a_hash_written_with_u32_operations_matches_the_builtin_noise() {
          let s = -i32(pixel.x) - 1; \
          let ok = (s >> 1u) == -((i32(pixel.x) + 2) / 2) && (~s) == i32(pixel.x) && (s & 1) == (1 - (i32(pixel.x) & 1)) && (s | 1) == select(s, s + 1, (s & 1) == 0); \
          select(2.0, f32(cx >> 8u) / 16777216.0, ok) + 0.0 * nearest(z)";
-    let src = format!(
-        r#"Technique(
-    name: "hashed",
-    channels: {{ "z": Channel(precision: F32) }},
-    passes: [
-        Depth(name: "depth", writes: "shadow", channel: "z"),
-        Shade(name: "shade", reads: ["shadow"], visibility: "{hash}"),
-    ],
-)"#
-    );
-    let s = scene("contact", 32, 64);
-    let c = sshc::compile_str(&src, &sshc::CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("hashed.ron", &src)));
-    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&s, &c.graph).unwrap()).unwrap();
-    for frame in 0..2 {
-        ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-        let vis = ex.read_camera(CameraOutput::Visibility).unwrap();
-        let pos = ex.read_camera(CameraOutput::Position).unwrap();
-        let (mut lit, mut surface) = (0, 0);
-        for y in 0..vis.height {
-            for x in 0..vis.width {
-                if pos.at(x, y)[0].is_nan() {
-                    continue;
-                }
-                surface += 1;
-                let v = vis.at(x, y)[0];
-                // 0 where the receiver faces away from the light
-                if v != 0.0 {
-                    lit += 1;
-                    let want = pcg3d_noise(x as i32, y as i32, frame);
-                    assert_eq!(v.to_bits(), want.to_bits(), "frame {frame}, ({x}, {y}): {v} against {want}");
-                }
-            }
-        }
-        assert!(2 * lit > surface, "{lit} of {surface} pixels lit");
-    }
+    assert_pcg3d_per_pixel(hash, &["fragment"]);
 }
 
 /// `sample_at(ch, du, dv)` (issue 17): a bilinear tap at an offset. One texel to the right,
