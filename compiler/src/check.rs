@@ -1202,7 +1202,11 @@ impl<'s, 'a> Typer<'s, 'a> {
                     return Err(
                         Self::err(e.span, format!("integer literal {v} does not fit in i32"), "out of i32 range")
                             .note(format!("integers are i32: from {} to {}", i32::MIN, i32::MAX))
-                            .help(format!("write it as a float literal: `{v}.0`")),
+                            .help(if u32::try_from(*v).is_ok() {
+                                format!("write it as a float literal (`{v}.0`), or as a u32 (`{v}u`)")
+                            } else {
+                                format!("write it as a float literal: `{v}.0`")
+                            }),
                     );
                 }
                 Ok(Ty::AbstractInt)

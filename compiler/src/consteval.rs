@@ -41,6 +41,30 @@ pub fn unary(op: UnOp, v: ConstValue) -> Option<ConstValue> {
     }
 }
 
+/// A comparison of two constants of one type (`None` for another operator).
+fn compare<T: PartialOrd>(op: BinOp, x: T, y: T) -> Option<ConstValue> {
+    Some(Bool(match op {
+        BinOp::Lt => x < y,
+        BinOp::Le => x <= y,
+        BinOp::Gt => x > y,
+        BinOp::Ge => x >= y,
+        BinOp::Eq => x == y,
+        BinOp::Ne => x != y,
+        BinOp::Add
+        | BinOp::Sub
+        | BinOp::Mul
+        | BinOp::Div
+        | BinOp::Rem
+        | BinOp::And
+        | BinOp::Or
+        | BinOp::BitAnd
+        | BinOp::BitOr
+        | BinOp::BitXor
+        | BinOp::Shl
+        | BinOp::Shr => return None,
+    }))
+}
+
 /// A shift count: below 32 (WGSL refuses a constant count of 32 or more).
 fn shift_count(y: ConstValue) -> Option<u32> {
     let c = match y {
@@ -71,12 +95,7 @@ pub fn binary(op: BinOp, x: ConstValue, y: ConstValue) -> Option<ConstValue> {
             BinOp::Mul => Float(x * y),
             BinOp::Div if y != 0.0 => Float(x / y),
             BinOp::Rem if y != 0.0 => Float(x % y),
-            BinOp::Lt => Bool(x < y),
-            BinOp::Le => Bool(x <= y),
-            BinOp::Gt => Bool(x > y),
-            BinOp::Ge => Bool(x >= y),
-            BinOp::Eq => Bool(x == y),
-            BinOp::Ne => Bool(x != y),
+            BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne => compare(op, x, y)?,
             BinOp::Div | BinOp::Rem | BinOp::And | BinOp::Or => return None,
             BinOp::BitAnd | BinOp::BitOr | BinOp::BitXor | BinOp::Shl | BinOp::Shr => return None,
         },
@@ -86,12 +105,7 @@ pub fn binary(op: BinOp, x: ConstValue, y: ConstValue) -> Option<ConstValue> {
             BinOp::Mul => Uint(x.wrapping_mul(y)),
             BinOp::Div if y != 0 => Uint(x / y),
             BinOp::Rem if y != 0 => Uint(x % y),
-            BinOp::Lt => Bool(x < y),
-            BinOp::Le => Bool(x <= y),
-            BinOp::Gt => Bool(x > y),
-            BinOp::Ge => Bool(x >= y),
-            BinOp::Eq => Bool(x == y),
-            BinOp::Ne => Bool(x != y),
+            BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne => compare(op, x, y)?,
             BinOp::BitAnd => Uint(x & y),
             BinOp::BitOr => Uint(x | y),
             BinOp::BitXor => Uint(x ^ y),
@@ -103,12 +117,7 @@ pub fn binary(op: BinOp, x: ConstValue, y: ConstValue) -> Option<ConstValue> {
             BinOp::Mul => Int(x.checked_mul(y)?),
             BinOp::Div if y != 0 => Int(x / y),
             BinOp::Rem if y != 0 => Int(x % y),
-            BinOp::Lt => Bool(x < y),
-            BinOp::Le => Bool(x <= y),
-            BinOp::Gt => Bool(x > y),
-            BinOp::Ge => Bool(x >= y),
-            BinOp::Eq => Bool(x == y),
-            BinOp::Ne => Bool(x != y),
+            BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne => compare(op, x, y)?,
             // on the i32 bits
             BinOp::BitAnd => Int(((x as i32) & (y as i32)) as i64),
             BinOp::BitOr => Int(((x as i32) | (y as i32)) as i64),

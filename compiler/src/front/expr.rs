@@ -671,7 +671,13 @@ impl Parser<'_> {
         match tok {
             Tok::Int => match text.parse::<i64>() {
                 Ok(v) if v <= i32::MAX as i64 + 1 => self.node(ExprKind::Lit(Literal::Int(v)), fspan),
-                _ => Err(Diagnostic::error(Phase::Syntax, format!("integer literal `{text}` does not fit in i32")).at(fspan, "too large")),
+                _ => Err(
+                    Diagnostic::error(Phase::Syntax, format!("integer literal `{text}` does not fit in i32"))
+                        .at(fspan, "too large")
+                        .help(format!(
+                            "write a float literal (`{text}.0`), or a u32 below 2^32 with the suffix `u` (`{text}u`)"
+                        )),
+                ),
             },
             Tok::Hex => match i64::from_str_radix(&text[2..], 16) {
                 Ok(v) if v <= i32::MAX as i64 => self.node(ExprKind::Lit(Literal::Int(v)), fspan),
