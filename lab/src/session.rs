@@ -77,6 +77,10 @@ pub struct Overrides {
     /// Override the scene's camera size, WIDTHxHEIGHT.
     #[arg(long, value_parser = size)]
     pub size: Option<(u32, u32)>,
+    /// Keep only the scene's first K lights (to measure time and memory against the number
+    /// of lights).
+    #[arg(long, value_name = "K")]
+    pub lights: Option<usize>,
 }
 
 impl Overrides {
@@ -85,6 +89,16 @@ impl Overrides {
     pub fn load<'g>(&self, gpu: &'g Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor<'g>), String> {
         let path = scene;
         let mut scene = load_scene(path, self.size, self.shadow_map)?;
+        if let Some(k) = self.lights {
+            let n = scene.lights.len();
+            if k == 0 || k > n {
+                return Err(format!(
+                    "error: `--lights {k}`: {} has {n} light(s); keep between 1 and {n}",
+                    path.display()
+                ));
+            }
+            scene.lights.truncate(k);
+        }
         if let Some(fit) = self.fit {
             scene.set_shadow_fit(fit).map_err(|e| e.to_string())?;
             scene.check_precision().map_err(|e| e.to_string())?;
@@ -268,8 +282,8 @@ pub fn compile_executor<'g>(gpu: &'g Gpu, path: &Path, source: &str, opts: &sshc
     Executor::new(gpu, c.graph, c.shaders).map_err(rt)
 }
 
-/// `scene` with its light `i` alone (issue 16: a scene of several lights is rendered one
-/// light at a time, each with its own light views and truth).
+/// `scene` with its light `i` alone (issue 16: each light of a scene has its own light
+/// views, passes and truth).
 pub fn single_light(scene: &Scene, i: usize) -> Scene {
     let mut s = scene.clone();
     s.lights = vec![scene.lights[i].clone()];

@@ -572,57 +572,148 @@ fn scene_specialisation_is_recorded_explained_and_enforced() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// Several lights (issue 16): `render` runs the graph once per light, each alone in the
-/// scene: light i's visibility file is byte for byte a render of the scene with that light
-/// only; the memory peak is one light's; `compare` gives each light its own truth and error.
+/// Several lights (issue 16): `render` gives each light its own passes and textures in one
+/// frame and combines them on the GPU. Channel i of the visibility file is, bit for bit, a
+/// render of the scene with light i alone; the image is the mean of the lights' images
+/// within one 8-bit quantum (the mean of three 8-bit values lies between two codes, and the
+/// GPU's store may round to either); the textures grow linearly: three lights hold three
+/// lights' textures plus the combining step's; `--lights K` keeps the first K lights;
+/// `compare` gives each light its own truth and error.
 #[test]
-fn each_light_of_a_scene_renders_and_compares_alone() {
+fn each_light_of_a_scene_renders_with_its_own_passes_and_compares_alone() {
     let dir = std::env::temp_dir().join(format!("sshc-lights-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let p = |name: &str| dir.join(name).to_string_lossy().into_owned();
     let small = ["--size", "24x24", "--shadow-map", "64"];
-    let out = ok(&[
+    let render = |scene: &str, vis: &str, png: &str, extra: &[&str]| {
+        ok(&[
+            &[
+                "render",
+                "techniques/pcf.ron",
+                "--scene",
+                scene,
+                "--visibility",
+                &p(vis),
+                "-o",
+                &p(png),
+            ][..],
+            &small[..],
+            extra,
+        ]
+        .concat())
+    };
+    let out = render("scenes/three-lights.ron", "v.pfm", "v.png", &[]);
+    assert!(out.contains("| 1 | Sphere |") && out.contains("| 2 | DistantDisk |"), "{out}");
+    // each light alone, from the same file with the other lights removed (compiled for any
+    // scene, as the three-light scene of several kinds is)
+    let text = std::fs::read_to_string(root().join("scenes/three-lights.ron")).unwrap();
+    let (head, rest) = text.split_once("    lights: [").unwrap();
+    let (lights, tail) = rest.split_once("\n    ],").unwrap();
+    // the lights' lines: a rectangle over several lines, then one line each
+    let rect_end = lights.find("        ),").unwrap() + "        ),".len();
+    let alone = [
+        &lights[..rect_end],
+        lights[rect_end..].lines().nth(1).unwrap(),
+        lights[rect_end..].lines().nth(2).unwrap(),
+    ];
+    let combined = read_pfm(&dir.join("v.pfm"));
+    assert!(combined.color, "three lights: one channel each");
+    let png = |name: &str| image::open(dir.join(name)).unwrap().to_rgb8();
+    let mean_png = png("v.png");
+    let mut sum = vec![0.0f64; mean_png.as_raw().len()];
+    let mut one_peak = None;
+    for (i, light) in alone.iter().enumerate() {
+        let file = format!("l{i}.ron");
+        std::fs::write(dir.join(&file), format!("{head}    lights: [\n{light}\n    ],{tail}")).unwrap();
+        let o = render(&p(&file), &format!("l{i}.pfm"), &format!("l{i}.png"), &["--generic"]);
+        one_peak.get_or_insert(number_after("| peak (all textures resident) |", &o));
+        let single = read_pfm(&dir.join(format!("l{i}.pfm")));
+        assert!(!single.color);
+        let channel: Vec<f32> = combined.data.chunks_exact(3).map(|c| c[i]).collect();
+        assert_eq!(channel, single.data, "light {i}: channel {i} is that light alone, bit for bit");
+        for (s, v) in sum.iter_mut().zip(png(&format!("l{i}.png")).as_raw()) {
+            *s += *v as f64;
+        }
+    }
+    let worst = sum
+        .iter()
+        .zip(mean_png.as_raw())
+        .map(|(s, v)| (s / 3.0 - *v as f64).abs())
+        .fold(0.0, f64::max);
+    assert!(worst <= 1.0, "the image is the lights' mean within one 8-bit code: {worst} codes");
+    // three lights: three lights' textures (every light's map has the same size) and the
+    // combining step's: per pixel, each light's visibility (4 bytes) and colour (4 bytes),
+    // then the combined colour (4) and visibilities (16)
+    let peak = number_after("| peak (all textures resident) |", &out);
+    assert_eq!(peak, 3.0 * one_peak.unwrap() + (24.0 * 24.0) * (3.0 * 8.0 + 20.0), "{out}");
+    // the first two lights: two channels written, the third 0
+    let two = render("scenes/three-lights.ron", "v2.pfm", "v2.png", &["--lights", "2"]);
+    assert!(two.contains("| 1 | Sphere |") && !two.contains("| 2 |"), "{two}");
+    let v2 = read_pfm(&dir.join("v2.pfm"));
+    assert!(v2.data.chunks_exact(3).all(|c| c[2] == 0.0));
+    let e = refused(
         &[
             "render",
             "techniques/pcf.ron",
             "--scene",
             "scenes/three-lights.ron",
-            "--visibility",
-            &p("v.pfm"),
+            "--lights",
+            "4",
             "-o",
-            &p("v.png"),
-        ][..],
-        &small[..],
-    ]
-    .concat());
-    assert!(out.contains("| 1 | Sphere |") && out.contains("| 2 | DistantDisk |"), "{out}");
-    let peak = |out: &str| out.lines().find(|l| l.starts_with("| peak")).map(str::to_string);
-    // the sphere alone, from the same file with the other lights removed
-    let text = std::fs::read_to_string(root().join("scenes/three-lights.ron")).unwrap();
-    let (head, rest) = text.split_once("    lights: [").unwrap();
-    let (_, tail) = rest.split_once("\n    ],").unwrap();
-    let sphere = text.lines().find(|l| l.trim_start().starts_with("Sphere(")).unwrap();
-    std::fs::write(dir.join("sphere.ron"), format!("{head}    lights: [\n{sphere}\n    ],{tail}")).unwrap();
-    let alone = ok(&[
-        &[
-            "render",
-            "techniques/pcf.ron",
-            "--scene",
-            &p("sphere.ron"),
-            "--visibility",
-            &p("s.pfm"),
-            "-o",
-            &p("s.png"),
-        ][..],
-        &small[..],
-    ]
-    .concat());
-    assert_eq!(
-        std::fs::read(dir.join("v.light1.pfm")).unwrap(),
-        std::fs::read(dir.join("s.pfm")).unwrap()
+            &p("x.png"),
+        ],
+        60,
     );
-    assert_ne!(std::fs::read(dir.join("v.pfm")).unwrap(), std::fs::read(dir.join("s.pfm")).unwrap());
-    assert_eq!(peak(&out), peak(&alone), "the textures are reused from light to light");
+    assert!(
+        e.contains("`--lights 4`: scenes/three-lights.ron has 3 light(s); keep between 1 and 3"),
+        "{e}"
+    );
+    // four lights render; their visibility does not fit a PFM's three channels; five are
+    // more than one frame combines
+    let sphere = alone[1];
+    let four = format!("{head}    lights: [\n{lights}\n{sphere}\n    ],{tail}");
+    std::fs::write(dir.join("four.ron"), four).unwrap();
+    let o = ok(&[
+        &["render", "techniques/pcf.ron", "--scene", &p("four.ron"), "-o", &p("4.png")][..],
+        &small[..],
+    ]
+    .concat());
+    assert!(o.contains("| 3 | Sphere |"), "{o}");
+    let e = refused(
+        &[
+            &[
+                "render",
+                "techniques/pcf.ron",
+                "--scene",
+                &p("four.ron"),
+                "--visibility",
+                &p("4.pfm"),
+                "-o",
+                &p("4.png"),
+            ][..],
+            &small[..],
+        ]
+        .concat(),
+        60,
+    );
+    assert!(
+        e.contains("a PFM holds one channel per light, at most 3") && e.contains("has 4 lights"),
+        "{e}"
+    );
+    std::fs::write(
+        dir.join("five.ron"),
+        format!("{head}    lights: [\n{lights}\n{sphere}\n{sphere}\n    ],{tail}"),
+    )
+    .unwrap();
+    let e = refused(
+        &[
+            &["render", "techniques/pcf.ron", "--scene", &p("five.ron"), "-o", &p("5.png")][..],
+            &small[..],
+        ]
+        .concat(),
+        60,
+    );
+    assert!(e.contains("5 light(s) bound: a frame combines 1 to 4 lights"), "{e}");
     let cmp = ok(&[
         &[
             "compare",

@@ -5,6 +5,7 @@ use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
 use crate::graph::{self, Format, PassGraph, TextureDecl};
 use crate::image::{Image, read_back, read_table};
+use crate::lights::{Combine, MAX_LIGHTS};
 use crate::resources::{Resources, f32_bytes, mip_count};
 use crate::steps::{self, Group0, PassNode, Stamps};
 use crate::validate::validate_wgsl;
@@ -79,7 +80,10 @@ pub fn read_capped(path: &Path, cap: u64) -> Result<String> {
 /// GPU time of each pass of one frame, in milliseconds (None without timestamp queries).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameTimes {
+    /// Each pass's time, summed over the lights when several are bound.
     pub passes: Vec<(String, Option<f64>)>,
+    /// Each light's time: the sum of its passes (one entry when one light is bound).
+    pub lights: Vec<Option<f64>>,
 }
 
 /// The camera outputs of the Shade pass.
@@ -118,7 +122,10 @@ pub struct Executor<'g> {
     params: Vec<u8>,
     params_buf: Option<wgpu::Buffer>,
     sampler: wgpu::Sampler,
-    bound: Option<Resources>,
+    /// The resources of each bound light (one for `bind_scene`; see [`Executor::bind_lights`]).
+    bound: Vec<Resources>,
+    /// Several lights: the step that combines their shaded images.
+    combine: Option<Combine>,
     timestamps: Option<Timestamps>,
     /// Linear depth written into the Depth pass's output instead of rasterising the scene.
     depth_override: Option<Vec<f32>>,
@@ -282,28 +289,7 @@ impl<'g> Executor<'g> {
                 mapped_at_creation: false,
             })
         });
-        let timestamps = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
-            let n = (graph.passes.len() * 2) as u32;
-            Timestamps {
-                set: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
-                    label: Some("pass times"),
-                    ty: wgpu::QueryType::Timestamp,
-                    count: n,
-                }),
-                resolve: gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("timestamps"),
-                    size: n as u64 * 8,
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                }),
-                read: gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("timestamps read"),
-                    size: n as u64 * 8,
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                }),
-            }
-        });
+        let timestamps = timestamps(gpu, graph.passes.len());
         Ok(Executor {
             gpu,
             graph,
@@ -311,7 +297,8 @@ impl<'g> Executor<'g> {
             params,
             params_buf,
             sampler,
-            bound: None,
+            bound: Vec::new(),
+            combine: None,
             timestamps,
             depth_override: None,
             max_bytes: 4 << 30,
@@ -346,21 +333,86 @@ impl<'g> Executor<'g> {
     /// Create the scene's buffers and every texture at the scene's sizes, then bind every
     /// step node to them.
     pub fn bind_scene(&mut self, s: &SceneInputs) -> Result<()> {
+        self.bind_lights(std::slice::from_ref(s))
+    }
+
+    /// Bind a scene of several lights (issue 16): `lights[l]` is the scene with light `l`
+    /// alone. Each light gets its own resources (its light-dependent textures, its camera
+    /// outputs: memory grows linearly with the lights), every pass runs once per light in
+    /// each frame, and a last compute step combines the lights' shaded colours (their mean)
+    /// and gathers their visibilities, one channel per light ([`crate::lights`]). At most
+    /// [`MAX_LIGHTS`]; every light's camera must have the same size.
+    pub fn bind_lights(&mut self, lights: &[SceneInputs]) -> Result<()> {
         let gpu = self.gpu;
-        self.bound = None;
+        self.bound = Vec::new();
+        self.combine = None;
+        if lights.is_empty() || lights.len() > MAX_LIGHTS {
+            return Err(RuntimeError::Param(format!(
+                "{} light(s) bound: a frame combines 1 to {MAX_LIGHTS} lights (their visibilities share one RGBA texel a pixel)",
+                lights.len()
+            )));
+        }
+        if let Some(s) = lights.iter().find(|s| s.camera_size != lights[0].camera_size) {
+            return Err(RuntimeError::Param(format!(
+                "the lights' cameras differ ({} x {} against {} x {}): lights are combined pixel by pixel",
+                s.camera_size.0, s.camera_size.1, lights[0].camera_size.0, lights[0].camera_size.1
+            )));
+        }
+        // one timestamp pair per pass and light, in one query set
+        let steps = self.graph.passes.len() * lights.len();
+        if steps > MAX_PASSES {
+            return Err(RuntimeError::Limit {
+                what: format!(
+                    "technique `{}`: passes times lights (two GPU timestamps each, one query set)",
+                    self.graph.technique
+                ),
+                needed: steps as u64,
+                limit: MAX_PASSES as u64,
+            });
+        }
+        let mut used = 0u64;
+        let mut bound = Vec::new();
+        for (l, s) in lights.iter().enumerate() {
+            let res = self.bind_light(s, l, self.max_bytes.saturating_sub(used))?;
+            used += self.light_bytes(&res);
+            bound.push(res);
+        }
+        if lights.len() > 1 {
+            let camera = lights[0].camera_size;
+            let need = used.saturating_add(Combine::bytes(camera, lights.len()));
+            if need > self.max_bytes {
+                return Err(RuntimeError::Limit {
+                    what: format!("textures of {} lights at this scene's sizes (bytes)", lights.len()),
+                    needed: need,
+                    limit: self.max_bytes,
+                });
+            }
+            self.combine = Some(Combine::new(gpu, camera, lights.len())?);
+        }
+        if self.timestamps.is_some() {
+            self.timestamps = timestamps(gpu, steps);
+        }
+        self.bound = bound;
+        Ok(())
+    }
+
+    /// Create light `l`'s resources and bind every step node to them.
+    fn bind_light(&mut self, s: &SceneInputs, l: usize, max_bytes: u64) -> Result<Resources> {
+        let gpu = self.gpu;
         // a graph specialised for a scene's light kind folded inputs another kind needs
         if let Some(facts) = &self.graph.specialised
             && s.light != Some(facts.light)
         {
             return Err(RuntimeError::Param(format!(
-                "technique `{}` was specialised for the {} light of scene {}, but this scene's light is {}; compile it for this scene (`--scene`) or without one",
+                "technique `{}` was specialised for the {} light of scene {}, but this scene's light{} is {}; compile it for this scene (`--scene`) or without one",
                 self.graph.technique,
                 facts.light.name(),
                 facts.scene,
+                if l > 0 { format!(" {l}") } else { String::new() },
                 s.light.map_or("not given (`SceneInputs::light`)", |k| k.name())
             )));
         }
-        let res = Resources::new(gpu, &self.graph, s, self.max_bytes)?;
+        let res = Resources::new(gpu, &self.graph, s, max_bytes)?;
         if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
             return Err(RuntimeError::Param(format!(
                 "technique `{}` renders {} light-sample view(s), but the scene gives {} (`SceneInputs::samples`)",
@@ -378,18 +430,27 @@ impl<'g> Executor<'g> {
         };
         gpu.scoped("binding the passes to the scene", || -> Result<()> {
             for node in self.passes.iter_mut().flat_map(|p| &mut p.steps) {
-                node.bind(gpu, &res, &shared)?;
+                node.bind(gpu, &res, &shared, l)?;
             }
             Ok(())
         })??;
-        self.bound = Some(res);
-        Ok(())
+        Ok(res)
+    }
+
+    /// Bytes of the graph's textures on one light's resources ([`Executor::memory`]).
+    fn light_bytes(&self, res: &Resources) -> u64 {
+        self.texture_bytes(res).iter().map(|t| t.1).sum()
     }
 
     fn bound(&self) -> Result<&Resources> {
         self.bound
-            .as_ref()
+            .first()
             .ok_or_else(|| RuntimeError::NotFound("no scene is bound: call bind_scene first".into()))
+    }
+
+    /// Lights bound ([`Executor::bind_lights`]); 0 before a scene is bound.
+    pub fn lights(&self) -> usize {
+        self.bound.len()
     }
 
     /// Replace the Depth pass: its output takes these linear depths (row-major, row 0 first,
@@ -400,8 +461,7 @@ impl<'g> Executor<'g> {
     }
 
     /// Upload the depth override into the Depth pass's output.
-    fn write_depth_override(&self, pass: &graph::PassDecl, depth: &[f32]) -> Result<()> {
-        let b = self.bound()?;
+    fn write_depth_override(&self, b: &Resources, pass: &graph::PassDecl, depth: &[f32]) -> Result<()> {
         let n = b.shadow_size as usize;
         if depth.len() != n * n {
             return Err(RuntimeError::Param(format!(
@@ -452,65 +512,77 @@ impl<'g> Executor<'g> {
         })
     }
 
-    /// Run every pass once. Returns the GPU time of each pass when timestamps are available.
+    /// Run every pass once, for each bound light, then combine the lights. Returns the GPU
+    /// time of each pass (summed over the lights) and of each light when timestamps are
+    /// available.
     pub fn run_frame(&mut self) -> Result<FrameTimes> {
         let gpu = self.gpu;
         if let Some(buf) = &self.params_buf {
             gpu.queue.write_buffer(buf, 0, &self.params);
         }
-        let res = self.bound()?;
-        // the `frame` input: frames run since the scene was bound, in every `Frame` buffer
-        let counters = [res.frames_run.get() as f32, 0.0, 0.0, 0.0];
+        self.bound()?;
         let at = graph::FRAME_FIELDS
             .iter()
             .position(|f| f.name == "counters")
             .map(|i| graph::frame_offset(i) as u64)
             .ok_or_else(|| RuntimeError::NotFound("no `counters` field in the Frame uniform".into()))?;
-        for buf in std::iter::once(&res.frame).chain(&res.sample_frames) {
-            gpu.queue.write_buffer(buf, at, &crate::resources::f32_bytes(&counters));
+        for res in &self.bound {
+            // the `frame` input: frames run since the scene was bound, in every `Frame` buffer
+            let counters = [res.frames_run.get() as f32, 0.0, 0.0, 0.0];
+            for buf in std::iter::once(&res.frame).chain(&res.sample_frames) {
+                gpu.queue.write_buffer(buf, at, &crate::resources::f32_bytes(&counters));
+            }
+            res.frames_run.set(res.frames_run.get() + 1);
         }
-        res.frames_run.set(res.frames_run.get() + 1);
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        let n = self.graph.passes.len();
         gpu.scoped("recording the frame", || -> Result<()> {
-            for (pi, (pass, decl)) in self.passes.iter().zip(&self.graph.passes).enumerate() {
-                if pass.kind == graph::PassKind::Depth
-                    && let Some(depth) = &self.depth_override
-                {
-                    self.write_depth_override(decl, depth)?;
-                    continue;
+            for (l, res) in self.bound.iter().enumerate() {
+                for (pi, (pass, decl)) in self.passes.iter().zip(&self.graph.passes).enumerate() {
+                    if pass.kind == graph::PassKind::Depth
+                        && let Some(depth) = &self.depth_override
+                    {
+                        self.write_depth_override(res, decl, depth)?;
+                        continue;
+                    }
+                    // The pass's first render or compute pass writes its start, the last its
+                    // end. A per-sample pass records all its steps for one view, then the next.
+                    let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
+                    let recording: Vec<_> = (0..views)
+                        .flat_map(|v| {
+                            pass.steps
+                                .iter()
+                                .filter(move |n| n.passes() > 0 && v < n.views())
+                                .map(move |n| (n, v))
+                        })
+                        .collect();
+                    let last = recording.len().saturating_sub(1);
+                    let q = 2 * (l * n + pi) as u32;
+                    for (i, (node, view)) in recording.into_iter().enumerate() {
+                        let stamps = self.timestamps.as_ref().map(|t| Stamps {
+                            set: &t.set,
+                            begin: (i == 0).then_some(q),
+                            end: (i == last).then_some(q + 1),
+                        });
+                        node.record(&mut encoder, res, stamps, l, view)?;
+                    }
                 }
-                // The pass's first render or compute pass writes its start, the last its end.
-                // A per-sample pass records all its steps for one view, then the next.
-                let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
-                let recording: Vec<_> = (0..views)
-                    .flat_map(|v| {
-                        pass.steps
-                            .iter()
-                            .filter(move |n| n.passes() > 0 && v < n.views())
-                            .map(move |n| (n, v))
-                    })
-                    .collect();
-                let last = recording.len().saturating_sub(1);
-                for (i, (node, view)) in recording.into_iter().enumerate() {
-                    let stamps = self.timestamps.as_ref().map(|t| Stamps {
-                        set: &t.set,
-                        begin: (i == 0).then_some(2 * pi as u32),
-                        end: (i == last).then_some(2 * pi as u32 + 1),
-                    });
-                    node.record(&mut encoder, res, stamps, view)?;
-                }
+            }
+            if let Some(c) = &self.combine {
+                c.record(&mut encoder, &self.bound);
             }
             Ok(())
         })??;
+        let queries = (n * self.bound.len() * 2) as u32;
         if let Some(t) = &self.timestamps {
-            let n = (self.graph.passes.len() * 2) as u32;
-            encoder.resolve_query_set(&t.set, 0..n, &t.resolve, 0);
-            encoder.copy_buffer_to_buffer(&t.resolve, 0, &t.read, 0, n as u64 * 8);
+            encoder.resolve_query_set(&t.set, 0..queries, &t.resolve, 0);
+            encoder.copy_buffer_to_buffer(&t.resolve, 0, &t.read, 0, queries as u64 * 8);
         }
         gpu.scoped("submitting the frame", || gpu.queue.submit([encoder.finish()]))?;
-        let times = match &self.timestamps {
+        // each light's time of each pass
+        let per_light: Vec<Vec<Option<f64>>> = match &self.timestamps {
             Some(t) => {
                 let raw = gpu.map_read(&t.read)?;
                 let ticks: Vec<u64> = raw
@@ -518,18 +590,28 @@ impl<'g> Executor<'g> {
                     .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
                     .collect();
                 let period = gpu.queue.get_timestamp_period() as f64;
-                self.passes
-                    .iter()
-                    .enumerate()
-                    .map(|(i, p)| {
-                        let (a, z) = (ticks[2 * i], ticks[2 * i + 1]);
-                        (p.name.clone(), (z >= a && a > 0).then(|| (z - a) as f64 * period * 1e-6))
+                (0..self.bound.len())
+                    .map(|l| {
+                        (0..n)
+                            .map(|i| {
+                                let (a, z) = (ticks[2 * (l * n + i)], ticks[2 * (l * n + i) + 1]);
+                                (z >= a && a > 0).then(|| (z - a) as f64 * period * 1e-6)
+                            })
+                            .collect()
                     })
                     .collect()
             }
-            None => self.passes.iter().map(|p| (p.name.clone(), None)).collect(),
+            None => vec![vec![None; n]; self.bound.len()],
         };
-        Ok(FrameTimes { passes: times })
+        Ok(FrameTimes {
+            passes: self
+                .passes
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.name.clone(), per_light.iter().map(|t| t[i]).sum()))
+                .collect(),
+            lights: per_light.iter().map(|t| t.iter().copied().sum()).collect(),
+        })
     }
 
     /// Read one layer and mip level of a texture of the graph.
@@ -562,13 +644,33 @@ impl<'g> Executor<'g> {
 
     /// Read a camera output of the Shade pass. The visibility (and the colour, computed from
     /// it) is refused where it is not finite or lies outside [0, 1] (`check_visibility`).
+    /// With several lights, the colour is the lights' combination and the other outputs are
+    /// light 0's ([`Executor::read_light_camera`] reads another light's,
+    /// [`Executor::read_visibilities`] every light's visibility).
     pub fn read_camera(&self, which: CameraOutput) -> Result<Image> {
+        if let (CameraOutput::Color, Some(c)) = (which, &self.combine) {
+            // the colour is computed from every light's visibility
+            for l in 0..self.bound.len() {
+                self.read_light_camera(l, CameraOutput::Visibility)?;
+            }
+            let (w, h) = self.bound()?.camera_size;
+            return read_back(self.gpu, &c.color, 0, 0, w, h, Format::Rgba8Unorm);
+        }
+        self.read_light_camera(0, which)
+    }
+
+    /// Read a camera output of light `light`'s Shade (that light alone).
+    pub fn read_light_camera(&self, light: usize, which: CameraOutput) -> Result<Image> {
         if which == CameraOutput::Color {
             // The shaded colour is computed from the visibility: a visibility the check
             // refuses is not passed on through the colour either.
-            self.read_camera(CameraOutput::Visibility)?;
+            self.read_light_camera(light, CameraOutput::Visibility)?;
         }
-        let b = self.bound()?;
+        self.bound()?;
+        let b = self
+            .bound
+            .get(light)
+            .ok_or_else(|| RuntimeError::NotFound(format!("light {light} is not bound ({} light(s) are)", self.bound.len())))?;
         let (w, h) = b.camera_size;
         let format = match which {
             CameraOutput::Visibility => Format::R32Float,
@@ -578,31 +680,64 @@ impl<'g> Executor<'g> {
         };
         let img = read_back(self.gpu, &b.camera[which as usize], 0, 0, w, h, format)?;
         if which == CameraOutput::Visibility {
-            let shade = self
-                .graph
-                .passes
-                .iter()
-                .rev()
-                .find(|p| p.kind == graph::PassKind::Shade)
-                .map_or("shade", |p| p.name.as_str());
-            check_visibility(&img.channel(0), w, shade)?;
+            check_visibility(&img.channel(0), w, self.shade_name())?;
         }
         Ok(img)
     }
 
+    /// Every light's visibility, channel `l` for light `l` (the combining step's gathering
+    /// with several lights; light 0's visibility in channel 0 with one), checked as
+    /// [`Executor::read_camera`] checks one.
+    pub fn read_visibilities(&self) -> Result<Image> {
+        let Some(c) = &self.combine else {
+            return self.read_light_camera(0, CameraOutput::Visibility);
+        };
+        let (w, h) = self.bound()?.camera_size;
+        let img = read_back(self.gpu, &c.visibility, 0, 0, w, h, Format::Rgba32Float)?;
+        for l in 0..self.bound.len() {
+            check_visibility(&img.channel(l), w, self.shade_name())?;
+        }
+        Ok(img)
+    }
+
+    fn shade_name(&self) -> &str {
+        self.graph
+            .passes
+            .iter()
+            .rev()
+            .find(|p| p.kind == graph::PassKind::Shade)
+            .map_or("shade", |p| p.name.as_str())
+    }
+
     /// Bytes of every texture at the bound sizes: (name, bytes); transient ones included.
+    /// With several lights, each light's textures (named `texture (light l)`) and the
+    /// combining step's.
     pub fn memory(&self) -> Result<Vec<(String, u64)>> {
-        let b = self.bound()?;
+        let first = self.texture_bytes(self.bound()?);
+        if self.bound.len() == 1 {
+            return Ok(first);
+        }
+        let mut all = Vec::new();
+        for (l, res) in self.bound.iter().enumerate() {
+            all.extend(self.texture_bytes(res).into_iter().map(|(n, b)| (format!("{n} (light {l})"), b)));
+        }
+        all.push((
+            "lights' colours and visibilities, combined (camera size)".to_string(),
+            Combine::bytes(first_camera(&self.bound), self.bound.len()),
+        ));
+        Ok(all)
+    }
+
+    fn texture_bytes(&self, b: &Resources) -> Vec<(String, u64)> {
         let texels = b.shadow_size as u64 * b.shadow_size as u64;
-        Ok(self
-            .graph
+        self.graph
             .textures
             .iter()
             .map(|t: &TextureDecl| {
                 let per = t.format.bytes_per_texel() as u64 * t.array_layers() as u64 * texels;
                 (t.name.clone(), if t.mips { per * 4 / 3 } else { per })
             })
-            .collect())
+            .collect()
     }
 
     /// What the last frame generated into buffer `name` (a Geometry pass's records): read
@@ -646,6 +781,36 @@ impl<'g> Executor<'g> {
     pub fn gpu(&self) -> &Gpu {
         self.gpu
     }
+}
+
+/// One query set for the passes' start and end times, `steps` passes (passes times lights).
+fn timestamps(gpu: &Gpu, steps: usize) -> Option<Timestamps> {
+    gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
+        let n = (steps * 2) as u32;
+        Timestamps {
+            set: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass times"),
+                ty: wgpu::QueryType::Timestamp,
+                count: n,
+            }),
+            resolve: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: n as u64 * 8,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            read: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps read"),
+                size: n as u64 * 8,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+        }
+    })
+}
+
+fn first_camera(bound: &[Resources]) -> (u32, u32) {
+    bound.first().map_or((0, 0), |b| b.camera_size)
 }
 
 fn param_bytes(ty: graph::ParamType, v: f64) -> [u8; 4] {

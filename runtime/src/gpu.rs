@@ -27,5 +27,6 @@ pub use crate::executor::{
 };
 pub use crate::frame::{SampleView, SceneInputs};
 pub use crate::image::Image;
+pub use crate::lights::MAX_LIGHTS;
 pub use crate::resources::mip_count;
 pub use crate::validate::validate_wgsl;

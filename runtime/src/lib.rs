@@ -12,6 +12,7 @@ mod executor;
 mod frame;
 pub mod gpu;
 mod image;
+mod lights;
 mod pipeline;
 mod resources;
 mod steps;

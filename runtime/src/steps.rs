@@ -38,8 +38,10 @@ pub(crate) struct StepNode {
     /// Layers per view of each texture it writes (a per-sample pass writes view k's
     /// layer l at `k * layers + l`).
     view_layers: Vec<u32>,
-    /// Bind groups, views and draw arguments at the bound scene's sizes, one per view.
-    bound: Vec<Bound>,
+    /// Bind groups, views and draw arguments at the bound scene's sizes: per light (the
+    /// light-dependent passes run once per scene light, each on its own resources), one per
+    /// view.
+    bound: Vec<Vec<Bound>>,
 }
 
 enum NodeKind {
@@ -487,14 +489,18 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
 }
 
 impl StepNode {
-    /// Create the bind groups, attachment views and draw arguments at `res`'s sizes.
-    pub fn bind(&mut self, gpu: &Gpu, res: &Resources, shared: &Group0) -> Result<()> {
-        self.bound = Vec::new();
+    /// Create the bind groups, attachment views and draw arguments at `res`'s sizes, for
+    /// light `light` (light 0 forgets what was bound before; the others are added in order).
+    pub fn bind(&mut self, gpu: &Gpu, res: &Resources, shared: &Group0, light: usize) -> Result<()> {
+        if light == 0 {
+            self.bound = Vec::new();
+        }
+        debug_assert_eq!(self.bound.len(), light, "lights are bound in order");
         let mut bound = Vec::new();
         for view in 0..self.views {
             bound.push(self.bind_view(gpu, res, shared, view)?);
         }
-        self.bound = bound;
+        self.bound.push(bound);
         Ok(())
     }
 
@@ -818,7 +824,7 @@ impl StepNode {
     /// Number of render or compute passes the node records per frame (0 for a mip chain
     /// of one level).
     pub fn passes(&self) -> usize {
-        match self.bound.first() {
+        match self.bound.first().and_then(|b| b.first()) {
             Some(Bound::Raster { passes, .. }) => passes.len(),
             Some(Bound::Compute { .. }) => 1,
             None => 0,
@@ -827,14 +833,22 @@ impl StepNode {
 
     /// Views the node records (one per light sample in a per-sample pass).
     pub fn views(&self) -> u32 {
-        self.bound.len() as u32
+        self.bound.first().map_or(0, |b| b.len() as u32)
     }
 
     /// Record the node's passes; `stamps.begin` goes to its first pass, `stamps.end` to its last.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, res: &Resources, stamps: Option<Stamps>, view: u32) -> Result<()> {
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        res: &Resources,
+        stamps: Option<Stamps>,
+        light: usize,
+        view: u32,
+    ) -> Result<()> {
         let bound = self
             .bound
-            .get(view as usize)
+            .get(light)
+            .and_then(|b| b.get(view as usize))
             .ok_or_else(|| RuntimeError::NotFound("no scene is bound: call bind_scene first".into()))?;
         match (&self.kind, bound, &self.pipeline.pipeline) {
             (

@@ -18,7 +18,7 @@ pub struct RenderArgs {
     #[arg(short, long, default_value = "render.png")]
     out: PathBuf,
     /// The visibility buffer: one-channel float PFM at camera resolution (1 where no surface
-    /// is seen); with several lights, light i > 0's goes to `NAME.light<i>.pfm`.
+    /// is seen); with several lights (at most 3), a three-channel PFM, channel i light i's.
     #[arg(long)]
     visibility: Option<PathBuf>,
     /// World-space position of the surface seen at each pixel: three-channel PFM (NaN where none).
@@ -49,13 +49,6 @@ fn median(v: &[f64]) -> f64 {
     v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
-/// `vis.pfm` for light 0, `vis.light1.pfm` for light 1, ...
-fn per_light_path(p: &Path, i: usize) -> PathBuf {
-    let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let ext = p.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
-    p.with_file_name(format!("{stem}.light{i}{ext}"))
-}
-
 /// Bytes of the copy that measures the bandwidth, and how many times it runs.
 const BANDWIDTH_COPY_BYTES: u64 = 64 << 20;
 const BANDWIDTH_RUNS: usize = 5;
@@ -68,10 +61,35 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
     }
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
-    let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
-    ex.bind_scene(&inputs).map_err(rt)?;
+    // Several lights (issue 16): each light gets its own resources and passes in the same
+    // frame, and the GPU combines their shaded images (`Executor::bind_lights`).
+    let n_lights = scene.lights.len().max(1);
+    if let Some(p) = &a.visibility
+        && n_lights > 3
+    {
+        return Err(format!(
+            "error: --visibility {}: a PFM holds one channel per light, at most 3; {} has {n_lights} lights (keep 3 with `--lights 3`)",
+            p.display(),
+            a.scene.display()
+        ));
+    }
+    let inputs = (0..n_lights)
+        .map(|i| {
+            let alone = if scene.lights.len() > 1 {
+                crate::session::single_light(&scene, i)
+            } else {
+                scene.clone()
+            };
+            crate::bind::scene_inputs_for(&alone, &ex.graph).map_err(|e| match scene.lights.len() {
+                1 => format!("error: {e}"),
+                _ => format!("error: light {i}: {e}"),
+            })
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    ex.bind_lights(&inputs).map_err(rt)?;
     let mut all: Vec<Vec<Option<f64>>> = Vec::new();
     let mut names = Vec::new();
+    let mut light_times: Vec<Vec<f64>> = vec![Vec::new(); n_lights];
     // the wall time of each frame, submission to completion: on lavapipe a compute pass's
     // end timestamp does not wait for its dispatches (docs/gpu.md), so schedules are
     // compared there by this
@@ -83,70 +101,34 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         walls.push(start.elapsed().as_secs_f64() * 1e3);
         names = t.passes.iter().map(|p| p.0.clone()).collect();
         all.push(t.passes.into_iter().map(|p| p.1).collect());
+        for (l, ms) in t.lights.iter().enumerate() {
+            if let (Some(ms), Some(v)) = (ms, light_times.get_mut(l)) {
+                v.push(*ms);
+            }
+        }
     }
-    let mut color = ex.read_camera(CameraOutput::Color).map_err(rt)?;
+    let color = ex.read_camera(CameraOutput::Color).map_err(rt)?;
     if let Some(p) = &a.visibility {
-        ex.read_camera(CameraOutput::Visibility)
-            .map_err(rt)?
-            .write_pfm_gray(p, 0)
-            .map_err(rt)?;
-        println!("wrote {}", p.display());
-    }
-    // Several lights (issue 16): the graph runs once per light, that light alone in the
-    // scene, on the same textures (rebinding replaces them: the peak stays one light's);
-    // the image is the mean of the lights' shaded images, and each light's visibility
-    // goes to its own file.
-    let mut lights = vec![(scene.lights.first().map(|l| l.kind().name()).unwrap_or("none"), median(&walls))];
-    let first = (names.clone(), all.clone(), walls.clone());
-    for i in 1..scene.lights.len() {
-        let alone = crate::session::single_light(&scene, i);
-        let inputs = crate::bind::scene_inputs_for(&alone, &ex.graph).map_err(|e| format!("error: light {i}: {e}"))?;
-        ex.bind_scene(&inputs).map_err(|e| format!("error: light {i}: {}", rt(e)))?;
-        let mut w = Vec::new();
-        for _ in 0..a.frames.max(1) {
-            let start = std::time::Instant::now();
-            ex.run_frame().map_err(rt)?;
-            gpu.wait().map_err(rt)?;
-            w.push(start.elapsed().as_secs_f64() * 1e3);
-        }
-        lights.push((scene.lights[i].kind().name(), median(&w)));
-        let c = ex.read_camera(CameraOutput::Color).map_err(rt)?;
-        for (a, b) in color.rgba.iter_mut().zip(&c.rgba) {
-            for k in 0..3 {
-                a[k] += b[k];
-            }
-        }
-        if let Some(p) = &a.visibility {
-            let file = per_light_path(p, i);
-            ex.read_camera(CameraOutput::Visibility)
-                .map_err(rt)?
-                .write_pfm_gray(&file, 0)
-                .map_err(rt)?;
-            println!("wrote {} (light {i})", file.display());
+        let vis = ex.read_visibilities().map_err(rt)?;
+        if n_lights == 1 {
+            vis.write_pfm_gray(p, 0).map_err(rt)?;
+            println!("wrote {}", p.display());
+        } else {
+            vis.write_pfm_rgb(p).map_err(rt)?;
+            println!("wrote {} (channel i: light i's visibility)", p.display());
         }
     }
-    let (names, all, mut walls) = first;
-    if lights.len() > 1 {
-        // back to light 0, whose tables follow
-        ex.bind_scene(&inputs).map_err(rt)?;
-        ex.run_frame().map_err(rt)?;
-        let n = lights.len() as f32;
-        for px in color.rgba.iter_mut() {
-            for v in px.iter_mut().take(3) {
-                *v /= n;
-            }
-        }
+    if n_lights > 1 {
         println!(
-            "| light | kind | frame wall ms (median of {} frame(s)) |\n|---|---|---|",
+            "| light | kind | GPU ms, its passes (median of {} frame(s)) |\n|---|---|---|",
             a.frames.max(1)
         );
-        for (i, (kind, ms)) in lights.iter().enumerate() {
-            println!("| {i} | {kind} | {ms:.3} |");
+        for (i, l) in scene.lights.iter().enumerate() {
+            let ms = light_times.get(i).filter(|v| !v.is_empty()).map(|v| format!("{:.3}", median(v)));
+            println!("| {i} | {} | {} |", l.kind().name(), ms.as_deref().unwrap_or("-"));
         }
         println!(
-            "lights: {}, frame wall time {:.3} ms in all; the tables below are light 0's",
-            lights.len(),
-            lights.iter().map(|l| l.1).sum::<f64>()
+            "lights: {n_lights}, each with its own passes and textures in one frame, combined on the GPU; the pass times below are summed over the lights"
         );
     }
     color.write_png(&a.out, None, (0.0, 1.0)).map_err(rt)?;
@@ -163,8 +145,11 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         dump(&ex, dir).map_err(rt)?;
     }
     println!("device: {}", gpu.describe());
-    if let Some(light) = scene.lights.first() {
-        println!("{}", scene.fit_report(light));
+    for (i, light) in scene.lights.iter().enumerate() {
+        match scene.lights.len() {
+            1 => println!("{}", scene.fit_report(light)),
+            _ => println!("light {i}: {}", scene.fit_report(light)),
+        }
     }
     // Every texture is allocated when the scene is bound and lives for the whole frame, so
     // the peak is the sum.

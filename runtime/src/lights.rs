@@ -1,0 +1,183 @@
+//! Several lights in one frame (issue 16): the graph's passes run once per scene light,
+//! each light on its own resources (its shadow maps, its camera outputs), and then one
+//! compute step combines the lights' shaded images into the frame's colour and gathers
+//! their visibilities into one texel a pixel, channel `l` for light `l`.
+//!
+//! The combination: light `l`'s Shade wrote its shaded colour `c_l` (that light alone); the
+//! frame's colour is their mean, `(c_0 + ... + c_{n-1}) / n`, each light weighted equally (the
+//! lights of a scene share one intensity; the mean keeps the image in [0, 1] as one light's
+//! is). The lights' colours and visibilities are first copied into the layers of two array
+//! textures, so the step reads `n` layers with one binding of each.
+
+use crate::device::{Gpu, Result, RuntimeError};
+use crate::resources::Resources;
+
+/// Most lights one frame combines: the visibilities go into one RGBA texel a pixel (and
+/// `sshc render --visibility` writes them as the channels of one image).
+pub const MAX_LIGHTS: usize = 4;
+
+const COMBINE_WGSL: &str = "
+@group(0) @binding(0) var visibility: texture_2d_array<f32>;
+@group(0) @binding(1) var color: texture_2d_array<f32>;
+@group(0) @binding(2) var out_color: texture_storage_2d<rgba8unorm, write>;
+@group(0) @binding(3) var out_visibility: texture_storage_2d<rgba32float, write>;
+
+@compute @workgroup_size(8, 8)
+fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(out_color);
+    if id.x >= size.x || id.y >= size.y {
+        return;
+    }
+    let lights = textureNumLayers(visibility);
+    var c = vec4<f32>(0.0);
+    var v = vec4<f32>(0.0);
+    for (var l = 0u; l < lights; l++) {
+        c += textureLoad(color, id.xy, l, 0);
+        v[l] = textureLoad(visibility, id.xy, l, 0).r;
+    }
+    textureStore(out_color, id.xy, c / f32(lights));
+    textureStore(out_visibility, id.xy, v);
+}
+";
+
+/// The combining step and its textures, at one camera size and number of lights.
+pub(crate) struct Combine {
+    pipeline: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+    /// Layer `l`: light `l`'s visibility (R32Float) and colour (Rgba8Unorm).
+    layers: [wgpu::Texture; 2],
+    /// The frame's colour (Rgba8Unorm) and the lights' visibilities (Rgba32Float).
+    pub color: wgpu::Texture,
+    pub visibility: wgpu::Texture,
+    size: (u32, u32),
+    lights: u32,
+}
+
+impl Combine {
+    /// Bytes of the combining textures at a camera size, for `lights` lights.
+    pub fn bytes(camera: (u32, u32), lights: usize) -> u64 {
+        let pixels = camera.0 as u64 * camera.1 as u64;
+        pixels * (lights as u64 * (4 + 4) + 4 + 16)
+    }
+
+    pub fn new(gpu: &Gpu, camera: (u32, u32), lights: usize) -> Result<Combine> {
+        if !(2..=MAX_LIGHTS).contains(&lights) {
+            return Err(RuntimeError::Limit {
+                what: "lights combined in one frame (one RGBA visibility texel a pixel)".into(),
+                needed: lights as u64,
+                limit: MAX_LIGHTS as u64,
+            });
+        }
+        gpu.scoped("creating the lights' combining step", || {
+            let device = &gpu.device;
+            let texture = |label: &str, format: wgpu::TextureFormat, layers: u32, usage: wgpu::TextureUsages| {
+                device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: camera.0,
+                        height: camera.1,
+                        depth_or_array_layers: layers,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+            };
+            let n = lights as u32;
+            let input = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+            let output = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
+            let layers = [
+                texture("lights' visibility", wgpu::TextureFormat::R32Float, n, input),
+                texture("lights' colour", wgpu::TextureFormat::Rgba8Unorm, n, input),
+            ];
+            let color = texture("combined colour", wgpu::TextureFormat::Rgba8Unorm, 1, output);
+            let visibility = texture("visibility per light", wgpu::TextureFormat::Rgba32Float, 1, output);
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("combine lights"),
+                source: wgpu::ShaderSource::Wgsl(COMBINE_WGSL.into()),
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("combine lights"),
+                layout: None,
+                module: &module,
+                entry_point: Some("combine"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let array = |t: &wgpu::Texture| {
+                t.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                    ..Default::default()
+                })
+            };
+            let (v_in, c_in) = (array(&layers[0]), array(&layers[1]));
+            let (c_out, v_out) = (color.create_view(&Default::default()), visibility.create_view(&Default::default()));
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("combine lights"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&v_in),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&c_in),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(&c_out),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::TextureView(&v_out),
+                    },
+                ],
+            });
+            Combine {
+                pipeline,
+                group,
+                layers,
+                color,
+                visibility,
+                size: camera,
+                lights: n,
+            }
+        })
+    }
+
+    /// Record the copies of every light's visibility and colour into the layers, then the
+    /// combining dispatch.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, lights: &[Resources]) {
+        let extent = wgpu::Extent3d {
+            width: self.size.0,
+            height: self.size.1,
+            depth_or_array_layers: 1,
+        };
+        for (l, res) in lights.iter().enumerate().take(self.lights as usize) {
+            // camera outputs 0 and 1: visibility and colour (`CameraOutput` order)
+            for (k, layers) in self.layers.iter().enumerate() {
+                encoder.copy_texture_to_texture(
+                    res.camera[k].as_image_copy(),
+                    wgpu::TexelCopyTextureInfo {
+                        texture: layers,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d { x: 0, y: 0, z: l as u32 },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    extent,
+                );
+            }
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("combine lights"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.group, &[]);
+        pass.dispatch_workgroups(self.size.0.div_ceil(8), self.size.1.div_ceil(8), 1);
+    }
+}
