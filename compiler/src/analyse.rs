@@ -8,7 +8,7 @@
 
 use crate::builtins::Ty;
 use crate::diag::{Diagnostic, Diagnostics, Phase};
-use crate::front::ast::{ConstValue, Precision, Reduce};
+use crate::front::ast::{ConstValue, LightView, Precision, Reduce};
 use crate::front::expr::{BinOp, UnOp};
 use crate::ir::*;
 use std::collections::HashMap;
@@ -159,6 +159,19 @@ fn mul(a: f64, b: f64) -> f64 {
 /// (no diagnostics). `param_range` overrides the range of one runtime param: the probe
 /// of the largest safe value evaluates the same IR under another environment.
 pub fn slot_ranges(ir: &Ir, param_range: Option<(ParamId, Interval)>) -> Vec<Vec<Interval>> {
+    ranges_from(ir, param_range, false)
+}
+
+/// [`slot_ranges`] with the Depth pass's output narrowed to the scene's depths where the
+/// compilation is specialised for a scene (`SceneFacts::depth_floor`). Only the channels
+/// left to the compiler (`Auto`) are judged on these: an explicit precision keeps the
+/// generic ranges and so the generic encodes, and a specialised build stores what the
+/// generic one stores.
+pub fn scene_slot_ranges(ir: &Ir) -> Vec<Vec<Interval>> {
+    ranges_from(ir, None, true)
+}
+
+fn ranges_from(ir: &Ir, param_range: Option<(ParamId, Interval)>, scene: bool) -> Vec<Vec<Interval>> {
     let mut out: Vec<Vec<Interval>> = ir.resources.iter().map(|r| vec![Interval::UNBOUNDED; r.slots.len()]).collect();
     for pass in &ir.passes {
         let Some(w) = pass.writes else { continue };
@@ -171,7 +184,19 @@ pub fn slot_ranges(ir: &Ir, param_range: Option<(ParamId, Interval)>) -> Vec<Vec
         };
         let mut ranges = Vec::with_capacity(res.slots.len());
         match &pass.kind {
-            IrPassKind::Depth { .. } => ranges.extend(res.slots.iter().map(|_| Interval::UNIT)),
+            IrPassKind::Depth { view } => {
+                // specialised for a scene: the centre view's casters lie at or beyond the
+                // facts' least depth (what no caster covers stays at 1)
+                let floor = match view {
+                    LightView::Center if scene => ir
+                        .specialised
+                        .as_ref()
+                        .and_then(|s| s.facts.depth_floor)
+                        .map_or(0.0, |f| (f as f64).clamp(0.0, 1.0)),
+                    LightView::Center | LightView::PerSample => 0.0,
+                };
+                ranges.extend(res.slots.iter().map(|_| Interval { lo: floor, hi: 1.0 }))
+            }
             IrPassKind::Map | IrPassKind::Geometry { .. } => {
                 let mut env = HashMap::new();
                 for &r in &pass.reads {
@@ -213,6 +238,74 @@ pub fn slot_ranges(ir: &Ir, param_range: Option<(ParamId, Interval)>) -> Vec<Vec
     out
 }
 
+/// The smallest magnitude other than 0 a range may hold (infinite when it straddles 0: its
+/// values may come as near 0 as they like, which the underflow warning leaves alone).
+fn smallest_magnitude(r: Interval) -> f64 {
+    if r.lo > 0.0 {
+        r.lo
+    } else if r.hi < 0.0 {
+        -r.hi
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Choose the precision of every channel left to the compiler (`precision: Auto`, or
+/// `--precision NAME=auto`): F16 where the channel's range, where it is made, fits F16
+/// (at most 65504) and stays clear of F16's subnormals (at least 6.1e-5 in magnitude
+/// when it does not straddle 0), else F32. The range is the one the analysis computes,
+/// so a technique specialised for a scene (`--scene`) is judged on the scene's depths
+/// (`SceneFacts::depth_floor`). The choice weighs range only: how finely a value must be
+/// kept (a depth compared with a small bias) is the author's to state with an explicit
+/// precision. Records one line per channel in `Ir::precision_choices`.
+pub fn choose_precisions(ir: &mut Ir) {
+    if !ir.channels.iter().any(|c| c.precision_auto) {
+        return;
+    }
+    let ranges = scene_slot_ranges(ir);
+    let mut chosen: Vec<(ChannelId, Precision, Interval)> = Vec::new();
+    for (ri, res) in ir.resources.with_handles() {
+        // where the channel is made: the Depth, Map or Geometry pass writing it
+        if matches!(
+            ir.passes[res.writer].kind,
+            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea
+        ) {
+            continue;
+        }
+        for (si, slot) in res.slots.iter().enumerate() {
+            if !ir.channels[slot.channel].precision_auto || chosen.iter().any(|c| c.0 == slot.channel) {
+                continue;
+            }
+            let r = ranges[ri.index()][si];
+            let p = if fits(Precision::F16, r) && smallest_magnitude(r) >= F16_MIN_NORMAL {
+                Precision::F16
+            } else {
+                Precision::F32
+            };
+            chosen.push((slot.channel, p, r));
+        }
+    }
+    for &(c, p, r) in &chosen {
+        ir.channels[c].precision = p;
+        let why = match p {
+            Precision::F16 => "within F16's 65504 and above its smallest normal 6.1e-5".to_string(),
+            Precision::F32 | Precision::Unorm8 | Precision::Unorm16 if r.magnitude() > F16_MAX => "beyond F16's 65504".to_string(),
+            Precision::F32 | Precision::Unorm8 | Precision::Unorm16 => {
+                format!("down to {}, below F16's smallest normal 6.1e-5", short(smallest_magnitude(r)))
+            }
+        };
+        let line = format!("channel `{}` (Auto): {}, spanning {r}, {why}", ir.channels[c].name, p.name());
+        ir.precision_choices.push(line);
+    }
+    for res in ir.resources.iter_mut() {
+        for slot in res.slots.iter_mut() {
+            if let Some(&(_, p, _)) = chosen.iter().find(|c| c.0 == slot.channel) {
+                slot.precision = p;
+            }
+        }
+    }
+}
+
 /// Whether a precision can hold a range.
 pub fn fits(p: Precision, r: Interval) -> bool {
     if r.lo.is_nan() || r.hi.is_nan() {
@@ -245,7 +338,27 @@ pub type Probe<'p> = &'p dyn Fn(ParamId, f64, ResId, usize) -> Option<Interval>;
 /// Ranges and encodings of every slot (a side table: the IR is only read, so the probe
 /// may read it too), and the warnings.
 pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Diagnostics> {
-    let ranges = slot_ranges(ir, None);
+    // channels left to the compiler were chosen on the scene's ranges (`choose_precisions`)
+    let generic = slot_ranges(ir, None);
+    let scene = scene_slot_ranges(ir);
+    let ranges: Vec<Vec<Interval>> = ir
+        .resources
+        .iter()
+        .enumerate()
+        .map(|(ri, res)| {
+            res.slots
+                .iter()
+                .enumerate()
+                .map(|(si, slot)| {
+                    if ir.channels[slot.channel].precision_auto {
+                        scene[ri][si]
+                    } else {
+                        generic[ri][si]
+                    }
+                })
+                .collect()
+        })
+        .collect();
     let mut diags = Diagnostics::default();
     let mut warnings = Vec::new();
     for (ri, res) in ir.resources.with_handles() {

@@ -224,6 +224,12 @@ pub fn explain(c: &Compiled) -> String {
             let _ = writeln!(s, "  {r}");
         }
     }
+    if !c.ir.precision_choices.is_empty() {
+        let _ = writeln!(s, "\nPrecisions chosen by the compiler (by range):");
+        for p in &c.ir.precision_choices {
+            let _ = writeln!(s, "  {p}");
+        }
+    }
     if let Some(sp) = &c.ir.specialised {
         let _ = writeln!(
             s,

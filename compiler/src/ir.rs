@@ -616,6 +616,8 @@ pub struct IrChannel {
     pub precision_span: Span,
     /// The precision came from `--precision` rather than the file.
     pub precision_overridden: bool,
+    /// The precision is left to the compiler (`Auto`): `analyse::choose_precisions` sets it.
+    pub precision_auto: bool,
     pub value: Option<H>,
     pub origin: Origin,
     pub span: Span,
@@ -874,6 +876,9 @@ pub struct Ir {
     pub samples: u32,
     /// The scene it was specialised for (`--scene`), and what that folded.
     pub specialised: Option<Specialised>,
+    /// The precisions left to the compiler (`Auto`) and why each was chosen, one line
+    /// each (`analyse::choose_precisions`; shown by `explain`).
+    pub precision_choices: Vec<String>,
 }
 
 /// A compilation specialised for a scene's facts (issue 16).

@@ -228,7 +228,8 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         if until == Until::Check {
             return Err(Diagnostics::default());
         }
-        let ir = lower::lower(&sym, &checked)?;
+        let mut ir = lower::lower(&sym, &checked)?;
+        analyse::choose_precisions(&mut ir);
         debug_validate(ir::Program::lowered(&ir), "lower");
         if want(DumpPhase::Lower) {
             dump = Some(ir.to_string());

@@ -501,6 +501,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             precision: sym.channel_precision[i],
             precision_span: c.precision.span,
             precision_overridden: sym.channel_precision[i] != c.precision.value,
+            precision_auto: sym.channel_auto[i],
             value: None,
             origin: if c.value.is_some() { Origin::Declared } else { Origin::Depth },
             span: c.span,
@@ -559,6 +560,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     precision: sym.expansion_precision[ei],
                     precision_span: e.precision.span,
                     precision_overridden: sym.expansion_precision[ei] != e.precision.value,
+                    precision_auto: sym.expansion_auto[ei],
                     value: Some(basis),
                     origin: Origin::Basis {
                         expansion: ExpansionId::new(ei),
@@ -696,7 +698,12 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         arena,
         samples: checked.samples,
         specialised: sym.scene.as_ref().map(|facts| Specialised {
-            facts: facts.clone(),
+            // the casters' least depth matters only to precisions left to the compiler: a
+            // graph without one does not assume it (nor does the runtime check it)
+            facts: sshc_graph::SceneFacts {
+                depth_floor: facts.depth_floor.filter(|_| sym.channel_auto.iter().chain(&sym.expansion_auto).any(|&a| a)),
+                ..facts.clone()
+            },
             folded: facts
                 .zero_inputs()
                 .iter()
@@ -714,7 +721,13 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                         "at a finite position"
                     }
                 )))
+                .chain(facts.depth_floor.filter(|_| sym.channel_auto.iter().chain(&sym.expansion_auto).any(|&a| a)).map(|f| {
+                    format!(
+                        "the casters lie at normalised depth {f} or more in the light's view: the Depth pass writes [{f}, 1] (the runtime refuses a scene whose casters come nearer)"
+                    )
+                }))
                 .collect(),
         }),
+        precision_choices: Vec::new(),
     })
 }

@@ -43,6 +43,9 @@ pub struct Symbols<'a> {
     /// Channel and expansion precisions after `--precision` overrides.
     pub channel_precision: Vec<Precision>,
     pub expansion_precision: Vec<Precision>,
+    /// Precisions left to the compiler (`Auto` in the file or `--precision NAME=auto`).
+    pub channel_auto: Vec<bool>,
+    pub expansion_auto: Vec<bool>,
     /// Per pass: its schedule after `--schedule` overrides (None: the compiler's default).
     pub schedules: Vec<Option<Schedule>>,
     /// `--scene`: the facts to specialise for, admitted by the technique's `light:` list.
@@ -65,6 +68,8 @@ impl<'a> Symbols<'a> {
             overridden: self.overridden.clone(),
             channel_precision: self.channel_precision.clone(),
             expansion_precision: self.expansion_precision.clone(),
+            channel_auto: self.channel_auto.clone(),
+            expansion_auto: self.expansion_auto.clone(),
             schedules: self.schedules.clone(),
             scene: self.scene.clone(),
         }
@@ -257,11 +262,15 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
     }
     let mut channel_precision: Vec<Precision> = t.channels.iter().map(|c| c.precision.value).collect();
     let mut expansion_precision: Vec<Precision> = t.expansions.iter().map(|e| e.precision.value).collect();
+    let mut channel_auto: Vec<bool> = t.channels.iter().map(|c| c.precision_auto).collect();
+    let mut expansion_auto: Vec<bool> = t.expansions.iter().map(|e| e.precision_auto).collect();
     for (name, text) in &opts.precision {
-        let Some(p) = Precision::parse(text) else {
+        // `auto`: left to the compiler (F32 until it chooses)
+        let auto = text.trim().eq_ignore_ascii_case("auto");
+        let Some(p) = Precision::parse(text).or(auto.then_some(Precision::F32)) else {
             diags.push(
                 Diagnostic::error(Phase::Cli, format!("`--precision {name}={text}`: unknown precision"))
-                    .note("expected one of: unorm8, unorm16, f16, f32"),
+                    .note("expected one of: unorm8, unorm16, f16, f32, auto"),
             );
             continue;
         };
@@ -269,8 +278,10 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         for one in name.split(',').map(str::trim) {
             if let Some(&i) = channels.get(one) {
                 channel_precision[i] = p;
+                channel_auto[i] = auto;
             } else if let Some(&i) = expansions.get(one) {
                 expansion_precision[i] = p;
+                expansion_auto[i] = auto;
             } else {
                 diags.push(Diagnostic::error(
                     Phase::Cli,
@@ -361,6 +372,8 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         overridden,
         channel_precision,
         expansion_precision,
+        channel_auto,
+        expansion_auto,
         schedules,
         scene: opts.scene.clone(),
     })

@@ -320,14 +320,46 @@ pub struct PassGraph {
 
 /// What a graph specialised for a scene assumes of it (issue 16): the kind of its light,
 /// from which the compiler folds the light inputs that are 0 for every light of that kind
-/// ([`SceneFacts::zero_inputs`]).
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+/// ([`SceneFacts::zero_inputs`]), and the least depth its casters reach in the light's
+/// view, from which it narrows the range of what the Depth pass writes (and so the
+/// precision a channel left open takes).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFacts {
     /// The scene file it was specialised for (for messages).
     pub scene: String,
     /// The kind of the scene's light.
     pub light: LightKind,
+    /// The least normalised depth of the scene's casters in each light's view
+    /// ([`caster_depth_floor`]): the Depth pass writes values in `[depth_floor, 1]`.
+    /// Absent: `[0, 1]` (no caster, or facts from before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_floor: Option<f32>,
+}
+
+/// The least normalised linear depth, `(-(view p).z - near) / (far - near)` clamped to
+/// [0, 1] (the Depth pass's), of the first `casting` vertices of `vertices` (interleaved
+/// position and normal, 6 floats a vertex; `None`: all) under the column-major
+/// `light_view`; `None` without a casting vertex. Depth is affine in position, so a
+/// triangle's least depth inside the view is at least its vertices' least: a lower bound
+/// of what the Depth pass writes where a caster covers a texel (elsewhere it writes 1).
+/// One function for the facts a compilation assumes and the runtime's check of a scene
+/// against them, so both compute the same value.
+pub fn caster_depth_floor(vertices: &[f32], casting: Option<u32>, light_view: &[f32; 16], near: f32, far: f32) -> Option<f32> {
+    let n = casting.map_or(vertices.len() / 6, |c| (c as usize).min(vertices.len() / 6));
+    let span = far - near;
+    if span.is_nan() || span <= 0.0 {
+        return None;
+    }
+    vertices
+        .chunks_exact(6)
+        .take(n)
+        .map(|v| {
+            // row 2 of the column-major matrix: the view-space z
+            let z = light_view[2] * v[0] + light_view[6] * v[1] + light_view[10] * v[2] + light_view[14];
+            ((-z - near) / span).clamp(0.0, 1.0)
+        })
+        .reduce(f32::min)
 }
 
 impl SceneFacts {
@@ -867,6 +899,8 @@ pub enum GraphError {
         pass: String,
         message: String,
     },
+    /// Scene facts (`specialised`) no scene can have.
+    Facts(String),
 }
 
 impl fmt::Display for GraphError {
@@ -883,6 +917,7 @@ impl fmt::Display for GraphError {
             ),
             GraphError::Reference { pass, name } => write!(f, "pass `{pass}` refers to texture `{name}`, which the graph does not declare"),
             GraphError::Param { param, message } => write!(f, "param `{param}`: {message}"),
+            GraphError::Facts(message) => write!(f, "the scene facts the graph was specialised for: {message}"),
             GraphError::Duplicate { what, name } => {
                 // "two passes", "two textures", "two params"
                 let plural = if what.ends_with('s') { "es" } else { "s" };
@@ -1041,6 +1076,11 @@ impl PassGraph {
             }
         }
         g.check_order()?;
+        if let Some(f) = g.specialised.as_ref().and_then(|s| s.depth_floor)
+            && !(0.0..=1.0).contains(&f)
+        {
+            return Err(GraphError::Facts(format!("`depth_floor` {f} is not a normalised depth in [0, 1]")));
+        }
         Ok(g)
     }
 
@@ -1526,6 +1566,49 @@ mod tests {
         assert!(e.to_string().contains("outside its range"), "{e}");
         let e = changed("range: Some((0.0, 1.0)),", "range: Some((0.0, inf)),").unwrap_err();
         assert!(matches!(&e, GraphError::Param { param, .. } if param == "bias"), "{e}");
+    }
+
+    #[test]
+    fn scene_facts_round_trip_and_a_depth_floor_outside_0_1_is_refused() {
+        let mut g = tiny();
+        let facts = |depth_floor| SceneFacts {
+            scene: "scenes/contact.ron".into(),
+            light: LightKind::Sphere,
+            depth_floor,
+        };
+        g.specialised = Some(facts(Some(0.25)));
+        assert_eq!(PassGraph::from_ron(&g.to_ron()).unwrap().specialised, Some(facts(Some(0.25))));
+        // absent: the facts of graphs from before the field
+        g.specialised = Some(facts(None));
+        assert!(!g.to_ron().contains("depth_floor"));
+        assert_eq!(PassGraph::from_ron(&g.to_ron()).unwrap().specialised, Some(facts(None)));
+        for bad in [-0.5, 1.5, f32::NAN, f32::INFINITY] {
+            g.specialised = Some(facts(Some(bad)));
+            let e = PassGraph::from_ron(&g.to_ron()).unwrap_err();
+            assert!(
+                matches!(e, GraphError::Facts(_)) && e.to_string().contains("depth_floor"),
+                "{bad}: {e}"
+            );
+        }
+    }
+
+    /// The casters' least depth: vertices in front of the near plane clamp to 0, the
+    /// non-casting ones are skipped, no caster gives none.
+    #[test]
+    fn caster_depth_floor_takes_the_least_normalised_depth_of_the_casters() {
+        // identity view: view-space z is the world z; depth = (-z - near) / (far - near)
+        let mut view = [0.0f32; 16];
+        for i in 0..4 {
+            view[5 * i] = 1.0;
+        }
+        let vertex = |z: f32| [0.0, 0.0, z, 0.0, 1.0, 0.0];
+        let vertices: Vec<f32> = [-3.0, -5.0, -2.0, -1.5].iter().flat_map(|&z| vertex(z)).collect();
+        // near 1, far 5: depths 0.5, 1.0, 0.25, 0.125
+        assert_eq!(caster_depth_floor(&vertices, Some(3), &view, 1.0, 5.0), Some(0.25));
+        assert_eq!(caster_depth_floor(&vertices, None, &view, 1.0, 5.0), Some(0.125));
+        assert_eq!(caster_depth_floor(&vertices, None, &view, 2.0, 5.0), Some(0.0));
+        assert_eq!(caster_depth_floor(&vertices, Some(0), &view, 1.0, 5.0), None);
+        assert_eq!(caster_depth_floor(&vertices, None, &view, 5.0, 5.0), None);
     }
 
     #[test]

@@ -291,11 +291,27 @@ pub fn single_light(scene: &Scene, i: usize) -> Scene {
 }
 
 /// The facts a technique is specialised for on `scene` (read from `path`): its first
-/// light's kind (the light the techniques render). None for a scene without a light.
+/// light's kind (the light the techniques render) and the least depth of its casters in
+/// any light's view (`sshc_graph::caster_depth_floor`, on the inputs the runtime binds, so
+/// that its check computes the same). None for a scene without a light.
 pub fn scene_facts(path: &Path, scene: &Scene) -> Option<sshc::SceneFacts> {
-    scene.lights.first().map(|l| sshc::SceneFacts {
+    let first = scene.lights.first()?;
+    let floors: Vec<Option<f32>> = (0..scene.lights.len())
+        .map(|i| {
+            let s = crate::bind::scene_inputs(&single_light(scene, i)).ok()?;
+            sshc_runtime::graph::caster_depth_floor(&s.vertices, s.casting_vertices, &s.light_view, s.near, s.far)
+        })
+        .collect();
+    // every light must have a floor for the facts to hold one
+    let depth_floor = floors
+        .iter()
+        .copied()
+        .collect::<Option<Vec<f32>>>()
+        .and_then(|f| f.into_iter().reduce(f32::min));
+    Some(sshc::SceneFacts {
         scene: path.display().to_string(),
-        light: l.kind(),
+        light: first.kind(),
+        depth_floor,
     })
 }
 

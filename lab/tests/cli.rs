@@ -737,3 +737,74 @@ fn each_light_of_a_scene_renders_with_its_own_passes_and_compares_alone() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// A precision left open (`Auto`) is chosen from the scene's depths (issue 16): the scaled
+/// ESM of compiler/tests/fixtures/esm-auto.ron stores its basis at F16 on the contact scene
+/// (its casters start at normalised depth 0.28) and at F32 for any scene. The two builds'
+/// visibilities differ by the F16 storage only: Vulkan lets a conversion to a 16-bit float
+/// round to nearest or towards zero, one F16 ulp or 2^-10 of the value, and the product
+/// with exp(-c (d - 1)) adds one f32 rounding (2^-23; clamping to [0, 1] only brings the two
+/// nearer). A graph compiled for contact is refused on a scene whose casters come nearer
+/// the light.
+#[test]
+fn a_precision_chosen_from_the_scene_renders_within_its_rounding_and_is_checked() {
+    let dir = temp_dir("auto-precision");
+    let p = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    let technique = "compiler/tests/fixtures/esm-auto.ron";
+    let text = ok(&["explain", technique, "--scene", "scenes/contact.ron"]);
+    assert!(text.contains("channel `e` (Auto): F16"), "{text}");
+    let small = ["--size", "48x48", "--shadow-map", "128"];
+    let render = |vis: &str, extra: &[&str]| {
+        ok(&[
+            &[
+                "render",
+                technique,
+                "--scene",
+                "scenes/contact.ron",
+                "--visibility",
+                &p(vis),
+                "-o",
+                &p("r.png"),
+            ][..],
+            &small[..],
+            extra,
+        ]
+        .concat())
+    };
+    render("f16.pfm", &[]);
+    render("f32.pfm", &["--generic"]);
+    let (a, b) = (read_pfm(&dir.join("f16.pfm")).data, read_pfm(&dir.join("f32.pfm")).data);
+    let mut differ = 0;
+    for (x, y) in a.iter().zip(&b) {
+        let bound = x.max(*y) as f64 * (2f64.powi(-10) + 2f64.powi(-23));
+        assert!(((x - y).abs() as f64) <= bound, "{x} against {y}: more than {bound}");
+        differ += (x != y) as usize;
+    }
+    assert!(differ > 0, "the F16 storage shows somewhere");
+    // the graph assumes contact's depths; a box near the light breaks them
+    let graph_dir = p("graph");
+    ok(&["compile", technique, "--scene", "scenes/contact.ron", "-o", &graph_dir]);
+    let contact = std::fs::read_to_string(root().join("scenes/contact.ron")).unwrap();
+    let nearer = contact.replace(
+        "    objects: [\n",
+        "    objects: [\n        Object(name: \"near the light\", mesh: Box(size: (0.1, 0.1, 0.1)), transform: (translate: (-0.7, 2.7, 1.3))),\n",
+    );
+    assert_ne!(nearer, contact);
+    std::fs::write(dir.join("nearer.ron"), nearer).unwrap();
+    let graph = dir.join("graph/esm_auto.graph.ron").to_string_lossy().into_owned();
+    let e = refused(
+        &[&["render", &graph, "--scene", &p("nearer.ron"), "-o", &p("n.png")][..], &small[..]].concat(),
+        60,
+    );
+    assert!(
+        e.contains("was specialised for scene scenes/contact.ron, whose casters lie at normalised depth 0.27")
+            && e.contains("but this scene's come to"),
+        "{e}"
+    );
+    ok(&[
+        &["render", &graph, "--scene", "scenes/contact.ron", "-o", &p("c.png")][..],
+        &small[..],
+    ]
+    .concat());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -412,6 +412,19 @@ impl<'g> Executor<'g> {
                 s.light.map_or("not given (`SceneInputs::light`)", |k| k.name())
             )));
         }
+        // and narrowed the range of what its Depth pass writes to the casters' least depth
+        if let Some(facts) = &self.graph.specialised
+            && let Some(floor) = facts.depth_floor
+            && let Some(here) = graph::caster_depth_floor(&s.vertices, s.casting_vertices, &s.light_view, s.near, s.far)
+            && here < floor
+        {
+            return Err(RuntimeError::Param(format!(
+                "technique `{}` was specialised for scene {}, whose casters lie at normalised depth {floor} or more in the light's view, but this scene's{} come to {here}; compile it for this scene (`--scene`) or without one",
+                self.graph.technique,
+                facts.scene,
+                if l > 0 { format!(" (light {l})") } else { String::new() },
+            )));
+        }
         let res = Resources::new(gpu, &self.graph, s, max_bytes)?;
         if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
             return Err(RuntimeError::Param(format!(

@@ -843,6 +843,7 @@ fn specialised_builds_give_the_generic_visibility_bit_for_bit() {
             let facts = sshc::SceneFacts {
                 scene: name.clone(),
                 light: kind,
+                depth_floor: None,
             };
             let opts = sshc::CompileOptions {
                 scene: Some(facts.clone()),

@@ -310,6 +310,12 @@ fn graph(u: &mut Unstructured) -> Result<PassGraph> {
             Some(SceneFacts {
                 scene: name(u)?,
                 light: *u.choose(&LightKind::ALL)?,
+                // outside [0, 1] and NaN too: the runtime compares, it does not trust
+                depth_floor: if u.arbitrary()? {
+                    Some(*u.choose(&[0.0, 0.25, 1.0, -1.0, 2.0, f32::NAN, f32::INFINITY])?)
+                } else {
+                    None
+                },
             })
         } else {
             None
@@ -342,6 +348,9 @@ fn check_accepted(g: &PassGraph, text: &str) {
         "duplicate param: {text}"
     );
     assert!(g.textures.iter().all(|t| t.layers >= 1));
+    if let Some(f) = g.specialised.as_ref().and_then(|s| s.depth_floor) {
+        assert!((0.0..=1.0).contains(&f), "accepted a depth floor outside [0, 1]: {text}");
+    }
     for t in &g.textures {
         for c in &t.channels {
             assert!(

@@ -167,6 +167,8 @@ impl Precision {
 pub struct Channel {
     pub name: Name,
     pub precision: Spanned<Precision>,
+    /// `precision: Auto`: left to the compiler (`precision` is then F32 until it chooses).
+    pub precision_auto: bool,
     /// The per-texel value (map side). `None`: the channel is written by a Depth pass.
     pub value: Option<Expr>,
     pub doc: Option<String>,
@@ -186,6 +188,8 @@ pub struct Expansion {
     pub terms: Vec<Term>,
     /// Precision of the basis channels.
     pub precision: Spanned<Precision>,
+    /// `precision: Auto`: left to the compiler.
+    pub precision_auto: bool,
     pub doc: Option<String>,
     pub span: Span,
 }

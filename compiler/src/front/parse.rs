@@ -523,25 +523,30 @@ pub fn const_value(node: &Node, ty: ScalarTy) -> Result<Spanned<ConstValue>, Dia
     Ok(Spanned::new(v, node.span))
 }
 
-const PRECISIONS: &[&str] = &["Unorm8", "Unorm16", "F16", "F32"];
+const PRECISIONS: &[&str] = &["Unorm8", "Unorm16", "F16", "F32", "Auto"];
 
-fn precision(node: &Node) -> Result<Spanned<Precision>, Diagnostic> {
+/// A precision, and whether it is `Auto` (left to the compiler: F32 until it chooses).
+fn precision(node: &Node) -> Result<(Spanned<Precision>, bool), Diagnostic> {
     let (v, span) = variant(node)?;
+    if v == "Auto" {
+        return Ok((Spanned::new(Precision::F32, node.span), true));
+    }
     match Precision::parse(&v).filter(|_| PRECISIONS.contains(&v.as_str())) {
-        Some(p) => Ok(Spanned::new(p, node.span)),
+        Some(p) => Ok((Spanned::new(p, node.span), false)),
         None => Err(unknown_variant(span, &v, "precision", PRECISIONS)),
     }
 }
 
 fn channel(name: Name, node: &Node) -> Result<Channel, Diagnostic> {
     let mut f = Fields::of(node, "Channel")?;
-    let precision = precision(f.req("precision")?)?;
+    let (precision, precision_auto) = precision(f.req("precision")?)?;
     let value = f.opt("value")?.map(expression).transpose()?;
     let doc = opt_string(&mut f, "doc")?;
     f.finish()?;
     Ok(Channel {
         name,
         precision,
+        precision_auto,
         value,
         doc,
         span: node.span,
@@ -576,7 +581,7 @@ fn expansion(name: Name, node: &Node) -> Result<Expansion, Diagnostic> {
             ));
         }
     };
-    let precision = precision(f.req("precision")?)?;
+    let (precision, precision_auto) = precision(f.req("precision")?)?;
     let doc = opt_string(&mut f, "doc")?;
     f.finish()?;
     Ok(Expansion {
@@ -588,6 +593,7 @@ fn expansion(name: Name, node: &Node) -> Result<Expansion, Diagnostic> {
         constant,
         terms,
         precision,
+        precision_auto,
         doc,
         span: node.span,
     })
