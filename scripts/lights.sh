@@ -26,12 +26,21 @@ rows=$tmp/rows.md
 : > "$rows"
 device=""
 kinds=""
-for t in hard pcf pcss vsm esm csm cssm; do
+refused=$tmp/refused.md
+: > "$refused"
+for f in techniques/*.ron; do
+    t=$(basename "$f" .ron)
+    # a technique that cannot render every light of the scene is listed with its reason
+    if ! "$bin" render "$f" --scene "$scene" --size 16x16 --shadow-map 64 -o "$tmp/r.png" > /dev/null 2> "$tmp/err"; then
+        echo "| $t | $(grep -m 1 '^error' "$tmp/err" | sed 's/^error: //; s/|/\\|/g') |" >> "$refused"
+        echo "$t: cannot render the scene" >&2
+        continue
+    fi
     walls=""
     peaks=""
     per=""
     for k in 1 2 3; do
-        log=$("$bin" render "techniques/$t.ron" --scene "$scene" --lights "$k" --size "$camera" --frames "$frames" -o "$tmp/r.png" 2>/dev/null)
+        log=$("$bin" render "$f" --scene "$scene" --lights "$k" --size "$camera" --frames "$frames" -o "$tmp/r.png" 2>/dev/null)
         [ -n "$device" ] || device=$(echo "$log" | sed -n 's/^device: //p')
         walls="$walls $(echo "$log" | sed -n 's/^frame wall time: \([0-9.]*\) ms.*/\1/p')"
         peaks="$peaks $(echo "$log" | sed -n 's/^| peak (all textures resident) | \([0-9]*\) |/\1/p')"
@@ -41,7 +50,7 @@ for t in hard pcf pcss vsm esm csm cssm; do
             [ -n "$kinds" ] || kinds=$(echo "$log" | awk -F'|' '$2 ~ /^ [0-9]+ $/ && $3 ~ /[A-Za-z]/ { gsub(/ /, "", $3); printf "%s%s", sep, $3; sep = ", " }')
         fi
     done
-    cmp=$("$bin" compare "techniques/$t.ron" --scene "$scene" --size 128x128 --stability-frames 0 -o "$tmp/c.png" 2>/dev/null)
+    cmp=$("$bin" compare "$f" --scene "$scene" --size 128x128 --stability-frames 0 -o "$tmp/c.png" 2>/dev/null)
     rms0=$(echo "$cmp" | sed -n 's/^error facing the light: RMS \([0-9.]*\),.*/\1/p')
     rmsk=$(echo "$cmp" | sed -n 's/^light [0-9]* ([A-Za-z]*): error facing the light: RMS \([0-9.]*\),.*/\1/p' | tr '\n' ' ')
     awk -v t="$t" -v walls="$walls" -v peaks="$peaks" -v per="$per" -v rms="$rms0 $rmsk" 'BEGIN {
@@ -71,5 +80,13 @@ done
     echo "| technique | frame ms, 1 / 2 / 3 lights | 3 / 1 | bytes, 1 / 2 / 3 lights | 3 / 1 | GPU ms per light | RMS per light |"
     echo "|---|---|---|---|---|---|---|"
     cat "$rows"
+    if [ -s "$refused" ]; then
+        echo
+        echo "Techniques that cannot render the scene, with the first error \`sshc render\` gives:"
+        echo
+        echo "| technique | error |"
+        echo "|---|---|"
+        cat "$refused"
+    fi
 } > "$out"
 echo "wrote $out" >&2
