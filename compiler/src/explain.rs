@@ -224,6 +224,7 @@ pub fn explain(c: &Compiled) -> String {
             let _ = writeln!(s, "  {r}");
         }
     }
+    rounding_report(&mut s, ir);
     if !c.ir.precision_choices.is_empty() {
         let _ = writeln!(s, "\nPrecisions chosen by the compiler (by range):");
         for p in &c.ir.precision_choices {
@@ -242,6 +243,42 @@ pub fn explain(c: &Compiled) -> String {
         }
     }
     s
+}
+
+/// The visibility error the channels' storage rounding causes (`rounding::estimate`).
+fn rounding_report(s: &mut String, ir: &Program) {
+    use crate::front::ast::Precision;
+    if let Some(why) = crate::rounding::unsupported(ir) {
+        let _ = writeln!(s, "\nVisibility error from storage rounding: not estimated ({why})");
+        return;
+    }
+    let Some(e) = crate::rounding::estimate(ir, crate::rounding::Detail::Explain) else {
+        return;
+    };
+    let _ = writeln!(
+        s,
+        "\nVisibility error from storage rounding (a sampled first-order estimate over {} texel and receiver configurations; compiler/src/rounding.rs; warned above {}):",
+        e.configurations,
+        crate::rounding::WARN_ABOVE
+    );
+    let heads: Vec<String> = Precision::ALL.iter().map(|p| format!("at {}", p.name())).collect();
+    let _ = writeln!(s, "  | channel | stored at | error | {} |", heads.join(" | "));
+    let _ = writeln!(s, "  |---|---|---|{}", "---|".repeat(heads.len()));
+    for c in &e.channels {
+        let at: Vec<String> = c.at.iter().map(|v| v.map_or("-".to_string(), |v| format!("{v:.3e}"))).collect();
+        let _ = writeln!(
+            s,
+            "  | {} | {} | {:.3e} | {} |",
+            c.name,
+            c.precision.name(),
+            c.error,
+            at.join(" | ")
+        );
+    }
+    let _ = writeln!(s, "  every channel at its precision: {:.3e}", e.total);
+    if e.skipped > 0 {
+        let _ = writeln!(s, "  ({} configurations gave no number and were skipped)", e.skipped);
+    }
 }
 
 /// What specialising for a scene changed (`sshc explain --scene`): per pass, the fetches

@@ -485,84 +485,119 @@ impl Arena {
 }
 
 impl Arena {
-    /// Evaluate a scalar expression on the CPU (f64). `leaf` gives the value of params,
-    /// inputs, channels and samples; vectors are not supported (NaN).
+    /// Evaluate an expression on the CPU (f64): its first component (a scalar's value).
+    /// `leaf` gives the value of params, inputs, channels and samples, a scalar that a
+    /// vector input takes in each component.
     pub fn eval(&self, h: H, leaf: &dyn Fn(&Node) -> Option<f64>) -> f64 {
+        let order = self.postorder(&[h]);
+        let mut vals = vec![[f64::NAN; 4]; self.nodes.len()];
+        self.eval_ordered(&order, h, leaf, &mut vals)
+    }
+
+    /// [`Arena::eval`] for callers that evaluate one expression many times: `order` is
+    /// `postorder(&[h])`, `vals` a scratch of one value per node of the arena. Vectors are
+    /// evaluated component by component (a scalar is held in every component, so mixing
+    /// it with a vector broadcasts it); `length` and `dot` reduce over the operand's width.
+    pub fn eval_ordered(&self, order: &[H], h: H, leaf: &dyn Fn(&Node) -> Option<f64>, vals: &mut [[f64; 4]]) -> f64 {
         use ConstValue::*;
-        let mut vals: HashMap<H, f64> = HashMap::new();
-        for n in self.postorder(&[h]) {
-            let get = |x: &H| vals.get(x).copied().unwrap_or(f64::NAN);
-            let v = match self.node(n) {
-                Node::F32(b) => f32::from_bits(*b) as f64,
-                Node::I32(v) => *v as f64,
-                Node::U32(v) => *v as f64,
-                Node::Bool(b) => *b as i32 as f64,
-                Node::Unary(UnOp::Neg, x) => -get(x),
-                Node::Unary(UnOp::Not, x) => (get(x) == 0.0) as i32 as f64,
-                Node::Unary(UnOp::BitNot, x) => {
-                    if self.ty(n) == Ty::U32 {
-                        !(get(x) as u32) as f64
-                    } else {
-                        !(get(x) as i32) as f64
-                    }
-                }
-                // integer operations of u32 (and bit operations of i32) with their wrapping
-                Node::Binary(op, x, y) if self.ty(n) == Ty::U32 || op.is_bitwise() => {
-                    let (x, y) = (get(x), get(y));
-                    let v = consteval::binary(*op, int_const(x, self.ty(n)), int_const(y, self.ty(n)));
-                    v.map_or(f64::NAN, ConstValue::as_f64)
-                }
-                Node::Binary(op, x, y) => {
-                    let (x, y) = (get(x), get(y));
-                    let int = self.ty(n) == Ty::I32;
-                    match op {
-                        BinOp::Add => x + y,
-                        BinOp::Sub => x - y,
-                        BinOp::Mul => x * y,
-                        BinOp::Div => {
-                            if int {
-                                (x / y).trunc()
-                            } else {
-                                x / y
-                            }
+        let width = |x: H| match self.ty(x) {
+            Ty::Vec(n) => (n as usize).clamp(1, 4),
+            Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => 1,
+        };
+        for &n in order {
+            let get = |x: &H, i: usize| vals.get(x.index()).map_or(f64::NAN, |v| v[i]);
+            let w = width(n);
+            let mut v = [f64::NAN; 4];
+            for (i, slot) in v.iter_mut().enumerate().take(w) {
+                *slot = match self.node(n) {
+                    Node::F32(b) => f32::from_bits(*b) as f64,
+                    Node::I32(x) => *x as f64,
+                    Node::U32(x) => *x as f64,
+                    Node::Bool(b) => *b as i32 as f64,
+                    Node::Unary(UnOp::Neg, x) => -get(x, i),
+                    Node::Unary(UnOp::Not, x) => (get(x, i) == 0.0) as i32 as f64,
+                    Node::Unary(UnOp::BitNot, x) => {
+                        if self.ty(n) == Ty::U32 {
+                            !(get(x, i) as u32) as f64
+                        } else {
+                            !(get(x, i) as i32) as f64
                         }
-                        BinOp::Rem => x % y,
-                        BinOp::Lt => (x < y) as i32 as f64,
-                        BinOp::Le => (x <= y) as i32 as f64,
-                        BinOp::Gt => (x > y) as i32 as f64,
-                        BinOp::Ge => (x >= y) as i32 as f64,
-                        BinOp::Eq => (x == y) as i32 as f64,
-                        BinOp::Ne => (x != y) as i32 as f64,
-                        BinOp::And => (x != 0.0 && y != 0.0) as i32 as f64,
-                        BinOp::Or => (x != 0.0 || y != 0.0) as i32 as f64,
-                        // the guard above takes these
-                        BinOp::BitAnd | BinOp::BitOr | BinOp::BitXor | BinOp::Shl | BinOp::Shr => f64::NAN,
                     }
-                }
-                Node::Call(Func::Select, a) => {
-                    if get(&a[2]) != 0.0 {
-                        get(&a[1])
-                    } else {
-                        get(&a[0])
+                    // integer operations of u32 (and bit operations of i32) with their wrapping
+                    Node::Binary(op, x, y) if self.ty(n) == Ty::U32 || op.is_bitwise() => {
+                        let (x, y) = (get(x, i), get(y, i));
+                        let r = consteval::binary(*op, int_const(x, self.ty(n)), int_const(y, self.ty(n)));
+                        r.map_or(f64::NAN, ConstValue::as_f64)
                     }
-                }
-                Node::Call(f, a) => {
-                    let args: Vec<ConstValue> = a
-                        .iter()
-                        .map(|x| match self.ty(*x) {
-                            t @ (Ty::I32 | Ty::U32) => int_const(get(x), t),
-                            Ty::F32 | Ty::Bool | Ty::Vec(_) | Ty::AbstractInt => Float(get(x)),
-                        })
-                        .collect();
-                    eval_call_f64(*f, &args).unwrap_or(f64::NAN)
-                }
-                other @ (Node::Param(_) | Node::Input(..) | Node::Channel(..) | Node::Sample { .. } | Node::Swizzle(..)) => {
-                    leaf(other).unwrap_or(f64::NAN)
-                }
-            };
-            vals.insert(n, v);
+                    Node::Binary(op, x, y) => {
+                        let (x, y) = (get(x, i), get(y, i));
+                        let int = self.ty(n) == Ty::I32;
+                        match op {
+                            BinOp::Add => x + y,
+                            BinOp::Sub => x - y,
+                            BinOp::Mul => x * y,
+                            BinOp::Div => {
+                                if int {
+                                    (x / y).trunc()
+                                } else {
+                                    x / y
+                                }
+                            }
+                            BinOp::Rem => x % y,
+                            BinOp::Lt => (x < y) as i32 as f64,
+                            BinOp::Le => (x <= y) as i32 as f64,
+                            BinOp::Gt => (x > y) as i32 as f64,
+                            BinOp::Ge => (x >= y) as i32 as f64,
+                            BinOp::Eq => (x == y) as i32 as f64,
+                            BinOp::Ne => (x != y) as i32 as f64,
+                            BinOp::And => (x != 0.0 && y != 0.0) as i32 as f64,
+                            BinOp::Or => (x != 0.0 || y != 0.0) as i32 as f64,
+                            // the guard above takes these
+                            BinOp::BitAnd | BinOp::BitOr | BinOp::BitXor | BinOp::Shl | BinOp::Shr => f64::NAN,
+                        }
+                    }
+                    Node::Call(Func::Select, a) => {
+                        if get(&a[2], i) != 0.0 {
+                            get(&a[1], i)
+                        } else {
+                            get(&a[0], i)
+                        }
+                    }
+                    // constructors: the arguments' components in order
+                    Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, a) => {
+                        let mut parts = a.iter().flat_map(|x| (0..width(*x)).map(move |k| (x, k)));
+                        match (a.len(), parts.nth(i)) {
+                            // one scalar fills every component
+                            (1, _) if width(a[0]) == 1 => get(&a[0], 0),
+                            (_, Some((x, k))) => get(x, k),
+                            (_, None) => f64::NAN,
+                        }
+                    }
+                    Node::Call(Func::Length, a) => (0..width(a[0])).map(|k| get(&a[0], k).powi(2)).sum::<f64>().sqrt(),
+                    Node::Call(Func::Dot, a) => (0..width(a[0])).map(|k| get(&a[0], k) * get(&a[1], k)).sum(),
+                    Node::Call(f, a) => {
+                        let args: Vec<ConstValue> = a
+                            .iter()
+                            .map(|x| match self.ty(*x) {
+                                t @ (Ty::I32 | Ty::U32) => int_const(get(x, i), t),
+                                Ty::F32 | Ty::Bool | Ty::Vec(_) | Ty::AbstractInt => Float(get(x, i)),
+                            })
+                            .collect();
+                        eval_call_f64(*f, &args).unwrap_or(f64::NAN)
+                    }
+                    Node::Swizzle(x, c) => c.get(i).map_or(f64::NAN, |&k| get(x, k as usize)),
+                    other @ (Node::Param(_) | Node::Input(..) | Node::Channel(..) | Node::Sample { .. }) => leaf(other).unwrap_or(f64::NAN),
+                };
+            }
+            // a scalar is held in every component
+            if w == 1 {
+                v = [v[0]; 4];
+            }
+            if let Some(slot) = vals.get_mut(n.index()) {
+                *slot = v;
+            }
         }
-        vals.get(&h).copied().unwrap_or(f64::NAN)
+        vals.get(h.index()).map_or(f64::NAN, |v| v[0])
     }
 }
 

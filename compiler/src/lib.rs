@@ -32,6 +32,7 @@ pub mod ir;
 pub mod lower;
 pub mod pack;
 pub mod resolve;
+pub mod rounding;
 pub mod span;
 pub mod types;
 
@@ -109,6 +110,10 @@ pub struct CompileOptions {
     /// `--scene`: specialise for the scene's facts (issue 16): refuse a scene light the
     /// technique's `light:` list does not admit, fold the light inputs that are 0 for it.
     pub scene: Option<sshc_graph::SceneFacts>,
+    /// Estimate what storage rounding does to the visibility and warn above
+    /// `rounding::WARN_ABOVE` (`sshc compile` and `explain` do; it costs 1 to 150 ms in a
+    /// release build, CSSM the most, so a library compilation asks for it).
+    pub rounding: bool,
 }
 
 /// A compiled technique.
@@ -244,6 +249,10 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         let layout = pack::pack(&ir, &analysis, &opts.limits)?;
         let program = ir::Program::new(&ir, &layout);
         debug_validate(program, "pack");
+        let mut warnings = warnings;
+        if opts.rounding {
+            warnings.extend(rounding_warning(&program));
+        }
         if want(DumpPhase::Pack) {
             dump = Some(program.to_string());
         }
@@ -257,7 +266,6 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
             );
         }
         let graph = emit::graph(&program, &out);
-        let mut warnings = warnings;
         warnings.extend(back::wgsl::render_target_warnings(&program, &graph, &opts.limits));
         if want(DumpPhase::Emit) {
             dump = Some(graph.to_ron());
@@ -278,6 +286,58 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         (r, _) => r,
     };
     Outcome { result, dump }
+}
+
+/// A warning where storage rounding can move the visibility by more than
+/// `rounding::WARN_ABOVE` (estimated only where a channel is stored below F32, whose
+/// rounding is at most 2^-24 of a value).
+fn rounding_warning(program: &ir::Program) -> Option<diag::Diagnostic> {
+    let narrow = program
+        .resources
+        .iter()
+        .flat_map(|r| &r.slots)
+        .any(|s| s.precision != front::ast::Precision::F32);
+    if !narrow {
+        return None;
+    }
+    let e = rounding::estimate(program, rounding::Detail::Warn)?;
+    if e.total <= rounding::WARN_ABOVE {
+        return None;
+    }
+    let worst = e.channels.iter().max_by(|a, b| a.error.total_cmp(&b.error))?;
+    let ch = &program.channels[worst.channel];
+    let mut d = diag::Diagnostic::warning(
+        diag::Phase::Analyse,
+        format!(
+            "storage rounding can move the visibility by up to {:.3} (a first-order estimate; warned above {}): channel `{}` at {} alone moves it by {:.3}",
+            e.total,
+            rounding::WARN_ABOVE,
+            worst.name,
+            worst.precision.name(),
+            worst.error
+        ),
+    )
+    .at(
+        ch.precision_span,
+        if ch.precision_overridden {
+            "this precision (set by `--precision`)".to_string()
+        } else {
+            "this precision".to_string()
+        },
+    );
+    let others: Vec<String> = e
+        .channels
+        .iter()
+        .filter(|c| c.channel != worst.channel && c.error > 0.0)
+        .map(|c| format!("`{}` at {}: {:.3}", c.name, c.precision.name(), c.error))
+        .collect();
+    if !others.is_empty() {
+        d = d.note(format!("the other channels: {}", others.join(", ")));
+    }
+    Some(d.help(format!(
+        "store `{}` at a wider precision: `sshc explain` gives the estimate at each precision",
+        worst.name
+    )))
 }
 
 /// In debug builds (every test), the IR a phase hands on must pass `ir::validate`.

@@ -107,6 +107,7 @@ fn options(c: &Common) -> Result<CompileOptions, String> {
         schedule: c.schedule.clone(),
         dump_after: c.dump_ir_after,
         scene,
+        rounding: true,
         ..Default::default()
     })
 }

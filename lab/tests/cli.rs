@@ -808,3 +808,27 @@ fn a_precision_chosen_from_the_scene_renders_within_its_rounding_and_is_checked(
     .concat());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `sshc compile` warns where storage rounding can move the visibility by more than 0.05
+/// (issue 17: VSM's moments at Unorm8), not at the technique's own F32; `sshc explain`
+/// prints the estimate per channel and precision.
+#[test]
+fn compile_warns_about_rounding_and_explain_prints_the_estimate() {
+    let dir = temp_dir("rounding");
+    let out = dir.to_string_lossy().into_owned();
+    let r = sshc(&["compile", "techniques/vsm.ron", "--precision", "m1,m2=unorm8", "-o", &out]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("storage rounding can move the visibility by up to 0.584") && stderr.contains("techniques/vsm.ron:24:34"),
+        "{stderr}"
+    );
+    let r = sshc(&["compile", "techniques/vsm.ron", "-o", &out]);
+    assert!(!String::from_utf8_lossy(&r.stderr).contains("storage rounding"));
+    let text = ok(&["explain", "techniques/vsm.ron"]);
+    assert!(
+        text.contains("| m1 | F32 | 7.838e-6 | 3.750e-1 | 1.070e-3 | 7.263e-2 | 7.838e-6 |"),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,83 @@
+//! Precision warnings (issue 17): every `warnings/*.ron` compiles, and its rendered
+//! warnings must match `warnings/*.stderr` (empty: none). The storage-rounding estimate
+//! (`sshc::rounding`) warns for VSM and MSM moments at Unorm8, the render-target check
+//! for Unorm16 channels; EVSM at F32 and at F16 within its exponent limits gives none.
+//! Set `UPDATE_EXPECT=1` to rewrite the expected files after reviewing a change.
+
+use std::path::Path;
+
+#[test]
+fn every_precision_fixture_has_its_warnings() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/warnings");
+    let mut fixtures: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .collect();
+    fixtures.sort();
+    assert_eq!(fixtures.len(), 5, "{fixtures:?}");
+    let update = std::env::var_os("UPDATE_EXPECT").is_some();
+    let mut failures = Vec::new();
+    for f in &fixtures {
+        let source = std::fs::read_to_string(f).unwrap();
+        let name = f.file_name().unwrap().to_string_lossy().into_owned();
+        let opts = sshc::CompileOptions {
+            rounding: true,
+            ..Default::default()
+        };
+        let c = sshc::compile_str(&source, &opts).unwrap_or_else(|d| panic!("{name}: refused\n{}", d.render(&name, &source)));
+        let got = sshc::diag::Diagnostics(c.warnings.clone()).render(&name, &source);
+        // the cases the issue names
+        let rounding = got.contains("storage rounding can move the visibility");
+        match name.as_str() {
+            "vsm_unorm8_moments.ron" | "msm_unorm8_moments.ron" => assert!(rounding, "{name}: {got}"),
+            "vsm_unorm16_render_target.ron" => assert!(got.contains("Rg16Unorm") && !rounding, "{name}: {got}"),
+            "evsm_f32.ron" | "evsm_f16_within_limits.ron" => assert!(got.is_empty(), "{name}: {got}"),
+            other => panic!("{other}: a fixture without its expectation here"),
+        }
+        let expected_path = f.with_extension("stderr");
+        if update {
+            std::fs::write(&expected_path, &got).unwrap();
+            continue;
+        }
+        match std::fs::read_to_string(&expected_path) {
+            Ok(want) if want == got => {}
+            Ok(want) => failures.push(format!("{name}: warnings changed\n--- expected\n{want}\n--- got\n{got}")),
+            Err(_) => failures.push(format!("{name}: no expected file {}; got\n{got}", expected_path.display())),
+        }
+    }
+    assert!(failures.is_empty(), "{}\n(run with UPDATE_EXPECT=1 to accept)", failures.join("\n"));
+}
+
+/// The estimate itself: at F32 every bundled moment technique's rounding error is far
+/// below the threshold, and a narrower precision never estimates less than a wider one
+/// of the same kind for the same channel (Unorm8 >= Unorm16, F16 >= F32), unless both
+/// have reached the visibility's whole range (an error of about 1: MSM's moments at 16
+/// bits and at 8).
+#[test]
+fn the_rounding_estimate_orders_the_precisions() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    for file in [
+        "techniques/vsm.ron",
+        "techniques/examples/evsm.ron",
+        "techniques/examples/msm.ron",
+        "techniques/csm.ron",
+    ] {
+        let source = std::fs::read_to_string(root.join(file)).unwrap();
+        let c = sshc::compile_str(&source, &sshc::CompileOptions::default()).unwrap();
+        let program = sshc::ir::Program::new(&c.ir, &c.layout);
+        let e = sshc::rounding::estimate(&program, sshc::rounding::Detail::Explain).expect("estimated");
+        assert!(e.configurations > 500, "{file}: {} configurations", e.configurations);
+        for ch in &e.channels {
+            let [u8, u16, f16, f32] = ch.at;
+            if let (Some(a), Some(b)) = (u8, u16) {
+                assert!(a >= b || a > 0.99, "{file} `{}`: Unorm8 {a} < Unorm16 {b}", ch.name);
+            }
+            if let (Some(a), Some(b)) = (f16, f32) {
+                assert!(a >= b || a > 0.99, "{file} `{}`: F16 {a} < F32 {b}", ch.name);
+            }
+            assert!(f32.is_some_and(|v| v < 0.01), "{file} `{}` at F32: {f32:?}", ch.name);
+        }
+    }
+}
