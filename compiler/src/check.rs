@@ -2054,13 +2054,14 @@ impl<'s, 'a> Typer<'s, 'a> {
             .result(&tys)
             .map_err(|m| Self::err(span, format!("type mismatch: {m}"), "in this call"))?;
         // Abstract arguments take the type the builtin's signature gives each argument
-        // (`Sig::arg_ty`): i32 where it computes in integers (conversions; min, max,
-        // clamp, abs, sign and select of integers), f32 otherwise.
+        // (`Sig::arg_ty`): i32 or u32 where it computes in integers (conversions; min,
+        // max, clamp, abs, sign and select of integers: `clamp(h, 1u, 90)` is u32
+        // throughout), f32 otherwise.
         for (i, a) in args.iter().enumerate() {
-            let to = if matches!(f.arg_ty(i, &tys, ty), Ty::I32 | Ty::AbstractInt) {
-                Ty::I32
-            } else {
-                Ty::F32
+            let to = match f.arg_ty(i, &tys, ty) {
+                Ty::I32 | Ty::AbstractInt => Ty::I32,
+                Ty::U32 => Ty::U32,
+                Ty::F32 | Ty::Bool | Ty::Vec(_) => Ty::F32,
             };
             self.settle(a, to)?;
         }

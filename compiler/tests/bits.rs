@@ -118,3 +118,19 @@ fn u32_constants_print_with_their_suffix() {
     let dump = out.dump.expect("a dump after lower");
     assert!(dump.contains("2654435769u"), "{dump}");
 }
+
+/// Abstract integers given to a builtin computing in u32 become u32s (fuzzing found
+/// `clamp(h, 1u, 90)` with `90` lowered as an f32: an internal error): every argument
+/// of `min`, `max`, `clamp` and `select` over u32 may be a plain literal, on runtime
+/// values and on constants (where the call folds).
+#[test]
+fn abstract_integers_settle_to_u32_in_builtins() {
+    for vis in [
+        "let h = u32(frame); f32(clamp(h, 1u, 90)) * nearest(z)",
+        "let h = u32(frame); f32(min(h, 7) + max(3, h) + select(2, h, h > 5u)) * nearest(z)",
+        "f32(clamp(100u, 1, 90) == 90u) * nearest(z)",
+    ] {
+        let c = compile(vis);
+        assert!(!shade(&c).is_empty(), "{vis}");
+    }
+}
