@@ -607,8 +607,9 @@ fn prefiltered_techniques_read_one_where_fully_lit_beyond_their_footprint() {
     }
 }
 
-/// The example techniques of issue 17 (`techniques/examples/`: EVSM, MSM, Poisson-disk PCF
-/// rotated per pixel, VSM with its bound and bleeding reduction as functions), written
+/// The techniques of issue 17 written with functions: the bundled EVSM and MSM
+/// (`techniques/evsm.ron`, `msm.ron`) and the examples (`techniques/examples/`: Poisson-disk
+/// PCF rotated per pixel, VSM with its bound and bleeding reduction as functions), written
 /// with functions, arrays, `pixel`, `frame` and `noise`: on every bundled scene their
 /// visibility is finite and in [0, 1], and on the receivers whose light-centre visibility
 /// is the same over a footprint of 8 texels (wider than any example's filter: Poisson's
@@ -619,11 +620,14 @@ fn prefiltered_techniques_read_one_where_fully_lit_beyond_their_footprint() {
 #[test]
 fn the_example_techniques_render_and_separate_lit_from_hidden() {
     let gpu = gpu();
-    let dir = root().join("techniques/examples");
-    let names = bundled("techniques/examples");
-    assert!(names.len() >= 4, "{names:?}");
-    for t in &names {
-        let path = dir.join(format!("{t}.ron"));
+    let examples = bundled("techniques/examples");
+    assert!(examples.len() >= 2, "{examples:?}");
+    let mut paths: Vec<(String, std::path::PathBuf)> = ["evsm", "msm"]
+        .iter()
+        .map(|t| (t.to_string(), root().join("techniques").join(format!("{t}.ron"))))
+        .collect();
+    paths.extend(examples.iter().map(|t| (t.clone(), root().join("techniques/examples").join(format!("{t}.ron")))));
+    for (t, path) in &paths {
         let src = std::fs::read_to_string(&path).unwrap();
         let c = sshc::compile_str(&src, &Default::default()).unwrap_or_else(|d| panic!("{}", d.render(t, &src)));
         let (mut right, mut checked) = (0usize, 0usize);
