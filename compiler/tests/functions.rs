@@ -240,7 +240,11 @@ fn the_example_techniques_compile_and_use_what_they_show() {
     for (name, folder, uses) in [
         ("evsm", "techniques", &["functions:", "chebyshev("][..]),
         ("msm", "techniques", &["functions:", "solve_c(", "intensity("][..]),
-        ("poisson-pcf", "techniques/examples", &["arrays:", "taps[i]", "pixel.x", "frame", "noise("][..]),
+        (
+            "poisson-pcf",
+            "techniques/examples",
+            &["arrays:", "taps[i]", "pixel.x", "frame", "noise("][..],
+        ),
         ("vsm-bleeding", "techniques/examples", &["functions:", "reduce_bleeding("][..]),
     ] {
         let src = std::fs::read_to_string(root().join(folder).join(format!("{name}.ron"))).unwrap();

@@ -626,7 +626,11 @@ fn the_example_techniques_render_and_separate_lit_from_hidden() {
         .iter()
         .map(|t| (t.to_string(), root().join("techniques").join(format!("{t}.ron"))))
         .collect();
-    paths.extend(examples.iter().map(|t| (t.clone(), root().join("techniques/examples").join(format!("{t}.ron")))));
+    paths.extend(
+        examples
+            .iter()
+            .map(|t| (t.clone(), root().join("techniques/examples").join(format!("{t}.ron")))),
+    );
     for (t, path) in &paths {
         let src = std::fs::read_to_string(&path).unwrap();
         let c = sshc::compile_str(&src, &Default::default()).unwrap_or_else(|d| panic!("{}", d.render(t, &src)));
