@@ -255,9 +255,11 @@ fn gpu_evsm_agrees_with_cpu() {
             "evsm F32 c=20,10 K=1 bleed=0.2",
             technique("evsm", &[("c_pos", 20.0), ("c_neg", 10.0), ("K", 1.0), ("bleed", 0.2)], None),
         ),
+        // (not c = 42: at d = 0 its least variance min_variance (c e^{-c})^2 = 1.1e-38 falls
+        // below f32's normal range, which a device may flush to 0)
         (
-            "evsm F32 c=42,42 K=5",
-            technique("evsm", &[("c_pos", 42.0), ("c_neg", 42.0), ("K", 5.0)], None),
+            "evsm F32 c=30,30 K=5",
+            technique("evsm", &[("c_pos", 30.0), ("c_neg", 30.0), ("K", 5.0)], None),
         ),
         // F16 holds exp(2 c) for c <= ln(65504) / 2 = 5.54; its 2^-11 rounding needs a
         // minimum variance well above 2^-10 of the squared warp to determine the variance
@@ -760,7 +762,7 @@ fn cpu_msm_bounds_the_shadow_intensity() {
         let g = check(&atoms, d as f64);
         assert!((v - (1.0 - g)).abs() < 1e-9, "d = {d}: {v} vs 1 - {g}");
         eprintln!("two planes, d = {d}: visibility {v}");
-        assert!((v - 0.5).abs() < 0.05, "d = {d}: {v}");
+        assert!((v - 0.5).abs() < 0.01, "d = {d}: {v}");
     }
 }
 

@@ -799,13 +799,17 @@ fn evsm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
 //   moved by -2^-8 or +2^-8): the moments stay those of a convex combination of texels (a valid moment
 //   vector), which independent intervals per moment would not;
 // - per moment, everything else the [`Model`] counts (storage roundings at each level, the
-//   mean and filter arithmetic, the Map pass's powers: z^k in f32 rounds k - 1 times), the
-//   bias's f32 mix (two roundings), and the backward error of the f32 Cholesky solve:
-//   the computed factor is the exact one of the matrix perturbed by at most
-//   gamma_4 sqrt(a_ii a_jj) <= 4 2^-23 per entry (Higham, Accuracy and Stability of
-//   Numerical Algorithms, theorem 10.3; the entries are moments in [0, 1]) and the two
-//   triangular solves are backward stable likewise: 16 2^-24 per moment in all. These are
-//   independent per moment: the bound is evaluated at the 16 corners of their box (for a
+//   mean and filter arithmetic, the Map pass's powers: z^k in f32 rounds k - 1 times) and
+//   the bias's f32 mix (a few roundings);
+// - the backward error of the f32 Cholesky solve: the computed factor is the exact one of
+//   the matrix perturbed by at most gamma_4 sqrt(a_ii a_jj) <= 4 2^-23 per entry (Higham,
+//   Accuracy and Stability of Numerical Algorithms, theorem 10.3; the entries are moments
+//   in [0, 1]) and the two triangular solves are backward stable likewise: 16 2^-24 per
+//   entry in all. This perturbation need not keep the matrix a Hankel matrix, and where
+//   the matrix is nearly singular that matters: so the five entries of the matrix
+//   (a12 = b1, a13 = a22 = b2, a23 = b3, a33 = b4) each move by their moment's error plus
+//   this, independently, and the b1, b2 of the last step by their moments' errors
+//   ([`cpu::msm_bound`]); the bound is evaluated at the 128 corners of that box (for a
 //   function linear over a box this small, its extremes);
 // - the receiver's depth d - bias rounds once: +-2^-23 (d + 1), taken at both ends;
 // - the steps after the solve (the quadratic's roots and the three cases) in f32: their
@@ -845,6 +849,9 @@ fn shifted_lookup(chain: &Chain, uv: [f64; 2], lod: f64, shift: [f64; 5]) -> f64
     }
 }
 
+/// The backward error of MSM's f32 Cholesky solve per matrix entry (see above).
+const BACKWARD: f64 = 16.0 * EPS32;
+
 fn msm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
     let t = &pre.technique;
     let uv = [q.uv[0] as f64, q.uv[1] as f64];
@@ -867,7 +874,7 @@ fn msm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
         .map(|(k, c)| {
             let l = c.lookup(uv, lod);
             let model = Model::new(pre, names[k], 0.0, k as f64 * EPS32, None);
-            (1.0 - alpha) * model.lookup_unweighted(&l) + 4.0 * EPS32 + 16.0 * EPS32
+            (1.0 - alpha) * model.lookup_unweighted(&l) + 4.0 * EPS32
         })
         .collect();
     let blends = chains[0].lookup(uv, lod).upper.is_some();
@@ -896,9 +903,22 @@ fn msm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
             .iter()
             .map(|e| (cpu::msm_intensity(b, zf + e) - centre).abs())
             .fold(0.0, f64::max);
-        for corner in 0..16 {
-            let bc: [f64; 4] = std::array::from_fn(|k| b[k] + if (corner >> k) & 1 == 1 { errors[k] } else { -errors[k] });
-            let g = cpu::msm_intensity(bc, zf);
+        // (value, half-width) of a12, a13, a22, a23, a33, then b1 and b2 of the last step
+        let inputs = [
+            (b[0], errors[0] + BACKWARD),
+            (b[1], errors[1] + BACKWARD),
+            (b[1], errors[1] + BACKWARD),
+            (b[2], errors[2] + BACKWARD),
+            (b[3], errors[3] + BACKWARD),
+            (b[0], errors[0]),
+            (b[1], errors[1]),
+        ];
+        for corner in 0..1u32 << inputs.len() {
+            let v: [f64; 7] = std::array::from_fn(|k| {
+                let (x, e) = inputs[k];
+                if (corner >> k) & 1 == 1 { x + e } else { x - e }
+            });
+            let g = cpu::msm_bound([v[0], v[1], v[2], v[3], v[4]], v[5], v[6], zf);
             lo = lo.min(g - by_zf);
             hi = hi.max(g + by_zf);
         }
