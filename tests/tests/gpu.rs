@@ -632,7 +632,7 @@ fn the_example_techniques_render_and_separate_lit_from_hidden() {
             .map(|t| (t.clone(), root().join("techniques/examples").join(format!("{t}.ron")))),
     );
     for (t, path) in &paths {
-        let src = std::fs::read_to_string(&path).unwrap();
+        let src = std::fs::read_to_string(path).unwrap();
         let c = sshc::compile_str(&src, &Default::default()).unwrap_or_else(|d| panic!("{}", d.render(t, &src)));
         let (mut right, mut checked) = (0usize, 0usize);
         for sc in &bundled("scenes") {

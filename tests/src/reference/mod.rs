@@ -24,8 +24,8 @@
 //! `[1 b1' b2'; b1' b2' b3'; b2' b3' b4'] c = (1, z_f, z_f^2)` by a Cholesky factorisation,
 //! takes the roots `z2 <= z3` of `c1 + c2 z + c3 z^2` and returns the lower bound `G` of the
 //! shadow intensity by the paper's three cases (`z_f <= z2`: 0; `z_f <= z3`:
-//! `(z_f z3 - b1' (z_f + z3) + b2') / ((z3 - z2)(z_f - z2))`; else `1 - (z2 z3 - b1' (z2 + z3)
-//! + b2') / ((z_f - z2)(z_f - z3))`); the visibility is `1 - G`. `alpha` is the file's
+//! `(z_f z3 - b1' (z_f + z3) + b2') / ((z3 - z2)(z_f - z2))`; else
+//! `1 - (z2 z3 - b1' (z2 + z3) + b2') / ((z_f - z2)(z_f - z3))`); the visibility is `1 - G`. `alpha` is the file's
 //! (default 3e-5, the paper's value for moments stored as 32-bit floats; the paper takes a
 //! larger one for 16-bit storage). Where every filtered depth is exactly 0 or exactly 1 the
 //! biased moments lie on the boundary of the moment space (the Hankel matrix is singular:
