@@ -26,7 +26,7 @@ rows=$tmp/rows.md
 : > "$rows"
 device=""
 kinds=""
-for t in hard pcf pcss vsm esm csm cssm; do
+for t in hard pcf pcss vsm esm evsm msm csm cssm; do
     log=$("$bin" render "techniques/$t.ron" --scene "$scene" --size "$camera" --frames "$frames" -o "$tmp/r.png" 2>/dev/null)
     [ -n "$device" ] || device=$(echo "$log" | sed -n 's/^device: //p')
     # `| i | Kind | ms |` rows of the per-light table
