@@ -238,6 +238,8 @@ fn evsm_agrees() {
             &[("c_pos", 5.0), ("c_neg", 5.0), ("min_variance", 0.002)],
             Some(Storage::F16),
         ),
+        // the compute schedule of its Map, Filter and Mipmap passes
+        Variant::new("evsm", &[], None).scheduled("compute"),
     ];
     agree("evsm", &v, &all_fields());
 }
@@ -248,6 +250,7 @@ fn msm_agrees() {
         Variant::new("msm", &[], None),
         Variant::new("msm", &[("K", 7.0)], None),
         Variant::new("msm", &[("K", 1.0), ("alpha", 0.0001)], None),
+        Variant::new("msm", &[], None).scheduled("compute"),
     ];
     agree("msm", &v, &all_fields());
 }

@@ -713,10 +713,10 @@ fn pipelines_are_built_once_per_device() {
 /// which the G-buffer holds at F16 (relative error 2^-11, a level of detail off by up to
 /// log2(1 + 2^-11) = 7e-4 of a level; the normal goes through an octahedral f32 encoding,
 /// which here changes no value). So a technique with no implicit-LOD lookup gives the same
-/// visibility bit for bit; one with them (CSM, VSM) may differ where the level of detail
+/// visibility bit for bit; one with them (CSM, VSM, EVSM, MSM) may differ where the level of detail
 /// moves the trilinear weight across one of its quanta (8 bits on lavapipe, as few as 4 in
 /// Vulkan), which its reconstruction then amplifies: that is the 8-bit filtering term of the
-/// agreement tests' error model, and tests/tests/agreement.rs checks both techniques'
+/// agreement tests' error model, and tests/tests/agreement.rs checks these techniques'
 /// compute variants (`*=compute`, the deferred Shade included) against the f64 reference
 /// with it. Here their differences are only reported. Position is bit for bit, the normal
 /// within one F16 ulp, the background the forward form's clear values.
@@ -820,7 +820,7 @@ fn a_deferred_shade_gives_the_forward_values() {
     }
     // every technique but the two that read a light sample's view's derivatives
     // (linear-light and point-samples: `depth_slope` inside `at_sample`), which stay forward
-    assert_eq!(deferred_ones.len(), 11, "{deferred_ones:?}");
+    assert_eq!(deferred_ones.len(), 13, "{deferred_ones:?}");
 }
 
 /// Specialised for its scene (issue 16), every bundled technique gives the generic build's
