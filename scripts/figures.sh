@@ -38,7 +38,7 @@ figure() {
         echo
     } >> "$out"
 }
-for t in hard pcf vsm esm csm cssm pcss penumbra-maps penumbra-limit-maps smoothies single-sample; do
+for t in hard pcf vsm esm evsm msm csm cssm pcss penumbra-maps penumbra-limit-maps smoothies single-sample; do
     figure "$t" bunny "bunny-$t" "$t"
 done
 for t in point-samples linear-light; do

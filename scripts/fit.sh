@@ -30,7 +30,7 @@ for s in scenes/*.ron; do
         # the per-sample techniques need N a multiple of the edges: the map techniques here
         techniques="hard pcf pcss vsm"
     else
-        techniques="hard pcf pcss vsm esm csm cssm"
+        techniques="hard pcf pcss vsm esm evsm msm csm cssm"
     fi
     for t in $techniques; do
         for fit in scene view; do

@@ -60,8 +60,8 @@ fn the_rounding_estimate_orders_the_precisions() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     for file in [
         "techniques/vsm.ron",
-        "techniques/examples/evsm.ron",
-        "techniques/examples/msm.ron",
+        "techniques/evsm.ron",
+        "techniques/msm.ron",
         "techniques/csm.ron",
     ] {
         let source = std::fs::read_to_string(root.join(file)).unwrap();

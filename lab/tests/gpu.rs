@@ -12,7 +12,7 @@ use sshc_lab::session::{compile_executor, positions_normals};
 use sshc_lab::visibility::Visibility;
 use sshc_runtime::gpu::{CameraOutput, Gpu};
 
-const TECHNIQUES: [&str; 7] = ["hard", "pcf", "vsm", "esm", "csm", "pcss", "cssm"];
+const TECHNIQUES: [&str; 9] = ["hard", "pcf", "vsm", "esm", "evsm", "msm", "csm", "pcss", "cssm"];
 
 fn root() -> &'static Path {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))

@@ -77,6 +77,8 @@ fn main() {
         Variant::new("pcf", &[("N", 3.0)], None),
         Variant::new("vsm", &[], None),
         Variant::new("esm", &[], None),
+        Variant::new("evsm", &[], None),
+        Variant::new("msm", &[], None),
         Variant::new("csm", &[], None),
         Variant::new("cssm", &[("filter", 0.0)], None).lit(0.2),
         Variant::new("cssm", &[("filter", 1.0)], None).lit(0.2),

@@ -227,6 +227,35 @@ fn esm_agrees() {
 }
 
 #[test]
+fn evsm_agrees() {
+    let v = vec![
+        Variant::new("evsm", &[], None),
+        Variant::new("evsm", &[("c_pos", 20.0), ("c_neg", 10.0), ("bleed", 0.2)], None),
+        // F16 holds exp(2 c) for c <= ln(65504) / 2 = 5.54 (the compiler refuses more); its
+        // rounding needs a larger minimum variance to determine the variance
+        Variant::new(
+            "evsm",
+            &[("c_pos", 5.0), ("c_neg", 5.0), ("min_variance", 0.002)],
+            Some(Storage::F16),
+        ),
+        // the compute schedule of its Map, Filter and Mipmap passes
+        Variant::new("evsm", &[], None).scheduled("compute"),
+    ];
+    agree("evsm", &v, &all_fields());
+}
+
+#[test]
+fn msm_agrees() {
+    let v = vec![
+        Variant::new("msm", &[], None),
+        Variant::new("msm", &[("K", 7.0)], None),
+        Variant::new("msm", &[("K", 1.0), ("alpha", 0.0001)], None),
+        Variant::new("msm", &[], None).scheduled("compute"),
+    ];
+    agree("msm", &v, &all_fields());
+}
+
+#[test]
 fn csm_agrees() {
     let mut v = Vec::new();
     for storage in [Storage::Unorm8, Storage::F16, Storage::F32] {

@@ -607,8 +607,9 @@ fn prefiltered_techniques_read_one_where_fully_lit_beyond_their_footprint() {
     }
 }
 
-/// The example techniques of issue 17 (`techniques/examples/`: EVSM, MSM, Poisson-disk PCF
-/// rotated per pixel, VSM with its bound and bleeding reduction as functions), written
+/// The techniques of issue 17 written with functions: the bundled EVSM and MSM
+/// (`techniques/evsm.ron`, `msm.ron`) and the examples (`techniques/examples/`: Poisson-disk
+/// PCF rotated per pixel, VSM with its bound and bleeding reduction as functions), written
 /// with functions, arrays, `pixel`, `frame` and `noise`: on every bundled scene their
 /// visibility is finite and in [0, 1], and on the receivers whose light-centre visibility
 /// is the same over a footprint of 8 texels (wider than any example's filter: Poisson's
@@ -619,12 +620,19 @@ fn prefiltered_techniques_read_one_where_fully_lit_beyond_their_footprint() {
 #[test]
 fn the_example_techniques_render_and_separate_lit_from_hidden() {
     let gpu = gpu();
-    let dir = root().join("techniques/examples");
-    let names = bundled("techniques/examples");
-    assert!(names.len() >= 4, "{names:?}");
-    for t in &names {
-        let path = dir.join(format!("{t}.ron"));
-        let src = std::fs::read_to_string(&path).unwrap();
+    let examples = bundled("techniques/examples");
+    assert!(examples.len() >= 2, "{examples:?}");
+    let mut paths: Vec<(String, std::path::PathBuf)> = ["evsm", "msm"]
+        .iter()
+        .map(|t| (t.to_string(), root().join("techniques").join(format!("{t}.ron"))))
+        .collect();
+    paths.extend(
+        examples
+            .iter()
+            .map(|t| (t.clone(), root().join("techniques/examples").join(format!("{t}.ron")))),
+    );
+    for (t, path) in &paths {
+        let src = std::fs::read_to_string(path).unwrap();
         let c = sshc::compile_str(&src, &Default::default()).unwrap_or_else(|d| panic!("{}", d.render(t, &src)));
         let (mut right, mut checked) = (0usize, 0usize);
         for sc in &bundled("scenes") {
@@ -705,10 +713,10 @@ fn pipelines_are_built_once_per_device() {
 /// which the G-buffer holds at F16 (relative error 2^-11, a level of detail off by up to
 /// log2(1 + 2^-11) = 7e-4 of a level; the normal goes through an octahedral f32 encoding,
 /// which here changes no value). So a technique with no implicit-LOD lookup gives the same
-/// visibility bit for bit; one with them (CSM, VSM) may differ where the level of detail
+/// visibility bit for bit; one with them (CSM, VSM, EVSM, MSM) may differ where the level of detail
 /// moves the trilinear weight across one of its quanta (8 bits on lavapipe, as few as 4 in
 /// Vulkan), which its reconstruction then amplifies: that is the 8-bit filtering term of the
-/// agreement tests' error model, and tests/tests/agreement.rs checks both techniques'
+/// agreement tests' error model, and tests/tests/agreement.rs checks these techniques'
 /// compute variants (`*=compute`, the deferred Shade included) against the f64 reference
 /// with it. Here their differences are only reported. Position is bit for bit, the normal
 /// within one F16 ulp, the background the forward form's clear values.
@@ -812,7 +820,7 @@ fn a_deferred_shade_gives_the_forward_values() {
     }
     // every technique but the two that read a light sample's view's derivatives
     // (linear-light and point-samples: `depth_slope` inside `at_sample`), which stay forward
-    assert_eq!(deferred_ones.len(), 11, "{deferred_ones:?}");
+    assert_eq!(deferred_ones.len(), 13, "{deferred_ones:?}");
 }
 
 /// Specialised for its scene (issue 16), every bundled technique gives the generic build's

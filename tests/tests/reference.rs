@@ -248,6 +248,42 @@ fn gpu_esm_agrees_with_cpu() {
 }
 
 #[test]
+fn gpu_evsm_agrees_with_cpu() {
+    agree(&[
+        ("evsm F32 c=40,5", technique("evsm", &[], None)),
+        (
+            "evsm F32 c=20,10 K=1 bleed=0.2",
+            technique("evsm", &[("c_pos", 20.0), ("c_neg", 10.0), ("K", 1.0), ("bleed", 0.2)], None),
+        ),
+        // (not c = 42: at d = 0 its least variance min_variance (c e^{-c})^2 = 1.1e-38 falls
+        // below f32's normal range, which a device may flush to 0)
+        (
+            "evsm F32 c=30,30 K=5",
+            technique("evsm", &[("c_pos", 30.0), ("c_neg", 30.0), ("K", 5.0)], None),
+        ),
+        // F16 holds exp(2 c) for c <= ln(65504) / 2 = 5.54; its 2^-11 rounding needs a
+        // minimum variance well above 2^-10 of the squared warp to determine the variance
+        (
+            "evsm F16 c=5,5 minvar=2e-3",
+            technique(
+                "evsm",
+                &[("c_pos", 5.0), ("c_neg", 5.0), ("min_variance", 2e-3)],
+                Some(Storage::F16),
+            ),
+        ),
+    ]);
+}
+
+#[test]
+fn gpu_msm_agrees_with_cpu() {
+    agree(&[
+        ("msm F32 alpha=3e-5 K=3", technique("msm", &[], None)),
+        ("msm F32 K=1", technique("msm", &[("K", 1.0)], None)),
+        ("msm F32 K=7 alpha=1e-4", technique("msm", &[("K", 7.0), ("alpha", 1e-4)], None)),
+    ]);
+}
+
+#[test]
 fn gpu_csm_agrees_with_cpu() {
     agree(&[
         ("csm Unorm8 M=4", technique("csm", &[], None)),
@@ -449,6 +485,10 @@ fn refused() -> Vec<Technique> {
         technique("csm", &[("K", 4.0)], None),
         technique("csm", &[("alpha", f64::NAN)], None),
         technique("esm", &[], Some(Storage::F16)),
+        // exp(2 c_pos) = e^80 does not fit F16
+        technique("evsm", &[], Some(Storage::F16)),
+        technique("evsm", &[("bias", 0.01)], None),
+        technique("msm", &[("K", 2.0)], None),
         technique("hard", &[], Some(Storage::Unorm8)),
         technique("pcf", &[("N", 0.0)], None),
     ]
@@ -594,6 +634,138 @@ fn cpu_esm_is_the_exponential_test() {
     assert!(v < 1e-6, "{v}");
 }
 
+/// The warps of EVSM (Lauritzen & McCool 2008) at depth z: t = 2z - 1, w+ = e^{c+ t},
+/// w- = -e^{-c- t}.
+fn evsm_warps(z: f64, cp: f64, cn: f64) -> (f64, f64) {
+    let t = 2.0 * z - 1.0;
+    ((cp * t).exp(), -(-cn * t).exp())
+}
+
+#[test]
+fn cpu_evsm_is_chebyshevs_bound_in_both_warps() {
+    let (cp, cn, mv) = (40.0, 5.0, 2e-5);
+    // a constant map: lit at and in front of it; behind it each warp's variance is the
+    // least one, mv (c w(d))^2, and the smaller of the two bounds is the visibility
+    let z0 = 0.4f32;
+    let map = flat(16, z0);
+    let t = technique("evsm", &[("bleed", 0.0)], None);
+    for d in [0.0f32, 0.2, 0.399, 0.4] {
+        // (the blur and the mip chain of a constant round by a few ulps)
+        let v = one(&t, &map, at([0.3, 0.6], d, 1.5));
+        assert!(v >= 1.0 - 1e-9, "d = {d}: in front of the map, lit: {v}");
+    }
+    let (p0, n0) = evsm_warps(z0 as f64, cp, cn);
+    for d in [0.401f32, 0.41, 0.45, 0.9] {
+        let (p, n) = evsm_warps(d as f64, cp, cn);
+        let bound = |w: f64, w0: f64, c: f64| {
+            let least = mv * (c * w) * (c * w);
+            least / (least + (w - w0) * (w - w0))
+        };
+        let expected = bound(p, p0, cp).min(bound(n, n0, cn));
+        let v = one(&t, &map, at([0.3, 0.6], d, 2.0));
+        assert!((v - expected).abs() <= 1e-9 * expected.max(1e-6), "d = {d}: {v} vs {expected}");
+    }
+    // two planes 0.3 | 0.7 averaged half-half (K = 1, between the texels on the edge):
+    // Chebyshev's bound is an upper bound of the lit fraction P(z >= d) in each warp, so the
+    // visibility is at least 1/2 between the planes and the exact formula of the mixture
+    let map = depth_map(16, |x, _| if x < 8 { 0.3 } else { 0.7 });
+    let t = technique("evsm", &[("bleed", 0.0), ("K", 1.0), ("min_variance", 0.0)], None);
+    let (pa, na) = evsm_warps(0.3f32 as f64, cp, cn);
+    let (pb, nb) = evsm_warps(0.7f32 as f64, cp, cn);
+    for d in [0.35f32, 0.5, 0.65, 0.69] {
+        let v = one(&t, &map, at([0.5, 0.5], d, 0.0));
+        assert!(v >= 0.5 - 1e-12, "d = {d}: {v} below the lit fraction 1/2");
+        let (p, n) = evsm_warps(d as f64, cp, cn);
+        let bound = |a: f64, b: f64, w: f64| {
+            let mean = 0.5 * (a + b);
+            let var = 0.5 * (a * a + b * b) - mean * mean;
+            if w <= mean { 1.0 } else { var / (var + (w - mean) * (w - mean)) }
+        };
+        let expected = bound(pa, pb, p).min(bound(na, nb, n));
+        assert!((v - expected).abs() <= 1e-9, "d = {d}: {v} vs {expected}");
+    }
+    // behind both planes the positive warp's bound is tiny (e^{16} against e^{32}), where
+    // VSM's would be 0.04 / (0.04 + 0.16) = 0.2: EVSM's reduction of light bleeding
+    let v = one(&t, &map, at([0.5, 0.5], 0.9, 0.0));
+    assert!(v < 0.05, "{v}");
+    // light-bleeding reduction: linstep(bleed, 1, p)
+    let bled = technique("evsm", &[("bleed", 0.3), ("K", 1.0), ("min_variance", 0.0)], None);
+    let w = one(&bled, &map, at([0.5, 0.5], 0.5, 0.0));
+    let v = one(&t, &map, at([0.5, 0.5], 0.5, 0.0));
+    assert!((w - ((v - 0.3) / 0.7).clamp(0.0, 1.0)).abs() < 1e-12, "{w} vs {v}");
+}
+
+/// MSM's biased moments (Peters & Klein 2015) of a distribution given as (depth, weight).
+fn biased_moments(atoms: &[(f64, f64)], alpha: f64) -> [f64; 4] {
+    std::array::from_fn(|k| {
+        let m: f64 = atoms.iter().map(|(z, w)| w * z.powi(k as i32 + 1)).sum();
+        (1.0 - alpha) * m + alpha * 0.5
+    })
+}
+
+#[test]
+fn cpu_msm_bounds_the_shadow_intensity() {
+    let alpha = 3e-5;
+    // G is a lower bound of the fraction in front of z_f over every distribution with the
+    // biased moments, among them the actual one: the filter's depths with weight 1 - alpha
+    // and the bias's atoms 0 and 1 with alpha / 2 each. And it is at least Chebyshev's
+    // (Cantelli's) bound from the first two of them, 1 - var / (var + (z_f - mean)^2).
+    let cantelli = |b: [f64; 4], zf: f64| {
+        let var = b[1] - b[0] * b[0];
+        if zf <= b[0] { 0.0 } else { 1.0 - var / (var + (zf - b[0]).powi(2)) }
+    };
+    let check = |atoms: &[(f64, f64)], zf: f64| -> f64 {
+        let b = biased_moments(atoms, alpha);
+        let g = cpu::msm_intensity(b, zf);
+        let front: f64 = atoms.iter().filter(|(z, _)| *z < zf).map(|(_, w)| w).sum::<f64>() * (1.0 - alpha)
+            + if zf > 0.0 { 0.5 * alpha } else { 0.0 }
+            + if zf > 1.0 { 0.5 * alpha } else { 0.0 };
+        assert!(g <= front + 1e-9, "{atoms:?} at {zf}: G = {g} above the actual fraction {front}");
+        assert!(
+            g >= cantelli(b, zf) - 1e-9,
+            "{atoms:?} at {zf}: G = {g} below Cantelli's {}",
+            cantelli(b, zf)
+        );
+        assert!((-1e-9..=1.0 + 1e-9).contains(&g), "{atoms:?} at {zf}: G = {g}");
+        g
+    };
+    for atoms in [
+        vec![(0.4, 1.0)],
+        vec![(0.3, 0.5), (0.7, 0.5)],
+        vec![(0.2, 0.25), (0.5, 0.5), (0.9, 0.25)],
+        vec![(0.1, 0.1), (0.6, 0.9)],
+    ] {
+        for i in 0..=40 {
+            check(&atoms, i as f64 / 40.0);
+        }
+    }
+    // a single plane: a step at it (in front lit up to alpha / 2, behind within Cantelli's
+    // bound of a variance of order alpha)
+    let map = flat(16, 0.4);
+    let t = technique("msm", &[("bias", 0.0)], None);
+    for d in [0.0f32, 0.2, 0.39] {
+        let v = one(&t, &map, at([0.3, 0.6], d, 1.0));
+        assert!(v >= 1.0 - 0.5 * alpha - 1e-9, "d = {d}: {v}");
+    }
+    for d in [0.45f32, 0.6, 0.9] {
+        let v = one(&t, &map, at([0.3, 0.6], d, 1.0));
+        assert!(v <= 1e-2, "d = {d}: {v}");
+    }
+    // two planes 0.3 | 0.7 half-half (K = 1 at the edge): the CPU evaluator is the bound of
+    // their biased moments, and between the planes it is within a few alpha of the
+    // fraction 1/2 (without the bias the distribution would be determined by its moments)
+    let map = depth_map(16, |x, _| if x < 8 { 0.3 } else { 0.7 });
+    let t = technique("msm", &[("bias", 0.0), ("K", 1.0)], None);
+    let atoms = [(0.3f32 as f64, 0.5), (0.7f32 as f64, 0.5)];
+    for d in [0.35f32, 0.5, 0.65] {
+        let v = one(&t, &map, at([0.5, 0.5], d, 0.0));
+        let g = check(&atoms, d as f64);
+        assert!((v - (1.0 - g)).abs() < 1e-9, "d = {d}: {v} vs 1 - {g}");
+        eprintln!("two planes, d = {d}: visibility {v}");
+        assert!((v - 0.5).abs() < 0.01, "d = {d}: {v}");
+    }
+}
+
 #[test]
 fn cpu_csm_approaches_the_step_as_m_grows() {
     // eq. 6.3 with c_k = pi (2k - 1): 1/2 + 2 sum sin(c_k (z - d)) / c_k is the square wave
@@ -671,6 +843,9 @@ fn cpu_results_stay_in_the_unit_interval() {
         technique("pcf", &[("N", 15.0)], None),
         technique("vsm", &[("min_variance", 0.0), ("bleed", 0.0)], None),
         technique("esm", &[("c", 88.0), ("classify", 2.0)], None),
+        technique("evsm", &[("min_variance", 0.0), ("c_pos", 42.0), ("c_neg", 0.0)], None),
+        technique("msm", &[("alpha", 0.0)], None),
+        technique("msm", &[("alpha", 0.1), ("K", 1.0)], None),
         technique("csm", &[("M", 64.0), ("alpha", 0.0), ("fix", 2.0)], None),
         soft("cssm", &[("M", 16.0), ("alpha", 0.0), ("min_blocker", 0.0)], [4.0, 4.0]),
         soft("cssm", &[("filter", 1.0), ("A", 100.0), ("B", 1000.0)], [4.0, 0.0]),

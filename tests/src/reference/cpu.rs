@@ -340,6 +340,29 @@ pub fn prefilter(t: &Technique, map: &DepthMap) -> Result<Prefiltered, String> {
                 channel("m2".into(), mip_chain(convolve(&z.map(|z| z * z), &blur))),
             ]
         }
+        Kind::Evsm => {
+            // Map: the warps of t = 2z - 1, w+ = e^{c+ t}, w- = -e^{-c- t}, and their squares
+            // (Lauritzen & McCool 2008); Filter: box of K; Mipmap: mean.
+            let blur = box_weights(k);
+            let (cp, cn) = (technique.get("c_pos"), technique.get("c_neg"));
+            [("p1", 1.0, cp), ("p2", 1.0, 2.0 * cp), ("n1", -1.0, -cn), ("n2", 1.0, -2.0 * cn)]
+                .into_iter()
+                .map(|(name, sign, c)| {
+                    channel(
+                        name.into(),
+                        mip_chain(convolve(&z.map(|z| sign * (c * (2.0 * z - 1.0)).exp()), &blur)),
+                    )
+                })
+                .collect()
+        }
+        Kind::Msm => {
+            // Map: the moments b_k = z^k, k = 1..4 (Peters & Klein 2015); Filter: box of K;
+            // Mipmap: mean.
+            let blur = box_weights(k);
+            (1..=4)
+                .map(|p| channel(format!("b{p}"), mip_chain(convolve(&z.map(|z| z.powi(p)), &blur))))
+                .collect()
+        }
         Kind::Esm => {
             // Map: the basis e^{cz} of eq. 7.1; Filter: box of K (eq. 7.2: filtering the
             // basis filters the test). No mip chain.
@@ -425,7 +448,7 @@ pub fn shade(pre: &Prefiltered, q: &Query) -> f64 {
     let d = q.d as f64;
     let lod = q.lod as f64;
     // The slope-scaled bias is `slope_bias * depth_slope` with depth_slope taken as 0.
-    let d_biased = d - t.get("bias");
+    let d_biased = d - t.bias();
     match t.kind {
         Kind::Hard => {
             // eq. 3.2: s = 1 if d <= z, 0 otherwise.
@@ -468,6 +491,20 @@ pub fn shade(pre: &Prefiltered, q: &Query) -> f64 {
             };
             linstep(t.get("bleed"), 1.0, p)
         }
+        Kind::Evsm => {
+            // Lauritzen & McCool 2008: Chebyshev's bound in each warped space, the minimum
+            // variance scaled by the warp's derivative (c w)^2, the smaller bound kept.
+            let tr = 2.0 * d_biased - 1.0;
+            let bound = |c: f64, w: f64, first: &str, second: &str| {
+                let least = t.get("min_variance") * (c * w) * (c * w);
+                chebyshev(pre.chain(first).sample(uv, lod), pre.chain(second).sample(uv, lod), w, least)
+            };
+            let (cp, cn) = (t.get("c_pos"), t.get("c_neg"));
+            let vp = bound(cp, (cp * tr).exp(), "p1", "p2");
+            let vn = bound(cn, -(-cn * tr).exp(), "n1", "n2");
+            linstep(t.get("bleed"), 1.0, vp.min(vn))
+        }
+        Kind::Msm => 1.0 - msm_intensity(msm_biased(t, msm_moments(pre, uv, lod)), d_biased),
         Kind::Esm => {
             let c = t.get("c");
             let e = pre.chain("e_t0_k1");
@@ -514,6 +551,99 @@ pub fn shade(pre: &Prefiltered, q: &Query) -> f64 {
         }
         Kind::Cssm => cssm_trace(pre, q).value,
         Kind::Pcss => pcss_trace(pre, q).value,
+    }
+}
+
+/// Chebyshev's one-sided inequality (Donnelly & Lauritzen 2006): of a distribution with
+/// mean `mean` and second moment `second`, at most `var / (var + (t - mean)^2)` lies at or
+/// behind `t > mean`, the variance `second - mean^2` clamped below by `least`; 1 for
+/// `t <= mean`.
+pub fn chebyshev(mean: f64, second: f64, t: f64, least: f64) -> f64 {
+    if t <= mean {
+        return 1.0;
+    }
+    let variance = (second - mean * mean).max(least);
+    let delta = t - mean;
+    variance / (variance + delta * delta)
+}
+
+/// MSM's filtered moments `(b1, b2, b3, b4)` at uv and a level of detail.
+pub fn msm_moments(pre: &Prefiltered, uv: [f64; 2], lod: f64) -> [f64; 4] {
+    ["b1", "b2", "b3", "b4"].map(|name| pre.chain(name).sample(uv, lod))
+}
+
+/// Peters & Klein 2015, Algorithm 2, step 1: `b' = (1 - alpha) b + alpha (1/2, 1/2, 1/2, 1/2)`.
+pub fn msm_biased(t: &Resolved, b: [f64; 4]) -> [f64; 4] {
+    let alpha = t.get("alpha");
+    b.map(|b| (1.0 - alpha) * b + alpha * 0.5)
+}
+
+/// The smallest Cholesky pivot (squared) of MSM's Hankel matrix: a positive-definite matrix
+/// has positive pivots; at its boundary (all filtered depths 0 or all 1) the last pivot is
+/// 0 in exact arithmetic and the bound is the limit as it tends to 0 from above.
+pub const MSM_PIVOT: f64 = 1e-12;
+
+/// Peters & Klein 2015, Algorithm 2, steps 2-4: the lower bound `G` of the shadow intensity
+/// (the fraction of the filter region in front of `zf`) over every distribution whose
+/// moments are the biased `b`. Not clamped.
+pub fn msm_intensity(b: [f64; 4], zf: f64) -> f64 {
+    let [b1, b2, b3, b4] = b;
+    msm_bound([b1, b2, b2, b3, b4], b1, b2, zf)
+}
+
+/// [`msm_intensity`] with the entries of the matrix given apart from the moments of the
+/// last step: `a = (a12, a13, a22, a23, a33)` of the symmetric matrix `[1 a12 a13; a12 a22
+/// a23; a13 a23 a33]` (the Hankel matrix has `a12 = b1`, `a13 = a22 = b2`, `a23 = b3`,
+/// `a33 = b4`), so that the error model can perturb the entries independently, as the
+/// backward error of a Cholesky solve does.
+pub fn msm_bound(a: [f64; 5], b1: f64, b2: f64, zf: f64) -> f64 {
+    let [a12, a13, a22, a23, a33] = a;
+    // Cholesky factor of the matrix = L L^T, with L = [1 0 0; a12 l22 0; a13 l32 l33]
+    let l22 = (a22 - a12 * a12).max(MSM_PIVOT).sqrt();
+    let l32 = (a23 - a12 * a13) / l22;
+    let l33 = (a33 - a13 * a13 - l32 * l32).max(MSM_PIVOT).sqrt();
+    // L y = (1, zf, zf^2): y1 = 1
+    let y2 = (zf - a12) / l22;
+    let y3 = (zf * zf - a13 - l32 * y2) / l33;
+    // L^T c = y
+    let c3 = y3 / l33;
+    let c2 = (y2 - l32 * c3) / l22;
+    let c1 = 1.0 - a12 * c2 - a13 * c3;
+    // the roots z2 <= z3 of c3 z^2 + c2 z + c1 = 0
+    let (p, q) = (c2 / c3, c1 / c3);
+    let r = (0.25 * p * p - q).max(0.0).sqrt();
+    let (z2, z3) = (-0.5 * p - r, -0.5 * p + r);
+    if zf <= z2 {
+        0.0
+    } else if zf <= z3 {
+        (zf * z3 - b1 * (zf + z3) + b2) / ((z3 - z2) * (zf - z2))
+    } else {
+        1.0 - (z2 * z3 - b1 * (z2 + z3) + b2) / ((zf - z2) * (zf - z3))
+    }
+}
+
+/// [`msm_intensity`] in f32 arithmetic, the same steps: the error model's estimate of what
+/// the f32 solve does to the bound.
+pub fn msm_intensity_f32(b: [f32; 4], zf: f32) -> f32 {
+    let [b1, b2, b3, b4] = b;
+    let pivot = MSM_PIVOT as f32;
+    let l22 = (b2 - b1 * b1).max(pivot).sqrt();
+    let l32 = (b3 - b1 * b2) / l22;
+    let l33 = (b4 - b2 * b2 - l32 * l32).max(pivot).sqrt();
+    let y2 = (zf - b1) / l22;
+    let y3 = (zf * zf - b2 - l32 * y2) / l33;
+    let c3 = y3 / l33;
+    let c2 = (y2 - l32 * c3) / l22;
+    let c1 = 1.0 - b1 * c2 - b2 * c3;
+    let (p, q) = (c2 / c3, c1 / c3);
+    let r = (0.25 * p * p - q).max(0.0).sqrt();
+    let (z2, z3) = (-0.5 * p - r, -0.5 * p + r);
+    if zf <= z2 {
+        0.0
+    } else if zf <= z3 {
+        (zf * z3 - b1 * (zf + z3) + b2) / ((z3 - z2) * (zf - z2))
+    } else {
+        1.0 - (z2 * z3 - b1 * (z2 + z3) + b2) / ((zf - z2) * (zf - z3))
     }
 }
 
@@ -677,7 +807,7 @@ pub fn cssm_trace(pre: &Prefiltered, q: &Query) -> CssmTrace {
     let light = t.light();
     let uv = [q.uv[0] as f64, q.uv[1] as f64];
     let d = q.d as f64;
-    let db = d - t.get("bias");
+    let db = d - t.bias();
     let dr = db - if t.int("fix") == 1 { 0.5 / t.get("M") } else { 0.0 };
     let dist = light.d_world(d).max(light.near);
     let u0 = cssm_initial_width(&light, dist);

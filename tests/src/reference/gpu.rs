@@ -13,6 +13,9 @@
 //! - Shade: one invocation per query, filtered lookups through a linear, clamp-to-edge
 //!   sampler with `textureSampleLevel` at the query's level of detail.
 //!
+//! EVSM and MSM store their four channels in one layer (`(w+, w+^2, w-, w-^2)` and
+//! `(z, z^2, z^3, z^4)`), so one sampler lookup filters all four with the same weights.
+//!
 //! CSSM keeps its CSM basis (Unorm8) and its z-weighted set (z-weighted basis and z/2, F16
 //! for mipmaps, Unorm8 for tables) in two array textures, each mapped, blurred and then
 //! mipmapped, or summed into u32 tables (`sat.wgsl`: rows, then columns) in one storage
@@ -85,6 +88,8 @@ macro_rules! program {
 }
 
 const MAP_VSM: Program = program!("map_vsm.wgsl", "main", [Depth, Write], false);
+const MAP_EVSM: Program = program!("map_evsm.wgsl", "main", [Depth, Write, Uniform], false);
+const MAP_MSM: Program = program!("map_msm.wgsl", "main", [Depth, Write], false);
 const MAP_ESM: Program = program!("map_esm.wgsl", "main", [Depth, Write, Uniform], false);
 const MAP_CSM: Program = program!("map_csm.wgsl", "main", [Depth, Write, Uniform, Read], false);
 const BLUR: Program = program!("blur.wgsl", "main", [Texels, Write, Uniform, Read], false);
@@ -93,6 +98,8 @@ const ZMAX: Program = program!("zmax.wgsl", "main", [Depth, WriteR32, Uniform], 
 const SHADE_HARD: Program = program!("shade_hard.wgsl", "main", [Read, ReadWrite, Depth, Uniform], true);
 const SHADE_PCF: Program = program!("shade_pcf.wgsl", "main", [Read, ReadWrite, Depth, Uniform], true);
 const SHADE_VSM: Program = program!("shade_vsm.wgsl", "main", [Read, ReadWrite, Filtered, Sampler, Uniform], true);
+const SHADE_EVSM: Program = program!("shade_evsm.wgsl", "main", [Read, ReadWrite, Filtered, Sampler, Uniform], true);
+const SHADE_MSM: Program = program!("shade_msm.wgsl", "main", [Read, ReadWrite, Filtered, Sampler, Uniform], true);
 /// By `classify`: none, threshold (7.3.2), z-max (7.3.1).
 const SHADE_ESM: [Program; 3] = [
     program!("shade_esm.wgsl", "plain", [Read, ReadWrite, Filtered, Sampler, Uniform], true),
@@ -404,7 +411,7 @@ impl<'g> GpuReference<'g> {
                 return Err("u32 summed-area tables of unorm8 codes hold maps up to 4096 x 4096".into());
             }
         }
-        if matches!(r.kind, Kind::Vsm | Kind::Esm | Kind::Csm) {
+        if matches!(r.kind, Kind::Vsm | Kind::Esm | Kind::Evsm | Kind::Msm | Kind::Csm) {
             if r.storage == Storage::Unorm16 && !features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM) {
                 return Err("Unorm16 storage needs the device feature TEXTURE_FORMAT_16BIT_NORM".into());
             }
@@ -444,6 +451,31 @@ impl<'g> GpuReference<'g> {
                 let params = self.uniform("vsm", words);
                 let resources = vec![queries, results, view(&filtered), sampler, params.as_entire_binding()];
                 out.push(self.dispatch(&SHADE_VSM, None, resources, shade_groups)?);
+            }
+            Kind::Evsm => {
+                // (lo, span) of the four warps, in the order p1, p2, n1, n2
+                let mut lo = Words::default();
+                let mut span = Words::default();
+                for c in r.stored_channels() {
+                    let (l, s) = c.encoding(r.storage);
+                    lo = lo.f(l);
+                    span = span.f(s);
+                }
+                let encoding = || Words(lo.0.iter().chain(&span.0).copied().collect());
+                let (cp, cn) = (r.get("c_pos"), r.get("c_neg"));
+                let map_params = self.uniform("evsm map", encoding().f(cp).f(cn));
+                let map = (&MAP_EVSM, vec![map_params.as_entire_binding()]);
+                let filtered = self.prefilter(r, n, depth, map, out)?;
+                let words = encoding().f(cp).f(cn).f(r.get("min_variance")).f(r.get("bleed"));
+                let params = self.uniform("evsm", words);
+                let resources = vec![queries, results, view(&filtered), sampler, params.as_entire_binding()];
+                out.push(self.dispatch(&SHADE_EVSM, None, resources, shade_groups)?);
+            }
+            Kind::Msm => {
+                let filtered = self.prefilter(r, n, depth, (&MAP_MSM, Vec::new()), out)?;
+                let params = self.uniform("msm", Words::default().f(r.get("alpha")).f(r.get("bias")));
+                let resources = vec![queries, results, view(&filtered), sampler, params.as_entire_binding()];
+                out.push(self.dispatch(&SHADE_MSM, None, resources, shade_groups)?);
             }
             Kind::Esm => {
                 let c = r.get("c");
@@ -642,10 +674,14 @@ impl<'g> GpuReference<'g> {
         map: (&Program, Vec<wgpu::BindingResource<'_>>),
         out: &mut Vec<Dispatch>,
     ) -> Result<wgpu::TextureView, String> {
-        // the techniques' Filter kernels; VSM and CSM build a mean mip chain, ESM does not
+        // the techniques' Filter kernels; VSM, EVSM, MSM and CSM build a mean mip chain, ESM
+        // does not
         let (weights, mips) = match r.kind {
             Kind::Csm => (super::cpu::gaussian_weights(r.int("K").max(1) as usize, r.get("sigma")), true),
-            _ => (super::cpu::box_weights(r.int("K").max(1) as usize), r.kind == Kind::Vsm),
+            _ => (
+                super::cpu::box_weights(r.int("K").max(1) as usize),
+                matches!(r.kind, Kind::Vsm | Kind::Evsm | Kind::Msm),
+            ),
         };
         self.filtered_stack(n, depth, map, r.storage, layers(r), &weights, mips, out)
     }

@@ -1,8 +1,37 @@
 //! Hand-written reference implementations of the bundled techniques (`techniques/hard.ron`,
-//! `pcf.ron`, `vsm.ron`, `esm.ron`, `csm.ron`, `cssm.ron`, `pcss.ron`), written from the
-//! papers (Annen 2008, chapters 3, 4, 6, 7 and 8; Fernando 2005) and the technique files
-//! alone, independently of the compiler's code generator, so that tests can check that
-//! generated and hand-written results agree.
+//! `pcf.ron`, `vsm.ron`, `esm.ron`, `evsm.ron`, `msm.ron`, `csm.ron`, `cssm.ron`,
+//! `pcss.ron`), written from the papers (Annen 2008, chapters 3, 4, 6, 7 and 8; Fernando
+//! 2005; Lauritzen & McCool 2008; Peters & Klein 2015) and the technique files alone,
+//! independently of the compiler's code generator, so that tests can check that generated
+//! and hand-written results agree.
+//!
+//! EVSM (exponential variance shadow maps; Lauritzen & McCool 2008, "Layered variance
+//! shadow maps", section on exponential warping, with Chebyshev's one-sided bound of
+//! Donnelly & Lauritzen 2006): the depth is mapped to `t = 2z - 1` in `[-1, 1]` and warped
+//! by `w+(t) = exp(c_pos t)` and `w-(t) = -exp(-c_neg t)`, both increasing in `t`; the Map
+//! pass stores `(w+, w+^2, w-, w-^2)`, which are box-filtered and mipmapped like VSM's
+//! moments; the Shade pass bounds the lit fraction with Chebyshev's inequality in each
+//! warped space, `p = var / (var + (w(t_r) - mean)^2)` behind the mean and 1 in front of it,
+//! the variance clamped below by the minimum variance scaled by the square of the warp's
+//! derivative with respect to `t` at the receiver, `min_variance (c w(t_r))^2` (the scaling
+//! of Lauritzen's sample code: the minimum variance is in units of `t`), and takes the
+//! smaller of the two bounds (both are upper bounds of the same lit fraction), then
+//! `linstep(bleed, 1, p)`. EVSM has no constant bias (`evsm.ron` declares none).
+//!
+//! MSM (moment shadow mapping, Hamburger 4MSM; Peters & Klein 2015, Algorithm 2): the Map
+//! pass stores `b = (z, z^2, z^3, z^4)`, filtered and mipmapped; the Shade pass biases the
+//! filtered moments, `b' = (1 - alpha) b + alpha (1/2, 1/2, 1/2, 1/2)`, solves
+//! `[1 b1' b2'; b1' b2' b3'; b2' b3' b4'] c = (1, z_f, z_f^2)` by a Cholesky factorisation,
+//! takes the roots `z2 <= z3` of `c1 + c2 z + c3 z^2` and returns the lower bound `G` of the
+//! shadow intensity by the paper's three cases (`z_f <= z2`: 0; `z_f <= z3`:
+//! `(z_f z3 - b1' (z_f + z3) + b2') / ((z3 - z2)(z_f - z2))`; else
+//! `1 - (z2 z3 - b1' (z2 + z3) + b2') / ((z_f - z2)(z_f - z3))`); the visibility is `1 - G`. `alpha` is the file's
+//! (default 3e-5, the paper's value for moments stored as 32-bit floats; the paper takes a
+//! larger one for 16-bit storage). Where every filtered depth is exactly 0 or exactly 1 the
+//! biased moments lie on the boundary of the moment space (the Hankel matrix is singular:
+//! the bias distribution has its two atoms at 0 and 1); there the Cholesky pivots are
+//! clamped below at [`cpu::MSM_PIVOT`] and the bound is the limit of the positive-definite
+//! case (its coefficients are affine in the last pivot).
 //!
 //! Every pass after the Depth pass (Map, Filter, Mipmap and the Shade lookup) exists twice:
 //!
@@ -217,20 +246,32 @@ impl Technique {
     }
 }
 
-/// The seven techniques the references implement.
+/// The nine techniques the references implement.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Kind {
     Hard,
     Pcf,
     Vsm,
     Esm,
+    Evsm,
+    Msm,
     Csm,
     Cssm,
     Pcss,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 7] = [Kind::Hard, Kind::Pcf, Kind::Vsm, Kind::Esm, Kind::Csm, Kind::Cssm, Kind::Pcss];
+    pub const ALL: [Kind; 9] = [
+        Kind::Hard,
+        Kind::Pcf,
+        Kind::Vsm,
+        Kind::Esm,
+        Kind::Evsm,
+        Kind::Msm,
+        Kind::Csm,
+        Kind::Cssm,
+        Kind::Pcss,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -238,6 +279,8 @@ impl Kind {
             Kind::Pcf => "pcf",
             Kind::Vsm => "vsm",
             Kind::Esm => "esm",
+            Kind::Evsm => "evsm",
+            Kind::Msm => "msm",
             Kind::Csm => "csm",
             Kind::Cssm => "cssm",
             Kind::Pcss => "pcss",
@@ -250,6 +293,8 @@ impl Kind {
             Kind::Pcf => include_str!("../../../techniques/pcf.ron"),
             Kind::Vsm => include_str!("../../../techniques/vsm.ron"),
             Kind::Esm => include_str!("../../../techniques/esm.ron"),
+            Kind::Evsm => include_str!("../../../techniques/evsm.ron"),
+            Kind::Msm => include_str!("../../../techniques/msm.ron"),
             Kind::Csm => include_str!("../../../techniques/csm.ron"),
             Kind::Cssm => include_str!("../../../techniques/cssm.ron"),
             Kind::Pcss => include_str!("../../../techniques/pcss.ron"),
@@ -277,6 +322,15 @@ impl Kind {
                 ("bias", false),
                 ("slope_bias", false),
             ],
+            Kind::Evsm => &[
+                ("c_pos", false),
+                ("c_neg", false),
+                ("K", true),
+                ("min_variance", false),
+                ("bleed", false),
+                ("slope_bias", false),
+            ],
+            Kind::Msm => &[("K", true), ("alpha", false), ("bias", false), ("slope_bias", false)],
             Kind::Csm => &[
                 ("M", true),
                 ("alpha", false),
@@ -311,6 +365,8 @@ impl Kind {
             Kind::Hard | Kind::Pcf | Kind::Pcss | Kind::Cssm => &[],
             Kind::Vsm => &["m1", "m2"],
             Kind::Esm => &["e"],
+            Kind::Evsm => &["p1", "p2", "n1", "n2"],
+            Kind::Msm => &["b1", "b2", "b3", "b4"],
             Kind::Csm => &["f"],
         }
     }
@@ -398,6 +454,11 @@ impl Resolved {
         self.params.get(name).copied().unwrap_or(f64::NAN)
     }
 
+    /// The constant depth bias: the file's `bias`, 0 for a technique without one (EVSM).
+    pub fn bias(&self) -> f64 {
+        self.params.get("bias").copied().unwrap_or(0.0)
+    }
+
     /// An integer parameter.
     pub fn int(&self, name: &str) -> i64 {
         self.get(name) as i64
@@ -432,6 +493,19 @@ impl Resolved {
             Kind::Vsm => vec![ch("m1".into(), 0.0, 1.0), ch("m2".into(), 0.0, 1.0)],
             // exp(c z) of z in [0, 1] (eq. 7.1)
             Kind::Esm => vec![ch("e_t0_k1".into(), 1.0, self.get("c").exp())],
+            // the warps of t = 2z - 1 in [-1, 1]: exp(c+ t) and its square, increasing;
+            // -exp(-c- t), increasing and negative, and its square
+            Kind::Evsm => {
+                let (p, n) = (self.get("c_pos"), self.get("c_neg"));
+                vec![
+                    ch("p1".into(), (-p).exp(), p.exp()),
+                    ch("p2".into(), (-2.0 * p).exp(), (2.0 * p).exp()),
+                    ch("n1".into(), -n.exp(), -(-n).exp()),
+                    ch("n2".into(), (-2.0 * n).exp(), (2.0 * n).exp()),
+                ]
+            }
+            // z^k of z in [0, 1]
+            Kind::Msm => (1..=4).map(|k| ch(format!("b{k}"), 0.0, 1.0)).collect(),
             // sin(c_k z), cos(c_k z) with c_k = pi (2k - 1) (eq. 6.6): sin(pi z) is
             // non-negative on [0, 1]; every other basis sweeps at least a whole period
             // (c_k >= 3 pi for k >= 2, and cos(pi z) goes from 1 to -1), so spans [-1, 1].
@@ -496,7 +570,7 @@ impl StoredChannel {
 pub fn resolve(t: &Technique) -> Result<Resolved, String> {
     let kind = Kind::ALL.into_iter().find(|k| k.name() == t.name).ok_or_else(|| {
         format!(
-            "no reference implementation of technique `{}` (there are: hard, pcf, vsm, esm, csm, cssm, pcss)",
+            "no reference implementation of technique `{}` (there are: hard, pcf, vsm, esm, evsm, msm, csm, cssm, pcss)",
             t.name
         )
     })?;
@@ -632,7 +706,7 @@ pub fn resolve(t: &Technique) -> Result<Resolved, String> {
 fn check_sizes(r: &Resolved) -> Result<(), String> {
     let sizes: Vec<(&str, i64)> = match r.kind {
         Kind::Hard | Kind::Pcf | Kind::Pcss => Vec::new(),
-        Kind::Vsm | Kind::Csm | Kind::Cssm => vec![("K", r.int("K"))],
+        Kind::Vsm | Kind::Evsm | Kind::Msm | Kind::Csm | Kind::Cssm => vec![("K", r.int("K"))],
         Kind::Esm => vec![("K", r.int("K")), ("K + 2", r.int("K") + 2)],
     };
     for (what, n) in sizes {

@@ -4,7 +4,7 @@
 //! Used to compare both the hand-written WGSL and the shaders sshc generates with the CPU.
 
 use super::Query;
-use super::cpu::{self, Footprint, LevelLookup, Lookup, Prefiltered};
+use super::cpu::{self, Chain, Footprint, LevelLookup, Lookup, Prefiltered};
 use super::{Kind, Storage};
 
 // ---------------------------------------------------------------------------------------
@@ -112,6 +112,24 @@ impl Model {
         e + self.output(mag) + self.decoding(mag)
     }
 
+    /// [`Model::lookup`] without the error of the filtering weights: for channels filtered
+    /// through one sampler with the same weights, whose weight error the caller models
+    /// jointly (MSM).
+    fn lookup_unweighted(&self, l: &Lookup) -> f64 {
+        let lower = self.level(l.level, self.magnitude(&l.lower));
+        let (e, mag) = match &l.upper {
+            None => (lower, self.magnitude(&l.lower)),
+            Some((lambda, up)) => {
+                let upper = self.level(l.level + 1, self.magnitude(up));
+                (
+                    (1.0 - lambda) * lower + lambda * upper + WEIGHT * (lower + upper),
+                    self.magnitude(&l.lower).max(self.magnitude(up)),
+                )
+            }
+        };
+        e + self.output(mag) + self.decoding(mag)
+    }
+
     /// Error of one texel read without filtering (`fetch`).
     fn texel(&self, v: f64) -> f64 {
         let mag = self.signed.unwrap_or(v.abs());
@@ -196,7 +214,7 @@ pub fn allowed(pre: &Prefiltered, q: &Query) -> Allowed {
     let t = &pre.technique;
     let uv = [q.uv[0] as f64, q.uv[1] as f64];
     let (d, lod) = (q.d as f64, q.lod as f64);
-    let d_biased = d - t.get("bias");
+    let d_biased = d - t.bias();
     let size = pre.depth.base().size as f64;
     // tf = fract(uv N - 0.5) in f32: uv N rounds by at most N 2^-24, the rest is exact
     let tf_error = (size + 1.0) * EPS32;
@@ -249,6 +267,8 @@ pub fn allowed(pre: &Prefiltered, q: &Query) -> Allowed {
                 t.get("bleed"),
             )
         }
+        Kind::Evsm => evsm_allowed(pre, q),
+        Kind::Msm => msm_allowed(pre, q),
         Kind::Esm => {
             let c = t.get("c");
             let Some(e) = pre.channel("e_t0_k1") else {
@@ -651,8 +671,9 @@ fn pcss_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
     clamp_interval(v - 2.0 * EPS32, v + 2.0 * EPS32)
 }
 
-/// VSM's visibility over boxes of its inputs: mean, second moment and biased depth.
-fn vsm_interval(mean: (f64, f64), m2: (f64, f64), d: (f64, f64), min_variance: f64, bleed: f64) -> Allowed {
+/// Chebyshev's one-sided bound ([`cpu::chebyshev`]) over boxes of its inputs: mean, second
+/// moment, receiver and least variance; the bound before any clamp or bleeding reduction.
+fn chebyshev_interval(mean: (f64, f64), m2: (f64, f64), d: (f64, f64), least: (f64, f64)) -> (f64, f64) {
     let sq = |(lo, hi): (f64, f64)| {
         let (a, b) = (lo * lo, hi * hi);
         if lo <= 0.0 && hi >= 0.0 {
@@ -663,11 +684,8 @@ fn vsm_interval(mean: (f64, f64), m2: (f64, f64), d: (f64, f64), min_variance: f
     };
     let mean_sq = sq(mean);
     // m2 - mean^2 in f32 loses up to 2^-23 of each operand
-    let slop = 2.0 * EPS32 * (m2.1.abs() + mean_sq.1);
-    let variance = (
-        (m2.0 - mean_sq.1 - slop).max(min_variance),
-        (m2.1 - mean_sq.0 + slop).max(min_variance),
-    );
+    let slop = 2.0 * EPS32 * (m2.1.abs().max(m2.0.abs()) + mean_sq.1);
+    let variance = ((m2.0 - mean_sq.1 - slop).max(least.0), (m2.1 - mean_sq.0 + slop).max(least.1));
     let delta = (d.0 - mean.1, d.1 - mean.0);
     let mut p = (f64::INFINITY, f64::NEG_INFINITY);
     let mut include = |v: f64| {
@@ -684,8 +702,242 @@ fn vsm_interval(mean: (f64, f64), m2: (f64, f64), d: (f64, f64), min_variance: f
         include(p_max(variance.0, delta_sq.1));
         include(p_max(variance.1, delta_sq.0));
     }
+    p
+}
+
+/// VSM's visibility over boxes of its inputs: mean, second moment and biased depth.
+fn vsm_interval(mean: (f64, f64), m2: (f64, f64), d: (f64, f64), min_variance: f64, bleed: f64) -> Allowed {
+    let p = chebyshev_interval(mean, m2, d, (min_variance, min_variance));
     let linstep = |x: f64| cpu::linstep(bleed, 1.0, x);
     // the f32 division and linstep: a few roundings, magnified by 1 / (1 - bleed)
     let slack = 8.0 * EPS32 / (1.0 - bleed);
     clamp_interval(linstep(p.0) - slack, linstep(p.1) + slack)
+}
+
+// ---------------------------------------------------------------------------------------
+// EVSM (Lauritzen & McCool 2008)
+//
+// Each warp is VSM in the warped space, so its bound is propagated as VSM's is, in interval
+// arithmetic over the lookups' error bounds (Chebyshev's bound is monotone in the variance
+// and in the distance to the mean), with these sources on top of the lookups' [`Model`]:
+// - the Map pass's exp(k c t), k = 1 for a warp and 2 for its square, |k c t| <= k c: exp's
+//   3 + 2|x| ulp, plus the argument's own error: 2z - 1 rounds by 2^-24, times k c, and
+//   the product k c t rounds once (relative 2^-24 of x), so the relative error of the value
+//   is at most (3 + 4 k c) 2^-23 + 2^-22 (the f32 values of the warps are what the lookups
+//   blend; their storage rounding, relative for floats, is in the Model);
+// - the receiver's warp exp(c t_r) the same way (t_r = 2 d - 1, d - bias exact for EVSM);
+// - the least variance min_variance (c w)^2: monotone in |w|, evaluated at the ends of w's
+//   interval, plus four roundings;
+// - m2 - mean^2 in f32 (as for VSM); with c = 40 the warps span e^{+-40} and the squares
+//   e^{+-80}, so this cancellation is the error that matters where the filter region is
+//   almost flat: 2^-23 of the second moment against a least variance of
+//   min_variance c^2 w^2 (3 % of w^2 at the defaults), small where w is near the mean;
+// - the minimum of the two bounds is monotone in each, the final linstep likewise.
+// For F16 the Model's rounding is 2^-11 relative: the variance is then meaningful only
+// above about 2^-9 of the second moment, so F16 needs a larger minimum variance (or the
+// allowance is wide, as it says).
+
+fn evsm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
+    let t = &pre.technique;
+    let uv = [q.uv[0] as f64, q.uv[1] as f64];
+    let lod = q.lod as f64;
+    let d = q.d as f64 - t.bias();
+    let tr = 2.0 * d - 1.0;
+    let tr_err = 2.0 * EPS32;
+    let min_variance = t.get("min_variance");
+    let bound = |c: f64, sign: f64, first: &str, second: &str| -> Option<(f64, f64)> {
+        let exp_rel = |kc: f64| (3.0 + 4.0 * kc) * 2.0 * EPS32 + 4.0 * EPS32;
+        let l1 = pre.channel(first)?.lookup(uv, lod);
+        let l2 = pre.channel(second)?.lookup(uv, lod);
+        let e1 = Model::new(pre, first, 0.0, exp_rel(c), None).lookup(&l1);
+        let e2 = Model::new(pre, second, 0.0, exp_rel(2.0 * c), None).lookup(&l2);
+        // the receiver's warp: w = sign exp(sign c t_r), sign = +1 or -1
+        let x = sign * c * tr;
+        let w = sign * x.exp();
+        let w_err = w.abs() * ((3.0 + 2.0 * x.abs()) * 2.0 * EPS32 + c * tr_err + 2.0 * EPS32 * x.abs());
+        let ws = (w - w_err, w + w_err);
+        // min_variance (c w)^2 over that interval
+        let mag = |v: f64| c * v.abs();
+        let (small, large) = if ws.0 <= 0.0 && ws.1 >= 0.0 {
+            (0.0, mag(ws.0).max(mag(ws.1)))
+        } else {
+            (mag(ws.0).min(mag(ws.1)), mag(ws.0).max(mag(ws.1)))
+        };
+        let least = (
+            min_variance * small * small * (1.0 - 8.0 * EPS32),
+            min_variance * large * large * (1.0 + 8.0 * EPS32),
+        );
+        Some(chebyshev_interval(
+            (l1.value - e1, l1.value + e1),
+            (l2.value - e2, l2.value + e2),
+            ws,
+            least,
+        ))
+    };
+    let (Some(vp), Some(vn)) = (bound(t.get("c_pos"), 1.0, "p1", "p2"), bound(t.get("c_neg"), -1.0, "n1", "n2")) else {
+        return Allowed::Within(0.0, 1.0);
+    };
+    let bleed = t.get("bleed");
+    let linstep = |x: f64| cpu::linstep(bleed, 1.0, x);
+    // the f32 divisions, the minimum and linstep: a few roundings, magnified by 1 / (1 - bleed)
+    let slack = 8.0 * EPS32 / (1.0 - bleed);
+    clamp_interval(linstep(vp.0.min(vn.0)) - slack, linstep(vp.1.min(vn.1)) + slack)
+}
+
+// ---------------------------------------------------------------------------------------
+// MSM (Peters & Klein 2015, Algorithm 2)
+//
+// The bound is a smooth but far from monotone function of the four moments, and badly
+// conditioned where the Hankel matrix is nearly singular (a flat filter region: the bias
+// alone keeps it positive definite, its last pivot of the order of alpha). So the error
+// bounds are propagated by perturbing the inputs and evaluating the CPU formulas there:
+// - the filtering weights: the four moments share one texture, one sampler and so the same
+//   bilinear weights and the same weight between levels; each carries 8 bits (see the top
+//   of this module), so the GPU's moments are those of the exact filter with each weight
+//   moved by up to 2^-8. They are taken at the exact weights and at every corner (each
+//   fraction of each level, and the weight between levels where the lookup blends two,
+//   moved by -2^-8 or +2^-8): the moments stay those of a convex combination of texels (a valid moment
+//   vector), which independent intervals per moment would not;
+// - per moment, everything else the [`Model`] counts (storage roundings at each level, the
+//   mean and filter arithmetic, the Map pass's powers: z^k in f32 rounds k - 1 times) and
+//   the bias's f32 mix (a few roundings);
+// - the backward error of the f32 Cholesky solve: the computed factor is the exact one of
+//   the matrix perturbed by at most gamma_4 sqrt(a_ii a_jj) <= 4 2^-23 per entry (Higham,
+//   Accuracy and Stability of Numerical Algorithms, theorem 10.3; the entries are moments
+//   in [0, 1]) and the two triangular solves are backward stable likewise: 16 2^-24 per
+//   entry in all. This perturbation need not keep the matrix a Hankel matrix, and where
+//   the matrix is nearly singular that matters: so the five entries of the matrix
+//   (a12 = b1, a13 = a22 = b2, a23 = b3, a33 = b4) each move by their moment's error plus
+//   this, independently, and the b1, b2 of the last step by their moments' errors
+//   ([`cpu::msm_bound`]); the bound is evaluated at the 128 corners of that box (for a
+//   function linear over a box this small, its extremes);
+// - the receiver's depth d - bias rounds once: +-2^-23 (d + 1), taken at both ends;
+// - the steps after the solve (the quadratic's roots and the three cases) in f32: their
+//   forward error is measured by running the same algorithm in f32 on the CPU
+//   ([`cpu::msm_intensity_f32`]) at the query's moments, and allowed twice over (the GPU
+//   rounds in another order and may contract products into fused multiply-adds), plus a
+//   few roundings of the result.
+// Where the matrix is nearly singular the allowance is wide, and it says so.
+
+/// One bilinear lookup of `level` at uv with both fractions moved by `shift` (clamped to
+/// [0, 1]).
+fn shifted_bilinear(level: &cpu::Level, uv: [f64; 2], shift: [f64; 2]) -> f64 {
+    let n = level.size as f64;
+    let (sx, sy) = (uv[0] * n - 0.5, uv[1] * n - 0.5);
+    let (x0, y0) = (sx.floor(), sy.floor());
+    let fx = (sx - x0 + shift[0]).clamp(0.0, 1.0);
+    let fy = (sy - y0 + shift[1]).clamp(0.0, 1.0);
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let top = level.at(x0, y0) + fx * (level.at(x0 + 1, y0) - level.at(x0, y0));
+    let bottom = level.at(x0, y0 + 1) + fx * (level.at(x0 + 1, y0 + 1) - level.at(x0, y0 + 1));
+    top + fy * (bottom - top)
+}
+
+/// [`Chain::lookup`] with the filtering weights moved: the bilinear fractions of the lower
+/// level by `shift[0..2]`, of the upper level by `shift[2..4]`, the weight of the upper level
+/// by `shift[4]` (each clamped to [0, 1]).
+fn shifted_lookup(chain: &Chain, uv: [f64; 2], lod: f64, shift: [f64; 5]) -> f64 {
+    let l = chain.lookup(uv, lod);
+    let lower = shifted_bilinear(&chain.levels[l.level], uv, [shift[0], shift[1]]);
+    match l.upper {
+        None => lower,
+        Some((lambda, _)) => {
+            let upper = shifted_bilinear(&chain.levels[l.level + 1], uv, [shift[2], shift[3]]);
+            let lambda = (lambda + shift[4]).clamp(0.0, 1.0);
+            lower + lambda * (upper - lower)
+        }
+    }
+}
+
+/// The backward error of MSM's f32 Cholesky solve per matrix entry (see above).
+const BACKWARD: f64 = 16.0 * EPS32;
+
+fn msm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
+    let t = &pre.technique;
+    let uv = [q.uv[0] as f64, q.uv[1] as f64];
+    let lod = q.lod as f64;
+    let zf = q.d as f64 - t.bias();
+    let zf_err = 2.0 * EPS32 * (zf.abs() + 1.0);
+    let names = ["b1", "b2", "b3", "b4"];
+    let mut chains = Vec::new();
+    for name in names {
+        match pre.channel(name) {
+            Some(c) => chains.push(c),
+            None => return Allowed::Within(0.0, 1.0),
+        }
+    }
+    let alpha = t.get("alpha");
+    // per-moment errors besides the weights', in the biased moments' units
+    let errors: Vec<f64> = chains
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let l = c.lookup(uv, lod);
+            let model = Model::new(pre, names[k], 0.0, k as f64 * EPS32, None);
+            (1.0 - alpha) * model.lookup_unweighted(&l) + 4.0 * EPS32
+        })
+        .collect();
+    let blends = chains[0].lookup(uv, lod).upper.is_some();
+    // the exact weights and the weights' corners (each weight at either end of its error;
+    // the two levels' fractions are rounded independently)
+    let dims = if blends { 5 } else { 2 };
+    let mut shifts = vec![[0.0; 5]];
+    for corner in 0..1u32 << dims {
+        shifts.push(std::array::from_fn(|i| {
+            if i >= dims {
+                0.0
+            } else if (corner >> i) & 1 == 1 {
+                WEIGHT
+            } else {
+                -WEIGHT
+            }
+        }));
+    }
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for shift in shifts {
+        let b: [f64; 4] = std::array::from_fn(|k| shifted_lookup(chains[k], uv, lod, shift));
+        let b = cpu::msm_biased(t, b);
+        let centre = cpu::msm_intensity(b, zf);
+        // the receiver's rounding, linear over its interval
+        let by_zf = [-zf_err, zf_err]
+            .iter()
+            .map(|e| (cpu::msm_intensity(b, zf + e) - centre).abs())
+            .fold(0.0, f64::max);
+        // (value, half-width) of a12, a13, a22, a23, a33, then b1 and b2 of the last step
+        let inputs = [
+            (b[0], errors[0] + BACKWARD),
+            (b[1], errors[1] + BACKWARD),
+            (b[1], errors[1] + BACKWARD),
+            (b[2], errors[2] + BACKWARD),
+            (b[3], errors[3] + BACKWARD),
+            (b[0], errors[0]),
+            (b[1], errors[1]),
+        ];
+        for corner in 0..1u32 << inputs.len() {
+            let v: [f64; 7] = std::array::from_fn(|k| {
+                let (x, e) = inputs[k];
+                if (corner >> k) & 1 == 1 { x + e } else { x - e }
+            });
+            let g = cpu::msm_bound([v[0], v[1], v[2], v[3], v[4]], v[5], v[6], zf);
+            lo = lo.min(g - by_zf);
+            hi = hi.max(g + by_zf);
+        }
+        lo = lo.min(centre - by_zf);
+        hi = hi.max(centre + by_zf);
+    }
+    // the f32 steps after the solve, measured at the query's moments
+    let b = cpu::msm_biased(t, cpu::msm_moments(pre, uv, lod));
+    let g64 = cpu::msm_intensity(b, zf);
+    let g32 = cpu::msm_intensity_f32(b.map(|v| v as f32), zf as f32) as f64;
+    let forward = if g32.is_finite() && g64.is_finite() {
+        2.0 * (g32 - g64).abs()
+    } else {
+        1.0
+    };
+    let slack = forward + 8.0 * EPS32;
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Allowed::Within(0.0, 1.0);
+    }
+    // visibility 1 - G
+    clamp_interval(1.0 - hi - slack, 1.0 - lo + slack)
 }

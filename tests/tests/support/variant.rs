@@ -71,6 +71,8 @@ impl Variant {
         match self.technique {
             "vsm" => &["m1", "m2"],
             "esm" => &["e"],
+            "evsm" => &["p1", "p2", "n1", "n2"],
+            "msm" => &["b1", "b2", "b3", "b4"],
             "csm" => &["f"],
             _ => &[],
         }
