@@ -2,6 +2,8 @@
 //! must be refused, and its rendered diagnostic must match `errors/*.stderr`.
 //! Set `UPDATE_EXPECT=1` to rewrite the expected files after reviewing a change.
 
+mod expect;
+
 use std::path::Path;
 
 fn render(path: &Path) -> String {
@@ -18,34 +20,14 @@ fn render(path: &Path) -> String {
 
 #[test]
 fn every_mistake_has_its_diagnostic() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/errors");
-    let mut fixtures: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
-        .collect();
-    fixtures.sort();
+    let fixtures = expect::fixtures("tests/errors");
     assert!(fixtures.len() >= 12, "expected at least 12 fixtures, found {}", fixtures.len());
-    let update = std::env::var_os("UPDATE_EXPECT").is_some();
-    let mut failures = Vec::new();
-    for f in &fixtures {
+    expect::check(&fixtures, "diagnostic", |f, name| {
         let got = render(f);
         // Every diagnostic names the file with a line and column.
-        let name = f.file_name().unwrap().to_string_lossy().into_owned();
         assert!(got.contains(&format!("{name}:")), "{name}: no file:line:column in\n{got}");
-        let expected_path = f.with_extension("stderr");
-        if update {
-            std::fs::write(&expected_path, &got).unwrap();
-            continue;
-        }
-        match std::fs::read_to_string(&expected_path) {
-            Ok(want) if want == got => {}
-            Ok(want) => failures.push(format!("{name}: diagnostic changed\n--- expected\n{want}\n--- got\n{got}")),
-            Err(_) => failures.push(format!("{name}: no expected file {}; got\n{got}", expected_path.display())),
-        }
-    }
-    assert!(failures.is_empty(), "{}\n(run with UPDATE_EXPECT=1 to accept)", failures.join("\n"));
+        got
+    });
 }
 
 #[test]

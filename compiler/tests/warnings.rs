@@ -4,50 +4,32 @@
 //! for Unorm16 channels; EVSM at F32 and at F16 within its exponent limits gives none.
 //! Set `UPDATE_EXPECT=1` to rewrite the expected files after reviewing a change.
 
+mod expect;
+
 use std::path::Path;
 
 #[test]
 fn every_precision_fixture_has_its_warnings() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/warnings");
-    let mut fixtures: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
-        .collect();
-    fixtures.sort();
+    let fixtures = expect::fixtures("tests/warnings");
     assert_eq!(fixtures.len(), 5, "{fixtures:?}");
-    let update = std::env::var_os("UPDATE_EXPECT").is_some();
-    let mut failures = Vec::new();
-    for f in &fixtures {
+    expect::check(&fixtures, "warnings", |f, name| {
         let source = std::fs::read_to_string(f).unwrap();
-        let name = f.file_name().unwrap().to_string_lossy().into_owned();
         let opts = sshc::CompileOptions {
             rounding: true,
             ..Default::default()
         };
-        let c = sshc::compile_str(&source, &opts).unwrap_or_else(|d| panic!("{name}: refused\n{}", d.render(&name, &source)));
-        let got = sshc::diag::Diagnostics(c.warnings.clone()).render(&name, &source);
+        let c = sshc::compile_str(&source, &opts).unwrap_or_else(|d| panic!("{name}: refused\n{}", d.render(name, &source)));
+        let got = sshc::diag::Diagnostics(c.warnings.clone()).render(name, &source);
         // the cases the issue names
         let rounding = got.contains("storage rounding can move the visibility");
-        match name.as_str() {
+        match name {
             "vsm_unorm8_moments.ron" | "msm_unorm8_moments.ron" => assert!(rounding, "{name}: {got}"),
             "vsm_unorm16_render_target.ron" => assert!(got.contains("Rg16Unorm") && !rounding, "{name}: {got}"),
             "evsm_f32.ron" | "evsm_f16_within_limits.ron" => assert!(got.is_empty(), "{name}: {got}"),
             other => panic!("{other}: a fixture without its expectation here"),
         }
-        let expected_path = f.with_extension("stderr");
-        if update {
-            std::fs::write(&expected_path, &got).unwrap();
-            continue;
-        }
-        match std::fs::read_to_string(&expected_path) {
-            Ok(want) if want == got => {}
-            Ok(want) => failures.push(format!("{name}: warnings changed\n--- expected\n{want}\n--- got\n{got}")),
-            Err(_) => failures.push(format!("{name}: no expected file {}; got\n{got}", expected_path.display())),
-        }
-    }
-    assert!(failures.is_empty(), "{}\n(run with UPDATE_EXPECT=1 to accept)", failures.join("\n"));
+        got
+    });
 }
 
 /// The estimate itself: at F32 every bundled moment technique's rounding error is far
