@@ -9,6 +9,9 @@ sshc_shaders_gen::technique!(mod pcf = "../techniques/pcf.ron");
 sshc_shaders_gen::technique!(mod vsm = "../techniques/vsm.ron");
 sshc_shaders_gen::technique!(mod esm = "../techniques/esm.ron");
 sshc_shaders_gen::technique!(mod csm = "../techniques/csm.ron");
+// functions of the technique and four moments (issue 17)
+sshc_shaders_gen::technique!(mod evsm = "../techniques/evsm.ron");
+sshc_shaders_gen::technique!(mod msm = "../techniques/msm.ron");
 sshc_shaders_gen::technique!(
     /// PCF over 5 x 5 taps.
     pub(crate) mod pcf5 = "../techniques/pcf.ron",
@@ -76,6 +79,8 @@ fn embedded_modules_equal_the_compiler_output() {
         (embedded!(vsm), compile("vsm.ron", &[], &[])),
         (embedded!(esm), compile("esm.ron", &[], &[])),
         (embedded!(csm), compile("csm.ron", &[], &[])),
+        (embedded!(evsm), compile("evsm.ron", &[], &[])),
+        (embedded!(msm), compile("msm.ron", &[], &[])),
         (embedded!(pcf5), compile("pcf.ron", &[("N", "5")], &[])),
         (embedded!(esm_f16), compile("esm.ron", &[("c", "10.0")], &[("e", "F16")])),
         (
