@@ -111,8 +111,10 @@ pub struct CompileOptions {
     /// technique's `light:` list does not admit, fold the light inputs that are 0 for it.
     pub scene: Option<sshc_graph::SceneFacts>,
     /// Estimate what storage rounding does to the visibility and warn above
-    /// `rounding::WARN_ABOVE` (`sshc compile` and `explain` do; it costs 1 to 150 ms in a
-    /// release build, CSSM the most, so a library compilation asks for it).
+    /// `rounding::WARN_ABOVE` (`sshc compile` and `explain` do). It runs only where a
+    /// channel is stored below F32, and costs up to about 120 ms in a release build (CSSM,
+    /// against 7 ms for the rest of its compilation; docs/language.md section 5), so a
+    /// library compilation asks for it.
     pub rounding: bool,
 }
 
