@@ -181,7 +181,7 @@ pub fn estimate(p: &Program, detail: Detail) -> Option<Estimate> {
     // thin the receivers where the expression is large
     let evals_per_channel = match detail {
         Detail::Warn => 2,
-        Detail::Explain => 10,
+        Detail::Explain => 8,
     };
     let per = order.len().max(1) * (1 + evals_per_channel * looked.len());
     while receivers.len() > 3 && per * textures.len() * receivers.len() > BUDGET {
@@ -257,12 +257,14 @@ pub fn estimate(p: &Program, detail: Detail) -> Option<Estimate> {
                         .filter(|e| !e.is_nan())
                         .fold(0.0, f64::max)
                 };
+                // the laid-out precision once, the others only for `Detail::Explain`
+                let laid_out = channels[k].precision;
+                let worst = worst_at(laid_out);
                 for (i, q) in Precision::ALL.iter().enumerate() {
                     if let Some(e) = channels[k].at[i].as_mut() {
-                        *e = e.max(worst_at(*q));
+                        *e = e.max(if *q == laid_out { worst } else { worst_at(*q) });
                     }
                 }
-                let worst = worst_at(channels[k].precision);
                 channels[k].error = channels[k].error.max(worst);
                 sum += worst;
             }
