@@ -1356,6 +1356,16 @@ impl Sig {
 /// Evaluate a pure function on constants with f32 results rounded as the GPU would store
 /// them; `None` where it is not folded (no finite value, or not evaluated at compile time).
 pub fn fold_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
+    fold_with(f, v, finite_f32)
+}
+
+/// [`fold_call`] without rounding float results to f32 and keeping infinities and NaNs:
+/// the CPU evaluation of `sshc verify` (`interp`), which is exact where the GPU is not.
+pub fn fold_call_exact(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
+    fold_with(f, v, |x| Some(ConstValue::Float(x)))
+}
+
+fn fold_with(f: Func, v: &[ConstValue], finish: fn(f64) -> Option<ConstValue>) -> Option<ConstValue> {
     let floats = || -> Option<Vec<f64>> {
         v.iter()
             .map(|c| match c {
@@ -1368,7 +1378,7 @@ pub fn fold_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
     };
     match f.desc().fold {
         Fold::Never => None,
-        Fold::Float(g) => finite_f32(g(&floats()?)?),
+        Fold::Float(g) => finish(g(&floats()?)?),
         Fold::IntOrFloat(int, g) => {
             // u32 arguments (`min`, `max`, `clamp` of u32): their result is one of them
             if let Some(a) = v
@@ -1390,7 +1400,7 @@ pub fn fold_call(f: Func, v: &[ConstValue]) -> Option<ConstValue> {
                 .collect();
             match ints {
                 Some(a) => int(&a).map(ConstValue::Int),
-                None => finite_f32(g(&floats()?)?),
+                None => finish(g(&floats()?)?),
             }
         }
         Fold::Custom(g) => g(v),

@@ -499,12 +499,36 @@ impl Arena {
     /// evaluated component by component (a scalar is held in every component, so mixing
     /// it with a vector broadcasts it); `length` and `dot` reduce over the operand's width.
     pub fn eval_ordered(&self, order: &[H], h: H, leaf: &dyn Fn(&Node) -> Option<f64>, vals: &mut [[f64; 4]]) -> f64 {
+        let hooks = Hooks {
+            leaf: &|n: H, _: usize, _: &[[f64; 4]]| leaf(self.node(n)),
+            exact: false,
+        };
+        self.eval_span(order, &hooks, vals);
+        vals.get(h.index()).map_or(f64::NAN, |v| v[0])
+    }
+
+    /// Evaluate the nodes of `order` (a suffix of a postorder is allowed: the nodes before
+    /// it keep their values in `vals`) into `vals`, with [`Hooks`]: `leaf` gives params,
+    /// inputs, channels, samples and the calls the arena cannot fold alone (`uv_width`,
+    /// `noise`) per component, reading the values of their arguments from `vals`.
+    pub fn eval_span(&self, order: &[H], hooks: &Hooks, vals: &mut [[f64; 4]]) {
+        for &n in order {
+            let v = self.eval_node(n, hooks, vals);
+            if let Some(slot) = vals.get_mut(n.index()) {
+                *slot = v;
+            }
+        }
+    }
+
+    /// One node's value from its operands' in `vals`.
+    pub fn eval_node(&self, n: H, hooks: &Hooks, vals: &[[f64; 4]]) -> [f64; 4] {
         use ConstValue::*;
+        let leaf = hooks.leaf;
         let width = |x: H| match self.ty(x) {
             Ty::Vec(n) => (n as usize).clamp(1, 4),
             Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => 1,
         };
-        for &n in order {
+        {
             let get = |x: &H, i: usize| vals.get(x.index()).map_or(f64::NAN, |v| v[i]);
             let w = width(n);
             let mut v = [f64::NAN; 4];
@@ -575,6 +599,7 @@ impl Arena {
                     }
                     Node::Call(Func::Length, a) => (0..width(a[0])).map(|k| get(&a[0], k).powi(2)).sum::<f64>().sqrt(),
                     Node::Call(Func::Dot, a) => (0..width(a[0])).map(|k| get(&a[0], k) * get(&a[1], k)).sum(),
+                    Node::Call(Func::UvWidth | Func::Noise, _) => leaf(n, i, vals).unwrap_or(f64::NAN),
                     Node::Call(f, a) => {
                         let args: Vec<ConstValue> = a
                             .iter()
@@ -583,26 +608,36 @@ impl Arena {
                                 Ty::F32 | Ty::Bool | Ty::Vec(_) | Ty::AbstractInt => Float(get(x, i)),
                             })
                             .collect();
-                        eval_call_f64(*f, &args).unwrap_or(f64::NAN)
+                        let folded = if hooks.exact {
+                            crate::builtins::fold_call_exact(*f, &args)
+                        } else {
+                            eval_call(*f, &args)
+                        };
+                        folded.map_or(f64::NAN, ConstValue::as_f64)
                     }
                     Node::Swizzle(x, c) => c.get(i).map_or(f64::NAN, |&k| get(x, k as usize)),
-                    other @ (Node::Param(_) | Node::Input(..) | Node::Channel(..) | Node::Sample { .. }) => leaf(other).unwrap_or(f64::NAN),
+                    Node::Param(_) | Node::Input(..) | Node::Channel(..) | Node::Sample { .. } => leaf(n, i, vals).unwrap_or(f64::NAN),
                 };
             }
             // a scalar is held in every component
             if w == 1 {
                 v = [v[0]; 4];
             }
-            if let Some(slot) = vals.get_mut(n.index()) {
-                *slot = v;
-            }
+            v
         }
-        vals.get(h.index()).map_or(f64::NAN, |v| v[0])
     }
 }
 
-fn eval_call_f64(f: Func, v: &[ConstValue]) -> Option<f64> {
-    eval_call(f, v).map(ConstValue::as_f64)
+/// A leaf's value in component `i` given the values computed so far (by node).
+pub type Leaf<'a> = dyn Fn(H, usize, &[[f64; 4]]) -> Option<f64> + 'a;
+
+/// How [`Arena::eval_span`] evaluates.
+pub struct Hooks<'a> {
+    /// The value of a leaf (param, input, channel, sample) or of a call the arena cannot
+    /// evaluate alone, in component `i`, given the values computed so far.
+    pub leaf: &'a Leaf<'a>,
+    /// Fold built-in calls in f64 without rounding to f32 (`builtins::fold_call_exact`).
+    pub exact: bool,
 }
 
 /// The constant of integer type `ty` holding `x` (a shift count is u32 whatever `ty`).

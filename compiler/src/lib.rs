@@ -27,6 +27,7 @@ pub mod emit;
 pub mod explain;
 pub mod front;
 pub mod handle;
+pub mod interp;
 pub mod interval;
 pub mod ir;
 pub mod lower;

@@ -13,6 +13,7 @@ pub mod image_io;
 pub mod metrics;
 pub mod session;
 pub mod truth;
+pub mod verify;
 pub mod visibility;
 
 /// Scenes live in their own crate, `sshc-scene` (no GPU), so that fuzzing and other tools

@@ -3,7 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use sshc::{CompileOptions, Diagnostics, DumpPhase};
-use sshc_lab::cmd::{compare, render, sweep, truth};
+use sshc_lab::cmd::{compare, render, sweep, truth, verify};
 use sshc_lab::session::{pair, read, report};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -75,6 +75,10 @@ enum Command {
     /// GPU time (as a ratio to a reference technique) and memory; CSV, Markdown and Pareto
     /// charts.
     Sweep(sweep::SweepArgs),
+    /// Run a technique on the GPU over synthetic depth fields and scene depth maps and
+    /// compare every receiver with an f64 evaluation of the same technique on the CPU: a
+    /// table and a verdict per input (agrees, differs, lossy).
+    Verify(verify::VerifyArgs),
     /// Time compilation of techniques in a warm process (naga validation included).
     BenchCompile {
         /// Technique files.
@@ -146,6 +150,7 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Truth(args) => truth::truth(args),
         Command::Compare(args) => compare::compare(args),
         Command::Sweep(args) => sweep::sweep(args),
+        Command::Verify(args) => verify::verify(args),
         Command::Compile { common, out } => {
             let c = compile_reported(&common)?;
             let files = sshc::write_outputs(&c, &out).map_err(|e| format!("error: cannot write to `{}`: {e}", out.display()))?;

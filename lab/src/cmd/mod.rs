@@ -5,3 +5,4 @@ pub mod compare;
 pub mod render;
 pub mod sweep;
 pub mod truth;
+pub mod verify;

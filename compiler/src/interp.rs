@@ -1,0 +1,1149 @@
+//! A compiled technique evaluated on the CPU in f64 (issue 17, `sshc verify`), with the
+//! interval about each value that the GPU's f32 arithmetic, its storage rounding, its
+//! filtering hardware and its built-in functions may move it by.
+//!
+//! Given the Depth pass's output (a square map of linear depths), [`Evaluation::new`] runs
+//! every pass after Depth in execution order: Map (the channel expressions per texel,
+//! `neighbour` offsets clamped to the edge), Filter (separable Box, Gaussian, Max and Min
+//! kernels along x then y, the 3 x 3 Laplacian), Mipmap (levels down to 1 x 1, each texel
+//! the mean, maximum or minimum of the 2 x 2 below it) and SummedArea (exact prefix sums).
+//! [`Evaluation::visibility`] then evaluates the Shade's visibility for one receiver with
+//! the eight lookups as the runtime performs them (texel `(i, j)` centred at uv `((i + 0.5)
+//! / N, (j + 0.5) / N)`, clamp to edge, bilinear within a level and linear between levels,
+//! `fetch` from `floor(uv N - 0.5)`, `sample_box` integrating the texels the box covers),
+//! and clamps it as the runtime stores it (`[0, 1]`, NaN read as 1).
+//!
+//! Values are exact (f64, the built-in functions folded without rounding by
+//! [`crate::builtins::fold_call_exact`]) unless [`Rounding::Stored`] asks for every stored texel to be
+//! rounded to its channel's precision and encoding, as the GPU keeps it: the difference of
+//! the two evaluations is what storage alone does to the visibility.
+//!
+//! **The allowance** (the tolerance model of `sshc verify`, a generic first-order form of
+//! the agreement tests' model). Every texel of every stored channel carries an allowance:
+//! half its precision's rounding step ([`half_step`]), plus what the pass that wrote it
+//! propagates (a filter's weights applied to its inputs' allowances, a maximum's largest,
+//! a mip level's mean, a Map's first-order sensitivity below). A value computed from an
+//! expression (a Map channel's per texel, the Shade's visibility per receiver) is allowed
+//!
+//! `sum over sites s of max(|v(x_s + e_s) - v|, |v(x_s - e_s) - v|) + 4 |v_f32 - v| + 2^-20`
+//!
+//! where `v` is the exact value, `v(x_s +- e_s)` the value with site `s` moved by its own
+//! error `e_s`, and `v_f32` the same expression evaluated with every float result rounded
+//! to f32 (the GPU's arithmetic; four times its distance covers a different order of
+//! operations and fused multiply-adds). The sites:
+//!
+//! - every lookup, moved by the allowance of the texels it reads (weighted as the lookup
+//!   weighs them) plus `2^-8` of their spread per filtered axis (filtering weights are kept
+//!   to 8 fractional bits by the hardware, lavapipe included);
+//! - every call of a built-in with a looser precision than f32 rounding, moved by its WGSL
+//!   bound ([`call_error`]: `sin`, `cos` 2^-11 absolute; `exp`, `exp2` (3 + 2|x|) ulp; `log`,
+//!   `log2` 3 ulp or 2^-21 absolute; `pow` as `exp2(y log2 x)`; `sqrt`, `inverseSqrt`,
+//!   division 2.5 ulp; the inverse trigonometric functions 4096 ulp);
+//! - the receiver's inputs, moved by what the GPU's f32 transforms may leave in them
+//!   ([`input_error`]: `d` and `uv` by 2^-20, the others by 2^-20 of their magnitude).
+//!
+//! A site where the value jumps (a depth comparison at a tie, a texel boundary) gets the
+//! whole jump as its allowance, so binary tests at exact ties need no separate rule.
+//!
+//! Not evaluated ([`unsupported`]): Geometry passes (their primitives are rasterised, not a
+//! function of texels), per-sample views and the inputs of segment lights.
+
+use crate::builtins::{Func, Input, SampleFn, Ty};
+use crate::front::ast::{LightView, Precision, Reduce};
+use crate::front::expr::BinOp;
+use crate::ir::{ChannelId, H, Hooks, IrKernel, IrPassKind, Node, PassId, PlacedSlot, Program, ResId};
+use std::collections::HashMap;
+
+/// The frame-wide inputs (docs/language.md section 8.5), as the runtime's `Frame` uniform
+/// holds them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    pub shadow_size: u32,
+    /// World distances of the fitted depth range.
+    pub near: f64,
+    pub far: f64,
+    pub light_size: f64,
+    pub light_width: [f64; 2],
+    pub light_spread: f64,
+    pub light_distant: bool,
+    /// One texel at view distance D spans `texel_world[0] D + texel_world[1]` world units
+    /// across the map (perspective: `[2 / (proj_y N), 0]`; orthographic: `[0, extent / N]`).
+    pub texel_world: [f64; 2],
+    /// Frames run since the scene was bound.
+    pub frame: u32,
+}
+
+/// One receiver (a shaded point) as the Shade pass sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Receiver {
+    /// Light-space uv.
+    pub uv: [f64; 2],
+    /// View distance from the light's centre (world units).
+    pub d_world: f64,
+    pub ndotl: f64,
+    /// The receiver plane's depth slope per texel (`depth_slope`).
+    pub depth_slope: f64,
+    /// The level of detail of implicit `sample` lookups.
+    pub lod: f64,
+    /// The camera pixel.
+    pub pixel: [f64; 2],
+}
+
+/// Whose errors an allowance bounds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Model {
+    /// The GPU's: storage rounding, f32 arithmetic, WGSL's built-in accuracy, the receiver's
+    /// f32 transforms and the filtering hardware's 8-bit positions.
+    Gpu,
+    /// Another f64 evaluation's: only f64 rounding, so that two f64 evaluations of the same
+    /// math (a technique and its reference) differ by no more than their conditioning allows.
+    F64,
+}
+
+impl Model {
+    /// One unit in the last place of `v` in the arithmetic modelled.
+    pub fn ulp(self, v: f64) -> f64 {
+        match self {
+            Model::Gpu => v.abs() * 2f64.powi(-23),
+            Model::F64 => v.abs() * 2f64.powi(-52),
+        }
+    }
+
+    /// What storing `v` in `slot` may move it by.
+    pub fn storage(self, slot: &PlacedSlot, v: f64) -> f64 {
+        match self {
+            Model::Gpu => half_step(slot, v),
+            Model::F64 => 0.0,
+        }
+    }
+}
+
+/// Whether stored texels keep their exact value or are rounded as the GPU stores them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rounding {
+    Exact,
+    Stored,
+}
+
+/// One evaluated value and the interval allowed about it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Allowed {
+    /// The value (the Shade's: clamped to [0, 1], NaN read as 1).
+    pub value: f64,
+    /// The allowed interval `[lo, hi]` (the Shade's: `raw -+ allowance`, clamped).
+    pub lo: f64,
+    pub hi: f64,
+    /// The value before the clamp, and the allowance about it.
+    pub raw: f64,
+    pub allowance: f64,
+}
+
+impl Allowed {
+    fn new(raw: f64, clamped: bool) -> Allowed {
+        let value = if clamped { raw.clamp(0.0, 1.0) } else { raw };
+        Allowed {
+            value,
+            lo: value,
+            hi: value,
+            raw,
+            allowance: 0.0,
+        }
+    }
+
+    /// Allow `by` more about the raw value.
+    fn widen(&mut self, by: f64, clamped: bool) {
+        self.allowance += if by.is_nan() { f64::INFINITY } else { by };
+        let (lo, hi) = (self.raw - self.allowance, self.raw + self.allowance);
+        (self.lo, self.hi) = if clamped {
+            (lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0))
+        } else {
+            (lo, hi)
+        };
+    }
+
+    /// Whether `x` lies in the allowed interval.
+    pub fn admits(&self, x: f64) -> bool {
+        (self.lo..=self.hi).contains(&x)
+    }
+
+    /// The larger side of the interval about the value.
+    pub fn half_width(&self) -> f64 {
+        (self.hi - self.value).max(self.value - self.lo)
+    }
+}
+
+/// Why a technique cannot be evaluated here, or `None`.
+pub fn unsupported(p: &Program) -> Option<String> {
+    for pass in p.passes.iter().filter(|pass| pass.live) {
+        match &pass.kind {
+            IrPassKind::Geometry { .. } => {
+                return Some(format!(
+                    "pass `{}` is a Geometry pass: its primitives are rasterised from the scene's meshes, which the CPU evaluation does not model",
+                    pass.name
+                ));
+            }
+            IrPassKind::Depth { view } if *view != LightView::Center => {
+                return Some(format!("pass `{}` renders one view per light sample", pass.name));
+            }
+            IrPassKind::Depth { .. }
+            | IrPassKind::Map
+            | IrPassKind::Filter { .. }
+            | IrPassKind::Mipmap { .. }
+            | IrPassKind::SummedArea
+            | IrPassKind::Shade { .. } => {}
+        }
+    }
+    let shade = shade_root(p)?;
+    for h in p.arena.postorder(&[shade]) {
+        if let Node::Input(i @ (Input::SegmentBefore | Input::SegmentAfter), _) = p.arena.node(h) {
+            return Some(format!("the Shade reads `{}`, an input of segment lights' samples", i.desc().name));
+        }
+    }
+    None
+}
+
+fn shade_root(p: &Program) -> Option<H> {
+    p.passes.iter().filter(|pass| pass.live).find_map(|pass| match pass.kind {
+        IrPassKind::Shade { visibility } => Some(visibility),
+        IrPassKind::Depth { .. }
+        | IrPassKind::Map
+        | IrPassKind::Filter { .. }
+        | IrPassKind::Mipmap { .. }
+        | IrPassKind::SummedArea
+        | IrPassKind::Geometry { .. } => None,
+    })
+}
+
+/// Half the rounding step of `slot`'s storage at value `v`, in value units.
+pub fn half_step(slot: &PlacedSlot, v: f64) -> f64 {
+    let scale = slot.encode.scale.abs().max(f64::MIN_POSITIVE);
+    match slot.precision {
+        Precision::Unorm8 => 0.5 / (255.0 * scale),
+        Precision::Unorm16 => 0.5 / (65535.0 * scale),
+        Precision::F16 => (v.abs() * 2f64.powi(-11)).max(2f64.powi(-25)),
+        Precision::F32 => v.abs() * 2f64.powi(-24),
+    }
+}
+
+/// `v` as `slot` stores it: encoded, rounded to its precision, decoded.
+pub fn stored(slot: &PlacedSlot, v: f64) -> f64 {
+    stored_at(slot.precision, slot.encode.bias, slot.encode.scale, v)
+}
+
+fn stored_at(precision: Precision, bias: f64, scale: f64, v: f64) -> f64 {
+    let unorm = |levels: f64| {
+        let e = ((v - bias) * scale).clamp(0.0, 1.0);
+        (e * levels).round() / levels / scale + bias
+    };
+    match precision {
+        Precision::Unorm8 => unorm(255.0),
+        Precision::Unorm16 => unorm(65535.0),
+        Precision::F16 => round_f16(v),
+        Precision::F32 => v as f32 as f64,
+    }
+}
+
+/// `v` rounded to the nearest IEEE half (11 significant bits, subnormals down to 2^-24,
+/// infinity past 65504).
+pub fn round_f16(v: f64) -> f64 {
+    if !v.is_finite() || v == 0.0 {
+        return v;
+    }
+    let e = v.abs().log2().floor().max(-14.0);
+    let ulp = 2f64.powf(e - 10.0);
+    let r = (v / ulp).round_ties_even() * ulp;
+    if r.abs() > 65504.0 { v.signum() * f64::INFINITY } else { r }
+}
+
+/// One level of one stored channel: values and their allowances, row-major.
+#[derive(Clone, Debug)]
+struct Level {
+    size: usize,
+    v: Vec<f64>,
+    a: Vec<f64>,
+}
+
+impl Level {
+    fn at(&self, x: i64, y: i64) -> (f64, f64) {
+        let last = self.size as i64 - 1;
+        let k = (y.clamp(0, last) * (last + 1) + x.clamp(0, last)) as usize;
+        (self.v[k], self.a[k])
+    }
+
+    /// Bilinear at uv: value, allowance of the blend, smallest and largest texel.
+    fn bilinear(&self, uv: [f64; 2]) -> (f64, f64, f64, f64) {
+        let n = self.size as f64;
+        let (sx, sy) = (uv[0] * n - 0.5, uv[1] * n - 0.5);
+        let (x0, y0) = (sx.floor(), sy.floor());
+        let (fx, fy) = (sx - x0, sy - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let t = [self.at(x0, y0), self.at(x0 + 1, y0), self.at(x0, y0 + 1), self.at(x0 + 1, y0 + 1)];
+        let w = [(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy];
+        let (mut v, mut a, mut lo, mut hi) = (0.0, 0.0, f64::INFINITY, f64::NEG_INFINITY);
+        for (k, (tv, ta)) in t.iter().enumerate() {
+            v += w[k] * tv;
+            a += w[k] * ta;
+            lo = lo.min(*tv);
+            hi = hi.max(*tv);
+        }
+        (v, a, lo, hi)
+    }
+}
+
+/// A stored channel: its levels (one without mips) and, read by `sample_box`, the prefix
+/// sums of level 0's values and allowances.
+#[derive(Clone, Debug)]
+struct Texels {
+    levels: Vec<Level>,
+    sat: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+/// Filtering hardware keeps the position within a texel and the fraction between mip
+/// levels to 8 bits (lavapipe; Vulkan asks for at least 4): a filtered lookup reads as if
+/// its texel-space position and level of detail were off by up to this much. The shift is
+/// the same for every lookup at one position, so it is applied to the receiver as a whole
+/// (all lookups move together, as the moments of one texel do on the GPU).
+const FILTER_SHIFT: f64 = 1.0 / 256.0;
+
+impl Texels {
+    fn base(&self) -> &Level {
+        &self.levels[0]
+    }
+
+    fn texel(&self, x: i64, y: i64) -> (f64, f64) {
+        self.base().at(x, y)
+    }
+
+    /// The level-0 texel containing texel-space point `p` (`floor(p)`), with its
+    /// allowance; where `p` lies within the GPU's coordinate error of a texel boundary the
+    /// neighbour across it may be read instead, so the difference is allowed too.
+    fn nearest(&self, p: [f64; 2], margin: f64) -> (f64, f64) {
+        let (x, y) = (p[0].floor(), p[1].floor());
+        let (v, mut a) = self.texel(x as i64, y as i64);
+        for (axis, c) in [p[0], p[1]].into_iter().enumerate() {
+            let f = c - c.floor();
+            let across = if f < margin {
+                Some(-1)
+            } else if f > 1.0 - margin {
+                Some(1)
+            } else {
+                None
+            };
+            if let Some(o) = across {
+                let (dx, dy) = if axis == 0 { (o, 0) } else { (0, o) };
+                a += (self.texel(x as i64 + dx, y as i64 + dy).0 - v).abs();
+            }
+        }
+        (v, a)
+    }
+
+    /// Filtered at uv and level of detail `lod` (clamped to the chain): value and allowance.
+    fn filtered(&self, uv: [f64; 2], lod: f64) -> (f64, f64) {
+        let last = self.levels.len() - 1;
+        let lod = if lod.is_nan() { 0.0 } else { lod.clamp(0.0, last as f64) };
+        let level = (lod.floor() as usize).min(last);
+        let lambda = lod - level as f64;
+        let (v0, a0, _, _) = self.levels[level].bilinear(uv);
+        if lambda > 0.0 && level < last {
+            let (v1, a1, _, _) = self.levels[level + 1].bilinear(uv);
+            (v0 + lambda * (v1 - v0), a0 + lambda * (a1 - a0))
+        } else {
+            (v0, a0)
+        }
+    }
+
+    /// `sample_box`: the mean over a box `w` (uv units, at least a texel each way) centred
+    /// at uv, clipped to the map (the centre clamped to it first).
+    fn boxed(&self, uv: [f64; 2], w: [f64; 2], model: Model) -> (f64, f64) {
+        let Some((sums, asums)) = &self.sat else {
+            return (f64::NAN, 0.0);
+        };
+        let n = self.base().size;
+        let runs = |c: f64, w: f64| {
+            let nf = n as f64;
+            let width = (w * nf).max(1.0);
+            let centre = if c.is_nan() { 0.0 } else { (c * nf).clamp(0.0, nf) };
+            ((centre - 0.5 * width).max(0.0), (centre + 0.5 * width).min(nf))
+        };
+        let ((x0, x1), (y0, y1)) = (runs(uv[0], w[0]), runs(uv[1], w[1]));
+        // the integral of the piecewise-constant texels over [0, x] x [0, y]
+        let integral = |s: &[f64], x: f64, y: f64| {
+            let row = n + 1;
+            let at = |i: usize, j: usize| s[j * row + i];
+            let (i, j) = ((x.floor() as usize).min(n), (y.floor() as usize).min(n));
+            let (fx, fy) = (x - i as f64, y - j as f64);
+            let (i1, j1) = ((i + 1).min(n), (j + 1).min(n));
+            // bilinear in the prefix sums is exact for piecewise-constant texels
+            let a = at(i, j) + fx * (at(i1, j) - at(i, j));
+            let b = at(i, j1) + fx * (at(i1, j1) - at(i, j1));
+            a + fy * (b - a)
+        };
+        let area = (x1 - x0) * (y1 - y0);
+        let mean = |s: &[f64]| (integral(s, x1, y1) - integral(s, x0, y1) - integral(s, x1, y0) + integral(s, x0, y0)) / area;
+        let v = mean(sums);
+        // the GPU weighs exact integer sums in f32
+        (v, mean(asums) + 32.0 * model.ulp(v))
+    }
+}
+
+fn prefix_sums(l: &Level, values: bool) -> Vec<f64> {
+    let n = l.size;
+    let row = n + 1;
+    let mut s = vec![0.0; row * row];
+    for y in 0..n {
+        for x in 0..n {
+            let t = if values { l.v[y * n + x] } else { l.a[y * n + x] };
+            s[(y + 1) * row + x + 1] = t + s[y * row + x + 1] + s[(y + 1) * row + x] - s[y * row + x];
+        }
+    }
+    s
+}
+
+/// The error bound of a built-in call with value `v` and arguments `x` (WGSL's accuracy of
+/// built-in functions), beyond f32 rounding; 0 where f32 rounding is the bound.
+pub fn call_error(f: Func, v: f64, x: &[f64]) -> f64 {
+    let ulp = v.abs() * 2f64.powi(-23);
+    let arg = x.first().copied().unwrap_or(0.0);
+    match f {
+        Func::Sin | Func::Cos => 2f64.powi(-11) + arg.abs() * 2f64.powi(-22),
+        Func::Tan => 2f64.powi(-11) * (1.0 + v * v),
+        Func::Exp => (3.0 + 2.0 * (arg * std::f64::consts::LOG2_E).abs()) * ulp,
+        Func::Exp2 => (3.0 + 2.0 * arg.abs()) * ulp,
+        Func::Log | Func::Log2 => (3.0 * ulp).max(2f64.powi(-21)),
+        Func::Pow => {
+            let y = x.get(1).copied().unwrap_or(0.0);
+            let e = y * arg.abs().log2();
+            (3.0 + 2.0 * e.abs()) * ulp + v.abs() * std::f64::consts::LN_2 * y.abs() * 2f64.powi(-21)
+        }
+        Func::Sqrt | Func::InverseSqrt | Func::DivOr => 2.5 * ulp,
+        Func::Asin | Func::Acos | Func::Atan | Func::Atan2 => 4096.0 * ulp + 2f64.powi(-22),
+        Func::Smoothstep | Func::Linstep => 4.0 * ulp,
+        Func::Abs
+        | Func::Floor
+        | Func::Ceil
+        | Func::Fract
+        | Func::Round
+        | Func::Trunc
+        | Func::Sign
+        | Func::Saturate
+        | Func::Min
+        | Func::Max
+        | Func::Step
+        | Func::Clamp
+        | Func::Mix
+        | Func::Select
+        | Func::ToF32
+        | Func::ToI32
+        | Func::ToU32
+        | Func::Vec2
+        | Func::Vec3
+        | Func::Vec4
+        | Func::Length
+        | Func::Dot
+        | Func::UvWidth
+        | Func::Noise => 0.0,
+    }
+}
+
+/// What the GPU's f32 transforms may leave in a receiver input of value `v`.
+pub fn input_error(i: Input, v: f64) -> f64 {
+    match i {
+        Input::D | Input::Uv | Input::Tf => 2f64.powi(-20),
+        Input::DWorld | Input::NdotL | Input::Slope | Input::TexelDepth | Input::DepthSlope => v.abs() * 2f64.powi(-20),
+        Input::TexelSize
+        | Input::ShadowSize
+        | Input::Near
+        | Input::Far
+        | Input::LightSize
+        | Input::LightWidth
+        | Input::LightSpread
+        | Input::LightDistant
+        | Input::ZFrag
+        | Input::ZVertex
+        | Input::ConeRadius
+        | Input::ZSurface
+        | Input::OccluderDepth
+        | Input::PenumbraLimit
+        | Input::LimitDepth
+        | Input::SegmentBefore
+        | Input::SegmentAfter
+        | Input::Pixel
+        | Input::Frame
+        | Input::Skin => 0.0,
+    }
+}
+
+/// The value of a frame-wide input in component `k`, or `None` for a per-receiver one.
+fn frame_input(f: &Frame, i: Input, k: usize) -> Option<f64> {
+    let n = f.shadow_size as f64;
+    Some(match i {
+        Input::TexelSize => 1.0 / n,
+        Input::ShadowSize => n,
+        Input::Near => f.near,
+        Input::Far => f.far,
+        Input::LightSize => f.light_size,
+        Input::LightWidth => f.light_width[k.min(1)],
+        Input::LightSpread => f.light_spread,
+        Input::LightDistant => f.light_distant as i32 as f64,
+        Input::Frame => f.frame as f64,
+        Input::D
+        | Input::DWorld
+        | Input::Uv
+        | Input::Tf
+        | Input::NdotL
+        | Input::Slope
+        | Input::TexelDepth
+        | Input::DepthSlope
+        | Input::ZFrag
+        | Input::ZVertex
+        | Input::ConeRadius
+        | Input::ZSurface
+        | Input::OccluderDepth
+        | Input::PenumbraLimit
+        | Input::LimitDepth
+        | Input::SegmentBefore
+        | Input::SegmentAfter
+        | Input::Pixel
+        | Input::Skin => return None,
+    })
+}
+
+/// `noise(x, y, k)`: PCG3D of the three integers (`builtins::NOISE_WGSL`), top 24 bits.
+pub fn noise(x: f64, y: f64, k: f64) -> f64 {
+    let u = |v: f64| v.floor() as i32 as u32;
+    let mut v = [u(x), u(y), u(k)];
+    for c in &mut v {
+        *c = c.wrapping_mul(1664525).wrapping_add(1013904223);
+    }
+    let mix = |v: &mut [u32; 3]| {
+        v[0] = v[0].wrapping_add(v[1].wrapping_mul(v[2]));
+        v[1] = v[1].wrapping_add(v[2].wrapping_mul(v[0]));
+        v[2] = v[2].wrapping_add(v[0].wrapping_mul(v[1]));
+    };
+    mix(&mut v);
+    for c in &mut v {
+        *c ^= *c >> 16;
+    }
+    mix(&mut v);
+    (v[0] >> 8) as f64 / 16_777_216.0
+}
+
+/// The light-side function `uv_width(len, dist)`.
+fn uv_width(f: &Frame, len: f64, dist: f64) -> f64 {
+    len / ((f.texel_world[0] * dist + f.texel_world[1]) * f.shadow_size as f64)
+}
+
+/// A leaf's value and allowance in component `i`, given the values computed so far.
+type LeafAllowed<'a> = dyn Fn(H, usize, &[[f64; 4]]) -> Option<(f64, f64)> + 'a;
+
+/// An expression prepared for repeated evaluation: its root and its nodes in postorder.
+struct Prepared {
+    root: H,
+    order: Vec<H>,
+}
+
+impl Prepared {
+    fn new(p: &Program, root: H) -> Prepared {
+        Prepared {
+            root,
+            order: p.arena.postorder(&[root]),
+        }
+    }
+}
+
+/// A technique's passes after Depth evaluated on one depth map.
+pub struct Evaluation<'p> {
+    p: Program<'p>,
+    frame: Frame,
+    texels: HashMap<(ResId, ChannelId), Texels>,
+    shade: Prepared,
+    model: Model,
+}
+
+impl<'p> Evaluation<'p> {
+    /// Run every pass after Depth on `depth` (`size` x `size` linear depths, row 0 first).
+    pub fn new(p: Program<'p>, depth: &[f32], frame: Frame, rounding: Rounding, model: Model) -> Result<Evaluation<'p>, String> {
+        if let Some(why) = unsupported(&p) {
+            return Err(why);
+        }
+        let size = frame.shadow_size as usize;
+        if size == 0 || depth.len() != size * size {
+            return Err(format!("a depth map of {} values is not {size} x {size}", depth.len()));
+        }
+        let shade = Prepared::new(&p, shade_root(&p).ok_or("the technique has no live Shade pass")?);
+        let mut ev = Evaluation {
+            p,
+            frame,
+            texels: HashMap::new(),
+            shade,
+            model,
+        };
+        for (id, pass) in p.passes.with_handles() {
+            if !pass.live {
+                continue;
+            }
+            ev.run_pass(id, depth, rounding)?;
+        }
+        Ok(ev)
+    }
+
+    fn slots(&self, r: ResId) -> Vec<PlacedSlot> {
+        self.p.resources[r].slots.clone()
+    }
+
+    fn source(&self, pass: PassId) -> Result<ResId, String> {
+        self.p.passes[pass]
+            .reads
+            .first()
+            .copied()
+            .ok_or_else(|| format!("pass `{}` reads nothing", self.p.passes[pass].name))
+    }
+
+    fn run_pass(&mut self, id: PassId, depth: &[f32], rounding: Rounding) -> Result<(), String> {
+        let pass = &self.p.passes[id];
+        let Some(out) = pass.writes else { return Ok(()) };
+        let size = self.frame.shadow_size as usize;
+        let keep = |slot: &PlacedSlot, v: f64| match rounding {
+            Rounding::Exact => v,
+            Rounding::Stored => stored(slot, v),
+        };
+        match &pass.kind {
+            IrPassKind::Depth { .. } => {
+                for slot in self.slots(out) {
+                    let v: Vec<f64> = depth.iter().map(|&z| keep(&slot, z as f64)).collect();
+                    let a = v.iter().map(|&z| self.model.storage(&slot, z)).collect();
+                    self.insert(out, slot.channel, vec![Level { size, v, a }]);
+                }
+            }
+            IrPassKind::Map => {
+                for slot in self.slots(out) {
+                    let level = self.map_channel(id, &slot, size, rounding)?;
+                    self.insert(out, slot.channel, vec![level]);
+                }
+            }
+            IrPassKind::Filter { kernel } => {
+                let src = self.source(id)?;
+                for slot in self.slots(out) {
+                    let base = self.read(src, slot.channel)?.base().clone();
+                    let level = filter(&base, kernel, &slot, rounding, self.model);
+                    self.insert(out, slot.channel, vec![level]);
+                }
+            }
+            IrPassKind::Mipmap { reduce } => {
+                let src = self.source(id)?;
+                for slot in self.slots(out) {
+                    let base = self.read(src, slot.channel)?.base().clone();
+                    let levels = mip_chain(base, *reduce, &slot, rounding, self.model);
+                    self.insert(out, slot.channel, levels);
+                }
+            }
+            IrPassKind::SummedArea => {
+                let src = self.source(id)?;
+                for slot in self.slots(out) {
+                    let base = self.read(src, slot.channel)?.base().clone();
+                    let sat = Some((prefix_sums(&base, true), prefix_sums(&base, false)));
+                    self.texels.insert((out, slot.channel), Texels { levels: vec![base], sat });
+                }
+            }
+            IrPassKind::Geometry { .. } | IrPassKind::Shade { .. } => {}
+        }
+        Ok(())
+    }
+
+    fn insert(&mut self, r: ResId, c: ChannelId, levels: Vec<Level>) {
+        self.texels.insert((r, c), Texels { levels, sat: None });
+    }
+
+    fn read(&self, r: ResId, c: ChannelId) -> Result<&Texels, String> {
+        self.texels.get(&(r, c)).ok_or_else(|| {
+            format!(
+                "channel `{}` of `{}` is read before it is written",
+                self.p.channels[c].name, self.p.resources[r].name
+            )
+        })
+    }
+
+    /// One Map channel at every texel: value and allowance (with its storage's rounding).
+    fn map_channel(&self, pass: PassId, slot: &PlacedSlot, size: usize, rounding: Rounding) -> Result<Level, String> {
+        let c = slot.channel;
+        let h = self.p.channels[c]
+            .value
+            .ok_or_else(|| format!("channel `{}` has no value", self.p.channels[c].name))?;
+        let prepared = Prepared::new(&self.p, h);
+        // the resources this pass reads, by the channels they carry
+        let mut from: HashMap<ChannelId, &Texels> = HashMap::new();
+        for &r in &self.p.passes[pass].reads {
+            for s in &self.p.resources[r].slots {
+                if let Some(t) = self.texels.get(&(r, s.channel)) {
+                    from.entry(s.channel).or_insert(t);
+                }
+            }
+        }
+        let mut scratch = Scratch::default();
+        scratch.fit(self.p.arena.len());
+        let (mut v, mut a) = (Vec::with_capacity(size * size), Vec::with_capacity(size * size));
+        for y in 0..size as i64 {
+            for x in 0..size as i64 {
+                let leaf = |h: H, k: usize, _: &[[f64; 4]]| -> Option<(f64, f64)> {
+                    match self.p.arena.node(h) {
+                        Node::Channel(ch, [dx, dy]) => from.get(ch).map(|t| t.texel(x + *dx as i64, y + *dy as i64)),
+                        Node::Input(i, _) => frame_input(&self.frame, *i, k).map(|v| (v, 0.0)),
+                        Node::Param(id) => Some((self.p.params[*id].value.as_f64(), 0.0)),
+                        Node::Call(Func::Noise | Func::UvWidth, _) | Node::Sample { .. } => None,
+                        Node::F32(_)
+                        | Node::I32(_)
+                        | Node::U32(_)
+                        | Node::Bool(_)
+                        | Node::Unary(..)
+                        | Node::Binary(..)
+                        | Node::Call(..)
+                        | Node::Swizzle(..) => None,
+                    }
+                };
+                let r = self.allowed(&prepared, &leaf, &mut scratch);
+                v.push(match rounding {
+                    Rounding::Exact => r.value,
+                    Rounding::Stored => stored(slot, r.value),
+                });
+                a.push(r.allowance + self.model.storage(slot, r.value));
+            }
+        }
+        Ok(Level { size, v, a })
+    }
+
+    /// The clamped visibility at one receiver and the interval allowed about it.
+    pub fn visibility(&self, r: &Receiver, scratch: &mut Scratch) -> Allowed {
+        scratch.fit(self.p.arena.len());
+        let mut out = self.allowed(&self.shade, &self.receiver_leaf(*r, [0.0; 3]), scratch);
+        if self.model == Model::F64 {
+            return out;
+        }
+        // the filtering hardware's 8-bit positions and level fractions, one axis at a time
+        let texel = FILTER_SHIFT / self.frame.shadow_size as f64;
+        let mut extra = 0.0;
+        for axis in 0..3 {
+            let mut worst: f64 = 0.0;
+            for sign in [1.0, -1.0] {
+                let mut shift = [0.0; 3];
+                shift[axis] = sign * if axis == 2 { FILTER_SHIFT } else { texel };
+                worst = worst.max(change(self.raw(r, shift, scratch), out.raw));
+            }
+            extra += worst;
+        }
+        out.widen(extra, true);
+        out
+    }
+
+    /// The raw visibility (NaN read as 1) at `r` with filtered lookups shifted by `shift`.
+    fn raw(&self, r: &Receiver, shift: [f64; 3], scratch: &mut Scratch) -> f64 {
+        let leaf = self.receiver_leaf(*r, shift);
+        let plain = |h: H, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
+        self.p
+            .arena
+            .eval_span(&self.shade.order, &Hooks { leaf: &plain, exact: true }, &mut scratch.vals);
+        raw_visibility(scratch.vals.get(self.shade.root.index()).map_or(f64::NAN, |v| v[0]))
+    }
+
+    /// The clamped visibility at one receiver, without its allowance.
+    pub fn value(&self, r: &Receiver, scratch: &mut Scratch) -> f64 {
+        scratch.fit(self.p.arena.len());
+        self.raw(r, [0.0; 3], scratch).clamp(0.0, 1.0)
+    }
+
+    /// The leaf values of the Shade at receiver `r`: inputs, params, the frame's functions,
+    /// lookups (with their allowance).
+    fn receiver_leaf(&self, r: Receiver, shift: [f64; 3]) -> impl Fn(H, usize, &[[f64; 4]]) -> Option<(f64, f64)> + '_ {
+        let f = &self.frame;
+        let d = (r.d_world - f.near) / (f.far - f.near);
+        let n = f.shadow_size as f64;
+        let slope = ((1.0 - r.ndotl * r.ndotl).max(0.0).sqrt() / r.ndotl.abs().max(0.01)).min(100.0);
+        let texel_depth = (f.texel_world[0] * r.d_world + f.texel_world[1]) / (f.far - f.near);
+        move |h: H, k: usize, vals: &[[f64; 4]]| -> Option<(f64, f64)> {
+            let arg = |h: &H, c: usize| vals.get(h.index()).map_or(f64::NAN, |v| v[c]);
+            match self.p.arena.node(h) {
+                Node::Input(i, _) => {
+                    let v = match i {
+                        Input::D => d,
+                        Input::DWorld => r.d_world,
+                        Input::Uv => r.uv[k.min(1)],
+                        Input::Tf => {
+                            let t = r.uv[k.min(1)] * n - 0.5;
+                            t - t.floor()
+                        }
+                        Input::NdotL => r.ndotl,
+                        Input::Slope => slope,
+                        Input::TexelDepth => texel_depth,
+                        Input::DepthSlope => r.depth_slope,
+                        Input::Pixel => r.pixel[k.min(1)],
+                        other @ (Input::TexelSize
+                        | Input::ShadowSize
+                        | Input::Near
+                        | Input::Far
+                        | Input::LightSize
+                        | Input::LightWidth
+                        | Input::LightSpread
+                        | Input::LightDistant
+                        | Input::Frame
+                        | Input::ZFrag
+                        | Input::ZVertex
+                        | Input::ConeRadius
+                        | Input::ZSurface
+                        | Input::OccluderDepth
+                        | Input::PenumbraLimit
+                        | Input::LimitDepth
+                        | Input::SegmentBefore
+                        | Input::SegmentAfter
+                        | Input::Skin) => frame_input(f, *other, k)?,
+                    };
+                    Some((v, 0.0))
+                }
+                Node::Param(id) => Some((self.p.params[*id].value.as_f64(), 0.0)),
+                Node::Call(Func::UvWidth, a) => Some((uv_width(f, arg(&a[0], 0), arg(&a[1], 0)), 0.0)),
+                Node::Call(Func::Noise, a) => Some((noise(arg(&a[0], 0), arg(&a[1], 0), arg(&a[2], 0)), 0.0)),
+                Node::Sample {
+                    channel,
+                    resource,
+                    how,
+                    args,
+                    ..
+                } => {
+                    let t = self.texels.get(&(*resource, *channel))?;
+                    let a = |i: usize| args.get(i).map_or(f64::NAN, |h| arg(h, 0));
+                    let margin = match self.model {
+                        Model::Gpu => n * 4.0 * input_error(Input::Uv, 0.0),
+                        Model::F64 => 0.0,
+                    };
+                    let texel = |uv: [f64; 2]| t.nearest([uv[0] * n, uv[1] * n], margin);
+                    let at = [r.uv[0] + shift[0], r.uv[1] + shift[1]];
+                    Some(match how {
+                        SampleFn::Sample => t.filtered(at, r.lod + shift[2]),
+                        SampleFn::SampleLod => t.filtered(at, a(0) + shift[2]),
+                        SampleFn::SampleWidth => t.filtered(at, (a(0) * n).max(1.0).log2() + shift[2]),
+                        SampleFn::SampleAt => t.filtered([at[0] + a(0), at[1] + a(1)], shift[2]),
+                        SampleFn::Nearest => texel(r.uv),
+                        SampleFn::NearestAt => texel([r.uv[0] + a(0), r.uv[1] + a(1)]),
+                        SampleFn::Fetch => t.nearest([r.uv[0] * n - 0.5 + a(0), r.uv[1] * n - 0.5 + a(1)], margin),
+                        SampleFn::Box => t.boxed(r.uv, [a(0), a(1)], self.model),
+                    })
+                }
+                Node::Channel(..)
+                | Node::F32(_)
+                | Node::I32(_)
+                | Node::U32(_)
+                | Node::Bool(_)
+                | Node::Unary(..)
+                | Node::Binary(..)
+                | Node::Call(..)
+                | Node::Swizzle(..) => None,
+            }
+        }
+    }
+
+    /// Evaluate `e` with `leaf` (value and allowance of leaves), then bound its error
+    /// node by node (a running error analysis, in postorder): a node's error is its own
+    /// (the lookup's or input's allowance, f32 rounding, the built-in's bound) plus, for each
+    /// operand, the largest change of the node when that operand alone moves by its error
+    /// either way (a bool operand that may flip: flipped). A clamp, a `select` or a
+    /// comparison therefore passes on exactly what its operands' errors can do to it. The
+    /// Shade's interval is its raw value (NaN read as 1) widened by the root's error, then
+    /// clamped.
+    fn allowed(&self, e: &Prepared, leaf: &LeafAllowed, scratch: &mut Scratch) -> Allowed {
+        let arena = &self.p.arena;
+        let shade = e.root == self.shade.root;
+        let plain = |h: H, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
+        let hooks = Hooks { leaf: &plain, exact: true };
+        let Scratch { vals, errors } = scratch;
+        arena.eval_span(&e.order, &hooks, vals);
+        let width = |h: H| match arena.ty(h) {
+            Ty::Vec(n) => (n as usize).clamp(1, 4),
+            Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => 1,
+        };
+        let mut operands: Vec<H> = Vec::new();
+        for &h in &e.order {
+            let v = vals.get(h.index()).copied().unwrap_or([f64::NAN; 4]);
+            let w = width(h);
+            let model = self.model;
+            let ulp = |k: usize| model.ulp(v[k]);
+            let float = matches!(arena.ty(h), Ty::F32 | Ty::Vec(_));
+            // the node's own error, per component
+            let mut err = [0.0f64; 4];
+            for (k, x) in err.iter_mut().enumerate().take(w) {
+                *x = match arena.node(h) {
+                    Node::Input(..) | Node::Sample { .. } | Node::Channel(..) | Node::Param(_) => {
+                        let own = leaf(h, k, vals).map_or(0.0, |(_, a)| a);
+                        match arena.node(h) {
+                            Node::Input(i, _) if model == Model::Gpu => own + input_error(*i, v[k]),
+                            Node::Input(..) => own,
+                            Node::F32(_)
+                            | Node::I32(_)
+                            | Node::U32(_)
+                            | Node::Bool(_)
+                            | Node::Param(_)
+                            | Node::Channel(..)
+                            | Node::Sample { .. }
+                            | Node::Unary(..)
+                            | Node::Binary(..)
+                            | Node::Call(..)
+                            | Node::Swizzle(..) => own,
+                        }
+                    }
+                    Node::Binary(BinOp::Add | BinOp::Sub | BinOp::Mul, ..) if float => ulp(k),
+                    Node::Binary(BinOp::Div, ..) if float => 3.0 * ulp(k),
+                    Node::Call(f, a) if float => {
+                        let arg = |i: usize| a.get(i).and_then(|x| vals.get(x.index())).map_or(0.0, |x| x[k]);
+                        match model {
+                            Model::Gpu => call_error(*f, v[k], &[arg(0), arg(1)]) + ulp(k),
+                            Model::F64 => 4.0 * ulp(k),
+                        }
+                    }
+                    Node::F32(_)
+                    | Node::I32(_)
+                    | Node::U32(_)
+                    | Node::Bool(_)
+                    | Node::Unary(..)
+                    | Node::Binary(..)
+                    | Node::Call(..)
+                    | Node::Swizzle(..) => 0.0,
+                };
+            }
+            // a value that is not a number stays one whatever moves it; a number whose
+            // own error is not a number may be anything
+            for k in 0..w {
+                if err[k].is_nan() {
+                    err[k] = if v[k].is_nan() { 0.0 } else { f64::INFINITY };
+                }
+            }
+            // what each operand's error can do to it
+            operands.clear();
+            match arena.node(h) {
+                Node::Unary(_, x) | Node::Swizzle(x, _) => operands.push(*x),
+                Node::Binary(_, x, y) => operands.extend([*x, *y]),
+                Node::Call(_, a) | Node::Sample { args: a, .. } => operands.extend(a.iter().copied()),
+                Node::F32(_) | Node::I32(_) | Node::U32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(..) => {}
+            }
+            operands.dedup();
+            for &x in &operands {
+                let ex = errors.get(x.index()).copied().unwrap_or([0.0; 4]);
+                if ex.iter().all(|e| *e == 0.0) {
+                    continue;
+                }
+                // an operand that may be anything makes this node anything
+                if ex.iter().take(width(x)).any(|e| e.is_infinite()) {
+                    for e in err.iter_mut().take(w) {
+                        *e = f64::INFINITY;
+                    }
+                    continue;
+                }
+                let keep = vals[x.index()];
+                // a bool flips; a number moves one component at a time, both ways (moving
+                // every component together would hide what cancels between them)
+                let moves: Vec<[f64; 4]> = if arena.ty(x) == Ty::Bool {
+                    vec![keep.map(|b| if b != 0.0 { 0.0 } else { 1.0 })]
+                } else {
+                    let wx = width(x);
+                    let mut m = Vec::with_capacity(2 * wx);
+                    for k in (0..wx).filter(|&k| ex[k] != 0.0) {
+                        for by in [ex[k], -ex[k]] {
+                            let mut moved = keep;
+                            if wx == 1 {
+                                // a scalar is held in every component
+                                moved = [keep[0] + by; 4];
+                            } else {
+                                moved[k] += by;
+                            }
+                            m.push(moved);
+                        }
+                    }
+                    m
+                };
+                // per moved component: the largest change of each of this node's components,
+                // summed over the operand's components (first order in each)
+                let mut total = [0.0f64; 4];
+                for pair in moves.chunks(if arena.ty(x) == Ty::Bool { 1 } else { 2 }) {
+                    let mut worst = [0.0f64; 4];
+                    for m in pair {
+                        vals[x.index()] = *m;
+                        let moved = arena.eval_node(h, &hooks, vals);
+                        for k in 0..w {
+                            worst[k] = worst[k].max(change(moved[k], v[k]));
+                        }
+                    }
+                    for k in 0..w {
+                        total[k] += worst[k];
+                    }
+                }
+                vals[x.index()] = keep;
+                for k in 0..w {
+                    err[k] += total[k];
+                }
+            }
+            // a `select` whose condition may flip takes either branch with its own error
+            if let Node::Call(Func::Select, a) = arena.node(h)
+                && let [f, t, c] = a.as_slice()
+                && errors.get(c.index()).is_some_and(|e| e[0] > 0.0)
+            {
+                let (ef, et) = (errors[f.index()], errors[t.index()]);
+                for k in 0..w {
+                    err[k] += ef[k].max(et[k]);
+                }
+            }
+            if w == 1 {
+                err = [err[0]; 4];
+            }
+            if let Some(slot) = errors.get_mut(h.index()) {
+                *slot = err;
+            }
+        }
+        let root = vals.get(e.root.index()).map_or(f64::NAN, |v| v[0]);
+        let error = errors.get(e.root.index()).map_or(f64::INFINITY, |v| v[0]);
+        let mut out = Allowed::new(if shade { raw_visibility(root) } else { root }, shade);
+        out.widen(error, shade);
+        out
+    }
+}
+
+/// How far a value moved: 0 between two NaNs, infinite from a number to a NaN.
+fn change(moved: f64, v: f64) -> f64 {
+    if moved == v || (moved.is_nan() && v.is_nan()) {
+        0.0
+    } else {
+        let c = (moved - v).abs();
+        if c.is_nan() { f64::INFINITY } else { c }
+    }
+}
+
+/// The Shade's raw visibility as the runtime reads it before clamping: NaN as 1.
+fn raw_visibility(v: f64) -> f64 {
+    if v.is_nan() { 1.0 } else { v }
+}
+
+/// Scratch space of [`Evaluation::visibility`], one per thread: values and errors by node.
+#[derive(Default)]
+pub struct Scratch {
+    vals: Vec<[f64; 4]>,
+    errors: Vec<[f64; 4]>,
+}
+
+impl Scratch {
+    fn fit(&mut self, nodes: usize) {
+        self.vals.resize(nodes, [f64::NAN; 4]);
+        self.errors.resize(nodes, [0.0; 4]);
+    }
+}
+
+/// A Filter pass over one level: separable kernels along x then y through an intermediate
+/// at the scratch precision, the Laplacian in one step; allowances carried through.
+fn filter(src: &Level, kernel: &IrKernel, slot: &PlacedSlot, rounding: Rounding, model: Model) -> Level {
+    let n = src.size as i64;
+    let scratch = crate::back::wgsl::scratch_precision(slot.precision);
+    let keep = |v: f64, p: Precision| match rounding {
+        Rounding::Exact => v,
+        Rounding::Stored => stored_at(p, slot.encode.bias, slot.encode.scale, v),
+    };
+    let step_at = |v: f64, p: Precision| model.storage(&PlacedSlot { precision: p, ..*slot }, v);
+    let out = |f: &dyn Fn(i64, i64) -> (f64, f64), p: Precision| -> Level {
+        let mut l = Level {
+            size: src.size,
+            v: Vec::with_capacity(src.v.len()),
+            a: Vec::with_capacity(src.v.len()),
+        };
+        for y in 0..n {
+            for x in 0..n {
+                let (v, a) = f(x, y);
+                l.v.push(keep(v, p));
+                l.a.push(a + step_at(v, p) + 4.0 * model.ulp(v));
+            }
+        }
+        l
+    };
+    match kernel {
+        IrKernel::LoG => out(
+            &|x, y| {
+                let (mut v, mut a) = (0.0, 0.0);
+                for (k, w) in IrKernel::LOG_3X3.iter().enumerate() {
+                    let (tv, ta) = src.at(x + k as i64 % 3 - 1, y + k as i64 / 3 - 1);
+                    v += w * tv;
+                    a += w.abs() * ta;
+                }
+                (v, a)
+            },
+            slot.precision,
+        ),
+        IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::Max(_) | IrKernel::Min(_) => {
+            let r = (kernel.size() as i64 - 1) / 2;
+            let weights = kernel.weights_1d();
+            let axis = |l: &Level, dx: i64, dy: i64, p: Precision| {
+                out(
+                    &|x, y| match &weights {
+                        Some(w) => {
+                            let (mut v, mut a) = (0.0, 0.0);
+                            for (k, wk) in w.iter().enumerate() {
+                                let o = k as i64 - r;
+                                let (tv, ta) = l.at(x + o * dx, y + o * dy);
+                                v += wk * tv;
+                                a += wk * ta;
+                            }
+                            (v, a)
+                        }
+                        None => {
+                            let mut best: Option<(f64, f64)> = None;
+                            for o in -r..=r {
+                                let t = l.at(x + o * dx, y + o * dy);
+                                let better = match (best, kernel) {
+                                    (None, _) => true,
+                                    (Some(b), IrKernel::Min(_)) => t.0 < b.0,
+                                    (Some(b), IrKernel::Max(_) | IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::LoG) => t.0 > b.0,
+                                };
+                                if better {
+                                    best = Some(t);
+                                }
+                            }
+                            // the allowance of the window's largest, as any texel near the extreme may win
+                            let amax = (-r..=r).map(|o| l.at(x + o * dx, y + o * dy).1).fold(0.0, f64::max);
+                            best.map_or((f64::NAN, 0.0), |b| (b.0, amax))
+                        }
+                    },
+                    p,
+                )
+            };
+            let mid = axis(src, 1, 0, scratch);
+            axis(&mid, 0, 1, slot.precision)
+        }
+    }
+}
+
+/// Levels down to 1 x 1, each texel reducing the 2 x 2 below it (clamped at an odd edge).
+fn mip_chain(base: Level, reduce: Reduce, slot: &PlacedSlot, rounding: Rounding, model: Model) -> Vec<Level> {
+    let mut levels = vec![base];
+    while let Some(prev) = levels.last().filter(|l| l.size > 1) {
+        let size = (prev.size / 2).max(1);
+        let mut l = Level {
+            size,
+            v: Vec::with_capacity(size * size),
+            a: Vec::with_capacity(size * size),
+        };
+        for y in 0..size as i64 {
+            for x in 0..size as i64 {
+                let t = [
+                    prev.at(2 * x, 2 * y),
+                    prev.at(2 * x + 1, 2 * y),
+                    prev.at(2 * x, 2 * y + 1),
+                    prev.at(2 * x + 1, 2 * y + 1),
+                ];
+                let amax = t.iter().map(|t| t.1).fold(0.0, f64::max);
+                let (v, a) = match reduce {
+                    Reduce::Mean => (t.iter().map(|t| t.0).sum::<f64>() * 0.25, t.iter().map(|t| t.1).sum::<f64>() * 0.25),
+                    Reduce::Max => (t.iter().map(|t| t.0).fold(f64::NEG_INFINITY, f64::max), amax),
+                    Reduce::Min => (t.iter().map(|t| t.0).fold(f64::INFINITY, f64::min), amax),
+                };
+                l.v.push(match rounding {
+                    Rounding::Exact => v,
+                    Rounding::Stored => stored(slot, v),
+                });
+                l.a.push(a + model.storage(slot, v) + 2.0 * model.ulp(v));
+            }
+        }
+        levels.push(l);
+    }
+    levels
+}

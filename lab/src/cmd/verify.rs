@@ -1,0 +1,135 @@
+//! `sshc verify T.ron`: the technique on the GPU against its f64 evaluation on the CPU, over
+//! the synthetic depth fields and scene depth maps of the agreement tests (see
+//! [`crate::verify`]); a table and a verdict per input, and a failing exit status when any
+//! input differs or is lossy.
+
+use crate::session::{pair, read, report, rt};
+use crate::verify::{self, FIELDS, Input, Options, Verdict};
+use sshc_runtime::gpu::Gpu;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args)]
+pub struct VerifyArgs {
+    /// The technique file (RON).
+    technique: PathBuf,
+    /// Override a param: NAME=VALUE (a RON literal). Repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
+    set: Vec<(String, String)>,
+    /// Override the precision of a channel or expansion: NAME=unorm8|unorm16|f16|f32|auto. Repeatable.
+    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
+    precision: Vec<(String, String)>,
+    /// Override the schedule of a pass: PASS=fragment|compute (`*` for all). Repeatable.
+    #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
+    schedule: Vec<(String, String)>,
+    /// An independent technique file computing the same visibility (written another way,
+    /// every channel at F32, say): its f64 CPU evaluation must agree with the technique's.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// How far the reference may differ beyond what the conditioning of both f64
+    /// evaluations allows (constants written differently, guards such as `1e-12`).
+    #[arg(long, default_value_t = 1e-6)]
+    reference_tolerance: f64,
+    /// Shadow-map size N (a power of two; the cameras are 2N and N/2 pixels wide).
+    #[arg(long, default_value_t = 32)]
+    shadow_map: u32,
+    /// Width of the square light over the query plane, world units (the plane spans 2).
+    #[arg(long, default_value_t = 0.5)]
+    light_width: f64,
+    /// Synthetic depth fields, comma-separated (ramp, step, checker, noise, zero, one).
+    #[arg(long, value_delimiter = ',', default_values_t = FIELDS.map(String::from))]
+    fields: Vec<String>,
+    /// Scenes whose light's depth maps are inputs too. Repeatable (default: the bundled
+    /// bunny and fence, where `scenes/` is found).
+    #[arg(long = "depth-of")]
+    scenes: Vec<PathBuf>,
+    /// Write the table (Markdown) here as well.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// The bundled scenes' folder: `scenes/` under the working directory, or beside the crate.
+fn bundled_scenes() -> Option<PathBuf> {
+    [
+        PathBuf::from("scenes"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("scenes"),
+    ]
+    .into_iter()
+    .find(|p| p.join("bunny.ron").is_file())
+}
+
+fn compile(path: &Path, args: &VerifyArgs, overrides: bool) -> Result<sshc::Compiled, String> {
+    let source = read(path)?;
+    let opts = sshc::CompileOptions {
+        set: if overrides { args.set.clone() } else { Vec::new() },
+        precision: if overrides { args.precision.clone() } else { Vec::new() },
+        schedule: if overrides { args.schedule.clone() } else { Vec::new() },
+        ..Default::default()
+    };
+    let c = sshc::compile_str(&source, &opts).map_err(|d| {
+        report(&d, path, &source);
+        String::new()
+    })?;
+    report(&sshc::Diagnostics(c.warnings.clone()), path, &source);
+    Ok(c)
+}
+
+pub fn verify(args: VerifyArgs) -> Result<(), String> {
+    let c = compile(&args.technique, &args, true)?;
+    let reference = args.reference.as_ref().map(|r| compile(r, &args, false)).transpose()?;
+    let gpu = Gpu::new().map_err(rt)?;
+    let n = args.shadow_map;
+    let mut inputs = Vec::new();
+    for f in &args.fields {
+        let depth = verify::depth_field(f, n).ok_or_else(|| format!("error: no depth field `{f}` (there are: {})", FIELDS.join(", ")))?;
+        inputs.push(Input { name: f.clone(), depth });
+    }
+    let scenes = if args.scenes.is_empty() {
+        bundled_scenes()
+            .map(|d| vec![d.join("bunny.ron"), d.join("fence.ron")])
+            .unwrap_or_default()
+    } else {
+        args.scenes.clone()
+    };
+    for s in &scenes {
+        let depth = verify::scene_depth(&gpu, s, n).map_err(|e| format!("error: {}: {e}", s.display()))?;
+        let name = s.file_stem().map_or("scene".into(), |x| x.to_string_lossy().into_owned());
+        inputs.push(Input { name, depth });
+    }
+    if inputs.is_empty() {
+        return Err("error: no inputs (name a depth field with --fields or a scene with --depth-of)".into());
+    }
+    let opts = Options {
+        shadow: n,
+        light_width: args.light_width,
+        reference_tolerance: args.reference_tolerance,
+    };
+    let total = inputs.len() * 2;
+    let mut done = 0;
+    let rows = verify::verify(&gpu, &c, reference.as_ref(), &inputs, &opts, &mut |input, camera| {
+        done += 1;
+        eprintln!("verify [{done}/{total}] {input}, camera {camera}");
+    })
+    .map_err(|e| format!("error: {e}"))?;
+    let table = verify::table(&rows);
+    println!(
+        "{} on {}, shadow map {n}, light width {}\n",
+        args.technique.display(),
+        gpu.describe(),
+        args.light_width
+    );
+    print!("{table}");
+    if let Some(out) = &args.out {
+        std::fs::write(out, &table).map_err(|e| format!("error: cannot write `{}`: {e}", out.display()))?;
+    }
+    let bad: Vec<String> = rows
+        .iter()
+        .filter(|r| r.verdict != Verdict::Agrees)
+        .map(|r| format!("{} (camera {}): {}", r.input, r.camera, r.verdict.name()))
+        .collect();
+    if bad.is_empty() {
+        println!("\nverdict: agrees on every input");
+        Ok(())
+    } else {
+        Err(format!("verdict: {} of {} inputs fail: {}", bad.len(), rows.len(), bad.join("; ")))
+    }
+}
