@@ -445,6 +445,54 @@ pub fn call_error(f: Func, v: f64, x: &[f64]) -> f64 {
     }
 }
 
+/// Whether a built-in's result is rounded (not one of its arguments or an exact function
+/// of them).
+fn rounds(f: Func) -> bool {
+    match f {
+        Func::Abs
+        | Func::Floor
+        | Func::Ceil
+        | Func::Fract
+        | Func::Round
+        | Func::Trunc
+        | Func::Sign
+        | Func::Saturate
+        | Func::Min
+        | Func::Max
+        | Func::Step
+        | Func::Clamp
+        | Func::Select
+        | Func::ToI32
+        | Func::ToU32
+        | Func::Vec2
+        | Func::Vec3
+        | Func::Vec4
+        | Func::Noise => false,
+        Func::Exp
+        | Func::Exp2
+        | Func::Log
+        | Func::Log2
+        | Func::Sqrt
+        | Func::InverseSqrt
+        | Func::Sin
+        | Func::Cos
+        | Func::Tan
+        | Func::Asin
+        | Func::Acos
+        | Func::Atan
+        | Func::Pow
+        | Func::Atan2
+        | Func::Mix
+        | Func::Smoothstep
+        | Func::Linstep
+        | Func::ToF32
+        | Func::Length
+        | Func::Dot
+        | Func::DivOr
+        | Func::UvWidth => true,
+    }
+}
+
 /// What the GPU's f32 transforms may leave in a receiver input of value `v`.
 pub fn input_error(i: Input, v: f64) -> f64 {
     match i {
@@ -891,9 +939,10 @@ impl<'p> Evaluation<'p> {
                     Node::Binary(BinOp::Div, ..) if float => 3.0 * ulp(k),
                     Node::Call(f, a) if float => {
                         let arg = |i: usize| a.get(i).and_then(|x| vals.get(x.index())).map_or(0.0, |x| x[k]);
+                        let rounding = if rounds(*f) { ulp(k) } else { 0.0 };
                         match model {
-                            Model::Gpu => call_error(*f, v[k], &[arg(0), arg(1)]) + ulp(k),
-                            Model::F64 => 4.0 * ulp(k),
+                            Model::Gpu => call_error(*f, v[k], &[arg(0), arg(1)]) + rounding,
+                            Model::F64 => 4.0 * rounding,
                         }
                     }
                     Node::F32(_)
@@ -1146,4 +1195,125 @@ fn mip_chain(base: Level, reduce: Reduce, slot: &PlacedSlot, rounding: Rounding,
         levels.push(l);
     }
     levels
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ir::Program;
+
+    fn compiled(src: &str) -> crate::Compiled {
+        crate::compile_str(src, &crate::CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("t.ron", src)))
+    }
+
+    fn frame(n: u32) -> Frame {
+        Frame {
+            shadow_size: n,
+            near: 8.0,
+            far: 12.0,
+            light_size: 0.0,
+            light_width: [0.0; 2],
+            light_spread: 0.0,
+            light_distant: true,
+            texel_world: [0.0, 2.0 / n as f64],
+            frame: 0,
+        }
+    }
+
+    /// A receiver at the centre of the map at normalised depth `d` (no slope).
+    fn receiver(d: f64) -> Receiver {
+        Receiver {
+            uv: [0.5 + 1.0 / 64.0, 0.5 + 1.0 / 64.0],
+            d_world: 8.0 + 4.0 * d,
+            ndotl: 1.0,
+            depth_slope: 0.0,
+            lod: 0.0,
+            pixel: [0.0, 0.0],
+        }
+    }
+
+    #[test]
+    fn halves_round_to_nearest_even_with_subnormals_and_overflow() {
+        assert_eq!(round_f16(1.0), 1.0);
+        // half way between 1 and the next half, 1 + 2^-10: to even (1)
+        assert_eq!(round_f16(1.0 + 2f64.powi(-11)), 1.0);
+        assert_eq!(round_f16(1.0 + 3.0 * 2f64.powi(-11)), 1.0 + 2.0 * 2f64.powi(-10));
+        assert_eq!(round_f16(65504.0), 65504.0);
+        assert_eq!(round_f16(70000.0), f64::INFINITY);
+        // subnormals are multiples of 2^-24
+        assert_eq!(round_f16(2f64.powi(-24)), 2f64.powi(-24));
+        assert_eq!(round_f16(0.7 * 2f64.powi(-24)), 2f64.powi(-24));
+        assert_eq!(round_f16(-0.3 * 2f64.powi(-24)), 0.0);
+    }
+
+    #[test]
+    fn hard_shadows_evaluate_exactly_and_allow_both_sides_only_at_a_tie() {
+        let c = compiled(include_str!("../../techniques/hard.ron"));
+        let p = Program::new(&c.ir, &c.layout);
+        assert_eq!(unsupported(&p), None);
+        let n = 8;
+        let depth = vec![0.5f32; (n * n) as usize];
+        let ev = Evaluation::new(p, &depth, frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        let mut s = Scratch::default();
+        // in front of the occluder: lit; behind it: shadowed; both within f32's reach
+        let lit = ev.visibility(&receiver(0.25), &mut s);
+        assert_eq!((lit.value, lit.lo, lit.hi), (1.0, 1.0, 1.0), "{lit:?}");
+        let dark = ev.visibility(&receiver(0.75), &mut s);
+        assert_eq!((dark.value, dark.lo, dark.hi), (0.0, 0.0, 0.0), "{dark:?}");
+        // at the occluder's depth the comparison is a tie: either side is allowed
+        let bias = c.ir.params.iter().find(|p| p.name == "bias").map_or(0.0, |p| p.value.as_f64());
+        let tie = ev.visibility(&receiver(0.5 + bias), &mut s);
+        assert_eq!((tie.lo, tie.hi), (0.0, 1.0), "{tie:?}");
+    }
+
+    #[test]
+    fn storage_rounding_is_what_separates_the_two_evaluations() {
+        // ESM's exp(c z) at Unorm8 over [1, e^c]: rounding moves the visibility a lot, and
+        // the GPU model's allowance covers the rounded evaluation
+        let src = include_str!("../../techniques/esm.ron");
+        let opts = crate::CompileOptions {
+            precision: vec![("e".into(), "unorm8".into())],
+            ..Default::default()
+        };
+        let c = crate::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("esm.ron", src)));
+        let p = Program::new(&c.ir, &c.layout);
+        let n = 8;
+        let depth: Vec<f32> = (0..n * n).map(|k| 0.3 + 0.4 * (k % n) as f32 / n as f32).collect();
+        let exact = Evaluation::new(p, &depth, frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        let rounded = Evaluation::new(p, &depth, frame(n), Rounding::Stored, Model::Gpu).unwrap();
+        let mut s = Scratch::default();
+        let r = receiver(0.55);
+        let e = exact.visibility(&r, &mut s);
+        let v = rounded.value(&r, &mut s);
+        assert!((v - e.value).abs() > 0.05, "exact {e:?}, rounded {v}");
+        assert!(e.admits(v), "exact {e:?}, rounded {v}");
+    }
+
+    #[test]
+    fn an_f64_model_allows_only_f64_rounding_where_the_math_is_well_conditioned() {
+        let c = compiled(include_str!("../../techniques/vsm.ron"));
+        let p = Program::new(&c.ir, &c.layout);
+        let n = 8;
+        let depth: Vec<f32> = (0..n * n).map(|k| 0.2 + 0.05 * (k % 7) as f32).collect();
+        let gpu = Evaluation::new(p, &depth, frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        let f64m = Evaluation::new(p, &depth, frame(n), Rounding::Exact, Model::F64).unwrap();
+        let mut s = Scratch::default();
+        let r = receiver(0.4);
+        let (a, b) = (gpu.visibility(&r, &mut s), f64m.visibility(&r, &mut s));
+        assert_eq!(a.value, b.value);
+        assert!(b.value > 0.0 && b.value < 1.0, "{b:?}");
+        // f64's own rounding through a short expression, against the GPU's f32 and storage
+        assert!(b.allowance < 1e-12, "{b:?}");
+        assert!(a.allowance > 1e3 * b.allowance, "{a:?} {b:?}");
+    }
+
+    #[test]
+    fn geometry_passes_and_per_sample_views_are_not_evaluated() {
+        let c = compiled(include_str!("../../techniques/penumbra-maps.ron"));
+        let why = unsupported(&Program::new(&c.ir, &c.layout)).expect("refused");
+        assert!(why.contains("Geometry pass"), "{why}");
+        let c = compiled(include_str!("../../techniques/point-samples.ron"));
+        let why = unsupported(&Program::new(&c.ir, &c.layout)).expect("refused");
+        assert!(why.contains("one view per light sample"), "{why}");
+    }
 }

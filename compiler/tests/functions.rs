@@ -246,6 +246,8 @@ fn the_example_techniques_compile_and_use_what_they_show() {
             &["arrays:", "taps[i]", "pixel.x", "frame", "noise("][..],
         ),
         ("vsm-bleeding", "techniques/examples", &["functions:", "reduce_bleeding("][..]),
+        // the independent reading `sshc verify --reference` checks msm.ron against
+        ("msm-reference", "techniques/examples", &["functions:", "det3(", "shadow("][..]),
     ] {
         let src = std::fs::read_to_string(root().join(folder).join(format!("{name}.ron"))).unwrap();
         for u in uses {

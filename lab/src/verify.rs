@@ -300,7 +300,7 @@ pub struct Row {
     /// Receivers compared.
     pub receivers: usize,
     /// Receivers whose allowance is at least 1/2: a site there jumps (a tie).
-    pub ties: usize,
+    pub loose: usize,
     /// Receivers outside their allowance.
     pub outside: usize,
     pub max_diff: f64,
@@ -393,7 +393,7 @@ pub fn verify(
                 input: input.name.clone(),
                 camera,
                 receivers: evaluated.len(),
-                ties: 0,
+                loose: 0,
                 outside: 0,
                 max_diff: 0.0,
                 median_allowance: 0.0,
@@ -422,7 +422,7 @@ pub fn verify(
                     row.worst = Some(w);
                 }
                 if e.half_width() >= 0.5 {
-                    row.ties += 1;
+                    row.loose += 1;
                 }
                 allowances.push(e.half_width());
                 storage.push((s - e.value).abs());
@@ -473,7 +473,7 @@ fn overlap(a: &Allowed, b: &Allowed, tol: f64) -> bool {
 pub fn table(rows: &[Row]) -> String {
     let with_reference = rows.iter().any(|r| r.reference.is_some());
     let mut s = String::from(
-        "| input | camera | receivers | ties | outside | max diff | median allowance | worst (pixel: got, expected, allowance) | storage p99 |",
+        "| input | camera | receivers | loose | outside | max diff | median allowance | worst (pixel: got, expected, allowance) | storage p99 |",
     );
     if with_reference {
         s.push_str(" reference outside | reference max diff |");
@@ -498,7 +498,7 @@ pub fn table(rows: &[Row]) -> String {
         let _ = write!(
             s,
             "| {} | {} | {} | {} | {} | {:.2e} | {:.2e} | {} | {:.2e} |",
-            r.input, r.camera, r.receivers, r.ties, r.outside, r.max_diff, r.median_allowance, worst, r.storage
+            r.input, r.camera, r.receivers, r.loose, r.outside, r.max_diff, r.median_allowance, worst, r.storage
         );
         if with_reference {
             match r.reference {

@@ -832,3 +832,116 @@ fn compile_warns_about_rounding_and_explain_prints_the_estimate() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The small inputs the verify tests run on (the command's defaults, 32^2 and eight
+/// inputs, are what docs/verify.md records): a 16^2 map, an edge, noise and a scene.
+const VERIFY_SMALL: [&str; 6] = ["--shadow-map", "16", "--fields", "step,noise", "--depth-of", "scenes/bunny.ron"];
+
+/// `sshc verify` agrees on every bundled technique it can evaluate and on the authoring
+/// examples; every other bundled technique is refused with the pass that stops it.
+#[test]
+fn verify_agrees_on_every_bundled_technique_it_evaluates_and_refuses_the_rest() {
+    let evaluated = [
+        "hard",
+        "pcf",
+        "vsm",
+        "esm",
+        "evsm",
+        "msm",
+        "csm",
+        "cssm",
+        "pcss",
+        "examples/poisson-pcf",
+        "examples/vsm-bleeding",
+        "examples/msm-reference",
+    ];
+    for t in evaluated {
+        let path = format!("techniques/{t}.ron");
+        let mut args = vec!["verify", path.as_str()];
+        args.extend(VERIFY_SMALL);
+        let out = ok(&args);
+        // three inputs under two cameras, each a row that agrees
+        assert_eq!(out.matches("| agrees |").count(), 6, "{t}:\n{out}");
+        assert!(out.contains("verdict: agrees on every input"), "{t}:\n{out}");
+    }
+    for (t, why) in [
+        ("penumbra-maps", "pass `penumbra` is a Geometry pass"),
+        ("penumbra-limit-maps", "is a Geometry pass"),
+        ("smoothies", "is a Geometry pass"),
+        ("single-sample", "is a Geometry pass"),
+        ("linear-light", "renders one view per light sample"),
+        ("point-samples", "pass `depth` renders one view per light sample"),
+    ] {
+        let path = format!("techniques/{t}.ron");
+        let err = refused(&["verify", path.as_str()], 60);
+        assert!(err.contains("cannot evaluate") && err.contains(why), "{t}: {err}");
+    }
+}
+
+/// A precision that loses the signal is caught: ESM's exp(c z) at Unorm8 rounds every
+/// texel of the ramp to the same few steps, and storage alone moves the visibility by
+/// more than 0.05 at over 1 % of the receivers (LOSSY); VSM's moments at Unorm8 too.
+#[test]
+fn verify_calls_a_precision_that_loses_the_signal_lossy() {
+    for (t, precision) in [
+        ("esm", vec!["--precision", "e=unorm8"]),
+        ("vsm", vec!["--precision", "m1=unorm8", "--precision", "m2=unorm8"]),
+    ] {
+        let path = format!("techniques/{t}.ron");
+        let mut args = vec!["verify", path.as_str(), "--fields", "ramp", "--depth-of", "scenes/bunny.ron"];
+        args.extend(precision);
+        let out = sshc(&args);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{t}: {stdout}");
+        assert!(stdout.contains("| LOSSY |"), "{t}: {stdout}");
+        assert!(
+            !stdout.contains("| DIFFERS |"),
+            "{t}: the GPU still agrees with the model: {stdout}"
+        );
+        assert!(stderr.contains("LOSSY"), "{t}: {stderr}");
+    }
+}
+
+/// A reference technique checks the math: MSM by Cholesky against MSM by Cramer's rule
+/// agrees; the same reference with one sign of the bound's numerator flipped does not.
+#[test]
+fn verify_checks_a_technique_against_an_independent_reference() {
+    let mut args = vec![
+        "verify",
+        "techniques/msm.ron",
+        "--reference",
+        "techniques/examples/msm-reference.ron",
+    ];
+    args.extend(VERIFY_SMALL);
+    let out = ok(&args);
+    // the column "reference outside" of every row: no receiver outside
+    let header: Vec<&str> = out
+        .lines()
+        .find(|l| l.starts_with("| input"))
+        .expect("a table")
+        .split('|')
+        .collect();
+    let column = header
+        .iter()
+        .position(|c| c.trim() == "reference outside")
+        .expect("the reference's column");
+    let rows: Vec<&str> = out.lines().filter(|l| l.ends_with("| agrees |")).collect();
+    assert_eq!(rows.len(), 6, "{out}");
+    for row in rows {
+        assert_eq!(row.split('|').nth(column).map(str::trim), Some("0"), "{row}");
+    }
+    let good = std::fs::read_to_string(root().join("techniques/examples/msm-reference.ron")).unwrap();
+    let wrong = good.replacen("zf * z3 - b.x * (zf + z3) + b.y", "zf * z3 + b.x * (zf + z3) + b.y", 1);
+    assert_ne!(good, wrong, "the mutation applies");
+    let dir = temp_dir("verify-reference");
+    let path = dir.join("wrong.ron");
+    std::fs::write(&path, wrong).unwrap();
+    let path = path.to_string_lossy().into_owned();
+    let mut args = vec!["verify", "techniques/msm.ron", "--reference", path.as_str()];
+    args.extend(VERIFY_SMALL);
+    let out = sshc(&args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(!out.status.success(), "{stdout}");
+    assert!(stdout.contains("| DIFFERS |"), "{stdout}");
+}
