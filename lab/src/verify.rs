@@ -207,9 +207,7 @@ pub fn depth_field(name: &str, n: u32) -> Option<Vec<f32>> {
 pub fn scene_depth(gpu: &Gpu, path: &Path, n: u32) -> Result<Vec<f32>, String> {
     let hard = include_str!("../../techniques/hard.ron");
     let c = sshc::compile_str(hard, &sshc::CompileOptions::default()).map_err(|d| d.render("techniques/hard.ron", hard))?;
-    let mut s = scene::Scene::load(path).map_err(|e| e.to_string())?;
-    s.shadow_map = n;
-    s.set_camera_size(8, 8);
+    let mut s = crate::session::load_scene(path, Some((8, 8)), Some(n))?;
     if s.lights.len() > 1 {
         s.lights.truncate(1);
     }
@@ -245,6 +243,29 @@ pub struct Options {
     /// How far a reference may differ from the technique beyond what the conditioning of
     /// both f64 evaluations allows (constants written differently, guards such as `1e-12`).
     pub reference_tolerance: f64,
+}
+
+impl Options {
+    /// Refuse sizes and widths the query plane cannot take.
+    pub fn check(&self) -> Result<(), String> {
+        let n = self.shadow;
+        if !(4..=1024).contains(&n) || !n.is_power_of_two() {
+            return Err(format!("the shadow map's size {n} must be a power of two in 4..=1024"));
+        }
+        if !(self.light_width.is_finite() && (0.0..=2.0).contains(&self.light_width)) {
+            return Err(format!(
+                "the light's width {} must lie in [0, 2] (the query plane spans 2 world units)",
+                self.light_width
+            ));
+        }
+        if !(self.reference_tolerance.is_finite() && self.reference_tolerance >= 0.0) {
+            return Err(format!(
+                "the reference tolerance {} must be finite and not negative",
+                self.reference_tolerance
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl Default for Options {
@@ -331,16 +352,8 @@ pub fn verify(
     if let Some(why) = sshc::interp::unsupported(&program) {
         return Err(format!("`sshc verify` cannot evaluate `{}` on the CPU: {why}", c.ir.technique));
     }
+    opts.check()?;
     let n = opts.shadow;
-    if !(4..=1024).contains(&n) || !n.is_power_of_two() {
-        return Err(format!("the shadow map's size {n} must be a power of two in 4..=1024"));
-    }
-    if !(opts.light_width.is_finite() && (0.0..=2.0).contains(&opts.light_width)) {
-        return Err(format!(
-            "the light's width {} must lie in [0, 2] (the query plane spans 2 world units)",
-            opts.light_width
-        ));
-    }
     let reference_program = reference.map(|r| Program::new(&r.ir, &r.layout));
     if let Some(p) = &reference_program
         && let Some(why) = sshc::interp::unsupported(p)

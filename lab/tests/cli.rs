@@ -945,3 +945,28 @@ fn verify_checks_a_technique_against_an_independent_reference() {
     assert!(!out.status.success(), "{stdout}");
     assert!(stdout.contains("| DIFFERS |"), "{stdout}");
 }
+
+/// Bad `verify` arguments are refused at once with the reason, before any GPU work.
+#[test]
+fn verify_refuses_bad_arguments_with_reasons() {
+    for (args, why) in [
+        (vec!["--shadow-map", "12"], "must be a power of two in 4..=1024"),
+        (vec!["--shadow-map", "0"], "must be a power of two in 4..=1024"),
+        (vec!["--light-width=-1"], "must lie in [0, 2]"),
+        (vec!["--light-width", "NaN"], "must lie in [0, 2]"),
+        (vec!["--reference-tolerance=-1"], "must be finite and not negative"),
+        (vec!["--fields", "ramp,bogus"], "no depth field `bogus` (there are: ramp, step"),
+        (vec!["--depth-of", "/nonexistent.ron"], "cannot read the scene"),
+        (
+            vec!["--reference", "techniques/smoothies.ron"],
+            "the reference `smoothies` cannot be evaluated",
+        ),
+    ] {
+        let mut all = vec!["verify", "techniques/hard.ron"];
+        all.extend(args.iter().copied());
+        let err = refused(&all, 60);
+        assert!(err.contains(why), "{args:?}: {err}");
+    }
+    let err = refused(&["verify", "lab/tests/data/does-not-exist.ron"], 10);
+    assert!(err.contains("does-not-exist.ron"), "{err}");
+}

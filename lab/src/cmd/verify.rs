@@ -76,6 +76,12 @@ fn compile(path: &Path, args: &VerifyArgs, overrides: bool) -> Result<sshc::Comp
 pub fn verify(args: VerifyArgs) -> Result<(), String> {
     let c = compile(&args.technique, &args, true)?;
     let reference = args.reference.as_ref().map(|r| compile(r, &args, false)).transpose()?;
+    let opts = Options {
+        shadow: args.shadow_map,
+        light_width: args.light_width,
+        reference_tolerance: args.reference_tolerance,
+    };
+    opts.check().map_err(|e| format!("error: {e}"))?;
     let gpu = Gpu::new().map_err(rt)?;
     let n = args.shadow_map;
     let mut inputs = Vec::new();
@@ -91,18 +97,13 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
         args.scenes.clone()
     };
     for s in &scenes {
-        let depth = verify::scene_depth(&gpu, s, n).map_err(|e| format!("error: {}: {e}", s.display()))?;
+        let depth = verify::scene_depth(&gpu, s, n)?;
         let name = s.file_stem().map_or("scene".into(), |x| x.to_string_lossy().into_owned());
         inputs.push(Input { name, depth });
     }
     if inputs.is_empty() {
         return Err("error: no inputs (name a depth field with --fields or a scene with --depth-of)".into());
     }
-    let opts = Options {
-        shadow: n,
-        light_width: args.light_width,
-        reference_tolerance: args.reference_tolerance,
-    };
     let total = inputs.len() * 2;
     let mut done = 0;
     let rows = verify::verify(&gpu, &c, reference.as_ref(), &inputs, &opts, &mut |input, camera| {
