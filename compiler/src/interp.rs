@@ -193,25 +193,13 @@ pub fn unsupported(p: &Program) -> Option<String> {
             | IrPassKind::Shade { .. } => {}
         }
     }
-    let shade = shade_root(p)?;
+    let shade = p.shade()?;
     for h in p.arena.postorder(&[shade]) {
         if let Node::Input(i @ (Input::SegmentBefore | Input::SegmentAfter), _) = p.arena.node(h) {
             return Some(format!("the Shade reads `{}`, an input of segment lights' samples", i.desc().name));
         }
     }
     None
-}
-
-fn shade_root(p: &Program) -> Option<H> {
-    p.passes.iter().filter(|pass| pass.live).find_map(|pass| match pass.kind {
-        IrPassKind::Shade { visibility } => Some(visibility),
-        IrPassKind::Depth { .. }
-        | IrPassKind::Map
-        | IrPassKind::Filter { .. }
-        | IrPassKind::Mipmap { .. }
-        | IrPassKind::SummedArea
-        | IrPassKind::Geometry { .. } => None,
-    })
 }
 
 /// Half the rounding step of `slot`'s storage at value `v`, in value units.
@@ -399,12 +387,13 @@ fn prefix_sums(l: &Level, values: bool) -> Vec<f64> {
     s
 }
 
-/// The error bound of a built-in call with value `v` and arguments `x` (WGSL's accuracy of
-/// built-in functions), beyond f32 rounding; 0 where f32 rounding is the bound.
-pub fn call_error(f: Func, v: f64, x: &[f64]) -> f64 {
+/// The accuracy of a built-in call with value `v` and arguments `x` (WGSL's accuracy of
+/// built-in functions): `None` where the result is exact (one of its arguments, or an exact
+/// function of them), else its error beyond the f32 rounding of the result.
+pub fn call_error(f: Func, v: f64, x: &[f64]) -> Option<f64> {
     let ulp = v.abs() * 2f64.powi(-23);
     let arg = x.first().copied().unwrap_or(0.0);
-    match f {
+    Some(match f {
         Func::Sin | Func::Cos => 2f64.powi(-11) + arg.abs() * 2f64.powi(-22),
         Func::Tan => 2f64.powi(-11) * (1.0 + v * v),
         Func::Exp => (3.0 + 2.0 * (arg * std::f64::consts::LOG2_E).abs()) * ulp,
@@ -418,37 +407,8 @@ pub fn call_error(f: Func, v: f64, x: &[f64]) -> f64 {
         Func::Sqrt | Func::InverseSqrt | Func::DivOr => 2.5 * ulp,
         Func::Asin | Func::Acos | Func::Atan | Func::Atan2 => 4096.0 * ulp + 2f64.powi(-22),
         Func::Smoothstep | Func::Linstep => 4.0 * ulp,
-        Func::Abs
-        | Func::Floor
-        | Func::Ceil
-        | Func::Fract
-        | Func::Round
-        | Func::Trunc
-        | Func::Sign
-        | Func::Saturate
-        | Func::Min
-        | Func::Max
-        | Func::Step
-        | Func::Clamp
-        | Func::Mix
-        | Func::Select
-        | Func::ToF32
-        | Func::ToI32
-        | Func::ToU32
-        | Func::Vec2
-        | Func::Vec3
-        | Func::Vec4
-        | Func::Length
-        | Func::Dot
-        | Func::UvWidth
-        | Func::Noise => 0.0,
-    }
-}
-
-/// Whether a built-in's result is rounded (not one of its arguments or an exact function
-/// of them).
-fn rounds(f: Func) -> bool {
-    match f {
+        // rounded once, as any arithmetic result
+        Func::Mix | Func::ToF32 | Func::Length | Func::Dot | Func::UvWidth => 0.0,
         Func::Abs
         | Func::Floor
         | Func::Ceil
@@ -467,30 +427,8 @@ fn rounds(f: Func) -> bool {
         | Func::Vec2
         | Func::Vec3
         | Func::Vec4
-        | Func::Noise => false,
-        Func::Exp
-        | Func::Exp2
-        | Func::Log
-        | Func::Log2
-        | Func::Sqrt
-        | Func::InverseSqrt
-        | Func::Sin
-        | Func::Cos
-        | Func::Tan
-        | Func::Asin
-        | Func::Acos
-        | Func::Atan
-        | Func::Pow
-        | Func::Atan2
-        | Func::Mix
-        | Func::Smoothstep
-        | Func::Linstep
-        | Func::ToF32
-        | Func::Length
-        | Func::Dot
-        | Func::DivOr
-        | Func::UvWidth => true,
-    }
+        | Func::Noise => return None,
+    })
 }
 
 /// What the GPU's f32 transforms may leave in a receiver input of value `v`.
@@ -618,7 +556,7 @@ impl<'p> Evaluation<'p> {
         if size == 0 || depth.len() != size * size {
             return Err(format!("a depth map of {} values is not {size} x {size}", depth.len()));
         }
-        let shade = Prepared::new(&p, shade_root(&p).ok_or("the technique has no live Shade pass")?);
+        let shade = Prepared::new(&p, p.shade().ok_or("the technique has no live Shade pass")?);
         let mut ev = Evaluation {
             p,
             frame,
@@ -939,10 +877,10 @@ impl<'p> Evaluation<'p> {
                     Node::Binary(BinOp::Div, ..) if float => 3.0 * ulp(k),
                     Node::Call(f, a) if float => {
                         let arg = |i: usize| a.get(i).and_then(|x| vals.get(x.index())).map_or(0.0, |x| x[k]);
-                        let rounding = if rounds(*f) { ulp(k) } else { 0.0 };
-                        match model {
-                            Model::Gpu => call_error(*f, v[k], &[arg(0), arg(1)]) + rounding,
-                            Model::F64 => 4.0 * rounding,
+                        match (model, call_error(*f, v[k], &[arg(0), arg(1)])) {
+                            (_, None) => 0.0,
+                            (Model::Gpu, Some(e)) => e + ulp(k),
+                            (Model::F64, Some(_)) => 4.0 * ulp(k),
                         }
                     }
                     Node::F32(_)

@@ -1009,6 +1009,21 @@ impl<S> Clone for Program<'_, S> {
 
 impl<S> Copy for Program<'_, S> {}
 
+impl<S> Program<'_, S> {
+    /// The visibility expression of the live Shade pass.
+    pub fn shade(&self) -> Option<H> {
+        self.passes.iter().filter(|pass| pass.live).find_map(|pass| match pass.kind {
+            IrPassKind::Shade { visibility } => Some(visibility),
+            IrPassKind::Depth { .. }
+            | IrPassKind::Map
+            | IrPassKind::Filter { .. }
+            | IrPassKind::Mipmap { .. }
+            | IrPassKind::SummedArea
+            | IrPassKind::Geometry { .. } => None,
+        })
+    }
+}
+
 impl<'a> Program<'a> {
     pub fn new(ir: &'a Ir, layout: &'a Layout) -> Program<'a> {
         Program {

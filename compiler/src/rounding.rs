@@ -146,15 +146,7 @@ pub fn estimate(p: &Program, detail: Detail) -> Option<Estimate> {
     if unsupported(p).is_some() {
         return None;
     }
-    let shade = p.passes.iter().find_map(|pass| match pass.kind {
-        IrPassKind::Shade { visibility } => Some(visibility),
-        IrPassKind::Depth { .. }
-        | IrPassKind::Map
-        | IrPassKind::Filter { .. }
-        | IrPassKind::Mipmap { .. }
-        | IrPassKind::SummedArea
-        | IrPassKind::Geometry { .. } => None,
-    })?;
+    let shade = p.shade()?;
     let order = p.arena.postorder(&[shade]);
     // the (resource, channel) pairs the Shade looks up, with their slot
     let mut looked: Vec<(ResId, ChannelId, PlacedSlot, Mix)> = Vec::new();

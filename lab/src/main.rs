@@ -4,7 +4,7 @@
 use clap::{Parser, Subcommand};
 use sshc::{CompileOptions, Diagnostics, DumpPhase};
 use sshc_lab::cmd::{compare, render, sweep, truth, verify};
-use sshc_lab::session::{pair, read, report};
+use sshc_lab::session::{Variants, pair, read, report};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -24,15 +24,8 @@ struct Cli {
 struct Common {
     /// The technique file (RON).
     technique: PathBuf,
-    /// Override a param: NAME=VALUE (a RON literal such as 16, 2.5 or true). Repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
-    set: Vec<(String, String)>,
-    /// Override the precision of a channel or expansion: NAME=unorm8|unorm16|f16|f32. Repeatable.
-    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
-    precision: Vec<(String, String)>,
-    /// Override the schedule of a Map, Filter, Mipmap or Shade pass: PASS=fragment|compute (`*` for all of them). Repeatable.
-    #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
-    schedule: Vec<(String, String)>,
+    #[command(flatten)]
+    variants: Variants,
     /// Print the IR after this phase.
     #[arg(long = "dump-ir-after", value_name = "PHASE", value_parser = dump_phase)]
     dump_ir_after: Option<DumpPhase>,
@@ -106,13 +99,10 @@ fn options(c: &Common) -> Result<CompileOptions, String> {
         None => None,
     };
     Ok(CompileOptions {
-        set: c.set.clone(),
-        precision: c.precision.clone(),
-        schedule: c.schedule.clone(),
         dump_after: c.dump_ir_after,
         scene,
         rounding: true,
-        ..Default::default()
+        ..c.variants.options()
     })
 }
 

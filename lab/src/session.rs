@@ -48,19 +48,41 @@ pub fn pair(s: &str) -> Result<(String, String), String> {
     }
 }
 
+/// The compile-time variants of a technique the command line can ask for without editing
+/// it: `compile`, `check`, `explain` and `verify` flatten it.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct Variants {
+    /// Override a param: NAME=VALUE (a RON literal such as 16, 2.5 or true). Repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
+    pub set: Vec<(String, String)>,
+    /// Override the precision of a channel or expansion: NAME=unorm8|unorm16|f16|f32|auto. Repeatable.
+    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
+    pub precision: Vec<(String, String)>,
+    /// Override the schedule of a Map, Filter, Mipmap or Shade pass: PASS=fragment|compute (`*` for all of them). Repeatable.
+    #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
+    pub schedule: Vec<(String, String)>,
+}
+
+impl Variants {
+    /// The compile options these variants ask for (everything else at its default).
+    pub fn options(&self) -> sshc::CompileOptions {
+        sshc::CompileOptions {
+            set: self.set.clone(),
+            precision: self.precision.clone(),
+            schedule: self.schedule.clone(),
+            ..Default::default()
+        }
+    }
+}
+
 /// What `render` and `compare` let the command line change: params, precisions, the
 /// shadow-map resolution and the camera size.
 #[derive(clap::Args)]
 pub struct Overrides {
-    /// Param override NAME=VALUE: compiled in for a technique, a uniform for a graph. Repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
-    pub set: Vec<(String, String)>,
-    /// Precision override of a channel or expansion, NAME=PRECISION (techniques only). Repeatable.
-    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
-    pub precision: Vec<(String, String)>,
-    /// Schedule override of a Map, Filter, Mipmap or Shade pass, PASS=fragment|compute (`*`: all of them; techniques only). Repeatable.
-    #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
-    pub schedule: Vec<(String, String)>,
+    /// Params, precisions and schedules (`--set` of a compiled graph sets its uniforms;
+    /// `--precision` and `--schedule` need a technique).
+    #[command(flatten)]
+    pub variants: Variants,
     /// Compile the technique for any scene instead of specialising it for this one (by
     /// default a technique is specialised for the scene's light where its `light:` list
     /// admits it: the light inputs that are 0 for it fold).
@@ -103,12 +125,7 @@ impl Overrides {
             scene.set_shadow_fit(fit).map_err(|e| e.to_string())?;
             scene.check_precision().map_err(|e| e.to_string())?;
         }
-        let mut opts = sshc::CompileOptions {
-            set: self.set.clone(),
-            precision: self.precision.clone(),
-            schedule: self.schedule.clone(),
-            ..Default::default()
-        };
+        let mut opts = self.variants.options();
         specialise(&mut opts, input, path, &scene, self.generic)?;
         let ex = executor(gpu, input, &opts)?;
         Ok((scene, ex))

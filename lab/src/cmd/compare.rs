@@ -178,9 +178,9 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     };
 
     let name = |p: &std::path::Path| p.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let mut overrides: Vec<String> = a.over.set.iter().map(|(k, v)| format!("{k}={v}")).collect();
-    overrides.extend(a.over.precision.iter().map(|(k, v)| format!("{k}:{v}")));
-    overrides.extend(a.over.schedule.iter().map(|(k, v)| format!("schedule {k}:{v}")));
+    let mut overrides: Vec<String> = a.over.variants.set.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    overrides.extend(a.over.variants.precision.iter().map(|(k, v)| format!("{k}:{v}")));
+    overrides.extend(a.over.variants.schedule.iter().map(|(k, v)| format!("schedule {k}:{v}")));
     let lines = figure_lines(&FigureInputs {
         title: format!(
             "{} on {}: {w}x{h} px, shadow map {}{}",

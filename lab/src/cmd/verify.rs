@@ -3,7 +3,7 @@
 //! [`crate::verify`]); a table and a verdict per input, and a failing exit status when any
 //! input differs or is lossy.
 
-use crate::session::{pair, read, report, rt};
+use crate::session::{Variants, read, report, rt};
 use crate::verify::{self, FIELDS, Input, Options, Verdict};
 use sshc_runtime::gpu::Gpu;
 use std::path::{Path, PathBuf};
@@ -12,15 +12,8 @@ use std::path::{Path, PathBuf};
 pub struct VerifyArgs {
     /// The technique file (RON).
     technique: PathBuf,
-    /// Override a param: NAME=VALUE (a RON literal). Repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
-    set: Vec<(String, String)>,
-    /// Override the precision of a channel or expansion: NAME=unorm8|unorm16|f16|f32|auto. Repeatable.
-    #[arg(long = "precision", value_name = "NAME=PRECISION", value_parser = pair)]
-    precision: Vec<(String, String)>,
-    /// Override the schedule of a pass: PASS=fragment|compute (`*` for all). Repeatable.
-    #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
-    schedule: Vec<(String, String)>,
+    #[command(flatten)]
+    variants: Variants,
     /// An independent technique file computing the same visibility (written another way,
     /// every channel at F32, say): its f64 CPU evaluation must agree with the technique's.
     #[arg(long)]
@@ -59,11 +52,11 @@ fn bundled_scenes() -> Option<PathBuf> {
 
 fn compile(path: &Path, args: &VerifyArgs, overrides: bool) -> Result<sshc::Compiled, String> {
     let source = read(path)?;
-    let opts = sshc::CompileOptions {
-        set: if overrides { args.set.clone() } else { Vec::new() },
-        precision: if overrides { args.precision.clone() } else { Vec::new() },
-        schedule: if overrides { args.schedule.clone() } else { Vec::new() },
-        ..Default::default()
+    // the reference is compiled as written: the variants name the technique's params
+    let opts = if overrides {
+        args.variants.options()
+    } else {
+        sshc::CompileOptions::default()
     };
     let c = sshc::compile_str(&source, &opts).map_err(|d| {
         report(&d, path, &source);
