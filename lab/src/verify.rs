@@ -333,6 +333,44 @@ pub struct Row {
     /// The reference's comparison: receivers outside, largest difference and its worst.
     pub reference: Option<(usize, f64, Option<Worst>)>,
     pub verdict: Verdict,
+    /// Every receiver compared: its pixel index, the GPU's value, the CPU's, and the
+    /// difference over the allowance (above 1: outside).
+    pub compared: Vec<(usize, f64, f64, f64)>,
+}
+
+impl Row {
+    /// The row as a picture, `scale` screen pixels per camera pixel: the GPU's visibility,
+    /// the CPU's, and the difference over the allowance (black: equal; through the viridis
+    /// map up to the allowance; red: outside it). Pixels not compared stay dark blue.
+    pub fn picture(&self, scale: u32) -> image::RgbImage {
+        let n = self.camera;
+        let s = scale.max(1);
+        let mut img = image::RgbImage::from_pixel(3 * n * s + 2 * s, n * s, image::Rgb([16, 16, 48]));
+        let grey = |v: f64| {
+            let g = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+            image::Rgb([g, g, g])
+        };
+        for &(i, got, expected, ratio) in &self.compared {
+            let (x, y) = ((i as u32) % n, (i as u32) / n);
+            let diff = if ratio > 1.0 || ratio.is_nan() {
+                image::Rgb([230, 20, 20])
+            } else if ratio == 0.0 {
+                image::Rgb([0, 0, 0])
+            } else {
+                let c = colorous::VIRIDIS.eval_continuous(ratio);
+                image::Rgb([c.r, c.g, c.b])
+            };
+            for (panel, colour) in [grey(got), grey(expected), diff].into_iter().enumerate() {
+                let x0 = panel as u32 * (n * s + s) + x * s;
+                for dy in 0..s {
+                    for dx in 0..s {
+                        img.put_pixel(x0 + dx, y * s + dy, colour);
+                    }
+                }
+            }
+        }
+        img
+    }
 }
 
 /// Receivers at or past this share of storage error make a row lossy.
@@ -414,6 +452,7 @@ pub fn verify(
                 storage: 0.0,
                 reference: reference_program.map(|_| (0, 0.0, None)),
                 verdict: Verdict::Agrees,
+                compared: Vec::with_capacity(evaluated.len()),
             };
             let mut allowances = Vec::new();
             let mut storage = Vec::new();
@@ -431,6 +470,12 @@ pub fn verify(
                 if !e.admits(g) {
                     row.outside += 1;
                 }
+                let ratio = if e.admits(g) {
+                    w.ratio().min(1.0)
+                } else {
+                    w.ratio().max(1.0 + f64::EPSILON)
+                };
+                row.compared.push((i, g, e.value, ratio));
                 if row.worst.is_none_or(|x| w.ratio() > x.ratio() || w.ratio().is_nan()) {
                     row.worst = Some(w);
                 }

@@ -901,6 +901,37 @@ fn verify_calls_a_precision_that_loses_the_signal_lossy() {
         );
         assert!(stderr.contains("LOSSY"), "{t}: {stderr}");
     }
+    // `--images`: one picture per input and camera, three panels of the camera's pixels
+    // scaled to at least 128 screen pixels, and red where the GPU leaves its interval
+    let dir = temp_dir("verify-images");
+    let images = dir.to_string_lossy().into_owned();
+    ok(&[
+        "verify",
+        "techniques/hard.ron",
+        "--fields",
+        "step",
+        "--depth-of",
+        "scenes/bunny.ron",
+        "--images",
+        images.as_str(),
+    ]);
+    for (input, camera) in [("step", 64u32), ("step", 16), ("bunny", 64), ("bunny", 16)] {
+        let path = dir.join(format!("{input}-{camera}.png"));
+        let img = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8();
+        let scale = 128u32.div_ceil(camera);
+        assert_eq!(
+            img.dimensions(),
+            (3 * camera * scale + 2 * scale, camera * scale),
+            "{}",
+            path.display()
+        );
+        assert!(
+            !img.pixels().any(|p| p.0 == [230, 20, 20]),
+            "{}: a receiver outside",
+            path.display()
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A reference technique checks the math: MSM by Cholesky against MSM by Cramer's rule

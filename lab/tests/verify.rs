@@ -16,8 +16,8 @@ fn compile(name: &str) -> sshc::Compiled {
     sshc::compile_str(&src, &sshc::CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render(name, &src)))
 }
 
-/// The verdicts of `c` on a 16^2 map: an edge, noise and the bunny's depth map.
-fn verdicts(gpu: &Gpu, c: &sshc::Compiled) -> Vec<Verdict> {
+/// The rows of `c` on a 16^2 map: an edge, noise and the bunny's depth map.
+fn rows(gpu: &Gpu, c: &sshc::Compiled) -> Vec<verify::Row> {
     let n = 16;
     let mut inputs: Vec<Input> = ["step", "noise"]
         .iter()
@@ -34,11 +34,11 @@ fn verdicts(gpu: &Gpu, c: &sshc::Compiled) -> Vec<Verdict> {
         shadow: n,
         ..Options::default()
     };
-    verify::verify(gpu, c, None, &inputs, &opts, &mut |_, _| {})
-        .unwrap_or_else(|e| panic!("{e}"))
-        .iter()
-        .map(|r| r.verdict)
-        .collect()
+    verify::verify(gpu, c, None, &inputs, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn verdicts(rows: &[verify::Row]) -> Vec<Verdict> {
+    rows.iter().map(|r| r.verdict).collect()
 }
 
 /// `c` with `from` replaced by `to` in the module of pass `pass` (which must contain it).
@@ -72,12 +72,17 @@ fn injected_code_generation_bugs_are_caught() {
         ("csm", "basis", "sin(", "cos("),
     ] {
         let c = compile(technique);
-        let good = verdicts(&gpu, &c);
+        let good = verdicts(&rows(&gpu, &c));
         assert!(good.iter().all(|v| *v == Verdict::Agrees), "{technique} as generated: {good:?}");
-        let bad = verdicts(&gpu, &injected(&c, pass, from, to));
+        let bad = rows(&gpu, &injected(&c, pass, from, to));
         assert!(
-            bad.contains(&Verdict::Differs),
-            "{technique} with `{from}` -> `{to}` in `{pass}` was not caught: {bad:?}"
+            verdicts(&bad).contains(&Verdict::Differs),
+            "{technique} with `{from}` -> `{to}` in `{pass}` was not caught: {:?}",
+            verdicts(&bad)
         );
+        // the picture of a row that differs shows where, in red
+        let row = bad.iter().find(|r| r.verdict == Verdict::Differs).expect("a row that differs");
+        let red = row.picture(1).pixels().filter(|p| p.0 == [230, 20, 20]).count();
+        assert_eq!(red, row.outside, "{technique}: one red pixel per receiver outside");
     }
 }

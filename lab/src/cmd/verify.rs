@@ -38,6 +38,10 @@ pub struct VerifyArgs {
     /// Write the table (Markdown) here as well.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Write one PNG per input and camera into this folder: the GPU's visibility, the
+    /// CPU's, and their difference over the allowance (red where outside it).
+    #[arg(long)]
+    images: Option<PathBuf>,
 }
 
 /// The bundled scenes' folder: `scenes/` under the working directory, or beside the crate.
@@ -112,6 +116,18 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
         args.light_width
     );
     print!("{table}");
+    if let Some(dir) = &args.images {
+        std::fs::create_dir_all(dir).map_err(|e| format!("error: cannot create `{}`: {e}", dir.display()))?;
+        for r in &rows {
+            let path = dir.join(format!("{}-{}.png", r.input, r.camera));
+            // at least 128 screen pixels per panel
+            let scale = 128u32.div_ceil(r.camera.max(1)).max(1);
+            r.picture(scale)
+                .save(&path)
+                .map_err(|e| format!("error: cannot write `{}`: {e}", path.display()))?;
+        }
+        println!("wrote {} pictures to {}", rows.len(), dir.display());
+    }
     if let Some(out) = &args.out {
         std::fs::write(out, &table).map_err(|e| format!("error: cannot write `{}`: {e}", out.display()))?;
     }
