@@ -18,32 +18,38 @@
 //! rounded to its channel's precision and encoding, as the GPU keeps it: the difference of
 //! the two evaluations is what storage alone does to the visibility.
 //!
-//! **The allowance** (the tolerance model of `sshc verify`, a generic first-order form of
-//! the agreement tests' model). Every texel of every stored channel carries an allowance:
+//! **The allowance** (the tolerance model of `sshc verify`, a generic form of the agreement
+//! tests' model) is a running error bound. Every texel of every stored channel carries one:
 //! half its precision's rounding step ([`half_step`]), plus what the pass that wrote it
-//! propagates (a filter's weights applied to its inputs' allowances, a maximum's largest,
-//! a mip level's mean, a Map's first-order sensitivity below). A value computed from an
-//! expression (a Map channel's per texel, the Shade's visibility per receiver) is allowed
+//! propagates (a filter's weights applied to its inputs' allowances, a maximum's largest, a
+//! mip level's mean, a Map channel's bound below). An expression (a Map channel per texel,
+//! the Shade's visibility per receiver) is bounded node by node in postorder
+//! (`Evaluation::allowed`): a node's error is its own, under the [`Model`],
 //!
-//! `sum over sites s of max(|v(x_s + e_s) - v|, |v(x_s - e_s) - v|) + 4 |v_f32 - v| + 2^-20`
+//! - a lookup: the allowance of the texels it reads, weighted as it weighs them, and the
+//!   jump to the neighbour texel where a `nearest` or `fetch` reads within the receiver's
+//!   error of a texel boundary;
+//! - an input: what the GPU's f32 transforms may leave in it ([`input_error`]: `d` and `uv`
+//!   by 2^-20, the others by 2^-20 of their magnitude);
+//! - an arithmetic result: one f32 ulp (three for a division); a built-in: its WGSL accuracy
+//!   ([`call_error`]: `sin`, `cos` 2^-11 absolute; `exp`, `exp2` (3 + 2|x|) ulp; `log`,
+//!   `log2` 3 ulp or 2^-21 absolute; `pow` as `exp2(y log2 x)`; `sqrt`, `inverseSqrt` 2.5 ulp;
+//!   the inverse trigonometric functions 4096 ulp) plus an ulp where it rounds,
 //!
-//! where `v` is the exact value, `v(x_s +- e_s)` the value with site `s` moved by its own
-//! error `e_s`, and `v_f32` the same expression evaluated with every float result rounded
-//! to f32 (the GPU's arithmetic; four times its distance covers a different order of
-//! operations and fused multiply-adds). The sites:
+//! plus, for each operand and each of its components, the largest change of the node when
+//! that component alone moves by its error either way (a bool operand flips). A clamp thus
+//! passes on only what crosses it; a comparison or a `select` whose operands may cross passes
+//! on the whole jump, so binary tests at exact ties need no separate rule; an operand that
+//! may be anything (an unbounded error) makes the node unbounded. The Shade's interval is its
+//! raw value (NaN read as 1) widened by the root's bound and then clamped to `[0, 1]`, widened
+//! once more by what moving every filtered lookup together by the hardware's 8-bit texel
+//! positions and level fractions (`FILTER_SHIFT`) changes: the GPU weighs every channel
+//! of a texel with the same weights, so that error is coherent across the lookups of one
+//! receiver, not independent per lookup.
 //!
-//! - every lookup, moved by the allowance of the texels it reads (weighted as the lookup
-//!   weighs them) plus `2^-8` of their spread per filtered axis (filtering weights are kept
-//!   to 8 fractional bits by the hardware, lavapipe included);
-//! - every call of a built-in with a looser precision than f32 rounding, moved by its WGSL
-//!   bound ([`call_error`]: `sin`, `cos` 2^-11 absolute; `exp`, `exp2` (3 + 2|x|) ulp; `log`,
-//!   `log2` 3 ulp or 2^-21 absolute; `pow` as `exp2(y log2 x)`; `sqrt`, `inverseSqrt`,
-//!   division 2.5 ulp; the inverse trigonometric functions 4096 ulp);
-//! - the receiver's inputs, moved by what the GPU's f32 transforms may leave in them
-//!   ([`input_error`]: `d` and `uv` by 2^-20, the others by 2^-20 of their magnitude).
-//!
-//! A site where the value jumps (a depth comparison at a tie, a texel boundary) gets the
-//! whole jump as its allowance, so binary tests at exact ties need no separate rule.
+//! The bound is linear in each operand and sums over operands: it is not a proof where
+//! errors interact beyond first order, and it is loose where an expression amplifies every
+//! error (MSM's Cholesky on flat moments; `sshc verify` counts such receivers as loose).
 //!
 //! Not evaluated ([`unsupported`]): Geometry passes (their primitives are rasterised, not a
 //! function of texels), per-sample views and the inputs of segment lights.
