@@ -264,8 +264,8 @@ impl Level {
         (self.v[k], self.a[k])
     }
 
-    /// Bilinear at uv: value, allowance of the blend, smallest and largest texel.
-    fn bilinear(&self, uv: [f64; 2]) -> (f64, f64, f64, f64) {
+    /// Bilinear at uv: the value and the allowance of the blend.
+    fn bilinear(&self, uv: [f64; 2]) -> (f64, f64) {
         let n = self.size as f64;
         let (sx, sy) = (uv[0] * n - 0.5, uv[1] * n - 0.5);
         let (x0, y0) = (sx.floor(), sy.floor());
@@ -273,14 +273,9 @@ impl Level {
         let (x0, y0) = (x0 as i64, y0 as i64);
         let t = [self.at(x0, y0), self.at(x0 + 1, y0), self.at(x0, y0 + 1), self.at(x0 + 1, y0 + 1)];
         let w = [(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy];
-        let (mut v, mut a, mut lo, mut hi) = (0.0, 0.0, f64::INFINITY, f64::NEG_INFINITY);
-        for (k, (tv, ta)) in t.iter().enumerate() {
-            v += w[k] * tv;
-            a += w[k] * ta;
-            lo = lo.min(*tv);
-            hi = hi.max(*tv);
-        }
-        (v, a, lo, hi)
+        t.iter()
+            .zip(w)
+            .fold((0.0, 0.0), |(v, a), ((tv, ta), wk)| (v + wk * tv, a + wk * ta))
     }
 }
 
@@ -337,9 +332,9 @@ impl Texels {
         let lod = if lod.is_nan() { 0.0 } else { lod.clamp(0.0, last as f64) };
         let level = (lod.floor() as usize).min(last);
         let lambda = lod - level as f64;
-        let (v0, a0, _, _) = self.levels[level].bilinear(uv);
+        let (v0, a0) = self.levels[level].bilinear(uv);
         if lambda > 0.0 && level < last {
-            let (v1, a1, _, _) = self.levels[level + 1].bilinear(uv);
+            let (v1, a1) = self.levels[level + 1].bilinear(uv);
             (v0 + lambda * (v1 - v0), a0 + lambda * (a1 - a0))
         } else {
             (v0, a0)
