@@ -2,8 +2,8 @@
 //! interval about each value that the GPU's f32 arithmetic, its storage rounding, its
 //! filtering hardware and its built-in functions may move it by.
 //!
-//! Given the Depth pass's output (a square map of linear depths), [`Evaluation::new`] runs
-//! every pass after Depth in execution order: Map (the channel expressions per texel,
+//! Given the Depth pass's output (a square map of linear depths per view) and every Geometry
+//! pass's ([`Given`]), [`Evaluation::new`] runs every other pass in execution order: Map (the channel expressions per texel,
 //! `neighbour` offsets clamped to the edge), Filter (separable Box, Gaussian, Max and Min
 //! kernels along x then y, the 3 x 3 Laplacian), Mipmap (levels down to 1 x 1, each texel
 //! the mean, maximum or minimum of the 2 x 2 below it) and SummedArea (exact prefix sums).
@@ -51,11 +51,17 @@
 //! errors interact beyond first order, and it is loose where an expression amplifies every
 //! error (MSM's Cholesky on flat moments; `sshc verify` counts such receivers as loose).
 //!
-//! Not evaluated ([`unsupported`]): Geometry passes (their primitives are rasterised, not a
-//! function of texels), per-sample views and the inputs of segment lights.
+//! **Given texels.** What the GPU rasterises is not recomputed: the Depth pass's output
+//! and every Geometry pass's (cones, sheets, ribbons, back faces and skins are drawn from
+//! the scene's meshes) are [`Given`], one map per view, and the evaluation starts after them.
+//! A depth map given from a synthetic field checks every pass after Depth; one read back
+//! from the GPU (`given_slots` names the textures) checks the passes after it and the
+//! Shade, not the rasterisation itself. Per-sample views (`Depth(view: PerSample)`, Skins)
+//! take one map per light sample, and the Shade's `at_sample(k, ..)` reads the receiver as
+//! light sample k sees it ([`Seen`]).
 
 use crate::builtins::{Func, Input, SampleFn, Ty};
-use crate::front::ast::{LightView, Precision, Reduce};
+use crate::front::ast::{Precision, Reduce};
 use crate::front::expr::BinOp;
 use crate::ir::{ChannelId, H, Hooks, IrKernel, IrPassKind, Node, PassId, PlacedSlot, Program, ResId};
 use std::collections::HashMap;
@@ -80,7 +86,7 @@ pub struct Frame {
 }
 
 /// One receiver (a shaded point) as the Shade pass sees it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Receiver {
     /// Light-space uv.
     pub uv: [f64; 2],
@@ -93,6 +99,134 @@ pub struct Receiver {
     pub lod: f64,
     /// The camera pixel.
     pub pixel: [f64; 2],
+    /// The receiver as each light sample's view sees it, in sample order (empty without
+    /// per-sample views).
+    pub samples: Vec<Seen>,
+}
+
+/// A receiver seen from light sample k (the `in_*_v{k}` of the generated Shade): its
+/// coordinates in the sample's view and the view's own depth range, texel size and weights.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Seen {
+    pub uv: [f64; 2],
+    pub d_world: f64,
+    /// The view's fitted depth range (world distances).
+    pub near: f64,
+    pub far: f64,
+    /// `dot(n, normalize(sample position - receiver))`.
+    pub ndotl: f64,
+    pub depth_slope: f64,
+    pub lod: f64,
+    /// World size of one texel per unit of view distance (`2 / (proj_y N)`).
+    pub texel_world: f64,
+    /// Weights of the segments before and after the sample (`segment_before`, `segment_after`).
+    pub weights: [f64; 2],
+}
+
+impl Seen {
+    fn d(&self) -> f64 {
+        (self.d_world - self.near) / (self.far - self.near)
+    }
+}
+
+/// Texels given to an evaluation instead of computed by it: the Depth pass's output and
+/// every Geometry pass's, by resource and channel, one map per view (the centre's alone, or
+/// one per light sample), decoded, row 0 first.
+#[derive(Clone, Debug, Default)]
+pub struct Given {
+    maps: HashMap<(ResId, ChannelId), Vec<Vec<f64>>>,
+}
+
+impl Given {
+    /// The Depth pass's output: one linear depth map per view.
+    pub fn depth(p: &Program, views: Vec<Vec<f32>>) -> Given {
+        let mut g = Given::default();
+        for s in given_slots(p).into_iter().filter(|s| !s.geometry) {
+            g.insert(
+                s.resource,
+                s.channel,
+                views.iter().map(|v| v.iter().map(|&z| z as f64).collect()).collect(),
+            );
+        }
+        g
+    }
+
+    /// One channel's maps, one per view.
+    pub fn maps(&self, resource: ResId, channel: ChannelId) -> Option<&[Vec<f64>]> {
+        self.maps.get(&(resource, channel)).map(Vec::as_slice)
+    }
+
+    /// Give one channel's maps, one per view.
+    pub fn insert(&mut self, resource: ResId, channel: ChannelId, views: Vec<Vec<f64>>) {
+        self.maps.insert((resource, channel), views);
+    }
+}
+
+/// A channel an evaluation must be given, and where the compiled graph keeps it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GivenSlot {
+    /// The pass that writes it.
+    pub pass: String,
+    /// Written by a Geometry pass (else by Depth).
+    pub geometry: bool,
+    pub resource: ResId,
+    pub channel: ChannelId,
+    /// The graph's texture, and the channel's layer within one view's block of `layers`.
+    pub texture: String,
+    pub layer: u32,
+    pub layers: u32,
+    pub component: u32,
+    /// Views: 1, or one per light sample (view k's block starts at layer `k * layers`).
+    pub views: u32,
+    /// The stored value is `(v - bias) * scale`.
+    pub bias: f64,
+    pub scale: f64,
+}
+
+impl GivenSlot {
+    /// A stored texel's value.
+    pub fn decode(&self, stored: f32) -> f64 {
+        stored as f64 / self.scale + self.bias
+    }
+
+    /// The array layer of view `k`.
+    pub fn array_layer(&self, k: u32) -> u32 {
+        k * self.layers + self.layer
+    }
+}
+
+/// The channels written by the live Depth and Geometry passes of `p`: what an evaluation is
+/// given rather than computes.
+pub fn given_slots(p: &Program) -> Vec<GivenSlot> {
+    let mut out = Vec::new();
+    for pass in p.passes.iter().filter(|pass| pass.live) {
+        let geometry = match pass.kind {
+            IrPassKind::Depth { .. } => false,
+            IrPassKind::Geometry { .. } => true,
+            IrPassKind::Map | IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea | IrPassKind::Shade { .. } => {
+                continue;
+            }
+        };
+        let Some(r) = pass.writes else { continue };
+        let res = &p.resources[r];
+        for s in &res.slots {
+            let Some(t) = res.textures.get(s.texture) else { continue };
+            out.push(GivenSlot {
+                pass: pass.name.clone(),
+                geometry,
+                resource: r,
+                channel: s.channel,
+                texture: t.name.clone(),
+                layer: s.layer,
+                layers: t.layers,
+                component: s.component,
+                views: if p.per_sample(r) { p.samples } else { 1 },
+                bias: s.encode.bias,
+                scale: s.encode.scale,
+            });
+        }
+    }
+    out
 }
 
 /// Whose errors an allowance bounds.
@@ -115,11 +249,15 @@ impl Model {
         }
     }
 
-    /// What storing `v` in `slot` may move it by.
+    /// What storing `v` in `slot` may move it by: half a rounding step, but a whole one
+    /// for F16, which Vulkan lets a device round toward zero when it converts a shader's
+    /// f32 output (lavapipe does: `sshc verify` of penumbra-limit-maps at F16 found texels
+    /// a whole step below the nearest half).
     pub fn storage(self, slot: &PlacedSlot, v: f64) -> f64 {
-        match self {
-            Model::Gpu => half_step(slot, v),
-            Model::F64 => 0.0,
+        match (self, slot.precision) {
+            (Model::Gpu, Precision::F16) => 2.0 * half_step(slot, v),
+            (Model::Gpu, Precision::Unorm8 | Precision::Unorm16 | Precision::F32) => half_step(slot, v),
+            (Model::F64, _) => 0.0,
         }
     }
 }
@@ -176,36 +314,6 @@ impl Allowed {
     pub fn half_width(&self) -> f64 {
         (self.hi - self.value).max(self.value - self.lo)
     }
-}
-
-/// Why a technique cannot be evaluated here, or `None`.
-pub fn unsupported(p: &Program) -> Option<String> {
-    for pass in p.passes.iter().filter(|pass| pass.live) {
-        match &pass.kind {
-            IrPassKind::Geometry { .. } => {
-                return Some(format!(
-                    "pass `{}` is a Geometry pass: its primitives are rasterised from the scene's meshes, which the CPU evaluation does not model",
-                    pass.name
-                ));
-            }
-            IrPassKind::Depth { view } if *view != LightView::Center => {
-                return Some(format!("pass `{}` renders one view per light sample", pass.name));
-            }
-            IrPassKind::Depth { .. }
-            | IrPassKind::Map
-            | IrPassKind::Filter { .. }
-            | IrPassKind::Mipmap { .. }
-            | IrPassKind::SummedArea
-            | IrPassKind::Shade { .. } => {}
-        }
-    }
-    let shade = p.shade()?;
-    for h in p.arena.postorder(&[shade]) {
-        if let Node::Input(i @ (Input::SegmentBefore | Input::SegmentAfter), _) = p.arena.node(h) {
-            return Some(format!("the Shade reads `{}`, an input of segment lights' samples", i.desc().name));
-        }
-    }
-    None
 }
 
 /// Half the rounding step of `slot`'s storage at value `v`, in value units.
@@ -285,6 +393,26 @@ impl Level {
 struct Texels {
     levels: Vec<Level>,
     sat: Option<(Vec<f64>, Vec<f64>)>,
+    /// What a filtered lookup's result may be off by beyond its texels' allowance: one code
+    /// of an 8- or 16-bit unorm format, which a device may filter in fixed point and round
+    /// to a code (lavapipe filters 8-bit formats so: tests/tests/lookups.rs measures its
+    /// bilinear result within 2^-8 + 1/255 of the exact blend); 0 for float formats.
+    code: f64,
+}
+
+impl Texels {
+    fn new(levels: Vec<Level>, slot: &PlacedSlot) -> Texels {
+        let scale = slot.encode.scale.abs().max(f64::MIN_POSITIVE);
+        Texels {
+            levels,
+            sat: None,
+            code: match slot.precision {
+                Precision::Unorm8 => 1.0 / (255.0 * scale),
+                Precision::Unorm16 => 1.0 / (65535.0 * scale),
+                Precision::F16 | Precision::F32 => 0.0,
+            },
+        }
+    }
 }
 
 /// Filtering hardware keeps the position within a texel and the fraction between mip
@@ -335,9 +463,10 @@ impl Texels {
         let (v0, a0) = self.levels[level].bilinear(uv);
         if lambda > 0.0 && level < last {
             let (v1, a1) = self.levels[level + 1].bilinear(uv);
-            (v0 + lambda * (v1 - v0), a0 + lambda * (a1 - a0))
+            // each level's blend and the blend between them may be rounded to a code
+            (v0 + lambda * (v1 - v0), a0 + lambda * (a1 - a0) + 2.0 * self.code)
         } else {
-            (v0, a0)
+            (v0, a0 + self.code)
         }
     }
 
@@ -437,6 +566,11 @@ pub fn input_error(i: Input, v: f64) -> f64 {
     match i {
         Input::D | Input::Uv | Input::Tf => 2f64.powi(-20),
         Input::DWorld | Input::NdotL | Input::Slope | Input::TexelDepth | Input::DepthSlope => v.abs() * 2f64.powi(-20),
+        // 2 tan(angle / 2) in f32: `tan`'s accuracy, twice (docs/language.md section 8.5)
+        Input::LightSpread if v != 0.0 => {
+            let t = 0.5 * v;
+            2.0 * call_error(Func::Tan, t, &[t.atan()]).unwrap_or(0.0)
+        }
         Input::TexelSize
         | Input::ShadowSize
         | Input::Near
@@ -542,34 +676,45 @@ impl Prepared {
 pub struct Evaluation<'p> {
     p: Program<'p>,
     frame: Frame,
-    texels: HashMap<(ResId, ChannelId), Texels>,
+    /// Every stored channel, one entry per view (the centre's alone, or one per sample).
+    texels: HashMap<(ResId, ChannelId), Vec<Texels>>,
     shade: Prepared,
+    /// The views of the Shade's filtered lookups (`None`: the centre's): each is shifted by
+    /// the filtering hardware's positions on its own.
+    filtered: Vec<Option<u8>>,
     model: Model,
 }
 
 impl<'p> Evaluation<'p> {
-    /// Run every pass after Depth on `depth` (`size` x `size` linear depths, row 0 first).
-    pub fn new(p: Program<'p>, depth: &[f32], frame: Frame, rounding: Rounding, model: Model) -> Result<Evaluation<'p>, String> {
-        if let Some(why) = unsupported(&p) {
-            return Err(why);
-        }
-        let size = frame.shadow_size as usize;
-        if size == 0 || depth.len() != size * size {
-            return Err(format!("a depth map of {} values is not {size} x {size}", depth.len()));
-        }
+    /// Run every pass after Depth and Geometry, whose outputs are `given` (`size` x `size`
+    /// texels per view, row 0 first).
+    pub fn new(p: Program<'p>, given: &Given, frame: Frame, rounding: Rounding, model: Model) -> Result<Evaluation<'p>, String> {
         let shade = Prepared::new(&p, p.shade().ok_or("the technique has no live Shade pass")?);
+        let mut filtered: Vec<Option<u8>> = Vec::new();
+        for &h in &shade.order {
+            if let Node::Sample { how, view, .. } = p.arena.node(h)
+                && matches!(
+                    how,
+                    SampleFn::Sample | SampleFn::SampleLod | SampleFn::SampleWidth | SampleFn::SampleAt
+                )
+                && !filtered.contains(view)
+            {
+                filtered.push(*view);
+            }
+        }
         let mut ev = Evaluation {
             p,
             frame,
             texels: HashMap::new(),
             shade,
+            filtered,
             model,
         };
         for (id, pass) in p.passes.with_handles() {
             if !pass.live {
                 continue;
             }
-            ev.run_pass(id, depth, rounding)?;
+            ev.run_pass(id, given, rounding)?;
         }
         Ok(ev)
     }
@@ -586,7 +731,22 @@ impl<'p> Evaluation<'p> {
             .ok_or_else(|| format!("pass `{}` reads nothing", self.p.passes[pass].name))
     }
 
-    fn run_pass(&mut self, id: PassId, depth: &[f32], rounding: Rounding) -> Result<(), String> {
+    /// The maps given for channel `c` of `r`, checked: one per view, each `size` x `size`.
+    fn given<'g>(&self, given: &'g Given, pass: PassId, r: ResId, c: ChannelId) -> Result<&'g [Vec<f64>], String> {
+        let size = self.frame.shadow_size as usize;
+        let views = if self.p.per_sample(r) { self.p.samples as usize } else { 1 };
+        let what = || format!("channel `{}` of pass `{}`", self.p.channels[c].name, self.p.passes[pass].name);
+        let maps = given.maps.get(&(r, c)).ok_or_else(|| format!("{} is not given", what()))?;
+        if maps.len() != views {
+            return Err(format!("{} is given {} view(s), not {views}", what(), maps.len()));
+        }
+        if let Some(m) = maps.iter().find(|m| size == 0 || m.len() != size * size) {
+            return Err(format!("{} is given a map of {} values, not {size} x {size}", what(), m.len()));
+        }
+        Ok(maps)
+    }
+
+    fn run_pass(&mut self, id: PassId, given: &Given, rounding: Rounding) -> Result<(), String> {
         let pass = &self.p.passes[id];
         let Some(out) = pass.writes else { return Ok(()) };
         let size = self.frame.shadow_size as usize;
@@ -597,15 +757,42 @@ impl<'p> Evaluation<'p> {
         match &pass.kind {
             IrPassKind::Depth { .. } => {
                 for slot in self.slots(out) {
-                    let v: Vec<f64> = depth.iter().map(|&z| keep(&slot, z as f64)).collect();
-                    let a = v.iter().map(|&z| self.model.storage(&slot, z)).collect();
-                    self.insert(out, slot.channel, vec![Level { size, v, a }]);
+                    let views = self
+                        .given(given, id, out, slot.channel)?
+                        .iter()
+                        .map(|depth| {
+                            let v: Vec<f64> = depth.iter().map(|&z| keep(&slot, z)).collect();
+                            let a = v.iter().map(|&z| self.model.storage(&slot, z)).collect();
+                            Texels::new(vec![Level { size, v, a }], &slot)
+                        })
+                        .collect();
+                    self.texels.insert((out, slot.channel), views);
+                }
+            }
+            // read back as the GPU stored them: exact, but for a unorm code's conversion to
+            // f32 in the shader (`k * (1 / 255)` on lavapipe, an ulp from `k / 255`)
+            IrPassKind::Geometry { .. } => {
+                let unorm = |slot: &PlacedSlot| matches!(slot.precision, Precision::Unorm8 | Precision::Unorm16);
+                for slot in self.slots(out) {
+                    let views = self
+                        .given(given, id, out, slot.channel)?
+                        .iter()
+                        .map(|v| {
+                            let level = Level {
+                                size,
+                                v: v.clone(),
+                                a: v.iter().map(|&x| if unorm(&slot) { self.model.ulp(x) } else { 0.0 }).collect(),
+                            };
+                            Texels::new(vec![level], &slot)
+                        })
+                        .collect();
+                    self.texels.insert((out, slot.channel), views);
                 }
             }
             IrPassKind::Map => {
                 for slot in self.slots(out) {
                     let level = self.map_channel(id, &slot, size, rounding)?;
-                    self.insert(out, slot.channel, vec![level]);
+                    self.insert(out, &slot, vec![level]);
                 }
             }
             IrPassKind::Filter { kernel } => {
@@ -613,7 +800,7 @@ impl<'p> Evaluation<'p> {
                 for slot in self.slots(out) {
                     let base = self.read(src, slot.channel)?.base().clone();
                     let level = filter(&base, kernel, &slot, rounding, self.model);
-                    self.insert(out, slot.channel, vec![level]);
+                    self.insert(out, &slot, vec![level]);
                 }
             }
             IrPassKind::Mipmap { reduce } => {
@@ -621,7 +808,7 @@ impl<'p> Evaluation<'p> {
                 for slot in self.slots(out) {
                     let base = self.read(src, slot.channel)?.base().clone();
                     let levels = mip_chain(base, *reduce, &slot, rounding, self.model);
-                    self.insert(out, slot.channel, levels);
+                    self.insert(out, &slot, levels);
                 }
             }
             IrPassKind::SummedArea => {
@@ -629,20 +816,26 @@ impl<'p> Evaluation<'p> {
                 for slot in self.slots(out) {
                     let base = self.read(src, slot.channel)?.base().clone();
                     let sat = Some((prefix_sums(&base, true), prefix_sums(&base, false)));
-                    self.texels.insert((out, slot.channel), Texels { levels: vec![base], sat });
+                    let texels = Texels {
+                        sat,
+                        ..Texels::new(vec![base], &slot)
+                    };
+                    self.texels.insert((out, slot.channel), vec![texels]);
                 }
             }
-            IrPassKind::Geometry { .. } | IrPassKind::Shade { .. } => {}
+            IrPassKind::Shade { .. } => {}
         }
         Ok(())
     }
 
-    fn insert(&mut self, r: ResId, c: ChannelId, levels: Vec<Level>) {
-        self.texels.insert((r, c), Texels { levels, sat: None });
+    fn insert(&mut self, r: ResId, slot: &PlacedSlot, levels: Vec<Level>) {
+        self.texels.insert((r, slot.channel), vec![Texels::new(levels, slot)]);
     }
 
+    /// The centre's texels of a channel (Map, Filter, Mipmap and SummedArea passes read no
+    /// per-sample resource).
     fn read(&self, r: ResId, c: ChannelId) -> Result<&Texels, String> {
-        self.texels.get(&(r, c)).ok_or_else(|| {
+        self.texels.get(&(r, c)).and_then(|v| v.first()).ok_or_else(|| {
             format!(
                 "channel `{}` of `{}` is read before it is written",
                 self.p.channels[c].name, self.p.resources[r].name
@@ -661,7 +854,7 @@ impl<'p> Evaluation<'p> {
         let mut from: HashMap<ChannelId, &Texels> = HashMap::new();
         for &r in &self.p.passes[pass].reads {
             for s in &self.p.resources[r].slots {
-                if let Some(t) = self.texels.get(&(r, s.channel)) {
+                if let Some(t) = self.texels.get(&(r, s.channel)).and_then(|v| v.first()) {
                     from.entry(s.channel).or_insert(t);
                 }
             }
@@ -701,29 +894,32 @@ impl<'p> Evaluation<'p> {
     /// The clamped visibility at one receiver and the interval allowed about it.
     pub fn visibility(&self, r: &Receiver, scratch: &mut Scratch) -> Allowed {
         scratch.fit(self.p.arena.len());
-        let mut out = self.allowed(&self.shade, &self.receiver_leaf(*r, [0.0; 3]), scratch);
+        let mut out = self.allowed(&self.shade, &self.receiver_leaf(r, Shift::NONE), scratch);
         if self.model == Model::F64 {
             return out;
         }
-        // the filtering hardware's 8-bit positions and level fractions, one axis at a time
+        // the filtering hardware's 8-bit positions and level fractions, one axis at a time,
+        // the lookups of each view together (each view reads its own positions)
         let texel = FILTER_SHIFT / self.frame.shadow_size as f64;
         let mut extra = 0.0;
-        for axis in 0..3 {
-            let mut worst: f64 = 0.0;
-            for sign in [1.0, -1.0] {
-                let mut shift = [0.0; 3];
-                shift[axis] = sign * if axis == 2 { FILTER_SHIFT } else { texel };
-                worst = worst.max(change(self.raw(r, shift, scratch), out.raw));
+        for &view in &self.filtered {
+            for axis in 0..3 {
+                let mut worst: f64 = 0.0;
+                for sign in [1.0, -1.0] {
+                    let mut by = [0.0; 3];
+                    by[axis] = sign * if axis == 2 { FILTER_SHIFT } else { texel };
+                    worst = worst.max(change(self.raw(r, Shift { view, by }, scratch), out.raw));
+                }
+                extra += worst;
             }
-            extra += worst;
         }
         out.widen(extra, true);
         out
     }
 
     /// The raw visibility (NaN read as 1) at `r` with filtered lookups shifted by `shift`.
-    fn raw(&self, r: &Receiver, shift: [f64; 3], scratch: &mut Scratch) -> f64 {
-        let leaf = self.receiver_leaf(*r, shift);
+    fn raw(&self, r: &Receiver, shift: Shift, scratch: &mut Scratch) -> f64 {
+        let leaf = self.receiver_leaf(r, shift);
         let plain = |h: H, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
         self.p
             .arena
@@ -734,33 +930,54 @@ impl<'p> Evaluation<'p> {
     /// The clamped visibility at one receiver, without its allowance.
     pub fn value(&self, r: &Receiver, scratch: &mut Scratch) -> f64 {
         scratch.fit(self.p.arena.len());
-        self.raw(r, [0.0; 3], scratch).clamp(0.0, 1.0)
+        self.raw(r, Shift::NONE, scratch).clamp(0.0, 1.0)
     }
 
     /// The leaf values of the Shade at receiver `r`: inputs, params, the frame's functions,
-    /// lookups (with their allowance).
-    fn receiver_leaf(&self, r: Receiver, shift: [f64; 3]) -> impl Fn(H, usize, &[[f64; 4]]) -> Option<(f64, f64)> + '_ {
+    /// lookups (with their allowance); inside `at_sample(k, ..)`, as light sample k sees it.
+    fn receiver_leaf<'a>(&'a self, r: &'a Receiver, shift: Shift) -> impl Fn(H, usize, &[[f64; 4]]) -> Option<(f64, f64)> + 'a {
         let f = &self.frame;
-        let d = (r.d_world - f.near) / (f.far - f.near);
         let n = f.shadow_size as f64;
-        let slope = ((1.0 - r.ndotl * r.ndotl).max(0.0).sqrt() / r.ndotl.abs().max(0.01)).min(100.0);
-        let texel_depth = (f.texel_world[0] * r.d_world + f.texel_world[1]) / (f.far - f.near);
+        let slope = |ndotl: f64| ((1.0 - ndotl * ndotl).max(0.0).sqrt() / ndotl.abs().max(0.01)).min(100.0);
+        let centre = Seen {
+            uv: r.uv,
+            d_world: r.d_world,
+            near: f.near,
+            far: f.far,
+            ndotl: r.ndotl,
+            depth_slope: r.depth_slope,
+            lod: r.lod,
+            texel_world: f.texel_world[0],
+            weights: [0.0; 2],
+        };
         move |h: H, k: usize, vals: &[[f64; 4]]| -> Option<(f64, f64)> {
             let arg = |h: &H, c: usize| vals.get(h.index()).map_or(f64::NAN, |v| v[c]);
+            let seen = |view: &Option<u8>| match view {
+                Some(s) => r.samples.get(*s as usize).copied(),
+                None => Some(centre),
+            };
             match self.p.arena.node(h) {
-                Node::Input(i, _) => {
+                Node::Input(i, view) => {
+                    let s = seen(view)?;
                     let v = match i {
-                        Input::D => d,
-                        Input::DWorld => r.d_world,
-                        Input::Uv => r.uv[k.min(1)],
+                        Input::D => s.d(),
+                        Input::DWorld => s.d_world,
+                        Input::Uv => s.uv[k.min(1)],
                         Input::Tf => {
-                            let t = r.uv[k.min(1)] * n - 0.5;
+                            let t = s.uv[k.min(1)] * n - 0.5;
                             t - t.floor()
                         }
-                        Input::NdotL => r.ndotl,
-                        Input::Slope => slope,
-                        Input::TexelDepth => texel_depth,
-                        Input::DepthSlope => r.depth_slope,
+                        Input::NdotL => s.ndotl,
+                        Input::Slope => slope(s.ndotl),
+                        // the centre's: (texel_world.x D + texel_world.y) / (far - near); a
+                        // sample's view is perspective: its texel_world.x D / (far - near)
+                        Input::TexelDepth => match view {
+                            None => (f.texel_world[0] * r.d_world + f.texel_world[1]) / (f.far - f.near),
+                            Some(_) => s.texel_world * s.d_world / (s.far - s.near),
+                        },
+                        Input::DepthSlope => s.depth_slope,
+                        Input::SegmentBefore => s.weights[0],
+                        Input::SegmentAfter => s.weights[1],
                         Input::Pixel => r.pixel[k.min(1)],
                         other @ (Input::TexelSize
                         | Input::ShadowSize
@@ -778,8 +995,6 @@ impl<'p> Evaluation<'p> {
                         | Input::OccluderDepth
                         | Input::PenumbraLimit
                         | Input::LimitDepth
-                        | Input::SegmentBefore
-                        | Input::SegmentAfter
                         | Input::Skin) => frame_input(f, *other, k)?,
                     };
                     Some((v, 0.0))
@@ -792,25 +1007,27 @@ impl<'p> Evaluation<'p> {
                     resource,
                     how,
                     args,
-                    ..
+                    view,
                 } => {
-                    let t = self.texels.get(&(*resource, *channel))?;
+                    let t = self.texels.get(&(*resource, *channel))?.get(view.map_or(0, usize::from))?;
+                    let s = seen(view)?;
                     let a = |i: usize| args.get(i).map_or(f64::NAN, |h| arg(h, 0));
                     let margin = match self.model {
                         Model::Gpu => n * 4.0 * input_error(Input::Uv, 0.0),
                         Model::F64 => 0.0,
                     };
                     let texel = |uv: [f64; 2]| t.nearest([uv[0] * n, uv[1] * n], margin);
-                    let at = [r.uv[0] + shift[0], r.uv[1] + shift[1]];
+                    let by = if shift.view == *view { shift.by } else { [0.0; 3] };
+                    let at = [s.uv[0] + by[0], s.uv[1] + by[1]];
                     Some(match how {
-                        SampleFn::Sample => t.filtered(at, r.lod + shift[2]),
-                        SampleFn::SampleLod => t.filtered(at, a(0) + shift[2]),
-                        SampleFn::SampleWidth => t.filtered(at, (a(0) * n).max(1.0).log2() + shift[2]),
-                        SampleFn::SampleAt => t.filtered([at[0] + a(0), at[1] + a(1)], shift[2]),
-                        SampleFn::Nearest => texel(r.uv),
-                        SampleFn::NearestAt => texel([r.uv[0] + a(0), r.uv[1] + a(1)]),
-                        SampleFn::Fetch => t.nearest([r.uv[0] * n - 0.5 + a(0), r.uv[1] * n - 0.5 + a(1)], margin),
-                        SampleFn::Box => t.boxed(r.uv, [a(0), a(1)], self.model),
+                        SampleFn::Sample => t.filtered(at, s.lod + by[2]),
+                        SampleFn::SampleLod => t.filtered(at, a(0) + by[2]),
+                        SampleFn::SampleWidth => t.filtered(at, (a(0) * n).max(1.0).log2() + by[2]),
+                        SampleFn::SampleAt => t.filtered([at[0] + a(0), at[1] + a(1)], by[2]),
+                        SampleFn::Nearest => texel(s.uv),
+                        SampleFn::NearestAt => texel([s.uv[0] + a(0), s.uv[1] + a(1)]),
+                        SampleFn::Fetch => t.nearest([s.uv[0] * n - 0.5 + a(0), s.uv[1] * n - 0.5 + a(1)], margin),
+                        SampleFn::Box => t.boxed(s.uv, [a(0), a(1)], self.model),
                     })
                 }
                 Node::Channel(..)
@@ -873,6 +1090,17 @@ impl<'p> Evaluation<'p> {
                             | Node::Call(..)
                             | Node::Swizzle(..) => own,
                         }
+                    }
+                    // f32's add, subtract and multiply are correctly rounded: exact operands
+                    // with a result f32 holds give that result exactly
+                    Node::Binary(BinOp::Add | BinOp::Sub | BinOp::Mul, x, y)
+                        if float
+                            && v[k] as f32 as f64 == v[k]
+                            && [x, y]
+                                .iter()
+                                .all(|o| errors.get(o.index()).is_some_and(|e| e.iter().all(|e| *e == 0.0))) =>
+                    {
+                        0.0
                     }
                     Node::Binary(BinOp::Add | BinOp::Sub | BinOp::Mul, ..) if float => ulp(k),
                     Node::Binary(BinOp::Div, ..) if float => 3.0 * ulp(k),
@@ -988,6 +1216,18 @@ impl<'p> Evaluation<'p> {
         out.widen(error, shade);
         out
     }
+}
+
+/// The filtering hardware's error as one shift of the filtered lookups of one view: uv by
+/// `by[..2]`, the level of detail by `by[2]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Shift {
+    view: Option<u8>,
+    by: [f64; 3],
+}
+
+impl Shift {
+    const NONE: Shift = Shift { view: None, by: [0.0; 3] };
 }
 
 /// How far a value moved: 0 between two NaNs, infinite from a number to a NaN.
@@ -1168,7 +1408,12 @@ mod tests {
             depth_slope: 0.0,
             lod: 0.0,
             pixel: [0.0, 0.0],
+            samples: Vec::new(),
         }
+    }
+
+    fn depth(p: &Program, map: &[f32]) -> Given {
+        Given::depth(p, vec![map.to_vec()])
     }
 
     #[test]
@@ -1189,10 +1434,9 @@ mod tests {
     fn hard_shadows_evaluate_exactly_and_allow_both_sides_only_at_a_tie() {
         let c = compiled(include_str!("../../techniques/hard.ron"));
         let p = Program::new(&c.ir, &c.layout);
-        assert_eq!(unsupported(&p), None);
         let n = 8;
-        let depth = vec![0.5f32; (n * n) as usize];
-        let ev = Evaluation::new(p, &depth, frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        let map = vec![0.5f32; (n * n) as usize];
+        let ev = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
         let mut s = Scratch::default();
         // in front of the occluder: lit; behind it: shadowed; both within f32's reach
         let lit = ev.visibility(&receiver(0.25), &mut s);
@@ -1217,9 +1461,9 @@ mod tests {
         let c = crate::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("esm.ron", src)));
         let p = Program::new(&c.ir, &c.layout);
         let n = 8;
-        let depth: Vec<f32> = (0..n * n).map(|k| 0.3 + 0.4 * (k % n) as f32 / n as f32).collect();
-        let exact = Evaluation::new(p, &depth, frame(n), Rounding::Exact, Model::Gpu).unwrap();
-        let rounded = Evaluation::new(p, &depth, frame(n), Rounding::Stored, Model::Gpu).unwrap();
+        let map: Vec<f32> = (0..n * n).map(|k| 0.3 + 0.4 * (k % n) as f32 / n as f32).collect();
+        let exact = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        let rounded = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Stored, Model::Gpu).unwrap();
         let mut s = Scratch::default();
         let r = receiver(0.55);
         let e = exact.visibility(&r, &mut s);
@@ -1233,9 +1477,9 @@ mod tests {
         let c = compiled(include_str!("../../techniques/vsm.ron"));
         let p = Program::new(&c.ir, &c.layout);
         let n = 8;
-        let depth: Vec<f32> = (0..n * n).map(|k| 0.2 + 0.05 * (k % 7) as f32).collect();
-        let gpu = Evaluation::new(p, &depth, frame(n), Rounding::Exact, Model::Gpu).unwrap();
-        let f64m = Evaluation::new(p, &depth, frame(n), Rounding::Exact, Model::F64).unwrap();
+        let map: Vec<f32> = (0..n * n).map(|k| 0.2 + 0.05 * (k % 7) as f32).collect();
+        let gpu = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        let f64m = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::F64).unwrap();
         let mut s = Scratch::default();
         let r = receiver(0.4);
         let (a, b) = (gpu.visibility(&r, &mut s), f64m.visibility(&r, &mut s));
@@ -1247,12 +1491,60 @@ mod tests {
     }
 
     #[test]
-    fn geometry_passes_and_per_sample_views_are_not_evaluated() {
-        let c = compiled(include_str!("../../techniques/penumbra-maps.ron"));
-        let why = unsupported(&Program::new(&c.ir, &c.layout)).expect("refused");
-        assert!(why.contains("Geometry pass"), "{why}");
+    fn each_light_sample_reads_its_own_view_of_the_receiver_and_its_own_map() {
         let c = compiled(include_str!("../../techniques/point-samples.ron"));
-        let why = unsupported(&Program::new(&c.ir, &c.layout)).expect("refused");
-        assert!(why.contains("one view per light sample"), "{why}");
+        let p = Program::new(&c.ir, &c.layout);
+        assert_eq!(p.samples, 2);
+        let n = 8;
+        // sample 0's map puts an occluder in front of the receiver, sample 1's does not
+        let near = vec![0.2f32; (n * n) as usize];
+        let far = vec![1.0f32; (n * n) as usize];
+        let given = Given::depth(&p, vec![near, far]);
+        let ev = Evaluation::new(p, &given, frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        let seen = |k: usize| Seen {
+            uv: [0.3 + 0.25 * k as f64, 0.5 + 1.0 / 64.0],
+            d_world: 10.0,
+            near: 8.0,
+            far: 12.0,
+            ndotl: 1.0,
+            depth_slope: 0.0,
+            lod: 0.0,
+            texel_world: 0.0,
+            weights: [0.0, 1.0],
+        };
+        let mut r = receiver(0.5);
+        r.samples = vec![seen(0), seen(1)];
+        let mut s = Scratch::default();
+        let v = ev.visibility(&r, &mut s);
+        // the mean of a lit and a shadowed sample, within the f32 ulps of its sum and division
+        // (one of 1, three of 0.5)
+        assert_eq!(v.value, 0.5, "{v:?}");
+        assert!(v.allowance <= 2.5 * 2f64.powi(-23), "{v:?}");
+        // one map for two views is refused
+        let one = Given::depth(&p, vec![vec![1.0; (n * n) as usize]]);
+        let err = Evaluation::new(p, &one, frame(n), Rounding::Exact, Model::Gpu).err().unwrap();
+        assert!(err.contains("given 1 view(s), not 2"), "{err}");
+    }
+
+    #[test]
+    fn geometry_outputs_are_given_and_read_as_stored() {
+        let c = compiled(include_str!("../../techniques/penumbra-maps.ron"));
+        let p = Program::new(&c.ir, &c.layout);
+        let slots = given_slots(&p);
+        let geometry: Vec<_> = slots.iter().filter(|s| s.geometry).collect();
+        assert!(!geometry.is_empty() && geometry.iter().all(|s| s.views == 1), "{slots:?}");
+        let n = 8;
+        let only_depth = Given::depth(&p, vec![vec![1.0; (n * n) as usize]]);
+        let err = Evaluation::new(p, &only_depth, frame(n), Rounding::Exact, Model::Gpu)
+            .err()
+            .unwrap();
+        assert!(err.contains("is not given"), "{err}");
+        let mut given = only_depth;
+        for s in &geometry {
+            given.insert(s.resource, s.channel, vec![vec![s.decode(0.25); (n * n) as usize]]);
+        }
+        let ev = Evaluation::new(p, &given, frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        let v = ev.visibility(&receiver(0.5), &mut Scratch::default());
+        assert!((0.0..=1.0).contains(&v.value) && v.lo <= v.value && v.value <= v.hi, "{v:?}");
     }
 }

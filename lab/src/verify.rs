@@ -21,9 +21,9 @@
 use crate::scene;
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
-use sshc::interp::{Allowed, Evaluation, Frame, Model, Receiver, Rounding, Scratch};
+use sshc::interp::{Allowed, Evaluation, Frame, Given, GivenSlot, Model, Receiver, Rounding, Scratch, Seen};
 use sshc::ir::Program;
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, SceneInputs};
+use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, SampleView, SceneInputs};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -33,24 +33,58 @@ use std::path::Path;
 /// normalised depth runs linearly from 1 to 0 across u (`d = 1 - u`). A camera of 2N pixels
 /// over an N-texel map samples every texel at sub-texel offsets 1/4 and 3/4 and filters at
 /// level of detail -1 (the base level); a camera of N / 2^k filters at level k.
+///
+/// With `casters`, the light's depth range starts higher (view distance 6.5, height 3.5),
+/// leaving a slab above the receiver (heights [`CASTER_SLAB`]) for caster meshes that the
+/// light draws and the camera does not (its near plane clips everything above height 2.2,
+/// the receiver's top): the depth map and Geometry passes' primitives are then rasterised
+/// from real meshes while every camera pixel still shades the plane.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct QueryPlane {
     pub shadow: u32,
     pub camera: u32,
+    pub casters: bool,
 }
 
 /// Light eye height and the fitted depth range of the query plane.
 const EYE: f32 = 10.0;
 const NEAR: f32 = 8.0;
 const FAR: f32 = 12.0;
+/// The depth range with room for casters above the receiver.
+const CASTER_NEAR: f32 = 6.5;
+const CASTER_FAR: f32 = 12.5;
+/// Heights the casters of [`QueryPlane::casters`] are fitted into.
+pub const CASTER_SLAB: (f32, f32) = (2.35, 3.3);
+/// The camera's near distance with casters: heights above 2.2 are clipped.
+const CAMERA_NEAR_CASTERS: f32 = EYE - 2.2;
 
 impl QueryPlane {
+    /// The plane without casters.
+    pub fn new(shadow: u32, camera: u32) -> QueryPlane {
+        QueryPlane {
+            shadow,
+            camera,
+            casters: false,
+        }
+    }
+
+    /// The light's fitted depth range (view distances).
+    fn range(&self) -> (f32, f32) {
+        if self.casters { (CASTER_NEAR, CASTER_FAR) } else { (NEAR, FAR) }
+    }
+
     pub fn light_view(&self) -> Mat4 {
-        scene::look_at(Vec3::new(0.0, EYE, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0))
+        self.view_at(0.0)
+    }
+
+    /// The light's view translated by `x` along the plane's tilt: light sample views.
+    fn view_at(&self, x: f32) -> Mat4 {
+        scene::look_at(Vec3::new(x, EYE, 0.0), Vec3::new(x, 0.0, 0.0), Vec3::new(0.0, 0.0, -1.0))
     }
 
     pub fn light_proj(&self) -> Mat4 {
-        scene::orthographic(-1.0, 1.0, -1.0, 1.0, NEAR, FAR)
+        let (near, far) = self.range();
+        scene::orthographic(-1.0, 1.0, -1.0, 1.0, near, far)
     }
 
     /// Height of the receiver at x: view distance 10 - y runs from 8 to 12 over x in [-1, 1].
@@ -72,7 +106,9 @@ impl QueryPlane {
         let vertices = quad.iter().flat_map(|p| [p.x, p.y, p.z, n.x, n.y, n.z]).collect();
         let view = self.light_view();
         let proj = self.light_proj();
-        let camera_proj = scene::orthographic(-1.0, 1.0, -1.0, 1.0, 0.1, 40.0);
+        let (near, far) = self.range();
+        let camera_near = if self.casters { CAMERA_NEAR_CASTERS } else { 0.1 };
+        let camera_proj = scene::orthographic(-1.0, 1.0, -1.0, 1.0, camera_near, 40.0);
         SceneInputs {
             vertices,
             meshes: vec![],
@@ -84,8 +120,8 @@ impl QueryPlane {
             light_view: view.to_cols_array(),
             light_view_proj: (proj * view).to_cols_array(),
             light_position: [0.0, 1.0, 0.0, 0.0],
-            near: NEAR,
-            far: FAR,
+            near,
+            far,
             light_size: 0.0,
             light_half_extents: [0.0, 0.0],
             light_angle: 0.0,
@@ -98,8 +134,15 @@ impl QueryPlane {
     }
 
     /// [`QueryPlane::inputs`] under a square light `width` world units wide, centred on the
-    /// light's eye.
+    /// light's eye; with casters, a distant light of angular diameter
+    /// [`QueryPlane::light_angle`] instead (the casters' primitives grow with its angle).
     pub fn lit_inputs(&self, width: f32) -> SceneInputs {
+        if self.casters {
+            return SceneInputs {
+                light_angle: Self::light_angle(width as f64) as f32,
+                ..self.inputs()
+            };
+        }
         SceneInputs {
             light_size: 0.5 * width,
             light_half_extents: [0.5 * width, 0.5 * width],
@@ -107,15 +150,100 @@ impl QueryPlane {
         }
     }
 
+    /// The angular diameter of the distant light over casters `width` wide: `2 atan(width
+    /// / 8)`, a spread (`2 tan(angle / 2)`) of `width / 4` (0.125 at the default width: a
+    /// caster 2 units above the receiver casts a penumbra 0.25 wide, 4 texels of a 32^2 map).
+    pub fn light_angle(width: f64) -> f64 {
+        2.0 * (width / 8.0).atan()
+    }
+
+    /// [`QueryPlane::lit_inputs`] with `casters` (world position and normal per vertex,
+    /// three vertices a triangle, fitted into [`CASTER_SLAB`]; `meshes`: their ranges of
+    /// triangles) drawn from the light before the receiver, which is its own mesh.
+    pub fn caster_inputs(&self, width: f32, casters: &[f32], meshes: &[std::ops::Range<u32>]) -> SceneInputs {
+        let receiver = self.lit_inputs(width);
+        let first = (casters.len() / 18) as u32;
+        let mut meshes = meshes.to_vec();
+        if meshes.is_empty() {
+            meshes.push(0..first);
+        }
+        meshes.push(first..first + (receiver.vertices.len() / 18) as u32);
+        SceneInputs {
+            vertices: casters.iter().chain(&receiver.vertices).copied().collect(),
+            meshes,
+            casting_vertices: Some((casters.len() / 6) as u32),
+            ..receiver
+        }
+    }
+
+    /// The x of light sample `k` of `samples` spread over `width` along the plane's tilt.
+    fn sample_x(samples: u32, k: u32, width: f64) -> f64 {
+        if samples < 2 {
+            0.0
+        } else {
+            width * (k as f64 / (samples - 1) as f64 - 0.5)
+        }
+    }
+
+    /// The views of `samples` light samples along a segment `width` wide across x: each is
+    /// the light's view translated to its sample (orthographic like the centre's, so that
+    /// every receiver input of each view is affine over the plane and the CPU computes it
+    /// exactly); each of the N - 1 segments weighs 1 / (N - 1), a lone sample [1, 1] (as
+    /// the lab binds a segment light).
+    pub fn sample_views(&self, samples: u32, width: f64) -> Vec<SampleView> {
+        let proj = self.light_proj();
+        let (near, far) = self.range();
+        let w = if samples > 1 { 1.0 / (samples - 1) as f32 } else { 1.0 };
+        (0..samples)
+            .map(|k| {
+                let x = Self::sample_x(samples, k, width) as f32;
+                let view = self.view_at(x);
+                SampleView {
+                    light_view: view.to_cols_array(),
+                    light_view_proj: (proj * view).to_cols_array(),
+                    position: [x, EYE, 0.0],
+                    near,
+                    far,
+                    light_proj_y: proj.y_axis.y,
+                    weights: if samples < 2 {
+                        [1.0, 1.0]
+                    } else {
+                        [if k > 0 { w } else { 0.0 }, if k + 1 < samples { w } else { 0.0 }]
+                    },
+                }
+            })
+            .collect()
+    }
+
+    /// `depth` (a map of the centre's view) as sample `k` of `samples` over `width` sees
+    /// it: translated by the sample's offset, rounded to whole texels, clamped at the edge
+    /// (occluders fixed in the world, seen from a translated view).
+    pub fn sample_depth(&self, depth: &[f32], samples: u32, k: u32, width: f64) -> Vec<f32> {
+        let n = self.shadow as i64;
+        let shift = (Self::sample_x(samples, k, width) * n as f64 / 2.0).round() as i64;
+        (0..n * n)
+            .map(|t| {
+                let (i, j) = (t % n, t / n);
+                depth[(j * n + (i + shift).clamp(0, n - 1)) as usize]
+            })
+            .collect()
+    }
+
     /// Light uv and normalised depth of a world position, in f64.
     pub fn project(&self, p: [f32; 3]) -> ([f64; 2], f64) {
-        let vp = (self.light_proj() * self.light_view()).as_dmat4();
-        let v = self.light_view().as_dmat4();
+        let (uv, dist) = self.seen_from(0.0, p);
+        let (near, far) = self.range();
+        (uv, (dist - near as f64) / (far as f64 - near as f64))
+    }
+
+    /// Light uv and view distance of a world position from the view translated by `x`.
+    fn seen_from(&self, x: f64, p: [f32; 3]) -> ([f64; 2], f64) {
+        let v = self.view_at(x as f32).as_dmat4();
+        let vp = self.light_proj().as_dmat4() * v;
         let w = glam::DVec4::new(p[0] as f64, p[1] as f64, p[2] as f64, 1.0);
         let clip = vp * w;
         let uv = [clip.x / clip.w * 0.5 + 0.5, -clip.y / clip.w * 0.5 + 0.5];
-        let dist = -(v * w).z;
-        (uv, (dist - NEAR as f64) / (FAR as f64 - NEAR as f64))
+        (uv, -(v * w).z)
     }
 
     /// The level of detail of implicit `sample` lookups: texels per camera pixel, log2.
@@ -126,14 +254,21 @@ impl QueryPlane {
     /// The frame-wide inputs under a light `width` wide (`lit_inputs`; 0: `inputs`).
     pub fn frame(&self, width: f64) -> Frame {
         let n = self.shadow as f64;
+        let (near, far) = self.range();
+        // without casters: a square light of `width` and no angular size; with casters, a
+        // distant light of no size and the spread the GPU computes from its f32 angle
+        let (size, spread) = if self.casters {
+            (0.0, 2.0 * (0.5 * Self::light_angle(width) as f32 as f64).tan())
+        } else {
+            (width, 0.0)
+        };
         Frame {
             shadow_size: self.shadow,
-            near: NEAR as f64,
-            far: FAR as f64,
-            light_size: 0.5 * width,
-            light_width: [width, width],
-            // a directional light of no angular size
-            light_spread: 0.0,
+            near: near as f64,
+            far: far as f64,
+            light_size: 0.5 * size,
+            light_width: [size, size],
+            light_spread: spread,
             light_distant: true,
             // orthographic: 2 world units over the map (light_proj_y is 1)
             texel_world: [0.0, 2.0 / n],
@@ -141,17 +276,45 @@ impl QueryPlane {
         }
     }
 
-    /// The receiver the GPU shaded at camera pixel `pixel` from world position `p`.
-    pub fn receiver(&self, pixel: usize, p: [f32; 3]) -> Receiver {
-        let (uv, d) = self.project(p);
+    /// The receiver the GPU shaded at camera pixel `pixel` from world position `p`, seen
+    /// from the centre and from each of `samples` light samples over `width`.
+    pub fn receiver(&self, pixel: usize, p: [f32; 3], samples: u32, width: f64) -> Receiver {
+        let (uv, d_world) = self.seen_from(0.0, p);
+        let (near, far) = self.range();
+        let (near, far) = (near as f64, far as f64);
+        let n = Self::normal().as_dvec3();
+        // d = (EYE - 2x - near) / (far - near) with x = 2u - 1: a gradient of 4 / (far -
+        // near) over uv (1 without casters: d = 1 - u), one texel's worth per texel
+        let depth_slope = (4.0 / (far - near) / self.shadow as f64).min(0.1);
+        let lod = self.lod().max(0.0) as f64;
+        let views = self.sample_views(samples, width);
+        let seen = (0..samples)
+            .zip(&views)
+            .map(|(k, v)| {
+                let x = Self::sample_x(samples, k, width);
+                let (uv, d_world) = self.seen_from(x, p);
+                let to = glam::DVec3::new(x - p[0] as f64, EYE as f64 - p[1] as f64, -p[2] as f64).normalize();
+                Seen {
+                    uv,
+                    d_world,
+                    near,
+                    far,
+                    ndotl: n.dot(to),
+                    depth_slope,
+                    lod,
+                    texel_world: 2.0 / (v.light_proj_y as f64 * self.shadow as f64),
+                    weights: v.weights.map(f64::from),
+                }
+            })
+            .collect();
         Receiver {
             uv,
-            d_world: NEAR as f64 + d * (FAR - NEAR) as f64,
-            ndotl: Self::normal().as_dvec3().dot(glam::DVec3::Y),
-            // d = 1 - u: a unit gradient over uv, one texel's worth per texel
-            depth_slope: (1.0 / self.shadow as f64).min(0.1),
-            lod: self.lod().max(0.0) as f64,
+            d_world,
+            ndotl: n.dot(glam::DVec3::Y),
+            depth_slope,
+            lod,
             pixel: [(pixel % self.camera as usize) as f64, (pixel / self.camera as usize) as f64],
+            samples: seen,
         }
     }
 }
@@ -226,11 +389,138 @@ pub fn scene_depth(gpu: &Gpu, path: &Path, n: u32) -> Result<Vec<f32>, String> {
         .channel(0))
 }
 
-/// One depth map to verify on.
+/// The caster sets of [`caster_set`], by name.
+pub const CASTERS: [&str; 2] = ["box", "bars"];
+
+/// Triangles (position and normal per vertex) of an axis-aligned box from `lo` to `hi`,
+/// turned by `turn` radians about the vertical through its centre.
+fn box_triangles(lo: Vec3, hi: Vec3, turn: f32) -> Vec<f32> {
+    let c = 0.5 * (lo + hi);
+    let rot = glam::Quat::from_rotation_y(turn);
+    let h = 0.5 * (hi - lo);
+    let mut out = Vec::new();
+    // each face: its normal axis and sign; corners in counter-clockwise order seen from outside
+    for (axis, sign) in [(0, 1.0f32), (0, -1.0), (1, 1.0), (1, -1.0), (2, 1.0), (2, -1.0)] {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let corner = |a: f32, b: f32| {
+            let mut p = Vec3::ZERO;
+            p[axis] = sign * h[axis];
+            p[u] = a * h[u];
+            p[v] = b * h[v] * sign;
+            c + rot * p
+        };
+        let mut n = Vec3::ZERO;
+        n[axis] = sign;
+        let n = rot * n;
+        let q = [corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)];
+        for i in [0, 1, 2, 0, 2, 3] {
+            out.extend([q[i].x, q[i].y, q[i].z, n.x, n.y, n.z]);
+        }
+    }
+    out
+}
+
+/// A bundled caster set above the query plane (heights within [`CASTER_SLAB`]), by name
+/// ([`CASTERS`]): its triangles and meshes (ranges of triangles), or `None`.
+///
+/// - `box`: one box, 0.7 wide, its silhouette square to the map;
+/// - `bars`: three boxes at three heights, one turned by 30 degrees (diagonal silhouettes).
+pub fn caster_set(name: &str) -> Option<(Vec<f32>, Vec<std::ops::Range<u32>>)> {
+    let boxes: Vec<(Vec3, Vec3, f32)> = match name {
+        "box" => vec![(Vec3::new(-0.35, 2.45, -0.35), Vec3::new(0.35, 2.9, 0.35), 0.0)],
+        "bars" => vec![
+            (Vec3::new(-0.75, 2.4, -0.7), Vec3::new(-0.45, 2.6, 0.7), 0.0),
+            (Vec3::new(-0.1, 2.7, -0.5), Vec3::new(0.15, 2.95, 0.5), std::f32::consts::FRAC_PI_6),
+            (Vec3::new(0.45, 3.05, -0.6), Vec3::new(0.7, 3.25, 0.2), 0.0),
+        ],
+        _ => return None,
+    };
+    let mut vertices = Vec::new();
+    let mut meshes = Vec::new();
+    for (lo, hi, turn) in boxes {
+        let first = (vertices.len() / 18) as u32;
+        vertices.extend(box_triangles(lo, hi, turn));
+        meshes.push(first..(vertices.len() / 18) as u32);
+    }
+    Some((vertices, meshes))
+}
+
+/// A scene's shadow casters fitted into the slab above the query plane: uniformly scaled
+/// and moved so that they span at most 1.5 across x and z and lie within [`CASTER_SLAB`].
+pub fn scene_casters(path: &Path) -> Result<(Vec<f32>, Vec<std::ops::Range<u32>>), String> {
+    let s = crate::session::load_scene(path, Some((8, 8)), Some(8))?;
+    let inputs = crate::bind::scene_inputs(&s)?;
+    let casting = inputs.casting_vertices.map_or(inputs.vertices.len() / 6, |n| n as usize);
+    let triangles = (casting / 3) as u32;
+    let all = 0..triangles;
+    let meshes = if inputs.meshes.is_empty() {
+        std::slice::from_ref(&all)
+    } else {
+        &inputs.meshes[..]
+    };
+    let bounds = |m: &std::ops::Range<u32>| {
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for t in m.start..m.end.min(triangles) {
+            for v in inputs.vertices[t as usize * 18..t as usize * 18 + 18].chunks(6) {
+                lo = lo.min(Vec3::new(v[0], v[1], v[2]));
+                hi = hi.max(Vec3::new(v[0], v[1], v[2]));
+            }
+        }
+        (lo, hi)
+    };
+    // floors (flat and level) receive; they are left out, as the plane receives here
+    let kept: Vec<std::ops::Range<u32>> = meshes
+        .iter()
+        .filter(|m| m.start < triangles)
+        .filter(|m| {
+            let (lo, hi) = bounds(m);
+            let e = hi - lo;
+            e.y > 0.01 * e.x.max(e.z)
+        })
+        .cloned()
+        .collect();
+    if kept.is_empty() {
+        return Err(format!("scene `{}` has no shadow casters but floors", path.display()));
+    }
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for m in &kept {
+        let (a, b) = bounds(m);
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let ext = hi - lo;
+    let scale = (1.5 / ext.x.max(ext.z).max(f32::MIN_POSITIVE)).min((CASTER_SLAB.1 - CASTER_SLAB.0) / ext.y.max(f32::MIN_POSITIVE));
+    let centre = Vec3::new(0.5 * (lo.x + hi.x), lo.y, 0.5 * (lo.z + hi.z));
+    let mut out = Vec::new();
+    let mut out_meshes = Vec::new();
+    for m in &kept {
+        let first = (out.len() / 18) as u32;
+        for v in inputs.vertices[m.start as usize * 18..m.end.min(triangles) as usize * 18].chunks(6) {
+            let p = (Vec3::new(v[0], v[1], v[2]) - centre) * scale + Vec3::new(0.0, CASTER_SLAB.0, 0.0);
+            out.extend([p.x, p.y, p.z, v[3], v[4], v[5]]);
+        }
+        out_meshes.push(first..(out.len() / 18) as u32);
+    }
+    Ok((out, out_meshes))
+}
+
+/// What an input gives the passes.
+#[derive(Clone, Debug)]
+pub enum Source {
+    /// A depth map of the light's centre view, fed in place of the Depth pass's output
+    /// (each light sample's view sees it translated by the sample's offset).
+    Depth(Vec<f32>),
+    /// Caster meshes above the query plane (triangles, position and normal per vertex, and
+    /// their meshes): the Depth pass and Geometry passes rasterise them, and their outputs
+    /// are read back and given to the CPU evaluation.
+    Casters(Vec<f32>, Vec<std::ops::Range<u32>>),
+}
+
+/// One input to verify on.
 #[derive(Clone, Debug)]
 pub struct Input {
     pub name: String,
-    pub depth: Vec<f32>,
+    pub source: Source,
 }
 
 /// What `verify` runs.
@@ -376,8 +666,39 @@ impl Row {
 /// Receivers at or past this share of storage error make a row lossy.
 const LOSSY_SHARE: f64 = 0.01;
 
+/// Read back every channel of `slots` after a frame: one decoded map per view.
+fn read_given(ex: &Executor, slots: &[GivenSlot]) -> Result<Given, String> {
+    let mut given = Given::default();
+    for s in slots {
+        let views = (0..s.views)
+            .map(|k| {
+                let image = ex.read_texture(&s.texture, s.array_layer(k), 0).map_err(crate::session::rt)?;
+                Ok(image.channel(s.component as usize).into_iter().map(|v| s.decode(v)).collect())
+            })
+            .collect::<Result<Vec<Vec<f64>>, String>>()?;
+        given.insert(s.resource, s.channel, views);
+    }
+    Ok(given)
+}
+
+/// The Depth pass's output in `given` (for a reference evaluated from the same maps).
+fn depth_views(given: &Given, slots: &[GivenSlot]) -> Vec<Vec<f32>> {
+    slots
+        .iter()
+        .find(|s| !s.geometry)
+        .and_then(|s| given.maps(s.resource, s.channel))
+        .map(|v| v.iter().map(|m| m.iter().map(|&z| z as f32).collect()).collect())
+        .unwrap_or_default()
+}
+
 /// Verify `c` (and optionally a reference technique) on each input, under both cameras.
 /// `progress` is told each (input, camera) as it starts.
+///
+/// A depth input replaces the Depth pass's output (every view's, each light sample's view
+/// translated); a caster input is rasterised. Either way what the GPU rasterised (the
+/// Depth pass's output and Geometry passes') is read back and given to the CPU evaluation,
+/// so a technique with Geometry passes is checked from its Geometry outputs on, and needs
+/// caster inputs.
 pub fn verify(
     gpu: &Gpu,
     c: &sshc::Compiled,
@@ -387,47 +708,82 @@ pub fn verify(
     progress: &mut dyn FnMut(&str, u32),
 ) -> Result<Vec<Row>, String> {
     let program = Program::new(&c.ir, &c.layout);
-    if let Some(why) = sshc::interp::unsupported(&program) {
-        return Err(format!("`sshc verify` cannot evaluate `{}` on the CPU: {why}", c.ir.technique));
-    }
     opts.check()?;
     let n = opts.shadow;
+    let slots = sshc::interp::given_slots(&program);
+    let geometry = slots.iter().find(|s| s.geometry).map(|s| s.pass.clone());
+    let per_sample = c.graph.passes.iter().any(|p| p.views == sshc_runtime::graph::Views::PerLightSample);
+    let samples = if per_sample { c.graph.samples } else { 0 };
     let reference_program = reference.map(|r| Program::new(&r.ir, &r.layout));
     if let Some(p) = &reference_program
-        && let Some(why) = sshc::interp::unsupported(p)
+        && let Some(s) = sshc::interp::given_slots(p).into_iter().find(|s| s.geometry)
     {
-        return Err(format!("the reference `{}` cannot be evaluated on the CPU: {why}", p.ir.technique));
+        return Err(format!(
+            "the reference `{}` has a Geometry pass (`{}`): a reference is evaluated from the technique's depth maps alone",
+            p.ir.technique, s.pass
+        ));
     }
     let mut rows = Vec::new();
     let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(crate::session::rt)?;
     for input in inputs {
-        if input.depth.len() != (n * n) as usize {
-            return Err(format!("input `{}` has {} depths, not {n} x {n}", input.name, input.depth.len()));
+        if let (Source::Depth(depth), _) = (&input.source, &geometry) {
+            if let Some(pass) = &geometry {
+                return Err(format!(
+                    "input `{}` is a depth map, but `{}` rasterises Geometry pass `{pass}` from meshes: give it casters",
+                    input.name, c.ir.technique
+                ));
+            }
+            if depth.len() != (n * n) as usize {
+                return Err(format!("input `{}` has {} depths, not {n} x {n}", input.name, depth.len()));
+            }
         }
         for camera in [2 * n, n / 2] {
             progress(&input.name, camera);
-            let plane = QueryPlane { shadow: n, camera };
+            let plane = QueryPlane {
+                shadow: n,
+                camera,
+                casters: matches!(input.source, Source::Casters(..)),
+            };
             let frame = plane.frame(opts.light_width);
-            ex.bind_scene(&plane.lit_inputs(opts.light_width as f32))
-                .map_err(crate::session::rt)?;
-            ex.set_depth_override(Some(input.depth.clone()));
+            let width = opts.light_width as f32;
+            let mut scene = match &input.source {
+                Source::Depth(depth) => {
+                    let maps = if per_sample {
+                        (0..samples)
+                            .map(|k| plane.sample_depth(depth, samples, k, opts.light_width))
+                            .collect()
+                    } else {
+                        vec![depth.clone()]
+                    };
+                    ex.set_depth_override_views(Some(maps));
+                    plane.lit_inputs(width)
+                }
+                Source::Casters(vertices, meshes) => {
+                    ex.set_depth_override(None);
+                    plane.caster_inputs(width, vertices, meshes)
+                }
+            };
+            scene.samples = plane.sample_views(samples, opts.light_width);
+            ex.bind_scene(&scene).map_err(crate::session::rt)?;
             ex.run_frame().map_err(crate::session::rt)?;
+            let given = read_given(&ex, &slots)?;
             let got = ex.read_camera(CameraOutput::Visibility).map_err(crate::session::rt)?.channel(0);
             let positions = ex.read_camera(CameraOutput::Position).map_err(crate::session::rt)?.rgba;
             let receivers: Vec<(usize, Receiver)> = positions
                 .iter()
                 .enumerate()
                 .filter(|(_, p)| p[..3].iter().all(|c| c.is_finite()))
-                .map(|(i, p)| (i, plane.receiver(i, [p[0], p[1], p[2]])))
+                .map(|(i, p)| (i, plane.receiver(i, [p[0], p[1], p[2]], samples, opts.light_width)))
                 .collect();
-            let exact = Evaluation::new(program, &input.depth, frame, Rounding::Exact, Model::Gpu)?;
-            let rounded = Evaluation::new(program, &input.depth, frame, Rounding::Stored, Model::Gpu)?;
+            let exact = Evaluation::new(program, &given, frame, Rounding::Exact, Model::Gpu)?;
+            let rounded = Evaluation::new(program, &given, frame, Rounding::Stored, Model::Gpu)?;
             // the technique and its reference, each with what f64 rounding allows it
             let pair = reference_program
                 .map(|p| -> Result<_, String> {
+                    let theirs = Given::depth(&p, depth_views(&given, &slots));
                     Ok((
-                        Evaluation::new(program, &input.depth, frame, Rounding::Exact, Model::F64)?,
-                        Evaluation::new(p, &input.depth, frame, Rounding::Exact, Model::F64)?,
+                        Evaluation::new(program, &given, frame, Rounding::Exact, Model::F64)?,
+                        Evaluation::new(p, &theirs, frame, Rounding::Exact, Model::F64)?,
                     ))
                 })
                 .transpose()?;

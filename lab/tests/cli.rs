@@ -837,11 +837,13 @@ fn compile_warns_about_rounding_and_explain_prints_the_estimate() {
 /// inputs, are what docs/verify.md records): a 16^2 map, an edge, noise and a scene.
 const VERIFY_SMALL: [&str; 6] = ["--shadow-map", "16", "--fields", "step,noise", "--depth-of", "scenes/bunny.ron"];
 
-/// `sshc verify` agrees on every bundled technique it can evaluate and on the authoring
-/// examples; every other bundled technique is refused with the pass that stops it.
+/// `sshc verify` agrees on every bundled technique and on the authoring examples: those
+/// without Geometry passes on depth fields and a scene's depth map (per-sample views see
+/// them translated), those with Geometry passes on casters above the plane (their Depth
+/// and Geometry outputs read back), each named in the output.
 #[test]
-fn verify_agrees_on_every_bundled_technique_it_evaluates_and_refuses_the_rest() {
-    let evaluated = [
+fn verify_agrees_on_every_bundled_technique() {
+    let depth_only = [
         "hard",
         "pcf",
         "vsm",
@@ -851,31 +853,49 @@ fn verify_agrees_on_every_bundled_technique_it_evaluates_and_refuses_the_rest() 
         "csm",
         "cssm",
         "pcss",
+        "point-samples",
         "examples/poisson-pcf",
         "examples/vsm-bleeding",
         "examples/msm-reference",
     ];
-    for t in evaluated {
+    let geometry = ["penumbra-maps", "penumbra-limit-maps", "smoothies", "single-sample", "linear-light"];
+    let mut listed: Vec<String> = std::fs::read_dir(root().join("techniques"))
+        .map(|d| {
+            d.flatten()
+                .filter_map(|e| e.file_name().to_str()?.strip_suffix(".ron").map(String::from))
+                .collect()
+        })
+        .unwrap_or_default();
+    listed.sort();
+    let mut covered: Vec<String> = depth_only
+        .iter()
+        .chain(&geometry)
+        .filter(|t| !t.contains('/'))
+        .map(|t| t.to_string())
+        .collect();
+    covered.sort();
+    assert_eq!(listed, covered, "every bundled technique is verified here");
+    for t in depth_only.iter().chain(&geometry) {
         let path = format!("techniques/{t}.ron");
         let mut args = vec!["verify", path.as_str()];
-        args.extend(VERIFY_SMALL);
+        if geometry.contains(t) {
+            // a 16^2 map, one caster set and a scene's casters
+            args.extend(["--shadow-map", "16", "--casters", "bars", "--depth-of", "scenes/bunny.ron"]);
+        } else {
+            args.extend(VERIFY_SMALL);
+        }
         let out = ok(&args);
-        // three inputs under two cameras, each a row that agrees
-        assert_eq!(out.matches("| agrees |").count(), 6, "{t}:\n{out}");
+        let inputs = if geometry.contains(t) { 2 } else { 3 };
+        // each input under two cameras, each a row that agrees
+        assert_eq!(out.matches("| agrees |").count(), 2 * inputs, "{t}:\n{out}");
         assert!(out.contains("verdict: agrees on every input"), "{t}:\n{out}");
     }
-    for (t, why) in [
-        ("penumbra-maps", "pass `penumbra` is a Geometry pass"),
-        ("penumbra-limit-maps", "is a Geometry pass"),
-        ("smoothies", "is a Geometry pass"),
-        ("single-sample", "is a Geometry pass"),
-        ("linear-light", "renders one view per light sample"),
-        ("point-samples", "pass `depth` renders one view per light sample"),
-    ] {
-        let path = format!("techniques/{t}.ron");
-        let err = refused(&["verify", path.as_str()], 60);
-        assert!(err.contains("cannot evaluate") && err.contains(why), "{t}: {err}");
-    }
+    // a depth field cannot stand in for what a Geometry pass rasterises
+    let err = refused(&["verify", "techniques/smoothies.ron", "--fields", "step"], 60);
+    assert!(
+        err.contains("rasterises Geometry pass `smoothies` from meshes: give it casters"),
+        "{err}"
+    );
 }
 
 /// A precision that loses the signal is caught: ESM's exp(c z) at Unorm8 rounds every
@@ -988,9 +1008,10 @@ fn verify_refuses_bad_arguments_with_reasons() {
         (vec!["--reference-tolerance=-1"], "must be finite and not negative"),
         (vec!["--fields", "ramp,bogus"], "no depth field `bogus` (there are: ramp, step"),
         (vec!["--depth-of", "/nonexistent.ron"], "cannot read the scene"),
+        (vec!["--casters", "box,bogus"], "no caster set `bogus` (there are: box, bars)"),
         (
             vec!["--reference", "techniques/smoothies.ron"],
-            "the reference `smoothies` cannot be evaluated",
+            "the reference `smoothies` has a Geometry pass (`smoothies`)",
         ),
     ] {
         let mut all = vec!["verify", "techniques/hard.ron"];

@@ -4,7 +4,7 @@
 //! make some input DIFFER, and the shaders as generated must agree. On a real adapter
 //! (lavapipe without a GPU); never skipped.
 
-use sshc_lab::verify::{self, Input, Options, Verdict};
+use sshc_lab::verify::{self, Input, Options, Source, Verdict};
 use sshc_runtime::gpu::Gpu;
 
 mod common;
@@ -23,12 +23,12 @@ fn rows(gpu: &Gpu, c: &sshc::Compiled) -> Vec<verify::Row> {
         .iter()
         .map(|f| Input {
             name: f.to_string(),
-            depth: verify::depth_field(f, n).expect("a bundled field"),
+            source: Source::Depth(verify::depth_field(f, n).expect("a bundled field")),
         })
         .collect();
     inputs.push(Input {
         name: "bunny".into(),
-        depth: verify::scene_depth(gpu, &root().join("scenes/bunny.ron"), n).unwrap_or_else(|e| panic!("{e}")),
+        source: Source::Depth(verify::scene_depth(gpu, &root().join("scenes/bunny.ron"), n).unwrap_or_else(|e| panic!("{e}"))),
     });
     let opts = Options {
         shadow: n,
@@ -84,5 +84,68 @@ fn injected_code_generation_bugs_are_caught() {
         let row = bad.iter().find(|r| r.verdict == Verdict::Differs).expect("a row that differs");
         let red = row.picture(1).pixels().filter(|p| p.0 == [230, 20, 20]).count();
         assert_eq!(red, row.outside, "{technique}: one red pixel per receiver outside");
+    }
+}
+
+/// The rows of `c` on a 16^2 map over two caster sets above the plane.
+fn caster_rows(gpu: &Gpu, c: &sshc::Compiled) -> Vec<verify::Row> {
+    let inputs: Vec<Input> = ["box", "bars"]
+        .iter()
+        .map(|s| {
+            let (vertices, meshes) = verify::caster_set(s).expect("a bundled caster set");
+            Input {
+                name: s.to_string(),
+                source: Source::Casters(vertices, meshes),
+            }
+        })
+        .collect();
+    let opts = Options {
+        shadow: 16,
+        ..Options::default()
+    };
+    verify::verify(gpu, c, None, &inputs, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Bugs are caught in light samples' views and downstream of Geometry passes: one sample's
+/// receiver depth off by 2 % (point samples, on depth fields), sample 0's depth test reading
+/// sample 1's layer (linear light, on casters), and Geometry outputs read at the wrong
+/// place: the penumbra map's `nearest` rounding instead of flooring (half a texel), the
+/// smoothies' filtered lookup one texel off.
+#[test]
+fn injected_bugs_in_sample_views_and_after_geometry_passes_are_caught() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("verify needs an adapter: {e}"));
+    let sample = |k: u32| {
+        (
+            format!("let in_d_v{k} = (in_d_world_v{k} - sv{k}.depth_range.x) * sv{k}.depth_range.z;"),
+            format!("let in_d_v{k} = (in_d_world_v{k} - sv{k}.depth_range.x) * sv{k}.depth_range.z * 1.02;"),
+        )
+    };
+    let layer = ("1i), 0i, 0i);".to_string(), "1i), 1i, 0i);".to_string());
+    for (technique, (from, to), casters) in [
+        ("point-samples", sample(1), false),
+        ("linear-light", layer, true),
+        (
+            "penumbra-maps",
+            (
+                "floor(in_uv * frame.shadow_size.xy)".into(),
+                "round(in_uv * frame.shadow_size.xy)".into(),
+            ),
+            true,
+        ),
+        (
+            "smoothies",
+            (
+                "textureSample(t_ramps, smp, in_uv,".into(),
+                "textureSample(t_ramps, smp, in_uv + frame.shadow_size.zw,".into(),
+            ),
+            true,
+        ),
+    ] {
+        let c = compile(technique);
+        let rows = |c: &sshc::Compiled| if casters { caster_rows(&gpu, c) } else { rows(&gpu, c) };
+        let good = verdicts(&rows(&c));
+        assert!(good.iter().all(|v| *v == Verdict::Agrees), "{technique} as generated: {good:?}");
+        let bad = verdicts(&rows(&injected(&c, "shade", &from, &to)));
+        assert!(bad.contains(&Verdict::Differs), "{technique} with `{to}` was not caught: {bad:?}");
     }
 }

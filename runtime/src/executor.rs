@@ -128,7 +128,8 @@ pub struct Executor<'g> {
     combine: Option<Combine>,
     timestamps: Option<Timestamps>,
     /// Linear depth written into the Depth pass's output instead of rasterising the scene.
-    depth_override: Option<Vec<f32>>,
+    /// One map per view of the Depth pass (a single map serves every view).
+    depth_override: Option<Vec<Vec<f32>>>,
     /// Refuse scenes whose textures would take more than this many bytes.
     pub max_bytes: u64,
 }
@@ -470,11 +471,17 @@ impl<'g> Executor<'g> {
     /// `shadow_size`^2 values) instead of the scene rasterised from the light. For feeding
     /// synthetic depth fields to the passes after Depth; `None` rasterises again.
     pub fn set_depth_override(&mut self, depth: Option<Vec<f32>>) {
-        self.depth_override = depth;
+        self.depth_override = depth.map(|d| vec![d]);
     }
 
-    /// Upload the depth override into the Depth pass's output.
-    fn write_depth_override(&self, b: &Resources, pass: &graph::PassDecl, depth: &[f32]) -> Result<()> {
+    /// [`Executor::set_depth_override`] with one map per view of a per-sample Depth pass
+    /// (`views: PerLightSample`), in sample order; a single map serves every view.
+    pub fn set_depth_override_views(&mut self, views: Option<Vec<Vec<f32>>>) {
+        self.depth_override = views;
+    }
+
+    /// Upload the depth override of view `view` into the Depth pass's output.
+    fn write_depth_override(&self, b: &Resources, pass: &graph::PassDecl, depth: &[f32], view: u32) -> Result<()> {
         let n = b.shadow_size as usize;
         if depth.len() != n * n {
             return Err(RuntimeError::Param(format!(
@@ -506,7 +513,7 @@ impl<'g> Executor<'g> {
                     origin: wgpu::Origin3d {
                         x: 0,
                         y: 0,
-                        z: target.layer,
+                        z: view * decl.layers + target.layer,
                     },
                     aspect: wgpu::TextureAspect::All,
                 },
@@ -555,9 +562,24 @@ impl<'g> Executor<'g> {
             for (l, res) in self.bound.iter().enumerate() {
                 for (pi, (pass, decl)) in self.passes.iter().zip(&self.graph.passes).enumerate() {
                     if pass.kind == graph::PassKind::Depth
-                        && let Some(depth) = &self.depth_override
+                        && let Some(maps) = &self.depth_override
                     {
-                        self.write_depth_override(res, decl, depth)?;
+                        let views = if decl.views == graph::Views::PerLightSample {
+                            self.graph.samples
+                        } else {
+                            1
+                        };
+                        if maps.len() != 1 && maps.len() != views as usize {
+                            return Err(RuntimeError::Param(format!(
+                                "depth override has {} maps, the Depth pass `{}` {views} view(s)",
+                                maps.len(),
+                                decl.name
+                            )));
+                        }
+                        for view in 0..views {
+                            let depth = &maps[(view as usize).min(maps.len() - 1)];
+                            self.write_depth_override(res, decl, depth, view)?;
+                        }
                         continue;
                     }
                     // The pass's first render or compute pass writes its start, the last its

@@ -66,7 +66,7 @@ fn main() {
     let (shadow, camera) = (size("SSHC_TIMINGS_SHADOW", 256), size("SSHC_TIMINGS_CAMERA", 512));
     const FRAMES: usize = 7;
     let hand = GpuReference::new(gpu()).unwrap_or_else(|e| panic!("{e}"));
-    let plane = QueryPlane { shadow, camera };
+    let plane = QueryPlane::new(shadow, camera);
     let z = scene_depth("bunny", shadow);
     let map = DepthMap {
         size: shadow,

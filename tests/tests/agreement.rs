@@ -77,7 +77,7 @@ fn compare(v: &Variant, hand: &GpuReference, inputs: &[(String, Vec<f32>)], row:
     let compiled = v.compiled();
     let t = v.reference();
     for camera in [2 * N, N / 2] {
-        let plane = QueryPlane { shadow: N, camera };
+        let plane = QueryPlane::new(N, camera);
         for (name, z) in inputs {
             let run = run_inputs(&compiled, &v.inputs(&plane), z, &[], 1);
             // the camera pixels that see the plane, their queries and generated values

@@ -39,7 +39,7 @@ fn probe(precision: &str, lookup: &str) -> sshc::Compiled {
 const N: u32 = 32;
 
 fn plane() -> QueryPlane {
-    QueryPlane { shadow: N, camera: 2 * N }
+    QueryPlane::new(N, 2 * N)
 }
 
 /// The unorm codes the Map pass stored, read back, as integers.

@@ -130,7 +130,7 @@ fn cssm_at_light_size_zero_is_csm_at_the_finest_level() {
     let sum = csm_coefficient_sum(4, 1.0);
     let off = [("A", 0.0), ("ring", 0.0)];
     let n = 32;
-    let plane = QueryPlane { shadow: n, camera: 2 * n };
+    let plane = QueryPlane::new(n, 2 * n);
     for (filter, tol) in [("0", 1e-5), ("1", sum * 4.0 / 256.0 + 1e-5)] {
         let cssm = compile("cssm", &[("filter", filter)]);
         // synthetic depth fields under the query plane's receiver (every depth difference)
@@ -192,7 +192,7 @@ fn cssm_with_no_occluder_in_front_of_the_receiver_is_lit() {
     // changes by 1/n per texel (slope_bias = 1), so only receivers with d >= 1/M + 1/n (plus
     // 0.01 for the blur and the kernel) are checked for 1; elsewhere finiteness and range.
     let n = 32;
-    let plane = QueryPlane { shadow: n, camera: n };
+    let plane = QueryPlane::new(n, n);
     let depth = depth_field("one", n);
     for filter in ["0", "1"] {
         let c = compile("cssm", &[("filter", filter)]);
@@ -240,7 +240,7 @@ fn pcss_penumbra_widens_as_the_light_grows() {
     // plus at most one texel (2 pixels) of nearest-texel rounding; 10 % for the M x M
     // sampling of the width (a lattice of M^2 = 64 distinct offsets per axis).
     let n = 64;
-    let plane = QueryPlane { shadow: n, camera: 2 * n };
+    let plane = QueryPlane::new(n, 2 * n);
     let depth = depth_field("step", n);
     let c = compile("pcss", &[]);
     let mut widths = Vec::new();
@@ -268,7 +268,7 @@ fn pcss_at_light_size_zero_is_the_hard_shadow_map() {
     // the bias of hard.ron (bias + slope_bias * depth_slope, the same defaults): PCSS reads
     // the hard shadow test exactly (both are 0 or 1).
     let n = 32;
-    let plane = QueryPlane { shadow: n, camera: 2 * n };
+    let plane = QueryPlane::new(n, 2 * n);
     let pcss = compile("pcss", &[]);
     let hard = compile("hard", &[]);
     for field in ["ramp", "step", "checker", "noise"] {
@@ -295,7 +295,7 @@ fn cssm_penumbra_widens_as_the_light_grows() {
     // = 24.6 pixels within -40 % (mipmaps: the kernel is rounded to trilinear levels of
     // widths 2^L) and +20 %.
     let n = 64;
-    let plane = QueryPlane { shadow: n, camera: 2 * n };
+    let plane = QueryPlane::new(n, 2 * n);
     let depth = depth_field("step", n);
     for filter in ["0", "1"] {
         let c = compile("cssm", &[("filter", filter)]);

@@ -4,7 +4,7 @@
 //! input differs or is lossy.
 
 use crate::session::{Variants, read, report, rt};
-use crate::verify::{self, FIELDS, Input, Options, Verdict};
+use crate::verify::{self, CASTERS, FIELDS, Input, Options, Source, Verdict};
 use sshc_runtime::gpu::Gpu;
 use std::path::{Path, PathBuf};
 
@@ -28,11 +28,17 @@ pub struct VerifyArgs {
     /// Width of the square light over the query plane, world units (the plane spans 2).
     #[arg(long, default_value_t = 0.5)]
     light_width: f64,
-    /// Synthetic depth fields, comma-separated (ramp, step, checker, noise, zero, one).
-    #[arg(long, value_delimiter = ',', default_values_t = FIELDS.map(String::from))]
-    fields: Vec<String>,
-    /// Scenes whose light's depth maps are inputs too. Repeatable (default: the bundled
-    /// bunny and fence, where `scenes/` is found).
+    /// Synthetic depth fields, comma-separated (ramp, step, checker, noise, zero, one;
+    /// default: all of them, for a technique without Geometry passes).
+    #[arg(long, value_delimiter = ',')]
+    fields: Option<Vec<String>>,
+    /// Caster sets above the plane, rasterised by the Depth and Geometry passes,
+    /// comma-separated (box, bars; default: both, for a technique with Geometry passes).
+    #[arg(long, value_delimiter = ',')]
+    casters: Option<Vec<String>>,
+    /// Scenes as inputs too: their light's depth map or, for a technique with Geometry
+    /// passes, their shadow casters fitted above the plane. Repeatable (default: the
+    /// bundled bunny and fence, where `scenes/` is found).
     #[arg(long = "depth-of")]
     scenes: Vec<PathBuf>,
     /// Write the table (Markdown) here as well.
@@ -81,10 +87,29 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
     opts.check().map_err(|e| format!("error: {e}"))?;
     let gpu = Gpu::new().map_err(rt)?;
     let n = args.shadow_map;
+    // a technique with Geometry passes is verified from rasterised casters; the others from
+    // depth maps unless casters are asked for
+    let geometry = sshc::interp::given_slots(&sshc::ir::Program::new(&c.ir, &c.layout))
+        .iter()
+        .any(|s| s.geometry);
+    let default = |on: bool, names: &[&str]| on.then(|| names.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+    let fields = args.fields.clone().or_else(|| default(!geometry, &FIELDS)).unwrap_or_default();
+    let casters = args.casters.clone().or_else(|| default(geometry, &CASTERS)).unwrap_or_default();
     let mut inputs = Vec::new();
-    for f in &args.fields {
+    for f in &fields {
         let depth = verify::depth_field(f, n).ok_or_else(|| format!("error: no depth field `{f}` (there are: {})", FIELDS.join(", ")))?;
-        inputs.push(Input { name: f.clone(), depth });
+        inputs.push(Input {
+            name: f.clone(),
+            source: Source::Depth(depth),
+        });
+    }
+    for s in &casters {
+        let (vertices, meshes) =
+            verify::caster_set(s).ok_or_else(|| format!("error: no caster set `{s}` (there are: {})", CASTERS.join(", ")))?;
+        inputs.push(Input {
+            name: s.clone(),
+            source: Source::Casters(vertices, meshes),
+        });
     }
     let scenes = if args.scenes.is_empty() {
         bundled_scenes()
@@ -94,12 +119,17 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
         args.scenes.clone()
     };
     for s in &scenes {
-        let depth = verify::scene_depth(&gpu, s, n)?;
         let name = s.file_stem().map_or("scene".into(), |x| x.to_string_lossy().into_owned());
-        inputs.push(Input { name, depth });
+        let source = if geometry {
+            let (vertices, meshes) = verify::scene_casters(s)?;
+            Source::Casters(vertices, meshes)
+        } else {
+            Source::Depth(verify::scene_depth(&gpu, s, n)?)
+        };
+        inputs.push(Input { name, source });
     }
     if inputs.is_empty() {
-        return Err("error: no inputs (name a depth field with --fields or a scene with --depth-of)".into());
+        return Err("error: no inputs (name a depth field with --fields, casters with --casters or a scene with --depth-of)".into());
     }
     let total = inputs.len() * 2;
     let mut done = 0;
