@@ -1054,9 +1054,24 @@ impl<'p> Evaluation<'p> {
     fn allowed(&self, e: &Prepared, leaf: &LeafAllowed, scratch: &mut Scratch) -> Allowed {
         let arena = &self.p.arena;
         let shade = e.root == self.shade.root;
-        let plain = |h: H, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
+        let Scratch { vals, errors, leaves } = scratch;
+        // the leaves' allowances, recorded as the evaluation reads them, so that each
+        // lookup runs once for its value and its allowance
+        for &h in &e.order {
+            if let Some(l) = leaves.get_mut(h.index()) {
+                *l = [0.0; 4];
+            }
+        }
+        let leaves = std::cell::RefCell::new(leaves);
+        let plain = |h: H, k: usize, vals: &[[f64; 4]]| {
+            leaf(h, k, vals).map(|(v, a)| {
+                if let Some(l) = leaves.borrow_mut().get_mut(h.index()) {
+                    l[k.min(3)] = a;
+                }
+                v
+            })
+        };
         let hooks = Hooks { leaf: &plain, exact: true };
-        let Scratch { vals, errors } = scratch;
         arena.eval_span(&e.order, &hooks, vals);
         let width = |h: H| match arena.ty(h) {
             Ty::Vec(n) => (n as usize).clamp(1, 4),
@@ -1074,7 +1089,8 @@ impl<'p> Evaluation<'p> {
             for (k, x) in err.iter_mut().enumerate().take(w) {
                 *x = match arena.node(h) {
                     Node::Input(..) | Node::Sample { .. } | Node::Channel(..) | Node::Param(_) => {
-                        let own = leaf(h, k, vals).map_or(0.0, |(_, a)| a);
+                        // read before the operand moves below evaluate this node again
+                        let own = leaves.borrow().get(h.index()).map_or(0.0, |l| l[k]);
                         match arena.node(h) {
                             Node::Input(i, _) if model == Model::Gpu => own + input_error(*i, v[k]),
                             Node::Input(..) => own,
@@ -1250,12 +1266,15 @@ fn raw_visibility(v: f64) -> f64 {
 pub struct Scratch {
     vals: Vec<[f64; 4]>,
     errors: Vec<[f64; 4]>,
+    /// The allowance of each leaf (input, lookup, channel, param) as last evaluated.
+    leaves: Vec<[f64; 4]>,
 }
 
 impl Scratch {
     fn fit(&mut self, nodes: usize) {
         self.vals.resize(nodes, [f64::NAN; 4]);
         self.errors.resize(nodes, [0.0; 4]);
+        self.leaves.resize(nodes, [0.0; 4]);
     }
 }
 
