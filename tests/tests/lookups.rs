@@ -230,3 +230,26 @@ fn div_or_divides_where_the_denominator_is_large_enough() {
     }
     assert!(counts.iter().all(|&c| c > 0), "every branch is exercised: {counts:?}");
 }
+
+/// A per-sample Depth pass takes one override map per light sample's view, each in its
+/// own layer; a single map serves every view; any other count is refused, naming the pass.
+#[test]
+fn depth_overrides_fill_each_light_samples_view() {
+    let c = compile_source("point_samples", &support::technique_source("point-samples"), &[], &[]);
+    let p = plane();
+    let mut inputs = p.inputs();
+    inputs.samples = p.sample_views(2, 0.5);
+    let mut ex = sshc_runtime::gpu::Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    ex.bind_scene(&inputs).unwrap();
+    let texels = (N * N) as usize;
+    let layer = |ex: &sshc_runtime::gpu::Executor, k: u32| ex.read_texture("shadow", k, 0).unwrap().channel(0);
+    ex.set_depth_override_views(Some(vec![vec![0.25; texels], vec![0.75; texels]]));
+    ex.run_frame().unwrap();
+    assert!(layer(&ex, 0).iter().all(|&z| z == 0.25) && layer(&ex, 1).iter().all(|&z| z == 0.75));
+    ex.set_depth_override(Some(vec![0.5; texels]));
+    ex.run_frame().unwrap();
+    assert!((0..2).all(|k| layer(&ex, k).iter().all(|&z| z == 0.5)));
+    ex.set_depth_override_views(Some(vec![vec![0.5; texels]; 3]));
+    let err = ex.run_frame().err().expect("three maps for two views").to_string();
+    assert!(err.contains("depth override has 3 maps, the Depth pass `depth` 2 view(s)"), "{err}");
+}
