@@ -250,6 +250,9 @@ fn depth_overrides_fill_each_light_samples_view() {
     ex.run_frame().unwrap();
     assert!((0..2).all(|k| layer(&ex, k).iter().all(|&z| z == 0.5)));
     ex.set_depth_override_views(Some(vec![vec![0.5; texels]; 3]));
-    let err = ex.run_frame().err().expect("three maps for two views").to_string();
+    let Err(err) = ex.run_frame() else {
+        panic!("three maps for two views were taken")
+    };
+    let err = err.to_string();
     assert!(err.contains("depth override has 3 maps, the Depth pass `depth` 2 view(s)"), "{err}");
 }
