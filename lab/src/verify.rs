@@ -726,7 +726,7 @@ pub fn verify(
     let mut rows = Vec::new();
     let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(crate::session::rt)?;
     for input in inputs {
-        if let (Source::Depth(depth), _) = (&input.source, &geometry) {
+        if let Source::Depth(depth) = &input.source {
             if let Some(pass) = &geometry {
                 return Err(format!(
                     "input `{}` is a depth map, but `{}` rasterises Geometry pass `{pass}` from meshes: give it casters",
