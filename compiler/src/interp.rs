@@ -2,9 +2,9 @@
 //! interval about each value that the GPU's f32 arithmetic, its storage rounding, its
 //! filtering hardware and its built-in functions may move it by.
 //!
-//! Given the Depth pass's output (a square map of linear depths per view) and every Geometry
-//! pass's ([`Given`]), [`Evaluation::new`] runs every other pass in execution order: Map (the channel expressions per texel,
-//! `neighbour` offsets clamped to the edge), Filter (separable Box, Gaussian, Max and Min
+//! Given the Depth pass's output (a square map of linear depths per view) and every
+//! Geometry pass's ([`Given`]), [`Evaluation::new`] runs every other pass in execution
+//! order: Map (the channel expressions per texel, `neighbour` offsets clamped to the edge), Filter (separable Box, Gaussian, Max and Min
 //! kernels along x then y, the 3 x 3 Laplacian), Mipmap (levels down to 1 x 1, each texel
 //! the mean, maximum or minimum of the 2 x 2 below it) and SummedArea (exact prefix sums).
 //! [`Evaluation::visibility`] then evaluates the Shade's visibility for one receiver with
@@ -31,7 +31,11 @@
 //!   error of a texel boundary;
 //! - an input: what the GPU's f32 transforms may leave in it ([`input_error`]: `d` and `uv`
 //!   by 2^-20, the others by 2^-20 of their magnitude);
-//! - an arithmetic result: one f32 ulp (three for a division); a built-in: its WGSL accuracy
+//! - a stored texel: half its rounding step, a whole one for F16 (a device may round F16
+//!   stores toward zero, as lavapipe does), and a filtered unorm lookup one code more (a
+//!   device may filter in fixed point); a read-back unorm texel an f32 ulp (its conversion);
+//! - an arithmetic result: one f32 ulp (three for a division; none for an add, subtract or
+//!   multiply of exact operands whose result f32 holds); a built-in: its WGSL accuracy
 //!   ([`call_error`]: `sin`, `cos` 2^-11 absolute; `exp`, `exp2` (3 + 2|x|) ulp; `log`,
 //!   `log2` 3 ulp or 2^-21 absolute; `pow` as `exp2(y log2 x)`; `sqrt`, `inverseSqrt` 2.5 ulp;
 //!   the inverse trigonometric functions 4096 ulp) plus an ulp where it rounds,
@@ -402,13 +406,11 @@ struct Texels {
 
 impl Texels {
     fn new(levels: Vec<Level>, slot: &PlacedSlot) -> Texels {
-        let scale = slot.encode.scale.abs().max(f64::MIN_POSITIVE);
         Texels {
             levels,
             sat: None,
             code: match slot.precision {
-                Precision::Unorm8 => 1.0 / (255.0 * scale),
-                Precision::Unorm16 => 1.0 / (65535.0 * scale),
+                Precision::Unorm8 | Precision::Unorm16 => 2.0 * half_step(slot, 0.0),
                 Precision::F16 | Precision::F32 => 0.0,
             },
         }
@@ -755,35 +757,26 @@ impl<'p> Evaluation<'p> {
             Rounding::Stored => stored(slot, v),
         };
         match &pass.kind {
-            IrPassKind::Depth { .. } => {
+            // given: a Depth output as the caller gives it (a synthetic field is stored as
+            // the slot stores it), a Geometry output read back as the GPU stored it (exact,
+            // but for a unorm code's conversion to f32 in the shader: `k * (1 / 255)` on
+            // lavapipe, an ulp from `k / 255`)
+            IrPassKind::Depth { .. } | IrPassKind::Geometry { .. } => {
+                let read_back = matches!(pass.kind, IrPassKind::Geometry { .. });
                 for slot in self.slots(out) {
+                    let unorm = matches!(slot.precision, Precision::Unorm8 | Precision::Unorm16);
+                    let allow = |x: f64| match (read_back, unorm) {
+                        (false, _) => self.model.storage(&slot, x),
+                        (true, true) => self.model.ulp(x),
+                        (true, false) => 0.0,
+                    };
                     let views = self
                         .given(given, id, out, slot.channel)?
                         .iter()
-                        .map(|depth| {
-                            let v: Vec<f64> = depth.iter().map(|&z| keep(&slot, z)).collect();
-                            let a = v.iter().map(|&z| self.model.storage(&slot, z)).collect();
+                        .map(|map| {
+                            let v: Vec<f64> = map.iter().map(|&x| if read_back { x } else { keep(&slot, x) }).collect();
+                            let a = v.iter().map(|&x| allow(x)).collect();
                             Texels::new(vec![Level { size, v, a }], &slot)
-                        })
-                        .collect();
-                    self.texels.insert((out, slot.channel), views);
-                }
-            }
-            // read back as the GPU stored them: exact, but for a unorm code's conversion to
-            // f32 in the shader (`k * (1 / 255)` on lavapipe, an ulp from `k / 255`)
-            IrPassKind::Geometry { .. } => {
-                let unorm = |slot: &PlacedSlot| matches!(slot.precision, Precision::Unorm8 | Precision::Unorm16);
-                for slot in self.slots(out) {
-                    let views = self
-                        .given(given, id, out, slot.channel)?
-                        .iter()
-                        .map(|v| {
-                            let level = Level {
-                                size,
-                                v: v.clone(),
-                                a: v.iter().map(|&x| if unorm(&slot) { self.model.ulp(x) } else { 0.0 }).collect(),
-                            };
-                            Texels::new(vec![level], &slot)
                         })
                         .collect();
                     self.texels.insert((out, slot.channel), views);
@@ -1054,23 +1047,8 @@ impl<'p> Evaluation<'p> {
     fn allowed(&self, e: &Prepared, leaf: &LeafAllowed, scratch: &mut Scratch) -> Allowed {
         let arena = &self.p.arena;
         let shade = e.root == self.shade.root;
-        let Scratch { vals, errors, leaves } = scratch;
-        // the leaves' allowances, recorded as the evaluation reads them, so that each
-        // lookup runs once for its value and its allowance
-        for &h in &e.order {
-            if let Some(l) = leaves.get_mut(h.index()) {
-                *l = [0.0; 4];
-            }
-        }
-        let leaves = std::cell::RefCell::new(leaves);
-        let plain = |h: H, k: usize, vals: &[[f64; 4]]| {
-            leaf(h, k, vals).map(|(v, a)| {
-                if let Some(l) = leaves.borrow_mut().get_mut(h.index()) {
-                    l[k.min(3)] = a;
-                }
-                v
-            })
-        };
+        let plain = |h: H, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
+        let Scratch { vals, errors } = scratch;
         let hooks = Hooks { leaf: &plain, exact: true };
         arena.eval_span(&e.order, &hooks, vals);
         let width = |h: H| match arena.ty(h) {
@@ -1089,8 +1067,7 @@ impl<'p> Evaluation<'p> {
             for (k, x) in err.iter_mut().enumerate().take(w) {
                 *x = match arena.node(h) {
                     Node::Input(..) | Node::Sample { .. } | Node::Channel(..) | Node::Param(_) => {
-                        // read before the operand moves below evaluate this node again
-                        let own = leaves.borrow().get(h.index()).map_or(0.0, |l| l[k]);
+                        let own = leaf(h, k, vals).map_or(0.0, |(_, a)| a);
                         match arena.node(h) {
                             Node::Input(i, _) if model == Model::Gpu => own + input_error(*i, v[k]),
                             Node::Input(..) => own,
@@ -1266,15 +1243,12 @@ fn raw_visibility(v: f64) -> f64 {
 pub struct Scratch {
     vals: Vec<[f64; 4]>,
     errors: Vec<[f64; 4]>,
-    /// The allowance of each leaf (input, lookup, channel, param) as last evaluated.
-    leaves: Vec<[f64; 4]>,
 }
 
 impl Scratch {
     fn fit(&mut self, nodes: usize) {
         self.vals.resize(nodes, [f64::NAN; 4]);
         self.errors.resize(nodes, [0.0; 4]);
-        self.leaves.resize(nodes, [0.0; 4]);
     }
 }
 

@@ -277,8 +277,8 @@ impl QueryPlane {
     }
 
     /// The receiver the GPU shaded at camera pixel `pixel` from world position `p`, seen
-    /// from the centre and from each of `samples` light samples over `width`.
-    pub fn receiver(&self, pixel: usize, p: [f32; 3], samples: u32, width: f64) -> Receiver {
+    /// from the centre and from each light sample's view of `views` ([`QueryPlane::sample_views`]).
+    pub fn receiver(&self, pixel: usize, p: [f32; 3], views: &[SampleView]) -> Receiver {
         let (uv, d_world) = self.seen_from(0.0, p);
         let (near, far) = self.range();
         let (near, far) = (near as f64, far as f64);
@@ -287,11 +287,10 @@ impl QueryPlane {
         // near) over uv (1 without casters: d = 1 - u), one texel's worth per texel
         let depth_slope = (4.0 / (far - near) / self.shadow as f64).min(0.1);
         let lod = self.lod().max(0.0) as f64;
-        let views = self.sample_views(samples, width);
-        let seen = (0..samples)
-            .zip(&views)
-            .map(|(k, v)| {
-                let x = Self::sample_x(samples, k, width);
+        let seen = views
+            .iter()
+            .map(|v| {
+                let x = v.position[0] as f64;
                 let (uv, d_world) = self.seen_from(x, p);
                 let to = glam::DVec3::new(x - p[0] as f64, EYE as f64 - p[1] as f64, -p[2] as f64).normalize();
                 Seen {
@@ -773,7 +772,7 @@ pub fn verify(
                 .iter()
                 .enumerate()
                 .filter(|(_, p)| p[..3].iter().all(|c| c.is_finite()))
-                .map(|(i, p)| (i, plane.receiver(i, [p[0], p[1], p[2]], samples, opts.light_width)))
+                .map(|(i, p)| (i, plane.receiver(i, [p[0], p[1], p[2]], &scene.samples)))
                 .collect();
             let exact = Evaluation::new(program, &given, frame, Rounding::Exact, Model::Gpu)?;
             let rounded = Evaluation::new(program, &given, frame, Rounding::Stored, Model::Gpu)?;
@@ -925,4 +924,64 @@ pub fn table(rows: &[Row]) -> String {
         let _ = writeln!(s, " {} |", r.verdict.name());
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every vertex within the slab above the plane and the light's square (x, z in [-1, 1]).
+    fn in_slab(vertices: &[f32]) -> bool {
+        vertices
+            .chunks(6)
+            .all(|v| (CASTER_SLAB.0 - 1e-5..=CASTER_SLAB.1 + 1e-5).contains(&v[1]) && v[0].abs() < 1.0 && v[2].abs() < 1.0)
+    }
+
+    #[test]
+    fn caster_sets_are_closed_boxes_in_the_slab_with_outward_normals() {
+        for name in CASTERS {
+            let (vertices, meshes) = caster_set(name).expect("a bundled set");
+            assert!(in_slab(&vertices), "{name}");
+            // one mesh of 12 triangles per box, covering every triangle in order
+            assert!(meshes.iter().all(|m| m.end - m.start == 12), "{name}: {meshes:?}");
+            assert_eq!(meshes.last().map(|m| m.end), Some((vertices.len() / 18) as u32), "{name}");
+            for m in &meshes {
+                let tri = |t: u32| &vertices[t as usize * 18..t as usize * 18 + 18];
+                let centre = (m.start..m.end)
+                    .flat_map(|t| tri(t).chunks(6).map(|v| Vec3::new(v[0], v[1], v[2])).collect::<Vec<_>>())
+                    .sum::<Vec3>()
+                    / (3.0 * 12.0);
+                for t in m.clone() {
+                    let v: Vec<Vec3> = tri(t).chunks(6).map(|v| Vec3::new(v[0], v[1], v[2])).collect();
+                    let n = Vec3::new(tri(t)[3], tri(t)[4], tri(t)[5]);
+                    let face = (v[1] - v[0]).cross(v[2] - v[0]);
+                    // counter-clockwise seen from outside, the normal pointing away from the box
+                    assert!(
+                        face.dot(n) > 0.0 && n.dot((v[0] + v[1] + v[2]) / 3.0 - centre) > 0.0,
+                        "{name}: triangle {t}"
+                    );
+                }
+            }
+        }
+        assert!(caster_set("bogus").is_none());
+    }
+
+    #[test]
+    fn a_scenes_casters_leave_its_floor_out_and_fit_the_slab() {
+        let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/bunny.ron");
+        let (vertices, meshes) = scene_casters(&bunny).unwrap_or_else(|e| panic!("{e}"));
+        assert!(in_slab(&vertices));
+        // the floor (flat and level) is left out: every mesh kept has height
+        assert!(!meshes.is_empty());
+        for m in &meshes {
+            let ys: Vec<f32> = vertices[m.start as usize * 18..m.end as usize * 18]
+                .chunks(6)
+                .map(|v| v[1])
+                .collect();
+            let (lo, hi) = ys
+                .iter()
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &y| (a.min(y), b.max(y)));
+            assert!(hi - lo > 0.1, "a flat mesh was kept: {m:?}, heights {lo}..{hi}");
+        }
+    }
 }
