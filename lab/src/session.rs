@@ -108,7 +108,7 @@ pub struct Overrides {
 impl Overrides {
     /// The scene at `path` with the size and shadow-map overrides, and an executor of
     /// `input` (a technique compiled with the overrides, or a graph with params set).
-    pub fn load<'g>(&self, gpu: &'g Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor<'g>), String> {
+    pub fn load(&self, gpu: &Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor), String> {
         let path = scene;
         let mut scene = load_scene(path, self.size, self.shadow_map)?;
         if let Some(k) = self.lights {
@@ -272,7 +272,7 @@ pub fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>
 /// (`.graph.ron`, params set as uniforms), as `sshc render` does.
 /// `opts` holds the command line's `--set`, `--precision` and `--schedule`; a graph takes
 /// `--set` only.
-pub fn executor<'g>(gpu: &'g Gpu, input: &Path, opts: &sshc::CompileOptions) -> Result<Executor<'g>, String> {
+pub fn executor(gpu: &Gpu, input: &Path, opts: &sshc::CompileOptions) -> Result<Executor, String> {
     if input.to_string_lossy().ends_with(".graph.ron") {
         if !opts.precision.is_empty() {
             return Err("error: `--precision` needs a technique, not a compiled graph".into());
@@ -291,7 +291,7 @@ pub fn executor<'g>(gpu: &'g Gpu, input: &Path, opts: &sshc::CompileOptions) -> 
     compile_executor(gpu, input, &source, opts)
 }
 
-pub fn compile_executor<'g>(gpu: &'g Gpu, path: &Path, source: &str, opts: &sshc::CompileOptions) -> Result<Executor<'g>, String> {
+pub fn compile_executor(gpu: &Gpu, path: &Path, source: &str, opts: &sshc::CompileOptions) -> Result<Executor, String> {
     let c = sshc::compile_str(source, opts).map_err(|d| {
         report(&d, path, source);
         String::new()

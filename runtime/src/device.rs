@@ -1,91 +1,30 @@
-//! The device: opening it, wgpu errors as values (error scopes), and the caches of shader
-//! modules and pipelines shared by every executor on it.
+//! The device: opening one or taking a host's, wgpu errors as values (error scopes), and
+//! the caches of shader modules and pipelines shared by every executor on it.
 
-use crate::graph;
+pub use crate::error::{Result, RuntimeError};
 use crate::pipeline::{PipelineKey, StepPipeline};
 use std::collections::HashMap;
-use std::fmt;
-use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
-
-/// Why the runtime could not do what was asked.
-#[derive(Clone, Debug, PartialEq)]
-pub enum RuntimeError {
-    /// No GPU adapter: the message names what to install.
-    NoAdapter(String),
-    Device(String),
-    Graph(graph::GraphError),
-    /// A file named by the graph could not be read, or lies outside the graph's folder.
-    File {
-        path: PathBuf,
-        message: String,
-    },
-    /// A shader module of the graph does not validate.
-    Shader {
-        file: String,
-        message: String,
-    },
-    /// A resource exceeds the device's limits.
-    Limit {
-        what: String,
-        needed: u64,
-        limit: u64,
-    },
-    /// wgpu refused an object or a command.
-    Wgpu {
-        context: String,
-        message: String,
-    },
-    /// The graph asks for something this runtime cannot do yet; it is refused rather than
-    /// run another way.
-    Unsupported {
-        pass: String,
-        feature: String,
-    },
-    /// A pass wrote values outside what its output may hold (non-finite, or visibility
-    /// outside [0, 1]); they are never passed on.
-    Output {
-        pass: String,
-        message: String,
-    },
-    Param(String),
-    NotFound(String),
-}
-
-impl fmt::Display for RuntimeError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            RuntimeError::NoAdapter(m) => write!(f, "no GPU adapter: {m}"),
-            RuntimeError::Device(m) => write!(f, "cannot open the GPU device: {m}"),
-            RuntimeError::Graph(e) => write!(f, "{e}"),
-            RuntimeError::File { path, message } => write!(f, "{}: {message}", path.display()),
-            RuntimeError::Shader { file, message } => write!(f, "shader `{file}` does not validate:\n{message}"),
-            RuntimeError::Limit { what, needed, limit } => write!(f, "{what} needs {needed}, above the device's limit of {limit}"),
-            RuntimeError::Wgpu { context, message } => write!(f, "{context}: {message}"),
-            RuntimeError::Unsupported { pass, feature } => {
-                write!(f, "pass `{pass}` needs {feature}, which this runtime does not support yet")
-            }
-            RuntimeError::Output { pass, message } => write!(f, "pass `{pass}` wrote {message}"),
-            RuntimeError::Param(m) => write!(f, "{m}"),
-            RuntimeError::NotFound(m) => write!(f, "{m}"),
-        }
-    }
-}
-
-impl std::error::Error for RuntimeError {}
-
-impl From<graph::GraphError> for RuntimeError {
-    fn from(e: graph::GraphError) -> Self {
-        RuntimeError::Graph(e)
-    }
-}
-
-pub type Result<T> = std::result::Result<T, RuntimeError>;
 
 /// What to install when no adapter exists.
 pub const INSTALL_HINT: &str = "install the Vulkan loader and Mesa's lavapipe CPU driver (Debian/Ubuntu: `apt-get install -y libvulkan1 mesa-vulkan-drivers`), or a GPU driver with Vulkan support";
 
-/// An open device.
+/// The features the runtime asks for when it opens its own device ([`Gpu::new`]), where
+/// the adapter has them. A host's device ([`Gpu::from_host`]) has what the host asked for;
+/// [`crate::gpu::Requirements`] says which of these a graph needs.
+pub const WANTED_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
+    .union(wgpu::Features::FLOAT32_FILTERABLE)
+    .union(wgpu::Features::FLOAT32_BLENDABLE)
+    .union(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM)
+    // what the adapter allows beyond WebGPU's guarantees: 16-bit norm formats as render
+    // targets (Unorm16 channels written by raster passes)
+    .union(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+
+/// A device the runtime runs on: its own ([`Gpu::new`]) or a host renderer's
+/// ([`Gpu::from_host`]). A handle: cloning it is cheap, and every clone shares the device,
+/// the queue and the caches of shader modules and pipelines, so an [`crate::gpu::Executor`]
+/// owns one and a host can keep executors in its own structs.
+#[derive(Clone)]
 pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -95,7 +34,14 @@ pub struct Gpu {
     /// The 16-bit norm formats the device can render to (an adapter-specific format
     /// feature beyond `TEXTURE_FORMAT_16BIT_NORM`).
     pub renderable_norm16: Vec<wgpu::TextureFormat>,
-    uncaptured: Arc<Mutex<Vec<String>>>,
+    shared: Arc<Shared>,
+}
+
+/// What every clone of a [`Gpu`] shares.
+struct Shared {
+    /// Errors that escaped every error scope, collected by the handler [`Gpu::new`]
+    /// installs. `None` on a host's device: its own handler sees them, untouched.
+    uncaptured: Option<Mutex<Vec<String>>>,
     /// Pipelines by everything that determines them ([`PipelineKey`]): lavapipe compiles
     /// each pipeline through LLVM, so executors of one technique on several scenes share them.
     pipelines: Mutex<HashMap<PipelineKey, Arc<StepPipeline>>>,
@@ -104,7 +50,9 @@ pub struct Gpu {
 }
 
 impl Gpu {
-    /// Open the first Vulkan adapter, headless.
+    /// Open the first Vulkan adapter, headless, with the [`WANTED_FEATURES`] it has and
+    /// its own limits. Errors that escape the runtime's error scopes are collected, not
+    /// passed to wgpu's default handler (which panics).
     pub fn new() -> Result<Gpu> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends: wgpu::Backends::VULKAN,
@@ -117,29 +65,35 @@ impl Gpu {
             apply_limit_buckets: false,
         }))
         .map_err(|e| RuntimeError::NoAdapter(format!("{e}; {INSTALL_HINT}")))?;
-        let wanted = wgpu::Features::TIMESTAMP_QUERY
-            | wgpu::Features::FLOAT32_FILTERABLE
-            | wgpu::Features::FLOAT32_BLENDABLE
-            | wgpu::Features::TEXTURE_FORMAT_16BIT_NORM
-            // what the adapter allows beyond WebGPU's guarantees: 16-bit norm formats as
-            // render targets (Unorm16 channels written by raster passes)
-            | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
-        let features = adapter.features() & wanted;
-        let limits = adapter.limits();
+        let features = adapter.features() & WANTED_FEATURES;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("sshc"),
             required_features: features,
-            required_limits: limits.clone(),
+            required_limits: adapter.limits(),
             ..Default::default()
         }))
         .map_err(|e| RuntimeError::Device(e.to_string()))?;
-        let uncaptured = Arc::new(Mutex::new(Vec::new()));
-        let sink = uncaptured.clone();
-        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-            if let Ok(mut v) = sink.lock() {
+        let gpu = Gpu::wrap(&adapter, device, queue, Some(Mutex::new(Vec::new())));
+        let shared = gpu.shared.clone();
+        gpu.device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Some(Ok(mut v)) = shared.uncaptured.as_ref().map(|m| m.lock()) {
                 v.push(e.to_string());
             }
         }));
+        Ok(gpu)
+    }
+
+    /// Run on a host renderer's device. The features and limits are the device's own (what
+    /// the host asked for); the adapter answers which formats are renderable. The host's
+    /// uncaptured-error handler stays as it is: every object the runtime creates is
+    /// created inside error scopes, and their errors come back as values. A graph the
+    /// device cannot run is refused when it is loaded ([`crate::gpu::Requirements`]).
+    pub fn from_host(adapter: &wgpu::Adapter, device: wgpu::Device, queue: wgpu::Queue) -> Gpu {
+        Gpu::wrap(adapter, device, queue, None)
+    }
+
+    fn wrap(adapter: &wgpu::Adapter, device: wgpu::Device, queue: wgpu::Queue, uncaptured: Option<Mutex<Vec<String>>>) -> Gpu {
+        let features = device.features();
         let renderable_norm16 = if features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM) {
             [
                 wgpu::TextureFormat::R16Unorm,
@@ -158,23 +112,30 @@ impl Gpu {
         } else {
             vec![]
         };
-        Ok(Gpu {
+        Gpu {
+            limits: device.limits(),
             device,
             queue,
             info: adapter.get_info(),
             features,
-            limits,
             renderable_norm16,
-            uncaptured,
-            pipelines: Mutex::new(HashMap::new()),
-            modules: Mutex::new(HashMap::new()),
-        })
+            shared: Arc::new(Shared {
+                uncaptured,
+                pipelines: Mutex::new(HashMap::new()),
+                modules: Mutex::new(HashMap::new()),
+            }),
+        }
+    }
+
+    /// Whether this is a host's device ([`Gpu::from_host`]).
+    pub fn is_host_device(&self) -> bool {
+        self.shared.uncaptured.is_none()
     }
 
     /// Number of pipelines built on this device so far (each is built once per distinct
     /// [`PipelineKey`]: shader, entry points, formats, bindings, depth and blend state).
     pub fn cached_pipelines(&self) -> usize {
-        self.pipelines.lock().map(|c| c.len()).unwrap_or(0)
+        self.shared.pipelines.lock().map(|c| c.len()).unwrap_or(0)
     }
 
     /// "name (backend, driver)" for reports.
@@ -202,10 +163,10 @@ impl Gpu {
     }
 
     fn take_uncaptured(&self, context: &str) -> Result<()> {
-        let mut v = self
-            .uncaptured
-            .lock()
-            .map_err(|_| RuntimeError::Device("error sink poisoned".into()))?;
+        let Some(sink) = &self.shared.uncaptured else {
+            return Ok(());
+        };
+        let mut v = sink.lock().map_err(|_| RuntimeError::Device("error sink poisoned".into()))?;
         if v.is_empty() {
             Ok(())
         } else {
@@ -220,7 +181,7 @@ impl Gpu {
 
     /// The shader module of a (validated) WGSL source, created once per device.
     pub(crate) fn module(&self, label: &str, source: &Arc<str>) -> Result<wgpu::ShaderModule> {
-        if let Some(m) = self.modules.lock().ok().and_then(|c| c.get(source).cloned()) {
+        if let Some(m) = self.shared.modules.lock().ok().and_then(|c| c.get(source).cloned()) {
             return Ok(m);
         }
         let m = self.scoped(&format!("shader `{label}`"), || {
@@ -229,7 +190,7 @@ impl Gpu {
                 source: wgpu::ShaderSource::Wgsl(source.as_ref().into()),
             })
         })?;
-        if let Ok(mut c) = self.modules.lock() {
+        if let Ok(mut c) = self.shared.modules.lock() {
             c.insert(source.clone(), m.clone());
         }
         Ok(m)
@@ -237,12 +198,12 @@ impl Gpu {
 
     /// The pipeline of `key`, built (from the key alone) once per device.
     pub(crate) fn pipeline(&self, key: &PipelineKey, label: &str) -> Result<Arc<StepPipeline>> {
-        if let Some(p) = self.pipelines.lock().ok().and_then(|c| c.get(key).cloned()) {
+        if let Some(p) = self.shared.pipelines.lock().ok().and_then(|c| c.get(key).cloned()) {
             return Ok(p);
         }
         let module = self.module(label, &key.source)?;
-        let p = Arc::new(StepPipeline::build(self, key, &module, label)?);
-        if let Ok(mut c) = self.pipelines.lock() {
+        let p = Arc::new(self.scoped(label, || StepPipeline::build(&self.device, key, &module, label))?);
+        if let Ok(mut c) = self.shared.pipelines.lock() {
             c.insert(key.clone(), p.clone());
         }
         Ok(p)

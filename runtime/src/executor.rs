@@ -2,12 +2,15 @@
 //! binds a scene, runs frames with GPU timestamps per pass, and reads any texture back.
 
 use crate::device::{Gpu, Result, RuntimeError};
-use crate::frame::SceneInputs;
+use crate::frame::{Camera, LightInputs, SceneInputs};
 use crate::graph::{self, Format, PassGraph, TextureDecl};
 use crate::image::{Image, read_back, read_table};
 use crate::lights::{Combine, MAX_LIGHTS};
+use crate::requirements::Requirements;
 use crate::resources::{Resources, f32_bytes, mip_count};
-use crate::steps::{self, Group0, PassNode, Stamps};
+use crate::steps::{self, Group0, PassNode};
+use crate::timing::{FrameTimes, Timestamps};
+use crate::update::FrameWriter;
 use crate::validate::validate_wgsl;
 use std::collections::HashMap;
 use std::path::Path;
@@ -77,15 +80,6 @@ pub fn read_capped(path: &Path, cap: u64) -> Result<String> {
     String::from_utf8(bytes).map_err(|e| err(format!("is not UTF-8: {e}")))
 }
 
-/// GPU time of each pass of one frame, in milliseconds (None without timestamp queries).
-#[derive(Clone, Debug, PartialEq)]
-pub struct FrameTimes {
-    /// Each pass's time, summed over the lights when several are bound.
-    pub passes: Vec<(String, Option<f64>)>,
-    /// Each light's time: the sum of its passes (one entry when one light is bound).
-    pub lights: Vec<Option<f64>>,
-}
-
 /// The camera outputs of the Shade pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CameraOutput {
@@ -93,13 +87,6 @@ pub enum CameraOutput {
     Color = 1,
     Position = 2,
     Normal = 3,
-}
-
-/// Two timestamps per pass: the query set, the buffer it resolves into, and a readable copy.
-struct Timestamps {
-    set: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    read: wgpu::Buffer,
 }
 
 /// What a frame generated into one buffer ([`Executor::generated`]).
@@ -113,9 +100,18 @@ pub struct Generated {
     pub instances: u32,
 }
 
-/// A loaded pass graph, ready to run.
-pub struct Executor<'g> {
-    gpu: &'g Gpu,
+/// A loaded pass graph, ready to run. It owns its [`Gpu`] handle (a clone: the device,
+/// queue and caches are shared), so a host can keep it in its own structs.
+///
+/// Two paths, kept apart:
+/// - **allocation**: [`Executor::bind_scene`] and [`Executor::bind_lights`] create every
+///   texture, buffer and bind group at the scene's sizes, and bump [`Executor::generation`];
+/// - **per frame**: [`Executor::set_camera`], [`Executor::set_light`] and
+///   [`Executor::set_param`] write uniforms only, and [`Executor::encode`] records the
+///   passes into the host's encoder. Neither creates a wgpu object (the writer holds the
+///   queue and never the device: `update.rs`).
+pub struct Executor {
+    gpu: Gpu,
     pub graph: PassGraph,
     /// One node per step, per pass, in execution order.
     passes: Vec<PassNode>,
@@ -124,6 +120,16 @@ pub struct Executor<'g> {
     sampler: wgpu::Sampler,
     /// The resources of each bound light (one for `bind_scene`; see [`Executor::bind_lights`]).
     bound: Vec<Resources>,
+    /// What each bound light's uniforms were last written from, and the camera.
+    lights_state: Vec<LightInputs>,
+    camera: Option<Camera>,
+    /// The bound casters' bounding box (world space): the per-frame re-check of a
+    /// specialised graph's depth floor ([`Executor::set_light`]).
+    caster_bounds: Option<[[f32; 3]; 2]>,
+    /// Bumped by every binding (every reallocation).
+    generation: u64,
+    /// Frames recorded since the last binding.
+    frames: u64,
     /// Several lights: the step that combines their shaded images.
     combine: Option<Combine>,
     timestamps: Option<Timestamps>,
@@ -134,9 +140,9 @@ pub struct Executor<'g> {
     pub max_bytes: u64,
 }
 
-impl<'g> Executor<'g> {
+impl Executor {
     /// Load `T.graph.ron` and the shader files it names, from the graph's own folder.
-    pub fn load(gpu: &'g Gpu, graph_path: &Path) -> Result<Executor<'g>> {
+    pub fn load(gpu: &Gpu, graph_path: &Path) -> Result<Executor> {
         let io = |path: &Path, e: std::io::Error| RuntimeError::File {
             path: path.to_path_buf(),
             message: e.to_string(),
@@ -175,7 +181,7 @@ impl<'g> Executor<'g> {
     }
 
     /// Build from a graph and its shader sources (as the compiler's API returns them).
-    pub fn new(gpu: &'g Gpu, graph: PassGraph, shaders: Vec<(String, String)>) -> Result<Executor<'g>> {
+    pub fn new(gpu: &Gpu, graph: PassGraph, shaders: Vec<(String, String)>) -> Result<Executor> {
         // The graph is untrusted: check references, refuse what this runtime cannot honour,
         // re-validate every module with naga, and check declared sizes against the device
         // before creating anything.
@@ -195,6 +201,8 @@ impl<'g> Executor<'g> {
             });
         }
         steps::unsupported(&graph)?;
+        // every feature and limit the graph needs, all missing ones listed at once
+        Requirements::of(&graph).check(gpu, &graph.technique)?;
         let mut sources: HashMap<String, Arc<str>> = HashMap::new();
         for p in &graph.passes {
             let src = shaders
@@ -213,41 +221,10 @@ impl<'g> Executor<'g> {
             }
         }
         for t in &graph.textures {
-            let limit = gpu.limits.max_texture_array_layers;
-            if t.array_layers() > limit {
-                return Err(RuntimeError::Limit {
-                    what: format!("texture `{}` (array layers)", t.name),
-                    needed: t.array_layers() as u64,
-                    limit: limit as u64,
-                });
-            }
             if t.format == Format::SummedAreaU32 && t.mips {
                 return Err(RuntimeError::NotFound(format!(
                     "texture `{}`: a summed-area table has no mip levels",
                     t.name
-                )));
-            }
-            if matches!(t.format, Format::R16Unorm | Format::Rg16Unorm | Format::Rgba16Unorm)
-                && !gpu.features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM)
-            {
-                return Err(RuntimeError::Device(format!(
-                    "texture `{}` is {:?}, which this device cannot store (no 16-bit norm formats)",
-                    t.name, t.format
-                )));
-            }
-            // Rendering to a 16-bit norm format is an adapter-specific feature.
-            let rendered = graph
-                .passes
-                .iter()
-                .flat_map(|p| &p.steps)
-                .any(|s| s.compute.is_none() && s.writes.iter().any(|w| w.texture == t.name));
-            if let (true, Some(f)) = (rendered, crate::resources::wgpu_format(t.format))
-                && matches!(t.format, Format::R16Unorm | Format::Rg16Unorm | Format::Rgba16Unorm)
-                && !gpu.renderable_norm16.contains(&f)
-            {
-                return Err(RuntimeError::Device(format!(
-                    "texture `{}` is {:?}, which this device cannot render to (a raster pass writes it); use F16 or Unorm8",
-                    t.name, t.format
                 )));
             }
         }
@@ -290,15 +267,20 @@ impl<'g> Executor<'g> {
                 mapped_at_creation: false,
             })
         });
-        let timestamps = timestamps(gpu, graph.passes.len());
+        let timestamps = Timestamps::new(gpu, passes.iter().map(|p| p.name.clone()).collect(), 1);
         Ok(Executor {
-            gpu,
+            gpu: gpu.clone(),
             graph,
             passes,
             params,
             params_buf,
             sampler,
             bound: Vec::new(),
+            lights_state: Vec::new(),
+            camera: None,
+            caster_bounds: None,
+            generation: 0,
+            frames: 0,
             combine: None,
             timestamps,
             depth_override: None,
@@ -344,8 +326,9 @@ impl<'g> Executor<'g> {
     /// and gathers their visibilities, one channel per light ([`crate::lights`]). At most
     /// [`MAX_LIGHTS`]; every light's camera must have the same size.
     pub fn bind_lights(&mut self, lights: &[SceneInputs]) -> Result<()> {
-        let gpu = self.gpu;
+        let gpu = self.gpu.clone();
         self.bound = Vec::new();
+        self.lights_state = Vec::new();
         self.combine = None;
         if lights.is_empty() || lights.len() > MAX_LIGHTS {
             return Err(RuntimeError::Param(format!(
@@ -388,18 +371,97 @@ impl<'g> Executor<'g> {
                     limit: self.max_bytes,
                 });
             }
-            self.combine = Some(Combine::new(gpu, camera, lights.len())?);
+            self.combine = Some(Combine::new(&gpu, camera, lights.len())?);
         }
-        if self.timestamps.is_some() {
-            self.timestamps = timestamps(gpu, steps);
-        }
+        self.timestamps = Timestamps::new(&gpu, self.passes.iter().map(|p| p.name.clone()).collect(), lights.len());
         self.bound = bound;
+        self.lights_state = lights.iter().map(SceneInputs::light_inputs).collect();
+        self.camera = Some(lights[0].camera());
+        self.caster_bounds = caster_bounds(&lights[0]);
+        self.generation += 1;
+        self.frames = 0;
+        Ok(())
+    }
+
+    /// Bumped by every binding: every time the textures, buffers and bind groups were
+    /// created again, so that a host knows its views of them ([`Executor::visibility`])
+    /// changed. The per-frame calls never bump it.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Set the camera of every bound light: writes their `Frame` uniforms, nothing else.
+    /// Its size is the bound one (a new size is a new binding).
+    pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
+        camera.check()?;
+        if self.bound.is_empty() {
+            return Err(RuntimeError::NotFound("no scene is bound: call bind_scene first".into()));
+        }
+        let writer = FrameWriter::new(&self.gpu.queue);
+        for (res, light) in self.bound.iter().zip(&self.lights_state) {
+            writer.light(res, camera, light);
+        }
+        self.camera = Some(*camera);
+        Ok(())
+    }
+
+    /// Set bound light `l`: writes its `Frame` and `LightSamples` uniforms, nothing else.
+    /// Its number of samples is the bound one (a new number is a new binding). A graph
+    /// specialised for a scene is re-checked here from the casters' bounding box: its
+    /// corners' least depth is a lower bound of the triangles', so a light the bounds
+    /// pass cannot break the specialisation; one they fail is refused (binding again runs
+    /// the exact check on the triangles).
+    pub fn set_light(&mut self, l: usize, light: &LightInputs) -> Result<()> {
+        light.check(l)?;
+        let (Some(res), Some(camera)) = (self.bound.get(l), self.camera) else {
+            return Err(RuntimeError::NotFound(format!(
+                "light {l} is not bound ({} light(s) are)",
+                self.bound.len()
+            )));
+        };
+        if light.samples.len() != res.samples as usize {
+            return Err(RuntimeError::Param(format!(
+                "light {l} has {} sample view(s), the bound one {}: a new number of samples is a new binding (`bind_lights`)",
+                light.samples.len(),
+                res.samples
+            )));
+        }
+        if let Some(facts) = &self.graph.specialised {
+            if light.kind != Some(facts.light) {
+                return Err(RuntimeError::Param(format!(
+                    "technique `{}` was specialised for the {} light of scene {}, but light {l} is {}",
+                    self.graph.technique,
+                    facts.light.name(),
+                    facts.scene,
+                    light.kind.map_or("not given (`LightInputs::kind`)", |k| k.name())
+                )));
+            }
+            if let (Some(floor), Some(bounds)) = (facts.depth_floor, self.caster_bounds) {
+                let corners: Vec<f32> = (0..8)
+                    .flat_map(|i| {
+                        let c = |axis: usize| bounds[(i >> axis) & 1][axis];
+                        [c(0), c(1), c(2), 0.0, 0.0, 0.0]
+                    })
+                    .collect();
+                if let Some(here) = graph::caster_depth_floor(&corners, None, &light.view, light.near, light.far)
+                    && here < floor
+                {
+                    return Err(RuntimeError::Param(format!(
+                        "technique `{}` was specialised for scene {}, whose casters lie at normalised depth {floor} or more in the light's view; under light {l} as set, the casters' bounding box reaches {here}, so the specialisation may not hold; bind the scene again (`bind_scene` checks the triangles themselves) or compile without `--scene`",
+                        self.graph.technique, facts.scene,
+                    )));
+                }
+            }
+        }
+        FrameWriter::new(&self.gpu.queue).light(res, &camera, light);
+        self.lights_state[l] = light.clone();
         Ok(())
     }
 
     /// Create light `l`'s resources and bind every step node to them.
     fn bind_light(&mut self, s: &SceneInputs, l: usize, max_bytes: u64) -> Result<Resources> {
-        let gpu = self.gpu;
+        let gpu = self.gpu.clone();
+        let gpu = &gpu;
         // a graph specialised for a scene's light kind folded inputs another kind needs
         if let Some(facts) = &self.graph.specialised
             && s.light != Some(facts.light)
@@ -532,120 +594,127 @@ impl<'g> Executor<'g> {
         })
     }
 
-    /// Run every pass once, for each bound light, then combine the lights. Returns the GPU
-    /// time of each pass (summed over the lights) and of each light when timestamps are
-    /// available.
-    pub fn run_frame(&mut self) -> Result<FrameTimes> {
-        let gpu = self.gpu;
-        if let Some(buf) = &self.params_buf {
-            gpu.queue.write_buffer(buf, 0, &self.params);
-        }
+    /// Record one frame into the host's `encoder`: every pass once for each bound light,
+    /// then the lights' combination. The host submits it; the visibility
+    /// ([`Executor::visibility`]) holds the frame's result once the submission completes.
+    ///
+    /// One recording per submission: the uniforms written before this call
+    /// ([`Executor::set_camera`], [`Executor::set_light`], the params and the frame
+    /// counter) are applied by wgpu at the next submission, before its command buffers,
+    /// so two recordings in one submission would both see the last state written.
+    ///
+    /// Nothing is created and nothing waits: the GPU times go into a ring of query sets
+    /// and come back a frame or more later ([`Executor::frame_times`]). Validation errors
+    /// of the recording surface where the host finishes its encoder.
+    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         self.bound()?;
-        let at = graph::FRAME_FIELDS
-            .iter()
-            .position(|f| f.name == "counters")
-            .map(|i| graph::frame_offset(i) as u64)
-            .ok_or_else(|| RuntimeError::NotFound("no `counters` field in the Frame uniform".into()))?;
+        if let Some(t) = &mut self.timestamps {
+            t.collect(&self.gpu)?;
+        }
+        let writer = FrameWriter::new(&self.gpu.queue);
+        if let Some(buf) = &self.params_buf {
+            writer.params(buf, &self.params);
+        }
+        let frame = self.frames;
         for res in &self.bound {
-            // the `frame` input: frames run since the scene was bound, in every `Frame` buffer
-            let counters = [res.frames_run.get() as f32, 0.0, 0.0, 0.0];
-            for buf in std::iter::once(&res.frame).chain(&res.sample_frames) {
-                gpu.queue.write_buffer(buf, at, &crate::resources::f32_bytes(&counters));
+            writer.counters(res, frame as u32);
+        }
+        let slot = self.timestamps.as_ref().and_then(|t| t.begin(frame));
+        for (l, res) in self.bound.iter().enumerate() {
+            for (pi, (pass, decl)) in self.passes.iter().zip(&self.graph.passes).enumerate() {
+                if pass.kind == graph::PassKind::Depth
+                    && let Some(maps) = &self.depth_override
+                {
+                    let views = if decl.views == graph::Views::PerLightSample {
+                        self.graph.samples
+                    } else {
+                        1
+                    };
+                    if maps.len() != 1 && maps.len() != views as usize {
+                        return Err(RuntimeError::Param(format!(
+                            "depth override has {} maps, the Depth pass `{}` {views} view(s)",
+                            maps.len(),
+                            decl.name
+                        )));
+                    }
+                    for view in 0..views {
+                        let depth = &maps[(view as usize).min(maps.len() - 1)];
+                        self.write_depth_override(res, decl, depth, view)?;
+                    }
+                    continue;
+                }
+                // The pass's first render or compute pass writes its start, the last its
+                // end. A per-sample pass records all its steps for one view, then the next.
+                let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
+                let recording: Vec<_> = (0..views)
+                    .flat_map(|v| {
+                        pass.steps
+                            .iter()
+                            .filter(move |n| n.passes() > 0 && v < n.views())
+                            .map(move |n| (n, v))
+                    })
+                    .collect();
+                let last = recording.len().saturating_sub(1);
+                for (i, (node, view)) in recording.into_iter().enumerate() {
+                    let stamps = match (&self.timestamps, slot) {
+                        (Some(t), Some(slot)) => Some(t.stamps(slot, l, pi, i == 0, i == last)),
+                        _ => None,
+                    };
+                    node.record(encoder, res, stamps, l, view)?;
+                }
             }
+        }
+        if let Some(c) = &self.combine {
+            c.record(encoder, &self.bound);
+        }
+        if let (Some(t), Some(slot)) = (&mut self.timestamps, slot) {
+            t.finish(encoder, slot, frame);
+        }
+        for res in &self.bound {
             res.frames_run.set(res.frames_run.get() + 1);
         }
+        self.frames += 1;
+        Ok(())
+    }
+
+    /// The newest frame whose GPU times have come back (its number, counted from the
+    /// binding, and its times), without waiting: `None` before any has, or without
+    /// timestamp queries.
+    pub fn frame_times(&mut self) -> Result<Option<(u64, FrameTimes)>> {
+        let Some(t) = &mut self.timestamps else { return Ok(None) };
+        t.collect(&self.gpu)?;
+        Ok(t.latest().cloned())
+    }
+
+    /// Frames recorded since the last binding.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
+    /// Run every pass once, for each bound light, then combine the lights: [`Executor::encode`]
+    /// into an encoder of its own, submitted, then wait for the frame's GPU times (the
+    /// lab's path; a host records into its own frame instead). Returns the GPU time of
+    /// each pass (summed over the lights) and of each light when timestamps are available.
+    pub fn run_frame(&mut self) -> Result<FrameTimes> {
+        let gpu = self.gpu.clone();
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
-        let n = self.graph.passes.len();
-        gpu.scoped("recording the frame", || -> Result<()> {
-            for (l, res) in self.bound.iter().enumerate() {
-                for (pi, (pass, decl)) in self.passes.iter().zip(&self.graph.passes).enumerate() {
-                    if pass.kind == graph::PassKind::Depth
-                        && let Some(maps) = &self.depth_override
-                    {
-                        let views = if decl.views == graph::Views::PerLightSample {
-                            self.graph.samples
-                        } else {
-                            1
-                        };
-                        if maps.len() != 1 && maps.len() != views as usize {
-                            return Err(RuntimeError::Param(format!(
-                                "depth override has {} maps, the Depth pass `{}` {views} view(s)",
-                                maps.len(),
-                                decl.name
-                            )));
-                        }
-                        for view in 0..views {
-                            let depth = &maps[(view as usize).min(maps.len() - 1)];
-                            self.write_depth_override(res, decl, depth, view)?;
-                        }
-                        continue;
-                    }
-                    // The pass's first render or compute pass writes its start, the last its
-                    // end. A per-sample pass records all its steps for one view, then the next.
-                    let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
-                    let recording: Vec<_> = (0..views)
-                        .flat_map(|v| {
-                            pass.steps
-                                .iter()
-                                .filter(move |n| n.passes() > 0 && v < n.views())
-                                .map(move |n| (n, v))
-                        })
-                        .collect();
-                    let last = recording.len().saturating_sub(1);
-                    let q = 2 * (l * n + pi) as u32;
-                    for (i, (node, view)) in recording.into_iter().enumerate() {
-                        let stamps = self.timestamps.as_ref().map(|t| Stamps {
-                            set: &t.set,
-                            begin: (i == 0).then_some(q),
-                            end: (i == last).then_some(q + 1),
-                        });
-                        node.record(&mut encoder, res, stamps, l, view)?;
-                    }
-                }
-            }
-            if let Some(c) = &self.combine {
-                c.record(&mut encoder, &self.bound);
-            }
-            Ok(())
-        })??;
-        let queries = (n * self.bound.len() * 2) as u32;
-        if let Some(t) = &self.timestamps {
-            encoder.resolve_query_set(&t.set, 0..queries, &t.resolve, 0);
-            encoder.copy_buffer_to_buffer(&t.resolve, 0, &t.read, 0, queries as u64 * 8);
-        }
+        gpu.scoped("recording the frame", || self.encode(&mut encoder))??;
+        let frame = self.frames - 1;
         gpu.scoped("submitting the frame", || gpu.queue.submit([encoder.finish()]))?;
-        // each light's time of each pass
-        let per_light: Vec<Vec<Option<f64>>> = match &self.timestamps {
-            Some(t) => {
-                let raw = gpu.map_read(&t.read)?;
-                let ticks: Vec<u64> = raw
-                    .chunks_exact(8)
-                    .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
-                    .collect();
-                let period = gpu.queue.get_timestamp_period() as f64;
-                (0..self.bound.len())
-                    .map(|l| {
-                        (0..n)
-                            .map(|i| {
-                                let (a, z) = (ticks[2 * (l * n + i)], ticks[2 * (l * n + i) + 1]);
-                                (z >= a && a > 0).then(|| (z - a) as f64 * period * 1e-6)
-                            })
-                            .collect()
-                    })
-                    .collect()
-            }
-            None => vec![vec![None; n]; self.bound.len()],
+        let names: Vec<String> = self.passes.iter().map(|p| p.name.clone()).collect();
+        let Some(t) = &mut self.timestamps else {
+            return Ok(FrameTimes::untimed(&names, self.bound.len()));
         };
-        Ok(FrameTimes {
-            passes: self
-                .passes
-                .iter()
-                .enumerate()
-                .map(|(i, p)| (p.name.clone(), per_light.iter().map(|t| t[i]).sum()))
-                .collect(),
-            lights: per_light.iter().map(|t| t.iter().copied().sum()).collect(),
+        // map this frame's slot, wait for the device, and take its times
+        t.collect(&gpu)?;
+        gpu.wait()?;
+        t.collect(&gpu)?;
+        Ok(match t.latest() {
+            Some((f, times)) if *f == frame => times.clone(),
+            // the slot was still pending (frames encoded by the host without waiting)
+            _ => FrameTimes::untimed(&names, self.bound.len()),
         })
     }
 
@@ -672,9 +741,9 @@ impl<'g> Executor<'g> {
         }
         let size = (b.shadow_size >> level).max(1);
         if decl.format == Format::SummedAreaU32 {
-            return read_table(self.gpu, b.table(name)?, layer, size);
+            return read_table(&self.gpu, b.table(name)?, layer, size);
         }
-        read_back(self.gpu, b.texture(name)?, layer, level, size, size, decl.format)
+        read_back(&self.gpu, b.texture(name)?, layer, level, size, size, decl.format)
     }
 
     /// Read a camera output of the Shade pass. The visibility (and the colour, computed from
@@ -689,7 +758,7 @@ impl<'g> Executor<'g> {
                 self.read_light_camera(l, CameraOutput::Visibility)?;
             }
             let (w, h) = self.bound()?.camera_size;
-            return read_back(self.gpu, &c.color, 0, 0, w, h, Format::Rgba8Unorm);
+            return read_back(&self.gpu, &c.color, 0, 0, w, h, Format::Rgba8Unorm);
         }
         self.read_light_camera(0, which)
     }
@@ -713,7 +782,7 @@ impl<'g> Executor<'g> {
             CameraOutput::Position => Format::Rgba32Float,
             CameraOutput::Normal => Format::Rgba16Float,
         };
-        let img = read_back(self.gpu, &b.camera[which as usize], 0, 0, w, h, format)?;
+        let img = read_back(&self.gpu, &b.camera[which as usize], 0, 0, w, h, format)?;
         if which == CameraOutput::Visibility {
             check_visibility(&img.channel(0), w, self.shade_name())?;
         }
@@ -728,7 +797,7 @@ impl<'g> Executor<'g> {
             return self.read_light_camera(0, CameraOutput::Visibility);
         };
         let (w, h) = self.bound()?.camera_size;
-        let img = read_back(self.gpu, &c.visibility, 0, 0, w, h, Format::Rgba32Float)?;
+        let img = read_back(&self.gpu, &c.visibility, 0, 0, w, h, Format::Rgba32Float)?;
         for l in 0..self.bound.len() {
             check_visibility(&img.channel(l), w, self.shade_name())?;
         }
@@ -783,7 +852,7 @@ impl<'g> Executor<'g> {
             .graph
             .buffer(name)
             .ok_or_else(|| RuntimeError::NotFound(format!("no generated buffer `{name}`")))?;
-        let gpu = self.gpu;
+        let gpu = &self.gpu;
         let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("draw arguments read-back"),
             size: graph::DRAW_ARGS_BYTES as u64,
@@ -814,33 +883,37 @@ impl<'g> Executor<'g> {
     }
 
     pub fn gpu(&self) -> &Gpu {
-        self.gpu
+        &self.gpu
+    }
+
+    /// The visibility as a texture the host can bind and sample, valid until the next
+    /// binding ([`Executor::generation`]): with one light, light 0's `R32Float` visibility
+    /// (1 where the camera sees no surface); with several, an `Rgba32Float` texture with
+    /// light `l`'s visibility in channel `l`. Both are camera-sized, with `TEXTURE_BINDING`
+    /// usage; 32-bit floats filter only with `FLOAT32_FILTERABLE`, so sample them with
+    /// `textureLoad` or a non-filtering sampler.
+    ///
+    /// The check that [`Executor::read_camera`] applies (every value finite and within
+    /// [0, 1]) cannot run on a texture the host samples directly;
+    /// [`Executor::read_visibilities`] runs it, as a debugging call (it waits for the GPU).
+    pub fn visibility(&self) -> Result<&wgpu::Texture> {
+        let b = self.bound()?;
+        Ok(match &self.combine {
+            Some(c) => &c.visibility,
+            None => &b.camera[CameraOutput::Visibility as usize],
+        })
     }
 }
 
-/// One query set for the passes' start and end times, `steps` passes (passes times lights).
-fn timestamps(gpu: &Gpu, steps: usize) -> Option<Timestamps> {
-    gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
-        let n = (steps * 2) as u32;
-        Timestamps {
-            set: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("pass times"),
-                ty: wgpu::QueryType::Timestamp,
-                count: n,
-            }),
-            resolve: gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size: n as u64 * 8,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-            read: gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps read"),
-                size: n as u64 * 8,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
-        }
+/// The bounding box of the scene's casting vertices (world space); `None` without one.
+fn caster_bounds(s: &SceneInputs) -> Option<[[f32; 3]; 2]> {
+    let n = s.casting_vertices.map_or(s.vertices.len() / 6, |c| (c as usize).min(s.vertices.len() / 6));
+    s.vertices.chunks_exact(6).take(n).fold(None, |b, v| {
+        let [lo, hi] = b.unwrap_or([[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]]);
+        Some([
+            [lo[0].min(v[0]), lo[1].min(v[1]), lo[2].min(v[2])],
+            [hi[0].max(v[0]), hi[1].max(v[1]), hi[2].max(v[2])],
+        ])
     })
 }
 

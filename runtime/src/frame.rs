@@ -2,6 +2,7 @@
 //! from it. The uniform's layout has one definition, [`crate::graph::FrameUniform`] (with
 //! [`crate::graph::FRAME_WGSL`] and [`crate::graph::FRAME_FIELDS`] derived from it).
 
+use crate::error::{Result, RuntimeError};
 use crate::graph::{FrameUniform, SampleViewUniform};
 
 /// One light sample's view, for the passes that render one view per light sample
@@ -66,46 +67,117 @@ pub struct SceneInputs {
     pub light: Option<crate::graph::LightKind>,
 }
 
-impl SceneInputs {
-    /// The `Frame` uniform of this scene. Every render target of the graph has the
-    /// shadow map's size, so `target_size` is the shadow map's.
-    pub fn frame(&self) -> FrameUniform {
-        let n = self.shadow_size as f32;
+/// The camera: what a host may change every frame without reallocation
+/// ([`crate::gpu::Executor::set_camera`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Column-major world-to-clip matrix (WebGPU clip space: depth in [0, 1]).
+    pub view_proj: [f32; 16],
+    /// World space.
+    pub position: [f32; 3],
+}
+
+/// One light as the passes see it: what a host may change every frame without
+/// reallocation ([`crate::gpu::Executor::set_light`]). The number of light samples is a
+/// size: changing it reallocates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightInputs {
+    /// Column-major world-to-view and world-to-clip matrices of the light's view.
+    pub view: [f32; 16],
+    pub view_proj: [f32; 16],
+    /// xyz position (w = 1) or direction towards the light (w = 0).
+    pub position: [f32; 4],
+    pub near: f32,
+    pub far: f32,
+    /// Radius or half-extent, world units.
+    pub size: f32,
+    /// Half-extents along the shadow map's u and v axes, world units.
+    pub half_extents: [f32; 2],
+    /// Full angular diameter, radians.
+    pub angle: f32,
+    /// Element [1][1] of the projection (1 / tan(fov / 2), or 2 / height orthographic).
+    pub proj_y: f32,
+    pub orthographic: bool,
+    pub samples: Vec<SampleView>,
+    pub samples_closed: bool,
+    pub kind: Option<crate::graph::LightKind>,
+}
+
+fn finite(values: &[f32]) -> bool {
+    values.iter().all(|v| v.is_finite())
+}
+
+impl Camera {
+    /// Refuse a non-finite matrix or position.
+    pub fn check(&self) -> Result<()> {
+        if finite(&self.view_proj) && finite(&self.position) {
+            Ok(())
+        } else {
+            Err(RuntimeError::Param(format!(
+                "the camera's matrix or position is not finite: {:?} at {:?}",
+                self.view_proj, self.position
+            )))
+        }
+    }
+}
+
+impl LightInputs {
+    /// Refuse non-finite matrices, positions or sizes, and an empty depth range.
+    pub fn check(&self, light: usize) -> Result<()> {
+        let mut values = vec![self.near, self.far, self.size, self.angle, self.proj_y];
+        values.extend(self.view.iter().chain(&self.view_proj).chain(&self.position).chain(&self.half_extents));
+        for s in &self.samples {
+            values.extend(s.light_view.iter().chain(&s.light_view_proj).chain(&s.position));
+            values.extend([s.near, s.far, s.light_proj_y]);
+        }
+        if !finite(&values) {
+            return Err(RuntimeError::Param(format!(
+                "light {light}: a matrix, position or size is not finite"
+            )));
+        }
+        if self.far <= self.near {
+            return Err(RuntimeError::Param(format!(
+                "light {light}: its depth range [{}, {}] is empty",
+                self.near, self.far
+            )));
+        }
+        Ok(())
+    }
+
+    /// The `Frame` uniform of this light seen by `camera`. Every render target of the graph
+    /// has the shadow map's size, so `target_size` is the shadow map's.
+    pub fn frame(&self, camera: &Camera, shadow_size: u32) -> FrameUniform {
+        let n = shadow_size as f32;
         let range = (self.far - self.near).max(f32::MIN_POSITIVE);
-        let p = self.camera_position;
-        let texel = 2.0 / (self.light_proj_y.max(f32::MIN_POSITIVE) * n);
+        let p = camera.position;
+        let texel = 2.0 / (self.proj_y.max(f32::MIN_POSITIVE) * n);
         FrameUniform {
-            light_view_proj: self.light_view_proj,
-            light_view: self.light_view,
-            camera_view_proj: self.camera_view_proj,
-            light_position: self.light_position,
+            light_view_proj: self.view_proj,
+            light_view: self.view,
+            camera_view_proj: camera.view_proj,
+            light_position: self.position,
             camera_position: [p[0], p[1], p[2], 1.0],
             depth_range: [self.near, self.far, 1.0 / range, 0.0],
             shadow_size: [n, n, 1.0 / n, 1.0 / n],
-            light_size: [
-                self.light_size,
-                self.light_angle,
-                self.light_half_extents[0],
-                self.light_half_extents[1],
-            ],
+            light_size: [self.size, self.angle, self.half_extents[0], self.half_extents[1]],
             target_size: [n, n, 1.0 / n, 1.0 / n],
-            texel_world: if self.light_orthographic {
+            texel_world: if self.orthographic {
                 [0.0, texel, 0.0, 0.0]
             } else {
                 [texel, 0.0, 0.0, 0.0]
             },
             sample: [0.0, self.samples.len() as f32, if self.samples_closed { 1.0 } else { 0.0 }, 0.0],
-            // `counters.x`, the frame index, is written by `Executor::run_frame`
+            // `counters.x`, the frame index, is written by the executor as it records
             counters: [0.0; 4],
         }
     }
 
     /// The `Frame` uniform of sample view `k`: the centre's, with the sample's matrices,
     /// position, depth range and texel size, and `sample.x = k`.
-    pub fn sample_frame(&self, k: usize) -> Option<FrameUniform> {
+    pub fn sample_frame(&self, camera: &Camera, shadow_size: u32, k: usize) -> Option<FrameUniform> {
         let s = self.samples.get(k)?;
-        let mut f = self.frame();
-        let n = self.shadow_size as f32;
+        let mut f = self.frame(camera, shadow_size);
+        let n = shadow_size as f32;
         f.light_view_proj = s.light_view_proj;
         f.light_view = s.light_view;
         f.light_position = [s.position[0], s.position[1], s.position[2], 1.0];
@@ -116,8 +188,8 @@ impl SceneInputs {
     }
 
     /// The `LightSamples` uniform: every sample's view.
-    pub fn light_samples(&self) -> Vec<SampleViewUniform> {
-        let n = self.shadow_size as f32;
+    pub fn light_samples(&self, shadow_size: u32) -> Vec<SampleViewUniform> {
+        let n = shadow_size as f32;
         self.samples
             .iter()
             .map(|s| SampleViewUniform {
@@ -133,6 +205,50 @@ impl SceneInputs {
                 ],
             })
             .collect()
+    }
+}
+
+impl SceneInputs {
+    /// The scene's camera.
+    pub fn camera(&self) -> Camera {
+        Camera {
+            view_proj: self.camera_view_proj,
+            position: self.camera_position,
+        }
+    }
+
+    /// The scene's light.
+    pub fn light_inputs(&self) -> LightInputs {
+        LightInputs {
+            view: self.light_view,
+            view_proj: self.light_view_proj,
+            position: self.light_position,
+            near: self.near,
+            far: self.far,
+            size: self.light_size,
+            half_extents: self.light_half_extents,
+            angle: self.light_angle,
+            proj_y: self.light_proj_y,
+            orthographic: self.light_orthographic,
+            samples: self.samples.clone(),
+            samples_closed: self.samples_closed,
+            kind: self.light,
+        }
+    }
+
+    /// The `Frame` uniform of this scene ([`LightInputs::frame`]).
+    pub fn frame(&self) -> FrameUniform {
+        self.light_inputs().frame(&self.camera(), self.shadow_size)
+    }
+
+    /// The `Frame` uniform of sample view `k` ([`LightInputs::sample_frame`]).
+    pub fn sample_frame(&self, k: usize) -> Option<FrameUniform> {
+        self.light_inputs().sample_frame(&self.camera(), self.shadow_size, k)
+    }
+
+    /// The `LightSamples` uniform ([`LightInputs::light_samples`]).
+    pub fn light_samples(&self) -> Vec<SampleViewUniform> {
+        self.light_inputs().light_samples(self.shadow_size)
     }
 }
 

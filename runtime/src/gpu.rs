@@ -20,13 +20,15 @@
 //! instead of wgpu's default, which panics. Sizes are checked against the device's limits
 //! before anything is allocated (lavapipe keeps allocating past its limits).
 
-pub use crate::device::{Gpu, INSTALL_HINT, Result, RuntimeError};
+pub use crate::device::{Gpu, INSTALL_HINT, Result, RuntimeError, WANTED_FEATURES};
 pub use crate::executor::{
-    CameraOutput, Executor, FrameTimes, Generated, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility,
+    CameraOutput, Executor, Generated, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility,
     read_capped,
 };
-pub use crate::frame::{SampleView, SceneInputs};
+pub use crate::frame::{Camera, LightInputs, SampleView, SceneInputs};
 pub use crate::image::Image;
 pub use crate::lights::MAX_LIGHTS;
+pub use crate::requirements::{FeatureNeed, Limit, LimitNeed, Requirements};
 pub use crate::resources::mip_count;
+pub use crate::timing::FrameTimes;
 pub use crate::validate::validate_wgsl;

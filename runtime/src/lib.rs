@@ -8,14 +8,18 @@
 
 pub mod adjacency;
 mod device;
+mod error;
 mod executor;
 mod frame;
 pub mod gpu;
 mod image;
 mod lights;
 mod pipeline;
+mod requirements;
 mod resources;
 mod steps;
+mod timing;
+mod update;
 mod validate;
 
 pub use sshc_graph as graph;

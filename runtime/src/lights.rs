@@ -88,7 +88,8 @@ impl Combine {
             };
             let n = lights as u32;
             let input = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
-            let output = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
+            // the host samples the visibilities (`Executor::visibility`)
+            let output = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING;
             let layers = [
                 texture("lights' visibility", wgpu::TextureFormat::R32Float, n, input),
                 texture("lights' colour", wgpu::TextureFormat::Rgba8Unorm, n, input),

@@ -5,7 +5,6 @@
 //! depth state and the vertex input. [`StepPipeline::build`] reads nothing else, so two
 //! steps with equal keys can share one pipeline (the device caches them by key).
 
-use crate::device::{Gpu, Result};
 use std::sync::Arc;
 
 /// The depth attachment format of scene draws.
@@ -184,7 +183,7 @@ impl Slot {
     }
 }
 
-fn group0_layout(gpu: &Gpu, l: &BindingLayout) -> wgpu::BindGroupLayout {
+fn group0_layout(device: &wgpu::Device, l: &BindingLayout) -> wgpu::BindGroupLayout {
     let vis = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
     let uniform = |binding| wgpu::BindGroupLayoutEntry {
         binding,
@@ -211,7 +210,7 @@ fn group0_layout(gpu: &Gpu, l: &BindingLayout) -> wgpu::BindGroupLayout {
     if l.light_samples {
         entries.push(uniform(3));
     }
-    gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("frame"),
         entries: &entries,
     })
@@ -231,13 +230,14 @@ const SCENE_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
 ];
 
 impl StepPipeline {
-    /// Build the pipeline of `key` (and nothing else) from `module`, the key's source.
-    pub fn build(gpu: &Gpu, key: &PipelineKey, module: &wgpu::ShaderModule, label: &str) -> Result<StepPipeline> {
+    /// Build the pipeline of `key` (and nothing else) from `module`, the key's source. The
+    /// caller holds the error scope ([`crate::gpu::Gpu::pipeline`]).
+    pub fn build(device: &wgpu::Device, key: &PipelineKey, module: &wgpu::ShaderModule, label: &str) -> StepPipeline {
         let l = &key.layout;
         let compute = matches!(key.stages, Stages::Compute { .. });
-        let group0 = group0_layout(gpu, l);
+        let group0 = group0_layout(device, l);
         let layout_of = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
-            gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
                 entries,
             })
@@ -253,22 +253,22 @@ impl StepPipeline {
         layouts.extend(group1.iter().map(Some));
         layouts.extend(group2.iter().map(Some));
         layouts.extend(group3.iter().map(Some));
-        let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(label),
             bind_group_layouts: &layouts,
             immediate_size: 0,
         });
         let pipeline = match &key.stages {
-            Stages::Compute { entry } => Pipeline::Compute(gpu.scoped(label, || {
-                gpu.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            Stages::Compute { entry } => Pipeline::Compute(
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(label),
                     layout: Some(&layout),
                     module,
                     entry_point: entry.as_deref(),
                     compilation_options: Default::default(),
                     cache: None,
-                })
-            })?),
+                }),
+            ),
             Stages::Raster {
                 vertex,
                 fragment,
@@ -295,8 +295,8 @@ impl StepPipeline {
                 } else {
                     vec![]
                 };
-                Pipeline::Render(gpu.scoped(label, || {
-                    gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                Pipeline::Render(
+                    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                         label: Some(label),
                         layout: Some(&layout),
                         vertex: wgpu::VertexState {
@@ -325,16 +325,16 @@ impl StepPipeline {
                         }),
                         multiview_mask: None,
                         cache: None,
-                    })
-                })?)
+                    }),
+                )
             }
         };
-        Ok(StepPipeline {
+        StepPipeline {
             pipeline,
             group0,
             group1,
             group2,
             group3,
-        })
+        }
     }
 }

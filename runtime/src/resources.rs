@@ -288,7 +288,7 @@ impl Resources {
             let camera = ["visibility", "color", "position", "normal"]
                 .iter()
                 .zip(CAMERA_FORMATS)
-                .map(|(n, f)| plain(n, cw, ch, f, camera_usage))
+                .map(|(n, f)| plain(n, cw, ch, f, camera_usage | wgpu::TextureUsages::TEXTURE_BINDING))
                 .collect();
             let camera_depth = plain("camera depth", cw, ch, DEPTH_FORMAT, none);
             let gbuffer = if draws(graph::Draw::CameraGBuffer) {

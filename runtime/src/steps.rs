@@ -234,7 +234,6 @@ const GBUFFER_CLEAR: [wgpu::Color; 3] = [
 /// Build the node of every step: decide from its [`Draw`] what it records, check what it
 /// binds against the graph and the device, and build (or find) its pipeline.
 pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<str>>) -> Result<Vec<PassNode>> {
-    let filterable_floats = gpu.features.contains(wgpu::Features::FLOAT32_FILTERABLE);
     let mut passes = Vec::new();
     for pass in &graph.passes {
         let source = sources
@@ -331,19 +330,10 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     let (clear, blend) = resolve_state(*resolve);
                     // A depth test: the light's depth attachment (cleared to 1), no blending.
                     let depth = (*resolve == Resolve::Nearest).then_some(DepthTarget::Light);
-                    let formats = step.writes.iter().map(|t| texture_format(&t.texture)).collect::<Result<Vec<_>>>()?;
-                    let float32 = formats.iter().any(|f| {
-                        matches!(
-                            f,
-                            wgpu::TextureFormat::R32Float | wgpu::TextureFormat::Rg32Float | wgpu::TextureFormat::Rgba32Float
-                        )
-                    });
-                    if float32 && blend.is_some() && !gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
-                        return Err(RuntimeError::Device(format!(
-                            "pass `{}` blends generated primitives into a 32-bit float texture, but this device cannot blend 32-bit floats; use F16 or a unorm precision",
-                            pass.name
-                        )));
+                    for t in &step.writes {
+                        texture_format(&t.texture)?;
                     }
+                    // blending 32-bit floats is a feature: `Requirements` checked it
                     NodeKind::Raster(RasterStep {
                         targets: Targets::Textures(step.writes.clone()),
                         clear: vec![clear; n],
@@ -361,17 +351,8 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     reads.push((b.binding, Slot::Buffer { read_only: true }));
                     continue;
                 }
-                let fmt = texture_format(&b.texture)?;
-                let is_f32 = matches!(
-                    fmt,
-                    wgpu::TextureFormat::R32Float | wgpu::TextureFormat::Rg32Float | wgpu::TextureFormat::Rgba32Float
-                );
-                if step.sampler && is_f32 && !filterable_floats {
-                    return Err(RuntimeError::Device(format!(
-                        "pass `{}` filters 32-bit float texture `{}`, but this device cannot filter 32-bit floats",
-                        pass.name, b.texture
-                    )));
-                }
+                // the texture exists (filtering 32-bit floats is a feature: `Requirements`)
+                texture_format(&b.texture)?;
                 let below_base = matches!(&kind, NodeKind::Raster(r) if r.levels == Levels::BelowBase)
                     || matches!(&kind, NodeKind::Compute(c) if matches!(c.dispatch, Dispatch::MipTexels));
                 if b.view == View::PreviousLevel && !below_base {

@@ -111,7 +111,7 @@ fn strip(x0: f32, x1: f32, z_half: f32, shadow: u32, n: u32) -> (Scene, SceneInp
 }
 
 /// The executor after one frame of `technique` with `set`.
-fn frame(technique: &str, set: &[(&str, String)], inputs: &SceneInputs) -> Executor<'static> {
+fn frame(technique: &str, set: &[(&str, String)], inputs: &SceneInputs) -> Executor {
     let compiled = compile_source(technique, &technique_source(technique), set, &[]);
     let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
     ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));

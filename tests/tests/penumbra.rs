@@ -81,11 +81,11 @@ fn meshes(scene: &Scene) -> Vec<std::ops::Range<usize>> {
 
 /// Run the generated technique on `scene`: the penumbra map (row 0 at the top), the hard
 /// test's inputs and the visibility buffer.
-fn run(scene: &Scene, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Executor<'static>) {
+fn run(scene: &Scene, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Executor) {
     run_source(scene, &technique_source(TECHNIQUE), set)
 }
 
-fn run_source(scene: &Scene, source: &str, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Executor<'static>) {
+fn run_source(scene: &Scene, source: &str, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Executor) {
     let compiled = compile_source(TECHNIQUE, source, set, &[]);
     let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));

@@ -18,7 +18,7 @@ const PLM: &str = "penumbra-limit-maps";
 const SMOOTHIES: &str = "smoothies";
 
 /// The visibility and world positions of every camera pixel, and the executor.
-fn run(technique: &str, scene: &Scene, precision: &[(&str, &str)]) -> (Vec<f32>, Vec<[f32; 3]>, Executor<'static>) {
+fn run(technique: &str, scene: &Scene, precision: &[(&str, &str)]) -> (Vec<f32>, Vec<[f32; 3]>, Executor) {
     let compiled = compile_source(technique, &technique_source(technique), &[], precision);
     let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));

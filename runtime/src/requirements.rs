@@ -1,0 +1,390 @@
+//! What a graph needs of a device: the wgpu features and limits beyond WebGPU's defaults,
+//! each with the pass that needs it and why. [`Requirements::of`] reads only the graph, so
+//! a host can ask before it opens its device ([`Requirements::features`],
+//! [`Requirements::limits`]); loading a graph ([`crate::gpu::Executor::new`]) checks them
+//! against the device and refuses it with every missing feature and limit listed.
+
+use crate::device::Gpu;
+use crate::error::{Result, RuntimeError};
+use crate::graph::{self, Draw, Format, PassGraph};
+
+/// A device limit a graph can exceed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Limit {
+    MaxTextureArrayLayers,
+    MaxUniformBufferBindingSize,
+    MaxBindGroups,
+    MaxColorAttachments,
+    MaxColorAttachmentBytesPerSample,
+    MaxSampledTexturesPerShaderStage,
+    MaxStorageBuffersPerShaderStage,
+    MaxStorageTexturesPerShaderStage,
+    MaxUniformBuffersPerShaderStage,
+    MaxComputeWorkgroupSizeX,
+    MaxComputeWorkgroupSizeY,
+    MaxComputeInvocationsPerWorkgroup,
+}
+
+impl Limit {
+    /// The field's name in `wgpu::Limits`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Limit::MaxTextureArrayLayers => "max_texture_array_layers",
+            Limit::MaxUniformBufferBindingSize => "max_uniform_buffer_binding_size",
+            Limit::MaxBindGroups => "max_bind_groups",
+            Limit::MaxColorAttachments => "max_color_attachments",
+            Limit::MaxColorAttachmentBytesPerSample => "max_color_attachment_bytes_per_sample",
+            Limit::MaxSampledTexturesPerShaderStage => "max_sampled_textures_per_shader_stage",
+            Limit::MaxStorageBuffersPerShaderStage => "max_storage_buffers_per_shader_stage",
+            Limit::MaxStorageTexturesPerShaderStage => "max_storage_textures_per_shader_stage",
+            Limit::MaxUniformBuffersPerShaderStage => "max_uniform_buffers_per_shader_stage",
+            Limit::MaxComputeWorkgroupSizeX => "max_compute_workgroup_size_x",
+            Limit::MaxComputeWorkgroupSizeY => "max_compute_workgroup_size_y",
+            Limit::MaxComputeInvocationsPerWorkgroup => "max_compute_invocations_per_workgroup",
+        }
+    }
+
+    /// The device's value of this limit.
+    pub fn of(self, l: &wgpu::Limits) -> u64 {
+        match self {
+            Limit::MaxTextureArrayLayers => l.max_texture_array_layers.into(),
+            Limit::MaxUniformBufferBindingSize => l.max_uniform_buffer_binding_size,
+            Limit::MaxBindGroups => l.max_bind_groups.into(),
+            Limit::MaxColorAttachments => l.max_color_attachments.into(),
+            Limit::MaxColorAttachmentBytesPerSample => l.max_color_attachment_bytes_per_sample.into(),
+            Limit::MaxSampledTexturesPerShaderStage => l.max_sampled_textures_per_shader_stage.into(),
+            Limit::MaxStorageBuffersPerShaderStage => l.max_storage_buffers_per_shader_stage.into(),
+            Limit::MaxStorageTexturesPerShaderStage => l.max_storage_textures_per_shader_stage.into(),
+            Limit::MaxUniformBuffersPerShaderStage => l.max_uniform_buffers_per_shader_stage.into(),
+            Limit::MaxComputeWorkgroupSizeX => l.max_compute_workgroup_size_x.into(),
+            Limit::MaxComputeWorkgroupSizeY => l.max_compute_workgroup_size_y.into(),
+            Limit::MaxComputeInvocationsPerWorkgroup => l.max_compute_invocations_per_workgroup.into(),
+        }
+    }
+
+    /// Raise the limit in `l` to at least `v` (saturating at the field's type).
+    fn raise(self, l: &mut wgpu::Limits, v: u64) {
+        let small = |x: &mut u32| *x = (*x).max(u32::try_from(v).unwrap_or(u32::MAX));
+        match self {
+            Limit::MaxTextureArrayLayers => small(&mut l.max_texture_array_layers),
+            Limit::MaxUniformBufferBindingSize => l.max_uniform_buffer_binding_size = l.max_uniform_buffer_binding_size.max(v),
+            Limit::MaxBindGroups => small(&mut l.max_bind_groups),
+            Limit::MaxColorAttachments => small(&mut l.max_color_attachments),
+            Limit::MaxColorAttachmentBytesPerSample => small(&mut l.max_color_attachment_bytes_per_sample),
+            Limit::MaxSampledTexturesPerShaderStage => small(&mut l.max_sampled_textures_per_shader_stage),
+            Limit::MaxStorageBuffersPerShaderStage => small(&mut l.max_storage_buffers_per_shader_stage),
+            Limit::MaxStorageTexturesPerShaderStage => small(&mut l.max_storage_textures_per_shader_stage),
+            Limit::MaxUniformBuffersPerShaderStage => small(&mut l.max_uniform_buffers_per_shader_stage),
+            Limit::MaxComputeWorkgroupSizeX => small(&mut l.max_compute_workgroup_size_x),
+            Limit::MaxComputeWorkgroupSizeY => small(&mut l.max_compute_workgroup_size_y),
+            Limit::MaxComputeInvocationsPerWorkgroup => small(&mut l.max_compute_invocations_per_workgroup),
+        }
+    }
+}
+
+/// A feature a pass needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FeatureNeed {
+    pub feature: wgpu::Features,
+    /// The pass that needs it (or `"the graph"` for a texture no pass owns).
+    pub pass: String,
+    pub why: String,
+}
+
+/// A limit a pass needs raised to at least `needed`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LimitNeed {
+    pub limit: Limit,
+    pub needed: u64,
+    pub pass: String,
+}
+
+/// Everything a graph needs of a device beyond what every WebGPU device has.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Requirements {
+    pub features: Vec<FeatureNeed>,
+    pub limits: Vec<LimitNeed>,
+    /// Textures a raster pass renders into that are 16-bit norm formats: the device must
+    /// also allow them as render attachments (an adapter-specific format feature), which
+    /// only the adapter answers ([`Gpu::renderable_norm16`]).
+    pub rendered_norm16: Vec<(String, wgpu::TextureFormat)>,
+}
+
+/// The 32-bit float formats: filtering and blending them are features.
+fn is_float32(f: Format) -> bool {
+    matches!(f, Format::R32Float | Format::Rg32Float | Format::Rgba32Float)
+}
+
+fn is_norm16(f: Format) -> bool {
+    matches!(f, Format::R16Unorm | Format::Rg16Unorm | Format::Rgba16Unorm)
+}
+
+/// What one step binds, counted per shader stage (every binding is visible to the stages
+/// that can use it, so the counts are the step's totals).
+#[derive(Default)]
+struct StepCounts {
+    sampled: u64,
+    storage_buffers: u64,
+    storage_textures: u64,
+    uniforms: u64,
+    /// Colour attachments and their bytes per sample (raster steps).
+    attachments: Vec<Format>,
+    groups: u64,
+    /// Workgroup size (x, y) of a compute step.
+    workgroup: Option<(u32, u32)>,
+}
+
+fn step_counts(graph: &PassGraph, step: &graph::Step) -> StepCounts {
+    let table = |name: &str| graph.texture(name).is_some_and(|t| t.format == Format::SummedAreaU32);
+    let format = |name: &str| graph.texture(name).map(|t| t.format);
+    let mut c = StepCounts {
+        uniforms: 1 + u64::from(step.params) + u64::from(step.light_samples),
+        ..Default::default()
+    };
+    for r in &step.reads {
+        if table(&r.texture) {
+            c.storage_buffers += 1;
+        } else {
+            c.sampled += 1;
+        }
+    }
+    let writes = step.writes.len() as u64;
+    let line = Some((graph::COMPUTE_WORKGROUP, 1));
+    let texel = Some((graph::TEXEL_WORKGROUP, graph::TEXEL_WORKGROUP));
+    // groups: 0 always; 1 (reads, or empty to keep later indices), 2 and 3 as the step binds
+    match &step.draw {
+        Draw::SceneFromLight | Draw::FullScreen | Draw::MipLevels => {
+            c.attachments = step.writes.iter().filter_map(|w| format(&w.texture)).collect();
+            c.groups = 1 + u64::from(!step.reads.is_empty());
+        }
+        Draw::SceneFromCamera => {
+            c.attachments = vec![Format::R32Float, Format::Rgba8Unorm, Format::Rgba32Float, Format::Rgba16Float];
+            c.groups = 1 + u64::from(!step.reads.is_empty());
+        }
+        Draw::CameraGBuffer => {
+            c.attachments = graph::GBUFFER.to_vec();
+            c.groups = 1 + u64::from(!step.reads.is_empty());
+        }
+        Draw::ComputePixels => {
+            // the four camera outputs stored, the G-buffer read at group 3
+            c.storage_textures = 4;
+            c.sampled += graph::GBUFFER.len() as u64;
+            c.groups = 4;
+            c.workgroup = texel;
+        }
+        Draw::ComputeRows | Draw::ComputeColumns => {
+            c.storage_buffers += writes;
+            c.groups = 3;
+            c.workgroup = line;
+        }
+        Draw::ComputeTexels | Draw::ComputeMipLevels => {
+            c.storage_textures = writes;
+            c.groups = 3;
+            c.workgroup = texel;
+        }
+        Draw::Silhouettes { .. } => {
+            // edges, face planes, edge faces, the generated buffer, the vertex claims
+            c.storage_buffers += writes + 5;
+            c.groups = 4;
+            c.workgroup = line;
+        }
+        Draw::Discontinuities { .. } => {
+            c.storage_buffers += writes + 1;
+            c.groups = 4;
+            c.workgroup = line;
+        }
+        Draw::Primitives { .. } => {
+            c.attachments = step.writes.iter().filter_map(|w| format(&w.texture)).collect();
+            c.storage_buffers += 1;
+            c.groups = 4;
+        }
+    }
+    c
+}
+
+/// Bytes per sample of these colour attachments, as wgpu counts them toward
+/// `max_color_attachment_bytes_per_sample`: each format's render-target byte cost, after
+/// aligning the running total to its component alignment (WebGPU's rule).
+fn attachment_bytes(formats: &[Format]) -> u64 {
+    let mut total = 0u32;
+    for f in formats.iter().filter_map(|f| crate::resources::wgpu_format(*f)) {
+        total = total.next_multiple_of(f.target_component_alignment().unwrap_or(1));
+        total += f.target_pixel_byte_cost().unwrap_or(0);
+    }
+    total.into()
+}
+
+impl Requirements {
+    /// What `graph` needs, read from its declarations alone.
+    pub fn of(graph: &PassGraph) -> Requirements {
+        let mut r = Requirements::default();
+        let mut limit = |limit: Limit, needed: u64, pass: &str| {
+            if needed > Limit::of(limit, &wgpu::Limits::default()) {
+                r.limits.push(LimitNeed {
+                    limit,
+                    needed,
+                    pass: pass.to_string(),
+                });
+            }
+        };
+        limit(Limit::MaxUniformBufferBindingSize, graph.params_size.into(), "the graph (its Params uniform)");
+        limit(
+            Limit::MaxUniformBufferBindingSize,
+            graph::FRAME_SIZE.into(),
+            "the graph (its Frame uniform)",
+        );
+        for t in &graph.textures {
+            limit(Limit::MaxTextureArrayLayers, t.array_layers().into(), &format!("the graph (texture `{}`)", t.name));
+        }
+        for pass in &graph.passes {
+            for step in &pass.steps {
+                let c = step_counts(graph, step);
+                let name = pass.name.as_str();
+                limit(Limit::MaxBindGroups, c.groups, name);
+                limit(Limit::MaxColorAttachments, c.attachments.len() as u64, name);
+                limit(
+                    Limit::MaxColorAttachmentBytesPerSample,
+                    attachment_bytes(&c.attachments),
+                    name,
+                );
+                limit(Limit::MaxSampledTexturesPerShaderStage, c.sampled, name);
+                limit(Limit::MaxStorageBuffersPerShaderStage, c.storage_buffers, name);
+                limit(Limit::MaxStorageTexturesPerShaderStage, c.storage_textures, name);
+                limit(Limit::MaxUniformBuffersPerShaderStage, c.uniforms, name);
+                if let Some((x, y)) = c.workgroup {
+                    limit(Limit::MaxComputeWorkgroupSizeX, x.into(), name);
+                    limit(Limit::MaxComputeWorkgroupSizeY, y.into(), name);
+                    limit(Limit::MaxComputeInvocationsPerWorkgroup, u64::from(x) * u64::from(y), name);
+                }
+            }
+        }
+        let mut feature = |feature: wgpu::Features, pass: &str, why: String| {
+            r.features.push(FeatureNeed {
+                feature,
+                pass: pass.to_string(),
+                why,
+            });
+        };
+        for t in graph.textures.iter().filter(|t| is_norm16(t.format)) {
+            let owner = graph
+                .passes
+                .iter()
+                .find(|p| p.steps.iter().any(|s| s.writes.iter().any(|w| w.texture == t.name)))
+                .map_or("the graph", |p| p.name.as_str());
+            feature(
+                wgpu::Features::TEXTURE_FORMAT_16BIT_NORM,
+                owner,
+                format!("texture `{}` is {:?}", t.name, t.format),
+            );
+        }
+        for pass in &graph.passes {
+            for step in &pass.steps {
+                if step.sampler {
+                    for read in &step.reads {
+                        if let Some(t) = graph.texture(&read.texture).filter(|t| is_float32(t.format)) {
+                            feature(
+                                wgpu::Features::FLOAT32_FILTERABLE,
+                                &pass.name,
+                                format!("it filters `{}`, a {:?} texture", t.name, t.format),
+                            );
+                        }
+                    }
+                }
+                let blends = match &step.draw {
+                    Draw::Primitives { resolve, .. } => *resolve != graph::Resolve::Nearest,
+                    Draw::SceneFromLight
+                    | Draw::SceneFromCamera
+                    | Draw::CameraGBuffer
+                    | Draw::ComputePixels
+                    | Draw::FullScreen
+                    | Draw::MipLevels
+                    | Draw::ComputeRows
+                    | Draw::ComputeColumns
+                    | Draw::ComputeTexels
+                    | Draw::ComputeMipLevels
+                    | Draw::Silhouettes { .. }
+                    | Draw::Discontinuities { .. } => false,
+                };
+                let raster = step.compute.is_none();
+                for w in &step.writes {
+                    let Some(t) = graph.texture(&w.texture) else { continue };
+                    if blends && is_float32(t.format) {
+                        feature(
+                            wgpu::Features::FLOAT32_BLENDABLE,
+                            &pass.name,
+                            format!("it blends generated primitives into `{}`, a {:?} texture", t.name, t.format),
+                        );
+                    }
+                    if raster
+                        && is_norm16(t.format)
+                        && let Some(f) = crate::resources::wgpu_format(t.format)
+                        && !r.rendered_norm16.iter().any(|(n, _)| n == &t.name)
+                    {
+                        r.rendered_norm16.push((t.name.clone(), f));
+                    }
+                }
+            }
+        }
+        r
+    }
+
+    /// Every feature the graph needs, as one set (for a host's `DeviceDescriptor`).
+    /// `TIMESTAMP_QUERY` is not among them: without it frames run untimed.
+    pub fn features(&self) -> wgpu::Features {
+        let mut f = self.features.iter().fold(wgpu::Features::empty(), |a, n| a | n.feature);
+        if !self.rendered_norm16.is_empty() {
+            f |= wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
+        }
+        f
+    }
+
+    /// `base` with every limit the graph needs raised to it (for a host's `DeviceDescriptor`).
+    pub fn limits(&self, mut base: wgpu::Limits) -> wgpu::Limits {
+        for n in &self.limits {
+            n.limit.raise(&mut base, n.needed);
+        }
+        base
+    }
+
+    /// What `gpu` lacks of these, one line each naming the pass that needs it.
+    pub fn missing(&self, gpu: &Gpu) -> Vec<String> {
+        let mut out = Vec::new();
+        for n in &self.features {
+            if !gpu.features.contains(n.feature) {
+                out.push(format!("feature {:?}, needed by pass `{}`: {}", n.feature, n.pass, n.why));
+            }
+        }
+        for (name, f) in &self.rendered_norm16 {
+            if !gpu.renderable_norm16.contains(f) {
+                out.push(format!(
+                    "{f:?} as a render attachment (an adapter-specific format feature): a raster pass renders texture `{name}`; use F16 or Unorm8"
+                ));
+            }
+        }
+        for n in &self.limits {
+            let has = n.limit.of(&gpu.limits);
+            if n.needed > has {
+                out.push(format!(
+                    "limit {} of {}, needed by pass `{}` (the device allows {has})",
+                    n.limit.name(),
+                    n.needed,
+                    n.pass
+                ));
+            }
+        }
+        out
+    }
+
+    /// Refuse `gpu` when it lacks any of these, listing all of them.
+    pub fn check(&self, gpu: &Gpu, technique: &str) -> Result<()> {
+        let missing = self.missing(gpu);
+        if missing.is_empty() {
+            Ok(())
+        } else {
+            Err(RuntimeError::Unsatisfied {
+                technique: technique.to_string(),
+                missing,
+            })
+        }
+    }
+}
