@@ -90,4 +90,3 @@ impl From<graph::GraphError> for RuntimeError {
         RuntimeError::Graph(e)
     }
 }
-

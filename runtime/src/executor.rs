@@ -907,7 +907,9 @@ impl Executor {
 
 /// The bounding box of the scene's casting vertices (world space); `None` without one.
 fn caster_bounds(s: &SceneInputs) -> Option<[[f32; 3]; 2]> {
-    let n = s.casting_vertices.map_or(s.vertices.len() / 6, |c| (c as usize).min(s.vertices.len() / 6));
+    let n = s
+        .casting_vertices
+        .map_or(s.vertices.len() / 6, |c| (c as usize).min(s.vertices.len() / 6));
     s.vertices.chunks_exact(6).take(n).fold(None, |b, v| {
         let [lo, hi] = b.unwrap_or([[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]]);
         Some([

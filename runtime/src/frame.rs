@@ -125,7 +125,13 @@ impl LightInputs {
     /// Refuse non-finite matrices, positions or sizes, and an empty depth range.
     pub fn check(&self, light: usize) -> Result<()> {
         let mut values = vec![self.near, self.far, self.size, self.angle, self.proj_y];
-        values.extend(self.view.iter().chain(&self.view_proj).chain(&self.position).chain(&self.half_extents));
+        values.extend(
+            self.view
+                .iter()
+                .chain(&self.view_proj)
+                .chain(&self.position)
+                .chain(&self.half_extents),
+        );
         for s in &self.samples {
             values.extend(s.light_view.iter().chain(&s.light_view_proj).chain(&s.position));
             values.extend([s.near, s.far, s.light_proj_y]);

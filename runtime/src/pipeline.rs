@@ -259,16 +259,14 @@ impl StepPipeline {
             immediate_size: 0,
         });
         let pipeline = match &key.stages {
-            Stages::Compute { entry } => Pipeline::Compute(
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&layout),
-                    module,
-                    entry_point: entry.as_deref(),
-                    compilation_options: Default::default(),
-                    cache: None,
-                }),
-            ),
+            Stages::Compute { entry } => Pipeline::Compute(device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&layout),
+                module,
+                entry_point: entry.as_deref(),
+                compilation_options: Default::default(),
+                cache: None,
+            })),
             Stages::Raster {
                 vertex,
                 fragment,
@@ -295,38 +293,36 @@ impl StepPipeline {
                 } else {
                     vec![]
                 };
-                Pipeline::Render(
-                    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                        label: Some(label),
-                        layout: Some(&layout),
-                        vertex: wgpu::VertexState {
-                            module,
-                            entry_point: vertex.as_deref(),
-                            compilation_options: Default::default(),
-                            buffers: &buffers,
-                        },
-                        primitive: wgpu::PrimitiveState {
-                            cull_mode: None,
-                            ..Default::default()
-                        },
-                        depth_stencil: depth.map(|d| wgpu::DepthStencilState {
-                            format: d.format,
-                            depth_write_enabled: Some(d.write),
-                            depth_compare: Some(d.compare),
-                            stencil: Default::default(),
-                            bias: Default::default(),
-                        }),
-                        multisample: Default::default(),
-                        fragment: Some(wgpu::FragmentState {
-                            module,
-                            entry_point: fragment.as_deref(),
-                            compilation_options: Default::default(),
-                            targets: &targets,
-                        }),
-                        multiview_mask: None,
-                        cache: None,
+                Pipeline::Render(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&layout),
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: vertex.as_deref(),
+                        compilation_options: Default::default(),
+                        buffers: &buffers,
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        cull_mode: None,
+                        ..Default::default()
+                    },
+                    depth_stencil: depth.map(|d| wgpu::DepthStencilState {
+                        format: d.format,
+                        depth_write_enabled: Some(d.write),
+                        depth_compare: Some(d.compare),
+                        stencil: Default::default(),
+                        bias: Default::default(),
                     }),
-                )
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module,
+                        entry_point: fragment.as_deref(),
+                        compilation_options: Default::default(),
+                        targets: &targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                }))
             }
         };
         StepPipeline {

@@ -86,8 +86,8 @@ impl Limit {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FeatureNeed {
     pub feature: wgpu::Features,
-    /// The pass that needs it (or `"the graph"` for a texture no pass owns).
-    pub pass: String,
+    /// Who needs it: "pass `name`", or the graph itself ("the graph's texture `t`").
+    pub who: String,
     pub why: String,
 }
 
@@ -96,7 +96,8 @@ pub struct FeatureNeed {
 pub struct LimitNeed {
     pub limit: Limit,
     pub needed: u64,
-    pub pass: String,
+    /// Who needs it: "pass `name`", or the graph itself ("the graph's Params uniform").
+    pub who: String,
 }
 
 /// Everything a graph needs of a device beyond what every WebGPU device has.
@@ -218,35 +219,36 @@ impl Requirements {
     /// What `graph` needs, read from its declarations alone.
     pub fn of(graph: &PassGraph) -> Requirements {
         let mut r = Requirements::default();
-        let mut limit = |limit: Limit, needed: u64, pass: &str| {
+        let mut limit = |limit: Limit, needed: u64, who: &str| {
             if needed > Limit::of(limit, &wgpu::Limits::default()) {
                 r.limits.push(LimitNeed {
                     limit,
                     needed,
-                    pass: pass.to_string(),
+                    who: who.to_string(),
                 });
             }
         };
-        limit(Limit::MaxUniformBufferBindingSize, graph.params_size.into(), "the graph (its Params uniform)");
         limit(
             Limit::MaxUniformBufferBindingSize,
-            graph::FRAME_SIZE.into(),
-            "the graph (its Frame uniform)",
+            graph.params_size.into(),
+            "the graph's Params uniform",
         );
+        limit(Limit::MaxUniformBufferBindingSize, graph::FRAME_SIZE.into(), "the Frame uniform");
         for t in &graph.textures {
-            limit(Limit::MaxTextureArrayLayers, t.array_layers().into(), &format!("the graph (texture `{}`)", t.name));
+            limit(
+                Limit::MaxTextureArrayLayers,
+                t.array_layers().into(),
+                &format!("the graph's texture `{}`", t.name),
+            );
         }
         for pass in &graph.passes {
             for step in &pass.steps {
                 let c = step_counts(graph, step);
-                let name = pass.name.as_str();
+                let who = format!("pass `{}`", pass.name);
+                let name = who.as_str();
                 limit(Limit::MaxBindGroups, c.groups, name);
                 limit(Limit::MaxColorAttachments, c.attachments.len() as u64, name);
-                limit(
-                    Limit::MaxColorAttachmentBytesPerSample,
-                    attachment_bytes(&c.attachments),
-                    name,
-                );
+                limit(Limit::MaxColorAttachmentBytesPerSample, attachment_bytes(&c.attachments), name);
                 limit(Limit::MaxSampledTexturesPerShaderStage, c.sampled, name);
                 limit(Limit::MaxStorageBuffersPerShaderStage, c.storage_buffers, name);
                 limit(Limit::MaxStorageTexturesPerShaderStage, c.storage_textures, name);
@@ -258,19 +260,15 @@ impl Requirements {
                 }
             }
         }
-        let mut feature = |feature: wgpu::Features, pass: &str, why: String| {
-            r.features.push(FeatureNeed {
-                feature,
-                pass: pass.to_string(),
-                why,
-            });
+        let mut feature = |feature: wgpu::Features, who: String, why: String| {
+            r.features.push(FeatureNeed { feature, who, why });
         };
         for t in graph.textures.iter().filter(|t| is_norm16(t.format)) {
             let owner = graph
                 .passes
                 .iter()
                 .find(|p| p.steps.iter().any(|s| s.writes.iter().any(|w| w.texture == t.name)))
-                .map_or("the graph", |p| p.name.as_str());
+                .map_or("the graph".to_string(), |p| format!("pass `{}`", p.name));
             feature(
                 wgpu::Features::TEXTURE_FORMAT_16BIT_NORM,
                 owner,
@@ -284,7 +282,7 @@ impl Requirements {
                         if let Some(t) = graph.texture(&read.texture).filter(|t| is_float32(t.format)) {
                             feature(
                                 wgpu::Features::FLOAT32_FILTERABLE,
-                                &pass.name,
+                                format!("pass `{}`", pass.name),
                                 format!("it filters `{}`, a {:?} texture", t.name, t.format),
                             );
                         }
@@ -311,7 +309,7 @@ impl Requirements {
                     if blends && is_float32(t.format) {
                         feature(
                             wgpu::Features::FLOAT32_BLENDABLE,
-                            &pass.name,
+                            format!("pass `{}`", pass.name),
                             format!("it blends generated primitives into `{}`, a {:?} texture", t.name, t.format),
                         );
                     }
@@ -351,7 +349,8 @@ impl Requirements {
         let mut out = Vec::new();
         for n in &self.features {
             if !gpu.features.contains(n.feature) {
-                out.push(format!("feature {:?}, needed by pass `{}`: {}", n.feature, n.pass, n.why));
+                let names: Vec<&str> = n.feature.iter_names().map(|(name, _)| name).collect();
+                out.push(format!("feature {}, needed by {}: {}", names.join(" | "), n.who, n.why));
             }
         }
         for (name, f) in &self.rendered_norm16 {
@@ -365,10 +364,10 @@ impl Requirements {
             let has = n.limit.of(&gpu.limits);
             if n.needed > has {
                 out.push(format!(
-                    "limit {} of {}, needed by pass `{}` (the device allows {has})",
+                    "limit {} of {}, needed by {} (the device allows {has})",
                     n.limit.name(),
                     n.needed,
-                    n.pass
+                    n.who
                 ));
             }
         }

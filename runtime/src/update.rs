@@ -24,15 +24,19 @@ impl<'a> FrameWriter<'a> {
     /// `LightSamples`, seen by `camera`. The light's sample count is the bound one
     /// (checked by the caller).
     pub fn light(&self, res: &Resources, camera: &Camera, light: &LightInputs) {
-        self.queue.write_buffer(&res.frame, 0, &light.frame(camera, res.shadow_size).to_bytes());
+        self.queue
+            .write_buffer(&res.frame, 0, &light.frame(camera, res.shadow_size).to_bytes());
         for (k, buf) in res.sample_frames.iter().enumerate() {
             if let Some(f) = light.sample_frame(camera, res.shadow_size, k) {
                 self.queue.write_buffer(buf, 0, &f.to_bytes());
             }
         }
         if !light.samples.is_empty() {
-            self.queue
-                .write_buffer(&res.light_samples, 0, &SampleViewUniform::to_bytes(&light.light_samples(res.shadow_size)));
+            self.queue.write_buffer(
+                &res.light_samples,
+                0,
+                &SampleViewUniform::to_bytes(&light.light_samples(res.shadow_size)),
+            );
         }
     }
 

@@ -1,0 +1,145 @@
+//! The per-frame cost of the embedding API (issue 29), for every bundled technique:
+//!
+//! - **CPU**: the time a host spends in sshc each frame, `set_camera` + `set_light` (for
+//!   every light) + `encode` into the host's encoder, timed on the CPU with `Instant`,
+//!   median (and 90th percentile) of `FRAMES` frames after 10 untimed ones. The host's own
+//!   encoder creation, its submission and the wait are outside the timing.
+//! - **GPU, moving against static**: the GPU time of a frame (the sum of its passes'
+//!   timestamps, read back through the ring) with the light and camera moving every frame,
+//!   against the same executor with them still. Frames alternate moving and static so that
+//!   drifts of the machine hit both; the ratio is of the two medians, taken in one run.
+//!
+//! Prints a Markdown table and writes it to `target/embedding/frame-cost.md` (quoted in
+//! docs/embedding.md). A measurement, minutes on lavapipe: `cargo bench -p sshc-tests
+//! --bench frame_cost`; `SSHC_FRAMES` (default 1000), `SSHC_CAMERA` (side, default 128),
+//! `SSHC_SHADOW` (default 256). The test suite only builds it (`cargo clippy --all-targets`).
+
+#[path = "../tests/support/mod.rs"]
+mod support;
+
+use glam::Vec3;
+use sshc_lab::scene::{Camera, Light, Scene};
+use sshc_runtime::gpu::{Executor, SceneInputs};
+use std::time::Instant;
+use support::{gpu, root};
+
+fn env(name: &str, default: u32) -> u32 {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+fn percentile(v: &mut [f64], p: f64) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(((v.len() as f64 - 1.0) * p).round() as usize).copied().unwrap_or(f64::NAN)
+}
+
+/// The scene at frame `f`: the light circles its start by a tenth of the scene's size and
+/// the camera slides (as the embedding tests move them).
+fn at_frame(base: &Scene, f: u32) -> Scene {
+    let mut s = base.clone();
+    let (lo, hi) = s.bounds();
+    let r = 0.1 * (hi - lo).length();
+    let a = f as f32 * 0.37;
+    let d = Vec3::new(r * a.cos(), 0.0, r * a.sin()) - Vec3::new(r, 0.0, 0.0);
+    for l in &mut s.lights {
+        match l {
+            Light::Point { position } => *position += d,
+            Light::Sphere { center, .. } | Light::Disk { center, .. } | Light::Rectangle { center, .. } => *center += d,
+            Light::Segment { a, b } => {
+                *a += d;
+                *b += d;
+            }
+            Light::Triangle { a, b, c } => {
+                *a += d;
+                *b += d;
+                *c += d;
+            }
+            Light::Directional { direction } | Light::DistantDisk { direction, .. } => *direction = (*direction + 0.1 * d).normalize(),
+        }
+    }
+    match &mut s.camera {
+        Camera::Perspective { position, .. } | Camera::Orthographic { position, .. } => *position += 0.02 * f as f32 * Vec3::X * r,
+    }
+    s
+}
+
+fn main() {
+    let frames = env("SSHC_FRAMES", 1000);
+    let (camera, shadow) = (env("SSHC_CAMERA", 128), env("SSHC_SHADOW", 256));
+    let gpu = gpu();
+    let mut names: Vec<String> = std::fs::read_dir(root().join("techniques"))
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    names.sort();
+    let mut table = format!(
+        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2.\n\n| technique | scene | CPU µs/frame, median | 90th percentile | GPU ms moving | GPU ms static | moving / static |\n|---|---|---|---|---|---|---|\n",
+        gpu.describe()
+    );
+    for t in &names {
+        let c = support::compile_source(t, &support::technique_source(t), &[], &[]);
+        let sc = if sshc_lab::bind::graph_samples(&c.graph) > 0 {
+            "linear"
+        } else {
+            "triangle"
+        };
+        let mut base = Scene::load(root().join("scenes").join(format!("{sc}.ron"))).unwrap();
+        base.set_camera_size(camera, camera);
+        base.shadow_map = shadow;
+        // the states of the orbit, computed before any timing (the lab's light fit is not
+        // sshc's per-frame cost)
+        let states: Vec<SceneInputs> = (0..frames + 10)
+            .map(|f| sshc_lab::bind::scene_inputs_for(&at_frame(&base, f), &c.graph).unwrap())
+            .collect();
+        let views: Vec<_> = states.iter().map(|s| (s.camera(), s.light_inputs())).collect();
+        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        ex.bind_scene(&states[0]).unwrap();
+        let mut cpu = Vec::new();
+        let (mut moving, mut still) = (Vec::new(), Vec::new());
+        let mut last: Option<u64> = None;
+        for (f, (cam, light)) in views.iter().enumerate() {
+            let move_this = f % 2 == 0;
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            let t0 = Instant::now();
+            if move_this {
+                ex.set_camera(cam).unwrap();
+                ex.set_light(0, light).unwrap();
+            }
+            ex.encode(&mut encoder).unwrap();
+            let dt = t0.elapsed().as_secs_f64() * 1e6;
+            gpu.queue.submit([encoder.finish()]);
+            gpu.wait().unwrap();
+            if f >= 10 && move_this {
+                cpu.push(dt);
+            }
+            // the newest frame's times, read through the ring (each counted once)
+            if let Some((n, times)) = ex.frame_times().unwrap()
+                && last.is_none_or(|l| n > l)
+            {
+                last = Some(n);
+                if let (true, Some(ms)) = (n >= 10, times.lights[0]) {
+                    if n % 2 == 0 { moving.push(ms) } else { still.push(ms) }
+                }
+            }
+        }
+        let (gm, gs) = (median(&mut moving), median(&mut still));
+        let row = format!(
+            "| {t} | {sc} | {:.1} | {:.1} | {gm:.3} | {gs:.3} | {:.3} |\n",
+            median(&mut cpu),
+            percentile(&mut cpu, 0.9),
+            gm / gs
+        );
+        print!("{row}");
+        table.push_str(&row);
+    }
+    let dir = root().join("target").join("embedding");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("frame-cost.md"), &table).unwrap();
+    println!("\n{table}");
+}

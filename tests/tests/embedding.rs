@@ -1,0 +1,452 @@
+//! The runtime as a host renderer uses it (issue 29): the host's device, per-frame camera
+//! and light updates that allocate nothing, recording into the host's encoder, the
+//! visibility sampled as a texture, and the refusal of a device that lacks what a graph
+//! needs. Every comparison of visibilities here is bit for bit: the in-place path and a
+//! fresh binding run the same shaders on the same uniforms, so the arithmetic is the same.
+
+mod support;
+
+use glam::Vec3;
+use sshc_lab::scene::{Camera, Light, Scene};
+use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, Requirements, RuntimeError, SceneInputs};
+use support::{gpu, root};
+
+fn compile(technique: &str) -> sshc::Compiled {
+    support::compile_source(technique, &support::technique_source(technique), &[], &[])
+}
+
+fn scene(name: &str, size: u32, shadow: u32) -> Scene {
+    let mut s = Scene::load(root().join("scenes").join(format!("{name}.ron"))).unwrap_or_else(|e| panic!("{name}: {e}"));
+    s.set_camera_size(size, size);
+    s.shadow_map = shadow;
+    s
+}
+
+/// The bundled techniques, by name, sorted.
+fn techniques() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(root().join("techniques"))
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    names.sort();
+    names
+}
+
+/// Move a light by `d` (a position or centre), or tilt it towards `d` (a direction).
+fn shift(light: &mut Light, d: Vec3) {
+    match light {
+        Light::Point { position } => *position += d,
+        Light::Sphere { center, .. } | Light::Disk { center, .. } | Light::Rectangle { center, .. } => *center += d,
+        Light::Segment { a, b } => {
+            *a += d;
+            *b += d;
+        }
+        Light::Triangle { a, b, c } => {
+            *a += d;
+            *b += d;
+            *c += d;
+        }
+        Light::Directional { direction } | Light::DistantDisk { direction, .. } => *direction = (*direction + 0.1 * d).normalize(),
+    }
+}
+
+/// The scene at frame `f` of an orbit: the light circles its start by a tenth of the
+/// scene's size, and the camera slides sideways.
+fn at_frame(base: &Scene, f: u32) -> Scene {
+    let mut s = base.clone();
+    let (lo, hi) = s.bounds();
+    let r = 0.1 * (hi - lo).length();
+    let a = f as f32 * 0.37;
+    let d = Vec3::new(r * a.cos(), 0.0, r * a.sin()) - Vec3::new(r, 0.0, 0.0);
+    for l in &mut s.lights {
+        shift(l, d);
+    }
+    match &mut s.camera {
+        Camera::Perspective { position, .. } | Camera::Orthographic { position, .. } => *position += 0.02 * f as f32 * Vec3::X * r,
+    }
+    s
+}
+
+fn inputs(s: &Scene, c: &sshc::Compiled) -> SceneInputs {
+    sshc_lab::bind::scene_inputs_for(s, &c.graph).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Every light of the scene as its own inputs (what `bind_lights` takes).
+fn all_lights(s: &Scene, c: &sshc::Compiled) -> Vec<SceneInputs> {
+    (0..s.lights.len())
+        .map(|l| {
+            let mut one = s.clone();
+            one.lights = vec![s.lights[l].clone()];
+            inputs(&one, c)
+        })
+        .collect()
+}
+
+/// The visibility of a freshly loaded and bound executor for these lights.
+fn fresh(c: &sshc::Compiled, lights: &[SceneInputs]) -> Vec<[f32; 4]> {
+    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_lights(lights).unwrap_or_else(|e| panic!("{e}"));
+    ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+    ex.read_visibilities().unwrap_or_else(|e| panic!("{e}")).rgba
+}
+
+/// Set every light and the camera of `ex` to these inputs (the per-frame path).
+fn update(ex: &mut Executor, lights: &[SceneInputs]) {
+    ex.set_camera(&lights[0].camera()).unwrap_or_else(|e| panic!("{e}"));
+    for (l, s) in lights.iter().enumerate() {
+        ex.set_light(l, &s.light_inputs()).unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+/// wgpu's live object counts (its `counters` feature), the command encoders left out
+/// (the host makes one a frame).
+fn live_objects(gpu: &Gpu) -> [(&'static str, isize); 11] {
+    let c = gpu.device.get_internal_counters().hal;
+    [
+        ("buffers", c.buffers.read()),
+        ("textures", c.textures.read()),
+        ("texture views", c.texture_views.read()),
+        ("bind groups", c.bind_groups.read()),
+        ("bind group layouts", c.bind_group_layouts.read()),
+        ("render pipelines", c.render_pipelines.read()),
+        ("compute pipelines", c.compute_pipelines.read()),
+        ("pipeline layouts", c.pipeline_layouts.read()),
+        ("samplers", c.samplers.read()),
+        ("shader modules", c.shader_modules.read()),
+        ("query sets", c.query_sets.read()),
+    ]
+}
+
+/// A scene each technique runs on: its light samples need a segment light.
+fn scene_for(c: &sshc::Compiled) -> &'static str {
+    if sshc_lab::bind::graph_samples(&c.graph) > 0 {
+        "linear"
+    } else {
+        "triangle"
+    }
+}
+
+#[test]
+fn every_bundled_technique_updated_in_place_matches_a_fresh_binding() {
+    let names = techniques();
+    assert!(names.len() >= 15, "{names:?}");
+    for t in &names {
+        let c = compile(t);
+        let base = scene(scene_for(&c), 32, 64);
+        let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+        ex.bind_scene(&inputs(&base, &c)).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let generation = ex.generation();
+        for f in 1..=2 {
+            let now = [inputs(&at_frame(&base, f), &c)];
+            update(&mut ex, &now);
+            ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
+            let moved = ex.read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba;
+            assert!(
+                moved == fresh(&c, &now),
+                "{t}, frame {f}: the updated executor differs from a fresh binding"
+            );
+        }
+        assert_eq!(ex.generation(), generation, "{t}: updates reallocated");
+    }
+}
+
+#[test]
+fn a_hundred_moving_frames_create_no_wgpu_object_and_match_fresh_bindings() {
+    // a raster technique, a Geometry one, a per-sample one and three lights at once
+    for (t, sc) in [
+        ("pcss", "triangle"),
+        ("penumbra-limit-maps", "triangle"),
+        ("linear-light", "linear"),
+        ("pcf", "three-lights"),
+    ] {
+        let c = compile(t);
+        let base = scene(sc, 32, 64);
+        let gpu = gpu();
+        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+        ex.bind_lights(&all_lights(&base, &c)).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let generation = ex.generation();
+        let frame = |ex: &mut Executor| {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            ex.encode(&mut encoder).unwrap_or_else(|e| panic!("{t}: {e}"));
+            gpu.queue.submit([encoder.finish()]);
+            gpu.wait().unwrap_or_else(|e| panic!("{e}"));
+        };
+        frame(&mut ex);
+        let before = live_objects(gpu);
+        let mut checked = Vec::new();
+        for f in 1..=100 {
+            let now = all_lights(&at_frame(&base, f), &c);
+            update(&mut ex, &now);
+            frame(&mut ex);
+            // read after each frame completes, before any read-back of this frame
+            assert_eq!(live_objects(gpu), before, "{t}: frame {f} created or destroyed wgpu objects");
+            if [25, 50, 100].contains(&f) {
+                checked.push((now, ex.read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba));
+            }
+        }
+        assert_eq!(ex.generation(), generation, "{t}: updates reallocated");
+        assert_eq!(ex.frames(), 101);
+        // the orbit moves the shadows: the checked frames differ from each other
+        assert!(
+            checked[0].1 != checked[1].1 && checked[1].1 != checked[2].1,
+            "{t}: the shadows did not move"
+        );
+        for (now, moved) in &checked {
+            assert!(
+                *moved == fresh(&c, now),
+                "{t}: a moving frame differs from a fresh binding of its state"
+            );
+        }
+    }
+}
+
+#[test]
+fn timestamps_come_back_frames_later_without_a_wait_in_recording() {
+    let c = compile("pcss");
+    let s = inputs(&scene("triangle", 32, 64), &c);
+    let gpu = gpu();
+    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(&s).unwrap();
+    for _ in 0..5 {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        ex.encode(&mut encoder).unwrap();
+        gpu.queue.submit([encoder.finish()]);
+    }
+    gpu.wait().unwrap();
+    // the last frame's slot is mapped by this call and read by the next, after the device
+    // has answered; no call waited
+    ex.frame_times().unwrap();
+    gpu.wait().unwrap();
+    let (frame, times) = ex.frame_times().unwrap().expect("lavapipe has timestamp queries");
+    assert_eq!(frame, 4, "the newest frame's times");
+    assert_eq!(times.passes.len(), c.graph.passes.len());
+    for (pass, ms) in &times.passes {
+        assert!(ms.is_some_and(|ms| ms >= 0.0), "pass `{pass}`: {ms:?}");
+    }
+}
+
+/// A host's own device and queue, from its own instance, with its own error handler
+/// (which counts the errors it sees) and what `req` asks for.
+fn host_device(
+    features: wgpu::Features,
+    limits: impl Fn(&wgpu::Adapter) -> wgpu::Limits,
+) -> (Gpu, std::sync::Arc<std::sync::atomic::AtomicUsize>) {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+        backends: wgpu::Backends::VULKAN,
+        ..wgpu::InstanceDescriptor::new_without_display_handle()
+    });
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).expect("an adapter (lavapipe)");
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("host"),
+        required_features: features & adapter.features(),
+        required_limits: limits(&adapter),
+        ..Default::default()
+    }))
+    .unwrap();
+    let seen = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let count = seen.clone();
+    device.on_uncaptured_error(std::sync::Arc::new(move |_: wgpu::Error| {
+        count.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    }));
+    (Gpu::from_host(&adapter, device, queue), seen)
+}
+
+/// The host's own pass: a compute shader that loads the visibility texture and stores it
+/// in a buffer, read back.
+fn host_samples(gpu: &Gpu, visibility: &wgpu::Texture) -> Vec<f32> {
+    let device = &gpu.device;
+    let (w, h) = (visibility.width(), visibility.height());
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("host lighting"),
+        source: wgpu::ShaderSource::Wgsl(
+            "@group(0) @binding(0) var vis: texture_2d<f32>;
+@group(0) @binding(1) var<storage, read_write> out: array<f32>;
+@compute @workgroup_size(8, 8) fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(vis);
+    if id.x < size.x && id.y < size.y { out[id.y * size.x + id.x] = textureLoad(vis, id.xy, 0).r; }
+}"
+            .into(),
+        ),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: None,
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let bytes = (w * h * 4) as u64;
+    let out = device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let read = device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let view = visibility.create_view(&Default::default());
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&view),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: out.as_entire_binding(),
+            },
+        ],
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+    }
+    encoder.copy_buffer_to_buffer(&out, 0, &read, 0, bytes);
+    gpu.queue.submit([encoder.finish()]);
+    read.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    gpu.wait().unwrap();
+    let data = read.slice(..).get_mapped_range().unwrap();
+    data.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
+}
+
+#[test]
+fn on_a_hosts_device_the_graph_records_into_its_frame_and_its_error_handler_stays() {
+    let c = compile("pcss");
+    let s = inputs(&scene("triangle", 32, 64), &c);
+    let req = Requirements::of(&c.graph);
+    let (host, errors) = host_device(req.features() | wgpu::Features::TIMESTAMP_QUERY, |a| req.limits(a.limits()));
+    assert!(host.is_host_device());
+    let mut ex = Executor::new(&host, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(&s).unwrap_or_else(|e| panic!("{e}"));
+    // the host's frame: its encoder, its submission
+    let mut encoder = host.device.create_command_encoder(&Default::default());
+    ex.encode(&mut encoder).unwrap();
+    host.queue.submit([encoder.finish()]);
+    host.wait().unwrap();
+    let ours = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
+    // the same graph on the runtime's own device
+    let mut own = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    own.bind_scene(&s).unwrap();
+    own.run_frame().unwrap();
+    assert!(
+        ours == own.read_camera(CameraOutput::Visibility).unwrap().channel(0),
+        "the host's device gives another visibility"
+    );
+    // the host samples the visibility texture in its own pass
+    assert!(
+        host_samples(&host, ex.visibility().unwrap()) == ours,
+        "the host's pass reads another visibility"
+    );
+    assert_eq!(errors.load(std::sync::atomic::Ordering::SeqCst), 0);
+    // an error outside any scope reaches the host's handler, not the runtime's
+    let _ = host.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("invalid on purpose"),
+        size: 4,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::MAP_WRITE,
+        mapped_at_creation: false,
+    });
+    host.wait().unwrap();
+    assert_eq!(
+        errors.load(std::sync::atomic::Ordering::SeqCst),
+        1,
+        "the host's handler saw its error"
+    );
+}
+
+#[test]
+fn a_device_without_what_a_graph_needs_is_refused_with_each_need_and_its_pass() {
+    // a bare device: no features, WebGPU's default limits
+    let (bare, _) = host_device(wgpu::Features::empty(), |_| wgpu::Limits::default());
+    let mut refused = 0;
+    let mut lines = Vec::new();
+    for t in techniques() {
+        let c = compile(&t);
+        let missing = Requirements::of(&c.graph).missing(&bare);
+        match Executor::new(&bare, c.graph.clone(), c.shaders.clone()) {
+            Ok(_) => assert!(missing.is_empty(), "{t} loaded on a device lacking {missing:?}"),
+            Err(RuntimeError::Unsatisfied {
+                technique,
+                missing: listed,
+            }) => {
+                assert_eq!(technique, c.graph.technique);
+                assert_eq!(listed, missing, "{t}");
+                assert!(!listed.is_empty());
+                // every line names a pass of the graph, or the graph itself
+                for l in &listed {
+                    assert!(
+                        c.graph.passes.iter().any(|p| l.contains(&format!("needed by pass `{}`", p.name)))
+                            || l.contains("needed by the graph")
+                            || l.contains("needed by the Frame uniform")
+                            || l.contains("a raster pass renders texture `"),
+                        "{t}: {l}"
+                    );
+                }
+                refused += 1;
+                lines.extend(listed);
+            }
+            Err(e) => panic!("{t}: refused for another reason: {e}"),
+        }
+    }
+    assert!(refused > 0);
+    // what the bundled techniques need beyond WebGPU: the camera outputs' 36 bytes a pixel
+    // (R32Float 4, Rgba8Unorm 8, Rgba32Float 16, Rgba16Float 8, over the default 32), and
+    // filtering of 32-bit float maps
+    assert!(
+        lines.iter().any(|l| l.contains("max_color_attachment_bytes_per_sample of 36")),
+        "{lines:#?}"
+    );
+    assert!(lines.iter().any(|l| l.contains("FLOAT32_FILTERABLE")), "{lines:#?}");
+    // and a device with exactly what the graph asks for runs it
+    let c = compile("vsm");
+    let req = Requirements::of(&c.graph);
+    let (fit, _) = host_device(req.features(), |a| {
+        let _ = a;
+        req.limits(wgpu::Limits::default())
+    });
+    Executor::new(&fit, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn per_frame_updates_refuse_what_would_need_a_new_binding() {
+    let c = compile("pcss");
+    let s = inputs(&scene("triangle", 32, 64), &c);
+    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let e = ex.set_camera(&s.camera()).unwrap_err();
+    assert!(e.to_string().contains("no scene is bound"), "{e}");
+    ex.bind_scene(&s).unwrap();
+    let mut cam = s.camera();
+    cam.view_proj[5] = f32::NAN;
+    let e = ex.set_camera(&cam).unwrap_err();
+    assert!(e.to_string().contains("not finite"), "{e}");
+    let mut light = s.light_inputs();
+    light.position[0] = f32::INFINITY;
+    let e = ex.set_light(0, &light).unwrap_err();
+    assert!(e.to_string().contains("light 0") && e.to_string().contains("not finite"), "{e}");
+    let mut light = s.light_inputs();
+    light.far = light.near;
+    assert!(ex.set_light(0, &light).unwrap_err().to_string().contains("depth range"));
+    let e = ex.set_light(1, &s.light_inputs()).unwrap_err();
+    assert!(e.to_string().contains("light 1 is not bound"), "{e}");
+    // a sample count is a size
+    let lc = compile("linear-light");
+    let ls = inputs(&scene("linear", 32, 64), &lc);
+    let mut lex = Executor::new(gpu(), lc.graph.clone(), lc.shaders.clone()).unwrap();
+    lex.bind_scene(&ls).unwrap();
+    let mut light = ls.light_inputs();
+    light.samples.pop();
+    let e = lex.set_light(0, &light).unwrap_err();
+    assert!(e.to_string().contains("a new number of samples is a new binding"), "{e}");
+    assert_eq!(ex.generation(), 1);
+}
