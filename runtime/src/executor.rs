@@ -8,9 +8,9 @@ use crate::image::{Image, read_back, read_table};
 use crate::lights::{Combine, MAX_LIGHTS};
 use crate::requirements::Requirements;
 use crate::resources::{Resources, f32_bytes, mip_count};
-use crate::steps::{self, Group0, PassNode};
+use crate::steps::{self, Group0, PassNode, Usages};
 use crate::timing::{FrameTimes, Timestamps};
-use crate::update::FrameWriter;
+use crate::update::{FrameWriter, LightUniforms};
 use crate::validate::validate_wgsl;
 use std::collections::HashMap;
 use std::path::Path;
@@ -115,13 +115,19 @@ pub struct Executor {
     pub graph: PassGraph,
     /// One node per step, per pass, in execution order.
     passes: Vec<PassNode>,
+    /// What the graph's resources are used as (from the steps' plans).
+    usages: Usages,
     params: Vec<u8>,
     params_buf: Option<wgpu::Buffer>,
     sampler: wgpu::Sampler,
     /// The resources of each bound light (one for `bind_scene`; see [`Executor::bind_lights`]).
     bound: Vec<Resources>,
-    /// What each bound light's uniforms were last written from, and the camera.
+    /// What each bound light's uniforms were last set from, and the camera.
     lights_state: Vec<LightInputs>,
+    /// Each bound light's uniforms as the next frame writes them.
+    uniforms: Vec<LightUniforms>,
+    /// The params changed since they were last written.
+    params_dirty: bool,
     camera: Option<Camera>,
     /// The bound casters' bounding box (world space): the per-frame re-check of a
     /// specialised graph's depth floor ([`Executor::set_light`]).
@@ -149,12 +155,15 @@ impl Executor {
         };
         let text = read_capped(graph_path, MAX_GRAPH_BYTES)?;
         // A syntax error has a line and column: named with the file (file:line:column).
-        let graph = PassGraph::from_ron(&text).map_err(|e| match e {
-            graph::GraphError::Syntax { message, line, column } => RuntimeError::File {
-                path: format!("{}:{line}:{column}", graph_path.display()).into(),
-                message: format!("not a valid pass graph: {message}"),
-            },
-            e => RuntimeError::Graph(e),
+        let graph = PassGraph::from_ron(&text).map_err(|e| {
+            if let graph::GraphError::Syntax { message, line, column } = e {
+                RuntimeError::File {
+                    path: format!("{}:{line}:{column}", graph_path.display()).into(),
+                    message: format!("not a valid pass graph: {message}"),
+                }
+            } else {
+                RuntimeError::Graph(e)
+            }
         })?;
         let dir = graph_path.parent().unwrap_or(Path::new("."));
         let canon_dir = dir.canonicalize().map_err(|e| io(dir, e))?;
@@ -168,12 +177,16 @@ impl Executor {
                     message: "lies outside the graph's folder (through a link)".into(),
                 });
             }
-            let src = read_capped(&canon, MAX_SHADER_BYTES).map_err(|e| match e {
-                RuntimeError::File { message, .. } => RuntimeError::File {
-                    path: path.clone(),
-                    message,
-                },
-                e => e,
+            // a file error names the path as the graph gives it, not the resolved one
+            let src = read_capped(&canon, MAX_SHADER_BYTES).map_err(|e| {
+                if let RuntimeError::File { message, .. } = e {
+                    RuntimeError::File {
+                        path: path.clone(),
+                        message,
+                    }
+                } else {
+                    e
+                }
             })?;
             shaders.push((p.shader.clone(), src));
         }
@@ -270,6 +283,7 @@ impl Executor {
         let timestamps = Timestamps::new(gpu, passes.iter().map(|p| p.name.clone()).collect(), 1);
         Ok(Executor {
             gpu: gpu.clone(),
+            usages: Usages::of(&graph),
             graph,
             passes,
             params,
@@ -277,6 +291,8 @@ impl Executor {
             sampler,
             bound: Vec::new(),
             lights_state: Vec::new(),
+            uniforms: Vec::new(),
+            params_dirty: true,
             camera: None,
             caster_bounds: None,
             generation: 0,
@@ -310,6 +326,7 @@ impl Executor {
         }
         let bytes = param_bytes(p.ty, value);
         self.params[off as usize..off as usize + 4].copy_from_slice(&bytes);
+        self.params_dirty = true;
         Ok(())
     }
 
@@ -376,6 +393,11 @@ impl Executor {
         self.timestamps = Timestamps::new(&gpu, self.passes.iter().map(|p| p.name.clone()).collect(), lights.len());
         self.bound = bound;
         self.lights_state = lights.iter().map(SceneInputs::light_inputs).collect();
+        // binding wrote every uniform: nothing is pending
+        self.uniforms = lights
+            .iter()
+            .map(|s| LightUniforms::new(&s.camera(), &s.light_inputs(), s.shadow_size, true))
+            .collect();
         self.camera = Some(lights[0].camera());
         self.caster_bounds = caster_bounds(&lights[0]);
         self.generation += 1;
@@ -390,22 +412,23 @@ impl Executor {
         self.generation
     }
 
-    /// Set the camera of every bound light: writes their `Frame` uniforms, nothing else.
-    /// Its size is the bound one (a new size is a new binding).
+    /// Set the camera of every bound light: their `Frame` uniforms change (written by the
+    /// next [`Executor::encode`]), nothing else. Its size is the bound one (a new size is a
+    /// new binding).
     pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         camera.check()?;
         if self.bound.is_empty() {
             return Err(RuntimeError::NotFound("no scene is bound: call bind_scene first".into()));
         }
-        let writer = FrameWriter::new(&self.gpu.queue);
-        for (res, light) in self.bound.iter().zip(&self.lights_state) {
-            writer.light(res, camera, light);
+        for ((res, light), u) in self.bound.iter().zip(&self.lights_state).zip(&mut self.uniforms) {
+            u.set_camera(camera, light, res.shadow_size);
         }
         self.camera = Some(*camera);
         Ok(())
     }
 
-    /// Set bound light `l`: writes its `Frame` and `LightSamples` uniforms, nothing else.
+    /// Set bound light `l`: its `Frame` and `LightSamples` uniforms change (written by the
+    /// next [`Executor::encode`]), nothing else.
     /// Its number of samples is the bound one (a new number is a new binding). A graph
     /// specialised for a scene is re-checked here from the casters' bounding box: its
     /// corners' least depth is a lower bound of the triangles', so a light the bounds
@@ -453,7 +476,7 @@ impl Executor {
                 }
             }
         }
-        FrameWriter::new(&self.gpu.queue).light(res, &camera, light);
+        self.uniforms[l] = LightUniforms::new(&camera, light, res.shadow_size, false);
         self.lights_state[l] = light.clone();
         Ok(())
     }
@@ -488,7 +511,7 @@ impl Executor {
                 if l > 0 { format!(" (light {l})") } else { String::new() },
             )));
         }
-        let res = Resources::new(gpu, &self.graph, s, max_bytes)?;
+        let res = Resources::new(gpu, &self.graph, &self.usages, s, max_bytes)?;
         if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
             return Err(RuntimeError::Param(format!(
                 "technique `{}` renders {} light-sample view(s), but the scene gives {} (`SceneInputs::samples`)",
@@ -609,15 +632,19 @@ impl Executor {
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         self.bound()?;
         if let Some(t) = &mut self.timestamps {
-            t.collect(&self.gpu)?;
+            // the host's submissions fire the mapping callbacks: no poll here
+            t.collect(&self.gpu, false)?;
         }
         let writer = FrameWriter::new(&self.gpu.queue);
-        if let Some(buf) = &self.params_buf {
+        if let Some(buf) = &self.params_buf
+            && self.params_dirty
+        {
             writer.params(buf, &self.params);
+            self.params_dirty = false;
         }
         let frame = self.frames;
-        for res in &self.bound {
-            writer.counters(res, frame as u32);
+        for (res, u) in self.bound.iter().zip(&mut self.uniforms) {
+            writer.light(res, u, frame as u32);
         }
         let slot = self.timestamps.as_ref().and_then(|t| t.begin(frame));
         for (l, res) in self.bound.iter().enumerate() {
@@ -670,9 +697,6 @@ impl Executor {
         if let (Some(t), Some(slot)) = (&mut self.timestamps, slot) {
             t.finish(encoder, slot, frame);
         }
-        for res in &self.bound {
-            res.frames_run.set(res.frames_run.get() + 1);
-        }
         self.frames += 1;
         Ok(())
     }
@@ -682,7 +706,7 @@ impl Executor {
     /// timestamp queries.
     pub fn frame_times(&mut self) -> Result<Option<(u64, FrameTimes)>> {
         let Some(t) = &mut self.timestamps else { return Ok(None) };
-        t.collect(&self.gpu)?;
+        t.collect(&self.gpu, true)?;
         Ok(t.latest().cloned())
     }
 
@@ -708,9 +732,9 @@ impl Executor {
             return Ok(FrameTimes::untimed(&names, self.bound.len()));
         };
         // map this frame's slot, wait for the device, and take its times
-        t.collect(&gpu)?;
+        t.collect(&gpu, false)?;
         gpu.wait()?;
-        t.collect(&gpu)?;
+        t.collect(&gpu, false)?;
         Ok(match t.latest() {
             Some((f, times)) if *f == frame => times.clone(),
             // the slot was still pending (frames encoded by the host without waiting)

@@ -105,7 +105,9 @@ fn decode_texel(b: &[u8], f: Format) -> [f32; 4] {
     let (n, size) = match f {
         Format::R8Unorm | Format::R16Unorm | Format::R16Float | Format::R32Float => (1, f.bytes_per_texel()),
         Format::Rg8Unorm | Format::Rg16Unorm | Format::Rg16Float | Format::Rg32Float => (2, f.bytes_per_texel() / 2),
-        _ => (4, f.bytes_per_texel() / 4),
+        Format::Rgba8Unorm | Format::Rgba16Unorm | Format::Rgba16Float | Format::Rgba32Float | Format::SummedAreaU32 => {
+            (4, f.bytes_per_texel() / 4)
+        }
     };
     for (i, o) in out.iter_mut().enumerate().take(n) {
         let c = &b[i * size as usize..(i + 1) * size as usize];
@@ -113,7 +115,9 @@ fn decode_texel(b: &[u8], f: Format) -> [f32; 4] {
             Format::R8Unorm | Format::Rg8Unorm | Format::Rgba8Unorm => c[0] as f32 / 255.0,
             Format::R16Unorm | Format::Rg16Unorm | Format::Rgba16Unorm => u16::from_le_bytes([c[0], c[1]]) as f32 / 65535.0,
             Format::R16Float | Format::Rg16Float | Format::Rgba16Float => half::f16::from_bits(u16::from_le_bytes([c[0], c[1]])).to_f32(),
-            _ => f32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+            Format::R32Float | Format::Rg32Float | Format::Rgba32Float | Format::SummedAreaU32 => {
+                f32::from_le_bytes([c[0], c[1], c[2], c[3]])
+            }
         };
     }
     out

@@ -6,6 +6,8 @@
 //! schema is the crate `sshc-graph`, re-exported here as [`graph`] so that a program that
 //! runs graphs needs one dependency.
 
+#![deny(clippy::wildcard_enum_match_arm)]
+
 pub mod adjacency;
 mod device;
 mod error;

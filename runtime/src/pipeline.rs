@@ -172,7 +172,7 @@ impl Slot {
         };
         let visibility = match self {
             Slot::Buffer { read_only: false } | Slot::StorageTexture { .. } => wgpu::ShaderStages::COMPUTE,
-            _ => wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            Slot::Texture { .. } | Slot::Buffer { read_only: true } => wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
         };
         wgpu::BindGroupLayoutEntry {
             binding,

@@ -6,7 +6,9 @@
 
 use crate::device::Gpu;
 use crate::error::{Result, RuntimeError};
-use crate::graph::{self, Draw, Format, PassGraph};
+use crate::graph::{self, Format, PassGraph};
+use crate::resources::{CAMERA_FORMATS, wgpu_format};
+use crate::steps::{self, Dispatch, NodeKind, Targets};
 
 /// A device limit a graph can exceed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -128,16 +130,19 @@ struct StepCounts {
     storage_buffers: u64,
     storage_textures: u64,
     uniforms: u64,
-    /// Colour attachments and their bytes per sample (raster steps).
-    attachments: Vec<Format>,
+    /// Colour attachments (raster steps).
+    attachments: Vec<wgpu::TextureFormat>,
     groups: u64,
     /// Workgroup size (x, y) of a compute step.
     workgroup: Option<(u32, u32)>,
+    /// It blends into its attachments.
+    blends: bool,
 }
 
+/// The counts of a step, from its plan ([`steps::plan`], the runtime's one reading of `Draw`).
 fn step_counts(graph: &PassGraph, step: &graph::Step) -> StepCounts {
     let table = |name: &str| graph.texture(name).is_some_and(|t| t.format == Format::SummedAreaU32);
-    let format = |name: &str| graph.texture(name).map(|t| t.format);
+    let format = |name: &str| graph.texture(name).and_then(|t| wgpu_format(t.format));
     let mut c = StepCounts {
         uniforms: 1 + u64::from(step.params) + u64::from(step.light_samples),
         ..Default::default()
@@ -150,54 +155,49 @@ fn step_counts(graph: &PassGraph, step: &graph::Step) -> StepCounts {
         }
     }
     let writes = step.writes.len() as u64;
-    let line = Some((graph::COMPUTE_WORKGROUP, 1));
-    let texel = Some((graph::TEXEL_WORKGROUP, graph::TEXEL_WORKGROUP));
-    // groups: 0 always; 1 (reads, or empty to keep later indices), 2 and 3 as the step binds
-    match &step.draw {
-        Draw::SceneFromLight | Draw::FullScreen | Draw::MipLevels => {
-            c.attachments = step.writes.iter().filter_map(|w| format(&w.texture)).collect();
-            c.groups = 1 + u64::from(!step.reads.is_empty());
+    let kind = steps::plan(step);
+    let group3 = steps::geometry_group(&kind).is_some();
+    match kind {
+        NodeKind::Raster(r) => {
+            c.attachments = match &r.targets {
+                Targets::Textures(t) => t.iter().filter_map(|w| format(&w.texture)).collect(),
+                Targets::Camera => CAMERA_FORMATS.to_vec(),
+                Targets::GBuffer => graph::GBUFFER.iter().filter_map(|f| wgpu_format(*f)).collect(),
+            };
+            c.blends = r.blend.is_some();
+            // a generated buffer's draw reads it at group 3 (groups 1 and 2 empty)
+            c.storage_buffers += u64::from(group3);
+            c.groups = if group3 { 4 } else { 1 + u64::from(!step.reads.is_empty()) };
         }
-        Draw::SceneFromCamera => {
-            c.attachments = vec![Format::R32Float, Format::Rgba8Unorm, Format::Rgba32Float, Format::Rgba16Float];
-            c.groups = 1 + u64::from(!step.reads.is_empty());
-        }
-        Draw::CameraGBuffer => {
-            c.attachments = graph::GBUFFER.to_vec();
-            c.groups = 1 + u64::from(!step.reads.is_empty());
-        }
-        Draw::ComputePixels => {
-            // the four camera outputs stored, the G-buffer read at group 3
-            c.storage_textures = 4;
-            c.sampled += graph::GBUFFER.len() as u64;
-            c.groups = 4;
-            c.workgroup = texel;
-        }
-        Draw::ComputeRows | Draw::ComputeColumns => {
-            c.storage_buffers += writes;
-            c.groups = 3;
-            c.workgroup = line;
-        }
-        Draw::ComputeTexels | Draw::ComputeMipLevels => {
-            c.storage_textures = writes;
-            c.groups = 3;
-            c.workgroup = texel;
-        }
-        Draw::Silhouettes { .. } => {
-            // edges, face planes, edge faces, the generated buffer, the vertex claims
-            c.storage_buffers += writes + 5;
-            c.groups = 4;
-            c.workgroup = line;
-        }
-        Draw::Discontinuities { .. } => {
-            c.storage_buffers += writes + 1;
-            c.groups = 4;
-            c.workgroup = line;
-        }
-        Draw::Primitives { .. } => {
-            c.attachments = step.writes.iter().filter_map(|w| format(&w.texture)).collect();
-            c.storage_buffers += 1;
-            c.groups = 4;
+        NodeKind::Compute(k) => {
+            let line = (graph::COMPUTE_WORKGROUP, 1);
+            let texel = (graph::TEXEL_WORKGROUP, graph::TEXEL_WORKGROUP);
+            c.groups = if group3 { 4 } else { 3 };
+            c.workgroup = Some(match k.dispatch {
+                Dispatch::Pixels => {
+                    // the four camera outputs stored, the G-buffer read at group 3
+                    c.storage_textures = CAMERA_FORMATS.len() as u64;
+                    c.sampled += graph::GBUFFER.len() as u64;
+                    texel
+                }
+                Dispatch::Texels | Dispatch::MipTexels => {
+                    c.storage_textures = writes;
+                    texel
+                }
+                Dispatch::ShadowMapLines | Dispatch::Indirect(_) => {
+                    c.storage_buffers += writes;
+                    line
+                }
+                Dispatch::Edges => {
+                    // edges, face planes, edge faces, the generated buffer, the vertex claims
+                    c.storage_buffers += writes + 5;
+                    line
+                }
+                Dispatch::Cells(_) => {
+                    c.storage_buffers += writes + 1;
+                    line
+                }
+            });
         }
     }
     c
@@ -206,9 +206,9 @@ fn step_counts(graph: &PassGraph, step: &graph::Step) -> StepCounts {
 /// Bytes per sample of these colour attachments, as wgpu counts them toward
 /// `max_color_attachment_bytes_per_sample`: each format's render-target byte cost, after
 /// aligning the running total to its component alignment (WebGPU's rule).
-fn attachment_bytes(formats: &[Format]) -> u64 {
+fn attachment_bytes(formats: &[wgpu::TextureFormat]) -> u64 {
     let mut total = 0u32;
-    for f in formats.iter().filter_map(|f| crate::resources::wgpu_format(*f)) {
+    for f in formats {
         total = total.next_multiple_of(f.target_component_alignment().unwrap_or(1));
         total += f.target_pixel_byte_cost().unwrap_or(0);
     }
@@ -288,21 +288,7 @@ impl Requirements {
                         }
                     }
                 }
-                let blends = match &step.draw {
-                    Draw::Primitives { resolve, .. } => *resolve != graph::Resolve::Nearest,
-                    Draw::SceneFromLight
-                    | Draw::SceneFromCamera
-                    | Draw::CameraGBuffer
-                    | Draw::ComputePixels
-                    | Draw::FullScreen
-                    | Draw::MipLevels
-                    | Draw::ComputeRows
-                    | Draw::ComputeColumns
-                    | Draw::ComputeTexels
-                    | Draw::ComputeMipLevels
-                    | Draw::Silhouettes { .. }
-                    | Draw::Discontinuities { .. } => false,
-                };
+                let blends = step_counts(graph, step).blends;
                 let raster = step.compute.is_none();
                 for w in &step.writes {
                     let Some(t) = graph.texture(&w.texture) else { continue };
@@ -315,7 +301,7 @@ impl Requirements {
                     }
                     if raster
                         && is_norm16(t.format)
-                        && let Some(f) = crate::resources::wgpu_format(t.format)
+                        && let Some(f) = wgpu_format(t.format)
                         && !r.rendered_norm16.iter().any(|(n, _)| n == &t.name)
                     {
                         r.rendered_norm16.push((t.name.clone(), f));

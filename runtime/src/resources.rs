@@ -8,6 +8,7 @@ use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
 use crate::graph::{self, DRAW_ARGS_BYTES, FRAME_SIZE, Format, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
 use crate::pipeline::DEPTH_FORMAT;
+use crate::steps::Usages;
 use std::collections::HashMap;
 
 /// Number of levels of a full mip chain.
@@ -101,8 +102,6 @@ pub(crate) struct Resources {
     /// The `Frame` of each light-sample view (`SceneInputs::sample_frame`), for the passes
     /// that render one view per sample.
     pub sample_frames: Vec<wgpu::Buffer>,
-    /// Frames run on these resources (the `frame` input of the next one).
-    pub frames_run: std::cell::Cell<u32>,
     /// The `LightSamples` uniform (every sample's view).
     pub light_samples: wgpu::Buffer,
     /// Light samples bound, and whether they close a loop.
@@ -116,7 +115,7 @@ pub(crate) struct Resources {
 
 impl Resources {
     /// Check the scene's sizes against the device and `max_bytes`, then create everything.
-    pub fn new(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) -> Result<Resources> {
+    pub fn new(gpu: &Gpu, graph: &PassGraph, usages: &Usages, s: &SceneInputs, max_bytes: u64) -> Result<Resources> {
         let max_dim = gpu.limits.max_texture_dimension_2d;
         if s.shadow_size == 0 || s.shadow_size > max_dim {
             return Err(RuntimeError::Limit {
@@ -185,7 +184,7 @@ impl Resources {
             let adj = Adjacency::build(&triangles(s), meshes(s));
             let edges = adj.edges.len() as u64;
             for b in &graph.buffers {
-                let records = buffer_records(graph, &b.name, edges, s.shadow_size);
+                let records = buffer_records(usages, &b.name, edges, s.shadow_size);
                 let size = generated_bytes(b.record_bytes, records);
                 if size > storage_limit {
                     return Err(RuntimeError::Limit {
@@ -219,11 +218,7 @@ impl Resources {
             let mut tables = HashMap::new();
             // textures a compute step stores into (the compute schedule of a Map pass)
             let storage = |name: &str| {
-                let stored = graph.passes.iter().flat_map(|p| &p.steps).any(|st| {
-                    matches!(st.draw, graph::Draw::ComputeTexels | graph::Draw::ComputeMipLevels)
-                        && st.writes.iter().any(|w| w.texture == name)
-                });
-                if stored {
+                if usages.stored.contains(name) {
                     wgpu::TextureUsages::STORAGE_BINDING
                 } else {
                     wgpu::TextureUsages::empty()
@@ -260,9 +255,8 @@ impl Resources {
                 });
                 textures.insert(t.name.clone(), tex);
             }
-            let draws = |d: graph::Draw| graph.passes.iter().flat_map(|p| &p.steps).any(|st| st.draw == d);
             // a deferred Shade stores the camera outputs from a compute step
-            let camera_usage = if draws(graph::Draw::ComputePixels) {
+            let camera_usage = if usages.camera_stored {
                 wgpu::TextureUsages::STORAGE_BINDING
             } else {
                 wgpu::TextureUsages::empty()
@@ -291,7 +285,7 @@ impl Resources {
                 .map(|(n, f)| plain(n, cw, ch, f, camera_usage | wgpu::TextureUsages::TEXTURE_BINDING))
                 .collect();
             let camera_depth = plain("camera depth", cw, ch, DEPTH_FORMAT, none);
-            let gbuffer = if draws(graph::Draw::CameraGBuffer) {
+            let gbuffer = if usages.gbuffer {
                 ["g-buffer world", "g-buffer normal", "g-buffer footprint"]
                     .iter()
                     .zip(graph::GBUFFER)
@@ -344,7 +338,7 @@ impl Resources {
             let mut generated = HashMap::new();
             let edges = adjacency.map(|adj| {
                 for b in &graph.buffers {
-                    let records = buffer_records(graph, &b.name, adj.edges.len() as u64, s.shadow_size);
+                    let records = buffer_records(usages, &b.name, adj.edges.len() as u64, s.shadow_size);
                     let size = generated_bytes(b.record_bytes, records) as usize;
                     // vertex_count 0 (reset every frame), instance_count 1, first vertex and instance 0
                     let args: Vec<u8> = [0u32, 1, 0, 0].iter().flat_map(|x| x.to_le_bytes()).collect();
@@ -376,7 +370,6 @@ impl Resources {
                 gbuffer,
                 frame,
                 sample_frames,
-                frames_run: std::cell::Cell::new(0),
                 light_samples,
                 samples: s.samples.len() as u32,
                 samples_closed: s.samples_closed,
@@ -414,13 +407,8 @@ impl Resources {
 /// Records a generated buffer holds: one per edge for a `Silhouettes` step's, one per
 /// triangle of the mesh of texel centres (two per cell, at most
 /// [`graph::MAX_DISCONTINUITY_RECORDS`]) for a `Discontinuities` step's.
-fn buffer_records(graph: &PassGraph, name: &str, edges: u64, shadow_size: u32) -> u64 {
-    let discontinuities = graph
-        .passes
-        .iter()
-        .flat_map(|p| &p.steps)
-        .any(|s| matches!(&s.draw, graph::Draw::Discontinuities { buffer, .. } if buffer == name));
-    if discontinuities {
+fn buffer_records(usages: &Usages, name: &str, edges: u64, shadow_size: u32) -> u64 {
+    if usages.per_cell.contains(name) {
         let cells = u64::from(shadow_size.saturating_sub(1)).pow(2);
         (2 * cells).min(u64::from(graph::MAX_DISCONTINUITY_RECORDS))
     } else {

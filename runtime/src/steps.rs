@@ -44,24 +44,24 @@ pub(crate) struct StepNode {
     bound: Vec<Vec<Bound>>,
 }
 
-enum NodeKind {
+pub(crate) enum NodeKind {
     Raster(RasterStep),
     Compute(ComputeStep),
 }
 
 /// A raster step: one render pass per level it writes.
-struct RasterStep {
-    targets: Targets,
+pub(crate) struct RasterStep {
+    pub targets: Targets,
     /// Clear colour of each target.
     clear: Vec<wgpu::Color>,
     depth: Option<DepthTarget>,
-    draw: DrawCall,
+    pub draw: DrawCall,
     levels: Levels,
     /// How overlapping fragments combine (generated primitives), or none (they replace).
-    blend: Option<wgpu::BlendState>,
+    pub blend: Option<wgpu::BlendState>,
 }
 
-enum Targets {
+pub(crate) enum Targets {
     /// Layers of the graph's textures.
     Textures(Vec<Target>),
     /// The four camera outputs.
@@ -71,13 +71,13 @@ enum Targets {
 }
 
 #[derive(Clone, Copy)]
-enum DepthTarget {
+pub(crate) enum DepthTarget {
     Light,
     Camera,
 }
 
 /// What a raster step draws.
-enum DrawCall {
+pub(crate) enum DrawCall {
     /// The scene's triangles.
     Scene,
     /// One full-screen triangle (3 vertices, no vertex buffer).
@@ -88,7 +88,7 @@ enum DrawCall {
 }
 
 #[derive(Clone, Copy, PartialEq)]
-enum Levels {
+pub(crate) enum Levels {
     /// Level 0.
     Base,
     /// Levels 1.. of the targets' mip chain, each reading the level above.
@@ -96,17 +96,17 @@ enum Levels {
 }
 
 /// A compute step: one compute pass.
-struct ComputeStep {
+pub(crate) struct ComputeStep {
     /// The summed-area tables or storage textures it writes (group 2).
-    writes: Vec<String>,
-    dispatch: Dispatch,
+    pub writes: Vec<String>,
+    pub dispatch: Dispatch,
     /// The generated buffer a `Silhouettes` step appends to (group 3); its vertex count is
     /// reset before the dispatch.
-    generated: Option<String>,
+    pub generated: Option<String>,
 }
 
 /// How many workgroups a compute step runs.
-enum Dispatch {
+pub(crate) enum Dispatch {
     /// One invocation per row (or column) of the shadow map, [`graph::COMPUTE_WORKGROUP`]
     /// per workgroup.
     ShadowMapLines,
@@ -231,6 +231,166 @@ const GBUFFER_CLEAR: [wgpu::Color; 3] = [
     wgpu::Color::TRANSPARENT,
 ];
 
+/// What a step is, decided from its [`Draw`]: the runtime's one match on `Draw`. Plain
+/// data, no device: [`build`] turns it into a node with a pipeline, the resources take
+/// their usages from it ([`Usages`]) and [`crate::gpu::Requirements`] its attachments,
+/// bindings and workgroups.
+pub(crate) fn plan(step: &graph::Step) -> NodeKind {
+    let n = step.writes.len();
+    let raster = |targets, clear, depth, draw, levels| {
+        NodeKind::Raster(RasterStep {
+            targets,
+            clear,
+            depth,
+            draw,
+            levels,
+            blend: None,
+        })
+    };
+    match &step.draw {
+        Draw::SceneFromLight => raster(
+            Targets::Textures(step.writes.clone()),
+            // no occluder: the far plane
+            vec![WHITE; n],
+            Some(DepthTarget::Light),
+            DrawCall::Scene,
+            Levels::Base,
+        ),
+        Draw::SceneFromCamera => raster(
+            Targets::Camera,
+            CAMERA_CLEAR.to_vec(),
+            Some(DepthTarget::Camera),
+            DrawCall::Scene,
+            Levels::Base,
+        ),
+        Draw::CameraGBuffer => raster(
+            Targets::GBuffer,
+            GBUFFER_CLEAR.to_vec(),
+            Some(DepthTarget::Camera),
+            DrawCall::Scene,
+            Levels::Base,
+        ),
+        Draw::ComputePixels => NodeKind::Compute(ComputeStep {
+            writes: vec![],
+            dispatch: Dispatch::Pixels,
+            generated: None,
+        }),
+        Draw::FullScreen => raster(
+            Targets::Textures(step.writes.clone()),
+            vec![wgpu::Color::TRANSPARENT; n],
+            None,
+            DrawCall::FullScreenTriangle,
+            Levels::Base,
+        ),
+        Draw::MipLevels => raster(
+            Targets::Textures(step.writes.clone()),
+            vec![wgpu::Color::TRANSPARENT; n],
+            None,
+            DrawCall::FullScreenTriangle,
+            Levels::BelowBase,
+        ),
+        Draw::ComputeRows | Draw::ComputeColumns => NodeKind::Compute(ComputeStep {
+            writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
+            dispatch: Dispatch::ShadowMapLines,
+            generated: None,
+        }),
+        Draw::ComputeTexels => NodeKind::Compute(ComputeStep {
+            writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
+            dispatch: Dispatch::Texels,
+            generated: None,
+        }),
+        Draw::ComputeMipLevels => NodeKind::Compute(ComputeStep {
+            writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
+            dispatch: Dispatch::MipTexels,
+            generated: None,
+        }),
+        Draw::Silhouettes { buffer } => NodeKind::Compute(ComputeStep {
+            writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
+            dispatch: Dispatch::Edges,
+            generated: Some(buffer.clone()),
+        }),
+        Draw::Discontinuities { buffer, source } => NodeKind::Compute(ComputeStep {
+            writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
+            dispatch: Dispatch::Cells(*source),
+            generated: Some(buffer.clone()),
+        }),
+        Draw::Primitives { buffer, resolve } => {
+            let (clear, blend) = resolve_state(*resolve);
+            // A depth test: the light's depth attachment (cleared to 1), no blending.
+            let depth = (*resolve == Resolve::Nearest).then_some(DepthTarget::Light);
+            // blending 32-bit floats is a feature: `Requirements` checks it
+            NodeKind::Raster(RasterStep {
+                targets: Targets::Textures(step.writes.clone()),
+                clear: vec![clear; n],
+                depth,
+                draw: DrawCall::Generated(buffer.clone()),
+                levels: Levels::Base,
+                blend,
+            })
+        }
+    }
+}
+
+/// The group 3 layout a step's plan binds (Geometry passes and a deferred Shade).
+pub(crate) fn geometry_group(kind: &NodeKind) -> Option<GeometryGroup> {
+    match kind {
+        NodeKind::Compute(c) => match (&c.dispatch, &c.generated) {
+            (Dispatch::Edges, Some(_)) => Some(GeometryGroup::Classify),
+            (Dispatch::Cells(_), Some(_)) => Some(GeometryGroup::Discontinuities),
+            (Dispatch::Pixels, _) => Some(GeometryGroup::GBuffer),
+            (
+                Dispatch::ShadowMapLines
+                | Dispatch::Edges
+                | Dispatch::Texels
+                | Dispatch::MipTexels
+                | Dispatch::Cells(_)
+                | Dispatch::Indirect(_),
+                _,
+            ) => None,
+        },
+        NodeKind::Raster(r) => match r.draw {
+            DrawCall::Generated(_) => Some(GeometryGroup::Draw),
+            DrawCall::Scene | DrawCall::FullScreenTriangle => None,
+        },
+    }
+}
+
+/// What the resources of a graph are used as, from its steps' plans: the one source of
+/// the usages that [`crate::resources::Resources::new`] gives them.
+#[derive(Default)]
+pub(crate) struct Usages {
+    /// Textures a compute step stores into (`STORAGE_BINDING`).
+    pub stored: std::collections::HashSet<String>,
+    /// A compute step stores the camera outputs (a deferred Shade).
+    pub camera_stored: bool,
+    /// A raster step draws the G-buffer (a deferred Shade).
+    pub gbuffer: bool,
+    /// Generated buffers filled per cell of the map (`Discontinuities`), not per edge.
+    pub per_cell: std::collections::HashSet<String>,
+}
+
+impl Usages {
+    pub fn of(graph: &PassGraph) -> Usages {
+        let mut u = Usages::default();
+        for step in graph.passes.iter().flat_map(|p| &p.steps) {
+            match plan(step) {
+                NodeKind::Compute(c) => match c.dispatch {
+                    Dispatch::Texels | Dispatch::MipTexels => u.stored.extend(c.writes.iter().cloned()),
+                    Dispatch::Pixels => u.camera_stored = true,
+                    Dispatch::Cells(_) => u.per_cell.extend(c.generated.iter().cloned()),
+                    Dispatch::ShadowMapLines | Dispatch::Edges | Dispatch::Indirect(_) => {}
+                },
+                NodeKind::Raster(r) => {
+                    if matches!(r.targets, Targets::GBuffer) {
+                        u.gbuffer = true;
+                    }
+                }
+            }
+        }
+        u
+    }
+}
+
 /// Build the node of every step: decide from its [`Draw`] what it records, check what it
 /// binds against the graph and the device, and build (or find) its pipeline.
 pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<str>>) -> Result<Vec<PassNode>> {
@@ -248,102 +408,14 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 wgpu_format(t.format).ok_or_else(|| RuntimeError::NotFound(format!("texture `{name}` has no texture format")))
             };
             let is_table = |name: &str| graph.texture(name).is_some_and(|t| t.format == Format::SummedAreaU32);
-            let n = step.writes.len();
-            let raster = |targets, clear, depth, draw, levels| {
-                NodeKind::Raster(RasterStep {
-                    targets,
-                    clear,
-                    depth,
-                    draw,
-                    levels,
-                    blend: None,
-                })
-            };
-            let kind = match &step.draw {
-                Draw::SceneFromLight => raster(
-                    Targets::Textures(step.writes.clone()),
-                    // no occluder: the far plane
-                    vec![WHITE; n],
-                    Some(DepthTarget::Light),
-                    DrawCall::Scene,
-                    Levels::Base,
-                ),
-                Draw::SceneFromCamera => raster(
-                    Targets::Camera,
-                    CAMERA_CLEAR.to_vec(),
-                    Some(DepthTarget::Camera),
-                    DrawCall::Scene,
-                    Levels::Base,
-                ),
-                Draw::CameraGBuffer => raster(
-                    Targets::GBuffer,
-                    GBUFFER_CLEAR.to_vec(),
-                    Some(DepthTarget::Camera),
-                    DrawCall::Scene,
-                    Levels::Base,
-                ),
-                Draw::ComputePixels => NodeKind::Compute(ComputeStep {
-                    writes: vec![],
-                    dispatch: Dispatch::Pixels,
-                    generated: None,
-                }),
-                Draw::FullScreen => raster(
-                    Targets::Textures(step.writes.clone()),
-                    vec![wgpu::Color::TRANSPARENT; n],
-                    None,
-                    DrawCall::FullScreenTriangle,
-                    Levels::Base,
-                ),
-                Draw::MipLevels => raster(
-                    Targets::Textures(step.writes.clone()),
-                    vec![wgpu::Color::TRANSPARENT; n],
-                    None,
-                    DrawCall::FullScreenTriangle,
-                    Levels::BelowBase,
-                ),
-                Draw::ComputeRows | Draw::ComputeColumns => NodeKind::Compute(ComputeStep {
-                    writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
-                    dispatch: Dispatch::ShadowMapLines,
-                    generated: None,
-                }),
-                Draw::ComputeTexels => NodeKind::Compute(ComputeStep {
-                    writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
-                    dispatch: Dispatch::Texels,
-                    generated: None,
-                }),
-                Draw::ComputeMipLevels => NodeKind::Compute(ComputeStep {
-                    writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
-                    dispatch: Dispatch::MipTexels,
-                    generated: None,
-                }),
-                Draw::Silhouettes { buffer } => NodeKind::Compute(ComputeStep {
-                    writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
-                    dispatch: Dispatch::Edges,
-                    generated: Some(buffer.clone()),
-                }),
-                Draw::Discontinuities { buffer, source } => NodeKind::Compute(ComputeStep {
-                    writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
-                    dispatch: Dispatch::Cells(*source),
-                    generated: Some(buffer.clone()),
-                }),
-                Draw::Primitives { buffer, resolve } => {
-                    let (clear, blend) = resolve_state(*resolve);
-                    // A depth test: the light's depth attachment (cleared to 1), no blending.
-                    let depth = (*resolve == Resolve::Nearest).then_some(DepthTarget::Light);
-                    for t in &step.writes {
-                        texture_format(&t.texture)?;
-                    }
-                    // blending 32-bit floats is a feature: `Requirements` checked it
-                    NodeKind::Raster(RasterStep {
-                        targets: Targets::Textures(step.writes.clone()),
-                        clear: vec![clear; n],
-                        depth,
-                        draw: DrawCall::Generated(buffer.clone()),
-                        levels: Levels::Base,
-                        blend,
-                    })
+            let kind = plan(step);
+            if let NodeKind::Raster(r) = &kind
+                && let Targets::Textures(t) = &r.targets
+            {
+                for t in t {
+                    texture_format(&t.texture)?;
                 }
-            };
+            }
             // What the step reads (group 1).
             let mut reads = Vec::new();
             for b in &step.reads {
@@ -420,21 +492,7 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     light_samples: step.light_samples,
                     reads,
                     writes,
-                    geometry: match &step.draw {
-                        Draw::Silhouettes { .. } => Some(GeometryGroup::Classify),
-                        Draw::Discontinuities { .. } => Some(GeometryGroup::Discontinuities),
-                        Draw::Primitives { .. } => Some(GeometryGroup::Draw),
-                        Draw::ComputePixels => Some(GeometryGroup::GBuffer),
-                        Draw::SceneFromLight
-                        | Draw::CameraGBuffer
-                        | Draw::SceneFromCamera
-                        | Draw::FullScreen
-                        | Draw::MipLevels
-                        | Draw::ComputeRows
-                        | Draw::ComputeColumns
-                        | Draw::ComputeTexels
-                        | Draw::ComputeMipLevels => None,
-                    },
+                    geometry: geometry_group(&kind),
                 },
             };
             let label = format!("pipeline of pass `{}` ({:?})", pass.name, step.fragment);

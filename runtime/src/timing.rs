@@ -127,9 +127,10 @@ impl Timestamps {
     }
 
     /// Without waiting: map the slots of frames recorded (and, by the one-recording-per-
-    /// submission rule, submitted) since the last call, poll the device once, and take the
-    /// times of every slot whose mapping has completed.
-    pub fn collect(&mut self, gpu: &Gpu) -> Result<()> {
+    /// submission rule, submitted) since the last call, poll the device once when `poll`
+    /// (submissions also run the mapping callbacks), and take the times of every slot whose
+    /// mapping has completed.
+    pub fn collect(&mut self, gpu: &Gpu, poll: bool) -> Result<()> {
         for s in &self.slots {
             if s.state.load(Ordering::Acquire) == RECORDED {
                 s.state.store(MAPPING, Ordering::Release);
@@ -139,9 +140,11 @@ impl Timestamps {
                 });
             }
         }
-        gpu.device
-            .poll(wgpu::PollType::Poll)
-            .map_err(|e| RuntimeError::Device(e.to_string()))?;
+        if poll {
+            gpu.device
+                .poll(wgpu::PollType::Poll)
+                .map_err(|e| RuntimeError::Device(e.to_string()))?;
+        }
         let period = gpu.queue.get_timestamp_period() as f64;
         for i in 0..self.slots.len() {
             let s = &self.slots[i];

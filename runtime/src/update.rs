@@ -1,15 +1,48 @@
 //! The per-frame path: what changes every frame (the camera, the lights, the params, the
 //! frame counter) written into the buffers that binding allocated ([`Resources`]).
 //!
-//! [`FrameWriter`] holds the queue and never the device, so nothing on this path can create
-//! a texture, a buffer, a bind group or a pipeline: the no-reallocation rule is in the
-//! types. Writes go through `Queue::write_buffer`, which wgpu applies at the next
+//! Each light keeps its uniforms on the CPU ([`LightUniforms`]): setting the camera or a
+//! light recomputes them there, and recording a frame writes each `Frame` buffer once, with
+//! that frame's counter, and the `LightSamples` and `Params` uniforms only when they
+//! changed. [`FrameWriter`] holds the queue and never the device, so nothing on this path
+//! can create a texture, a buffer, a bind group or a pipeline: the no-reallocation rule is
+//! in the types. Writes go through `Queue::write_buffer`, which wgpu applies at the next
 //! submission, before its command buffers: one recording per submission sees the state
 //! last written before it (last write wins).
 
 use crate::frame::{Camera, LightInputs};
-use crate::graph::{self, SampleViewUniform};
-use crate::resources::{Resources, f32_bytes};
+use crate::graph::{FrameUniform, SampleViewUniform};
+use crate::resources::Resources;
+
+/// One light's uniforms as the next frame writes them.
+pub(crate) struct LightUniforms {
+    /// The centre view's `Frame` and each light sample's.
+    centre: FrameUniform,
+    samples: Vec<FrameUniform>,
+    /// The `LightSamples` uniform, when it changed since it was last written.
+    light_samples: Option<Vec<SampleViewUniform>>,
+}
+
+impl LightUniforms {
+    /// The uniforms of `light` seen by `camera`; the `LightSamples` pending when `fresh`
+    /// (binding has just written them: not pending).
+    pub fn new(camera: &Camera, light: &LightInputs, shadow_size: u32, fresh: bool) -> LightUniforms {
+        LightUniforms {
+            centre: light.frame(camera, shadow_size),
+            samples: (0..light.samples.len())
+                .filter_map(|k| light.sample_frame(camera, shadow_size, k))
+                .collect(),
+            light_samples: (!fresh && !light.samples.is_empty()).then(|| light.light_samples(shadow_size)),
+        }
+    }
+
+    /// A new camera: the `Frame` uniforms change, the `LightSamples` do not.
+    pub fn set_camera(&mut self, camera: &Camera, light: &LightInputs, shadow_size: u32) {
+        let pending = self.light_samples.take();
+        *self = LightUniforms::new(camera, light, shadow_size, true);
+        self.light_samples = pending;
+    }
+}
 
 pub(crate) struct FrameWriter<'a> {
     queue: &'a wgpu::Queue,
@@ -20,38 +53,18 @@ impl<'a> FrameWriter<'a> {
         FrameWriter { queue }
     }
 
-    /// Light `light`'s `Frame` uniforms (the centre's and every sample view's) and its
-    /// `LightSamples`, seen by `camera`. The light's sample count is the bound one
-    /// (checked by the caller).
-    pub fn light(&self, res: &Resources, camera: &Camera, light: &LightInputs) {
-        self.queue
-            .write_buffer(&res.frame, 0, &light.frame(camera, res.shadow_size).to_bytes());
-        for (k, buf) in res.sample_frames.iter().enumerate() {
-            if let Some(f) = light.sample_frame(camera, res.shadow_size, k) {
-                self.queue.write_buffer(buf, 0, &f.to_bytes());
-            }
+    /// Write light `u`'s uniforms into `res` for frame `frame` (`counters.x`: frames run
+    /// since the scene was bound): every `Frame` buffer once, the `LightSamples` if they
+    /// changed.
+    pub fn light(&self, res: &Resources, u: &mut LightUniforms, frame: u32) {
+        u.centre.counters[0] = frame as f32;
+        self.queue.write_buffer(&res.frame, 0, &u.centre.to_bytes());
+        for (f, buf) in u.samples.iter_mut().zip(&res.sample_frames) {
+            f.counters[0] = frame as f32;
+            self.queue.write_buffer(buf, 0, &f.to_bytes());
         }
-        if !light.samples.is_empty() {
-            self.queue.write_buffer(
-                &res.light_samples,
-                0,
-                &SampleViewUniform::to_bytes(&light.light_samples(res.shadow_size)),
-            );
-        }
-    }
-
-    /// The `counters` field (`counters.x`: frames run since the scene was bound) of every
-    /// `Frame` buffer of `res`.
-    pub fn counters(&self, res: &Resources, frame: u32) {
-        // internal invariant: `FrameUniform` has the field (the frame layout tests check it)
-        let field = graph::FRAME_FIELDS
-            .iter()
-            .position(|f| f.name == "counters")
-            .expect("the Frame uniform has a `counters` field");
-        let at = graph::frame_offset(field) as u64;
-        let counters = [frame as f32, 0.0, 0.0, 0.0];
-        for buf in std::iter::once(&res.frame).chain(&res.sample_frames) {
-            self.queue.write_buffer(buf, at, &f32_bytes(&counters));
+        if let Some(views) = u.light_samples.take() {
+            self.queue.write_buffer(&res.light_samples, 0, &SampleViewUniform::to_bytes(&views));
         }
     }
 

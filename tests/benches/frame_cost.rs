@@ -8,11 +8,15 @@
 //!   timestamps, read back through the ring) with the light and camera moving every frame,
 //!   against the same executor with them still. Frames alternate moving and static so that
 //!   drifts of the machine hit both; the ratio is of the two medians, taken in one run.
+//!   Beside it, the wall time of the frame's submission until the device is idle, for the
+//!   same two sets of frames: on lavapipe the end timestamp of a compute pass does not wait
+//!   for its last dispatch (docs/agreement.md), so the wall time is the check on the
+//!   timestamps.
 //!
 //! Prints a Markdown table and writes it to `target/embedding/frame-cost.md` (quoted in
 //! docs/embedding.md). A measurement, minutes on lavapipe: `cargo bench -p sshc-tests
 //! --bench frame_cost`; `SSHC_FRAMES` (default 1000), `SSHC_CAMERA` (side, default 128),
-//! `SSHC_SHADOW` (default 256). The test suite only builds it (`cargo clippy --all-targets`).
+//! `SSHC_SHADOW` (default 256), `SSHC_TECHNIQUES` (a comma-separated subset). The test suite only builds it (`cargo clippy --all-targets`).
 
 #[path = "../tests/support/mod.rs"]
 mod support;
@@ -62,7 +66,7 @@ fn at_frame(base: &Scene, f: u32) -> Scene {
         }
     }
     match &mut s.camera {
-        Camera::Perspective { position, .. } | Camera::Orthographic { position, .. } => *position += 0.02 * f as f32 * Vec3::X * r,
+        Camera::Perspective { position, .. } | Camera::Orthographic { position, .. } => *position += 0.2 * r * a.sin() * Vec3::X,
     }
     s
 }
@@ -78,8 +82,12 @@ fn main() {
         .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
         .collect();
     names.sort();
+    // `SSHC_TECHNIQUES=a,b`: only these
+    if let Ok(only) = std::env::var("SSHC_TECHNIQUES") {
+        names.retain(|n| only.split(',').any(|o| o == n));
+    }
     let mut table = format!(
-        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2.\n\n| technique | scene | CPU µs/frame, median | 90th percentile | GPU ms moving | GPU ms static | moving / static |\n|---|---|---|---|---|---|---|\n",
+        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2.\n\n| technique | scene | CPU µs/frame, median | 90th percentile | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|\n",
         gpu.describe()
     );
     for t in &names {
@@ -103,6 +111,7 @@ fn main() {
         let mut cpu = Vec::new();
         let (mut moving, mut still) = (Vec::new(), Vec::new());
         let mut last: Option<u64> = None;
+        let (mut wall_moving, mut wall_still) = (Vec::new(), Vec::new());
         for (f, (cam, light)) in views.iter().enumerate() {
             let move_this = f % 2 == 0;
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -113,10 +122,17 @@ fn main() {
             }
             ex.encode(&mut encoder).unwrap();
             let dt = t0.elapsed().as_secs_f64() * 1e6;
+            let t1 = Instant::now();
             gpu.queue.submit([encoder.finish()]);
             gpu.wait().unwrap();
-            if f >= 10 && move_this {
-                cpu.push(dt);
+            let wall = t1.elapsed().as_secs_f64() * 1e3;
+            if f >= 10 {
+                if move_this {
+                    cpu.push(dt);
+                    wall_moving.push(wall);
+                } else {
+                    wall_still.push(wall);
+                }
             }
             // the newest frame's times, read through the ring (each counted once)
             if let Some((n, times)) = ex.frame_times().unwrap()
@@ -129,11 +145,13 @@ fn main() {
             }
         }
         let (gm, gs) = (median(&mut moving), median(&mut still));
+        let (wm, ws) = (median(&mut wall_moving), median(&mut wall_still));
         let row = format!(
-            "| {t} | {sc} | {:.1} | {:.1} | {gm:.3} | {gs:.3} | {:.3} |\n",
+            "| {t} | {sc} | {:.1} | {:.1} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
             median(&mut cpu),
             percentile(&mut cpu, 0.9),
-            gm / gs
+            gm / gs,
+            wm / ws
         );
         print!("{row}");
         table.push_str(&row);

@@ -53,7 +53,7 @@ fn shift(light: &mut Light, d: Vec3) {
 }
 
 /// The scene at frame `f` of an orbit: the light circles its start by a tenth of the
-/// scene's size, and the camera slides sideways.
+/// scene's size, and the camera sways sideways.
 fn at_frame(base: &Scene, f: u32) -> Scene {
     let mut s = base.clone();
     let (lo, hi) = s.bounds();
@@ -64,7 +64,7 @@ fn at_frame(base: &Scene, f: u32) -> Scene {
         shift(l, d);
     }
     match &mut s.camera {
-        Camera::Perspective { position, .. } | Camera::Orthographic { position, .. } => *position += 0.02 * f as f32 * Vec3::X * r,
+        Camera::Perspective { position, .. } | Camera::Orthographic { position, .. } => *position += 0.2 * r * a.sin() * Vec3::X,
     }
     s
 }

@@ -2010,7 +2010,8 @@ fn shade(ir: &Program, pass: &IrPass, visibility: H, split: Split) -> Result<(St
             s,
             "
 // visibility (r32float), shaded colour (rgba8unorm), world position (rgba32float) and
-// world normal (rgba16float): 32 bytes per sample, WebGPU's limit.
+// world normal (rgba16float): 36 bytes per sample as WebGPU counts them (rgba8unorm 8),
+// above its default limit of 32: a host's device raises max_color_attachment_bytes_per_sample.
 struct ShadeOut {{
     @location(0) visibility: vec4<f32>,
     @location(1) color: vec4<f32>,
