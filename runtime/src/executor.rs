@@ -3,6 +3,7 @@
 
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::{Camera, LightInputs, SceneInputs};
+use crate::geometry::{Geometry, GeometryBuffers};
 use crate::graph::{self, Format, PassGraph, TextureDecl};
 use crate::image::{Image, read_back, read_table};
 use crate::lights::{Combine, MAX_LIGHTS};
@@ -136,6 +137,9 @@ pub struct Executor {
     generation: u64,
     /// Frames recorded since the last binding.
     frames: u64,
+    /// A host's geometry ([`Executor::bind_geometry`]), shared by every light; `None`
+    /// when a triangle soup is bound.
+    geometry: Option<GeometryBuffers>,
     /// Several lights: the step that combines their shaded images.
     combine: Option<Combine>,
     timestamps: Option<Timestamps>,
@@ -297,6 +301,7 @@ impl Executor {
             caster_bounds: None,
             generation: 0,
             frames: 0,
+            geometry: None,
             combine: None,
             timestamps,
             depth_override: None,
@@ -343,6 +348,122 @@ impl Executor {
     /// and gathers their visibilities, one channel per light ([`crate::lights`]). At most
     /// [`MAX_LIGHTS`]; every light's camera must have the same size.
     pub fn bind_lights(&mut self, lights: &[SceneInputs]) -> Result<()> {
+        self.geometry = None;
+        self.bind_all(lights)
+    }
+
+    /// Bind a host's geometry ([`Geometry`]: indexed meshes uploaded once, instances with
+    /// transforms) seen by `camera` under `lights` (1 to [`MAX_LIGHTS`]), at these sizes.
+    /// Per frame, [`Executor::set_transforms`] moves the instances, without reallocation.
+    /// Refused for a graph with Geometry passes (its edge adjacency is built from a bound
+    /// triangle soup: bind a [`SceneInputs`] for those).
+    pub fn bind_geometry(
+        &mut self,
+        geometry: &Geometry,
+        camera: &Camera,
+        lights: &[LightInputs],
+        camera_size: (u32, u32),
+        shadow_size: u32,
+    ) -> Result<()> {
+        if let Some(p) = self.graph.passes.iter().find(|p| p.kind == graph::PassKind::Geometry) {
+            return Err(RuntimeError::Unsupported {
+                pass: p.name.clone(),
+                feature: "host geometry (instances with transforms) under a Geometry pass, whose edge adjacency is built from a triangle soup; bind a `SceneInputs` instead".into(),
+            });
+        }
+        camera.check()?;
+        for (l, light) in lights.iter().enumerate() {
+            light.check(l)?;
+        }
+        // the exact check of a specialised graph's depth floor, on the placed casters
+        if let Some(facts) = &self.graph.specialised
+            && let Some(floor) = facts.depth_floor
+        {
+            let (soup, casting) = geometry.soup();
+            for (l, light) in lights.iter().enumerate() {
+                if let Some(here) = graph::caster_depth_floor(&soup, Some(casting), &light.view, light.near, light.far)
+                    && here < floor
+                {
+                    return Err(RuntimeError::Param(format!(
+                        "technique `{}` was specialised for scene {}, whose casters lie at normalised depth {floor} or more in the light's view, but under light {l} these come to {here}; compile it for this scene (`--scene`) or without one",
+                        self.graph.technique, facts.scene,
+                    )));
+                }
+            }
+        }
+        self.geometry = None;
+        self.bound = Vec::new();
+        let buffers = GeometryBuffers::new(&self.gpu, geometry)?;
+        self.geometry = Some(buffers);
+        let inputs: Vec<SceneInputs> = lights
+            .iter()
+            .map(|l| crate::geometry::sized(camera, l, camera_size, shadow_size))
+            .collect();
+        let bound = self.bind_all(&inputs);
+        if bound.is_err() {
+            self.geometry = None;
+        }
+        bound?;
+        self.caster_bounds = self.geometry_caster_bounds();
+        Ok(())
+    }
+
+    /// Set every instance's transform (column-major, one per instance of the bound
+    /// geometry, each finite, affine and invertible): the placement records are written and
+    /// the next frame places the instances again; nothing is allocated. A specialised
+    /// graph's depth floor is re-checked from the casters' bounding box, as
+    /// [`Executor::set_light`] does.
+    pub fn set_transforms(&mut self, transforms: &[[f32; 16]]) -> Result<()> {
+        let Some(g) = &mut self.geometry else {
+            return Err(RuntimeError::NotFound(
+                "no host geometry is bound: call bind_geometry first (a triangle soup has no transforms)".into(),
+            ));
+        };
+        let before = g.transforms.clone();
+        g.set_transforms(&self.gpu.queue, transforms)?;
+        self.caster_bounds = self.geometry_caster_bounds();
+        for (l, light) in self.lights_state.clone().iter().enumerate() {
+            if let Err(e) = self.check_floor_from_bounds(l, light) {
+                // the transforms stay as they were
+                if let Some(g) = &mut self.geometry {
+                    g.set_transforms(&self.gpu.queue, &before)?;
+                }
+                self.caster_bounds = self.geometry_caster_bounds();
+                return Err(e);
+            }
+        }
+        Ok(())
+    }
+
+    fn geometry_caster_bounds(&self) -> Option<[[f32; 3]; 2]> {
+        self.geometry.as_ref()?.caster_bounds()
+    }
+
+    /// A specialised graph's depth floor, re-checked for light `l` from the casters'
+    /// bounding box: its corners' least depth is a lower bound of the triangles', so a
+    /// state the bounds pass cannot break the specialisation; one they fail is refused.
+    fn check_floor_from_bounds(&self, l: usize, light: &LightInputs) -> Result<()> {
+        let (Some(facts), Some(bounds)) = (&self.graph.specialised, self.caster_bounds) else {
+            return Ok(());
+        };
+        let Some(floor) = facts.depth_floor else { return Ok(()) };
+        let corners: Vec<f32> = (0..8)
+            .flat_map(|i| {
+                let c = |axis: usize| bounds[(i >> axis) & 1][axis];
+                [c(0), c(1), c(2), 0.0, 0.0, 0.0]
+            })
+            .collect();
+        match graph::caster_depth_floor(&corners, None, &light.view, light.near, light.far) {
+            Some(here) if here < floor => Err(RuntimeError::Param(format!(
+                "technique `{}` was specialised for scene {}, whose casters lie at normalised depth {floor} or more in the light's view; under light {l} as set, the casters' bounding box reaches {here}, so the specialisation may not hold; bind again (binding checks the triangles themselves) or compile without `--scene`",
+                self.graph.technique, facts.scene,
+            ))),
+            Some(_) | None => Ok(()),
+        }
+    }
+
+    /// Bind `lights` on the geometry bound (a host's, or each light's soup).
+    fn bind_all(&mut self, lights: &[SceneInputs]) -> Result<()> {
         let gpu = self.gpu.clone();
         self.bound = Vec::new();
         self.lights_state = Vec::new();
@@ -449,33 +570,18 @@ impl Executor {
                 res.samples
             )));
         }
-        if let Some(facts) = &self.graph.specialised {
-            if light.kind != Some(facts.light) {
-                return Err(RuntimeError::Param(format!(
-                    "technique `{}` was specialised for the {} light of scene {}, but light {l} is {}",
-                    self.graph.technique,
-                    facts.light.name(),
-                    facts.scene,
-                    light.kind.map_or("not given (`LightInputs::kind`)", |k| k.name())
-                )));
-            }
-            if let (Some(floor), Some(bounds)) = (facts.depth_floor, self.caster_bounds) {
-                let corners: Vec<f32> = (0..8)
-                    .flat_map(|i| {
-                        let c = |axis: usize| bounds[(i >> axis) & 1][axis];
-                        [c(0), c(1), c(2), 0.0, 0.0, 0.0]
-                    })
-                    .collect();
-                if let Some(here) = graph::caster_depth_floor(&corners, None, &light.view, light.near, light.far)
-                    && here < floor
-                {
-                    return Err(RuntimeError::Param(format!(
-                        "technique `{}` was specialised for scene {}, whose casters lie at normalised depth {floor} or more in the light's view; under light {l} as set, the casters' bounding box reaches {here}, so the specialisation may not hold; bind the scene again (`bind_scene` checks the triangles themselves) or compile without `--scene`",
-                        self.graph.technique, facts.scene,
-                    )));
-                }
-            }
+        if let Some(facts) = &self.graph.specialised
+            && light.kind != Some(facts.light)
+        {
+            return Err(RuntimeError::Param(format!(
+                "technique `{}` was specialised for the {} light of scene {}, but light {l} is {}",
+                self.graph.technique,
+                facts.light.name(),
+                facts.scene,
+                light.kind.map_or("not given (`LightInputs::kind`)", |k| k.name())
+            )));
         }
+        self.check_floor_from_bounds(l, light)?;
         self.uniforms[l] = LightUniforms::new(&camera, light, res.shadow_size, false);
         self.lights_state[l] = light.clone();
         Ok(())
@@ -511,7 +617,8 @@ impl Executor {
                 if l > 0 { format!(" (light {l})") } else { String::new() },
             )));
         }
-        let res = Resources::new(gpu, &self.graph, &self.usages, s, max_bytes)?;
+        let host = self.geometry.as_ref().map(|g| &g.draw);
+        let res = Resources::new(gpu, &self.graph, &self.usages, s, host, max_bytes)?;
         if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
             return Err(RuntimeError::Param(format!(
                 "technique `{}` renders {} light-sample view(s), but the scene gives {} (`SceneInputs::samples`)",
@@ -645,6 +752,10 @@ impl Executor {
         let frame = self.frames;
         for (res, u) in self.bound.iter().zip(&mut self.uniforms) {
             writer.light(res, u, frame as u32);
+        }
+        // a host geometry's instances, placed again after their transforms changed
+        if let Some(g) = &mut self.geometry {
+            g.record(encoder);
         }
         let slot = self.timestamps.as_ref().and_then(|t| t.begin(frame));
         for (l, res) in self.bound.iter().enumerate() {

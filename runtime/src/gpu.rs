@@ -25,6 +25,7 @@ pub use crate::executor::{
     CameraOutput, Executor, Generated, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility, read_capped,
 };
 pub use crate::frame::{Camera, LightInputs, SampleView, SceneInputs};
+pub use crate::geometry::{Geometry, IDENTITY, Instance, MAX_INSTANCES, Mesh, normal_matrix, transform_point};
 pub use crate::image::Image;
 pub use crate::lights::MAX_LIGHTS;
 pub use crate::requirements::{FeatureNeed, Limit, LimitNeed, Requirements};

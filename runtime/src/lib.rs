@@ -13,6 +13,7 @@ mod device;
 mod error;
 mod executor;
 mod frame;
+mod geometry;
 pub mod gpu;
 mod image;
 mod lights;

@@ -6,6 +6,7 @@
 use crate::adjacency::{Adjacency, AdjacencyCounts, GpuEdge};
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
+use crate::geometry::SceneDraw;
 use crate::graph::{self, DRAW_ARGS_BYTES, FRAME_SIZE, Format, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
 use crate::pipeline::DEPTH_FORMAT;
 use crate::steps::Usages;
@@ -84,10 +85,9 @@ pub(crate) fn generated_bytes(record_bytes: u32, edges: u64) -> u64 {
 pub(crate) struct Resources {
     pub shadow_size: u32,
     pub camera_size: (u32, u32),
-    pub vertices: wgpu::Buffer,
-    pub vertex_count: u32,
-    /// The leading vertices drawn from the light ([`SceneInputs::casting_vertices`]).
-    pub casting_vertex_count: u32,
+    /// What the scene's draws bind and draw: the soup's vertices (its casting vertices,
+    /// [`SceneInputs::casting_vertices`], drawn from the light) or a host geometry's.
+    pub draw: SceneDraw,
     textures: HashMap<String, wgpu::Texture>,
     /// Summed-area tables, by texture name.
     tables: HashMap<String, wgpu::Buffer>,
@@ -115,7 +115,17 @@ pub(crate) struct Resources {
 
 impl Resources {
     /// Check the scene's sizes against the device and `max_bytes`, then create everything.
-    pub fn new(gpu: &Gpu, graph: &PassGraph, usages: &Usages, s: &SceneInputs, max_bytes: u64) -> Result<Resources> {
+    ///
+    /// `host`: the draws of a host geometry ([`crate::geometry`]), shared by every light; the
+    /// scene's `vertices` are then not read.
+    pub fn new(
+        gpu: &Gpu,
+        graph: &PassGraph,
+        usages: &Usages,
+        s: &SceneInputs,
+        host: Option<&SceneDraw>,
+        max_bytes: u64,
+    ) -> Result<Resources> {
         let max_dim = gpu.limits.max_texture_dimension_2d;
         if s.shadow_size == 0 || s.shadow_size > max_dim {
             return Err(RuntimeError::Limit {
@@ -205,15 +215,21 @@ impl Resources {
             Some(adj)
         };
         gpu.scoped("scene resources", || {
-            let vertices = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("scene vertices"),
-                size: vb_size,
-                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            if !s.vertices.is_empty() {
-                gpu.queue.write_buffer(&vertices, 0, f32_bytes(&s.vertices).as_slice());
-            }
+            let draw = match host {
+                Some(d) => d.clone(),
+                None => {
+                    let vertices = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("scene vertices"),
+                        size: vb_size,
+                        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    });
+                    if !s.vertices.is_empty() {
+                        gpu.queue.write_buffer(&vertices, 0, f32_bytes(&s.vertices).as_slice());
+                    }
+                    SceneDraw::soup(vertices, vertex_count, casting_vertex_count)
+                }
+            };
             let mut textures = HashMap::new();
             let mut tables = HashMap::new();
             // textures a compute step stores into (the compute schedule of a Map pass)
@@ -359,9 +375,7 @@ impl Resources {
             Resources {
                 shadow_size: s.shadow_size,
                 camera_size: s.camera_size,
-                vertices,
-                vertex_count,
-                casting_vertex_count,
+                draw,
                 textures,
                 tables,
                 light_depth,

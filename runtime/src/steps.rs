@@ -4,6 +4,7 @@
 //! [`Draw`]: what a step draws or dispatches is decided there and nowhere else.
 
 use crate::device::{Gpu, Result, RuntimeError};
+use crate::geometry::SceneDraw;
 use crate::graph::{self, Binding, Draw, Format, PassGraph, PassKind, Resolve, Target, View};
 use crate::pipeline::{
     BindingLayout, ColorTarget, DEPTH_FORMAT, DepthState, GeometryGroup, Pipeline, PipelineKey, Slot, Stages, StepPipeline,
@@ -143,7 +144,8 @@ enum Bound {
         group0: wgpu::BindGroup,
         /// One render pass per level.
         passes: Vec<RasterPass>,
-        vertices: Option<(wgpu::Buffer, u32)>,
+        /// The scene's draws, and whether from the light (casters only).
+        vertices: Option<(SceneDraw, bool)>,
         /// An empty group 1 (when the step reads nothing), an empty group 2 and the
         /// generated buffer (group 3) of a `Primitives` step.
         geometry: Option<(Option<wgpu::BindGroup>, wgpu::BindGroup, wgpu::BindGroup)>,
@@ -596,12 +598,9 @@ impl StepNode {
                         depth,
                     });
                 }
-                // Seen from the light, only the shadow casters (listed first) are drawn.
-                let count = match r.depth {
-                    Some(DepthTarget::Light) => res.casting_vertex_count,
-                    _ => res.vertex_count,
-                };
-                let vertices = matches!(r.draw, DrawCall::Scene).then(|| (res.vertices.clone(), count));
+                // Seen from the light, only the shadow casters are drawn.
+                let from_light = matches!(r.depth, Some(DepthTarget::Light));
+                let vertices = matches!(r.draw, DrawCall::Scene).then(|| (res.draw.clone(), from_light));
                 let (geometry, indirect) = match &r.draw {
                     DrawCall::Generated(name) => {
                         let buf = res.generated(name)?;
@@ -955,11 +954,8 @@ impl StepNode {
                     }
                     match &r.draw {
                         DrawCall::Scene => {
-                            if let Some((buffer, count)) = vertices
-                                && *count > 0
-                            {
-                                rp.set_vertex_buffer(0, buffer.slice(..));
-                                rp.draw(0..*count, 0..1);
+                            if let Some((draw, from_light)) = vertices {
+                                draw.record(&mut rp, *from_light);
                             }
                         }
                         DrawCall::FullScreenTriangle => rp.draw(0..3, 0..1),

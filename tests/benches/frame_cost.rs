@@ -21,10 +21,10 @@
 #[path = "../tests/support/mod.rs"]
 mod support;
 
-use glam::Vec3;
-use sshc_lab::scene::{Camera, Light, Scene};
+use sshc_lab::scene::Scene;
 use sshc_runtime::gpu::{Executor, SceneInputs};
 use std::time::Instant;
+use support::host::at_frame;
 use support::{gpu, root};
 
 fn env(name: &str, default: u32) -> u32 {
@@ -39,36 +39,6 @@ fn median(v: &mut [f64]) -> f64 {
 fn percentile(v: &mut [f64], p: f64) -> f64 {
     v.sort_by(f64::total_cmp);
     v.get(((v.len() as f64 - 1.0) * p).round() as usize).copied().unwrap_or(f64::NAN)
-}
-
-/// The scene at frame `f`: the light circles its start by a tenth of the scene's size and
-/// the camera slides (as the embedding tests move them).
-fn at_frame(base: &Scene, f: u32) -> Scene {
-    let mut s = base.clone();
-    let (lo, hi) = s.bounds();
-    let r = 0.1 * (hi - lo).length();
-    let a = f as f32 * 0.37;
-    let d = Vec3::new(r * a.cos(), 0.0, r * a.sin()) - Vec3::new(r, 0.0, 0.0);
-    for l in &mut s.lights {
-        match l {
-            Light::Point { position } => *position += d,
-            Light::Sphere { center, .. } | Light::Disk { center, .. } | Light::Rectangle { center, .. } => *center += d,
-            Light::Segment { a, b } => {
-                *a += d;
-                *b += d;
-            }
-            Light::Triangle { a, b, c } => {
-                *a += d;
-                *b += d;
-                *c += d;
-            }
-            Light::Directional { direction } | Light::DistantDisk { direction, .. } => *direction = (*direction + 0.1 * d).normalize(),
-        }
-    }
-    match &mut s.camera {
-        Camera::Perspective { position, .. } | Camera::Orthographic { position, .. } => *position += 0.2 * r * a.sin() * Vec3::X,
-    }
-    s
 }
 
 fn main() {
@@ -156,8 +126,67 @@ fn main() {
         print!("{row}");
         table.push_str(&row);
     }
+    table.push_str(&bytes_table());
     let dir = root().join("target").join("embedding");
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("frame-cost.md"), &table).unwrap();
     println!("\n{table}");
+}
+
+/// Buffer bytes a binding allocates (wgpu's `buffer_memory` counter, before and after),
+/// for a triangle soup against the same triangles as indexed, instanced host geometry: the
+/// bundled bunny on its floor, and the bunny instanced on a grid to at least 1 M triangles.
+fn bytes_table() -> String {
+    use sshc_runtime::gpu::{IDENTITY, Instance};
+    let gpu = gpu();
+    let c = support::compile_source("hard", &support::technique_source("hard"), &[], &[]);
+    let mut base = Scene::load(root().join("scenes").join("bunny.ron")).unwrap();
+    base.set_camera_size(64, 64);
+    base.shadow_map = 64;
+    let s = sshc_lab::bind::scene_inputs_for(&base, &c.graph).unwrap();
+    let memory = || gpu.device.get_internal_counters().hal.buffer_memory.read();
+    let mut out = String::from(
+        "\n| geometry | triangles | soup buffer bytes | per triangle | indexed + instanced buffer bytes | per triangle | host (CPU) bytes, soup | host bytes, indexed |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    for copies in [1usize, 273] {
+        let mut g = support::host::geometry_of(&s, [0.0; 3]);
+        g.instances.pop(); // the turned copy
+        // the bunny: the mesh of most triangles
+        let bunny = (0..g.instances.len())
+            .max_by_key(|&i| g.meshes[g.instances[i].mesh].indices.len())
+            .unwrap();
+        for k in 1..copies {
+            let (x, z) = ((k % 17) as f32 * 0.25 - 2.0, (k / 17) as f32 * 0.25 - 2.0);
+            let mut t = IDENTITY;
+            (t[12], t[14]) = (x, z);
+            g.instances.push(Instance {
+                name: format!("bunny {k}"),
+                mesh: g.instances[bunny].mesh,
+                transform: t,
+                casts: true,
+            });
+        }
+        let soup = support::host::listed_out(&s, &g);
+        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        let m0 = memory();
+        ex.bind_scene(&soup).unwrap();
+        let soup_bytes = memory() - m0;
+        drop(ex);
+        gpu.wait().unwrap();
+        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        let m0 = memory();
+        ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+            .unwrap();
+        let indexed_bytes = memory() - m0;
+        let tris = g.triangles();
+        let host_indexed: usize =
+            g.meshes.iter().map(|m| m.positions.len() * 24 + m.indices.len() * 4).sum::<usize>() + g.instances.len() * 64;
+        out.push_str(&format!(
+            "| bunny x {copies} + floor | {tris} | {soup_bytes} | {:.1} | {indexed_bytes} | {:.1} | {} | {host_indexed} |\n",
+            soup_bytes as f64 / tris as f64,
+            indexed_bytes as f64 / tris as f64,
+            soup.vertices.len() * 4,
+        ));
+    }
+    out
 }

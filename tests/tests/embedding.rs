@@ -6,9 +6,9 @@
 
 mod support;
 
-use glam::Vec3;
-use sshc_lab::scene::{Camera, Light, Scene};
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, Requirements, RuntimeError, SceneInputs};
+use sshc_lab::scene::Scene;
+use sshc_runtime::gpu::{CameraOutput, Executor, Geometry, Gpu, Requirements, RuntimeError, SceneInputs};
+use support::host::{at_frame, geometry_of, listed_out};
 use support::{gpu, root};
 
 fn compile(technique: &str) -> sshc::Compiled {
@@ -32,41 +32,6 @@ fn techniques() -> Vec<String> {
         .collect();
     names.sort();
     names
-}
-
-/// Move a light by `d` (a position or centre), or tilt it towards `d` (a direction).
-fn shift(light: &mut Light, d: Vec3) {
-    match light {
-        Light::Point { position } => *position += d,
-        Light::Sphere { center, .. } | Light::Disk { center, .. } | Light::Rectangle { center, .. } => *center += d,
-        Light::Segment { a, b } => {
-            *a += d;
-            *b += d;
-        }
-        Light::Triangle { a, b, c } => {
-            *a += d;
-            *b += d;
-            *c += d;
-        }
-        Light::Directional { direction } | Light::DistantDisk { direction, .. } => *direction = (*direction + 0.1 * d).normalize(),
-    }
-}
-
-/// The scene at frame `f` of an orbit: the light circles its start by a tenth of the
-/// scene's size, and the camera sways sideways.
-fn at_frame(base: &Scene, f: u32) -> Scene {
-    let mut s = base.clone();
-    let (lo, hi) = s.bounds();
-    let r = 0.1 * (hi - lo).length();
-    let a = f as f32 * 0.37;
-    let d = Vec3::new(r * a.cos(), 0.0, r * a.sin()) - Vec3::new(r, 0.0, 0.0);
-    for l in &mut s.lights {
-        shift(l, d);
-    }
-    match &mut s.camera {
-        Camera::Perspective { position, .. } | Camera::Orthographic { position, .. } => *position += 0.2 * r * a.sin() * Vec3::X,
-    }
-    s
 }
 
 fn inputs(s: &Scene, c: &sshc::Compiled) -> SceneInputs {
@@ -449,4 +414,206 @@ fn per_frame_updates_refuse_what_would_need_a_new_binding() {
     let e = lex.set_light(0, &light).unwrap_err();
     assert!(e.to_string().contains("a new number of samples is a new binding"), "{e}");
     assert_eq!(ex.generation(), 1);
+}
+
+// Host geometry: indexed meshes, instances, transforms.
+
+fn visibility_of_geometry(c: &sshc::Compiled, g: &Geometry, s: &SceneInputs) -> Vec<[f32; 4]> {
+    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    ex.bind_geometry(g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap_or_else(|e| panic!("{}: {e}", c.graph.technique));
+    ex.run_frame().unwrap();
+    ex.read_visibilities().unwrap().rgba
+}
+
+#[test]
+fn indexed_instanced_geometry_matches_the_same_triangles_listed_out() {
+    let mut bound = 0;
+    for t in techniques() {
+        let c = compile(&t);
+        let s = inputs(&scene(scene_for(&c), 32, 64), &c);
+        let g = geometry_of(&s, [0.25, 0.0, -0.5]);
+        if c.graph.passes.iter().any(|p| p.kind == sshc_runtime::graph::PassKind::Geometry) {
+            let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+            let e = ex
+                .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+                .unwrap_err();
+            assert!(matches!(e, RuntimeError::Unsupported { .. }), "{t}: {e}");
+            continue;
+        }
+        let ours = visibility_of_geometry(&c, &g, &s);
+        assert!(
+            ours == fresh(&c, &[listed_out(&s, &g)]),
+            "{t}: indexed and instanced differs from listed out"
+        );
+        bound += 1;
+    }
+    assert!(bound >= 10, "{bound} techniques ran on host geometry");
+}
+
+#[test]
+fn moving_instances_create_no_wgpu_object_and_match_listed_out() {
+    let c = compile("pcss");
+    let s = inputs(&scene("triangle", 32, 64), &c);
+    let mut g = geometry_of(&s, [0.0; 3]);
+    // the scene's triangle (its ground is an instance too)
+    let moving = g
+        .instances
+        .iter()
+        .position(|i| g.meshes[i.mesh].indices.len() == 3)
+        .expect("the triangle");
+    let gpu = gpu();
+    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+    ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap();
+    let frame = |ex: &mut Executor| {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        ex.encode(&mut encoder).unwrap();
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait().unwrap();
+    };
+    frame(&mut ex);
+    let before = live_objects(gpu);
+    let mut checked = Vec::new();
+    for f in 1..=20 {
+        // the caster slides in steps of 1/128 (exact in f32), inside the light's fitted view
+        g.instances[moving].transform[12] = f as f32 / 128.0;
+        let transforms: Vec<[f32; 16]> = g.instances.iter().map(|i| i.transform).collect();
+        ex.set_transforms(&transforms).unwrap();
+        frame(&mut ex);
+        assert_eq!(live_objects(gpu), before, "frame {f} created or destroyed wgpu objects");
+        if f % 10 == 0 {
+            checked.push((g.clone(), ex.read_visibilities().unwrap().rgba));
+        }
+    }
+    assert_eq!(ex.generation(), 1);
+    assert!(checked[0].1 != checked[1].1, "the caster's shadow did not move");
+    for (g, moved) in &checked {
+        assert!(
+            *moved == fresh(&c, &[listed_out(&s, g)]),
+            "a moved instance differs from its triangles listed out"
+        );
+    }
+}
+
+#[test]
+fn host_geometry_is_checked_at_upload_naming_the_mesh_or_instance() {
+    let c = compile("pcss");
+    let s = inputs(&scene("triangle", 32, 64), &c);
+    let good = geometry_of(&s, [0.0; 3]);
+    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut bind = |g: &Geometry| {
+        ex.bind_geometry(g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+            .map(|_| ())
+    };
+    let refused = |g: Geometry, want: &str, bind: &mut dyn FnMut(&Geometry) -> sshc_runtime::gpu::Result<()>| {
+        let e = bind(&g).expect_err(want);
+        assert!(e.to_string().contains(want), "{e}");
+    };
+    let mut g = good.clone();
+    g.meshes[0].indices[4] = g.meshes[0].positions.len() as u32;
+    refused(g, "mesh 0 (`part 0`): index 4 is", &mut bind);
+    let mut g = good.clone();
+    g.meshes[0].indices.pop();
+    refused(g, "not a multiple of 3", &mut bind);
+    let mut g = good.clone();
+    g.meshes[0].normals.pop();
+    refused(g, "normals for", &mut bind);
+    let mut g = good.clone();
+    g.meshes[0].positions[0][1] = f32::NAN;
+    refused(g, "mesh 0 (`part 0`): vertex 0 is not finite", &mut bind);
+    let mut g = good.clone();
+    g.instances[0].transform[5] = f32::NAN;
+    refused(g, "instance 0 (`part 0`): its transform is not finite", &mut bind);
+    let mut g = good.clone();
+    g.instances[0].transform[3] = 1.0;
+    refused(g, "not affine", &mut bind);
+    let mut g = good.clone();
+    g.instances[0].transform[0] = 0.0;
+    g.instances[0].transform[10] = 0.0;
+    refused(g, "singular", &mut bind);
+    let mut g = good.clone();
+    g.instances[0].mesh = 9;
+    refused(g, "places mesh 9", &mut bind);
+    bind(&good).unwrap();
+    // per frame: the count, and NaN
+    let mut ts: Vec<[f32; 16]> = good.instances.iter().map(|i| i.transform).collect();
+    ts.pop();
+    assert!(
+        ex.set_transforms(&ts)
+            .unwrap_err()
+            .to_string()
+            .contains("a new instance set is a new binding")
+    );
+    let mut ts: Vec<[f32; 16]> = good.instances.iter().map(|i| i.transform).collect();
+    ts[1][12] = f32::INFINITY;
+    assert!(
+        ex.set_transforms(&ts)
+            .unwrap_err()
+            .to_string()
+            .contains("instance 1: its transform is not finite")
+    );
+    // a soup has no transforms
+    ex.bind_scene(&s).unwrap();
+    assert!(
+        ex.set_transforms(&[])
+            .unwrap_err()
+            .to_string()
+            .contains("no host geometry is bound")
+    );
+}
+
+#[test]
+fn a_specialised_graph_is_rechecked_per_frame_from_the_casters_bounds() {
+    let sc = scene("triangle", 32, 64);
+    // ESM with its basis channel's precision left to the compiler: the specialisation keeps
+    // the casters' depth floor, which that choice reads
+    let src = support::technique_source("esm");
+    let s = inputs(&sc, &compile("esm"));
+    let floor = sshc_runtime::graph::caster_depth_floor(&s.vertices, s.casting_vertices, &s.light_view, s.near, s.far).unwrap();
+    let opts = sshc::CompileOptions {
+        scene: Some(sshc::SceneFacts {
+            scene: "triangle".into(),
+            light: sc.lights[0].kind(),
+            depth_floor: Some(floor),
+        }),
+        precision: vec![("e".into(), "auto".into())],
+        ..Default::default()
+    };
+    let c = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render("esm", &src)));
+    assert_eq!(c.graph.specialised.as_ref().and_then(|f| f.depth_floor), Some(floor));
+    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    ex.bind_scene(&s).unwrap();
+    // the same light passes: the bounds' least depth is the triangles' here (the top corner)
+    ex.set_light(0, &s.light_inputs()).unwrap();
+    // a near plane pushed towards the casters brings them below the floor
+    let mut closer = s.light_inputs();
+    closer.near += 0.5 * (closer.far - closer.near) * floor;
+    let e = ex.set_light(0, &closer).unwrap_err();
+    assert!(e.to_string().contains("bounding box reaches"), "{e}");
+    // host geometry: the exact check at binding, the bounds per frame, on transforms too
+    let mut g = geometry_of(&s, [0.0; 3]);
+    g.instances.pop();
+    ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap();
+    let raised: Vec<[f32; 16]> = g
+        .instances
+        .iter()
+        .map(|i| {
+            let mut t = i.transform;
+            t[13] += 0.25; // up, towards the overhead light
+            t
+        })
+        .collect();
+    let e = ex.set_transforms(&raised).unwrap_err();
+    assert!(e.to_string().contains("bounding box reaches"), "{e}");
+    // refused transforms are not kept: the bound ones still pass
+    ex.set_light(0, &s.light_inputs()).unwrap();
+    for (i, t) in g.instances.iter_mut().zip(&raised) {
+        i.transform = *t;
+    }
+    let e = ex
+        .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap_err();
+    assert!(e.to_string().contains("under light 0 these come to"), "{e}");
 }

@@ -3,6 +3,7 @@
 //! coordinates), and synthetic depth fields fed to the passes after Depth.
 #![allow(dead_code)]
 
+pub mod host;
 pub mod variant;
 
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, SceneInputs};
