@@ -570,40 +570,34 @@ impl Executor {
                 res.samples
             )));
         }
-        if let Some(facts) = &self.graph.specialised
-            && light.kind != Some(facts.light)
-        {
-            return Err(RuntimeError::Param(format!(
-                "technique `{}` was specialised for the {} light of scene {}, but light {l} is {}",
-                self.graph.technique,
-                facts.light.name(),
-                facts.scene,
-                light.kind.map_or("not given (`LightInputs::kind`)", |k| k.name())
-            )));
-        }
+        self.check_light_kind(l, light.kind)?;
         self.check_floor_from_bounds(l, light)?;
         self.uniforms[l] = LightUniforms::new(&camera, light, res.shadow_size, false);
         self.lights_state[l] = light.clone();
         Ok(())
     }
 
-    /// Create light `l`'s resources and bind every step node to them.
-    fn bind_light(&mut self, s: &SceneInputs, l: usize, max_bytes: u64) -> Result<Resources> {
-        let gpu = self.gpu.clone();
-        let gpu = &gpu;
-        // a graph specialised for a scene's light kind folded inputs another kind needs
-        if let Some(facts) = &self.graph.specialised
-            && s.light != Some(facts.light)
-        {
-            return Err(RuntimeError::Param(format!(
+    /// A graph specialised for a scene's light kind folded inputs another kind needs: light
+    /// `l` must be of that kind.
+    fn check_light_kind(&self, l: usize, kind: Option<graph::LightKind>) -> Result<()> {
+        match &self.graph.specialised {
+            Some(facts) if kind != Some(facts.light) => Err(RuntimeError::Param(format!(
                 "technique `{}` was specialised for the {} light of scene {}, but this scene's light{} is {}; compile it for this scene (`--scene`) or without one",
                 self.graph.technique,
                 facts.light.name(),
                 facts.scene,
                 if l > 0 { format!(" {l}") } else { String::new() },
-                s.light.map_or("not given (`SceneInputs::light`)", |k| k.name())
-            )));
+                kind.map_or("not given (`SceneInputs::light`, `LightInputs::kind`)", |k| k.name())
+            ))),
+            Some(_) | None => Ok(()),
         }
+    }
+
+    /// Create light `l`'s resources and bind every step node to them.
+    fn bind_light(&mut self, s: &SceneInputs, l: usize, max_bytes: u64) -> Result<Resources> {
+        let gpu = self.gpu.clone();
+        let gpu = &gpu;
+        self.check_light_kind(l, s.light)?;
         // and narrowed the range of what its Depth pass writes to the casters' least depth
         if let Some(facts) = &self.graph.specialised
             && let Some(floor) = facts.depth_floor

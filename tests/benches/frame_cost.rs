@@ -2,8 +2,9 @@
 //!
 //! - **CPU**: the time a host spends in sshc each frame, `set_camera` + `set_light` (for
 //!   every light) + `encode` into the host's encoder, timed on the CPU with `Instant`,
-//!   median (and 90th percentile) of `FRAMES` frames after 10 untimed ones. The host's own
-//!   encoder creation, its submission and the wait are outside the timing.
+//!   median (and 90th percentile) of `FRAMES` frames after 10 untimed ones, with the scene
+//!   bound as a triangle soup and again as host geometry. The host's own encoder creation,
+//!   its submission and the wait are outside the timing.
 //! - **GPU, moving against static**: the GPU time of a frame (the sum of its passes'
 //!   timestamps, read back through the ring) with the light and camera moving every frame,
 //!   against the same executor with them still. Frames alternate moving and static so that
@@ -45,19 +46,13 @@ fn main() {
     let frames = env("SSHC_FRAMES", 1000);
     let (camera, shadow) = (env("SSHC_CAMERA", 128), env("SSHC_SHADOW", 256));
     let gpu = gpu();
-    let mut names: Vec<String> = std::fs::read_dir(root().join("techniques"))
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
-        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
-        .collect();
-    names.sort();
+    let mut names = support::bundled("techniques");
     // `SSHC_TECHNIQUES=a,b`: only these
     if let Ok(only) = std::env::var("SSHC_TECHNIQUES") {
         names.retain(|n| only.split(',').any(|o| o == n));
     }
     let mut table = format!(
-        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2.\n\n| technique | scene | CPU µs/frame, median | 90th percentile | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2.\n\n| technique | scene | CPU µs/frame, median | 90th percentile | on host geometry, median | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
         gpu.describe()
     );
     for t in &names {
@@ -116,8 +111,9 @@ fn main() {
         }
         let (gm, gs) = (median(&mut moving), median(&mut still));
         let (wm, ws) = (median(&mut wall_moving), median(&mut wall_still));
+        let hosted = host_geometry_cpu(&c, &views, &states[0]).map_or("refused (Geometry passes)".to_string(), |us| format!("{us:.1}"));
         let row = format!(
-            "| {t} | {sc} | {:.1} | {:.1} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
+            "| {t} | {sc} | {:.1} | {:.1} | {hosted} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
             median(&mut cpu),
             percentile(&mut cpu, 0.9),
             gm / gs,
@@ -133,7 +129,40 @@ fn main() {
     println!("\n{table}");
 }
 
-/// Buffer bytes a binding allocates (wgpu's `buffer_memory` counter, before and after),
+/// The median CPU µs of `set_camera` + `set_light` + `encode` over the same orbit with
+/// the scene bound as host geometry (`bind_geometry`: its soup welded into indexed meshes,
+/// one instance each); `None` for a graph with Geometry passes (refused on that path).
+fn host_geometry_cpu(
+    c: &sshc::Compiled,
+    views: &[(sshc_runtime::gpu::Camera, sshc_runtime::gpu::LightInputs)],
+    s: &SceneInputs,
+) -> Option<f64> {
+    let gpu = gpu();
+    let mut g = support::host::geometry_of(s, [0.0; 3]);
+    g.instances.pop(); // the turned copy
+    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+    ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .ok()?;
+    let mut cpu = Vec::new();
+    for (f, (cam, light)) in views.iter().enumerate() {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let t0 = Instant::now();
+        ex.set_camera(cam).unwrap();
+        ex.set_light(0, light).unwrap();
+        ex.encode(&mut encoder).unwrap();
+        let dt = t0.elapsed().as_secs_f64() * 1e6;
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait().unwrap();
+        ex.frame_times().unwrap();
+        if f >= 10 {
+            cpu.push(dt);
+        }
+    }
+    Some(median(&mut cpu))
+}
+
+/// Buffer bytes a binding allocates (wgpu's `buffer_memory` counter, before and after, the
+/// uploads' staging memory freed),
 /// for a triangle soup against the same triangles as indexed, instanced host geometry: the
 /// bundled bunny on its floor, and the bunny instanced on a grid to at least 1 M triangles.
 fn bytes_table() -> String {
@@ -144,7 +173,12 @@ fn bytes_table() -> String {
     base.set_camera_size(64, 64);
     base.shadow_map = 64;
     let s = sshc_lab::bind::scene_inputs_for(&base, &c.graph).unwrap();
-    let memory = || gpu.device.get_internal_counters().hal.buffer_memory.read();
+    // what stays allocated: the uploads' staging buffers are submitted and freed first
+    let memory = || {
+        gpu.queue.submit([]);
+        gpu.wait().unwrap();
+        gpu.device.get_internal_counters().hal.buffer_memory.read()
+    };
     let mut out = String::from(
         "\n| geometry | triangles | soup buffer bytes | per triangle | indexed + instanced buffer bytes | per triangle | host (CPU) bytes, soup | host bytes, indexed |\n|---|---|---|---|---|---|---|---|\n",
     );

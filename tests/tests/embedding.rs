@@ -24,14 +24,7 @@ fn scene(name: &str, size: u32, shadow: u32) -> Scene {
 
 /// The bundled techniques, by name, sorted.
 fn techniques() -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(root().join("techniques"))
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
-        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
-        .collect();
-    names.sort();
-    names
+    support::bundled("techniques")
 }
 
 fn inputs(s: &Scene, c: &sshc::Compiled) -> SceneInputs {
@@ -84,6 +77,15 @@ fn live_objects(gpu: &Gpu) -> [(&'static str, isize); 11] {
     ]
 }
 
+/// One frame as a host runs it: its encoder, `encode`, its submission, then a wait.
+fn host_frame(ex: &mut Executor) {
+    let gpu = gpu();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    ex.encode(&mut encoder).unwrap_or_else(|e| panic!("{}: {e}", ex.graph.technique));
+    gpu.queue.submit([encoder.finish()]);
+    gpu.wait().unwrap_or_else(|e| panic!("{e}"));
+}
+
 /// A scene each technique runs on: its light samples need a segment light.
 fn scene_for(c: &sshc::Compiled) -> &'static str {
     if sshc_lab::bind::graph_samples(&c.graph) > 0 {
@@ -132,19 +134,13 @@ fn a_hundred_moving_frames_create_no_wgpu_object_and_match_fresh_bindings() {
         let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
         ex.bind_lights(&all_lights(&base, &c)).unwrap_or_else(|e| panic!("{t}: {e}"));
         let generation = ex.generation();
-        let frame = |ex: &mut Executor| {
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            ex.encode(&mut encoder).unwrap_or_else(|e| panic!("{t}: {e}"));
-            gpu.queue.submit([encoder.finish()]);
-            gpu.wait().unwrap_or_else(|e| panic!("{e}"));
-        };
-        frame(&mut ex);
+        host_frame(&mut ex);
         let before = live_objects(gpu);
         let mut checked = Vec::new();
         for f in 1..=100 {
             let now = all_lights(&at_frame(&base, f), &c);
             update(&mut ex, &now);
-            frame(&mut ex);
+            host_frame(&mut ex);
             // read after each frame completes, before any read-back of this frame
             assert_eq!(live_objects(gpu), before, "{t}: frame {f} created or destroyed wgpu objects");
             if [25, 50, 100].contains(&f) {
@@ -466,13 +462,7 @@ fn moving_instances_create_no_wgpu_object_and_match_listed_out() {
     let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
     ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap();
-    let frame = |ex: &mut Executor| {
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        ex.encode(&mut encoder).unwrap();
-        gpu.queue.submit([encoder.finish()]);
-        gpu.wait().unwrap();
-    };
-    frame(&mut ex);
+    host_frame(&mut ex);
     let before = live_objects(gpu);
     let mut checked = Vec::new();
     for f in 1..=20 {
@@ -480,7 +470,7 @@ fn moving_instances_create_no_wgpu_object_and_match_listed_out() {
         g.instances[moving].transform[12] = f as f32 / 128.0;
         let transforms: Vec<[f32; 16]> = g.instances.iter().map(|i| i.transform).collect();
         ex.set_transforms(&transforms).unwrap();
-        frame(&mut ex);
+        host_frame(&mut ex);
         assert_eq!(live_objects(gpu), before, "frame {f} created or destroyed wgpu objects");
         if f % 10 == 0 {
             checked.push((g.clone(), ex.read_visibilities().unwrap().rgba));

@@ -19,6 +19,20 @@ pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// The `.ron` files of a folder of the repository, by name, sorted: every bundled
+/// technique (or scene) is tested without being listed.
+pub fn bundled(folder: &str) -> Vec<String> {
+    let dir = root().join(folder);
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    names.sort();
+    names
+}
+
 pub fn technique_source(name: &str) -> String {
     std::fs::read_to_string(root().join("techniques").join(format!("{name}.ron"))).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
