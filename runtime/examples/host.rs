@@ -1,8 +1,9 @@
 //! A host renderer with sshc's shadows in it (issue 29; docs/embedding.md walks through it).
 //!
 //! The host opens its own wgpu device, uploads the bundled bunny and a floor as its own
-//! indexed meshes (the bunny instanced nine times), lets sshc render the shadows of a
-//! sphere light orbiting above, samples sshc's visibility texture in its own lighting pass,
+//! indexed meshes (the bunny instanced nine times, the middle one turning), lets sshc
+//! render the shadows of a sphere light orbiting above, samples sshc's visibility texture in
+//! its own lighting pass,
 //! and writes each frame as `OUT_DIR/frame-NNN.png`, and all of them side by side as
 //! `OUT_DIR/strip.png`. It prints the median CPU time of
 //! sshc's share of each frame (the light and camera updates and the recording), in µs.
@@ -99,6 +100,9 @@ fn run(args: Args) -> Result<(), String> {
         meshes: vec![bunny, floor],
         instances,
     };
+    // the middle bunny turns; the others stay
+    let mut transforms: Vec<[f32; 16]> = geometry.instances.iter().map(|i| i.transform).collect();
+    let turning = 5;
 
     // 3. sshc, bound once.
     let size = (args.size, args.size);
@@ -123,13 +127,15 @@ fn run(args: Args) -> Result<(), String> {
     let mut strip = image::RgbaImage::new(args.size * args.frames, args.size);
     for f in 0..args.frames {
         let light = light(f as f32 / 24.0 * std::f32::consts::TAU);
+        transforms[turning] = Mat4::from_rotation_y(f as f32 * 0.4).to_cols_array();
         let mut encoder = device.create_command_encoder(&Default::default());
-        // sshc's share of the frame: the light moves, then the passes are recorded
+        // sshc's share of the frame: the light and a bunny move, then the passes are recorded
         let t = Instant::now();
         shadows.set_light(0, &light).map_err(|e| e.to_string())?;
+        shadows.set_transforms(&transforms).map_err(|e| e.to_string())?;
         shadows.encode(&mut encoder).map_err(|e| e.to_string())?;
         sshc_us.push(t.elapsed().as_secs_f64() * 1e6);
-        host.record(&mut encoder, light.position);
+        host.record(&mut encoder, light.position, &transforms);
         queue.submit([encoder.finish()]);
         let path = args.out_dir.join(format!("frame-{f:03}.png"));
         let frame = host.save(&device, &path)?;
@@ -140,7 +146,7 @@ fn run(args: Args) -> Result<(), String> {
     sshc_us.sort_by(f64::total_cmp);
     let median = sshc_us.get(sshc_us.len() / 2).copied().unwrap_or(f64::NAN);
     println!(
-        "{} frames of `{}` on {} into {}: sshc's update and recording took {median:.1} µs a frame (median)",
+        "{} frames of `{}` on {} into {}: sshc's updates (light, transforms) and recording took {median:.1} µs a frame (median)",
         args.frames,
         compiled.graph.technique,
         gpu.describe(),
@@ -372,7 +378,7 @@ impl HostPass {
         let transforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("host transforms"),
             contents: &bytes(&transforms),
-            usage: wgpu::BufferUsages::VERTEX,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
         });
         let texture = |format, usage| {
             device.create_texture(&wgpu::TextureDescriptor {
@@ -417,10 +423,12 @@ impl HostPass {
     }
 
     /// The host's lighting pass and the copy of its image, after sshc's passes.
-    fn record(&self, encoder: &mut wgpu::CommandEncoder, light: [f32; 4]) {
+    fn record(&self, encoder: &mut wgpu::CommandEncoder, light: [f32; 4], transforms: &[[f32; 16]]) {
         let mut u: Vec<u8> = self.view_proj.iter().flat_map(|x| x.to_le_bytes()).collect();
         u.extend(light.iter().flat_map(|x| x.to_le_bytes()));
         self.queue.write_buffer(&self.uniform, 0, &u);
+        let t: Vec<u8> = transforms.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        self.queue.write_buffer(&self.transforms, 0, &t);
         {
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("host lighting"),
