@@ -52,6 +52,24 @@ pub struct GpuEdge {
     pub pad: [u32; 2],
 }
 
+impl GpuEdge {
+    /// The edge in its std430 layout (48 bytes, little-endian).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(48);
+        for x in self.a {
+            out.extend(x.to_le_bytes());
+        }
+        out.extend(self.first_face.to_le_bytes());
+        for x in self.b {
+            out.extend(x.to_le_bytes());
+        }
+        for x in [self.face_count, self.ia, self.ib, self.pad[0], self.pad[1]] {
+            out.extend(x.to_le_bytes());
+        }
+        out
+    }
+}
+
 /// What [`Adjacency::build`] found, for `sshc render` and the tests.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct AdjacencyCounts {

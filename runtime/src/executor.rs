@@ -355,8 +355,8 @@ impl Executor {
     /// Bind a host's geometry ([`Geometry`]: indexed meshes uploaded once, instances with
     /// transforms) seen by `camera` under `lights` (1 to [`MAX_LIGHTS`]), at these sizes.
     /// Per frame, [`Executor::set_transforms`] moves the instances, without reallocation.
-    /// Refused for a graph with Geometry passes (its edge adjacency is built from a bound
-    /// triangle soup: bind a [`SceneInputs`] for those).
+    /// For a graph with Geometry passes, each mesh's edge adjacency is built once, in object
+    /// space, and placed with its instances.
     pub fn bind_geometry(
         &mut self,
         geometry: &Geometry,
@@ -365,12 +365,6 @@ impl Executor {
         camera_size: (u32, u32),
         shadow_size: u32,
     ) -> Result<()> {
-        if let Some(p) = self.graph.passes.iter().find(|p| p.kind == graph::PassKind::Geometry) {
-            return Err(RuntimeError::Unsupported {
-                pass: p.name.clone(),
-                feature: "host geometry (instances with transforms) under a Geometry pass, whose edge adjacency is built from a triangle soup; bind a `SceneInputs` instead".into(),
-            });
-        }
         camera.check()?;
         for (l, light) in lights.iter().enumerate() {
             light.check(l)?;
@@ -393,7 +387,7 @@ impl Executor {
         }
         self.geometry = None;
         self.bound = Vec::new();
-        let buffers = GeometryBuffers::new(&self.gpu, geometry)?;
+        let buffers = GeometryBuffers::new(&self.gpu, geometry, self.usages.edges)?;
         self.geometry = Some(buffers);
         let inputs: Vec<SceneInputs> = lights
             .iter()
@@ -611,7 +605,7 @@ impl Executor {
                 if l > 0 { format!(" (light {l})") } else { String::new() },
             )));
         }
-        let host = self.geometry.as_ref().map(|g| &g.draw);
+        let host = self.geometry.as_ref().map(|g| &g.scene);
         let res = Resources::new(gpu, &self.graph, &self.usages, s, host, max_bytes)?;
         if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
             return Err(RuntimeError::Param(format!(

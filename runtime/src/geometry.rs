@@ -11,6 +11,12 @@
 //! the frame after the transforms change ([`crate::gpu::Executor::set_transforms`]), so a
 //! frame whose transforms did not move pays nothing for it.
 //!
+//! Geometry passes classify the edges of the casting instances. Each mesh's edge adjacency
+//! ([`Adjacency`]) is built once, in object space, and the same step places it per casting
+//! instance: edges (end points transformed, face and welded-vertex indices offset), face
+//! planes (`(N n, d - (N n) . t)`, negated where `M` mirrors) and face references (plane
+//! indices offset). A soup of the instance's triangles would give the same buffers.
+//!
 //! Memory: the meshes once (24 bytes a vertex and 4 an index) and the placed vertices
 //! (24 bytes a vertex per instance), against a triangle soup's 72 bytes a triangle per
 //! instance ([`Geometry::gpu_bytes`]).
@@ -20,6 +26,7 @@
 //! 3 x 3 holds only 0 and +-1 add one rounding (of the translation), the same one a CPU
 //! computing `M p` in f32 makes.
 
+use crate::adjacency::{Adjacency, AdjacencyCounts};
 use crate::device::Gpu;
 use crate::error::{Result, RuntimeError};
 use crate::frame::SceneInputs;
@@ -229,6 +236,20 @@ impl Geometry {
         }
         (out, casting)
     }
+
+    /// The triangles of each casting instance in [`Geometry::soup`]'s listing, as ranges
+    /// of triangle indices ([`SceneInputs::meshes`]: Geometry passes find edges within
+    /// each, as the host geometry's adjacency is built per instance's mesh).
+    pub fn soup_meshes(&self) -> Vec<std::ops::Range<u32>> {
+        let mut out = Vec::new();
+        let mut at = 0u32;
+        for inst in self.instances.iter().filter(|i| i.casts) {
+            let n = self.meshes.get(inst.mesh).map_or(0, |m| m.indices.len() as u32 / 3);
+            out.push(at..at + n);
+            at += n;
+        }
+        out
+    }
 }
 
 /// The bounding box of the casting instances, world space: each instance's mesh box
@@ -269,6 +290,26 @@ pub(crate) fn check_transform(m: &[f32; 16], what: &str) -> Result<()> {
         return Err(RuntimeError::Param(format!("{what}: its transform is singular (no normal matrix)")));
     }
     Ok(())
+}
+
+/// The scene's edge adjacency on the GPU, for Geometry passes (group 3 of their
+/// `Silhouettes` steps; layout in [`crate::adjacency`]).
+#[derive(Clone)]
+pub(crate) struct EdgeBuffers {
+    pub edges: wgpu::Buffer,
+    pub planes: wgpu::Buffer,
+    pub edge_faces: wgpu::Buffer,
+    /// One `u32` per welded vertex, cleared before each classification: the first edge
+    /// to claim a vertex draws what is drawn once per silhouette vertex.
+    pub claims: wgpu::Buffer,
+    pub counts: AdjacencyCounts,
+}
+
+/// A host geometry as every light's resources take it: its draws, and its edges when a
+/// graph classifies silhouettes.
+pub(crate) struct HostScene {
+    pub draw: SceneDraw,
+    pub edges: Option<EdgeBuffers>,
 }
 
 /// One draw of the scene: a range of indices (or of vertices, without an index buffer)
@@ -332,27 +373,50 @@ impl SceneDraw {
 }
 
 const PLACE_WGSL: &str = "
+// One instance's placement (a 256-byte record read at a dynamic offset): its matrix and
+// normal matrix, then for vertices, edges, face planes and face references: where the
+// instance's mesh's ones start, how many, and where the placed ones go; plus the first
+// welded vertex (edges), whether the matrix mirrors (planes) and the first plane (faces).
 struct Placement {
     model: mat4x4<f32>,
     normal: mat4x4<f32>,
-    // first vertex of the mesh in the mesh buffer, vertices, first placed vertex
-    src: u32,
-    count: u32,
-    dst: u32,
-    pad: u32,
+    vertices: vec4<u32>,
+    edges: vec4<u32>,
+    planes: vec4<u32>,
+    faces: vec4<u32>,
+}
+struct Edge {
+    a: vec3<f32>,
+    first_face: u32,
+    b: vec3<f32>,
+    face_count: u32,
+    ia: u32,
+    ib: u32,
+    pad0: u32,
+    pad1: u32,
 }
 @group(0) @binding(0) var<uniform> place: Placement;
 @group(0) @binding(1) var<storage, read> meshes: array<f32>;
 @group(0) @binding(2) var<storage, read_write> placed: array<f32>;
+@group(0) @binding(3) var<storage, read> mesh_edges: array<Edge>;
+@group(0) @binding(4) var<storage, read_write> edges: array<Edge>;
+@group(0) @binding(5) var<storage, read> mesh_planes: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> planes: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read> mesh_faces: array<u32>;
+@group(0) @binding(8) var<storage, read_write> faces: array<u32>;
+
+fn index(id: vec3<u32>) -> u32 {
+    return id.x + id.y * 64u * 65535u;
+}
 
 @compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x + id.y * 64u * 65535u;
-    if i >= place.count {
+fn place_vertices(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = index(id);
+    if i >= place.vertices.y {
         return;
     }
-    let s = (place.src + i) * 6u;
-    let d = (place.dst + i) * 6u;
+    let s = (place.vertices.x + i) * 6u;
+    let d = (place.vertices.z + i) * 6u;
     let p = place.model * vec4<f32>(meshes[s], meshes[s + 1u], meshes[s + 2u], 1.0);
     let n = place.normal * vec4<f32>(meshes[s + 3u], meshes[s + 4u], meshes[s + 5u], 0.0);
     placed[d] = p.x;
@@ -362,19 +426,71 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     placed[d + 4u] = n.y;
     placed[d + 5u] = n.z;
 }
+
+@compute @workgroup_size(64)
+fn place_edges(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = index(id);
+    if i >= place.edges.y {
+        return;
+    }
+    var e = mesh_edges[place.edges.x + i];
+    e.a = (place.model * vec4<f32>(e.a, 1.0)).xyz;
+    e.b = (place.model * vec4<f32>(e.b, 1.0)).xyz;
+    e.first_face = e.first_face + place.faces.z;
+    e.ia = e.ia + place.edges.w;
+    e.ib = e.ib + place.edges.w;
+    edges[place.edges.z + i] = e;
+}
+
+// the plane n.x + d = 0 of x = M^-1 (x' - t): (N n).x' + d - (N n).t = 0, N the normal
+// matrix; negated where M mirrors, so that the normal stays the winding's
+@compute @workgroup_size(64)
+fn place_planes(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = index(id);
+    if i >= place.planes.y {
+        return;
+    }
+    let q = mesh_planes[place.planes.x + i];
+    let n = (place.normal * vec4<f32>(q.xyz, 0.0)).xyz;
+    let side = select(1.0, -1.0, place.planes.w == 1u);
+    planes[place.planes.z + i] = side * vec4<f32>(n, q.w - dot(n, place.model[3].xyz));
+}
+
+@compute @workgroup_size(64)
+fn place_faces(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = index(id);
+    if i >= place.faces.y {
+        return;
+    }
+    let f = mesh_faces[place.faces.x + i];
+    faces[place.faces.z + i] = (((f >> 1u) + place.faces.w) << 1u) | (f & 1u);
+}
 ";
 
-/// A host geometry on the GPU: the meshes, the placed vertices, the placement step, and
-/// the draws. Shared by every light.
+/// Where one instance's placed data start, and how many of each (the record's words).
+#[derive(Clone, Copy, Default)]
+struct Spans {
+    /// (mesh's first, count, placed first) of vertices, edges, planes, face references.
+    vertices: [u32; 3],
+    edges: [u32; 3],
+    planes: [u32; 3],
+    faces: [u32; 3],
+    /// The instance's first welded vertex among all placed ones.
+    welded: u32,
+}
+
+/// The entry points of the placement shader, with the span each dispatches over.
+const STEPS: [&str; 4] = ["place_vertices", "place_edges", "place_planes", "place_faces"];
+
+/// A host geometry on the GPU: the meshes, the placed vertices (and, for graphs that
+/// classify silhouettes, the placed edges, face planes and face references), the placement
+/// step, and the draws. Shared by every light.
 pub(crate) struct GeometryBuffers {
-    pub draw: SceneDraw,
+    pub scene: HostScene,
     records: wgpu::Buffer,
-    pipeline: wgpu::ComputePipeline,
+    pipelines: Vec<wgpu::ComputePipeline>,
     group: wgpu::BindGroup,
-    /// Per instance: its vertex count (the dispatch size).
-    counts: Vec<u32>,
-    /// Per instance: its mesh, its casting, its mesh's first vertex and first placed vertex.
-    layout: Vec<(usize, u32, u32)>,
+    spans: Vec<Spans>,
     /// Placement is due (the transforms changed since it last ran).
     pub dirty: bool,
     pub transforms: Vec<[f32; 16]>,
@@ -384,44 +500,99 @@ pub(crate) struct GeometryBuffers {
 }
 
 impl GeometryBuffers {
-    /// Upload `g` (checked) and create its placement step.
-    pub fn new(gpu: &Gpu, g: &Geometry) -> Result<GeometryBuffers> {
+    /// Upload `g` (checked) and create its placement step; with `edges`, the edge adjacency
+    /// of every mesh a casting instance places, built once per mesh in object space (the
+    /// same welding and order as [`Adjacency::build`] of the instance's triangles listed out).
+    pub fn new(gpu: &Gpu, g: &Geometry, edges: bool) -> Result<GeometryBuffers> {
         g.check(&gpu.limits)?;
-        // the meshes, one after the other; the placed vertices, one instance after the other
-        let mut vertex_first = Vec::new();
-        let mut index_first = Vec::new();
+        let words = |v: &mut Vec<u8>, x: &[u32]| v.extend(x.iter().flat_map(|w| w.to_le_bytes()));
+        // the meshes, one after the other, and their adjacency
+        let mut first = Vec::new(); // per mesh: first vertex, index, edge, plane, face reference
         let (mut vertex_data, mut index_data) = (Vec::new(), Vec::new());
-        for m in &g.meshes {
-            vertex_first.push((vertex_data.len() / 24) as u32);
-            index_first.push((index_data.len() / 4) as u32);
+        let (mut edge_data, mut plane_data, mut face_data) = (Vec::new(), Vec::new(), Vec::new());
+        let mut adjacency: Vec<Option<Adjacency>> = Vec::new();
+        for (mi, m) in g.meshes.iter().enumerate() {
+            first.push([
+                (vertex_data.len() / 24) as u32,
+                (index_data.len() / 4) as u32,
+                (edge_data.len() / 48) as u32,
+                (plane_data.len() / 16) as u32,
+                (face_data.len() / 4) as u32,
+            ]);
             for (p, n) in m.positions.iter().zip(&m.normals) {
                 for c in p.iter().chain(n) {
                     vertex_data.extend(c.to_le_bytes());
                 }
             }
-            for ix in &m.indices {
-                index_data.extend(ix.to_le_bytes());
+            words(&mut index_data, &m.indices);
+            let cast = g.instances.iter().any(|i| i.mesh == mi && i.casts);
+            let adj = (edges && cast).then(|| {
+                let tris: Vec<[[f32; 3]; 3]> = m
+                    .indices
+                    .chunks_exact(3)
+                    .map(|t| [0, 1, 2].map(|k| m.positions[t[k] as usize]))
+                    .collect();
+                Adjacency::build(&tris, std::iter::once(0..tris.len()))
+            });
+            if let Some(a) = &adj {
+                edge_data.extend(a.edges.iter().flat_map(|e| e.to_bytes()));
+                plane_data.extend(a.planes.iter().flatten().flat_map(|x| x.to_le_bytes()));
+                words(&mut face_data, &a.edge_faces);
             }
+            adjacency.push(adj);
         }
-        let mut ranges = Vec::new();
-        let mut places = Vec::new();
-        let mut counts = Vec::new();
-        let mut placed = 0u32;
+        // the instances, one after the other: draws, and spans of what they place
+        let (mut ranges, mut spans) = (Vec::new(), Vec::new());
+        let mut placed = Spans::default();
+        let mut counts = AdjacencyCounts::default();
         for inst in &g.instances {
             let m = &g.meshes[inst.mesh];
-            let first = index_first[inst.mesh];
+            let f = first[inst.mesh];
             ranges.push(DrawRange {
-                elements: first..first + m.indices.len() as u32,
-                base_vertex: i32::try_from(placed).map_err(|_| RuntimeError::Limit {
+                elements: f[1]..f[1] + m.indices.len() as u32,
+                base_vertex: i32::try_from(placed.vertices[2]).map_err(|_| RuntimeError::Limit {
                     what: "placed vertices (a base vertex is an i32)".into(),
-                    needed: placed.into(),
+                    needed: placed.vertices[2].into(),
                     limit: i32::MAX as u64,
                 })?,
                 casts: inst.casts,
             });
-            places.push((inst.mesh, vertex_first[inst.mesh], placed));
-            counts.push(m.positions.len() as u32);
-            placed += m.positions.len() as u32;
+            let mut s = Spans {
+                vertices: [f[0], m.positions.len() as u32, placed.vertices[2]],
+                welded: placed.welded,
+                ..Default::default()
+            };
+            placed.vertices[2] += m.positions.len() as u32;
+            if let (true, Some(a)) = (inst.casts, &adjacency[inst.mesh]) {
+                s.edges = [f[2], a.edges.len() as u32, placed.edges[2]];
+                s.planes = [f[3], a.planes.len() as u32, placed.planes[2]];
+                s.faces = [f[4], a.edge_faces.len() as u32, placed.faces[2]];
+                placed.edges[2] += a.edges.len() as u32;
+                placed.planes[2] += a.planes.len() as u32;
+                placed.faces[2] += a.edge_faces.len() as u32;
+                placed.welded += a.vertices;
+                counts.meshes += 1;
+                counts.edges += a.counts.edges;
+                counts.boundary += a.counts.boundary;
+                counts.manifold += a.counts.manifold;
+                counts.non_manifold += a.counts.non_manifold;
+                counts.degenerate_faces += a.counts.degenerate_faces;
+            }
+            spans.push(s);
+        }
+        let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+        for (what, needed) in [
+            ("placed edges (bytes)", u64::from(placed.edges[2]) * 48),
+            ("placed face planes (bytes)", u64::from(placed.planes[2]) * 16),
+            ("placed face references (bytes)", u64::from(placed.faces[2]) * 4),
+        ] {
+            if needed > storage_limit {
+                return Err(RuntimeError::Limit {
+                    what: what.into(),
+                    needed,
+                    limit: storage_limit,
+                });
+            }
         }
         gpu.scoped("uploading the host geometry", || {
             let device = &gpu.device;
@@ -429,30 +600,42 @@ impl GeometryBuffers {
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
                     // a binding may not be empty
-                    size: size.max(24).next_multiple_of(4),
+                    size: size.max(48).next_multiple_of(16),
                     usage,
                     mapped_at_creation: false,
                 })
             };
-            let copy = wgpu::BufferUsages::COPY_DST;
-            let meshes = buffer("mesh vertices", vertex_data.len() as u64, wgpu::BufferUsages::STORAGE | copy);
-            let indices = buffer("mesh indices", index_data.len() as u64, wgpu::BufferUsages::INDEX | copy);
-            let placed_buf = buffer(
+            let upload = |label: &str, data: &[u8], usage: wgpu::BufferUsages| {
+                let b = buffer(label, data.len() as u64, usage | wgpu::BufferUsages::COPY_DST);
+                if !data.is_empty() {
+                    gpu.queue.write_buffer(&b, 0, data);
+                }
+                b
+            };
+            let storage = wgpu::BufferUsages::STORAGE;
+            let meshes = upload("mesh vertices", &vertex_data, storage);
+            let indices = upload("mesh indices", &index_data, wgpu::BufferUsages::INDEX);
+            let mesh_edges = upload("mesh edges", &edge_data, storage);
+            let mesh_planes = upload("mesh face planes", &plane_data, storage);
+            let mesh_faces = upload("mesh face references", &face_data, storage);
+            let placed_vertices = buffer(
                 "placed vertices",
-                u64::from(placed) * 24,
-                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX,
+                u64::from(placed.vertices[2]) * 24,
+                storage | wgpu::BufferUsages::VERTEX,
+            );
+            let placed_edges = buffer("placed edges", u64::from(placed.edges[2]) * 48, storage);
+            let placed_planes = buffer("placed face planes", u64::from(placed.planes[2]) * 16, storage);
+            let placed_faces = buffer("placed face references", u64::from(placed.faces[2]) * 4, storage);
+            let claims = buffer(
+                "vertex claims",
+                4 * u64::from(placed.welded) + 4,
+                storage | wgpu::BufferUsages::COPY_DST,
             );
             let records = buffer(
                 "placement records",
                 g.instances.len() as u64 * RECORD_BYTES,
-                wgpu::BufferUsages::UNIFORM | copy,
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             );
-            if !vertex_data.is_empty() {
-                gpu.queue.write_buffer(&meshes, 0, &vertex_data);
-            }
-            if !index_data.is_empty() {
-                gpu.queue.write_buffer(&indices, 0, &index_data);
-            }
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("place instances"),
                 source: wgpu::ShaderSource::Wgsl(PLACE_WGSL.into()),
@@ -468,67 +651,81 @@ impl GeometryBuffers {
                 has_dynamic_offset: false,
                 min_binding_size: None,
             };
+            let record = wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(RECORD_BYTES),
+            };
+            let mut entries = vec![entry(0, record)];
+            entries.extend((1..9).map(|b| entry(b, storage(b % 2 == 1))));
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("place instances"),
-                entries: &[
-                    entry(
-                        0,
-                        wgpu::BindingType::Buffer {
-                            ty: wgpu::BufferBindingType::Uniform,
-                            has_dynamic_offset: true,
-                            min_binding_size: wgpu::BufferSize::new(RECORD_BYTES),
-                        },
-                    ),
-                    entry(1, storage(true)),
-                    entry(2, storage(false)),
-                ],
+                entries: &entries,
             });
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("place instances"),
                 bind_group_layouts: &[Some(&layout)],
                 immediate_size: 0,
             });
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("place instances"),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
+            let pipelines = STEPS
+                .iter()
+                .map(|entry| {
+                    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(entry),
+                        layout: Some(&pipeline_layout),
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        cache: None,
+                    })
+                })
+                .collect();
+            let bound = [
+                &meshes,
+                &placed_vertices,
+                &mesh_edges,
+                &placed_edges,
+                &mesh_planes,
+                &placed_planes,
+                &mesh_faces,
+                &placed_faces,
+            ];
+            let mut group_entries = vec![wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &records,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(RECORD_BYTES),
+                }),
+            }];
+            group_entries.extend(bound.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32 + 1,
+                resource: b.as_entire_binding(),
+            }));
             let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("place instances"),
                 layout: &layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &records,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(RECORD_BYTES),
-                        }),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: meshes.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: placed_buf.as_entire_binding(),
-                    },
-                ],
+                entries: &group_entries,
             });
             let mut out = GeometryBuffers {
-                draw: SceneDraw {
-                    vertices: placed_buf,
-                    indices: Some(indices),
-                    ranges,
+                scene: HostScene {
+                    draw: SceneDraw {
+                        vertices: placed_vertices,
+                        indices: Some(indices),
+                        ranges,
+                    },
+                    edges: edges.then(|| EdgeBuffers {
+                        edges: placed_edges,
+                        planes: placed_planes,
+                        edge_faces: placed_faces,
+                        claims,
+                        counts,
+                    }),
                 },
                 records,
-                pipeline,
+                pipelines,
                 group,
-                counts,
-                layout: places,
+                spans,
                 dirty: true,
                 transforms: g.instances.iter().map(|i| i.transform).collect(),
                 casts: g.instances.iter().map(|i| i.casts).collect(),
@@ -564,14 +761,33 @@ impl GeometryBuffers {
     /// Write every placement record and mark placement due.
     fn write_records(&mut self, queue: &wgpu::Queue) {
         let mut bytes = vec![0u8; self.transforms.len() * RECORD_BYTES as usize];
-        for (i, (t, &(_, src, dst))) in self.transforms.iter().zip(&self.layout).enumerate() {
-            let n = normal_matrix(t).unwrap_or(crate::geometry::IDENTITY);
-            let r = &mut bytes[i * RECORD_BYTES as usize..];
-            for (k, c) in t.iter().chain(&n).enumerate() {
-                r[4 * k..4 * k + 4].copy_from_slice(&c.to_le_bytes());
-            }
-            for (k, w) in [src, self.counts[i], dst, 0].iter().enumerate() {
-                r[128 + 4 * k..132 + 4 * k].copy_from_slice(&w.to_le_bytes());
+        for (i, (t, s)) in self.transforms.iter().zip(&self.spans).enumerate() {
+            let n = normal_matrix(t).unwrap_or(IDENTITY);
+            // a mirroring matrix turns the winding: the planes are negated to follow it
+            let mirrors = determinant3(t) < 0.0;
+            let r = &mut bytes[i * RECORD_BYTES as usize..(i + 1) * RECORD_BYTES as usize];
+            let values = t.iter().chain(&n).map(|c| c.to_le_bytes());
+            let words = [
+                s.vertices[0],
+                s.vertices[1],
+                s.vertices[2],
+                0,
+                s.edges[0],
+                s.edges[1],
+                s.edges[2],
+                s.welded,
+                s.planes[0],
+                s.planes[1],
+                s.planes[2],
+                u32::from(mirrors),
+                s.faces[0],
+                s.faces[1],
+                s.faces[2],
+                s.planes[2],
+            ]
+            .map(|w| w.to_le_bytes());
+            for (k, b) in values.chain(words).enumerate() {
+                r[4 * k..4 * k + 4].copy_from_slice(&b);
             }
         }
         if !bytes.is_empty() {
@@ -585,7 +801,8 @@ impl GeometryBuffers {
         instances_bounds(&self.boxes, &self.casts, &self.transforms)
     }
 
-    /// Record the placement of every instance, when it is due.
+    /// Record the placement of every instance (its vertices, and its edges, planes and face
+    /// references where it has them), when it is due.
     pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder) {
         if !self.dirty {
             return;
@@ -595,21 +812,31 @@ impl GeometryBuffers {
             label: Some("place instances"),
             timestamp_writes: None,
         });
-        pass.set_pipeline(&self.pipeline);
-        for (i, &count) in self.counts.iter().enumerate() {
-            if count == 0 {
-                continue;
+        for (step, pipeline) in self.pipelines.iter().enumerate() {
+            pass.set_pipeline(pipeline);
+            for (i, s) in self.spans.iter().enumerate() {
+                let count = [s.vertices, s.edges, s.planes, s.faces][step][1];
+                if count == 0 {
+                    continue;
+                }
+                pass.set_bind_group(0, &self.group, &[(i as u64 * RECORD_BYTES) as u32]);
+                let groups = count.div_ceil(64);
+                let (x, y) = if groups <= 65535 {
+                    (groups, 1)
+                } else {
+                    (65535, groups.div_ceil(65535))
+                };
+                pass.dispatch_workgroups(x, y, 1);
             }
-            pass.set_bind_group(0, &self.group, &[(i as u64 * RECORD_BYTES) as u32]);
-            let groups = count.div_ceil(64);
-            let (x, y) = if groups <= 65535 {
-                (groups, 1)
-            } else {
-                (65535, groups.div_ceil(65535))
-            };
-            pass.dispatch_workgroups(x, y, 1);
         }
     }
+}
+
+/// The determinant of the upper 3 x 3 of a column-major 4 x 4.
+fn determinant3(m: &[f32; 16]) -> f64 {
+    let a = |r: usize, c: usize| f64::from(m[4 * c + r]);
+    a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1)) - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
+        + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0))
 }
 
 /// The inputs of a light bound over host geometry: its sizes and views with no vertices

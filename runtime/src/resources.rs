@@ -3,10 +3,10 @@
 //! `Frame` uniform. Sizes are checked against the device before anything is allocated
 //! (lavapipe keeps allocating past its limits).
 
-use crate::adjacency::{Adjacency, AdjacencyCounts, GpuEdge};
+use crate::adjacency::{Adjacency, GpuEdge};
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
-use crate::geometry::SceneDraw;
+use crate::geometry::{EdgeBuffers, HostScene, SceneDraw};
 use crate::graph::{self, DRAW_ARGS_BYTES, FRAME_SIZE, Format, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
 use crate::pipeline::DEPTH_FORMAT;
 use crate::steps::Usages;
@@ -52,18 +52,6 @@ fn table_bytes(t: &TextureDecl, shadow_size: u32) -> u64 {
 
 pub(crate) fn f32_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
-}
-
-/// The scene's edge adjacency on the GPU, for Geometry passes (group 3 of their
-/// `Silhouettes` steps; layout in [`crate::adjacency`]).
-pub(crate) struct EdgeBuffers {
-    pub edges: wgpu::Buffer,
-    pub planes: wgpu::Buffer,
-    pub edge_faces: wgpu::Buffer,
-    /// One `u32` per welded vertex, cleared before each classification: the first edge
-    /// to claim a vertex draws what is drawn once per silhouette vertex.
-    pub claims: wgpu::Buffer,
-    pub counts: AdjacencyCounts,
 }
 
 /// The triangles of `s` as position triples (normals dropped).
@@ -123,7 +111,7 @@ impl Resources {
         graph: &PassGraph,
         usages: &Usages,
         s: &SceneInputs,
-        host: Option<&SceneDraw>,
+        host: Option<&HostScene>,
         max_bytes: u64,
     ) -> Result<Resources> {
         let max_dim = gpu.limits.max_texture_dimension_2d;
@@ -179,7 +167,7 @@ impl Resources {
         // Geometry passes: the edge adjacency, bounded from the triangle count before it is
         // built, and the generated buffers, bounded from the edge count it gives.
         let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-        let adjacency = if graph.buffers.is_empty() {
+        let adjacency = if graph.buffers.is_empty() || host.is_some() {
             None
         } else {
             let tris = (s.vertices.len() / 18) as u64;
@@ -191,32 +179,33 @@ impl Resources {
                     limit: max_bytes,
                 });
             }
-            let adj = Adjacency::build(&triangles(s), meshes(s));
-            let edges = adj.edges.len() as u64;
-            for b in &graph.buffers {
-                let records = buffer_records(usages, &b.name, edges, s.shadow_size);
-                let size = generated_bytes(b.record_bytes, records);
-                if size > storage_limit {
-                    return Err(RuntimeError::Limit {
-                        what: format!("generated buffer `{}` ({records} records x {} bytes)", b.name, b.record_bytes),
-                        needed: size,
-                        limit: storage_limit,
-                    });
-                }
-                bytes += size;
-            }
-            if bytes > max_bytes {
+            Some(Adjacency::build(&triangles(s), meshes(s)))
+        };
+        // the edges the Silhouettes steps classify: a host geometry's, or the soup's
+        let host_edges = host.and_then(|h| h.edges.as_ref());
+        let edge_count = host_edges.map_or(adjacency.as_ref().map_or(0, |a| a.edges.len() as u64), |e| e.counts.edges.into());
+        for b in &graph.buffers {
+            let records = buffer_records(usages, &b.name, edge_count, s.shadow_size);
+            let size = generated_bytes(b.record_bytes, records);
+            if size > storage_limit {
                 return Err(RuntimeError::Limit {
-                    what: "textures and generated buffers of this graph at this scene's sizes (bytes)".into(),
-                    needed: bytes,
-                    limit: max_bytes,
+                    what: format!("generated buffer `{}` ({records} records x {} bytes)", b.name, b.record_bytes),
+                    needed: size,
+                    limit: storage_limit,
                 });
             }
-            Some(adj)
-        };
+            bytes += size;
+        }
+        if bytes > max_bytes {
+            return Err(RuntimeError::Limit {
+                what: "textures and generated buffers of this graph at this scene's sizes (bytes)".into(),
+                needed: bytes,
+                limit: max_bytes,
+            });
+        }
         gpu.scoped("scene resources", || {
             let draw = match host {
-                Some(d) => d.clone(),
+                Some(h) => h.draw.clone(),
                 None => {
                     let vertices = gpu.device.create_buffer(&wgpu::BufferDescriptor {
                         label: Some("scene vertices"),
@@ -352,16 +341,16 @@ impl Resources {
                 buf
             };
             let mut generated = HashMap::new();
-            let edges = adjacency.map(|adj| {
-                for b in &graph.buffers {
-                    let records = buffer_records(usages, &b.name, adj.edges.len() as u64, s.shadow_size);
-                    let size = generated_bytes(b.record_bytes, records) as usize;
-                    // vertex_count 0 (reset every frame), instance_count 1, first vertex and instance 0
-                    let args: Vec<u8> = [0u32, 1, 0, 0].iter().flat_map(|x| x.to_le_bytes()).collect();
-                    let buf = storage(&b.name, &args, size, wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC);
-                    generated.insert(b.name.clone(), buf);
-                }
-                let edge_bytes: Vec<u8> = adj.edges.iter().flat_map(edge_bytes).collect();
+            for b in &graph.buffers {
+                let records = buffer_records(usages, &b.name, edge_count, s.shadow_size);
+                let size = generated_bytes(b.record_bytes, records) as usize;
+                // vertex_count 0 (reset every frame), instance_count 1, first vertex and instance 0
+                let args: Vec<u8> = [0u32, 1, 0, 0].iter().flat_map(|x| x.to_le_bytes()).collect();
+                let buf = storage(&b.name, &args, size, wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC);
+                generated.insert(b.name.clone(), buf);
+            }
+            let edges = host_edges.cloned().or(adjacency.map(|adj| {
+                let edge_bytes: Vec<u8> = adj.edges.iter().flat_map(GpuEdge::to_bytes).collect();
                 let plane_bytes: Vec<u8> = adj.planes.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
                 let face_bytes: Vec<u8> = adj.edge_faces.iter().flat_map(|x| x.to_le_bytes()).collect();
                 EdgeBuffers {
@@ -371,7 +360,7 @@ impl Resources {
                     claims: storage("vertex claims", &[], 4 * adj.vertices as usize + 4, wgpu::BufferUsages::empty()),
                     counts: adj.counts,
                 }
-            });
+            }));
             Resources {
                 shadow_size: s.shadow_size,
                 camera_size: s.camera_size,
@@ -438,20 +427,4 @@ fn meshes(s: &SceneInputs) -> Vec<std::ops::Range<usize>> {
     } else {
         s.meshes.iter().map(|r| r.start as usize..r.end as usize).collect()
     }
-}
-
-/// An edge in its std430 layout (48 bytes, little-endian).
-fn edge_bytes(e: &GpuEdge) -> Vec<u8> {
-    let mut out = Vec::with_capacity(48);
-    for x in e.a {
-        out.extend(x.to_le_bytes());
-    }
-    out.extend(e.first_face.to_le_bytes());
-    for x in e.b {
-        out.extend(x.to_le_bytes());
-    }
-    for x in [e.face_count, e.ia, e.ib, e.pad[0], e.pad[1]] {
-        out.extend(x.to_le_bytes());
-    }
-    out
 }

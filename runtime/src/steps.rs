@@ -369,6 +369,8 @@ pub(crate) struct Usages {
     pub gbuffer: bool,
     /// Generated buffers filled per cell of the map (`Discontinuities`), not per edge.
     pub per_cell: std::collections::HashSet<String>,
+    /// A step classifies the scene's edges (`Silhouettes`): the edge adjacency is built.
+    pub edges: bool,
 }
 
 impl Usages {
@@ -380,7 +382,8 @@ impl Usages {
                     Dispatch::Texels | Dispatch::MipTexels => u.stored.extend(c.writes.iter().cloned()),
                     Dispatch::Pixels => u.camera_stored = true,
                     Dispatch::Cells(_) => u.per_cell.extend(c.generated.iter().cloned()),
-                    Dispatch::ShadowMapLines | Dispatch::Edges | Dispatch::Indirect(_) => {}
+                    Dispatch::Edges => u.edges = true,
+                    Dispatch::ShadowMapLines | Dispatch::Indirect(_) => {}
                 },
                 NodeKind::Raster(r) => {
                     if matches!(r.targets, Targets::GBuffer) {

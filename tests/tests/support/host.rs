@@ -64,7 +64,7 @@ pub fn listed_out(s: &SceneInputs, g: &Geometry) -> SceneInputs {
     let (vertices, casting) = g.soup();
     SceneInputs {
         casting_vertices: Some(casting),
-        meshes: vec![],
+        meshes: g.soup_meshes(),
         vertices,
         ..s.clone()
     }
