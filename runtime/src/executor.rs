@@ -7,6 +7,7 @@ use crate::geometry::{Geometry, GeometryBuffers};
 use crate::graph::{self, Format, PassGraph, TextureDecl};
 use crate::image::{Image, read_back, read_table};
 use crate::lights::{Combine, MAX_LIGHTS};
+use crate::pixels::{HostPixels, PixelsStep};
 use crate::requirements::Requirements;
 use crate::resources::{Resources, f32_bytes, mip_count};
 use crate::steps::{self, Group0, PassNode, Usages};
@@ -140,6 +141,9 @@ pub struct Executor {
     /// A host's geometry ([`Executor::bind_geometry`]), shared by every light; `None`
     /// when a triangle soup is bound.
     geometry: Option<GeometryBuffers>,
+    /// A host's pixels in place of the deferred Shade's G-buffer raster
+    /// ([`Executor::set_host_pixels`]).
+    pixels: Option<PixelsStep>,
     /// Several lights: the step that combines their shaded images.
     combine: Option<Combine>,
     timestamps: Option<Timestamps>,
@@ -302,6 +306,7 @@ impl Executor {
             generation: 0,
             frames: 0,
             geometry: None,
+            pixels: None,
             combine: None,
             timestamps,
             depth_override: None,
@@ -456,9 +461,36 @@ impl Executor {
         }
     }
 
+    /// Shade the host's pixels ([`HostPixels`]: world position and normal textures at the
+    /// camera's size) instead of rasterising the scene from the camera: the deferred
+    /// Shade's G-buffer is written from them by a step of the runtime's
+    /// (`runtime/src/pixels.rs`, where the tolerance of the derived depth slope and
+    /// footprint is stated). `None` rasterises again. Given after binding, and again after
+    /// every binding (the textures are bound to the G-buffers it made). Refused for a graph
+    /// whose Shade runs forward, with the reason; the textures' formats, sizes and usages
+    /// are checked.
+    pub fn set_host_pixels(&mut self, pixels: Option<HostPixels>) -> Result<()> {
+        self.pixels = None;
+        let Some(pixels) = pixels else { return Ok(()) };
+        self.bound()?;
+        if !self.usages.gbuffer {
+            let shade = self.shade_name().to_string();
+            return Err(RuntimeError::Unsupported {
+                pass: shade,
+                feature: format!(
+                    "host pixels, which need the deferred Shade (G-buffer, then compute); technique `{}` shades forward. Compile its Shade pass with the compute schedule (`--schedule SHADE=compute`); a Shade that reads a light sample's depth slope or an implicit-level lookup in a sample's view cannot run deferred, and the compiler says so",
+                    self.graph.technique
+                ),
+            });
+        }
+        self.pixels = Some(PixelsStep::new(&self.gpu, &pixels, &self.bound)?);
+        Ok(())
+    }
+
     /// Bind `lights` on the geometry bound (a host's, or each light's soup).
     fn bind_all(&mut self, lights: &[SceneInputs]) -> Result<()> {
         let gpu = self.gpu.clone();
+        self.pixels = None;
         self.bound = Vec::new();
         self.lights_state = Vec::new();
         self.combine = None;
@@ -786,7 +818,11 @@ impl Executor {
                         (Some(t), Some(slot)) => Some(t.stamps(slot, l, pi, i == 0, i == last)),
                         _ => None,
                     };
-                    node.record(encoder, res, stamps, l, view)?;
+                    match &self.pixels {
+                        // the host's pixels in place of the G-buffer raster
+                        Some(p) if node.draws_gbuffer() => p.record(encoder, l, stamps),
+                        Some(_) | None => node.record(encoder, res, stamps, l, view)?,
+                    }
                 }
             }
         }

@@ -28,6 +28,7 @@ pub use crate::frame::{Camera, LightInputs, SampleView, SceneInputs};
 pub use crate::geometry::{Geometry, IDENTITY, Instance, MAX_INSTANCES, Mesh, normal_matrix, transform_point};
 pub use crate::image::Image;
 pub use crate::lights::MAX_LIGHTS;
+pub use crate::pixels::HostPixels;
 pub use crate::requirements::{FeatureNeed, Limit, LimitNeed, Requirements};
 pub use crate::resources::mip_count;
 pub use crate::timing::FrameTimes;

@@ -18,6 +18,7 @@ pub mod gpu;
 mod image;
 mod lights;
 mod pipeline;
+mod pixels;
 mod requirements;
 mod resources;
 mod steps;

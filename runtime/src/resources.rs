@@ -294,7 +294,18 @@ impl Resources {
                 ["g-buffer world", "g-buffer normal", "g-buffer footprint"]
                     .iter()
                     .zip(graph::GBUFFER)
-                    .filter_map(|(n, f)| wgpu_format(f).map(|f| plain(n, cw, ch, f, wgpu::TextureUsages::TEXTURE_BINDING)))
+                    .filter_map(|(n, f)| {
+                        // storage: a host's pixels are written into it by a compute step
+                        wgpu_format(f).map(|f| {
+                            plain(
+                                n,
+                                cw,
+                                ch,
+                                f,
+                                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+                            )
+                        })
+                    })
                     .collect()
             } else {
                 Vec::new()

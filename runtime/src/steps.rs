@@ -872,6 +872,12 @@ impl StepNode {
         }
     }
 
+    /// Whether the node rasterises the deferred Shade's G-buffer (what a host's pixels
+    /// replace).
+    pub fn draws_gbuffer(&self) -> bool {
+        matches!(&self.kind, NodeKind::Raster(r) if matches!(r.targets, Targets::GBuffer))
+    }
+
     /// Views the node records (one per light sample in a per-sample pass).
     pub fn views(&self) -> u32 {
         self.bound.first().map_or(0, |b| b.len() as u32)

@@ -633,3 +633,294 @@ fn a_specialised_graph_is_rechecked_per_frame_from_the_casters_bounds() {
         .unwrap_err();
     assert!(e.to_string().contains("under light 0 these come to"), "{e}");
 }
+
+// Host pixels: the deferred Shade fed by the host's G-buffer.
+
+/// The host's own G-buffer pass: the soup of `s` rasterised from its camera into the world
+/// position (xyz, w = 1 on a surface, 0 elsewhere) and the interpolated normal, both
+/// `Rgba32Float`, as a deferred renderer's geometry pass writes them.
+fn host_gbuffer(gpu: &Gpu, s: &SceneInputs) -> [wgpu::Texture; 2] {
+    use wgpu::util::DeviceExt;
+    let device = &gpu.device;
+    let (w, h) = s.camera_size;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("host g-buffer"),
+        source: wgpu::ShaderSource::Wgsl(
+            "@group(0) @binding(0) var<uniform> view_proj: mat4x4<f32>;
+struct V { @builtin(position) pos: vec4<f32>, @location(0) world: vec3<f32>, @location(1) normal: vec3<f32> }
+@vertex fn vs(@location(0) p: vec3<f32>, @location(1) n: vec3<f32>) -> V {
+    var v: V;
+    v.pos = view_proj * vec4<f32>(p, 1.0);
+    v.world = p;
+    v.normal = n;
+    return v;
+}
+struct G { @location(0) world: vec4<f32>, @location(1) normal: vec4<f32> }
+@fragment fn fs(v: V) -> G { return G(vec4<f32>(v.world, 1.0), vec4<f32>(v.normal, 0.0)); }"
+                .into(),
+        ),
+    });
+    let attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+    let target = Some(wgpu::ColorTargetState::from(wgpu::TextureFormat::Rgba32Float));
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("host g-buffer"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: 24,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &attrs,
+            })],
+        },
+        primitive: Default::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[target.clone(), target],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    let bytes = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents: &bytes(&s.vertices),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents: &bytes(&s.camera_view_proj),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: uniform.as_entire_binding(),
+        }],
+    });
+    let texture = |format, usage| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    let out = [
+        texture(wgpu::TextureFormat::Rgba32Float, usage),
+        texture(wgpu::TextureFormat::Rgba32Float, usage),
+    ];
+    let depth = texture(wgpu::TextureFormat::Depth32Float, wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let views: Vec<wgpu::TextureView> = out.iter().map(|t| t.create_view(&Default::default())).collect();
+    let depth_view = depth.create_view(&Default::default());
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let attachment = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("host g-buffer"),
+            color_attachments: &[attachment(&views[0]), attachment(&views[1])],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rp.set_pipeline(&pipeline);
+        rp.set_bind_group(0, &group, &[]);
+        rp.set_vertex_buffer(0, vertices.slice(..));
+        rp.draw(0..(s.vertices.len() / 6) as u32, 0..1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    out
+}
+
+/// The triangle of `s` that world point `p` lies on, or `None` when none or more than one
+/// holds it (a point on an edge).
+fn triangle_of(s: &SceneInputs, p: [f32; 3]) -> Option<usize> {
+    let v = |t: usize, k: usize| glam::Vec3::from_slice(&s.vertices[t * 18 + k * 6..t * 18 + k * 6 + 3]);
+    let p = glam::Vec3::from(p);
+    let mut found = None;
+    for t in 0..s.vertices.len() / 18 {
+        let (a, b, c) = (v(t, 0), v(t, 1), v(t, 2));
+        let n = (b - a).cross(c - a);
+        let area = n.length();
+        if area == 0.0 || (p - a).dot(n).abs() / area > 1e-4 {
+            continue;
+        }
+        // barycentric coordinates, each at least a margin inside
+        let w = [(c - b).cross(p - b), (a - c).cross(p - c), (b - a).cross(p - a)].map(|e| e.dot(n) / (area * area));
+        if w.iter().all(|x| *x > -1e-4) {
+            if found.is_some() || w.iter().any(|x| *x < 1e-4) {
+                return None;
+            }
+            found = Some(t);
+        }
+    }
+    found
+}
+
+#[test]
+fn host_pixels_give_the_forward_shade_where_a_quad_lies_on_one_triangle() {
+    for t in ["hard", "pcf", "pcss"] {
+        let forward = compile(t);
+        let src = support::technique_source(t);
+        let opts = sshc::CompileOptions {
+            schedule: vec![("shade".into(), "compute".into())],
+            ..Default::default()
+        };
+        let deferred = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(t, &src)));
+        let s = inputs(&scene("triangle", 48, 128), &forward);
+        let mut ex = Executor::new(gpu(), forward.graph.clone(), forward.shaders.clone()).unwrap();
+        ex.bind_scene(&s).unwrap();
+        ex.run_frame().unwrap();
+        let want = ex.read_camera(CameraOutput::Visibility).unwrap();
+        let position = ex.read_camera(CameraOutput::Position).unwrap();
+        // a forward graph is refused host pixels, with the reason
+        let [world, normal] = host_gbuffer(gpu(), &s);
+        let pixels = sshc_runtime::gpu::HostPixels {
+            world: &world,
+            normal: &normal,
+        };
+        let e = ex.set_host_pixels(Some(pixels)).unwrap_err();
+        assert!(e.to_string().contains("need the deferred Shade"), "{e}");
+        // the deferred graph on the host's pixels
+        let mut host = Executor::new(gpu(), deferred.graph.clone(), deferred.shaders.clone()).unwrap();
+        host.bind_scene(&s).unwrap();
+        host.set_host_pixels(Some(pixels)).unwrap();
+        host.run_frame().unwrap();
+        let got = host.read_camera(CameraOutput::Visibility).unwrap();
+        let (w, h) = (want.width, want.height);
+        let tri = |x: u32, y: u32| {
+            let p = position.at(x, y);
+            if p[0].is_nan() { None } else { triangle_of(&s, [p[0], p[1], p[2]]) }
+        };
+        let (mut interior, mut surface, mut at_edges) = (0, 0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                let (a, b) = (want.at(x, y)[0], got.at(x, y)[0]);
+                if position.at(x, y)[0].is_nan() {
+                    assert_eq!(b, 1.0, "{t} ({x}, {y}): no surface reads 1");
+                    continue;
+                }
+                surface += 1;
+                let (qx, qy) = (x & !1, y & !1);
+                let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
+                let here = tri(x, y);
+                let one_triangle = here.is_some() && quad.iter().all(|&(u, v)| u < w && v < h && tri(u, v) == here);
+                if one_triangle {
+                    assert_eq!(a.to_bits(), b.to_bits(), "{t} ({x}, {y}): {a} forward, {b} from host pixels");
+                    interior += 1;
+                } else if a != b {
+                    at_edges += 1;
+                }
+            }
+        }
+        assert!(
+            interior * 10 >= surface * 8,
+            "{t}: {interior} of {surface} surface pixels have their quad on one triangle"
+        );
+        eprintln!("{t}: {interior} of {surface} pixels bit for bit; {at_edges} of the others differ");
+    }
+}
+
+#[test]
+fn host_pixels_of_the_wrong_format_or_size_are_refused() {
+    let src = support::technique_source("pcss");
+    let opts = sshc::CompileOptions {
+        schedule: vec![("shade".into(), "compute".into())],
+        ..Default::default()
+    };
+    let c = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render("pcss", &src)));
+    let s = inputs(&scene("triangle", 32, 64), &c);
+    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let texture = |format, size: u32, usage| {
+        gpu().device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let sampled = wgpu::TextureUsages::TEXTURE_BINDING;
+    let good = texture(wgpu::TextureFormat::Rgba32Float, 32, sampled);
+    fn pixels<'a>(world: &'a wgpu::Texture, normal: &'a wgpu::Texture) -> sshc_runtime::gpu::HostPixels<'a> {
+        sshc_runtime::gpu::HostPixels { world, normal }
+    }
+    let e = ex.set_host_pixels(Some(pixels(&good, &good))).unwrap_err();
+    assert!(e.to_string().contains("no scene is bound"), "{e}");
+    ex.bind_scene(&s).unwrap();
+    for (world, normal, want) in [
+        (
+            texture(wgpu::TextureFormat::Rgba16Float, 32, sampled),
+            None,
+            "world-position texture is Rgba16Float; it must be Rgba32Float",
+        ),
+        (
+            texture(wgpu::TextureFormat::Rgba32Float, 48, sampled),
+            None,
+            "is 48 x 48, the camera 32 x 32",
+        ),
+        (
+            texture(wgpu::TextureFormat::Rgba32Float, 32, wgpu::TextureUsages::COPY_DST),
+            None,
+            "has no TEXTURE_BINDING usage",
+        ),
+        (
+            texture(wgpu::TextureFormat::Rgba32Float, 32, sampled),
+            Some(texture(wgpu::TextureFormat::Rgba8Unorm, 32, sampled)),
+            "normal texture is Rgba8Unorm",
+        ),
+    ] {
+        let normal = normal.as_ref().unwrap_or(&good);
+        let e = ex.set_host_pixels(Some(pixels(&world, normal))).unwrap_err();
+        assert!(e.to_string().contains(want), "{e}");
+    }
+    ex.set_host_pixels(Some(pixels(&good, &good))).unwrap();
+}

@@ -1905,17 +1905,18 @@ fn shade_receiver(distant: Option<bool>) -> String {
     )
 }
 
-/// The receiver-plane depth slope, in a fragment entry (screen-space derivatives).
+/// The receiver-plane depth slope's derivatives, in a fragment entry (screen-space
+/// derivatives); `DEPTH_SLOPE` (the schema's, shared with the runtime's host pixels)
+/// follows it.
 const SHADE_SLOPE: &str = "    // receiver-plane depth gradient over uv from screen-space derivatives (Isidoro 2006):
     // solve [duv/dx; duv/dy] g = [dd/dx; dd/dy]; 0 where the Jacobian is singular
     let duv_dx = dpdx(in_uv);
     let duv_dy = dpdy(in_uv);
     let dd_dx = dpdx(in_d);
     let dd_dy = dpdy(in_d);
-    let det = duv_dx.x * duv_dy.y - duv_dx.y * duv_dy.x;
-    let g = vec2<f32>(dd_dx * duv_dy.y - duv_dx.y * dd_dy, duv_dx.x * dd_dy - dd_dx * duv_dy.x);
-    let in_depth_slope = select(0.0, min(length(g / det) * frame.shadow_size.z, 0.1), abs(det) > 1e-14);
 ";
+const DEPTH_SLOPE: &str = graph::DEPTH_SLOPE_WGSL;
+const OCTAHEDRAL: &str = graph::OCTAHEDRAL_WGSL;
 
 /// Why a Shade pass that asks for the compute (deferred) schedule runs forward, or None:
 /// what the G-buffer does not carry, the screen-space derivatives of a light sample's view
@@ -2022,7 +2023,7 @@ struct ShadeOut {{
 @fragment
 fn fs_shade(in: ShadeVarying) -> ShadeOut {{
 {SHADE_NORMAL}    let world = vec4<f32>(in.world, 1.0);
-{receiver}{SHADE_SLOPE}{}{prologues}{body}{}    return out;
+{receiver}{SHADE_SLOPE}{DEPTH_SLOPE}{}{prologues}{body}{}    return out;
 }}
 ",
             pixel("floor(in.clip.xy)"),
@@ -2046,28 +2047,14 @@ struct GBufferOut {{
     @location(2) duv: vec4<f32>,
 }}
 
-// Octahedral encoding of a unit vector (Cigolle et al. 2014, section 3.1).
-fn octahedral(v: vec3<f32>) -> vec2<f32> {{
-    let p = v.xy / (abs(v.x) + abs(v.y) + abs(v.z));
-    let sign = select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
-    return select((1.0 - abs(p.yx)) * sign, p, v.z >= 0.0);
-}}
-
-fn from_octahedral(e: vec2<f32>) -> vec3<f32> {{
-    var v = vec3<f32>(e, 1.0 - abs(e.x) - abs(e.y));
-    let t = max(-v.z, 0.0);
-    let sign = select(vec2<f32>(1.0), vec2<f32>(-1.0), v.xy >= vec2<f32>(0.0));
-    v = vec3<f32>(v.xy + t * sign, v.z);
-    return normalize(v);
-}}
-
+{OCTAHEDRAL}
 @fragment
 fn fs_gbuffer(in: ShadeVarying) -> GBufferOut {{
 {SHADE_NORMAL}    let world = vec4<f32>(in.world, 1.0);
     let in_d = (-(frame.light_view * world).z - frame.depth_range.x) * frame.depth_range.z;
     let light_clip = frame.light_view_proj * world;
     let in_uv = light_clip.xy / light_clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
-{SHADE_SLOPE}    var out: GBufferOut;
+{SHADE_SLOPE}{DEPTH_SLOPE}    var out: GBufferOut;
     out.world = vec4<f32>(in.world, in_depth_slope);
     out.normal = octahedral(n);
     out.duv = vec4<f32>(duv_dx, duv_dy);
