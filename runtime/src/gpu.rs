@@ -1,24 +1,35 @@
-//! The wgpu executor, as one namespace: [`Gpu`] (the device, error scopes, the shader and
-//! pipeline caches), [`Executor`] (a loaded graph as step nodes, a bound scene, frames),
-//! [`SceneInputs`] (what a scene gives the `Frame` uniform and the draws) and [`Image`]
+//! The wgpu executor, as one namespace: [`Gpu`] (a device, its own or a host's, with error
+//! scopes and the shader and pipeline caches), [`Executor`] (a loaded graph as step nodes,
+//! bound resources, frames), [`SceneInputs`] and [`Geometry`] (what a scene gives the
+//! draws), [`Camera`] and [`LightInputs`] (what may change every frame), [`Requirements`]
+//! (what a graph needs of a device), [`HostPixels`] (a host's G-buffer) and [`Image`]
 //! (read-back textures). The parts live in their own modules:
 //!
-//! - `device`: [`Gpu`], [`RuntimeError`], error scopes, the caches;
+//! - `error`: [`RuntimeError`];
+//! - `device`: [`Gpu`], error scopes, the caches;
+//! - `requirements`: [`Requirements`], read from the graph alone and checked at load;
 //! - `pipeline`: the pipeline key (everything a pipeline is built from) and its building;
-//! - `steps`: the step nodes (raster and compute) and the refusals of unsupported features;
+//! - `steps`: the step nodes (raster and compute), the one reading of each step's `Draw`
+//!   (its plan), and the refusals of unsupported features;
 //! - `resources`: textures, tables, attachments, edge adjacency and generated buffers at
-//!   a scene's sizes;
+//!   a scene's sizes (the allocation path);
+//! - `geometry`: a host's indexed meshes and instances, and their placement on the GPU;
+//! - `pixels`: a host's G-buffer in place of the deferred Shade's raster;
+//! - `update`: the per-frame path, which writes uniforms and never creates anything;
+//! - `timing`: [`FrameTimes`] and the ring of timestamp queries read back later;
 //! - `adjacency` (public): the edge adjacency of a scene's meshes, built on the CPU for
 //!   Geometry passes, and the silhouette rule;
-//! - `executor`: [`Executor`]: load, bind, run, read back;
-//! - `frame`: [`SceneInputs`] and the `Frame` uniform's values;
+//! - `executor`: [`Executor`]: load, bind, update, encode, run, read back;
+//! - `frame`: [`SceneInputs`], [`Camera`], [`LightInputs`] and the `Frame` uniform's values;
+//! - `lights`: several lights combined in one frame;
 //! - `image`: [`Image`] and texel decoding (the PNG and PFM writers are in the lab);
 //! - `validate`: [`validate_wgsl`], naga's validation of untrusted shaders.
 //!
-//! Every wgpu object is created inside an error scope and its error returned as a value;
-//! errors that escape a scope are collected by the device's uncaptured-error handler
-//! instead of wgpu's default, which panics. Sizes are checked against the device's limits
-//! before anything is allocated (lavapipe keeps allocating past its limits).
+//! Every wgpu object is created inside an error scope and its error returned as a value; on
+//! the runtime's own device, errors that escape a scope are collected by its uncaptured-
+//! error handler instead of wgpu's default, which panics (a host's device keeps the host's
+//! handler). Sizes are checked against the device's limits before anything is allocated
+//! (lavapipe keeps allocating past its limits).
 
 pub use crate::device::{Gpu, INSTALL_HINT, Result, RuntimeError, WANTED_FEATURES};
 pub use crate::executor::{

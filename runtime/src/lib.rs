@@ -1,10 +1,13 @@
 //! `sshc-runtime`: the wgpu executor of sshc pass graphs.
 //!
 //! It loads a compiled graph (trusted or not: every shader is re-validated with naga and
-//! every size checked against the device before allocation), binds what a frame needs from
-//! a scene ([`gpu::SceneInputs`]: triangles, camera, light) and runs the passes. The graph
-//! schema is the crate `sshc-graph`, re-exported here as [`graph`] so that a program that
-//! runs graphs needs one dependency.
+//! every size checked against the device before allocation), binds what a frame needs (a
+//! triangle soup, [`gpu::SceneInputs`], or a host's indexed meshes and instances,
+//! [`gpu::Geometry`]) and runs the passes: on its own device, or inside a host renderer on
+//! the host's device, recording into the host's encoder every frame and handing the
+//! visibility back as a texture (docs/embedding.md). The graph schema is the crate
+//! `sshc-graph`, re-exported here as [`graph`] so that a program that runs graphs needs one
+//! dependency.
 
 #![deny(clippy::wildcard_enum_match_arm)]
 

@@ -416,44 +416,55 @@ fn per_frame_updates_refuse_what_would_need_a_new_binding() {
 
 #[test]
 fn indexed_instanced_geometry_matches_the_same_triangles_listed_out() {
-    let mut geometry_passes = 0;
+    let (mut geometry_passes, mut pairs, mut one_view) = (0, 0, 0);
+    let scenes = support::bundled("scenes");
     for t in techniques() {
         let c = compile(&t);
-        let s = inputs(&scene(scene_for(&c), 32, 64), &c);
-        // a quarter turn about the origin: every coordinate of the copy, its edges and its
-        // face planes are its mesh's permuted and negated, exactly (a translation would
-        // round the planes' offsets apart from the listed-out triangles' own)
-        let g = geometry_of(&s, [0.0; 3]);
-        let mut host = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-        host.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
-            .unwrap_or_else(|e| panic!("{t}: {e}"));
-        host.run_frame().unwrap();
-        let mut soup = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-        soup.bind_scene(&listed_out(&s, &g)).unwrap();
-        soup.run_frame().unwrap();
-        let visibility = |ex: &Executor| ex.read_visibilities().unwrap().rgba;
-        assert!(
-            visibility(&host) == visibility(&soup),
-            "{t}: indexed and instanced differs from listed out"
-        );
-        // Geometry passes: the same edges where silhouettes are classified (host geometry
-        // builds no adjacency for a graph that reads none), and the same records generated
-        let classifies = c
-            .graph
-            .passes
-            .iter()
-            .flat_map(|p| &p.steps)
-            .any(|st| matches!(st.draw, sshc_runtime::graph::Draw::Silhouettes { .. }));
-        let edges = host.edge_counts().unwrap();
-        assert_eq!(edges.is_some(), classifies, "{t}");
-        if classifies {
-            assert_eq!(edges, soup.edge_counts().unwrap(), "{t}");
-        }
+        one_view += usize::from(sshc_lab::bind::graph_samples(&c.graph) == 0);
         let mut records = 0;
-        for b in &c.graph.buffers {
-            let (h, l) = (host.generated(&b.name).unwrap(), soup.generated(&b.name).unwrap());
-            assert_eq!(h, l, "{t}: buffer `{}`", b.name);
-            records += h.records;
+        for sc in &scenes {
+            // a technique of light samples runs under the lights that have its samples
+            let Ok(s) = sshc_lab::bind::scene_inputs_for(&scene(sc, 32, 64), &c.graph) else {
+                assert!(sshc_lab::bind::graph_samples(&c.graph) > 0, "{t} on {sc}: not bound");
+                continue;
+            };
+            let what = format!("{t} on {sc}");
+            // a quarter turn about the origin: every coordinate of the copy, its edges and
+            // its face planes are its mesh's permuted and negated, exactly (a translation
+            // would round the planes' offsets apart from the listed-out triangles' own)
+            let g = geometry_of(&s, [0.0; 3]);
+            let mut host = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+            host.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
+            host.run_frame().unwrap();
+            let mut soup = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+            soup.bind_scene(&listed_out(&s, &g)).unwrap();
+            soup.run_frame().unwrap();
+            let visibility = |ex: &Executor| ex.read_visibilities().unwrap().rgba;
+            assert!(
+                visibility(&host) == visibility(&soup),
+                "{what}: indexed and instanced differs from listed out"
+            );
+            // Geometry passes: the same edges where silhouettes are classified (host
+            // geometry builds no adjacency for a graph that reads none), and the same
+            // records generated
+            let classifies = c
+                .graph
+                .passes
+                .iter()
+                .flat_map(|p| &p.steps)
+                .any(|st| matches!(st.draw, sshc_runtime::graph::Draw::Silhouettes { .. }));
+            let edges = host.edge_counts().unwrap();
+            assert_eq!(edges.is_some(), classifies, "{what}");
+            if classifies {
+                assert_eq!(edges, soup.edge_counts().unwrap(), "{what}");
+            }
+            for b in &c.graph.buffers {
+                let (h, l) = (host.generated(&b.name).unwrap(), soup.generated(&b.name).unwrap());
+                assert_eq!(h, l, "{what}: buffer `{}`", b.name);
+                records += h.records;
+            }
+            pairs += 1;
         }
         // (a buffer may be empty, as the skins towards a chain's missing neighbour are)
         assert!(
@@ -466,6 +477,8 @@ fn indexed_instanced_geometry_matches_the_same_triangles_listed_out() {
         geometry_passes >= 5,
         "{geometry_passes} techniques with Geometry passes ran on host geometry"
     );
+    // every technique of one view ran on every scene (the per-sample ones where they can)
+    assert!(pairs > one_view * scenes.len(), "{pairs} technique-scene pairs");
 }
 
 #[test]
