@@ -114,281 +114,70 @@ impl Resources {
         host: Option<&HostScene>,
         max_bytes: u64,
     ) -> Result<Resources> {
-        let max_dim = gpu.limits.max_texture_dimension_2d;
-        if s.shadow_size == 0 || s.shadow_size > max_dim {
-            return Err(RuntimeError::Limit {
-                what: "shadow map (texels per side)".into(),
-                needed: s.shadow_size as u64,
-                limit: max_dim as u64,
-            });
-        }
-        let (cw, ch) = s.camera_size;
-        if cw == 0 || ch == 0 || cw.max(ch) > max_dim {
-            return Err(RuntimeError::Limit {
-                what: "camera image (pixels per side)".into(),
-                needed: cw.max(ch) as u64,
-                limit: max_dim as u64,
-            });
-        }
-        let texels = s.shadow_size as u64 * s.shadow_size as u64;
-        let mut bytes: u64 = texels * 4 + cw as u64 * ch as u64 * (4 + 4 + 16 + 8 + 4);
-        for t in &graph.textures {
-            let per = t.format.bytes_per_texel() as u64 * t.array_layers() as u64 * texels;
-            bytes += if t.mips { per * 4 / 3 } else { per };
-        }
-        if bytes > max_bytes {
-            return Err(RuntimeError::Limit {
-                what: "textures of this graph at this scene's sizes (bytes)".into(),
-                needed: bytes,
-                limit: max_bytes,
-            });
-        }
-        for t in graph.textures.iter().filter(|t| t.format == Format::SummedAreaU32) {
-            let size = table_bytes(t, s.shadow_size);
-            let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-            if size > limit {
-                return Err(RuntimeError::Limit {
-                    what: format!("summed-area table `{}` (storage buffer bytes)", t.name),
-                    needed: size,
-                    limit,
-                });
-            }
-        }
-        let vertex_count = (s.vertices.len() / 6) as u32;
-        let casting_vertex_count = s.casting_vertices.map_or(vertex_count, |n| n.min(vertex_count));
-        let vb_size = (s.vertices.len() * 4).max(24) as u64;
-        if vb_size > gpu.limits.max_buffer_size {
-            return Err(RuntimeError::Limit {
-                what: "vertex buffer (bytes)".into(),
-                needed: vb_size,
-                limit: gpu.limits.max_buffer_size,
-            });
-        }
-        // Geometry passes: the edge adjacency, bounded from the triangle count before it is
-        // built, and the generated buffers, bounded from the edge count it gives.
-        let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-        let adjacency = if graph.buffers.is_empty() || host.is_some() {
-            None
-        } else {
-            let tris = (s.vertices.len() / 18) as u64;
-            let bound = Adjacency::max_bytes(tris);
-            if bytes.saturating_add(bound) > max_bytes {
-                return Err(RuntimeError::Limit {
-                    what: format!("edge adjacency of {tris} triangles, with the textures (bytes)"),
-                    needed: bytes.saturating_add(bound),
-                    limit: max_bytes,
-                });
-            }
-            Some(Adjacency::build(&triangles(s), meshes(s)))
+        // every size checked before anything is created (lavapipe keeps allocating past
+        // its limits)
+        let texture_bytes = check_sizes(gpu, graph, s, max_bytes)?;
+        let adjacency = match host {
+            Some(_) => None,
+            None => soup_adjacency(graph, s, texture_bytes, max_bytes)?,
         };
         // the edges the Silhouettes steps classify: a host geometry's, or the soup's
         let host_edges = host.and_then(|h| h.edges.as_ref());
         let edge_count = host_edges.map_or(adjacency.as_ref().map_or(0, |a| a.edges.len() as u64), |e| e.counts.edges.into());
-        for b in &graph.buffers {
-            let records = buffer_records(usages, &b.name, edge_count, s.shadow_size);
-            let size = generated_bytes(b.record_bytes, records);
-            if size > storage_limit {
-                return Err(RuntimeError::Limit {
-                    what: format!("generated buffer `{}` ({records} records x {} bytes)", b.name, b.record_bytes),
-                    needed: size,
-                    limit: storage_limit,
-                });
-            }
-            bytes += size;
-        }
-        if bytes > max_bytes {
-            return Err(RuntimeError::Limit {
-                what: "textures and generated buffers of this graph at this scene's sizes (bytes)".into(),
-                needed: bytes,
-                limit: max_bytes,
-            });
-        }
+        check_generated(gpu, graph, usages, s.shadow_size, edge_count, texture_bytes, max_bytes)?;
         gpu.scoped("scene resources", || {
-            let draw = match host {
-                Some(h) => h.draw.clone(),
-                None => {
-                    let vertices = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("scene vertices"),
-                        size: vb_size,
-                        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    });
-                    if !s.vertices.is_empty() {
-                        gpu.queue.write_buffer(&vertices, 0, f32_bytes(&s.vertices).as_slice());
-                    }
-                    SceneDraw::soup(vertices, vertex_count, casting_vertex_count)
-                }
-            };
-            let mut textures = HashMap::new();
-            let mut tables = HashMap::new();
-            // textures a compute step stores into (the compute schedule of a Map pass)
-            let storage = |name: &str| {
-                if usages.stored.contains(name) {
-                    wgpu::TextureUsages::STORAGE_BINDING
-                } else {
-                    wgpu::TextureUsages::empty()
-                }
-            };
-            for t in &graph.textures {
-                let Some(format) = wgpu_format(t.format) else {
-                    let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some(&t.name),
-                        size: table_bytes(t, s.shadow_size),
-                        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                        mapped_at_creation: false,
-                    });
-                    tables.insert(t.name.clone(), buf);
-                    continue;
-                };
-                let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some(&t.name),
-                    size: wgpu::Extent3d {
-                        width: s.shadow_size,
-                        height: s.shadow_size,
-                        depth_or_array_layers: t.array_layers(),
-                    },
-                    mip_level_count: if t.mips { mip_count(s.shadow_size) } else { 1 },
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                        | wgpu::TextureUsages::TEXTURE_BINDING
-                        | wgpu::TextureUsages::COPY_SRC
-                        | wgpu::TextureUsages::COPY_DST
-                        | storage(&t.name),
-                    view_formats: &[],
-                });
-                textures.insert(t.name.clone(), tex);
-            }
+            let make = Make { gpu };
+            let (textures, tables) = make.graph_textures(graph, usages, s.shadow_size);
+            let (cw, ch) = s.camera_size;
+            let none = wgpu::TextureUsages::empty();
+            let sampled = wgpu::TextureUsages::TEXTURE_BINDING;
             // a deferred Shade stores the camera outputs from a compute step
-            let camera_usage = if usages.camera_stored {
+            let camera_stored = if usages.camera_stored {
                 wgpu::TextureUsages::STORAGE_BINDING
             } else {
-                wgpu::TextureUsages::empty()
+                none
             };
-            let plain = |label: &str, w: u32, h: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
-                gpu.device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width: w,
-                        height: h,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC | usage,
-                    view_formats: &[],
-                })
-            };
-            let none = wgpu::TextureUsages::empty();
-            let light_depth = plain("light depth", s.shadow_size, s.shadow_size, DEPTH_FORMAT, none);
-            let camera = ["visibility", "color", "position", "normal"]
-                .iter()
-                .zip(CAMERA_FORMATS)
-                .map(|(n, f)| plain(n, cw, ch, f, camera_usage | wgpu::TextureUsages::TEXTURE_BINDING))
-                .collect();
-            let camera_depth = plain("camera depth", cw, ch, DEPTH_FORMAT, none);
             let gbuffer = if usages.gbuffer {
                 ["g-buffer world", "g-buffer normal", "g-buffer footprint"]
                     .iter()
                     .zip(graph::GBUFFER)
+                    // storage: a host's pixels are written into it by a compute step
                     .filter_map(|(n, f)| {
-                        // storage: a host's pixels are written into it by a compute step
-                        wgpu_format(f).map(|f| {
-                            plain(
-                                n,
-                                cw,
-                                ch,
-                                f,
-                                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
-                            )
-                        })
+                        wgpu_format(f).map(|f| make.attachment(n, (cw, ch), f, sampled | wgpu::TextureUsages::STORAGE_BINDING))
                     })
                     .collect()
             } else {
                 Vec::new()
             };
-            let frame = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("frame"),
-                size: FRAME_SIZE as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            gpu.queue.write_buffer(&frame, 0, &s.frame().to_bytes());
-            let sample_frames = (0..s.samples.len())
-                .filter_map(|k| s.sample_frame(k))
-                .map(|f| {
-                    let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("sample frame"),
-                        size: FRAME_SIZE as u64,
-                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    });
-                    gpu.queue.write_buffer(&buf, 0, &f.to_bytes());
-                    buf
-                })
-                .collect();
-            let light_samples = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("light samples"),
-                size: LIGHT_SAMPLES_SIZE as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            gpu.queue
-                .write_buffer(&light_samples, 0, &SampleViewUniform::to_bytes(&s.light_samples()));
-            // A storage binding may not be empty: every buffer holds at least one element.
-            let storage = |label: &str, data: &[u8], min: usize, usage: wgpu::BufferUsages| {
-                let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: data.len().max(min) as u64,
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | usage,
-                    mapped_at_creation: false,
-                });
-                if !data.is_empty() {
-                    gpu.queue.write_buffer(&buf, 0, data);
-                }
-                buf
-            };
-            let mut generated = HashMap::new();
-            for b in &graph.buffers {
-                let records = buffer_records(usages, &b.name, edge_count, s.shadow_size);
-                let size = generated_bytes(b.record_bytes, records) as usize;
-                // vertex_count 0 (reset every frame), instance_count 1, first vertex and instance 0
-                let args: Vec<u8> = [0u32, 1, 0, 0].iter().flat_map(|x| x.to_le_bytes()).collect();
-                let buf = storage(&b.name, &args, size, wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC);
-                generated.insert(b.name.clone(), buf);
-            }
-            let edges = host_edges.cloned().or(adjacency.map(|adj| {
-                let edge_bytes: Vec<u8> = adj.edges.iter().flat_map(GpuEdge::to_bytes).collect();
-                let plane_bytes: Vec<u8> = adj.planes.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
-                let face_bytes: Vec<u8> = adj.edge_faces.iter().flat_map(|x| x.to_le_bytes()).collect();
-                EdgeBuffers {
-                    edges: storage("edges", &edge_bytes, 48, wgpu::BufferUsages::empty()),
-                    planes: storage("face planes", &plane_bytes, 16, wgpu::BufferUsages::empty()),
-                    edge_faces: storage("edge faces", &face_bytes, 4, wgpu::BufferUsages::empty()),
-                    claims: storage("vertex claims", &[], 4 * adj.vertices as usize + 4, wgpu::BufferUsages::empty()),
-                    counts: adj.counts,
-                }
-            }));
+            let edges = host_edges.cloned().or(adjacency.map(|adj| make.edges(&adj)));
             Resources {
                 shadow_size: s.shadow_size,
                 camera_size: s.camera_size,
-                draw,
+                draw: host.map_or_else(|| make.soup(s), |h| h.draw.clone()),
                 textures,
                 tables,
-                light_depth,
-                camera,
-                camera_depth,
+                light_depth: make.attachment("light depth", (s.shadow_size, s.shadow_size), DEPTH_FORMAT, none),
+                camera: ["visibility", "color", "position", "normal"]
+                    .iter()
+                    .zip(CAMERA_FORMATS)
+                    .map(|(n, f)| make.attachment(n, (cw, ch), f, camera_stored | sampled))
+                    .collect(),
+                camera_depth: make.attachment("camera depth", (cw, ch), DEPTH_FORMAT, none),
                 gbuffer,
-                frame,
-                sample_frames,
-                light_samples,
+                frame: make.uniform("frame", &s.frame().to_bytes()),
+                sample_frames: (0..s.samples.len())
+                    .filter_map(|k| s.sample_frame(k))
+                    .map(|f| make.uniform("sample frame", &f.to_bytes()))
+                    .collect(),
+                light_samples: make.uniform_sized(
+                    "light samples",
+                    &SampleViewUniform::to_bytes(&s.light_samples()),
+                    LIGHT_SAMPLES_SIZE as usize,
+                ),
                 samples: s.samples.len() as u32,
                 samples_closed: s.samples_closed,
                 edges,
-                generated,
+                generated: make.generated(graph, usages, edge_count, s.shadow_size),
             }
         })
     }
@@ -415,6 +204,271 @@ impl Resources {
         self.tables
             .get(name)
             .ok_or_else(|| RuntimeError::NotFound(format!("no summed-area table `{name}`")))
+    }
+}
+
+/// The sizes of a scene checked against the device and `max_bytes`: the shadow map and
+/// the camera image, the graph's textures, the summed-area tables and the vertex buffer.
+/// Returns the textures' bytes.
+fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) -> Result<u64> {
+    let max_dim = gpu.limits.max_texture_dimension_2d;
+    if s.shadow_size == 0 || s.shadow_size > max_dim {
+        return Err(RuntimeError::Limit {
+            what: "shadow map (texels per side)".into(),
+            needed: s.shadow_size as u64,
+            limit: max_dim as u64,
+        });
+    }
+    let (cw, ch) = s.camera_size;
+    if cw == 0 || ch == 0 || cw.max(ch) > max_dim {
+        return Err(RuntimeError::Limit {
+            what: "camera image (pixels per side)".into(),
+            needed: cw.max(ch) as u64,
+            limit: max_dim as u64,
+        });
+    }
+    let texels = s.shadow_size as u64 * s.shadow_size as u64;
+    let mut bytes: u64 = texels * 4 + cw as u64 * ch as u64 * (4 + 4 + 16 + 8 + 4);
+    for t in &graph.textures {
+        let per = t.format.bytes_per_texel() as u64 * t.array_layers() as u64 * texels;
+        bytes += if t.mips { per * 4 / 3 } else { per };
+    }
+    if bytes > max_bytes {
+        return Err(RuntimeError::Limit {
+            what: "textures of this graph at this scene's sizes (bytes)".into(),
+            needed: bytes,
+            limit: max_bytes,
+        });
+    }
+    let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    for t in graph.textures.iter().filter(|t| t.format == Format::SummedAreaU32) {
+        let size = table_bytes(t, s.shadow_size);
+        if size > storage_limit {
+            return Err(RuntimeError::Limit {
+                what: format!("summed-area table `{}` (storage buffer bytes)", t.name),
+                needed: size,
+                limit: storage_limit,
+            });
+        }
+    }
+    let vb_size = vertex_buffer_bytes(s);
+    if vb_size > gpu.limits.max_buffer_size {
+        return Err(RuntimeError::Limit {
+            what: "vertex buffer (bytes)".into(),
+            needed: vb_size,
+            limit: gpu.limits.max_buffer_size,
+        });
+    }
+    Ok(bytes)
+}
+
+/// Bytes of a soup's vertex buffer (at least one vertex).
+fn vertex_buffer_bytes(s: &SceneInputs) -> u64 {
+    (s.vertices.len() * 4).max(24) as u64
+}
+
+/// A soup's edge adjacency, for a graph with generated buffers: bounded from the triangle
+/// count (with the textures' bytes) before it is built.
+fn soup_adjacency(graph: &PassGraph, s: &SceneInputs, texture_bytes: u64, max_bytes: u64) -> Result<Option<Adjacency>> {
+    if graph.buffers.is_empty() {
+        return Ok(None);
+    }
+    let tris = (s.vertices.len() / 18) as u64;
+    let needed = texture_bytes.saturating_add(Adjacency::max_bytes(tris));
+    if needed > max_bytes {
+        return Err(RuntimeError::Limit {
+            what: format!("edge adjacency of {tris} triangles, with the textures (bytes)"),
+            needed,
+            limit: max_bytes,
+        });
+    }
+    Ok(Some(Adjacency::build(&triangles(s), meshes(s))))
+}
+
+/// Each generated buffer, sized from the edge count, against the storage-binding limit,
+/// and all of them with the textures against `max_bytes`.
+fn check_generated(
+    gpu: &Gpu,
+    graph: &PassGraph,
+    usages: &Usages,
+    shadow_size: u32,
+    edge_count: u64,
+    texture_bytes: u64,
+    max_bytes: u64,
+) -> Result<()> {
+    let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    let mut bytes = texture_bytes;
+    for b in &graph.buffers {
+        let records = buffer_records(usages, &b.name, edge_count, shadow_size);
+        let size = generated_bytes(b.record_bytes, records);
+        if size > storage_limit {
+            return Err(RuntimeError::Limit {
+                what: format!("generated buffer `{}` ({records} records x {} bytes)", b.name, b.record_bytes),
+                needed: size,
+                limit: storage_limit,
+            });
+        }
+        bytes += size;
+    }
+    if bytes > max_bytes {
+        return Err(RuntimeError::Limit {
+            what: "textures and generated buffers of this graph at this scene's sizes (bytes)".into(),
+            needed: bytes,
+            limit: max_bytes,
+        });
+    }
+    Ok(())
+}
+
+/// Creating the resources, inside the caller's error scope (the sizes are checked).
+struct Make<'a> {
+    gpu: &'a Gpu,
+}
+
+impl Make<'_> {
+    /// The soup's vertex buffer and its draws.
+    fn soup(&self, s: &SceneInputs) -> SceneDraw {
+        let vertices = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scene vertices"),
+            size: vertex_buffer_bytes(s),
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        if !s.vertices.is_empty() {
+            self.gpu.queue.write_buffer(&vertices, 0, f32_bytes(&s.vertices).as_slice());
+        }
+        let count = (s.vertices.len() / 6) as u32;
+        SceneDraw::soup(vertices, count, s.casting_vertices.map_or(count, |n| n.min(count)))
+    }
+
+    /// The graph's textures at the shadow map's size, and its summed-area tables
+    /// (storage buffers), by name.
+    fn graph_textures(
+        &self,
+        graph: &PassGraph,
+        usages: &Usages,
+        shadow_size: u32,
+    ) -> (HashMap<String, wgpu::Texture>, HashMap<String, wgpu::Buffer>) {
+        let (mut textures, mut tables) = (HashMap::new(), HashMap::new());
+        for t in &graph.textures {
+            let Some(format) = wgpu_format(t.format) else {
+                let buf = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(&t.name),
+                    size: table_bytes(t, shadow_size),
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                tables.insert(t.name.clone(), buf);
+                continue;
+            };
+            // textures a compute step stores into (the compute schedule of a Map pass)
+            let stored = if usages.stored.contains(&t.name) {
+                wgpu::TextureUsages::STORAGE_BINDING
+            } else {
+                wgpu::TextureUsages::empty()
+            };
+            let tex = self.gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(&t.name),
+                size: wgpu::Extent3d {
+                    width: shadow_size,
+                    height: shadow_size,
+                    depth_or_array_layers: t.array_layers(),
+                },
+                mip_level_count: if t.mips { mip_count(shadow_size) } else { 1 },
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::COPY_DST
+                    | stored,
+                view_formats: &[],
+            });
+            textures.insert(t.name.clone(), tex);
+        }
+        (textures, tables)
+    }
+
+    /// A render attachment of one layer and level (a depth buffer, a camera output, the
+    /// G-buffer), readable back, with `usage` besides.
+    fn attachment(&self, label: &str, (w, h): (u32, u32), format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> wgpu::Texture {
+        self.gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC | usage,
+            view_formats: &[],
+        })
+    }
+
+    /// A `Frame`-sized uniform holding `bytes`.
+    fn uniform(&self, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+        self.uniform_sized(label, bytes, FRAME_SIZE as usize)
+    }
+
+    /// A uniform of `size` bytes holding `bytes` at its start.
+    fn uniform_sized(&self, label: &str, bytes: &[u8], size: usize) -> wgpu::Buffer {
+        let buf = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        self.gpu.queue.write_buffer(&buf, 0, bytes);
+        buf
+    }
+
+    /// A storage buffer holding `data`, at least `min` bytes (a storage binding may not be
+    /// empty: every buffer holds at least one element).
+    fn storage(&self, label: &str, data: &[u8], min: usize, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        let buf = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: data.len().max(min) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | usage,
+            mapped_at_creation: false,
+        });
+        if !data.is_empty() {
+            self.gpu.queue.write_buffer(&buf, 0, data);
+        }
+        buf
+    }
+
+    /// The generated buffers, by name: draw arguments at their start (vertex count 0, reset
+    /// every frame; instance count 1), then their records.
+    fn generated(&self, graph: &PassGraph, usages: &Usages, edge_count: u64, shadow_size: u32) -> HashMap<String, wgpu::Buffer> {
+        let args: Vec<u8> = [0u32, 1, 0, 0].iter().flat_map(|x| x.to_le_bytes()).collect();
+        graph
+            .buffers
+            .iter()
+            .map(|b| {
+                let size = generated_bytes(b.record_bytes, buffer_records(usages, &b.name, edge_count, shadow_size)) as usize;
+                let usage = wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC;
+                (b.name.clone(), self.storage(&b.name, &args, size, usage))
+            })
+            .collect()
+    }
+
+    /// A soup's edge adjacency on the GPU.
+    fn edges(&self, adj: &Adjacency) -> EdgeBuffers {
+        let edge_bytes: Vec<u8> = adj.edges.iter().flat_map(GpuEdge::to_bytes).collect();
+        let plane_bytes: Vec<u8> = adj.planes.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        let face_bytes: Vec<u8> = adj.edge_faces.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let none = wgpu::BufferUsages::empty();
+        EdgeBuffers {
+            edges: self.storage("edges", &edge_bytes, 48, none),
+            planes: self.storage("face planes", &plane_bytes, 16, none),
+            edge_faces: self.storage("edge faces", &face_bytes, 4, none),
+            claims: self.storage("vertex claims", &[], 4 * adj.vertices as usize + 4, none),
+            counts: adj.counts,
+        }
     }
 }
 
