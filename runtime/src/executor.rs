@@ -378,7 +378,7 @@ impl Executor {
         if let Some(facts) = &self.graph.specialised
             && let Some(floor) = facts.depth_floor
         {
-            let (soup, casting) = geometry.soup();
+            let (soup, casting) = geometry.soup()?;
             for (l, light) in lights.iter().enumerate() {
                 if let Some(here) = graph::caster_depth_floor(&soup, Some(casting), &light.view, light.near, light.far)
                     && here < floor

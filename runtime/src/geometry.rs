@@ -108,6 +108,13 @@ impl Geometry {
     /// non-finite position, an instance of a mesh that does not exist, a transform that is
     /// not finite, not affine or singular, and counts over `limits`.
     pub fn check(&self, limits: &wgpu::Limits) -> Result<()> {
+        self.check_contents()?;
+        self.check_sizes(limits)
+    }
+
+    /// [`Geometry::check`] without the device's limits: every index in range, every
+    /// instance of a mesh that exists, every value finite.
+    pub fn check_contents(&self) -> Result<()> {
         let bad = |m: String| Err(RuntimeError::Param(m));
         for (i, m) in self.meshes.iter().enumerate() {
             let name = if m.name.is_empty() {
@@ -157,6 +164,11 @@ impl Geometry {
             }
             check_transform(&inst.transform, &name)?;
         }
+        Ok(())
+    }
+
+    /// The sizes against the device's limits.
+    fn check_sizes(&self, limits: &wgpu::Limits) -> Result<()> {
         let storage = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
         let sizes = [
             ("the meshes' vertices (bytes)", self.mesh_vertices() * 24, storage),
@@ -216,8 +228,10 @@ impl Geometry {
 
     /// The same triangles listed out, world space, casting instances first (in order),
     /// then the others: what [`SceneInputs::vertices`] holds for this geometry, its
-    /// transforms applied on the CPU ([`transform_point`], and the normal matrix).
-    pub fn soup(&self) -> (Vec<f32>, u32) {
+    /// transforms applied on the CPU ([`transform_point`], and the normal matrix), and the
+    /// number of casting vertices. Refused as [`Geometry::check_contents`] refuses.
+    pub fn soup(&self) -> Result<(Vec<f32>, u32)> {
+        self.check_contents()?;
         let mut out = Vec::new();
         let mut casting = 0;
         for pass in [true, false] {
@@ -234,7 +248,7 @@ impl Geometry {
                 casting = (out.len() / 6) as u32;
             }
         }
-        (out, casting)
+        Ok((out, casting))
     }
 
     /// The triangles of each casting instance in [`Geometry::soup`]'s listing, as ranges
@@ -633,7 +647,8 @@ impl GeometryBuffers {
             );
             let records = buffer(
                 "placement records",
-                g.instances.len() as u64 * RECORD_BYTES,
+                // at least one record: the binding is one record wide
+                (g.instances.len() as u64).max(1) * RECORD_BYTES,
                 wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             );
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {

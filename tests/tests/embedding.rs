@@ -564,6 +564,8 @@ fn host_geometry_is_checked_at_upload_naming_the_mesh_or_instance() {
     let mut g = good.clone();
     g.instances[0].mesh = 9;
     refused(g, "places mesh 9", &mut bind);
+    // nothing at all is a scene with nothing in it, not an error
+    bind(&Geometry::default()).unwrap();
     bind(&good).unwrap();
     // per frame: the count, and NaN
     let mut ts: Vec<[f32; 16]> = good.instances.iter().map(|i| i.transform).collect();
@@ -645,6 +647,12 @@ fn a_specialised_graph_is_rechecked_per_frame_from_the_casters_bounds() {
         .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap_err();
     assert!(e.to_string().contains("under light 0 these come to"), "{e}");
+    // the exact check reads the placed casters: a bad geometry is refused before it, not a panic
+    g.meshes[0].indices[0] = u32::MAX;
+    let e = ex
+        .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap_err();
+    assert!(e.to_string().contains("out of range"), "{e}");
 }
 
 // Host pixels: the deferred Shade fed by the host's G-buffer.

@@ -61,7 +61,7 @@ pub fn quarter_turn(t: [f32; 3]) -> [f32; 16] {
 
 /// `s` with the geometry's triangles listed out in its place.
 pub fn listed_out(s: &SceneInputs, g: &Geometry) -> SceneInputs {
-    let (vertices, casting) = g.soup();
+    let (vertices, casting) = g.soup().unwrap_or_else(|e| panic!("{e}"));
     SceneInputs {
         casting_vertices: Some(casting),
         meshes: g.soup_meshes(),
