@@ -5,7 +5,7 @@
 //! render the shadows of a sphere light orbiting above, samples sshc's visibility texture in
 //! its own lighting pass,
 //! and writes each frame as `OUT_DIR/frame-NNN.png`, and all of them side by side as
-//! `OUT_DIR/strip.png`. It prints the median CPU time of
+//! `OUT_DIR/strip.png` (when that is at most 16384 pixels wide). It prints the median CPU time of
 //! sshc's share of each frame (the light and camera updates and the recording), in µs.
 //!
 //! ```text
@@ -124,7 +124,9 @@ fn run(args: Args) -> Result<(), String> {
 
     std::fs::create_dir_all(&args.out_dir).map_err(|e| format!("{}: {e}", args.out_dir.display()))?;
     let mut sshc_us = Vec::new();
-    let mut strip = image::RgbaImage::new(args.size * args.frames, args.size);
+    // the strip of every frame side by side, when it stays a picture (at most 16384 wide)
+    let strip_width = args.size.checked_mul(args.frames).filter(|w| (1..=16384).contains(w));
+    let mut strip = strip_width.map(|w| image::RgbaImage::new(w, args.size));
     for f in 0..args.frames {
         let light = light(f as f32 / 24.0 * std::f32::consts::TAU);
         transforms[turning] = Mat4::from_rotation_y(f as f32 * 0.4).to_cols_array();
@@ -139,10 +141,18 @@ fn run(args: Args) -> Result<(), String> {
         queue.submit([encoder.finish()]);
         let path = args.out_dir.join(format!("frame-{f:03}.png"));
         let frame = host.save(&device, &path)?;
-        image::imageops::replace(&mut strip, &frame, i64::from(f * args.size), 0);
+        if let Some(strip) = &mut strip {
+            image::imageops::replace(strip, &frame, i64::from(f) * i64::from(args.size), 0);
+        }
     }
-    let path = args.out_dir.join("strip.png");
-    strip.save(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    match &strip {
+        Some(strip) => {
+            let path = args.out_dir.join("strip.png");
+            strip.save(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        }
+        None if args.frames > 0 => println!("no strip.png: {} frames of {} pixels are wider than 16384", args.frames, args.size),
+        None => {}
+    }
     sshc_us.sort_by(f64::total_cmp);
     let median = sshc_us.get(sshc_us.len() / 2).copied().unwrap_or(f64::NAN);
     println!(

@@ -403,7 +403,7 @@ impl Executor {
             self.geometry = None;
         }
         bound?;
-        self.caster_bounds = self.geometry_caster_bounds();
+        self.caster_bounds = self.geometry.as_ref().and_then(|g| g.caster_bounds_at(&g.transforms));
         Ok(())
     }
 
@@ -413,36 +413,29 @@ impl Executor {
     /// graph's depth floor is re-checked from the casters' bounding box, as
     /// [`Executor::set_light`] does.
     pub fn set_transforms(&mut self, transforms: &[[f32; 16]]) -> Result<()> {
-        let Some(g) = &mut self.geometry else {
+        let Some(g) = &self.geometry else {
             return Err(RuntimeError::NotFound(
                 "no host geometry is bound: call bind_geometry first (a triangle soup has no transforms)".into(),
             ));
         };
-        let before = g.transforms.clone();
-        g.set_transforms(&self.gpu.queue, transforms)?;
-        self.caster_bounds = self.geometry_caster_bounds();
-        for (l, light) in self.lights_state.clone().iter().enumerate() {
-            if let Err(e) = self.check_floor_from_bounds(l, light) {
-                // the transforms stay as they were
-                if let Some(g) = &mut self.geometry {
-                    g.set_transforms(&self.gpu.queue, &before)?;
-                }
-                self.caster_bounds = self.geometry_caster_bounds();
-                return Err(e);
-            }
+        // everything checked before anything is written: a refused set changes nothing
+        g.check_transforms(transforms)?;
+        let bounds = g.caster_bounds_at(transforms);
+        for (l, light) in self.lights_state.iter().enumerate() {
+            self.check_floor_from_bounds(l, light, bounds)?;
         }
+        if let Some(g) = &mut self.geometry {
+            g.write_transforms(&self.gpu.queue, transforms);
+        }
+        self.caster_bounds = bounds;
         Ok(())
-    }
-
-    fn geometry_caster_bounds(&self) -> Option<[[f32; 3]; 2]> {
-        self.geometry.as_ref()?.caster_bounds()
     }
 
     /// A specialised graph's depth floor, re-checked for light `l` from the casters'
     /// bounding box: its corners' least depth is a lower bound of the triangles', so a
     /// state the bounds pass cannot break the specialisation; one they fail is refused.
-    fn check_floor_from_bounds(&self, l: usize, light: &LightInputs) -> Result<()> {
-        let (Some(facts), Some(bounds)) = (&self.graph.specialised, self.caster_bounds) else {
+    fn check_floor_from_bounds(&self, l: usize, light: &LightInputs, bounds: Option<[[f32; 3]; 2]>) -> Result<()> {
+        let (Some(facts), Some(bounds)) = (&self.graph.specialised, bounds) else {
             return Ok(());
         };
         let Some(floor) = facts.depth_floor else { return Ok(()) };
@@ -564,9 +557,7 @@ impl Executor {
     /// new binding).
     pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         camera.check()?;
-        if self.bound.is_empty() {
-            return Err(RuntimeError::NotFound("no scene is bound: call bind_scene first".into()));
-        }
+        self.bound()?;
         for ((res, light), u) in self.bound.iter().zip(&self.lights_state).zip(&mut self.uniforms) {
             u.set_camera(camera, light, res.shadow_size);
         }
@@ -597,7 +588,7 @@ impl Executor {
             )));
         }
         self.check_light_kind(l, light.kind)?;
-        self.check_floor_from_bounds(l, light)?;
+        self.check_floor_from_bounds(l, light, self.caster_bounds)?;
         self.uniforms[l] = LightUniforms::new(&camera, light, res.shadow_size, false);
         self.lights_state[l] = light.clone();
         Ok(())
@@ -1069,13 +1060,7 @@ fn caster_bounds(s: &SceneInputs) -> Option<[[f32; 3]; 2]> {
     let n = s
         .casting_vertices
         .map_or(s.vertices.len() / 6, |c| (c as usize).min(s.vertices.len() / 6));
-    s.vertices.chunks_exact(6).take(n).fold(None, |b, v| {
-        let [lo, hi] = b.unwrap_or([[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]]);
-        Some([
-            [lo[0].min(v[0]), lo[1].min(v[1]), lo[2].min(v[2])],
-            [hi[0].max(v[0]), hi[1].max(v[1]), hi[2].max(v[2])],
-        ])
-    })
+    crate::geometry::box_of(s.vertices.chunks_exact(6).take(n).map(|v| [v[0], v[1], v[2]]))
 }
 
 fn first_camera(bound: &[Resources]) -> (u32, u32) {

@@ -124,19 +124,22 @@ impl Camera {
 impl LightInputs {
     /// Refuse non-finite matrices, positions or sizes, and an empty depth range.
     pub fn check(&self, light: usize) -> Result<()> {
-        let mut values = vec![self.near, self.far, self.size, self.angle, self.proj_y];
-        values.extend(
-            self.view
+        // every value, without collecting them (this runs on every `set_light`)
+        let scalars = [self.near, self.far, self.size, self.angle, self.proj_y];
+        let views = self
+            .view
+            .iter()
+            .chain(&self.view_proj)
+            .chain(&self.position)
+            .chain(&self.half_extents);
+        let samples = self.samples.iter().flat_map(|s| {
+            s.light_view
                 .iter()
-                .chain(&self.view_proj)
-                .chain(&self.position)
-                .chain(&self.half_extents),
-        );
-        for s in &self.samples {
-            values.extend(s.light_view.iter().chain(&s.light_view_proj).chain(&s.position));
-            values.extend([s.near, s.far, s.light_proj_y]);
-        }
-        if !finite(&values) {
+                .chain(&s.light_view_proj)
+                .chain(&s.position)
+                .chain([&s.near, &s.far, &s.light_proj_y])
+        });
+        if !scalars.iter().chain(views).chain(samples).all(|v| v.is_finite()) {
             return Err(RuntimeError::Param(format!(
                 "light {light}: a matrix, position or size is not finite"
             )));

@@ -162,7 +162,7 @@ impl Geometry {
                     self.meshes.len()
                 ));
             }
-            check_transform(&inst.transform, &name)?;
+            check_transform(&inst.transform, || name.clone())?;
         }
         Ok(())
     }
@@ -279,7 +279,7 @@ fn instances_bounds(boxes: &[Option<[[f32; 3]; 2]>], casts: &[bool], transforms:
     box_of(corners)
 }
 
-fn box_of(points: impl Iterator<Item = [f32; 3]>) -> Option<[[f32; 3]; 2]> {
+pub(crate) fn box_of(points: impl Iterator<Item = [f32; 3]>) -> Option<[[f32; 3]; 2]> {
     points.fold(None, |b, p| {
         let [lo, hi] = b.unwrap_or([p, p]);
         Some([
@@ -289,19 +289,26 @@ fn box_of(points: impl Iterator<Item = [f32; 3]>) -> Option<[[f32; 3]; 2]> {
     })
 }
 
-/// Refuse a transform that is not finite, not affine or singular, naming `what`.
-pub(crate) fn check_transform(m: &[f32; 16], what: &str) -> Result<()> {
+/// Refuse a transform that is not finite, not affine or singular, naming `what` (made only
+/// for the error: this runs for every instance on every `set_transforms`).
+pub(crate) fn check_transform(m: &[f32; 16], what: impl Fn() -> String) -> Result<()> {
     if !m.iter().all(|c| c.is_finite()) {
-        return Err(RuntimeError::Param(format!("{what}: its transform is not finite: {m:?}")));
+        return Err(RuntimeError::Param(format!("{}: its transform is not finite: {m:?}", what())));
     }
     if [m[3], m[7], m[11], m[15]] != [0.0, 0.0, 0.0, 1.0] {
         return Err(RuntimeError::Param(format!(
-            "{what}: its transform is not affine (last row {:?}, not [0, 0, 0, 1])",
+            "{}: its transform is not affine (last row {:?}, not [0, 0, 0, 1])",
+            what(),
             [m[3], m[7], m[11], m[15]]
         )));
     }
-    if normal_matrix(m).is_none() {
-        return Err(RuntimeError::Param(format!("{what}: its transform is singular (no normal matrix)")));
+    // the normal matrix's own condition (`normal_matrix`), without computing it
+    let det = determinant3(m);
+    if !(det.is_finite() && det != 0.0) {
+        return Err(RuntimeError::Param(format!(
+            "{}: its transform is singular (no normal matrix)",
+            what()
+        )));
     }
     Ok(())
 }
@@ -555,6 +562,34 @@ impl GeometryBuffers {
             }
             adjacency.push(adj);
         }
+        // what the casting instances place, summed in u64 and bounded before the u32 spans
+        // are laid out (many instances of a mesh of many edges could pass 2^32)
+        let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+        let mut totals = [0u64; 4];
+        for inst in g.instances.iter().filter(|i| i.casts) {
+            if let Some(a) = &adjacency[inst.mesh] {
+                for (t, n) in totals
+                    .iter_mut()
+                    .zip([a.edges.len(), a.planes.len(), a.edge_faces.len(), a.vertices as usize])
+                {
+                    *t += n as u64;
+                }
+            }
+        }
+        for (what, needed) in [
+            ("placed edges (bytes)", totals[0] * 48),
+            ("placed face planes (bytes)", totals[1] * 16),
+            ("placed face references (bytes)", totals[2] * 4),
+            ("vertex claims (bytes)", totals[3] * 4 + 4),
+        ] {
+            if needed > storage_limit {
+                return Err(RuntimeError::Limit {
+                    what: what.into(),
+                    needed,
+                    limit: storage_limit,
+                });
+            }
+        }
         // the instances, one after the other: draws, and spans of what they place
         let (mut ranges, mut spans) = (Vec::new(), Vec::new());
         let mut placed = Spans::default();
@@ -593,20 +628,6 @@ impl GeometryBuffers {
                 counts.degenerate_faces += a.counts.degenerate_faces;
             }
             spans.push(s);
-        }
-        let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-        for (what, needed) in [
-            ("placed edges (bytes)", u64::from(placed.edges[2]) * 48),
-            ("placed face planes (bytes)", u64::from(placed.planes[2]) * 16),
-            ("placed face references (bytes)", u64::from(placed.faces[2]) * 4),
-        ] {
-            if needed > storage_limit {
-                return Err(RuntimeError::Limit {
-                    what: what.into(),
-                    needed,
-                    limit: storage_limit,
-                });
-            }
         }
         gpu.scoped("uploading the host geometry", || {
             let device = &gpu.device;
@@ -755,9 +776,9 @@ impl GeometryBuffers {
         })
     }
 
-    /// Set every instance's transform (checked: as many as instances, each finite, affine
-    /// and invertible); placement runs in the next frame.
-    pub fn set_transforms(&mut self, queue: &wgpu::Queue, transforms: &[[f32; 16]]) -> Result<()> {
+    /// Refuse a set of transforms: not one per instance, or one not finite, affine and
+    /// invertible.
+    pub fn check_transforms(&self, transforms: &[[f32; 16]]) -> Result<()> {
         if transforms.len() != self.transforms.len() {
             return Err(RuntimeError::Param(format!(
                 "{} transforms for {} instances: a new instance set is a new binding",
@@ -766,11 +787,16 @@ impl GeometryBuffers {
             )));
         }
         for (i, t) in transforms.iter().enumerate() {
-            check_transform(t, &format!("instance {i}"))?;
+            check_transform(t, || format!("instance {i}"))?;
         }
+        Ok(())
+    }
+
+    /// Take a set of transforms ([`GeometryBuffers::check_transforms`] passed): the
+    /// placement records are written and placement runs in the next frame.
+    pub fn write_transforms(&mut self, queue: &wgpu::Queue, transforms: &[[f32; 16]]) {
         self.transforms.copy_from_slice(transforms);
         self.write_records(queue);
-        Ok(())
     }
 
     /// Write every placement record and mark placement due.
@@ -811,9 +837,9 @@ impl GeometryBuffers {
         self.dirty = true;
     }
 
-    /// The casting instances' bounding box at the current transforms.
-    pub fn caster_bounds(&self) -> Option<[[f32; 3]; 2]> {
-        instances_bounds(&self.boxes, &self.casts, &self.transforms)
+    /// The casting instances' bounding box under `transforms` (one per instance).
+    pub fn caster_bounds_at(&self, transforms: &[[f32; 16]]) -> Option<[[f32; 3]; 2]> {
+        instances_bounds(&self.boxes, &self.casts, transforms)
     }
 
     /// Record the placement of every instance (its vertices, and its edges, planes and face

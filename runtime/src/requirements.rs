@@ -241,9 +241,14 @@ impl Requirements {
                 &format!("the graph's texture `{}`", t.name),
             );
         }
-        for pass in &graph.passes {
-            for step in &pass.steps {
-                let c = step_counts(graph, step);
+        // each step's counts, once (the features below read whether it blends)
+        let counts: Vec<Vec<StepCounts>> = graph
+            .passes
+            .iter()
+            .map(|p| p.steps.iter().map(|st| step_counts(graph, st)).collect())
+            .collect();
+        for (pass, steps) in graph.passes.iter().zip(&counts) {
+            for c in steps {
                 let who = format!("pass `{}`", pass.name);
                 let name = who.as_str();
                 limit(Limit::MaxBindGroups, c.groups, name);
@@ -275,8 +280,8 @@ impl Requirements {
                 format!("texture `{}` is {:?}", t.name, t.format),
             );
         }
-        for pass in &graph.passes {
-            for step in &pass.steps {
+        for (pass, steps) in graph.passes.iter().zip(&counts) {
+            for (step, c) in pass.steps.iter().zip(steps) {
                 if step.sampler {
                     for read in &step.reads {
                         if let Some(t) = graph.texture(&read.texture).filter(|t| is_float32(t.format)) {
@@ -288,7 +293,7 @@ impl Requirements {
                         }
                     }
                 }
-                let blends = step_counts(graph, step).blends;
+                let blends = c.blends;
                 let raster = step.compute.is_none();
                 for w in &step.writes {
                     let Some(t) = graph.texture(&w.texture) else { continue };
