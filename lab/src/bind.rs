@@ -1,8 +1,9 @@
 //! From a [`Scene`] to the plain data the executor binds ([`SceneInputs`]).
 
 use crate::scene::{Light, Scene};
-use sshc_runtime::gpu::{SampleView, SceneInputs};
+use sshc_runtime::gpu::{Camera, LightInputs, SceneInputs};
 use sshc_runtime::graph::{MAX_LIGHT_SAMPLES, PassGraph, Views};
+use sshc_runtime::light::{SampleFit, sample_views};
 
 /// The scene's geometry, camera and first light, as the executor needs them.
 ///
@@ -74,93 +75,29 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
         meshes.push(0..0);
     }
     let every = casting == vertices.len() / 6;
+    let camera = Camera {
+        view_proj: scene.camera_view_proj().to_cols_array(),
+        position: cam.to_array(),
+    };
+    let light = LightInputs::from_view(light, &v, &samples, samples_closed);
     Ok(SceneInputs {
         vertices,
         meshes,
         casting_vertices: (!every).then_some(casting as u32),
-        camera_view_proj: scene.camera_view_proj().to_cols_array(),
-        camera_position: cam.to_array(),
-        camera_size: scene.camera_size(),
-        shadow_size: scene.shadow_map,
-        light_view: v.view.to_cols_array(),
-        light_view_proj: v.view_proj.to_cols_array(),
-        light_position: v.position_or_direction.to_array(),
-        near: v.near,
-        far: v.far,
-        light_size: v.size,
-        light_half_extents: v.half_extents.to_array(),
-        light_angle: v.angle,
-        light_proj_y: v.proj.y_axis.y,
-        light_orthographic: v.orthographic,
-        samples,
-        samples_closed,
-        light: scene.lights.first().map(|l| l.kind()),
+        ..SceneInputs::of(&camera, &light, scene.camera_size(), scene.shadow_map)
     })
 }
 
 /// `n` sample views of `light` in `scene`, in order along the light, and whether they
-/// close a loop (issue 14's conventions, after Heidrich et al. 2000, sections 3 and 4):
-///
-/// - positions: [`Light::sample_chain`] (a segment's evenly spaced points, ends included;
-///   a triangle's or rectangle's perimeter, corners included, `n` a multiple of the
-///   edges, closed; `n = 1`: the centre of any light at a finite position);
-/// - each view is the one a point light at the sample would get
-///   ([`Scene::light_view`] of `Light::Point`, so the scene's `shadow_fit` holds), with its
-///   own near, far and projection;
-/// - weights: each segment between consecutive samples weighs its length over the chain's
-///   total (N - 1 segments when open, N when closed); a sample carries the weights of the
-///   segments before and after it (0 where there is none); a lone sample carries [1, 1]
-///   (its two channels start at one half, section 3.2, so a lit point sums to 1). A chain
-///   of zero length (a segment with a = b) weighs its segments equally.
+/// close a loop: [`sshc_runtime::light::sample_views`] (issue 14's conventions, after
+/// Heidrich et al. 2000, sections 3 and 4), each view the one a point light at the sample
+/// would get ([`Scene::light_view`] of `Light::Point`, so the scene's `shadow_fit` holds).
 ///
 /// Errors: `n` above [`MAX_LIGHT_SAMPLES`], a light at infinity, a point, sphere or disk
 /// with `n > 1`, `n` not a multiple of a triangle's or rectangle's edges.
-pub fn light_samples(scene: &Scene, light: &Light, n: u32) -> Result<(Vec<SampleView>, bool), String> {
-    let (points, closed) = light
-        .sample_chain(n, MAX_LIGHT_SAMPLES)
-        .map_err(|e| format!("the scene's light ({}): {e}", light.kind_name()))?;
-    let k = points.len();
-    // segment i joins sample i and sample i + 1 (mod k when closed)
-    let segments = if k < 2 {
-        0
-    } else if closed {
-        k
-    } else {
-        k - 1
-    };
-    let lengths: Vec<f32> = (0..segments).map(|i| points[i].distance(points[(i + 1) % k])).collect();
-    let total: f32 = lengths.iter().sum();
-    let weight = |i: usize| {
-        if total > 0.0 && total.is_finite() {
-            lengths[i] / total
-        } else {
-            1.0 / segments as f32
-        }
-    };
-    let views = points
-        .iter()
-        .enumerate()
-        .map(|(i, &position)| {
-            let v = scene.light_view(&Light::Point { position });
-            let weights = if k == 1 {
-                [1.0, 1.0]
-            } else {
-                let before = if i > 0 { Some(i - 1) } else { closed.then_some(k - 1) };
-                let after = (i + 1 < k || closed).then_some(i);
-                [before.map_or(0.0, weight), after.map_or(0.0, weight)]
-            };
-            SampleView {
-                light_view: v.view.to_cols_array(),
-                light_view_proj: v.view_proj.to_cols_array(),
-                position: position.to_array(),
-                near: v.near,
-                far: v.far,
-                light_proj_y: v.proj.y_axis.y,
-                weights,
-            }
-        })
-        .collect();
-    Ok((views, closed))
+pub fn light_samples(scene: &Scene, light: &Light, n: u32) -> Result<(Vec<SampleFit>, bool), String> {
+    sample_views(light, n, MAX_LIGHT_SAMPLES, |l| scene.light_view(l))
+        .map_err(|e| format!("the scene's light ({}): {e}", light.kind_name()))
 }
 
 #[cfg(test)]

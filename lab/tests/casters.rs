@@ -2,7 +2,8 @@
 //! CPU: the scene options and their errors, the fitted extent against its formula (a
 //! distant disk and a sphere light), the vertex order the executor binds, the ground
 //! truth's shadow rays, which object a pixel shows, and Lawlor's "shadow on the ground"
-//! pixel set on a constructed case. The GPU side is in tests/gpu.rs.
+//! pixel set on a constructed case; the runtime's fit to a host's boxes against the
+//! scene's to its vertices. The GPU side is in tests/gpu.rs.
 
 use glam::Vec3;
 use sshc_lab::metrics;
@@ -288,4 +289,113 @@ fn the_precision_budget_uses_the_casters_texels() {
     assert!(scene("", light, objects).is_ok(), "the whole scene's texels resolve");
     let e = scene("shadow_fit: Casters,", light, objects).expect_err("the casters' texels do not");
     assert!(e.contains("coarser than 1/16 of a shadow-map texel"), "{e}");
+}
+
+/// A host's light view, fitted by the runtime to its objects' boxes
+/// (`LightInputs::fit`), is the scene's fitted to its vertices where the objects are
+/// axis-aligned boxes: both fits are one code (the crate `sshc-light`), and a box's
+/// vertices are its box's corners, so every min, max and view is the same f32 arithmetic.
+/// Every light kind, the `Scene` and `Casters` fits, and the sample views of linear and
+/// area lights, bit for bit.
+#[test]
+fn the_runtimes_fit_to_boxes_is_the_scenes_fit_to_box_vertices_bit_for_bit() {
+    use sshc_runtime::gpu::{Boxes, Fit, LightInputs};
+    let lights = [
+        ("Point(position: (0.4, 2.5, 0.3))", 0),
+        ("Directional(direction: (0.3, 1.0, 0.2))", 0),
+        ("Sphere(center: (0.4, 2.5, 0.3), radius: 0.2)", 0),
+        ("Disk(center: (0.4, 2.5, 0.3), normal: (0.0, -1.0, 0.2), radius: 0.3)", 0),
+        (
+            "Rectangle(center: (0.0, 2.5, 0.0), normal: (0.0, -1.0, 0.0), u_axis: (1.0, 0.0, 0.3), half_width: 0.4, half_height: 0.2)",
+            8,
+        ),
+        ("Segment(a: (-0.6, 2.5, 0.0), b: (0.6, 2.4, 0.1))", 5),
+        ("Triangle(a: (-0.6, 2.5, 0.3), b: (0.6, 2.5, 0.3), c: (0.0, 2.6, -0.5))", 6),
+        ("DistantDisk(direction: (0.2, 1.0, -0.1), angle_degrees: 4.0)", 0),
+    ];
+    let boxes = "Object(mesh: Box(size: (0.6, 0.4, 0.8)), transform: (translate: (0.3, 0.9, -0.2))), \
+                 Object(mesh: Box(size: (0.2, 1.0, 0.2)), transform: (translate: (-0.8, 0.5, 0.6)))";
+    let ground = "Object(mesh: Box(size: (4.0, 0.1, 4.0)), casts: false)";
+    for (light, samples) in lights {
+        for (fit, runtime_fit) in [("Scene", Fit::Scene), ("Casters", Fit::Casters)] {
+            let s = scene(&format!("shadow_fit: {fit},"), light, &format!("{ground}, {boxes}")).unwrap();
+            let box_of = |i: usize| {
+                let t = &s.triangles()[s.object_triangles(i)];
+                let lo = t.iter().flatten().fold(Vec3::INFINITY, |a, p| a.min(*p));
+                let hi = t.iter().flatten().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+                [lo.to_array(), hi.to_array()]
+            };
+            let b = Boxes {
+                casters: vec![box_of(1), box_of(2)],
+                others: vec![box_of(0)],
+            };
+            let lab = sshc_lab::bind::scene_inputs_with_samples(&s, samples).unwrap().light_inputs();
+            let runtime = LightInputs::fit(&s.lights[0], &b, runtime_fit, s.shadow_map, samples).unwrap();
+            assert_eq!(runtime, lab, "{light}, {fit} fit");
+            assert_eq!(runtime.samples.len(), samples as usize);
+        }
+    }
+}
+
+/// What the runtime's fit refuses, with the reason: lights made in code are checked as
+/// a scene file's are when read.
+#[test]
+fn the_runtimes_fit_refuses_lights_and_boxes_no_view_can_hold() {
+    use sshc_runtime::gpu::{Boxes, Fit, LightInputs};
+    use sshc_runtime::light::Light;
+    let b = Boxes {
+        casters: vec![[[0.0; 3], [1.0; 3]]],
+        others: vec![],
+    };
+    let cases = [
+        (
+            Light::Sphere {
+                center: Vec3::new(0.0, f32::NAN, 0.0),
+                radius: 0.1,
+            },
+            "centre",
+        ),
+        (
+            Light::Sphere {
+                center: Vec3::Y,
+                radius: -1.0,
+            },
+            "radius -1",
+        ),
+        (Light::Directional { direction: Vec3::ZERO }, "direction is zero"),
+        (
+            Light::DistantDisk {
+                direction: Vec3::Y,
+                angle_degrees: 200.0,
+            },
+            "[0, 180)",
+        ),
+        (
+            Light::Rectangle {
+                center: Vec3::Y,
+                normal: Vec3::Y,
+                u_axis: Vec3::Y,
+                half_width: 1.0,
+                half_height: 1.0,
+            },
+            "parallel",
+        ),
+    ];
+    for (light, says) in cases {
+        let e = LightInputs::fit(&light, &b, Fit::Casters, 64, 0).unwrap_err().to_string();
+        assert!(e.contains(says) && e.contains(light.kind_name()), "{light:?}: {e}");
+    }
+    // samples the light cannot give
+    let e = LightInputs::fit(&Light::Point { position: Vec3::Y }, &b, Fit::Scene, 64, 4)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("Point") && e.contains("4 light samples"), "{e}");
+    let bad = Boxes {
+        casters: vec![[[0.0; 3], [-1.0, 1.0, 1.0]]],
+        others: vec![],
+    };
+    let e = LightInputs::fit(&Light::Point { position: Vec3::Y }, &bad, Fit::Scene, 64, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("caster box 0 is not a box"), "{e}");
 }

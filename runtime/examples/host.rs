@@ -14,7 +14,8 @@
 
 use clap::Parser;
 use glam::{Mat4, Vec3};
-use sshc_runtime::gpu::{Camera, Executor, Geometry, Gpu, INSTALL_HINT, Instance, LightInputs, Mesh, Requirements};
+use sshc_runtime::gpu::{Camera, Executor, Fit, Geometry, Gpu, INSTALL_HINT, Instance, LightInputs, Mesh, Requirements};
+use sshc_runtime::light::Light;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -108,8 +109,9 @@ fn run(args: Args) -> Result<(), String> {
     let size = (args.size, args.size);
     let camera = camera(size);
     let mut shadows = Executor::new(&gpu, compiled.graph.clone(), compiled.shaders.clone()).map_err(|e| e.to_string())?;
+    let first = LightInputs::fit(&light(0.0), &geometry.boxes(), Fit::Casters, SHADOW_MAP, 0).map_err(|e| e.to_string())?;
     shadows
-        .bind_geometry(&geometry, &camera, &[light(0.0)], size, SHADOW_MAP)
+        .bind_geometry(&geometry, &camera, &[first], size, SHADOW_MAP)
         .map_err(|e| e.to_string())?;
 
     // 4. The host's own lighting pass, reading sshc's visibility.
@@ -133,11 +135,11 @@ fn run(args: Args) -> Result<(), String> {
         let mut encoder = device.create_command_encoder(&Default::default());
         // sshc's share of the frame: the light and a bunny move, then the passes are recorded
         let t = Instant::now();
-        shadows.set_light(0, &light).map_err(|e| e.to_string())?;
         shadows.set_transforms(&transforms).map_err(|e| e.to_string())?;
+        shadows.place_light(0, &light, Fit::Casters).map_err(|e| e.to_string())?;
         shadows.encode(&mut encoder).map_err(|e| e.to_string())?;
         sshc_us.push(t.elapsed().as_secs_f64() * 1e6);
-        host.record(&mut encoder, light.position, &transforms);
+        host.record(&mut encoder, light.center().unwrap_or(Vec3::Y).extend(1.0).to_array(), &transforms);
         queue.submit([encoder.finish()]);
         let path = args.out_dir.join(format!("frame-{f:03}.png"));
         let frame = host.save(&device, &path)?;
@@ -176,29 +178,12 @@ fn camera(size: (u32, u32)) -> Camera {
     }
 }
 
-/// A sphere light of radius 0.15 on a circle above the scene, at angle `a`: its view is
-/// the host's to compute (a perspective view at the light, looking at the scene's centre,
-/// wide enough for the floor).
-fn light(a: f32) -> LightInputs {
-    let at = Vec3::new(2.5 * a.cos(), 4.0, 2.5 * a.sin());
-    let view = glam::camera::rh::view::look_at_mat4(at, Vec3::ZERO, Vec3::Y);
-    let (near, far) = (1.0, 12.0);
-    let proj = glam::camera::rh::proj::directx::perspective(90f32.to_radians(), 1.0, near, far);
-    let radius = 0.15;
-    LightInputs {
-        view: view.to_cols_array(),
-        view_proj: (proj * view).to_cols_array(),
-        position: [at.x, at.y, at.z, 1.0],
-        near,
-        far,
-        size: radius,
-        half_extents: [radius, radius],
-        angle: 0.0,
-        proj_y: proj.y_axis.y,
-        orthographic: false,
-        samples: vec![],
-        samples_closed: false,
-        kind: Some(sshc_runtime::graph::LightKind::Sphere),
+/// A sphere light of radius 0.15 on a circle above the scene, at angle `a`. The host says
+/// only what it is; sshc fits its view to the instances every frame.
+fn light(a: f32) -> Light {
+    Light::Sphere {
+        center: Vec3::new(2.5 * a.cos(), 4.0, 2.5 * a.sin()),
+        radius: 0.15,
     }
 }
 

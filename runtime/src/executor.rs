@@ -2,6 +2,7 @@
 //! binds a scene, runs frames with GPU timestamps per pass, and reads any texture back.
 
 use crate::device::{Gpu, Result, RuntimeError};
+use crate::fit::Fit;
 use crate::frame::{Camera, LightInputs, SceneInputs};
 use crate::geometry::{Geometry, GeometryBuffers};
 use crate::graph::{self, Format, PassGraph, TextureDecl};
@@ -396,7 +397,7 @@ impl Executor {
         self.geometry = Some(buffers);
         let inputs: Vec<SceneInputs> = lights
             .iter()
-            .map(|l| crate::geometry::sized(camera, l, camera_size, shadow_size))
+            .map(|l| SceneInputs::of(camera, l, camera_size, shadow_size))
             .collect();
         let bound = self.bind_all(&inputs);
         if bound.is_err() {
@@ -592,6 +593,23 @@ impl Executor {
         self.uniforms[l] = LightUniforms::new(&camera, light, res.shadow_size, false);
         self.lights_state[l] = light.clone();
         Ok(())
+    }
+
+    /// Set bound light `l` from what a host knows of it ([`Light`]: kind, position or
+    /// direction, size), its view fitted by the runtime to the bound geometry's instances
+    /// under their current transforms ([`LightInputs::fit`] of [`Geometry::boxes`]), with
+    /// the bound number of sample views. Then as [`Executor::set_light`]: uniforms only.
+    /// Needs host geometry ([`Executor::bind_geometry`]); over a triangle soup, fit with
+    /// [`LightInputs::fit`] and boxes of your own, then `set_light`.
+    pub fn place_light(&mut self, l: usize, light: &crate::light::Light, fit: Fit) -> Result<()> {
+        let (Some(g), Some(res)) = (&self.geometry, self.bound.get(l)) else {
+            return Err(RuntimeError::NotFound(match self.geometry {
+                None => "no host geometry is bound: place_light fits the light to the bound instances (bind_geometry first; over a triangle soup, use LightInputs::fit and set_light)".into(),
+                Some(_) => format!("light {l} is not bound ({} light(s) are)", self.bound.len()),
+            }));
+        };
+        let inputs = LightInputs::fit(light, &g.boxes(), fit, res.shadow_size, res.samples)?;
+        self.set_light(l, &inputs)
     }
 
     /// A graph specialised for a scene's light kind folded inputs another kind needs: light

@@ -218,6 +218,34 @@ impl LightInputs {
 }
 
 impl SceneInputs {
+    /// The inputs of `light` seen by `camera` at these sizes, with no triangle soup
+    /// (`vertices` and `meshes` empty, every vertex casting): what a binding of host
+    /// geometry takes, and the base a soup is added to.
+    pub fn of(camera: &Camera, light: &LightInputs, camera_size: (u32, u32), shadow_size: u32) -> SceneInputs {
+        SceneInputs {
+            vertices: Vec::new(),
+            meshes: Vec::new(),
+            casting_vertices: None,
+            camera_view_proj: camera.view_proj,
+            camera_position: camera.position,
+            camera_size,
+            shadow_size,
+            light_view: light.view,
+            light_view_proj: light.view_proj,
+            light_position: light.position,
+            near: light.near,
+            far: light.far,
+            light_size: light.size,
+            light_half_extents: light.half_extents,
+            light_angle: light.angle,
+            light_proj_y: light.proj_y,
+            light_orthographic: light.orthographic,
+            samples: light.samples.clone(),
+            samples_closed: light.samples_closed,
+            light: light.kind,
+        }
+    }
+
     /// The scene's camera.
     pub fn camera(&self) -> Camera {
         Camera {

@@ -29,7 +29,7 @@
 use crate::adjacency::{Adjacency, AdjacencyCounts};
 use crate::device::Gpu;
 use crate::error::{Result, RuntimeError};
-use crate::frame::SceneInputs;
+use crate::fit::Boxes;
 
 /// An indexed triangle mesh in its object space.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -211,6 +211,20 @@ impl Geometry {
             .sum()
     }
 
+    /// The instances' world-space boxes under their transforms, what
+    /// [`crate::gpu::LightInputs::fit`] fits a light's view to (instances of a mesh that does
+    /// not exist are left out: [`Geometry::check`] refuses them).
+    pub fn boxes(&self) -> Boxes {
+        let boxes: Vec<_> = self
+            .instances
+            .iter()
+            .map(|i| self.meshes.get(i.mesh).and_then(|m| box_of(m.positions.iter().copied())))
+            .collect();
+        let casts: Vec<bool> = self.instances.iter().map(|i| i.casts).collect();
+        let transforms: Vec<[f32; 16]> = self.instances.iter().map(|i| i.transform).collect();
+        world_boxes(&boxes, &casts, &transforms)
+    }
+
     /// Triangles drawn by the camera (every instance's).
     pub fn triangles(&self) -> u64 {
         self.instances
@@ -227,7 +241,7 @@ impl Geometry {
     }
 
     /// The same triangles listed out, world space, casting instances first (in order),
-    /// then the others: what [`SceneInputs::vertices`] holds for this geometry, its
+    /// then the others: what [`crate::frame::SceneInputs::vertices`] holds for this geometry, its
     /// transforms applied on the CPU ([`transform_point`], and the normal matrix), and the
     /// number of casting vertices. Refused as [`Geometry::check_contents`] refuses.
     pub fn soup(&self) -> Result<(Vec<f32>, u32)> {
@@ -252,7 +266,7 @@ impl Geometry {
     }
 
     /// The triangles of each casting instance in [`Geometry::soup`]'s listing, as ranges
-    /// of triangle indices ([`SceneInputs::meshes`]: Geometry passes find edges within
+    /// of triangle indices ([`crate::frame::SceneInputs::meshes`]: Geometry passes find edges within
     /// each, as the host geometry's adjacency is built per instance's mesh).
     pub fn soup_meshes(&self) -> Vec<std::ops::Range<u32>> {
         let mut out = Vec::new();
@@ -264,6 +278,21 @@ impl Geometry {
         }
         out
     }
+}
+
+/// The world-space boxes of the instances (each mesh box, `boxes[i]` in object space, with
+/// its corners transformed), split into casters and the others; instances of an empty mesh
+/// have none.
+fn world_boxes(boxes: &[Option<[[f32; 3]; 2]>], casts: &[bool], transforms: &[[f32; 16]]) -> Boxes {
+    let mut out = Boxes::default();
+    for ((b, &c), t) in boxes.iter().zip(casts).zip(transforms) {
+        let Some(b) = b else { continue };
+        let placed = box_of((0..8).map(|i| transform_point(t, [0, 1, 2].map(|a| b[(i >> a) & 1][a]))));
+        if let Some(w) = placed {
+            if c { &mut out.casters } else { &mut out.others }.push(w);
+        }
+    }
+    out
 }
 
 /// The bounding box of the casting instances, world space: each instance's mesh box
@@ -837,6 +866,11 @@ impl GeometryBuffers {
         self.dirty = true;
     }
 
+    /// The instances' world-space boxes under the current transforms ([`Geometry::boxes`]).
+    pub fn boxes(&self) -> Boxes {
+        world_boxes(&self.boxes, &self.casts, &self.transforms)
+    }
+
     /// The casting instances' bounding box under `transforms` (one per instance).
     pub fn caster_bounds_at(&self, transforms: &[[f32; 16]]) -> Option<[[f32; 3]; 2]> {
         instances_bounds(&self.boxes, &self.casts, transforms)
@@ -878,36 +912,4 @@ fn determinant3(m: &[f32; 16]) -> f64 {
     let a = |r: usize, c: usize| f64::from(m[4 * c + r]);
     a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1)) - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
         + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0))
-}
-
-/// The inputs of a light bound over host geometry: its sizes and views with no vertices
-/// (the draws come from the geometry).
-pub(crate) fn sized(
-    camera: &crate::frame::Camera,
-    light: &crate::frame::LightInputs,
-    camera_size: (u32, u32),
-    shadow_size: u32,
-) -> SceneInputs {
-    SceneInputs {
-        vertices: Vec::new(),
-        meshes: Vec::new(),
-        casting_vertices: None,
-        camera_view_proj: camera.view_proj,
-        camera_position: camera.position,
-        camera_size,
-        shadow_size,
-        light_view: light.view,
-        light_view_proj: light.view_proj,
-        light_position: light.position,
-        near: light.near,
-        far: light.far,
-        light_size: light.size,
-        light_half_extents: light.half_extents,
-        light_angle: light.angle,
-        light_proj_y: light.proj_y,
-        light_orthographic: light.orthographic,
-        samples: light.samples.clone(),
-        samples_closed: light.samples_closed,
-        light: light.kind,
-    }
 }

@@ -20,6 +20,7 @@
 //! - `adjacency` (public): the edge adjacency of a scene's meshes, built on the CPU for
 //!   Geometry passes, and the silhouette rule;
 //! - `executor`: [`Executor`]: load, bind, update, encode, run, read back;
+//! - `fit`: a light's view fitted by the runtime ([`LightInputs::fit`], [`Fit`], [`Boxes`]);
 //! - `frame`: [`SceneInputs`], [`Camera`], [`LightInputs`] and the `Frame` uniform's values;
 //! - `lights`: several lights combined in one frame;
 //! - `image`: [`Image`] and texel decoding (the PNG and PFM writers are in the lab);
@@ -35,6 +36,7 @@ pub use crate::device::{Gpu, INSTALL_HINT, Result, RuntimeError, WANTED_FEATURES
 pub use crate::executor::{
     CameraOutput, Executor, Generated, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility, read_capped,
 };
+pub use crate::fit::{Boxes, Fit};
 pub use crate::frame::{Camera, LightInputs, SampleView, SceneInputs};
 pub use crate::geometry::{Geometry, IDENTITY, Instance, MAX_INSTANCES, Mesh, normal_matrix, transform_point};
 pub use crate::image::Image;

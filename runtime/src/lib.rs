@@ -15,6 +15,7 @@ pub mod adjacency;
 mod device;
 mod error;
 mod executor;
+mod fit;
 mod frame;
 mod geometry;
 pub mod gpu;
@@ -31,3 +32,6 @@ mod validate;
 
 pub use sshc_graph as graph;
 pub use sshc_graph::*;
+/// Lights and their views as plain math (the crate `sshc-light`, shared with the lab's
+/// scenes): what [`gpu::LightInputs::fit`] and [`gpu::Executor::place_light`] fit.
+pub use sshc_light as light;

@@ -3,7 +3,8 @@
 //! - **CPU**: the time a host spends in sshc each frame, `set_camera` + `set_light` (for
 //!   every light) + `encode` into the host's encoder, timed on the CPU with `Instant`,
 //!   median (and 90th percentile) of `FRAMES` frames after 10 untimed ones, with the scene
-//!   bound as a triangle soup and again as host geometry. The host's own encoder creation,
+//!   bound as a triangle soup and again as host geometry, there also with the light's view
+//!   fitted by sshc every frame (`place_light`). The host's own encoder creation,
 //!   its submission and the wait are outside the timing.
 //! - **GPU, moving against static**: the GPU time of a frame (the sum of its passes'
 //!   timestamps, read back through the ring) with the light and camera moving every frame,
@@ -22,8 +23,8 @@
 #[path = "../tests/support/mod.rs"]
 mod support;
 
-use sshc_lab::scene::Scene;
-use sshc_runtime::gpu::{Executor, SceneInputs};
+use sshc_lab::scene::{Light, Scene};
+use sshc_runtime::gpu::{Executor, Fit, SceneInputs};
 use std::time::Instant;
 use support::host::at_frame;
 use support::{gpu, root};
@@ -52,7 +53,7 @@ fn main() {
         names.retain(|n| only.split(',').any(|o| o == n));
     }
     let mut table = format!(
-        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2.\n\n| technique | scene | CPU µs/frame, median | 90th percentile | on host geometry, median | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2.\n\n| technique | scene | CPU µs/frame, median | 90th percentile | on host geometry, median | host geometry, light placed by sshc, median | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         gpu.describe()
     );
     for t in &names {
@@ -111,9 +112,13 @@ fn main() {
         }
         let (gm, gs) = (median(&mut moving), median(&mut still));
         let (wm, ws) = (median(&mut wall_moving), median(&mut wall_still));
-        let hosted = host_geometry_cpu(&c, &views, &states[0]).map_or("refused (Geometry passes)".to_string(), |us| format!("{us:.1}"));
+        let lights: Vec<Light> = (0..frames + 10).map(|f| at_frame(&base, f).lights.remove(0)).collect();
+        let (hosted, placed) = host_geometry_cpu(&c, &views, &lights, &states[0])
+            .map_or(("refused (Geometry passes)".to_string(), "refused".to_string()), |(us, placed)| {
+                (format!("{us:.1}"), format!("{placed:.1}"))
+            });
         let row = format!(
-            "| {t} | {sc} | {:.1} | {:.1} | {hosted} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
+            "| {t} | {sc} | {:.1} | {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
             median(&mut cpu),
             percentile(&mut cpu, 0.9),
             gm / gs,
@@ -131,34 +136,43 @@ fn main() {
 
 /// The median CPU µs of `set_camera` + `set_light` + `encode` over the same orbit with
 /// the scene bound as host geometry (`bind_geometry`: its soup welded into indexed meshes,
-/// one instance each); `None` for a graph with Geometry passes (refused on that path).
+/// one instance each), and of `set_camera` + `place_light` (the view fitted by sshc to the
+/// instances' boxes) + `encode`; `None` for a graph with Geometry passes (refused on that
+/// path).
 fn host_geometry_cpu(
     c: &sshc::Compiled,
     views: &[(sshc_runtime::gpu::Camera, sshc_runtime::gpu::LightInputs)],
+    lights: &[Light],
     s: &SceneInputs,
-) -> Option<f64> {
+) -> Option<(f64, f64)> {
     let gpu = gpu();
     let mut g = support::host::geometry_of(s, [0.0; 3]);
     g.instances.pop(); // the turned copy
     let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
     ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .ok()?;
-    let mut cpu = Vec::new();
-    for (f, (cam, light)) in views.iter().enumerate() {
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let t0 = Instant::now();
-        ex.set_camera(cam).unwrap();
-        ex.set_light(0, light).unwrap();
-        ex.encode(&mut encoder).unwrap();
-        let dt = t0.elapsed().as_secs_f64() * 1e6;
-        gpu.queue.submit([encoder.finish()]);
-        gpu.wait().unwrap();
-        ex.frame_times().unwrap();
-        if f >= 10 {
-            cpu.push(dt);
+    let (mut cpu, mut placed) = (Vec::new(), Vec::new());
+    for (f, ((cam, light), shape)) in views.iter().zip(lights).enumerate() {
+        for place in [false, true] {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            let t0 = Instant::now();
+            ex.set_camera(cam).unwrap();
+            if place {
+                ex.place_light(0, shape, Fit::Casters).unwrap();
+            } else {
+                ex.set_light(0, light).unwrap();
+            }
+            ex.encode(&mut encoder).unwrap();
+            let dt = t0.elapsed().as_secs_f64() * 1e6;
+            gpu.queue.submit([encoder.finish()]);
+            gpu.wait().unwrap();
+            ex.frame_times().unwrap();
+            if f >= 10 {
+                if place { &mut placed } else { &mut cpu }.push(dt);
+            }
         }
     }
-    Some(median(&mut cpu))
+    Some((median(&mut cpu), median(&mut placed)))
 }
 
 /// Buffer bytes a binding allocates (wgpu's `buffer_memory` counter, before and after, the

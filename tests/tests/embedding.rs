@@ -525,6 +525,80 @@ fn moving_instances_create_no_wgpu_object_and_match_listed_out() {
     }
 }
 
+/// A host that knows only its light (kind, position, size) lets the runtime fit the view
+/// every frame (`place_light`, to the instances' boxes under their current transforms):
+/// nothing is created, and each frame equals a fresh binding of the light fitted the same
+/// way. A per-sample technique gets its sample views fitted too.
+#[test]
+fn lights_placed_by_the_runtime_every_frame_create_nothing_and_match_fresh_fits() {
+    use sshc_runtime::gpu::{Fit, LightInputs};
+    for (t, sc) in [("pcss", "triangle"), ("linear-light", "linear")] {
+        let c = compile(t);
+        let base = scene(sc, 32, 64);
+        let s = inputs(&base, &c);
+        let mut g = geometry_of(&s, [0.0; 3]);
+        let samples = sshc_lab::bind::graph_samples(&c.graph);
+        let gpu = gpu();
+        let fitted = |g: &Geometry, light: &sshc_lab::scene::Light| {
+            LightInputs::fit(light, &g.boxes(), Fit::Casters, s.shadow_size, samples).unwrap_or_else(|e| panic!("{t}: {e}"))
+        };
+        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        ex.bind_geometry(&g, &s.camera(), &[fitted(&g, &base.lights[0])], s.camera_size, s.shadow_size)
+            .unwrap_or_else(|e| panic!("{t}: {e}"));
+        host_frame(&mut ex);
+        let before = live_objects(gpu);
+        let moving = g.instances.len() - 1;
+        let mut checked = Vec::new();
+        for f in 1..=20 {
+            let light = at_frame(&base, f).lights.remove(0);
+            g.instances[moving].transform[12] = f as f32 / 64.0;
+            let transforms: Vec<[f32; 16]> = g.instances.iter().map(|i| i.transform).collect();
+            ex.set_transforms(&transforms).unwrap();
+            ex.place_light(0, &light, Fit::Casters)
+                .unwrap_or_else(|e| panic!("{t}: frame {f}: {e}"));
+            host_frame(&mut ex);
+            assert_eq!(live_objects(gpu), before, "{t}: frame {f} created or destroyed wgpu objects");
+            if f % 10 == 0 {
+                checked.push((g.clone(), light, ex.read_visibilities().unwrap().rgba));
+            }
+        }
+        assert_eq!(ex.generation(), 1);
+        assert!(checked[0].2 != checked[1].2, "{t}: the shadows did not move");
+        for (g, light, moved) in &checked {
+            let mut again = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+            let inputs = fitted(g, light);
+            assert_eq!(inputs.samples.len(), samples as usize);
+            again
+                .bind_geometry(g, &s.camera(), &[inputs], s.camera_size, s.shadow_size)
+                .unwrap();
+            again.run_frame().unwrap();
+            assert!(
+                *moved == again.read_visibilities().unwrap().rgba,
+                "{t}: a light placed per frame differs from a fresh binding of the same fit"
+            );
+        }
+        // a light no view can hold is refused and leaves the bound one as it was
+        let bad = sshc_lab::scene::Light::Point {
+            position: glam::Vec3::new(f32::NAN, 1.0, 0.0),
+        };
+        let e = ex.place_light(0, &bad, Fit::Casters).unwrap_err().to_string();
+        assert!(e.contains("not finite"), "{t}: {e}");
+        host_frame(&mut ex);
+        assert!(
+            ex.read_visibilities().unwrap().rgba == checked[1].2,
+            "{t}: a refused light changed the frame"
+        );
+    }
+    // over a triangle soup there are no instances to fit to: the host is told what to do
+    let c = compile("pcss");
+    let s = inputs(&scene("triangle", 8, 16), &c);
+    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    ex.bind_scene(&s).unwrap();
+    let light = sshc_lab::scene::Light::Point { position: glam::Vec3::Y };
+    let e = ex.place_light(0, &light, Fit::Scene).unwrap_err().to_string();
+    assert!(e.contains("no host geometry") && e.contains("LightInputs::fit"), "{e}");
+}
+
 #[test]
 fn host_geometry_is_checked_at_upload_naming_the_mesh_or_instance() {
     let c = compile("pcss");

@@ -50,7 +50,10 @@ use std::path::{Component, Path, PathBuf};
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 
-use sshc_graph::LightKind;
+/// The lights a scene file names and the views fitted to them live in `sshc-light`, which
+/// the runtime shares (a host's lights are fitted by the same code).
+pub use sshc_light::{Light, LightView, corners, fit_guard, look_at, orthographic, perspective};
+use sshc_light::{any_perpendicular_up, bounds_of, depth_range, enclosing_axis, ortho_light_view, padded};
 
 // ---------------------------------------------------------------------------------------
 // File schema
@@ -163,81 +166,6 @@ pub enum Camera {
 
 fn default_up() -> Vec3 {
     Vec3::Y
-}
-
-/// A light. Visibility from a point is the fraction of the light that the point sees
-/// (the ground truth of docs/truth.md); how each kind is sampled is in `sshc_lab::visibility`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub enum Light {
-    /// A point light.
-    Point {
-        /// World position.
-        position: Vec3,
-    },
-    /// A light at infinity with no extent (parallel rays).
-    Directional {
-        /// Direction from the scene towards the light, e.g. (0, 1, 0) for straight
-        /// overhead. Normalised on load.
-        direction: Vec3,
-    },
-    /// A sphere, sampled uniformly over the cone it subtends from the receiver.
-    Sphere {
-        /// Centre, world space.
-        center: Vec3,
-        /// Radius, >= 0 (0 behaves as a point light).
-        radius: f32,
-    },
-    /// A flat disk, sampled uniformly over its area.
-    Disk {
-        /// Centre, world space.
-        center: Vec3,
-        /// Normal of the disk's plane (the side it faces). Normalised on load.
-        normal: Vec3,
-        /// Radius, >= 0.
-        radius: f32,
-    },
-    /// A rectangle, sampled uniformly over its area.
-    Rectangle {
-        /// Centre, world space.
-        center: Vec3,
-        /// Normal of the rectangle's plane (the side it faces). Normalised on load.
-        normal: Vec3,
-        /// Direction of the `half_width` side; its component along `normal` is removed
-        /// and it is normalised on load. The other side runs along `normal x u_axis`.
-        u_axis: Vec3,
-        /// Half the extent along `u_axis`, >= 0.
-        half_width: f32,
-        /// Half the extent along `normal x u_axis`, >= 0.
-        half_height: f32,
-    },
-    /// A linear light from `a` to `b`, sampled uniformly over its length.
-    Segment {
-        /// One end, world space.
-        a: Vec3,
-        /// The other end, world space.
-        b: Vec3,
-    },
-    /// A disk at infinity (the sun), sampled uniformly over its disk in the tangent plane,
-    /// i.e. directions within the cone of half-angle `angle_degrees / 2` around
-    /// `direction`.
-    DistantDisk {
-        /// Direction from the scene towards the disk's centre. Normalised on load.
-        direction: Vec3,
-        /// Full angular diameter in degrees, in [0, 180). The sun is about 0.53.
-        angle_degrees: f32,
-    },
-    /// A triangle, sampled uniformly over its area (two-sided, as every light here).
-    /// Per-sample techniques take its three edges as linear lights (Heidrich et al. 2000,
-    /// section 4, figure 8: the "crude approximation" of an area light by its outline).
-    Triangle {
-        /// First corner, world space.
-        a: Vec3,
-        /// Second corner, world space.
-        b: Vec3,
-        /// Third corner, world space.
-        c: Vec3,
-    },
 }
 
 /// One piece of geometry: a mesh placed by a transform.
@@ -543,41 +471,6 @@ pub struct Scene {
     bounds: (Vec3, Vec3),
 }
 
-/// The view of a light used to rasterise a shadow map.
-///
-/// The shaders compute linear depth as `(-(view * p).z - near) / (far - near)`; `near` and
-/// `far` are view-space distances along the view axis, fitted so that every corner of the
-/// bounds it was fitted to has linear depth in [0, 1] and lies inside the clip volume.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LightView {
-    /// World to light view (right-handed, looking down -Z).
-    pub view: Mat4,
-    /// Light view to clip space (depth range [0, 1]).
-    pub proj: Mat4,
-    /// `proj * view`.
-    pub view_proj: Mat4,
-    /// Near distance along the view axis, > 0.
-    pub near: f32,
-    /// Far distance along the view axis, > near.
-    pub far: f32,
-    /// `w = 1`: the light's centre (point-like lights); `w = 0`: unit direction towards
-    /// the light (directional and distant-disk lights).
-    pub position_or_direction: Vec4,
-    /// Radius (sphere, disk), half of the larger side (rectangle), half length (segment),
-    /// the farthest corner's distance from the centroid (triangle), 0 for point and directional lights, and `tan(angle / 2)` for a distant disk (the
-    /// radius of its disk in the tangent plane at unit distance).
-    pub size: f32,
-    /// Half-extents of the light's outline along the view's x and y axes (the shadow map's
-    /// u and v): r for a sphere, a disk or rectangle projected onto each axis, half the
-    /// projected length for a segment, the farthest corner's projected offset from the
-    /// centroid for a triangle, 0 for the rest.
-    pub half_extents: Vec2,
-    /// Full angular diameter in radians for a distant disk, else 0.
-    pub angle: f32,
-    /// True for an orthographic view (directional and distant-disk lights).
-    pub orthographic: bool,
-}
-
 impl Scene {
     /// Reads a scene file. OBJ paths resolve against the file's folder.
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
@@ -738,79 +631,10 @@ impl Scene {
             .flat_map(|i| self.triangles[self.object_triangles[i].clone()].iter().flatten().copied())
     }
 
-    /// The farthest reach of the casters' penumbra under `light`, in world units: how far
-    /// beyond a caster's shadow outline (its outline seen from the light's centre) the
-    /// penumbra can extend on a receiver.
-    ///
-    /// - A distant disk of angular diameter `a`: `h tan(a / 2)`, `h` the largest height of
-    ///   a caster corner above the lowest point of any object, both measured along the
-    ///   light's direction (rays from a receiver within the cone of half-angle `a / 2`
-    ///   around the direction meet a caster `h` above it at most `h tan(a / 2)` to the
-    ///   side). A directional light: 0.
-    /// - A light at a finite position with bounding radius `s` ([`Light::bounding_radius`]):
-    ///   `s (d_r - d_c) / d_c`, `d_c` the smallest distance of a caster corner from the
-    ///   light's centre along its view axis and `d_r` the largest of any object's corner
-    ///   (the penumbra width of a caster at `d_c` on a receiver at `d_r`, by similar
-    ///   triangles). In the view's tangent space this is `s (1 / d_c - 1 / d_r)`, what the
-    ///   `Casters` fit pads the view's half-angle tangent by.
-    ///
-    /// 0 when no object casts.
+    /// The farthest reach of the casters' penumbra under `light`, in world units
+    /// ([`sshc_light::penumbra_reach`] over the scene's vertices).
     pub fn penumbra_reach(&self, light: &Light) -> f32 {
-        match light.center() {
-            None => {
-                let dir = light.direction().unwrap_or(Vec3::Y);
-                let top = self.caster_points().map(|p| p.dot(dir)).fold(f32::NEG_INFINITY, f32::max);
-                let low = self.triangles.iter().flatten().map(|p| p.dot(dir)).fold(f32::INFINITY, f32::min);
-                if !(top.is_finite() && low.is_finite()) {
-                    return 0.0;
-                }
-                (top - low).max(0.0) * (0.5 * light.angle()).tan()
-            }
-            Some(_) => match self.local_reach(light) {
-                Some((_, dc, dr, s)) => s * (dr - dc) / dc,
-                None => 0.0,
-            },
-        }
-    }
-
-    /// For a light at a finite position: its view fitted to the casters, the nearest
-    /// caster distance `d_c` and farthest object distance `d_r` along that view's axis
-    /// (`d_c` at least the view's near distance), and the light's bounding radius.
-    fn local_reach(&self, light: &Light) -> Option<(LightView, f32, f32, f32)> {
-        let eye = light.center()?;
-        let cb = bounds_of(self.caster_points());
-        if self.caster_triangles() == 0 {
-            return None;
-        }
-        let forward = enclosing_axis(eye, padded(cb));
-        let view = look_at(eye, eye + forward, any_perpendicular_up(forward));
-        let (lo, hi) = depth_range(&view, padded(self.bounds));
-        let far = (hi * 1.001).max(1e-6);
-        let near = (lo * 0.999).max(far * 1e-4);
-        let dc = self
-            .caster_points()
-            .map(|p| -view.transform_point3(p).z)
-            .fold(f32::INFINITY, f32::min)
-            .max(near);
-        let dr = self
-            .triangles
-            .iter()
-            .flatten()
-            .map(|p| -view.transform_point3(*p).z)
-            .fold(dc, f32::max);
-        let base = LightView {
-            view,
-            proj: Mat4::IDENTITY,
-            view_proj: Mat4::IDENTITY,
-            near,
-            far,
-            position_or_direction: eye.extend(1.0),
-            size: 0.0,
-            half_extents: Vec2::ZERO,
-            angle: 0.0,
-            orthographic: false,
-        };
-        Some((base, dc, dr, light.bounding_radius()))
+        sshc_light::penumbra_reach(light, self)
     }
 
     /// The view of `light` for rasterising the shadow map, fitted as [`Scene::shadow_fit`]
@@ -829,52 +653,7 @@ impl Scene {
         if self.shadow_fit == ShadowFit::Scene || self.caster_triangles() == 0 {
             return light.view(self.bounds);
         }
-        let n = self.shadow_map.max(1);
-        let guard = fit_guard(n);
-        let v = match light.center() {
-            None => {
-                let dir = light.direction().unwrap_or(Vec3::Y);
-                let up = any_perpendicular_up(dir);
-                let cb = bounds_of(self.caster_points());
-                let cc = (cb.0 + cb.1) * 0.5;
-                let v0 = look_at(cc + dir, cc, up);
-                let (mut x0, mut x1, mut y0, mut y1) = (f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY);
-                for p in self.caster_points() {
-                    let q = v0.transform_point3(p);
-                    (x0, x1, y0, y1) = (x0.min(q.x), x1.max(q.x), y0.min(q.y), y1.max(q.y));
-                }
-                let (right, upv) = (v0.row(0).truncate(), v0.row(1).truncate());
-                let centre = cc + right * (0.5 * (x0 + x1)) + upv * (0.5 * (y0 + y1));
-                let half_c = (0.5 * (x1 - x0)).max(0.5 * (y1 - y0));
-                let scene = padded(self.bounds);
-                let (sc, radius) = ((scene.0 + scene.1) * 0.5, 0.5 * (scene.1 - scene.0).length());
-                let eye = centre + dir * (2.0 * radius + centre.distance(sc));
-                let view = look_at(eye, centre, up);
-                let (lo, hi) = depth_range(&view, scene);
-                let margin = radius * 1e-3;
-                let far = hi + margin;
-                let near = (lo - margin).max(far * 1e-4);
-                let half = ((half_c + self.penumbra_reach(light)) * guard).max(radius * 1e-4);
-                ortho_light_view(view, dir, half, near, far)
-            }
-            Some(_) => {
-                let Some((mut v, dc, dr, s)) = self.local_reach(light) else {
-                    return light.view(self.bounds);
-                };
-                let mut tan = 0.0f32;
-                for p in self.caster_points() {
-                    let q = v.view.transform_point3(p);
-                    let depth = (-q.z).max(v.near);
-                    tan = tan.max(q.x.abs() / depth).max(q.y.abs() / depth);
-                }
-                let reach = s * (1.0 / dc - 1.0 / dr);
-                let tan = ((tan + reach) * guard).clamp(1e-6, 80f32.to_radians().tan());
-                v.proj = perspective(2.0 * tan.atan(), 1.0, v.near, v.far);
-                v.view_proj = v.proj * v.view;
-                v
-            }
-        };
-        light.with_extent(v)
+        sshc_light::casters_view(light, self, self.shadow_map)
     }
 
     /// The points of the scene the camera sees: every triangle clipped to the camera's
@@ -1352,325 +1131,6 @@ impl Scene {
     }
 }
 
-/// Right-handed view matrix looking from `eye` at `target` (view space: -Z forward, +Y up).
-pub fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
-    glam::camera::rh::view::look_at_mat4(eye, target, up)
-}
-
-/// Right-handed perspective projection to WebGPU clip space (depth [0, 1], Y up), as
-/// `Mat4::perspective_rh` of older glam.
-pub fn perspective(fov_y: f32, aspect: f32, near: f32, far: f32) -> Mat4 {
-    glam::camera::rh::proj::directx::perspective(fov_y, aspect, near, far)
-}
-
-/// Right-handed orthographic projection to WebGPU clip space (depth [0, 1], Y up), as
-/// `Mat4::orthographic_rh` of older glam.
-pub fn orthographic(left: f32, right: f32, bottom: f32, top: f32, near: f32, far: f32) -> Mat4 {
-    glam::camera::rh::proj::directx::orthographic(left, right, bottom, top, near, far)
-}
-
-/// Smallest and largest view-space distance (-z) of the corners of `bounds`.
-fn depth_range(view: &Mat4, bounds: (Vec3, Vec3)) -> (f32, f32) {
-    let mut lo = f32::INFINITY;
-    let mut hi = f32::NEG_INFINITY;
-    for c in corners(bounds) {
-        let d = -view.transform_point3(c).z;
-        lo = lo.min(d);
-        hi = hi.max(d);
-    }
-    (lo, hi)
-}
-
-/// The 8 corners of a box.
-pub fn corners((lo, hi): (Vec3, Vec3)) -> [Vec3; 8] {
-    std::array::from_fn(|i| {
-        Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    })
-}
-
-fn bounds_of(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
-    let (lo, hi) = points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
-    if lo.cmple(hi).all() { (lo, hi) } else { (Vec3::ZERO, Vec3::ZERO) }
-}
-
-/// A unit vector not parallel to `dir`, for `look_at` up vectors and tangent frames.
-pub(crate) fn any_perpendicular_up(dir: Vec3) -> Vec3 {
-    if dir.normalize_or_zero().dot(Vec3::Y).abs() < 0.99 {
-        Vec3::Y
-    } else {
-        Vec3::Z
-    }
-}
-
-// ---------------------------------------------------------------------------------------
-// Lights
-// ---------------------------------------------------------------------------------------
-
-impl Light {
-    /// The light's kind (the schema's one list of kinds, shared with techniques'
-    /// light models).
-    pub fn kind(&self) -> LightKind {
-        match self {
-            Light::Point { .. } => LightKind::Point,
-            Light::Directional { .. } => LightKind::Directional,
-            Light::Sphere { .. } => LightKind::Sphere,
-            Light::Disk { .. } => LightKind::Disk,
-            Light::Rectangle { .. } => LightKind::Rectangle,
-            Light::Segment { .. } => LightKind::Segment,
-            Light::DistantDisk { .. } => LightKind::DistantDisk,
-            Light::Triangle { .. } => LightKind::Triangle,
-        }
-    }
-
-    /// The variant's name as written in a scene file.
-    pub fn kind_name(&self) -> &'static str {
-        self.kind().name()
-    }
-
-    /// True for lights at infinity (directional, distant disk).
-    pub fn is_distant(&self) -> bool {
-        self.kind().is_distant()
-    }
-
-    /// The centre of a light at a finite position (the midpoint of a segment); `None` for
-    /// lights at infinity.
-    pub fn center(&self) -> Option<Vec3> {
-        match self {
-            Light::Point { position } => Some(*position),
-            Light::Sphere { center, .. } | Light::Disk { center, .. } | Light::Rectangle { center, .. } => Some(*center),
-            Light::Segment { a, b } => Some((*a + *b) * 0.5),
-            Light::Triangle { a, b, c } => Some((*a + *b + *c) / 3.0),
-            Light::Directional { .. } | Light::DistantDisk { .. } => None,
-        }
-    }
-
-    /// The unit direction towards a light at infinity; `None` for the others.
-    pub fn direction(&self) -> Option<Vec3> {
-        match self {
-            Light::Directional { direction } | Light::DistantDisk { direction, .. } => Some(direction.normalize_or(Vec3::Y)),
-            Light::Point { .. }
-            | Light::Sphere { .. }
-            | Light::Disk { .. }
-            | Light::Rectangle { .. }
-            | Light::Segment { .. }
-            | Light::Triangle { .. } => None,
-        }
-    }
-
-    /// Radius of a sphere around [`Light::center`] that holds the whole light (0 for a
-    /// point, and for lights at infinity).
-    pub fn bounding_radius(&self) -> f32 {
-        match self {
-            Light::Sphere { radius, .. } | Light::Disk { radius, .. } => radius.max(0.0),
-            Light::Rectangle {
-                half_width, half_height, ..
-            } => half_width.hypot(*half_height),
-            Light::Segment { a, b } => 0.5 * a.distance(*b),
-            Light::Triangle { a, b, c } => {
-                let m = (*a + *b + *c) / 3.0;
-                m.distance(*a).max(m.distance(*b)).max(m.distance(*c))
-            }
-            Light::Point { .. } | Light::Directional { .. } | Light::DistantDisk { .. } => 0.0,
-        }
-    }
-
-    /// Full angular diameter in radians of a distant disk, else 0.
-    pub fn angle(&self) -> f32 {
-        match self {
-            Light::DistantDisk { angle_degrees, .. } => angle_degrees.to_radians(),
-            Light::Point { .. }
-            | Light::Directional { .. }
-            | Light::Sphere { .. }
-            | Light::Disk { .. }
-            | Light::Rectangle { .. }
-            | Light::Segment { .. }
-            | Light::Triangle { .. } => 0.0,
-        }
-    }
-
-    /// `n` points evenly spaced along a segment light, ends included (`n = 1`: the
-    /// midpoint), for techniques that render one view per light sample; `None` for other
-    /// kinds.
-    pub fn segment_samples(&self, n: u32) -> Option<Vec<Vec3>> {
-        match self {
-            Light::Segment { a, b } => Some(match n {
-                0 => Vec::new(),
-                1 => vec![(*a + *b) * 0.5],
-                _ => (0..n).map(|i| a.lerp(*b, i as f32 / (n - 1) as f32)).collect(),
-            }),
-            Light::Point { .. }
-            | Light::Directional { .. }
-            | Light::Sphere { .. }
-            | Light::Disk { .. }
-            | Light::Rectangle { .. }
-            | Light::Triangle { .. }
-            | Light::DistantDisk { .. } => None,
-        }
-    }
-
-    /// The corners of a triangle or rectangle light in order around its outline (a
-    /// rectangle's from `center - u half_width - v half_height`, `v = normal x u_axis`,
-    /// counter-clockwise about `normal`); `None` for other kinds.
-    pub fn outline(&self) -> Option<Vec<Vec3>> {
-        match self {
-            Light::Triangle { a, b, c } => Some(vec![*a, *b, *c]),
-            Light::Rectangle {
-                center,
-                normal,
-                u_axis,
-                half_width,
-                half_height,
-            } => {
-                let u = u_axis.normalize_or(Vec3::X) * *half_width;
-                let v = normal.normalize_or(Vec3::Y).cross(u_axis.normalize_or(Vec3::X)) * *half_height;
-                Some(vec![*center - u - v, *center + u - v, *center + u + v, *center - u + v])
-            }
-            Light::Point { .. }
-            | Light::Directional { .. }
-            | Light::Sphere { .. }
-            | Light::Disk { .. }
-            | Light::Segment { .. }
-            | Light::DistantDisk { .. } => None,
-        }
-    }
-
-    /// The positions of `n` light samples for techniques that render one view per sample
-    /// (Heidrich et al. 2000), and whether they close a loop:
-    ///
-    /// - `n = 1`, a light at a finite position: its centre ([`Light::center`]; a
-    ///   segment's midpoint, a triangle's centroid), open.
-    /// - a segment, `n >= 2`: [`Light::segment_samples`] (ends included), open.
-    /// - a triangle or rectangle, `n` a multiple of its edge count E (3 or 4): its outline
-    ///   (paper section 4, figure 8: an area light approximated by the linear lights of its
-    ///   edges), `n / E` samples per edge starting at each corner of [`Light::outline`]
-    ///   (corners included), closed: the last sample's next is the first.
-    ///
-    /// `n = 0`: no samples. Anything else is an error naming what would fit: `n` above
-    /// `max`, a light at infinity (no position to see from), a point, sphere or disk with
-    /// `n > 1`, or `n` not a multiple of the edges.
-    pub fn sample_chain(&self, n: u32, max: u32) -> Result<(Vec<Vec3>, bool), String> {
-        let name = self.kind_name();
-        if n > max {
-            return Err(format!("{n} light samples is above the limit of {max}: write N in 1..={max}"));
-        }
-        if n == 0 {
-            return Ok((Vec::new(), false));
-        }
-        let Some(centre) = self.center() else {
-            return Err(format!(
-                "a {name} light is at infinity: per-sample views look from points on the light, so they need a light at a finite position (Segment, Triangle, Rectangle, or any local light with N = 1)"
-            ));
-        };
-        if n == 1 {
-            return Ok((vec![centre], false));
-        }
-        if let Some(points) = self.segment_samples(n) {
-            return Ok((points, false));
-        }
-        let Some(corners) = self.outline() else {
-            return Err(format!(
-                "a {name} light has no edges to sample: {n} light samples need a Segment, Triangle or Rectangle light (N = 1 takes the light's centre)"
-            ));
-        };
-        let e = corners.len() as u32;
-        if !n.is_multiple_of(e) {
-            return Err(format!(
-                "a {name} light's samples walk its {e} edges with the same count per edge, so N must be a multiple of {e}, not {n}"
-            ));
-        }
-        let per = n / e;
-        let mut out = Vec::with_capacity(n as usize);
-        for (i, &p) in corners.iter().enumerate() {
-            let q = corners[(i + 1) % corners.len()];
-            out.extend((0..per).map(|j| p.lerp(q, j as f32 / per as f32)));
-        }
-        Ok((out, true))
-    }
-
-    /// The light's view for rasterising a shadow map of the geometry in `bounds`.
-    ///
-    /// Point-like lights (point, sphere, disk, rectangle, segment, triangle) get a square
-    /// perspective frustum from the light's centre, wide enough for every corner of
-    /// `bounds`, with near/far fitted to the corners (near at least far * 1e-4). It looks
-    /// along the axis of the narrowest cone that holds the corners, which is the direction
-    /// of the bounds' centre for a distant light but differs where the bounds reach
-    /// beside or behind the light (a light low over a large floor). A light that no
-    /// frustum narrower than 160 degrees can see the bounds from (a light inside them)
-    /// gets that widest frustum, and corners outside it are left out. Directional and
-    /// distant-disk lights get an orthographic view along their direction fitted to the
-    /// bounds.
-    pub fn view(&self, bounds: (Vec3, Vec3)) -> LightView {
-        let v = match self.center() {
-            Some(eye) => perspective_view(eye, bounds),
-            None => orthographic_view(self.direction().unwrap_or(Vec3::Y), bounds),
-        };
-        self.with_extent(v)
-    }
-
-    /// `v` with the light's `size`, `half_extents` and `angle` filled in.
-    fn with_extent(&self, mut v: LightView) -> LightView {
-        v.size = match self {
-            Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius,
-            Light::Rectangle {
-                half_width, half_height, ..
-            } => half_width.max(*half_height),
-            Light::Segment { a, b } => 0.5 * a.distance(*b),
-            Light::DistantDisk { angle_degrees, .. } => (0.5 * angle_degrees.to_radians()).tan(),
-            Light::Triangle { .. } => self.bounding_radius(),
-            Light::Point { .. } | Light::Directional { .. } => 0.0,
-        };
-        // half-extents along the shadow map's u and v axes (the view's x and y): the
-        // half-widths of the light's outline projected onto them
-        let (ax, ay) = (v.view.row(0).truncate(), v.view.row(1).truncate());
-        let along = |axis: Vec3| -> f32 {
-            match self {
-                Light::Sphere { radius, .. } => *radius,
-                Light::Disk { radius, normal, .. } => radius * (1.0 - normal.normalize_or_zero().dot(axis).powi(2)).max(0.0).sqrt(),
-                Light::Rectangle {
-                    normal,
-                    u_axis,
-                    half_width,
-                    half_height,
-                    ..
-                } => {
-                    let w = normal.cross(*u_axis).normalize_or_zero();
-                    half_width * u_axis.dot(axis).abs() + half_height * w.dot(axis).abs()
-                }
-                Light::Segment { a, b } => 0.5 * (*b - *a).dot(axis).abs(),
-                // about the centroid: the farthest corner's offset (at least half the
-                // projected width, and all of it on the side the centroid is near)
-                Light::Triangle { a, b, c } => {
-                    let m = (*a + *b + *c) / 3.0;
-                    [a, b, c].iter().map(|p| (**p - m).dot(axis).abs()).fold(0.0, f32::max)
-                }
-                Light::Point { .. } | Light::Directional { .. } | Light::DistantDisk { .. } => 0.0,
-            }
-        };
-        v.half_extents = Vec2::new(along(ax), along(ay));
-        v.angle = self.angle();
-        v
-    }
-
-    /// A perspective view from any point `eye` (for example one sample of a segment
-    /// light) fitted to `bounds` as in [`Light::view`]; `size`, `half_extents` and `angle`
-    /// are 0.
-    pub fn view_from(eye: Vec3, bounds: (Vec3, Vec3)) -> LightView {
-        perspective_view(eye, bounds)
-    }
-}
-
-/// The `Casters` fit's guard band: the lateral extent is multiplied by `n / (n - 2)` for a
-/// map of `n >= 3` texels, which adds one texel on each side (a caster never reaches the
-/// outermost texels, which a lookup clamped to the map's edge reads); `1.001` below that
-/// (the rounding margin of the `Scene` fit).
-pub fn fit_guard(n: u32) -> f32 {
-    if n >= 3 { n as f32 / (n - 2) as f32 } else { 1.001 }
-}
-
 /// How a light's shadow map is fitted ([`Scene::fit_report`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FitReport {
@@ -1718,99 +1178,19 @@ impl fmt::Display for FitReport {
     }
 }
 
-/// Bounds with every side at least a small positive length, so views stay finite.
-fn padded(bounds: (Vec3, Vec3)) -> (Vec3, Vec3) {
-    let (lo, hi) = bounds;
-    let scale = (hi - lo)
-        .max_element()
-        .max(lo.abs().max_element())
-        .max(hi.abs().max_element())
-        .max(1.0);
-    let pad = Vec3::splat(scale * 1e-4);
-    let mid = (lo + hi) * 0.5;
-    let half = ((hi - lo) * 0.5).max(pad);
-    (mid - half, mid + half)
-}
-
-/// The axis of (nearly) the narrowest cone from `eye` that holds every corner of
-/// `bounds`: Badoiu–Clarkson iterations for the smallest ball around the unit directions
-/// to the corners, started from their mean.
-fn enclosing_axis(eye: Vec3, bounds: (Vec3, Vec3)) -> Vec3 {
-    let dirs: Vec<Vec3> = corners(bounds).iter().filter_map(|c| (*c - eye).try_normalize()).collect();
-    let mut axis = dirs.iter().copied().sum::<Vec3>().try_normalize().unwrap_or(-Vec3::Y);
-    for i in 1..=200 {
-        let Some(far) = dirs.iter().copied().min_by(|a, b| a.dot(axis).total_cmp(&b.dot(axis))) else {
-            break;
-        };
-        axis = (axis + (far - axis) / (i as f32 + 1.0)).try_normalize().unwrap_or(axis);
+/// The `Casters` fit over the scene's vertices: the tightest fit the points allow.
+impl sshc_light::Occluders for Scene {
+    fn casters(&self) -> impl Iterator<Item = Vec3> + '_ {
+        self.caster_points()
     }
-    axis
-}
-
-fn perspective_view(eye: Vec3, bounds: (Vec3, Vec3)) -> LightView {
-    let bounds = padded(bounds);
-    let forward = enclosing_axis(eye, bounds);
-    let view = look_at(eye, eye + forward, any_perpendicular_up(forward));
-    let (lo, hi) = depth_range(&view, bounds);
-    let far = (hi * 1.001).max(1e-6);
-    let near = (lo * 0.999).max(far * 1e-4);
-    // Widest tangent over the corners in front of the near plane.
-    let mut tan = 0.0f32;
-    for c in corners(bounds) {
-        let p = view.transform_point3(c);
-        let depth = (-p.z).max(near);
-        tan = tan.max(p.x.abs() / depth).max(p.y.abs() / depth);
+    fn points(&self) -> impl Iterator<Item = Vec3> + '_ {
+        self.triangles.iter().flatten().copied()
     }
-    let tan = (tan * 1.001).clamp(1e-6, 80f32.to_radians().tan());
-    let proj = perspective(2.0 * tan.atan(), 1.0, near, far);
-    LightView {
-        view,
-        proj,
-        view_proj: proj * view,
-        near,
-        far,
-        position_or_direction: eye.extend(1.0),
-        size: 0.0,
-        half_extents: Vec2::ZERO,
-        angle: 0.0,
-        orthographic: false,
+    fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
     }
-}
-
-fn orthographic_view(direction: Vec3, bounds: (Vec3, Vec3)) -> LightView {
-    let bounds = padded(bounds);
-    let centre = (bounds.0 + bounds.1) * 0.5;
-    let radius = 0.5 * (bounds.1 - bounds.0).length();
-    let dir = direction.normalize_or(Vec3::Y);
-    let eye = centre + dir * (2.0 * radius);
-    let view = look_at(eye, centre, any_perpendicular_up(dir));
-    let (lo, hi) = depth_range(&view, bounds);
-    let margin = radius * 1e-3;
-    let far = hi + margin;
-    let near = (lo - margin).max(far * 1e-4);
-    let mut half = 0.0f32;
-    for c in corners(bounds) {
-        let p = view.transform_point3(c);
-        half = half.max(p.x.abs()).max(p.y.abs());
-    }
-    ortho_light_view(view, dir, half * 1.001, near, far)
-}
-
-/// An orthographic light view looking down `view`'s -z towards a light in direction `dir`,
-/// covering `[-half, half]` on both axes and `[near, far]` in depth.
-fn ortho_light_view(view: Mat4, dir: Vec3, half: f32, near: f32, far: f32) -> LightView {
-    let proj = orthographic(-half, half, -half, half, near, far);
-    LightView {
-        view,
-        proj,
-        view_proj: proj * view,
-        near,
-        far,
-        position_or_direction: dir.extend(0.0),
-        size: 0.0,
-        half_extents: Vec2::ZERO,
-        angle: 0.0,
-        orthographic: true,
+    fn has_casters(&self) -> bool {
+        self.caster_triangles() > 0
     }
 }
 
@@ -2495,8 +1875,8 @@ mod tests {
             },
             Light::Triangle { a: p, b: d, c: Vec3::X },
         ];
-        let kinds: Vec<LightKind> = lights.iter().map(Light::kind).collect();
-        assert_eq!(kinds, LightKind::ALL);
+        let kinds: Vec<sshc_graph::LightKind> = lights.iter().map(Light::kind).collect();
+        assert_eq!(kinds, sshc_graph::LightKind::ALL);
         for l in &lights {
             let ron = ron::to_string(l).unwrap();
             assert!(ron.starts_with(&format!("{}(", l.kind_name())), "{ron}");
