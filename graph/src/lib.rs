@@ -268,6 +268,24 @@ impl Draw {
 /// invocations).
 pub const TEXEL_WORKGROUP: u32 = 8;
 
+/// The receiver's normal in WGSL, in a fragment entry whose input `in` has `world` and
+/// `normal`: surfaces are two-sided, and the receiver is the side the camera sees. Defines
+/// `n`. The compiler's Shade passes and the runtime's draw of objects that receive no
+/// shadow share it.
+pub const SHADE_NORMAL_WGSL: &str = "    // Two-sided surfaces: the receiver is the side the camera sees. The triangle's own
+    // normal from screen-space derivatives, cross(dpdy, dpdx) of the world position, faces
+    // the camera whatever the winding (framebuffer y runs down); the interpolated normal is
+    // turned to its side, so a smooth normal at a silhouette keeps its sign.
+    let in_face = cross(dpdy(in.world), dpdx(in.world));
+    let in_smooth = normalize(in.normal);
+    let n = select(in_smooth, -in_smooth, dot(in_smooth, in_face) < 0.0);
+";
+
+/// The shaded colour of the camera image in WGSL, an expression of the visibility `vis`
+/// and `lambert` (`max(n . l, 0)`): 12 % ambient, the rest lit. The compiler's Shade passes
+/// and the runtime's draw of objects that receive no shadow (`vis` = 1) share it.
+pub const SHADE_COLOR_WGSL: &str = "vec4<f32>(vec3<f32>(0.12 + 0.88 * vis * lambert), 1.0)";
+
 /// The receiver-plane depth slope (Isidoro 2006) in WGSL: from the derivatives over the
 /// screen of the light-space uv (`duv_dx`, `duv_dy`) and of the normalised depth (`dd_dx`,
 /// `dd_dy`), solve `[duv/dx; duv/dy] g = [dd/dx; dd/dy]` and define `in_depth_slope`

@@ -10,7 +10,7 @@ use sshc_runtime::light::{SampleFit, sample_views};
 /// The vertex buffer lists the objects that cast shadows first, in file order, then those
 /// that do not (`casts: false`), in file order: the light's draws take only the first
 /// `casting_vertices`, and the meshes whose edges Geometry passes extrude are the casters
-/// only. With every object casting, the buffer is [`Scene::vertex_data`] as it is.
+/// only. Objects with `receives: false` are listed in `unshadowed` (drawn unshadowed). With every object casting, the buffer is [`Scene::vertex_data`] as it is.
 /// The light's view is fitted as the scene's `shadow_fit` says ([`Scene::light_view`]).
 /// No light samples: for graphs without `PerLightSample` passes (see
 /// [`scene_inputs_for`] and [`scene_inputs_with_samples`]).
@@ -56,6 +56,8 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
     // One mesh per casting object: Geometry passes find edges within each.
     let mut meshes = Vec::new();
     let mut casting = 0usize;
+    // the objects that receive no shadow, as ranges of vertices
+    let mut unshadowed = Vec::new();
     for &i in &order {
         let r = scene.object_triangles(i);
         let start = vertices.len() / 18;
@@ -64,6 +66,9 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
                 vertices.extend_from_slice(&tri[k].to_array());
                 vertices.extend_from_slice(&nrm[k].to_array());
             }
+        }
+        if !scene.receives(i) {
+            unshadowed.push(start as u32 * 3..(vertices.len() / 6) as u32);
         }
         if scene.casts(i) {
             meshes.push(start as u32..(vertices.len() / 18) as u32);
@@ -84,6 +89,7 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
         vertices,
         meshes,
         casting_vertices: (!every).then_some(casting as u32),
+        unshadowed,
         ..SceneInputs::of(&camera, &light, scene.camera_size(), scene.shadow_map)
     })
 }

@@ -311,6 +311,13 @@ pub fn compute(
     let start = Instant::now();
     let pixels = positions.len();
     let surface: Vec<bool> = positions.iter().map(|p| p.is_finite()).collect();
+    // pixels on objects that receive no shadow read 1 (`receives: false`), as the
+    // techniques draw them
+    let unshadowed = if scene.objects().iter().any(|o| !o.receives) {
+        vis.on_non_receivers(scene, positions)
+    } else {
+        vec![false; pixels]
+    };
     let surface_pixels = surface.iter().filter(|&&s| s).count() as u64;
     let binary = is_binary(light);
     let mut n = strata(settings.samples);
@@ -362,6 +369,11 @@ pub fn compute(
         let mut std_error = Vec::with_capacity(pixels);
         for i in 0..pixels {
             if !surface[i] {
+                visibility.push(1.0);
+                std_error.push(0.0);
+                continue;
+            }
+            if unshadowed[i] {
                 visibility.push(1.0);
                 std_error.push(0.0);
                 continue;

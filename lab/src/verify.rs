@@ -113,6 +113,7 @@ impl QueryPlane {
             vertices,
             meshes: vec![],
             casting_vertices: None,
+            unshadowed: vec![],
             camera_view_proj: (camera_proj * view).to_cols_array(),
             camera_position: [0.0, EYE, 0.0],
             camera_size: (self.camera, self.camera),
@@ -172,6 +173,7 @@ impl QueryPlane {
             vertices: casters.iter().chain(&receiver.vertices).copied().collect(),
             meshes,
             casting_vertices: Some((casters.len() / 6) as u32),
+            unshadowed: vec![],
             ..receiver
         }
     }

@@ -529,6 +529,15 @@ impl Visibility {
             .collect()
     }
 
+    /// For each of `positions`, whether the camera shows there an object that receives no
+    /// shadow (`receives: false`; [`Visibility::object_seen`]), in parallel.
+    pub fn on_non_receivers(&self, scene: &Scene, positions: &[Vec3]) -> Vec<bool> {
+        positions
+            .par_iter()
+            .map(|&p| self.object_seen(scene, p).is_some_and(|o| !scene.receives(o)))
+            .collect()
+    }
+
     /// The nearest triangle along the ray from `origin` in unit direction `dir` with
     /// `0 < t < t_max`: its distance `t` and its index in [`Scene::triangles`].
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<(f32, usize)> {

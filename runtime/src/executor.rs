@@ -9,6 +9,7 @@ use crate::graph::{self, Format, PassGraph, TextureDecl};
 use crate::image::{Image, read_back, read_table};
 use crate::lights::{Combine, MAX_LIGHTS};
 use crate::pixels::{HostPixels, PixelsStep};
+use crate::receivers::Unshadowed;
 use crate::requirements::Requirements;
 use crate::resources::{Resources, f32_bytes, mip_count};
 use crate::steps::{self, Group0, PassNode, Usages};
@@ -147,6 +148,8 @@ pub struct Executor {
     pixels: Option<PixelsStep>,
     /// Several lights: the step that combines their shaded images.
     combine: Option<Combine>,
+    /// The draw of the objects that receive no shadow, when the bound draws have some.
+    unshadowed: Option<Unshadowed>,
     timestamps: Option<Timestamps>,
     /// Linear depth written into the Depth pass's output instead of rasterising the scene.
     /// One map per view of the Depth pass (a single map serves every view).
@@ -309,6 +312,7 @@ impl Executor {
             geometry: None,
             pixels: None,
             combine: None,
+            unshadowed: None,
             timestamps,
             depth_override: None,
             max_bytes: 4 << 30,
@@ -488,6 +492,7 @@ impl Executor {
         self.bound = Vec::new();
         self.lights_state = Vec::new();
         self.combine = None;
+        self.unshadowed = None;
         if lights.is_empty() || lights.len() > MAX_LIGHTS {
             return Err(RuntimeError::Param(format!(
                 "{} light(s) bound: a frame combines 1 to {MAX_LIGHTS} lights (their visibilities share one RGBA texel a pixel)",
@@ -532,6 +537,7 @@ impl Executor {
             self.combine = Some(Combine::new(&gpu, camera, lights.len())?);
         }
         self.timestamps = Timestamps::new(&gpu, self.passes.iter().map(|p| p.name.clone()).collect(), lights.len());
+        self.unshadowed = Unshadowed::new(&gpu, &bound)?;
         self.bound = bound;
         self.lights_state = lights.iter().map(SceneInputs::light_inputs).collect();
         // binding wrote every uniform: nothing is pending
@@ -833,6 +839,11 @@ impl Executor {
                         Some(_) | None => node.record(encoder, res, stamps, l, view)?,
                     }
                 }
+            }
+            // the objects that receive no shadow, over this light's camera depth (none is
+            // rasterised from a host's pixels: the host's pass applies its own rule)
+            if let (Some(u), None) = (&self.unshadowed, &self.pixels) {
+                u.record(encoder, l, res);
             }
         }
         if let Some(c) = &self.combine {

@@ -37,6 +37,9 @@ pub struct SceneInputs {
     /// the shadow casters, listed first; the rest (objects that cast no shadow, such as a
     /// ground plane) are drawn by the camera only. `None`: every vertex casts.
     pub casting_vertices: Option<u32>,
+    /// Ranges of `vertices / 6` of the objects that receive no shadow: drawn unshadowed,
+    /// they read visibility 1 (runtime/src/receivers.rs). Empty: every object receives.
+    pub unshadowed: Vec<std::ops::Range<u32>>,
     pub camera_view_proj: [f32; 16],
     pub camera_position: [f32; 3],
     pub camera_size: (u32, u32),
@@ -226,6 +229,7 @@ impl SceneInputs {
             vertices: Vec::new(),
             meshes: Vec::new(),
             casting_vertices: None,
+            unshadowed: Vec::new(),
             camera_view_proj: camera.view_proj,
             camera_position: camera.position,
             camera_size,

@@ -54,6 +54,9 @@ pub struct Instance {
     pub transform: [f32; 16],
     /// Drawn into the light's views (a shadow caster). Every instance is drawn by the camera.
     pub casts: bool,
+    /// Receives shadows. An instance that does not (a sky dome, a light's own fixture, a
+    /// marker) is drawn unshadowed and reads visibility 1 (runtime/src/receivers.rs).
+    pub receives: bool,
 }
 
 /// A host's meshes and their instances, in draw order.
@@ -265,6 +268,23 @@ impl Geometry {
         Ok((out, casting))
     }
 
+    /// The vertices of each instance that receives no shadow in [`Geometry::soup`]'s
+    /// listing, as ranges of vertex indices ([`crate::frame::SceneInputs::unshadowed`]).
+    pub fn soup_unshadowed(&self) -> Vec<std::ops::Range<u32>> {
+        let mut out = Vec::new();
+        let mut at = 0u32;
+        for pass in [true, false] {
+            for inst in self.instances.iter().filter(|i| i.casts == pass) {
+                let n = self.meshes.get(inst.mesh).map_or(0, |m| m.indices.len() as u32);
+                if !inst.receives {
+                    out.push(at..at + n);
+                }
+                at += n;
+            }
+        }
+        out
+    }
+
     /// The triangles of each casting instance in [`Geometry::soup`]'s listing, as ranges
     /// of triangle indices ([`crate::frame::SceneInputs::meshes`]: Geometry passes find edges within
     /// each, as the host geometry's adjacency is built per instance's mesh).
@@ -378,13 +398,27 @@ pub(crate) struct SceneDraw {
     pub vertices: wgpu::Buffer,
     pub indices: Option<wgpu::Buffer>,
     pub ranges: Vec<DrawRange>,
+    /// The draws of the objects that receive no shadow, drawn again unshadowed
+    /// ([`crate::receivers`]); empty when every object receives.
+    pub unshadowed: Vec<DrawRange>,
 }
 
 impl SceneDraw {
-    /// A soup of `count` vertices, the first `casting` drawn from the light.
-    pub fn soup(vertices: wgpu::Buffer, count: u32, casting: u32) -> SceneDraw {
+    /// A soup of `count` vertices, the first `casting` drawn from the light, those in
+    /// `unshadowed` (vertex ranges, clamped to the soup) receiving no shadow.
+    pub fn soup(vertices: wgpu::Buffer, count: u32, casting: u32, unshadowed: &[std::ops::Range<u32>]) -> SceneDraw {
         let casting = casting.min(count);
         SceneDraw {
+            unshadowed: unshadowed
+                .iter()
+                .map(|r| r.start.min(count)..r.end.min(count))
+                .filter(|r| !r.is_empty())
+                .map(|elements| DrawRange {
+                    elements,
+                    base_vertex: 0,
+                    casts: false,
+                })
+                .collect(),
             vertices,
             indices: None,
             ranges: [(0..casting, true), (casting..count, false)]
@@ -401,7 +435,16 @@ impl SceneDraw {
 
     /// Record the draws into `rp` (the casting ones only when `from_light`).
     pub fn record(&self, rp: &mut wgpu::RenderPass<'_>, from_light: bool) {
-        let mut ranges = self.ranges.iter().filter(|r| r.casts || !from_light).peekable();
+        self.draw(rp, self.ranges.iter().filter(|r| r.casts || !from_light));
+    }
+
+    /// Record the draws of the objects that receive no shadow.
+    pub fn record_unshadowed(&self, rp: &mut wgpu::RenderPass<'_>) {
+        self.draw(rp, self.unshadowed.iter());
+    }
+
+    fn draw<'r>(&self, rp: &mut wgpu::RenderPass<'_>, ranges: impl Iterator<Item = &'r DrawRange>) {
+        let mut ranges = ranges.peekable();
         if ranges.peek().is_none() {
             return;
         }
@@ -620,7 +663,7 @@ impl GeometryBuffers {
             }
         }
         // the instances, one after the other: draws, and spans of what they place
-        let (mut ranges, mut spans) = (Vec::new(), Vec::new());
+        let (mut ranges, mut spans, mut unshadowed) = (Vec::new(), Vec::new(), Vec::new());
         let mut placed = Spans::default();
         let mut counts = AdjacencyCounts::default();
         for inst in &g.instances {
@@ -635,6 +678,9 @@ impl GeometryBuffers {
                 })?,
                 casts: inst.casts,
             });
+            if !inst.receives {
+                unshadowed.extend(ranges.last().cloned());
+            }
             let mut s = Spans {
                 vertices: [f[0], m.positions.len() as u32, placed.vertices[2]],
                 welded: placed.welded,
@@ -778,6 +824,7 @@ impl GeometryBuffers {
                         vertices: placed_vertices,
                         indices: Some(indices),
                         ranges,
+                        unshadowed,
                     },
                     edges: edges.then(|| EdgeBuffers {
                         edges: placed_edges,

@@ -23,6 +23,7 @@ mod image;
 mod lights;
 mod pipeline;
 mod pixels;
+mod receivers;
 mod requirements;
 mod resources;
 mod steps;

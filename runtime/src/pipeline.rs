@@ -216,7 +216,7 @@ fn group0_layout(device: &wgpu::Device, l: &BindingLayout) -> wgpu::BindGroupLay
     })
 }
 
-const SCENE_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
+pub(crate) const SCENE_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
     wgpu::VertexAttribute {
         format: wgpu::VertexFormat::Float32x3,
         offset: 0,

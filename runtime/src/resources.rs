@@ -338,7 +338,7 @@ impl Make<'_> {
             self.gpu.queue.write_buffer(&vertices, 0, f32_bytes(&s.vertices).as_slice());
         }
         let count = (s.vertices.len() / 6) as u32;
-        SceneDraw::soup(vertices, count, s.casting_vertices.map_or(count, |n| n.min(count)))
+        SceneDraw::soup(vertices, count, s.casting_vertices.map_or(count, |n| n.min(count)), &s.unshadowed)
     }
 
     /// The graph's textures at the shadow map's size, and its summed-area tables
@@ -361,12 +361,6 @@ impl Make<'_> {
                 tables.insert(t.name.clone(), buf);
                 continue;
             };
-            // textures a compute step stores into (the compute schedule of a Map pass)
-            let stored = if usages.stored.contains(&t.name) {
-                wgpu::TextureUsages::STORAGE_BINDING
-            } else {
-                wgpu::TextureUsages::empty()
-            };
             let tex = self.gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(&t.name),
                 size: wgpu::Extent3d {
@@ -378,11 +372,8 @@ impl Make<'_> {
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC
-                    | wgpu::TextureUsages::COPY_DST
-                    | stored,
+                // from the steps that declare it (`Usages::of`)
+                usage: usages.texture(&t.name),
                 view_formats: &[],
             });
             textures.insert(t.name.clone(), tex);

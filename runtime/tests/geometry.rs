@@ -230,6 +230,7 @@ fn inputs(tris: &[[[f32; 3]; 3]], meshes: Vec<std::ops::Range<u32>>, light: [f32
         vertices: tris.iter().flatten().flat_map(|p| [p[0], p[1], p[2], 0.0, 1.0, 0.0]).collect(),
         meshes,
         casting_vertices: None,
+        unshadowed: vec![],
         camera_view_proj: identity(),
         camera_position: [0.0, 5.0, 0.0],
         camera_size: (4, 4),

@@ -212,6 +212,7 @@ fn bytes_table() -> String {
                 mesh: g.instances[bunny].mesh,
                 transform: t,
                 casts: true,
+                receives: true,
             });
         }
         let soup = support::host::listed_out(&s, &g);

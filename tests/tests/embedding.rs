@@ -1019,3 +1019,143 @@ fn host_pixels_of_the_wrong_format_or_size_are_refused() {
     }
     ex.set_host_pixels(Some(pixels(&good, &good))).unwrap();
 }
+
+/// Objects that receive no shadow (`receives: false` in a scene, `Instance::receives` in a
+/// host's geometry) read visibility 1 and are drawn lit, in every schedule of the Shade
+/// (forward, deferred) and on a Geometry technique; everything else stays as it was, bit
+/// for bit; host geometry gives what the same triangles listed out give; and the truth
+/// follows the same rule.
+#[test]
+fn objects_that_receive_no_shadow_read_one_in_the_techniques_and_the_truth() {
+    use sshc_lab::truth::{self, Points, TruthSettings};
+    use sshc_lab::visibility::Visibility;
+    let text = std::fs::read_to_string(root().join("scenes/triangle.ron")).unwrap();
+    let ground = "Object(name: \"ground\", mesh: Plane(size: (3.0, 3.0)))";
+    assert!(text.contains(ground), "scenes/triangle.ron's ground changed");
+    let load = |text: &str| {
+        let mut s = Scene::from_str(text, root().join("scenes")).unwrap_or_else(|e| panic!("{e}"));
+        s.set_camera_size(32, 32);
+        s.shadow_map = 64;
+        s
+    };
+    let base = load(&text);
+    let unlit = load(&text.replace(ground, &format!("{}, receives: false)", &ground[..ground.len() - 1])));
+    assert!(!unlit.receives(0) && unlit.receives(1) && base.receives(0));
+    assert_ne!(base.fingerprint(), unlit.fingerprint(), "the truth cache tells the two apart");
+    let deferred = {
+        let src = support::technique_source("pcss");
+        let opts = sshc::CompileOptions {
+            schedule: vec![("shade".into(), "compute".into())],
+            ..Default::default()
+        };
+        sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render("pcss", &src)))
+    };
+    let vis = Visibility::new(&unlit);
+    let run = |c: &sshc::Compiled, s: &SceneInputs| {
+        let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+        ex.bind_scene(s).unwrap();
+        ex.run_frame().unwrap();
+        let read = |o| ex.read_camera(o).unwrap().rgba;
+        (
+            read(CameraOutput::Visibility),
+            read(CameraOutput::Color),
+            read(CameraOutput::Position),
+        )
+    };
+    for (name, c) in [
+        ("pcss", compile("pcss")),
+        ("pcss, deferred", deferred),
+        ("penumbra-limit-maps", compile("penumbra-limit-maps")),
+    ] {
+        let (si, su) = (inputs(&base, &c), inputs(&unlit, &c));
+        assert_eq!(
+            su.unshadowed,
+            vec![0..6],
+            "{name}: the ground's two triangles, listed first (it casts too)"
+        );
+        let (v0, c0, p0) = run(&c, &si);
+        let (v1, c1, p1) = run(&c, &su);
+        let bits = |p: &[[f32; 4]]| p.iter().flatten().map(|c| c.to_bits()).collect::<Vec<u32>>();
+        assert!(bits(&p0) == bits(&p1), "{name}: the camera raster changed");
+        let positions: Vec<glam::Vec3> = p1.iter().map(|p| glam::Vec3::new(p[0], p[1], p[2])).collect();
+        let on_ground = vis.on_non_receivers(&unlit, &positions);
+        let (mut ground, mut shadowed) = (0, 0);
+        for i in 0..positions.len() {
+            if on_ground[i] {
+                ground += 1;
+                shadowed += usize::from(v0[i][0] < 1.0);
+                assert_eq!(v1[i][0], 1.0, "{name}: pixel {i} on the ground");
+                // lit: the colour a visibility of 1 gives, within one unorm8 step of the
+                // Shade's own where it read 1 (the same formula in another shader)
+                assert!(c1[i][0] >= c0[i][0], "{name}: pixel {i} darker unshadowed");
+                if v0[i][0] == 1.0 {
+                    assert!(
+                        (c1[i][0] - c0[i][0]).abs() <= 1.0 / 255.0,
+                        "{name}: pixel {i}: {} against {}",
+                        c1[i][0],
+                        c0[i][0]
+                    );
+                }
+            } else {
+                assert!(
+                    bits(&[v1[i]]) == bits(&[v0[i]]) && c1[i] == c0[i],
+                    "{name}: pixel {i} off the ground changed"
+                );
+            }
+        }
+        assert!(
+            ground > 100 && shadowed > 10,
+            "{name}: {ground} ground pixels, {shadowed} in shadow"
+        );
+        // host geometry: the ground an instance that does not receive, against its
+        // triangles listed out
+        let mut g = geometry_of(&su, [0.0; 3]);
+        g.instances.pop(); // the turned copy
+        // the ground: the mesh of two triangles (it casts, as in the scene)
+        let ground = g
+            .instances
+            .iter()
+            .position(|i| g.meshes[i.mesh].indices.len() == 6)
+            .expect("the ground");
+        g.instances[ground].receives = false;
+        let listed = listed_out(&su, &g);
+        assert!(!listed.unshadowed.is_empty());
+        let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+        ex.bind_geometry(&g, &su.camera(), &[su.light_inputs()], su.camera_size, su.shadow_size)
+            .unwrap();
+        ex.run_frame().unwrap();
+        assert!(
+            ex.read_camera(CameraOutput::Visibility).unwrap().rgba == run(&c, &listed).0,
+            "{name}: host geometry differs from its triangles listed out"
+        );
+    }
+    // the truth: 1 on the ground, exactly; elsewhere the same rays as with a receiving ground
+    let (_, _, p) = run(&compile("hard"), &inputs(&unlit, &compile("hard")));
+    let positions: Vec<glam::Vec3> = p.iter().map(|p| glam::Vec3::new(p[0], p[1], p[2])).collect();
+    let points = Points {
+        width: 32,
+        height: 32,
+        positions: &positions,
+        normals: &[],
+    };
+    let settings = TruthSettings {
+        samples: 16,
+        runs: 2,
+        ..Default::default()
+    };
+    let no_progress = |_| {};
+    let t0 = truth::compute(&base, &Visibility::new(&base), &points, &settings, &no_progress).unwrap();
+    let t1 = truth::compute(&unlit, &vis, &points, &settings, &no_progress).unwrap();
+    let on_ground = vis.on_non_receivers(&unlit, &positions);
+    assert!(
+        t0.visibility.iter().zip(&on_ground).any(|(v, g)| *g && *v < 1.0),
+        "the ground has a shadow"
+    );
+    for (i, &on) in on_ground.iter().enumerate() {
+        if on {
+            assert_eq!((t1.visibility[i], t1.std_error[i]), (1.0, 0.0), "truth at pixel {i}");
+        } else {
+            assert_eq!(t1.visibility[i], t0.visibility[i], "truth at pixel {i}");
+        }
+    }
+}

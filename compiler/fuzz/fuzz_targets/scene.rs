@@ -286,6 +286,7 @@ fn object(u: &mut Unstructured) -> Result<Object> {
         },
         flat_normals: u.arbitrary()?,
         casts: u.arbitrary()?,
+        receives: u.arbitrary()?,
     })
 }
 

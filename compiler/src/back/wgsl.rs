@@ -1840,9 +1840,12 @@ fn mipmap(ir: &Program, pass: &IrPass, reduce: Reduce, limits: &Limits) -> Resul
 }
 
 /// What the camera raster of both Shade schedules interpolates.
+// The clip position is `@invariant`: the runtime redraws the objects that receive no
+// shadow with its own vertex stage of the same expression, testing depth Equal against this
+// raster's (runtime/src/receivers.rs), which invariance makes exact.
 const SHADE_VARYING: &str = "
 struct ShadeVarying {
-    @builtin(position) clip: vec4<f32>,
+    @builtin(position) @invariant clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
 }
@@ -1861,14 +1864,7 @@ fn vs_shade(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) ->
 ";
 
 /// The receiver's normal, in a fragment entry taking `in: ShadeVarying`.
-const SHADE_NORMAL: &str = "    // Two-sided surfaces: the receiver is the side the camera sees. The triangle's own
-    // normal from screen-space derivatives, cross(dpdy, dpdx) of the world position, faces
-    // the camera whatever the winding (framebuffer y runs down); the interpolated normal is
-    // turned to its side, so a smooth normal at a silhouette keeps its sign.
-    let in_face = cross(dpdy(in.world), dpdx(in.world));
-    let in_smooth = normalize(in.normal);
-    let n = select(in_smooth, -in_smooth, dot(in_smooth, in_face) < 0.0);
-";
+const SHADE_NORMAL: &str = graph::SHADE_NORMAL_WGSL;
 
 /// The receiver seen from the light's centre, from `in.world`, `world` and `n`; `distant`,
 /// where the graph is specialised for a scene (issue 16), keeps only the form of the
@@ -1989,7 +1985,7 @@ fn shade(ir: &Program, pass: &IrPass, visibility: H, split: Split) -> Result<(St
     let lambert = max(in_ndotl, 0.0);
 {}{}{}{}",
             store("visibility", "vec4<f32>(vis, 0.0, 0.0, 1.0)"),
-            store("color", "vec4<f32>(vec3<f32>(0.12 + 0.88 * vis * lambert), 1.0)"),
+            store("color", graph::SHADE_COLOR_WGSL),
             store("position", "vec4<f32>(in.world, 1.0)"),
             store("normal", "vec4<f32>(n, 0.0)"),
         )

@@ -53,7 +53,7 @@ use serde::{Deserialize, Serialize};
 /// The lights a scene file names and the views fitted to them live in `sshc-light`, which
 /// the runtime shares (a host's lights are fitted by the same code).
 pub use sshc_light::{Light, LightView, corners, fit_guard, look_at, orthographic, perspective};
-use sshc_light::{any_perpendicular_up, bounds_of, depth_range, enclosing_axis, ortho_light_view, padded};
+use sshc_light::{any_perpendicular_up, bounds_of, depth_range, enclosing_axis, ortho_light_view, padded, perspective_light_view};
 
 // ---------------------------------------------------------------------------------------
 // File schema
@@ -190,6 +190,11 @@ pub struct Object {
     /// ground truth.
     #[serde(default = "yes", skip_serializing_if = "is_true")]
     pub casts: bool,
+    /// Whether the object receives shadows (default true). One that does not (a marker, a
+    /// light's fixture, a backdrop) is drawn unshadowed: it reads visibility 1, in the
+    /// techniques and the ground truth alike. It still casts, unless `casts: false`.
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    pub receives: bool,
 }
 
 fn yes() -> bool {
@@ -598,6 +603,11 @@ impl Scene {
         self.objects[i].casts
     }
 
+    /// Whether object `i` receives shadows (`receives` in the file; default true).
+    pub fn receives(&self, i: usize) -> bool {
+        self.objects[i].receives
+    }
+
     /// For each triangle of [`Scene::triangles`], whether its object casts shadows.
     pub fn casting_triangles(&self) -> Vec<bool> {
         let mut out = vec![true; self.triangles.len()];
@@ -806,19 +816,7 @@ impl Scene {
                 let near = (dc * 0.999).max(far * 1e-4);
                 let reach = s * (1.0 / near.max(far * 1e-4) - 1.0 / dr);
                 let tan = ((tan + reach) * guard).clamp(1e-6, 80f32.to_radians().tan());
-                let proj = perspective(2.0 * tan.atan(), 1.0, near, far);
-                LightView {
-                    view,
-                    proj,
-                    view_proj: proj * view,
-                    near,
-                    far,
-                    position_or_direction: eye.extend(1.0),
-                    size: 0.0,
-                    half_extents: Vec2::ZERO,
-                    angle: 0.0,
-                    orthographic: false,
-                }
+                perspective_light_view(view, perspective(2.0 * tan.atan(), 1.0, near, far), eye, near, far)
             }
         };
         Some(v)
@@ -1125,6 +1123,13 @@ impl Scene {
             eat(b"casts");
             for o in &self.objects {
                 eat(&[u8::from(o.casts)]);
+            }
+        }
+        // and which receive (only when some does not, likewise)
+        if self.objects.iter().any(|o| !o.receives) {
+            eat(b"receives");
+            for o in &self.objects {
+                eat(&[u8::from(o.receives)]);
             }
         }
         h

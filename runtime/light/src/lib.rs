@@ -578,7 +578,12 @@ fn perspective_view(eye: Vec3, bounds: (Vec3, Vec3)) -> LightView {
         tan = tan.max(p.x.abs() / depth).max(p.y.abs() / depth);
     }
     let tan = (tan * 1.001).clamp(1e-6, 80f32.to_radians().tan());
-    let proj = perspective(2.0 * tan.atan(), 1.0, near, far);
+    perspective_light_view(view, perspective(2.0 * tan.atan(), 1.0, near, far), eye, near, far)
+}
+
+/// A perspective light view from `eye` through `view` and `proj`, over `[near, far]` in
+/// depth (its extents 0: [`Light::with_extent`] fills them).
+pub fn perspective_light_view(view: Mat4, proj: Mat4, eye: Vec3, near: f32, far: f32) -> LightView {
     LightView {
         view,
         proj,
@@ -704,18 +709,8 @@ fn local_reach(light: &Light, scene: &impl Occluders) -> Option<(LightView, f32,
         .fold(f32::INFINITY, f32::min)
         .max(near);
     let dr = scene.points().map(|p| -view.transform_point3(p).z).fold(dc, f32::max);
-    let base = LightView {
-        view,
-        proj: Mat4::IDENTITY,
-        view_proj: Mat4::IDENTITY,
-        near,
-        far,
-        position_or_direction: eye.extend(1.0),
-        size: 0.0,
-        half_extents: Vec2::ZERO,
-        angle: 0.0,
-        orthographic: false,
-    };
+    // the projection is the caller's (identity here, so `view_proj` is `view` until then)
+    let base = perspective_light_view(view, Mat4::IDENTITY, eye, near, far);
     Some((base, dc, dr, light.bounding_radius()))
 }
 

@@ -78,6 +78,7 @@ pub fn one_triangle() -> SceneInputs {
         vertices: vec![-1., -1., 0.5, 0., 0., 1., 3., -1., 0.5, 0., 0., 1., -1., 3., 0.5, 0., 0., 1.],
         meshes: vec![],
         casting_vertices: None,
+        unshadowed: vec![],
         camera_view_proj: identity(),
         camera_position: [0.0; 3],
         camera_size: (4, 4),

@@ -42,6 +42,7 @@ pub fn geometry_of(s: &SceneInputs, shift: [f32; 3]) -> Geometry {
             mesh: i,
             transform: IDENTITY,
             casts: *casts,
+            receives: true,
         });
     }
     let last_caster = ranges.iter().rposition(|(_, casts)| *casts).unwrap_or(0);
@@ -50,6 +51,7 @@ pub fn geometry_of(s: &SceneInputs, shift: [f32; 3]) -> Geometry {
         mesh: last_caster,
         transform: quarter_turn(shift),
         casts: true,
+        receives: true,
     });
     g
 }
@@ -64,6 +66,7 @@ pub fn listed_out(s: &SceneInputs, g: &Geometry) -> SceneInputs {
     let (vertices, casting) = g.soup().unwrap_or_else(|e| panic!("{e}"));
     SceneInputs {
         casting_vertices: Some(casting),
+        unshadowed: g.soup_unshadowed(),
         meshes: g.soup_meshes(),
         vertices,
         ..s.clone()
