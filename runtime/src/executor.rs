@@ -150,6 +150,8 @@ pub struct Executor {
     combine: Option<Combine>,
     /// The draw of the objects that receive no shadow, when the bound draws have some.
     unshadowed: Option<Unshadowed>,
+    /// A bound triangle soup's vertices and edges, shared by every light (`bind_lights`).
+    soup: Option<crate::geometry::HostScene>,
     timestamps: Option<Timestamps>,
     /// Linear depth written into the Depth pass's output instead of rasterising the scene.
     /// One map per view of the Depth pass (a single map serves every view).
@@ -313,6 +315,7 @@ impl Executor {
             pixels: None,
             combine: None,
             unshadowed: None,
+            soup: None,
             timestamps,
             depth_override: None,
             max_bytes: 4 << 30,
@@ -357,9 +360,35 @@ impl Executor {
     /// each frame, and a last compute step combines the lights' shaded colours (their mean)
     /// and gathers their visibilities, one channel per light ([`crate::lights`]). At most
     /// [`MAX_LIGHTS`]; every light's camera must have the same size.
+    ///
+    /// The lights share one scene: their soups must be the same (vertices, meshes, casting
+    /// and unshadowed ranges), and it is uploaded once, with its edge adjacency built once,
+    /// for every light ([`crate::resources::soup_scene`]: the same form a host geometry
+    /// takes).
     pub fn bind_lights(&mut self, lights: &[SceneInputs]) -> Result<()> {
+        // checked before anything is dropped: a refused set leaves the bound one as it was
+        if let Some(first) = lights.first() {
+            let same = |s: &SceneInputs| {
+                s.vertices.len() == first.vertices.len()
+                    && s.vertices.iter().zip(&first.vertices).all(|(a, b)| a.to_bits() == b.to_bits())
+                    && (&s.meshes, s.casting_vertices, &s.unshadowed) == (&first.meshes, first.casting_vertices, &first.unshadowed)
+            };
+            if let Some(l) = lights.iter().position(|s| !same(s)) {
+                return Err(RuntimeError::Param(format!(
+                    "light {l}'s scene differs from light 0's (its vertices, meshes, casting or unshadowed ranges): the lights of a frame share one scene"
+                )));
+            }
+        }
         self.geometry = None;
-        self.bind_all(lights)
+        self.soup = None;
+        if let Some(first) = lights.first() {
+            self.soup = Some(crate::resources::soup_scene(&self.gpu, &self.graph, first, self.max_bytes)?);
+        }
+        let bound = self.bind_all(lights);
+        if bound.is_err() {
+            self.soup = None;
+        }
+        bound
     }
 
     /// Bind a host's geometry ([`Geometry`]: indexed meshes uploaded once, instances with
@@ -396,6 +425,7 @@ impl Executor {
             }
         }
         self.geometry = None;
+        self.soup = None;
         self.bound = Vec::new();
         let buffers = GeometryBuffers::new(&self.gpu, geometry, self.usages.edges)?;
         self.geometry = Some(buffers);
@@ -652,8 +682,13 @@ impl Executor {
                 if l > 0 { format!(" (light {l})") } else { String::new() },
             )));
         }
-        let host = self.geometry.as_ref().map(|g| &g.scene);
-        let res = Resources::new(gpu, &self.graph, &self.usages, s, host, max_bytes)?;
+        let scene = self
+            .geometry
+            .as_ref()
+            .map(|g| &g.scene)
+            .or(self.soup.as_ref())
+            .ok_or_else(|| RuntimeError::NotFound("no scene geometry: bind_scene, bind_lights or bind_geometry".into()))?;
+        let res = Resources::new(gpu, &self.graph, &self.usages, s, scene, max_bytes)?;
         if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
             return Err(RuntimeError::Param(format!(
                 "technique `{}` renders {} light-sample view(s), but the scene gives {} (`SceneInputs::samples`)",

@@ -104,26 +104,14 @@ pub(crate) struct Resources {
 impl Resources {
     /// Check the scene's sizes against the device and `max_bytes`, then create everything.
     ///
-    /// `host`: the draws of a host geometry ([`crate::geometry`]), shared by every light; the
-    /// scene's `vertices` are then not read.
-    pub fn new(
-        gpu: &Gpu,
-        graph: &PassGraph,
-        usages: &Usages,
-        s: &SceneInputs,
-        host: Option<&HostScene>,
-        max_bytes: u64,
-    ) -> Result<Resources> {
+    /// `scene`: what the draws bind and the edges Silhouettes steps classify, shared by
+    /// every light: a host geometry's ([`crate::geometry`]) or a triangle soup's
+    /// ([`soup_scene`]); the scene's `vertices` are not read here.
+    pub fn new(gpu: &Gpu, graph: &PassGraph, usages: &Usages, s: &SceneInputs, scene: &HostScene, max_bytes: u64) -> Result<Resources> {
         // every size checked before anything is created (lavapipe keeps allocating past
         // its limits)
         let texture_bytes = check_sizes(gpu, graph, s, max_bytes)?;
-        let adjacency = match host {
-            Some(_) => None,
-            None => soup_adjacency(graph, s, texture_bytes, max_bytes)?,
-        };
-        // the edges the Silhouettes steps classify: a host geometry's, or the soup's
-        let host_edges = host.and_then(|h| h.edges.as_ref());
-        let edge_count = host_edges.map_or(adjacency.as_ref().map_or(0, |a| a.edges.len() as u64), |e| e.counts.edges.into());
+        let edge_count = scene.edges.as_ref().map_or(0, |e| e.counts.edges.into());
         check_generated(gpu, graph, usages, s.shadow_size, edge_count, texture_bytes, max_bytes)?;
         gpu.scoped("scene resources", || {
             let make = Make { gpu };
@@ -149,11 +137,10 @@ impl Resources {
             } else {
                 Vec::new()
             };
-            let edges = host_edges.cloned().or(adjacency.map(|adj| make.edges(&adj)));
             Resources {
                 shadow_size: s.shadow_size,
                 camera_size: s.camera_size,
-                draw: host.map_or_else(|| make.soup(s), |h| h.draw.clone()),
+                draw: scene.draw.clone(),
                 textures,
                 tables,
                 light_depth: make.attachment("light depth", (s.shadow_size, s.shadow_size), DEPTH_FORMAT, none),
@@ -176,7 +163,7 @@ impl Resources {
                 ),
                 samples: s.samples.len() as u32,
                 samples_closed: s.samples_closed,
-                edges,
+                edges: scene.edges.clone(),
                 generated: make.generated(graph, usages, edge_count, s.shadow_size),
             }
         })
@@ -208,8 +195,8 @@ impl Resources {
 }
 
 /// The sizes of a scene checked against the device and `max_bytes`: the shadow map and
-/// the camera image, the graph's textures, the summed-area tables and the vertex buffer.
-/// Returns the textures' bytes.
+/// the camera image, the graph's textures and the summed-area tables. Returns the
+/// textures' bytes.
 fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) -> Result<u64> {
     let max_dim = gpu.limits.max_texture_dimension_2d;
     if s.shadow_size == 0 || s.shadow_size > max_dim {
@@ -251,6 +238,21 @@ fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) ->
             });
         }
     }
+    Ok(bytes)
+}
+
+/// Bytes of a soup's vertex buffer (at least one vertex).
+fn vertex_buffer_bytes(s: &SceneInputs) -> u64 {
+    (s.vertices.len() * 4).max(24) as u64
+}
+
+/// A triangle soup as the scene every light's resources take ([`HostScene`], as a host
+/// geometry is): its vertex buffer and draws, and, for a graph with generated buffers, its
+/// edge adjacency, built once for every light. The vertex buffer is checked against the
+/// device's `max_buffer_size` (a vertex buffer, not a storage binding), the adjacency
+/// bounded from the triangle count with the textures' bytes of `s`'s sizes before it is
+/// built.
+pub(crate) fn soup_scene(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) -> Result<HostScene> {
     let vb_size = vertex_buffer_bytes(s);
     if vb_size > gpu.limits.max_buffer_size {
         return Err(RuntimeError::Limit {
@@ -259,12 +261,15 @@ fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) ->
             limit: gpu.limits.max_buffer_size,
         });
     }
-    Ok(bytes)
-}
-
-/// Bytes of a soup's vertex buffer (at least one vertex).
-fn vertex_buffer_bytes(s: &SceneInputs) -> u64 {
-    (s.vertices.len() * 4).max(24) as u64
+    let texture_bytes = check_sizes(gpu, graph, s, max_bytes)?;
+    let adjacency = soup_adjacency(graph, s, texture_bytes, max_bytes)?;
+    gpu.scoped("the scene's vertices", || {
+        let make = Make { gpu };
+        HostScene {
+            draw: make.soup(s),
+            edges: adjacency.map(|adj| make.edges(&adj)),
+        }
+    })
 }
 
 /// A soup's edge adjacency, for a graph with generated buffers: bounded from the triangle

@@ -410,6 +410,15 @@ fn per_frame_updates_refuse_what_would_need_a_new_binding() {
     let e = lex.set_light(0, &light).unwrap_err();
     assert!(e.to_string().contains("a new number of samples is a new binding"), "{e}");
     assert_eq!(ex.generation(), 1);
+    // the lights of a frame share one scene (uploaded once for all of them): a light whose
+    // soup differs is refused, and the bound scene stays as it was
+    let mut moved = s.clone();
+    moved.vertices[0] += 0.5;
+    let e = ex.bind_lights(&[s.clone(), moved]).unwrap_err().to_string();
+    assert!(e.contains("light 1's scene differs") && e.contains("share one scene"), "{e}");
+    assert_eq!((ex.generation(), ex.lights()), (1, 1));
+    ex.set_camera(&s.camera()).unwrap();
+    ex.run_frame().unwrap();
 }
 
 // Host geometry: indexed meshes, instances, transforms.
