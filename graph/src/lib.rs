@@ -69,21 +69,28 @@ const fn round_up(v: u32, to: u32) -> u32 {
     v.div_ceil(to) * to
 }
 
-/// Byte offset of field `i` of [`FRAME_FIELDS`] (WGSL layout rules: each field at the next
-/// multiple of its alignment).
-pub const fn frame_offset(i: usize) -> u32 {
+/// Byte offset of field `i` of `fields` (WGSL's uniform layout rules: each field at the
+/// next multiple of its alignment).
+pub const fn field_offset(fields: &[FrameField], i: usize) -> u32 {
     let mut end = 0;
     let mut k = 0;
     while k < i {
-        end = round_up(end, FRAME_FIELDS[k].ty.align()) + FRAME_FIELDS[k].ty.size();
+        end = round_up(end, fields[k].ty.align()) + fields[k].ty.size();
         k += 1;
     }
-    round_up(end, FRAME_FIELDS[i].ty.align())
+    round_up(end, fields[i].ty.align())
 }
 
-const fn frame_size() -> u32 {
-    let last = FRAME_FIELDS.len() - 1;
-    round_up(frame_offset(last) + FRAME_FIELDS[last].ty.size(), 16)
+/// Bytes of a struct of `fields` (its last field's end, rounded up to 16: the struct's
+/// alignment, which an array of it strides by).
+pub const fn struct_size(fields: &[FrameField]) -> u32 {
+    let last = fields.len() - 1;
+    round_up(field_offset(fields, last) + fields[last].ty.size(), 16)
+}
+
+/// Byte offset of field `i` of [`FRAME_FIELDS`].
+pub const fn frame_offset(i: usize) -> u32 {
+    field_offset(FRAME_FIELDS, i)
 }
 
 macro_rules! frame_type {
@@ -101,37 +108,49 @@ macro_rules! frame_type {
     };
 }
 
-/// The one definition of the `Frame` uniform: from the field list come the WGSL
-/// declaration [`FRAME_WGSL`] (each doc line becomes a `//` comment), the field table
-/// [`FRAME_FIELDS`] with its offsets and [`FRAME_SIZE`], and the Rust struct
-/// [`FrameUniform`] whose [`FrameUniform::to_bytes`] writes each field at its offset.
-macro_rules! frame_uniform {
-    ($( $(#[doc = $doc:literal])+ $name:ident: $ty:ident, )+) => {
-        /// The per-frame uniform every module declares at `@group(0) @binding(0)`.
-        pub const FRAME_WGSL: &str = concat!(
-            "struct Frame {\n",
+/// The one definition of a uniform struct: from the field list come its WGSL declaration
+/// (each doc line becomes a `//` comment; `then` is appended), its field table with
+/// offsets and size ([`field_offset`], [`struct_size`]), and the Rust struct whose
+/// `to_bytes` writes each field at its offset. The `Frame` uniform and one light sample's
+/// `SampleView` are made by it; the layout test against naga's layouter is in
+/// runtime/src/frame.rs.
+macro_rules! uniform_struct {
+    (
+        $(#[doc = $sdoc:literal])+
+        struct $wgsl_name:literal => $rust:ident;
+        wgsl: $wgsl:ident, then: $then:literal;
+        fields: $fields:ident, size: $size:ident;
+        $( $(#[doc = $doc:literal])+ $name:ident: $ty:ident, )+
+    ) => {
+        /// The WGSL declaration of the struct (and what follows it).
+        pub const $wgsl: &str = concat!(
+            "struct ", $wgsl_name, " {\n",
             $( $("    //", $doc, "\n",)+ "    ", stringify!($name), ": ", frame_type!(wgsl $ty), ",\n", )+
-            "}\n"
+            "}\n",
+            $then
         );
 
-        /// The fields of [`FRAME_WGSL`]'s `Frame`, in declaration order.
-        pub const FRAME_FIELDS: &[FrameField] = &[$(FrameField { name: stringify!($name), ty: FrameType::$ty },)+];
+        /// The fields of the struct, in declaration order.
+        pub const $fields: &[FrameField] = &[$(FrameField { name: stringify!($name), ty: FrameType::$ty },)+];
 
-        /// The values of the `Frame` uniform (matrices column-major).
+        /// Bytes of the struct.
+        pub const $size: u32 = struct_size($fields);
+
+        $(#[doc = $sdoc])+
         #[derive(Clone, Copy, Debug, Default, PartialEq)]
         #[repr(C)]
-        pub struct FrameUniform {
+        pub struct $rust {
             $( $(#[doc = $doc])+ pub $name: frame_type!(rust $ty), )+
         }
 
-        impl FrameUniform {
-            /// The uniform's bytes (little-endian), [`FRAME_SIZE`] of them, each field at
-            /// its [`frame_offset`].
+        impl $rust {
+            /// The struct's bytes (little-endian), its size of them, each field at its
+            /// [`field_offset`].
             pub fn to_bytes(&self) -> Vec<u8> {
-                let mut out = vec![0u8; FRAME_SIZE as usize];
+                let mut out = vec![0u8; $size as usize];
                 let values: &[&[f32]] = &[$(&self.$name,)+];
                 for (i, v) in values.iter().enumerate() {
-                    let at = frame_offset(i) as usize;
+                    let at = field_offset($fields, i) as usize;
                     for (k, x) in v.iter().enumerate() {
                         out[at + 4 * k..at + 4 * k + 4].copy_from_slice(&x.to_le_bytes());
                     }
@@ -142,13 +161,18 @@ macro_rules! frame_uniform {
             /// Byte offsets of the Rust struct's fields, in declaration order (for the
             /// layout test: the `#[repr(C)]` struct matches the WGSL layout).
             pub fn rust_offsets() -> Vec<usize> {
-                vec![$(std::mem::offset_of!(FrameUniform, $name),)+]
+                vec![$(std::mem::offset_of!($rust, $name),)+]
             }
         }
     };
 }
 
-frame_uniform! {
+uniform_struct! {
+    /// The values of the `Frame` uniform every module declares at `@group(0) @binding(0)`
+    /// (matrices column-major).
+    struct "Frame" => FrameUniform;
+    wgsl: FRAME_WGSL, then: "";
+    fields: FRAME_FIELDS, size: FRAME_SIZE;
     /// world -> light clip space
     light_view_proj: Mat4,
     /// world -> light view space (the light looks down -z)
@@ -182,60 +206,39 @@ frame_uniform! {
 /// The most light samples a pass graph may render views of ([`PassGraph::samples`]).
 pub const MAX_LIGHT_SAMPLES: u32 = 16;
 
-/// The `LightSamples` uniform at `@group(0) @binding(3)` of steps with
-/// [`Step::light_samples`]: one [`SampleViewUniform`] per light sample, `MAX_LIGHT_SAMPLES`
-/// of them (unused ones zero).
-pub const LIGHT_SAMPLES_WGSL: &str = "struct SampleView {
-    // world -> this sample's light clip space
-    view_proj: mat4x4<f32>,
-    // world -> this sample's light view space (looking down -z)
-    view: mat4x4<f32>,
-    // xyz: the sample's position (w = 1)
-    position: vec4<f32>,
-    // x: near, y: far (view distances), z: 1 / (far - near)
-    depth_range: vec4<f32>,
-    // x: weight of the segment before the sample, y: of the segment after it (0 where
-    // there is none); z: world size of one texel per unit of view distance; w: tan of half
-    // the (square, symmetric) perspective view's field of view
-    weights: vec4<f32>,
+uniform_struct! {
+    /// One light sample's view, as the `LightSamples` uniform holds it (matrices
+    /// column-major). `LIGHT_SAMPLES_WGSL` declares it and the uniform at
+    /// `@group(0) @binding(3)` of steps with [`Step::light_samples`]: one per light sample,
+    /// [`MAX_LIGHT_SAMPLES`] of them (unused ones zero).
+    struct "SampleView" => SampleViewUniform;
+    wgsl: LIGHT_SAMPLES_WGSL, then: "struct LightSamples {\n    views: array<SampleView, 16>,\n}\n";
+    fields: SAMPLE_VIEW_FIELDS, size: SAMPLE_VIEW_SIZE;
+    /// world -> this sample's light clip space
+    view_proj: Mat4,
+    /// world -> this sample's light view space (looking down -z)
+    view: Mat4,
+    /// xyz: the sample's position (w = 1)
+    position: Vec4,
+    /// x: near, y: far (view distances), z: 1 / (far - near)
+    depth_range: Vec4,
+    /// x: weight of the segment before the sample, y: of the segment after it (0 where
+    /// there is none); z: world size of one texel per unit of view distance; w: tan of half
+    /// the (square, symmetric) perspective view's field of view
+    weights: Vec4,
 }
-struct LightSamples {
-    views: array<SampleView, 16>,
-}
-";
 
-/// Bytes of one `SampleView` of [`LIGHT_SAMPLES_WGSL`].
-pub const SAMPLE_VIEW_SIZE: u32 = 176;
-/// Bytes of the `LightSamples` uniform.
+/// Bytes of the `LightSamples` uniform ([`MAX_LIGHT_SAMPLES`] views; the array length in
+/// [`LIGHT_SAMPLES_WGSL`] is checked against it by the layout test).
 pub const LIGHT_SAMPLES_SIZE: u32 = SAMPLE_VIEW_SIZE * MAX_LIGHT_SAMPLES;
-
-/// One light sample's view, as the `LightSamples` uniform holds it (matrices column-major).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SampleViewUniform {
-    pub view_proj: [f32; 16],
-    pub view: [f32; 16],
-    pub position: [f32; 4],
-    pub depth_range: [f32; 4],
-    pub weights: [f32; 4],
-}
 
 impl SampleViewUniform {
     /// The bytes of `views` as the `LightSamples` uniform ([`LIGHT_SAMPLES_SIZE`] bytes;
     /// views past [`MAX_LIGHT_SAMPLES`] are dropped, missing ones zero).
-    pub fn to_bytes(views: &[SampleViewUniform]) -> Vec<u8> {
+    pub fn light_samples_bytes(views: &[SampleViewUniform]) -> Vec<u8> {
         let mut out = Vec::with_capacity(LIGHT_SAMPLES_SIZE as usize);
         for k in 0..MAX_LIGHT_SAMPLES as usize {
-            let v = views.get(k).copied().unwrap_or_default();
-            for x in v
-                .view_proj
-                .iter()
-                .chain(&v.view)
-                .chain(&v.position)
-                .chain(&v.depth_range)
-                .chain(&v.weights)
-            {
-                out.extend_from_slice(&x.to_le_bytes());
-            }
+            out.extend(views.get(k).copied().unwrap_or_default().to_bytes());
         }
         out
     }
@@ -331,9 +334,6 @@ pub const GBUFFER: [Format; 3] = [Format::Rgba32Float, Format::Rg32Float, Format
 /// The four camera outputs of a Shade pass, in the order of [`Draw::SceneFromCamera`]'s
 /// targets and [`Draw::ComputePixels`]'s bindings.
 pub const CAMERA_OUTPUTS: [Format; 4] = [Format::R32Float, Format::Rgba8Unorm, Format::Rgba32Float, Format::Rgba16Float];
-
-/// Size in bytes of [`FRAME_WGSL`]'s `Frame`.
-pub const FRAME_SIZE: u32 = frame_size();
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -295,43 +295,112 @@ impl SceneInputs {
 
 #[cfg(test)]
 mod tests {
-    use crate::graph::{FRAME_FIELDS, FRAME_SIZE, FRAME_WGSL, FrameUniform, frame_offset};
+    use crate::graph::{
+        FRAME_FIELDS, FRAME_SIZE, FRAME_WGSL, FrameField, FrameUniform, LIGHT_SAMPLES_SIZE, LIGHT_SAMPLES_WGSL, MAX_LIGHT_SAMPLES,
+        SAMPLE_VIEW_FIELDS, SAMPLE_VIEW_SIZE, SampleViewUniform, field_offset, frame_offset,
+    };
 
-    /// naga's layout of the WGSL `Frame` (name, offset, size per member; struct size).
-    fn naga_layout() -> (Vec<(String, u32, u32)>, u32) {
-        let module = naga::front::wgsl::parse_str(FRAME_WGSL).unwrap_or_else(|e| panic!("{}", e.emit_to_string(FRAME_WGSL)));
+    /// naga's layout of struct `name` in `wgsl` (name, offset, size per member; struct
+    /// size), and the module and its layouter for further questions.
+    fn naga_layout(wgsl: &str, name: &str) -> (Vec<(String, u32, u32)>, u32, naga::Module, naga::proc::Layouter) {
+        let module = naga::front::wgsl::parse_str(wgsl).unwrap_or_else(|e| panic!("{}", e.emit_to_string(wgsl)));
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).unwrap();
         let (handle, ty) = module
             .types
             .iter()
-            .find(|(_, t)| t.name.as_deref() == Some("Frame"))
-            .expect("FRAME_WGSL declares `Frame`");
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("the WGSL declares `{name}`"));
         let naga::TypeInner::Struct { members, span } = &ty.inner else {
-            panic!("`Frame` is not a struct")
+            panic!("`{name}` is not a struct")
         };
         assert_eq!(layouter[handle].size, *span);
         let members = members
             .iter()
             .map(|m| (m.name.clone().unwrap_or_default(), m.offset, layouter[m.ty].size))
             .collect();
-        (members, *span)
+        let span = *span;
+        (members, span, module, layouter)
+    }
+
+    /// The field table, the Rust struct and the WGSL declaration of one uniform struct
+    /// agree with naga's layout of the WGSL.
+    fn agrees(wgsl: &str, name: &str, fields: &[FrameField], size: u32, rust: &[usize], rust_size: usize) {
+        let (members, span, ..) = naga_layout(wgsl, name);
+        assert_eq!(members.len(), fields.len(), "{name}");
+        for (i, (f, (member, offset, bytes))) in fields.iter().zip(&members).enumerate() {
+            assert_eq!(f.name, member, "{name}: field {i}");
+            assert_eq!(field_offset(fields, i), *offset, "{name}: offset of `{member}`");
+            assert_eq!(f.ty.size(), *bytes, "{name}: size of `{member}`");
+            assert_eq!(rust[i], *offset as usize, "{name}: offset of the Rust field `{member}`");
+            assert!(wgsl.contains(&format!("    {member}: {},\n", f.ty.wgsl())));
+        }
+        assert_eq!((span, rust_size), (size, size as usize), "{name}: size");
     }
 
     #[test]
     fn frame_layout_is_nagas() {
-        let (members, span) = naga_layout();
-        assert_eq!(members.len(), FRAME_FIELDS.len());
-        let rust = FrameUniform::rust_offsets();
-        for (i, (f, (name, offset, size))) in FRAME_FIELDS.iter().zip(&members).enumerate() {
-            assert_eq!(f.name, name, "field {i}");
-            assert_eq!(frame_offset(i), *offset, "offset of `{name}`");
-            assert_eq!(f.ty.size(), *size, "size of `{name}`");
-            assert_eq!(rust[i], *offset as usize, "offset of the Rust field `{name}`");
-            assert!(FRAME_WGSL.contains(&format!("    {name}: {},\n", f.ty.wgsl())));
+        agrees(
+            FRAME_WGSL,
+            "Frame",
+            FRAME_FIELDS,
+            FRAME_SIZE,
+            &FrameUniform::rust_offsets(),
+            std::mem::size_of::<FrameUniform>(),
+        );
+        assert_eq!(frame_offset(3), field_offset(FRAME_FIELDS, 3));
+    }
+
+    /// `LightSamples`: each `SampleView` as naga lays it out, the array as long as
+    /// `MAX_LIGHT_SAMPLES` with naga's stride, and the bytes at those offsets.
+    #[test]
+    fn light_samples_layout_is_nagas() {
+        agrees(
+            LIGHT_SAMPLES_WGSL,
+            "SampleView",
+            SAMPLE_VIEW_FIELDS,
+            SAMPLE_VIEW_SIZE,
+            &SampleViewUniform::rust_offsets(),
+            std::mem::size_of::<SampleViewUniform>(),
+        );
+        let (members, span, module, layouter) = naga_layout(LIGHT_SAMPLES_WGSL, "LightSamples");
+        assert_eq!(span, LIGHT_SAMPLES_SIZE);
+        assert_eq!(members.len(), 1);
+        let array = module
+            .types
+            .iter()
+            .find_map(|(h, t)| {
+                let naga::TypeInner::Array { size, stride, .. } = t.inner else {
+                    return None;
+                };
+                Some((h, size, stride))
+            })
+            .expect("an array of views");
+        assert_eq!(
+            array.1,
+            naga::ArraySize::Constant(std::num::NonZeroU32::new(MAX_LIGHT_SAMPLES).unwrap())
+        );
+        assert_eq!(array.2, SAMPLE_VIEW_SIZE);
+        assert_eq!(layouter[array.0].size, LIGHT_SAMPLES_SIZE);
+        // view k's weights at k * stride + the field's offset
+        let views: Vec<SampleViewUniform> = (0..3)
+            .map(|k| SampleViewUniform {
+                weights: [k as f32 + 1.0, 0.0, 0.0, 0.0],
+                ..Default::default()
+            })
+            .collect();
+        let bytes = SampleViewUniform::light_samples_bytes(&views);
+        assert_eq!(bytes.len(), LIGHT_SAMPLES_SIZE as usize);
+        let weights = field_offset(SAMPLE_VIEW_FIELDS, 4) as usize;
+        for k in 0..3 {
+            let at = k * SAMPLE_VIEW_SIZE as usize + weights;
+            assert_eq!(f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()), k as f32 + 1.0);
         }
-        assert_eq!(span, FRAME_SIZE);
-        assert_eq!(std::mem::size_of::<FrameUniform>(), FRAME_SIZE as usize);
+        assert_eq!(
+            bytes.chunks_exact(4).filter(|w| w.iter().any(|b| *b != 0)).count(),
+            3,
+            "only the three weights"
+        );
     }
 
     #[test]
@@ -342,7 +411,7 @@ mod tests {
         let bytes = f.to_bytes();
         assert_eq!(bytes.len(), FRAME_SIZE as usize);
         let at = |i: usize| f32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
-        let (members, _) = naga_layout();
+        let (members, ..) = naga_layout(FRAME_WGSL, "Frame");
         let offset = |name: &str| members.iter().find(|m| m.0 == name).unwrap().1 as usize;
         assert_eq!(at(offset("light_view") + 4), 2.0);
         assert_eq!(at(offset("texel_world") + 12), 3.0);

@@ -158,7 +158,7 @@ impl Resources {
                     .collect(),
                 light_samples: make.uniform_sized(
                     "light samples",
-                    &SampleViewUniform::to_bytes(&s.light_samples()),
+                    &SampleViewUniform::light_samples_bytes(&s.light_samples()),
                     LIGHT_SAMPLES_SIZE as usize,
                 ),
                 samples: s.samples.len() as u32,

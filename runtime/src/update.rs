@@ -64,7 +64,8 @@ impl<'a> FrameWriter<'a> {
             self.queue.write_buffer(buf, 0, &f.to_bytes());
         }
         if let Some(views) = u.light_samples.take() {
-            self.queue.write_buffer(&res.light_samples, 0, &SampleViewUniform::to_bytes(&views));
+            self.queue
+                .write_buffer(&res.light_samples, 0, &SampleViewUniform::light_samples_bytes(&views));
         }
     }
 
