@@ -5,82 +5,16 @@
 //! lower, the arena's folding, analyse and codegen read these descriptors and do not
 //! match on the function themselves.
 
-use crate::front::ast::{ConstValue, Primitive, ScalarTy};
+/// The expression language's types live beside the syntax tree that names them.
+pub use crate::front::ast::Ty;
+use crate::front::ast::{ConstValue, Primitive};
 use crate::interval::Interval;
 use std::f64::consts::PI;
 use std::fmt;
 
-/// Types of the expression language. Integer literals are abstract until context fixes them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Ty {
-    F32,
-    I32,
-    /// Unsigned 32-bit integers, modulo 2^32 (hashes, bit patterns): never abstract, never
-    /// implied; written `7u`, `0x9e3779b9u` or converted with `u32(x)`.
-    U32,
-    Bool,
-    /// `vecN<f32>`, N in 2..=4.
-    Vec(u8),
-    AbstractInt,
-}
-
-impl Ty {
-    pub fn from_scalar(s: ScalarTy) -> Ty {
-        match s {
-            ScalarTy::F32 => Ty::F32,
-            ScalarTy::I32 => Ty::I32,
-            ScalarTy::Bool => Ty::Bool,
-        }
-    }
-
-    /// The concrete type an abstract type becomes when nothing else decides it.
-    pub fn concrete(self) -> Ty {
-        if self == Ty::AbstractInt { Ty::I32 } else { self }
-    }
-
-    pub fn is_float_like(self) -> bool {
-        matches!(self, Ty::F32 | Ty::Vec(_) | Ty::AbstractInt)
-    }
-
-    /// f32, i32 and vectors (what negation, `abs` and `sign` take); u32 is not among them.
-    pub fn is_numeric(self) -> bool {
-        matches!(self, Ty::F32 | Ty::I32 | Ty::Vec(_) | Ty::AbstractInt)
-    }
-
-    /// What arithmetic (`+ - * / %`), comparisons, `min`/`max`/`clamp` and series take:
-    /// the numeric types and u32.
-    pub fn is_arithmetic(self) -> bool {
-        self.is_numeric() || self == Ty::U32
-    }
-
-    /// i32, u32 or an abstract integer: what the bit operators take.
-    pub fn is_integer(self) -> bool {
-        matches!(self, Ty::I32 | Ty::U32 | Ty::AbstractInt)
-    }
-
-    pub fn wgsl(self) -> &'static str {
-        match self.concrete() {
-            Ty::F32 => "f32",
-            Ty::I32 => "i32",
-            Ty::U32 => "u32",
-            Ty::Bool => "bool",
-            Ty::Vec(2) => "vec2<f32>",
-            Ty::Vec(3) => "vec3<f32>",
-            Ty::Vec(_) => "vec4<f32>",
-            // `concrete` leaves no abstract type
-            Ty::AbstractInt => "i32",
-        }
-    }
-}
-
-impl fmt::Display for Ty {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Ty::AbstractInt => write!(f, "integer"),
-            t @ (Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::Vec(_)) => write!(f, "{}", t.wgsl()),
-        }
-    }
-}
+/// The name of the per-sample lookup `at_sample(k, e)` (a Shade pass evaluating `e` in
+/// light sample `k`'s view), which check types and lower unrolls.
+pub const AT_SAMPLE: &str = "at_sample";
 
 /// Join two operand types as WGSL does for abstract integers; `None` when they differ.
 pub fn unify(a: Ty, b: Ty) -> Option<Ty> {
@@ -686,6 +620,17 @@ impl fmt::Debug for Builtin {
 }
 
 impl Func {
+    /// The WGSL of a call of this function on `args` (WGSL expressions), as its
+    /// descriptor says: the same name, another callee, or an expression of its own.
+    pub fn wgsl_call(self, args: &[String]) -> String {
+        let d = self.desc();
+        match d.wgsl {
+            Wgsl::Same => format!("{}({})", d.name, args.join(", ")),
+            Wgsl::Callee(callee) => format!("{callee}({})", args.join(", ")),
+            Wgsl::Expr(write) => write(args),
+        }
+    }
+
     pub const ALL: [Func; 41] = [
         Func::Abs,
         Func::Exp,
@@ -1907,11 +1852,7 @@ mod tests {
             for sig in signatures(f) {
                 let ty = f.result(&sig).unwrap();
                 let args: Vec<String> = sig.iter().map(|t| arg(*t)).collect();
-                body.push_str(&format!(
-                    "    let call{k}: {} = {};\n",
-                    ty.wgsl(),
-                    crate::back::wgsl::call(f, &args)
-                ));
+                body.push_str(&format!("    let call{k}: {} = {};\n", ty.wgsl(), f.wgsl_call(&args)));
                 k += 1;
             }
         }

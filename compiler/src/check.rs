@@ -4,14 +4,13 @@
 //! receiver-side inputs only, basis functions map-side inputs only); parameter values lie
 //! in their ranges; filter sizes are odd and within bounds.
 
-use crate::builtins::{Func, Input, SampleFn, Side, Ty, constant, unify};
+use crate::builtins::{AT_SAMPLE, Func, Input, SampleFn, Side, Ty, constant, unify};
 use crate::consteval::{self, IntOp, IntSpans, MAX_SERIES, NotConst};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::*;
 use crate::front::expr::{BinOp, Expr, ExprKind, Literal, UnOp};
 use crate::front::parse::closest;
 use crate::ir::IrKernel;
-use crate::lower::AT_SAMPLE;
 use crate::resolve::{Item, Symbols};
 use crate::span::Span;
 use crate::types::{Resolved, Types, comp_index};

@@ -1,4 +1,4 @@
-//! A compiled technique evaluated on the CPU in f64 (issue 17, `sshc verify`), with the
+//! A compiled technique evaluated on the CPU in f64 (`sshc verify`), with the
 //! interval about each value that the GPU's f32 arithmetic, its storage rounding, its
 //! filtering hardware and its built-in functions may move it by.
 //!
@@ -1538,6 +1538,16 @@ mod tests {
         }
         let ev = Evaluation::new(p, &given, frame(n), Rounding::Exact, Model::Gpu).unwrap();
         let v = ev.visibility(&receiver(0.5), &mut Scratch::default());
-        assert!((0.0..=1.0).contains(&v.value) && v.lo <= v.value && v.value <= v.hi, "{v:?}");
+        // the depth map (all 1) lights the receiver at 0.5, so the visibility is the
+        // penumbra map's intensity as given: 0.25, exact at its F16 (`select(0, p, lit)`,
+        // techniques/penumbra-maps.ron)
+        assert_eq!(v.value, 0.25, "{v:?}");
+        // a depth map of 0.25 shadows it: the umbra, whatever the penumbra map holds
+        let mut umbra = Given::depth(&p, vec![vec![0.25; (n * n) as usize]]);
+        for s in &geometry {
+            umbra.insert(s.resource, s.channel, vec![vec![s.decode(0.25); (n * n) as usize]]);
+        }
+        let ev = Evaluation::new(p, &umbra, frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        assert_eq!(ev.visibility(&receiver(0.5), &mut Scratch::default()).value, 0.0);
     }
 }

@@ -951,7 +951,7 @@ pub struct Ir {
     pub precision_choices: Vec<String>,
 }
 
-/// A compilation specialised for a scene's facts (issue 16).
+/// A compilation specialised for a scene's facts.
 #[derive(Clone, Debug)]
 pub struct Specialised {
     pub facts: sshc_graph::SceneFacts,

@@ -108,7 +108,7 @@ pub struct CompileOptions {
     pub dump_after: Option<DumpPhase>,
     /// Where long generated bodies are split into functions (`back::parts`).
     pub split: back::parts::Split,
-    /// `--scene`: specialise for the scene's facts (issue 16): refuse a scene light the
+    /// `--scene`: specialise for the scene's facts: refuse a scene light the
     /// technique's `light:` list does not admit, fold the light inputs that are 0 for it.
     pub scene: Option<sshc_graph::SceneFacts>,
     /// Estimate what storage rounding does to the visibility and warn above

@@ -3,7 +3,7 @@
 //! `constant + sum_i a_i(d) * lookup(B_i)` (Annen eq. 5.8), and passes put in execution
 //! order. Expressions go into the hash-consed arena, which folds constants as it goes.
 
-use crate::builtins::{Func, SampleFn, Ty};
+use crate::builtins::{AT_SAMPLE, Func, SampleFn, Ty};
 use crate::check::Checked;
 use crate::consteval::{self, IntOp, IntSpans, MAX_SERIES};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
@@ -14,9 +14,6 @@ use crate::ir::*;
 use crate::resolve::{Item, Symbols};
 use crate::span::Span;
 use crate::types::{Resolved, Types, comp_index};
-
-/// `at_sample(k, body)`: `body` with the receiver seen from light sample `k`.
-pub const AT_SAMPLE: &str = "at_sample";
 
 /// Lowering stops past this many distinct expression nodes.
 pub const MAX_NODES: usize = 1 << 20;

@@ -1,4 +1,4 @@
-//! What storage rounding does to the visibility (issue 17): a first-order estimate of the
+//! What storage rounding does to the visibility: a first-order estimate of the
 //! visibility error that each stored channel's precision causes, per channel and for all
 //! of them, reported by `explain` and warned about at compile time above
 //! [`WARN_ABOVE`].

@@ -1,4 +1,4 @@
-//! Constant arrays (issue 17): elements known at compile time, indexed by integers known
+//! Constant arrays: elements known at compile time, indexed by integers known
 //! at compile time (literals and series variables); what they compile to, and what is
 //! refused, at file:line:column.
 

@@ -1,4 +1,4 @@
-//! Precisions left to the compiler (`precision: Auto`, `--precision NAME=auto`; issue 16):
+//! Precisions left to the compiler (`precision: Auto`, `--precision NAME=auto`):
 //! chosen from the channel's range, which a compilation specialised for a scene takes from
 //! the scene's depths (`SceneFacts::depth_floor`).
 

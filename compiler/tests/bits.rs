@@ -1,4 +1,4 @@
-//! `u32` and the bit operators (issue 17): literals, conversions, wrapping arithmetic and
+//! `u32` and the bit operators: literals, conversions, wrapping arithmetic and
 //! shifts, folded at compile time with the GPU's semantics and emitted as WGSL otherwise;
 //! the mistakes are fixtures in `errors/` (shift counts, negative u32s, negation, bits of
 //! a float, literals out of range). The GPU's own results are checked in

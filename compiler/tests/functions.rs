@@ -1,4 +1,4 @@
-//! Functions declared in a technique (issue 17): typed parameters, inlined at every call,
+//! Functions declared in a technique: typed parameters, inlined at every call,
 //! in the caller's context; recursion, wrong calls and runaway inlining refused with
 //! diagnostics at file:line:column.
 
@@ -195,7 +195,7 @@ fn runaway_inlining_is_refused_at_once() {
     assert!(t.elapsed() < Duration::from_secs(2), "{:?}", t.elapsed());
 }
 
-/// `neighbour(ch, dx, dy)` (issue 17): map side only, offsets known at compile time and at
+/// `neighbour(ch, dx, dy)`: map side only, offsets known at compile time and at
 /// most 31 texels away; each offset a texel load of its own.
 #[test]
 fn neighbourhood_reads_are_map_side_and_bounded() {

@@ -1,4 +1,4 @@
-//! Limits of the compiler against hostile and extreme techniques (issue 11): every one is
+//! Limits of the compiler against hostile and extreme techniques: every one is
 //! refused with a diagnostic at file:line:column, within a stated time bound, never a stack
 //! overflow or a hang.
 

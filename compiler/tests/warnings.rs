@@ -1,4 +1,4 @@
-//! Precision warnings (issue 17): every `warnings/*.ron` compiles, and its rendered
+//! Precision warnings: every `warnings/*.ron` compiles, and its rendered
 //! warnings must match `warnings/*.stderr` (empty: none). The storage-rounding estimate
 //! (`sshc::rounding`) warns for VSM and MSM moments at Unorm8, the render-target check
 //! for Unorm16 channels; EVSM at F32 and at F16 within its exponent limits gives none.

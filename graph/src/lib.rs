@@ -18,6 +18,8 @@
 //! - Scene draws use one vertex buffer: `@location(0)` position and `@location(1)` normal,
 //!   `vec3<f32>` each, interleaved (24-byte stride), in world space.
 
+#![deny(clippy::wildcard_enum_match_arm)]
+
 pub mod traffic;
 
 use serde::{Deserialize, Serialize};
@@ -366,7 +368,7 @@ pub struct PassGraph {
     pub specialised: Option<SceneFacts>,
 }
 
-/// What a graph specialised for a scene assumes of it (issue 16): the kind of its light,
+/// What a graph specialised for a scene assumes of it: the kind of its light,
 /// from which the compiler folds the light inputs that are 0 for every light of that kind
 /// ([`SceneFacts::zero_inputs`]), and the least depth its casters reach in the light's
 /// view, from which it narrows the range of what the Depth pass writes (and so the
@@ -549,6 +551,18 @@ pub enum ParamType {
     F32,
     I32,
     Bool,
+}
+
+impl ParamType {
+    /// A value's 4 bytes in the `Params` uniform (little-endian): an f32, an i32 (truncated
+    /// towards zero), or a bool as the u32 0 or 1 (any non-zero value is true).
+    pub fn bytes(self, v: f64) -> [u8; 4] {
+        match self {
+            ParamType::F32 => (v as f32).to_le_bytes(),
+            ParamType::I32 => (v as i32).to_le_bytes(),
+            ParamType::Bool => u32::from(v != 0.0).to_le_bytes(),
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -994,6 +1008,21 @@ impl fmt::Display for GraphError {
 impl std::error::Error for GraphError {}
 
 impl PassGraph {
+    /// The `Params` uniform with every runtime param at its default value (`params_size`
+    /// bytes, each param at its offset, padding zero): what an executor binds first.
+    pub fn default_params(&self) -> Vec<u8> {
+        let mut bytes = vec![0u8; self.params_size as usize];
+        for p in &self.params {
+            if let Some(off) = p.offset {
+                let o = off as usize;
+                if o + 4 <= bytes.len() {
+                    bytes[o..o + 4].copy_from_slice(&p.ty.bytes(p.value));
+                }
+            }
+        }
+        bytes
+    }
+
     /// Serialise as pretty RON.
     pub fn to_ron(&self) -> String {
         let config = ron::ser::PrettyConfig::new().depth_limit(8).indentor("  ".to_string());

@@ -1,5 +1,5 @@
 //! The memory traffic a pass cannot avoid, and the time it implies at a bandwidth: the
-//! cost model beside the operation counts (issue 15).
+//! cost model beside the operation counts.
 //!
 //! A pass's *compulsory* bytes are what any schedule of it must move between memory and
 //! the GPU, with a perfect cache: every texel it writes once, at its format, and every
@@ -98,7 +98,16 @@ pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffi
             t.read += GBUFFER_BYTES_PER_PIXEL * sizes.texels(Extent::Camera);
             t.written += CAMERA_BYTES_PER_PIXEL * sizes.texels(Extent::Camera);
         }
-        _ => {}
+        // their targets' bytes (above) and reads (below) are all they move
+        Draw::FullScreen
+        | Draw::MipLevels
+        | Draw::ComputeRows
+        | Draw::ComputeColumns
+        | Draw::ComputeTexels
+        | Draw::ComputeMipLevels
+        | Draw::Silhouettes { .. }
+        | Draw::Primitives { .. }
+        | Draw::Discontinuities { .. } => {}
     }
     if kind == PassKind::Shade || matches!(s.draw, Draw::SceneFromCamera | Draw::Silhouettes { .. } | Draw::Primitives { .. }) {
         return t;
@@ -120,7 +129,18 @@ pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffi
         let texels = match s.draw {
             // the neighbour's depth map: one layer of the per-sample block
             Draw::Discontinuities { .. } => sizes.texels(tex.extent),
-            _ => sizes.texels(tex.extent) * f64::from(layers),
+            Draw::SceneFromLight
+            | Draw::SceneFromCamera
+            | Draw::CameraGBuffer
+            | Draw::ComputePixels
+            | Draw::FullScreen
+            | Draw::MipLevels
+            | Draw::ComputeRows
+            | Draw::ComputeColumns
+            | Draw::ComputeTexels
+            | Draw::ComputeMipLevels
+            | Draw::Silhouettes { .. }
+            | Draw::Primitives { .. } => sizes.texels(tex.extent) * f64::from(layers),
         };
         t.read += f64::from(tex.format.bytes_per_texel()) * texels * level;
     }

@@ -95,7 +95,7 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
 }
 
 /// `n` sample views of `light` in `scene`, in order along the light, and whether they
-/// close a loop: [`sshc_runtime::light::sample_views`] (issue 14's conventions, after
+/// close a loop: [`sshc_runtime::light::sample_views`] (the conventions of
 /// Heidrich et al. 2000, sections 3 and 4), each view the one a point light at the sample
 /// would get ([`Scene::light_view`] of `Light::Point`, so the scene's `shadow_fit` holds).
 ///

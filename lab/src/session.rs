@@ -299,7 +299,7 @@ pub fn compile_executor(gpu: &Gpu, path: &Path, source: &str, opts: &sshc::Compi
     Executor::new(gpu, c.graph, c.shaders).map_err(rt)
 }
 
-/// `scene` with its light `i` alone (issue 16: each light of a scene has its own light
+/// `scene` with its light `i` alone (each light of a scene has its own light
 /// views, passes and truth).
 pub fn single_light(scene: &Scene, i: usize) -> Scene {
     let mut s = scene.clone();
@@ -333,7 +333,7 @@ pub fn scene_facts(path: &Path, scene: &Scene) -> Option<sshc::SceneFacts> {
 }
 
 /// Compile options specialised for `scene` where the technique at `input` admits its light
-/// (issue 16), else generic with a warning on stderr naming both files; generic for a
+///, else generic with a warning on stderr naming both files; generic for a
 /// compiled graph (which carries its own facts, checked when bound) or with `generic`.
 pub fn specialise(opts: &mut sshc::CompileOptions, input: &Path, scene_path: &Path, scene: &Scene, generic: bool) -> Result<(), String> {
     if generic || input.to_string_lossy().ends_with(".graph.ron") {

@@ -1,4 +1,4 @@
-//! `sshc verify` (issue 17): a compiled technique run on the GPU over the inputs of the
+//! `sshc verify`: a compiled technique run on the GPU over the inputs of the
 //! agreement tests and compared, receiver by receiver, with the compiler's f64 evaluation
 //! of the same technique on the CPU (`sshc::interp`), within that evaluation's allowance.
 //!

@@ -525,7 +525,7 @@ fn the_gpu_bench_script_reports_every_technique() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// Scene specialisation on the command line (issue 16): `compile --scene` records the
+/// Scene specialisation on the command line: `compile --scene` records the
 /// facts and refuses a light the technique does not admit, naming both files; `explain
 /// --scene` says what folded and compares the work with the generic build; `render`
 /// specialises by default where admitted, warns and stays generic where not, and a
@@ -572,7 +572,7 @@ fn scene_specialisation_is_recorded_explained_and_enforced() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// Several lights (issue 16): `render` gives each light its own passes and textures in one
+/// Several lights: `render` gives each light its own passes and textures in one
 /// frame and combines them on the GPU. Channel i of the visibility file is, bit for bit, a
 /// render of the scene with light i alone; the image is the mean of the lights' images
 /// within one 8-bit quantum (the mean of three 8-bit values lies between two codes, and the
@@ -738,7 +738,7 @@ fn each_light_of_a_scene_renders_with_its_own_passes_and_compares_alone() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// A precision left open (`Auto`) is chosen from the scene's depths (issue 16): the scaled
+/// A precision left open (`Auto`) is chosen from the scene's depths: the scaled
 /// ESM of compiler/tests/fixtures/esm-auto.ron stores its basis at F16 on the contact scene
 /// (its casters start at normalised depth 0.28) and at F32 for any scene. The two builds'
 /// visibilities differ by the F16 storage only: Vulkan lets a conversion to a 16-bit float
@@ -810,7 +810,7 @@ fn a_precision_chosen_from_the_scene_renders_within_its_rounding_and_is_checked(
 }
 
 /// `sshc compile` warns where storage rounding can move the visibility by more than 0.05
-/// (issue 17: VSM's moments at Unorm8), not at the technique's own F32; `sshc explain`
+/// (VSM's moments at Unorm8), not at the technique's own F32; `sshc explain`
 /// prints the estimate per channel and precision.
 #[test]
 fn compile_warns_about_rounding_and_explain_prints_the_estimate() {

@@ -1,4 +1,4 @@
-//! Numerical robustness of the ground truth (issue 11, "Scene numerics"): the ray origin
+//! Numerical robustness of the ground truth ("Scene numerics"): the ray origin
 //! under a grazing sun, checked against an exact answer computed independently in f64.
 //!
 //! The scene: a floor at y = 0 and a box ("curb") standing on it, lit by a distant disk

@@ -1,5 +1,5 @@
-//! The probes of issue 11 ("hostile and extreme inputs") that crashed, hung, were accepted
-//! or were answered unclearly, run as the issue ran them: the actual input, through the
+//! The probes of hostile and extreme inputs that crashed, hung, were accepted
+//! or were answered unclearly, run as they were first run: the actual input, through the
 //! `sshc` binary, on lavapipe where a GPU is needed. docs/reliability.md ("Probe audit")
 //! lists every probe with the test that covers it; these are the end-to-end ones.
 //!

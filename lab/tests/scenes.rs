@@ -604,7 +604,7 @@ fn tiny_scales_and_huge_camera_distances_say_what_is_wrong() {
     assert!(ok.camera_view_proj().is_finite());
 }
 
-/// The `View` fit (issue 16) holds every point the camera sees inside the light's view,
+/// The `View` fit holds every point the camera sees inside the light's view,
 /// laterally and in depth, on every bundled scene, with texels at the receivers no larger
 /// than the whole-scene fit's; a caster over the visible receivers lies within its depth
 /// range even when all its corners lie outside the footprint (the edge scene's half-plane).

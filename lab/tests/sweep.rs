@@ -214,7 +214,7 @@ fn a_sweep_over_the_shadow_on_the_ground_reports_it() {
     let _ = std::fs::remove_dir_all(&bad);
 }
 
-/// A scene of several lights (issue 16) is swept one light at a time: each light gets its
+/// A scene of several lights is swept one light at a time: each light gets its
 /// own rows, truth and figures, named `SCENE light K`.
 #[test]
 fn a_sweep_over_several_lights_reports_each_light() {

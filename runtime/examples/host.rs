@@ -1,4 +1,4 @@
-//! A host renderer with sshc's shadows in it (issue 29; docs/embedding.md walks through it).
+//! A host renderer with sshc's shadows in it (docs/embedding.md walks through it).
 //!
 //! The host opens its own wgpu device, uploads the bundled bunny and a floor as its own
 //! indexed meshes (the bunny instanced nine times, the middle one turning), lets sshc

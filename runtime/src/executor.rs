@@ -8,13 +8,15 @@ use crate::geometry::{Geometry, GeometryBuffers};
 use crate::graph::{self, Format, PassGraph, TextureDecl};
 use crate::image::{Image, read_back, read_table};
 use crate::lights::{Combine, MAX_LIGHTS};
+use crate::pipeline::mip_count;
 use crate::pixels::{HostPixels, PixelsStep};
 use crate::receivers::Unshadowed;
 use crate::requirements::Requirements;
-use crate::resources::{Resources, f32_bytes, mip_count};
-use crate::steps::{self, Group0, PassNode, Usages};
+use crate::resources::{Resources, f32_bytes};
+use crate::steps::{self, Group0, PassNode};
 use crate::timing::{FrameTimes, Timestamps};
 use crate::update::{FrameWriter, LightUniforms};
+use crate::usages::Usages;
 use crate::validate::validate_wgsl;
 use std::collections::HashMap;
 use std::path::Path;
@@ -274,7 +276,7 @@ impl Executor {
                 )));
             }
         }
-        let params = default_params(&graph);
+        let params = graph.default_params();
         let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("sshc linear clamp"),
             address_mode_u: wgpu::AddressMode::ClampToEdge,
@@ -342,7 +344,7 @@ impl Executor {
                 "param `{name}` = {value} is outside its range [{lo}, {hi}]"
             )));
         }
-        let bytes = param_bytes(p.ty, value);
+        let bytes = p.ty.bytes(value);
         self.params[off as usize..off as usize + 4].copy_from_slice(&bytes);
         self.params_dirty = true;
         Ok(())
@@ -354,7 +356,7 @@ impl Executor {
         self.bind_lights(std::slice::from_ref(s))
     }
 
-    /// Bind a scene of several lights (issue 16): `lights[l]` is the scene with light `l`
+    /// Bind a scene of several lights: `lights[l]` is the scene with light `l`
     /// alone. Each light gets its own resources (its light-dependent textures, its camera
     /// outputs: memory grows linearly with the lights), every pass runs once per light in
     /// each frame, and a last compute step combines the lights' shaded colours (their mean)
@@ -1129,25 +1131,4 @@ fn caster_bounds(s: &SceneInputs) -> Option<[[f32; 3]; 2]> {
 
 fn first_camera(bound: &[Resources]) -> (u32, u32) {
     bound.first().map_or((0, 0), |b| b.camera_size)
-}
-
-fn param_bytes(ty: graph::ParamType, v: f64) -> [u8; 4] {
-    match ty {
-        graph::ParamType::F32 => (v as f32).to_le_bytes(),
-        graph::ParamType::I32 => (v as i32).to_le_bytes(),
-        graph::ParamType::Bool => ((v != 0.0) as u32).to_le_bytes(),
-    }
-}
-
-fn default_params(g: &PassGraph) -> Vec<u8> {
-    let mut bytes = vec![0u8; g.params_size as usize];
-    for p in &g.params {
-        if let Some(off) = p.offset {
-            let o = off as usize;
-            if o + 4 <= bytes.len() {
-                bytes[o..o + 4].copy_from_slice(&param_bytes(p.ty, p.value));
-            }
-        }
-    }
-    bytes
 }

@@ -29,6 +29,7 @@ mod resources;
 mod steps;
 mod timing;
 mod update;
+mod usages;
 mod validate;
 
 pub use sshc_graph as graph;

@@ -1,4 +1,4 @@
-//! Several lights in one frame (issue 16): the graph's passes run once per scene light,
+//! Several lights in one frame: the graph's passes run once per scene light,
 //! each light on its own resources (its shadow maps, its camera outputs), and then one
 //! compute step combines the lights' shaded images into the frame's colour and gathers
 //! their visibilities into one texel a pixel, channel `l` for light `l`.

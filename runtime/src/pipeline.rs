@@ -5,10 +5,44 @@
 //! depth state and the vertex input. [`StepPipeline::build`] reads nothing else, so two
 //! steps with equal keys can share one pipeline (the device caches them by key).
 
+use crate::graph::Format;
 use std::sync::Arc;
 
 /// The depth attachment format of scene draws.
 pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Number of levels of a full mip chain.
+pub fn mip_count(size: u32) -> u32 {
+    32 - size.max(1).leading_zeros()
+}
+
+/// The wgpu format of a texture; `None` for a summed-area table (a storage buffer).
+pub(crate) fn wgpu_format(f: Format) -> Option<wgpu::TextureFormat> {
+    use wgpu::TextureFormat as T;
+    Some(match f {
+        Format::R8Unorm => T::R8Unorm,
+        Format::Rg8Unorm => T::Rg8Unorm,
+        Format::Rgba8Unorm => T::Rgba8Unorm,
+        Format::R16Unorm => T::R16Unorm,
+        Format::Rg16Unorm => T::Rg16Unorm,
+        Format::Rgba16Unorm => T::Rgba16Unorm,
+        Format::R16Float => T::R16Float,
+        Format::Rg16Float => T::Rg16Float,
+        Format::Rgba16Float => T::Rgba16Float,
+        Format::R32Float => T::R32Float,
+        Format::Rg32Float => T::Rg32Float,
+        Format::Rgba32Float => T::Rgba32Float,
+        Format::SummedAreaU32 => return None,
+    })
+}
+
+/// The camera outputs of the Shade pass, in [`crate::executor::CameraOutput`] order.
+pub(crate) const CAMERA_FORMATS: [wgpu::TextureFormat; 4] = [
+    wgpu::TextureFormat::R32Float,
+    wgpu::TextureFormat::Rgba8Unorm,
+    wgpu::TextureFormat::Rgba32Float,
+    wgpu::TextureFormat::Rgba16Float,
+];
 
 /// Everything a pipeline is built from.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]

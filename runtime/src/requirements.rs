@@ -7,7 +7,7 @@
 use crate::device::Gpu;
 use crate::error::{Result, RuntimeError};
 use crate::graph::{self, Format, PassGraph};
-use crate::resources::{CAMERA_FORMATS, wgpu_format};
+use crate::pipeline::{CAMERA_FORMATS, wgpu_format};
 use crate::steps::{self, Dispatch, NodeKind, Targets};
 
 /// A device limit a graph can exceed.

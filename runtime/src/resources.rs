@@ -8,42 +8,9 @@ use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
 use crate::geometry::{EdgeBuffers, HostScene, SceneDraw};
 use crate::graph::{self, DRAW_ARGS_BYTES, FRAME_SIZE, Format, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
-use crate::pipeline::DEPTH_FORMAT;
-use crate::steps::Usages;
+use crate::pipeline::{CAMERA_FORMATS, DEPTH_FORMAT, mip_count, wgpu_format};
+use crate::usages::Usages;
 use std::collections::HashMap;
-
-/// Number of levels of a full mip chain.
-pub fn mip_count(size: u32) -> u32 {
-    32 - size.max(1).leading_zeros()
-}
-
-/// The wgpu format of a texture; `None` for a summed-area table (a storage buffer).
-pub(crate) fn wgpu_format(f: Format) -> Option<wgpu::TextureFormat> {
-    use wgpu::TextureFormat as T;
-    Some(match f {
-        Format::R8Unorm => T::R8Unorm,
-        Format::Rg8Unorm => T::Rg8Unorm,
-        Format::Rgba8Unorm => T::Rgba8Unorm,
-        Format::R16Unorm => T::R16Unorm,
-        Format::Rg16Unorm => T::Rg16Unorm,
-        Format::Rgba16Unorm => T::Rgba16Unorm,
-        Format::R16Float => T::R16Float,
-        Format::Rg16Float => T::Rg16Float,
-        Format::Rgba16Float => T::Rgba16Float,
-        Format::R32Float => T::R32Float,
-        Format::Rg32Float => T::Rg32Float,
-        Format::Rgba32Float => T::Rgba32Float,
-        Format::SummedAreaU32 => return None,
-    })
-}
-
-/// The camera outputs of the Shade pass, in [`crate::executor::CameraOutput`] order.
-pub(crate) const CAMERA_FORMATS: [wgpu::TextureFormat; 4] = [
-    wgpu::TextureFormat::R32Float,
-    wgpu::TextureFormat::Rgba8Unorm,
-    wgpu::TextureFormat::Rgba32Float,
-    wgpu::TextureFormat::Rgba16Float,
-];
 
 /// Bytes of a summed-area table at a shadow-map size: one `vec4<u32>` per texel and layer.
 fn table_bytes(t: &TextureDecl, shadow_size: u32) -> u64 {

@@ -1,4 +1,4 @@
-//! Two of issue 11's probes at the runtime's own interface (lab/tests/probes.rs runs them
+//! Two probes of hostile and extreme inputs at the runtime's own interface (lab/tests/probes.rs runs them
 //! through `sshc`): a graph file with a syntax error is named with its line and column, and
 //! the shaded colour is refused with the visibility it is computed from (a plain render
 //! read only the colour, so a NaN visibility passed on into the PNG and exited 0).

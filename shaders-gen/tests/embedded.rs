@@ -2,14 +2,14 @@
 //! technique and options, and `Params` writes the uniform the runtime would write from the
 //! graph's defaults. (No GPU: `gpu.rs` renders.)
 
-use sshc_graph::{ParamType, PassGraph};
+use sshc_graph::PassGraph;
 
 sshc_shaders_gen::technique!(mod hard = "../techniques/hard.ron");
 sshc_shaders_gen::technique!(mod pcf = "../techniques/pcf.ron");
 sshc_shaders_gen::technique!(mod vsm = "../techniques/vsm.ron");
 sshc_shaders_gen::technique!(mod esm = "../techniques/esm.ron");
 sshc_shaders_gen::technique!(mod csm = "../techniques/csm.ron");
-// functions of the technique and four moments (issue 17)
+// functions of the technique and four moments
 sshc_shaders_gen::technique!(mod evsm = "../techniques/evsm.ron");
 sshc_shaders_gen::technique!(mod msm = "../techniques/msm.ron");
 sshc_shaders_gen::technique!(
@@ -55,22 +55,6 @@ fn compile(file: &str, set: &[(&str, &str)], precision: &[(&str, &str)]) -> sshc
     sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(file, &src)))
 }
 
-/// The `Params` bytes as the runtime derives them from the graph (`default_params`).
-fn params_from_graph(g: &PassGraph) -> Vec<u8> {
-    let mut b = vec![0u8; g.params_size as usize];
-    for p in &g.params {
-        if let Some(o) = p.offset {
-            let v = match p.ty {
-                ParamType::F32 => (p.value as f32).to_le_bytes(),
-                ParamType::I32 => (p.value as i32).to_le_bytes(),
-                ParamType::Bool => u32::from(p.value != 0.0).to_le_bytes(),
-            };
-            b[o as usize..o as usize + 4].copy_from_slice(&v);
-        }
-    }
-    b
-}
-
 #[test]
 fn embedded_modules_equal_the_compiler_output() {
     let cases = [
@@ -97,7 +81,8 @@ fn embedded_modules_equal_the_compiler_output() {
         let shaders: Vec<(String, String)> = e.shaders.iter().map(|(f, s)| (f.to_string(), s.to_string())).collect();
         assert_eq!(shaders, c.shaders, "{}", e.technique);
         assert_eq!(e.params.len(), c.graph.params_size as usize, "{}", e.technique);
-        assert_eq!(e.params, params_from_graph(&c.graph), "{}", e.technique);
+        // the macro lays the bytes out itself; the runtime binds the schema's layout
+        assert_eq!(e.params, c.graph.default_params(), "{}", e.technique);
     }
 }
 

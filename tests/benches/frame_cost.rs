@@ -1,4 +1,4 @@
-//! The per-frame cost of the embedding API (issue 29), for every bundled technique:
+//! The per-frame cost of the embedding API, for every bundled technique:
 //!
 //! - **CPU**: the time a host spends in sshc each frame, `set_camera` + `set_light` (for
 //!   every light) + `encode` into the host's encoder, timed on the CPU with `Instant`,

@@ -208,7 +208,7 @@ fn vsm_agrees() {
     // F16 moments: the variance is then not determined by the precision at small
     // variances (the allowance says so); a larger minimum variance keeps it meaningful
     v.push(Variant::new("vsm", &[("min_variance", 0.001)], Some(Storage::F16)));
-    // the compute schedule of its Map and Filter passes (issue 15)
+    // the compute schedule of its Map and Filter passes
     v.push(Variant::new("vsm", &[], None).scheduled("compute"));
     agree("vsm", &v, &all_fields());
 }

@@ -1,4 +1,4 @@
-//! The runtime as a host renderer uses it (issue 29): the host's device, per-frame camera
+//! The runtime as a host renderer uses it: the host's device, per-frame camera
 //! and light updates that allocate nothing, recording into the host's encoder, the
 //! visibility sampled as a texture, and the refusal of a device that lacks what a graph
 //! needs. Every comparison of visibilities here is bit for bit: the in-place path and a

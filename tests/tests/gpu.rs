@@ -610,7 +610,7 @@ fn prefiltered_techniques_read_one_where_fully_lit_beyond_their_footprint() {
     }
 }
 
-/// The techniques of issue 17 written with functions: the bundled EVSM and MSM
+/// Techniques written with functions: the bundled EVSM and MSM
 /// (`techniques/evsm.ron`, `msm.ron`) and the examples (`techniques/examples/`: Poisson-disk
 /// PCF rotated per pixel, VSM with its bound and bleeding reduction as functions), written
 /// with functions, arrays, `pixel`, `frame` and `noise`: on every bundled scene their
@@ -826,7 +826,7 @@ fn a_deferred_shade_gives_the_forward_values() {
     assert_eq!(deferred_ones.len(), 13, "{deferred_ones:?}");
 }
 
-/// Specialised for its scene (issue 16), every bundled technique gives the generic build's
+/// Specialised for its scene, every bundled technique gives the generic build's
 /// visibility bit for bit on every bundled scene whose light its `light:` list admits: what
 /// the scene's light kind folds (the light inputs that are 0 for it, the local or distant
 /// form of the Shade's direction to the light and texel size) is exactly what the generic
@@ -960,7 +960,7 @@ fn assert_pcg3d_per_pixel(visibility: &str, schedules: &[&str]) {
     }
 }
 
-/// The `pixel` and `frame` inputs and `noise` (issue 17): a Shade whose visibility is
+/// The `pixel` and `frame` inputs and `noise`: a Shade whose visibility is
 /// `noise(pixel.x, pixel.y, f32(frame))` gives, at every pixel it lights, the CPU
 /// reference of the stated hash, for frames 0 and 1, forward and deferred.
 #[test]
@@ -968,7 +968,7 @@ fn pixel_frame_and_noise_give_the_stated_hash_per_pixel_and_frame() {
     assert_pcg3d_per_pixel("noise(pixel.x, pixel.y, f32(frame)) + 0.0 * nearest(z)", &["fragment", "compute"]);
 }
 
-/// `u32` and the bit operators on the GPU (issue 17): PCG3D written in the language
+/// `u32` and the bit operators on the GPU: PCG3D written in the language
 /// (wrapping products, `^`, `>>`, conversions between f32, i32 and u32) gives the
 /// built-in `noise` bit for bit, at every lit pixel of frames 0 and 1; its arithmetic
 /// `>>` of an i32 and its `&`, `|`, `~` on i32 bits give the CPU's values too (a wrong
@@ -987,7 +987,7 @@ fn a_hash_written_with_u32_operations_matches_the_builtin_noise() {
     assert_pcg3d_per_pixel(hash, &["fragment"]);
 }
 
-/// `sample_at(ch, du, dv)` (issue 17): a bilinear tap at an offset. One texel to the right,
+/// `sample_at(ch, du, dv)`: a bilinear tap at an offset. One texel to the right,
 /// it is the bilinear blend of the four texels one to the right of the receiver's, with
 /// the receiver's own weights `tf`, up to the GPU's filtering precision: Vulkan gives
 /// bilinear weights at least 8 bits (lavapipe 8), so a weight is off by at most 2^-8 and
@@ -1029,7 +1029,7 @@ fn a_bilinear_tap_at_an_offset_is_the_blend_of_the_shifted_texels() {
     assert!(compared > 200, "{compared}");
 }
 
-/// `neighbour(ch, dx, dy)` (issue 17): a Map pass reading a 3 x 3 neighbourhood computes
+/// `neighbour(ch, dx, dy)`: a Map pass reading a 3 x 3 neighbourhood computes
 /// what the Filter pass's Box 3 computes, up to the order of the sums (nine f32 additions
 /// against two separable passes of three at F32: a few ulps of values in [0, 1]).
 #[test]
@@ -1076,7 +1076,7 @@ fn a_map_over_a_neighbourhood_computes_the_box_filter() {
     }
 }
 
-/// `compare_at(ch, r, dx, dy)` (issue 17): the bilinear PCF tap of the bundled PCF at
+/// `compare_at(ch, r, dx, dy)`: the bilinear PCF tap of the bundled PCF at
 /// offset (0, 0) is `compare_at(z, d - bias, 0, 0)`: the same visibility bit for bit as
 /// the four tests and weights written out, and a 3 x 3 grid of taps is a 4 x 4 PCF.
 #[test]

@@ -6,7 +6,7 @@
 
 use crate::back::geometry;
 use crate::back::parts::{self, Line, Split};
-use crate::builtins::{Func, Input, SampleFn, SampleWgsl, Sig, Ty, Wgsl};
+use crate::builtins::{Input, SampleFn, SampleWgsl, Sig, Ty};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::{ConstValue, LightView, Precision, Primitive, Reduce, Resolve, Schedule};
 use crate::front::expr::{BinOp, UnOp};
@@ -78,17 +78,6 @@ pub fn f32_lit(v: f32) -> String {
         format!("{v:e}")
     };
     if v < 0.0 { format!("({s}f)") } else { format!("{s}f") }
-}
-
-/// A call of a built-in function on the WGSL expressions of its arguments, as its
-/// descriptor writes it.
-pub fn call(f: Func, args: &[String]) -> String {
-    let d = f.desc();
-    match d.wgsl {
-        Wgsl::Same => format!("{}({})", d.name, args.join(", ")),
-        Wgsl::Callee(callee) => format!("{callee}({})", args.join(", ")),
-        Wgsl::Expr(write) => write(args),
-    }
 }
 
 fn i32_lit(v: i32) -> String {
@@ -325,7 +314,7 @@ impl<'a> Emitter<'a> {
             Node::Swizzle(x, c) => format!("{}.{}", self.n(x), c.iter().map(|i| COMP[*i as usize]).collect::<String>()),
             Node::Call(f, args) => {
                 let v: Vec<String> = args.iter().map(|x| self.n(*x).to_string()).collect();
-                call(f, &v)
+                f.wgsl_call(&v)
             }
         })
     }
@@ -1867,7 +1856,7 @@ fn vs_shade(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) ->
 const SHADE_NORMAL: &str = graph::SHADE_NORMAL_WGSL;
 
 /// The receiver seen from the light's centre, from `in.world`, `world` and `n`; `distant`,
-/// where the graph is specialised for a scene (issue 16), keeps only the form of the
+/// where the graph is specialised for a scene, keeps only the form of the
 /// direction to the light and of the texel's size that the light's kind takes.
 fn shade_receiver(distant: Option<bool>) -> String {
     let to_light = match distant {

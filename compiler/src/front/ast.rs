@@ -3,6 +3,7 @@
 
 use crate::front::expr::Expr;
 use crate::span::{Span, Spanned};
+use std::fmt;
 
 pub type Name = Spanned<String>;
 
@@ -100,7 +101,7 @@ pub struct Param {
 pub struct Function {
     pub name: Name,
     /// In call order: each parameter's name and type (`F32`, `I32`, `U32`, `Bool`, `Vec2` to `Vec4`).
-    pub params: Vec<(Name, Spanned<crate::builtins::Ty>)>,
+    pub params: Vec<(Name, Spanned<Ty>)>,
     pub body: Expr,
     pub doc: Option<String>,
     pub span: Span,
@@ -112,7 +113,7 @@ pub struct Function {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArrayDecl {
     pub name: Name,
-    pub ty: Spanned<crate::builtins::Ty>,
+    pub ty: Spanned<Ty>,
     pub values: Vec<Expr>,
     pub doc: Option<String>,
     pub span: Span,
@@ -220,7 +221,7 @@ pub enum LightView {
     PerSample,
 }
 
-/// How a pass runs on the GPU (issue 15: the technique says what is computed, the
+/// How a pass runs on the GPU (the technique says what is computed, the
 /// schedule how). Map, Filter, Mipmap and Shade passes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Schedule {
@@ -432,6 +433,78 @@ impl PassKind {
             | PassKind::SummedArea { writes, .. }
             | PassKind::Geometry { writes, .. } => Some(writes),
             PassKind::Shade { .. } => None,
+        }
+    }
+}
+
+/// Types of the expression language. Integer literals are abstract until context fixes them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Ty {
+    F32,
+    I32,
+    /// Unsigned 32-bit integers, modulo 2^32 (hashes, bit patterns): never abstract, never
+    /// implied; written `7u`, `0x9e3779b9u` or converted with `u32(x)`.
+    U32,
+    Bool,
+    /// `vecN<f32>`, N in 2..=4.
+    Vec(u8),
+    AbstractInt,
+}
+
+impl Ty {
+    pub fn from_scalar(s: ScalarTy) -> Ty {
+        match s {
+            ScalarTy::F32 => Ty::F32,
+            ScalarTy::I32 => Ty::I32,
+            ScalarTy::Bool => Ty::Bool,
+        }
+    }
+
+    /// The concrete type an abstract type becomes when nothing else decides it.
+    pub fn concrete(self) -> Ty {
+        if self == Ty::AbstractInt { Ty::I32 } else { self }
+    }
+
+    pub fn is_float_like(self) -> bool {
+        matches!(self, Ty::F32 | Ty::Vec(_) | Ty::AbstractInt)
+    }
+
+    /// f32, i32 and vectors (what negation, `abs` and `sign` take); u32 is not among them.
+    pub fn is_numeric(self) -> bool {
+        matches!(self, Ty::F32 | Ty::I32 | Ty::Vec(_) | Ty::AbstractInt)
+    }
+
+    /// What arithmetic (`+ - * / %`), comparisons, `min`/`max`/`clamp` and series take:
+    /// the numeric types and u32.
+    pub fn is_arithmetic(self) -> bool {
+        self.is_numeric() || self == Ty::U32
+    }
+
+    /// i32, u32 or an abstract integer: what the bit operators take.
+    pub fn is_integer(self) -> bool {
+        matches!(self, Ty::I32 | Ty::U32 | Ty::AbstractInt)
+    }
+
+    pub fn wgsl(self) -> &'static str {
+        match self.concrete() {
+            Ty::F32 => "f32",
+            Ty::I32 => "i32",
+            Ty::U32 => "u32",
+            Ty::Bool => "bool",
+            Ty::Vec(2) => "vec2<f32>",
+            Ty::Vec(3) => "vec3<f32>",
+            Ty::Vec(_) => "vec4<f32>",
+            // `concrete` leaves no abstract type
+            Ty::AbstractInt => "i32",
+        }
+    }
+}
+
+impl fmt::Display for Ty {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Ty::AbstractInt => write!(f, "integer"),
+            t @ (Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::Vec(_)) => write!(f, "{}", t.wgsl()),
         }
     }
 }

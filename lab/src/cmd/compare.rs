@@ -205,7 +205,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
         device: gpu.describe(),
         range,
     });
-    // Several lights (issue 16): each light alone, its own truth and error; the panels
+    // Several lights: each light alone, its own truth and error; the panels
     // show light 0.
     let mut lines = lines;
     for i in 1..scene.lights.len() {

@@ -61,7 +61,7 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
     }
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
-    // Several lights (issue 16): each light gets its own resources and passes in the same
+    // Several lights: each light gets its own resources and passes in the same
     // frame, and the GPU combines their shaded images (`Executor::bind_lights`).
     let n_lights = scene.lights.len().max(1);
     if let Some(p) = &a.visibility

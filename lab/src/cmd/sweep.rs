@@ -387,7 +387,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     check_axes(&file).map_err(|e| format!("error: {}: {e}", a.sweep.display()))?;
     let base = a.sweep.parent().unwrap_or(Path::new(".")).to_path_buf();
     let resolve = |p: &str| -> PathBuf { base.join(p) };
-    // Several lights (issue 16): a scene of n lights becomes n entries `PATH#k`, each that
+    // Several lights: a scene of n lights becomes n entries `PATH#k`, each that
     // light alone (its own truth, metrics and rows).
     let mut file = file;
     let mut entries = Vec::new();
@@ -500,7 +500,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         // The axes change the shadow map and the light: the precision budget again.
         scene.check_precision().map_err(|e| e.to_string())?;
         let path = resolve(&file.techniques[c.technique].file);
-        // specialised for the scene's light where the technique admits it (issue 16)
+        // specialised for the scene's light where the technique admits it
         let scene_path = resolve(split_entry(&file.scenes[c.scene]).0);
         let facts = crate::session::scene_facts(&scene_path, &scene).filter(|f| sshc::admits(&sources[c.technique], f.light));
         let compiled = compile_for(&path, &sources[c.technique], &set, &precision, &schedule, facts)?;
@@ -660,7 +660,7 @@ fn compile(
     compile_for(path, source, set, precision, schedule, None)
 }
 
-/// [`compile`], specialised for `scene` where given (issue 16).
+/// [`compile`], specialised for `scene` where given.
 fn compile_for(
     path: &Path,
     source: &str,

@@ -15,6 +15,8 @@
 //! Conventions: right-handed world, +Y up, views look down -Z, projections map depth to
 //! WebGPU's [0, 1]. Matrices are glam's (column-major).
 
+#![deny(clippy::wildcard_enum_match_arm)]
+
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 

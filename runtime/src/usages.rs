@@ -1,0 +1,81 @@
+//! What the resources of a graph are used as ([`Usages`]), from its steps' declared reads
+//! and writes and from each step's plan ([`crate::steps::plan`]): the one source of the
+//! usages the allocation path ([`crate::resources::Resources::new`]) gives.
+
+use crate::graph::{self, PassGraph};
+use crate::pipeline::wgpu_format;
+use crate::steps::{Dispatch, NodeKind, Targets, plan};
+
+/// What the resources of a graph are used as, from its steps' declared reads and writes
+/// and their plans: the one source of the usages that
+/// [`crate::resources::Resources::new`] gives them.
+#[derive(Default)]
+pub(crate) struct Usages {
+    /// Each graph texture's usages: `RENDER_ATTACHMENT` where a raster step writes it,
+    /// `STORAGE_BINDING` where a compute step stores into it, `TEXTURE_BINDING` where a
+    /// step reads it, `COPY_DST` where a Depth pass writes it (the lab's depth override
+    /// writes its output from the CPU), and `COPY_SRC` on every one (read-back:
+    /// [`crate::gpu::Executor::read_texture`]). A texture no step writes or reads is only
+    /// `COPY_SRC`.
+    pub textures: std::collections::HashMap<String, wgpu::TextureUsages>,
+    /// A compute step stores the camera outputs (a deferred Shade).
+    pub camera_stored: bool,
+    /// A raster step draws the G-buffer (a deferred Shade).
+    pub gbuffer: bool,
+    /// Generated buffers filled per cell of the map (`Discontinuities`), not per edge.
+    pub per_cell: std::collections::HashSet<String>,
+    /// A step classifies the scene's edges (`Silhouettes`): the edge adjacency is built.
+    pub edges: bool,
+}
+
+impl Usages {
+    pub fn of(graph: &PassGraph) -> Usages {
+        use wgpu::TextureUsages as U;
+        let mut u = Usages::default();
+        for pass in &graph.passes {
+            for step in &pass.steps {
+                let mut add = |name: &str, usage: U| {
+                    if graph.texture(name).is_some_and(|t| wgpu_format(t.format).is_some()) {
+                        *u.textures.entry(name.to_string()).or_insert(U::COPY_SRC) |= usage;
+                    }
+                };
+                for b in &step.reads {
+                    add(&b.texture, U::TEXTURE_BINDING);
+                }
+                if pass.kind == graph::PassKind::Depth {
+                    for t in &step.writes {
+                        add(&t.texture, U::COPY_DST);
+                    }
+                }
+                match plan(step) {
+                    NodeKind::Compute(c) => {
+                        for t in &c.writes {
+                            add(t, U::STORAGE_BINDING);
+                        }
+                        match c.dispatch {
+                            Dispatch::Pixels => u.camera_stored = true,
+                            Dispatch::Cells(_) => u.per_cell.extend(c.generated.iter().cloned()),
+                            Dispatch::Edges => u.edges = true,
+                            Dispatch::Texels | Dispatch::MipTexels | Dispatch::ShadowMapLines | Dispatch::Indirect(_) => {}
+                        }
+                    }
+                    NodeKind::Raster(r) => match &r.targets {
+                        Targets::Textures(targets) => {
+                            for t in targets {
+                                add(&t.texture, U::RENDER_ATTACHMENT);
+                            }
+                        }
+                        Targets::GBuffer => u.gbuffer = true,
+                        Targets::Camera => {}
+                    },
+                }
+            }
+        }
+        u
+    }
+
+    /// The usages of graph texture `name` ([`Usages::textures`]).
+    pub fn texture(&self, name: &str) -> wgpu::TextureUsages {
+        self.textures.get(name).copied().unwrap_or(wgpu::TextureUsages::COPY_SRC)
+    }
+}
