@@ -25,7 +25,7 @@ pub struct RangeEval<'a> {
     channels: HashMap<ChannelId, Interval>,
     /// One runtime param evaluated over another range than its declared one.
     pub param_range: Option<(ParamId, Interval)>,
-    memo: HashMap<H, Interval>,
+    memo: HashMap<ExprId, Interval>,
 }
 
 impl<'a> RangeEval<'a> {
@@ -38,7 +38,7 @@ impl<'a> RangeEval<'a> {
         }
     }
 
-    pub fn eval(&mut self, root: H) -> Interval {
+    pub fn eval(&mut self, root: ExprId) -> Interval {
         for h in self.ir.arena.postorder(&[root]) {
             if !self.memo.contains_key(&h) {
                 let r = self.node(h);
@@ -48,11 +48,11 @@ impl<'a> RangeEval<'a> {
         self.memo[&root]
     }
 
-    fn get(&self, h: H) -> Interval {
+    fn get(&self, h: ExprId) -> Interval {
         self.memo.get(&h).copied().unwrap_or(Interval::UNBOUNDED)
     }
 
-    fn node(&self, h: H) -> Interval {
+    fn node(&self, h: ExprId) -> Interval {
         let r = self.node_exact(h);
         // u32 arithmetic wraps: a range that leaves [0, 2^32 - 1] may hold any u32
         if self.ir.arena.ty(h) == Ty::U32 && !(r.lo >= 0.0 && r.hi <= u32::MAX as f64) {
@@ -63,7 +63,7 @@ impl<'a> RangeEval<'a> {
     }
 
     /// The range of `h`'s value computed without wrapping.
-    fn node_exact(&self, h: H) -> Interval {
+    fn node_exact(&self, h: ExprId) -> Interval {
         let a = &self.ir.arena;
         let integers = || if a.ty(h) == Ty::U32 { Interval::U32 } else { Interval::I32 };
         match a.node(h) {
@@ -266,10 +266,7 @@ pub fn choose_precisions(ir: &mut Ir) {
     let mut chosen: Vec<(ChannelId, Precision, Interval)> = Vec::new();
     for (ri, res) in ir.resources.with_handles() {
         // where the channel is made: the Depth, Map or Geometry pass writing it
-        if matches!(
-            ir.passes[res.writer].kind,
-            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea
-        ) {
+        if ir.passes[res.writer].kind.copies_source() {
             continue;
         }
         for (si, slot) in res.slots.iter().enumerate() {
@@ -363,16 +360,13 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
     let mut warnings = Vec::new();
     for (ri, res) in ir.resources.with_handles() {
         // A resource repeats its source's complaint: report each channel once, where it is made.
-        let derived = matches!(
-            ir.passes[res.writer].kind,
-            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea
-        );
+        let own = ir.passes[res.writer].kind.reports_own_range();
         for (si, slot) in res.slots.iter().enumerate() {
             let r = ranges[ri.index()][si];
             if fits(slot.precision, r) {
                 continue;
             }
-            if derived && !matches!(ir.passes[res.writer].kind, IrPassKind::Filter { kernel: IrKernel::LoG }) {
+            if !own {
                 continue;
             }
             let ch = &ir.channels[slot.channel];
@@ -471,10 +465,7 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
     }
     // Quantisation and underflow, reported once, where the channel is made.
     for (ri, res) in ir.resources.with_handles() {
-        if matches!(
-            ir.passes[res.writer].kind,
-            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea
-        ) {
+        if ir.passes[res.writer].kind.copies_source() {
             continue;
         }
         for s in &res.slots {

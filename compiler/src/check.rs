@@ -420,7 +420,7 @@ fn check_sample_views(sym: &Symbols, per_sample: &[String], diags: &mut Diagnost
             }
         }
         if let PassKind::Geometry { primitive, view, from, .. } = &p.kind {
-            let skins = *primitive == Primitive::Skins;
+            let skins = primitive.joins_sample_views();
             if skins && *view != LightView::PerSample {
                 diags.push(
                     Diagnostic::error(Phase::Check, format!("Geometry pass `{}` draws Skins from the light's centre", p.name.value))
@@ -706,8 +706,8 @@ fn primitive_resolve(p: &Pass, primitive: Primitive, r: Resolve, spec: &ResolveS
         ResolveSpec::Expr(e) => (e.span, "this resolve rule"),
         ResolveSpec::Rule(_) => (p.kind_span, "this pass's `resolve`"),
     };
-    let nearest = matches!(primitive, Primitive::Ribbons | Primitive::BackFaces);
-    if nearest == (r == Resolve::Nearest) || primitive == Primitive::Skins {
+    let Some(nearest) = primitive.keeps_nearest() else { return Ok(()) };
+    if nearest == (r == Resolve::Nearest) {
         return Ok(());
     }
     let d = Diagnostic::error(

@@ -1,4 +1,4 @@
-//! Typed handles into typed arenas, as naga's `Handle<T>` and `Arena<T>`: a handle of a
+//! Typed handles into typed arenas, as naga's `Handle<T>` and `Table<T>`: a handle of a
 //! channel cannot index the resources, and a dump prints `channel#3`, not `3`.
 
 use std::fmt;
@@ -10,7 +10,7 @@ pub trait Kind {
     const KIND: &'static str;
 }
 
-/// An index into an [`Arena<T>`] (or the expression arena, for `Handle<Node>`).
+/// An index into an [`Table<T>`] (or the expression arena, for `Handle<Node>`).
 pub struct Handle<T> {
     index: u32,
     marker: PhantomData<fn() -> T>,
@@ -80,36 +80,36 @@ impl<T: Kind> fmt::Display for Handle<T> {
 /// A vector of `T` indexed by `Handle<K>`; elements are only appended. `K` is `T` but for
 /// a side table that maps the entities of another arena one to one (the laid-out
 /// resources of `pack`, indexed by the handles of the lowered ones).
-pub struct Arena<T, K = T> {
+pub struct Table<T, K = T> {
     items: Vec<T>,
     marker: PhantomData<fn() -> K>,
 }
 
-impl<T: Clone, K> Clone for Arena<T, K> {
+impl<T: Clone, K> Clone for Table<T, K> {
     fn clone(&self) -> Self {
-        Arena {
+        Table {
             items: self.items.clone(),
             marker: PhantomData,
         }
     }
 }
 
-impl<T, K> Default for Arena<T, K> {
+impl<T, K> Default for Table<T, K> {
     fn default() -> Self {
-        Arena {
+        Table {
             items: Vec::new(),
             marker: PhantomData,
         }
     }
 }
 
-impl<T: fmt::Debug, K: Kind> fmt::Debug for Arena<T, K> {
+impl<T: fmt::Debug, K: Kind> fmt::Debug for Table<T, K> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_map().entries(self.with_handles()).finish()
     }
 }
 
-impl<T, K> Arena<T, K> {
+impl<T, K> Table<T, K> {
     pub fn append(&mut self, item: T) -> Handle<K> {
         let h = Handle::new(self.items.len());
         self.items.push(item);
@@ -156,20 +156,20 @@ impl<T, K> Arena<T, K> {
     }
 }
 
-impl<T, K> std::ops::Index<Handle<K>> for Arena<T, K> {
+impl<T, K> std::ops::Index<Handle<K>> for Table<T, K> {
     type Output = T;
     fn index(&self, h: Handle<K>) -> &T {
         &self.items[h.index()]
     }
 }
 
-impl<T, K> std::ops::IndexMut<Handle<K>> for Arena<T, K> {
+impl<T, K> std::ops::IndexMut<Handle<K>> for Table<T, K> {
     fn index_mut(&mut self, h: Handle<K>) -> &mut T {
         &mut self.items[h.index()]
     }
 }
 
-impl<'a, T, K> IntoIterator for &'a Arena<T, K> {
+impl<'a, T, K> IntoIterator for &'a Table<T, K> {
     type Item = &'a T;
     type IntoIter = std::slice::Iter<'a, T>;
     fn into_iter(self) -> Self::IntoIter {
@@ -177,16 +177,16 @@ impl<'a, T, K> IntoIterator for &'a Arena<T, K> {
     }
 }
 
-impl<T, K> FromIterator<T> for Arena<T, K> {
+impl<T, K> FromIterator<T> for Table<T, K> {
     fn from_iter<I: IntoIterator<Item = T>>(iter: I) -> Self {
-        Arena {
+        Table {
             items: iter.into_iter().collect(),
             marker: PhantomData,
         }
     }
 }
 
-impl<T, K> Extend<T> for Arena<T, K> {
+impl<T, K> Extend<T> for Table<T, K> {
     fn extend<I: IntoIterator<Item = T>>(&mut self, iter: I) {
         self.items.extend(iter)
     }
@@ -203,7 +203,7 @@ mod tests {
 
     #[test]
     fn handles_print_their_kind_and_index() {
-        let mut a: Arena<Thing> = Arena::default();
+        let mut a: Table<Thing> = Table::default();
         a.append(Thing);
         let h = a.append(Thing);
         assert_eq!(format!("{h:?}"), "thing#1");

@@ -67,7 +67,7 @@
 use crate::builtins::{Func, Input, SampleFn, Ty};
 use crate::front::ast::{Precision, Reduce};
 use crate::front::expr::BinOp;
-use crate::ir::{ChannelId, H, Hooks, IrKernel, IrPassKind, Node, PassId, PlacedSlot, Program, ResId};
+use crate::ir::{ChannelId, ExprId, Hooks, IrKernel, IrPassKind, Node, PassId, PlacedSlot, Program, ResId};
 use std::collections::HashMap;
 
 /// The frame-wide inputs (docs/language.md section 8.5), as the runtime's `Frame` uniform
@@ -657,16 +657,16 @@ fn uv_width(f: &Frame, len: f64, dist: f64) -> f64 {
 }
 
 /// A leaf's value and allowance in component `i`, given the values computed so far.
-type LeafAllowed<'a> = dyn Fn(H, usize, &[[f64; 4]]) -> Option<(f64, f64)> + 'a;
+type LeafAllowed<'a> = dyn Fn(ExprId, usize, &[[f64; 4]]) -> Option<(f64, f64)> + 'a;
 
 /// An expression prepared for repeated evaluation: its root and its nodes in postorder.
 struct Prepared {
-    root: H,
-    order: Vec<H>,
+    root: ExprId,
+    order: Vec<ExprId>,
 }
 
 impl Prepared {
-    fn new(p: &Program, root: H) -> Prepared {
+    fn new(p: &Program, root: ExprId) -> Prepared {
         Prepared {
             root,
             order: p.arena.postorder(&[root]),
@@ -857,7 +857,7 @@ impl<'p> Evaluation<'p> {
         let (mut v, mut a) = (Vec::with_capacity(size * size), Vec::with_capacity(size * size));
         for y in 0..size as i64 {
             for x in 0..size as i64 {
-                let leaf = |h: H, k: usize, _: &[[f64; 4]]| -> Option<(f64, f64)> {
+                let leaf = |h: ExprId, k: usize, _: &[[f64; 4]]| -> Option<(f64, f64)> {
                     match self.p.arena.node(h) {
                         Node::Channel(ch, [dx, dy]) => from.get(ch).map(|t| t.texel(x + *dx as i64, y + *dy as i64)),
                         Node::Input(i, _) => frame_input(&self.frame, *i, k).map(|v| (v, 0.0)),
@@ -913,7 +913,7 @@ impl<'p> Evaluation<'p> {
     /// The raw visibility (NaN read as 1) at `r` with filtered lookups shifted by `shift`.
     fn raw(&self, r: &Receiver, shift: Shift, scratch: &mut Scratch) -> f64 {
         let leaf = self.receiver_leaf(r, shift);
-        let plain = |h: H, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
+        let plain = |h: ExprId, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
         self.p
             .arena
             .eval_span(&self.shade.order, &Hooks { leaf: &plain, exact: true }, &mut scratch.vals);
@@ -928,7 +928,7 @@ impl<'p> Evaluation<'p> {
 
     /// The leaf values of the Shade at receiver `r`: inputs, params, the frame's functions,
     /// lookups (with their allowance); inside `at_sample(k, ..)`, as light sample k sees it.
-    fn receiver_leaf<'a>(&'a self, r: &'a Receiver, shift: Shift) -> impl Fn(H, usize, &[[f64; 4]]) -> Option<(f64, f64)> + 'a {
+    fn receiver_leaf<'a>(&'a self, r: &'a Receiver, shift: Shift) -> impl Fn(ExprId, usize, &[[f64; 4]]) -> Option<(f64, f64)> + 'a {
         let f = &self.frame;
         let n = f.shadow_size as f64;
         let slope = |ndotl: f64| ((1.0 - ndotl * ndotl).max(0.0).sqrt() / ndotl.abs().max(0.01)).min(100.0);
@@ -943,8 +943,8 @@ impl<'p> Evaluation<'p> {
             texel_world: f.texel_world[0],
             weights: [0.0; 2],
         };
-        move |h: H, k: usize, vals: &[[f64; 4]]| -> Option<(f64, f64)> {
-            let arg = |h: &H, c: usize| vals.get(h.index()).map_or(f64::NAN, |v| v[c]);
+        move |h: ExprId, k: usize, vals: &[[f64; 4]]| -> Option<(f64, f64)> {
+            let arg = |h: &ExprId, c: usize| vals.get(h.index()).map_or(f64::NAN, |v| v[c]);
             let seen = |view: &Option<u8>| match view {
                 Some(s) => r.samples.get(*s as usize).copied(),
                 None => Some(centre),
@@ -1047,15 +1047,15 @@ impl<'p> Evaluation<'p> {
     fn allowed(&self, e: &Prepared, leaf: &LeafAllowed, scratch: &mut Scratch) -> Allowed {
         let arena = &self.p.arena;
         let shade = e.root == self.shade.root;
-        let plain = |h: H, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
+        let plain = |h: ExprId, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
         let Scratch { vals, errors } = scratch;
         let hooks = Hooks { leaf: &plain, exact: true };
         arena.eval_span(&e.order, &hooks, vals);
-        let width = |h: H| match arena.ty(h) {
+        let width = |h: ExprId| match arena.ty(h) {
             Ty::Vec(n) => (n as usize).clamp(1, 4),
             Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => 1,
         };
-        let mut operands: Vec<H> = Vec::new();
+        let mut operands: Vec<ExprId> = Vec::new();
         for &h in &e.order {
             let v = vals.get(h.index()).copied().unwrap_or([f64::NAN; 4]);
             let w = width(h);

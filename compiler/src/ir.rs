@@ -7,7 +7,7 @@ use crate::builtins::{Func, Input, SampleFn, Ty};
 use crate::consteval;
 use crate::front::ast::{ConstValue, LightModel, LightView, Neighbour, Precision, Primitive, Reduce, Resolve, ScalarTy};
 use crate::front::expr::{BinOp, UnOp, fmt_float};
-use crate::handle::{Arena as Table, Handle, Kind};
+use crate::handle::{Handle, Kind, Table};
 pub use crate::interval::{Interval, short};
 use crate::span::Span;
 use std::collections::HashMap;
@@ -16,7 +16,7 @@ use std::fmt::{self, Write as _};
 pub mod validate;
 
 /// Handle of an expression node in the expression [`Arena`].
-pub type H = Handle<Node>;
+pub type ExprId = Handle<Node>;
 /// Handle of a channel in [`Ir::channels`].
 pub type ChannelId = Handle<IrChannel>;
 /// Handle of a resource in [`Ir::resources`].
@@ -67,34 +67,34 @@ pub enum Node {
         channel: ChannelId,
         resource: ResId,
         how: SampleFn,
-        args: Vec<H>,
+        args: Vec<ExprId>,
         /// The light sample's view inside `at_sample(k, ..)` (the channel's resource holds
         /// one layer block per sample); `None` for the centre.
         view: Option<u8>,
     },
-    Unary(UnOp, H),
-    Binary(BinOp, H, H),
-    Call(Func, Vec<H>),
+    Unary(UnOp, ExprId),
+    Binary(BinOp, ExprId, ExprId),
+    Call(Func, Vec<ExprId>),
     /// Vector components, e.g. `.x` = [0], `.xy` = [0, 1].
-    Swizzle(H, Vec<u8>),
+    Swizzle(ExprId, Vec<u8>),
 }
 
 #[derive(Clone, Debug, Default)]
 pub struct Arena {
     nodes: Vec<(Node, Ty, Span)>,
-    index: HashMap<(Node, Ty), H>,
+    index: HashMap<(Node, Ty), ExprId>,
 }
 
 impl Arena {
-    pub fn node(&self, h: H) -> &Node {
+    pub fn node(&self, h: ExprId) -> &Node {
         &self.nodes[h.index()].0
     }
 
-    pub fn ty(&self, h: H) -> Ty {
+    pub fn ty(&self, h: ExprId) -> Ty {
         self.nodes[h.index()].1
     }
 
-    pub fn span(&self, h: H) -> Span {
+    pub fn span(&self, h: ExprId) -> Span {
         self.nodes[h.index()].2
     }
 
@@ -106,15 +106,15 @@ impl Arena {
         self.nodes.is_empty()
     }
 
-    pub fn f32(&mut self, v: f64) -> H {
+    pub fn f32(&mut self, v: f64) -> ExprId {
         self.add(Node::F32((v as f32).to_bits()), Ty::F32, Span::UNDEFINED)
     }
 
-    pub fn i32(&mut self, v: i32) -> H {
+    pub fn i32(&mut self, v: i32) -> ExprId {
         self.add(Node::I32(v), Ty::I32, Span::UNDEFINED)
     }
 
-    pub fn as_const(&self, h: H) -> Option<ConstValue> {
+    pub fn as_const(&self, h: ExprId) -> Option<ConstValue> {
         match self.node(h) {
             Node::F32(b) => Some(ConstValue::Float(f32::from_bits(*b) as f64)),
             Node::I32(v) => Some(ConstValue::Int(*v as i64)),
@@ -131,7 +131,7 @@ impl Arena {
         }
     }
 
-    fn constant(&mut self, v: ConstValue, ty: Ty, span: Span) -> Option<H> {
+    fn constant(&mut self, v: ConstValue, ty: Ty, span: Span) -> Option<ExprId> {
         let node = match (v, ty) {
             (ConstValue::Float(f), Ty::F32) => {
                 let f = f as f32;
@@ -148,18 +148,18 @@ impl Arena {
         Some(self.intern(node, ty, span))
     }
 
-    fn intern(&mut self, node: Node, ty: Ty, span: Span) -> H {
+    fn intern(&mut self, node: Node, ty: Ty, span: Span) -> ExprId {
         if let Some(h) = self.index.get(&(node.clone(), ty)) {
             return *h;
         }
-        let h = H::new(self.nodes.len());
+        let h = ExprId::new(self.nodes.len());
         self.nodes.push((node.clone(), ty, span));
         self.index.insert((node, ty), h);
         h
     }
 
     /// Add a node, folding it when its operands are constants.
-    pub fn add(&mut self, node: Node, ty: Ty, span: Span) -> H {
+    pub fn add(&mut self, node: Node, ty: Ty, span: Span) -> ExprId {
         if let Some(h) = self.fold(&node, ty, span) {
             return h;
         }
@@ -167,7 +167,7 @@ impl Arena {
     }
 
     /// The components of a vector constructor (`vec2`..`vec4` of scalars), by handle.
-    fn components(&self, h: H) -> Option<Vec<H>> {
+    fn components(&self, h: ExprId) -> Option<Vec<ExprId>> {
         if let Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, args) = self.node(h)
             && args.iter().all(|a| self.ty(*a) == Ty::F32)
         {
@@ -177,8 +177,8 @@ impl Arena {
     }
 
     /// Whether `h` is the scalar `v` or a vector constructor of `v`s.
-    fn is_splat_of(&self, h: H, v: f64) -> bool {
-        let is = |h: H| self.as_const(h).is_some_and(|c| c.as_f64() == v);
+    fn is_splat_of(&self, h: ExprId, v: f64) -> bool {
+        let is = |h: ExprId| self.as_const(h).is_some_and(|c| c.as_f64() == v);
         is(h) || self.components(h).is_some_and(|c| c.iter().all(|&x| is(x)))
     }
 
@@ -186,12 +186,12 @@ impl Arena {
     /// into several scalar ones would add operations: docs/language.md section 8.9):
     /// identities with a constant operand of zeros or ones, operations whose operands
     /// are all constant components, and a single-component swizzle of a constructor.
-    fn fold_vector(&mut self, node: &Node, ty: Ty, span: Span) -> Option<H> {
+    fn fold_vector(&mut self, node: &Node, ty: Ty, span: Span) -> Option<ExprId> {
         match node {
             Node::Binary(op, a, b) if matches!(ty, Ty::Vec(_)) => {
                 let (a, b) = (*a, *b);
                 // identities: the kept operand already has the result's type
-                let keep = |h: H| (self.ty(h) == ty).then_some(h);
+                let keep = |h: ExprId| (self.ty(h) == ty).then_some(h);
                 match op {
                     BinOp::Add if self.is_splat_of(a, 0.0) => return keep(b),
                     BinOp::Add | BinOp::Sub if self.is_splat_of(b, 0.0) => {
@@ -232,7 +232,7 @@ impl Arena {
                     Ty::Vec(n) => n as usize,
                     Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => return None,
                 };
-                let side = |h: H| -> Option<Vec<ConstValue>> {
+                let side = |h: ExprId| -> Option<Vec<ConstValue>> {
                     match self.components(h) {
                         Some(c) if c.len() == n => c.iter().map(|&x| self.as_const(x)).collect(),
                         Some(_) => None,
@@ -268,7 +268,7 @@ impl Arena {
         }
     }
 
-    fn fold(&mut self, node: &Node, ty: Ty, span: Span) -> Option<H> {
+    fn fold(&mut self, node: &Node, ty: Ty, span: Span) -> Option<ExprId> {
         use ConstValue::*;
         if let Some(h) = self.fold_vector(node, ty, span) {
             return Some(h);
@@ -353,7 +353,7 @@ impl Arena {
     }
 
     /// Handles reachable from `root`, operands before users (the order codegen emits them).
-    pub fn postorder(&self, roots: &[H]) -> Vec<H> {
+    pub fn postorder(&self, roots: &[ExprId]) -> Vec<ExprId> {
         let mut seen = vec![false; self.nodes.len()];
         let mut out = Vec::new();
         for &r in roots {
@@ -362,7 +362,7 @@ impl Arena {
         out
     }
 
-    fn visit(&self, h: H, seen: &mut [bool], out: &mut Vec<H>) {
+    fn visit(&self, h: ExprId, seen: &mut [bool], out: &mut Vec<ExprId>) {
         // Iterative to keep deep series off the call stack.
         let mut stack = vec![(h, false)];
         while let Some((h, done)) = stack.pop() {
@@ -383,7 +383,7 @@ impl Arena {
         }
     }
 
-    pub fn operands(&self, h: H) -> Vec<H> {
+    pub fn operands(&self, h: ExprId) -> Vec<ExprId> {
         match self.node(h) {
             Node::Unary(_, a) | Node::Swizzle(a, _) => vec![*a],
             Node::Binary(_, a, b) => vec![*a, *b],
@@ -395,13 +395,13 @@ impl Arena {
     }
 
     /// Write `h` as an expression (for dumps and explain).
-    pub fn display(&self, h: H, ir: Option<&Ir>) -> String {
+    pub fn display(&self, h: ExprId, ir: Option<&Ir>) -> String {
         let mut s = String::new();
         self.write(&mut s, h, ir, 0);
         s
     }
 
-    fn write(&self, s: &mut String, h: H, ir: Option<&Ir>, depth: usize) {
+    fn write(&self, s: &mut String, h: ExprId, ir: Option<&Ir>, depth: usize) {
         if depth > 24 {
             let _ = write!(s, "%{}", h.index());
             return;
@@ -488,7 +488,7 @@ impl Arena {
     /// Evaluate an expression on the CPU (f64): its first component (a scalar's value).
     /// `leaf` gives the value of params, inputs, channels and samples, a scalar that a
     /// vector input takes in each component.
-    pub fn eval(&self, h: H, leaf: &dyn Fn(&Node) -> Option<f64>) -> f64 {
+    pub fn eval(&self, h: ExprId, leaf: &dyn Fn(&Node) -> Option<f64>) -> f64 {
         let order = self.postorder(&[h]);
         let mut vals = vec![[f64::NAN; 4]; self.nodes.len()];
         self.eval_ordered(&order, h, leaf, &mut vals)
@@ -498,9 +498,9 @@ impl Arena {
     /// `postorder(&[h])`, `vals` a scratch of one value per node of the arena. Vectors are
     /// evaluated component by component (a scalar is held in every component, so mixing
     /// it with a vector broadcasts it); `length` and `dot` reduce over the operand's width.
-    pub fn eval_ordered(&self, order: &[H], h: H, leaf: &dyn Fn(&Node) -> Option<f64>, vals: &mut [[f64; 4]]) -> f64 {
+    pub fn eval_ordered(&self, order: &[ExprId], h: ExprId, leaf: &dyn Fn(&Node) -> Option<f64>, vals: &mut [[f64; 4]]) -> f64 {
         let hooks = Hooks {
-            leaf: &|n: H, _: usize, _: &[[f64; 4]]| leaf(self.node(n)),
+            leaf: &|n: ExprId, _: usize, _: &[[f64; 4]]| leaf(self.node(n)),
             exact: false,
         };
         self.eval_span(order, &hooks, vals);
@@ -511,7 +511,7 @@ impl Arena {
     /// it keep their values in `vals`) into `vals`, with [`Hooks`]: `leaf` gives params,
     /// inputs, channels, samples and the calls the arena cannot fold alone (`uv_width`,
     /// `noise`) per component, reading the values of their arguments from `vals`.
-    pub fn eval_span(&self, order: &[H], hooks: &Hooks, vals: &mut [[f64; 4]]) {
+    pub fn eval_span(&self, order: &[ExprId], hooks: &Hooks, vals: &mut [[f64; 4]]) {
         for &n in order {
             let v = self.eval_node(n, hooks, vals);
             if let Some(slot) = vals.get_mut(n.index()) {
@@ -521,15 +521,15 @@ impl Arena {
     }
 
     /// One node's value from its operands' in `vals`.
-    pub fn eval_node(&self, n: H, hooks: &Hooks, vals: &[[f64; 4]]) -> [f64; 4] {
+    pub fn eval_node(&self, n: ExprId, hooks: &Hooks, vals: &[[f64; 4]]) -> [f64; 4] {
         use ConstValue::*;
         let leaf = hooks.leaf;
-        let width = |x: H| match self.ty(x) {
+        let width = |x: ExprId| match self.ty(x) {
             Ty::Vec(n) => (n as usize).clamp(1, 4),
             Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => 1,
         };
         {
-            let get = |x: &H, i: usize| vals.get(x.index()).map_or(f64::NAN, |v| v[i]);
+            let get = |x: &ExprId, i: usize| vals.get(x.index()).map_or(f64::NAN, |v| v[i]);
             let w = width(n);
             let mut v = [f64::NAN; 4];
             for (i, slot) in v.iter_mut().enumerate().take(w) {
@@ -629,7 +629,7 @@ impl Arena {
 }
 
 /// A leaf's value in component `i` given the values computed so far (by node).
-pub type Leaf<'a> = dyn Fn(H, usize, &[[f64; 4]]) -> Option<f64> + 'a;
+pub type Leaf<'a> = dyn Fn(ExprId, usize, &[[f64; 4]]) -> Option<f64> + 'a;
 
 /// How [`Arena::eval_span`] evaluates.
 pub struct Hooks<'a> {
@@ -688,7 +688,7 @@ pub struct IrChannel {
     pub precision_overridden: bool,
     /// The precision is left to the compiler (`Auto`): `analyse::choose_precisions` sets it.
     pub precision_auto: bool,
-    pub value: Option<H>,
+    pub value: Option<ExprId>,
     pub origin: Origin,
     pub span: Span,
 }
@@ -696,9 +696,9 @@ pub struct IrChannel {
 #[derive(Clone, Debug)]
 pub struct IrExpansion {
     pub name: String,
-    pub constant: H,
+    pub constant: ExprId,
     /// Unrolled terms: receiver-side coefficient and the basis channel it multiplies.
-    pub terms: Vec<(H, ChannelId)>,
+    pub terms: Vec<(ExprId, ChannelId)>,
     pub span: Span,
 }
 
@@ -893,13 +893,39 @@ pub enum IrPassKind {
         resolve: Resolve,
         view: LightView,
         /// Fragments for which this bool is false are discarded.
-        keep: Option<H>,
+        keep: Option<ExprId>,
         /// `Skins`: the neighbouring sample whose discontinuities are warped in.
         from: Option<Neighbour>,
     },
     Shade {
-        visibility: H,
+        visibility: ExprId,
     },
+}
+
+impl IrPassKind {
+    /// Whether the pass's output carries its source's slots (a filtered copy, a mip chain
+    /// or a summed-area table of them) rather than channels the pass makes: the channel's
+    /// facts (its precision, its quantisation) are its source's.
+    pub fn copies_source(&self) -> bool {
+        match self {
+            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea => true,
+            IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::Geometry { .. } | IrPassKind::Shade { .. } => false,
+        }
+    }
+
+    /// Whether a range its output cannot hold is this pass's to report: every pass that
+    /// makes its channels, and a Laplacian-of-Gaussian filter, whose output (a difference
+    /// of neighbours) has a range of its own; the other copies repeat their source's.
+    pub fn reports_own_range(&self) -> bool {
+        match self {
+            IrPassKind::Filter { kernel } => match kernel {
+                IrKernel::LoG => true,
+                IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::Max(_) | IrKernel::Min(_) => false,
+            },
+            IrPassKind::Mipmap { .. } | IrPassKind::SummedArea => false,
+            IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::Geometry { .. } | IrPassKind::Shade { .. } => true,
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -1011,7 +1037,7 @@ impl<S> Copy for Program<'_, S> {}
 
 impl<S> Program<'_, S> {
     /// The visibility expression of the live Shade pass.
-    pub fn shade(&self) -> Option<H> {
+    pub fn shade(&self) -> Option<ExprId> {
         self.passes.iter().filter(|pass| pass.live).find_map(|pass| match pass.kind {
             IrPassKind::Shade { visibility } => Some(visibility),
             IrPassKind::Depth { .. }

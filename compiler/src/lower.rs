@@ -9,7 +9,7 @@ use crate::consteval::{self, IntOp, IntSpans, MAX_SERIES};
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::*;
 use crate::front::expr::{BinOp, Expr, ExprKind, Literal, UnOp};
-use crate::handle::Arena as Table;
+use crate::handle::Table;
 use crate::ir::*;
 use crate::resolve::{Item, Symbols};
 use crate::span::Span;
@@ -24,7 +24,7 @@ struct Lowerer<'s, 'a> {
     sym: &'s Symbols<'a>,
     types: &'s Types,
     arena: &'s mut Arena,
-    locals: Vec<(String, H)>,
+    locals: Vec<(String, ExprId)>,
     /// The series variables being unrolled and their values, innermost last (for messages).
     series: Vec<(String, i64)>,
     /// AST channel index -> IR channel id.
@@ -84,7 +84,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
 
     /// The value of `e` (lowered to `h`) where it is used: an abstract integer that
     /// `check` converted to f32 becomes the f32 constant.
-    fn coerce(&mut self, e: &Expr, h: H) -> H {
+    fn coerce(&mut self, e: &Expr, h: ExprId) -> ExprId {
         if self.types.converts_to_f32(e)
             && let Some(ConstValue::Int(v)) = self.arena.as_const(h)
         {
@@ -101,7 +101,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
     }
 
     /// Lower `e` and convert it for its context.
-    fn expr_coerced(&mut self, e: &Expr) -> Result<H, Diagnostic> {
+    fn expr_coerced(&mut self, e: &Expr) -> Result<ExprId, Diagnostic> {
         let h = self.expr(e)?;
         Ok(self.coerce(e, h))
     }
@@ -109,7 +109,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
     /// An integer operation whose operands unrolling made constants (a series variable
     /// among them: `check` has refused the others) must have an i32 value; WGSL would
     /// refuse the constant expression, so it is refused here, at the operation.
-    fn int_fault(&self, op: IntOp, operands: &[H], ty: Ty, span: Span, divisor: Span) -> Result<(), Diagnostic> {
+    fn int_fault(&self, op: IntOp, operands: &[ExprId], ty: Ty, span: Span, divisor: Span) -> Result<(), Diagnostic> {
         if !matches!(ty, Ty::I32 | Ty::U32) {
             return Ok(());
         }
@@ -142,7 +142,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         Ok(())
     }
 
-    fn expr(&mut self, e: &Expr) -> Result<H, Diagnostic> {
+    fn expr(&mut self, e: &Expr) -> Result<ExprId, Diagnostic> {
         self.budget(e.span)?;
         Ok(match &e.kind {
             ExprKind::Lit(Literal::Int(v)) => {
@@ -233,7 +233,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                     ));
                 }
                 let ty = self.ty(e)?;
-                let mut acc: Option<H> = None;
+                let mut acc: Option<ExprId> = None;
                 for k in lo..=hi {
                     let kh = self.arena.i32(k as i32);
                     self.locals.push((var.clone(), kh));
@@ -261,7 +261,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
     }
 
     /// The zero of a type: `0`, `0.0`, `vecN(0.0)` (`false` for bool, which a sum never is).
-    fn zero(&mut self, ty: Ty, span: Span) -> H {
+    fn zero(&mut self, ty: Ty, span: Span) -> ExprId {
         match ty {
             Ty::F32 => self.arena.f32(0.0),
             Ty::I32 | Ty::AbstractInt => self.arena.i32(0),
@@ -287,7 +287,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         }
     }
 
-    fn name(&mut self, e: &Expr, n: &str) -> Result<H, Diagnostic> {
+    fn name(&mut self, e: &Expr, n: &str) -> Result<ExprId, Diagnostic> {
         let span = e.span;
         let r = self.types.name(e).ok_or_else(|| internal(span, "name not resolved by check"))?;
         Ok(match r {
@@ -349,7 +349,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         })
     }
 
-    fn call(&mut self, name: &str, args: &[Expr], e: &Expr) -> Result<H, Diagnostic> {
+    fn call(&mut self, name: &str, args: &[Expr], e: &Expr) -> Result<ExprId, Diagnostic> {
         let span = e.span;
         if name == crate::builtins::NEIGHBOUR {
             let Some(Resolved::Channel(c)) = self.types.name(&args[0]) else {
@@ -462,7 +462,7 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         }
         let f = Func::from_name(name).ok_or_else(|| internal(span, "unknown function"))?;
         let lowered = args.iter().map(|a| self.expr(a)).collect::<Result<Vec<_>, _>>()?;
-        let hs: Vec<H> = lowered.into_iter().zip(args).map(|(h, a)| self.coerce(a, h)).collect();
+        let hs: Vec<ExprId> = lowered.into_iter().zip(args).map(|(h, a)| self.coerce(a, h)).collect();
         let ty = self.ty(e)?;
         self.int_fault(IntOp::Call(f), &hs, ty, span, span)?;
         Ok(self.arena.add(Node::Call(f, hs), ty, span))

@@ -5,7 +5,7 @@
 
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::Precision;
-use crate::handle::Arena as Table;
+use crate::handle::Table;
 use crate::ir::*;
 use std::collections::{HashMap, HashSet};
 
@@ -88,7 +88,7 @@ fn eliminate(ir: &Ir, lay: &mut Working) {
         let carrier = |c: ChannelId| reads.iter().copied().find(|&r| lay.resources[r].slot_of(c).is_some());
         match lay.passes[pi].kind {
             IrPassKind::Map | IrPassKind::Geometry { .. } => {
-                let mut roots: Vec<H> = needed.iter().filter_map(|&c| ir.channels[c].value).collect();
+                let mut roots: Vec<ExprId> = needed.iter().filter_map(|&c| ir.channels[c].value).collect();
                 if let IrPassKind::Geometry { keep: Some(k), .. } = lay.passes[pi].kind {
                     roots.push(k);
                 }

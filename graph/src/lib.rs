@@ -267,6 +267,81 @@ impl Draw {
             | Draw::Primitives { .. } => false,
         }
     }
+
+    /// Whether the step appends records to a generated buffer (a Geometry pass's
+    /// classification: silhouette edges, depth discontinuities).
+    pub fn generates_records(&self) -> bool {
+        match self {
+            Draw::Silhouettes { .. } | Draw::Discontinuities { .. } => true,
+            Draw::SceneFromLight
+            | Draw::SceneFromCamera
+            | Draw::CameraGBuffer
+            | Draw::ComputePixels
+            | Draw::FullScreen
+            | Draw::MipLevels
+            | Draw::ComputeRows
+            | Draw::ComputeColumns
+            | Draw::ComputeTexels
+            | Draw::ComputeMipLevels
+            | Draw::Primitives { .. } => false,
+        }
+    }
+
+    /// Whether the step is part of a deferred Shade (its G-buffer raster, or the compute
+    /// step over its pixels), which only a Shade pass may hold.
+    pub fn is_deferred_shade(&self) -> bool {
+        match self {
+            Draw::CameraGBuffer | Draw::ComputePixels => true,
+            Draw::SceneFromLight
+            | Draw::SceneFromCamera
+            | Draw::FullScreen
+            | Draw::MipLevels
+            | Draw::ComputeRows
+            | Draw::ComputeColumns
+            | Draw::ComputeTexels
+            | Draw::ComputeMipLevels
+            | Draw::Silhouettes { .. }
+            | Draw::Primitives { .. }
+            | Draw::Discontinuities { .. } => false,
+        }
+    }
+
+    /// Whether a compute step stores into its target textures (which must then have a
+    /// storage format).
+    pub fn stores_textures(&self) -> bool {
+        match self {
+            Draw::ComputeTexels | Draw::ComputeMipLevels => true,
+            Draw::SceneFromLight
+            | Draw::SceneFromCamera
+            | Draw::CameraGBuffer
+            | Draw::ComputePixels
+            | Draw::FullScreen
+            | Draw::MipLevels
+            | Draw::ComputeRows
+            | Draw::ComputeColumns
+            | Draw::Silhouettes { .. }
+            | Draw::Primitives { .. }
+            | Draw::Discontinuities { .. } => false,
+        }
+    }
+
+    /// Whether the step writes the levels below the base of its targets' mip chains.
+    pub fn writes_levels_below_base(&self) -> bool {
+        match self {
+            Draw::MipLevels | Draw::ComputeMipLevels => true,
+            Draw::SceneFromLight
+            | Draw::SceneFromCamera
+            | Draw::CameraGBuffer
+            | Draw::ComputePixels
+            | Draw::FullScreen
+            | Draw::ComputeRows
+            | Draw::ComputeColumns
+            | Draw::ComputeTexels
+            | Draw::Silhouettes { .. }
+            | Draw::Primitives { .. }
+            | Draw::Discontinuities { .. } => false,
+        }
+    }
 }
 
 /// Workgroup side of [`Draw::ComputeTexels`] and [`Draw::ComputePixels`] steps (8 x 8
@@ -418,17 +493,16 @@ impl SceneFacts {
     /// directional light and a distant disk (whose extent is its angle); the spread is 0
     /// for every light but a distant disk.
     pub fn zero_inputs(&self) -> Vec<&'static str> {
-        let mut zero = Vec::new();
-        if matches!(self.light, LightKind::Point | LightKind::Directional) {
-            zero.push("light_size");
-        }
-        if matches!(self.light, LightKind::Point | LightKind::Directional | LightKind::DistantDisk) {
-            zero.push("light_width");
-        }
-        if self.light != LightKind::DistantDisk {
-            zero.push("light_spread");
-        }
-        zero
+        let k = self.light;
+        [
+            ("light_size", k.has_size()),
+            ("light_width", k.has_width()),
+            ("light_spread", k.has_spread()),
+        ]
+        .into_iter()
+        .filter(|(_, has)| !has)
+        .map(|(name, _)| name)
+        .collect()
     }
 }
 
@@ -481,6 +555,44 @@ impl LightKind {
 
     pub fn from_name(name: &str) -> Option<LightKind> {
         LightKind::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// Whether the light has a size in world units (`light_size`: a radius or half-extent):
+    /// 0 for a point and a directional light, and for a distant disk, whose extent is its
+    /// angle.
+    pub fn has_size(self) -> bool {
+        match self {
+            LightKind::Sphere
+            | LightKind::Disk
+            | LightKind::Rectangle
+            | LightKind::Segment
+            | LightKind::Triangle
+            | LightKind::DistantDisk => true,
+            LightKind::Point | LightKind::Directional => false,
+        }
+    }
+
+    /// Whether the light has a width across the shadow map (`light_width`); 0 for a point,
+    /// a directional light and a distant disk.
+    pub fn has_width(self) -> bool {
+        match self {
+            LightKind::Sphere | LightKind::Disk | LightKind::Rectangle | LightKind::Segment | LightKind::Triangle => true,
+            LightKind::Point | LightKind::Directional | LightKind::DistantDisk => false,
+        }
+    }
+
+    /// Whether the light has an angular spread (`light_spread`): a distant disk only.
+    pub fn has_spread(self) -> bool {
+        match self {
+            LightKind::DistantDisk => true,
+            LightKind::Point
+            | LightKind::Directional
+            | LightKind::Sphere
+            | LightKind::Disk
+            | LightKind::Rectangle
+            | LightKind::Segment
+            | LightKind::Triangle => false,
+        }
     }
 
     /// True for lights at infinity (orthographic light views).
@@ -1215,7 +1327,7 @@ impl PassGraph {
                     });
                 }
                 // a deferred Shade: the G-buffer, then the pixels that read it
-                if matches!(s.draw, Draw::CameraGBuffer | Draw::ComputePixels) && p.kind != PassKind::Shade {
+                if s.draw.is_deferred_shade() && p.kind != PassKind::Shade {
                     return Err(GraphError::Step {
                         pass: p.name.clone(),
                         message: format!("a {:?} step belongs to a Shade pass, not a {:?} pass", s.draw, p.kind),
@@ -1243,7 +1355,7 @@ impl PassGraph {
                     }
                 }
                 for w in &s.writes {
-                    if matches!(s.draw, Draw::ComputeTexels | Draw::ComputeMipLevels)
+                    if s.draw.stores_textures()
                         && let Some(t) = self.texture(&w.texture)
                         && !t.format.storable()
                     {

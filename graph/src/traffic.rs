@@ -67,6 +67,26 @@ impl Sizes {
     }
 }
 
+/// Whether a step's reads are compulsory traffic, every texel of what it reads once: a
+/// full-screen or compute step over the map reads its inputs whole; the camera's raster, a
+/// classification over the scene's edges and a draw of generated primitives read only
+/// where their fragments or edges look.
+fn reads_whole_textures(d: &Draw) -> bool {
+    match d {
+        Draw::SceneFromCamera | Draw::Silhouettes { .. } | Draw::Primitives { .. } => false,
+        Draw::SceneFromLight
+        | Draw::CameraGBuffer
+        | Draw::ComputePixels
+        | Draw::FullScreen
+        | Draw::MipLevels
+        | Draw::ComputeRows
+        | Draw::ComputeColumns
+        | Draw::ComputeTexels
+        | Draw::ComputeMipLevels
+        | Draw::Discontinuities { .. } => true,
+    }
+}
+
 /// Compulsory bytes of one step (one view of it).
 pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffic {
     let texture = |name: &str| graph.textures.iter().find(|t| t.name == name);
@@ -74,11 +94,7 @@ pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffi
     let mut t = Traffic::default();
     // the levels below the base of a chain: 1/4 + 1/16 + ... of it
     let chain = |d: &Draw| {
-        if matches!(d, Draw::MipLevels | Draw::ComputeMipLevels) {
-            1.0 / 3.0
-        } else {
-            1.0
-        }
+        if d.writes_levels_below_base() { 1.0 / 3.0 } else { 1.0 }
     };
     for w in &s.writes {
         if let Some(tex) = texture(&w.texture) {
@@ -109,7 +125,7 @@ pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffi
         | Draw::Primitives { .. }
         | Draw::Discontinuities { .. } => {}
     }
-    if kind == PassKind::Shade || matches!(s.draw, Draw::SceneFromCamera | Draw::Silhouettes { .. } | Draw::Primitives { .. }) {
+    if kind == PassKind::Shade || !reads_whole_textures(&s.draw) {
         return t;
     }
     let written_layers = s.writes.len() as u32;

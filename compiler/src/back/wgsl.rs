@@ -94,7 +94,7 @@ const COMP: [char; 4] = ['x', 'y', 'z', 'w'];
 
 /// Where expressions are evaluated.
 #[derive(Clone, Copy, PartialEq, Eq)]
-enum Side {
+enum Site {
     /// Per shadow-map texel (`texel` is the integer coordinate).
     Map,
     /// Per fragment of a Geometry pass's primitives (`texel` is the fragment's shadow-map
@@ -107,14 +107,14 @@ enum Side {
 /// Emits straight-line WGSL for a set of expression roots.
 struct Emitter<'a> {
     ir: &'a Program<'a>,
-    side: Side,
+    site: Site,
     body: Vec<Line>,
     /// What the code after the body reads: every value `emit` returned (a name, or an
     /// expression of names).
     roots: std::collections::HashSet<String>,
     /// Where long bodies are split into functions.
     split: Split,
-    names: HashMap<H, String>,
+    names: HashMap<ExprId, String>,
     fetches: HashMap<String, String>,
     /// Textures this module reads: (name, binding).
     bindings: Vec<(String, View)>,
@@ -138,10 +138,10 @@ struct Emitter<'a> {
 }
 
 impl<'a> Emitter<'a> {
-    fn new(ir: &'a Program<'a>, side: Side, reads: Vec<ResId>) -> Self {
+    fn new(ir: &'a Program<'a>, site: Site, reads: Vec<ResId>) -> Self {
         Emitter {
             ir,
-            side,
+            site,
             body: Vec::new(),
             roots: Default::default(),
             split: Split::default(),
@@ -204,10 +204,10 @@ impl<'a> Emitter<'a> {
     fn input(&mut self, i: Input) -> String {
         // check refuses receiver inputs on the map side and geometry inputs outside
         // Geometry passes' channels
-        debug_assert!(match self.side {
-            Side::Receiver => i.side() != crate::builtins::Side::Geometry,
-            Side::Geometry => matches!(i.side(), crate::builtins::Side::Both | crate::builtins::Side::Geometry),
-            Side::Map => i.side() == crate::builtins::Side::Both,
+        debug_assert!(match self.site {
+            Site::Receiver => i.side() != crate::builtins::Side::Geometry,
+            Site::Geometry => matches!(i.side(), crate::builtins::Side::Both | crate::builtins::Side::Geometry),
+            Site::Map => i.side() == crate::builtins::Side::Both,
         });
         i.desc().wgsl.to_string()
     }
@@ -234,7 +234,7 @@ impl<'a> Emitter<'a> {
         }
     }
 
-    fn emit(&mut self, root: H) -> Result<String, Diagnostic> {
+    fn emit(&mut self, root: ExprId) -> Result<String, Diagnostic> {
         for h in self.ir.arena.postorder(&[root]) {
             if self.names.contains_key(&h) {
                 continue;
@@ -258,11 +258,11 @@ impl<'a> Emitter<'a> {
         Ok(name)
     }
 
-    fn n(&self, h: H) -> &str {
+    fn n(&self, h: ExprId) -> &str {
         &self.names[&h]
     }
 
-    fn expr(&mut self, h: H) -> Result<String, Diagnostic> {
+    fn expr(&mut self, h: ExprId) -> Result<String, Diagnostic> {
         let ir = self.ir;
         let a = &ir.arena;
         let node = a.node(h).clone();
@@ -351,7 +351,7 @@ impl<'a> Emitter<'a> {
         Ok(Self::decode(&format!("{v}.{}", COMP[comp as usize]), enc))
     }
 
-    fn sample(&mut self, ch: ChannelId, res: ResId, how: SampleFn, args: &[H], view: Option<u8>) -> Result<String, Diagnostic> {
+    fn sample(&mut self, ch: ChannelId, res: ResId, how: SampleFn, args: &[ExprId], view: Option<u8>) -> Result<String, Diagnostic> {
         if let Some(k) = view {
             self.views.entry(k).or_default();
         }
@@ -807,7 +807,7 @@ fn map(ir: &Program, pass: &IrPass, limits: &Limits, split: Split) -> Result<(St
     let entries = channel_entries(
         ir,
         pass,
-        Side::Map,
+        Site::Map,
         limits,
         EntryForm {
             signature,
@@ -993,7 +993,7 @@ struct ChannelEntries<'a> {
 fn channel_entries<'a>(
     ir: &'a Program,
     pass: &IrPass,
-    side: Side,
+    site: Site,
     limits: &Limits,
     form: EntryForm<'_, 'a>,
 ) -> Result<ChannelEntries<'a>, Diagnostic> {
@@ -1008,7 +1008,7 @@ fn channel_entries<'a>(
             ..
         }
     );
-    let mut decl = Emitter::new(ir, side, pass.reads.clone());
+    let mut decl = Emitter::new(ir, site, pass.reads.clone());
     decl.per_sample_pass = per_sample;
     for (ti, tex) in res.textures.iter().enumerate() {
         if form.compute {
@@ -1026,7 +1026,7 @@ fn channel_entries<'a>(
             if !form.compute {
                 structs.push_str(&out_struct(&out_name, chunk.len(), form.depth.is_some()));
             }
-            let mut em = Emitter::new(ir, side, pass.reads.clone());
+            let mut em = Emitter::new(ir, site, pass.reads.clone());
             em.per_sample_pass = per_sample;
             em.split = form.split;
             em.bindings = decl.bindings.clone();
@@ -1117,7 +1117,7 @@ fn geometry_buffers(pass: &IrPass, steps: &[Step]) -> Vec<graph::BufferDecl> {
     };
     steps
         .iter()
-        .filter(|s| matches!(s.draw, Draw::Silhouettes { .. } | Draw::Discontinuities { .. }))
+        .filter(|s| s.draw.generates_records())
         .map(|_| graph::BufferDecl {
             name: geometry_buffer_name(pass),
             record_bytes: lib.record_bytes,
@@ -1165,7 +1165,7 @@ fn geometry(
     pass: &IrPass,
     primitive: Primitive,
     resolve: Resolve,
-    keep: Option<H>,
+    keep: Option<ExprId>,
     limits: &Limits,
     split: Split,
 ) -> Result<(String, Vec<Step>), Diagnostic> {
@@ -1195,7 +1195,7 @@ fn geometry(
     // reads. The penumbra map holds the penumbrae of those surfaces only (Wyman & Hansen
     // 2003, section 3), so fragments behind it are discarded (the paper's fragment
     // program, line 4).
-    let surface = if primitive == Primitive::ConesAndSheets {
+    let surface = if primitive.behind_the_lit_surface_discarded() {
         Some(
             pass.reads
                 .iter()
@@ -1212,7 +1212,7 @@ fn geometry(
     };
     // Skins: the per-sample Depth resource whose discontinuities they span, and the
     // detector's threshold.
-    let skins = if primitive == Primitive::Skins {
+    let skins = if primitive.joins_sample_views() {
         let depth = pass
             .reads
             .iter()
@@ -1256,7 +1256,7 @@ fn geometry(
     let entries = channel_entries(
         ir,
         pass,
-        Side::Geometry,
+        Site::Geometry,
         limits,
         EntryForm {
             signature: &signature,
@@ -1942,9 +1942,9 @@ pub fn shade_is_deferred(ir: &Program, pass: &IrPass) -> bool {
 /// Both compute the receiver's inputs the same way from the same values, except that the
 /// deferred form reads the normal through an octahedral f32 encoding and the footprint of
 /// implicit-LOD lookups at F16.
-fn shade(ir: &Program, pass: &IrPass, visibility: H, split: Split) -> Result<(String, Vec<Step>), Diagnostic> {
+fn shade(ir: &Program, pass: &IrPass, visibility: ExprId, split: Split) -> Result<(String, Vec<Step>), Diagnostic> {
     let deferred = shade_is_deferred(ir, pass);
-    let mut em = Emitter::new(ir, Side::Receiver, pass.reads.clone());
+    let mut em = Emitter::new(ir, Site::Receiver, pass.reads.clone());
     em.split = split;
     em.deferred = deferred;
     let v = em.emit(visibility)?;

@@ -301,6 +301,37 @@ pub enum Primitive {
 impl Primitive {
     /// The names a technique writes, in declaration order.
     pub const NAMES: [&'static str; 4] = ["ConesAndSheets", "Ribbons", "Skins", "BackFaces"];
+
+    /// Whether it joins two light-sample views (skins span one sample's depth
+    /// discontinuities, warped into its neighbour's view): it needs `view: PerSample`, a
+    /// per-sample Depth resource and the discontinuity threshold.
+    pub fn joins_sample_views(self) -> bool {
+        match self {
+            Primitive::Skins => true,
+            Primitive::ConesAndSheets | Primitive::Ribbons | Primitive::BackFaces => false,
+        }
+    }
+
+    /// The resolve its fragments need: `Some(true)`, the nearest (a depth test on their
+    /// depth: ribbons, back faces); `Some(false)`, a blend rule (cones and sheets write no
+    /// depth); `None`, any (skins).
+    pub fn keeps_nearest(self) -> Option<bool> {
+        match self {
+            Primitive::Ribbons | Primitive::BackFaces => Some(true),
+            Primitive::ConesAndSheets => Some(false),
+            Primitive::Skins => None,
+        }
+    }
+
+    /// Whether its fragments behind the surface the light sees are discarded, which needs
+    /// the Depth resource the pass reads (Wyman & Hansen 2003, section 3: the penumbra map
+    /// holds the penumbrae of those surfaces only).
+    pub fn behind_the_lit_surface_discarded(self) -> bool {
+        match self {
+            Primitive::ConesAndSheets => true,
+            Primitive::Ribbons | Primitive::Skins | Primitive::BackFaces => false,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -17,22 +17,22 @@ use std::collections::HashSet;
 pub enum ValidationError {
     /// An operand of `node` is `operand`, which is not an earlier node.
     OperandOrder {
-        node: H,
-        operand: H,
+        node: ExprId,
+        operand: ExprId,
     },
     /// A handle of the expression arena out of range, where `at` says.
     BadNode {
         at: String,
-        node: H,
+        node: ExprId,
     },
     /// The type of `node` does not follow from its operands.
     NodeType {
-        node: H,
+        node: ExprId,
         ty: Ty,
         why: String,
     },
     BadParam {
-        node: H,
+        node: ExprId,
         param: ParamId,
     },
     BadChannel {
@@ -60,11 +60,11 @@ pub enum ValidationError {
     /// (receiver side) from a map-side root.
     WrongSide {
         at: String,
-        node: H,
+        node: ExprId,
     },
     /// A lookup of a resource the Shade pass does not read, or of a channel it lacks.
     BadLookup {
-        node: H,
+        node: ExprId,
         why: String,
     },
     /// Resource `resource` names `pass` as its writer, but that pass writes something else.
@@ -135,7 +135,7 @@ pub fn validate<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
 fn nodes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
     let a = &ir.arena;
     for i in 0..a.len() {
-        let h = H::new(i);
+        let h = ExprId::new(i);
         for op in a.operands(h) {
             if op.index() >= i {
                 return Err(ValidationError::OperandOrder { node: h, operand: op });
@@ -261,7 +261,7 @@ fn nodes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationError> {
 
 /// A root expression: in the arena, an f32, and only of its side (`map`: channels, no
 /// lookups; receiver: lookups, no channels).
-fn root<S: SlotView>(ir: &Program<S>, h: H, at: &str, map: bool) -> Result<(), ValidationError> {
+fn root<S: SlotView>(ir: &Program<S>, h: ExprId, at: &str, map: bool) -> Result<(), ValidationError> {
     if h.index() >= ir.arena.len() {
         return Err(ValidationError::BadNode {
             at: at.to_string(),
@@ -477,13 +477,13 @@ mod tests {
     #[test]
     fn an_operand_after_its_user_is_refused() {
         let mut ir = compiled("hard");
-        let last = H::new(ir.arena.len());
+        let last = ExprId::new(ir.arena.len());
         let one = ir.arena.f32(1.0);
         ir.arena.nodes.push((Node::Binary(BinOp::Add, one, last), Ty::F32, Span::UNDEFINED));
         assert_eq!(
             validate_ir(&ir),
             Err(ValidationError::OperandOrder {
-                node: H::new(ir.arena.len() - 1),
+                node: ExprId::new(ir.arena.len() - 1),
                 operand: last
             })
         );
@@ -496,7 +496,7 @@ mod tests {
         let one = ir.arena.f32(1.0);
         let k = ir.arena.i32(2);
         ir.arena.nodes.push((Node::Binary(BinOp::Add, one, k), Ty::F32, Span::UNDEFINED));
-        let bad = H::new(ir.arena.len() - 1);
+        let bad = ExprId::new(ir.arena.len() - 1);
         assert!(matches!(validate_ir(&ir), Err(ValidationError::NodeType { node, .. }) if node == bad));
         // a swizzle of a scalar
         let mut ir = compiled("hard");
