@@ -1,0 +1,348 @@
+//! The checks of a scene file's values, and the limits they enforce.
+
+use crate::error::SceneError;
+use crate::schema::{Camera, Mesh, Object, Rotation, SceneDesc};
+
+use glam::{Vec2, Vec3};
+use sshc_light::Light;
+
+/// Most segments of a `Sphere` mesh (it has `segments * max(2, segments / 2) * 2`
+/// triangles: 1,048,576 at this limit).
+pub const MAX_SPHERE_SEGMENTS: u32 = 1024;
+/// Most triangles in a scene, all objects together (checked before allocating).
+pub const MAX_SCENE_TRIANGLES: usize = 1 << 24;
+/// Largest OBJ file read, in bytes (256 MiB).
+pub const MAX_OBJ_BYTES: u64 = 256 << 20;
+/// Smallest magnitude of a scale component: below it the object's triangles underflow f32.
+pub const MIN_SCALE: f32 = 1e-10;
+/// Largest camera `near`, `far` and position-to-target distance: the projection multiplies
+/// near by far, which must stay within f32.
+pub const MAX_CAMERA_DISTANCE: f32 = 1e15;
+/// Most pixels of the scene's camera (4096 x 4096).
+pub const MAX_CAMERA_PIXELS: u64 = 4096 * 4096;
+/// Smallest object size (bounds' diagonal) relative to the scene's largest coordinate
+/// magnitude: 2^-16, the ground truth's ray offset relative to a point's coordinates
+/// (128 to 256 ulp); see [`crate::Scene::check_precision`].
+pub const PRECISION_RATIO: f32 = 1.0 / 65536.0;
+/// f32 ulps of a local light's distance allowed per shadow-map texel of the scene: the
+/// light view's coordinates must resolve 1/16 of a texel; see [`crate::Scene::check_precision`].
+pub const LIGHT_PRECISION_MARGIN: f32 = 16.0;
+
+fn finite3(v: Vec3) -> bool {
+    v.is_finite()
+}
+
+/// Checks ranges and normalises directions in place.
+pub(crate) fn validate(desc: &mut SceneDesc) -> Result<(), SceneError> {
+    if desc.shadow_map == 0 {
+        return Err(SceneError::invalid(
+            "shadow_map",
+            "the shadow map has no texels",
+            "write a resolution of at least 1, such as 512",
+        ));
+    }
+    validate_camera(&desc.camera)?;
+    for (i, light) in desc.lights.iter_mut().enumerate() {
+        let name = light.kind_name();
+        let at = |field: &str| format!("lights[{i}] ({name}).{field}");
+        validate_light(light, &at)?;
+    }
+    for (i, object) in desc.objects.iter().enumerate() {
+        let at = |field: &str| match &object.name {
+            Some(n) => format!("objects[{i}] (\"{n}\").{field}"),
+            None => format!("objects[{i}].{field}"),
+        };
+        validate_object(object, &at)?;
+    }
+    Ok(())
+}
+
+fn validate_camera(camera: &Camera) -> Result<(), SceneError> {
+    let (name, position, target, up, width, height, near, far) = match camera {
+        Camera::Perspective {
+            position,
+            target,
+            up,
+            width,
+            height,
+            near,
+            far,
+            ..
+        } => ("Perspective", position, target, up, width, height, near, far),
+        Camera::Orthographic {
+            position,
+            target,
+            up,
+            width,
+            height,
+            near,
+            far,
+            ..
+        } => ("Orthographic", position, target, up, width, height, near, far),
+    };
+    let at = |f: &str| format!("camera ({name}).{f}");
+    for (field, v) in [("position", position), ("target", target), ("up", up)] {
+        if !finite3(*v) {
+            return Err(SceneError::invalid(at(field), "the vector is not finite", "write finite numbers"));
+        }
+    }
+    let dir = *target - *position;
+    if dir.length_squared() == 0.0 {
+        return Err(SceneError::invalid(
+            at("target"),
+            "the camera looks at its own position",
+            "move `target` away from `position`",
+        ));
+    }
+    let distance = (target.as_dvec3() - position.as_dvec3()).length();
+    if distance > f64::from(MAX_CAMERA_DISTANCE) {
+        return Err(SceneError::invalid(
+            at("target"),
+            format!("`target` is {distance:e} from `position`, beyond the limit of {MAX_CAMERA_DISTANCE:e} (f32 cannot hold the view)"),
+            "bring the camera closer to its target, or scale the scene down",
+        ));
+    }
+    if up.length_squared() == 0.0 || dir.normalize().cross(up.normalize()).length() < 1e-4 {
+        return Err(SceneError::invalid(
+            at("up"),
+            "`up` is zero or parallel to the view direction",
+            "choose an `up` not parallel to `target - position` (looking straight down, use (0.0, 0.0, -1.0))",
+        ));
+    }
+    if *width == 0 || *height == 0 {
+        return Err(SceneError::invalid(
+            at("width"),
+            "the image has no pixels",
+            "write a width and height of at least 1",
+        ));
+    }
+    let pixels = u64::from(*width) * u64::from(*height);
+    if pixels > MAX_CAMERA_PIXELS {
+        return Err(SceneError::invalid(
+            at("width"),
+            format!("{width} x {height} is {pixels} pixels, above the limit of {MAX_CAMERA_PIXELS} (4096 x 4096)"),
+            "write a smaller camera size: the read-backs hold several float images of this size",
+        ));
+    }
+    match camera {
+        Camera::Perspective { fov_y_degrees, .. } if !(*fov_y_degrees > 0.0 && *fov_y_degrees < 180.0) => {
+            return Err(SceneError::invalid(
+                at("fov_y_degrees"),
+                format!("field of view {fov_y_degrees} is outside (0, 180) degrees"),
+                "write a field of view such as 45.0",
+            ));
+        }
+        Camera::Orthographic { half_height, .. } if !(*half_height > 0.0 && half_height.is_finite()) => {
+            return Err(SceneError::invalid(
+                at("half_height"),
+                format!("half height {half_height} is not positive"),
+                "write a positive half height",
+            ));
+        }
+        Camera::Perspective { .. } | Camera::Orthographic { .. } => {}
+    }
+    if let Some(n) = near
+        && !(*n > 0.0 && n.is_finite())
+    {
+        return Err(SceneError::invalid(
+            at("near"),
+            format!("near {n} is not positive"),
+            "write a positive near distance or leave it out",
+        ));
+    }
+    for (field, v) in [("near", near), ("far", far)] {
+        if let Some(v) = v
+            && *v > MAX_CAMERA_DISTANCE
+        {
+            return Err(SceneError::invalid(
+                at(field),
+                format!(
+                    "{field} {v:e} is beyond the limit of {MAX_CAMERA_DISTANCE:e}: the projection multiplies near by far, which overflows f32"
+                ),
+                "write near and far of at most 1e15, or leave them out to fit the scene",
+            ));
+        }
+    }
+    if let Some(f) = far
+        && !(*f > near.unwrap_or(0.0) && f.is_finite())
+    {
+        return Err(SceneError::invalid(
+            at("far"),
+            format!("far {f} is not positive and beyond near"),
+            "write far > near > 0 or leave them out",
+        ));
+    }
+    Ok(())
+}
+
+fn check_unit(v: &mut Vec3, at: String) -> Result<(), SceneError> {
+    if !(finite3(*v) && v.length_squared() > 0.0) {
+        return Err(SceneError::invalid(
+            at,
+            "the direction is zero or not finite",
+            "write a non-zero direction such as (0.0, -1.0, 0.0)",
+        ));
+    }
+    *v = v.normalize();
+    Ok(())
+}
+
+fn check_point(v: &Vec3, at: String) -> Result<(), SceneError> {
+    if finite3(*v) {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(at, "the position is not finite", "write finite numbers"))
+    }
+}
+
+fn check_size(x: f32, at: String, what: &str) -> Result<(), SceneError> {
+    if x >= 0.0 && x.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            at,
+            format!("{what} {x} is negative or not finite"),
+            format!("write a {what} >= 0"),
+        ))
+    }
+}
+
+fn validate_light(light: &mut Light, at: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
+    match light {
+        Light::Point { position } => check_point(position, at("position")),
+        Light::Directional { direction } => check_unit(direction, at("direction")),
+        Light::Sphere { center, radius } => {
+            check_point(center, at("center"))?;
+            check_size(*radius, at("radius"), "radius")
+        }
+        Light::Disk { center, normal, radius } => {
+            check_point(center, at("center"))?;
+            check_unit(normal, at("normal"))?;
+            check_size(*radius, at("radius"), "radius")
+        }
+        Light::Rectangle {
+            center,
+            normal,
+            u_axis,
+            half_width,
+            half_height,
+        } => {
+            check_point(center, at("center"))?;
+            check_unit(normal, at("normal"))?;
+            check_size(*half_width, at("half_width"), "half width")?;
+            check_size(*half_height, at("half_height"), "half height")?;
+            let u = *u_axis - *normal * u_axis.dot(*normal);
+            if !(u.is_finite() && u.length() > 1e-4 * u_axis.length()) {
+                return Err(SceneError::invalid(
+                    at("u_axis"),
+                    "`u_axis` is zero or parallel to `normal`",
+                    "write an axis that lies in the rectangle's plane, perpendicular to `normal`",
+                ));
+            }
+            *u_axis = u.normalize();
+            Ok(())
+        }
+        Light::Segment { a, b } => {
+            check_point(a, at("a"))?;
+            check_point(b, at("b"))
+        }
+        Light::Triangle { a, b, c } => {
+            check_point(a, at("a"))?;
+            check_point(b, at("b"))?;
+            check_point(c, at("c"))
+        }
+        Light::DistantDisk { direction, angle_degrees } => {
+            check_unit(direction, at("direction"))?;
+            if !(*angle_degrees >= 0.0 && *angle_degrees < 180.0) {
+                return Err(SceneError::invalid(
+                    at("angle_degrees"),
+                    format!("angular diameter {angle_degrees} is outside [0, 180) degrees"),
+                    "write the full angular diameter in degrees, such as 0.53 for the sun",
+                ));
+            }
+            Ok(())
+        }
+    }
+}
+
+fn validate_object(object: &Object, at: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
+    let t = &object.transform;
+    if !(t.translate.is_finite() && t.scale.is_finite()) {
+        return Err(SceneError::invalid(
+            at("transform"),
+            "the transform is not finite",
+            "write finite numbers",
+        ));
+    }
+    let s = t.scale;
+    if s.x == 0.0 || s.y == 0.0 || s.z == 0.0 {
+        return Err(SceneError::invalid(
+            at("transform.scale"),
+            format!("a scale of 0 flattens the object (scale ({}, {}, {}))", s.x, s.y, s.z),
+            "write non-zero scales",
+        ));
+    }
+    if s.abs().min_element() < MIN_SCALE {
+        return Err(SceneError::invalid(
+            at("transform.scale"),
+            format!(
+                "scale ({:e}, {:e}, {:e}) is too small: below {MIN_SCALE:e} the object degenerates in f32 (its triangles lose their area)",
+                s.x, s.y, s.z
+            ),
+            "write scales of at least 1e-10 in magnitude, or change the scene's units",
+        ));
+    }
+    match &t.rotate {
+        Rotation::AxisAngle { axis, degrees } if !(axis.is_finite() && axis.length_squared() > 0.0 && degrees.is_finite()) => {
+            return Err(SceneError::invalid(
+                at("transform.rotate"),
+                "the rotation axis is zero or not finite",
+                "write a non-zero axis",
+            ));
+        }
+        Rotation::Euler(x, y, z) if !(x.is_finite() && y.is_finite() && z.is_finite()) => {
+            return Err(SceneError::invalid(
+                at("transform.rotate"),
+                "the angles are not finite",
+                "write finite angles",
+            ));
+        }
+        Rotation::None | Rotation::Euler(..) | Rotation::AxisAngle { .. } => {}
+    }
+    match &object.mesh {
+        Mesh::Plane { size } if !(size.is_finite() && size.cmpgt(Vec2::ZERO).all()) => Err(SceneError::invalid(
+            at("mesh.size"),
+            "a plane needs a positive size",
+            "write (x, z) sizes > 0",
+        )),
+        Mesh::Box { size } if !(size.is_finite() && size.cmpgt(Vec3::ZERO).all()) => Err(SceneError::invalid(
+            at("mesh.size"),
+            "a box needs a positive size",
+            "write (x, y, z) sizes > 0",
+        )),
+        Mesh::Sphere { radius, .. } if !(*radius > 0.0 && radius.is_finite()) => Err(SceneError::invalid(
+            at("mesh.radius"),
+            format!("radius {radius} is not positive"),
+            "write a radius > 0",
+        )),
+        Mesh::Sphere { segments, .. } if *segments < 3 => Err(SceneError::invalid(
+            at("mesh.segments"),
+            format!("{segments} segments cannot make a sphere"),
+            "write at least 3 segments",
+        )),
+        Mesh::Sphere { segments, .. } if *segments > MAX_SPHERE_SEGMENTS => Err(SceneError::invalid(
+            at("mesh.segments"),
+            format!("{segments} segments is above the limit of {MAX_SPHERE_SEGMENTS}"),
+            format!("write at most {MAX_SPHERE_SEGMENTS} segments (a sphere of {MAX_SPHERE_SEGMENTS} segments has 1,048,576 triangles)"),
+        )),
+        Mesh::Triangle { a, b, c } if !(a.is_finite() && b.is_finite() && c.is_finite()) => {
+            Err(SceneError::invalid(at("mesh"), "a corner is not finite", "write finite numbers"))
+        }
+        Mesh::Quad { a, b, c, d } if !(a.is_finite() && b.is_finite() && c.is_finite() && d.is_finite()) => {
+            Err(SceneError::invalid(at("mesh"), "a corner is not finite", "write finite numbers"))
+        }
+        Mesh::Plane { .. } | Mesh::Box { .. } | Mesh::Sphere { .. } | Mesh::Triangle { .. } | Mesh::Quad { .. } | Mesh::Obj { .. } => {
+            Ok(())
+        }
+    }
+}
