@@ -646,7 +646,7 @@ impl Executor {
                 Some(_) => format!("light {l} is not bound ({} light(s) are)", self.bound.len()),
             }));
         };
-        let inputs = LightInputs::fit(light, &g.boxes(), fit, res.shadow_size, res.samples)?;
+        let inputs = LightInputs::fit(light, g.boxes(), fit, res.shadow_size, res.samples)?;
         self.set_light(l, &inputs)
     }
 

@@ -38,8 +38,8 @@ pub struct Boxes {
     pub others: Vec<[[f32; 3]; 2]>,
 }
 
-fn box_corners(b: &[[f32; 3]; 2]) -> impl Iterator<Item = Vec3> + '_ {
-    (0..8).map(move |i| Vec3::from_array([0, 1, 2].map(|a| b[(i >> a) & 1][a])))
+fn box_corners(b: &[[f32; 3]; 2]) -> [Vec3; 8] {
+    sshc_light::corners((Vec3::from_array(b[0]), Vec3::from_array(b[1])))
 }
 
 impl Occluders for Boxes {
@@ -54,6 +54,27 @@ impl Occluders for Boxes {
     }
     fn has_casters(&self) -> bool {
         !self.casters.is_empty()
+    }
+}
+
+/// [`Boxes`] with their bounds computed once (each fit asks for them several times).
+struct Bounded<'a> {
+    boxes: &'a Boxes,
+    bounds: (Vec3, Vec3),
+}
+
+impl Occluders for Bounded<'_> {
+    fn casters(&self) -> impl Iterator<Item = Vec3> + '_ {
+        self.boxes.casters()
+    }
+    fn points(&self) -> impl Iterator<Item = Vec3> + '_ {
+        self.boxes.points()
+    }
+    fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
+    }
+    fn has_casters(&self) -> bool {
+        self.boxes.has_casters()
     }
 }
 
@@ -120,9 +141,14 @@ impl LightInputs {
             .check()
             .map_err(|e| RuntimeError::Param(format!("the light ({}): {e}", light.kind_name())))?;
         boxes.check()?;
+        // the bounds walked once for the centre's fit and every sample's
+        let scene = Bounded {
+            boxes,
+            bounds: sshc_light::bounds_of(boxes.points()),
+        };
         let view_of = |l: &Light| match fit {
-            Fit::Scene => l.view(boxes.bounds()),
-            Fit::Casters => sshc_light::casters_view(l, boxes, shadow_size),
+            Fit::Scene => l.view(scene.bounds),
+            Fit::Casters => sshc_light::casters_view(l, &scene, shadow_size),
         };
         let v = view_of(light);
         let (fits, closed) = sshc_light::sample_views(light, samples, MAX_LIGHT_SAMPLES, view_of)

@@ -590,6 +590,9 @@ pub(crate) struct GeometryBuffers {
     /// Per instance: whether it casts, and its mesh's box (object space).
     casts: Vec<bool>,
     boxes: Vec<Option<[[f32; 3]; 2]>>,
+    /// The instances' world-space boxes under `transforms`, made again when they change
+    /// (what a light placed every frame is fitted to, without recomputing them).
+    world: Boxes,
 }
 
 impl GeometryBuffers {
@@ -846,7 +849,9 @@ impl GeometryBuffers {
                     .iter()
                     .map(|i| box_of(g.meshes[i.mesh].positions.iter().copied()))
                     .collect(),
+                world: Boxes::default(),
             };
+            out.world = world_boxes(&out.boxes, &out.casts, &out.transforms);
             out.write_records(&gpu.queue);
             out
         })
@@ -872,6 +877,7 @@ impl GeometryBuffers {
     /// placement records are written and placement runs in the next frame.
     pub fn write_transforms(&mut self, queue: &wgpu::Queue, transforms: &[[f32; 16]]) {
         self.transforms.copy_from_slice(transforms);
+        self.world = world_boxes(&self.boxes, &self.casts, &self.transforms);
         self.write_records(queue);
     }
 
@@ -914,8 +920,8 @@ impl GeometryBuffers {
     }
 
     /// The instances' world-space boxes under the current transforms ([`Geometry::boxes`]).
-    pub fn boxes(&self) -> Boxes {
-        world_boxes(&self.boxes, &self.casts, &self.transforms)
+    pub fn boxes(&self) -> &Boxes {
+        &self.world
     }
 
     /// The casting instances' bounding box under `transforms` (one per instance).
