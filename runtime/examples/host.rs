@@ -88,6 +88,7 @@ fn run(args: Args) -> Result<(), String> {
         transform: Mat4::IDENTITY.to_cols_array(),
         casts: false,
         receives: true,
+        moves: false,
     }];
     for k in 0..9 {
         let at = Vec3::new((k % 3) as f32 - 1.0, 0.0, (k / 3) as f32 - 1.0) * 1.4;
@@ -97,6 +98,7 @@ fn run(args: Args) -> Result<(), String> {
             transform: (Mat4::from_translation(at) * Mat4::from_rotation_y(k as f32 * 0.7)).to_cols_array(),
             casts: true,
             receives: true,
+            moves: true,
         });
     }
     let geometry = Geometry {

@@ -142,8 +142,8 @@ pub struct Executor {
     generation: u64,
     /// Frames recorded since the last binding.
     frames: u64,
-    /// A host's geometry ([`Executor::bind_geometry`]), shared by every light; `None`
-    /// when a triangle soup is bound.
+    /// The bound geometry, shared by every light: a host's ([`Executor::bind_geometry`]) or
+    /// a triangle soup's ([`Executor::bind_lights`], through [`Geometry::from_soup`]).
     geometry: Option<GeometryBuffers>,
     /// A host's pixels in place of the deferred Shade's G-buffer raster
     /// ([`Executor::set_host_pixels`]).
@@ -152,8 +152,6 @@ pub struct Executor {
     combine: Option<Combine>,
     /// The draw of the objects that receive no shadow, when the bound draws have some.
     unshadowed: Option<Unshadowed>,
-    /// A bound triangle soup's vertices and edges, shared by every light (`bind_lights`).
-    soup: Option<crate::geometry::HostScene>,
     timestamps: Option<Timestamps>,
     /// Linear depth written into the Depth pass's output instead of rasterising the scene.
     /// One map per view of the Depth pass (a single map serves every view).
@@ -317,7 +315,6 @@ impl Executor {
             pixels: None,
             combine: None,
             unshadowed: None,
-            soup: None,
             timestamps,
             depth_override: None,
             max_bytes: 4 << 30,
@@ -364,33 +361,32 @@ impl Executor {
     /// [`MAX_LIGHTS`]; every light's camera must have the same size.
     ///
     /// The lights share one scene: their soups must be the same (vertices, meshes, casting
-    /// and unshadowed ranges), and it is uploaded once, with its edge adjacency built once,
-    /// for every light ([`crate::resources::soup_scene`]: the same form a host geometry
-    /// takes).
+    /// and unshadowed ranges). It is bound as geometry ([`Geometry::from_soup`]: one mesh
+    /// and one world-space instance per object, drawn straight from its vertices), uploaded
+    /// once with its edge adjacency built once, for every light.
     pub fn bind_lights(&mut self, lights: &[SceneInputs]) -> Result<()> {
         // checked before anything is dropped: a refused set leaves the bound one as it was
-        if let Some(first) = lights.first() {
-            let same = |s: &SceneInputs| {
-                s.vertices.len() == first.vertices.len()
-                    && s.vertices.iter().zip(&first.vertices).all(|(a, b)| a.to_bits() == b.to_bits())
-                    && (&s.meshes, s.casting_vertices, &s.unshadowed) == (&first.meshes, first.casting_vertices, &first.unshadowed)
-            };
-            if let Some(l) = lights.iter().position(|s| !same(s)) {
-                return Err(RuntimeError::Param(format!(
-                    "light {l}'s scene differs from light 0's (its vertices, meshes, casting or unshadowed ranges): the lights of a frame share one scene"
-                )));
-            }
+        let Some(first) = lights.first() else {
+            return self.bind_all(lights);
+        };
+        let same = |s: &SceneInputs| {
+            s.vertices.len() == first.vertices.len()
+                && s.vertices.iter().zip(&first.vertices).all(|(a, b)| a.to_bits() == b.to_bits())
+                && (&s.meshes, s.casting_vertices, &s.unshadowed) == (&first.meshes, first.casting_vertices, &first.unshadowed)
+        };
+        if let Some(l) = lights.iter().position(|s| !same(s)) {
+            return Err(RuntimeError::Param(format!(
+                "light {l}'s scene differs from light 0's (its vertices, meshes, casting or unshadowed ranges): the lights of a frame share one scene"
+            )));
         }
+        let geometry = Geometry::from_soup(&first.vertices, &first.meshes, first.casting_vertices, &first.unshadowed)?;
         self.geometry = None;
-        self.soup = None;
-        if let Some(first) = lights.first() {
-            self.soup = Some(crate::resources::soup_scene(&self.gpu, &self.graph, first, self.max_bytes)?);
-        }
-        let bound = self.bind_all(lights);
-        if bound.is_err() {
-            self.soup = None;
-        }
-        bound
+        self.bound = Vec::new();
+        let buffers = crate::resources::scene_buffers(&self.gpu, &self.graph, self.usages.edges, first, &geometry, self.max_bytes);
+        // the soup's copy is freed before the textures are made
+        drop(geometry);
+        self.geometry = Some(buffers?);
+        self.bind_on_geometry(lights)
     }
 
     /// Bind a host's geometry ([`Geometry`]: indexed meshes uploaded once, instances with
@@ -426,16 +422,29 @@ impl Executor {
                 }
             }
         }
-        self.geometry = None;
-        self.soup = None;
-        self.bound = Vec::new();
-        let buffers = GeometryBuffers::new(&self.gpu, geometry, self.usages.edges)?;
-        self.geometry = Some(buffers);
         let inputs: Vec<SceneInputs> = lights
             .iter()
             .map(|l| SceneInputs::of(camera, l, camera_size, shadow_size))
             .collect();
-        let bound = self.bind_all(&inputs);
+        let Some(first) = inputs.first() else {
+            return self.bind_all(&inputs);
+        };
+        self.geometry = None;
+        self.bound = Vec::new();
+        self.geometry = Some(crate::resources::scene_buffers(
+            &self.gpu,
+            &self.graph,
+            self.usages.edges,
+            first,
+            geometry,
+            self.max_bytes,
+        )?);
+        self.bind_on_geometry(&inputs)
+    }
+
+    /// Bind `lights` on the geometry just uploaded; a refusal drops it (nothing is bound).
+    fn bind_on_geometry(&mut self, lights: &[SceneInputs]) -> Result<()> {
+        let bound = self.bind_all(lights);
         if bound.is_err() {
             self.geometry = None;
         }
@@ -451,9 +460,7 @@ impl Executor {
     /// [`Executor::set_light`] does.
     pub fn set_transforms(&mut self, transforms: &[[f32; 16]]) -> Result<()> {
         let Some(g) = &self.geometry else {
-            return Err(RuntimeError::NotFound(
-                "no host geometry is bound: call bind_geometry first (a triangle soup has no transforms)".into(),
-            ));
+            return Err(RuntimeError::NotFound("no geometry is bound: call bind_geometry first".into()));
         };
         // everything checked before anything is written: a refused set changes nothing
         g.check_transforms(transforms)?;
@@ -517,7 +524,7 @@ impl Executor {
         Ok(())
     }
 
-    /// Bind `lights` on the geometry bound (a host's, or each light's soup).
+    /// Bind `lights` on the bound geometry.
     fn bind_all(&mut self, lights: &[SceneInputs]) -> Result<()> {
         let gpu = self.gpu.clone();
         self.pixels = None;
@@ -578,7 +585,6 @@ impl Executor {
             .map(|s| LightUniforms::new(&s.camera(), &s.light_inputs(), s.shadow_size, true))
             .collect();
         self.camera = Some(lights[0].camera());
-        self.caster_bounds = caster_bounds(&lights[0]);
         self.generation += 1;
         self.frames = 0;
         Ok(())
@@ -637,12 +643,13 @@ impl Executor {
     /// direction, size), its view fitted by the runtime to the bound geometry's instances
     /// under their current transforms ([`LightInputs::fit`] of [`Geometry::boxes`]), with
     /// the bound number of sample views. Then as [`Executor::set_light`]: uniforms only.
-    /// Needs host geometry ([`Executor::bind_geometry`]); over a triangle soup, fit with
-    /// [`LightInputs::fit`] and boxes of your own, then `set_light`.
+    /// Over a bound triangle soup, the instances are its objects ([`Geometry::from_soup`]).
     pub fn place_light(&mut self, l: usize, light: &crate::light::Light, fit: Fit) -> Result<()> {
         let (Some(g), Some(res)) = (&self.geometry, self.bound.get(l)) else {
             return Err(RuntimeError::NotFound(match self.geometry {
-                None => "no host geometry is bound: place_light fits the light to the bound instances (bind_geometry first; over a triangle soup, use LightInputs::fit and set_light)".into(),
+                None => {
+                    "no geometry is bound: place_light fits the light to the bound instances (bind_geometry or bind_scene first)".into()
+                }
                 Some(_) => format!("light {l} is not bound ({} light(s) are)", self.bound.len()),
             }));
         };
@@ -688,7 +695,6 @@ impl Executor {
             .geometry
             .as_ref()
             .map(|g| &g.scene)
-            .or(self.soup.as_ref())
             .ok_or_else(|| RuntimeError::NotFound("no scene geometry: bind_scene, bind_lights or bind_geometry".into()))?;
         let res = Resources::new(gpu, &self.graph, &self.usages, s, scene, max_bytes)?;
         if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
@@ -1119,14 +1125,6 @@ impl Executor {
             None => &b.camera[CameraOutput::Visibility as usize],
         })
     }
-}
-
-/// The bounding box of the scene's casting vertices (world space); `None` without one.
-fn caster_bounds(s: &SceneInputs) -> Option<[[f32; 3]; 2]> {
-    let n = s
-        .casting_vertices
-        .map_or(s.vertices.len() / 6, |c| (c as usize).min(s.vertices.len() / 6));
-    crate::geometry::box_of(s.vertices.chunks_exact(6).take(n).map(|v| [v[0], v[1], v[2]]))
 }
 
 fn first_camera(bound: &[Resources]) -> (u32, u32) {

@@ -28,10 +28,13 @@ pub struct SampleView {
 /// Everything the executor needs from a scene, as plain data (column-major matrices).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneInputs {
-    /// Interleaved world-space position xyz and normal xyz, three vertices per triangle.
+    /// Interleaved world-space position xyz and normal xyz, three vertices per triangle: a
+    /// triangle soup, bound as host geometry of one world-space instance per object
+    /// ([`crate::gpu::Geometry::from_soup`], which says what it refuses).
     pub vertices: Vec<f32>,
-    /// The scene's meshes as ranges of triangles (indices into `vertices / 18`). Geometry
-    /// passes find edges within each mesh, never across two; empty: one mesh of all.
+    /// The scene's meshes as ranges of triangles (indices into `vertices / 18`), each on
+    /// one side of `casting_vertices`. Geometry passes find the casters' edges within each
+    /// mesh, never across two; empty: the casting triangles are one mesh.
     pub meshes: Vec<std::ops::Range<u32>>,
     /// How many of the first `vertices` are drawn from the light (`Draw::SceneFromLight`):
     /// the shadow casters, listed first; the rest (objects that cast no shadow, such as a

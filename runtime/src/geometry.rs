@@ -17,9 +17,15 @@
 //! planes (`(N n, d - (N n) . t)`, negated where `M` mirrors) and face references (plane
 //! indices offset). A soup of the instance's triangles would give the same buffers.
 //!
+//! Instances that do not move under the identity are *in world space*
+//! ([`Instance::in_world_space`]): drawn straight from their mesh's vertices, with no placed
+//! copy, their edges written once at upload. A triangle soup binds as such instances, one
+//! per object ([`Geometry::from_soup`]), and a mesh listed out (indices 0, 1, 2, ...) is
+//! drawn without an index buffer, so a soup keeps its 72 bytes a triangle.
+//!
 //! Memory: the meshes once (24 bytes a vertex and 4 an index) and the placed vertices
-//! (24 bytes a vertex per instance), against a triangle soup's 72 bytes a triangle per
-//! instance ([`Geometry::gpu_bytes`]).
+//! (24 bytes a vertex per instance not in world space), against a triangle soup's 72 bytes
+//! a triangle per instance ([`Geometry::gpu_bytes`]).
 //!
 //! With an identity transform, placement is exact: each coordinate is `1 x + 0 y + 0 z +
 //! 0`, so the placed vertices are the mesh's (up to the sign of a zero). Transforms whose
@@ -43,6 +49,19 @@ pub struct Mesh {
     pub indices: Vec<u32>,
 }
 
+impl Mesh {
+    /// Its indices are 0, 1, 2, ... (its triangles listed out, as a soup's are): it is drawn
+    /// without an index buffer, and none is uploaded for it.
+    pub fn listed_out(&self) -> bool {
+        self.indices.iter().enumerate().all(|(k, &i)| i as usize == k)
+    }
+
+    /// The indices uploaded for it: none when [`Mesh::listed_out`].
+    fn uploaded_indices(&self) -> u64 {
+        if self.listed_out() { 0 } else { self.indices.len() as u64 }
+    }
+}
+
 /// One placement of a mesh.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Instance {
@@ -57,6 +76,20 @@ pub struct Instance {
     /// Receives shadows. An instance that does not (a sky dome, a light's own fixture, a
     /// marker) is drawn unshadowed and reads visibility 1 (runtime/src/receivers.rs).
     pub receives: bool,
+    /// Its transform may change after binding ([`crate::gpu::Executor::set_transforms`]).
+    /// One that does not keeps the transform it was bound with. With the identity transform
+    /// (a mesh given in world space, as static level geometry or the lab's scenes are), it
+    /// is *in world space*: drawn straight from its mesh's vertices, with no placed copy and
+    /// no placement step, and its edges are written once at binding.
+    pub moves: bool,
+}
+
+impl Instance {
+    /// Drawn straight from its mesh: it does not move and its transform is the identity,
+    /// bit for bit (a `-0.0` entry places it on the GPU like any other).
+    pub fn in_world_space(&self) -> bool {
+        !self.moves && self.transform.map(f32::to_bits) == IDENTITY.map(f32::to_bits)
+    }
 }
 
 /// A host's meshes and their instances, in draw order.
@@ -170,18 +203,26 @@ impl Geometry {
         Ok(())
     }
 
-    /// The sizes against the device's limits.
+    /// The sizes against the device's limits. The vertices of a mesh some instance places
+    /// on the GPU, and the placed vertices, are bound whole as storage by the placement
+    /// step; a mesh drawn only in world space is a vertex buffer, under `max_buffer_size`.
     fn check_sizes(&self, limits: &wgpu::Limits) -> Result<()> {
         let storage = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        let [placed_meshes, world_meshes] = self.mesh_vertices();
         let sizes = [
-            ("the meshes' vertices (bytes)", self.mesh_vertices() * 24, storage),
+            ("the vertices of the meshes placed on the GPU (bytes)", placed_meshes * 24, storage),
             (
-                "the meshes' indices (bytes)",
-                self.meshes.iter().map(|m| m.indices.len() as u64).sum::<u64>() * 4,
+                "the vertices of the meshes in world space (bytes)",
+                world_meshes * 24,
                 limits.max_buffer_size,
             ),
             (
-                "the placed vertices of every instance (bytes)",
+                "the meshes' indices (bytes)",
+                self.meshes.iter().map(Mesh::uploaded_indices).sum::<u64>() * 4,
+                limits.max_buffer_size,
+            ),
+            (
+                "the placed vertices of every moving instance (bytes)",
                 self.placed_vertices() * 24,
                 storage,
             ),
@@ -203,14 +244,41 @@ impl Geometry {
         Ok(())
     }
 
-    fn mesh_vertices(&self) -> u64 {
-        self.meshes.iter().map(|m| m.positions.len() as u64).sum()
+    /// Per mesh: whether an instance places it on the GPU (not [`Instance::in_world_space`]).
+    fn placed_on_gpu(&self) -> Vec<bool> {
+        let mut out = vec![false; self.meshes.len()];
+        for i in self.instances.iter().filter(|i| !i.in_world_space()) {
+            if let Some(p) = out.get_mut(i.mesh) {
+                *p = true;
+            }
+        }
+        out
     }
 
+    /// The vertices of the meshes placed on the GPU, and of those drawn in world space only.
+    fn mesh_vertices(&self) -> [u64; 2] {
+        let mut out = [0u64; 2];
+        for (m, gpu) in self.meshes.iter().zip(self.placed_on_gpu()) {
+            out[usize::from(!gpu)] += m.positions.len() as u64;
+        }
+        out
+    }
+
+    /// The placed copies' vertices: every instance placed on the GPU has one.
     fn placed_vertices(&self) -> u64 {
         self.instances
             .iter()
+            .filter(|i| !i.in_world_space())
             .map(|i| self.meshes.get(i.mesh).map_or(0, |m| m.positions.len() as u64))
+            .sum()
+    }
+
+    /// Triangles of the casting instances (what their edge adjacency is bounded from).
+    pub fn casting_triangles(&self) -> u64 {
+        self.instances
+            .iter()
+            .filter(|i| i.casts)
+            .map(|i| self.meshes.get(i.mesh).map_or(0, |m| m.indices.len() as u64 / 3))
             .sum()
     }
 
@@ -236,11 +304,122 @@ impl Geometry {
             .sum()
     }
 
-    /// Bytes the GPU holds for this geometry: the meshes' vertices and indices, the placed
-    /// vertices and the placement records.
+    /// Bytes the GPU holds for this geometry: the meshes' vertices and indices (none for a
+    /// mesh listed out), the placed vertices (of the instances not in world space) and the
+    /// placement records.
     pub fn gpu_bytes(&self) -> u64 {
-        let indices: u64 = self.meshes.iter().map(|m| m.indices.len() as u64).sum();
-        self.mesh_vertices() * 24 + indices * 4 + self.placed_vertices() * 24 + self.instances.len() as u64 * RECORD_BYTES
+        let indices: u64 = self.meshes.iter().map(Mesh::uploaded_indices).sum();
+        let [placed, world] = self.mesh_vertices();
+        (placed + world) * 24 + indices * 4 + self.placed_vertices() * 24 + self.instances.len() as u64 * RECORD_BYTES
+    }
+
+    /// A triangle soup as geometry: the adapter [`crate::gpu::Executor::bind_scene`] binds a
+    /// soup through ([`crate::frame::SceneInputs`]'s `vertices`, `meshes`,
+    /// `casting_vertices` and `unshadowed`). Each object of the soup (a run of triangles
+    /// with one mesh range, one side of the casting boundary and one receiving flag)
+    /// becomes a mesh of its triangles listed out (`indices` 0, 1, 2, ...: drawn without an
+    /// index buffer, [`Mesh::listed_out`]) and an instance in world space
+    /// ([`Instance::in_world_space`]): drawn straight from its vertices, in the soup's
+    /// order, so the draws and the edges are the soup's, bit for bit, in the soup's 72
+    /// bytes a triangle. Casting triangles in no mesh range form objects of their own.
+    ///
+    /// Refused, saying where: a float count that is not whole triangles (18 floats each), a
+    /// casting count or an unshadowed range that is not whole triangles, a mesh range that
+    /// straddles the casting boundary, overlaps another or is split by an unshadowed range
+    /// (a mesh casts, and receives, as a whole).
+    pub fn from_soup(
+        vertices: &[f32],
+        meshes: &[std::ops::Range<u32>],
+        casting_vertices: Option<u32>,
+        unshadowed: &[std::ops::Range<u32>],
+    ) -> Result<Geometry> {
+        let bad = |m: String| Err(RuntimeError::Param(m));
+        if !vertices.len().is_multiple_of(18) {
+            return bad(format!(
+                "the soup has {} floats, not whole triangles (18 floats each: three vertices of position and normal)",
+                vertices.len()
+            ));
+        }
+        let n = u32::try_from(vertices.len() / 6).map_err(|_| RuntimeError::Limit {
+            what: "vertices of a triangle soup".into(),
+            needed: (vertices.len() / 6) as u64,
+            limit: u32::MAX.into(),
+        })? / 3;
+        let casting = casting_vertices.map_or(3 * n, |c| c.min(3 * n));
+        if !casting.is_multiple_of(3) {
+            return bad(format!("casting_vertices is {casting}, not whole triangles (3 vertices each)"));
+        }
+        let casting = casting / 3;
+        let mut shade_free = Vec::new();
+        for (k, r) in unshadowed.iter().enumerate() {
+            if !r.start.is_multiple_of(3) || !r.end.is_multiple_of(3) {
+                return bad(format!(
+                    "unshadowed range {k} ({}..{}) is not whole triangles (3 vertices each)",
+                    r.start, r.end
+                ));
+            }
+            let r = (r.start / 3).min(n)..(r.end / 3).min(n);
+            if !r.is_empty() {
+                shade_free.push(r);
+            }
+        }
+        let mut objects: Vec<std::ops::Range<u32>> = if meshes.is_empty() {
+            std::iter::once(0..casting).collect()
+        } else {
+            meshes.iter().map(|r| r.start.min(n)..r.end.min(n)).collect()
+        };
+        objects.retain(|r| !r.is_empty());
+        objects.sort_by_key(|r| r.start);
+        for (k, r) in objects.iter().enumerate() {
+            if r.start < casting && casting < r.end {
+                return bad(format!(
+                    "mesh triangles {}..{} straddle the casting boundary at triangle {casting}: a mesh casts, or does not, as a whole",
+                    r.start, r.end
+                ));
+            }
+            if let Some(next) = objects.get(k + 1)
+                && next.start < r.end
+            {
+                return bad(format!(
+                    "meshes of triangles {}..{} and {}..{} overlap",
+                    r.start, r.end, next.start, next.end
+                ));
+            }
+            if let Some(u) = shade_free.iter().flat_map(|u| [u.start, u.end]).find(|&u| r.start < u && u < r.end) {
+                return bad(format!(
+                    "an unshadowed range splits the mesh of triangles {}..{} at triangle {u}: a mesh receives shadows, or does not, as a whole",
+                    r.start, r.end
+                ));
+            }
+        }
+        // the runs between every boundary: meshes, the casting one, the unshadowed ranges'
+        let mut cuts: Vec<u32> = [0, n, casting]
+            .into_iter()
+            .chain(objects.iter().flat_map(|r| [r.start, r.end]))
+            .chain(shade_free.iter().flat_map(|r| [r.start, r.end]))
+            .collect();
+        cuts.sort_unstable();
+        cuts.dedup();
+        let mut g = Geometry::default();
+        for w in cuts.windows(2) {
+            let (a, b) = (w[0] as usize, w[1] as usize);
+            let corners = vertices[a * 18..b * 18].chunks_exact(6);
+            g.meshes.push(Mesh {
+                name: format!("soup triangles {a}..{b}"),
+                positions: corners.clone().map(|v| [v[0], v[1], v[2]]).collect(),
+                normals: corners.map(|v| [v[3], v[4], v[5]]).collect(),
+                indices: (0..3 * (b - a) as u32).collect(),
+            });
+            g.instances.push(Instance {
+                name: format!("soup triangles {a}..{b}"),
+                mesh: g.meshes.len() - 1,
+                transform: IDENTITY,
+                casts: w[1] <= casting,
+                receives: !shade_free.iter().any(|r| r.contains(&w[0])),
+                moves: false,
+            });
+        }
+        Ok(g)
     }
 
     /// The same triangles listed out, world space, casting instances first (in order),
@@ -382,21 +561,27 @@ pub(crate) struct HostScene {
     pub edges: Option<EdgeBuffers>,
 }
 
-/// One draw of the scene: a range of indices (or of vertices, without an index buffer)
-/// with its base vertex, and whether the light's views draw it.
+/// One draw of the scene: a range of indices (or of vertices, for a mesh listed out) from
+/// one of the draw's vertex buffers, with its base vertex, and whether the light's views
+/// draw it.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct DrawRange {
+    /// Index into [`SceneDraw::buffers`].
+    pub buffer: usize,
     pub elements: std::ops::Range<u32>,
     pub base_vertex: i32,
+    /// `elements` are indices into the index buffer; else vertices ([`Mesh::listed_out`]).
+    pub indexed: bool,
     pub casts: bool,
 }
 
-/// What a scene draw binds and draws: a triangle soup's vertex buffer (its casting
-/// vertices first), or a host geometry's placed vertices with the meshes' index buffer.
+/// What a scene draw binds and draws: the vertex buffers (the placed vertices, the meshes'
+/// vertices placed on the GPU, the world-space meshes' vertices) and the meshes' index
+/// buffer, one draw per instance.
 #[derive(Clone)]
 pub(crate) struct SceneDraw {
-    pub vertices: wgpu::Buffer,
-    pub indices: Option<wgpu::Buffer>,
+    pub buffers: Vec<wgpu::Buffer>,
+    pub indices: wgpu::Buffer,
     pub ranges: Vec<DrawRange>,
     /// The draws of the objects that receive no shadow, drawn again unshadowed
     /// ([`crate::receivers`]); empty when every object receives.
@@ -404,35 +589,6 @@ pub(crate) struct SceneDraw {
 }
 
 impl SceneDraw {
-    /// A soup of `count` vertices, the first `casting` drawn from the light, those in
-    /// `unshadowed` (vertex ranges, clamped to the soup) receiving no shadow.
-    pub fn soup(vertices: wgpu::Buffer, count: u32, casting: u32, unshadowed: &[std::ops::Range<u32>]) -> SceneDraw {
-        let casting = casting.min(count);
-        SceneDraw {
-            unshadowed: unshadowed
-                .iter()
-                .map(|r| r.start.min(count)..r.end.min(count))
-                .filter(|r| !r.is_empty())
-                .map(|elements| DrawRange {
-                    elements,
-                    base_vertex: 0,
-                    casts: false,
-                })
-                .collect(),
-            vertices,
-            indices: None,
-            ranges: [(0..casting, true), (casting..count, false)]
-                .into_iter()
-                .filter(|(r, _)| !r.is_empty())
-                .map(|(elements, casts)| DrawRange {
-                    elements,
-                    base_vertex: 0,
-                    casts,
-                })
-                .collect(),
-        }
-    }
-
     /// Record the draws into `rp` (the casting ones only when `from_light`).
     pub fn record(&self, rp: &mut wgpu::RenderPass<'_>, from_light: bool) {
         self.draw(rp, self.ranges.iter().filter(|r| r.casts || !from_light));
@@ -444,24 +600,48 @@ impl SceneDraw {
     }
 
     fn draw<'r>(&self, rp: &mut wgpu::RenderPass<'_>, ranges: impl Iterator<Item = &'r DrawRange>) {
-        let mut ranges = ranges.peekable();
-        if ranges.peek().is_none() {
-            return;
-        }
-        rp.set_vertex_buffer(0, self.vertices.slice(..));
-        match &self.indices {
-            Some(indices) => {
-                rp.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                for r in ranges {
-                    rp.draw_indexed(r.elements.clone(), r.base_vertex, 0..1);
-                }
+        let (mut bound, mut indices) = (None, false);
+        for r in ranges {
+            if bound != Some(r.buffer) {
+                rp.set_vertex_buffer(0, self.buffers[r.buffer].slice(..));
+                bound = Some(r.buffer);
             }
-            None => {
-                for r in ranges {
-                    rp.draw(r.elements.clone(), 0..1);
+            if r.indexed {
+                if !std::mem::replace(&mut indices, true) {
+                    rp.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
                 }
+                rp.draw_indexed(r.elements.clone(), r.base_vertex, 0..1);
+            } else {
+                rp.draw(r.elements.clone(), 0..1);
             }
         }
+    }
+}
+
+/// The edges, face planes and face references of a casting instance in world space, written
+/// into the placed buffers' bytes (`out`: edges, planes, face references) at `at` (their
+/// first places) with `welded` its first welded vertex: what `PLACE_WGSL` writes under the
+/// identity, with no arithmetic on the values (the face and welded-vertex indices offset,
+/// the planes as they are, none mirrored).
+fn write_in_world(a: &Adjacency, at: [u32; 3], welded: u32, out: &mut [Vec<u8>; 3]) {
+    let [edges, planes, faces] = at.map(|x| x as usize);
+    for (k, e) in a.edges.iter().enumerate() {
+        let placed = crate::adjacency::GpuEdge {
+            first_face: e.first_face + faces as u32,
+            ia: e.ia + welded,
+            ib: e.ib + welded,
+            ..*e
+        };
+        out[0][(edges + k) * 48..(edges + k + 1) * 48].copy_from_slice(&placed.to_bytes());
+    }
+    for (k, p) in a.planes.iter().enumerate() {
+        for (c, x) in p.iter().enumerate() {
+            out[1][(planes + k) * 16 + 4 * c..(planes + k) * 16 + 4 * c + 4].copy_from_slice(&x.to_le_bytes());
+        }
+    }
+    for (k, f) in a.edge_faces.iter().enumerate() {
+        let placed = (((f >> 1) + planes as u32) << 1) | (f & 1);
+        out[2][(faces + k) * 4..(faces + k + 1) * 4].copy_from_slice(&placed.to_le_bytes());
     }
 }
 
@@ -584,6 +764,11 @@ pub(crate) struct GeometryBuffers {
     pipelines: Vec<wgpu::ComputePipeline>,
     group: wgpu::BindGroup,
     spans: Vec<Spans>,
+    /// Some instance is placed on the GPU (its vertices, or its edges): the placement step
+    /// has work.
+    places: bool,
+    /// Per instance: whether its transform may change ([`Instance::moves`]).
+    moves: Vec<bool>,
     /// Placement is due (the transforms changed since it last ran).
     pub dirty: bool,
     pub transforms: Vec<[f32; 16]>,
@@ -599,30 +784,50 @@ impl GeometryBuffers {
     /// Upload `g` (checked) and create its placement step; with `edges`, the edge adjacency
     /// of every mesh a casting instance places, built once per mesh in object space (the
     /// same welding and order as [`Adjacency::build`] of the instance's triangles listed out).
+    ///
+    /// Instances in world space ([`Instance::in_world_space`]) are drawn from their mesh's
+    /// vertices, and their edges, face planes and face references are written here, as the
+    /// placement step writes them under the identity (offsets added, values as they are).
+    /// The meshes' vertices are two buffers: those of meshes an instance places on the GPU
+    /// (bound as storage by the placement step) and those drawn in world space only (a
+    /// vertex buffer, free of the storage-binding limit).
     pub fn new(gpu: &Gpu, g: &Geometry, edges: bool) -> Result<GeometryBuffers> {
         g.check(&gpu.limits)?;
         let words = |v: &mut Vec<u8>, x: &[u32]| v.extend(x.iter().flat_map(|w| w.to_le_bytes()));
-        // the meshes, one after the other, and their adjacency
-        let mut first = Vec::new(); // per mesh: first vertex, index, edge, plane, face reference
-        let (mut vertex_data, mut index_data) = (Vec::new(), Vec::new());
+        let world: Vec<bool> = g.instances.iter().map(Instance::in_world_space).collect();
+        let on_gpu = g.placed_on_gpu();
+        // per mesh: whether a casting instance places it, on the GPU or in world space
+        let (mut casts_any, mut casts_on_gpu) = (vec![false; g.meshes.len()], vec![false; g.meshes.len()]);
+        for (inst, &w) in g.instances.iter().zip(&world).filter(|(i, _)| i.casts) {
+            casts_any[inst.mesh] = true;
+            casts_on_gpu[inst.mesh] |= !w;
+        }
+        // the meshes, one after the other, and their adjacency; per mesh: its vertex buffer
+        // (0: placed on the GPU, 1: world space only), first vertex there, first index, and
+        // (for meshes the placement step reads) first edge, plane and face reference
+        let mut first = Vec::new();
+        // vertices per buffer (written straight into the upload's staging memory, below:
+        // no copy of every vertex is made here, a soup's would be as large as the soup)
+        let (mut vertex_counts, mut index_data) = ([0u64; 2], Vec::new());
         let (mut edge_data, mut plane_data, mut face_data) = (Vec::new(), Vec::new(), Vec::new());
         let mut adjacency: Vec<Option<Adjacency>> = Vec::new();
+        let mut listed = Vec::new();
         for (mi, m) in g.meshes.iter().enumerate() {
+            let bucket = usize::from(!on_gpu[mi]);
             first.push([
-                (vertex_data.len() / 24) as u32,
+                bucket as u32,
+                vertex_counts[bucket] as u32,
                 (index_data.len() / 4) as u32,
                 (edge_data.len() / 48) as u32,
                 (plane_data.len() / 16) as u32,
                 (face_data.len() / 4) as u32,
             ]);
-            for (p, n) in m.positions.iter().zip(&m.normals) {
-                for c in p.iter().chain(n) {
-                    vertex_data.extend(c.to_le_bytes());
-                }
+            vertex_counts[bucket] += m.positions.len() as u64;
+            listed.push(m.listed_out());
+            if !listed[mi] {
+                words(&mut index_data, &m.indices);
             }
-            words(&mut index_data, &m.indices);
-            let cast = g.instances.iter().any(|i| i.mesh == mi && i.casts);
-            let adj = (edges && cast).then(|| {
+            let adj = (edges && casts_any[mi]).then(|| {
                 let tris: Vec<[[f32; 3]; 3]> = m
                     .indices
                     .chunks_exact(3)
@@ -630,7 +835,7 @@ impl GeometryBuffers {
                     .collect();
                 Adjacency::build(&tris, std::iter::once(0..tris.len()))
             });
-            if let Some(a) = &adj {
+            if let (Some(a), true) = (&adj, casts_on_gpu[mi]) {
                 edge_data.extend(a.edges.iter().flat_map(|e| e.to_bytes()));
                 plane_data.extend(a.planes.iter().flatten().flat_map(|x| x.to_le_bytes()));
                 words(&mut face_data, &a.edge_faces);
@@ -665,35 +870,66 @@ impl GeometryBuffers {
                 });
             }
         }
+        // the edges of the casting instances in world space, written here
+        let world_edges = g
+            .instances
+            .iter()
+            .zip(&world)
+            .any(|(i, &w)| w && i.casts && adjacency[i.mesh].is_some());
+        let mut placed_data = [Vec::new(), Vec::new(), Vec::new()];
+        if world_edges {
+            placed_data = [totals[0] * 48, totals[1] * 16, totals[2] * 4].map(|n| vec![0u8; n as usize]);
+        }
         // the instances, one after the other: draws, and spans of what they place
         let (mut ranges, mut spans, mut unshadowed) = (Vec::new(), Vec::new(), Vec::new());
         let mut placed = Spans::default();
         let mut counts = AdjacencyCounts::default();
-        for inst in &g.instances {
+        for (inst, &w) in g.instances.iter().zip(&world) {
             let m = &g.meshes[inst.mesh];
             let f = first[inst.mesh];
-            ranges.push(DrawRange {
-                elements: f[1]..f[1] + m.indices.len() as u32,
-                base_vertex: i32::try_from(placed.vertices[2]).map_err(|_| RuntimeError::Limit {
-                    what: "placed vertices (a base vertex is an i32)".into(),
-                    needed: placed.vertices[2].into(),
-                    limit: i32::MAX as u64,
-                })?,
-                casts: inst.casts,
+            let (buffer, base) = if w { (f[0] as usize + 1, f[1]) } else { (0, placed.vertices[2]) };
+            let n = m.indices.len() as u32;
+            ranges.push(if listed[inst.mesh] {
+                DrawRange {
+                    buffer,
+                    elements: base..base + n,
+                    base_vertex: 0,
+                    indexed: false,
+                    casts: inst.casts,
+                }
+            } else {
+                DrawRange {
+                    buffer,
+                    elements: f[2]..f[2] + n,
+                    base_vertex: i32::try_from(base).map_err(|_| RuntimeError::Limit {
+                        what: "vertices of one vertex buffer (a base vertex is an i32)".into(),
+                        needed: base.into(),
+                        limit: i32::MAX as u64,
+                    })?,
+                    indexed: true,
+                    casts: inst.casts,
+                }
             });
             if !inst.receives {
                 unshadowed.extend(ranges.last().cloned());
             }
             let mut s = Spans {
-                vertices: [f[0], m.positions.len() as u32, placed.vertices[2]],
                 welded: placed.welded,
                 ..Default::default()
             };
-            placed.vertices[2] += m.positions.len() as u32;
+            if !w {
+                s.vertices = [f[1], m.positions.len() as u32, placed.vertices[2]];
+                placed.vertices[2] += m.positions.len() as u32;
+            }
             if let (true, Some(a)) = (inst.casts, &adjacency[inst.mesh]) {
-                s.edges = [f[2], a.edges.len() as u32, placed.edges[2]];
-                s.planes = [f[3], a.planes.len() as u32, placed.planes[2]];
-                s.faces = [f[4], a.edge_faces.len() as u32, placed.faces[2]];
+                let at = [placed.edges[2], placed.planes[2], placed.faces[2]];
+                if w {
+                    write_in_world(a, at, placed.welded, &mut placed_data);
+                } else {
+                    s.edges = [f[3], a.edges.len() as u32, at[0]];
+                    s.planes = [f[4], a.planes.len() as u32, at[1]];
+                    s.faces = [f[5], a.edge_faces.len() as u32, at[2]];
+                }
                 placed.edges[2] += a.edges.len() as u32;
                 placed.planes[2] += a.planes.len() as u32;
                 placed.faces[2] += a.edge_faces.len() as u32;
@@ -707,6 +943,9 @@ impl GeometryBuffers {
             }
             spans.push(s);
         }
+        let places = spans
+            .iter()
+            .any(|s| s.vertices[1] > 0 || s.edges[1] > 0 || s.planes[1] > 0 || s.faces[1] > 0);
         gpu.scoped("uploading the host geometry", || {
             let device = &gpu.device;
             let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
@@ -726,19 +965,47 @@ impl GeometryBuffers {
                 b
             };
             let storage = wgpu::BufferUsages::STORAGE;
-            let meshes = upload("mesh vertices", &vertex_data, storage);
+            let vertex = wgpu::BufferUsages::VERTEX;
+            let vertices_of = |label: &str, bucket: usize, usage: wgpu::BufferUsages| {
+                let b = buffer(label, vertex_counts[bucket] * 24, usage | wgpu::BufferUsages::COPY_DST);
+                let meshes = g.meshes.iter().zip(&first).filter(|(_, f)| f[0] as usize == bucket);
+                if let Some(size) = wgpu::BufferSize::new(vertex_counts[bucket] * 24)
+                    && let Some(mut view) = gpu.queue.write_buffer_with(&b, 0, size)
+                {
+                    // in pieces of 1 MiB: the view is write-only memory, written in slices
+                    let floats = meshes
+                        .flat_map(|(m, _)| m.positions.iter().zip(&m.normals))
+                        .flat_map(|(p, n)| p.iter().chain(n));
+                    let (mut piece, mut at) = (Vec::with_capacity(1 << 20), 0);
+                    for c in floats {
+                        piece.extend(c.to_le_bytes());
+                        if piece.len() == 1 << 20 {
+                            view.slice(at..at + piece.len()).copy_from_slice(&piece);
+                            at += piece.len();
+                            piece.clear();
+                        }
+                    }
+                    view.slice(at..at + piece.len()).copy_from_slice(&piece);
+                }
+                b
+            };
+            let meshes = vertices_of("mesh vertices", 0, storage | vertex);
+            let world_vertices = vertices_of("world-space mesh vertices", 1, vertex);
             let indices = upload("mesh indices", &index_data, wgpu::BufferUsages::INDEX);
             let mesh_edges = upload("mesh edges", &edge_data, storage);
             let mesh_planes = upload("mesh face planes", &plane_data, storage);
             let mesh_faces = upload("mesh face references", &face_data, storage);
-            let placed_vertices = buffer(
-                "placed vertices",
-                u64::from(placed.vertices[2]) * 24,
-                storage | wgpu::BufferUsages::VERTEX,
-            );
-            let placed_edges = buffer("placed edges", u64::from(placed.edges[2]) * 48, storage);
-            let placed_planes = buffer("placed face planes", u64::from(placed.planes[2]) * 16, storage);
-            let placed_faces = buffer("placed face references", u64::from(placed.faces[2]) * 4, storage);
+            let placed_vertices = buffer("placed vertices", u64::from(placed.vertices[2]) * 24, storage | vertex);
+            let placed_of = |label: &str, k: usize, bytes: u64| {
+                if world_edges {
+                    upload(label, &placed_data[k], storage)
+                } else {
+                    buffer(label, bytes, storage)
+                }
+            };
+            let placed_edges = placed_of("placed edges", 0, u64::from(placed.edges[2]) * 48);
+            let placed_planes = placed_of("placed face planes", 1, u64::from(placed.planes[2]) * 16);
+            let placed_faces = placed_of("placed face references", 2, u64::from(placed.faces[2]) * 4);
             let claims = buffer(
                 "vertex claims",
                 4 * u64::from(placed.welded) + 4,
@@ -824,8 +1091,8 @@ impl GeometryBuffers {
             let mut out = GeometryBuffers {
                 scene: HostScene {
                     draw: SceneDraw {
-                        vertices: placed_vertices,
-                        indices: Some(indices),
+                        buffers: vec![placed_vertices, meshes.clone(), world_vertices],
+                        indices,
                         ranges,
                         unshadowed,
                     },
@@ -841,6 +1108,8 @@ impl GeometryBuffers {
                 pipelines,
                 group,
                 spans,
+                places,
+                moves: g.instances.iter().map(|i| i.moves).collect(),
                 dirty: true,
                 transforms: g.instances.iter().map(|i| i.transform).collect(),
                 casts: g.instances.iter().map(|i| i.casts).collect(),
@@ -869,6 +1138,11 @@ impl GeometryBuffers {
         }
         for (i, t) in transforms.iter().enumerate() {
             check_transform(t, || format!("instance {i}"))?;
+            if !self.moves[i] && t.map(f32::to_bits) != self.transforms[i].map(f32::to_bits) {
+                return Err(RuntimeError::Param(format!(
+                    "instance {i} does not move (`Instance::moves` is false): its transform stays the one it was bound with"
+                )));
+            }
         }
         Ok(())
     }
@@ -932,10 +1206,9 @@ impl GeometryBuffers {
     /// Record the placement of every instance (its vertices, and its edges, planes and face
     /// references where it has them), when it is due.
     pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        if !self.dirty {
+        if !std::mem::take(&mut self.dirty) || !self.places {
             return;
         }
-        self.dirty = false;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("place instances"),
             timestamp_writes: None,
@@ -965,4 +1238,74 @@ fn determinant3(m: &[f32; 16]) -> f64 {
     let a = |r: usize, c: usize| f64::from(m[4 * c + r]);
     a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1)) - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
         + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0))
+}
+
+#[cfg(test)]
+// lists of one range are meant: a soup's mesh and unshadowed ranges
+#[allow(clippy::single_range_in_vec_init)]
+mod tests {
+    use super::*;
+
+    /// `n` triangles of a soup, each corner's position `(t, k, 0)` and normal up.
+    fn soup(n: u32) -> Vec<f32> {
+        (0..n)
+            .flat_map(|t| (0..3).flat_map(move |k| [t as f32, k as f32, 0.0, 0.0, 1.0, 0.0]))
+            .collect()
+    }
+
+    #[test]
+    fn a_soup_becomes_one_world_space_instance_per_object_in_its_order() {
+        // casters: meshes 0..2 and 2..3; triangle 3 casts in no mesh; 4..6 do not cast,
+        // and 5 receives no shadow
+        let v = soup(6);
+        let g = Geometry::from_soup(&v, &[0..2, 2..3], Some(12), &[15..18]).unwrap();
+        let objects: Vec<(usize, bool, bool)> = g
+            .instances
+            .iter()
+            .map(|i| (g.meshes[i.mesh].indices.len() / 3, i.casts, i.receives))
+            .collect();
+        assert_eq!(
+            objects,
+            [
+                (2, true, true),
+                (1, true, true),
+                (1, true, true),
+                (1, false, true),
+                (1, false, false)
+            ]
+        );
+        assert!(g.instances.iter().all(Instance::in_world_space));
+        // listed out again, the soup is the same, float for float, and so are its ranges
+        let (again, casting) = g.soup().unwrap();
+        assert_eq!(
+            again.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            v.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        assert_eq!(casting, 12);
+        assert_eq!(g.soup_unshadowed(), [15..18]);
+        // no mesh given: the casters are one object, the rest another
+        let g = Geometry::from_soup(&v, &[], Some(9), &[]).unwrap();
+        let sizes: Vec<usize> = g.meshes.iter().map(|m| m.positions.len() / 3).collect();
+        assert_eq!(sizes, [3, 3]);
+        // an empty soup is an empty geometry
+        assert_eq!(Geometry::from_soup(&[], &[], None, &[]).unwrap(), Geometry::default());
+    }
+
+    #[test]
+    fn a_soup_whose_ranges_split_an_object_is_refused_saying_where() {
+        let v = soup(4);
+        let refused = |meshes: &[std::ops::Range<u32>], casting: Option<u32>, unshadowed: &[std::ops::Range<u32>]| {
+            Geometry::from_soup(&v, meshes, casting, unshadowed).unwrap_err().to_string()
+        };
+        let e = Geometry::from_soup(&v[..20], &[], None, &[]).unwrap_err().to_string();
+        assert!(e.contains("20 floats, not whole triangles"), "{e}");
+        assert!(refused(&[], Some(4), &[]).contains("casting_vertices is 4"));
+        assert!(refused(&[], None, &[1..3]).contains("unshadowed range 0 (1..3)"));
+        let e = refused(&[0..3], Some(6), &[]);
+        assert!(e.contains("0..3 straddle the casting boundary at triangle 2"), "{e}");
+        let e = refused(&[0..2, 1..3], None, &[]);
+        assert!(e.contains("0..2 and 1..3 overlap"), "{e}");
+        let e = refused(&[0..4], None, &[3..6]);
+        assert!(e.contains("splits the mesh of triangles 0..4 at triangle 1"), "{e}");
+    }
 }

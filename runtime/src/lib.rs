@@ -2,8 +2,8 @@
 //!
 //! It loads a compiled graph (trusted or not: every shader is re-validated with naga and
 //! every size checked against the device before allocation), binds what a frame needs (a
-//! triangle soup, [`gpu::SceneInputs`], or a host's indexed meshes and instances,
-//! [`gpu::Geometry`]) and runs the passes: on its own device, or inside a host renderer on
+//! host's indexed meshes and instances, [`gpu::Geometry`], or a triangle soup,
+//! [`gpu::SceneInputs`], which becomes one) and runs the passes: on its own device, or inside a host renderer on
 //! the host's device, recording into the host's encoder every frame and handing the
 //! visibility back as a texture (docs/embedding.md). The graph schema is the crate
 //! `sshc-graph`, re-exported here as [`graph`] so that a program that runs graphs needs one

@@ -3,10 +3,10 @@
 //! `Frame` uniform. Sizes are checked against the device before anything is allocated
 //! (lavapipe keeps allocating past its limits).
 
-use crate::adjacency::{Adjacency, GpuEdge};
+use crate::adjacency::Adjacency;
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
-use crate::geometry::{EdgeBuffers, HostScene, SceneDraw};
+use crate::geometry::{EdgeBuffers, Geometry, GeometryBuffers, HostScene, SceneDraw};
 use crate::graph::{self, DRAW_ARGS_BYTES, FRAME_SIZE, Format, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
 use crate::pipeline::{CAMERA_FORMATS, DEPTH_FORMAT, mip_count, wgpu_format};
 use crate::usages::Usages;
@@ -21,14 +21,6 @@ pub(crate) fn f32_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
-/// The triangles of `s` as position triples (normals dropped).
-fn triangles(s: &SceneInputs) -> Vec<[[f32; 3]; 3]> {
-    s.vertices
-        .chunks_exact(18)
-        .map(|t| [[t[0], t[1], t[2]], [t[6], t[7], t[8]], [t[12], t[13], t[14]]])
-        .collect()
-}
-
 /// Bytes of a generated buffer for `edges` edges: the draw arguments and one record per edge,
 /// at least one record (a scene with no edge, such as one whose objects all have `casts:
 /// false`, still binds a buffer as large as the shader's record array needs).
@@ -40,8 +32,7 @@ pub(crate) fn generated_bytes(record_bytes: u32, edges: u64) -> u64 {
 pub(crate) struct Resources {
     pub shadow_size: u32,
     pub camera_size: (u32, u32),
-    /// What the scene's draws bind and draw: the soup's vertices (its casting vertices,
-    /// [`SceneInputs::casting_vertices`], drawn from the light) or a host geometry's.
+    /// What the scene's draws bind and draw (the geometry's buffers and draws).
     pub draw: SceneDraw,
     textures: HashMap<String, wgpu::Texture>,
     /// Summed-area tables, by texture name.
@@ -72,8 +63,8 @@ impl Resources {
     /// Check the scene's sizes against the device and `max_bytes`, then create everything.
     ///
     /// `scene`: what the draws bind and the edges Silhouettes steps classify, shared by
-    /// every light: a host geometry's ([`crate::geometry`]) or a triangle soup's
-    /// ([`soup_scene`]); the scene's `vertices` are not read here.
+    /// every light ([`scene_buffers`]: a host geometry, or a triangle soup through
+    /// [`Geometry::from_soup`]); the scene's `vertices` are not read here.
     pub fn new(gpu: &Gpu, graph: &PassGraph, usages: &Usages, s: &SceneInputs, scene: &HostScene, max_bytes: u64) -> Result<Resources> {
         // every size checked before anything is created (lavapipe keeps allocating past
         // its limits)
@@ -208,53 +199,31 @@ fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) ->
     Ok(bytes)
 }
 
-/// Bytes of a soup's vertex buffer (at least one vertex).
-fn vertex_buffer_bytes(s: &SceneInputs) -> u64 {
-    (s.vertices.len() * 4).max(24) as u64
-}
-
-/// A triangle soup as the scene every light's resources take ([`HostScene`], as a host
-/// geometry is): its vertex buffer and draws, and, for a graph with generated buffers, its
-/// edge adjacency, built once for every light. The vertex buffer is checked against the
-/// device's `max_buffer_size` (a vertex buffer, not a storage binding), the adjacency
-/// bounded from the triangle count with the textures' bytes of `s`'s sizes before it is
-/// built.
-pub(crate) fn soup_scene(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) -> Result<HostScene> {
-    let vb_size = vertex_buffer_bytes(s);
-    if vb_size > gpu.limits.max_buffer_size {
-        return Err(RuntimeError::Limit {
-            what: "vertex buffer (bytes)".into(),
-            needed: vb_size,
-            limit: gpu.limits.max_buffer_size,
-        });
-    }
+/// A geometry on the GPU as every light's resources take it, checked first against `s`'s
+/// sizes: the textures ([`check_sizes`]), then, for a graph with Geometry passes (`edges`),
+/// the edge adjacency bounded from the casting triangles with the textures' bytes before it
+/// is built ([`Adjacency::max_bytes`]).
+pub(crate) fn scene_buffers(
+    gpu: &Gpu,
+    graph: &PassGraph,
+    edges: bool,
+    s: &SceneInputs,
+    g: &Geometry,
+    max_bytes: u64,
+) -> Result<GeometryBuffers> {
     let texture_bytes = check_sizes(gpu, graph, s, max_bytes)?;
-    let adjacency = soup_adjacency(graph, s, texture_bytes, max_bytes)?;
-    gpu.scoped("the scene's vertices", || {
-        let make = Make { gpu };
-        HostScene {
-            draw: make.soup(s),
-            edges: adjacency.map(|adj| make.edges(&adj)),
+    if edges {
+        let tris = g.casting_triangles();
+        let needed = texture_bytes.saturating_add(Adjacency::max_bytes(tris));
+        if needed > max_bytes {
+            return Err(RuntimeError::Limit {
+                what: format!("edge adjacency of {tris} casting triangles, with the textures (bytes)"),
+                needed,
+                limit: max_bytes,
+            });
         }
-    })
-}
-
-/// A soup's edge adjacency, for a graph with generated buffers: bounded from the triangle
-/// count (with the textures' bytes) before it is built.
-fn soup_adjacency(graph: &PassGraph, s: &SceneInputs, texture_bytes: u64, max_bytes: u64) -> Result<Option<Adjacency>> {
-    if graph.buffers.is_empty() {
-        return Ok(None);
     }
-    let tris = (s.vertices.len() / 18) as u64;
-    let needed = texture_bytes.saturating_add(Adjacency::max_bytes(tris));
-    if needed > max_bytes {
-        return Err(RuntimeError::Limit {
-            what: format!("edge adjacency of {tris} triangles, with the textures (bytes)"),
-            needed,
-            limit: max_bytes,
-        });
-    }
-    Ok(Some(Adjacency::build(&triangles(s), meshes(s))))
+    GeometryBuffers::new(gpu, g, edges)
 }
 
 /// Each generated buffer, sized from the edge count, against the storage-binding limit,
@@ -298,21 +267,6 @@ struct Make<'a> {
 }
 
 impl Make<'_> {
-    /// The soup's vertex buffer and its draws.
-    fn soup(&self, s: &SceneInputs) -> SceneDraw {
-        let vertices = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("scene vertices"),
-            size: vertex_buffer_bytes(s),
-            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        if !s.vertices.is_empty() {
-            self.gpu.queue.write_buffer(&vertices, 0, f32_bytes(&s.vertices).as_slice());
-        }
-        let count = (s.vertices.len() / 6) as u32;
-        SceneDraw::soup(vertices, count, s.casting_vertices.map_or(count, |n| n.min(count)), &s.unshadowed)
-    }
-
     /// The graph's textures at the shadow map's size, and its summed-area tables
     /// (storage buffers), by name.
     fn graph_textures(
@@ -418,21 +372,6 @@ impl Make<'_> {
             })
             .collect()
     }
-
-    /// A soup's edge adjacency on the GPU.
-    fn edges(&self, adj: &Adjacency) -> EdgeBuffers {
-        let edge_bytes: Vec<u8> = adj.edges.iter().flat_map(GpuEdge::to_bytes).collect();
-        let plane_bytes: Vec<u8> = adj.planes.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
-        let face_bytes: Vec<u8> = adj.edge_faces.iter().flat_map(|x| x.to_le_bytes()).collect();
-        let none = wgpu::BufferUsages::empty();
-        EdgeBuffers {
-            edges: self.storage("edges", &edge_bytes, 48, none),
-            planes: self.storage("face planes", &plane_bytes, 16, none),
-            edge_faces: self.storage("edge faces", &face_bytes, 4, none),
-            claims: self.storage("vertex claims", &[], 4 * adj.vertices as usize + 4, none),
-            counts: adj.counts,
-        }
-    }
 }
 
 /// Records a generated buffer holds: one per edge for a `Silhouettes` step's, one per
@@ -444,15 +383,5 @@ fn buffer_records(usages: &Usages, name: &str, edges: u64, shadow_size: u32) -> 
         (2 * cells).min(u64::from(graph::MAX_DISCONTINUITY_RECORDS))
     } else {
         edges
-    }
-}
-
-/// The mesh ranges of `s` as triangle index ranges (one mesh of everything when none is given).
-fn meshes(s: &SceneInputs) -> Vec<std::ops::Range<usize>> {
-    let n = s.vertices.len() / 18;
-    if s.meshes.is_empty() {
-        std::iter::once(0..n).collect()
-    } else {
-        s.meshes.iter().map(|r| r.start as usize..r.end as usize).collect()
     }
 }

@@ -598,14 +598,28 @@ fn lights_placed_by_the_runtime_every_frame_create_nothing_and_match_fresh_fits(
             "{t}: a refused light changed the frame"
         );
     }
-    // over a triangle soup there are no instances to fit to: the host is told what to do
+    // over a triangle soup, the instances fitted to are its objects; with nothing bound,
+    // the host is told what to do
     let c = compile("pcss");
     let s = inputs(&scene("triangle", 8, 16), &c);
+    let light = sshc_lab::scene::Light::Point { position: glam::Vec3::Y };
+    let e = Executor::new(gpu(), c.graph.clone(), c.shaders.clone())
+        .unwrap()
+        .place_light(0, &light, Fit::Scene)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no geometry is bound") && e.contains("bind_scene"), "{e}");
     let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
     ex.bind_scene(&s).unwrap();
-    let light = sshc_lab::scene::Light::Point { position: glam::Vec3::Y };
-    let e = ex.place_light(0, &light, Fit::Scene).unwrap_err().to_string();
-    assert!(e.contains("no host geometry") && e.contains("LightInputs::fit"), "{e}");
+    ex.place_light(0, &light, Fit::Casters).unwrap();
+    ex.run_frame().unwrap();
+    let objects = Geometry::from_soup(&s.vertices, &s.meshes, s.casting_vertices, &s.unshadowed).unwrap();
+    let fitted = LightInputs::fit(&light, &objects.boxes(), Fit::Casters, s.shadow_size, 0).unwrap();
+    let mut by_hand = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    by_hand.bind_scene(&s).unwrap();
+    by_hand.set_light(0, &fitted).unwrap();
+    by_hand.run_frame().unwrap();
+    assert!(ex.read_visibilities().unwrap().rgba == by_hand.read_visibilities().unwrap().rgba);
 }
 
 #[test]
@@ -667,14 +681,23 @@ fn host_geometry_is_checked_at_upload_naming_the_mesh_or_instance() {
             .to_string()
             .contains("instance 1: its transform is not finite")
     );
-    // a soup has no transforms
+    // a soup's objects are instances in world space: their transforms stay the identity
     ex.bind_scene(&s).unwrap();
-    assert!(
-        ex.set_transforms(&[])
-            .unwrap_err()
-            .to_string()
-            .contains("no host geometry is bound")
-    );
+    let objects = Geometry::from_soup(&s.vertices, &s.meshes, s.casting_vertices, &s.unshadowed)
+        .unwrap()
+        .instances
+        .len();
+    let mut ts = vec![sshc_runtime::gpu::IDENTITY; objects];
+    ex.set_transforms(&ts).unwrap();
+    ts[0][12] = 1.0;
+    let e = ex.set_transforms(&ts).unwrap_err().to_string();
+    assert!(e.contains("instance 0 does not move"), "{e}");
+    let e = Executor::new(gpu(), c.graph.clone(), c.shaders.clone())
+        .unwrap()
+        .set_transforms(&ts)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no geometry is bound"), "{e}");
 }
 
 #[test]
@@ -1167,4 +1190,130 @@ fn objects_that_receive_no_shadow_read_one_in_the_techniques_and_the_truth() {
             assert_eq!(t1.visibility[i], t0.visibility[i], "truth at pixel {i}");
         }
     }
+}
+
+/// Instances that do not move, under the identity, are drawn straight from their meshes
+/// (no placed copy, no placement) and give the visibility of the same instances placed on
+/// the GPU, bit for bit; their transforms stay as bound, while a moving instance beside
+/// them moves.
+#[test]
+fn world_space_instances_keep_no_placed_copy_and_match_instances_placed_on_the_gpu() {
+    for t in ["pcss", "penumbra-limit-maps"] {
+        let c = compile(t);
+        let s = inputs(&scene("triangle", 32, 64), &c);
+        let placed = geometry_of(&s, [0.0; 3]);
+        let mut world = placed.clone();
+        for i in world.instances.iter_mut().filter(|i| i.transform == sshc_runtime::gpu::IDENTITY) {
+            i.moves = false;
+        }
+        let still: Vec<usize> = (0..world.instances.len())
+            .filter(|&i| world.instances[i].in_world_space())
+            .collect();
+        let moving = world.instances.iter().position(|i| i.moves).expect("the turned copy moves");
+        assert!(!still.is_empty(), "{t}: no instance in world space");
+        // the placed copies of the instances in world space are gone, and nothing else
+        let saved: u64 = still
+            .iter()
+            .map(|&i| world.meshes[world.instances[i].mesh].positions.len() as u64 * 24)
+            .sum();
+        assert_eq!(placed.gpu_bytes() - world.gpu_bytes(), saved, "{t}");
+        let bind = |g: &Geometry| {
+            let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+            ex.bind_geometry(g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+                .unwrap_or_else(|e| panic!("{t}: {e}"));
+            ex.run_frame().unwrap();
+            ex
+        };
+        let (mut w, p) = (bind(&world), bind(&placed));
+        assert!(w.read_visibilities().unwrap().rgba == p.read_visibilities().unwrap().rgba, "{t}");
+        if !c.graph.buffers.is_empty() {
+            assert_eq!(w.edge_counts().unwrap(), p.edge_counts().unwrap(), "{t}");
+            for b in &c.graph.buffers {
+                assert_eq!(w.generated(&b.name).unwrap(), p.generated(&b.name).unwrap(), "{t}: `{}`", b.name);
+            }
+        }
+        // the bound transforms are accepted again; a changed one is refused for a still
+        // instance, and taken for the moving one
+        let mut transforms: Vec<[f32; 16]> = world.instances.iter().map(|i| i.transform).collect();
+        w.set_transforms(&transforms).unwrap();
+        let mut bad = transforms.clone();
+        bad[still[0]][13] = 0.25;
+        let e = w.set_transforms(&bad).unwrap_err().to_string();
+        assert!(e.contains(&format!("instance {} does not move", still[0])), "{t}: {e}");
+        transforms[moving][13] = 1.0 / 64.0;
+        w.set_transforms(&transforms).unwrap();
+        w.run_frame().unwrap();
+        world.instances[moving].transform = transforms[moving];
+        assert!(
+            w.read_visibilities().unwrap().rgba == fresh(&c, &[listed_out(&s, &world)]),
+            "{t}: the moving instance beside still ones differs from its triangles listed out"
+        );
+    }
+}
+
+/// The placement step binds the vertices it places whole, as storage; a mesh drawn only in
+/// world space is a vertex buffer and is not held to that binding's limit. On a host device
+/// whose storage bindings hold 64 KiB, a mesh of 96 KiB of vertices binds in world space
+/// and gives the visibility the full device gives it, and the same mesh placed on the GPU
+/// is refused, naming the limit.
+#[test]
+fn world_space_meshes_are_free_of_the_storage_binding_limit() {
+    const LIMIT: u64 = 64 << 10;
+    let c = compile("pcss");
+    let s = inputs(&scene("triangle", 32, 64), &c);
+    // a floor of 64 x 64 vertices (24 bytes each: 96 KiB), under the scene's triangle
+    let n = 64u32;
+    let mut floor = sshc_runtime::gpu::Mesh {
+        name: "fine floor".into(),
+        ..Default::default()
+    };
+    for k in 0..n * n {
+        let (x, z) = ((k % n) as f32 / (n - 1) as f32, (k / n) as f32 / (n - 1) as f32);
+        floor.positions.push([4.0 * x - 2.0, -0.01, 4.0 * z - 2.0]);
+        floor.normals.push([0.0, 1.0, 0.0]);
+    }
+    for r in 0..n - 1 {
+        for q in 0..n - 1 {
+            let v = r * n + q;
+            floor.indices.extend([v, v + n, v + 1, v + 1, v + n, v + n + 1]);
+        }
+    }
+    assert!(floor.positions.len() * 24 > LIMIT as usize);
+    let mut g = geometry_of(&s, [0.0; 3]);
+    for i in &mut g.instances {
+        i.moves = false;
+    }
+    g.meshes.push(floor);
+    g.instances.push(sshc_runtime::gpu::Instance {
+        name: "fine floor".into(),
+        mesh: g.meshes.len() - 1,
+        transform: sshc_runtime::gpu::IDENTITY,
+        casts: false,
+        receives: true,
+        moves: false,
+    });
+    // the turned copy is the one instance not in world space; it places a small mesh
+    let (host, _) = host_device(wgpu::Features::TIMESTAMP_QUERY, |a| wgpu::Limits {
+        max_storage_buffer_binding_size: LIMIT,
+        ..a.limits()
+    });
+    let mut ex = Executor::new(&host, c.graph.clone(), c.shaders.clone()).unwrap();
+    ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap();
+    ex.run_frame().unwrap();
+    let mut full = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    full.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap();
+    full.run_frame().unwrap();
+    assert!(ex.read_visibilities().unwrap().rgba == full.read_visibilities().unwrap().rgba);
+    // placed on the GPU, the floor's vertices would be bound whole
+    let last = g.instances.len() - 1;
+    g.instances[last].moves = true;
+    let e = ex
+        .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap_err();
+    assert!(
+        matches!(&e, RuntimeError::Limit { what, limit, .. } if what.contains("meshes placed on the GPU") && *limit == LIMIT),
+        "{e}"
+    );
 }

@@ -43,6 +43,7 @@ pub fn geometry_of(s: &SceneInputs, shift: [f32; 3]) -> Geometry {
             transform: IDENTITY,
             casts: *casts,
             receives: true,
+            moves: true,
         });
     }
     let last_caster = ranges.iter().rposition(|(_, casts)| *casts).unwrap_or(0);
@@ -52,6 +53,7 @@ pub fn geometry_of(s: &SceneInputs, shift: [f32; 3]) -> Geometry {
         transform: quarter_turn(shift),
         casts: true,
         receives: true,
+        moves: true,
     });
     g
 }
