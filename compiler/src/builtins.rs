@@ -197,7 +197,7 @@ impl Input {
 
     /// The descriptor: adding an input means adding a variant, its entry in
     /// [`Input::ALL`] and its arm here (and its `in_*` local in the Shade prelude of
-    /// `back/wgsl.rs` when it is receiver-side).
+    /// `back/shade.rs` when it is receiver-side).
     pub fn desc(self) -> &'static InputDesc {
         use Side::{Both, Geometry, Receiver};
         match self {
