@@ -114,7 +114,8 @@ pub enum Input {
 }
 
 /// Everything the compiler knows about one built-in input: check reads its name, type and
-/// side, analyse its range, codegen its WGSL.
+/// side, analyse its range, codegen its WGSL, `rounding` its typical value, `interp` the
+/// error the GPU may leave in it.
 #[derive(Debug)]
 pub struct InputDesc {
     pub name: &'static str,
@@ -125,7 +126,31 @@ pub struct InputDesc {
     /// The WGSL expression for it. Receiver-side inputs are the `in_*` locals the Shade
     /// module computes before the visibility; the others read the `Frame` uniform.
     pub wgsl: &'static str,
+    /// The value it takes in a typical configuration (a 512^2 map over depths 1 to 11 in
+    /// world units, a receiver facing the light, no slope, the centre of a texel), where
+    /// `rounding` estimates the visibility's sensitivity to storage rounding.
+    pub typical: f64,
+    /// What the GPU's f32 transforms may leave in it (`interp::input_error`).
+    pub error: InputError,
     pub doc: &'static str,
+}
+
+/// What the f32 transforms of a receiver's position leave in the inputs computed from it,
+/// 2^-20 (absolute for the normalised ones, relative for the others).
+const TRANSFORM_ERROR: f64 = 1.0 / 1048576.0;
+
+/// What the GPU's f32 transforms may leave in an input, for `interp`'s error bounds.
+#[derive(Clone, Copy, Debug)]
+pub enum InputError {
+    /// Nothing: a uniform's value, or one computed exactly.
+    Exact,
+    /// At most this much.
+    Absolute(f64),
+    /// At most this fraction of its magnitude.
+    Relative(f64),
+    /// `2 tan(angle / 2)` computed in f32: `tan`'s accuracy, twice (nothing where it is 0;
+    /// docs/language.md section 8.5).
+    TanHalfAngle,
 }
 
 impl Input {
@@ -197,7 +222,7 @@ impl Input {
 
     /// The descriptor: adding an input means adding a variant, its entry in
     /// [`Input::ALL`] and its arm here (and its `in_*` local in the Shade prelude of
-    /// `back/wgsl.rs` when it is receiver-side).
+    /// `back/shade.rs` when it is receiver-side).
     pub fn desc(self) -> &'static InputDesc {
         use Side::{Both, Geometry, Receiver};
         match self {
@@ -207,6 +232,8 @@ impl Input {
                 side: Receiver,
                 range: (0.0, 1.0),
                 wgsl: "in_d",
+                typical: 0.5,
+                error: InputError::Absolute(TRANSFORM_ERROR),
                 doc: "receiver depth from the light, normalised to [0, 1] between near and far",
             },
             Input::DWorld => &InputDesc {
@@ -215,6 +242,8 @@ impl Input {
                 side: Receiver,
                 range: (0.0, 1e4),
                 wgsl: "in_d_world",
+                typical: 6.0,
+                error: InputError::Relative(TRANSFORM_ERROR),
                 doc: "receiver distance from the light along its view axis (world units)",
             },
             Input::Uv => &InputDesc {
@@ -223,6 +252,8 @@ impl Input {
                 side: Receiver,
                 range: (0.0, 1.0),
                 wgsl: "in_uv",
+                typical: 0.5,
+                error: InputError::Absolute(TRANSFORM_ERROR),
                 doc: "shadow-map coordinates of the receiver",
             },
             Input::Tf => &InputDesc {
@@ -231,6 +262,8 @@ impl Input {
                 side: Receiver,
                 range: (0.0, 1.0),
                 wgsl: "in_tf",
+                typical: 0.5,
+                error: InputError::Absolute(TRANSFORM_ERROR),
                 doc: "fractional texel position fract(uv * shadow_size - 0.5), for bilinear weights",
             },
             Input::NdotL => &InputDesc {
@@ -239,6 +272,8 @@ impl Input {
                 side: Receiver,
                 range: (-1.0, 1.0),
                 wgsl: "in_ndotl",
+                typical: 1.0,
+                error: InputError::Relative(TRANSFORM_ERROR),
                 doc: "cosine between surface normal and direction to the light",
             },
             Input::Slope => &InputDesc {
@@ -247,6 +282,8 @@ impl Input {
                 side: Receiver,
                 range: (0.0, 100.0),
                 wgsl: "in_slope",
+                typical: 0.0,
+                error: InputError::Relative(TRANSFORM_ERROR),
                 doc: "tan of the angle between normal and light, clamped to [0, 100]",
             },
             Input::TexelSize => &InputDesc {
@@ -255,6 +292,8 @@ impl Input {
                 side: Both,
                 range: (1.0 / 16384.0, 1.0),
                 wgsl: "frame.shadow_size.z",
+                typical: 1.0 / 512.0,
+                error: InputError::Exact,
                 doc: "1 / shadow-map resolution",
             },
             Input::TexelDepth => &InputDesc {
@@ -263,6 +302,8 @@ impl Input {
                 side: Receiver,
                 range: (0.0, 1e4),
                 wgsl: "in_texel_depth",
+                typical: 0.0,
+                error: InputError::Relative(TRANSFORM_ERROR),
                 doc: "world size of one shadow-map texel at the receiver, in normalised depth units",
             },
             Input::DepthSlope => &InputDesc {
@@ -271,6 +312,8 @@ impl Input {
                 side: Receiver,
                 range: (0.0, 0.1),
                 wgsl: "in_depth_slope",
+                typical: 0.0,
+                error: InputError::Relative(TRANSFORM_ERROR),
                 doc: "change of the receiver's normalised depth over one shadow-map texel (receiver-plane gradient), clamped to [0, 0.1]",
             },
             Input::ShadowSize => &InputDesc {
@@ -279,6 +322,8 @@ impl Input {
                 side: Both,
                 range: (1.0, 16384.0),
                 wgsl: "frame.shadow_size.x",
+                typical: 512.0,
+                error: InputError::Exact,
                 doc: "shadow-map resolution in texels",
             },
             Input::Near => &InputDesc {
@@ -287,6 +332,8 @@ impl Input {
                 side: Both,
                 range: (0.0, 1e4),
                 wgsl: "frame.depth_range.x",
+                typical: 1.0,
+                error: InputError::Exact,
                 doc: "near plane of the light's depth range (world units)",
             },
             Input::Far => &InputDesc {
@@ -295,6 +342,8 @@ impl Input {
                 side: Both,
                 range: (0.0, 1e4),
                 wgsl: "frame.depth_range.y",
+                typical: 11.0,
+                error: InputError::Exact,
                 doc: "far plane of the light's depth range (world units)",
             },
             Input::LightSize => &InputDesc {
@@ -303,6 +352,8 @@ impl Input {
                 side: Both,
                 range: (0.0, 1e4),
                 wgsl: "frame.light_size.x",
+                typical: 0.25,
+                error: InputError::Exact,
                 doc: "light radius or half-extent (world units)",
             },
             Input::LightWidth => &InputDesc {
@@ -311,6 +362,8 @@ impl Input {
                 side: Both,
                 range: (0.0, 2e4),
                 wgsl: "(frame.light_size.zw * 2.0)",
+                typical: 0.5,
+                error: InputError::Exact,
                 doc: "full width of the light along the shadow map's u and v axes (world units)",
             },
             Input::LightSpread => &InputDesc {
@@ -320,6 +373,8 @@ impl Input {
                 // 2 tan(angle / 2) for an angular diameter below 180 degrees; 4 is 126.9 degrees
                 range: (0.0, 4.0),
                 wgsl: "(2.0 * tan(0.5 * frame.light_size.y))",
+                typical: 0.0,
+                error: InputError::TanHalfAngle,
                 doc: "angular width 2 tan(angle / 2) of a distant light: penumbra width per unit of blocker-receiver distance; 0 for local lights",
             },
             Input::ZFrag => &InputDesc {
@@ -328,6 +383,8 @@ impl Input {
                 side: Geometry,
                 range: (0.0, 1e4),
                 wgsl: "in_z_frag",
+                typical: 6.0,
+                error: InputError::Exact,
                 doc: "light-view distance of the generated primitive's fragment (Z_F of Wyman & Hansen eq. 1, world units)",
             },
             Input::ZVertex => &InputDesc {
@@ -336,6 +393,8 @@ impl Input {
                 side: Geometry,
                 range: (0.0, 1e4),
                 wgsl: "in_z_vertex",
+                typical: 6.0,
+                error: InputError::Exact,
                 doc: "light-view distance of the fragment's silhouette vertex (Z_v, interpolated along a sheet; world units)",
             },
             Input::ConeRadius => &InputDesc {
@@ -344,6 +403,8 @@ impl Input {
                 side: Geometry,
                 range: (0.0, 1e4),
                 wgsl: "in_cone_radius",
+                typical: 0.1,
+                error: InputError::Exact,
                 doc: "radius of the fragment's cone at its distance, (Z_F - Z_v) L_r / Z_v (world units)",
             },
             Input::ZSurface => &InputDesc {
@@ -352,6 +413,8 @@ impl Input {
                 side: Geometry,
                 range: (0.0, 1e4),
                 wgsl: "in_z_surface",
+                typical: 6.0,
+                error: InputError::Exact,
                 doc: "light-view distance of the foremost surface the light sees at the fragment's texel (Z_P of Wyman & Hansen eq. 1, world units)",
             },
             Input::LightDistant => &InputDesc {
@@ -360,6 +423,8 @@ impl Input {
                 side: Both,
                 range: (0.0, 1.0),
                 wgsl: "select(0.0, 1.0, frame.light_position.w == 0.0)",
+                typical: 0.0,
+                error: InputError::Exact,
                 doc: "1 for a distant light (orthographic light view), 0 for a local one",
             },
             Input::OccluderDepth => &InputDesc {
@@ -368,6 +433,8 @@ impl Input {
                 side: Geometry,
                 range: (0.0, 1.0),
                 wgsl: "in_occluder_depth",
+                typical: 0.5,
+                error: InputError::Exact,
                 doc: "c of penumbra limit maps (Lawlor 2006, section 3): normalised depth of the silhouette edge point nearest the ribbon fragment",
             },
             Input::PenumbraLimit => &InputDesc {
@@ -376,6 +443,8 @@ impl Input {
                 side: Geometry,
                 range: (-1e4, 1e4),
                 wgsl: "in_penumbra_limit",
+                typical: 0.0,
+                error: InputError::Exact,
                 doc: "p_i of penumbra limit maps (Lawlor 2006, eq. 1, p_i = w s r): signed distance from the silhouette edge (positive outward) times the light's depth rate, normalised depth units",
             },
             Input::LimitDepth => &InputDesc {
@@ -384,6 +453,8 @@ impl Input {
                 side: Geometry,
                 range: (0.0, 1.0),
                 wgsl: "in_limit_depth",
+                typical: 0.5,
+                error: InputError::Exact,
                 doc: "normalised depth of the penumbra-limit surface at the ribbon fragment (the depth Nearest keeps the smallest of)",
             },
             Input::SegmentBefore => &InputDesc {
@@ -392,6 +463,8 @@ impl Input {
                 side: Receiver,
                 range: (0.0, 1.0),
                 wgsl: "in_segment_before",
+                typical: 1.0,
+                error: InputError::Exact,
                 doc: "inside at_sample(k, ..): weight of the light segment before sample k (its share of the light; 0 for the first sample of an open chain, 1 for a lone sample)",
             },
             Input::SegmentAfter => &InputDesc {
@@ -400,6 +473,8 @@ impl Input {
                 side: Receiver,
                 range: (0.0, 1.0),
                 wgsl: "in_segment_after",
+                typical: 1.0,
+                error: InputError::Exact,
                 doc: "inside at_sample(k, ..): weight of the light segment after sample k (0 for the last sample of an open chain, 1 for a lone sample)",
             },
             Input::Pixel => &InputDesc {
@@ -408,6 +483,8 @@ impl Input {
                 side: Receiver,
                 range: (0.0, 16384.0),
                 wgsl: "in_pixel",
+                typical: 0.0,
+                error: InputError::Exact,
                 doc: "the camera pixel being shaded: integer coordinates (x, y) from the top-left, as floats",
             },
             Input::Frame => &InputDesc {
@@ -416,6 +493,8 @@ impl Input {
                 side: Both,
                 range: (0.0, 16777216.0),
                 wgsl: "i32(frame.counters.x)",
+                typical: 0.0,
+                error: InputError::Exact,
                 doc: "frames run since the scene was bound: 0, 1, 2, ... (for noise that changes from frame to frame)",
             },
             Input::Skin => &InputDesc {
@@ -424,6 +503,8 @@ impl Input {
                 side: Geometry,
                 range: (0.0, 1.0),
                 wgsl: "in_skin",
+                typical: 1.0,
+                error: InputError::Exact,
                 doc: "Skins only: the skin's Gouraud value, 0 on the occluder edge and 1 on the receiver (Heidrich et al. 2000, section 3.2)",
             },
         }
@@ -546,7 +627,7 @@ fn sshc_noise(x: f32, y: f32, k: f32) -> f32 {
 /// Everything the compiler knows about one built-in function. check types a call with
 /// [`Builtin::sig`], lower coerces its arguments with it, the arena folds it with
 /// [`Builtin::fold`] (through [`fold_call`]), analyse bounds it with [`Builtin::range`], codegen
-/// writes it with [`Builtin::wgsl`].
+/// writes it with [`Builtin::wgsl`], `interp` bounds its GPU error with [`Builtin::accuracy`].
 pub struct Builtin {
     pub name: &'static str,
     pub arity: usize,
@@ -555,6 +636,30 @@ pub struct Builtin {
     /// The range of the result given the ranges of the arguments (interval analysis).
     pub range: fn(&[Interval]) -> Interval,
     pub wgsl: Wgsl,
+    /// WGSL's accuracy of the function (what `interp::call_error` bounds a call with).
+    pub accuracy: Accuracy,
+}
+
+/// WGSL's accuracy of a built-in function: how far the GPU's result may lie from the exact
+/// value, beyond the f32 rounding of the result.
+#[derive(Clone, Copy, Debug)]
+pub enum Accuracy {
+    /// Exact: one of its arguments, or an exact function of them.
+    Exact,
+    /// Rounded once, as any arithmetic result.
+    Rounded,
+    /// The error beyond the result's rounding, given the result's value and the arguments.
+    Bound(fn(f64, &[f64]) -> f64),
+}
+
+/// One f32 ulp of `v` (relative 2^-23).
+fn ulp(v: f64) -> f64 {
+    v.abs() * 2f64.powi(-23)
+}
+
+/// Argument `i` of a call, 0 where it has none.
+fn arg(x: &[f64], i: usize) -> f64 {
+    x.get(i).copied().unwrap_or(0.0)
 }
 
 /// The typing rule of a function: which argument types it takes and what it returns,
@@ -678,6 +783,7 @@ impl Func {
     /// The descriptor: adding a function means adding a variant, its entry in
     /// [`Func::ALL`] and its arm here.
     pub fn desc(self) -> &'static Builtin {
+        use Accuracy::{Bound, Exact, Rounded};
         use Fold::{Custom, Float, IntOrFloat, Never};
         use Sig::{Construct, Convert, Dot, Length, Numeric, SameNumeric, Scalars};
         use Wgsl::{Callee, Expr, Same};
@@ -701,6 +807,7 @@ impl Func {
                     }
                 },
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Exp => &Builtin {
                 name: "exp",
@@ -709,6 +816,7 @@ impl Func {
                 fold: Float(|x| Some(x[0].exp())),
                 range: |v| v[0].monotone(f64::exp),
                 wgsl: Same,
+                accuracy: Bound(|v, x| (3.0 + 2.0 * (arg(x, 0) * std::f64::consts::LOG2_E).abs()) * ulp(v)),
             },
             Func::Exp2 => &Builtin {
                 name: "exp2",
@@ -717,6 +825,7 @@ impl Func {
                 fold: Float(|x| Some(x[0].exp2())),
                 range: |v| v[0].monotone(f64::exp2),
                 wgsl: Same,
+                accuracy: Bound(|v, x| (3.0 + 2.0 * arg(x, 0).abs()) * ulp(v)),
             },
             Func::Log => &Builtin {
                 name: "log",
@@ -725,6 +834,7 @@ impl Func {
                 fold: Float(|x| (x[0] > 0.0).then(|| x[0].ln())),
                 range: |v| v[0].monotone(|t| if t <= 0.0 { f64::NEG_INFINITY } else { t.ln() }),
                 wgsl: Same,
+                accuracy: Bound(|v, _| (3.0 * ulp(v)).max(2f64.powi(-21))),
             },
             Func::Log2 => &Builtin {
                 name: "log2",
@@ -733,6 +843,7 @@ impl Func {
                 fold: Float(|x| (x[0] > 0.0).then(|| x[0].log2())),
                 range: |v| v[0].monotone(|t| if t <= 0.0 { f64::NEG_INFINITY } else { t.log2() }),
                 wgsl: Same,
+                accuracy: Bound(|v, _| (3.0 * ulp(v)).max(2f64.powi(-21))),
             },
             Func::Sqrt => &Builtin {
                 name: "sqrt",
@@ -741,6 +852,7 @@ impl Func {
                 fold: Float(|x| (x[0] >= 0.0).then(|| x[0].sqrt())),
                 range: |v| v[0].monotone(|t| t.max(0.0).sqrt()),
                 wgsl: Same,
+                accuracy: Bound(|v, _| 2.5 * ulp(v)),
             },
             Func::InverseSqrt => &Builtin {
                 name: "inverseSqrt",
@@ -759,6 +871,7 @@ impl Func {
                     }
                 },
                 wgsl: Same,
+                accuracy: Bound(|v, _| 2.5 * ulp(v)),
             },
             Func::Sin => &Builtin {
                 name: "sin",
@@ -767,6 +880,7 @@ impl Func {
                 fold: Float(|x| Some(x[0].sin())),
                 range: |v| trig(v[0], 0.0),
                 wgsl: Same,
+                accuracy: Bound(|_, x| 2f64.powi(-11) + arg(x, 0).abs() * 2f64.powi(-22)),
             },
             Func::Cos => &Builtin {
                 name: "cos",
@@ -775,6 +889,7 @@ impl Func {
                 fold: Float(|x| Some(x[0].cos())),
                 range: |v| trig(v[0], PI / 2.0),
                 wgsl: Same,
+                accuracy: Bound(|_, x| 2f64.powi(-11) + arg(x, 0).abs() * 2f64.powi(-22)),
             },
             Func::Tan => &Builtin {
                 name: "tan",
@@ -790,6 +905,7 @@ impl Func {
                     }
                 },
                 wgsl: Same,
+                accuracy: Bound(|v, _| 2f64.powi(-11) * (1.0 + v * v)),
             },
             Func::Asin => &Builtin {
                 name: "asin",
@@ -804,6 +920,7 @@ impl Func {
                     .monotone(f64::asin)
                 },
                 wgsl: Same,
+                accuracy: Bound(|v, _| 4096.0 * ulp(v) + 2f64.powi(-22)),
             },
             Func::Acos => &Builtin {
                 name: "acos",
@@ -818,6 +935,7 @@ impl Func {
                     .monotone(f64::acos)
                 },
                 wgsl: Same,
+                accuracy: Bound(|v, _| 4096.0 * ulp(v) + 2f64.powi(-22)),
             },
             Func::Atan => &Builtin {
                 name: "atan",
@@ -826,6 +944,7 @@ impl Func {
                 fold: Float(|x| Some(x[0].atan())),
                 range: |v| v[0].monotone(f64::atan),
                 wgsl: Same,
+                accuracy: Bound(|v, _| 4096.0 * ulp(v) + 2f64.powi(-22)),
             },
             Func::Floor => &Builtin {
                 name: "floor",
@@ -834,6 +953,7 @@ impl Func {
                 fold: Float(|x| Some(x[0].floor())),
                 range: |v| v[0].monotone(f64::floor),
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Ceil => &Builtin {
                 name: "ceil",
@@ -842,6 +962,7 @@ impl Func {
                 fold: Float(|x| Some(x[0].ceil())),
                 range: |v| v[0].monotone(f64::ceil),
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Fract => &Builtin {
                 name: "fract",
@@ -850,6 +971,7 @@ impl Func {
                 fold: Float(|x| Some(x[0] - x[0].floor())),
                 range: |_| Interval { lo: 0.0, hi: 1.0 },
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Round => &Builtin {
                 name: "round",
@@ -858,6 +980,7 @@ impl Func {
                 fold: Float(|x| Some(round_half_even(x[0]))),
                 range: |v| v[0].monotone(round_half_even),
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Trunc => &Builtin {
                 name: "trunc",
@@ -866,6 +989,7 @@ impl Func {
                 fold: Float(|x| Some(x[0].trunc())),
                 range: |v| v[0].monotone(f64::trunc),
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Sign => &Builtin {
                 name: "sign",
@@ -874,6 +998,7 @@ impl Func {
                 fold: IntOrFloat(|a| Some(a[0].signum()), |x| Some(x[0].signum() * (x[0] != 0.0) as i32 as f64)),
                 range: |v| v[0].monotone(sign),
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Saturate => &Builtin {
                 name: "saturate",
@@ -885,6 +1010,7 @@ impl Func {
                     hi: v[0].hi.clamp(0.0, 1.0),
                 },
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Pow => &Builtin {
                 name: "pow",
@@ -905,6 +1031,11 @@ impl Func {
                     }
                 },
                 wgsl: Same,
+                accuracy: Bound(|v, x| {
+                    let y = arg(x, 1);
+                    let e = y * arg(x, 0).abs().log2();
+                    (3.0 + 2.0 * e.abs()) * ulp(v) + v.abs() * std::f64::consts::LN_2 * y.abs() * 2f64.powi(-21)
+                }),
             },
             Func::Min => &Builtin {
                 name: "min",
@@ -916,6 +1047,7 @@ impl Func {
                     hi: v[0].hi.min(v[1].hi),
                 },
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Max => &Builtin {
                 name: "max",
@@ -927,6 +1059,7 @@ impl Func {
                     hi: v[0].hi.max(v[1].hi),
                 },
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Atan2 => &Builtin {
                 name: "atan2",
@@ -935,6 +1068,7 @@ impl Func {
                 fold: Float(|x| Some(x[0].atan2(x[1]))),
                 range: |_| Interval { lo: -PI, hi: PI },
                 wgsl: Same,
+                accuracy: Bound(|v, _| 4096.0 * ulp(v) + 2f64.powi(-22)),
             },
             Func::Step => &Builtin {
                 name: "step",
@@ -943,6 +1077,7 @@ impl Func {
                 fold: Float(|x| Some(if x[1] >= x[0] { 1.0 } else { 0.0 })),
                 range: |_| Interval::UNIT,
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Clamp => &Builtin {
                 name: "clamp",
@@ -958,6 +1093,7 @@ impl Func {
                     hi: v[0].hi.max(v[1].hi).min(v[2].hi),
                 },
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Mix => &Builtin {
                 name: "mix",
@@ -977,6 +1113,7 @@ impl Func {
                     Interval::of(&vals)
                 },
                 wgsl: Same,
+                accuracy: Rounded,
             },
             Func::Smoothstep => &Builtin {
                 name: "smoothstep",
@@ -990,6 +1127,7 @@ impl Func {
                 }),
                 range: |_| Interval::UNIT,
                 wgsl: Same,
+                accuracy: Bound(|v, _| 4.0 * ulp(v)),
             },
             Func::Linstep => &Builtin {
                 name: "linstep",
@@ -998,6 +1136,7 @@ impl Func {
                 fold: Float(|x| (x[0] != x[1]).then(|| ((x[2] - x[0]) / (x[1] - x[0])).clamp(0.0, 1.0))),
                 range: |_| Interval::UNIT,
                 wgsl: Expr(|v| format!("saturate(({} - {}) / ({} - {}))", v[2], v[0], v[1], v[0])),
+                accuracy: Bound(|v, _| 4.0 * ulp(v)),
             },
             Func::Select => &Builtin {
                 name: "select",
@@ -1011,6 +1150,7 @@ impl Func {
                 }),
                 range: |v| Interval::hull(v[0], v[1]),
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::ToF32 => &Builtin {
                 name: "f32",
@@ -1024,6 +1164,7 @@ impl Func {
                 }),
                 range: |v| v[0],
                 wgsl: Same,
+                accuracy: Rounded,
             },
             Func::ToI32 => &Builtin {
                 name: "i32",
@@ -1041,6 +1182,7 @@ impl Func {
                 }),
                 range: |v| v[0].monotone(f64::trunc),
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::ToU32 => &Builtin {
                 name: "u32",
@@ -1061,6 +1203,7 @@ impl Func {
                     if t.lo < 0.0 { Interval::U32 } else { t.meet(Interval::U32) }
                 },
                 wgsl: Same,
+                accuracy: Exact,
             },
             Func::Vec2 => &Builtin {
                 name: "vec2",
@@ -1069,6 +1212,7 @@ impl Func {
                 fold: Never,
                 range: components,
                 wgsl: Callee("vec2<f32>"),
+                accuracy: Exact,
             },
             Func::Vec3 => &Builtin {
                 name: "vec3",
@@ -1077,6 +1221,7 @@ impl Func {
                 fold: Never,
                 range: components,
                 wgsl: Callee("vec3<f32>"),
+                accuracy: Exact,
             },
             Func::Vec4 => &Builtin {
                 name: "vec4",
@@ -1085,6 +1230,7 @@ impl Func {
                 fold: Never,
                 range: components,
                 wgsl: Callee("vec4<f32>"),
+                accuracy: Exact,
             },
             Func::Length => &Builtin {
                 name: "length",
@@ -1096,6 +1242,7 @@ impl Func {
                     hi: (v.len() as f64).sqrt().max(2.0) * v[0].magnitude(),
                 },
                 wgsl: Same,
+                accuracy: Rounded,
             },
             Func::Dot => &Builtin {
                 name: "dot",
@@ -1107,6 +1254,7 @@ impl Func {
                     Interval { lo: -m, hi: m }
                 },
                 wgsl: Same,
+                accuracy: Rounded,
             },
             Func::DivOr => &Builtin {
                 name: "div_or",
@@ -1138,6 +1286,7 @@ impl Func {
                         fb = v[3]
                     )
                 }),
+                accuracy: Bound(|v, _| 2.5 * ulp(v)),
             },
             Func::Noise => &Builtin {
                 name: "noise",
@@ -1148,6 +1297,7 @@ impl Func {
                 range: |_| Interval { lo: 0.0, hi: 1.0 },
                 // the module defines `sshc_noise` where a body calls it (`NOISE_WGSL`)
                 wgsl: Callee("sshc_noise"),
+                accuracy: Exact,
             },
             Func::UvWidth => &Builtin {
                 name: "uv_width",
@@ -1167,6 +1317,7 @@ impl Func {
                         v[0], v[1]
                     )
                 }),
+                accuracy: Rounded,
             },
         }
     }

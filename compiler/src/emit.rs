@@ -2,7 +2,8 @@
 //! a cost report (bytes per texel of every resource; fetches and operations per invocation
 //! of every step, counted on the naga IR).
 
-use crate::back::wgsl::{Output, texture_format};
+use crate::back::formats::texture_format;
+use crate::back::wgsl::Output;
 use crate::front::ast::{ConstValue, LightView, ScalarTy};
 use crate::ir::*;
 use crate::pack::{mip_source, table_source};

@@ -1,9 +1,11 @@
-//! `sshc explain`: the compiled technique in plain words: parameters, passes in order,
-//! channels and how they are packed, cost, and what was removed.
+//! `sshc explain`: the compiled technique in plain words: parameters, passes in order
+//! (with the schedule each runs in, as the `schedule` phase recorded it), channels and how
+//! they are packed, cost, and what was removed.
 
 use crate::Compiled;
-use crate::front::ast::{LightView, Primitive, Resolve, Schedule};
+use crate::front::ast::{LightView, Primitive, Resolve};
 use crate::ir::{IrPassKind, Origin, Program, short};
+use crate::schedule::Choice;
 use std::fmt::Write as _;
 
 pub fn explain(c: &Compiled) -> String {
@@ -28,7 +30,8 @@ pub fn explain(c: &Compiled) -> String {
         }
     }
     let _ = writeln!(s, "\nPasses, in execution order:");
-    for (i, p) in ir.passes.iter().filter(|p| p.live).enumerate() {
+    for (i, (pi, p)) in ir.passes.with_handles().filter(|(_, p)| p.live).enumerate() {
+        let choice = c.schedules.of(pi);
         let reads: Vec<&str> = p
             .reads
             .iter()
@@ -46,8 +49,7 @@ pub fn explain(c: &Compiled) -> String {
             IrPassKind::Map => format!(
                 "computes channels per shadow-map texel ({})",
                 schedule(
-                    ir,
-                    p,
+                    choice,
                     "a full-screen triangle",
                     "8 x 8 texels per workgroup, storage-texture writes"
                 )
@@ -60,8 +62,7 @@ pub fn explain(c: &Compiled) -> String {
                     ""
                 },
                 schedule(
-                    ir,
-                    p,
+                    choice,
                     "a full-screen triangle per step",
                     "8 x 8 texels per workgroup, each workgroup loading its tile and apron into workgroup memory once per layer"
                 )
@@ -69,8 +70,7 @@ pub fn explain(c: &Compiled) -> String {
             IrPassKind::Mipmap { reduce } => format!(
                 "builds a {reduce:?} mip chain in place ({})",
                 schedule(
-                    ir,
-                    p,
+                    choice,
                     "a full-screen triangle per level",
                     "one dispatch per level, 8 x 8 texels per workgroup"
                 )
@@ -139,13 +139,10 @@ pub fn explain(c: &Compiled) -> String {
             }
             IrPassKind::Shade { .. } => format!(
                 "evaluates visibility per camera pixel; {}",
-                match p.schedule {
-                    Schedule::Fragment => "schedule: fragment (forward), the camera raster's fragments evaluate it".to_string(),
-                    Schedule::Compute if crate::back::wgsl::shade_is_deferred(ir, p) => "schedule: compute (deferred), a camera raster writes a G-buffer of 32 bytes a pixel (world position and depth slope, normal, uv footprint), then one compute invocation per pixel (8 x 8 per workgroup) evaluates it from there".to_string(),
-                    Schedule::Compute => format!(
-                        "schedule: fragment (forward); compute (deferred) was asked for, but {}",
-                        crate::back::wgsl::shade_refusal(ir, p).unwrap_or_default()
-                    ),
+                match choice {
+                    Some(Choice::Fragment) | None => "schedule: fragment (forward), the camera raster's fragments evaluate it".to_string(),
+                    Some(Choice::Compute) => "schedule: compute (deferred), a camera raster writes a G-buffer of 32 bytes a pixel (world position and depth slope, normal, uv footprint), then one compute invocation per pixel (8 x 8 per workgroup) evaluates it from there".to_string(),
+                    Some(Choice::Refused(why)) => format!("schedule: fragment (forward); compute (deferred) was asked for, but {why}"),
                 }
             ),
         };
@@ -307,15 +304,12 @@ pub fn specialisation(generic: &Compiled, specialised: &Compiled) -> String {
     s
 }
 
-/// How a Map, Filter or Mipmap pass runs: `fragment` and `compute` describe each form; a
-/// compute schedule that cannot be honoured says why.
-fn schedule(ir: &Program, p: &crate::ir::IrPass, fragment: &str, compute: &str) -> String {
-    match p.schedule {
-        Schedule::Fragment => format!("schedule: fragment, {fragment}"),
-        Schedule::Compute if crate::back::wgsl::map_runs_as_compute(ir, p) => format!("schedule: compute, {compute}"),
-        Schedule::Compute => format!(
-            "schedule: fragment; compute was asked for, but {}",
-            crate::back::wgsl::compute_refusal(ir, p).unwrap_or_default()
-        ),
+/// How a Map, Filter or Mipmap pass runs, as the `schedule` phase chose: `fragment` and
+/// `compute` describe each form; a compute schedule refused says why.
+fn schedule(choice: Option<&Choice>, fragment: &str, compute: &str) -> String {
+    match choice {
+        Some(Choice::Fragment) | None => format!("schedule: fragment, {fragment}"),
+        Some(Choice::Compute) => format!("schedule: compute, {compute}"),
+        Some(Choice::Refused(why)) => format!("schedule: fragment; compute was asked for, but {why}"),
     }
 }

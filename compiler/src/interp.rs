@@ -64,7 +64,7 @@
 //! take one map per light sample, and the Shade's `at_sample(k, ..)` reads the receiver as
 //! light sample k sees it ([`Seen`]).
 
-use crate::builtins::{Func, Input, SampleFn, Ty};
+use crate::builtins::{Accuracy, Func, Input, InputError, SampleFn, Ty};
 use crate::front::ast::{Precision, Reduce};
 use crate::front::expr::BinOp;
 use crate::ir::{ChannelId, ExprId, Hooks, IrKernel, IrPassKind, Node, PassId, PlacedSlot, Program, ResId};
@@ -523,76 +523,24 @@ fn prefix_sums(l: &Level, values: bool) -> Vec<f64> {
 /// built-in functions): `None` where the result is exact (one of its arguments, or an exact
 /// function of them), else its error beyond the f32 rounding of the result.
 pub fn call_error(f: Func, v: f64, x: &[f64]) -> Option<f64> {
-    let ulp = v.abs() * 2f64.powi(-23);
-    let arg = x.first().copied().unwrap_or(0.0);
-    Some(match f {
-        Func::Sin | Func::Cos => 2f64.powi(-11) + arg.abs() * 2f64.powi(-22),
-        Func::Tan => 2f64.powi(-11) * (1.0 + v * v),
-        Func::Exp => (3.0 + 2.0 * (arg * std::f64::consts::LOG2_E).abs()) * ulp,
-        Func::Exp2 => (3.0 + 2.0 * arg.abs()) * ulp,
-        Func::Log | Func::Log2 => (3.0 * ulp).max(2f64.powi(-21)),
-        Func::Pow => {
-            let y = x.get(1).copied().unwrap_or(0.0);
-            let e = y * arg.abs().log2();
-            (3.0 + 2.0 * e.abs()) * ulp + v.abs() * std::f64::consts::LN_2 * y.abs() * 2f64.powi(-21)
-        }
-        Func::Sqrt | Func::InverseSqrt | Func::DivOr => 2.5 * ulp,
-        Func::Asin | Func::Acos | Func::Atan | Func::Atan2 => 4096.0 * ulp + 2f64.powi(-22),
-        Func::Smoothstep | Func::Linstep => 4.0 * ulp,
-        // rounded once, as any arithmetic result
-        Func::Mix | Func::ToF32 | Func::Length | Func::Dot | Func::UvWidth => 0.0,
-        Func::Abs
-        | Func::Floor
-        | Func::Ceil
-        | Func::Fract
-        | Func::Round
-        | Func::Trunc
-        | Func::Sign
-        | Func::Saturate
-        | Func::Min
-        | Func::Max
-        | Func::Step
-        | Func::Clamp
-        | Func::Select
-        | Func::ToI32
-        | Func::ToU32
-        | Func::Vec2
-        | Func::Vec3
-        | Func::Vec4
-        | Func::Noise => return None,
-    })
+    match f.desc().accuracy {
+        Accuracy::Exact => None,
+        Accuracy::Rounded => Some(0.0),
+        Accuracy::Bound(error) => Some(error(v, x)),
+    }
 }
 
 /// What the GPU's f32 transforms may leave in a receiver input of value `v`.
 pub fn input_error(i: Input, v: f64) -> f64 {
-    match i {
-        Input::D | Input::Uv | Input::Tf => 2f64.powi(-20),
-        Input::DWorld | Input::NdotL | Input::Slope | Input::TexelDepth | Input::DepthSlope => v.abs() * 2f64.powi(-20),
-        // 2 tan(angle / 2) in f32: `tan`'s accuracy, twice (docs/language.md section 8.5)
-        Input::LightSpread if v != 0.0 => {
+    match i.desc().error {
+        InputError::Exact => 0.0,
+        InputError::Absolute(e) => e,
+        InputError::Relative(e) => v.abs() * e,
+        InputError::TanHalfAngle if v != 0.0 => {
             let t = 0.5 * v;
             2.0 * call_error(Func::Tan, t, &[t.atan()]).unwrap_or(0.0)
         }
-        Input::TexelSize
-        | Input::ShadowSize
-        | Input::Near
-        | Input::Far
-        | Input::LightSize
-        | Input::LightWidth
-        | Input::LightSpread
-        | Input::LightDistant
-        | Input::ZFrag
-        | Input::ZVertex
-        | Input::ConeRadius
-        | Input::ZSurface
-        | Input::OccluderDepth
-        | Input::PenumbraLimit
-        | Input::LimitDepth
-        | Input::SegmentBefore
-        | Input::SegmentAfter
-        | Input::Pixel
-        | Input::Frame
-        | Input::Skin => 0.0,
+        InputError::TanHalfAngle => 0.0,
     }
 }
 
@@ -1256,7 +1204,7 @@ impl Scratch {
 /// at the scratch precision, the Laplacian in one step; allowances carried through.
 fn filter(src: &Level, kernel: &IrKernel, slot: &PlacedSlot, rounding: Rounding, model: Model) -> Level {
     let n = src.size as i64;
-    let scratch = crate::back::wgsl::scratch_precision(slot.precision);
+    let scratch = crate::back::formats::scratch_precision(slot.precision);
     let keep = |v: f64, p: Precision| match rounding {
         Rounding::Exact => v,
         Rounding::Stored => stored_at(p, slot.encode.bias, slot.encode.scale, v),

@@ -937,7 +937,8 @@ pub struct IrPass {
     pub span: Span,
     /// False once dead-code elimination removed it.
     pub live: bool,
-    /// How a Map pass runs (every other pass: `Fragment`, their one schedule so far).
+    /// The schedule the technique or `--schedule` asks for (Map, Filter, Mipmap and Shade
+    /// passes; `Fragment` for the others); the `schedule` phase decides the one it runs in.
     pub schedule: crate::front::ast::Schedule,
 }
 

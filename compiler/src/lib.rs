@@ -4,7 +4,7 @@
 //! a visibility expression) is compiled through one module per phase:
 //!
 //! ```text
-//! parse -> resolve -> check -> lower -> analyse -> pack -> codegen -> emit
+//! parse -> resolve -> check -> lower -> analyse -> pack -> schedule -> codegen -> emit
 //! ```
 //!
 //! into naga-validated WGSL modules and a [`PassGraph`] of the runtime crate's schema.
@@ -34,6 +34,7 @@ pub mod lower;
 pub mod pack;
 pub mod resolve;
 pub mod rounding;
+pub mod schedule;
 pub mod span;
 pub mod types;
 
@@ -126,6 +127,9 @@ pub struct Compiled {
     pub ir: ir::Ir,
     /// Its layout after `pack`: live resources and passes, placements, textures.
     pub layout: ir::Layout,
+    /// The schedule each live pass runs in, as the `schedule` phase chose it: what codegen
+    /// generated and `explain` reports.
+    pub schedules: schedule::Schedules,
     pub graph: PassGraph,
     /// (file name, WGSL source), in pass order.
     pub shaders: Vec<(String, String)>,
@@ -259,7 +263,8 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         if want(DumpPhase::Pack) {
             dump = Some(program.to_string());
         }
-        let out = back::wgsl::codegen(&program, &opts.limits, opts.split)?;
+        let schedules = schedule::choose(&program);
+        let out = back::wgsl::codegen(&program, &schedules, &opts.limits, opts.split)?;
         if want(DumpPhase::Codegen) {
             dump = Some(
                 out.modules
@@ -269,7 +274,7 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
             );
         }
         let graph = emit::graph(&program, &out);
-        warnings.extend(back::wgsl::render_target_warnings(&program, &graph, &opts.limits));
+        warnings.extend(back::formats::render_target_warnings(&program, &graph, &opts.limits));
         if want(DumpPhase::Emit) {
             dump = Some(graph.to_ron());
         }
@@ -278,6 +283,7 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         Ok(Compiled {
             ir,
             layout,
+            schedules,
             graph,
             shaders,
             cost,

@@ -19,7 +19,7 @@ pub struct Limits {
     /// Whether the device renders to 16-bit norm formats (`R16Unorm`, `Rg16Unorm`,
     /// `Rgba16Unorm`): not in WebGPU's core, an adapter-specific feature beyond
     /// `TEXTURE_FORMAT_16BIT_NORM` (lavapipe has it). Where not, a raster pass writing one
-    /// is warned about at compile time (`back::wgsl::render_target_warnings`).
+    /// is warned about at compile time (`back::formats::render_target_warnings`).
     pub renderable_norm16: bool,
 }
 

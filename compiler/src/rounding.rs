@@ -85,29 +85,10 @@ pub fn unsupported(p: &Program) -> Option<&'static str> {
     None
 }
 
-/// The value an input other than `d` takes (a 512^2 map over depths 1 to 11 in world
-/// units, a receiver facing the light, no slope, the centre of a texel).
+/// The value an input takes in the typical configuration its descriptor states
+/// ([`InputDesc::typical`](crate::builtins::InputDesc::typical)).
 pub fn typical(i: Input) -> f64 {
-    match i {
-        Input::D => 0.5,
-        Input::DWorld => 6.0,
-        Input::Uv | Input::Tf => 0.5,
-        Input::NdotL => 1.0,
-        Input::Slope | Input::TexelDepth | Input::DepthSlope => 0.0,
-        Input::TexelSize => 1.0 / 512.0,
-        Input::ShadowSize => 512.0,
-        Input::Near => 1.0,
-        Input::Far => 11.0,
-        Input::LightSize => 0.25,
-        Input::LightWidth => 0.5,
-        Input::LightSpread | Input::LightDistant => 0.0,
-        Input::ZFrag | Input::ZVertex | Input::ZSurface => 6.0,
-        Input::ConeRadius => 0.1,
-        Input::OccluderDepth | Input::LimitDepth => 0.5,
-        Input::PenumbraLimit => 0.0,
-        Input::SegmentBefore | Input::SegmentAfter | Input::Skin => 1.0,
-        Input::Pixel | Input::Frame => 0.0,
-    }
+    i.desc().typical
 }
 
 /// How a resource's texels combine the two planes' values.

@@ -8,9 +8,9 @@
 //! - `Ribbons` (penumbra limit maps, Lawlor 2006, section 3.1): `ribbons.wgsl`.
 //! - `Skins` (linear lights, Heidrich et al. 2000, section 3.2): `skins.wgsl`, built from
 //!   the depth discontinuities of a neighbouring sample's map rather than from silhouettes;
-//!   the compiler prepends `SKIN_FROM`, `sk_depth` and `sk_threshold` (`wgsl.rs`).
+//!   the compiler prepends `SKIN_FROM`, `sk_depth` and `sk_threshold` (`geometry_pass.rs`).
 //!
-//! `BackFaces` draws the scene's own triangles and needs no library (`wgsl.rs`).
+//! `BackFaces` draws the scene's own triangles and needs no library (`geometry_pass.rs`).
 
 use crate::front::ast::Primitive;
 use sshc_graph::FRAME_WGSL;

@@ -1,10 +1,29 @@
-//! Back end: WGSL generation, naga validation, and operation counts on the naga IR.
+//! Back end: WGSL generation (`wgsl.rs` drives it, one module per pass kind and the
+//! expression emitter beside it), naga validation, operation counts on the naga IR, and
+//! the diagnostic of an internal error met while generating code.
 
+pub(crate) mod depth;
+pub(crate) mod expr;
+pub(crate) mod filter;
+pub(crate) mod formats;
 pub mod geometry;
+pub(crate) mod geometry_pass;
+pub(crate) mod map;
+pub(crate) mod mipmap;
 pub mod parts;
+pub(crate) mod shade;
+pub(crate) mod steps;
+pub(crate) mod summed_area;
+pub(crate) mod text;
 pub mod wgsl;
 
+use crate::diag::{Diagnostic, Phase};
 use sshc_graph::OpCount;
+
+/// An internal compiler error met while generating code.
+pub(crate) fn internal(msg: impl Into<String>) -> Diagnostic {
+    Diagnostic::error(Phase::Codegen, format!("internal compiler error: {}", msg.into())).note("please report this with the technique file")
+}
 
 /// Parse and validate WGSL with naga; the error text is naga's own.
 pub fn validate(source: &str) -> Result<naga::Module, String> {

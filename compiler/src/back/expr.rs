@@ -1,0 +1,405 @@
+//! The expression emitter: straight-line WGSL for a set of expression roots, in operand
+//! order, one `let` per shared operation (the arena already merged equal
+//! sub-expressions), texture reads of one texel of one layer fetched once and shared by
+//! its channels. It records what the body used (bindings, params, the sampler, the
+//! light samples' views) for the module's declarations and the graph's steps. An
+//! operation on constants that did not fold (a division by zero, the log of a negative
+//! number) is refused here, where it is met.
+
+use crate::back::internal;
+use crate::back::parts::{self, Line, Split};
+use crate::back::summed_area::box_lookup;
+use crate::back::text::{COMP, decode_expr, f32_lit, i32_lit, params_struct};
+use crate::builtins::{Input, SampleFn, SampleWgsl, Sig, Ty};
+use crate::diag::{Diagnostic, Phase};
+use crate::front::ast::{ConstValue, Precision};
+use crate::front::expr::{BinOp, UnOp};
+use crate::ir::{ChannelId, Encode, ExprId, Node, Program, ResId};
+use crate::pack::table_source;
+use sshc_graph::{self as graph, Binding, FRAME_WGSL, View};
+use std::collections::HashMap;
+use std::fmt::Write as _;
+
+/// Where expressions are evaluated.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Site {
+    /// Per shadow-map texel (`texel` is the integer coordinate).
+    Map,
+    /// Per fragment of a Geometry pass's primitives (`texel` is the fragment's shadow-map
+    /// texel; the geometry inputs are `in_*` locals).
+    Geometry,
+    /// Per camera pixel in the Shade pass.
+    Receiver,
+}
+
+/// Emits straight-line WGSL for a set of expression roots.
+pub(crate) struct Emitter<'a> {
+    ir: &'a Program<'a>,
+    site: Site,
+    body: Vec<Line>,
+    /// What the code after the body reads: every value `emit` returned (a name, or an
+    /// expression of names).
+    roots: std::collections::HashSet<String>,
+    /// Where long bodies are split into functions.
+    pub(crate) split: Split,
+    names: HashMap<ExprId, String>,
+    fetches: HashMap<String, String>,
+    /// Textures this module reads: (name, binding).
+    pub(crate) bindings: Vec<(String, View)>,
+    /// Of those, the summed-area tables (storage buffers) and the unorm scale of their codes.
+    tables: Vec<(String, u32)>,
+    pub(crate) uses_params: bool,
+    pub(crate) uses_sampler: bool,
+    /// Map side: the resources the pass reads.
+    reads: Vec<ResId>,
+    counter: usize,
+    /// Receiver side: the light samples whose views `at_sample` used, with the `in_*`
+    /// locals of each view the body reads (the prologue computes only those).
+    pub(crate) views: std::collections::BTreeMap<u8, std::collections::BTreeSet<&'static str>>,
+    /// Map and geometry side, in a per-sample pass: per-sample resources are read at the
+    /// layer block of the view being rendered (`frame.sample.x`).
+    pub(crate) per_sample_pass: bool,
+    /// Receiver side, in a deferred Shade's compute step: implicit-LOD lookups take their
+    /// footprint from the G-buffer (`textureSampleGrad`), compute stages having no
+    /// screen-space derivatives.
+    pub(crate) deferred: bool,
+}
+
+impl<'a> Emitter<'a> {
+    pub(crate) fn new(ir: &'a Program<'a>, site: Site, reads: Vec<ResId>) -> Self {
+        Emitter {
+            ir,
+            site,
+            body: Vec::new(),
+            roots: Default::default(),
+            split: Split::default(),
+            names: HashMap::new(),
+            fetches: HashMap::new(),
+            bindings: vec![],
+            tables: vec![],
+            uses_params: false,
+            uses_sampler: false,
+            reads,
+            counter: 0,
+            views: Default::default(),
+            per_sample_pass: false,
+            deferred: false,
+        }
+    }
+
+    /// The layer of `layer` of texture `t` of resource `res` in sample view `view`, as WGSL:
+    /// a per-sample resource holds one block of `t.layers` layers per sample.
+    fn view_layer(&self, res: ResId, t: usize, layer: u32, view: Option<u8>) -> String {
+        let r = &self.ir.resources[res];
+        let per = r.textures[t].layers;
+        match view {
+            Some(k) => format!("{}i", u32::from(k) * per + layer),
+            None if self.per_sample_pass && self.ir.per_sample(res) => format!("(i32(frame.sample.x) * {per}i + {layer}i)"),
+            None => format!("{layer}i"),
+        }
+    }
+
+    pub(crate) fn binding(&mut self, texture: &str, view: View) -> String {
+        if !self.bindings.iter().any(|(n, _)| n == texture) {
+            self.bindings.push((texture.to_string(), view));
+        }
+        format!("t_{texture}")
+    }
+
+    fn fresh(&mut self, prefix: &str) -> String {
+        self.counter += 1;
+        format!("{prefix}{}", self.counter)
+    }
+
+    pub(crate) fn line(&mut self, s: &str) {
+        self.body.push(Line::Raw(s.to_string()));
+    }
+
+    fn let_line(&mut self, name: &str, ty: &'static str, rhs: String) {
+        self.body.push(Line::Let {
+            name: name.to_string(),
+            ty,
+            rhs,
+        });
+    }
+
+    /// The body's text and the functions it calls (long bodies are split: `back::parts`).
+    /// `entry` names the entry point.
+    pub(crate) fn finish(&self, entry: &str) -> (String, String) {
+        parts::split(&self.body, entry, &self.roots, self.split)
+    }
+
+    fn input(&mut self, i: Input) -> String {
+        // check refuses receiver inputs on the map side and geometry inputs outside
+        // Geometry passes' channels
+        debug_assert!(match self.site {
+            Site::Receiver => i.side() != crate::builtins::Side::Geometry,
+            Site::Geometry => matches!(i.side(), crate::builtins::Side::Both | crate::builtins::Side::Geometry),
+            Site::Map => i.side() == crate::builtins::Side::Both,
+        });
+        i.desc().wgsl.to_string()
+    }
+
+    /// The WGSL texture name and decode of a channel in a resource: (binding, layer, component, encode).
+    fn locate(&mut self, res: ResId, ch: ChannelId, view: View, sample: Option<u8>) -> Result<(String, String, u32, Encode), Diagnostic> {
+        let r = &self.ir.resources[res];
+        let slot = r
+            .slot_of(ch)
+            .ok_or_else(|| internal(format!("channel {} missing from `{}`", self.ir.channels[ch].name, r.name)))?;
+        let (t, layer, comp) = slot.place();
+        let name = r.textures[t].name.clone();
+        let (comp, encode) = (comp, slot.encode);
+        let layer = self.view_layer(res, t, layer, sample);
+        let b = self.binding(&name, view);
+        Ok((b, layer, comp, encode))
+    }
+
+    pub(crate) fn emit(&mut self, root: ExprId) -> Result<String, Diagnostic> {
+        for h in self.ir.arena.postorder(&[root]) {
+            if self.names.contains_key(&h) {
+                continue;
+            }
+            let e = self.expr(h)?;
+            let node = self.ir.arena.node(h);
+            let leaf = matches!(
+                node,
+                Node::F32(_) | Node::I32(_) | Node::U32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(..)
+            );
+            if leaf {
+                self.names.insert(h, e);
+            } else {
+                let name = format!("e{}", h.index());
+                self.let_line(&name, self.ir.arena.ty(h).wgsl(), e);
+                self.names.insert(h, name);
+            }
+        }
+        let name = self.names[&root].clone();
+        self.roots.insert(name.clone());
+        Ok(name)
+    }
+
+    fn n(&self, h: ExprId) -> &str {
+        &self.names[&h]
+    }
+
+    fn expr(&mut self, h: ExprId) -> Result<String, Diagnostic> {
+        let ir = self.ir;
+        let a = &ir.arena;
+        let node = a.node(h).clone();
+        // Operations on constants that did not fold are invalid at compile time (x / 0, log(-1)).
+        let ops = a.operands(h);
+        let all_const = !ops.is_empty() && ops.iter().all(|o| a.as_const(*o).is_some());
+        let exempt = matches!(node, Node::Sample { .. })
+            || matches!(node, Node::Call(f, _) if matches!(f.desc().sig, Sig::Construct(_)))
+            || (matches!(node, Node::Binary(BinOp::Div | BinOp::Rem, _, _)) && a.ty(h) == Ty::I32);
+        if all_const && !exempt {
+            return Err(
+                Diagnostic::error(Phase::Codegen, format!("`{}` has no finite value", a.display(h, Some(ir))))
+                    .at(a.span(h), "evaluates to infinity or NaN at compile time")
+                    .help("check for a division by zero, the log or square root of a negative number, or an overflow"),
+            );
+        }
+        Ok(match node {
+            Node::F32(b) => f32_lit(f32::from_bits(b)),
+            Node::I32(v) => i32_lit(v),
+            Node::U32(v) => format!("{v}u"),
+            Node::Bool(v) => v.to_string(),
+            Node::Param(p) => {
+                self.uses_params = true;
+                let prm = &ir.params[p];
+                if matches!(prm.value, ConstValue::Bool(_)) {
+                    format!("(params.{} != 0u)", prm.name)
+                } else {
+                    format!("params.{}", prm.name)
+                }
+            }
+            Node::Input(i, None) => self.input(i),
+            Node::Input(i, Some(k)) => {
+                let name = self.input(i);
+                self.views.entry(k).or_default().insert(i.desc().wgsl);
+                format!("{name}_v{k}")
+            }
+            Node::Channel(c, offset) => self.load_map_channel(c, offset)?,
+            Node::Sample {
+                channel,
+                resource,
+                how,
+                args,
+                view,
+            } => self.sample(channel, resource, how, &args, view)?,
+            Node::Unary(UnOp::Neg, x) => format!("-{}", self.n(x)),
+            Node::Unary(UnOp::Not, x) => format!("!{}", self.n(x)),
+            Node::Unary(UnOp::BitNot, x) => format!("~{}", self.n(x)),
+            Node::Binary(op, x, y) => format!("{} {} {}", self.n(x), op.symbol(), self.n(y)),
+            Node::Swizzle(x, c) => format!("{}.{}", self.n(x), c.iter().map(|i| COMP[*i as usize]).collect::<String>()),
+            Node::Call(f, args) => {
+                let v: Vec<String> = args.iter().map(|x| self.n(*x).to_string()).collect();
+                f.wgsl_call(&v)
+            }
+        })
+    }
+
+    /// Map side: the value of a channel at this texel, read from the resource that carries it.
+    pub(crate) fn load_map_channel(&mut self, c: ChannelId, [dx, dy]: [i32; 2]) -> Result<String, Diagnostic> {
+        let res = self
+            .reads
+            .iter()
+            .copied()
+            .find(|&r| self.ir.resources[r].slot_of(c).is_some())
+            .ok_or_else(|| internal("map channel not read"))?;
+        let (tex, layer, comp, enc) = self.locate(res, c, View::Base, None)?;
+        let key = format!("{tex}/{layer}/{dx},{dy}");
+        let v = match self.fetches.get(&key) {
+            Some(v) => v.clone(),
+            None => {
+                let v = self.fresh("texel_");
+                // a neighbour: its texel, clamped to the map's edge
+                let at = if (dx, dy) == (0, 0) {
+                    "texel".to_string()
+                } else {
+                    format!(
+                        "clamp(texel + vec2<i32>({}, {}), vec2<i32>(0i), vec2<i32>(textureDimensions({tex}).xy) - 1i)",
+                        i32_lit(dx),
+                        i32_lit(dy)
+                    )
+                };
+                self.let_line(&v, "vec4<f32>", format!("textureLoad({tex}, {at}, {layer}, 0i)"));
+                self.fetches.insert(key, v.clone());
+                v
+            }
+        };
+        Ok(decode_expr(&format!("{v}.{}", COMP[comp as usize]), enc))
+    }
+
+    fn sample(&mut self, ch: ChannelId, res: ResId, how: SampleFn, args: &[ExprId], view: Option<u8>) -> Result<String, Diagnostic> {
+        if let Some(k) = view {
+            self.views.entry(k).or_default();
+        }
+        let (tex, layer, comp, enc) = self.locate(res, ch, View::All, view)?;
+        let args: Vec<String> = args.iter().map(|a| self.n(*a).to_string()).collect();
+        let key = format!("{tex}/{layer}/{how:?}/{}", args.join(","));
+        let v = match self.fetches.get(&key) {
+            Some(v) => v.clone(),
+            None => {
+                let v = self.fresh("s");
+                let call = match how.desc().wgsl {
+                    SampleWgsl::SummedAreaTable => {
+                        let r = &self.ir.resources[res];
+                        let t = r.slot_of(ch).map(|s| &r.textures[s.texture]);
+                        let scale = match t.map(|t| t.precision) {
+                            Some(Precision::Unorm8) => 255,
+                            Some(Precision::Unorm16) => 65535,
+                            Some(Precision::F16 | Precision::F32) | None => {
+                                return Err(internal("summed-area table over a non-unorm texture"));
+                            }
+                        };
+                        let name = tex.trim_start_matches("t_").to_string();
+                        if table_source(self.ir, res).is_none() {
+                            return Err(internal("box lookup of a texture"));
+                        }
+                        if !self.tables.iter().any(|(n, _)| *n == name) {
+                            self.tables.push((name.clone(), scale));
+                        }
+                        format!("box_{name}(in_uv, vec2<f32>({}, {}), {layer})", args[0], args[1])
+                    }
+                    // `shade_refusal` keeps per-sample implicit-LOD lookups forward
+                    SampleWgsl::Texture { sampler, .. } if self.deferred && how == SampleFn::Sample && view.is_none() => {
+                        self.uses_sampler |= sampler;
+                        format!("textureSampleGrad({tex}, smp, in_uv, {layer}, in_duv_dx, in_duv_dy)")
+                    }
+                    SampleWgsl::Texture { sampler, read } => {
+                        self.uses_sampler |= sampler;
+                        read(&tex, &layer, &args)
+                    }
+                };
+                // inside `at_sample(k, ..)`, the receiver's coordinates in view k
+                let call = match view {
+                    Some(k) => {
+                        let used = self.views.entry(k).or_default();
+                        for local in ["in_uv", "in_base"] {
+                            if call.contains(local) {
+                                used.insert(local);
+                            }
+                        }
+                        in_view(&call, k)
+                    }
+                    None => call,
+                };
+                // every lookup returns the texel's four components
+                self.let_line(&v, "vec4<f32>", call);
+                self.fetches.insert(key, v.clone());
+                v
+            }
+        };
+        Ok(decode_expr(&format!("{v}.{}", COMP[comp as usize]), enc))
+    }
+
+    /// Module-level declarations for what the body used.
+    pub(crate) fn declarations(&self, ir: &Program) -> String {
+        let mut s = String::new();
+        s.push_str(FRAME_WGSL);
+        s.push_str("@group(0) @binding(0) var<uniform> frame: Frame;\n");
+        if self.uses_params {
+            s.push_str(&params_struct(ir));
+            s.push_str("@group(0) @binding(1) var<uniform> params: Params;\n");
+        }
+        if self.uses_sampler {
+            s.push_str("@group(0) @binding(2) var smp: sampler;\n");
+        }
+        if !self.views.is_empty() {
+            s.push_str(graph::LIGHT_SAMPLES_WGSL);
+            s.push_str("@group(0) @binding(3) var<uniform> light_samples: LightSamples;\n");
+        }
+        for (i, (name, _)) in self.bindings.iter().enumerate() {
+            match self.tables.iter().find(|(n, _)| n == name) {
+                Some((_, scale)) => {
+                    let _ = writeln!(s, "@group(1) @binding({i}) var<storage, read> t_{name}: array<vec4<u32>>;");
+                    s.push_str(&box_lookup(name, *scale));
+                }
+                None => {
+                    let _ = writeln!(s, "@group(1) @binding({i}) var t_{name}: texture_2d_array<f32>;");
+                }
+            }
+        }
+        s
+    }
+
+    pub(crate) fn graph_bindings(&self) -> Vec<Binding> {
+        self.bindings
+            .iter()
+            .enumerate()
+            .map(|(i, (n, v))| Binding {
+                binding: i as u32,
+                texture: n.clone(),
+                view: *v,
+            })
+            .collect()
+    }
+}
+
+/// `wgsl` with the receiver's shadow-map coordinates (`in_uv`, `in_base`) replaced by
+/// those of light sample `k`'s view.
+fn in_view(wgsl: &str, k: u8) -> String {
+    let mut out = String::with_capacity(wgsl.len() + 8);
+    let mut rest = wgsl;
+    while let Some(i) = rest.find("in_") {
+        let (head, tail) = rest.split_at(i);
+        out.push_str(head);
+        let boundary = head.chars().last().is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
+        let word = ["in_uv", "in_base"]
+            .into_iter()
+            .find(|w| tail.starts_with(w) && !tail[w.len()..].starts_with(|c: char| c.is_alphanumeric() || c == '_'));
+        match word {
+            Some(w) if boundary => {
+                out.push_str(&format!("{w}_v{k}"));
+                rest = &tail[w.len()..];
+            }
+            _ => {
+                out.push_str("in_");
+                rest = &tail[3..];
+            }
+        }
+    }
+    out.push_str(rest);
+    out
+}

@@ -1,0 +1,256 @@
+//! The Filter pass: separable kernels (Box, Gaussian, Max, Min) in two axes through a
+//! scratch texture of a wider precision, the 3x3 LoG in one; in the fragment or the
+//! compute schedule (a workgroup tile with the kernel's apron, [`filter_tile`]). The last
+//! axis re-encodes each component from its source's storage to its destination's.
+
+use crate::back::formats::{scratch_precision, texture_format};
+use crate::back::internal;
+use crate::back::steps::{fullscreen_step, layer_chunks};
+use crate::back::text::{FULLSCREEN_VS, f32_lit, header, out_struct};
+use crate::diag::Diagnostic;
+use crate::ir::{IrKernel, IrPass, Program, Texture};
+use crate::pack::Limits;
+use sshc_graph::{self as graph, Binding, Draw, FRAME_WGSL, Step, View};
+use std::fmt::Write as _;
+
+/// Intermediate textures a module needs besides the IR's (the separable filters' scratch).
+#[derive(Clone, Debug)]
+pub struct Scratch {
+    pub name: String,
+    pub like: String,
+    pub format: graph::Format,
+}
+
+/// A Filter's workgroup tile in the compute schedule: (apron x, apron y, width, height) in
+/// texels for a workgroup of [`graph::TEXEL_WORKGROUP`] squared invocations, on one axis
+/// of a separable kernel (`horizontal`) or both (the 3 x 3 LoG).
+pub(crate) fn filter_tile(kernel: &IrKernel, horizontal: bool) -> (i32, i32, i32, i32) {
+    let r = (kernel.size() as i32 - 1) / 2;
+    let (ax, ay) = match (kernel.separable(), horizontal) {
+        (false, _) => (r, r),
+        (true, true) => (r, 0),
+        (true, false) => (0, r),
+    };
+    let g = graph::TEXEL_WORKGROUP as i32;
+    (ax, ay, g + 2 * ax, g + 2 * ay)
+}
+
+/// A Filter pass: per texture of its output, one step per axis of a separable kernel (the
+/// first into a scratch texture) or one for the 3x3 stencil, each a sum of weighted taps
+/// or their max or min; fragment entries, or compute entries loading a tile and its apron
+/// into workgroup memory where the schedule phase chose `compute`.
+pub(crate) fn filter(
+    ir: &Program,
+    pass: &IrPass,
+    kernel: &IrKernel,
+    compute: bool,
+    limits: &Limits,
+    scratch: &mut Vec<Scratch>,
+) -> Result<(String, Vec<Step>), Diagnostic> {
+    let src = &ir.resources[pass.reads[0]];
+    let dst = &ir.resources[pass.writes.ok_or_else(|| internal("filter without output"))?];
+    let mut s = header(ir, pass);
+    s.push_str(FRAME_WGSL);
+    s.push_str("@group(0) @binding(0) var<uniform> frame: Frame;\n");
+    s.push_str("@group(1) @binding(0) var t_src: texture_2d_array<f32>;\n\n");
+    s.push_str(FULLSCREEN_VS);
+    let mut steps = Vec::new();
+    let size = kernel.size() as i32;
+    let r = (size - 1) / 2;
+    // out = ((f / scale_in + bias_in * W) - bias_out) * scale_out, W = sum of weights
+    let sum_w = if matches!(kernel, IrKernel::LoG) { 0.0 } else { 1.0 };
+    for (ti, tex) in dst.textures.iter().enumerate() {
+        let src_tex = &src.textures[ti];
+        let tmp_tex = Texture {
+            name: format!("{}_tmp", tex.name),
+            precision: scratch_precision(tex.precision),
+            ..tex.clone()
+        };
+        let passes: Vec<(&str, bool)> = if kernel.separable() {
+            vec![("h", true), ("v", false)]
+        } else {
+            vec![("2d", false)]
+        };
+        let tmp = tmp_tex.name.clone();
+        if kernel.separable() {
+            scratch.push(Scratch {
+                name: tmp.clone(),
+                like: tex.name.clone(),
+                format: texture_format(&tmp_tex),
+            });
+        }
+        for (axis, horizontal) in passes {
+            // each axis writes as many layers at once as its target's format allows
+            let written = if kernel.separable() && horizontal { &tmp_tex } else { tex };
+            let (ax, ay, tw, th) = filter_tile(kernel, horizontal);
+            if compute {
+                let _ = writeln!(
+                    s,
+                    "@group(2) @binding(0) var w_{}: texture_storage_2d_array<{}, write>;",
+                    written.name,
+                    texture_format(written).wgsl()
+                );
+            }
+            for (ci, chunk) in layer_chunks(written, limits).iter().enumerate() {
+                let entry = format!("{}_{}_{axis}_{ci}", if compute { "cs" } else { "fs" }, tex.name);
+                let out_name = format!("Out_{}_{axis}_{ci}", tex.name);
+                let tile = format!("tile_{}_{axis}_{ci}", tex.name);
+                if compute {
+                    let g = graph::TEXEL_WORKGROUP;
+                    let _ = write!(
+                        s,
+                        "\n// the workgroup's {g} x {g} texels and the kernel's apron, one layer at a time
+var<workgroup> {tile}: array<vec4<f32>, {}>;
+
+@compute @workgroup_size({g}, {g})
+fn {entry}(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {{
+    let texel = vec2<i32>(id.xy);
+    let last = vec2<i32>(textureDimensions(t_src)) - 1i;
+    // no early return: every invocation takes part in the loads and barriers
+    let inside = all(vec2<f32>(id.xy) < frame.shadow_size.xy);
+    let origin = vec2<i32>(wg.xy) * {g}i - vec2<i32>({ax}i, {ay}i);
+    let local = vec2<i32>(i32(li % {g}u), i32(li / {g}u));
+",
+                        tw * th
+                    );
+                } else {
+                    s.push_str(&out_struct(&out_name, chunk.len(), false));
+                    let _ = write!(
+                        s,
+                        "\n@fragment\nfn {entry}(@builtin(position) pos: vec4<f32>) -> {out_name} {{\n    let texel = vec2<i32>(pos.xy);\n    let last = vec2<i32>(textureDimensions(t_src)) - 1i;\n    var out: {out_name};\n"
+                    );
+                }
+                for (oi, &layer) in chunk.iter().enumerate() {
+                    let taps: Vec<(i32, i32, f64)> = match kernel {
+                        IrKernel::LoG => (0..9)
+                            .filter(|i| IrKernel::LOG_3X3[*i] != 0.0)
+                            .map(|i| (i as i32 % 3 - 1, i as i32 / 3 - 1, IrKernel::LOG_3X3[i]))
+                            .collect(),
+                        IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::Max(_) | IrKernel::Min(_) => {
+                            let w = kernel.weights_1d().unwrap_or_else(|| vec![1.0; size as usize]);
+                            (-r..=r)
+                                .map(|i| {
+                                    if horizontal {
+                                        (i, 0, w[(i + r) as usize])
+                                    } else {
+                                        (0, i, w[(i + r) as usize])
+                                    }
+                                })
+                                .collect()
+                        }
+                    };
+                    let _ = writeln!(s, "    // layer {layer}");
+                    if compute {
+                        // each invocation loads every 64th texel of the tile: one global
+                        // load per texel and layer instead of one per tap
+                        let n = tw * th;
+                        let g2 = (graph::TEXEL_WORKGROUP * graph::TEXEL_WORKGROUP) as i32;
+                        for j in 0..(n + g2 - 1) / g2 {
+                            let _ = writeln!(s, "    let k{oi}_{j} = i32(li) + {}i;", j * g2);
+                            let load = format!(
+                                "{tile}[k{oi}_{j}] = textureLoad(t_src, clamp(origin + vec2<i32>(k{oi}_{j} % {tw}i, k{oi}_{j} / {tw}i), vec2<i32>(0i), last), {layer}i, 0i);"
+                            );
+                            if (j + 1) * g2 > n {
+                                let _ = writeln!(s, "    if k{oi}_{j} < {n}i {{\n        {load}\n    }}");
+                            } else {
+                                let _ = writeln!(s, "    {load}");
+                            }
+                        }
+                        s.push_str("    workgroupBarrier();\n");
+                        for (k, (dx, dy, _)) in taps.iter().enumerate() {
+                            let _ = writeln!(
+                                s,
+                                "    let a{oi}_{k} = {tile}[(local.y + {}i) * {tw}i + local.x + {}i];",
+                                ay + dy,
+                                ax + dx
+                            );
+                        }
+                        // the next layer's loads overwrite the tile
+                        s.push_str("    workgroupBarrier();\n");
+                    } else {
+                        for (k, (dx, dy, _)) in taps.iter().enumerate() {
+                            let _ = writeln!(
+                                s,
+                                "    let a{oi}_{k} = textureLoad(t_src, clamp(texel + vec2<i32>({dx}i, {dy}i), vec2<i32>(0i), last), {layer}i, 0i);"
+                            );
+                        }
+                    }
+                    let combined = match kernel {
+                        IrKernel::Max(_) => taps
+                            .iter()
+                            .enumerate()
+                            .map(|(k, _)| format!("a{oi}_{k}"))
+                            .reduce(|a, b| format!("max({a}, {b})"))
+                            .unwrap_or_default(),
+                        IrKernel::Min(_) => taps
+                            .iter()
+                            .enumerate()
+                            .map(|(k, _)| format!("a{oi}_{k}"))
+                            .reduce(|a, b| format!("min({a}, {b})"))
+                            .unwrap_or_default(),
+                        IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::LoG => taps
+                            .iter()
+                            .enumerate()
+                            .map(|(k, (_, _, w))| format!("a{oi}_{k} * {}", f32_lit(*w as f32)))
+                            .collect::<Vec<_>>()
+                            .join(" + "),
+                    };
+                    // Encodes differ only across a LoG (its output range is wider).
+                    let last_axis = !kernel.separable() || !horizontal;
+                    let mut value = combined;
+                    if last_axis {
+                        let mut fix = Vec::new();
+                        let mut any = false;
+                        for c in 0..4u32 {
+                            let enc_in = src.slots.iter().find(|sl| sl.place() == (ti, layer, c)).map(|sl| sl.encode);
+                            let enc_out = dst.slots.iter().find(|sl| sl.place() == (ti, layer, c)).map(|sl| sl.encode);
+                            match (enc_in, enc_out) {
+                                (Some(i), Some(o)) if i != o || sum_w != 1.0 => {
+                                    any = true;
+                                    fix.push((1.0 / i.scale * o.scale, (i.bias * sum_w - o.bias) * o.scale));
+                                }
+                                _ => fix.push((1.0, 0.0)),
+                            }
+                        }
+                        if any {
+                            let m: Vec<String> = fix.iter().map(|f| f32_lit(f.0 as f32)).collect();
+                            let b: Vec<String> = fix.iter().map(|f| f32_lit(f.1 as f32)).collect();
+                            value = format!("({value}) * vec4<f32>({}) + vec4<f32>({})", m.join(", "), b.join(", "));
+                        }
+                    }
+                    if compute {
+                        let _ = writeln!(
+                            s,
+                            "    if inside {{\n        textureStore(w_{}, texel, {layer}i, {value});\n    }}",
+                            written.name
+                        );
+                    } else {
+                        let _ = writeln!(s, "    out.o{oi} = {value};");
+                    }
+                }
+                s.push_str(if compute { "}\n" } else { "    return out;\n}\n" });
+                let (read, write) = match (kernel.separable(), horizontal) {
+                    (true, true) => (src_tex.name.clone(), tmp.clone()),
+                    (true, false) => (tmp.clone(), tex.name.clone()),
+                    _ => (src_tex.name.clone(), tex.name.clone()),
+                };
+                let mut step = fullscreen_step(
+                    entry,
+                    Draw::FullScreen,
+                    vec![Binding {
+                        binding: 0,
+                        texture: read,
+                        view: View::Base,
+                    }],
+                    &write,
+                    chunk,
+                );
+                if compute {
+                    (step.vertex, step.compute, step.draw) = (None, step.fragment.take(), Draw::ComputeTexels);
+                }
+                steps.push(step);
+            }
+        }
+    }
+    Ok((s, steps))
+}

@@ -1,0 +1,318 @@
+//! The Shade pass: the visibility evaluated per camera pixel, forward (the camera
+//! raster's fragments) or deferred (a G-buffer, then one compute invocation per pixel);
+//! the receiver's inputs seen from the light's centre and, for `at_sample`, from each
+//! light sample's view.
+
+use crate::back::expr::{Emitter, Site};
+use crate::back::parts::Split;
+use crate::back::text::header;
+use crate::diag::Diagnostic;
+use crate::ir::{ExprId, IrPass, Program};
+use sshc_graph::{self as graph, Draw, OpCount, Step};
+use std::fmt::Write as _;
+
+/// The receiver seen from light sample `k`: the `in_*_v{k}` locals that `used` names (and
+/// what they are computed from), as the centre's are computed from `frame`, from the
+/// sample's view in `light_samples` (its own matrices, depth range and texel size; the
+/// weights of its segments). Unused inputs are not emitted, so each sample costs only what
+/// its lookups and inputs need.
+fn sample_prologue(k: u8, used: &std::collections::BTreeSet<&'static str>) -> String {
+    let uses = |names: &[&str]| names.iter().any(|n| used.contains(n));
+    let slope = uses(&["in_depth_slope"]);
+    let d = uses(&["in_d"]) || slope;
+    let d_world = d || uses(&["in_d_world", "in_texel_depth"]);
+    let texel_pos = uses(&["in_tf", "in_base"]);
+    let uv = texel_pos || slope || uses(&["in_uv"]);
+    let ndotl = uses(&["in_ndotl", "in_slope"]);
+    let mut s = format!("    // the receiver seen from light sample {k}\n    let sv{k} = light_samples.views[{k}];\n");
+    let mut line = |on: bool, text: String| {
+        if on {
+            s.push_str("    ");
+            s.push_str(&text);
+            s.push('\n');
+        }
+    };
+    line(d_world, format!("let in_d_world_v{k} = -(sv{k}.view * world).z;"));
+    line(
+        d,
+        format!("let in_d_v{k} = (in_d_world_v{k} - sv{k}.depth_range.x) * sv{k}.depth_range.z;"),
+    );
+    line(uv, format!("let light_clip_v{k} = sv{k}.view_proj * world;"));
+    line(
+        uv,
+        format!("let in_uv_v{k} = light_clip_v{k}.xy / light_clip_v{k}.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);"),
+    );
+    line(
+        ndotl,
+        format!("let in_ndotl_v{k} = dot(n, normalize(sv{k}.position.xyz - in.world));"),
+    );
+    line(
+        uses(&["in_slope"]),
+        format!("let in_slope_v{k} = min(sqrt(max(1.0 - in_ndotl_v{k} * in_ndotl_v{k}, 0.0)) / max(abs(in_ndotl_v{k}), 0.01), 100.0);"),
+    );
+    line(texel_pos, format!("let texel_pos_v{k} = in_uv_v{k} * frame.shadow_size.xy - 0.5;"));
+    line(uses(&["in_tf"]), format!("let in_tf_v{k} = fract(texel_pos_v{k});"));
+    line(
+        uses(&["in_texel_depth"]),
+        format!("let in_texel_depth_v{k} = sv{k}.weights.z * in_d_world_v{k} * sv{k}.depth_range.z;"),
+    );
+    line(uses(&["in_base"]), format!("let in_base_v{k} = vec2<i32>(floor(texel_pos_v{k}));"));
+    if slope {
+        for text in [
+            format!("let duv_dx_v{k} = dpdx(in_uv_v{k});"),
+            format!("let duv_dy_v{k} = dpdy(in_uv_v{k});"),
+            format!("let dd_dx_v{k} = dpdx(in_d_v{k});"),
+            format!("let dd_dy_v{k} = dpdy(in_d_v{k});"),
+            format!("let det_v{k} = duv_dx_v{k}.x * duv_dy_v{k}.y - duv_dx_v{k}.y * duv_dy_v{k}.x;"),
+            format!(
+                "let g_v{k} = vec2<f32>(dd_dx_v{k} * duv_dy_v{k}.y - duv_dx_v{k}.y * dd_dy_v{k}, duv_dx_v{k}.x * dd_dy_v{k} - dd_dx_v{k} * duv_dy_v{k}.x);"
+            ),
+            format!(
+                "let in_depth_slope_v{k} = select(0.0, min(length(g_v{k} / det_v{k}) * frame.shadow_size.z, 0.1), abs(det_v{k}) > 1e-14);"
+            ),
+        ] {
+            line(true, text);
+        }
+    }
+    line(
+        uses(&["in_segment_before"]),
+        format!("let in_segment_before_v{k} = sv{k}.weights.x;"),
+    );
+    line(uses(&["in_segment_after"]), format!("let in_segment_after_v{k} = sv{k}.weights.y;"));
+    s
+}
+
+/// What the camera raster of both Shade schedules interpolates.
+// The clip position is `@invariant`: the runtime redraws the objects that receive no
+// shadow with its own vertex stage of the same expression, testing depth Equal against this
+// raster's (runtime/src/receivers.rs), which invariance makes exact.
+const SHADE_VARYING: &str = "
+struct ShadeVarying {
+    @builtin(position) @invariant clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+";
+
+/// The camera raster's vertex stage: the scene's world position and normal.
+const SHADE_VERTEX: &str = "
+@vertex
+fn vs_shade(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> ShadeVarying {
+    var out: ShadeVarying;
+    out.clip = frame.camera_view_proj * vec4<f32>(position, 1.0);
+    out.world = position;
+    out.normal = normal;
+    return out;
+}
+";
+
+/// The receiver's normal, in a fragment entry taking `in: ShadeVarying`.
+const SHADE_NORMAL: &str = graph::SHADE_NORMAL_WGSL;
+
+/// The receiver seen from the light's centre, from `in.world`, `world` and `n`; `distant`,
+/// where the graph is specialised for a scene, keeps only the form of the
+/// direction to the light and of the texel's size that the light's kind takes.
+fn shade_receiver(distant: Option<bool>) -> String {
+    let to_light = match distant {
+        None => {
+            "select(normalize(frame.light_position.xyz - in.world), normalize(frame.light_position.xyz), frame.light_position.w == 0.0)"
+        }
+        Some(false) => "normalize(frame.light_position.xyz - in.world)",
+        Some(true) => "normalize(frame.light_position.xyz)",
+    };
+    let texel = match distant {
+        None => "frame.texel_world.x * in_d_world + frame.texel_world.y",
+        // perspective: y is 0; orthographic: x is 0 (sshc_graph's `texel_world`)
+        Some(false) => "frame.texel_world.x * in_d_world",
+        Some(true) => "frame.texel_world.y",
+    };
+    format!(
+        "    let in_d_world = -(frame.light_view * world).z;
+    let in_d = (in_d_world - frame.depth_range.x) * frame.depth_range.z;
+    let light_clip = frame.light_view_proj * world;
+    let in_uv = light_clip.xy / light_clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+    let to_light = {to_light};
+    let in_ndotl = dot(n, to_light);
+    // tan(acos(ndotl)), for slope-scaled bias
+    let in_slope = min(sqrt(max(1.0 - in_ndotl * in_ndotl, 0.0)) / max(abs(in_ndotl), 0.01), 100.0);
+    let texel_pos = in_uv * frame.shadow_size.xy - 0.5;
+    let in_tf = fract(texel_pos);
+    // one shadow-map texel at the receiver, in normalised depth units
+    let in_texel_depth = ({texel}) * frame.depth_range.z;
+    let in_base = vec2<i32>(floor(texel_pos));
+"
+    )
+}
+
+/// The receiver-plane depth slope's derivatives, in a fragment entry (screen-space
+/// derivatives); `DEPTH_SLOPE` (the schema's, shared with the runtime's host pixels)
+/// follows it.
+const SHADE_SLOPE: &str = "    // receiver-plane depth gradient over uv from screen-space derivatives (Isidoro 2006):
+    // solve [duv/dx; duv/dy] g = [dd/dx; dd/dy]; 0 where the Jacobian is singular
+    let duv_dx = dpdx(in_uv);
+    let duv_dy = dpdy(in_uv);
+    let dd_dx = dpdx(in_d);
+    let dd_dy = dpdy(in_d);
+";
+const DEPTH_SLOPE: &str = graph::DEPTH_SLOPE_WGSL;
+const OCTAHEDRAL: &str = graph::OCTAHEDRAL_WGSL;
+
+/// A Shade pass: forward, one camera raster whose fragments evaluate the visibility; or
+/// deferred (the compute schedule, where the schedule phase chose it), a camera raster writing the G-buffer
+/// ([`graph::GBUFFER`]) and then one compute invocation per pixel evaluating it from there.
+/// Both compute the receiver's inputs the same way from the same values, except that the
+/// deferred form reads the normal through an octahedral f32 encoding and the footprint of
+/// implicit-LOD lookups at F16.
+pub(crate) fn shade(
+    ir: &Program,
+    pass: &IrPass,
+    visibility: ExprId,
+    deferred: bool,
+    split: Split,
+) -> Result<(String, Vec<Step>), Diagnostic> {
+    let mut em = Emitter::new(ir, Site::Receiver, pass.reads.clone());
+    em.split = split;
+    em.deferred = deferred;
+    let v = em.emit(visibility)?;
+    let mut s = header(ir, pass);
+    s.push_str(&em.declarations(ir));
+    let entry = if deferred { "cs_shade" } else { "fs_shade" };
+    let (functions, body) = em.finish(entry);
+    s.push_str(&functions);
+    s.push_str(SHADE_VARYING);
+    let prologues: String = em.views.iter().map(|(&k, used)| sample_prologue(k, used)).collect();
+    let receiver = shade_receiver(ir.ir.specialised.as_ref().map(|s| s.facts.light.is_distant()));
+    // the `pixel` input, where the code reads it
+    let uses_pixel = body.contains("in_pixel") || functions.contains("in_pixel");
+    let pixel = |from: &str| {
+        if uses_pixel {
+            format!("    let in_pixel = {from};\n")
+        } else {
+            String::new()
+        }
+    };
+    let outputs = |store: &dyn Fn(&str, &str) -> String| {
+        format!(
+            "    // outputs stay finite and in [0, 1]; a receiver facing away from the light's centre
+    // is shadowed by its own surface
+    let raw = {v};
+    let vis = select(select(clamp(raw, 0.0, 1.0), 1.0, raw != raw), 0.0, in_ndotl <= 0.0);
+    let lambert = max(in_ndotl, 0.0);
+{}{}{}{}",
+            store("visibility", "vec4<f32>(vis, 0.0, 0.0, 1.0)"),
+            store("color", graph::SHADE_COLOR_WGSL),
+            store("position", "vec4<f32>(in.world, 1.0)"),
+            store("normal", "vec4<f32>(n, 0.0)"),
+        )
+    };
+    let step = |vertex: Option<&str>, fragment: Option<&str>, compute: Option<&str>, draw: Draw, reads: bool| Step {
+        vertex: vertex.map(str::to_string),
+        fragment: fragment.map(str::to_string),
+        compute: compute.map(str::to_string),
+        draw,
+        reads: if reads { em.graph_bindings() } else { vec![] },
+        writes: vec![],
+        params: reads && em.uses_params,
+        sampler: reads && em.uses_sampler,
+        light_samples: reads && !em.views.is_empty(),
+        cost: OpCount::default(),
+    };
+    if !deferred {
+        let _ = write!(
+            s,
+            "
+// visibility (r32float), shaded colour (rgba8unorm), world position (rgba32float) and
+// world normal (rgba16float): 36 bytes per sample as WebGPU counts them (rgba8unorm 8),
+// above its default limit of 32: a host's device raises max_color_attachment_bytes_per_sample.
+struct ShadeOut {{
+    @location(0) visibility: vec4<f32>,
+    @location(1) color: vec4<f32>,
+    @location(2) position: vec4<f32>,
+    @location(3) normal: vec4<f32>,
+}}
+{SHADE_VERTEX}
+@fragment
+fn fs_shade(in: ShadeVarying) -> ShadeOut {{
+{SHADE_NORMAL}    let world = vec4<f32>(in.world, 1.0);
+{receiver}{SHADE_SLOPE}{DEPTH_SLOPE}{}{prologues}{body}{}    return out;
+}}
+",
+            pixel("floor(in.clip.xy)"),
+            outputs(&|field, value| {
+                let decl = if field == "visibility" { "    var out: ShadeOut;\n" } else { "" };
+                format!("{decl}    out.{field} = {value};\n")
+            })
+        );
+        let forward = step(Some("vs_shade"), Some("fs_shade"), None, Draw::SceneFromCamera, true);
+        return Ok((s, vec![forward]));
+    }
+    s.push_str(SHADE_VERTEX);
+    let _ = write!(
+        s,
+        "
+// The G-buffer (sshc_graph::GBUFFER): world position and the centre view's depth slope,
+// the normal (octahedral, f32), the footprint of the centre view's uv (f16).
+struct GBufferOut {{
+    @location(0) world: vec4<f32>,
+    @location(1) normal: vec2<f32>,
+    @location(2) duv: vec4<f32>,
+}}
+
+{OCTAHEDRAL}
+@fragment
+fn fs_gbuffer(in: ShadeVarying) -> GBufferOut {{
+{SHADE_NORMAL}    let world = vec4<f32>(in.world, 1.0);
+    let in_d = (-(frame.light_view * world).z - frame.depth_range.x) * frame.depth_range.z;
+    let light_clip = frame.light_view_proj * world;
+    let in_uv = light_clip.xy / light_clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+{SHADE_SLOPE}{DEPTH_SLOPE}    var out: GBufferOut;
+    out.world = vec4<f32>(in.world, in_depth_slope);
+    out.normal = octahedral(n);
+    out.duv = vec4<f32>(duv_dx, duv_dy);
+    return out;
+}}
+
+// The camera outputs (sshc_graph::CAMERA_OUTPUTS) and the G-buffer.
+@group(2) @binding(0) var o_visibility: texture_storage_2d_array<r32float, write>;
+@group(2) @binding(1) var o_color: texture_storage_2d_array<rgba8unorm, write>;
+@group(2) @binding(2) var o_position: texture_storage_2d_array<rgba32float, write>;
+@group(2) @binding(3) var o_normal: texture_storage_2d_array<rgba16float, write>;
+@group(3) @binding(0) var g_world: texture_2d<f32>;
+@group(3) @binding(1) var g_normal: texture_2d<f32>;
+@group(3) @binding(2) var g_duv: texture_2d<f32>;
+
+@compute @workgroup_size({wg}, {wg})
+fn cs_shade(@builtin(global_invocation_id) id: vec3<u32>) {{
+    // invocations past the target's edge store nothing
+    if any(id.xy >= textureDimensions(o_visibility)) {{
+        return;
+    }}
+    let pixel = vec2<i32>(id.xy);
+    let gbuffer = textureLoad(g_world, pixel, 0i);
+    // where the camera sees no surface (the G-buffer's clear value has w = -1): the forward
+    // form's clear values, visibility 1, a dark background, position and normal NaN
+    if gbuffer.w < 0.0 {{
+        let nan = bitcast<f32>(0x7fc00000u);
+        textureStore(o_visibility, pixel, 0i, vec4<f32>(1.0, 0.0, 0.0, 1.0));
+        textureStore(o_color, pixel, 0i, vec4<f32>(0.02, 0.02, 0.03, 1.0));
+        textureStore(o_position, pixel, 0i, vec4<f32>(nan));
+        textureStore(o_normal, pixel, 0i, vec4<f32>(nan));
+        return;
+    }}
+    let in = ShadeVarying(vec4<f32>(0.0), gbuffer.xyz, vec3<f32>(0.0));
+    let n = from_octahedral(textureLoad(g_normal, pixel, 0i).xy);
+    let world = vec4<f32>(in.world, 1.0);
+{receiver}    let in_depth_slope = gbuffer.w;
+    let footprint = textureLoad(g_duv, pixel, 0i);
+    let in_duv_dx = footprint.xy;
+    let in_duv_dy = footprint.zw;
+{}{prologues}{body}{}}}
+",
+        pixel("vec2<f32>(pixel)"),
+        outputs(&|field, value| format!("    textureStore(o_{field}, pixel, 0i, {value});\n")),
+        wg = graph::TEXEL_WORKGROUP,
+    );
+    let gbuffer = step(Some("vs_shade"), Some("fs_gbuffer"), None, Draw::CameraGBuffer, false);
+    let pixels = step(None, None, Some("cs_shade"), Draw::ComputePixels, true);
+    Ok((s, vec![gbuffer, pixels]))
+}
