@@ -12,6 +12,10 @@ fn ui() {
     // SAFETY: this binary has no other test, and no thread of ours reads the environment
     // concurrently; trybuild's cargo inherits the variable.
     unsafe { std::env::set_var("SSHC_SHADERS_GEN_BASE_DIR", env!("CARGO_MANIFEST_DIR")) };
+    // trybuild's crate is built once per run, from nothing on a fresh clone: without debug
+    // information or incremental state, which no case reads (its messages are rustc's)
+    unsafe { std::env::set_var("CARGO_PROFILE_DEV_DEBUG", "false") };
+    unsafe { std::env::set_var("CARGO_INCREMENTAL", "0") };
     let t = trybuild::TestCases::new();
     t.pass("tests/ui/pass/*.rs");
     t.compile_fail("tests/ui/fail/*.rs");
