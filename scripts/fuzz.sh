@@ -10,7 +10,8 @@
 #   scripts/fuzz.sh ci [SECONDS]              CI smoke run (scripts/test.sh): build without
 #                                             a sanitizer, then each target on its seeds
 #                                             plus SECONDS (default 25) of mutation into a
-#                                             scratch corpus; fails on any crash
+#                                             scratch corpus, one target per core at a
+#                                             time; fails on any crash
 #
 # Without --asan the targets are built with the coverage instrumentation only (no
 # sanitizer): the code under test is safe Rust, so a panic, an abort, a stack overflow,
@@ -77,19 +78,39 @@ case ${1:-} in
         build plain
         scratch=$(mktemp -d)
         trap 'rm -rf "$scratch"' EXIT
-        for t in "${TARGETS[@]}"; do
+        # The targets run side by side, as many at a time as there are cores: each is one
+        # process on one core, so each still gets its seeds and its full SECONDS.
+        smoke() {
+            local t=$1
             mkdir -p "$scratch/$t" "$FUZZ/artifacts/$t"
-            echo "fuzz $t: seeds, then ${secs}s"
             # A crash, a timeout (-timeout, per input) or an allocation over the memory
             # limits exits non-zero and leaves the input in $FUZZ/artifacts/$t/.
             # shellcheck disable=SC2046
-            if ! "$(bin plain "$t")" "$scratch/$t" "$FUZZ/seeds/$t" $(target_flags "$t") \
+            "$(bin plain "$t")" "$scratch/$t" "$FUZZ/seeds/$t" $(target_flags "$t") \
                 -max_total_time="$secs" -timeout=30 -rss_limit_mb=2048 -print_final_stats=1 \
-                -artifact_prefix="$FUZZ/artifacts/$t/" >"$scratch/$t.log" 2>&1; then
+                -artifact_prefix="$FUZZ/artifacts/$t/" >"$scratch/$t.log" 2>&1
+        }
+        jobs=$(nproc)
+        declare -A status
+        for ((i = 0; i < ${#TARGETS[@]}; i += jobs)); do
+            declare -A pid=()
+            for t in "${TARGETS[@]:i:jobs}"; do
+                echo "fuzz $t: seeds, then ${secs}s"
+                smoke "$t" &
+                pid[$t]=$!
+            done
+            for t in "${!pid[@]}"; do
+                if wait "${pid[$t]}"; then status[$t]=0; else status[$t]=1; fi
+            done
+            unset pid
+        done
+        for t in "${TARGETS[@]}"; do
+            if [[ ${status[$t]} != 0 ]]; then
                 tail -n 60 "$scratch/$t.log"
                 echo "error: fuzz target $t failed; the input is in $FUZZ/artifacts/$t/ (reproduce: $(bin plain "$t") <file>)"
                 exit 1
             fi
+            echo -n "$t: "
             grep -E '^stat::(number_of_executed_units|peak_rss_mb)|^Done' "$scratch/$t.log" | tr '\n' ' '
             echo
         done

@@ -13,6 +13,15 @@ echo "spirv-val: $(spirv-val --version 2>&1 | head -1)"
 phase "format"
 cargo fmt --all -- --check
 
+# The fuzz targets' instrumented build (a workspace and target of its own) runs beside the
+# lint: each build leaves cores idle while its last crates compile alone. The fuzz runs
+# themselves wait for the lint to end, so that each has a core of its own.
+# (In a session of its own, so that a failing suite stops the build with its cargo.)
+fuzz_build_log=$(mktemp)
+setsid scripts/fuzz.sh build >"$fuzz_build_log" 2>&1 &
+fuzz_build=$!
+trap 'kill -- -"$fuzz_build" 2>/dev/null || true; rm -f "$fuzz_build_log"' EXIT
+
 phase "lint"
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 
@@ -38,8 +47,13 @@ phase "fuzz (short run)"
 # instrumentation, no sanitizer (RUSTC_BOOTSTRAP=1 on stable; libfuzzer-sys's build script
 # compiles libFuzzer's C++, so a C++ compiler is needed), then runs each on its seeds plus
 # 20 s of mutation; a crash, a timeout or an out-of-memory fails the phase and leaves the
-# input in compiler/fuzz/artifacts/<target>/. About 5 minutes on a 2-core machine from
-# a clean compiler/fuzz/target, 1.5 with it warm (docs/fuzzing.md).
+# input in compiler/fuzz/artifacts/<target>/. The build ran beside the lint; the runs take
+# the targets one per core (docs/fuzzing.md).
+if ! wait "$fuzz_build"; then
+    cat "$fuzz_build_log"
+    echo "error: the fuzz targets did not build"
+    exit 1
+fi
 scripts/fuzz.sh ci 20
 
 phase "tests"
