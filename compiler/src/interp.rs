@@ -544,9 +544,12 @@ pub fn input_error(i: Input, v: f64) -> f64 {
     }
 }
 
-/// The value of a frame-wide input in component `k`, or `None` for a per-receiver one.
-fn frame_input(f: &Frame, i: Input, k: usize) -> Option<f64> {
+/// The value of input `i` in component `k`: a frame-wide one from the frame, a receiver's
+/// as the view `at` sees it (`None`: no receiver, outside the Shade), a Geometry
+/// fragment's never (`None`: the Geometry passes' outputs are given).
+fn input_value(f: &Frame, i: Input, k: usize, at: Option<&At>) -> Option<f64> {
     let n = f.shadow_size as f64;
+    let slope = |ndotl: f64| ((1.0 - ndotl * ndotl).max(0.0).sqrt() / ndotl.abs().max(0.01)).min(100.0);
     Some(match i {
         Input::TexelSize => 1.0 / n,
         Input::ShadowSize => n,
@@ -557,26 +560,47 @@ fn frame_input(f: &Frame, i: Input, k: usize) -> Option<f64> {
         Input::LightSpread => f.light_spread,
         Input::LightDistant => f.light_distant as i32 as f64,
         Input::Frame => f.frame as f64,
-        Input::D
-        | Input::DWorld
-        | Input::Uv
-        | Input::Tf
-        | Input::NdotL
-        | Input::Slope
-        | Input::TexelDepth
-        | Input::DepthSlope
-        | Input::ZFrag
+        Input::D => at?.seen.d(),
+        Input::DWorld => at?.seen.d_world,
+        Input::Uv => at?.seen.uv[k.min(1)],
+        Input::Tf => {
+            let t = at?.seen.uv[k.min(1)] * n - 0.5;
+            t - t.floor()
+        }
+        Input::NdotL => at?.seen.ndotl,
+        Input::Slope => slope(at?.seen.ndotl),
+        // the centre's: (texel_world.x D + texel_world.y) / (far - near); a sample's view
+        // is perspective: its texel_world.x D / (far - near)
+        Input::TexelDepth => {
+            let at = at?;
+            let s = &at.seen;
+            if at.centre {
+                (f.texel_world[0] * s.d_world + f.texel_world[1]) / (f.far - f.near)
+            } else {
+                s.texel_world * s.d_world / (s.far - s.near)
+            }
+        }
+        Input::DepthSlope => at?.seen.depth_slope,
+        Input::SegmentBefore => at?.seen.weights[0],
+        Input::SegmentAfter => at?.seen.weights[1],
+        Input::Pixel => at?.pixel[k.min(1)],
+        Input::ZFrag
         | Input::ZVertex
         | Input::ConeRadius
         | Input::ZSurface
         | Input::OccluderDepth
         | Input::PenumbraLimit
         | Input::LimitDepth
-        | Input::SegmentBefore
-        | Input::SegmentAfter
-        | Input::Pixel
         | Input::Skin => return None,
     })
+}
+
+/// A receiver as one view sees it, for [`input_value`].
+struct At {
+    seen: Seen,
+    /// The light's centre view (not a light sample's).
+    centre: bool,
+    pixel: [f64; 2],
 }
 
 /// `noise(x, y, k)`: PCG3D of the three integers (`builtins::NOISE_WGSL`), top 24 bits.
@@ -808,9 +832,9 @@ impl<'p> Evaluation<'p> {
                 let leaf = |h: ExprId, k: usize, _: &[[f64; 4]]| -> Option<(f64, f64)> {
                     match self.p.arena.node(h) {
                         Node::Channel(ch, [dx, dy]) => from.get(ch).map(|t| t.texel(x + *dx as i64, y + *dy as i64)),
-                        Node::Input(i, _) => frame_input(&self.frame, *i, k).map(|v| (v, 0.0)),
+                        Node::Input(i, _) => input_value(&self.frame, *i, k, None).map(|v| (v, 0.0)),
                         Node::Param(id) => Some((self.p.params[*id].value.as_f64(), 0.0)),
-                        Node::Call(Func::Noise | Func::UvWidth, _) | Node::Sample { .. } => None,
+                        Node::Sample { .. } => None,
                         Node::F32(_)
                         | Node::I32(_)
                         | Node::U32(_)
@@ -879,7 +903,6 @@ impl<'p> Evaluation<'p> {
     fn receiver_leaf<'a>(&'a self, r: &'a Receiver, shift: Shift) -> impl Fn(ExprId, usize, &[[f64; 4]]) -> Option<(f64, f64)> + 'a {
         let f = &self.frame;
         let n = f.shadow_size as f64;
-        let slope = |ndotl: f64| ((1.0 - ndotl * ndotl).max(0.0).sqrt() / ndotl.abs().max(0.01)).min(100.0);
         let centre = Seen {
             uv: r.uv,
             d_world: r.d_world,
@@ -899,45 +922,12 @@ impl<'p> Evaluation<'p> {
             };
             match self.p.arena.node(h) {
                 Node::Input(i, view) => {
-                    let s = seen(view)?;
-                    let v = match i {
-                        Input::D => s.d(),
-                        Input::DWorld => s.d_world,
-                        Input::Uv => s.uv[k.min(1)],
-                        Input::Tf => {
-                            let t = s.uv[k.min(1)] * n - 0.5;
-                            t - t.floor()
-                        }
-                        Input::NdotL => s.ndotl,
-                        Input::Slope => slope(s.ndotl),
-                        // the centre's: (texel_world.x D + texel_world.y) / (far - near); a
-                        // sample's view is perspective: its texel_world.x D / (far - near)
-                        Input::TexelDepth => match view {
-                            None => (f.texel_world[0] * r.d_world + f.texel_world[1]) / (f.far - f.near),
-                            Some(_) => s.texel_world * s.d_world / (s.far - s.near),
-                        },
-                        Input::DepthSlope => s.depth_slope,
-                        Input::SegmentBefore => s.weights[0],
-                        Input::SegmentAfter => s.weights[1],
-                        Input::Pixel => r.pixel[k.min(1)],
-                        other @ (Input::TexelSize
-                        | Input::ShadowSize
-                        | Input::Near
-                        | Input::Far
-                        | Input::LightSize
-                        | Input::LightWidth
-                        | Input::LightSpread
-                        | Input::LightDistant
-                        | Input::Frame
-                        | Input::ZFrag
-                        | Input::ZVertex
-                        | Input::ConeRadius
-                        | Input::ZSurface
-                        | Input::OccluderDepth
-                        | Input::PenumbraLimit
-                        | Input::LimitDepth
-                        | Input::Skin) => frame_input(f, *other, k)?,
+                    let at = At {
+                        seen: seen(view)?,
+                        centre: view.is_none(),
+                        pixel: r.pixel,
                     };
+                    let v = input_value(f, *i, k, Some(&at))?;
                     Some((v, 0.0))
                 }
                 Node::Param(id) => Some((self.p.params[*id].value.as_f64(), 0.0)),

@@ -3,7 +3,7 @@
 //! one hash-consed [`Arena`] (equal sub-expressions share a handle, constants fold as
 //! nodes are added).
 
-use crate::builtins::{Func, Input, SampleFn, Ty};
+use crate::builtins::{Fold, Func, Input, SampleFn, Sig, Ty};
 use crate::consteval;
 use crate::front::ast::{ConstValue, LightModel, LightView, Neighbour, Precision, Primitive, Reduce, Resolve, ScalarTy};
 use crate::front::expr::{BinOp, UnOp, fmt_float};
@@ -580,40 +580,49 @@ impl Arena {
                             BinOp::BitAnd | BinOp::BitOr | BinOp::BitXor | BinOp::Shl | BinOp::Shr => f64::NAN,
                         }
                     }
-                    Node::Call(Func::Select, a) => {
-                        if get(&a[2], i) != 0.0 {
-                            get(&a[1], i)
-                        } else {
-                            get(&a[0], i)
-                        }
-                    }
-                    // constructors: the arguments' components in order
-                    Node::Call(Func::Vec2 | Func::Vec3 | Func::Vec4, a) => {
-                        let mut parts = a.iter().flat_map(|x| (0..width(*x)).map(move |k| (x, k)));
-                        match (a.len(), parts.nth(i)) {
-                            // one scalar fills every component
-                            (1, _) if width(a[0]) == 1 => get(&a[0], 0),
-                            (_, Some((x, k))) => get(x, k),
-                            (_, None) => f64::NAN,
-                        }
-                    }
-                    Node::Call(Func::Length, a) => (0..width(a[0])).map(|k| get(&a[0], k).powi(2)).sum::<f64>().sqrt(),
-                    Node::Call(Func::Dot, a) => (0..width(a[0])).map(|k| get(&a[0], k) * get(&a[1], k)).sum(),
-                    Node::Call(Func::UvWidth | Func::Noise, _) => leaf(n, i, vals).unwrap_or(f64::NAN),
                     Node::Call(f, a) => {
-                        let args: Vec<ConstValue> = a
-                            .iter()
-                            .map(|x| match self.ty(*x) {
-                                t @ (Ty::I32 | Ty::U32) => int_const(get(x, i), t),
-                                Ty::F32 | Ty::Bool | Ty::Vec(_) | Ty::AbstractInt => Float(get(x, i)),
-                            })
-                            .collect();
-                        let folded = if hooks.exact {
-                            crate::builtins::fold_call_exact(*f, &args)
-                        } else {
-                            eval_call(*f, &args)
+                        let componentwise = || {
+                            let args: Vec<ConstValue> = a
+                                .iter()
+                                .map(|x| match self.ty(*x) {
+                                    t @ (Ty::I32 | Ty::U32) => int_const(get(x, i), t),
+                                    Ty::F32 | Ty::Bool | Ty::Vec(_) | Ty::AbstractInt => Float(get(x, i)),
+                                })
+                                .collect();
+                            let folded = if hooks.exact {
+                                crate::builtins::fold_call_exact(*f, &args)
+                            } else {
+                                eval_call(*f, &args)
+                            };
+                            folded.map_or(f64::NAN, ConstValue::as_f64)
                         };
-                        folded.map_or(f64::NAN, ConstValue::as_f64)
+                        match (f.desc().fold, f.desc().sig) {
+                            // the frame's functions and the GPU's hash: the hook's
+                            (Fold::Hook, _) => leaf(n, i, vals).unwrap_or(f64::NAN),
+                            (_, Sig::Select) => {
+                                if get(&a[2], i) != 0.0 {
+                                    get(&a[1], i)
+                                } else {
+                                    get(&a[0], i)
+                                }
+                            }
+                            // constructors: the arguments' components in order
+                            (_, Sig::Construct(_)) => {
+                                let mut parts = a.iter().flat_map(|x| (0..width(*x)).map(move |k| (x, k)));
+                                match (a.len(), parts.nth(i)) {
+                                    // one scalar fills every component
+                                    (1, _) if width(a[0]) == 1 => get(&a[0], 0),
+                                    (_, Some((x, k))) => get(x, k),
+                                    (_, None) => f64::NAN,
+                                }
+                            }
+                            (_, Sig::Length) => (0..width(a[0])).map(|k| get(&a[0], k).powi(2)).sum::<f64>().sqrt(),
+                            (_, Sig::Dot) => (0..width(a[0])).map(|k| get(&a[0], k) * get(&a[1], k)).sum(),
+                            (
+                                Fold::Never | Fold::Float(_) | Fold::IntOrFloat(..) | Fold::Custom(_),
+                                Sig::Float | Sig::Numeric | Sig::SameNumeric | Sig::Convert(_) | Sig::Scalars,
+                            ) => componentwise(),
+                        }
                     }
                     Node::Swizzle(x, c) => c.get(i).map_or(f64::NAN, |&k| get(x, k as usize)),
                     Node::Param(_) | Node::Input(..) | Node::Channel(..) | Node::Sample { .. } => leaf(n, i, vals).unwrap_or(f64::NAN),

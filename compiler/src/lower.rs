@@ -336,12 +336,10 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 }
             }
             Resolved::Input(input) => {
-                // receiver-side inputs (and the sample's segment weights) are the view's
-                // (the pixel is the same in every view)
-                let view = if input.side() == crate::builtins::Side::Receiver && input != crate::builtins::Input::Pixel {
-                    self.view
-                } else {
-                    None
+                // inside `at_sample(k, ..)`, the inputs each view computes again are view k's
+                let view = match input.desc().view {
+                    crate::builtins::InView::Own { .. } | crate::builtins::InView::OnlyThere(_) => self.view,
+                    crate::builtins::InView::Same => None,
                 };
                 self.arena.add(Node::Input(input, view), input.ty(), span)
             }

@@ -55,7 +55,7 @@ pub(crate) struct Emitter<'a> {
     counter: usize,
     /// Receiver side: the light samples whose views `at_sample` used, with the `in_*`
     /// locals of each view the body reads (the prologue computes only those).
-    pub(crate) views: std::collections::BTreeMap<u8, std::collections::BTreeSet<&'static str>>,
+    pub(crate) views: std::collections::BTreeMap<u8, std::collections::BTreeSet<Input>>,
     /// Map and geometry side, in a per-sample pass: per-sample resources are read at the
     /// layer block of the view being rendered (`frame.sample.x`).
     pub(crate) per_sample_pass: bool,
@@ -216,7 +216,7 @@ impl<'a> Emitter<'a> {
             Node::Input(i, None) => self.input(i),
             Node::Input(i, Some(k)) => {
                 let name = self.input(i);
-                self.views.entry(k).or_default().insert(i.desc().wgsl);
+                self.views.entry(k).or_default().insert(i);
                 format!("{name}_v{k}")
             }
             Node::Channel(c, offset) => self.load_map_channel(c, offset)?,
@@ -272,9 +272,16 @@ impl<'a> Emitter<'a> {
     }
 
     fn sample(&mut self, ch: ChannelId, res: ResId, how: SampleFn, args: &[ExprId], view: Option<u8>) -> Result<String, Diagnostic> {
-        if let Some(k) = view {
-            self.views.entry(k).or_default();
-        }
+        // the receiver's shadow-map coordinates and the texel under them, in the view read
+        let (uv, base) = match view {
+            Some(k) => {
+                self.views.entry(k).or_default().insert(Input::Uv);
+                let uv = format!("in_uv_v{k}");
+                let base = format!("vec2<i32>(floor({uv} * frame.shadow_size.xy - 0.5))");
+                (uv, base)
+            }
+            None => ("in_uv".to_string(), "in_base".to_string()),
+        };
         let (tex, layer, comp, enc) = self.locate(res, ch, View::All, view)?;
         let args: Vec<String> = args.iter().map(|a| self.n(*a).to_string()).collect();
         let key = format!("{tex}/{layer}/{how:?}/{}", args.join(","));
@@ -300,7 +307,7 @@ impl<'a> Emitter<'a> {
                         if !self.tables.iter().any(|(n, _)| *n == name) {
                             self.tables.push((name.clone(), scale));
                         }
-                        format!("box_{name}(in_uv, vec2<f32>({}, {}), {layer})", args[0], args[1])
+                        format!("box_{name}({uv}, vec2<f32>({}, {}), {layer})", args[0], args[1])
                     }
                     // `shade_refusal` keeps per-sample implicit-LOD lookups forward
                     SampleWgsl::Texture { sampler, .. } if self.deferred && how == SampleFn::Sample && view.is_none() => {
@@ -309,21 +316,8 @@ impl<'a> Emitter<'a> {
                     }
                     SampleWgsl::Texture { sampler, read } => {
                         self.uses_sampler |= sampler;
-                        read(&tex, &layer, &args)
+                        read(&tex, &layer, &uv, &base, &args)
                     }
-                };
-                // inside `at_sample(k, ..)`, the receiver's coordinates in view k
-                let call = match view {
-                    Some(k) => {
-                        let used = self.views.entry(k).or_default();
-                        for local in ["in_uv", "in_base"] {
-                            if call.contains(local) {
-                                used.insert(local);
-                            }
-                        }
-                        in_view(&call, k)
-                    }
-                    None => call,
                 };
                 // every lookup returns the texel's four components
                 self.let_line(&v, "vec4<f32>", call);
@@ -375,31 +369,4 @@ impl<'a> Emitter<'a> {
             })
             .collect()
     }
-}
-
-/// `wgsl` with the receiver's shadow-map coordinates (`in_uv`, `in_base`) replaced by
-/// those of light sample `k`'s view.
-fn in_view(wgsl: &str, k: u8) -> String {
-    let mut out = String::with_capacity(wgsl.len() + 8);
-    let mut rest = wgsl;
-    while let Some(i) = rest.find("in_") {
-        let (head, tail) = rest.split_at(i);
-        out.push_str(head);
-        let boundary = head.chars().last().is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
-        let word = ["in_uv", "in_base"]
-            .into_iter()
-            .find(|w| tail.starts_with(w) && !tail[w.len()..].starts_with(|c: char| c.is_alphanumeric() || c == '_'));
-        match word {
-            Some(w) if boundary => {
-                out.push_str(&format!("{w}_v{k}"));
-                rest = &tail[w.len()..];
-            }
-            _ => {
-                out.push_str("in_");
-                rest = &tail[3..];
-            }
-        }
-    }
-    out.push_str(rest);
-    out
 }

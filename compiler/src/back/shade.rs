@@ -6,79 +6,40 @@
 use crate::back::expr::{Emitter, Site};
 use crate::back::parts::Split;
 use crate::back::text::header;
+use crate::builtins::{InView, Input};
 use crate::diag::Diagnostic;
 use crate::ir::{ExprId, IrPass, Program};
 use sshc_graph::{self as graph, Draw, OpCount, Step};
+use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
-/// The receiver seen from light sample `k`: the `in_*_v{k}` locals that `used` names (and
-/// what they are computed from), as the centre's are computed from `frame`, from the
-/// sample's view in `light_samples` (its own matrices, depth range and texel size; the
-/// weights of its segments). Unused inputs are not emitted, so each sample costs only what
-/// its lookups and inputs need.
-fn sample_prologue(k: u8, used: &std::collections::BTreeSet<&'static str>) -> String {
-    let uses = |names: &[&str]| names.iter().any(|n| used.contains(n));
-    let slope = uses(&["in_depth_slope"]);
-    let d = uses(&["in_d"]) || slope;
-    let d_world = d || uses(&["in_d_world", "in_texel_depth"]);
-    let texel_pos = uses(&["in_tf", "in_base"]);
-    let uv = texel_pos || slope || uses(&["in_uv"]);
-    let ndotl = uses(&["in_ndotl", "in_slope"]);
-    let mut s = format!("    // the receiver seen from light sample {k}\n    let sv{k} = light_samples.views[{k}];\n");
-    let mut line = |on: bool, text: String| {
-        if on {
-            s.push_str("    ");
-            s.push_str(&text);
-            s.push('\n');
+/// The receiver seen from light sample `k`: the `in_*_v{k}` locals of the inputs in `used`
+/// and of those they need, each from its descriptor's [`InView`] lines (its own matrices,
+/// depth range and texel size in `light_samples`; the weights of its segments), in the
+/// order of `Input::ALL` with what an input needs first. Unused inputs are not emitted, so
+/// each sample costs only what its lookups and inputs need.
+fn sample_prologue(k: u8, used: &BTreeSet<Input>) -> String {
+    fn emit(i: Input, k: u8, done: &mut BTreeSet<Input>, s: &mut String) {
+        if !done.insert(i) {
+            return;
         }
-    };
-    line(d_world, format!("let in_d_world_v{k} = -(sv{k}.view * world).z;"));
-    line(
-        d,
-        format!("let in_d_v{k} = (in_d_world_v{k} - sv{k}.depth_range.x) * sv{k}.depth_range.z;"),
-    );
-    line(uv, format!("let light_clip_v{k} = sv{k}.view_proj * world;"));
-    line(
-        uv,
-        format!("let in_uv_v{k} = light_clip_v{k}.xy / light_clip_v{k}.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);"),
-    );
-    line(
-        ndotl,
-        format!("let in_ndotl_v{k} = dot(n, normalize(sv{k}.position.xyz - in.world));"),
-    );
-    line(
-        uses(&["in_slope"]),
-        format!("let in_slope_v{k} = min(sqrt(max(1.0 - in_ndotl_v{k} * in_ndotl_v{k}, 0.0)) / max(abs(in_ndotl_v{k}), 0.01), 100.0);"),
-    );
-    line(texel_pos, format!("let texel_pos_v{k} = in_uv_v{k} * frame.shadow_size.xy - 0.5;"));
-    line(uses(&["in_tf"]), format!("let in_tf_v{k} = fract(texel_pos_v{k});"));
-    line(
-        uses(&["in_texel_depth"]),
-        format!("let in_texel_depth_v{k} = sv{k}.weights.z * in_d_world_v{k} * sv{k}.depth_range.z;"),
-    );
-    line(uses(&["in_base"]), format!("let in_base_v{k} = vec2<i32>(floor(texel_pos_v{k}));"));
-    if slope {
-        for text in [
-            format!("let duv_dx_v{k} = dpdx(in_uv_v{k});"),
-            format!("let duv_dy_v{k} = dpdy(in_uv_v{k});"),
-            format!("let dd_dx_v{k} = dpdx(in_d_v{k});"),
-            format!("let dd_dy_v{k} = dpdy(in_d_v{k});"),
-            format!("let det_v{k} = duv_dx_v{k}.x * duv_dy_v{k}.y - duv_dx_v{k}.y * duv_dy_v{k}.x;"),
-            format!(
-                "let g_v{k} = vec2<f32>(dd_dx_v{k} * duv_dy_v{k}.y - duv_dx_v{k}.y * dd_dy_v{k}, duv_dx_v{k}.x * dd_dy_v{k} - dd_dx_v{k} * duv_dy_v{k}.x);"
-            ),
-            format!(
-                "let in_depth_slope_v{k} = select(0.0, min(length(g_v{k} / det_v{k}) * frame.shadow_size.z, 0.1), abs(det_v{k}) > 1e-14);"
-            ),
-        ] {
-            line(true, text);
+        let (needs, lines): (&[Input], &[&str]) = match i.desc().view {
+            InView::Own { needs, wgsl } => (needs, wgsl),
+            InView::OnlyThere(wgsl) => (&[], wgsl),
+            InView::Same => (&[], &[]),
+        };
+        for &n in needs {
+            emit(n, k, done, s);
+        }
+        for line in lines {
+            let _ = writeln!(s, "    {}", line.replace("{k}", &k.to_string()));
         }
     }
-    line(
-        uses(&["in_segment_before"]),
-        format!("let in_segment_before_v{k} = sv{k}.weights.x;"),
-    );
-    line(uses(&["in_segment_after"]), format!("let in_segment_after_v{k} = sv{k}.weights.y;"));
+    let mut s = format!("    // the receiver seen from light sample {k}\n    let sv{k} = light_samples.views[{k}];\n");
+    let mut done = BTreeSet::new();
+    for i in Input::ALL.into_iter().filter(|i| used.contains(i)) {
+        emit(i, k, &mut done, &mut s);
+    }
     s
 }
 
@@ -315,4 +276,70 @@ fn cs_shade(@builtin(global_invocation_id) id: vec3<u32>) {{
     let gbuffer = step(Some("vs_shade"), Some("fs_gbuffer"), None, Draw::CameraGBuffer, false);
     let pixels = step(None, None, Some("cs_shade"), Draw::ComputePixels, true);
     Ok((s, vec![gbuffer, pixels]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every input a view computes again, alone and all together, in two views: the
+    /// prologue defines it (and what it needs, once) in WGSL that naga accepts, and the
+    /// same-in-every-view inputs add nothing.
+    #[test]
+    fn every_input_seen_from_a_view_is_defined_by_valid_wgsl() {
+        let module = |prologue: &str, reads: &str| {
+            format!(
+                "{}@group(0) @binding(0) var<uniform> frame: Frame;
+{}@group(0) @binding(3) var<uniform> light_samples: LightSamples;
+struct In {{ world: vec3<f32> }}
+@fragment
+fn main(@location(0) w: vec3<f32>) -> @location(0) vec4<f32> {{
+    let in = In(w);
+    let world = vec4<f32>(w, 1.0);
+    let n = vec3<f32>(0.0, 0.0, 1.0);
+{prologue}    return vec4<f32>({reads});
+}}
+",
+                sshc_graph::FRAME_WGSL,
+                graph::LIGHT_SAMPLES_WGSL
+            )
+        };
+        use crate::builtins::Ty;
+        let read = |i: Input, k: u8| match i.ty() {
+            Ty::Vec(_) => format!("{}_v{k}.x", i.desc().wgsl),
+            Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => format!("f32({}_v{k})", i.desc().wgsl),
+        };
+        let own: Vec<Input> = Input::ALL
+            .into_iter()
+            .filter(|i| match i.desc().view {
+                InView::Own { .. } | InView::OnlyThere(_) => true,
+                InView::Same => false,
+            })
+            .collect();
+        assert!(own.contains(&Input::Uv) && own.contains(&Input::SegmentBefore) && !own.contains(&Input::Pixel));
+        for &i in &own {
+            let prologue = sample_prologue(0, &BTreeSet::from([i]));
+            let wgsl = module(&prologue, &format!("{}, 0.0, 0.0, 1.0", read(i, 0)));
+            if let Err(e) = crate::back::validate(&wgsl) {
+                panic!("{}: {e}\n{wgsl}", i.name());
+            }
+        }
+        let all: BTreeSet<Input> = own.iter().copied().collect();
+        let both: String = [0u8, 1].iter().map(|&k| sample_prologue(k, &all)).collect();
+        let sum = own.iter().flat_map(|&i| [read(i, 0), read(i, 1)]).collect::<Vec<_>>().join(" + ");
+        let wgsl = module(&both, &format!("{sum}, 0.0, 0.0, 1.0"));
+        if let Err(e) = crate::back::validate(&wgsl) {
+            panic!("{e}\n{wgsl}");
+        }
+        // each local once per view, what an input needs before it
+        for k in [0u8, 1] {
+            let p = sample_prologue(k, &all);
+            assert_eq!(p.matches(&format!("let in_d_world_v{k} =")).count(), 1, "{p}");
+            assert!(
+                p.find(&format!("let in_d_world_v{k} =")) < p.find(&format!("let in_d_v{k} =")),
+                "{p}"
+            );
+        }
+        assert!(!sample_prologue(0, &BTreeSet::from([Input::Pixel, Input::TexelSize])).contains("let in_"));
+    }
 }
