@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what sshc needs beyond Rust when it is missing: the Vulkan loader and Mesa's
 # lavapipe CPU driver (a Vulkan adapter for machines without a GPU), and with `--test`
-# also the validators the tests use (spirv-tools). As root it installs them;
+# also what the tests use: the validators (spirv-tools) and a virtual X server for the
+# viewer's windows (xvfb, xauth). As root it installs them;
 # otherwise it names the command to run and fails.
 # Usage: scripts/setup.sh [--test]
 set -euo pipefail
@@ -10,6 +11,9 @@ if ! ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1'; then missing+=(libvulka
 if ! ls /usr/share/vulkan/icd.d/*.json >/dev/null 2>&1; then missing+=(mesa-vulkan-drivers); fi
 if [ "${1:-}" = "--test" ]; then
     command -v spirv-val >/dev/null 2>&1 || missing+=(spirv-tools)
+    # `sshc view`'s tests open real windows on a virtual X server
+    command -v xvfb-run >/dev/null 2>&1 || missing+=(xvfb)
+    command -v xauth >/dev/null 2>&1 || missing+=(xauth)
 fi
 if [ ${#missing[@]} -gt 0 ]; then
     if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then

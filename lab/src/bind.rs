@@ -41,9 +41,7 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
         .lights
         .first()
         .ok_or_else(|| "the scene has no light: add one to `lights`".to_string())?;
-    let v = scene.light_view(light);
-    let (samples, samples_closed) = light_samples(scene, light, n)?;
-    let cam = scene.camera_position();
+    let light = light_inputs_with_samples(scene, light, n)?;
     let n = scene.objects().len();
     let order: Vec<usize> = (0..n)
         .filter(|&i| scene.casts(i))
@@ -80,11 +78,7 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
         meshes.push(0..0);
     }
     let every = casting == vertices.len() / 6;
-    let camera = Camera {
-        view_proj: scene.camera_view_proj().to_cols_array(),
-        position: cam.to_array(),
-    };
-    let light = LightInputs::from_view(light, &v, &samples, samples_closed);
+    let camera = camera(scene);
     Ok(SceneInputs {
         vertices,
         meshes,
@@ -92,6 +86,27 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
         unshadowed,
         ..SceneInputs::of(&camera, &light, scene.camera_size(), scene.shadow_map)
     })
+}
+
+/// The scene's camera, as the executor takes it.
+pub fn camera(scene: &Scene) -> Camera {
+    Camera {
+        view_proj: scene.camera_view_proj().to_cols_array(),
+        position: scene.camera_position().to_array(),
+    }
+}
+
+/// `light`'s inputs in `scene` for `graph` (its view fitted as the scene's `shadow_fit`
+/// says, and the light-sample views `graph` renders): what [`scene_inputs_for`] binds, for
+/// a light that moves between frames (`Executor::set_light`). `scene` is the light's alone
+/// where a scene has several ([`crate::session::single_light`]), as it is for binding.
+pub fn light_inputs(scene: &Scene, light: &Light, graph: &PassGraph) -> Result<LightInputs, String> {
+    light_inputs_with_samples(scene, light, graph_samples(graph))
+}
+
+fn light_inputs_with_samples(scene: &Scene, light: &Light, n: u32) -> Result<LightInputs, String> {
+    let (samples, closed) = light_samples(scene, light, n)?;
+    Ok(LightInputs::from_view(light, &scene.light_view(light), &samples, closed))
 }
 
 /// `n` sample views of `light` in `scene`, in order along the light, and whether they

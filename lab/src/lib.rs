@@ -14,6 +14,8 @@ pub mod metrics;
 pub mod session;
 pub mod truth;
 pub mod verify;
+#[cfg(feature = "view")]
+pub mod view;
 pub mod visibility;
 
 /// Scenes live in their own crate, `sshc-scene` (no GPU), so that fuzzing and other tools

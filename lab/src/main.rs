@@ -74,6 +74,11 @@ enum Command {
     /// compare every receiver with an f64 evaluation of the same technique on the CPU: a
     /// table and a verdict per input (agrees, differs, lossy).
     Verify(verify::VerifyArgs),
+    /// A live window on a technique: orbit the camera, drag the light, params as sliders,
+    /// precisions and schedules recompiled in the background, hot reload on save, any
+    /// texture of the graph (docs/viewer.md).
+    #[cfg(feature = "view")]
+    View(sshc_lab::view::ViewArgs),
     /// Time compilation of techniques in a warm process (naga validation included).
     BenchCompile {
         /// Technique files.
@@ -142,6 +147,8 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Truth(args) => truth::truth(args),
         Command::Compare(args) => compare::compare(args),
         Command::Sweep(args) => sweep::sweep(args),
+        #[cfg(feature = "view")]
+        Command::View(args) => sshc_lab::view::view(args),
         Command::Verify(args) => verify::verify(args),
         Command::Compile { common, out } => {
             let c = compile_reported(&common)?;

@@ -103,6 +103,20 @@ pub struct Overrides {
     /// of lights).
     #[arg(long, value_name = "K")]
     pub lights: Option<usize>,
+    /// Replace the scene's camera: a RON value as a scene file writes it, such as
+    /// 'Perspective(position: (0, 2, 5), target: (0, 0, 0), fov_y_degrees: 40, width: 512,
+    /// height: 512)' (`--size` still sets its size; `sshc view`'s "copy as command" writes it).
+    #[arg(long, value_name = "RON", value_parser = ron_value::<crate::scene::Camera>)]
+    pub camera: Option<crate::scene::Camera>,
+    /// Replace the scene's lights in order, the K-th `--light` light K (a RON value as a
+    /// scene file writes it, such as 'Sphere(center: (0, 4, 0), radius: 0.2)'). Repeatable.
+    #[arg(long = "light", value_name = "RON", value_parser = ron_value::<crate::scene::Light>)]
+    pub light: Vec<crate::scene::Light>,
+}
+
+/// Parses a RON value of the scene file's syntax (`--camera`, `--light`).
+fn ron_value<T: serde::de::DeserializeOwned>(s: &str) -> Result<T, String> {
+    ron::from_str(s).map_err(|e| format!("{}:{}: {}", e.span.start.line, e.span.start.col, e.code))
 }
 
 impl Overrides {
@@ -111,6 +125,20 @@ impl Overrides {
     pub fn load(&self, gpu: &Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor), String> {
         let path = scene;
         let mut scene = load_scene(path, self.size, self.shadow_map)?;
+        if let Some(c) = &self.camera {
+            scene.set_camera(c.clone()).map_err(|e| format!("error: --camera: {e}"))?;
+            if let Some((w, h)) = self.size {
+                scene.set_camera_size(w, h);
+            }
+        }
+        for (i, l) in self.light.iter().enumerate() {
+            scene
+                .set_light(i, l.clone())
+                .map_err(|e| format!("error: --light (light {i}): {e}"))?;
+        }
+        if self.camera.is_some() || !self.light.is_empty() {
+            scene.check_precision().map_err(|e| format!("error: {e}"))?;
+        }
         if let Some(k) = self.lights {
             let n = scene.lights.len();
             if k == 0 || k > n {

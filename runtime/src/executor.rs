@@ -1108,6 +1108,26 @@ impl Executor {
         &self.gpu
     }
 
+    /// A camera output of the Shade pass as a texture the host can bind (a host's view of
+    /// it, as [`Executor::visibility`] is of the visibility), valid until the next binding:
+    /// the colour is every light's combination where several are bound, the others light
+    /// 0's. Camera-sized, `TEXTURE_BINDING` usage, formats as `sshc_graph::CAMERA_OUTPUTS`.
+    pub fn camera_texture(&self, which: CameraOutput) -> Result<&wgpu::Texture> {
+        let b = self.bound()?;
+        Ok(match (which, &self.combine) {
+            (CameraOutput::Color, Some(c)) => &c.color,
+            (CameraOutput::Color | CameraOutput::Visibility | CameraOutput::Position | CameraOutput::Normal, _) => {
+                &b.camera[which as usize]
+            }
+        })
+    }
+
+    /// A texture of the graph (light 0's), for a host to bind and look at, valid until the
+    /// next binding. Summed-area tables are storage buffers, not textures: refused.
+    pub fn texture(&self, name: &str) -> Result<&wgpu::Texture> {
+        self.bound()?.texture(name)
+    }
+
     /// The visibility as a texture the host can bind and sample, valid until the next
     /// binding ([`Executor::generation`]): with one light, light 0's `R32Float` visibility
     /// (1 where the camera sees no surface); with several, an `Rgba32Float` texture with

@@ -4,7 +4,7 @@
 use crate::error::{SceneError, SceneErrorKind, syntax_error};
 use crate::mesh::{analytic_triangles, build_mesh, place};
 use crate::schema::{Camera, Object, SceneDesc, ShadowFit};
-use crate::validate::{LIGHT_PRECISION_MARGIN, MAX_SCENE_TRIANGLES, PRECISION_RATIO, validate};
+use crate::validate::{LIGHT_PRECISION_MARGIN, MAX_SCENE_TRIANGLES, PRECISION_RATIO, validate, validate_camera, validate_light};
 use std::fmt;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -34,6 +34,14 @@ pub struct Scene {
     normals: Vec<[Vec3; 3]>,
     object_triangles: Vec<Range<usize>>,
     bounds: (Vec3, Vec3),
+}
+
+/// `light` checked and its directions normalised as a scene file's light `i` is (checking
+/// a checked light changes nothing).
+pub fn checked_light(i: usize, mut light: Light) -> Result<Light, SceneError> {
+    let name = light.kind_name();
+    validate_light(&mut light, &|field: &str| format!("lights[{i}] ({name}).{field}"))?;
+    Ok(light)
 }
 
 impl Scene {
@@ -141,6 +149,31 @@ impl Scene {
                 format!("`shadow_fit: Casters` fits the shadow map to the casting objects, but {why}"),
                 "mark at least one object `casts: true` (the default), or write `shadow_fit: Scene`",
             ));
+        }
+        Ok(())
+    }
+
+    /// Replaces the camera, checked as a scene file's is.
+    pub fn set_camera(&mut self, camera: Camera) -> Result<(), SceneError> {
+        validate_camera(&camera)?;
+        self.camera = camera;
+        Ok(())
+    }
+
+    /// Replaces light `i` (or adds it, at `i` = the number of lights), checked and its
+    /// directions normalised as a scene file's are.
+    pub fn set_light(&mut self, i: usize, light: Light) -> Result<(), SceneError> {
+        let light = checked_light(i, light)?;
+        match i.cmp(&self.lights.len()) {
+            std::cmp::Ordering::Less => self.lights[i] = light,
+            std::cmp::Ordering::Equal => self.lights.push(light),
+            std::cmp::Ordering::Greater => {
+                return Err(SceneError::invalid(
+                    format!("lights[{i}]"),
+                    format!("the scene has {} light(s): light {i} would leave a gap", self.lights.len()),
+                    "replace an existing light or add the next one",
+                ));
+            }
         }
         Ok(())
     }

@@ -57,7 +57,7 @@ pub(crate) fn validate(desc: &mut SceneDesc) -> Result<(), SceneError> {
     Ok(())
 }
 
-fn validate_camera(camera: &Camera) -> Result<(), SceneError> {
+pub(crate) fn validate_camera(camera: &Camera) -> Result<(), SceneError> {
     let (name, position, target, up, width, height, near, far) = match camera {
         Camera::Perspective {
             position,
@@ -183,7 +183,11 @@ fn check_unit(v: &mut Vec3, at: String) -> Result<(), SceneError> {
             "write a non-zero direction such as (0.0, -1.0, 0.0)",
         ));
     }
-    *v = v.normalize();
+    // a direction already of unit length to within f32 rounding is kept as it is, so that
+    // checking a light twice (a scene written out and read back) changes nothing
+    if (v.length_squared() - 1.0).abs() > 4.0 * f32::EPSILON {
+        *v = v.normalize();
+    }
     Ok(())
 }
 
@@ -207,7 +211,7 @@ fn check_size(x: f32, at: String, what: &str) -> Result<(), SceneError> {
     }
 }
 
-fn validate_light(light: &mut Light, at: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
+pub(crate) fn validate_light(light: &mut Light, at: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
     match light {
         Light::Point { position } => check_point(position, at("position")),
         Light::Directional { direction } => check_unit(direction, at("direction")),
@@ -239,7 +243,9 @@ fn validate_light(light: &mut Light, at: &dyn Fn(&str) -> String) -> Result<(), 
                     "write an axis that lies in the rectangle's plane, perpendicular to `normal`",
                 ));
             }
-            *u_axis = u.normalize();
+            if (u.length_squared() - 1.0).abs() > 4.0 * f32::EPSILON || u != *u_axis {
+                *u_axis = u.normalize();
+            }
             Ok(())
         }
         Light::Segment { a, b } => {

@@ -1,0 +1,62 @@
+//! `sshc view`: a live window on a technique. It is a host of the runtime's public API, as
+//! an engine would be (docs/embedding.md): its own device and window surface, the camera
+//! and lights updated in place every frame (`set_camera`, `set_light`), the passes
+//! recorded into its own encoder (`encode`), and the graph's textures drawn into the
+//! window. Compilation runs on a worker thread ([`worker`]); the last good graph keeps
+//! rendering until the new one is ready, and a file that no longer compiles shows its
+//! diagnostics in the window. docs/viewer.md is the guide.
+
+mod app;
+mod present;
+pub mod script;
+pub mod state;
+mod worker;
+
+use crate::session::{Variants, size};
+use std::path::PathBuf;
+
+/// `sshc view`'s arguments.
+#[derive(clap::Args)]
+pub struct ViewArgs {
+    /// The technique file (RON).
+    pub technique: PathBuf,
+    /// The scene (RON).
+    #[arg(long)]
+    pub scene: PathBuf,
+    /// Params, precisions and schedules to start with.
+    #[command(flatten)]
+    pub variants: Variants,
+    /// The window's inner size, WIDTHxHEIGHT (default: the scene camera's).
+    #[arg(long, value_parser = size)]
+    pub size: Option<(u32, u32)>,
+    /// Override the scene's shadow-map resolution.
+    #[arg(long)]
+    pub shadow_map: Option<u32>,
+    /// Render this many frames, then exit (with `--screenshot`, after writing it).
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// With `--frames`: write the window's contents to this PNG before exiting.
+    #[arg(long, requires = "frames")]
+    pub screenshot: Option<PathBuf>,
+    /// Replay this script (a RON list of events; docs/viewer.md), then exit.
+    #[arg(long)]
+    pub script: Option<PathBuf>,
+    /// Write what happens as JSON lines: each event, each recompilation with its
+    /// diagnostics, each screenshot with the view's state.
+    #[arg(long)]
+    pub log: Option<PathBuf>,
+}
+
+/// What to install for a display, for the message shown without one.
+pub const NO_DISPLAY: &str = "no display: `sshc view` opens a window. Without a desktop, run it under a virtual X server: `xvfb-run -a sshc view ...` (Debian: `apt-get install -y xvfb xauth`)";
+
+/// Runs the viewer until its window closes (or its frames or script end).
+pub fn view(args: ViewArgs) -> Result<(), String> {
+    let has_display = ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()));
+    if !has_display {
+        return Err(format!("error: {NO_DISPLAY}"));
+    }
+    app::run(args)
+}

@@ -1,0 +1,343 @@
+//! `sshc view` in a real window: an X server of its own (`xvfb-run`, which
+//! `scripts/setup.sh --test` installs), lavapipe drawing into the window's surface, scripts
+//! replayed frame by frame and the JSON-lines log read back. Never skipped: without
+//! `xvfb-run` these tests fail and say what to install.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+mod common;
+use common::{root, temp_dir};
+
+/// A viewer run's bound: a few compilations and pipeline creations on lavapipe and some
+/// tens of frames at 160 x 120 take seconds; a hang is stopped here.
+const LIMIT: Duration = Duration::from_secs(240);
+
+/// Runs `sshc view ARGS` under its own virtual X server; returns (success, stdout+stderr).
+fn view(args: &[&str]) -> (bool, String) {
+    let xvfb = which("xvfb-run").unwrap_or_else(|| {
+        panic!("xvfb-run is missing: `sshc view`'s tests open real windows on a virtual X server (as root, `scripts/setup.sh --test` installs it; or `apt-get install -y xvfb xauth`)")
+    });
+    let mut child = Command::new(xvfb)
+        .args(["-a", "-s", "-screen 0 640x480x24"])
+        .arg(env!("CARGO_BIN_EXE_sshc"))
+        .arg("view")
+        .args(args)
+        .current_dir(root())
+        .env("LP_NUM_THREADS", std::env::var("LP_NUM_THREADS").unwrap_or_else(|_| "2".into()))
+        .env(
+            "XDG_RUNTIME_DIR",
+            std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| "/tmp".into()),
+        )
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("xvfb-run starts");
+    let start = Instant::now();
+    loop {
+        if child.try_wait().expect("the viewer can be waited on").is_some() {
+            break;
+        }
+        if start.elapsed() > LIMIT {
+            let _ = child.kill();
+            let out = child.wait_with_output().expect("its output");
+            panic!(
+                "sshc view {} ran past {LIMIT:?}:\n{}{}",
+                args.join(" "),
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let out = child.wait_with_output().expect("its output");
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    (out.status.success(), text)
+}
+
+fn which(name: &str) -> Option<PathBuf> {
+    std::env::var_os("PATH")?
+        .to_str()?
+        .split(':')
+        .map(|d| Path::new(d).join(name))
+        .find(|p| p.is_file())
+}
+
+/// The log's entries.
+fn log(path: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect()
+}
+
+fn entries<'a>(log: &'a [serde_json::Value], event: &str) -> Vec<&'a serde_json::Value> {
+    log.iter().filter(|e| e["event"] == event).collect()
+}
+
+fn png(path: &Path) -> image::RgbaImage {
+    image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8()
+}
+
+fn pfm(path: &Path) -> Vec<f32> {
+    let mut f = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    pxm::PFM::read_from(&mut f)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .data
+}
+
+/// The number of distinct colours in an image below the panels' title bar (on a window this
+/// small the panels start folded: a bar 24 points high at the top left).
+fn colours_below_panels(img: &image::RgbaImage) -> usize {
+    let mut seen = std::collections::HashSet::new();
+    for y in 32.min(img.height())..img.height() {
+        for x in 0..img.width() {
+            seen.insert(img.get_pixel(x, y).0);
+        }
+    }
+    seen.len()
+}
+
+fn write_script(dir: &Path, text: &str) -> PathBuf {
+    let p = dir.join("script.ron");
+    std::fs::write(&p, text).expect("the script is written");
+    p
+}
+
+/// One scripted session of PCSS on the contact scene: the light moves, a param is set, every
+/// view mode is shown. The screenshot after the light moved differs from the one before;
+/// the visibility after `Set` is `sshc render`'s with the command the log gives, bit for
+/// bit (the same graph, camera and light, the same arithmetic); every mode draws an image.
+#[test]
+fn a_scripted_session_moves_the_light_sets_a_param_and_matches_render_bit_for_bit() {
+    let dir = temp_dir("session");
+    let d = dir.display();
+    let script = write_script(
+        &dir,
+        &format!(
+            r#"[
+    Wait(2),
+    Screenshot("{d}/before.png"),
+    MoveLight(light: 0, by: (1.2, 0.0, -0.6)),
+    Wait(2),
+    Screenshot("{d}/moved.png"),
+    Set(name: "slope_bias", value: 2.5),
+    Wait(2),
+    Screenshot("{d}/set.png"),
+    Show(Visibility),
+    Wait(1),
+    Screenshot("{d}/visibility.png"),
+    Show(Texture(name: "shadow", layer: 0, level: 0, channel: 0, lo: 0.0, hi: 1.0, map: Viridis)),
+    Wait(1),
+    Screenshot("{d}/texture.png"),
+]"#
+        ),
+    );
+    let log_path = dir.join("log.jsonl");
+    let (ok, out) = view(&[
+        "techniques/pcss.ron",
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "160x120",
+        "--shadow-map",
+        "256",
+        "--script",
+        script.to_str().unwrap(),
+        "--log",
+        log_path.to_str().unwrap(),
+    ]);
+    assert!(ok, "sshc view failed:\n{out}");
+    let log = log(&log_path);
+    assert_eq!(entries(&log, "screenshot").len(), 5, "{log:?}");
+    assert_eq!(entries(&log, "exit").len(), 1);
+    let (before, moved) = (png(&dir.join("before.png")), png(&dir.join("moved.png")));
+    assert_eq!((before.width(), before.height()), (160, 120));
+    let differ = before.pixels().zip(moved.pixels()).filter(|(a, b)| a != b).count();
+    assert!(differ > 100, "moving the light changed {differ} pixels");
+    // the visibility after `Set`, and `sshc render` of the logged command
+    let shot = entries(&log, "screenshot")[2];
+    let command = shot["command"].as_str().expect("a command");
+    assert!(
+        command.contains("--set 'slope_bias=2.5'") || command.contains("--set slope_bias=2.5"),
+        "{command}"
+    );
+    let words = shell_words(command);
+    assert_eq!(&words[..2], ["sshc", "render"]);
+    let out_png = dir.join("render.png");
+    let out_pfm = dir.join("render.pfm");
+    let mut args: Vec<String> = words[1..].to_vec();
+    let at = args.iter().position(|w| w == "--out").expect("--out");
+    args[at + 1] = out_png.display().to_string();
+    args.extend(["--visibility".to_string(), out_pfm.display().to_string()]);
+    let r = Command::new(env!("CARGO_BIN_EXE_sshc"))
+        .args(&args)
+        .current_dir(root())
+        .output()
+        .expect("sshc render runs");
+    assert!(r.status.success(), "sshc render {args:?}:\n{}", String::from_utf8_lossy(&r.stderr));
+    let viewer = pfm(Path::new(shot["visibility"].as_str().expect("a visibility file")));
+    let rendered = pfm(&out_pfm);
+    assert_eq!(viewer.len(), 160 * 120);
+    let same = viewer.iter().zip(&rendered).filter(|(a, b)| a.to_bits() == b.to_bits()).count();
+    assert_eq!(
+        same,
+        viewer.len(),
+        "{} of {} visibilities differ from `sshc render`'s",
+        viewer.len() - same,
+        viewer.len()
+    );
+    // a penumbra: not every pixel lit or hidden
+    assert!(viewer.iter().any(|v| *v > 0.05 && *v < 0.95));
+    for mode in ["set", "visibility", "texture"] {
+        let img = png(&dir.join(format!("{mode}.png")));
+        assert!(
+            colours_below_panels(&img) > 8,
+            "{mode}: an image of {} colours",
+            colours_below_panels(&img)
+        );
+    }
+}
+
+/// A file saved broken: the log has its diagnostic with file:line:column and the image
+/// keeps the previous graph's; saved fixed with a new default, the new graph renders.
+#[test]
+fn a_broken_save_logs_its_diagnostic_and_keeps_rendering_and_a_fixed_one_renders_anew() {
+    let dir = temp_dir("reload");
+    let technique = dir.join("pcss.ron");
+    std::fs::copy(root().join("techniques/pcss.ron"), &technique).expect("the technique is copied");
+    let t = technique.display();
+    let d = dir.display();
+    let script = write_script(
+        &dir,
+        &format!(
+            r#"[
+    Wait(1),
+    Screenshot("{d}/first.png"),
+    Edit(path: "{t}", from: "\"bias\": Param(", to: "\"bias\": Parm("),
+    WaitCompiled,
+    Screenshot("{d}/broken.png"),
+    Edit(path: "{t}", from: "\"bias\": Parm(", to: "\"bias\": Param("),
+    WaitCompiled,
+    Edit(path: "{t}", from: "default: 0.0005", to: "default: 0.05"),
+    WaitCompiled,
+    Screenshot("{d}/fixed.png"),
+]"#
+        ),
+    );
+    let log_path = dir.join("log.jsonl");
+    let (ok, out) = view(&[
+        technique.to_str().unwrap(),
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "160x120",
+        "--shadow-map",
+        "256",
+        "--script",
+        script.to_str().unwrap(),
+        "--log",
+        log_path.to_str().unwrap(),
+    ]);
+    assert!(ok, "sshc view failed:\n{out}");
+    let log = log(&log_path);
+    let compiled = entries(&log, "compiled");
+    let failed: Vec<_> = compiled.iter().filter(|e| e["ok"] == false).collect();
+    assert_eq!(failed.len(), 1, "{compiled:?}");
+    let diag = failed[0]["diagnostics"].as_str().unwrap_or_default();
+    // file:line:column, as the terminal shows it
+    let located = format!("{}:", technique.display());
+    assert!(diag.contains(&located) && diag.contains("Parm"), "{diag}");
+    let at = &diag[diag.find(&located).unwrap() + located.len()..];
+    let (line, rest) = at.split_once(':').unwrap_or_else(|| panic!("{diag}"));
+    let column: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    assert!(
+        line.parse::<u32>().is_ok() && column.parse::<u32>().is_ok(),
+        "no line:column after the path: {diag}"
+    );
+    assert!(compiled.iter().filter(|e| e["ok"] == true).count() >= 3, "{compiled:?}");
+    let vis = |name: &str| pfm(&dir.join(format!("{name}.visibility.pfm")));
+    assert_eq!(vis("first"), vis("broken"), "the broken save changed the image");
+    let (first, fixed) = (vis("first"), vis("fixed"));
+    let moved = first.iter().zip(&fixed).filter(|(a, b)| a != b).count();
+    assert!(moved > 0, "the fixed save's bias of 0.05 changed no visibility");
+}
+
+/// Without a display the viewer says how to get one; `--frames` with `--screenshot` writes
+/// the window after N frames and exits.
+#[test]
+fn without_a_display_the_viewer_says_how_to_get_one_and_frames_end_a_run() {
+    let out = Command::new(env!("CARGO_BIN_EXE_sshc"))
+        .args(["view", "techniques/hard.ron", "--scene", "scenes/contact.ron"])
+        .current_dir(root())
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("sshc runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("xvfb-run") && err.contains("apt-get install -y xvfb xauth"),
+        "{err}"
+    );
+    let dir = temp_dir("frames");
+    let shot = dir.join("shot.png");
+    let (ok, out) = view(&[
+        "techniques/hard.ron",
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "96x64",
+        "--frames",
+        "3",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    assert!(ok, "{out}");
+    let img = png(&shot);
+    assert_eq!((img.width(), img.height()), (96, 64));
+    assert!(colours_below_panels(&img) > 4);
+}
+
+/// Splits a command line as a POSIX shell does for the quoting `ViewState::command` writes
+/// (single quotes, and `'\''` for a quote inside them).
+fn shell_words(s: &str) -> Vec<String> {
+    let mut words = Vec::new();
+    let mut word = String::new();
+    let mut in_word = false;
+    let mut chars = s.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '\'' => {
+                in_word = true;
+                for q in chars.by_ref() {
+                    if q == '\'' {
+                        break;
+                    }
+                    word.push(q);
+                }
+            }
+            '\\' => {
+                in_word = true;
+                if let Some(n) = chars.next() {
+                    word.push(n);
+                }
+            }
+            ' ' => {
+                if in_word {
+                    words.push(std::mem::take(&mut word));
+                    in_word = false;
+                }
+            }
+            c => {
+                in_word = true;
+                word.push(c);
+            }
+        }
+    }
+    if in_word {
+        words.push(word);
+    }
+    words
+}
