@@ -341,3 +341,61 @@ fn shell_words(s: &str) -> Vec<String> {
     }
     words
 }
+
+/// The truth refines while the view stands still (its standard error falls as rounds are
+/// added) and starts over when the light moves; the error view and the RMS come with it.
+#[test]
+fn the_truth_refines_while_the_view_stands_still_and_starts_over_when_the_light_moves() {
+    let dir = temp_dir("truth");
+    let d = dir.display();
+    let script = write_script(
+        &dir,
+        &format!(
+            r#"[
+    Show(Error(range: 0.25)),
+    WaitTruth(4),
+    Screenshot("{d}/error.png"),
+    MoveLight(light: 0, by: (0.5, 0.0, 0.0)),
+    WaitTruth(1),
+    Show(StdError(range: 0.05)),
+    Wait(1),
+    Screenshot("{d}/std-error.png"),
+]"#
+        ),
+    );
+    let log_path = dir.join("log.jsonl");
+    let (ok, out) = view(&[
+        "techniques/pcss.ron",
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "96x72",
+        "--shadow-map",
+        "256",
+        "--script",
+        script.to_str().unwrap(),
+        "--log",
+        log_path.to_str().unwrap(),
+    ]);
+    assert!(ok, "sshc view failed:\n{out}");
+    let log = log(&log_path);
+    let truth = entries(&log, "truth");
+    let rounds: Vec<u64> = truth.iter().map(|e| e["rounds"].as_u64().unwrap()).collect();
+    // rounds 1 to 4, then the moved light's first
+    let restart = rounds
+        .windows(2)
+        .position(|w| w[1] < w[0])
+        .expect("the truth starts over after the light moved");
+    assert_eq!(&rounds[..restart + 1], [1, 2, 3, 4], "{rounds:?}");
+    assert_eq!(rounds[restart + 1], 1, "{rounds:?}");
+    let se = |i: usize| truth[i]["mean_std_error"].as_f64().unwrap();
+    // the mean of 4 rounds has about half the standard error of 1 (1 / sqrt(4)); the
+    // estimates of the spread are themselves noisy, so only the direction is asserted
+    assert!(se(3) < se(0), "standard error {} after 1 round, {} after 4", se(0), se(3));
+    let rms = truth[3]["rms"].as_f64().unwrap();
+    assert!(rms.is_finite() && rms > 0.0 && rms < 0.5, "RMS {rms}");
+    for name in ["error", "std-error"] {
+        let img = png(&dir.join(format!("{name}.png")));
+        assert!(colours_below_panels(&img) > 8, "{name}: {} colours", colours_below_panels(&img));
+    }
+}

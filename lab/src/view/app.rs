@@ -3,6 +3,7 @@
 
 use super::ViewArgs;
 use super::present::{Pick, Present};
+use super::refine::{Estimate, Refiner};
 use super::script::{Event, Log};
 use super::state::{self, ColourMap, Mode, Orbit, ViewState};
 use super::worker::{self, Answer, Controls, Watch, Worker};
@@ -97,10 +98,20 @@ struct App {
     /// Compilations answered so far, and the count a `WaitCompiled` waits for.
     answers: u64,
     wait_answers: Option<u64>,
+    wait_truth: Option<u32>,
     log: Log,
     watch: Option<Watch>,
     mouse: Mouse,
     times: Times,
+    /// The truth, refined on its own thread while a mode that shows it is on.
+    refiner: Refiner,
+    truth: Option<Estimate>,
+    /// The truth, the error and the standard error as textures (camera-sized R32Float).
+    truth_textures: Option<[wgpu::Texture; 3]>,
+    /// RMS of the error over the surface and over the penumbra.
+    rms: Option<(f64, f64)>,
+    /// The view changed since the truth was started.
+    truth_stale: bool,
     /// A screenshot to write after the next frame is drawn.
     screenshot: Option<PathBuf>,
     command: String,
@@ -160,11 +171,17 @@ impl App {
             wait_ready: false,
             answers: 0,
             wait_answers: None,
+            wait_truth: None,
             log,
             watch: None,
             mouse: Mouse::default(),
             times: Times::default(),
             screenshot: None,
+            refiner: Refiner::start(),
+            truth: None,
+            truth_textures: None,
+            rms: None,
+            truth_stale: true,
             command: String::new(),
             exit: None,
             args,
@@ -355,6 +372,14 @@ impl App {
             Event::Wait(n) => self.waiting = n,
             Event::WaitReady => self.wait_ready = true,
             Event::WaitCompiled => self.wait_answers = Some(self.answers + 1),
+            Event::WaitTruth(n) => {
+                if !matches!(self.state.mode, Mode::Truth | Mode::Error { .. } | Mode::StdError { .. }) {
+                    return Err(
+                        "error: WaitTruth: no mode that shows the truth is on (Show(Truth), Show(Error(..)) or Show(StdError(..)))".into(),
+                    );
+                }
+                self.wait_truth = Some(n);
+            }
             Event::Orbit { yaw, pitch } => {
                 self.orbit.turn(yaw.to_radians(), pitch.to_radians());
                 self.orbit_moved();
@@ -497,6 +522,13 @@ impl App {
 
     /// Run the script until it must wait.
     fn step_script(&mut self) -> Result<(), String> {
+        if let Some(n) = self.wait_truth {
+            if self.truth_stale || self.truth.as_ref().is_none_or(|t| t.rounds < n) {
+                return Ok(());
+            }
+            self.wait_truth = None;
+            self.waiting = 1;
+        }
         if let Some(n) = self.wait_answers {
             if self.answers < n {
                 return Ok(());
@@ -512,7 +544,8 @@ impl App {
             // one frame more, so that what is shown is the answer's
             self.waiting = 1;
         }
-        while self.waiting == 0 && !self.wait_ready && self.wait_answers.is_none() && self.screenshot.is_none() {
+        while self.waiting == 0 && !self.wait_ready && self.wait_answers.is_none() && self.wait_truth.is_none() && self.screenshot.is_none()
+        {
             let Some(e) = self.script.pop_front() else { break };
             self.apply(e)?;
         }
@@ -524,10 +557,14 @@ impl App {
         let scene = self.current_scene();
         let Some(ex) = &mut self.ex else { return Ok(()) };
         if self.resized {
+            self.truth_stale = true;
             worker::bind(ex, &scene)?;
             self.resized = false;
             self.moved = false;
             return Ok(());
+        }
+        if self.moved || self.resized {
+            self.truth_stale = true;
         }
         if self.moved {
             ex.set_camera(&crate::bind::camera(&scene)).map_err(|e| format!("error: {e}"))?;
@@ -612,6 +649,25 @@ impl App {
                         square: false,
                     },
                 ),
+                Mode::Truth | Mode::Error { .. } | Mode::StdError { .. } => {
+                    let (i, map, lo, hi) = match self.state.mode {
+                        Mode::Error { range } => (1, ColourMap::Diverging, -range, range),
+                        Mode::StdError { range } => (2, ColourMap::Viridis, 0.0, range),
+                        _ => (0, ColourMap::Grey, 0.0, 1.0),
+                    };
+                    (
+                        self.truth_textures.as_ref().map(|t| &t[i]),
+                        Pick {
+                            layer: 0,
+                            level: 0,
+                            channel: 0,
+                            map: map.index(),
+                            lo,
+                            hi,
+                            square: false,
+                        },
+                    )
+                }
                 Mode::Texture {
                     name,
                     layer,
@@ -652,6 +708,8 @@ impl App {
             times: &self.times,
             techniques: &self.techniques,
             command: &self.command,
+            truth: self.truth.as_ref(),
+            rms: self.rms,
         };
         let out = gfx.egui.run_pass(raw, |ctx| panels(ctx, &ui, &mut actions));
         gfx.egui_winit.handle_platform_output(&gfx.window, out.platform_output);
@@ -709,6 +767,7 @@ impl App {
         gfx.window.pre_present_notify();
         gfx.queue.present(frame);
         self.frame += 1;
+        self.refine()?;
         if let Some(ex) = &mut self.ex
             && let Ok(Some((_, t))) = ex.frame_times()
         {
@@ -750,6 +809,7 @@ impl App {
             && self.waiting == 0
             && !self.wait_ready
             && self.wait_answers.is_none()
+            && self.wait_truth.is_none()
             && self.screenshot.is_none();
         let frames_done = self.args.frames.is_some_and(|n| self.frame >= n);
         if frames_done && let Some(p) = self.args.screenshot.take() {
@@ -762,6 +822,72 @@ impl App {
             self.log.write(self.frame, json!({"event": "exit"}));
             self.finish(event_loop, Ok(()));
         }
+        Ok(())
+    }
+
+    /// Keep the truth going while a mode shows it: start it over where the view changed,
+    /// and take a new estimate (its textures and the RMS against the visibility).
+    fn refine(&mut self) -> Result<(), String> {
+        let shows = matches!(self.state.mode, Mode::Truth | Mode::Error { .. } | Mode::StdError { .. });
+        self.refiner.pause(!shows);
+        let Some(ex) = &self.ex else { return Ok(()) };
+        if shows && self.truth_stale {
+            let (p, n) = crate::session::positions_normals(ex)?;
+            let mut scene = self.current_scene();
+            scene.lights.truncate(1);
+            self.refiner.restart(scene, p, n);
+            self.truth_stale = false;
+            self.truth = None;
+            self.truth_textures = None;
+            self.rms = None;
+        }
+        let Some(e) = self.refiner.poll() else { return Ok(()) };
+        let vis = ex.read_visibilities().map_err(|e| format!("error: {e}"))?.channel(0);
+        let error: Vec<f32> = vis
+            .iter()
+            .zip(&e.visibility)
+            .map(|(v, t)| if t.is_finite() { v - t } else { 0.0 })
+            .collect();
+        let truth: Vec<f32> = e.visibility.iter().map(|t| if t.is_finite() { *t } else { 1.0 }).collect();
+        self.rms = Some(super::refine::rms(&vis, &e.visibility));
+        let (mean_se, max_se) = e.std_errors();
+        self.log.write(
+            self.frame,
+            json!({"event": "truth", "rounds": e.rounds, "seconds": e.seconds, "mean_std_error": mean_se, "max_std_error": max_se,
+                   "rms": self.rms.map(|r| r.0), "rms_penumbra": self.rms.map(|r| r.1)}),
+        );
+        if let Some(gfx) = &self.gfx {
+            let make = |data: &[f32]| {
+                let t = gfx.device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("sshc view: truth"),
+                    size: wgpu::Extent3d {
+                        width: e.width,
+                        height: e.height,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: wgpu::TextureFormat::R32Float,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                    view_formats: &[],
+                });
+                let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
+                gfx.queue.write_texture(
+                    t.as_image_copy(),
+                    &bytes,
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(e.width * 4),
+                        rows_per_image: None,
+                    },
+                    t.size(),
+                );
+                t
+            };
+            self.truth_textures = Some([make(&truth), make(&error), make(&e.std_error)]);
+        }
+        self.truth = Some(e);
         Ok(())
     }
 
@@ -910,6 +1036,8 @@ struct UiData<'a> {
     times: &'a Times,
     techniques: &'a [PathBuf],
     command: &'a str,
+    truth: Option<&'a Estimate>,
+    rms: Option<(f64, f64)>,
 }
 
 const PRECISIONS: [&str; 5] = ["auto", "unorm8", "unorm16", "f16", "f32"];
@@ -1064,10 +1192,38 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
     ui.horizontal(|ui| {
         ui.selectable_value(&mut mode, Mode::Shaded, "shaded");
         ui.selectable_value(&mut mode, Mode::Visibility, "visibility");
+        ui.selectable_value(&mut mode, Mode::Truth, "truth");
     });
+    ui.horizontal(|ui| {
+        let error = match mode {
+            Mode::Error { range } => range,
+            _ => 0.25,
+        };
+        ui.selectable_value(&mut mode, Mode::Error { range: error }, "error");
+        let se = match mode {
+            Mode::StdError { range } => range,
+            _ => 0.05,
+        };
+        ui.selectable_value(&mut mode, Mode::StdError { range: se }, "truth's std. error");
+    });
+    if let Mode::Error { range } | Mode::StdError { range } = &mut mode {
+        ui.add(egui::Slider::new(range, 0.001..=1.0).logarithmic(true).text("full colour at"));
+    }
+    if let Some(t) = d.truth {
+        let (mean, max) = t.std_errors();
+        ui.label(format!(
+            "truth: {} rounds of {} samples in {:.1} s; std. error mean {mean:.4}, max {max:.4}",
+            t.rounds,
+            super::refine::SAMPLES_PER_ROUND,
+            t.seconds
+        ));
+    }
+    if let Some((all, pen)) = d.rms {
+        ui.label(format!("RMS error: {all:.4} over the surface, {pen:.4} over the penumbra"));
+    }
     let current = match &mode {
         Mode::Texture { name, .. } => name.clone(),
-        Mode::Shaded | Mode::Visibility => "a texture".into(),
+        Mode::Shaded | Mode::Visibility | Mode::Truth | Mode::Error { .. } | Mode::StdError { .. } => "a texture".into(),
     };
     let mut name = current.clone();
     egui::ComboBox::from_label("texture").selected_text(&name).show_ui(ui, |ui| {

@@ -8,6 +8,7 @@
 
 mod app;
 mod present;
+mod refine;
 pub mod script;
 pub mod state;
 mod worker;

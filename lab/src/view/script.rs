@@ -19,6 +19,9 @@ pub enum Event {
     /// Wait until the next compilation is answered (one asked for by a file saved, say),
     /// then one frame more.
     WaitCompiled,
+    /// Wait until the truth of the current view has refined this many rounds (a mode that
+    /// shows the truth must be on), then one frame more.
+    WaitTruth(u32),
     /// Orbit the camera: degrees around the vertical and up.
     Orbit { yaw: f32, pitch: f32 },
     /// Pan the camera in the view plane, in units of its distance to the target.

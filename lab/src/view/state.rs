@@ -14,6 +14,13 @@ pub enum Mode {
     Shaded,
     /// Light 0's visibility, 0 black to 1 white.
     Visibility,
+    /// The ray-traced truth of light 0, refined while the view stands still.
+    Truth,
+    /// The visibility less the truth, blue below, red above, white where they agree;
+    /// `range` is the error at full colour.
+    Error { range: f32 },
+    /// The truth's standard error, 0 to `range` (viridis).
+    StdError { range: f32 },
     /// One channel of one layer and level of a texture of the graph, mapped from
     /// `[lo, hi]` through a colour map.
     Texture {
