@@ -399,3 +399,66 @@ fn the_truth_refines_while_the_view_stands_still_and_starts_over_when_the_light_
         assert!(colours_below_panels(&img) > 8, "{name}: {} colours", colours_below_panels(&img));
     }
 }
+
+/// A split view shows the main technique on the left half and the second on the right, at
+/// the same pixels as each alone.
+#[test]
+fn a_split_view_shows_each_half_as_its_technique_alone() {
+    let dir = temp_dir("split");
+    let d = dir.display();
+    let script = write_script(
+        &dir,
+        &format!(
+            r#"[
+    Wait(20),
+    Screenshot("{d}/pcss.png"),
+    Split(Some((technique: "techniques/hard.ron"))),
+    WaitReady,
+    Screenshot("{d}/split.png"),
+    Split(None),
+    Technique("techniques/hard.ron"),
+    WaitReady,
+    Screenshot("{d}/hard.png"),
+]"#
+        ),
+    );
+    let log_path = dir.join("log.jsonl");
+    let (ok, out) = view(&[
+        "techniques/pcss.ron",
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "320x120",
+        "--shadow-map",
+        "256",
+        "--script",
+        script.to_str().unwrap(),
+        "--log",
+        log_path.to_str().unwrap(),
+    ]);
+    assert!(ok, "sshc view failed:\n{out}");
+    let (pcss, split, hard) = (png(&dir.join("pcss.png")), png(&dir.join("split.png")), png(&dir.join("hard.png")));
+    // (the folded panels and their shadow fade in over the first frames: the first
+    // screenshot waits for that)
+    let half = |img: &image::RgbaImage, right: bool| -> Vec<[u8; 4]> {
+        let xs = if right { 160..320 } else { 0..160 };
+        (0..120)
+            .flat_map(|y| xs.clone().map(move |x| (x, y)))
+            .map(|(x, y)| img.get_pixel(x, y).0)
+            .collect()
+    };
+    assert!(half(&split, false) == half(&pcss, false), "the left half is not PCSS's");
+    assert!(
+        half(&split, true) == half(&hard, true),
+        "the right half is not the hard shadow map's"
+    );
+    assert!(
+        half(&pcss, true) != half(&hard, true),
+        "PCSS and hard shadows look the same here: the test shows nothing"
+    );
+    let shot = entries(&log(&log_path), "screenshot")[1].clone();
+    assert!(
+        shot["split_command"].as_str().is_some_and(|c| c.contains("techniques/hard.ron")),
+        "{shot}"
+    );
+}

@@ -2,7 +2,7 @@
 //! egui panels.
 
 use super::ViewArgs;
-use super::present::{Pick, Present};
+use super::present::{Part, Pick, Present};
 use super::refine::{Estimate, Refiner};
 use super::script::{Event, Log};
 use super::state::{self, ColourMap, Mode, Orbit, ViewState};
@@ -61,8 +61,30 @@ struct Mouse {
 #[derive(Default)]
 struct Times {
     passes: Vec<(String, f64)>,
+    /// The last 60 frames: sshc's GPU time (its passes' timestamps), the panels' CPU time
+    /// (egui's pass and tessellation), the frame interval.
+    gpu_ms: VecDeque<f64>,
+    ui_ms: VecDeque<f64>,
     frame_ms: VecDeque<f64>,
     last: Option<Instant>,
+    /// The frame number of the last GPU times taken.
+    gpu_frame: Option<u64>,
+    /// Each pass's GPU times over the same frames.
+    pass_ms: BTreeMap<String, VecDeque<f64>>,
+}
+
+fn push(v: &mut VecDeque<f64>, x: f64) {
+    v.push_back(x);
+    if v.len() > 60 {
+        v.pop_front();
+    }
+}
+
+/// The median of a window of times (NaN when empty).
+fn median(v: &VecDeque<f64>) -> f64 {
+    let mut s: Vec<f64> = v.iter().copied().collect();
+    s.sort_by(f64::total_cmp);
+    s.get(s.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
 /// What the panels asked for, applied after they are drawn.
@@ -83,6 +105,9 @@ struct App {
     gfx: Option<Gfx>,
     worker: Option<Worker>,
     ex: Option<Executor>,
+    /// The split view's right half: its own worker and executor.
+    worker_b: Option<Worker>,
+    ex_b: Option<Executor>,
     controls: Controls,
     /// The diagnostics of the last compilation that failed, until one succeeds.
     diagnostics: Option<String>,
@@ -114,6 +139,10 @@ struct App {
     truth_stale: bool,
     /// A screenshot to write after the next frame is drawn.
     screenshot: Option<PathBuf>,
+    /// When the script last saved a file, and the new graph's compile, pipeline and bind
+    /// times until its first frame is drawn.
+    saved_at: Option<Instant>,
+    fresh: Option<(f64, f64, f64)>,
     command: String,
     exit: Option<Result<(), String>>,
 }
@@ -146,6 +175,7 @@ impl App {
             schedules: args.variants.schedule.iter().cloned().collect(),
             shadow_map: scene.shadow_map,
             mode: Mode::Shaded,
+            split: None,
         };
         let script = match &args.script {
             Some(p) => super::script::load(p)?.into(),
@@ -160,6 +190,8 @@ impl App {
             gfx: None,
             worker: None,
             ex: None,
+            worker_b: None,
+            ex_b: None,
             controls: Controls::default(),
             diagnostics: None,
             status: "compiling".into(),
@@ -177,6 +209,8 @@ impl App {
             mouse: Mouse::default(),
             times: Times::default(),
             screenshot: None,
+            saved_at: None,
+            fresh: None,
             refiner: Refiner::start(),
             truth: None,
             truth_textures: None,
@@ -208,11 +242,18 @@ impl App {
     /// The compile options of the state: its fixed params, precisions and schedules; a
     /// graph for any scene (lights move).
     fn options(&self) -> sshc::CompileOptions {
-        sshc::CompileOptions {
-            set: self.state.fixed.clone().into_iter().collect(),
-            precision: self.state.precisions.clone().into_iter().collect(),
-            schedule: self.state.schedules.clone().into_iter().collect(),
-            ..Default::default()
+        options(&self.state)
+    }
+
+    /// Compile the split's right half (or drop it).
+    fn recompile_split(&mut self) {
+        let scene = self.current_scene();
+        match (self.state.right(), &mut self.worker_b) {
+            (Some(right), Some(w)) => {
+                w.request(&right.technique, options(&right), scene);
+            }
+            (None, _) => self.ex_b = None,
+            (Some(_), None) => {}
         }
     }
 
@@ -302,6 +343,7 @@ impl App {
         );
         let egui_wgpu = egui_wgpu::Renderer::new(&device, format, egui_wgpu::RendererOptions::default());
         self.worker = Some(Worker::start(gpu.clone()));
+        self.worker_b = Some(Worker::start(gpu.clone()));
         self.gfx = Some(Gfx {
             window,
             surface,
@@ -320,7 +362,9 @@ impl App {
     }
 
     fn watch_files(&mut self) {
-        match Watch::new(&[self.state.technique.clone(), self.state.scene.clone()]) {
+        let mut files = vec![self.state.technique.clone(), self.state.scene.clone()];
+        files.extend(self.state.split.as_ref().map(|s| s.technique.clone()));
+        match Watch::new(&files) {
             Ok(w) => self.watch = Some(w),
             Err(e) => self.status = e,
         }
@@ -342,6 +386,11 @@ impl App {
                 // runtime params the new graph still has keep their values
                 self.state.params.retain(|k, v| ex.set_param(k, *v).is_ok());
                 self.ex = Some(ex);
+                self.fresh = Some((r.compile_ms, r.pipelines_ms, r.bind_ms));
+                // GPU times are the new graph's from here
+                self.times.gpu_ms.clear();
+                self.times.pass_ms.clear();
+                self.times.gpu_frame = None;
                 self.controls = r.controls;
                 self.diagnostics = None;
                 self.status = format!(
@@ -355,6 +404,8 @@ impl App {
                 );
             }
             Answer::Failed { diagnostics, .. } => {
+                // a save that does not compile has no first frame
+                self.saved_at = None;
                 self.status = "the file does not compile: the previous graph keeps rendering".into();
                 self.log.write(
                     self.frame,
@@ -413,6 +464,11 @@ impl App {
                 self.recompile();
             }
             Event::Show(m) => self.state.mode = m,
+            Event::Split(split) => {
+                self.state.split = split;
+                self.watch_files();
+                self.recompile_split();
+            }
             Event::Technique(t) => {
                 self.state.technique = t;
                 self.state.params.clear();
@@ -428,6 +484,7 @@ impl App {
                     return Err(format!("error: Edit: `{from}` is not in {}", path.display()));
                 }
                 std::fs::write(&path, text.replacen(&from, &to, 1)).map_err(|e| format!("error: cannot write {}: {e}", path.display()))?;
+                self.saved_at = Some(Instant::now());
             }
             Event::Screenshot(p) => self.screenshot = Some(p),
             Event::State(s) => {
@@ -449,6 +506,7 @@ impl App {
                 if recompile {
                     self.recompile();
                 }
+                self.recompile_split();
             }
             Event::Reset => {
                 let size = self.current_scene().camera_size();
@@ -537,7 +595,7 @@ impl App {
             self.waiting = 1;
         }
         if self.wait_ready {
-            if self.worker.as_ref().is_some_and(|w| w.pending.is_some()) {
+            if [&self.worker, &self.worker_b].into_iter().flatten().any(|w| w.pending.is_some()) {
                 return Ok(());
             }
             self.wait_ready = false;
@@ -554,26 +612,24 @@ impl App {
 
     /// Hand the executor the camera and lights as they are now.
     fn update_executor(&mut self) -> Result<(), String> {
-        let scene = self.current_scene();
-        let Some(ex) = &mut self.ex else { return Ok(()) };
-        if self.resized {
-            self.truth_stale = true;
-            worker::bind(ex, &scene)?;
-            self.resized = false;
-            self.moved = false;
+        if !(self.moved || self.resized) {
             return Ok(());
         }
-        if self.moved || self.resized {
-            self.truth_stale = true;
-        }
-        if self.moved {
+        self.truth_stale = true;
+        let scene = self.current_scene();
+        for ex in [&mut self.ex, &mut self.ex_b].into_iter().flatten() {
+            if self.resized {
+                worker::bind(ex, &scene)?;
+                continue;
+            }
             ex.set_camera(&crate::bind::camera(&scene)).map_err(|e| format!("error: {e}"))?;
             for (l, light) in scene.lights.iter().enumerate() {
                 let inputs = crate::bind::light_inputs(&crate::session::single_light(&scene, l), light, &ex.graph)?;
                 ex.set_light(l, &inputs).map_err(|e| format!("error: light {l}: {e}"))?;
             }
-            self.moved = false;
         }
+        self.resized = false;
+        self.moved = false;
         Ok(())
     }
 
@@ -587,6 +643,27 @@ impl App {
             };
             if let Some(a) = answer {
                 self.take_answer(a);
+            }
+        }
+        if let Some(a) = self.worker_b.as_mut().and_then(Worker::poll) {
+            match a {
+                Answer::Ready(r) => {
+                    let mut ex = r.executor;
+                    if let Some(split) = &mut self.state.split {
+                        split.params.retain(|k, v| ex.set_param(k, *v).is_ok());
+                    }
+                    self.resized |= self.current_scene().camera_size() != first_size(&ex);
+                    self.moved = true;
+                    self.ex_b = Some(ex);
+                    self.log.write(self.frame, json!({"event": "compiled", "ok": true, "split": true, "technique": self.state.split.as_ref().map(|s| &s.technique)}));
+                }
+                Answer::Failed { diagnostics, .. } => {
+                    self.log.write(
+                        self.frame,
+                        json!({"event": "compiled", "ok": false, "split": true, "diagnostics": diagnostics}),
+                    );
+                    self.diagnostics = Some(format!("the split's right half:\n{diagnostics}"));
+                }
             }
         }
         if let Some(watch) = &self.watch {
@@ -612,6 +689,7 @@ impl App {
             }
             if !changed.is_empty() {
                 self.recompile();
+                self.recompile_split();
             }
         }
         self.step_script()?;
@@ -632,72 +710,28 @@ impl App {
         let target = frame.texture.create_view(&Default::default());
         let mut encoder = gfx.device.create_command_encoder(&Default::default());
         let size = (gfx.config.width, gfx.config.height);
-        let mut shown = false;
+        let mut shown_any = false;
         if let Some(ex) = &mut self.ex {
             ex.encode(&mut encoder).map_err(|e| format!("error: {e}"))?;
-            let (texture, pick) = match &self.state.mode {
-                Mode::Shaded => (ex.camera_texture(CameraOutput::Color).ok(), shaded()),
-                Mode::Visibility => (
-                    ex.camera_texture(CameraOutput::Visibility).ok(),
-                    Pick {
-                        layer: 0,
-                        level: 0,
-                        channel: 0,
-                        map: ColourMap::Grey.index(),
-                        lo: 0.0,
-                        hi: 1.0,
-                        square: false,
-                    },
-                ),
-                Mode::Truth | Mode::Error { .. } | Mode::StdError { .. } => {
-                    let (i, map, lo, hi) = match self.state.mode {
-                        Mode::Error { range } => (1, ColourMap::Diverging, -range, range),
-                        Mode::StdError { range } => (2, ColourMap::Viridis, 0.0, range),
-                        _ => (0, ColourMap::Grey, 0.0, 1.0),
-                    };
-                    (
-                        self.truth_textures.as_ref().map(|t| &t[i]),
-                        Pick {
-                            layer: 0,
-                            level: 0,
-                            channel: 0,
-                            map: map.index(),
-                            lo,
-                            hi,
-                            square: false,
-                        },
-                    )
-                }
-                Mode::Texture {
-                    name,
-                    layer,
-                    level,
-                    channel,
-                    lo,
-                    hi,
-                    map,
-                } => (
-                    ex.texture(name).ok(),
-                    Pick {
-                        layer: *layer,
-                        level: *level,
-                        channel: *channel,
-                        map: map.index(),
-                        lo: *lo,
-                        hi: *hi,
-                        square: true,
-                    },
-                ),
-            };
+            let truth = self.truth_textures.as_ref();
+            let (texture, pick) = shown(&self.state.mode, ex, truth);
+            let part = if self.ex_b.is_some() { Part::Left } else { Part::Whole };
             if let Some(t) = texture {
-                gfx.present.draw(&mut encoder, &target, size, t, pick);
-                shown = true;
+                gfx.present.draw(&mut encoder, &target, size, t, pick, part);
+                shown_any = true;
+            }
+            if let Some(b) = &mut self.ex_b {
+                b.encode(&mut encoder).map_err(|e| format!("error: split: {e}"))?;
+                if let (Some(t), pick) = shown(&self.state.mode, b, truth) {
+                    gfx.present.draw(&mut encoder, &target, size, t, pick, Part::Right);
+                }
             }
         }
-        if !shown {
+        if !shown_any {
             Present::clear(&mut encoder, &target);
         }
         let mut actions = Vec::new();
+        let ui_start = Instant::now();
         let raw = gfx.egui_winit.take_egui_input(&gfx.window);
         let ui = UiData {
             state: &self.state,
@@ -714,6 +748,7 @@ impl App {
         let out = gfx.egui.run_pass(raw, |ctx| panels(ctx, &ui, &mut actions));
         gfx.egui_winit.handle_platform_output(&gfx.window, out.platform_output);
         let jobs = gfx.egui.tessellate(out.shapes, out.pixels_per_point);
+        push(&mut self.times.ui_ms, ui_start.elapsed().as_secs_f64() * 1e3);
         let screen = egui_wgpu::ScreenDescriptor {
             size_in_pixels: [size.0, size.1],
             pixels_per_point: out.pixels_per_point,
@@ -761,24 +796,43 @@ impl App {
             self.command = self.state.command(&path.display().to_string());
             self.log.write(
                 self.frame,
-                json!({"event": "screenshot", "path": path, "visibility": vis, "state": self.state, "command": self.command}),
+                json!({"event": "screenshot", "path": path, "visibility": vis, "state": self.state, "command": self.command,
+                       "split_command": self.state.right().map(|r| r.command(&path.display().to_string())),
+                       "gpu_ms": median(&self.times.gpu_ms), "ui_ms": median(&self.times.ui_ms), "frame_ms": median(&self.times.frame_ms),
+                       "frames_timed": self.times.gpu_ms.len(),
+                       "pass_ms": self.times.pass_ms.iter().map(|(k, v)| (k.clone(), median(v))).collect::<BTreeMap<_, _>>()}),
             );
         }
         gfx.window.pre_present_notify();
         gfx.queue.present(frame);
+        if let Some((compile_ms, pipelines_ms, bind_ms)) = self.fresh.take() {
+            // the new graph's first frame, to the GPU's end of it
+            gfx.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| format!("error: {e}"))?;
+            let since_save = self.saved_at.take().map(|t| t.elapsed().as_secs_f64() * 1e3);
+            self.log.write(
+                self.frame,
+                json!({"event": "first frame", "technique": self.state.technique, "compile_ms": compile_ms, "pipelines_ms": pipelines_ms,
+                       "bind_ms": bind_ms, "save_to_frame_ms": since_save}),
+            );
+        }
         self.frame += 1;
         self.refine()?;
         if let Some(ex) = &mut self.ex
-            && let Ok(Some((_, t))) = ex.frame_times()
+            && let Ok(Some((n, t))) = ex.frame_times()
+            && self.times.gpu_frame != Some(n)
         {
+            self.times.gpu_frame = Some(n);
             self.times.passes = t.passes.into_iter().filter_map(|(n, ms)| Some((n, ms?))).collect();
+            push(&mut self.times.gpu_ms, self.times.passes.iter().map(|p| p.1).sum());
+            for (name, ms) in &self.times.passes {
+                push(self.times.pass_ms.entry(name.clone()).or_default(), *ms);
+            }
         }
         let now = Instant::now();
         if let Some(last) = self.times.last.replace(now) {
-            self.times.frame_ms.push_back((now - last).as_secs_f64() * 1e3);
-            if self.times.frame_ms.len() > 60 {
-                self.times.frame_ms.pop_front();
-            }
+            push(&mut self.times.frame_ms, (now - last).as_secs_f64() * 1e3);
         }
         for a in actions {
             match a {
@@ -923,6 +977,76 @@ impl App {
             self.orbit.pan(dx / h, dy / h);
             self.orbit_moved();
         }
+    }
+}
+
+/// The compile options of a state: its fixed params, precisions and schedules; a graph for
+/// any scene (lights move).
+fn options(state: &ViewState) -> sshc::CompileOptions {
+    sshc::CompileOptions {
+        set: state.fixed.clone().into_iter().collect(),
+        precision: state.precisions.clone().into_iter().collect(),
+        schedule: state.schedules.clone().into_iter().collect(),
+        ..Default::default()
+    }
+}
+
+/// The texture a mode shows from `ex` (the truth's from `truth`: the truth, the error, the
+/// standard error), and how to read it.
+fn shown<'a>(mode: &Mode, ex: &'a Executor, truth: Option<&'a [wgpu::Texture; 3]>) -> (Option<&'a wgpu::Texture>, Pick) {
+    match mode {
+        Mode::Shaded => (ex.camera_texture(CameraOutput::Color).ok(), shaded()),
+        Mode::Visibility => (
+            ex.camera_texture(CameraOutput::Visibility).ok(),
+            Pick {
+                layer: 0,
+                level: 0,
+                channel: 0,
+                map: ColourMap::Grey.index(),
+                lo: 0.0,
+                hi: 1.0,
+                square: false,
+            },
+        ),
+        Mode::Truth | Mode::Error { .. } | Mode::StdError { .. } => {
+            let (i, map, lo, hi) = match *mode {
+                Mode::Error { range } => (1, ColourMap::Diverging, -range, range),
+                Mode::StdError { range } => (2, ColourMap::Viridis, 0.0, range),
+                _ => (0, ColourMap::Grey, 0.0, 1.0),
+            };
+            (
+                truth.map(|t| &t[i]),
+                Pick {
+                    layer: 0,
+                    level: 0,
+                    channel: 0,
+                    map: map.index(),
+                    lo,
+                    hi,
+                    square: false,
+                },
+            )
+        }
+        Mode::Texture {
+            name,
+            layer,
+            level,
+            channel,
+            lo,
+            hi,
+            map,
+        } => (
+            ex.texture(name).ok(),
+            Pick {
+                layer: *layer,
+                level: *level,
+                channel: *channel,
+                map: map.index(),
+                lo: *lo,
+                hi: *hi,
+                square: true,
+            },
+        ),
     }
 }
 
@@ -1275,14 +1399,50 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
     if mode != d.state.mode {
         actions.push(Action::Event(Event::Show(mode)));
     }
+    ui.separator();
+    match &d.state.split {
+        None => {
+            if ui
+                .button("split: keep these settings on the right")
+                .on_hover_text("the right half keeps the technique and settings of now; change the left half to compare")
+                .clicked()
+            {
+                actions.push(Action::Event(Event::Split(Some(d.state.as_split()))));
+            }
+        }
+        Some(split) => {
+            ui.label(format!("right half: {}", split.technique.display()));
+            let mut t = split.technique.clone();
+            egui::ComboBox::from_label("right technique")
+                .selected_text(t.display().to_string())
+                .show_ui(ui, |ui| {
+                    for p in d.techniques {
+                        ui.selectable_value(&mut t, p.clone(), p.display().to_string());
+                    }
+                });
+            if t != split.technique {
+                actions.push(Action::Event(Event::Split(Some(super::state::Split {
+                    technique: t,
+                    params: BTreeMap::new(),
+                    fixed: BTreeMap::new(),
+                    precisions: BTreeMap::new(),
+                    schedules: BTreeMap::new(),
+                }))));
+            }
+            if ui.button("end the split").clicked() {
+                actions.push(Action::Event(Event::Split(None)));
+            }
+        }
+    }
 }
 
 fn times(ui: &mut egui::Ui, d: &UiData, ex: &Executor) {
-    let mut ms: Vec<f64> = d.times.frame_ms.iter().copied().collect();
-    ms.sort_by(f64::total_cmp);
-    if let Some(m) = ms.get(ms.len() / 2) {
-        ui.label(format!("frame: {m:.1} ms (median of the last {})", ms.len()));
-    }
+    ui.label(format!(
+        "frame {:.1} ms, panels {:.2} ms of CPU (medians of the last {})",
+        median(&d.times.frame_ms),
+        median(&d.times.ui_ms),
+        d.times.frame_ms.len()
+    ));
     let total: f64 = d.times.passes.iter().map(|p| p.1).sum();
     ui.label(format!("sshc's passes: {total:.3} ms on the GPU"));
     let widest = d.times.passes.iter().map(|p| p.1).fold(0.0, f64::max).max(1e-9);

@@ -82,6 +82,14 @@ pub struct Pick {
     pub square: bool,
 }
 
+/// Where a texture is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    Whole,
+    Left,
+    Right,
+}
+
 pub struct Present {
     device: wgpu::Device,
     queue: wgpu::Queue,
@@ -164,7 +172,9 @@ impl Present {
         }
     }
 
-    /// Draw `texture` as `pick` says over the whole of `target` (`size` pixels).
+    /// Draw `texture` as `pick` says over `part` of `target` (`size` pixels): the whole,
+    /// or its left or right half (a split view: each half shows its own texture at the
+    /// same pixels).
     pub fn draw(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
@@ -172,6 +182,7 @@ impl Present {
         size: (u32, u32),
         texture: &wgpu::Texture,
         pick: Pick,
+        part: Part,
     ) {
         let mut bytes = Vec::with_capacity(48);
         for v in [pick.layer, pick.level, pick.channel, pick.map] {
@@ -213,12 +224,25 @@ impl Present {
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    load: match part {
+                        Part::Whole | Part::Left => wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        Part::Right => wgpu::LoadOp::Load,
+                    },
                     store: wgpu::StoreOp::Store,
                 },
             })],
             ..Default::default()
         });
+        let half = size.0 / 2;
+        let (x, w) = match part {
+            Part::Whole => (0, size.0),
+            Part::Left => (0, half),
+            Part::Right => (half, size.0 - half),
+        };
+        if w == 0 || size.1 == 0 {
+            return;
+        }
+        pass.set_scissor_rect(x, 0, w, size.1);
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, group, &[]);
         pass.draw(0..3, 0..1);

@@ -41,6 +41,9 @@ pub enum Event {
     Schedule { pass: String, value: String },
     /// Show this.
     Show(Mode),
+    /// Show a second technique or setting on the right half (`None`: the whole window is
+    /// the main one again).
+    Split(Option<super::state::Split>),
     /// Switch to this technique file.
     Technique(PathBuf),
     /// Edit a file as an editor saves it: replace the first `from` by `to` and write it.

@@ -87,9 +87,52 @@ pub struct ViewState {
     pub schedules: BTreeMap<String, String>,
     pub shadow_map: u32,
     pub mode: Mode,
+    /// A second technique or setting on the right half of the window, on the same camera
+    /// and lights (the left half is the one above).
+    #[serde(default)]
+    pub split: Option<Split>,
+}
+
+/// The right half of a split view: its technique and settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Split {
+    pub technique: PathBuf,
+    #[serde(default)]
+    pub params: BTreeMap<String, f64>,
+    #[serde(default)]
+    pub fixed: BTreeMap<String, String>,
+    #[serde(default)]
+    pub precisions: BTreeMap<String, String>,
+    #[serde(default)]
+    pub schedules: BTreeMap<String, String>,
 }
 
 impl ViewState {
+    /// The split's own state: this one with the split's technique and settings.
+    pub fn right(&self) -> Option<ViewState> {
+        let s = self.split.as_ref()?;
+        Some(ViewState {
+            technique: s.technique.clone(),
+            params: s.params.clone(),
+            fixed: s.fixed.clone(),
+            precisions: s.precisions.clone(),
+            schedules: s.schedules.clone(),
+            split: None,
+            ..self.clone()
+        })
+    }
+
+    /// The settings of this view as a split's (to compare them with others).
+    pub fn as_split(&self) -> Split {
+        Split {
+            technique: self.technique.clone(),
+            params: self.params.clone(),
+            fixed: self.fixed.clone(),
+            precisions: self.precisions.clone(),
+            schedules: self.schedules.clone(),
+        }
+    }
+
     /// The `sshc render` line that renders this view: the same technique, settings,
     /// camera (with the window's size) and lights, bit for bit where the arithmetic is the
     /// same. Arguments are quoted for a POSIX shell.
@@ -379,6 +422,7 @@ mod tests {
             schedules: BTreeMap::new(),
             shadow_map: 512,
             mode: Mode::Shaded,
+            split: None,
         };
         let cmd = s.command("out.png");
         assert!(cmd.contains("'scenes/my scene.ron'"), "{cmd}");
