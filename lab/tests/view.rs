@@ -202,13 +202,18 @@ fn a_scripted_session_moves_the_light_sets_a_param_and_matches_render_bit_for_bi
 }
 
 /// A file saved broken: the log has its diagnostic with file:line:column and the image
-/// keeps the previous graph's; saved fixed with a new default, the new graph renders.
+/// keeps the previous graph's; saved fixed with a new default, the new graph renders. A
+/// fixed param set from the panels recompiles, and the scene file saved reloads.
 #[test]
 fn a_broken_save_logs_its_diagnostic_and_keeps_rendering_and_a_fixed_one_renders_anew() {
     let dir = temp_dir("reload");
     let technique = dir.join("pcss.ron");
     std::fs::copy(root().join("techniques/pcss.ron"), &technique).expect("the technique is copied");
+    let scene = dir.join("contact.ron");
+    // (the contact scene names no mesh file: its copy reads the same anywhere)
+    std::fs::copy(root().join("scenes/contact.ron"), &scene).expect("the scene is copied");
     let t = technique.display();
+    let s = scene.display();
     let d = dir.display();
     let script = write_script(
         &dir,
@@ -224,6 +229,12 @@ fn a_broken_save_logs_its_diagnostic_and_keeps_rendering_and_a_fixed_one_renders
     Edit(path: "{t}", from: "default: 0.0005", to: "default: 0.05"),
     WaitCompiled,
     Screenshot("{d}/fixed.png"),
+    Set(name: "N", value: 2.0),
+    WaitReady,
+    Screenshot("{d}/n2.png"),
+    Edit(path: "{s}", from: "radius: 0.35", to: "radius: 0.7"),
+    WaitCompiled,
+    Screenshot("{d}/scene.png"),
 ]"#
         ),
     );
@@ -231,7 +242,7 @@ fn a_broken_save_logs_its_diagnostic_and_keeps_rendering_and_a_fixed_one_renders
     let (ok, out) = view(&[
         technique.to_str().unwrap(),
         "--scene",
-        "scenes/contact.ron",
+        scene.to_str().unwrap(),
         "--size",
         "160x120",
         "--shadow-map",
@@ -263,6 +274,19 @@ fn a_broken_save_logs_its_diagnostic_and_keeps_rendering_and_a_fixed_one_renders
     let (first, fixed) = (vis("first"), vis("fixed"));
     let moved = first.iter().zip(&fixed).filter(|(a, b)| a != b).count();
     assert!(moved > 0, "the fixed save's bias of 0.05 changed no visibility");
+    // a fixed param recompiles (the log has its compilation) and changes the image; the
+    // scene file saved with a larger light reloads and widens the penumbra
+    assert!(compiled.iter().filter(|e| e["ok"] == true).count() >= 4, "{compiled:?}");
+    assert_ne!(vis("fixed"), vis("n2"), "N = 2 changed nothing");
+    let penumbra = |v: &[f32]| v.iter().filter(|x| **x > 0.02 && **x < 0.98).count();
+    let (before, after) = (penumbra(&vis("n2")), penumbra(&vis("scene")));
+    assert!(
+        after > before,
+        "the light's radius 0.35 -> 0.7 gave {before} -> {after} penumbra pixels"
+    );
+    let shots = entries(&log, "screenshot");
+    let last = &shots[shots.len() - 1]["state"]["lights"][0]["Sphere"]["radius"];
+    assert_eq!(last.as_f64(), Some(0.7f32 as f64), "{last}");
 }
 
 /// Without a display the viewer says how to get one; `--frames` with `--screenshot` writes
@@ -461,4 +485,67 @@ fn a_split_view_shows_each_half_as_its_technique_alone() {
         shot["split_command"].as_str().is_some_and(|c| c.contains("techniques/hard.ron")),
         "{shot}"
     );
+}
+
+/// Every texture of a technique's graph (the moments, the limits, the skins of every light
+/// sample's layer, a mip level) draws into the window: the centre of the window shows the
+/// texture, not the background the viewer clears to where it has nothing to draw.
+#[test]
+fn every_texture_of_a_graph_draws_an_image() {
+    let dir = temp_dir("textures");
+    for (scene, techniques) in [
+        ("contact", &["vsm", "msm", "cssm", "penumbra-limit-maps", "smoothies"][..]),
+        ("linear", &["linear-light"][..]),
+    ] {
+        let mut steps = String::from("[\n");
+        let mut shots = Vec::new();
+        for t in techniques {
+            let path = root().join(format!("techniques/{t}.ron"));
+            let source = std::fs::read_to_string(&path).expect("the technique reads");
+            let graph = sshc::compile_str(&source, &Default::default()).expect("it compiles").graph;
+            steps.push_str(&format!("    Technique(\"techniques/{t}.ron\"),\n    WaitReady,\n"));
+            for tex in graph.textures.iter().filter(|x| x.format != sshc_graph::Format::SummedAreaU32) {
+                let shot = dir.join(format!("{t}-{}.png", tex.name));
+                let level = u32::from(tex.mips);
+                steps.push_str(&format!(
+                    "    Show(Texture(name: \"{}\", layer: {}, level: {level}, channel: 0, lo: 0.0, hi: 1.0, map: Viridis)),\n    Wait(1),\n    Screenshot(\"{}\"),\n",
+                    tex.name,
+                    tex.array_layers() - 1,
+                    shot.display()
+                ));
+                shots.push(shot);
+            }
+        }
+        steps.push(']');
+        let script = write_script(&dir, &steps);
+        let (ok, out) = view(&[
+            &format!("techniques/{}.ron", techniques[0]),
+            "--scene",
+            &format!("scenes/{scene}.ron"),
+            "--size",
+            "96x96",
+            "--shadow-map",
+            "128",
+            "--script",
+            script.to_str().unwrap(),
+        ]);
+        assert!(ok, "sshc view failed:\n{out}");
+        assert!(shots.len() >= techniques.len(), "{shots:?}");
+        for shot in shots {
+            let img = png(&shot);
+            // the clear colour: (0.02, 0.02, 0.03) in unorm8
+            let background = [5u8, 5, 8, 255];
+            let centre: Vec<[u8; 4]> = (40..56)
+                .flat_map(|y| (40..56).map(move |x| (x, y)))
+                .map(|(x, y)| img.get_pixel(x, y).0)
+                .collect();
+            let drawn = centre.iter().filter(|p| **p != background).count();
+            assert!(
+                drawn == centre.len(),
+                "{}: {drawn} of {} centre pixels drawn",
+                shot.display(),
+                centre.len()
+            );
+        }
+    }
 }
