@@ -60,24 +60,11 @@ pub(crate) fn moved_light(light: &Light, scene: &Scene, texels: f32) -> Light {
     let v = scene.light_view(light);
     let right = v.view.inverse().transform_vector3(Vec3::X).normalize_or(Vec3::X);
     let d = right * texels * texel_world(light, scene);
-    let mut l = light.clone();
-    match &mut l {
-        Light::Point { position } => *position += d,
-        Light::Sphere { center, .. } | Light::Disk { center, .. } | Light::Rectangle { center, .. } => *center += d,
-        Light::Segment { a, b } => {
-            *a += d;
-            *b += d;
-        }
-        Light::Triangle { a, b, c } => {
-            *a += d;
-            *b += d;
-            *c += d;
-        }
-        Light::Directional { direction } | Light::DistantDisk { direction, .. } => {
-            let half_diagonal = (0.5 * (bounds.1 - bounds.0).length()).max(f32::MIN_POSITIVE);
-            let angle = texels * texel_world(light, scene) / half_diagonal;
-            *direction = (*direction + right * angle.tan()).normalize_or(*direction);
-        }
+    let mut l = light.translated(d);
+    if let Light::Directional { direction } | Light::DistantDisk { direction, .. } = &mut l {
+        let half_diagonal = (0.5 * (bounds.1 - bounds.0).length()).max(f32::MIN_POSITIVE);
+        let angle = texels * texel_world(light, scene) / half_diagonal;
+        *direction = (*direction + right * angle.tan()).normalize_or(*direction);
     }
     l
 }

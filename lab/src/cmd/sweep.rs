@@ -242,28 +242,7 @@ fn split_entry(entry: &str) -> (&str, Option<usize>) {
 /// Scale a light's extent (radius, half-extents, segment length about its midpoint,
 /// triangle about its centroid, angular diameter).
 fn scale_light(l: &mut Light, f: f32) {
-    match l {
-        Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius *= f,
-        Light::Rectangle {
-            half_width, half_height, ..
-        } => {
-            *half_width *= f;
-            *half_height *= f;
-        }
-        Light::Segment { a, b } => {
-            let m = (*a + *b) * 0.5;
-            *a = m + (*a - m) * f;
-            *b = m + (*b - m) * f;
-        }
-        Light::Triangle { a, b, c } => {
-            let m = (*a + *b + *c) / 3.0;
-            for p in [a, b, c] {
-                *p = m + (*p - m) * f;
-            }
-        }
-        Light::DistantDisk { angle_degrees, .. } => *angle_degrees *= f,
-        Light::Point { .. } | Light::Directional { .. } => {}
-    }
+    *l = l.scaled(f);
 }
 
 /// The truth of one scene at one light scale: visibility, its largest standard error,

@@ -1377,6 +1377,9 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
     } = &mut mode
         && let Some(decl) = ex.graph.texture(name)
     {
+        if decl.format == sshc_runtime::graph::Format::SummedAreaU32 {
+            ui.label("a summed-area table: a storage buffer of u32 sums, not a texture; not shown");
+        }
         let layers = decl.array_layers().max(1);
         let levels = if decl.mips {
             ex.shadow_size().map_or(1, |s| 32 - s.leading_zeros())

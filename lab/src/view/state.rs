@@ -288,20 +288,9 @@ pub fn moved(light: &Light, by: Vec3) -> Light {
         let pitch = ((d.y / len).clamp(-1.0, 1.0).asin() + by.y).clamp(-limit, limit);
         Vec3::new(pitch.cos() * yaw.sin(), pitch.sin(), pitch.cos() * yaw.cos())
     };
-    let mut l = light.clone();
-    match &mut l {
-        Light::Point { position } => *position += by,
-        Light::Sphere { center, .. } | Light::Disk { center, .. } | Light::Rectangle { center, .. } => *center += by,
-        Light::Segment { a, b } => {
-            *a += by;
-            *b += by;
-        }
-        Light::Triangle { a, b, c } => {
-            *a += by;
-            *b += by;
-            *c += by;
-        }
-        Light::Directional { direction } | Light::DistantDisk { direction, .. } => *direction = turn(*direction),
+    let mut l = light.translated(by);
+    if let Light::Directional { direction } | Light::DistantDisk { direction, .. } = &mut l {
+        *direction = turn(*direction);
     }
     l
 }
@@ -322,35 +311,24 @@ pub fn size(light: &Light) -> Option<f32> {
     }
 }
 
-/// The light with its size set to `s` (its shape kept: a rectangle's sides and a
-/// triangle's corners scale about its centre).
+/// The light with its size set to `s` (its shape kept: [`Light::scaled`] about its
+/// centre by the ratio of the sizes).
 pub fn resized(light: &Light, s: f32) -> Light {
     let s = s.max(0.0);
-    let mut l = light.clone();
-    let scale = size(light).filter(|&old| old > 0.0).map_or(1.0, |old| s / old);
-    match &mut l {
-        Light::Point { .. } | Light::Directional { .. } => {}
-        Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius = s,
-        Light::Rectangle {
-            half_width, half_height, ..
-        } => {
-            *half_width = s;
-            *half_height *= scale;
-        }
-        Light::Segment { a, b } => {
-            let m = 0.5 * (*a + *b);
-            *a = m + (*a - m) * scale;
-            *b = m + (*b - m) * scale;
-        }
-        Light::Triangle { a, b, c } => {
-            let m = (*a + *b + *c) / 3.0;
-            for p in [a, b, c] {
-                *p = m + (*p - m) * scale;
+    match size(light).filter(|&old| old > 0.0) {
+        Some(old) => light.scaled(s / old),
+        // a light of size 0 grows from nothing: set its size itself
+        None => {
+            let mut l = light.clone();
+            match &mut l {
+                Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius = s,
+                Light::Rectangle { half_width, .. } => *half_width = s,
+                Light::DistantDisk { angle_degrees, .. } => *angle_degrees = s.min(179.0),
+                Light::Point { .. } | Light::Directional { .. } | Light::Segment { .. } | Light::Triangle { .. } => {}
             }
+            l
         }
-        Light::DistantDisk { angle_degrees, .. } => *angle_degrees = s.min(179.0),
     }
-    l
 }
 
 #[cfg(test)]

@@ -284,6 +284,57 @@ impl Light {
         self.kind().is_distant()
     }
 
+    /// The light moved by `by`: every point of it. A light at infinity is unchanged (it
+    /// has no position).
+    pub fn translated(&self, by: Vec3) -> Light {
+        let mut l = self.clone();
+        match &mut l {
+            Light::Point { position } => *position += by,
+            Light::Sphere { center, .. } | Light::Disk { center, .. } | Light::Rectangle { center, .. } => *center += by,
+            Light::Segment { a, b } => {
+                *a += by;
+                *b += by;
+            }
+            Light::Triangle { a, b, c } => {
+                *a += by;
+                *b += by;
+                *c += by;
+            }
+            Light::Directional { .. } | Light::DistantDisk { .. } => {}
+        }
+        l
+    }
+
+    /// The light's extent scaled by `f` about its centre: a radius, both half extents, a
+    /// segment's ends and a triangle's corners, a distant disk's angle. A light without
+    /// extent (point, directional) is unchanged.
+    pub fn scaled(&self, f: f32) -> Light {
+        let mut l = self.clone();
+        match &mut l {
+            Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius *= f,
+            Light::Rectangle {
+                half_width, half_height, ..
+            } => {
+                *half_width *= f;
+                *half_height *= f;
+            }
+            Light::Segment { a, b } => {
+                let m = (*a + *b) * 0.5;
+                *a = m + (*a - m) * f;
+                *b = m + (*b - m) * f;
+            }
+            Light::Triangle { a, b, c } => {
+                let m = (*a + *b + *c) / 3.0;
+                for p in [a, b, c] {
+                    *p = m + (*p - m) * f;
+                }
+            }
+            Light::DistantDisk { angle_degrees, .. } => *angle_degrees *= f,
+            Light::Point { .. } | Light::Directional { .. } => {}
+        }
+        l
+    }
+
     /// The centre of a light at a finite position (the midpoint of a segment); `None` for
     /// lights at infinity.
     pub fn center(&self) -> Option<Vec3> {
