@@ -60,13 +60,9 @@ pub(crate) fn moved_light(light: &Light, scene: &Scene, texels: f32) -> Light {
     let v = scene.light_view(light);
     let right = v.view.inverse().transform_vector3(Vec3::X).normalize_or(Vec3::X);
     let d = right * texels * texel_world(light, scene);
-    let mut l = light.translated(d);
-    if let Light::Directional { direction } | Light::DistantDisk { direction, .. } = &mut l {
-        let half_diagonal = (0.5 * (bounds.1 - bounds.0).length()).max(f32::MIN_POSITIVE);
-        let angle = texels * texel_world(light, scene) / half_diagonal;
-        *direction = (*direction + right * angle.tan()).normalize_or(*direction);
-    }
-    l
+    let half_diagonal = (0.5 * (bounds.1 - bounds.0).length()).max(f32::MIN_POSITIVE);
+    let angle = texels * texel_world(light, scene) / half_diagonal;
+    light.translated(d).turned(|dir| (dir + right * angle.tan()).normalize_or(dir))
 }
 
 /// Visibility of `frames` frames, the light moving by `step` texels between consecutive

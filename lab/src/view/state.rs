@@ -288,11 +288,7 @@ pub fn moved(light: &Light, by: Vec3) -> Light {
         let pitch = ((d.y / len).clamp(-1.0, 1.0).asin() + by.y).clamp(-limit, limit);
         Vec3::new(pitch.cos() * yaw.sin(), pitch.sin(), pitch.cos() * yaw.cos())
     };
-    let mut l = light.translated(by);
-    if let Light::Directional { direction } | Light::DistantDisk { direction, .. } = &mut l {
-        *direction = turn(*direction);
-    }
-    l
+    light.translated(by).turned(turn)
 }
 
 /// The light's size: radius, half extent, half length or angle; `None` for a light with

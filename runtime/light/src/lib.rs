@@ -305,6 +305,22 @@ impl Light {
         l
     }
 
+    /// A light at infinity with its direction replaced by `f` of it; a light at a finite
+    /// position is unchanged (it has no direction).
+    pub fn turned(&self, f: impl Fn(Vec3) -> Vec3) -> Light {
+        let mut l = self.clone();
+        match &mut l {
+            Light::Directional { direction } | Light::DistantDisk { direction, .. } => *direction = f(*direction),
+            Light::Point { .. }
+            | Light::Sphere { .. }
+            | Light::Disk { .. }
+            | Light::Rectangle { .. }
+            | Light::Segment { .. }
+            | Light::Triangle { .. } => {}
+        }
+        l
+    }
+
     /// The light's extent scaled by `f` about its centre: a radius, both half extents, a
     /// segment's ends and a triangle's corners, a distant disk's angle. A light without
     /// extent (point, directional) is unchanged.
