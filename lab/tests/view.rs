@@ -487,25 +487,49 @@ fn a_split_view_shows_each_half_as_its_technique_alone() {
     );
 }
 
+/// A viewer run: its scene, its techniques in order, the `--set` of the first.
+type Run = (&'static str, &'static [&'static str], &'static [(&'static str, &'static str)]);
+
 /// Every texture of a technique's graph (the moments, the limits, the skins of every light
-/// sample's layer, a mip level) draws into the window: the centre of the window shows the
+/// sample's layer, a mip level, a summed-area table) draws into the window: the centre of the window shows the
 /// texture, not the background the viewer clears to where it has nothing to draw.
 #[test]
 fn every_texture_of_a_graph_draws_an_image() {
     let dir = temp_dir("textures");
-    for (scene, techniques) in [
-        ("contact", &["vsm", "msm", "cssm", "penumbra-limit-maps", "smoothies"][..]),
-        ("linear", &["linear-light"][..]),
-    ] {
+    // (scene, techniques, `--set` of the first): CSSM's filter 1 takes summed-area tables,
+    // storage buffers the viewer reads back to show
+    let runs: [Run; 3] = [
+        ("contact", &["vsm", "msm", "cssm", "penumbra-limit-maps", "smoothies"], &[]),
+        ("contact", &["cssm"], &[("filter", "1")]),
+        ("linear", &["linear-light"], &[]),
+    ];
+    for (scene, techniques, set) in runs {
         let mut steps = String::from("[\n");
         let mut shots = Vec::new();
-        for t in techniques {
+        for (i, t) in techniques.iter().enumerate() {
             let path = root().join(format!("techniques/{t}.ron"));
             let source = std::fs::read_to_string(&path).expect("the technique reads");
-            let graph = sshc::compile_str(&source, &Default::default()).expect("it compiles").graph;
-            steps.push_str(&format!("    Technique(\"techniques/{t}.ron\"),\n    WaitReady,\n"));
-            for tex in graph.textures.iter().filter(|x| x.format != sshc_graph::Format::SummedAreaU32) {
-                let shot = dir.join(format!("{t}-{}.png", tex.name));
+            let options = sshc::CompileOptions {
+                set: if i == 0 {
+                    set.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+                } else {
+                    vec![]
+                },
+                ..Default::default()
+            };
+            let graph = sshc::compile_str(&source, &options).expect("it compiles").graph;
+            if !options.set.is_empty() {
+                assert!(
+                    graph.textures.iter().any(|t| t.format == sshc_graph::Format::SummedAreaU32),
+                    "{t} with {set:?} has no summed-area table: the run shows none"
+                );
+            }
+            if i > 0 {
+                steps.push_str(&format!("    Technique(\"techniques/{t}.ron\"),\n"));
+            }
+            steps.push_str("    WaitReady,\n");
+            for tex in &graph.textures {
+                let shot = dir.join(format!("{t}-{}{}.png", tex.name, set.len()));
                 let level = u32::from(tex.mips);
                 steps.push_str(&format!(
                     "    Show(Texture(name: \"{}\", layer: {}, level: {level}, channel: 0, lo: 0.0, hi: 1.0, map: Viridis)),\n    Wait(1),\n    Screenshot(\"{}\"),\n",
@@ -518,17 +542,21 @@ fn every_texture_of_a_graph_draws_an_image() {
         }
         steps.push(']');
         let script = write_script(&dir, &steps);
-        let (ok, out) = view(&[
-            &format!("techniques/{}.ron", techniques[0]),
-            "--scene",
-            &format!("scenes/{scene}.ron"),
-            "--size",
-            "96x96",
-            "--shadow-map",
-            "128",
-            "--script",
-            script.to_str().unwrap(),
-        ]);
+        let mut args = vec![
+            format!("techniques/{}.ron", techniques[0]),
+            "--scene".into(),
+            format!("scenes/{scene}.ron"),
+            "--size".into(),
+            "96x96".into(),
+            "--shadow-map".into(),
+            "128".into(),
+            "--script".into(),
+            script.display().to_string(),
+        ];
+        for (k, v) in set {
+            args.extend(["--set".to_string(), format!("{k}={v}")]);
+        }
+        let (ok, out) = view(&args.iter().map(String::as_str).collect::<Vec<_>>());
         assert!(ok, "sshc view failed:\n{out}");
         assert!(shots.len() >= techniques.len(), "{shots:?}");
         for shot in shots {

@@ -65,6 +65,8 @@ struct Times {
     /// (egui's pass and tessellation), the frame interval.
     gpu_ms: VecDeque<f64>,
     ui_ms: VecDeque<f64>,
+    /// Acquiring the window's next texture and presenting it (CPU, waits included).
+    present_ms: VecDeque<f64>,
     frame_ms: VecDeque<f64>,
     last: Option<Instant>,
     /// The frame number of the last GPU times taken.
@@ -137,6 +139,8 @@ struct App {
     rms: Option<(f64, f64)>,
     /// The view changed since the truth was started.
     truth_stale: bool,
+    /// A summed-area table shown: its read-back, as a texture.
+    table: Option<wgpu::Texture>,
     /// A screenshot to write after the next frame is drawn.
     screenshot: Option<PathBuf>,
     /// When the script last saved a file, and the new graph's compile, pipeline and bind
@@ -216,6 +220,7 @@ impl App {
             truth_textures: None,
             rms: None,
             truth_stale: true,
+            table: None,
             command: String::new(),
             exit: None,
             args,
@@ -695,6 +700,7 @@ impl App {
         self.step_script()?;
         self.update_executor()?;
         let Some(gfx) = &mut self.gfx else { return Ok(()) };
+        let acquire = Instant::now();
         let frame = match gfx.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(f) | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
@@ -707,14 +713,32 @@ impl App {
                 return Ok(());
             }
         };
+        let mut present_ms = acquire.elapsed().as_secs_f64() * 1e3;
         let target = frame.texture.create_view(&Default::default());
         let mut encoder = gfx.device.create_command_encoder(&Default::default());
         let size = (gfx.config.width, gfx.config.height);
         let mut shown_any = false;
         if let Some(ex) = &mut self.ex {
             ex.encode(&mut encoder).map_err(|e| format!("error: {e}"))?;
+            // a summed-area table is a storage buffer: read back and shown as a texture
+            if let Mode::Texture { name, layer, level, .. } = &self.state.mode
+                && ex
+                    .graph
+                    .texture(name)
+                    .is_some_and(|t| t.format == sshc_runtime::graph::Format::SummedAreaU32)
+            {
+                let img = ex.read_texture(name, *layer, *level).map_err(|e| format!("error: {e}"))?;
+                self.table = Some(upload(&gfx.device, &gfx.queue, &img));
+            } else {
+                self.table = None;
+            }
             let truth = self.truth_textures.as_ref();
-            let (texture, pick) = shown(&self.state.mode, ex, truth);
+            let (mut texture, mut pick) = shown(&self.state.mode, ex, truth);
+            if let Some(t) = &self.table {
+                texture = Some(t);
+                pick.layer = 0;
+                pick.level = 0;
+            }
             let part = if self.ex_b.is_some() { Part::Left } else { Part::Whole };
             if let Some(t) = texture {
                 gfx.present.draw(&mut encoder, &target, size, t, pick, part);
@@ -798,13 +822,16 @@ impl App {
                 self.frame,
                 json!({"event": "screenshot", "path": path, "visibility": vis, "state": self.state, "command": self.command,
                        "split_command": self.state.right().map(|r| r.command(&path.display().to_string())),
-                       "gpu_ms": median(&self.times.gpu_ms), "ui_ms": median(&self.times.ui_ms), "frame_ms": median(&self.times.frame_ms),
+                       "gpu_ms": median(&self.times.gpu_ms), "ui_ms": median(&self.times.ui_ms), "present_ms": median(&self.times.present_ms), "frame_ms": median(&self.times.frame_ms),
                        "frames_timed": self.times.gpu_ms.len(),
                        "pass_ms": self.times.pass_ms.iter().map(|(k, v)| (k.clone(), median(v))).collect::<BTreeMap<_, _>>()}),
             );
         }
         gfx.window.pre_present_notify();
+        let presenting = Instant::now();
         gfx.queue.present(frame);
+        present_ms += presenting.elapsed().as_secs_f64() * 1e3;
+        push(&mut self.times.present_ms, present_ms);
         if let Some((compile_ms, pipelines_ms, bind_ms)) = self.fresh.take() {
             // the new graph's first frame, to the GPU's end of it
             gfx.device
@@ -903,7 +930,7 @@ impl App {
             .map(|(v, t)| if t.is_finite() { v - t } else { 0.0 })
             .collect();
         let truth: Vec<f32> = e.visibility.iter().map(|t| if t.is_finite() { *t } else { 1.0 }).collect();
-        self.rms = Some(super::refine::rms(&vis, &e.visibility));
+        self.rms = Some(super::refine::rms(&vis, &e.visibility, &e.facing));
         let (mean_se, max_se) = e.std_errors();
         self.log.write(
             self.frame,
@@ -1048,6 +1075,36 @@ fn shown<'a>(mode: &Mode, ex: &'a Executor, truth: Option<&'a [wgpu::Texture; 3]
             },
         ),
     }
+}
+
+/// An image of the runtime's as an `Rgba32Float` texture.
+fn upload(device: &wgpu::Device, queue: &wgpu::Queue, img: &sshc_runtime::gpu::Image) -> wgpu::Texture {
+    let t = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("sshc view: read back"),
+        size: wgpu::Extent3d {
+            width: img.width,
+            height: img.height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let bytes: Vec<u8> = img.rgba.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    queue.write_texture(
+        t.as_image_copy(),
+        &bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(img.width * 16),
+            rows_per_image: None,
+        },
+        t.size(),
+    );
+    t
 }
 
 fn first_size(ex: &Executor) -> (u32, u32) {
@@ -1343,7 +1400,9 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
         ));
     }
     if let Some((all, pen)) = d.rms {
-        ui.label(format!("RMS error: {all:.4} over the surface, {pen:.4} over the penumbra"));
+        ui.label(format!(
+            "RMS error: {all:.4} over the pixels facing the light, {pen:.4} over the penumbra"
+        ));
     }
     let current = match &mode {
         Mode::Texture { name, .. } => name.clone(),
@@ -1378,7 +1437,7 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
         && let Some(decl) = ex.graph.texture(name)
     {
         if decl.format == sshc_runtime::graph::Format::SummedAreaU32 {
-            ui.label("a summed-area table: a storage buffer of u32 sums, not a texture; not shown");
+            ui.label("a summed-area table (u32 sums in a storage buffer): read back every frame");
         }
         let layers = decl.array_layers().max(1);
         let levels = if decl.mips {
@@ -1389,8 +1448,25 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
         ui.add(egui::Slider::new(layer, 0..=layers - 1).text("layer"));
         ui.add(egui::Slider::new(level, 0..=levels - 1).text("level"));
         ui.add(egui::Slider::new(channel, 0..=3).text("channel"));
-        ui.add(egui::DragValue::new(lo).speed(0.01).prefix("lo "));
-        ui.add(egui::DragValue::new(hi).speed(0.01).prefix("hi "));
+        ui.horizontal(|ui| {
+            ui.add(egui::DragValue::new(lo).speed(0.01).prefix("lo "));
+            ui.add(egui::DragValue::new(hi).speed(0.01).prefix("hi "));
+            // the channel's finite values, read back once
+            if ui.button("fit").clicked()
+                && let Ok(img) = ex.read_texture(name, *layer, *level)
+            {
+                let c = (*channel).min(3) as usize;
+                let (a, b) = img
+                    .rgba
+                    .iter()
+                    .map(|p| p[c])
+                    .filter(|v| v.is_finite())
+                    .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+                if a <= b {
+                    (*lo, *hi) = (a, if b > a { b } else { a + 1.0 });
+                }
+            }
+        });
         egui::ComboBox::from_label("colour map")
             .selected_text(map.name())
             .show_ui(ui, |ui| {
@@ -1441,9 +1517,10 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
 
 fn times(ui: &mut egui::Ui, d: &UiData, ex: &Executor) {
     ui.label(format!(
-        "frame {:.1} ms, panels {:.2} ms of CPU (medians of the last {})",
+        "frame {:.1} ms; panels {:.2} ms and presentation {:.2} ms of CPU (medians of the last {})",
         median(&d.times.frame_ms),
         median(&d.times.ui_ms),
+        median(&d.times.present_ms),
         d.times.frame_ms.len()
     ));
     let total: f64 = d.times.passes.iter().map(|p| p.1).sum();
@@ -1538,6 +1615,20 @@ impl ApplicationHandler for App {
             }
             _ => {}
         }
+    }
+
+    /// The surface, the device and every handle to it (the workers') and the window go
+    /// while the event loop (and its X connection) still lives: a swapchain destroyed
+    /// after its display connection has closed, or a device left to the driver's exit
+    /// handlers, can crash the driver.
+    fn exiting(&mut self, _event_loop: &ActiveEventLoop) {
+        self.table = None;
+        self.truth_textures = None;
+        self.ex = None;
+        self.ex_b = None;
+        self.worker = None;
+        self.worker_b = None;
+        self.gfx = None;
     }
 
     fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {

@@ -31,6 +31,9 @@ pub struct Estimate {
     pub rounds: u32,
     /// Seconds since this view's first round began.
     pub seconds: f64,
+    /// The pixels whose surface faces the light (its centre, or its direction at
+    /// infinity): where the RMS is taken.
+    pub facing: Vec<bool>,
 }
 
 impl Estimate {
@@ -144,6 +147,19 @@ fn refine(job: Job, jobs: &mpsc::Receiver<Job>, out: &mpsc::Sender<Estimate>, pe
     };
     let n = job.positions.len();
     let (mut mean, mut m2) = (vec![0f64; n], vec![0f64; n]);
+    let light = job.scene.lights.first();
+    let facing: Vec<bool> = job
+        .positions
+        .iter()
+        .zip(&job.normals)
+        .map(|(p, nrm)| {
+            let to_light = match light.and_then(|l| l.center()) {
+                Some(c) => c - *p,
+                None => light.and_then(|l| l.direction()).unwrap_or(Vec3::Y),
+            };
+            p.is_finite() && nrm.dot(to_light) > 0.0
+        })
+        .collect();
     let start = Instant::now();
     let mut first_se = Vec::new();
     for round in 0u32.. {
@@ -202,18 +218,19 @@ fn refine(job: Job, jobs: &mpsc::Receiver<Job>, out: &mpsc::Sender<Estimate>, pe
             std_error,
             rounds: round + 1,
             seconds: start.elapsed().as_secs_f64(),
+            facing: facing.clone(),
         })
         .map_err(|_| ())?;
     }
     Ok(())
 }
 
-/// RMS of `vis - truth` over the pixels that face the light and show a surface, and over
-/// the penumbra (truth strictly between 0.02 and 0.98).
-pub fn rms(vis: &[f32], truth: &[f32]) -> (f64, f64) {
+/// RMS of `vis - truth` over the pixels that face the light (`facing`), and over those of
+/// them in the penumbra (truth strictly between 0.02 and 0.98).
+pub fn rms(vis: &[f32], truth: &[f32], facing: &[bool]) -> (f64, f64) {
     let (mut all, mut na, mut pen, mut np) = (0.0, 0usize, 0.0, 0usize);
-    for (v, t) in vis.iter().zip(truth) {
-        if !(v.is_finite() && t.is_finite()) {
+    for ((v, t), f) in vis.iter().zip(truth).zip(facing) {
+        if !(*f && v.is_finite() && t.is_finite()) {
             continue;
         }
         let e = f64::from(v - t).powi(2);

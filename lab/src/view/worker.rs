@@ -54,7 +54,9 @@ pub struct Ready {
 
 /// The worker thread.
 pub struct Worker {
-    to: mpsc::Sender<Request>,
+    /// `None` once dropped: the thread's `recv` then ends and it returns.
+    to: Option<mpsc::Sender<Request>>,
+    thread: Option<std::thread::JoinHandle<()>>,
     from: mpsc::Receiver<Answer>,
     next: u64,
     /// The latest request not yet answered.
@@ -65,7 +67,7 @@ impl Worker {
     pub fn start(gpu: Gpu) -> Worker {
         let (to, requests) = mpsc::channel::<Request>();
         let (answers, from) = mpsc::channel();
-        std::thread::spawn(move || {
+        let thread = std::thread::spawn(move || {
             while let Ok(mut r) = requests.recv() {
                 // only the latest of the requests waiting is worth compiling
                 while let Ok(newer) = requests.try_recv() {
@@ -82,7 +84,8 @@ impl Worker {
             }
         });
         Worker {
-            to,
+            to: Some(to),
+            thread: Some(thread),
             from,
             next: 0,
             pending: None,
@@ -94,7 +97,8 @@ impl Worker {
         self.next += 1;
         let id = self.next;
         self.pending = Some(id);
-        let _ = self.to.send(Request {
+        let Some(to) = &self.to else { return id };
+        let _ = to.send(Request {
             id,
             technique: technique.to_path_buf(),
             options,
@@ -133,6 +137,17 @@ impl Worker {
             }
         }
         None
+    }
+}
+
+/// The thread ends (after the compilation in flight) and its device handle with it, before
+/// the process exits: a device left to the driver's exit handlers can crash them.
+impl Drop for Worker {
+    fn drop(&mut self) {
+        self.to = None;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
     }
 }
 
