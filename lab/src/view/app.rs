@@ -100,8 +100,12 @@ struct App {
     args: ViewArgs,
     /// The technique files the picker lists: `techniques/*.ron` and the one given.
     techniques: Vec<PathBuf>,
-    /// The scene as its file says, and the window's state.
+    /// The scene (its camera and lights the window's, set in place: `sync_scene`), the
+    /// file's camera and lights, and the window's state.
     scene: Scene,
+    file: (crate::scene::Camera, Vec<crate::scene::Light>),
+    /// The frame the camera or a light last moved: the truth starts over once they stand.
+    last_move: u64,
     state: ViewState,
     orbit: Orbit,
     gfx: Option<Gfx>,
@@ -188,6 +192,8 @@ impl App {
         let log = Log::open(args.log.as_deref())?;
         Ok(App {
             orbit: Orbit::of(&scene.camera),
+            file: (scene.camera.clone(), scene.lights.clone()),
+            last_move: 0,
             techniques,
             scene,
             state,
@@ -236,12 +242,26 @@ impl App {
     }
 
     /// The scene as the window has it: the file's, with the state's camera and lights.
-    fn current_scene(&self) -> Scene {
-        let mut s = self.scene.clone();
-        s.camera = self.state.camera.clone();
-        s.lights = self.state.lights.clone();
-        s.shadow_map = self.state.shadow_map;
-        s
+    fn current_scene(&mut self) -> Scene {
+        self.sync_scene().clone()
+    }
+
+    /// The scene made the window's in place (its camera, lights and map size: no copy of
+    /// its triangles, which a frame that moves the light must not pay for).
+    fn sync_scene(&mut self) -> &Scene {
+        self.scene.camera = self.state.camera.clone();
+        self.scene.lights = self.state.lights.clone();
+        self.scene.shadow_map = self.state.shadow_map;
+        &self.scene
+    }
+
+    /// The window's image size (the state's camera's).
+    fn view_size(&self) -> (u32, u32) {
+        match &self.state.camera {
+            crate::scene::Camera::Perspective { width, height, .. } | crate::scene::Camera::Orthographic { width, height, .. } => {
+                (*width, *height)
+            }
+        }
     }
 
     /// The compile options of the state: its fixed params, precisions and schedules; a
@@ -386,7 +406,7 @@ impl App {
             Answer::Ready(r) => {
                 let mut ex = r.executor;
                 // the worker bound the scene as it was asked; the view may have moved since
-                self.resized |= self.current_scene().camera_size() != first_size(&ex);
+                self.resized |= self.view_size() != first_size(&ex);
                 self.moved = true;
                 // runtime params the new graph still has keep their values
                 self.state.params.retain(|k, v| ex.set_param(k, *v).is_ok());
@@ -498,7 +518,7 @@ impl App {
                     || s.precisions != self.state.precisions
                     || s.schedules != self.state.schedules
                     || s.shadow_map != self.state.shadow_map;
-                let size = self.current_scene().camera_size();
+                let size = self.view_size();
                 self.state = *s;
                 self.set_camera_size(size.0, size.1);
                 self.orbit = Orbit::of(&self.state.camera);
@@ -514,9 +534,9 @@ impl App {
                 self.recompile_split();
             }
             Event::Reset => {
-                let size = self.current_scene().camera_size();
-                self.state.camera = self.scene.camera.clone();
-                self.state.lights = self.scene.lights.clone();
+                let size = self.view_size();
+                self.state.camera = self.file.0.clone();
+                self.state.lights = self.file.1.clone();
                 self.set_camera_size(size.0, size.1);
                 self.orbit = Orbit::of(&self.state.camera);
                 let defaults: Vec<String> = self.state.params.keys().cloned().collect();
@@ -621,15 +641,18 @@ impl App {
             return Ok(());
         }
         self.truth_stale = true;
-        let scene = self.current_scene();
+        self.last_move = self.frame;
+        self.sync_scene();
+        let scene = &self.scene;
         for ex in [&mut self.ex, &mut self.ex_b].into_iter().flatten() {
             if self.resized {
-                worker::bind(ex, &scene)?;
+                worker::bind(ex, scene)?;
                 continue;
             }
-            ex.set_camera(&crate::bind::camera(&scene)).map_err(|e| format!("error: {e}"))?;
+            ex.set_camera(&crate::bind::camera(scene)).map_err(|e| format!("error: {e}"))?;
+            // each light's view depends on the geometry and that light alone
             for (l, light) in scene.lights.iter().enumerate() {
-                let inputs = crate::bind::light_inputs(&crate::session::single_light(&scene, l), light, &ex.graph)?;
+                let inputs = crate::bind::light_inputs(scene, light, &ex.graph)?;
                 ex.set_light(l, &inputs).map_err(|e| format!("error: light {l}: {e}"))?;
             }
         }
@@ -657,7 +680,7 @@ impl App {
                     if let Some(split) = &mut self.state.split {
                         split.params.retain(|k, v| ex.set_param(k, *v).is_ok());
                     }
-                    self.resized |= self.current_scene().camera_size() != first_size(&ex);
+                    self.resized |= self.view_size() != first_size(&ex);
                     self.moved = true;
                     self.ex_b = Some(ex);
                     self.log.write(self.frame, json!({"event": "compiled", "ok": true, "split": true, "technique": self.state.split.as_ref().map(|s| &s.technique)}));
@@ -680,10 +703,11 @@ impl App {
             if scene_changed {
                 match crate::session::load_scene(&self.state.scene, None, None) {
                     Ok(s) => {
-                        let size = self.current_scene().camera_size();
+                        let size = self.view_size();
+                        self.file = (s.camera.clone(), s.lights.clone());
                         self.scene = s;
-                        self.state.camera = state::with_size(&self.scene.camera, size.0, size.1);
-                        self.state.lights = self.scene.lights.clone();
+                        self.state.camera = state::with_size(&self.file.0, size.0, size.1);
+                        self.state.lights = self.file.1.clone();
                         self.orbit = Orbit::of(&self.state.camera);
                     }
                     Err(e) => {
@@ -911,8 +935,13 @@ impl App {
     fn refine(&mut self) -> Result<(), String> {
         let shows = matches!(self.state.mode, Mode::Truth | Mode::Error { .. } | Mode::StdError { .. });
         self.refiner.pause(!shows);
-        let Some(ex) = &self.ex else { return Ok(()) };
-        if shows && self.truth_stale {
+        if self.ex.is_none() {
+            return Ok(());
+        }
+        // started over once the view has stood for a few frames, not at every frame of a
+        // drag (each start reads the camera's positions back from the GPU)
+        if shows && self.truth_stale && self.frame >= self.last_move + TRUTH_SETTLE {
+            let Some(ex) = &self.ex else { return Ok(()) };
             let (p, n) = crate::session::positions_normals(ex)?;
             let mut scene = self.current_scene();
             scene.lights.truncate(1);
@@ -922,6 +951,7 @@ impl App {
             self.truth_textures = None;
             self.rms = None;
         }
+        let Some(ex) = &self.ex else { return Ok(()) };
         let Some(e) = self.refiner.poll() else { return Ok(()) };
         let vis = ex.read_visibilities().map_err(|e| format!("error: {e}"))?.channel(0);
         let error: Vec<f32> = vis
@@ -1220,6 +1250,9 @@ struct UiData<'a> {
     truth: Option<&'a Estimate>,
     rms: Option<(f64, f64)>,
 }
+
+/// Frames the view must stand still before the truth starts over.
+const TRUTH_SETTLE: u64 = 3;
 
 const PRECISIONS: [&str; 5] = ["auto", "unorm8", "unorm16", "f16", "f32"];
 
