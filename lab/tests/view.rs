@@ -56,6 +56,24 @@ fn view(args: &[&str]) -> (bool, String) {
     (out.status.success(), text)
 }
 
+/// `sshc view TECHNIQUE --scene SCENE --size SIZE --shadow-map 256 --script S --log L`.
+fn scripted(technique: &str, scene: &str, size: &str, script: &Path, log: &Path) -> (bool, String) {
+    let (script, log) = (script.display().to_string(), log.display().to_string());
+    view(&[
+        technique,
+        "--scene",
+        scene,
+        "--size",
+        size,
+        "--shadow-map",
+        "256",
+        "--script",
+        &script,
+        "--log",
+        &log,
+    ])
+}
+
 fn which(name: &str) -> Option<PathBuf> {
     std::env::var_os("PATH")?
         .to_str()?
@@ -136,19 +154,7 @@ fn a_scripted_session_moves_the_light_sets_a_param_and_matches_render_bit_for_bi
         ),
     );
     let log_path = dir.join("log.jsonl");
-    let (ok, out) = view(&[
-        "techniques/pcss.ron",
-        "--scene",
-        "scenes/contact.ron",
-        "--size",
-        "160x120",
-        "--shadow-map",
-        "256",
-        "--script",
-        script.to_str().unwrap(),
-        "--log",
-        log_path.to_str().unwrap(),
-    ]);
+    let (ok, out) = scripted("techniques/pcss.ron", "scenes/contact.ron", "160x120", &script, &log_path);
     assert!(ok, "sshc view failed:\n{out}");
     let log = log(&log_path);
     assert_eq!(entries(&log, "screenshot").len(), 5, "{log:?}");
@@ -239,19 +245,7 @@ fn a_broken_save_logs_its_diagnostic_and_keeps_rendering_and_a_fixed_one_renders
         ),
     );
     let log_path = dir.join("log.jsonl");
-    let (ok, out) = view(&[
-        technique.to_str().unwrap(),
-        "--scene",
-        scene.to_str().unwrap(),
-        "--size",
-        "160x120",
-        "--shadow-map",
-        "256",
-        "--script",
-        script.to_str().unwrap(),
-        "--log",
-        log_path.to_str().unwrap(),
-    ]);
+    let (ok, out) = scripted(technique.to_str().unwrap(), scene.to_str().unwrap(), "160x120", &script, &log_path);
     assert!(ok, "sshc view failed:\n{out}");
     let log = log(&log_path);
     let compiled = entries(&log, "compiled");
@@ -388,19 +382,7 @@ fn the_truth_refines_while_the_view_stands_still_and_starts_over_when_the_light_
         ),
     );
     let log_path = dir.join("log.jsonl");
-    let (ok, out) = view(&[
-        "techniques/pcss.ron",
-        "--scene",
-        "scenes/contact.ron",
-        "--size",
-        "96x72",
-        "--shadow-map",
-        "256",
-        "--script",
-        script.to_str().unwrap(),
-        "--log",
-        log_path.to_str().unwrap(),
-    ]);
+    let (ok, out) = scripted("techniques/pcss.ron", "scenes/contact.ron", "96x72", &script, &log_path);
     assert!(ok, "sshc view failed:\n{out}");
     let log = log(&log_path);
     let truth = entries(&log, "truth");
@@ -447,19 +429,7 @@ fn a_split_view_shows_each_half_as_its_technique_alone() {
         ),
     );
     let log_path = dir.join("log.jsonl");
-    let (ok, out) = view(&[
-        "techniques/pcss.ron",
-        "--scene",
-        "scenes/contact.ron",
-        "--size",
-        "320x120",
-        "--shadow-map",
-        "256",
-        "--script",
-        script.to_str().unwrap(),
-        "--log",
-        log_path.to_str().unwrap(),
-    ]);
+    let (ok, out) = scripted("techniques/pcss.ron", "scenes/contact.ron", "320x120", &script, &log_path);
     assert!(ok, "sshc view failed:\n{out}");
     let (pcss, split, hard) = (png(&dir.join("pcss.png")), png(&dir.join("split.png")), png(&dir.join("hard.png")));
     // (the folded panels and their shadow fade in over the first frames: the first
