@@ -22,8 +22,27 @@ setsid scripts/fuzz.sh build >"$fuzz_build_log" 2>&1 &
 fuzz_build=$!
 trap 'kill -- -"$fuzz_build" 2>/dev/null || true; rm -f "$fuzz_build_log"' EXIT
 
-phase "lint"
-cargo clippy --workspace --all-targets --quiet -- -D warnings
+# The lint runs inside the one build the tests use. `cargo clippy` is `cargo check` with
+# clippy-driver wrapping rustc for the workspace's own crates; wrapping `cargo test
+# --no-run` the same way lints the same targets (--all-targets: libraries, binaries, tests,
+# benches, examples) while compiling them, so the dependencies are compiled once, in full,
+# instead of once checked for the lint and once built for the tests. CLIPPY_ARGS is how
+# cargo-clippy hands `-- -D warnings` to the driver (arguments joined by
+# __CLIPPY_HACKERY__). Only the two cargo commands below get the wrapper: it is part of
+# the workspace crates' fingerprints, so both must see the same one, and a nested cargo
+# (the fuzz build, trybuild's) must not.
+clippy_driver="$(rustc --print sysroot)/bin/clippy-driver"
+if [ ! -x "$clippy_driver" ]; then
+    echo "error: clippy-driver is missing; install it with: rustup component add clippy"
+    exit 1
+fi
+linted() {
+    RUSTC_WORKSPACE_WRAPPER="$clippy_driver" \
+        CLIPPY_ARGS="-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__" "$@"
+}
+
+phase "lint and test build (clippy --all-targets -D warnings)"
+linted cargo test --workspace --all-targets --no-run --quiet
 
 phase "dependency boundaries"
 # The compiler library, the build-time embedding macro, the scene crate and the light crate carry no GPU, command line, image
@@ -58,9 +77,9 @@ scripts/fuzz.sh ci 20
 
 phase "tests"
 if cargo nextest --version >/dev/null 2>&1; then
-    cargo nextest run --workspace --no-fail-fast
+    linted cargo nextest run --workspace --no-fail-fast
 else
-    cargo test --workspace --no-fail-fast
+    linted cargo test --workspace --no-fail-fast
 fi
 
 phase "done"
