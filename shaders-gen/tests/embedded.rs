@@ -22,6 +22,21 @@ sshc_shaders_gen::technique!(mod typed_params = "tests/techniques/typed_params.r
 sshc_shaders_gen::technique!(mod unused_params = "tests/techniques/unused_params.ron");
 sshc_shaders_gen::technique!(mod esm_f16 = "../techniques/esm.ron", set: { "c" = 10.0 }, precision: { e = "F16" }, graph: ::sshc_graph);
 
+// Attributes and visibility on the module, overrides by name and by string as `sshc --set`
+// and `--precision` take them, and the graph schema crate named through another path, as
+// seen from inside the generated module.
+mod rt {
+    pub use sshc_graph;
+}
+sshc_shaders_gen::technique!(
+    /// PCF over 5 x 5 taps, the depth at half precision.
+    #[allow(unused)]
+    pub(crate) mod pcf5_f16 = "../techniques/pcf.ron",
+    set: { N = 5, bias = 0.001, "slope_bias" = 2 },
+    precision: { z = F16 },
+    graph: crate::rt::sshc_graph,
+);
+
 struct Embedded {
     technique: &'static str,
     graph_ron: &'static str,
@@ -147,4 +162,50 @@ fn params_of_every_type_and_none() {
         unused_params::Params::default().to_bytes(),
         typed_params::Params::default().to_bytes()
     );
+}
+
+/// A host's use of the modules: `Params` filled by field name and turned into uniform
+/// bytes of the graph's size, one shader per pass, the fixed values typed as the technique
+/// declares them.
+#[test]
+fn params_fill_by_field_and_fixed_values_are_typed() {
+    fn check(graph: PassGraph, bytes: &[u8], shaders: &[(&str, &str)]) {
+        assert_eq!(graph.params_size as usize, bytes.len());
+        assert_eq!(graph.passes.len(), shaders.len());
+    }
+    let h = hard::Params {
+        bias: 0.001,
+        ..Default::default()
+    };
+    check(hard::graph().unwrap(), &h.to_bytes(), hard::SHADERS);
+    let p = pcf::Params {
+        slope_bias: 2.0,
+        ..Default::default()
+    };
+    check(pcf::graph().unwrap(), &p.to_bytes(), pcf::SHADERS);
+    let v = vsm::Params {
+        bleed: 0.3,
+        ..Default::default()
+    };
+    check(vsm::graph().unwrap(), &v.to_bytes(), vsm::SHADERS);
+    let e = esm::Params {
+        eps: 0.1,
+        ..Default::default()
+    };
+    check(esm::graph().unwrap(), &e.to_bytes(), esm::SHADERS);
+    let c = csm::Params::default();
+    check(csm::graph().unwrap(), &c.to_bytes(), csm::SHADERS);
+    let n: i32 = pcf::fixed::N;
+    let k: f32 = esm::fixed::c;
+    assert_eq!((n, k), (3, 80.0));
+    assert_eq!(std::mem::size_of::<pcf::Params>(), pcf::PARAMS_SIZE as usize);
+}
+
+#[test]
+fn overrides_reach_the_fixed_values_the_defaults_and_the_formats() {
+    assert_eq!(pcf5_f16::fixed::N, 5);
+    let p = pcf5_f16::Params::default();
+    assert_eq!((p.bias, p.slope_bias), (0.001, 2.0));
+    let g = pcf5_f16::graph().unwrap();
+    assert!(g.textures.iter().any(|t| format!("{:?}", t.format) == "R16Float"));
 }

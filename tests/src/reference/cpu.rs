@@ -7,7 +7,7 @@
 //! sums ([`Table`]); the soft-shadow techniques expose their steps ([`cssm_trace`],
 //! [`pcss_trace`]) so that the error model can propagate bounds through them.
 
-use super::{DepthMap, Kind, LightFrame, Query, Resolved, Technique, check_map, clamp_visibility, resolve};
+use super::{DepthMap, Kind, LightFrame, Query, Resolved, StoredChannel, Technique, check_map, clamp_visibility, resolve};
 use std::f64::consts::PI;
 
 /// Visibility at every query, computed in f64 from the exact math of the papers.
@@ -149,6 +149,9 @@ pub struct Prefiltered {
     pub channels: Vec<Channel>,
     /// Summed-area tables of the filtered channels, by channel name (CSSM with filter = 1).
     pub tables: Vec<(String, Table)>,
+    /// `technique.stored_channels()`, made once: the error models ask for a channel's
+    /// range at every term of every query.
+    pub stored: Vec<StoredChannel>,
 }
 
 impl Prefiltered {
@@ -413,6 +416,7 @@ pub fn prefilter(t: &Technique, map: &DepthMap) -> Result<Prefiltered, String> {
         }
     };
     Ok(Prefiltered {
+        stored: technique.stored_channels(),
         technique,
         depth: Chain { levels: vec![z] },
         channels,

@@ -57,7 +57,7 @@ struct Model {
 impl Model {
     fn new(pre: &Prefiltered, channel: &str, map_abs: f64, map_rel: f64, signed: Option<f64>) -> Model {
         let t = &pre.technique;
-        let c = t.stored_channels().into_iter().find(|c| c.name == channel);
+        let c = pre.stored.iter().find(|c| c.name == channel);
         let storage = t.channel_storage(channel);
         let (lo, span) = c.as_ref().map_or((0.0, 1.0), |c| c.encoding(storage));
         let range = c.map_or(1.0, |c| c.hi - c.lo);
