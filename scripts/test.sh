@@ -41,6 +41,19 @@ linted() {
         CLIPPY_ARGS="-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__" "$@"
 }
 
+# The canary: a clippy warning must fail a build under the wrapper, so that a toolchain
+# whose driver reads its arguments another way stops the suite instead of linting nothing.
+canary=$(mktemp -d)
+printf 'fn main() {\n    let v = vec![1];\n    println!("{}", v.len());\n}\n' >"$canary/canary.rs"
+if linted "$clippy_driver" rustc --edition 2024 --crate-type bin --emit=metadata \
+    -o "$canary/canary.rmeta" "$canary/canary.rs" >"$canary/out" 2>&1 \
+    || ! grep -q 'useless_vec' "$canary/out"; then
+    cat "$canary/out"
+    echo "error: clippy-driver under RUSTC_WORKSPACE_WRAPPER did not deny a clippy warning"
+    exit 1
+fi
+rm -rf "$canary"
+
 phase "lint and test build (clippy --all-targets -D warnings)"
 linted cargo test --workspace --all-targets --no-run --quiet
 
