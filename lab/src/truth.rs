@@ -609,8 +609,10 @@ impl TruthCache {
         CacheLookup::Hit(Box::new(record.truth))
     }
 
-    /// Stores `truth` under `key` (written to a temporary file, then renamed, so that a
-    /// reader never sees half a file).
+    /// Stores `truth` under `key`: written to a temporary file of a name no other writer
+    /// has (random, created exclusively: another process, thread or machine sharing the
+    /// folder writes its own), then renamed over the record, so that a reader never sees
+    /// half a file and the last writer's whole record wins.
     pub fn store(&self, key: CacheKey, truth: &Truth) -> Result<PathBuf, TruthError> {
         std::fs::create_dir_all(&self.dir).map_err(io_error(&self.dir))?;
         let path = self.path(key);
@@ -622,9 +624,13 @@ impl TruthCache {
             path: path.clone(),
             message: e.to_string(),
         })?;
-        let tmp = self.dir.join(format!("{key}.{}.tmp", std::process::id()));
-        std::fs::write(&tmp, text).map_err(io_error(&tmp))?;
-        std::fs::rename(&tmp, &path).map_err(io_error(&path))?;
+        let mut tmp = tempfile::Builder::new()
+            .prefix(&format!("{key}."))
+            .suffix(".tmp")
+            .tempfile_in(&self.dir)
+            .map_err(io_error(&self.dir))?;
+        std::io::Write::write_all(&mut tmp, text.as_bytes()).map_err(io_error(tmp.path()))?;
+        tmp.persist(&path).map_err(|e| io_error(&path)(e.error))?;
         Ok(path)
     }
 }

@@ -379,6 +379,51 @@ fn the_cache_hits_on_the_second_call_and_misses_when_samples_or_scene_change() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Writers of one record at once (threads of one process here: the same pid, as two nodes
+/// of a cluster may have) each write a temporary file of their own: every store succeeds
+/// and the record is always whole.
+#[test]
+fn concurrent_stores_of_one_key_all_succeed_and_leave_a_whole_record() {
+    let dir = temp_dir("concurrent");
+    let cache_dir = dir.join("cache");
+    let mut scene = Scene::load(scenes_dir().join("edge.ron")).unwrap();
+    scene.set_camera_size(8, 8);
+    let s = TruthSettings {
+        samples: 4,
+        runs: 2,
+        ..Default::default()
+    };
+    let (t, src) = cached(&scene, &s, &cache_dir);
+    let Source::Computed(Some(file)) = src else { panic!("{src:?}") };
+    let key = {
+        let (p, n) = camera_points(&scene);
+        let points = Points {
+            width: 8,
+            height: 8,
+            positions: &p,
+            normals: &n,
+        };
+        truth::cache_key(&scene, &points, &s).unwrap()
+    };
+    let cache = TruthCache::new(&cache_dir);
+    std::thread::scope(|sc| {
+        for _ in 0..8 {
+            sc.spawn(|| {
+                for _ in 0..40 {
+                    assert_eq!(cache.store(key, &t).unwrap_or_else(|e| panic!("{e}")), file);
+                    match cache.load(key) {
+                        CacheLookup::Hit(r) => assert_eq!(*r, t),
+                        other => panic!("a reader saw {other:?}"),
+                    }
+                }
+            });
+        }
+    });
+    let left: Vec<_> = std::fs::read_dir(&cache_dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left.len(), 1, "temporary files left behind: {left:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn the_key_hashes_mesh_bytes_and_positions() {
     let dir = temp_dir("key");
