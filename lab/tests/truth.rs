@@ -40,6 +40,19 @@ fn camera_points(scene: &Scene) -> (Vec<Vec3>, Vec<Vec3>) {
 
 fn no_progress(_: truth::Progress) {}
 
+/// The cache key of `scene`'s camera pixels under `settings`, as [`cached`] computes it.
+fn camera_key(scene: &Scene, settings: &TruthSettings) -> truth::CacheKey {
+    let (w, h) = scene.camera_size();
+    let (p, n) = camera_points(scene);
+    let points = Points {
+        width: w,
+        height: h,
+        positions: &p,
+        normals: &n,
+    };
+    truth::cache_key(scene, &points, settings).unwrap_or_else(|e| panic!("{e}"))
+}
+
 fn run(scene: &Scene, settings: &TruthSettings) -> Truth {
     let (w, h) = scene.camera_size();
     let (p, n) = camera_points(scene);
@@ -356,17 +369,7 @@ fn the_cache_hits_on_the_second_call_and_misses_when_samples_or_scene_change() {
     // A damaged file is recomputed and replaced.
     std::fs::write(&file, "Record(key: ").unwrap();
     std::fs::write(&scene_path, &scene_text).unwrap();
-    let key = {
-        let sc = load();
-        let (p, n) = camera_points(&sc);
-        let points = Points {
-            width: 16,
-            height: 16,
-            positions: &p,
-            normals: &n,
-        };
-        truth::cache_key(&sc, &points, &s).unwrap()
-    };
+    let key = camera_key(&load(), &s);
     assert!(matches!(TruthCache::new(&cache_dir).load(key), CacheLookup::Unreadable(_)));
     let (again, src) = cached(&load(), &s, &cache_dir);
     assert!(matches!(src, Source::Computed(_)));
@@ -395,16 +398,7 @@ fn concurrent_stores_of_one_key_all_succeed_and_leave_a_whole_record() {
     };
     let (t, src) = cached(&scene, &s, &cache_dir);
     let Source::Computed(Some(file)) = src else { panic!("{src:?}") };
-    let key = {
-        let (p, n) = camera_points(&scene);
-        let points = Points {
-            width: 8,
-            height: 8,
-            positions: &p,
-            normals: &n,
-        };
-        truth::cache_key(&scene, &points, &s).unwrap()
-    };
+    let key = camera_key(&scene, &s);
     let cache = TruthCache::new(&cache_dir);
     std::thread::scope(|sc| {
         for _ in 0..8 {
