@@ -40,29 +40,28 @@ fn camera_points(scene: &Scene) -> (Vec<Vec3>, Vec<Vec3>) {
 
 fn no_progress(_: truth::Progress) {}
 
-/// The cache key of `scene`'s camera pixels under `settings`, as [`cached`] computes it.
-fn camera_key(scene: &Scene, settings: &TruthSettings) -> truth::CacheKey {
+/// `f` of the points `scene`'s camera sees, one per pixel.
+fn at_camera_points<R>(scene: &Scene, f: impl FnOnce(&Points) -> R) -> R {
     let (w, h) = scene.camera_size();
     let (p, n) = camera_points(scene);
-    let points = Points {
+    f(&Points {
         width: w,
         height: h,
         positions: &p,
         normals: &n,
-    };
-    truth::cache_key(scene, &points, settings).unwrap_or_else(|e| panic!("{e}"))
+    })
+}
+
+/// The cache key of `scene`'s camera pixels under `settings`, as [`cached`] computes it.
+fn camera_key(scene: &Scene, settings: &TruthSettings) -> truth::CacheKey {
+    at_camera_points(scene, |points| truth::cache_key(scene, points, settings)).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn run(scene: &Scene, settings: &TruthSettings) -> Truth {
-    let (w, h) = scene.camera_size();
-    let (p, n) = camera_points(scene);
-    let points = Points {
-        width: w,
-        height: h,
-        positions: &p,
-        normals: &n,
-    };
-    truth::compute(scene, &Visibility::new(scene), &points, settings, &no_progress).unwrap_or_else(|e| panic!("{e}"))
+    at_camera_points(scene, |points| {
+        truth::compute(scene, &Visibility::new(scene), points, settings, &no_progress)
+    })
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Area of the part of a unit disk on the far side of a chord at signed distance `u`
@@ -303,16 +302,11 @@ fn progress_reaches_the_total() {
 
 /// [`truth::compute_cached`] of `scene` with a cache in `dir`.
 fn cached(scene: &Scene, settings: &TruthSettings, dir: &Path) -> (Truth, Source) {
-    let (w, h) = scene.camera_size();
-    let (p, n) = camera_points(scene);
-    let points = Points {
-        width: w,
-        height: h,
-        positions: &p,
-        normals: &n,
-    };
     let cache = TruthCache::new(dir);
-    truth::compute_cached(scene, &points, settings, Some(&cache), &no_progress, &|m| eprintln!("{m}")).unwrap_or_else(|e| panic!("{e}"))
+    at_camera_points(scene, |points| {
+        truth::compute_cached(scene, points, settings, Some(&cache), &no_progress, &|m| eprintln!("{m}"))
+    })
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]
