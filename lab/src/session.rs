@@ -289,6 +289,9 @@ pub fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>
     let mut warned = WARNED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     if !warned.iter().any(|p| p == path) {
         warned.push(path.to_path_buf());
+        for note in scene.notes() {
+            eprintln!("note: {note}");
+        }
         for w in light_warnings(&scene) {
             eprintln!("warning: {}: {w}", path.display());
         }

@@ -511,13 +511,9 @@ pub fn cache_key(scene: &Scene, points: &Points, settings: &TruthSettings) -> Re
     if let Some(path) = scene.source() {
         let text = std::fs::read(path).map_err(io_error(path))?;
         field("scene file", &text);
-        let base = path.parent().unwrap_or(Path::new("."));
-        for object in scene.objects() {
-            if let Mesh::Obj { path: rel } = &object.mesh {
-                let mesh = base.join(rel);
-                let bytes = std::fs::read(&mesh).map_err(io_error(&mesh))?;
-                field("mesh", &bytes);
-            }
+        for mesh in scene.files() {
+            let bytes = std::fs::read(mesh).map_err(io_error(mesh))?;
+            field("mesh", &bytes);
         }
     }
     field("camera", to_ron(&scene.camera).as_bytes());

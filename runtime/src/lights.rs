@@ -12,9 +12,9 @@
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::resources::Resources;
 
-/// Most lights one frame combines: the visibilities go into one RGBA texel a pixel (and
-/// `sshc render --visibility` writes them as the channels of one image).
-pub const MAX_LIGHTS: usize = 4;
+/// Most lights one frame combines (defined beside the lights, in `sshc-light`, so that
+/// scene loaders refuse what the runtime cannot bind).
+pub use sshc_light::MAX_LIGHTS;
 
 const COMBINE_WGSL: &str = "
 @group(0) @binding(0) var visibility: texture_2d_array<f32>;

@@ -46,12 +46,15 @@
 #![deny(clippy::wildcard_enum_match_arm)]
 
 mod error;
+pub mod generate;
+mod gltf;
 mod mesh;
 mod scene;
 mod schema;
 mod validate;
 
 pub use error::*;
+pub use gltf::{CAMERA_HEIGHT as GLTF_CAMERA_HEIGHT, DEFAULT_RADIUS_FRACTION, DEFAULT_SUN_DEGREES, MAX_GLTF_BYTES};
 pub use scene::*;
 pub use schema::*;
 pub use validate::*;

@@ -14,7 +14,14 @@ pub(crate) struct MeshData {
     pub(crate) normals: Option<Vec<[Vec3; 3]>>,
 }
 
-pub(crate) fn build_mesh(index: usize, object: &Object, base: &Path) -> Result<MeshData, SceneError> {
+/// What reading the meshes noted (said once per file) and the files they read.
+#[derive(Default)]
+pub(crate) struct Reads {
+    pub(crate) notes: Vec<String>,
+    pub(crate) files: Vec<PathBuf>,
+}
+
+pub(crate) fn build_mesh(index: usize, object: &Object, base: &Path, reads: &mut Reads) -> Result<MeshData, SceneError> {
     let flat = |triangles| MeshData { triangles, normals: None };
     Ok(match &object.mesh {
         Mesh::Plane { size } => {
@@ -36,7 +43,28 @@ pub(crate) fn build_mesh(index: usize, object: &Object, base: &Path) -> Result<M
                 Some(n) => format!("objects[{index}] (\"{n}\").mesh.path"),
                 None => format!("objects[{index}].mesh.path"),
             };
-            load_obj(path, base).map_err(|e| e.with_at(at))?
+            let (mesh, file) = load_obj(path, base).map_err(|e| e.with_at(at))?;
+            reads.files.push(file);
+            mesh
+        }
+        Mesh::Gltf { path } => {
+            let at = match &object.name {
+                Some(n) => format!("objects[{index}] (\"{n}\").mesh.path"),
+                None => format!("objects[{index}].mesh.path"),
+            };
+            let imported = crate::gltf::load(path, base).map_err(|e| e.with_at(at))?;
+            reads.notes.extend(imported.notes.into_iter().map(|n| format!("{path}: {n}")));
+            if imported.camera.is_some() || !imported.lights.is_empty() {
+                reads.notes.push(format!(
+                    "{path}: its camera and lights are ignored where a scene file includes it (load the glTF file as the scene to use them)"
+                ));
+            }
+            reads.files.extend(imported.files);
+            imported.mesh
+        }
+        Mesh::City { triangles, seed } => {
+            let bytes = crate::generate::city_glb(*triangles as usize, *seed);
+            crate::gltf::import(&bytes, &format!("city (seed {seed})"), None)?.mesh
         }
     })
 }
@@ -51,7 +79,8 @@ pub(crate) fn analytic_triangles(mesh: &Mesh) -> Option<usize> {
             let s = *segments as usize;
             Some(s.saturating_mul((s / 2).max(2)).saturating_mul(2))
         }
-        Mesh::Obj { .. } => None,
+        Mesh::City { triangles, .. } => Some(*triangles as usize),
+        Mesh::Obj { .. } | Mesh::Gltf { .. } => None,
     }
 }
 
@@ -112,9 +141,9 @@ pub(crate) fn sphere(radius: f32, segments: u32) -> MeshData {
 }
 
 /// Resolves `rel` inside `base`, refusing absolute paths, `..` and links leading out.
-fn resolve_inside(rel: &str, base: &Path) -> Result<PathBuf, SceneError> {
+pub(crate) fn resolve_inside(rel: &str, base: &Path) -> Result<PathBuf, SceneError> {
     let escape = |what: &str| {
-        SceneError::new(SceneErrorKind::Mesh, format!("the OBJ path `{rel}` {what}"))
+        SceneError::new(SceneErrorKind::Mesh, format!("the mesh path `{rel}` {what}"))
             .with_hint("write a path relative to the scene file's folder, without `..`, and put the mesh beside the scene")
     };
     let p = Path::new(rel);
@@ -140,7 +169,7 @@ fn resolve_inside(rel: &str, base: &Path) -> Result<PathBuf, SceneError> {
         .with_hint("load the scene from an existing folder")
     })?;
     let canon = joined.canonicalize().map_err(|e| {
-        SceneError::new(SceneErrorKind::Io, format!("cannot open the OBJ file `{}`: {e}", joined.display()))
+        SceneError::new(SceneErrorKind::Io, format!("cannot open the mesh file `{}`: {e}", joined.display()))
             .with_hint("check that the mesh file is beside the scene file")
     })?;
     if !canon.starts_with(&canon_base) {
@@ -149,7 +178,23 @@ fn resolve_inside(rel: &str, base: &Path) -> Result<PathBuf, SceneError> {
     Ok(canon)
 }
 
-fn load_obj(rel: &str, base: &Path) -> Result<MeshData, SceneError> {
+/// The area-weighted smooth normal of each vertex of an indexed triangle list (not
+/// normalised: placing the mesh normalises).
+pub(crate) fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let mut smooth = vec![Vec3::ZERO; positions.len()];
+    for f in indices.chunks_exact(3) {
+        let (a, b, c) = (positions[f[0] as usize], positions[f[1] as usize], positions[f[2] as usize]);
+        let n = (b - a).cross(c - a);
+        if n.is_finite() {
+            for &k in f {
+                smooth[k as usize] += n;
+            }
+        }
+    }
+    smooth
+}
+
+fn load_obj(rel: &str, base: &Path) -> Result<(MeshData, PathBuf), SceneError> {
     let path = resolve_inside(rel, base)?;
     let bytes = read_capped(&path, MAX_OBJ_BYTES).map_err(|e| {
         SceneError::new(SceneErrorKind::Io, format!("cannot read the OBJ file `{}`: {e}", path.display())).with_hint(format!(
@@ -180,8 +225,6 @@ fn load_obj(rel: &str, base: &Path) -> Result<MeshData, SceneError> {
         };
         let has_normals = m.normals.len() == m.positions.len() && !m.normals.is_empty();
         all_have_normals &= has_normals;
-        // Area-weighted smooth normals by vertex index, for meshes without normals.
-        let mut smooth = vec![Vec3::ZERO; m.positions.len() / 3];
         let mut tris = Vec::with_capacity(m.indices.len() / 3);
         for f in m.indices.chunks_exact(3) {
             let (Some(a), Some(b), Some(c)) = (vertex(f[0]), vertex(f[1]), vertex(f[2])) else {
@@ -190,12 +233,6 @@ fn load_obj(rel: &str, base: &Path) -> Result<MeshData, SceneError> {
                         .with_hint("check the face indices of the OBJ file"),
                 );
             };
-            let n = (b - a).cross(c - a);
-            if n.is_finite() {
-                for &k in f {
-                    smooth[k as usize] += n;
-                }
-            }
             tris.push([a, b, c]);
             if has_normals {
                 let nr = |i: u32| {
@@ -205,6 +242,9 @@ fn load_obj(rel: &str, base: &Path) -> Result<MeshData, SceneError> {
                 normals.push([nr(f[0]), nr(f[1]), nr(f[2])]);
             }
         }
+        // area-weighted smooth normals by vertex index, for meshes without normals
+        let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(|s| Vec3::new(s[0], s[1], s[2])).collect();
+        let smooth = smooth_normals(&positions, &m.indices);
         computed.extend(
             m.indices
                 .chunks_exact(3)
@@ -213,15 +253,18 @@ fn load_obj(rel: &str, base: &Path) -> Result<MeshData, SceneError> {
         triangles.extend(tris);
     }
     let normals = if all_have_normals { normals } else { computed };
-    Ok(MeshData {
-        triangles,
-        normals: Some(normals),
-    })
+    Ok((
+        MeshData {
+            triangles,
+            normals: Some(normals),
+        },
+        path,
+    ))
 }
 
 /// Reads a regular file of at most `cap` bytes; anything else (a FIFO, a device, a folder,
 /// a larger file) is refused without reading it (or, if it grows, past `cap + 1` bytes).
-fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
+pub(crate) fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
     let meta = std::fs::metadata(path)?;
     if !meta.is_file() {

@@ -2,7 +2,7 @@
 //! and the light views fitted to it.
 
 use crate::error::{SceneError, SceneErrorKind, syntax_error};
-use crate::mesh::{analytic_triangles, build_mesh, place};
+use crate::mesh::{MeshData, Reads, analytic_triangles, build_mesh, place};
 use crate::schema::{Camera, Object, SceneDesc, ShadowFit};
 use crate::validate::{LIGHT_PRECISION_MARGIN, MAX_SCENE_TRIANGLES, PRECISION_RATIO, validate, validate_camera, validate_light};
 use std::fmt;
@@ -30,10 +30,23 @@ pub struct Scene {
     shadow_fit: ShadowFit,
     objects: Vec<Object>,
     source: Option<PathBuf>,
+    notes: Vec<String>,
+    files: Vec<PathBuf>,
+    placements: (usize, usize),
     triangles: Vec<[Vec3; 3]>,
     normals: Vec<[Vec3; 3]>,
     object_triangles: Vec<Range<usize>>,
     bounds: (Vec3, Vec3),
+}
+
+/// Side of the shadow map of a scene read from a glTF file.
+pub const GLTF_SHADOW_MAP: u32 = 2048;
+
+/// Whether `path` names a glTF file (`.gltf` or `.glb`, any case).
+pub fn is_gltf(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
 }
 
 /// `light` checked and its directions normalised as a scene file's light `i` is (checking
@@ -45,9 +58,13 @@ pub fn checked_light(i: usize, mut light: Light) -> Result<Light, SceneError> {
 }
 
 impl Scene {
-    /// Reads a scene file. OBJ paths resolve against the file's folder.
+    /// Reads a scene file. OBJ paths resolve against the file's folder. A `.gltf` or `.glb`
+    /// file is read as a scene of its own ([`Scene::load_gltf`]).
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
+        if is_gltf(path) {
+            return Scene::load_gltf(path);
+        }
         let text = std::fs::read_to_string(path).map_err(|e| {
             SceneError::new(SceneErrorKind::Io, format!("cannot read the scene: {e}"))
                 .with_file(Some(path))
@@ -57,6 +74,77 @@ impl Scene {
         let base = if base.as_os_str().is_empty() { PathBuf::from(".") } else { base };
         let mut scene = Scene::parse(&text, &base, Some(path))?;
         scene.source = Some(path.to_path_buf());
+        Ok(scene)
+    }
+
+    /// Reads a glTF 2.0 file as a scene: its triangles as one object that casts and
+    /// receives, its first camera (else one framing the scene, 512 x 512), its
+    /// `KHR_lights_punctual` lights (else a sun from above, with a note), a
+    /// [`GLTF_SHADOW_MAP`]-texel shadow map fitted to the scene. What was ignored is in
+    /// [`Scene::notes`].
+    pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let folder = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let folder = if folder.as_os_str().is_empty() {
+            PathBuf::from(".")
+        } else {
+            folder
+        };
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let imported = crate::gltf::load(&name, &folder).map_err(|e| e.with_file(Some(path)))?;
+        let mut scene = Scene::from_imported(imported, &name, &folder).map_err(|e| e.with_file(Some(path)))?;
+        scene.source = Some(path.to_path_buf());
+        Ok(scene)
+    }
+
+    /// [`Scene::load_gltf`] of glTF bytes (JSON or GLB) held in memory: only the GLB chunk
+    /// and data URIs can hold its buffers.
+    pub fn from_gltf_slice(bytes: &[u8]) -> Result<Scene, SceneError> {
+        let imported = crate::gltf::import(bytes, "<memory>", None)?;
+        Scene::from_imported(imported, "<memory>", Path::new("."))
+    }
+
+    fn from_imported(imported: crate::gltf::Imported, name: &str, folder: &Path) -> Result<Scene, SceneError> {
+        let crate::gltf::Imported {
+            mesh,
+            camera,
+            lights,
+            mut notes,
+            files,
+            placements,
+        } = imported;
+        let bounds = bounds_of(mesh.triangles.iter().flatten().copied());
+        let camera = camera.unwrap_or_else(|| {
+            notes.push("it has no camera: a camera framing the scene is used".into());
+            crate::gltf::framing_camera(bounds)
+        });
+        let lights = if lights.is_empty() {
+            notes.push(format!(
+                "it has no light (KHR_lights_punctual): a sun from above, {} degrees wide, is used",
+                crate::gltf::DEFAULT_SUN_DEGREES
+            ));
+            vec![crate::gltf::default_sun()]
+        } else {
+            lights
+        };
+        let desc = SceneDesc {
+            camera,
+            shadow_map: GLTF_SHADOW_MAP,
+            lights,
+            objects: vec![Object {
+                name: Some(name.to_string()),
+                mesh: crate::schema::Mesh::Gltf { path: name.to_string() },
+                transform: Default::default(),
+                flat_normals: false,
+                casts: true,
+                receives: true,
+            }],
+            shadow_fit: ShadowFit::Scene,
+        };
+        let mut scene = Scene::build_with(desc, folder, vec![Some(mesh)])?;
+        scene.notes = notes.into_iter().map(|n| format!("{name}: {n}")).collect();
+        scene.files = files;
+        scene.placements = placements;
         Ok(scene)
     }
 
@@ -76,7 +164,12 @@ impl Scene {
         Scene::build(desc, base).map_err(|e| e.with_file(file))
     }
 
-    fn build(mut desc: SceneDesc, base: &Path) -> Result<Scene, SceneError> {
+    fn build(desc: SceneDesc, base: &Path) -> Result<Scene, SceneError> {
+        Scene::build_with(desc, base, Vec::new())
+    }
+
+    /// Builds the scene; `built[i]`, where given, is object `i`'s mesh already read.
+    fn build_with(mut desc: SceneDesc, base: &Path, mut built: Vec<Option<MeshData>>) -> Result<Scene, SceneError> {
         validate(&mut desc)?;
         // The analytic meshes' triangles, all counted before any is built.
         let mut planned = 0usize;
@@ -93,6 +186,7 @@ impl Scene {
         let mut triangles = Vec::new();
         let mut normals = Vec::new();
         let mut object_triangles = Vec::with_capacity(desc.objects.len());
+        let mut reads = Reads::default();
         for (i, object) in desc.objects.iter().enumerate() {
             let start = triangles.len();
             let too_many = |count: usize| {
@@ -111,7 +205,10 @@ impl Scene {
             {
                 return Err(too_many(start.saturating_add(n)));
             }
-            let mesh = build_mesh(i, object, base)?;
+            let mesh = match built.get_mut(i).and_then(Option::take) {
+                Some(mesh) => mesh,
+                None => build_mesh(i, object, base, &mut reads)?,
+            };
             if start.saturating_add(mesh.triangles.len()) > MAX_SCENE_TRIANGLES {
                 return Err(too_many(start.saturating_add(mesh.triangles.len())));
             }
@@ -126,6 +223,9 @@ impl Scene {
             shadow_fit: desc.shadow_fit,
             objects: desc.objects,
             source: None,
+            notes: reads.notes,
+            files: reads.files,
+            placements: (0, 0),
             triangles,
             normals,
             object_triangles,
@@ -577,6 +677,23 @@ impl Scene {
             ));
         }
         Ok(())
+    }
+
+    /// What loading noted: what a glTF file had that was ignored or assumed. Each says its
+    /// file; a command prints them once.
+    pub fn notes(&self) -> &[String] {
+        &self.notes
+    }
+
+    /// The mesh files read (OBJ, glTF and its buffers), besides the scene file itself.
+    pub fn files(&self) -> &[PathBuf] {
+        &self.files
+    }
+
+    /// For a scene loaded from a glTF file: how many nodes place a mesh, and how many
+    /// distinct meshes they place (the instancing the file holds); (0, 0) otherwise.
+    pub fn placements(&self) -> (usize, usize) {
+        self.placements
     }
 
     /// The scene file this scene was loaded from, if any.

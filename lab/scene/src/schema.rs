@@ -199,6 +199,28 @@ pub enum Mesh {
         /// Relative to the scene file's folder, and inside it.
         path: String,
     },
+    /// A glTF 2.0 file (`.gltf` with its buffers beside it, or `.glb`): every triangle
+    /// primitive its default scene's nodes place, with their transforms (see the `gltf`
+    /// module: materials are ignored, and here its camera and lights too).
+    Gltf {
+        /// Relative to the scene file's folder, and inside it; so are its buffers.
+        path: String,
+    },
+    /// A procedural city of about `triangles` triangles (towers on a ground plane, a
+    /// block apart, centred on the origin; `sshc scene city` writes the same as a GLB
+    /// file). Built as glTF and read by the glTF importer; the same `seed` gives the same
+    /// city everywhere.
+    City {
+        /// Triangles to reach, at most the scene limit.
+        triangles: u32,
+        /// Seed of the layout (default 1).
+        #[serde(default = "one")]
+        seed: u64,
+    },
+}
+
+fn one() -> u64 {
+    1
 }
 
 /// Object-to-world placement: scale, then rotate, then translate.

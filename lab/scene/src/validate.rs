@@ -11,7 +11,7 @@ use sshc_light::Light;
 pub const MAX_SPHERE_SEGMENTS: u32 = 1024;
 /// Most triangles in a scene, all objects together (checked before allocating).
 pub const MAX_SCENE_TRIANGLES: usize = 1 << 24;
-/// Largest OBJ file read, in bytes (256 MiB).
+/// Largest mesh file read (an OBJ file, a glTF file or one of its buffers), in bytes (256 MiB).
 pub const MAX_OBJ_BYTES: u64 = 256 << 20;
 /// Smallest magnitude of a scale component: below it the object's triangles underflow f32.
 pub const MIN_SCALE: f32 = 1e-10;
@@ -347,8 +347,18 @@ fn validate_object(object: &Object, at: &dyn Fn(&str) -> String) -> Result<(), S
         Mesh::Quad { a, b, c, d } if !(a.is_finite() && b.is_finite() && c.is_finite() && d.is_finite()) => {
             Err(SceneError::invalid(at("mesh"), "a corner is not finite", "write finite numbers"))
         }
-        Mesh::Plane { .. } | Mesh::Box { .. } | Mesh::Sphere { .. } | Mesh::Triangle { .. } | Mesh::Quad { .. } | Mesh::Obj { .. } => {
-            Ok(())
-        }
+        Mesh::City { triangles, .. } if *triangles as usize > MAX_SCENE_TRIANGLES => Err(SceneError::invalid(
+            at("mesh.triangles"),
+            format!("{triangles} triangles is above the scene limit of {MAX_SCENE_TRIANGLES}"),
+            format!("ask for at most {MAX_SCENE_TRIANGLES} triangles"),
+        )),
+        Mesh::Plane { .. }
+        | Mesh::Box { .. }
+        | Mesh::Sphere { .. }
+        | Mesh::Triangle { .. }
+        | Mesh::Quad { .. }
+        | Mesh::Obj { .. }
+        | Mesh::Gltf { .. }
+        | Mesh::City { .. } => Ok(()),
     }
 }

@@ -17,6 +17,11 @@
 
 #![deny(clippy::wildcard_enum_match_arm)]
 
+/// Most lights one frame combines: the visibilities go into one RGBA texel a pixel (and
+/// `sshc render --visibility` writes them as the channels of one image). The runtime
+/// refuses more at binding; scene loaders refuse more when reading.
+pub const MAX_LIGHTS: usize = 4;
+
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 
