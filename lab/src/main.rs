@@ -79,6 +79,10 @@ enum Command {
     /// texture of the graph (docs/viewer.md).
     #[cfg(feature = "view")]
     View(sshc_lab::view::ViewArgs),
+    /// Generate a scene: `sshc scene city` writes the procedural city as a GLB file (the
+    /// mesh a scene file names `City(triangles: N, seed: S)`), to load as `--scene`.
+    #[command(subcommand)]
+    Scene(SceneCommand),
     /// Time compilation of techniques in a warm process (naga validation included).
     BenchCompile {
         /// Technique files.
@@ -89,6 +93,24 @@ enum Command {
         /// Override a param of every technique that has it: NAME=VALUE. Repeatable.
         #[arg(long = "set", value_name = "NAME=VALUE", value_parser = pair)]
         set: Vec<(String, String)>,
+    },
+}
+
+#[derive(Subcommand)]
+enum SceneCommand {
+    /// A city of towers on a ground plane, about `--triangles` triangles, reproducible from
+    /// `--seed`; its towers are nodes instancing six meshes. It has no camera and no light:
+    /// loaded as `--scene`, it gets a framing camera and a sun (each noted).
+    City {
+        /// Triangles to reach (10 k to 16 M).
+        #[arg(long, default_value_t = 1_000_000)]
+        triangles: u32,
+        /// Seed of the layout.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// The GLB file to write.
+        #[arg(short, long)]
+        out: PathBuf,
     },
 }
 
@@ -150,6 +172,23 @@ fn run(cli: Cli) -> Result<(), String> {
         #[cfg(feature = "view")]
         Command::View(args) => sshc_lab::view::view(args),
         Command::Verify(args) => verify::verify(args),
+        Command::Scene(SceneCommand::City { triangles, seed, out }) => {
+            let limit = sshc_lab::scene::MAX_SCENE_TRIANGLES;
+            if triangles as usize > limit {
+                return Err(format!("error: `--triangles {triangles}` is above the scene limit of {limit}"));
+            }
+            let bytes = sshc_lab::scene::generate::city_glb(triangles as usize, seed);
+            std::fs::write(&out, &bytes).map_err(|e| format!("error: cannot write `{}`: {e}", out.display()))?;
+            let scene = sshc_lab::scene::Scene::load(&out).map_err(|e| e.to_string())?;
+            let (nodes, meshes) = scene.placements();
+            println!(
+                "wrote {}: {} triangles, {nodes} nodes placing {meshes} meshes, {} bytes",
+                out.display(),
+                scene.triangles().len(),
+                bytes.len()
+            );
+            Ok(())
+        }
         Command::Compile { common, out } => {
             let c = compile_reported(&common)?;
             let files = sshc::write_outputs(&c, &out).map_err(|e| format!("error: cannot write to `{}`: {e}", out.display()))?;

@@ -39,7 +39,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use xxhash_rust::xxh3::{Xxh3, xxh3_64};
 
-use crate::scene::{Light, Mesh, Scene};
+use crate::scene::{Light, Scene};
 use crate::visibility::Visibility;
 
 /// Version of the ground-truth computation, part of every cache key: bump it whenever the

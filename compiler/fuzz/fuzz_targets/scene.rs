@@ -236,7 +236,7 @@ fn light(u: &mut Unstructured) -> Result<Light> {
 }
 
 fn mesh(u: &mut Unstructured) -> Result<Mesh> {
-    Ok(match u.int_in_range(0..=5u8)? {
+    Ok(match u.int_in_range(0..=6u8)? {
         0 => Mesh::Plane {
             size: Vec2::new(float(u)?, float(u)?),
         },
@@ -260,6 +260,14 @@ fn mesh(u: &mut Unstructured) -> Result<Mesh> {
             b: vec3(u)?,
             c: vec3(u)?,
             d: vec3(u)?,
+        },
+        5 => Mesh::City {
+            triangles: match u.int_in_range(0..=5u8)? {
+                0 => u32::MAX,
+                1 => MAX_SCENE_TRIANGLES as u32 + 1,
+                _ => u.int_in_range(0..=6000)?,
+            },
+            seed: u.arbitrary()?,
         },
         _ => Mesh::Obj {
             path: u.choose(OBJ_PATHS)?.to_string(),
@@ -321,7 +329,10 @@ fn planned_triangles(text: &str) -> usize {
             // Refused before building (above MAX_SPHERE_SEGMENTS): kept.
             Mesh::Sphere { segments, .. } if segments > MAX_SPHERE_SEGMENTS => 0,
             Mesh::Sphere { segments, .. } => (segments as usize).saturating_mul((segments as usize / 2).max(2)).saturating_mul(2),
-            Mesh::Obj { .. } => 0,
+            // generated as glTF; refused before building above the limit
+            Mesh::City { triangles, .. } if triangles as usize > MAX_SCENE_TRIANGLES => 0,
+            Mesh::City { triangles, .. } => triangles as usize,
+            Mesh::Obj { .. } | Mesh::Gltf { .. } => 0,
         })
         .fold(0usize, usize::saturating_add)
 }

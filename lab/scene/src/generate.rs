@@ -191,6 +191,37 @@ pub fn city_glb(triangles: usize, seed: u64) -> Vec<u8> {
     glb(&root, bin)
 }
 
+/// A triangle soup as GLB: one mesh of the triangles listed out (no index buffer), with
+/// their corners' normals, placed by one node at the identity. Read back, it gives the same
+/// triangles, bit for bit (the importer places nothing at the identity).
+pub fn soup_glb(triangles: &[[Vec3; 3]], normals: &[[Vec3; 3]]) -> Vec<u8> {
+    let mut bin: Vec<u8> = triangles
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let split = bin.len();
+    bin.extend(normals.iter().flatten().flat_map(|v| v.to_array()).flat_map(f32::to_le_bytes));
+    let (lo, hi) = sshc_light::bounds_of(triangles.iter().flatten().copied());
+    let count = 3 * triangles.len();
+    let root = json!({
+        "asset": {"version": "2.0", "generator": "sshc soup_glb"},
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": count, "type": "VEC3", "min": lo.to_array(), "max": hi.to_array()},
+            {"bufferView": 1, "componentType": 5126, "count": count, "type": "VEC3"},
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": split},
+            {"buffer": 0, "byteOffset": split, "byteLength": bin.len() - split},
+        ],
+        "buffers": [{"byteLength": bin.len()}],
+    });
+    glb(&root, bin)
+}
+
 /// A GLB container (glTF 2.0 section 4.4) around `json` and one binary chunk, written by
 /// the `gltf` crate (which pads both chunks to 4 bytes and sets the lengths).
 pub fn glb(json: &serde_json::Value, bin: Vec<u8>) -> Vec<u8> {

@@ -103,13 +103,39 @@ pub(crate) fn import(bytes: &[u8], file: &str, folders: Option<(&Path, &Path)>) 
             ));
         }
     }
-    let doc = gltf::Gltf::from_slice(bytes).map_err(|e| {
+    let unreadable = |e: &dyn std::fmt::Display| {
         fail(
             file,
             format_args!("cannot read it: {e}"),
             "check that it is glTF 2.0 (JSON or GLB) and that it passes the Khronos glTF validator",
         )
-    })?;
+    };
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        let glb = gltf::Glb::from_slice(bytes).map_err(|e| unreadable(&e))?;
+        (glb.json.into_owned(), glb.bin.map(std::borrow::Cow::into_owned))
+    } else {
+        (bytes.to_vec(), None)
+    };
+    let root = gltf::json::Root::from_slice(&json).map_err(|e| unreadable(&e))?;
+    // gltf-json 1.4's validation indexes the accessors by POSITION's index before checking
+    // it (and panics past the end): checked here first
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some((_, a)) = prim.attributes.iter().find(|(_, a)| a.value() >= root.accessors.len()) {
+                return Err(fail(
+                    file,
+                    format_args!(
+                        "mesh {m} primitive {p} names accessor {}, past its {} accessors",
+                        a.value(),
+                        root.accessors.len()
+                    ),
+                    "name accessors that exist",
+                ));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(root).map_err(|e| unreadable(&e))?;
+    let doc = gltf::Gltf { document, blob };
     for ext in doc.extensions_required() {
         if ext != "KHR_lights_punctual" && !IGNORABLE_REQUIRED.iter().any(|p| ext.starts_with(p)) {
             return Err(fail(

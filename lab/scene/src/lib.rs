@@ -61,7 +61,7 @@ pub use validate::*;
 
 /// The lights a scene file names and the views fitted to them live in `sshc-light`, which
 /// the runtime shares (a host's lights are fitted by the same code).
-pub use sshc_light::{Light, LightView, corners, fit_guard, look_at, orthographic, perspective};
+pub use sshc_light::{Light, LightView, MAX_LIGHTS, corners, fit_guard, look_at, orthographic, perspective};
 
 #[cfg(test)]
 mod tests {
