@@ -153,9 +153,11 @@ impl Overrides {
             scene.set_shadow_fit(fit).map_err(|e| e.to_string())?;
             scene.check_precision().map_err(|e| e.to_string())?;
         }
+        let mut stages = Stages::default();
         let mut opts = self.variants.options();
         specialise(&mut opts, input, path, &scene, self.generic)?;
         let ex = executor(gpu, input, &opts)?;
+        stages.done("compile");
         Ok((scene, ex))
     }
 }
@@ -268,11 +270,53 @@ pub fn light_warnings(scene: &Scene) -> Vec<String> {
     crate::visibility::Visibility::new(scene).light_warnings(scene)
 }
 
+/// The stages of a long command, each printed to stderr as it ends with its wall time and
+/// the process's resident memory then (Linux's `VmRSS`; `-` elsewhere): `stage NAME: S s,
+/// resident M MB`. docs/scale.md reads them (scripts/scale.sh).
+pub struct Stages {
+    last: std::time::Instant,
+}
+
+impl Default for Stages {
+    fn default() -> Self {
+        Stages {
+            last: std::time::Instant::now(),
+        }
+    }
+}
+
+impl Stages {
+    /// Ends the stage begun at the last call (or at creation).
+    pub fn done(&mut self, what: &str) {
+        let secs = self.last.elapsed().as_secs_f64();
+        let rss = resident_mb().map_or("-".to_string(), |m| format!("{m:.0}"));
+        eprintln!("stage {what}: {secs:.3} s, resident {rss} MB");
+        self.last = std::time::Instant::now();
+    }
+}
+
+/// The process's resident memory in MB (`VmRSS` of /proc/self/status), where the system
+/// has it.
+pub fn resident_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: f64 = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kb / 1024.0)
+}
+
 /// Loads a scene and applies the size and shadow-map overrides, then checks its precision
 /// budget again (the shadow map's resolution is part of it), and prints a warning for each
 /// light inside or on its geometry (once per file).
 pub fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>) -> Result<Scene, String> {
+    let mut stages = Stages::default();
     let mut scene = Scene::load(path).map_err(|e| e.to_string())?;
+    stages.done(&format!("scene read ({} triangles)", scene.triangles().len()));
     if let Some(n) = shadow_map {
         if n == 0 {
             return Err("error: `--shadow-map 0`: the shadow map needs at least one texel".into());
@@ -292,7 +336,9 @@ pub fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>
         for note in scene.notes() {
             eprintln!("note: {note}");
         }
-        for w in light_warnings(&scene) {
+        let warnings = light_warnings(&scene);
+        stages.done("light check (a BVH of the scene)");
+        for w in warnings {
             eprintln!("warning: {}: {w}", path.display());
         }
     }

@@ -73,6 +73,7 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
             a.scene.display()
         ));
     }
+    let mut stages = crate::session::Stages::default();
     let inputs = (0..n_lights)
         .map(|i| {
             let alone = if scene.lights.len() > 1 {
@@ -86,7 +87,10 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
             })
         })
         .collect::<Result<Vec<_>, String>>()?;
+    stages.done("scene inputs (the triangle soup)");
     ex.bind_lights(&inputs).map_err(rt)?;
+    gpu.wait().map_err(rt)?;
+    stages.done("bind (upload, edge adjacency, resources)");
     let mut all: Vec<Vec<Option<f64>>> = Vec::new();
     let mut names = Vec::new();
     let mut light_times: Vec<Vec<f64>> = vec![Vec::new(); n_lights];
@@ -107,6 +111,7 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
             }
         }
     }
+    stages.done(&format!("{} frame(s)", a.frames.max(1)));
     let color = ex.read_camera(CameraOutput::Color).map_err(rt)?;
     if let Some(p) = &a.visibility {
         let vis = ex.read_visibilities().map_err(rt)?;
