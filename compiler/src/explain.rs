@@ -114,9 +114,9 @@ pub fn explain(c: &Compiled) -> String {
                     .filter(|b| g.passes.iter().any(|gp| gp.name == p.name && gp.steps.iter().any(|st| matches!(&st.draw, sshc_graph::Draw::Silhouettes { buffer } if *buffer == b.name))))
                     .map(|b| {
                         format!(
-                            "buffer `{}`: {} bytes of draw arguments and at most one {}-byte record per edge of the scene's meshes, {} vertices drawn per record",
+                            "buffer `{}`: a {}-byte header (draw arguments, records claimed and dropped) and at most one {}-byte record per edge of the scene's meshes, as many as one storage binding holds, {} vertices drawn per record",
                             b.name,
-                            sshc_graph::DRAW_ARGS_BYTES,
+                            sshc_graph::GENERATED_HEADER_BYTES,
                             b.record_bytes,
                             b.vertices_per_record
                         )

@@ -436,10 +436,15 @@ pub enum Resolve {
     Nearest,
 }
 
-/// A buffer of records generated on the GPU by a `Silhouettes` step: 16 bytes of draw
-/// arguments (`vertex_count`, `instance_count`, `first_vertex`, `first_instance`: what
-/// `draw_indirect` reads) followed by at most one record of `record_bytes` per edge of
-/// the scene's meshes. The runtime sizes it from the edge count before allocation.
+/// A buffer of records generated on the GPU by a `Silhouettes` (or `Discontinuities`)
+/// step: a [`GENERATED_HEADER_BYTES`] header, then the records of `record_bytes`. The
+/// header is 16 bytes of draw arguments (`vertex_count`, `instance_count`,
+/// `first_vertex`, `first_instance`: what `draw_indirect` reads), then `claimed` (the
+/// records the step asked for), `dropped` (those past the buffer's capacity, written
+/// nowhere) and two words of padding. The runtime sizes it before allocation: at most one
+/// record per edge of the casting meshes, and no more than one storage binding holds; a
+/// record past the capacity is counted in `dropped`, never drawn half-written, and the
+/// runtime reports it (`Executor::generated`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BufferDecl {
@@ -456,6 +461,9 @@ pub const MAX_RECORD_BYTES: u32 = 1024;
 pub const MAX_VERTICES_PER_RECORD: u32 = 4096;
 /// Bytes of the draw arguments at the start of a generated buffer.
 pub const DRAW_ARGS_BYTES: u32 = 16;
+/// Bytes of a generated buffer's header: the draw arguments, `claimed`, `dropped` and two
+/// words of padding (the records, of 16-byte vectors, start 16-byte aligned).
+pub const GENERATED_HEADER_BYTES: u32 = 32;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum View {

@@ -104,6 +104,11 @@ pub struct Generated {
     pub vertices: u32,
     /// Instances of the indirect draw (1).
     pub instances: u32,
+    /// Records the step asked for: `records + dropped`.
+    pub claimed: u32,
+    /// Records past the buffer's capacity, written nowhere and not drawn: the frame's
+    /// silhouettes passed its bound ([`crate::resources::GeneratedLimits`]).
+    pub dropped: u32,
 }
 
 /// A loaded pass graph, ready to run. It owns its [`Gpu`] handle (a clone: the device,
@@ -158,6 +163,9 @@ pub struct Executor {
     depth_override: Option<Vec<Vec<f32>>>,
     /// Refuse scenes whose textures would take more than this many bytes.
     pub max_bytes: u64,
+    /// Bounds on what Geometry passes bind and generate (default: the device's), read at
+    /// binding.
+    pub generated_limits: crate::resources::GeneratedLimits,
 }
 
 impl Executor {
@@ -318,6 +326,7 @@ impl Executor {
             timestamps,
             depth_override: None,
             max_bytes: 4 << 30,
+            generated_limits: Default::default(),
         })
     }
 
@@ -696,7 +705,7 @@ impl Executor {
             .as_ref()
             .map(|g| &g.scene)
             .ok_or_else(|| RuntimeError::NotFound("no scene geometry: bind_scene, bind_lights or bind_geometry".into()))?;
-        let res = Resources::new(gpu, &self.graph, &self.usages, s, scene, max_bytes)?;
+        let res = Resources::new(gpu, &self.graph, &self.usages, s, scene, max_bytes, self.generated_limits)?;
         if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
             return Err(RuntimeError::Param(format!(
                 "technique `{}` renders {} light-sample view(s), but the scene gives {} (`SceneInputs::samples`)",
@@ -1077,12 +1086,12 @@ impl Executor {
         let gpu = &self.gpu;
         let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("draw arguments read-back"),
-            size: graph::DRAW_ARGS_BYTES as u64,
+            size: graph::GENERATED_HEADER_BYTES as u64,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(b.generated(name)?, 0, &read, 0, graph::DRAW_ARGS_BYTES as u64);
+        encoder.copy_buffer_to_buffer(b.generated(name)?, 0, &read, 0, graph::GENERATED_HEADER_BYTES as u64);
         gpu.scoped("reading draw arguments", || gpu.queue.submit([encoder.finish()]))?;
         let raw = gpu.map_read(&read)?;
         let word = |i: usize| u32::from_le_bytes([raw[4 * i], raw[4 * i + 1], raw[4 * i + 2], raw[4 * i + 3]]);
@@ -1091,6 +1100,8 @@ impl Executor {
             records: vertices / decl.vertices_per_record,
             vertices,
             instances: word(1),
+            claimed: word(4),
+            dropped: word(5),
         })
     }
 

@@ -762,7 +762,7 @@ pub(crate) struct GeometryBuffers {
     pub scene: HostScene,
     records: wgpu::Buffer,
     pipelines: Vec<wgpu::ComputePipeline>,
-    group: wgpu::BindGroup,
+    group: Option<wgpu::BindGroup>,
     spans: Vec<Spans>,
     /// Some instance is placed on the GPU (its vertices, or its edges): the placement step
     /// has work.
@@ -856,8 +856,23 @@ impl GeometryBuffers {
                 }
             }
         }
+        // The classification binds the edges in chunks (`EdgeBuffers::chunks`): one buffer
+        // holds them all. The placement step binds them whole, so instances placed on the
+        // GPU keep their edges within one binding.
+        let places_on_gpu = g.instances.iter().any(|i| !i.in_world_space());
+        let edge_limit = if places_on_gpu { storage_limit } else { gpu.limits.max_buffer_size };
+        if totals[0] * 48 > edge_limit {
+            return Err(RuntimeError::Limit {
+                what: if places_on_gpu {
+                    "placed edges (bytes; instances placed on the GPU bind their edges whole)".into()
+                } else {
+                    "edges (bytes, in one buffer)".into()
+                },
+                needed: totals[0] * 48,
+                limit: edge_limit,
+            });
+        }
         for (what, needed) in [
-            ("placed edges (bytes)", totals[0] * 48),
             ("placed face planes (bytes)", totals[1] * 16),
             ("placed face references (bytes)", totals[2] * 4),
             ("vertex claims (bytes)", totals[3] * 4 + 4),
@@ -1083,10 +1098,14 @@ impl GeometryBuffers {
                 binding: i as u32 + 1,
                 resource: b.as_entire_binding(),
             }));
-            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("place instances"),
-                layout: &layout,
-                entries: &group_entries,
+            // bound only when some instance is placed on the GPU: world-space edges may
+            // exceed one binding (they are classified in chunks)
+            let group = places.then(|| {
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("place instances"),
+                    layout: &layout,
+                    entries: &group_entries,
+                })
             });
             let mut out = GeometryBuffers {
                 scene: HostScene {
@@ -1209,6 +1228,7 @@ impl GeometryBuffers {
         if !std::mem::take(&mut self.dirty) || !self.places {
             return;
         }
+        let Some(group) = &self.group else { return };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("place instances"),
             timestamp_writes: None,
@@ -1220,7 +1240,7 @@ impl GeometryBuffers {
                 if count == 0 {
                     continue;
                 }
-                pass.set_bind_group(0, &self.group, &[(i as u64 * RECORD_BYTES) as u32]);
+                pass.set_bind_group(0, group, &[(i as u64 * RECORD_BYTES) as u32]);
                 let groups = count.div_ceil(64);
                 let (x, y) = if groups <= 65535 {
                     (groups, 1)

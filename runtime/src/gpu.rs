@@ -44,5 +44,6 @@ pub use crate::lights::MAX_LIGHTS;
 pub use crate::pipeline::mip_count;
 pub use crate::pixels::HostPixels;
 pub use crate::requirements::{FeatureNeed, Limit, LimitNeed, Requirements};
+pub use crate::resources::GeneratedLimits;
 pub use crate::timing::FrameTimes;
 pub use crate::validate::validate_wgsl;

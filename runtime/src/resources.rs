@@ -7,7 +7,7 @@ use crate::adjacency::Adjacency;
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
 use crate::geometry::{EdgeBuffers, Geometry, GeometryBuffers, HostScene, SceneDraw};
-use crate::graph::{self, DRAW_ARGS_BYTES, FRAME_SIZE, Format, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
+use crate::graph::{self, FRAME_SIZE, Format, GENERATED_HEADER_BYTES, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
 use crate::pipeline::{CAMERA_FORMATS, DEPTH_FORMAT, mip_count, wgpu_format};
 use crate::usages::Usages;
 use std::collections::HashMap;
@@ -21,11 +21,49 @@ pub(crate) fn f32_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
-/// Bytes of a generated buffer for `edges` edges: the draw arguments and one record per edge,
-/// at least one record (a scene with no edge, such as one whose objects all have `casts:
-/// false`, still binds a buffer as large as the shader's record array needs).
-pub(crate) fn generated_bytes(record_bytes: u32, edges: u64) -> u64 {
-    DRAW_ARGS_BYTES as u64 + record_bytes as u64 * edges.max(1)
+/// Bytes of a generated buffer of `records` records: the header (draw arguments, records
+/// claimed and dropped) and the records, at least one (a scene with no edge, such as one
+/// whose objects all have `casts: false`, still binds a buffer as large as the shader's
+/// record array needs).
+pub(crate) fn generated_bytes(record_bytes: u32, records: u64) -> u64 {
+    GENERATED_HEADER_BYTES as u64 + record_bytes as u64 * records.max(1)
+}
+
+/// Bounds on what Geometry passes bind and generate. `None` is the device's own bound: the
+/// edges classified in chunks of as many as one storage binding holds, and each generated
+/// buffer holding as many records as one binding holds (at most one per edge). A host (or a
+/// test) may set smaller ones: a frame whose silhouettes pass the record bound draws the
+/// records that fit and counts the rest as dropped ([`crate::gpu::Generated::dropped`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GeneratedLimits {
+    /// Edges a classification dispatch binds at once (rounded down to the device's storage
+    /// offset alignment, at least one alignment's worth).
+    pub edges_per_chunk: Option<u32>,
+    /// Records a silhouettes buffer holds.
+    pub records: Option<u64>,
+}
+
+impl GeneratedLimits {
+    /// The edges per classification chunk on `limits`: a whole number of 48-byte edges
+    /// whose bytes are a multiple of the storage offset alignment, within one binding.
+    pub(crate) fn chunk(&self, limits: &wgpu::Limits) -> u64 {
+        let align = u64::from(limits.min_storage_buffer_offset_alignment.max(1));
+        let step = align / gcd(48, align);
+        let binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size) / 48;
+        let wanted = self.edges_per_chunk.map_or(binding, |n| u64::from(n).min(binding));
+        (wanted / step * step).max(step)
+    }
+
+    /// Records a generated buffer of `record_bytes` holds for `edges` edges on `limits`.
+    fn silhouette_records(&self, limits: &wgpu::Limits, record_bytes: u32, edges: u64) -> u64 {
+        let binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        let fits = binding.saturating_sub(u64::from(GENERATED_HEADER_BYTES)) / u64::from(record_bytes.max(1));
+        edges.min(fits).min(self.records.unwrap_or(u64::MAX))
+    }
+}
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 /// The resources of one graph bound to one scene.
@@ -57,6 +95,8 @@ pub(crate) struct Resources {
     pub edges: Option<EdgeBuffers>,
     /// Buffers generated on the GPU, by name.
     generated: HashMap<String, wgpu::Buffer>,
+    /// Edges a classification dispatch binds at once ([`GeneratedLimits::chunk`]).
+    pub edges_per_chunk: u64,
 }
 
 impl Resources {
@@ -65,12 +105,27 @@ impl Resources {
     /// `scene`: what the draws bind and the edges Silhouettes steps classify, shared by
     /// every light ([`scene_buffers`]: a host geometry, or a triangle soup through
     /// [`Geometry::from_soup`]); the scene's `vertices` are not read here.
-    pub fn new(gpu: &Gpu, graph: &PassGraph, usages: &Usages, s: &SceneInputs, scene: &HostScene, max_bytes: u64) -> Result<Resources> {
+    pub fn new(
+        gpu: &Gpu,
+        graph: &PassGraph,
+        usages: &Usages,
+        s: &SceneInputs,
+        scene: &HostScene,
+        max_bytes: u64,
+        limits: GeneratedLimits,
+    ) -> Result<Resources> {
         // every size checked before anything is created (lavapipe keeps allocating past
         // its limits)
         let texture_bytes = check_sizes(gpu, graph, s, max_bytes)?;
         let edge_count = scene.edges.as_ref().map_or(0, |e| e.counts.edges.into());
-        check_generated(gpu, graph, usages, s.shadow_size, edge_count, texture_bytes, max_bytes)?;
+        let bytes = texture_bytes + check_generated(gpu, graph, usages, s.shadow_size, edge_count, limits)?;
+        if bytes > max_bytes {
+            return Err(RuntimeError::Limit {
+                what: "textures and generated buffers of this graph at this scene's sizes (bytes)".into(),
+                needed: bytes,
+                limit: max_bytes,
+            });
+        }
         gpu.scoped("scene resources", || {
             let make = Make { gpu };
             let (textures, tables) = make.graph_textures(graph, usages, s.shadow_size);
@@ -122,7 +177,8 @@ impl Resources {
                 samples: s.samples.len() as u32,
                 samples_closed: s.samples_closed,
                 edges: scene.edges.clone(),
-                generated: make.generated(graph, usages, edge_count, s.shadow_size),
+                generated: make.generated(graph, usages, edge_count, s.shadow_size, limits),
+                edges_per_chunk: limits.chunk(&gpu.limits),
             }
         })
     }
@@ -226,21 +282,20 @@ pub(crate) fn scene_buffers(
     GeometryBuffers::new(gpu, g, edges)
 }
 
-/// Each generated buffer, sized from the edge count, against the storage-binding limit,
-/// and all of them with the textures against `max_bytes`.
+/// Each generated buffer, sized from the edge count, against the storage-binding limit:
+/// their bytes together.
 fn check_generated(
     gpu: &Gpu,
     graph: &PassGraph,
     usages: &Usages,
     shadow_size: u32,
     edge_count: u64,
-    texture_bytes: u64,
-    max_bytes: u64,
-) -> Result<()> {
+    limits: GeneratedLimits,
+) -> Result<u64> {
     let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-    let mut bytes = texture_bytes;
+    let mut bytes = 0;
     for b in &graph.buffers {
-        let records = buffer_records(usages, &b.name, edge_count, shadow_size);
+        let records = buffer_records(&gpu.limits, usages, b, edge_count, shadow_size, limits);
         let size = generated_bytes(b.record_bytes, records);
         if size > storage_limit {
             return Err(RuntimeError::Limit {
@@ -251,14 +306,7 @@ fn check_generated(
         }
         bytes += size;
     }
-    if bytes > max_bytes {
-        return Err(RuntimeError::Limit {
-            what: "textures and generated buffers of this graph at this scene's sizes (bytes)".into(),
-            needed: bytes,
-            limit: max_bytes,
-        });
-    }
-    Ok(())
+    Ok(bytes)
 }
 
 /// Creating the resources, inside the caller's error scope (the sizes are checked).
@@ -360,13 +408,24 @@ impl Make<'_> {
 
     /// The generated buffers, by name: draw arguments at their start (vertex count 0, reset
     /// every frame; instance count 1), then their records.
-    fn generated(&self, graph: &PassGraph, usages: &Usages, edge_count: u64, shadow_size: u32) -> HashMap<String, wgpu::Buffer> {
-        let args: Vec<u8> = [0u32, 1, 0, 0].iter().flat_map(|x| x.to_le_bytes()).collect();
+    fn generated(
+        &self,
+        graph: &PassGraph,
+        usages: &Usages,
+        edge_count: u64,
+        shadow_size: u32,
+        limits: GeneratedLimits,
+    ) -> HashMap<String, wgpu::Buffer> {
+        // the header: draw arguments (instance count 1), records claimed and dropped, padding
+        let args: Vec<u8> = [0u32, 1, 0, 0, 0, 0, 0, 0].iter().flat_map(|x| x.to_le_bytes()).collect();
         graph
             .buffers
             .iter()
             .map(|b| {
-                let size = generated_bytes(b.record_bytes, buffer_records(usages, &b.name, edge_count, shadow_size)) as usize;
+                let size = generated_bytes(
+                    b.record_bytes,
+                    buffer_records(&self.gpu.limits, usages, b, edge_count, shadow_size, limits),
+                ) as usize;
                 let usage = wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC;
                 (b.name.clone(), self.storage(&b.name, &args, size, usage))
             })
@@ -374,14 +433,22 @@ impl Make<'_> {
     }
 }
 
-/// Records a generated buffer holds: one per edge for a `Silhouettes` step's, one per
-/// triangle of the mesh of texel centres (two per cell, at most
-/// [`graph::MAX_DISCONTINUITY_RECORDS`]) for a `Discontinuities` step's.
-fn buffer_records(usages: &Usages, name: &str, edges: u64, shadow_size: u32) -> u64 {
-    if usages.per_cell.contains(name) {
+/// Records a generated buffer holds: for a `Silhouettes` step's, one per edge but no more
+/// than one storage binding holds (or [`GeneratedLimits::records`]); for a
+/// `Discontinuities` step's, one per triangle of the mesh of texel centres (two per cell,
+/// at most [`graph::MAX_DISCONTINUITY_RECORDS`]).
+fn buffer_records(
+    device: &wgpu::Limits,
+    usages: &Usages,
+    b: &graph::BufferDecl,
+    edges: u64,
+    shadow_size: u32,
+    limits: GeneratedLimits,
+) -> u64 {
+    if usages.per_cell.contains(&b.name) {
         let cells = u64::from(shadow_size.saturating_sub(1)).pow(2);
         (2 * cells).min(u64::from(graph::MAX_DISCONTINUITY_RECORDS))
     } else {
-        edges
+        limits.silhouette_records(device, b.record_bytes, edges)
     }
 }

@@ -157,10 +157,11 @@ enum Bound {
         group0: wgpu::BindGroup,
         group1: Option<wgpu::BindGroup>,
         group2: Option<wgpu::BindGroup>,
-        /// The edge adjacency and the generated buffer of a `Silhouettes` step, with the
-        /// buffers to reset (the generated one's count, the vertex claims) and the number
-        /// of edges (invocations).
-        geometry: Option<(wgpu::BindGroup, [wgpu::Buffer; 2], u32)>,
+        /// The edge adjacency and the generated buffer of a `Silhouettes` step, one group
+        /// per chunk of edges with its number of edges (invocations), and the buffers to
+        /// reset (the generated one's header, the vertex claims); a `Discontinuities` step's
+        /// one group with its cells.
+        geometry: Option<GeometryGroups>,
         /// A `ComputeMipLevels` step: per level k >= 1, group 1 (level k - 1), group 2
         /// (level k, storage) and the level's size; `group1`, `group2` are then unused.
         levels: Vec<(Option<wgpu::BindGroup>, wgpu::BindGroup, u32)>,
@@ -168,6 +169,10 @@ enum Bound {
         gbuffer: Option<wgpu::BindGroup>,
     },
 }
+
+/// A Geometry compute step's group 3 per chunk, with the invocations of each, and the
+/// buffers reset before it (the generated buffer's header, the vertex claims).
+type GeometryGroups = (Vec<(wgpu::BindGroup, u32)>, [wgpu::Buffer; 2]);
 
 struct RasterPass {
     group1: Option<wgpu::BindGroup>,
@@ -575,7 +580,7 @@ impl StepNode {
                             None
                         };
                         let g2 = self.empty_group(gpu, 2)?;
-                        let g3 = self.group3(gpu, &[(4, buf)])?;
+                        let g3 = self.group3(gpu, &[(4, buf.as_entire_binding())])?;
                         (Some((g1, g2, g3)), Some(buf.clone()))
                     }
                     DrawCall::Scene | DrawCall::FullScreenTriangle => (None, None),
@@ -675,14 +680,38 @@ impl StepNode {
                 let geometry = match (&c.generated, &c.dispatch) {
                     (Some(name), Dispatch::Cells(_)) => {
                         let buf = res.generated(name)?;
-                        let g3 = self.group3(gpu, &[(3, buf)])?;
+                        let g3 = self.group3(gpu, &[(3, buf.as_entire_binding())])?;
                         let cells = res.shadow_size.saturating_sub(1);
-                        Some((g3, [buf.clone(), buf.clone()], cells))
+                        Some((vec![(g3, cells)], [buf.clone(), buf.clone()]))
                     }
                     (Some(name), _) => {
+                        // the edges in chunks of at most one binding each: the shader's
+                        // `arrayLength(&cs_edges)` is its chunk's, and an edge names its
+                        // faces and welded vertices by their indices in the whole scene
                         let (e, buf) = (res.edges()?, res.generated(name)?);
-                        let g3 = self.group3(gpu, &[(0, &e.edges), (1, &e.planes), (2, &e.edge_faces), (3, buf), (5, &e.claims)])?;
-                        Some((g3, [buf.clone(), e.claims.clone()], e.counts.edges))
+                        let (total, chunk) = (u64::from(e.counts.edges), res.edges_per_chunk.max(1));
+                        let mut groups = Vec::new();
+                        for first in (0..total.max(1)).step_by(chunk as usize) {
+                            let n = chunk.min(total - first.min(total));
+                            let edges = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                buffer: &e.edges,
+                                offset: first * 48,
+                                // an empty scene binds one edge-sized slot (the buffer's least)
+                                size: wgpu::BufferSize::new(n.max(1) * 48),
+                            });
+                            let g3 = self.group3(
+                                gpu,
+                                &[
+                                    (0, edges),
+                                    (1, e.planes.as_entire_binding()),
+                                    (2, e.edge_faces.as_entire_binding()),
+                                    (3, buf.as_entire_binding()),
+                                    (5, e.claims.as_entire_binding()),
+                                ],
+                            )?;
+                            groups.push((g3, n as u32));
+                        }
+                        Some((groups, [buf.clone(), e.claims.clone()]))
                     }
                     (None, _) => None,
                 };
@@ -744,7 +773,7 @@ impl StepNode {
     }
 
     /// Group 3 of a Geometry pass's step: (binding, buffer) pairs.
-    fn group3(&self, gpu: &Gpu, buffers: &[(u32, &wgpu::Buffer)]) -> Result<wgpu::BindGroup> {
+    fn group3(&self, gpu: &Gpu, buffers: &[(u32, wgpu::BindingResource<'_>)]) -> Result<wgpu::BindGroup> {
         let layout = self
             .pipeline
             .group3
@@ -754,7 +783,7 @@ impl StepNode {
             .iter()
             .map(|(binding, b)| wgpu::BindGroupEntry {
                 binding: *binding,
-                resource: b.as_entire_binding(),
+                resource: b.clone(),
             })
             .collect();
         Ok(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -953,8 +982,10 @@ impl StepNode {
             ) => {
                 // A fresh count of generated vertices and fresh vertex claims every frame
                 // (instance_count stays 1).
-                if let Some((_, [buffer, claims], _)) = geometry {
+                if let Some((_, [buffer, claims])) = geometry {
+                    // the vertex count, then the records claimed and dropped
                     encoder.clear_buffer(buffer, 0, Some(4));
+                    encoder.clear_buffer(buffer, 16, Some(8));
                     if matches!(c.dispatch, Dispatch::Edges) {
                         encoder.clear_buffer(claims, 0, None);
                     }
@@ -977,7 +1008,10 @@ impl StepNode {
                 if let Some(g2) = group2 {
                     cpass.set_bind_group(2, g2, &[]);
                 }
-                if let Some((g3, _, _)) = geometry {
+                // a Discontinuities step's one group (a Silhouettes step sets its chunks')
+                if let Some((groups, _)) = geometry
+                    && let [(g3, _)] = &groups[..]
+                {
                     cpass.set_bind_group(3, g3, &[]);
                 }
                 if let Some(g3) = gbuffer {
@@ -1008,18 +1042,20 @@ impl StepNode {
                         }
                     }
                     Dispatch::Edges => {
-                        let edges = geometry.as_ref().map_or(0, |g| g.2);
-                        // Workgroups per dimension are limited (WebGPU guarantees 65,535):
-                        // edges beyond 64 x 65,535 spread over y, and the shader skips
-                        // indices past the edge count (see `Draw::Silhouettes`).
-                        let groups = edges.div_ceil(graph::COMPUTE_WORKGROUP);
-                        let max = 65_535;
-                        if groups > 0 {
-                            cpass.dispatch_workgroups(groups.min(max), groups.div_ceil(max), 1);
+                        for (g3, edges) in geometry.iter().flat_map(|g| &g.0) {
+                            cpass.set_bind_group(3, g3, &[]);
+                            // Workgroups per dimension are limited (WebGPU guarantees
+                            // 65,535): edges beyond 64 x 65,535 spread over y, and the
+                            // shader skips indices past its chunk (see `Draw::Silhouettes`).
+                            let groups = edges.div_ceil(graph::COMPUTE_WORKGROUP);
+                            let max = 65_535;
+                            if groups > 0 {
+                                cpass.dispatch_workgroups(groups.min(max), groups.div_ceil(max), 1);
+                            }
                         }
                     }
                     Dispatch::Cells(source) => {
-                        let cells = geometry.as_ref().map_or(0, |g| g.2);
+                        let cells = geometry.as_ref().and_then(|g| g.0.first()).map_or(0, |g| g.1);
                         // the shader would find no source view and return at once (it
                         // checks too); on lavapipe a dispatch of empty invocations costs
                         // as much as half a full one

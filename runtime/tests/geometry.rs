@@ -8,7 +8,7 @@
 //! against the CPU statement of the rule (`Adjacency::silhouette_count`).
 
 use sshc_runtime::adjacency::Adjacency;
-use sshc_runtime::gpu::{Executor, Gpu, RuntimeError, SceneInputs};
+use sshc_runtime::gpu::{Executor, GeneratedLimits, Gpu, RuntimeError, SceneInputs};
 use sshc_runtime::graph::*;
 
 mod common;
@@ -25,6 +25,7 @@ struct Edge {{ a: vec3<f32>, first_face: u32, b: vec3<f32>, face_count: u32, ia:
 struct Record {{ a: vec4<f32>, b: vec4<f32> }}
 struct Generated {{
     vertex_count: atomic<u32>, instance_count: u32, first_vertex: u32, first_instance: u32,
+    claimed: atomic<u32>, dropped: atomic<u32>, pad: vec2<u32>,
     records: array<Record>,
 }}
 @group(3) @binding(0) var<storage, read> edges: array<Edge>;
@@ -48,8 +49,15 @@ fn cs_silhouettes(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_wor
         silhouette = silhouette || faces_light(edge_faces[e.first_face + k]) != first;
     }}
     if !silhouette {{ return; }}
-    let at = atomicAdd(&out.vertex_count, {VERTS}u) / {VERTS}u;
+    // the header's contract (GENERATED_HEADER_BYTES): claim a slot, count one past the
+    // capacity as dropped, count the vertices once the record is written
+    let at = atomicAdd(&out.claimed, 1u);
+    if at >= arrayLength(&out.records) {{
+        atomicAdd(&out.dropped, 1u);
+        return;
+    }}
     out.records[at] = Record(vec4<f32>(e.a, 1.0), vec4<f32>(e.b, 1.0));
+    atomicAdd(&out.vertex_count, {VERTS}u);
 }}
 "
     );
@@ -60,7 +68,7 @@ fn cs_silhouettes(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_wor
     // is kept, not the smallest value).
     let draw = "
 struct Record { a: vec4<f32>, b: vec4<f32> }
-struct Generated { vertex_count: u32, instance_count: u32, first_vertex: u32, first_instance: u32, records: array<Record> }
+struct Generated { vertex_count: u32, instance_count: u32, first_vertex: u32, first_instance: u32, claimed: u32, dropped: u32, pad: vec2<u32>, records: array<Record> }
 @group(3) @binding(4) var<storage, read> gen: Generated;
 struct VOut { @builtin(position) pos: vec4<f32>, @location(0) @interpolate(flat) v: f32 }
 @vertex fn vs_prim(@builtin(vertex_index) vi: u32) -> VOut {
@@ -315,6 +323,87 @@ fn silhouettes_classified_on_the_gpu_match_the_cpu_count_and_draw_under_every_re
     }
     // The lights see different silhouettes (the test is not one case five times).
     assert!(counts.iter().any(|&c| c != counts[0]), "{counts:?}");
+}
+
+/// The edges classified in chunks (one binding each) give what one dispatch over them all
+/// gives: the same records and the same textures under every resolve rule. A chunk of one
+/// edge is rounded up to the device's storage offset alignment (48-byte edges).
+#[test]
+fn edges_classified_in_chunks_give_the_same_records_and_textures() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
+    let (tris, ranges) = meshes();
+    let light = [10.0, 10.0, 10.0, 1.0];
+    let run = |chunk: Option<u32>| {
+        let (g, shaders) = graph();
+        let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
+        ex.generated_limits = GeneratedLimits {
+            edges_per_chunk: chunk,
+            records: None,
+        };
+        ex.bind_scene(&inputs(&tris, ranges.clone(), light))
+            .unwrap_or_else(|e| panic!("{e}"));
+        ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+        let g = ex.generated("sil").unwrap_or_else(|e| panic!("{e}"));
+        let textures: Vec<Vec<u32>> = ["add", "multiply", "min", "max", "nearest"]
+            .iter()
+            .map(|t| {
+                let img = ex.read_texture(t, 0, 0).unwrap_or_else(|e| panic!("{e}"));
+                img.channel(0).iter().map(|v| v.to_bits()).collect()
+            })
+            .collect();
+        (g, textures)
+    };
+    let whole = run(None);
+    let adj = Adjacency::build(&tris, ranges.iter().map(|r| r.start as usize..r.end as usize));
+    assert_eq!(whole.0.records as usize, adj.silhouette_count(light));
+    let align = u64::from(gpu.limits.min_storage_buffer_offset_alignment);
+    let step = align / gcd(48, align);
+    assert!(step < u64::from(adj.counts.edges), "a chunk of {step} edges would hold them all");
+    let chunked = run(Some(1));
+    assert_eq!(chunked.0, whole.0, "records");
+    assert!(
+        chunked.1 == whole.1,
+        "the textures differ between one dispatch and chunks of {step} edges"
+    );
+}
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 { a } else { gcd(b, a % b) }
+}
+
+/// A silhouettes buffer smaller than the frame's silhouettes keeps the records that fit,
+/// draws those, and counts the rest as dropped: nothing is written past it, nothing half
+/// drawn, and the count is reported.
+#[test]
+fn silhouettes_past_the_buffer_are_counted_as_dropped_and_the_rest_drawn() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
+    let (tris, ranges) = meshes();
+    let light = [10.0, 10.0, 10.0, 1.0];
+    let adj = Adjacency::build(&tris, ranges.iter().map(|r| r.start as usize..r.end as usize));
+    let expected = adj.silhouette_count(light) as u32;
+    assert!(expected > 3, "{expected}");
+    let (g, shaders) = graph();
+    let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
+    ex.generated_limits = GeneratedLimits {
+        edges_per_chunk: None,
+        records: Some(3),
+    };
+    ex.bind_scene(&inputs(&tris, ranges, light)).unwrap_or_else(|e| panic!("{e}"));
+    for _ in 0..2 {
+        // twice: the header's counts are reset every frame
+        ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+        let g = ex.generated("sil").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            (g.records, g.vertices, g.claimed, g.dropped),
+            (3, 3 * VERTS, expected, expected - 3),
+            "{g:?}"
+        );
+    }
+    // three records drawn, each a full-screen 1/64 shadow amount under `Add`
+    let ulp = 2f32.powi(-11);
+    for v in ex.read_texture("add", 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0) {
+        assert!((v - (1.0 - 3.0 / 64.0)).abs() <= 4.0 * ulp, "add: {v}");
+    }
 }
 
 #[test]

@@ -58,8 +58,12 @@ fn cs_cones_and_sheets(@builtin(global_invocation_id) id: vec3<u32>, @builtin(nu
     if atomicAdd(&cs_claims[e.ib], 1u) == 0u {
         cones |= 2u;
     }
-    let at = atomicAdd(&cs_out.vertex_count, VERTICES_PER_RECORD) / VERTICES_PER_RECORD;
+    let at = cs_claim();
+    if at == NO_SLOT {
+        return;
+    }
     cs_out.records[at] = ConeSheet(vec4<f32>(s.a, ra), vec4<f32>(s.b, rb), vec4<f32>(s.outward, select(0.0, 1.0, s.seen), f32(cones)));
+    cs_commit(VERTICES_PER_RECORD);
 }
 
 // One vertex of a primitive, in view space, with its vertex distance.

@@ -78,6 +78,9 @@ struct GeneratedRw {{
     instance_count: u32,
     first_vertex: u32,
     first_instance: u32,
+    claimed: atomic<u32>,
+    dropped: atomic<u32>,
+    pad: vec2<u32>,
     records: array<{record}>,
 }}
 
@@ -86,7 +89,28 @@ struct Generated {{
     instance_count: u32,
     first_vertex: u32,
     first_instance: u32,
+    claimed: u32,
+    dropped: u32,
+    pad: vec2<u32>,
     records: array<{record}>,
+}}
+
+// The slot of a new record, or NO_SLOT past the buffer's capacity (counted in `dropped`:
+// the runtime reports it). A record written to its slot is drawn once `cs_commit` counts
+// its vertices, so the draw never reads a slot that was not written.
+const NO_SLOT: u32 = 0xffffffffu;
+
+fn cs_claim() -> u32 {{
+    let at = atomicAdd(&cs_out.claimed, 1u);
+    if at >= arrayLength(&cs_out.records) {{
+        atomicAdd(&cs_out.dropped, 1u);
+        return NO_SLOT;
+    }}
+    return at;
+}}
+
+fn cs_commit(vertices: u32) {{
+    atomicAdd(&cs_out.vertex_count, vertices);
 }}
 "
         )

@@ -71,8 +71,12 @@ fn cs_ribbons(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
     let h = 2.0 * reach + f32(RIBBON_MARGIN) * rb_texel();
     let pa = cs_along_ray(s.a, far).xy;
     let pb = cs_along_ray(s.b, far).xy;
-    let at = atomicAdd(&cs_out.vertex_count, VERTICES_PER_RECORD) / VERTICES_PER_RECORD;
+    let at = cs_claim();
+    if at == NO_SLOT {
+        return;
+    }
     cs_out.records[at] = Ribbon(vec4<f32>(pa, -s.a.z, 0.0), vec4<f32>(pb, -s.b.z, 0.0), vec4<f32>(s.outward, h, 0.0));
+    cs_commit(VERTICES_PER_RECORD);
 }
 
 @vertex

@@ -105,8 +105,8 @@ fn sk_triangle(t0: vec2<i32>, t1: vec2<i32>, t2: vec2<i32>, z: vec3<f32>, logs: 
     if abs(sk_area(a, b, c)) < 1e-6 * texel * texel {
         return;
     }
-    let at = atomicAdd(&cs_out.vertex_count, 3u) / 3u;
-    if at >= arrayLength(&cs_out.records) {
+    let at = cs_claim();
+    if at == NO_SLOT {
         return;
     }
     cs_out.records[at] = Skin(
@@ -114,6 +114,7 @@ fn sk_triangle(t0: vec2<i32>, t1: vec2<i32>, t2: vec2<i32>, z: vec3<f32>, logs: 
         vec4<f32>(b, select(1.0, 0.0, z.y < mid)),
         vec4<f32>(c, select(1.0, 0.0, z.z < mid)),
     );
+    cs_commit(3u);
 }
 
 @compute @workgroup_size(64)

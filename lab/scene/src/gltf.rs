@@ -27,8 +27,8 @@
 //! each at most [`MAX_OBJ_BYTES`] and all together at most [`MAX_GLTF_BYTES`].
 
 use crate::error::{SceneError, SceneErrorKind};
-use crate::mesh::{MeshData, read_capped, resolve_inside, smooth_normals};
 use crate::schema::Camera;
+use crate::source::{MeshData, read_capped, resolve_inside, smooth_normals};
 use crate::validate::{MAX_OBJ_BYTES, MAX_SCENE_TRIANGLES};
 use std::path::{Path, PathBuf};
 

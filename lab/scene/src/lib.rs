@@ -51,6 +51,7 @@ mod gltf;
 mod mesh;
 mod scene;
 mod schema;
+mod source;
 mod validate;
 
 pub use error::*;

@@ -2,8 +2,9 @@
 //! and the light views fitted to it.
 
 use crate::error::{SceneError, SceneErrorKind, syntax_error};
-use crate::mesh::{MeshData, Reads, analytic_triangles, build_mesh, place};
+use crate::mesh::{Reads, analytic_triangles, build_mesh, place};
 use crate::schema::{Camera, Object, SceneDesc, ShadowFit};
+use crate::source::MeshData;
 use crate::validate::{LIGHT_PRECISION_MARGIN, MAX_SCENE_TRIANGLES, PRECISION_RATIO, validate, validate_camera, validate_light};
 use std::fmt;
 use std::ops::Range;

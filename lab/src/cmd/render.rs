@@ -187,6 +187,12 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
                 "silhouette edge(s) in the last frame"
             };
             println!("{}: {} {what}, {} primitive vertices drawn", b.name, g.records, g.vertices);
+            if g.dropped > 0 {
+                eprintln!(
+                    "warning: {}: {} of {} records did not fit in the buffer and were not drawn (the frame's silhouettes passed the bound of one storage binding): the shadow is missing their penumbrae",
+                    b.name, g.dropped, g.claimed
+                );
+            }
         }
     }
     let work = pass_work(

@@ -1,0 +1,90 @@
+//! What every mesh reader shares: the object-space mesh it returns, the files it may open
+//! (inside the scene's folder, capped in size) and smooth normals for meshes without them.
+
+use crate::error::{SceneError, SceneErrorKind};
+use std::path::{Component, Path, PathBuf};
+
+use glam::Vec3;
+
+/// Object-space triangles with per-corner normals (`None`: use face normals).
+pub(crate) struct MeshData {
+    pub(crate) triangles: Vec<[Vec3; 3]>,
+    pub(crate) normals: Option<Vec<[Vec3; 3]>>,
+}
+
+/// Resolves `rel` inside `base`, refusing absolute paths, `..` and links leading out.
+pub(crate) fn resolve_inside(rel: &str, base: &Path) -> Result<PathBuf, SceneError> {
+    let escape = |what: &str| {
+        SceneError::new(SceneErrorKind::Mesh, format!("the mesh path `{rel}` {what}"))
+            .with_hint("write a path relative to the scene file's folder, without `..`, and put the mesh beside the scene")
+    };
+    let p = Path::new(rel);
+    if rel.is_empty() {
+        return Err(escape("is empty"));
+    }
+    if p.is_absolute() || p.has_root() {
+        return Err(escape("is absolute"));
+    }
+    for c in p.components() {
+        match c {
+            Component::Normal(_) | Component::CurDir => {}
+            Component::ParentDir => return Err(escape("leaves the scene's folder (`..`)")),
+            Component::RootDir | Component::Prefix(_) => return Err(escape("is absolute")),
+        }
+    }
+    let joined = base.join(p);
+    let canon_base = base.canonicalize().map_err(|e| {
+        SceneError::new(
+            SceneErrorKind::Io,
+            format!("cannot open the scene's folder `{}`: {e}", base.display()),
+        )
+        .with_hint("load the scene from an existing folder")
+    })?;
+    let canon = joined.canonicalize().map_err(|e| {
+        SceneError::new(SceneErrorKind::Io, format!("cannot open the mesh file `{}`: {e}", joined.display()))
+            .with_hint("check that the mesh file is beside the scene file")
+    })?;
+    if !canon.starts_with(&canon_base) {
+        return Err(escape("leads out of the scene's folder through a link"));
+    }
+    Ok(canon)
+}
+
+/// The area-weighted smooth normal of each vertex of an indexed triangle list (not
+/// normalised: placing the mesh normalises).
+pub(crate) fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let mut smooth = vec![Vec3::ZERO; positions.len()];
+    for f in indices.chunks_exact(3) {
+        let (a, b, c) = (positions[f[0] as usize], positions[f[1] as usize], positions[f[2] as usize]);
+        let n = (b - a).cross(c - a);
+        if n.is_finite() {
+            for &k in f {
+                smooth[k as usize] += n;
+            }
+        }
+    }
+    smooth
+}
+
+/// Reads a regular file of at most `cap` bytes; anything else (a FIFO, a device, a folder,
+/// a larger file) is refused without reading it (or, if it grows, past `cap + 1` bytes).
+pub(crate) fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(std::io::Error::other("it is not a regular file"));
+    }
+    if meta.len() > cap {
+        return Err(std::io::Error::other(format!(
+            "it has {} bytes, above the limit of {cap}",
+            meta.len()
+        )));
+    }
+    let file = std::fs::File::open(path)?;
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(cap + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > cap {
+        return Err(std::io::Error::other(format!("it grew above the limit of {cap} bytes")));
+    }
+    Ok(bytes)
+}
