@@ -75,7 +75,7 @@ done
 
 phase "fuzz (short run)"
 # A workspace of its own (compiler/fuzz, excluded from the root one). scripts/fuzz.sh
-# builds the four targets (front, expr, graph, scene) with libFuzzer's coverage
+# builds the five targets (front, expr, graph, scene, gltf) with libFuzzer's coverage
 # instrumentation, no sanitizer (RUSTC_BOOTSTRAP=1 on stable; libfuzzer-sys's build script
 # compiles libFuzzer's C++, so a C++ compiler is needed), then runs each on its seeds plus
 # 20 s of mutation; a crash, a timeout or an out-of-memory fails the phase and leaves the
