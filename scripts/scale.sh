@@ -63,7 +63,7 @@ EOF
         peak=$(sed -n 's/^peak \([0-9]*\) KB$/\1/p' "$log")
         row "$n" "$t: peak resident" - "$((peak / 1024))" -
         # per-pass GPU time (median of the frames): `| pass | ms | ...`
-        awk -F'|' '/^\| pass \| GPU ms/ {on = 1; next} on && /^\|---/ {next} on && /^\|/ {gsub(/ /, "", $2); gsub(/ /, "", $3); print $2 "\t" $3} on && !/^\|/ {on = 0}' "$log" |
+        awk -F'|' '/^\| pass \| GPU ms/ {on = 1; next} on && /^\|---/ {next} on && !/^\|/ {on = 0} on {p = $2; m = $3; gsub(/ /, "", p); gsub(/ /, "", m); print p "\t" m}' "$log" |
             while IFS=$'\t' read -r pass ms; do row "$n" "$t: pass $pass (GPU)" "$(echo "$ms / 1000" | bc -l)" - -; done
         echo "  $t: $(grep -c . "$log") lines, peak $((peak / 1024)) MB" >&2
     done
@@ -82,6 +82,18 @@ python3 - "$rows" <<'EOF'
 import math, sys, collections
 rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1]) if l.strip()]
 sizes = sorted({int(r[0]) for r in rows})
+# the scene's own stages once (the first technique's run); per technique the rest
+shared = ("scene read", "light check", "scene inputs")
+first = next((r[1].split(": ")[0] for r in rows if ": " in r[1]), "")
+kept = []
+for r in rows:
+    name, _, stage = r[1].partition(": ")
+    if stage.startswith(shared):
+        if name != first:
+            continue
+        r[1] = stage
+    kept.append(r)
+rows = kept
 stages = list(dict.fromkeys(r[1] for r in rows))
 cell = collections.defaultdict(dict)
 for n, stage, s, mb, note in rows:

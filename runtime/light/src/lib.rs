@@ -17,6 +17,9 @@
 
 #![deny(clippy::wildcard_enum_match_arm)]
 
+mod cascades;
+pub use cascades::{CameraFrustum, Cascade, MAX_CASCADES, cascade_views, practical_splits};
+
 /// Most lights one frame combines: the visibilities go into one RGBA texel a pixel (and
 /// `sshc render --visibility` writes them as the channels of one image). The runtime
 /// refuses more at binding; scene loaders refuse more when reading.
