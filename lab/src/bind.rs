@@ -88,6 +88,106 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
     })
 }
 
+/// Refuses what cascades cannot split: a count outside 1 to `MAX_CASCADES`, a weight
+/// outside [0, 1], a band outside [0, 1), several lights, a light at a finite position.
+pub fn check_cascades(scene: &Scene, n: u32, c: &crate::session::Cascading) -> Result<(), String> {
+    let max = sshc_runtime::light::MAX_CASCADES;
+    if !(1..=max).contains(&n) {
+        return Err(format!("error: `--cascades {n}`: a light has 1 to {max} cascades"));
+    }
+    if !(0.0..=1.0).contains(&c.cascade_lambda) {
+        return Err(format!("error: `--cascade-lambda {}`: a weight in [0, 1]", c.cascade_lambda));
+    }
+    if !(0.0..1.0).contains(&c.cascade_band) {
+        return Err(format!(
+            "error: `--cascade-band {}`: a fraction of a slice, in [0, 1)",
+            c.cascade_band
+        ));
+    }
+    if n > 1 {
+        if scene.lights.len() != 1 {
+            return Err(format!(
+                "error: `--cascades {n}`: cascades split one light's view; the scene has {} lights (keep one with `--lights 1`)",
+                scene.lights.len()
+            ));
+        }
+        if scene.lights[0].direction().is_none() {
+            return Err(format!(
+                "error: `--cascades {n}`: cascades split the view of a light at infinity (Directional or DistantDisk); the scene's light is a {}",
+                scene.lights[0].kind_name()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The cascades of the scene's one light at infinity, as
+/// [`sshc_runtime::gpu::Executor::bind_cascades`] binds them.
+pub struct Cascades {
+    pub inputs: Vec<SceneInputs>,
+    pub eye: [f32; 3],
+    pub forward: [f32; 3],
+    pub splits: Vec<f32>,
+    /// World units per texel of each cascade's map.
+    pub texels: Vec<f32>,
+}
+
+/// `n` cascades of the scene's light over its camera's view depth (the camera's fitted
+/// near and far), split by the practical scheme with `lambda`, each fitted to its slice
+/// padded by the casters' penumbra reach, `scene.shadow_map` texels wide, snapped to whole
+/// texels unless `snap` is false ([`sshc_runtime::light::cascade_views`]).
+pub fn cascade_inputs(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, snap: bool) -> Result<Cascades, String> {
+    use sshc_runtime::light::{CameraFrustum, cascade_views, practical_splits};
+    let light = scene.lights.first().ok_or("the scene has no light")?;
+    let dir = light.direction().ok_or_else(|| {
+        format!(
+            "cascades split the view of a light at infinity; the scene's light is a {}",
+            light.kind_name()
+        )
+    })?;
+    if graph_samples(graph) > 0 {
+        return Err("cascades and per-sample techniques do not mix: per-sample views look from points on a local light".into());
+    }
+    let frustum =
+        CameraFrustum::from_matrices(scene.camera_view(), scene.camera_proj()).ok_or("the camera's matrices cannot be inverted")?;
+    let (near, far) = scene.camera_near_far();
+    let splits = practical_splits(near, far, n, lambda).ok_or_else(|| format!("no splits of [{near}, {far}] into {n}"))?;
+    let views = cascade_views(
+        dir,
+        &frustum,
+        &splits,
+        scene.shadow_map,
+        scene.penumbra_reach(light),
+        scene.bounds(),
+        snap,
+    )
+    .ok_or("the cascades cannot be fitted")?;
+    let base = scene_inputs_for(scene, graph)?;
+    let camera = camera(scene);
+    let inputs = views
+        .iter()
+        .map(|c| SceneInputs {
+            vertices: base.vertices.clone(),
+            meshes: base.meshes.clone(),
+            casting_vertices: base.casting_vertices,
+            unshadowed: base.unshadowed.clone(),
+            ..SceneInputs::of(
+                &camera,
+                &LightInputs::from_view(light, &c.view, &[], false),
+                scene.camera_size(),
+                scene.shadow_map,
+            )
+        })
+        .collect();
+    Ok(Cascades {
+        inputs,
+        eye: frustum.eye.to_array(),
+        forward: frustum.forward.to_array(),
+        splits,
+        texels: views.iter().map(|c| c.texel).collect(),
+    })
+}
+
 /// The scene's camera, as the executor takes it.
 pub fn camera(scene: &Scene) -> Camera {
     Camera {

@@ -112,6 +112,61 @@ pub struct Overrides {
     /// scene file writes it, such as 'Sphere(center: (0, 4, 0), radius: 0.2)'). Repeatable.
     #[arg(long = "light", value_name = "RON", value_parser = ron_value::<crate::scene::Light>)]
     pub light: Vec<crate::scene::Light>,
+    #[command(flatten)]
+    pub cascading: Cascading,
+}
+
+/// Cascaded shadow maps for a light at infinity (`bind::cascade_inputs`).
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub struct Cascading {
+    /// Split the light's view into N cascades (1 to 4) over the camera's view depth, each
+    /// fitted to its slice and `--shadow-map` texels wide; 1 is the scene's own fit. A
+    /// light at infinity only, alone in the scene; the technique is compiled generic.
+    #[arg(long, value_name = "N")]
+    pub cascades: Option<u32>,
+    /// The practical split scheme's weight: 0 uniform, 1 logarithmic (Zhang et al. 2006,
+    /// eq. 6).
+    #[arg(long, default_value_t = 0.75)]
+    pub cascade_lambda: f32,
+    /// The fraction of each cascade's slice, at its far end, mixed into the next.
+    #[arg(long, default_value_t = 0.1)]
+    pub cascade_band: f32,
+    /// Do not snap the cascades to whole texels (to measure the shimmer snapping removes).
+    #[arg(long)]
+    pub no_snap: bool,
+}
+
+impl Cascading {
+    /// More than one cascade asked for.
+    pub fn on(&self) -> bool {
+        self.cascades.is_some_and(|n| n > 1)
+    }
+
+    /// Binds the scene's cascades when more than one is asked for, and says where they
+    /// split and how fine each is; `false` (nothing bound) otherwise.
+    pub fn bind(&self, ex: &mut Executor, scene: &Scene) -> Result<bool, String> {
+        let Some(n) = self.cascades.filter(|&n| n > 1) else {
+            return Ok(false);
+        };
+        let c = crate::bind::cascade_inputs(scene, &ex.graph, n, self.cascade_lambda, !self.no_snap).map_err(|e| format!("error: {e}"))?;
+        ex.bind_cascades(&c.inputs, c.eye, c.forward, &c.splits, self.cascade_band)
+            .map_err(rt)?;
+        let slices: Vec<String> = c
+            .splits
+            .windows(2)
+            .zip(&c.texels)
+            .map(|(w, t)| format!("{:.3}..{:.3} at {t:.4} world units a texel", w[0], w[1]))
+            .collect();
+        println!(
+            "cascades: {n} of {} texels, split at lambda {} ({}), mixed over the last {} of each slice: {}",
+            scene.shadow_map,
+            self.cascade_lambda,
+            if self.no_snap { "not snapped" } else { "snapped to whole texels" },
+            self.cascade_band,
+            slices.join("; ")
+        );
+        Ok(true)
+    }
 }
 
 /// Parses a RON value of the scene file's syntax (`--camera`, `--light`).
@@ -155,7 +210,11 @@ impl Overrides {
         }
         let mut stages = Stages::default();
         let mut opts = self.variants.options();
-        specialise(&mut opts, input, path, &scene, self.generic)?;
+        if let Some(n) = self.cascading.cascades {
+            crate::bind::check_cascades(&scene, n, &self.cascading)?;
+        }
+        // a graph specialised for the scene's light view would refuse the cascades' views
+        specialise(&mut opts, input, path, &scene, self.generic || self.cascading.on())?;
         let ex = executor(gpu, input, &opts)?;
         stages.done("compile");
         Ok((scene, ex))

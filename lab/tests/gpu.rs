@@ -207,3 +207,82 @@ fn a_gltf_file_and_the_same_geometry_as_obj_give_the_same_visibility() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Cascades (`Executor::bind_cascades`, fitted by `bind::cascade_inputs`): one cascade is
+/// the plain binding, bit for bit, for every bundled technique a sun serves; with several,
+/// each pixel takes the cascade whose slice holds its view distance, mixed with the next
+/// over the band at its slice's far end, exactly as the combining step states (channel 1
+/// of the visibilities says which: `k + t`).
+#[test]
+fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
+    use sshc_lab::session::Cascading;
+    let text = "Scene(camera: Perspective(position: (0.0, 1.5, 9.0), target: (0.0, 0.0, -4.0), fov_y_degrees: 55.0, width: 48, height: 48),
+        shadow_map: 128, lights: [DistantDisk(direction: (0.5, 0.8, 0.3), angle_degrees: 2.0)],
+        objects: [Object(mesh: Plane(size: (30.0, 30.0)), casts: false),
+                  Object(mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (0.3, 0.9, 7.3))),
+                  Object(mesh: Box(size: (2.0, 3.0, 2.0)), transform: (translate: (-2.0, 1.5, -6.0)))])";
+    let scene = Scene::from_str(text, ".").unwrap_or_else(|e| panic!("{e}"));
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
+    let cascading = |n| Cascading {
+        cascades: Some(n),
+        cascade_lambda: 0.75,
+        cascade_band: 0.2,
+        no_snap: false,
+    };
+    for t in TECHNIQUES {
+        let path = root().join("techniques").join(format!("{t}.ron"));
+        let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut ex = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap())
+            .unwrap_or_else(|e| panic!("{t}: {e}"));
+        ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
+        let plain = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
+        // one cascade: bound as the scene is
+        assert!(!cascading(1).bind(&mut ex, &scene).unwrap_or_else(|e| panic!("{t}: {e}")));
+        let one = sshc_lab::bind::cascade_inputs(&scene, &ex.graph, 1, 0.75, true).unwrap_or_else(|e| panic!("{t}: {e}"));
+        assert_eq!(one.inputs.len(), 1);
+        let inputs = sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap();
+        ex.bind_cascades(&[inputs], one.eye, one.forward, &one.splits, 0.2)
+            .unwrap_or_else(|e| panic!("{t}: {e}"));
+        ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
+        let again = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
+        assert!(
+            plain.iter().zip(&again).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{t}: one cascade differs"
+        );
+
+        // three cascades: the selection and the mixture, pixel by pixel
+        assert!(cascading(3).bind(&mut ex, &scene).unwrap_or_else(|e| panic!("{t}: {e}")));
+        let c = sshc_lab::bind::cascade_inputs(&scene, &ex.graph, 3, 0.75, true).unwrap();
+        ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
+        let combined = ex.read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}"));
+        let own: Vec<Vec<f32>> = (0..3)
+            .map(|k| ex.read_light_camera(k, CameraOutput::Visibility).unwrap().channel(0))
+            .collect();
+        let positions = ex.read_light_camera(0, CameraOutput::Position).unwrap();
+        let (eye, forward) = (Vec3::from_array(c.eye), Vec3::from_array(c.forward));
+        let mut seen = [0usize; 3];
+        for (i, p) in positions.rgba.iter().enumerate() {
+            let [v, which, ..] = combined.rgba[i];
+            let p = Vec3::new(p[0], p[1], p[2]);
+            if !p.is_finite() {
+                assert_eq!((v, which), (own[0][i], 0.0), "{t}: pixel {i} sees no surface");
+                continue;
+            }
+            let d = (p - eye).dot(forward);
+            let k = (0..2).find(|&k| d <= c.splits[k + 1]).unwrap_or(2);
+            // f32 rounding of the distance on either side of a split or a band's start
+            let near_edge = c.splits.iter().any(|s| (d - s).abs() < 1e-4 * s.abs().max(1.0));
+            if near_edge {
+                continue;
+            }
+            seen[k] += 1;
+            let (kk, tt) = (which.floor() as usize, which.fract());
+            assert_eq!(kk, k, "{t}: pixel {i} at distance {d} in slice {k} took cascade {which}");
+            let want = own[k][i] * (1.0 - tt) + own[(k + 1).min(2)][i] * tt;
+            // WGSL's mix in f32: a few roundings of values in [0, 1]
+            assert!((v - want).abs() <= 4.0 * f32::EPSILON, "{t}: pixel {i}: {v} against {want}");
+        }
+        assert!(seen.iter().all(|&n| n > 20), "{t}: pixels per slice {seen:?}, splits {:?}", c.splits);
+    }
+}

@@ -7,7 +7,7 @@ use crate::frame::{Camera, LightInputs, SceneInputs};
 use crate::geometry::{Geometry, GeometryBuffers};
 use crate::graph::{self, Format, PassGraph, TextureDecl};
 use crate::image::{Image, read_back, read_table};
-use crate::lights::{Combine, MAX_LIGHTS};
+use crate::lights::{Combine, Combining, MAX_LIGHTS};
 use crate::pipeline::mip_count;
 use crate::pixels::{HostPixels, PixelsStep};
 use crate::receivers::Unshadowed;
@@ -18,6 +18,7 @@ use crate::timing::{FrameTimes, Timestamps};
 use crate::update::{FrameWriter, LightUniforms};
 use crate::usages::Usages;
 use crate::validate::validate_wgsl;
+use sshc_light::MAX_CASCADES;
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -398,6 +399,59 @@ impl Executor {
         self.bind_on_geometry(lights)
     }
 
+    /// Bind the cascades of one light at infinity (2 to [`MAX_CASCADES`]): `cascades[i]`
+    /// is the scene with cascade `i`'s light view (the same light, camera and geometry;
+    /// [`crate::light::cascade_views`] fits them), `splits` the `n + 1` view distances
+    /// bounding them along the camera's unit `forward` from `eye`. Each cascade gets its own
+    /// resources and runs every pass, as a light of [`Executor::bind_lights`] does (so one
+    /// width in texels serves every cascade: a technique's texel-sized kernels cover less
+    /// of the world in nearer cascades); the combining step then takes, per pixel, the
+    /// cascade of its view distance, mixed with the next over the last `band` fraction of
+    /// its slice. The visibility texture holds it in channel 0 and the cascade (fractional
+    /// in a band) in channel 1. One cascade is [`Executor::bind_scene`].
+    pub fn bind_cascades(&mut self, cascades: &[SceneInputs], eye: [f32; 3], forward: [f32; 3], splits: &[f32], band: f32) -> Result<()> {
+        let n = cascades.len();
+        let bad = |m: String| Err(RuntimeError::Param(m));
+        if !(1..=MAX_CASCADES as usize).contains(&n) {
+            return bad(format!("{n} cascades: a light has 1 to {MAX_CASCADES}"));
+        }
+        if splits.len() != n + 1 || !splits.iter().all(|s| s.is_finite()) || splits.windows(2).any(|w| w[0] >= w[1]) {
+            return bad(format!(
+                "{} split distances for {n} cascades: give {} increasing finite distances",
+                splits.len(),
+                n + 1
+            ));
+        }
+        if !(0.0..1.0).contains(&band) {
+            return bad(format!("cascade band {band}: a fraction of a slice, in [0, 1)"));
+        }
+        if !(eye.iter().chain(&forward).all(|x| x.is_finite())) {
+            return bad("the camera's eye and forward axis must be finite".into());
+        }
+        if let Some(s) = cascades
+            .iter()
+            .find(|s| s.light_position != cascades[0].light_position || s.light_position[3] != 0.0)
+        {
+            return bad(format!(
+                "cascades are views of one light at infinity: light position or direction {:?} against {:?}",
+                s.light_position, cascades[0].light_position
+            ));
+        }
+        self.bind_lights(cascades)?;
+        if n > 1 {
+            let camera = cascades[0].camera_size;
+            let position = &self.bound[0].camera[CameraOutput::Position as usize];
+            let mode = Combining::Cascades {
+                eye,
+                forward,
+                splits: splits.to_vec(),
+                band,
+            };
+            self.combine = Some(Combine::new(&self.gpu, camera, n, &mode, position)?);
+        }
+        Ok(())
+    }
+
     /// Bind a host's geometry ([`Geometry`]: indexed meshes uploaded once, instances with
     /// transforms) seen by `camera` under `lights` (1 to [`MAX_LIGHTS`]), at these sizes.
     /// Per frame, [`Executor::set_transforms`] moves the instances, without reallocation.
@@ -582,7 +636,8 @@ impl Executor {
                     limit: self.max_bytes,
                 });
             }
-            self.combine = Some(Combine::new(&gpu, camera, lights.len())?);
+            let position = &bound[0].camera[CameraOutput::Position as usize];
+            self.combine = Some(Combine::new(&gpu, camera, lights.len(), &Combining::Lights, position)?);
         }
         self.timestamps = Timestamps::new(&gpu, self.passes.iter().map(|p| p.name.clone()).collect(), lights.len());
         self.unshadowed = Unshadowed::new(&gpu, &bound)?;
@@ -983,6 +1038,16 @@ impl Executor {
     /// light 0's ([`Executor::read_light_camera`] reads another light's,
     /// [`Executor::read_visibilities`] every light's visibility).
     pub fn read_camera(&self, which: CameraOutput) -> Result<Image> {
+        if let (CameraOutput::Visibility, Some(c)) = (which, &self.combine)
+            && c.cascades
+        {
+            // cascades: the visibility is their combination (channel 0; channel 1 the cascade)
+            let mut img = self.read_visibilities()?;
+            for p in &mut img.rgba {
+                *p = [p[0], 0.0, 0.0, 1.0];
+            }
+            return Ok(img);
+        }
         if let (CameraOutput::Color, Some(c)) = (which, &self.combine) {
             // the colour is computed from every light's visibility
             for l in 0..self.bound.len() {
@@ -1029,7 +1094,9 @@ impl Executor {
         };
         let (w, h) = self.bound()?.camera_size;
         let img = read_back(&self.gpu, &c.visibility, 0, 0, w, h, Format::Rgba32Float)?;
-        for l in 0..self.bound.len() {
+        // cascades: channel 1 is the cascade, checked by nothing
+        let visibilities = if c.cascades { 1 } else { self.bound.len() };
+        for l in 0..visibilities {
             check_visibility(&img.channel(l), w, self.shade_name())?;
         }
         Ok(img)

@@ -40,6 +40,85 @@ fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 ";
 
+/// Cascades of one light (docs/architecture.md, section 2a): per pixel, the cascade whose
+/// slice of view distances holds the pixel's (`dot(p - eye, forward)`, `p` the camera
+/// pass's world position), mixed with the next cascade over the last `band` fraction of its
+/// slice, so that no seam shows where two cascades meet; beyond the last split, the last
+/// cascade. Colour and visibility (channel 0) come from that mixture; channel 1 holds the
+/// cascade, fractional in a band (`sshc render --visibility` and the viewer can show it).
+const CASCADES_WGSL: &str = "
+@group(0) @binding(0) var visibility: texture_2d_array<f32>;
+@group(0) @binding(1) var color: texture_2d_array<f32>;
+@group(0) @binding(2) var out_color: texture_storage_2d<rgba8unorm, write>;
+@group(0) @binding(3) var out_visibility: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(4) var position: texture_2d<f32>;
+struct Slices {
+    // eye.xyz, band; forward.xyz, cascades; the n + 1 split distances
+    eye: vec4<f32>,
+    forward: vec4<f32>,
+    lo: vec4<f32>,
+    hi: vec4<f32>,
+}
+@group(0) @binding(5) var<uniform> slices: Slices;
+
+fn split(i: u32) -> f32 {
+    if i < 4u {
+        return slices.lo[i];
+    }
+    return slices.hi.x;
+}
+
+@compute @workgroup_size(8, 8)
+fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(out_color);
+    if id.x >= size.x || id.y >= size.y {
+        return;
+    }
+    let n = u32(slices.forward.w);
+    let p = textureLoad(position, id.xy, 0).xyz;
+    var k = 0u;
+    var t = 0.0;
+    // no surface (NaN position): cascade 0, whose visibility is 1 there as every one's
+    if all(p == p) {
+        let d = dot(p - slices.eye.xyz, slices.forward.xyz);
+        k = n - 1u;
+        for (var i = 0u; i + 1u < n; i++) {
+            if d <= split(i + 1u) {
+                k = i;
+                break;
+            }
+        }
+        if k + 1u < n {
+            let far = split(k + 1u);
+            let start = far - slices.eye.w * (far - split(k));
+            t = clamp((d - start) / max(far - start, 1e-30), 0.0, 1.0);
+        }
+    }
+    let next = min(k + 1u, n - 1u);
+    let v = mix(textureLoad(visibility, id.xy, k, 0).r, textureLoad(visibility, id.xy, next, 0).r, t);
+    let c = mix(textureLoad(color, id.xy, k, 0), textureLoad(color, id.xy, next, 0), t);
+    textureStore(out_color, id.xy, c);
+    textureStore(out_visibility, id.xy, vec4<f32>(v, f32(k) + t, 0.0, 0.0));
+}
+";
+
+/// How the combining step makes one frame of the bound light views.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Combining {
+    /// Several lights: the mean of their colours; visibility channel `l` light `l`'s.
+    Lights,
+    /// Cascades of one light: by the pixel's view distance (`CASCADES_WGSL`).
+    Cascades {
+        /// The camera's position and unit view direction.
+        eye: [f32; 3],
+        forward: [f32; 3],
+        /// The `n + 1` split distances along `forward`, increasing.
+        splits: Vec<f32>,
+        /// The fraction of each slice, at its far end, over which it mixes into the next.
+        band: f32,
+    },
+}
+
 /// The combining step and its textures, at one camera size and number of lights.
 pub(crate) struct Combine {
     pipeline: wgpu::ComputePipeline,
@@ -51,6 +130,8 @@ pub(crate) struct Combine {
     pub visibility: wgpu::Texture,
     size: (u32, u32),
     lights: u32,
+    /// Cascades of one light: channel 1 of the visibility is the cascade, not a light's.
+    pub cascades: bool,
 }
 
 impl Combine {
@@ -60,7 +141,8 @@ impl Combine {
         pixels * (lights as u64 * (4 + 4) + 4 + 16)
     }
 
-    pub fn new(gpu: &Gpu, camera: (u32, u32), lights: usize) -> Result<Combine> {
+    /// `position`: light 0's camera positions, which `Combining::Cascades` reads.
+    pub fn new(gpu: &Gpu, camera: (u32, u32), lights: usize, mode: &Combining, position: &wgpu::Texture) -> Result<Combine> {
         if !(2..=MAX_LIGHTS).contains(&lights) {
             return Err(RuntimeError::Limit {
                 what: "lights combined in one frame (one RGBA visibility texel a pixel)".into(),
@@ -96,9 +178,13 @@ impl Combine {
             ];
             let color = texture("combined colour", wgpu::TextureFormat::Rgba8Unorm, 1, output);
             let visibility = texture("visibility per light", wgpu::TextureFormat::Rgba32Float, 1, output);
+            let source = match mode {
+                Combining::Lights => COMBINE_WGSL,
+                Combining::Cascades { .. } => CASCADES_WGSL,
+            };
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("combine lights"),
-                source: wgpu::ShaderSource::Wgsl(COMBINE_WGSL.into()),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
             });
             let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some("combine lights"),
@@ -116,27 +202,76 @@ impl Combine {
             };
             let (v_in, c_in) = (array(&layers[0]), array(&layers[1]));
             let (c_out, v_out) = (color.create_view(&Default::default()), visibility.create_view(&Default::default()));
+            let p_in = position.create_view(&Default::default());
+            let slices = match mode {
+                Combining::Lights => None,
+                Combining::Cascades {
+                    eye,
+                    forward,
+                    splits,
+                    band,
+                } => {
+                    let at = |i: usize| splits.get(i).copied().unwrap_or(f32::MAX);
+                    let words = [
+                        eye[0],
+                        eye[1],
+                        eye[2],
+                        *band,
+                        forward[0],
+                        forward[1],
+                        forward[2],
+                        (splits.len() - 1) as f32,
+                        at(0),
+                        at(1),
+                        at(2),
+                        at(3),
+                        at(4),
+                        0.0,
+                        0.0,
+                        0.0,
+                    ];
+                    let b = device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("cascade slices"),
+                        size: 64,
+                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    });
+                    gpu.queue.write_buffer(&b, 0, &crate::resources::f32_bytes(&words));
+                    Some(b)
+                }
+            };
+            let mut entries = vec![
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&v_in),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&c_in),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&c_out),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&v_out),
+                },
+            ];
+            if let Some(b) = &slices {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&p_in),
+                });
+                entries.push(wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: b.as_entire_binding(),
+                });
+            }
             let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("combine lights"),
                 layout: &pipeline.get_bind_group_layout(0),
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&v_in),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&c_in),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::TextureView(&c_out),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: wgpu::BindingResource::TextureView(&v_out),
-                    },
-                ],
+                entries: &entries,
             });
             Combine {
                 pipeline,
@@ -146,6 +281,7 @@ impl Combine {
                 visibility,
                 size: camera,
                 lights: n,
+                cascades: slices.is_some(),
             }
         })
     }

@@ -102,6 +102,9 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
             a.stability_frames
         ));
     }
+    if a.over.cascading.on() && a.stability_frames >= 2 {
+        return Err("error: `--stability-frames` moves the light between frames and binds it alone: not with `--cascades` (yet)".into());
+    }
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
     let light = scene
@@ -120,8 +123,10 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     {
         return Err(format!("error: `--range {r}`: expected a half-width > 0 in 0..255 units"));
     }
-    let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
-    ex.bind_scene(&inputs).map_err(rt)?;
+    if !a.over.cascading.bind(&mut ex, &scene)? {
+        let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
+        ex.bind_scene(&inputs).map_err(rt)?;
+    }
     let mut frame_ms = Vec::new();
     for _ in 0..a.frames.max(1) {
         let t = ex.run_frame().map_err(rt)?;

@@ -88,7 +88,9 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         })
         .collect::<Result<Vec<_>, String>>()?;
     stages.done("scene inputs (the triangle soup)");
-    ex.bind_lights(&inputs).map_err(rt)?;
+    if !a.over.cascading.bind(&mut ex, &scene)? {
+        ex.bind_lights(&inputs).map_err(rt)?;
+    }
     gpu.wait().map_err(rt)?;
     stages.done("bind (upload, edge adjacency, resources)");
     let mut all: Vec<Vec<Option<f64>>> = Vec::new();
@@ -152,6 +154,8 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
     println!("device: {}", gpu.describe());
     for (i, light) in scene.lights.iter().enumerate() {
         match scene.lights.len() {
+            // cascades are fitted each to its slice (their line above)
+            1 if a.over.cascading.on() => {}
             1 => println!("{}", scene.fit_report(light)),
             _ => println!("light {i}: {}", scene.fit_report(light)),
         }
