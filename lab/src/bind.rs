@@ -132,11 +132,15 @@ pub struct Cascades {
     pub texels: Vec<f32>,
 }
 
-/// `n` cascades of the scene's light over its camera's view depth (the camera's fitted
-/// near and far), split by the practical scheme with `lambda`, each fitted to its slice
-/// padded by the casters' penumbra reach, `scene.shadow_map` texels wide, snapped to whole
-/// texels unless `snap` is false ([`sshc_runtime::light::cascade_views`]).
-pub fn cascade_inputs(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, snap: bool) -> Result<Cascades, String> {
+/// `n` cascades of the scene's light over the view depth the camera sees surfaces at (the
+/// nearest and farthest view distance of the triangles clipped to its frustum,
+/// [`Scene::visible_points`]; the camera's near and far when it sees none), split by the
+/// practical scheme with `lambda`, each fitted to its slice padded by the casters'
+/// penumbra reach, `scene.shadow_map` texels wide, snapped to whole texels unless `snap` is
+/// false ([`sshc_runtime::light::cascade_views`]), with the light's size and angle
+/// ([`Light::with_extent`]).
+/// `offset` moves the camera the cascades are fitted to (not the image's).
+pub fn cascade_inputs(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, snap: bool, offset: [f32; 3]) -> Result<Cascades, String> {
     use sshc_runtime::light::{CameraFrustum, cascade_views, practical_splits};
     let light = scene.lights.first().ok_or("the scene has no light")?;
     let dir = light.direction().ok_or_else(|| {
@@ -148,9 +152,20 @@ pub fn cascade_inputs(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, sna
     if graph_samples(graph) > 0 {
         return Err("cascades and per-sample techniques do not mix: per-sample views look from points on a local light".into());
     }
-    let frustum =
+    let mut frustum =
         CameraFrustum::from_matrices(scene.camera_view(), scene.camera_proj()).ok_or("the camera's matrices cannot be inverted")?;
-    let (near, far) = scene.camera_near_far();
+    frustum.eye += glam::Vec3::from_array(offset);
+    let (camera_near, camera_far) = scene.camera_near_far();
+    let (mut near, mut far) = (f32::INFINITY, 0.0f32);
+    for p in scene.visible_points() {
+        let d = (p - frustum.eye).dot(frustum.forward);
+        (near, far) = (near.min(d), far.max(d));
+    }
+    let (near, far) = if near < far {
+        (near.max(camera_near), far.min(camera_far).max(near * (1.0 + 1e-3)))
+    } else {
+        (camera_near, camera_far)
+    };
     let splits = practical_splits(near, far, n, lambda).ok_or_else(|| format!("no splits of [{near}, {far}] into {n}"))?;
     let views = cascade_views(
         dir,
@@ -173,7 +188,7 @@ pub fn cascade_inputs(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, sna
             unshadowed: base.unshadowed.clone(),
             ..SceneInputs::of(
                 &camera,
-                &LightInputs::from_view(light, &c.view, &[], false),
+                &LightInputs::from_view(light, &light.with_extent(c.view), &[], false),
                 scene.camera_size(),
                 scene.shadow_map,
             )

@@ -134,6 +134,24 @@ pub struct Cascading {
     /// Do not snap the cascades to whole texels (to measure the shimmer snapping removes).
     #[arg(long)]
     pub no_snap: bool,
+    /// Fit the cascades as if the camera stood this far away, X,Y,Z in world units, the
+    /// image's camera unmoved: the shadow's change from one offset to the next is then the
+    /// cascades' alone (scripts/shimmer.sh).
+    #[arg(long, value_name = "X,Y,Z", value_parser = offset, allow_hyphen_values = true)]
+    pub cascade_offset: Option<[f32; 3]>,
+}
+
+/// `--cascade-offset X,Y,Z`: three finite numbers.
+fn offset(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("{s}: {e}"))?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([x, y, z]),
+        _ => Err(format!("{s}: write three finite numbers, X,Y,Z")),
+    }
 }
 
 impl Cascading {
@@ -148,7 +166,15 @@ impl Cascading {
         let Some(n) = self.cascades.filter(|&n| n > 1) else {
             return Ok(false);
         };
-        let c = crate::bind::cascade_inputs(scene, &ex.graph, n, self.cascade_lambda, !self.no_snap).map_err(|e| format!("error: {e}"))?;
+        let c = crate::bind::cascade_inputs(
+            scene,
+            &ex.graph,
+            n,
+            self.cascade_lambda,
+            !self.no_snap,
+            self.cascade_offset.unwrap_or_default(),
+        )
+        .map_err(|e| format!("error: {e}"))?;
         ex.bind_cascades(&c.inputs, c.eye, c.forward, &c.splits, self.cascade_band)
             .map_err(rt)?;
         let slices: Vec<String> = c

@@ -228,6 +228,7 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
         cascade_lambda: 0.75,
         cascade_band: 0.2,
         no_snap: false,
+        cascade_offset: None,
     };
     for t in TECHNIQUES {
         let path = root().join("techniques").join(format!("{t}.ron"));
@@ -239,7 +240,7 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
         let plain = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
         // one cascade: bound as the scene is
         assert!(!cascading(1).bind(&mut ex, &scene).unwrap_or_else(|e| panic!("{t}: {e}")));
-        let one = sshc_lab::bind::cascade_inputs(&scene, &ex.graph, 1, 0.75, true).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let one = sshc_lab::bind::cascade_inputs(&scene, &ex.graph, 1, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"));
         assert_eq!(one.inputs.len(), 1);
         let inputs = sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap();
         ex.bind_cascades(&[inputs], one.eye, one.forward, &one.splits, 0.2)
@@ -253,7 +254,7 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
 
         // three cascades: the selection and the mixture, pixel by pixel
         assert!(cascading(3).bind(&mut ex, &scene).unwrap_or_else(|e| panic!("{t}: {e}")));
-        let c = sshc_lab::bind::cascade_inputs(&scene, &ex.graph, 3, 0.75, true).unwrap();
+        let c = sshc_lab::bind::cascade_inputs(&scene, &ex.graph, 3, 0.75, true, [0.0; 3]).unwrap();
         ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
         let combined = ex.read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}"));
         let own: Vec<Vec<f32>> = (0..3)
@@ -283,6 +284,10 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
             // WGSL's mix in f32: a few roundings of values in [0, 1]
             assert!((v - want).abs() <= 4.0 * f32::EPSILON, "{t}: pixel {i}: {v} against {want}");
         }
-        assert!(seen.iter().all(|&n| n > 20), "{t}: pixels per slice {seen:?}, splits {:?}", c.splits);
+        assert!(
+            seen.iter().all(|&n| n > 20),
+            "{t}: pixels per slice {seen:?}, splits {:?}",
+            c.splits
+        );
     }
 }

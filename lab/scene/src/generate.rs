@@ -60,36 +60,19 @@ fn tower(sides: u32, floors: u32) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u32>) {
     for f in 0..floors {
         let y0 = f as f32 * storey;
         let (y1, y2) = (y0 + 0.8 * storey, y0 + storey);
+        // the wall band (facing out), the ledge's underside (down), its front (out) and its
+        // top (up): each a quad from (radius, height) to (radius, height) across a side
+        let bands = [
+            (inner, y0, inner, y1),
+            (inner, y1, outer, y1),
+            (outer, y1, outer, y2),
+            (outer, y2, inner, y2),
+        ];
         for k in 0..sides {
             let (a, b) = (k, k + 1);
-            // the wall band, facing out
-            quad([
-                corner(a, inner, y0),
-                corner(b, inner, y0),
-                corner(b, inner, y1),
-                corner(a, inner, y1),
-            ]);
-            // the ledge's underside, facing down
-            quad([
-                corner(a, inner, y1),
-                corner(b, inner, y1),
-                corner(b, outer, y1),
-                corner(a, outer, y1),
-            ]);
-            // its front, facing out
-            quad([
-                corner(a, outer, y1),
-                corner(b, outer, y1),
-                corner(b, outer, y2),
-                corner(a, outer, y2),
-            ]);
-            // its top, facing up
-            quad([
-                corner(a, outer, y2),
-                corner(b, outer, y2),
-                corner(b, inner, y2),
-                corner(a, inner, y2),
-            ]);
+            for (r0, h0, r1, h1) in bands {
+                quad([corner(a, r0, h0), corner(b, r0, h0), corner(b, r1, h1), corner(a, r1, h1)]);
+            }
         }
     }
     // the roof: a fan about its centre, facing up

@@ -28,7 +28,7 @@
 
 use crate::error::{SceneError, SceneErrorKind};
 use crate::schema::Camera;
-use crate::source::{MeshData, read_capped, resolve_inside, smooth_normals};
+use crate::source::{MeshData, read_capped, read_mesh_file, resolve_inside, smooth_normals};
 use crate::validate::{MAX_OBJ_BYTES, MAX_SCENE_TRIANGLES};
 use std::path::{Path, PathBuf};
 
@@ -71,13 +71,7 @@ pub(crate) struct Imported {
 
 /// Reads `rel` (inside `base`) as glTF.
 pub(crate) fn load(rel: &str, base: &Path) -> Result<Imported, SceneError> {
-    let path = resolve_inside(rel, base)?;
-    let bytes = read_capped(&path, MAX_OBJ_BYTES).map_err(|e| {
-        SceneError::new(SceneErrorKind::Io, format!("cannot read the glTF file `{}`: {e}", path.display())).with_hint(format!(
-            "give a regular file (not a pipe or device) of at most {} MiB",
-            MAX_OBJ_BYTES >> 20
-        ))
-    })?;
+    let (path, bytes) = read_mesh_file(rel, base, "glTF")?;
     let folder = path.parent().map(Path::to_path_buf).unwrap_or_else(|| base.to_path_buf());
     let mut imported = import(&bytes, rel, Some((base, &folder)))?;
     imported.files.insert(0, path);

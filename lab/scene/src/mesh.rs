@@ -3,8 +3,7 @@
 
 use crate::error::{SceneError, SceneErrorKind};
 use crate::schema::{Mesh, Object};
-use crate::source::{MeshData, read_capped, resolve_inside, smooth_normals};
-use crate::validate::MAX_OBJ_BYTES;
+use crate::source::{MeshData, read_mesh_file, smooth_normals};
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Vec3};
@@ -136,13 +135,7 @@ pub(crate) fn sphere(radius: f32, segments: u32) -> MeshData {
 }
 
 fn load_obj(rel: &str, base: &Path) -> Result<(MeshData, PathBuf), SceneError> {
-    let path = resolve_inside(rel, base)?;
-    let bytes = read_capped(&path, MAX_OBJ_BYTES).map_err(|e| {
-        SceneError::new(SceneErrorKind::Io, format!("cannot read the OBJ file `{}`: {e}", path.display())).with_hint(format!(
-            "give a regular file (not a pipe or device) of at most {} MiB",
-            MAX_OBJ_BYTES >> 20
-        ))
-    })?;
+    let (path, bytes) = read_mesh_file(rel, base, "OBJ")?;
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,

@@ -2,6 +2,7 @@
 //! (inside the scene's folder, capped in size) and smooth normals for meshes without them.
 
 use crate::error::{SceneError, SceneErrorKind};
+use crate::validate::MAX_OBJ_BYTES;
 use std::path::{Component, Path, PathBuf};
 
 use glam::Vec3;
@@ -87,4 +88,17 @@ pub(crate) fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
         return Err(std::io::Error::other(format!("it grew above the limit of {cap} bytes")));
     }
     Ok(bytes)
+}
+
+/// Reads the mesh file `rel` (a `what` file: "OBJ", "glTF") inside `base`, refusing paths
+/// that leave it and files over [`MAX_OBJ_BYTES`]: its path and bytes.
+pub(crate) fn read_mesh_file(rel: &str, base: &Path, what: &str) -> Result<(PathBuf, Vec<u8>), SceneError> {
+    let path = resolve_inside(rel, base)?;
+    let bytes = read_capped(&path, MAX_OBJ_BYTES).map_err(|e| {
+        SceneError::new(SceneErrorKind::Io, format!("cannot read the {what} file `{}`: {e}", path.display())).with_hint(format!(
+            "give a regular file (not a pipe or device) of at most {} MiB",
+            MAX_OBJ_BYTES >> 20
+        ))
+    })?;
+    Ok((path, bytes))
 }
