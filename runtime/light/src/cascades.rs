@@ -16,11 +16,18 @@
 //! - **Snapping**: the sphere's centre is moved, in the light view's plane, to a whole
 //!   number of texels (Valient, "Stable rendering of cascaded shadow maps", ShaderX6,
 //!   2008): a camera that moves shifts each cascade's texel grid by whole texels, so a
-//!   shadow edge's texels do not swim (shimmer) from frame to frame.
+//!   shadow edge's texels do not swim (shimmer) from frame to frame. For the grid to hold,
+//!   the texel's size must hold too: the extent is rounded up to a power of `2^(1/16)`, and
+//!   the depth range is the scene's, the same for every camera.
 
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::{LightView, any_perpendicular_up, look_at, ortho_light_view};
+
+/// `x > 0` rounded up to the next power of `2^(1/16)`.
+fn quantised(x: f32) -> f32 {
+    2f32.powf((16.0 * x.log2()).ceil() / 16.0)
+}
 
 /// Most cascades a light may have.
 pub const MAX_CASCADES: u32 = 4;
@@ -135,34 +142,35 @@ pub fn cascade_views(
     let up = any_perpendicular_up(dir);
     // a rotation only, fixed for the light: the cascades' grids differ by translation
     let basis = look_at(Vec3::ZERO, -dir, up);
-    let scene_centre = 0.5 * (bounds.0 + bounds.1);
-    let scene_radius = 0.5 * (bounds.1 - bounds.0).length();
+    // depth: every object, measured along the light's direction from a plane beyond them
+    // all; the same for every cascade and every camera, so that a stored depth does not
+    // change as the camera moves
+    let (mut zmin, mut zmax) = (f32::INFINITY, f32::NEG_INFINITY);
+    for p in crate::corners(bounds) {
+        let z = basis.transform_point3(p).z;
+        (zmin, zmax) = (zmin.min(z), zmax.max(z));
+    }
+    let margin = 1e-3 * (zmax - zmin).max(1e-6);
+    let eye_z = zmax + margin;
+    let (near, far) = (0.5 * margin, zmax - zmin + 2.0 * margin);
     let mut out = Vec::with_capacity(splits.len() - 1);
     for w in splits.windows(2) {
         let corners: Vec<Vec3> = camera.section(w[0]).into_iter().chain(camera.section(w[1])).collect();
         let centre = corners.iter().copied().sum::<Vec3>() / corners.len() as f32;
         let radius = corners.iter().map(|c| c.distance(centre)).fold(0.0f32, f32::max);
-        let half = (radius + reach.max(0.0)).max(1e-6);
+        // the extent rounded up to a step of 2^(1/16) (4.4 %): the slice's sphere changes
+        // as its splits follow the view, and a texel whose size changed every frame would
+        // move every shadow edge
+        let half = quantised((radius + reach.max(0.0)).max(1e-6));
         let texel = 2.0 * half / size as f32;
         // the centre in the light's rotated frame, moved to a whole texel
-        let mut c = basis.transform_point3(centre);
+        let c = basis.transform_point3(centre);
+        let (mut cx, mut cy) = (c.x, c.y);
         if snap {
-            c.x = (c.x / texel).round() * texel;
-            c.y = (c.y / texel).round() * texel;
+            cx = (cx / texel).round() * texel;
+            cy = (cy / texel).round() * texel;
         }
-        let centre = basis.inverse().transform_point3(Vec3::new(c.x, c.y, c.z));
-        // the eye beyond every object along the light's direction
-        let back = centre.distance(scene_centre) + scene_radius + half;
-        let eye = centre + dir * (back + 1.0);
-        let view = look_at(eye, centre, up);
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for p in crate::corners(bounds).into_iter().chain(corners.iter().copied()) {
-            let d = -view.transform_point3(p).z;
-            (lo, hi) = (lo.min(d), hi.max(d));
-        }
-        let margin = 1e-3 * (hi - lo).max(1e-6);
-        let far = hi + margin;
-        let near = (lo - margin).max(far * 1e-6);
+        let view = Mat4::from_translation(-Vec3::new(cx, cy, eye_z)) * basis;
         out.push(Cascade {
             split: (w[0], w[1]),
             view: ortho_light_view(view, dir, half, near, far),
@@ -209,8 +217,8 @@ mod tests {
         }
     }
 
-    /// Every corner of a cascade's slice lies inside its light view (clip x, y in [-1, 1],
-    /// depth in [0, 1]), and so does every corner of the scene in depth.
+    /// Every corner of a cascade's slice lies inside its light view (clip x, y in [-1, 1]),
+    /// and every point of the scene in depth (in [0, 1]).
     #[test]
     fn each_cascade_holds_its_slice_and_the_scene_in_depth() {
         let cam = camera(Vec3::new(-3.0, 4.0, 12.0), Vec3::new(1.0, 0.0, 0.0));
@@ -223,7 +231,11 @@ mod tests {
             let corners = cam.section(c.split.0).into_iter().chain(cam.section(c.split.1));
             for p in corners {
                 let q = c.view.view_proj.project_point3(p);
-                assert!(q.x.abs() <= 1.0 && q.y.abs() <= 1.0 && (0.0..=1.0).contains(&q.z), "{q} for {p}");
+                assert!(q.x.abs() <= 1.0 && q.y.abs() <= 1.0, "{q} for {p}");
+                // depth covers the scene: the slice's part inside it
+                let inside = p.clamp(bounds.0, bounds.1);
+                let z = c.view.view_proj.project_point3(inside).z;
+                assert!((0.0..=1.0).contains(&z), "{z} for {inside}");
             }
             for p in crate::corners(bounds) {
                 let z = c.view.view_proj.project_point3(p).z;
