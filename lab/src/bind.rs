@@ -1,7 +1,7 @@
 //! From a [`Scene`] to the plain data the executor binds ([`SceneInputs`]).
 
 use crate::scene::{Light, Scene};
-use sshc_runtime::gpu::{Camera, LightInputs, SceneInputs};
+use sshc_runtime::gpu::{Camera, Executor, LightInputs, SceneInputs};
 use sshc_runtime::graph::{MAX_LIGHT_SAMPLES, PassGraph, Views};
 use sshc_runtime::light::{SampleFit, sample_views};
 
@@ -88,9 +88,88 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
     })
 }
 
+/// Cascaded shadow maps for a light at infinity (`bind::cascade_inputs`).
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub struct Cascading {
+    /// Split the light's view into N cascades (1 to 4) over the camera's view depth, each
+    /// fitted to its slice and `--shadow-map` texels wide; 1 is the scene's own fit. A
+    /// light at infinity only, alone in the scene; the technique is compiled generic.
+    #[arg(long, value_name = "N")]
+    pub cascades: Option<u32>,
+    /// The practical split scheme's weight: 0 uniform, 1 logarithmic (Zhang et al. 2006,
+    /// eq. 6).
+    #[arg(long, default_value_t = 0.75)]
+    pub cascade_lambda: f32,
+    /// The fraction of each cascade's slice, at its far end, mixed into the next.
+    #[arg(long, default_value_t = 0.1)]
+    pub cascade_band: f32,
+    /// Do not snap the cascades to whole texels (to measure the shimmer snapping removes).
+    #[arg(long)]
+    pub no_snap: bool,
+    /// Fit the cascades as if the camera stood this far away, X,Y,Z in world units, the
+    /// image's camera unmoved: the shadow's change from one offset to the next is then the
+    /// cascades' alone (scripts/shimmer.sh).
+    #[arg(long, value_name = "X,Y,Z", value_parser = offset, allow_hyphen_values = true)]
+    pub cascade_offset: Option<[f32; 3]>,
+}
+
+/// `--cascade-offset X,Y,Z`: three finite numbers.
+fn offset(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("{s}: {e}"))?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([x, y, z]),
+        _ => Err(format!("{s}: write three finite numbers, X,Y,Z")),
+    }
+}
+
+impl Cascading {
+    /// More than one cascade asked for.
+    pub fn on(&self) -> bool {
+        self.cascades.is_some_and(|n| n > 1)
+    }
+
+    /// Binds the scene's cascades when more than one is asked for, and says where they
+    /// split and how fine each is; `false` (nothing bound) otherwise.
+    pub fn bind(&self, ex: &mut Executor, scene: &Scene) -> Result<bool, String> {
+        let Some(n) = self.cascades.filter(|&n| n > 1) else {
+            return Ok(false);
+        };
+        let c = crate::bind::cascade_inputs(
+            scene,
+            &ex.graph,
+            n,
+            self.cascade_lambda,
+            !self.no_snap,
+            self.cascade_offset.unwrap_or_default(),
+        )
+        .map_err(|e| format!("error: {e}"))?;
+        ex.bind_cascades(&c.inputs, c.eye, c.forward, &c.splits, self.cascade_band)
+            .map_err(|e| format!("error: {e}"))?;
+        let slices: Vec<String> = c
+            .splits
+            .windows(2)
+            .zip(&c.texels)
+            .map(|(w, t)| format!("{:.3}..{:.3} at {t:.4} world units a texel", w[0], w[1]))
+            .collect();
+        println!(
+            "cascades: {n} of {} texels, split at lambda {} ({}), mixed over the last {} of each slice: {}",
+            scene.shadow_map,
+            self.cascade_lambda,
+            if self.no_snap { "not snapped" } else { "snapped to whole texels" },
+            self.cascade_band,
+            slices.join("; ")
+        );
+        Ok(true)
+    }
+}
+
 /// Refuses what cascades cannot split: a count outside 1 to `MAX_CASCADES`, a weight
 /// outside [0, 1], a band outside [0, 1), several lights, a light at a finite position.
-pub fn check_cascades(scene: &Scene, n: u32, c: &crate::session::Cascading) -> Result<(), String> {
+pub fn check_cascades(scene: &Scene, n: u32, c: &Cascading) -> Result<(), String> {
     let max = sshc_runtime::light::MAX_CASCADES;
     if !(1..=max).contains(&n) {
         return Err(format!("error: `--cascades {n}`: a light has 1 to {max} cascades"));

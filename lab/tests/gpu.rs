@@ -215,7 +215,7 @@ fn a_gltf_file_and_the_same_geometry_as_obj_give_the_same_visibility() {
 /// of the visibilities says which: `k + t`).
 #[test]
 fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
-    use sshc_lab::session::Cascading;
+    use sshc_lab::bind::Cascading;
     let text = "Scene(camera: Perspective(position: (0.0, 1.5, 9.0), target: (0.0, 0.0, -4.0), fov_y_degrees: 55.0, width: 48, height: 48),
         shadow_map: 128, lights: [DistantDisk(direction: (0.5, 0.8, 0.3), angle_degrees: 2.0)],
         objects: [Object(mesh: Plane(size: (30.0, 30.0)), casts: false),
