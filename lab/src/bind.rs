@@ -97,12 +97,13 @@ pub struct Cascading {
     #[arg(long, value_name = "N")]
     pub cascades: Option<u32>,
     /// The practical split scheme's weight: 0 uniform, 1 logarithmic (Zhang et al. 2006,
-    /// eq. 6).
-    #[arg(long, default_value_t = 0.75)]
-    pub cascade_lambda: f32,
+    /// eq. 6). Default: the scene file's, else 0.75.
+    #[arg(long)]
+    pub cascade_lambda: Option<f32>,
     /// The fraction of each cascade's slice, at its far end, mixed into the next.
-    #[arg(long, default_value_t = 0.1)]
-    pub cascade_band: f32,
+    /// Default: the scene file's, else 0.1.
+    #[arg(long)]
+    pub cascade_band: Option<f32>,
     /// Do not snap the cascades to whole texels (to measure the shimmer snapping removes).
     #[arg(long)]
     pub no_snap: bool,
@@ -127,27 +128,40 @@ fn offset(s: &str) -> Result<[f32; 3], String> {
 }
 
 impl Cascading {
-    /// More than one cascade asked for.
-    pub fn on(&self) -> bool {
-        self.cascades.is_some_and(|n| n > 1)
+    /// The cascades asked for: the command line's options, else the scene file's
+    /// (`cascades:`), else one cascade, lambda 0.75, band 0.1.
+    pub fn resolved(&self, scene: &Scene) -> crate::scene::Cascades {
+        let file = scene.cascades();
+        crate::scene::Cascades {
+            count: self.cascades.or(file.map(|c| c.count)).unwrap_or(1),
+            lambda: self.cascade_lambda.or(file.map(|c| c.lambda)).unwrap_or(0.75),
+            band: self.cascade_band.or(file.map(|c| c.band)).unwrap_or(0.1),
+        }
+    }
+
+    /// More than one cascade asked for, here or by the scene file.
+    pub fn on(&self, scene: &Scene) -> bool {
+        self.resolved(scene).count > 1
     }
 
     /// Binds the scene's cascades when more than one is asked for, and says where they
     /// split and how fine each is; `false` (nothing bound) otherwise.
     pub fn bind(&self, ex: &mut Executor, scene: &Scene) -> Result<bool, String> {
-        let Some(n) = self.cascades.filter(|&n| n > 1) else {
+        let r = self.resolved(scene);
+        let n = r.count;
+        if n < 2 {
             return Ok(false);
-        };
+        }
         let c = crate::bind::cascade_inputs(
             scene,
             &ex.graph,
             n,
-            self.cascade_lambda,
+            r.lambda,
             !self.no_snap,
             self.cascade_offset.unwrap_or_default(),
         )
         .map_err(|e| format!("error: {e}"))?;
-        ex.bind_cascades(&c.inputs, c.eye, c.forward, &c.splits, self.cascade_band)
+        ex.bind_cascades(&c.inputs, c.eye, c.forward, &c.splits, r.band)
             .map_err(|e| format!("error: {e}"))?;
         let slices: Vec<String> = c
             .splits
@@ -158,9 +172,9 @@ impl Cascading {
         println!(
             "cascades: {n} of {} texels, split at lambda {} ({}), mixed over the last {} of each slice: {}",
             scene.shadow_map,
-            self.cascade_lambda,
+            r.lambda,
             if self.no_snap { "not snapped" } else { "snapped to whole texels" },
-            self.cascade_band,
+            r.band,
             slices.join("; ")
         );
         Ok(true)
@@ -169,19 +183,18 @@ impl Cascading {
 
 /// Refuses what cascades cannot split: a count outside 1 to `MAX_CASCADES`, a weight
 /// outside [0, 1], a band outside [0, 1), several lights, a light at a finite position.
-pub fn check_cascades(scene: &Scene, n: u32, c: &Cascading) -> Result<(), String> {
+pub fn check_cascades(scene: &Scene, c: &Cascading) -> Result<(), String> {
     let max = sshc_runtime::light::MAX_CASCADES;
+    let r = c.resolved(scene);
+    let n = r.count;
     if !(1..=max).contains(&n) {
         return Err(format!("error: `--cascades {n}`: a light has 1 to {max} cascades"));
     }
-    if !(0.0..=1.0).contains(&c.cascade_lambda) {
-        return Err(format!("error: `--cascade-lambda {}`: a weight in [0, 1]", c.cascade_lambda));
+    if !(0.0..=1.0).contains(&r.lambda) {
+        return Err(format!("error: `--cascade-lambda {}`: a weight in [0, 1]", r.lambda));
     }
-    if !(0.0..1.0).contains(&c.cascade_band) {
-        return Err(format!(
-            "error: `--cascade-band {}`: a fraction of a slice, in [0, 1)",
-            c.cascade_band
-        ));
+    if !(0.0..1.0).contains(&r.band) {
+        return Err(format!("error: `--cascade-band {}`: a fraction of a slice, in [0, 1)", r.band));
     }
     if n > 1 {
         if scene.lights.len() != 1 {

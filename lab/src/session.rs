@@ -157,11 +157,9 @@ impl Overrides {
         }
         let mut stages = Stages::default();
         let mut opts = self.variants.options();
-        if let Some(n) = self.cascading.cascades {
-            crate::bind::check_cascades(&scene, n, &self.cascading)?;
-        }
+        crate::bind::check_cascades(&scene, &self.cascading)?;
         // a graph specialised for the scene's light view would refuse the cascades' views
-        specialise(&mut opts, input, path, &scene, self.generic || self.cascading.on())?;
+        specialise(&mut opts, input, path, &scene, self.generic || self.cascading.on(&scene))?;
         let ex = executor(gpu, input, &opts)?;
         stages.done("compile");
         Ok((scene, ex))

@@ -225,8 +225,8 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
     let cascading = |n| Cascading {
         cascades: Some(n),
-        cascade_lambda: 0.75,
-        cascade_band: 0.2,
+        cascade_lambda: Some(0.75),
+        cascade_band: Some(0.2),
         no_snap: false,
         cascade_offset: None,
     };
@@ -288,6 +288,61 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
             seen.iter().all(|&n| n > 20),
             "{t}: pixels per slice {seen:?}, splits {:?}",
             c.splits
+        );
+    }
+}
+
+/// A host moving its camera refits the cascades in place (`Executor::set_cascades`: the
+/// lights' views, the camera and the splits written, nothing created); the frame equals a
+/// fresh binding of the new fit, bit for bit.
+#[test]
+fn cascades_refitted_in_place_equal_a_fresh_binding() {
+    let scene_at = |x: f32| {
+        let text = format!(
+            "Scene(camera: Perspective(position: ({x}, 1.5, 9.0), target: ({x}, 0.0, -4.0), fov_y_degrees: 55.0, width: 32, height: 32),
+            shadow_map: 128, lights: [DistantDisk(direction: (0.5, 0.8, 0.3), angle_degrees: 2.0)],
+            objects: [Object(mesh: Plane(size: (30.0, 30.0)), casts: false),
+                      Object(mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (0.3, 0.9, 7.3))),
+                      Object(mesh: Box(size: (2.0, 3.0, 2.0)), transform: (translate: (-2.0, 1.5, -6.0)))])"
+        );
+        Scene::from_str(&text, ".").unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (first, moved) = (scene_at(0.0), scene_at(0.7));
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
+    for t in ["hard", "pcss"] {
+        let path = root().join("techniques").join(format!("{t}.ron"));
+        let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let executor = || compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let fit = |ex: &sshc_runtime::gpu::Executor, s: &Scene| {
+            sshc_lab::bind::cascade_inputs(s, &ex.graph, 3, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"))
+        };
+        let frame = |ex: &mut sshc_runtime::gpu::Executor| {
+            ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
+            ex.read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba
+        };
+        let mut ex = executor();
+        let a = fit(&ex, &first);
+        ex.bind_cascades(&a.inputs, a.eye, a.forward, &a.splits, 0.2)
+            .unwrap_or_else(|e| panic!("{t}: {e}"));
+        let before = frame(&mut ex);
+        let b = fit(&ex, &moved);
+        let lights: Vec<_> = b.inputs.iter().map(|s| s.light_inputs()).collect();
+        ex.set_cascades(&lights, &sshc_lab::bind::camera(&moved), b.eye, b.forward, &b.splits)
+            .unwrap_or_else(|e| panic!("{t}: {e}"));
+        let in_place = frame(&mut ex);
+        let mut fresh = executor();
+        fresh
+            .bind_cascades(&b.inputs, b.eye, b.forward, &b.splits, 0.2)
+            .unwrap_or_else(|e| panic!("{t}: {e}"));
+        let fresh = frame(&mut fresh);
+        let bits = |v: &[[f32; 4]]| v.iter().flat_map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+        assert!(
+            bits(&in_place) == bits(&fresh),
+            "{t}: refitted in place differs from a fresh binding"
+        );
+        assert!(
+            bits(&in_place) != bits(&before),
+            "{t}: the camera's move changed nothing (a test of nothing)"
         );
     }
 }

@@ -656,3 +656,40 @@ fn the_view_fit_holds_what_the_camera_sees_in_finer_texels() {
         }
     }
 }
+
+/// A scene file's `cascades:` is checked where it is written, and the command line's
+/// options override it field by field (`bind::Cascading::resolved`).
+#[test]
+fn the_scene_files_cascades_are_checked_and_the_command_line_overrides_them() {
+    let sun = "DistantDisk(direction: (0.3, 1.0, 0.2), angle_degrees: 1.0)";
+    let with = |lights: &str, cascades: &str| {
+        let text = format!(
+            "Scene({CAMERA}, shadow_map: 64, lights: [{lights}], cascades: {cascades}, objects: [Object(mesh: Box(size: (1.0, 1.0, 1.0)))])"
+        );
+        Scene::from_str(&text, ".")
+    };
+    let scene = with(sun, "(count: 3, lambda: 0.5)").unwrap_or_else(|e| panic!("{e}"));
+    let c = scene.cascades().unwrap_or_else(|| panic!("no cascades"));
+    assert_eq!((c.count, c.lambda, c.band), (3, 0.5, 0.1));
+    for (lights, cascades, at) in [
+        (sun, "(count: 5)", "cascades.count"),
+        (sun, "(count: 2, lambda: 2.0)", "cascades.lambda"),
+        (sun, "(count: 2, band: 1.0)", "cascades.band"),
+        ("Point(position: (0.0, 5.0, 0.0))", "(count: 2)", "cascades.count"),
+    ] {
+        let e = with(lights, cascades).expect_err(cascades);
+        assert_eq!(e.at(), Some(at), "{e}");
+        assert!(e.hint().is_some(), "{e}");
+    }
+    let mut cli = sshc_lab::bind::Cascading {
+        cascades: None,
+        cascade_lambda: Some(0.9),
+        cascade_band: None,
+        no_snap: false,
+        cascade_offset: None,
+    };
+    let r = cli.resolved(&scene);
+    assert_eq!((r.count, r.lambda, r.band), (3, 0.9, 0.1));
+    cli.cascades = Some(1);
+    assert!(!cli.on(&scene), "the command line's one cascade overrides the file's three");
+}

@@ -164,6 +164,8 @@ pub struct Executor {
     depth_override: Option<Vec<Vec<f32>>>,
     /// Refuse scenes whose textures would take more than this many bytes.
     pub max_bytes: u64,
+    /// The band of the bound cascades (`None` unless `bind_cascades` bound 2 or more).
+    cascade_band: Option<f32>,
     /// Bounds on what Geometry passes bind and generate (default: the device's), read at
     /// binding.
     pub generated_limits: crate::resources::GeneratedLimits,
@@ -327,6 +329,7 @@ impl Executor {
             timestamps,
             depth_override: None,
             max_bytes: 4 << 30,
+            cascade_band: None,
             generated_limits: Default::default(),
         })
     }
@@ -448,6 +451,58 @@ impl Executor {
                 band,
             };
             self.combine = Some(Combine::new(&self.gpu, camera, n, &mode, position)?);
+            self.cascade_band = Some(band);
+        }
+        Ok(())
+    }
+
+    /// Refit the bound cascades for a frame whose camera moved: each cascade's light
+    /// (`lights[i]`, its view fitted to its new slice), the camera, its `eye` and unit
+    /// `forward`, and the `n + 1` splits, all checked as [`Executor::bind_cascades`] checks
+    /// them (the same count and band). Uniforms are written, nothing is created, nothing
+    /// waits: the next frame renders as a fresh binding of these cascades would.
+    pub fn set_cascades(
+        &mut self,
+        lights: &[LightInputs],
+        camera: &Camera,
+        eye: [f32; 3],
+        forward: [f32; 3],
+        splits: &[f32],
+    ) -> Result<()> {
+        let n = self.bound.len();
+        let Some(band) = self.cascade_band else {
+            return Err(RuntimeError::NotFound(
+                "no cascades are bound (bind_cascades with 2 or more)".into(),
+            ));
+        };
+        if lights.len() != n || splits.len() != n + 1 || !splits.iter().all(|s| s.is_finite()) || splits.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(RuntimeError::Param(format!(
+                "{} cascade light(s) and {} split(s) for the {n} bound cascades: give {n} and {} increasing finite distances",
+                lights.len(),
+                splits.len(),
+                n + 1
+            )));
+        }
+        if !(eye.iter().chain(&forward).all(|x| x.is_finite())) {
+            return Err(RuntimeError::Param("the camera's eye and forward axis must be finite".into()));
+        }
+        // every value checked before anything is written
+        camera.check()?;
+        for (l, light) in lights.iter().enumerate() {
+            light.check(l)?;
+        }
+        self.set_camera(camera)?;
+        for (l, light) in lights.iter().enumerate() {
+            self.set_light(l, light)?;
+        }
+        if let Some(c) = &self.combine {
+            let mode = Combining::Cascades {
+                eye,
+                forward,
+                splits: splits.to_vec(),
+                band,
+            };
+            c.set_slices(&self.gpu.queue, &mode);
         }
         Ok(())
     }
@@ -594,6 +649,7 @@ impl Executor {
         self.bound = Vec::new();
         self.lights_state = Vec::new();
         self.combine = None;
+        self.cascade_band = None;
         self.unshadowed = None;
         if lights.is_empty() || lights.len() > MAX_LIGHTS {
             return Err(RuntimeError::Param(format!(

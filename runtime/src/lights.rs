@@ -102,6 +102,39 @@ fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 ";
 
+/// The cascades' uniform (`Slices` of `CASCADES_WGSL`): eye and band, forward and count,
+/// the splits (unused ones past the last); `None` for lights.
+fn slices_words(mode: &Combining) -> Option<[f32; 16]> {
+    let Combining::Cascades {
+        eye,
+        forward,
+        splits,
+        band,
+    } = mode
+    else {
+        return None;
+    };
+    let at = |i: usize| splits.get(i).copied().unwrap_or(f32::MAX);
+    Some([
+        eye[0],
+        eye[1],
+        eye[2],
+        *band,
+        forward[0],
+        forward[1],
+        forward[2],
+        splits.len().saturating_sub(1) as f32,
+        at(0),
+        at(1),
+        at(2),
+        at(3),
+        at(4),
+        0.0,
+        0.0,
+        0.0,
+    ])
+}
+
 /// How the combining step makes one frame of the bound light views.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Combining {
@@ -132,6 +165,8 @@ pub(crate) struct Combine {
     lights: u32,
     /// Cascades of one light: channel 1 of the visibility is the cascade, not a light's.
     pub cascades: bool,
+    /// Cascades: the uniform of the camera and the splits, rewritten per frame.
+    slices: Option<wgpu::Buffer>,
 }
 
 impl Combine {
@@ -203,43 +238,16 @@ impl Combine {
             let (v_in, c_in) = (array(&layers[0]), array(&layers[1]));
             let (c_out, v_out) = (color.create_view(&Default::default()), visibility.create_view(&Default::default()));
             let p_in = position.create_view(&Default::default());
-            let slices = match mode {
-                Combining::Lights => None,
-                Combining::Cascades {
-                    eye,
-                    forward,
-                    splits,
-                    band,
-                } => {
-                    let at = |i: usize| splits.get(i).copied().unwrap_or(f32::MAX);
-                    let words = [
-                        eye[0],
-                        eye[1],
-                        eye[2],
-                        *band,
-                        forward[0],
-                        forward[1],
-                        forward[2],
-                        (splits.len() - 1) as f32,
-                        at(0),
-                        at(1),
-                        at(2),
-                        at(3),
-                        at(4),
-                        0.0,
-                        0.0,
-                        0.0,
-                    ];
-                    let b = device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("cascade slices"),
-                        size: 64,
-                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    });
-                    gpu.queue.write_buffer(&b, 0, &crate::resources::f32_bytes(&words));
-                    Some(b)
-                }
-            };
+            let slices = slices_words(mode).map(|words| {
+                let b = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("cascade slices"),
+                    size: 64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                gpu.queue.write_buffer(&b, 0, &crate::resources::f32_bytes(&words));
+                b
+            });
             let mut entries = vec![
                 wgpu::BindGroupEntry {
                     binding: 0,
@@ -282,8 +290,17 @@ impl Combine {
                 size: camera,
                 lights: n,
                 cascades: slices.is_some(),
+                slices,
             }
         })
+    }
+
+    /// Cascades: the camera and splits of this frame (`Combining::Cascades`), written to the
+    /// uniform the combining step reads; nothing is created. Ignored for lights.
+    pub fn set_slices(&self, queue: &wgpu::Queue, mode: &Combining) {
+        if let (Some(b), Some(words)) = (&self.slices, slices_words(mode)) {
+            queue.write_buffer(b, 0, &crate::resources::f32_bytes(&words));
+        }
     }
 
     /// Record the copies of every light's visibility and colour into the layers, then the

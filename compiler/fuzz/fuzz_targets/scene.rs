@@ -305,6 +305,15 @@ fn scene(u: &mut Unstructured) -> Result<SceneDesc> {
         lights: (0..u.int_in_range(0..=4)?).map(|_| light(u)).collect::<Result<_>>()?,
         objects: (0..u.int_in_range(0..=6)?).map(|_| object(u)).collect::<Result<_>>()?,
         shadow_fit: if u.arbitrary()? { ShadowFit::Casters } else { ShadowFit::Scene },
+        cascades: if u.ratio(1u8, 4)? {
+            Some(Cascades {
+                count: u.int_in_range(0..=5)?,
+                lambda: float(u)?,
+                band: float(u)?,
+            })
+        } else {
+            None
+        },
     })
 }
 

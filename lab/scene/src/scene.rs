@@ -29,6 +29,7 @@ pub struct Scene {
     /// The lights.
     pub lights: Vec<Light>,
     shadow_fit: ShadowFit,
+    cascades: Option<crate::schema::Cascades>,
     objects: Vec<Object>,
     source: Option<PathBuf>,
     notes: Vec<String>,
@@ -141,6 +142,7 @@ impl Scene {
                 receives: true,
             }],
             shadow_fit: ShadowFit::Scene,
+            cascades: None,
         };
         let mut scene = Scene::build_with(desc, folder, vec![Some(mesh)])?;
         scene.notes = notes.into_iter().map(|n| format!("{name}: {n}")).collect();
@@ -222,6 +224,7 @@ impl Scene {
             shadow_map: desc.shadow_map,
             lights: desc.lights,
             shadow_fit: desc.shadow_fit,
+            cascades: desc.cascades,
             objects: desc.objects,
             source: None,
             notes: reads.notes,
@@ -277,6 +280,11 @@ impl Scene {
             }
         }
         Ok(())
+    }
+
+    /// The scene file's cascades ([`crate::schema::SceneDesc::cascades`]), checked.
+    pub fn cascades(&self) -> Option<crate::schema::Cascades> {
+        self.cascades
     }
 
     /// What the light's view is fitted to (see [`ShadowFit`]).

@@ -24,6 +24,34 @@ pub struct SceneDesc {
     /// penumbra; see [`ShadowFit`]).
     #[serde(default)]
     pub shadow_fit: ShadowFit,
+    /// Cascaded shadow maps for the scene's light, which must be at infinity and alone:
+    /// `cascades: (count: 4)`, with `lambda` (the practical split's weight, default 0.75)
+    /// and `band` (the fraction of a slice mixed into the next, default 0.1). Absent: one
+    /// map, fitted as `shadow_fit` says. `--cascades` and its options override it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cascades: Option<Cascades>,
+}
+
+/// A scene's cascaded shadow maps (see [`SceneDesc::cascades`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cascades {
+    /// Cascades, 1 to `sshc_light::MAX_CASCADES`; each `shadow_map` texels wide.
+    pub count: u32,
+    /// The practical split scheme's weight in [0, 1]: 0 uniform, 1 logarithmic.
+    #[serde(default = "default_lambda")]
+    pub lambda: f32,
+    /// The fraction of each slice, at its far end, mixed into the next, in [0, 1).
+    #[serde(default = "default_band")]
+    pub band: f32,
+}
+
+fn default_lambda() -> f32 {
+    0.75
+}
+
+fn default_band() -> f32 {
+    0.1
 }
 
 /// What the light's view, and so the shadow map, is fitted to.

@@ -34,6 +34,38 @@ fn finite3(v: Vec3) -> bool {
 
 /// Checks ranges and normalises directions in place.
 pub(crate) fn validate(desc: &mut SceneDesc) -> Result<(), SceneError> {
+    if let Some(c) = &desc.cascades {
+        let max = sshc_light::MAX_CASCADES;
+        let bad = |field: &str, message: String, hint: &str| Err(SceneError::invalid(format!("cascades.{field}"), message, hint));
+        if !(1..=max).contains(&c.count) {
+            return bad("count", format!("{} cascades", c.count), &format!("write 1 to {max}"));
+        }
+        if !(0.0..=1.0).contains(&c.lambda) {
+            return bad(
+                "lambda",
+                format!("the split weight {} is outside [0, 1]", c.lambda),
+                "write 0 (uniform) to 1 (logarithmic)",
+            );
+        }
+        if !(0.0..1.0).contains(&c.band) {
+            return bad(
+                "band",
+                format!("the band {} is outside [0, 1)", c.band),
+                "write a fraction of a slice, such as 0.1",
+            );
+        }
+        if c.count > 1 && (desc.lights.len() != 1 || desc.lights[0].direction().is_none()) {
+            return bad(
+                "count",
+                format!(
+                    "{} cascades split one light at infinity's view; the scene has {} light(s)",
+                    c.count,
+                    desc.lights.len()
+                ),
+                "give the scene one Directional or DistantDisk light, or remove `cascades`",
+            );
+        }
+    }
     if desc.shadow_map == 0 {
         return Err(SceneError::invalid(
             "shadow_map",

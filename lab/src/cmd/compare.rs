@@ -102,11 +102,11 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
             a.stability_frames
         ));
     }
-    if a.over.cascading.on() && a.stability_frames >= 2 {
-        return Err("error: `--stability-frames` moves the light between frames and binds it alone: not with `--cascades` (yet)".into());
-    }
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
+    if a.over.cascading.on(&scene) && a.stability_frames >= 2 {
+        return Err("error: `--stability-frames` moves the light between frames and binds it alone: not with cascades (yet); give `--stability-frames 0`".into());
+    }
     let light = scene
         .lights
         .first()

@@ -155,7 +155,7 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
     for (i, light) in scene.lights.iter().enumerate() {
         match scene.lights.len() {
             // cascades are fitted each to its slice (their line above)
-            1 if a.over.cascading.on() => {}
+            1 if a.over.cascading.on(&scene) => {}
             1 => println!("{}", scene.fit_report(light)),
             _ => println!("light {i}: {}", scene.fit_report(light)),
         }
