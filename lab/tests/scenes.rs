@@ -693,3 +693,35 @@ fn the_scene_files_cascades_are_checked_and_the_command_line_overrides_them() {
     cli.cascades = Some(1);
     assert!(!cli.on(&scene), "the command line's one cascade overrides the file's three");
 }
+
+/// The large scenes (scenes/large/, out of the suite's every-scene walks: each generates a
+/// million triangles) parse as scene files and name a city of a million triangles under one
+/// sun; scripts/scale.sh and scripts/cascades.sh load them whole.
+#[test]
+fn the_large_scenes_parse_and_name_a_city() {
+    let dir = scenes_dir().join("large");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
+        let path = entry.unwrap_or_else(|e| panic!("{e}")).path();
+        if path.extension().is_none_or(|e| e != "ron") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let options = ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        let desc: sshc_lab::scene::SceneDesc = options.from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(
+            matches!(
+                desc.objects[..],
+                [sshc_lab::scene::Object {
+                    mesh: sshc_lab::scene::Mesh::City { triangles: 1_000_000, .. },
+                    ..
+                }]
+            ),
+            "{}",
+            path.display()
+        );
+        assert!(matches!(desc.lights[..], [Light::DistantDisk { .. }]), "{}", path.display());
+        seen += 1;
+    }
+    assert!(seen >= 2, "{seen} large scenes");
+}
