@@ -144,13 +144,13 @@ impl Cascading {
         self.resolved(scene).count > 1
     }
 
-    /// Binds the scene's cascades when more than one is asked for, and says where they
-    /// split and how fine each is; `false` (nothing bound) otherwise.
-    pub fn bind(&self, ex: &mut Executor, scene: &Scene) -> Result<bool, String> {
+    /// Binds the scene's cascades when more than one is asked for: a line saying where
+    /// they split and how fine each is; `None` (nothing bound) otherwise.
+    pub fn bind(&self, ex: &mut Executor, scene: &Scene) -> Result<Option<String>, String> {
         let r = self.resolved(scene);
         let n = r.count;
         if n < 2 {
-            return Ok(false);
+            return Ok(None);
         }
         let c = crate::bind::cascade_inputs(
             scene,
@@ -169,15 +169,14 @@ impl Cascading {
             .zip(&c.texels)
             .map(|(w, t)| format!("{:.3}..{:.3} at {t:.4} world units a texel", w[0], w[1]))
             .collect();
-        println!(
+        Ok(Some(format!(
             "cascades: {n} of {} texels, split at lambda {} ({}), mixed over the last {} of each slice: {}",
             scene.shadow_map,
             r.lambda,
             if self.no_snap { "not snapped" } else { "snapped to whole texels" },
             r.band,
             slices.join("; ")
-        );
-        Ok(true)
+        )))
     }
 }
 

@@ -235,3 +235,32 @@ fn a_sweep_over_several_lights_reports_each_light() {
     assert!(errors[0] != errors[1] && errors[1] != errors[2], "{csv}");
     let _ = std::fs::remove_dir_all(out);
 }
+
+/// `sshc sweep --cascades 2` runs every configuration, and the reference, with two
+/// cascades: the same rows, finite figures, and a visibility that is not the one map's (the
+/// cascades are fitted to the camera's slices, not to the scene).
+#[test]
+fn a_sweep_with_cascades_runs_every_configuration_with_them() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/sweep-ground.ron");
+    let (plain, cascaded) = (tmp("plain"), tmp("cascades"));
+    let one = rows(&run_file(&file, &plain, &[]));
+    let csv = run_file(&file, &cascaded, &["--cascades", "2"]);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
+    let two = rows(&csv);
+    assert_eq!(two.len(), one.len(), "{csv}");
+    for r in &two {
+        let rms: f64 = r[col("rms_ground")].parse().unwrap_or_else(|_| panic!("{r:?}"));
+        assert!(rms.is_finite() && rms > 0.0, "{r:?}");
+        // the GPU rows are timed against the reference (the CPU baseline's row is not)
+        if !r[col("technique")].contains("(CPU)") {
+            assert!(!r[col("time_ratio")].is_empty(), "{r:?}");
+        }
+    }
+    assert!(
+        one.iter().zip(&two).any(|(a, b)| a[col("rms_ground")] != b[col("rms_ground")]),
+        "two cascades gave every row the one map's error: were they bound?"
+    );
+    let _ = std::fs::remove_dir_all(&plain);
+    let _ = std::fs::remove_dir_all(&cascaded);
+}

@@ -123,9 +123,12 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     {
         return Err(format!("error: `--range {r}`: expected a half-width > 0 in 0..255 units"));
     }
-    if !a.over.cascading.bind(&mut ex, &scene)? {
-        let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
-        ex.bind_scene(&inputs).map_err(rt)?;
+    match a.over.cascading.bind(&mut ex, &scene)? {
+        Some(line) => println!("{line}"),
+        None => {
+            let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
+            ex.bind_scene(&inputs).map_err(rt)?;
+        }
     }
     let mut frame_ms = Vec::new();
     for _ in 0..a.frames.max(1) {

@@ -88,8 +88,9 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         })
         .collect::<Result<Vec<_>, String>>()?;
     stages.done("scene inputs (the triangle soup)");
-    if !a.over.cascading.bind(&mut ex, &scene)? {
-        ex.bind_lights(&inputs).map_err(rt)?;
+    match a.over.cascading.bind(&mut ex, &scene)? {
+        Some(line) => println!("{line}"),
+        None => ex.bind_lights(&inputs).map_err(rt)?,
     }
     gpu.wait().map_err(rt)?;
     stages.done("bind (upload, edge adjacency, resources)");

@@ -34,6 +34,10 @@ pub struct SweepArgs {
     shard: (usize, usize),
     #[command(flatten)]
     truth: TruthOpts,
+    /// Cascades for every configuration (each scene file's `cascades:` otherwise): see
+    /// `sshc render --help`. The reference technique is timed with them too.
+    #[command(flatten)]
+    cascading: crate::bind::Cascading,
 }
 
 fn shard(s: &str) -> Result<(usize, usize), String> {
@@ -435,7 +439,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     // its memory warm and reads faster on a CPU driver).
     const RETIME: usize = 12;
     let reference_source = read(&resolve(&file.reference))?;
-    type ReferenceRun = (sshc::Compiled, sshc_runtime::gpu::SceneInputs, Vec<f64>);
+    type ReferenceRun = (sshc::Compiled, sshc_runtime::gpu::SceneInputs, Vec<f64>, crate::scene::Scene);
     let mut reference_runs: Vec<Option<ReferenceRun>> = Vec::new();
     for (si_, scene_path) in file.scenes.iter().enumerate() {
         let touches = mine.iter().any(|c| c.scene == si_) || !file.stochastic.is_empty();
@@ -444,14 +448,17 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
             continue;
         }
         let scene = load_entry(scene_path, file.camera)?;
+        crate::bind::check_cascades(&scene, &a.cascading)?;
         let c = compile(&resolve(&file.reference), &reference_source, &[], &[], &[])?;
         let inputs = crate::bind::scene_inputs_for(&scene, &c.graph)?;
-        reference_runs.push(Some((c, inputs, Vec::new())));
+        reference_runs.push(Some((c, inputs, Vec::new(), scene)));
     }
     let time_references = |runs: &mut Vec<Option<ReferenceRun>>| -> Result<(), String> {
-        for (c, inputs, times) in runs.iter_mut().flatten() {
+        for (c, inputs, times, scene) in runs.iter_mut().flatten() {
             let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).map_err(rt)?;
-            ex.bind_scene(inputs).map_err(rt)?;
+            if a.cascading.bind(&mut ex, scene)?.is_none() {
+                ex.bind_scene(inputs).map_err(rt)?;
+            }
             times.extend(time_frames(&mut ex, file.frames)?);
         }
         Ok(())
@@ -481,10 +488,14 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         let path = resolve(&file.techniques[c.technique].file);
         // specialised for the scene's light where the technique admits it
         let scene_path = resolve(split_entry(&file.scenes[c.scene]).0);
-        let facts = crate::session::scene_facts(&scene_path, &scene).filter(|f| sshc::admits(&sources[c.technique], f.light));
+        // (generic under cascades: their views are not the scene's)
+        let facts = crate::session::scene_facts(&scene_path, &scene)
+            .filter(|f| sshc::admits(&sources[c.technique], f.light) && !a.cascading.on(&scene));
         let compiled = compile_for(&path, &sources[c.technique], &set, &precision, &schedule, facts)?;
         let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
-        ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
+        if a.cascading.bind(&mut ex, &scene)?.is_none() {
+            ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
+        }
         let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
         let (fetches, ops) = work(&ex.graph, scene.shadow_map, scene.camera_size(), edges);
         let ms = time_frames(&mut ex, file.frames)?;
@@ -572,7 +583,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     let medians: Vec<Option<f64>> = reference_runs
         .iter()
         .map(|r| {
-            r.as_ref().and_then(|(_, _, t)| {
+            r.as_ref().and_then(|(_, _, t, _)| {
                 let mut t = t.clone();
                 t.sort_by(f64::total_cmp);
                 t.get(t.len() / 2).copied()
