@@ -1106,3 +1106,49 @@ fn check_says_everything_compile_says() {
         );
     }
 }
+
+/// `compare --cascades 2` binds the cascades, states them, and keeps them through the
+/// temporal run (each moved light's frame bound with its cascades), and `render` refuses
+/// cascades of a light at a finite position, saying why.
+#[test]
+fn compare_with_cascades_states_them_and_keeps_them_while_the_light_moves() {
+    let dir = std::env::temp_dir().join(format!("sshc-cli-cascades-{}", std::process::id()));
+    let out = ok(&[
+        "compare",
+        "techniques/pcss.ron",
+        "--scene",
+        "scenes/triangle.ron",
+        "--cascades",
+        "2",
+        "--size",
+        "32x32",
+        "--samples",
+        "16",
+        "--runs",
+        "2",
+        "--stability-frames",
+        "3",
+        "--cache",
+        &dir.join("cache").to_string_lossy(),
+        "-o",
+        &dir.join("c.png").to_string_lossy(),
+    ]);
+    assert!(out.contains("cascades: 2 of 512 texels"), "{out}");
+    assert!(out.contains("temporal: mean |change|") && out.contains("3 frames"), "{out}");
+    let o = sshc(&[
+        "render",
+        "techniques/pcss.ron",
+        "--scene",
+        "scenes/bunny.ron",
+        "--cascades",
+        "2",
+        "-o",
+        &dir.join("r.png").to_string_lossy(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("a light at infinity") && err.contains("Rectangle"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -66,10 +66,12 @@ pub(crate) fn moved_light(light: &Light, scene: &Scene, texels: f32) -> Light {
 }
 
 /// Visibility of `frames` frames, the light moving by `step` texels between consecutive
-/// ones (`first` is frame 0, as already rendered); the executor is left bound to the last.
+/// ones (`first` is frame 0, as already rendered), bound with `cascading`'s cascades where
+/// it asks for them; the executor is left bound to the last.
 pub(crate) fn moving_light_frames(
     ex: &mut Executor,
     scene: &Scene,
+    cascading: &crate::bind::Cascading,
     first: Vec<f32>,
     frames: usize,
     step: f32,
@@ -81,8 +83,10 @@ pub(crate) fn moving_light_frames(
     for i in 1..frames {
         let mut s = scene.clone();
         s.lights[0] = moved_light(light, scene, i as f32 * step);
-        let inputs = crate::bind::scene_inputs_for(&s, &ex.graph).map_err(|e| format!("error: {e}"))?;
-        ex.bind_scene(&inputs).map_err(rt)?;
+        if cascading.bind(ex, &s)?.is_none() {
+            let inputs = crate::bind::scene_inputs_for(&s, &ex.graph).map_err(|e| format!("error: {e}"))?;
+            ex.bind_scene(&inputs).map_err(rt)?;
+        }
         ex.run_frame().map_err(rt)?;
         out.push(ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0));
     }
@@ -104,9 +108,6 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     }
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
-    if a.over.cascading.on(&scene) && a.stability_frames >= 2 {
-        return Err("error: `--stability-frames` moves the light between frames and binds it alone: not with cascades (yet); give `--stability-frames 0`".into());
-    }
     let light = scene
         .lights
         .first()
@@ -158,7 +159,14 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     };
     let error = metrics::error_image(&visibility, &truth.visibility, Some(&facing), w, h, range).map_err(|e| format!("error: {e}"))?;
     let stability = if a.stability_frames >= 2 {
-        let frames = moving_light_frames(&mut ex, &scene, visibility.clone(), a.stability_frames, a.stability_step)?;
+        let frames = moving_light_frames(
+            &mut ex,
+            &scene,
+            &a.over.cascading,
+            visibility.clone(),
+            a.stability_frames,
+            a.stability_step,
+        )?;
         for (k, f) in frames.iter().enumerate() {
             metrics::check_visibility(&format!("the technique's visibility in stability frame {k}"), f, &facing)
                 .map_err(|e| format!("error: {e}"))?;
