@@ -74,23 +74,29 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
         ));
     }
     let mut stages = crate::session::Stages::default();
-    let inputs = (0..n_lights)
-        .map(|i| {
-            let alone = if scene.lights.len() > 1 {
-                crate::session::single_light(&scene, i)
-            } else {
-                scene.clone()
-            };
-            crate::bind::scene_inputs_for(&alone, &ex.graph).map_err(|e| match scene.lights.len() {
-                1 => format!("error: {e}"),
-                _ => format!("error: light {i}: {e}"),
-            })
-        })
-        .collect::<Result<Vec<_>, String>>()?;
-    stages.done("scene inputs (the triangle soup)");
+    // cascades build their own inputs (one soup, a view per cascade)
     match a.over.cascading.bind(&mut ex, &scene)? {
-        Some(line) => println!("{line}"),
-        None => ex.bind_lights(&inputs).map_err(rt)?,
+        Some(line) => {
+            stages.done("scene inputs and the cascades' binding");
+            println!("{line}");
+        }
+        None => {
+            let inputs = (0..n_lights)
+                .map(|i| {
+                    let alone = if scene.lights.len() > 1 {
+                        crate::session::single_light(&scene, i)
+                    } else {
+                        scene.clone()
+                    };
+                    crate::bind::scene_inputs_for(&alone, &ex.graph).map_err(|e| match scene.lights.len() {
+                        1 => format!("error: {e}"),
+                        _ => format!("error: light {i}: {e}"),
+                    })
+                })
+                .collect::<Result<Vec<_>, String>>()?;
+            stages.done("scene inputs (the triangle soup)");
+            ex.bind_lights(&inputs).map_err(rt)?;
+        }
     }
     gpu.wait().map_err(rt)?;
     stages.done("bind (upload, edge adjacency, resources)");
