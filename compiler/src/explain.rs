@@ -8,6 +8,58 @@ use crate::ir::{IrPassKind, Origin, Program, short};
 use crate::schedule::Choice;
 use std::fmt::Write as _;
 
+/// How the technique runs under cascaded shadow maps (the runtime's `bind_cascades`): one
+/// compiled graph for every cascade, so what is counted in texels is the same count in each
+/// cascade, while what the Frame uniform gives per view (the light's size in the map, a
+/// texel's world size) is each cascade's own.
+fn cascades(s: &mut String, ir: &Program, g: &sshc_graph::PassGraph) {
+    let _ = writeln!(s, "\nUnder cascades (`--cascades N`, a light at infinity):");
+    if g.passes.iter().any(|p| p.views == sshc_graph::Views::PerLightSample) {
+        let _ = writeln!(
+            s,
+            "  refused: the per-sample passes render views from points on a local light, and cascades split the view of a light at infinity"
+        );
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "  every pass runs once per cascade on that cascade's view, with this one compiled graph (no variant per cascade)"
+    );
+    let params: Vec<&str> = ir.params.iter().map(|p| p.name.as_str()).collect();
+    let kernels: Vec<String> = ir
+        .passes
+        .iter()
+        .filter(|p| p.live)
+        .filter_map(|p| match &p.kind {
+            IrPassKind::Filter { kernel } => Some(format!("{} ({kernel:?})", p.name)),
+            IrPassKind::Depth { .. }
+            | IrPassKind::Map
+            | IrPassKind::Mipmap { .. }
+            | IrPassKind::SummedArea
+            | IrPassKind::Geometry { .. }
+            | IrPassKind::Shade { .. } => None,
+        })
+        .collect();
+    if !params.is_empty() || !kernels.is_empty() {
+        let mut what = Vec::new();
+        if !kernels.is_empty() {
+            what.push(format!("the filter kernels of {}", kernels.join(", ")));
+        }
+        if !params.is_empty() {
+            what.push(format!("the parameters ({})", params.join(", ")));
+        }
+        let _ = writeln!(
+            s,
+            "  the same in every cascade: {}; a width in texels covers less of the world in a nearer (finer) cascade",
+            what.join(" and ")
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  each cascade's own: its depth range, a texel's world size and the light's size in its map, so what the Shade computes from them (a search region or penumbra width from the light's size) keeps its world size"
+    );
+}
+
 pub fn explain(c: &Compiled) -> String {
     let ir = &Program::new(&c.ir, &c.layout);
     let g = &c.graph;
@@ -171,6 +223,7 @@ pub fn explain(c: &Compiled) -> String {
         };
         let _ = writeln!(s, "\nVisibility after lowering and constant folding:\n  {shown}");
     }
+    cascades(&mut s, ir, g);
     let _ = writeln!(s, "\nChannels and packing:");
     for r in ir.resources.iter().filter(|r| r.live) {
         let _ = writeln!(s, "  {}:", r.name);

@@ -139,6 +139,41 @@ impl Cascading {
         }
     }
 
+    /// The options as command-line words (for the `sshc render` line of a view).
+    pub fn words(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        let mut push = |flag: &str, v: Option<String>| {
+            if let Some(v) = v {
+                w.extend([flag.to_string(), v]);
+            }
+        };
+        push("--cascades", self.cascades.map(|n| n.to_string()));
+        push("--cascade-lambda", self.cascade_lambda.map(|x| x.to_string()));
+        push("--cascade-band", self.cascade_band.map(|x| x.to_string()));
+        push("--cascade-offset", self.cascade_offset.map(|[x, y, z]| format!("{x},{y},{z}")));
+        if self.no_snap {
+            w.push("--no-snap".into());
+        }
+        w
+    }
+
+    /// Refit the cascades bound by [`Cascading::bind`] to the scene's camera and light as
+    /// they are now, in place (nothing created; see `Executor::set_cascades`).
+    pub fn refit(&self, ex: &mut Executor, scene: &Scene) -> Result<(), String> {
+        let r = self.resolved(scene);
+        let c = cascade_fit(
+            scene,
+            &ex.graph,
+            r.count,
+            r.lambda,
+            !self.no_snap,
+            self.cascade_offset.unwrap_or_default(),
+        )
+        .map_err(|e| format!("error: {e}"))?;
+        ex.set_cascades(&c.lights, &camera(scene), c.eye, c.forward, &c.splits)
+            .map_err(|e| format!("error: {e}"))
+    }
+
     /// More than one cascade asked for, here or by the scene file.
     pub fn on(&self, scene: &Scene) -> bool {
         self.resolved(scene).count > 1
@@ -161,7 +196,7 @@ impl Cascading {
             self.cascade_offset.unwrap_or_default(),
         )
         .map_err(|e| format!("error: {e}"))?;
-        ex.bind_cascades(&c.inputs, c.eye, c.forward, &c.splits, r.band)
+        ex.bind_cascades(&c.scene, &c.lights, c.eye, c.forward, &c.splits, r.band)
             .map_err(|e| format!("error: {e}"))?;
         let slices: Vec<String> = c
             .splits
@@ -213,9 +248,13 @@ pub fn check_cascades(scene: &Scene, c: &Cascading) -> Result<(), String> {
 }
 
 /// The cascades of the scene's one light at infinity, as
-/// [`sshc_runtime::gpu::Executor::bind_cascades`] binds them.
-pub struct Cascades {
-    pub inputs: Vec<SceneInputs>,
+/// [`sshc_runtime::gpu::Executor::bind_cascades`] binds them ([`cascade_inputs`]) or
+/// [`sshc_runtime::gpu::Executor::set_cascades`] refits them ([`cascade_fit`]: no scene).
+pub struct Cascades<S = SceneInputs> {
+    /// The scene (geometry and camera; light 0's view), bound once for every cascade.
+    pub scene: S,
+    /// Each cascade's light.
+    pub lights: Vec<LightInputs>,
     pub eye: [f32; 3],
     pub forward: [f32; 3],
     pub splits: Vec<f32>,
@@ -232,6 +271,20 @@ pub struct Cascades {
 /// ([`Light::with_extent`]).
 /// `offset` moves the camera the cascades are fitted to (not the image's).
 pub fn cascade_inputs(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, snap: bool, offset: [f32; 3]) -> Result<Cascades, String> {
+    let fit = cascade_fit(scene, graph, n, lambda, snap, offset)?;
+    Ok(Cascades {
+        scene: scene_inputs_for(scene, graph)?,
+        lights: fit.lights,
+        eye: fit.eye,
+        forward: fit.forward,
+        splits: fit.splits,
+        texels: fit.texels,
+    })
+}
+
+/// [`cascade_inputs`] without the scene's triangles: what a frame whose camera or light
+/// moved refits (`Executor::set_cascades`).
+pub fn cascade_fit(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, snap: bool, offset: [f32; 3]) -> Result<Cascades<()>, String> {
     use sshc_runtime::light::{CameraFrustum, cascade_views, practical_splits};
     let light = scene.lights.first().ok_or("the scene has no light")?;
     let dir = light.direction().ok_or_else(|| {
@@ -268,25 +321,13 @@ pub fn cascade_inputs(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, sna
         snap,
     )
     .ok_or("the cascades cannot be fitted")?;
-    let base = scene_inputs_for(scene, graph)?;
-    let camera = camera(scene);
-    let inputs = views
+    let lights = views
         .iter()
-        .map(|c| SceneInputs {
-            vertices: base.vertices.clone(),
-            meshes: base.meshes.clone(),
-            casting_vertices: base.casting_vertices,
-            unshadowed: base.unshadowed.clone(),
-            ..SceneInputs::of(
-                &camera,
-                &LightInputs::from_view(light, &light.with_extent(c.view), &[], false),
-                scene.camera_size(),
-                scene.shadow_map,
-            )
-        })
+        .map(|c| LightInputs::from_view(light, &light.with_extent(c.view), &[], false))
         .collect();
     Ok(Cascades {
-        inputs,
+        scene: (),
+        lights,
         eye: frustum.eye.to_array(),
         forward: frustum.forward.to_array(),
         splits,

@@ -44,6 +44,11 @@ pub struct QueryPlane {
     pub shadow: u32,
     pub camera: u32,
     pub casters: bool,
+    /// The light view's half-extent (world units; 1: the plane's own square) and the x its
+    /// eye stands over (0: the plane's centre): a cascade of [`QueryPlane::cascade`]. The
+    /// camera keeps the plane's square whatever these are.
+    pub half: f32,
+    pub centre: f32,
 }
 
 /// Light eye height and the fitted depth range of the query plane.
@@ -65,7 +70,36 @@ impl QueryPlane {
             shadow,
             camera,
             casters: false,
+            half: 1.0,
+            centre: 0.0,
         }
+    }
+
+    /// Cascade `k` of the plane for `verify --cascades`: a light view `2^(k/2)` times as
+    /// wide as the plane's square (a half-extent `h`), its eye over `x = 1 - h`, so that
+    /// every cascade holds the whole plane (x from `1 - 2h` to 1) and each is coarser than
+    /// the one before, as cascades further from a camera are. The camera looks down at the
+    /// plane, so a receiver's view distance is `EYE - 2x`: the nearest slice lies at x = 1,
+    /// the edge every cascade shares.
+    pub fn cascade(self, k: u32) -> QueryPlane {
+        let half = (0.5 * k as f32).exp2();
+        QueryPlane {
+            half,
+            centre: 1.0 - half,
+            ..self
+        }
+    }
+
+    /// The camera's eye and unit forward axis (looking down at the plane), from which
+    /// cascades measure view distance.
+    pub fn camera_axis() -> ([f32; 3], [f32; 3]) {
+        ([0.0, EYE, 0.0], [0.0, -1.0, 0.0])
+    }
+
+    /// The range of view distances the camera sees the receiver at (`EYE - 2x`, x in
+    /// [-1, 1]), which cascades split.
+    pub fn view_depths() -> (f32, f32) {
+        (EYE - 2.0, EYE + 2.0)
     }
 
     /// The light's fitted depth range (view distances).
@@ -74,7 +108,7 @@ impl QueryPlane {
     }
 
     pub fn light_view(&self) -> Mat4 {
-        self.view_at(0.0)
+        self.view_at(self.centre)
     }
 
     /// The light's view translated by `x` along the plane's tilt: light sample views.
@@ -84,7 +118,8 @@ impl QueryPlane {
 
     pub fn light_proj(&self) -> Mat4 {
         let (near, far) = self.range();
-        scene::orthographic(-1.0, 1.0, -1.0, 1.0, near, far)
+        let h = self.half;
+        scene::orthographic(-h, h, -h, h, near, far)
     }
 
     /// Height of the receiver at x: view distance 10 - y runs from 8 to 12 over x in [-1, 1].
@@ -109,12 +144,14 @@ impl QueryPlane {
         let (near, far) = self.range();
         let camera_near = if self.casters { CAMERA_NEAR_CASTERS } else { 0.1 };
         let camera_proj = scene::orthographic(-1.0, 1.0, -1.0, 1.0, camera_near, 40.0);
+        // the camera keeps the plane's own view and square under any cascade's light
+        let camera_view = self.view_at(0.0);
         SceneInputs {
             vertices,
             meshes: vec![],
             casting_vertices: None,
             unshadowed: vec![],
-            camera_view_proj: (camera_proj * view).to_cols_array(),
+            camera_view_proj: (camera_proj * camera_view).to_cols_array(),
             camera_position: [0.0, EYE, 0.0],
             camera_size: (self.camera, self.camera),
             shadow_size: self.shadow,
@@ -233,7 +270,7 @@ impl QueryPlane {
 
     /// Light uv and normalised depth of a world position, in f64.
     pub fn project(&self, p: [f32; 3]) -> ([f64; 2], f64) {
-        let (uv, dist) = self.seen_from(0.0, p);
+        let (uv, dist) = self.seen_from(self.centre as f64, p);
         let (near, far) = self.range();
         (uv, (dist - near as f64) / (far as f64 - near as f64))
     }
@@ -250,7 +287,7 @@ impl QueryPlane {
 
     /// The level of detail of implicit `sample` lookups: texels per camera pixel, log2.
     pub fn lod(&self) -> f32 {
-        (self.shadow as f32 / self.camera as f32).log2()
+        (self.shadow as f32 / (self.camera as f32 * self.half)).log2()
     }
 
     /// The frame-wide inputs under a light `width` wide (`lit_inputs`; 0: `inputs`).
@@ -272,8 +309,8 @@ impl QueryPlane {
             light_width: [size, size],
             light_spread: spread,
             light_distant: true,
-            // orthographic: 2 world units over the map (light_proj_y is 1)
-            texel_world: [0.0, 2.0 / n],
+            // orthographic: 2h world units over the map (light_proj_y is 1 / h)
+            texel_world: [0.0, 2.0 * self.half as f64 / n],
             frame: 0,
         }
     }
@@ -281,13 +318,14 @@ impl QueryPlane {
     /// The receiver the GPU shaded at camera pixel `pixel` from world position `p`, seen
     /// from the centre and from each light sample's view of `views` ([`QueryPlane::sample_views`]).
     pub fn receiver(&self, pixel: usize, p: [f32; 3], views: &[SampleView]) -> Receiver {
-        let (uv, d_world) = self.seen_from(0.0, p);
+        let (uv, d_world) = self.seen_from(self.centre as f64, p);
         let (near, far) = self.range();
         let (near, far) = (near as f64, far as f64);
         let n = Self::normal().as_dvec3();
-        // d = (EYE - 2x - near) / (far - near) with x = 2u - 1: a gradient of 4 / (far -
-        // near) over uv (1 without casters: d = 1 - u), one texel's worth per texel
-        let depth_slope = (4.0 / (far - near) / self.shadow as f64).min(0.1);
+        // d = (EYE - 2x - near) / (far - near) with x = centre + h (2u - 1): a gradient of
+        // 4h / (far - near) over uv (1 on the plane's own square without casters: d = 1 -
+        // u), one texel's worth per texel
+        let depth_slope = (4.0 * self.half as f64 / (far - near) / self.shadow as f64).min(0.1);
         let lod = self.lod().max(0.0) as f64;
         let seen = views
             .iter()
@@ -534,6 +572,12 @@ pub struct Options {
     /// How far a reference may differ from the technique beyond what the conditioning of
     /// both f64 evaluations allows (constants written differently, guards such as `1e-12`).
     pub reference_tolerance: f64,
+    /// Cascades of the query plane's light ([`QueryPlane::cascade`]; 1: none), split at
+    /// `cascade_lambda` by the practical scheme and mixed over the last `cascade_band` of
+    /// each slice, as `render --cascades` binds them.
+    pub cascades: u32,
+    pub cascade_lambda: f32,
+    pub cascade_band: f32,
 }
 
 impl Options {
@@ -555,7 +599,23 @@ impl Options {
                 self.reference_tolerance
             ));
         }
+        let max = sshc_runtime::light::MAX_CASCADES;
+        if !(1..=max).contains(&self.cascades) {
+            return Err(format!("{} cascades: a light has 1 to {max}", self.cascades));
+        }
+        if !(0.0..=1.0).contains(&self.cascade_lambda) {
+            return Err(format!("cascade lambda {}: a weight in [0, 1]", self.cascade_lambda));
+        }
+        if !(0.0..1.0).contains(&self.cascade_band) {
+            return Err(format!("cascade band {}: a fraction of a slice, in [0, 1)", self.cascade_band));
+        }
         Ok(())
+    }
+
+    /// The view distances bounding the cascades (`cascades + 1` of them).
+    pub fn splits(&self) -> Vec<f32> {
+        let (near, far) = QueryPlane::view_depths();
+        sshc_runtime::light::practical_splits(near, far, self.cascades, self.cascade_lambda).unwrap_or_else(|| vec![near, far])
     }
 }
 
@@ -565,6 +625,9 @@ impl Default for Options {
             shadow: 32,
             light_width: 0.5,
             reference_tolerance: 1e-6,
+            cascades: 1,
+            cascade_lambda: 0.75,
+            cascade_band: 0.1,
         }
     }
 }
@@ -667,13 +730,16 @@ impl Row {
 /// Receivers at or past this share of storage error make a row lossy.
 const LOSSY_SHARE: f64 = 0.01;
 
-/// Read back every channel of `slots` after a frame: one decoded map per view.
-fn read_given(ex: &Executor, slots: &[GivenSlot]) -> Result<Given, String> {
+/// Read back every channel of `slots` after a frame, light (cascade) `light`'s: one decoded
+/// map per view.
+fn read_given(ex: &Executor, slots: &[GivenSlot], light: usize) -> Result<Given, String> {
     let mut given = Given::default();
     for s in slots {
         let views = (0..s.views)
             .map(|k| {
-                let image = ex.read_texture(&s.texture, s.array_layer(k), 0).map_err(crate::session::rt)?;
+                let image = ex
+                    .read_light_texture(light, &s.texture, s.array_layer(k), 0)
+                    .map_err(crate::session::rt)?;
                 Ok(image.channel(s.component as usize).into_iter().map(|v| s.decode(v)).collect())
             })
             .collect::<Result<Vec<Vec<f64>>, String>>()?;
@@ -724,6 +790,13 @@ pub fn verify(
             p.ir.technique, s.pass
         ));
     }
+    if opts.cascades > 1 && per_sample {
+        return Err(format!(
+            "cascades and per-sample techniques do not mix: `{}` renders views from points on a local light, and cascades split the view of a light at infinity",
+            c.ir.technique
+        ));
+    }
+    let splits = opts.splits();
     let mut rows = Vec::new();
     let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(crate::session::rt)?;
     for input in inputs {
@@ -744,8 +817,8 @@ pub fn verify(
                 shadow: n,
                 camera,
                 casters: matches!(input.source, Source::Casters(..)),
+                ..QueryPlane::new(n, camera)
             };
-            let frame = plane.frame(opts.light_width);
             let width = opts.light_width as f32;
             let mut scene = match &input.source {
                 Source::Depth(depth) => {
@@ -765,36 +838,53 @@ pub fn verify(
                 }
             };
             scene.samples = plane.sample_views(samples, opts.light_width);
-            ex.bind_scene(&scene).map_err(crate::session::rt)?;
+            // cascade k's light over the plane (cascade 0 is the plane's own square)
+            let planes: Vec<QueryPlane> = (0..opts.cascades).map(|k| plane.cascade(k)).collect();
+            if planes.len() > 1 {
+                let lights: Vec<_> = planes.iter().map(|p| p.lit_inputs(width).light_inputs()).collect();
+                let (eye, forward) = QueryPlane::camera_axis();
+                ex.bind_cascades(&scene, &lights, eye, forward, &splits, opts.cascade_band)
+            } else {
+                ex.bind_scene(&scene)
+            }
+            .map_err(crate::session::rt)?;
             ex.run_frame().map_err(crate::session::rt)?;
-            let given = read_given(&ex, &slots)?;
             let got = ex.read_camera(CameraOutput::Visibility).map_err(crate::session::rt)?.channel(0);
             let positions = ex.read_camera(CameraOutput::Position).map_err(crate::session::rt)?.rgba;
-            let receivers: Vec<(usize, Receiver)> = positions
+            let points: Vec<(usize, [f32; 3])> = positions
                 .iter()
                 .enumerate()
                 .filter(|(_, p)| p[..3].iter().all(|c| c.is_finite()))
-                .map(|(i, p)| (i, plane.receiver(i, [p[0], p[1], p[2]], &scene.samples)))
+                .map(|(i, p)| (i, [p[0], p[1], p[2]]))
                 .collect();
-            let exact = Evaluation::new(program, &given, frame, Rounding::Exact, Model::Gpu)?;
-            let rounded = Evaluation::new(program, &given, frame, Rounding::Stored, Model::Gpu)?;
-            // the technique and its reference, each with what f64 rounding allows it
-            let pair = reference_program
-                .map(|p| -> Result<_, String> {
-                    let theirs = Given::depth(&p, depth_views(&given, &slots));
-                    Ok((
-                        Evaluation::new(program, &given, frame, Rounding::Exact, Model::F64)?,
-                        Evaluation::new(p, &theirs, frame, Rounding::Exact, Model::F64)?,
-                    ))
-                })
-                .transpose()?;
-            let evaluated: Vec<_> = receivers
+            // each cascade's evaluations, from what its own passes rasterised
+            let mut cascades = Vec::with_capacity(planes.len());
+            for (k, &p) in planes.iter().enumerate() {
+                let given = read_given(&ex, &slots, k)?;
+                let frame = p.frame(opts.light_width);
+                // the technique and its reference, each with what f64 rounding allows it
+                let pair = reference_program
+                    .map(|r| -> Result<_, String> {
+                        let theirs = Given::depth(&r, depth_views(&given, &slots));
+                        Ok((
+                            Evaluation::new(program, &given, frame, Rounding::Exact, Model::F64)?,
+                            Evaluation::new(r, &theirs, frame, Rounding::Exact, Model::F64)?,
+                        ))
+                    })
+                    .transpose()?;
+                cascades.push(Cascade {
+                    plane: p,
+                    exact: Evaluation::new(program, &given, frame, Rounding::Exact, Model::Gpu)?,
+                    rounded: Evaluation::new(program, &given, frame, Rounding::Stored, Model::Gpu)?,
+                    pair,
+                });
+            }
+            let band = opts.cascade_band as f64;
+            let evaluated: Vec<_> = points
                 .par_iter()
-                .map_init(Scratch::default, |scratch, (i, r)| {
-                    let e = exact.visibility(r, scratch);
-                    let s = rounded.value(r, scratch);
-                    let f = pair.as_ref().map(|(t, x)| (t.visibility(r, scratch), x.visibility(r, scratch)));
-                    (*i, e, s, f)
+                .map_init(Scratch::default, |scratch, &(i, p)| {
+                    let (e, s, f) = evaluate(&cascades, &splits, band, i, p, &scene.samples, scratch);
+                    (i, e, s, f)
                 })
                 .collect();
             let mut row = Row {
@@ -877,6 +967,114 @@ pub fn verify(
         }
     }
     Ok(rows)
+}
+
+/// One cascade of the query plane and its evaluations: the technique's (exact and as
+/// stored) and, with a reference, both f64 evaluations.
+struct Cascade<'p> {
+    plane: QueryPlane,
+    exact: Evaluation<'p>,
+    rounded: Evaluation<'p>,
+    pair: Option<(Evaluation<'p>, Evaluation<'p>)>,
+}
+
+/// What one cascade gives a receiver: the allowed visibility, the stored-rounding value
+/// and the pair's allowed visibilities.
+type Evaluated = (Allowed, f64, Option<(Allowed, Allowed)>);
+
+/// The receiver at camera pixel `i` (world position `p`) evaluated as the GPU shades it:
+/// one cascade's evaluations, or with several the combining step's mixture
+/// (`CASCADES_WGSL` in runtime/src/lights.rs) of the cascade whose slice holds its view
+/// distance and the next. The GPU measures that distance in f32, so the allowance is the
+/// hull of the mixtures over every distance within its rounding (`D_ROUNDING`), the slices'
+/// kinks included: where the band is 0 the mixture jumps at a split, and both sides are
+/// allowed there.
+fn evaluate(
+    cascades: &[Cascade],
+    splits: &[f32],
+    band: f64,
+    i: usize,
+    p: [f32; 3],
+    samples: &[SampleView],
+    scratch: &mut Scratch,
+) -> Evaluated {
+    let one = |k: usize, scratch: &mut Scratch| -> Evaluated {
+        let c = &cascades[k];
+        let r = c.plane.receiver(i, p, samples);
+        (
+            c.exact.visibility(&r, scratch),
+            c.rounded.value(&r, scratch),
+            c.pair.as_ref().map(|(t, x)| (t.visibility(&r, scratch), x.visibility(&r, scratch))),
+        )
+    };
+    if cascades.len() == 1 {
+        return one(0, scratch);
+    }
+    let (eye, forward) = QueryPlane::camera_axis();
+    let d: f64 = (0..3).map(|a| (p[a] as f64 - eye[a] as f64) * forward[a] as f64).sum();
+    let last = splits.last().copied().unwrap_or(0.0) as f64;
+    let dd = D_ROUNDING * (d.abs() + last);
+    let mut seen: [Option<Evaluated>; sshc_runtime::light::MAX_CASCADES as usize] = Default::default();
+    let mut at = |k: usize, scratch: &mut Scratch| *seen[k].get_or_insert_with(|| one(k, scratch));
+    let (k, t) = cascade_at(d, splits, band);
+    let next = (k + 1).min(cascades.len() - 1);
+    let (a, b) = (at(k, scratch), at(next, scratch));
+    let mut e = mixed(&a.0, &b.0, t);
+    // the distances the GPU may have measured: either end of the rounding, and every split
+    // and band start between them
+    let kinks = splits.windows(2).flat_map(|w| {
+        let (near, far) = (w[0] as f64, w[1] as f64);
+        [far, far - band * (far - near)]
+    });
+    for x in [d - dd, d + dd].into_iter().chain(kinks.filter(|x| (x - d).abs() <= dd)) {
+        let (k, t) = cascade_at(x, splits, band);
+        let next = (k + 1).min(cascades.len() - 1);
+        let m = mixed(&at(k, scratch).0, &at(next, scratch).0, t);
+        (e.lo, e.hi) = (e.lo.min(m.lo), e.hi.max(m.hi));
+    }
+    e.allowance = (e.hi - e.value).max(e.value - e.lo);
+    let s = a.1 * (1.0 - t) + b.1 * t;
+    let f = a.2.zip(b.2).map(|((ta, xa), (tb, xb))| (mixed(&ta, &tb, t), mixed(&xa, &xb, t)));
+    (e, s, f)
+}
+
+/// The relative rounding of the view distance the combining step measures in f32 (a
+/// subtraction and a three-term dot product, each rounding at most 2^-24 of a term no larger
+/// than the distance plus the last split), with a factor of 4 to spare.
+const D_ROUNDING: f64 = 16.0 * f32::EPSILON as f64 / 2.0;
+
+/// The rounding of WGSL's `mix(a, b, t)` in f32 with a, b in [0, 1] and t itself rounded
+/// (a quotient of f32 differences): a few units of 2^-24, four on either side.
+const MIX_ROUNDING: f64 = 8.0 * f32::EPSILON as f64 / 2.0;
+
+/// The cascade the combining step takes at view distance `d` and how far it mixes into the
+/// next (`CASCADES_WGSL`): the first slice whose far split is at or beyond `d` (the last
+/// beyond every split), and the fraction of the band at its far end that `d` has crossed.
+fn cascade_at(d: f64, splits: &[f32], band: f64) -> (usize, f64) {
+    let n = splits.len().saturating_sub(1).max(1);
+    let split = |i: usize| splits.get(i).copied().unwrap_or(f32::MAX) as f64;
+    let k = (0..n - 1).find(|&i| d <= split(i + 1)).unwrap_or(n - 1);
+    if k + 1 >= n {
+        return (k, 0.0);
+    }
+    let far = split(k + 1);
+    let start = far - band * (far - split(k));
+    (k, ((d - start) / (far - start).max(1e-30)).clamp(0.0, 1.0))
+}
+
+/// Two cascades' allowed values mixed at `t` as the combining step mixes them, with the
+/// mixture's f32 rounding.
+fn mixed(a: &Allowed, b: &Allowed, t: f64) -> Allowed {
+    let m = |x: f64, y: f64| x * (1.0 - t) + y * t;
+    let value = m(a.value, b.value);
+    let (lo, hi) = (m(a.lo, b.lo) - MIX_ROUNDING, m(a.hi, b.hi) + MIX_ROUNDING);
+    Allowed {
+        value,
+        lo,
+        hi,
+        raw: value,
+        allowance: (hi - value).max(value - lo),
+    }
 }
 
 /// Whether two evaluations' intervals meet once widened by `tol`.

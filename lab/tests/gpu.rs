@@ -241,9 +241,9 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
         // one cascade: bound as the scene is
         assert!(cascading(1).bind(&mut ex, &scene).unwrap_or_else(|e| panic!("{t}: {e}")).is_none());
         let one = sshc_lab::bind::cascade_inputs(&scene, &ex.graph, 1, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"));
-        assert_eq!(one.inputs.len(), 1);
+        assert_eq!(one.lights.len(), 1);
         let inputs = sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap();
-        ex.bind_cascades(&[inputs], one.eye, one.forward, &one.splits, 0.2)
+        ex.bind_cascades(&inputs, &[inputs.light_inputs()], one.eye, one.forward, &one.splits, 0.2)
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
         let again = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
@@ -322,17 +322,16 @@ fn cascades_refitted_in_place_equal_a_fresh_binding() {
         };
         let mut ex = executor();
         let a = fit(&ex, &first);
-        ex.bind_cascades(&a.inputs, a.eye, a.forward, &a.splits, 0.2)
+        ex.bind_cascades(&a.scene, &a.lights, a.eye, a.forward, &a.splits, 0.2)
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         let before = frame(&mut ex);
         let b = fit(&ex, &moved);
-        let lights: Vec<_> = b.inputs.iter().map(|s| s.light_inputs()).collect();
-        ex.set_cascades(&lights, &sshc_lab::bind::camera(&moved), b.eye, b.forward, &b.splits)
+        ex.set_cascades(&b.lights, &sshc_lab::bind::camera(&moved), b.eye, b.forward, &b.splits)
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         let in_place = frame(&mut ex);
         let mut fresh = executor();
         fresh
-            .bind_cascades(&b.inputs, b.eye, b.forward, &b.splits, 0.2)
+            .bind_cascades(&b.scene, &b.lights, b.eye, b.forward, &b.splits, 0.2)
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         let fresh = frame(&mut fresh);
         let bits = |v: &[[f32; 4]]| v.iter().flat_map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();

@@ -118,6 +118,28 @@ fn colours_below_panels(img: &image::RgbaImage) -> usize {
     seen.len()
 }
 
+/// The visibility a screenshot's log entry wrote, and `sshc render`'s with the command the
+/// entry gives (its `--out` in `dir`).
+fn render_logged(dir: &Path, shot: &serde_json::Value) -> (Vec<f32>, Vec<f32>) {
+    let command = shot["command"].as_str().expect("a command");
+    let words = shell_words(command);
+    assert_eq!(&words[..2], ["sshc", "render"]);
+    let out_png = dir.join("render.png");
+    let out_pfm = dir.join("render.pfm");
+    let mut args: Vec<String> = words[1..].to_vec();
+    let at = args.iter().position(|w| w == "--out").expect("--out");
+    args[at + 1] = out_png.display().to_string();
+    args.extend(["--visibility".to_string(), out_pfm.display().to_string()]);
+    let r = Command::new(env!("CARGO_BIN_EXE_sshc"))
+        .args(&args)
+        .current_dir(root())
+        .output()
+        .expect("sshc render runs");
+    assert!(r.status.success(), "sshc render {args:?}:\n{}", String::from_utf8_lossy(&r.stderr));
+    let viewer = pfm(Path::new(shot["visibility"].as_str().expect("a visibility file")));
+    (viewer, pfm(&out_pfm))
+}
+
 fn write_script(dir: &Path, text: &str) -> PathBuf {
     let p = dir.join("script.ron");
     std::fs::write(&p, text).expect("the script is written");
@@ -170,22 +192,7 @@ fn a_scripted_session_moves_the_light_sets_a_param_and_matches_render_bit_for_bi
         command.contains("--set 'slope_bias=2.5'") || command.contains("--set slope_bias=2.5"),
         "{command}"
     );
-    let words = shell_words(command);
-    assert_eq!(&words[..2], ["sshc", "render"]);
-    let out_png = dir.join("render.png");
-    let out_pfm = dir.join("render.pfm");
-    let mut args: Vec<String> = words[1..].to_vec();
-    let at = args.iter().position(|w| w == "--out").expect("--out");
-    args[at + 1] = out_png.display().to_string();
-    args.extend(["--visibility".to_string(), out_pfm.display().to_string()]);
-    let r = Command::new(env!("CARGO_BIN_EXE_sshc"))
-        .args(&args)
-        .current_dir(root())
-        .output()
-        .expect("sshc render runs");
-    assert!(r.status.success(), "sshc render {args:?}:\n{}", String::from_utf8_lossy(&r.stderr));
-    let viewer = pfm(Path::new(shot["visibility"].as_str().expect("a visibility file")));
-    let rendered = pfm(&out_pfm);
+    let (viewer, rendered) = render_logged(&dir, shot);
     assert_eq!(viewer.len(), 160 * 120);
     let same = viewer.iter().zip(&rendered).filter(|(a, b)| a.to_bits() == b.to_bits()).count();
     assert_eq!(
@@ -549,4 +556,98 @@ fn every_texture_of_a_graph_draws_an_image() {
             );
         }
     }
+}
+
+/// Cascades in the viewer (`--cascades 3`): the `cascades` view draws each pixel's cascade
+/// through viridis, the nearest dark blue, the middle teal, the farthest yellow (an even
+/// split, lambda 0.5, so each holds a band of the floor at this size); the camera
+/// orbits and the cascades are refitted in place, and the visibility then is `sshc render`'s
+/// with the logged command (its `--cascades 3` included), bit for bit: the in-place refit
+/// is a fresh binding of the moved camera's cascades.
+#[test]
+fn the_viewer_draws_the_cascades_and_refits_them_as_the_camera_moves() {
+    let dir = temp_dir("cascades");
+    let d = dir.display();
+    let scene = dir.join("sun.ron");
+    std::fs::write(
+        &scene,
+        "Scene(camera: Perspective(position: (0.0, 1.5, 9.0), target: (0.0, 0.0, -4.0), fov_y_degrees: 55.0, width: 96, height: 72),
+        shadow_map: 256, lights: [DistantDisk(direction: (0.5, 0.8, 0.3), angle_degrees: 2.0)],
+        objects: [Object(mesh: Plane(size: (30.0, 30.0)), casts: false),
+                  Object(mesh: Box(size: (1.0, 1.0, 1.0)), transform: (translate: (1.5, 0.5, 4.0))),
+                  Object(mesh: Box(size: (2.0, 3.0, 2.0)), transform: (translate: (-2.0, 1.5, -6.0)))])",
+    )
+    .expect("the scene is written");
+    let script = write_script(
+        &dir,
+        &format!(
+            r#"[
+    Show(Cascades),
+    Wait(2),
+    Screenshot("{d}/cascades.png"),
+    Orbit(yaw: 15.0, pitch: 5.0),
+    Show(Visibility),
+    Wait(2),
+    Screenshot("{d}/moved.png"),
+]"#
+        ),
+    );
+    let log_path = dir.join("log.jsonl");
+    let (script, log_arg, scene) = (
+        script.display().to_string(),
+        log_path.display().to_string(),
+        scene.display().to_string(),
+    );
+    let (ok, out) = view(&[
+        "techniques/pcf.ron",
+        "--scene",
+        &scene,
+        "--size",
+        "160x120",
+        "--cascades",
+        "3",
+        "--cascade-lambda",
+        "0.5",
+        "--cascade-band",
+        "0.2",
+        "--script",
+        &script,
+        "--log",
+        &log_arg,
+    ]);
+    assert!(ok, "sshc view failed:\n{out}");
+    let log = log(&log_path);
+    let shots = entries(&log, "screenshot");
+    assert_eq!(shots.len(), 2, "{log:?}");
+    // viridis at 0, 1/2 and 1, below the panels' bar: each cascade holds pixels
+    let img = png(&dir.join("cascades.png"));
+    let count = |f: &dyn Fn([u8; 4]) -> bool| {
+        (32..img.height())
+            .flat_map(|y| (0..img.width()).map(move |x| (x, y)))
+            .filter(|&(x, y)| f(img.get_pixel(x, y).0))
+            .count()
+    };
+    let near = count(&|[r, g, b, _]| r < 100 && g < 60 && b > 60);
+    let middle = count(&|[r, g, b, _]| r < 80 && (110..180).contains(&g) && (100..170).contains(&b));
+    let far = count(&|[r, g, b, _]| r > 180 && g > 180 && b < 110);
+    assert!(
+        near > 50 && middle > 50 && far > 50,
+        "cascade pixels: {near} near, {middle} middle, {far} far"
+    );
+    assert!(
+        shots[1]["command"].as_str().unwrap_or_default().contains("--cascades 3"),
+        "{}",
+        shots[1]["command"]
+    );
+    let (viewer, rendered) = render_logged(&dir, shots[1]);
+    assert_eq!(viewer.len(), 160 * 120);
+    let same = viewer.iter().zip(&rendered).filter(|(a, b)| a.to_bits() == b.to_bits()).count();
+    assert_eq!(
+        same,
+        viewer.len(),
+        "{} of {} visibilities differ from `sshc render`'s",
+        viewer.len() - same,
+        viewer.len()
+    );
+    assert!(viewer.iter().any(|v| *v < 0.5), "no shadow in view");
 }

@@ -392,6 +392,13 @@ impl Executor {
                 "light {l}'s scene differs from light 0's (its vertices, meshes, casting or unshadowed ranges): the lights of a frame share one scene"
             )));
         }
+        self.bind_soup(first, lights)
+    }
+
+    /// Upload `soup`'s vertices as geometry ([`Geometry::from_soup`]) and bind `lights` on it
+    /// (their own vertices are not read).
+    fn bind_soup(&mut self, soup: &SceneInputs, lights: &[SceneInputs]) -> Result<()> {
+        let first = soup;
         let geometry = Geometry::from_soup(&first.vertices, &first.meshes, first.casting_vertices, &first.unshadowed)?;
         self.geometry = None;
         self.bound = Vec::new();
@@ -402,17 +409,26 @@ impl Executor {
         self.bind_on_geometry(lights)
     }
 
-    /// Bind the cascades of one light at infinity (2 to [`MAX_CASCADES`]): `cascades[i]`
-    /// is the scene with cascade `i`'s light view (the same light, camera and geometry;
-    /// [`crate::light::cascade_views`] fits them), `splits` the `n + 1` view distances
+    /// Bind the cascades of one light at infinity (1 to [`MAX_CASCADES`]): `scene` gives the
+    /// geometry and camera, uploaded once for every cascade as [`Executor::bind_lights`]
+    /// shares one scene; `cascades[i]` is cascade `i`'s light (the same light, its view
+    /// fitted by [`crate::light::cascade_views`]); `splits` the `n + 1` view distances
     /// bounding them along the camera's unit `forward` from `eye`. Each cascade gets its own
     /// resources and runs every pass, as a light of [`Executor::bind_lights`] does (so one
     /// width in texels serves every cascade: a technique's texel-sized kernels cover less
     /// of the world in nearer cascades); the combining step then takes, per pixel, the
     /// cascade of its view distance, mixed with the next over the last `band` fraction of
     /// its slice. The visibility texture holds it in channel 0 and the cascade (fractional
-    /// in a band) in channel 1. One cascade is [`Executor::bind_scene`].
-    pub fn bind_cascades(&mut self, cascades: &[SceneInputs], eye: [f32; 3], forward: [f32; 3], splits: &[f32], band: f32) -> Result<()> {
+    /// in a band) in channel 1. One cascade is [`Executor::bind_scene`] with its light.
+    pub fn bind_cascades(
+        &mut self,
+        scene: &SceneInputs,
+        cascades: &[LightInputs],
+        eye: [f32; 3],
+        forward: [f32; 3],
+        splits: &[f32],
+        band: f32,
+    ) -> Result<()> {
         let n = cascades.len();
         let bad = |m: String| Err(RuntimeError::Param(m));
         if !(1..=MAX_CASCADES as usize).contains(&n) {
@@ -431,18 +447,25 @@ impl Executor {
         if !(eye.iter().chain(&forward).all(|x| x.is_finite())) {
             return bad("the camera's eye and forward axis must be finite".into());
         }
-        if let Some(s) = cascades
-            .iter()
-            .find(|s| s.light_position != cascades[0].light_position || s.light_position[3] != 0.0)
-        {
+        if let Some(s) = cascades.iter().find(|s| s.position != cascades[0].position || s.position[3] != 0.0) {
             return bad(format!(
                 "cascades are views of one light at infinity: light position or direction {:?} against {:?}",
-                s.light_position, cascades[0].light_position
+                s.position, cascades[0].position
             ));
         }
-        self.bind_lights(cascades)?;
+        let camera = scene.camera();
+        camera.check()?;
+        for (l, light) in cascades.iter().enumerate() {
+            light.check(l)?;
+        }
+        self.check_floor(&scene.vertices, scene.casting_vertices, cascades)?;
+        let inputs: Vec<SceneInputs> = cascades
+            .iter()
+            .map(|l| SceneInputs::of(&camera, l, scene.camera_size, scene.shadow_size))
+            .collect();
+        self.bind_soup(scene, &inputs)?;
         if n > 1 {
-            let camera = cascades[0].camera_size;
+            let camera = scene.camera_size;
             let position = &self.bound[0].camera[CameraOutput::Position as usize];
             let mode = Combining::Cascades {
                 eye,
@@ -525,20 +548,9 @@ impl Executor {
             light.check(l)?;
         }
         // the exact check of a specialised graph's depth floor, on the placed casters
-        if let Some(facts) = &self.graph.specialised
-            && let Some(floor) = facts.depth_floor
-        {
+        if self.graph.specialised.as_ref().is_some_and(|f| f.depth_floor.is_some()) {
             let (soup, casting) = geometry.soup()?;
-            for (l, light) in lights.iter().enumerate() {
-                if let Some(here) = graph::caster_depth_floor(&soup, Some(casting), &light.view, light.near, light.far)
-                    && here < floor
-                {
-                    return Err(RuntimeError::Param(format!(
-                        "technique `{}` was specialised for scene {}, whose casters lie at normalised depth {floor} or more in the light's view, but under light {l} these come to {here}; compile it for this scene (`--scene`) or without one",
-                        self.graph.technique, facts.scene,
-                    )));
-                }
-            }
+            self.check_floor(&soup, Some(casting), lights)?;
         }
         let inputs: Vec<SceneInputs> = lights
             .iter()
@@ -558,6 +570,25 @@ impl Executor {
             self.max_bytes,
         )?);
         self.bind_on_geometry(&inputs)
+    }
+
+    /// A specialised graph's depth floor, checked exactly on the casters of `soup` (world
+    /// position and normal per vertex; the first `casting` vertices cast) under each light.
+    fn check_floor(&self, soup: &[f32], casting: Option<u32>, lights: &[LightInputs]) -> Result<()> {
+        let Some((facts, floor)) = self.graph.specialised.as_ref().and_then(|f| Some((f, f.depth_floor?))) else {
+            return Ok(());
+        };
+        for (l, light) in lights.iter().enumerate() {
+            if let Some(here) = graph::caster_depth_floor(soup, casting, &light.view, light.near, light.far)
+                && here < floor
+            {
+                return Err(RuntimeError::Param(format!(
+                    "technique `{}` was specialised for scene {}, whose casters lie at normalised depth {floor} or more in the light's view, but under light {l} these come to {here}; compile it for this scene (`--scene`) or without one",
+                    self.graph.technique, facts.scene,
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// Bind `lights` on the geometry just uploaded; a refusal drops it (nothing is bound).
@@ -852,6 +883,11 @@ impl Executor {
             .ok_or_else(|| RuntimeError::NotFound("no scene is bound: call bind_scene first".into()))
     }
 
+    /// Cascades bound ([`Executor::bind_cascades`] with 2 or more); 1 otherwise.
+    pub fn cascades(&self) -> usize {
+        if self.cascade_band.is_some() { self.bound.len() } else { 1 }
+    }
+
     /// Lights bound ([`Executor::bind_lights`]); 0 before a scene is bound.
     pub fn lights(&self) -> usize {
         self.bound.len()
@@ -1060,9 +1096,18 @@ impl Executor {
         })
     }
 
-    /// Read one layer and mip level of a texture of the graph.
+    /// Read one layer and mip level of a texture of the graph (light 0's, with several).
     pub fn read_texture(&self, name: &str, layer: u32, level: u32) -> Result<Image> {
-        let b = self.bound()?;
+        self.read_light_texture(0, name, layer, level)
+    }
+
+    /// [`Executor::read_texture`] of light (or cascade) `light`'s resources.
+    pub fn read_light_texture(&self, light: usize, name: &str, layer: u32, level: u32) -> Result<Image> {
+        self.bound()?;
+        let b = self
+            .bound
+            .get(light)
+            .ok_or_else(|| RuntimeError::NotFound(format!("light {light} is not bound ({} light(s) are)", self.bound.len())))?;
         let decl = self
             .graph
             .texture(name)

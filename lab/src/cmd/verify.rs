@@ -41,6 +41,18 @@ pub struct VerifyArgs {
     /// bundled bunny and fence, where `scenes/` is found).
     #[arg(long = "depth-of")]
     scenes: Vec<PathBuf>,
+    /// Split the light's view into N cascades (1 to 4): cascade k is 2^(k/2) times as wide
+    /// as the query plane's square, each holds the whole plane, and the combining step
+    /// takes each receiver's by its view distance; the CPU evaluates every cascade from
+    /// what its own passes rasterised and mixes them as the GPU does.
+    #[arg(long, default_value_t = 1)]
+    cascades: u32,
+    /// With `--cascades`: the practical split's weight of the logarithmic split, in [0, 1].
+    #[arg(long, default_value_t = 0.75)]
+    cascade_lambda: f32,
+    /// With `--cascades`: the fraction of each slice, at its far end, mixed into the next.
+    #[arg(long, default_value_t = 0.1)]
+    cascade_band: f32,
     /// Write the table (Markdown) here as well.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -83,6 +95,9 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
         shadow: args.shadow_map,
         light_width: args.light_width,
         reference_tolerance: args.reference_tolerance,
+        cascades: args.cascades,
+        cascade_lambda: args.cascade_lambda,
+        cascade_band: args.cascade_band,
     };
     opts.check().map_err(|e| format!("error: {e}"))?;
     let gpu = Gpu::new().map_err(rt)?;
@@ -139,8 +154,20 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
     })
     .map_err(|e| format!("error: {e}"))?;
     let table = verify::table(&rows);
+    let cascades = if args.cascades > 1 {
+        let splits: Vec<String> = opts.splits().iter().map(|s| format!("{s:.3}")).collect();
+        format!(
+            ", {} cascades split at {} (lambda {}), mixed over the last {} of each slice",
+            args.cascades,
+            splits.join(", "),
+            args.cascade_lambda,
+            args.cascade_band
+        )
+    } else {
+        String::new()
+    };
     println!(
-        "{} on {}, shadow map {n}, light width {}\n",
+        "{} on {}, shadow map {n}, light width {}{cascades}\n",
         args.technique.display(),
         gpu.describe(),
         args.light_width

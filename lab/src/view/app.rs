@@ -275,7 +275,7 @@ impl App {
         let scene = self.current_scene();
         match (self.state.right(), &mut self.worker_b) {
             (Some(right), Some(w)) => {
-                w.request(&right.technique, options(&right), scene);
+                w.request(&right.technique, options(&right), scene, self.args.cascading);
             }
             (None, _) => self.ex_b = None,
             (Some(_), None) => {}
@@ -285,7 +285,7 @@ impl App {
     fn recompile(&mut self) {
         let (technique, options, scene) = (self.state.technique.clone(), self.options(), self.current_scene());
         if let Some(w) = &mut self.worker {
-            w.request(&technique, options, scene);
+            w.request(&technique, options, scene, self.args.cascading);
             self.status = format!("compiling {}", technique.display());
         }
     }
@@ -646,7 +646,12 @@ impl App {
         let scene = &self.scene;
         for ex in [&mut self.ex, &mut self.ex_b].into_iter().flatten() {
             if self.resized {
-                worker::bind(ex, scene)?;
+                worker::bind(ex, scene, &self.args.cascading)?;
+                continue;
+            }
+            if ex.cascades() > 1 {
+                // the cascades follow the camera: refitted to its slices in place
+                self.args.cascading.refit(ex, scene)?;
                 continue;
             }
             ex.set_camera(&crate::bind::camera(scene)).map_err(|e| format!("error: {e}"))?;
@@ -841,11 +846,11 @@ impl App {
                 Some(ex) => write_visibility(ex, &path)?,
                 None => None,
             };
-            self.command = self.state.command(&path.display().to_string());
+            self.command = with_words(self.state.command(&path.display().to_string()), &self.args.cascading);
             self.log.write(
                 self.frame,
                 json!({"event": "screenshot", "path": path, "visibility": vis, "state": self.state, "command": self.command,
-                       "split_command": self.state.right().map(|r| r.command(&path.display().to_string())),
+                       "split_command": self.state.right().map(|r| with_words(r.command(&path.display().to_string()), &self.args.cascading)),
                        "gpu_ms": median(&self.times.gpu_ms), "ui_ms": median(&self.times.ui_ms), "present_ms": median(&self.times.present_ms), "frame_ms": median(&self.times.frame_ms),
                        "frames_timed": self.times.gpu_ms.len(),
                        "pass_ms": self.times.pass_ms.iter().map(|(k, v)| (k.clone(), median(v))).collect::<BTreeMap<_, _>>()}),
@@ -897,7 +902,7 @@ impl App {
                     self.screenshot = Some(PathBuf::from(name));
                 }
                 Action::CopyCommand => {
-                    self.command = self.state.command("view.png");
+                    self.command = with_words(self.state.command("view.png"), &self.args.cascading);
                     println!("{}", self.command);
                     if let Some(gfx) = &self.gfx {
                         gfx.egui.copy_text(self.command.clone());
@@ -1037,6 +1042,15 @@ impl App {
     }
 }
 
+/// A view's `sshc render` line with its cascade options.
+fn with_words(mut command: String, cascading: &crate::bind::Cascading) -> String {
+    for w in cascading.words() {
+        command.push(' ');
+        command.push_str(&w);
+    }
+    command
+}
+
 /// The compile options of a state: its fixed params, precisions and schedules; a graph for
 /// any scene (lights move).
 fn options(state: &ViewState) -> sshc::CompileOptions {
@@ -1053,8 +1067,9 @@ fn options(state: &ViewState) -> sshc::CompileOptions {
 fn shown<'a>(mode: &Mode, ex: &'a Executor, truth: Option<&'a [wgpu::Texture; 3]>) -> (Option<&'a wgpu::Texture>, Pick) {
     match mode {
         Mode::Shaded => (ex.camera_texture(CameraOutput::Color).ok(), shaded()),
+        // light 0's visibility, or the cascades' combination
         Mode::Visibility => (
-            ex.camera_texture(CameraOutput::Visibility).ok(),
+            ex.visibility().ok(),
             Pick {
                 layer: 0,
                 level: 0,
@@ -1065,6 +1080,28 @@ fn shown<'a>(mode: &Mode, ex: &'a Executor, truth: Option<&'a [wgpu::Texture; 3]
                 square: false,
             },
         ),
+        // the combining step's channel 1: the cascade, `k + t` in a band
+        Mode::Cascades => {
+            let n = ex.cascades();
+            let texture = if n > 1 {
+                ex.visibility()
+            } else {
+                ex.camera_texture(CameraOutput::Visibility)
+            };
+            (
+                texture.ok(),
+                Pick {
+                    layer: 0,
+                    level: 0,
+                    // one R32Float channel without cascades: its g reads 0, cascade 0
+                    channel: 1,
+                    map: ColourMap::Viridis.index(),
+                    lo: 0.0,
+                    hi: (n.max(2) - 1) as f32,
+                    square: false,
+                },
+            )
+        }
         Mode::Truth | Mode::Error { .. } | Mode::StdError { .. } => {
             let (i, map, lo, hi) = match *mode {
                 Mode::Error { range } => (1, ColourMap::Diverging, -range, range),
@@ -1228,7 +1265,8 @@ fn write_png(
 fn write_visibility(ex: &Executor, png: &Path) -> Result<Option<PathBuf>, String> {
     let p = png.with_extension("visibility.pfm");
     let vis = ex.read_visibilities().map_err(|e| format!("error: {e}"))?;
-    match ex.lights() {
+    // cascades: their combination in channel 0 (`sshc render --visibility` writes it)
+    match if ex.cascades() > 1 { 1 } else { ex.lights() } {
         1 => vis.write_pfm_gray(&p, 0),
         2 | 3 => vis.write_pfm_rgb(&p),
         _ => return Ok(None),
@@ -1407,6 +1445,9 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
         ui.selectable_value(&mut mode, Mode::Shaded, "shaded");
         ui.selectable_value(&mut mode, Mode::Visibility, "visibility");
         ui.selectable_value(&mut mode, Mode::Truth, "truth");
+        if ex.cascades() > 1 {
+            ui.selectable_value(&mut mode, Mode::Cascades, "cascades");
+        }
     });
     ui.horizontal(|ui| {
         let error = match mode {
@@ -1439,7 +1480,7 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
     }
     let current = match &mode {
         Mode::Texture { name, .. } => name.clone(),
-        Mode::Shaded | Mode::Visibility | Mode::Truth | Mode::Error { .. } | Mode::StdError { .. } => "a texture".into(),
+        Mode::Shaded | Mode::Visibility | Mode::Cascades | Mode::Truth | Mode::Error { .. } | Mode::StdError { .. } => "a texture".into(),
     };
     let mut name = current.clone();
     egui::ComboBox::from_label("texture").selected_text(&name).show_ui(ui, |ui| {

@@ -30,6 +30,10 @@ pub struct ViewArgs {
     /// The window's inner size, WIDTHxHEIGHT (default: the scene camera's).
     #[arg(long, value_parser = size)]
     pub size: Option<(u32, u32)>,
+    /// Cascaded shadow maps for the scene's light at infinity (its file's `cascades:`
+    /// otherwise); refitted in place as the camera moves, drawn by the `cascades` view.
+    #[command(flatten)]
+    pub cascading: crate::bind::Cascading,
     /// Override the scene's shadow-map resolution.
     #[arg(long)]
     pub shadow_map: Option<u32>,

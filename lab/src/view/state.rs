@@ -14,6 +14,10 @@ pub enum Mode {
     Shaded,
     /// Light 0's visibility, 0 black to 1 white.
     Visibility,
+    /// Which cascade each pixel takes (`--cascades` or the scene's `cascades:`): the
+    /// cascade's index through viridis, dark blue for the nearest, yellow for the farthest,
+    /// blended across the band where two mix. One colour without cascades.
+    Cascades,
     /// The ray-traced truth of light 0, refined while the view stands still.
     Truth,
     /// The visibility less the truth, blue below, red above, white where they agree;

@@ -2,6 +2,7 @@
 //! its scene bound on a worker, and the window keeps drawing the last good graph until the
 //! new one is ready. Also the file watcher that asks for a recompilation on save.
 
+use crate::bind::Cascading;
 use crate::scene::Scene;
 use notify::Watcher as _;
 use sshc_runtime::gpu::{Executor, Gpu};
@@ -18,6 +19,8 @@ pub struct Request {
     pub options: sshc::CompileOptions,
     /// The scene as the window has it (its camera and lights as they are now).
     pub scene: Scene,
+    /// Its cascades, when asked for.
+    pub cascading: Cascading,
 }
 
 /// The compiled technique's controls: what the panels list.
@@ -93,7 +96,7 @@ impl Worker {
     }
 
     /// Ask for a compilation; returns its id.
-    pub fn request(&mut self, technique: &Path, options: sshc::CompileOptions, scene: Scene) -> u64 {
+    pub fn request(&mut self, technique: &Path, options: sshc::CompileOptions, scene: Scene, cascading: Cascading) -> u64 {
         self.next += 1;
         let id = self.next;
         self.pending = Some(id);
@@ -103,6 +106,7 @@ impl Worker {
             technique: technique.to_path_buf(),
             options,
             scene,
+            cascading,
         });
         id
     }
@@ -185,7 +189,7 @@ fn build(gpu: &Gpu, r: Request) -> Result<Ready, String> {
     let mut executor = Executor::new(gpu, compiled.graph, compiled.shaders).map_err(|e| format!("error: {e}"))?;
     let pipelines_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
-    bind(&mut executor, &r.scene)?;
+    bind(&mut executor, &r.scene, &r.cascading)?;
     let bind_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok(Ready {
         id: r.id,
@@ -197,8 +201,13 @@ fn build(gpu: &Gpu, r: Request) -> Result<Ready, String> {
     })
 }
 
-/// Bind every light of `scene` as `sshc render` does (each light its own passes).
-pub fn bind(ex: &mut Executor, scene: &Scene) -> Result<(), String> {
+/// Bind every light of `scene` as `sshc render` does (each light its own passes), or its
+/// light's cascades where `cascading` or the scene asks for them.
+pub fn bind(ex: &mut Executor, scene: &Scene, cascading: &Cascading) -> Result<(), String> {
+    crate::bind::check_cascades(scene, cascading)?;
+    if cascading.bind(ex, scene)?.is_some() {
+        return Ok(());
+    }
     let inputs = light_inputs(&ex.graph, scene)?;
     ex.bind_lights(&inputs).map_err(|e| format!("error: {e}"))
 }
