@@ -239,6 +239,7 @@ fn a_sweep_over_several_lights_reports_each_light() {
 /// `sshc sweep --cascades 2` runs every configuration, and the reference, with two
 /// cascades: the same rows, finite figures, and a visibility that is not the one map's (the
 /// cascades are fitted to the camera's slices, not to the scene).
+/// A `cascades` axis in the sweep file gives, row by row, what `--cascades N` gives.
 #[test]
 fn a_sweep_with_cascades_runs_every_configuration_with_them() {
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/sweep-ground.ron");
@@ -261,6 +262,28 @@ fn a_sweep_with_cascades_runs_every_configuration_with_them() {
         one.iter().zip(&two).any(|(a, b)| a[col("rms_ground")] != b[col("rms_ground")]),
         "two cascades gave every row the one map's error: were they bound?"
     );
+    // a `cascades` axis: each of its rows is the run with that many cascades, to the digit
+    let axis = tmp("cascades-axis");
+    let csv = run_file(&file.with_file_name("sweep-cascades.ron"), &axis, &[]);
+    let swept = rows(&csv);
+    assert_eq!(swept.len(), 4, "{csv}");
+    for r in &swept {
+        let config = &r[col("config")];
+        let (n, map) = (
+            if config.contains("cascades=2") { &two } else { &one },
+            if config.contains("shadow_map=16") {
+                "shadow_map=16"
+            } else {
+                "shadow_map=64"
+            },
+        );
+        let same = n
+            .iter()
+            .find(|x| x[col("config")].contains(map) && !x[col("technique")].contains("(CPU)"))
+            .unwrap_or_else(|| panic!("no row {map} in {n:?}"));
+        assert_eq!(r[col("rms_ground")], same[col("rms_ground")], "{config}: {r:?} against {same:?}");
+    }
     let _ = std::fs::remove_dir_all(&plain);
     let _ = std::fs::remove_dir_all(&cascaded);
+    let _ = std::fs::remove_dir_all(&axis);
 }

@@ -117,7 +117,8 @@ struct Entry {
     #[serde(default)]
     label: Option<String>,
     /// Axes: `shadow_map` (texels), `light_scale` (multiplies the light's size),
-    /// `precision:NAME` (a precision name) or a param name (a `--set` value).
+    /// `cascades` (1 to 4 cascades of a light at infinity), `precision:NAME` (a precision
+    /// name) or a param name (a `--set` value).
     #[serde(default)]
     axes: IndexMap<String, Vec<ron::Value>>,
 }
@@ -192,6 +193,8 @@ struct Settings {
     shadow_map: Option<u32>,
     /// The `light_scale` axis (else 1).
     light_scale: f64,
+    /// The `cascades` axis (else `--cascades` or the scene file's).
+    cascades: Option<u32>,
     /// Params, compiled in as `--set` values: each configuration compiles its technique
     /// afresh, so a fixed param (an I32 `N` of light samples) takes its value there, and
     /// the binding reads the sample count from the compiled graph
@@ -207,6 +210,7 @@ fn settings(c: &Config) -> Result<Settings, String> {
     let mut out = Settings {
         shadow_map: None,
         light_scale: 1.0,
+        cascades: None,
         set: Vec::new(),
         precision: Vec::new(),
         schedule: Vec::new(),
@@ -215,6 +219,7 @@ fn settings(c: &Config) -> Result<Settings, String> {
         match k.as_str() {
             "shadow_map" => out.shadow_map = Some(v.parse().map_err(|_| format!("error: shadow_map = `{v}` is not a whole number"))?),
             "light_scale" => out.light_scale = v.parse().map_err(|_| format!("error: light_scale = `{v}` is not a number"))?,
+            "cascades" => out.cascades = Some(v.parse().map_err(|_| format!("error: cascades = `{v}` is not a whole number"))?),
             k if k.starts_with("precision:") => out.precision.push((k["precision:".len()..].to_string(), v.clone())),
             k if k.starts_with("schedule:") => out.schedule.push((k["schedule:".len()..].to_string(), v.clone())),
             k => out.set.push((k.to_string(), v.clone())),
@@ -329,6 +334,16 @@ fn check_axes(file: &SweepFile) -> Result<(), String> {
                             return Err(format!(
                                 "{at}: `{}`: the shadow map needs a whole number of at least 1 texel",
                                 value_text(v)
+                            ));
+                        }
+                    },
+                    "cascades" => match x {
+                        Some(x) if x.fract() == 0.0 && (1.0..=f64::from(sshc_runtime::light::MAX_CASCADES)).contains(&x) => {}
+                        _ => {
+                            return Err(format!(
+                                "{at}: `{}`: a light has 1 to {} cascades",
+                                value_text(v),
+                                sshc_runtime::light::MAX_CASCADES
                             ));
                         }
                     },
@@ -473,10 +488,16 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         let Settings {
             shadow_map,
             light_scale,
+            cascades,
             set,
             precision,
             schedule,
         } = settings(c)?;
+        // the `cascades` axis over `--cascades` (the reference is timed with the latter)
+        let cascading = crate::bind::Cascading {
+            cascades: cascades.or(a.cascading.cascades),
+            ..a.cascading
+        };
         if let Some(n) = shadow_map {
             scene.shadow_map = n;
         }
@@ -490,10 +511,11 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         let scene_path = resolve(split_entry(&file.scenes[c.scene]).0);
         // (generic under cascades: their views are not the scene's)
         let facts = crate::session::scene_facts(&scene_path, &scene)
-            .filter(|f| sshc::admits(&sources[c.technique], f.light) && !a.cascading.on(&scene));
+            .filter(|f| sshc::admits(&sources[c.technique], f.light) && !cascading.on(&scene));
         let compiled = compile_for(&path, &sources[c.technique], &set, &precision, &schedule, facts)?;
         let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
-        if a.cascading.bind(&mut ex, &scene)?.is_none() {
+        crate::bind::check_cascades(&scene, &cascading)?;
+        if cascading.bind(&mut ex, &scene)?.is_none() {
             ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
         }
         let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
@@ -889,6 +911,8 @@ mod tests {
                 r#""light_scale": [-1.0]"#,
                 "axis `light_scale`: `-1`: a light scale must be a finite number >= 0",
             ),
+            (r#""cascades": [5]"#, "axis `cascades`: `5`: a light has 1 to 4 cascades"),
+            (r#""cascades": [1.5]"#, "axis `cascades`: `1.5`: a light has 1 to 4 cascades"),
             (
                 r#""shadow_map": [0]"#,
                 "axis `shadow_map`: `0`: the shadow map needs a whole number of at least 1 texel",
@@ -957,6 +981,7 @@ mod tests {
                 Settings {
                     shadow_map: None,
                     light_scale: 1.0,
+                    cascades: None,
                     set: vec![("N".to_string(), n.to_string())],
                     precision: vec![],
                     schedule: vec![],
