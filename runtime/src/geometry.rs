@@ -19,7 +19,12 @@
 //!
 //! Instances that do not move under the identity are *in world space*
 //! ([`Instance::in_world_space`]): drawn straight from their mesh's vertices, with no placed
-//! copy, their edges written once at upload. A triangle soup binds as such instances, one
+//! copy, their edges written once at upload. Instances that do not move under another
+//! transform (a glTF node's instance of a shared mesh) are *placed at upload*
+//! ([`Instance::placed_at_upload`]): their placed vertices, edges, face planes and face
+//! references are computed once on the CPU, with the arithmetic of [`Geometry::soup`]
+//! (so they equal the soup's triangles bit for bit), and written with the rest; the
+//! placement step never binds them, so they are free of its storage-binding limit. A triangle soup binds as such instances, one
 //! per object ([`Geometry::from_soup`]), and a mesh listed out (indices 0, 1, 2, ...) is
 //! drawn without an index buffer, so a soup keeps its 72 bytes a triangle.
 //!
@@ -89,6 +94,13 @@ impl Instance {
     /// bit for bit (a `-0.0` entry places it on the GPU like any other).
     pub fn in_world_space(&self) -> bool {
         !self.moves && self.transform.map(f32::to_bits) == IDENTITY.map(f32::to_bits)
+    }
+
+    /// Placed once, on the CPU, at upload: it does not move and its transform is not the
+    /// identity. Its placed copy is drawn like a moving instance's, but the placement step
+    /// has no work for it.
+    pub fn placed_at_upload(&self) -> bool {
+        !self.moves && !self.in_world_space()
     }
 }
 
@@ -222,9 +234,13 @@ impl Geometry {
                 limits.max_buffer_size,
             ),
             (
-                "the placed vertices of every moving instance (bytes)",
+                "the placed vertices of every instance not in world space (bytes; bound whole by the placement step when an instance moves)",
                 self.placed_vertices() * 24,
-                storage,
+                if self.instances.iter().any(|i| i.moves) {
+                    storage
+                } else {
+                    limits.max_buffer_size
+                },
             ),
             (
                 "the instances' placement records (bytes)",
@@ -244,10 +260,10 @@ impl Geometry {
         Ok(())
     }
 
-    /// Per mesh: whether an instance places it on the GPU (not [`Instance::in_world_space`]).
+    /// Per mesh: whether an instance places it on the GPU (a moving one).
     fn placed_on_gpu(&self) -> Vec<bool> {
         let mut out = vec![false; self.meshes.len()];
-        for i in self.instances.iter().filter(|i| !i.in_world_space()) {
+        for i in self.instances.iter().filter(|i| i.moves) {
             if let Some(p) = out.get_mut(i.mesh) {
                 *p = true;
             }
@@ -264,7 +280,7 @@ impl Geometry {
         out
     }
 
-    /// The placed copies' vertices: every instance placed on the GPU has one.
+    /// The placed copies' vertices: every instance not in world space has one.
     fn placed_vertices(&self) -> u64 {
         self.instances
             .iter()
@@ -618,15 +634,21 @@ impl SceneDraw {
     }
 }
 
-/// The edges, face planes and face references of a casting instance in world space, written
-/// into the placed buffers' bytes (`out`: edges, planes, face references) at `at` (their
-/// first places) with `welded` its first welded vertex: what `PLACE_WGSL` writes under the
-/// identity, with no arithmetic on the values (the face and welded-vertex indices offset,
-/// the planes as they are, none mirrored).
-fn write_in_world(a: &Adjacency, at: [u32; 3], welded: u32, out: &mut [Vec<u8>; 3]) {
+/// The edges, face planes and face references of a casting instance in world space (`m`
+/// `None`) or placed at upload (`m` its transform), written into the placed buffers' bytes
+/// (`out`: edges, planes, face references) at `at` (their first places) with `welded` its
+/// first welded vertex: what `PLACE_WGSL` writes, computed on the CPU. In world space, as
+/// under the identity, with no arithmetic on the values (the face and welded-vertex indices
+/// offset, the planes as they are, none mirrored); placed, the end points by
+/// [`transform_point`] and the planes `(N n, d - (N n) . t)` with the normal matrix,
+/// negated where `m` mirrors.
+fn write_placed(a: &Adjacency, at: [u32; 3], welded: u32, m: Option<&[f32; 16]>, out: &mut [Vec<u8>; 3]) {
     let [edges, planes, faces] = at.map(|x| x as usize);
+    let place = |p: [f32; 3]| m.map_or(p, |m| transform_point(m, p));
     for (k, e) in a.edges.iter().enumerate() {
         let placed = crate::adjacency::GpuEdge {
+            a: place(e.a),
+            b: place(e.b),
             first_face: e.first_face + faces as u32,
             ia: e.ia + welded,
             ib: e.ib + welded,
@@ -634,15 +656,46 @@ fn write_in_world(a: &Adjacency, at: [u32; 3], welded: u32, out: &mut [Vec<u8>; 
         };
         out[0][(edges + k) * 48..(edges + k + 1) * 48].copy_from_slice(&placed.to_bytes());
     }
+    let normal = m.map(|m| {
+        (
+            normal_matrix(m).unwrap_or(IDENTITY),
+            if determinant3(m) < 0.0 { -1.0f32 } else { 1.0 },
+        )
+    });
     for (k, p) in a.planes.iter().enumerate() {
-        for (c, x) in p.iter().enumerate() {
-            out[1][(planes + k) * 16 + 4 * c..(planes + k) * 16 + 4 * c + 4].copy_from_slice(&x.to_le_bytes());
+        let plane = match (m, &normal) {
+            (Some(m), Some((n, side))) => {
+                let q = [0, 1, 2].map(|r| n[r] * p[0] + n[4 + r] * p[1] + n[8 + r] * p[2]);
+                let d = p[3] - (q[0] * m[12] + q[1] * m[13] + q[2] * m[14]);
+                [q[0], q[1], q[2], d].map(|x| side * x)
+            }
+            _ => *p,
+        };
+        for (c, x) in plane.into_iter().enumerate() {
+            let at = (planes + k) * 16 + 4 * c;
+            out[1][at..at + 4].copy_from_slice(&x.to_le_bytes());
         }
     }
     for (k, f) in a.edge_faces.iter().enumerate() {
         let placed = (((f >> 1) + planes as u32) << 1) | (f & 1);
         out[2][(faces + k) * 4..(faces + k + 1) * 4].copy_from_slice(&placed.to_le_bytes());
     }
+}
+
+/// A mesh's vertices placed by `m` on the CPU, as [`Geometry::soup`] places them (position
+/// and normal, 24 bytes a vertex).
+fn placed_copy(mesh: &Mesh, m: &[f32; 16]) -> Vec<u8> {
+    let n = normal_matrix(m).unwrap_or(IDENTITY);
+    mesh.positions
+        .iter()
+        .zip(&mesh.normals)
+        .flat_map(|(p, q)| {
+            let p = transform_point(m, *p);
+            let q = [0, 1, 2].map(|r| n[r] * q[0] + n[4 + r] * q[1] + n[8 + r] * q[2]);
+            p.into_iter().chain(q)
+        })
+        .flat_map(f32::to_le_bytes)
+        .collect()
 }
 
 const PLACE_WGSL: &str = "
@@ -796,11 +849,11 @@ impl GeometryBuffers {
         let words = |v: &mut Vec<u8>, x: &[u32]| v.extend(x.iter().flat_map(|w| w.to_le_bytes()));
         let world: Vec<bool> = g.instances.iter().map(Instance::in_world_space).collect();
         let on_gpu = g.placed_on_gpu();
-        // per mesh: whether a casting instance places it, on the GPU or in world space
+        // per mesh: whether a casting instance places it, and whether one places it on the GPU
         let (mut casts_any, mut casts_on_gpu) = (vec![false; g.meshes.len()], vec![false; g.meshes.len()]);
-        for (inst, &w) in g.instances.iter().zip(&world).filter(|(i, _)| i.casts) {
+        for inst in g.instances.iter().filter(|i| i.casts) {
             casts_any[inst.mesh] = true;
-            casts_on_gpu[inst.mesh] |= !w;
+            casts_on_gpu[inst.mesh] |= inst.moves;
         }
         // the meshes, one after the other, and their adjacency; per mesh: its vertex buffer
         // (0: placed on the GPU, 1: world space only), first vertex there, first index, and
@@ -859,7 +912,7 @@ impl GeometryBuffers {
         // The classification binds the edges in chunks (`EdgeBuffers::chunks`): one buffer
         // holds them all. The placement step binds them whole, so instances placed on the
         // GPU keep their edges within one binding.
-        let places_on_gpu = g.instances.iter().any(|i| !i.in_world_space());
+        let places_on_gpu = g.instances.iter().any(|i| i.moves);
         let edge_limit = if places_on_gpu { storage_limit } else { gpu.limits.max_buffer_size };
         if totals[0] * 48 > edge_limit {
             return Err(RuntimeError::Limit {
@@ -885,12 +938,8 @@ impl GeometryBuffers {
                 });
             }
         }
-        // the edges of the casting instances in world space, written here
-        let world_edges = g
-            .instances
-            .iter()
-            .zip(&world)
-            .any(|(i, &w)| w && i.casts && adjacency[i.mesh].is_some());
+        // the edges of the casting instances in world space or placed at upload, written here
+        let world_edges = g.instances.iter().any(|i| !i.moves && i.casts && adjacency[i.mesh].is_some());
         let mut placed_data = [Vec::new(), Vec::new(), Vec::new()];
         if world_edges {
             placed_data = [totals[0] * 48, totals[1] * 16, totals[2] * 4].map(|n| vec![0u8; n as usize]);
@@ -899,6 +948,8 @@ impl GeometryBuffers {
         let (mut ranges, mut spans, mut unshadowed) = (Vec::new(), Vec::new(), Vec::new());
         let mut placed = Spans::default();
         let mut counts = AdjacencyCounts::default();
+        // the instances placed at upload and the first of their placed vertices
+        let mut at_upload = Vec::new();
         for (inst, &w) in g.instances.iter().zip(&world) {
             let m = &g.meshes[inst.mesh];
             let f = first[inst.mesh];
@@ -932,14 +983,21 @@ impl GeometryBuffers {
                 welded: placed.welded,
                 ..Default::default()
             };
-            if !w {
+            if inst.moves {
                 s.vertices = [f[1], m.positions.len() as u32, placed.vertices[2]];
+            }
+            if inst.placed_at_upload() {
+                at_upload.push((inst, placed.vertices[2]));
+            }
+            if !w {
                 placed.vertices[2] += m.positions.len() as u32;
             }
             if let (true, Some(a)) = (inst.casts, &adjacency[inst.mesh]) {
                 let at = [placed.edges[2], placed.planes[2], placed.faces[2]];
                 if w {
-                    write_in_world(a, at, placed.welded, &mut placed_data);
+                    write_placed(a, at, placed.welded, None, &mut placed_data);
+                } else if !inst.moves {
+                    write_placed(a, at, placed.welded, Some(&inst.transform), &mut placed_data);
                 } else {
                     s.edges = [f[3], a.edges.len() as u32, at[0]];
                     s.planes = [f[4], a.planes.len() as u32, at[1]];
@@ -1010,7 +1068,17 @@ impl GeometryBuffers {
             let mesh_edges = upload("mesh edges", &edge_data, storage);
             let mesh_planes = upload("mesh face planes", &plane_data, storage);
             let mesh_faces = upload("mesh face references", &face_data, storage);
-            let placed_vertices = buffer("placed vertices", u64::from(placed.vertices[2]) * 24, storage | vertex);
+            let placed_vertices = buffer(
+                "placed vertices",
+                u64::from(placed.vertices[2]) * 24,
+                storage | vertex | wgpu::BufferUsages::COPY_DST,
+            );
+            for &(inst, first) in &at_upload {
+                let bytes = placed_copy(&g.meshes[inst.mesh], &inst.transform);
+                if !bytes.is_empty() {
+                    gpu.queue.write_buffer(&placed_vertices, u64::from(first) * 24, &bytes);
+                }
+            }
             let placed_of = |label: &str, k: usize, bytes: u64| {
                 if world_edges {
                     upload(label, &placed_data[k], storage)

@@ -1317,3 +1317,60 @@ fn world_space_meshes_are_free_of_the_storage_binding_limit() {
         "{e}"
     );
 }
+
+/// Instances that do not move are placed once, on the CPU, at upload (`placed_at_upload`):
+/// under any transform (here 30 degrees about y, scaled by 1.3 and moved, which rounds every
+/// coordinate) their vertices, edges and face planes are the listed-out soup's, bit for bit
+/// (the same arithmetic as `Geometry::soup`), for a raster technique and a Geometry one, and
+/// the placement step has no work (nothing is bound whole, so no storage-binding limit holds
+/// them: the 4 M-triangle city's instances bind this way, docs/scale.md).
+#[test]
+fn static_instances_placed_at_upload_match_the_same_triangles_listed_out() {
+    let (sin, cos) = 30f32.to_radians().sin_cos();
+    let k = 1.3f32;
+    let turn = [
+        k * cos,
+        0.,
+        -k * sin,
+        0.,
+        0.,
+        k,
+        0.,
+        0.,
+        k * sin,
+        0.,
+        k * cos,
+        0.,
+        0.3,
+        0.05,
+        -0.2,
+        1.,
+    ];
+    for t in ["pcss", "penumbra-limit-maps"] {
+        let c = compile(t);
+        let s = inputs(&scene("triangle", 32, 64), &c);
+        let mut g = geometry_of(&s, [0.0; 3]);
+        for i in &mut g.instances {
+            i.moves = false;
+        }
+        let copy = g.instances.len() - 1;
+        g.instances[copy].transform = turn;
+        assert!(g.instances[copy].placed_at_upload() && g.instances[..copy].iter().all(|i| i.in_world_space()));
+        let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+        ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+            .unwrap_or_else(|e| panic!("{t}: {e}"));
+        ex.run_frame().unwrap();
+        let listed = fresh(&c, &[listed_out(&s, &g)]);
+        assert!(
+            ex.read_visibilities().unwrap().rgba == listed,
+            "{t}: an instance placed at upload differs from its triangles listed out"
+        );
+        // the copy casts a shadow of its own: without it the frame differs
+        let mut without = g.clone();
+        without.instances.pop();
+        assert!(
+            fresh(&c, &[listed_out(&s, &without)]) != listed,
+            "{t}: the placed copy changed nothing"
+        );
+    }
+}
