@@ -1,7 +1,7 @@
 //! From a [`Scene`] to the plain data the executor binds ([`SceneInputs`]).
 
 use crate::scene::{Light, Scene};
-use sshc_runtime::gpu::{Camera, Executor, LightInputs, SceneInputs};
+use sshc_runtime::gpu::{Camera, Executor, Geometry, IDENTITY, Instance, LightInputs, Mesh, SceneInputs};
 use sshc_runtime::graph::{MAX_LIGHT_SAMPLES, PassGraph, Views};
 use sshc_runtime::light::{SampleFit, sample_views};
 
@@ -16,6 +16,110 @@ use sshc_runtime::light::{SampleFit, sample_views};
 /// [`scene_inputs_for`] and [`scene_inputs_with_samples`]).
 pub fn scene_inputs(scene: &Scene) -> Result<SceneInputs, String> {
     scene_inputs_with_samples(scene, 0)
+}
+
+/// The scene as host geometry ([`sshc_runtime::gpu::Geometry`]), where an object holds a
+/// glTF file's shared meshes ([`Scene::instancing`]): each such mesh once, indexed as the
+/// file has it, and an instance per node with the node's matrix (`moves: false`: placed
+/// once, at upload); every other object a mesh of its triangles listed out, in world space.
+/// Casting objects first, in file order, then the others, as [`scene_inputs`] lists the
+/// soup. `None` when no object shares meshes (the soup is then what is bound).
+pub fn scene_geometry(scene: &Scene) -> Option<Geometry> {
+    let n = scene.objects().len();
+    if !(0..n).any(|i| scene.instancing(i).is_some()) {
+        return None;
+    }
+    let order = (0..n).filter(|&i| scene.casts(i)).chain((0..n).filter(|&i| !scene.casts(i)));
+    let mut g = Geometry::default();
+    let (tris, normals) = (scene.triangles(), scene.normals());
+    for i in order {
+        let (casts, receives) = (scene.casts(i), scene.receives(i));
+        let name = scene.objects()[i].name.clone().unwrap_or_else(|| format!("object {i}"));
+        match scene.instancing(i) {
+            Some(inst) => {
+                let first = g.meshes.len();
+                g.meshes.extend(inst.meshes.iter().map(|m| Mesh {
+                    name: format!("{name}: {}", m.name),
+                    positions: m.positions.clone(),
+                    normals: m.normals.clone(),
+                    indices: m.indices.clone(),
+                }));
+                g.instances
+                    .extend(inst.instances.iter().enumerate().map(|(k, (m, world))| Instance {
+                        name: format!("{name}: node instance {k}"),
+                        mesh: first + m,
+                        transform: *world,
+                        casts,
+                        receives,
+                        moves: false,
+                    }));
+            }
+            None => {
+                let r = scene.object_triangles(i);
+                let corners = || {
+                    tris[r.clone()]
+                        .iter()
+                        .zip(&normals[r.clone()])
+                        .flat_map(|(t, n)| (0..3).map(move |k| (t[k], n[k])))
+                };
+                g.meshes.push(Mesh {
+                    name: name.clone(),
+                    positions: corners().map(|(p, _)| p.to_array()).collect(),
+                    normals: corners().map(|(_, n)| n.to_array()).collect(),
+                    indices: (0..3 * r.len() as u32).collect(),
+                });
+                g.instances.push(Instance {
+                    name,
+                    mesh: g.meshes.len() - 1,
+                    transform: IDENTITY,
+                    casts,
+                    receives,
+                    moves: false,
+                });
+            }
+        }
+    }
+    Some(g)
+}
+
+/// Bind `scene` on `ex`, every light with its own passes (`all`) or its first light only:
+/// as host geometry where the scene shares meshes ([`scene_geometry`]: meshes once, an
+/// instance per node, `bind_geometry`), else as the triangle soup of each light
+/// ([`scene_inputs_for`], `bind_lights`). Says which: `"instances"` or `"soup"`.
+pub fn bind_scene(ex: &mut Executor, scene: &Scene, all: bool) -> Result<&'static str, String> {
+    let lights = if all { scene.lights.len().max(1) } else { 1 };
+    let alone = |i: usize| {
+        if scene.lights.len() > 1 {
+            crate::session::single_light(scene, i)
+        } else {
+            scene.clone()
+        }
+    };
+    let named = |i: usize, e: String| {
+        if scene.lights.len() > 1 {
+            format!("error: light {i}: {e}")
+        } else {
+            format!("error: {e}")
+        }
+    };
+    if let Some(g) = scene_geometry(scene).filter(|_| !scene.lights.is_empty()) {
+        let samples = graph_samples(&ex.graph);
+        let inputs = scene
+            .lights
+            .iter()
+            .take(lights)
+            .enumerate()
+            .map(|(i, l)| light_inputs_with_samples(scene, l, samples).map_err(|e| named(i, e)))
+            .collect::<Result<Vec<_>, String>>()?;
+        ex.bind_geometry(&g, &camera(scene), &inputs, scene.camera_size(), scene.shadow_map)
+            .map_err(|e| format!("error: {e}"))?;
+        return Ok("instances");
+    }
+    let inputs = (0..lights)
+        .map(|i| scene_inputs_for(&alone(i), &ex.graph).map_err(|e| named(i, e)))
+        .collect::<Result<Vec<_>, String>>()?;
+    ex.bind_lights(&inputs).map_err(|e| format!("error: {e}"))?;
+    Ok("soup")
 }
 
 /// The light samples `graph` renders views of: [`PassGraph::samples`] when some pass has

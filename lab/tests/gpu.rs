@@ -345,3 +345,46 @@ fn cascades_refitted_in_place_equal_a_fresh_binding() {
         );
     }
 }
+
+/// A glTF file whose nodes share meshes (the generated city: seven tower meshes placed by
+/// sixteen nodes) binds as the runtime's meshes and instances (`bind::bind_scene`:
+/// `bind_geometry`, each mesh once with its indices, each node an instance placed at
+/// upload), not as a flattened soup, and renders what the soup renders.
+#[test]
+fn a_gltf_of_shared_meshes_binds_as_instances_and_renders_as_its_soup() {
+    let mut scene = Scene::from_gltf_slice(&sshc_lab::scene::generate::city_glb(20_000, 3)).unwrap_or_else(|e| panic!("{e}"));
+    scene.set_camera_size(96, 96);
+    scene.shadow_map = 512;
+    let (nodes, meshes) = scene.placements();
+    assert!(nodes > meshes, "{nodes} nodes place {meshes} meshes: nothing is shared");
+    let inst = scene.instancing(0).expect("the city keeps its instancing");
+    assert_eq!(inst.instances.len(), nodes);
+    assert_eq!(inst.triangles(), scene.triangles().len());
+    let g = sshc_lab::bind::scene_geometry(&scene).expect("host geometry");
+    assert_eq!(g.meshes.len(), meshes);
+    assert!(g.instances.iter().all(|i| i.placed_at_upload() || i.in_world_space()));
+    // each mesh once: fewer vertices than the soup's three a triangle
+    let vertices: usize = g.meshes.iter().map(|m| m.positions.len()).sum();
+    assert!(vertices * 2 < scene.triangles().len() * 3, "{vertices} vertices");
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
+    for t in ["hard", "pcss", "penumbra-limit-maps"] {
+        let path = root().join("techniques").join(format!("{t}.ron"));
+        let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let run = |instances: bool| {
+            let mut ex = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
+            if instances {
+                assert_eq!(sshc_lab::bind::bind_scene(&mut ex, &scene, true), Ok("instances"), "{t}");
+            } else {
+                ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap())
+                    .unwrap();
+            }
+            ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
+            ex.read_camera(CameraOutput::Visibility).unwrap().channel(0)
+        };
+        let (a, b) = (run(true), run(false));
+        let differ = a.iter().zip(&b).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
+        let max = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+        assert!(a.iter().any(|v| *v < 0.5), "{t}: no shadow in view");
+        assert_eq!(differ, 0, "{t}: {differ} pixels differ from the soup's, by up to {max}");
+    }
+}

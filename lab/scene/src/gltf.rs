@@ -28,7 +28,7 @@
 
 use crate::error::{SceneError, SceneErrorKind};
 use crate::schema::Camera;
-use crate::source::{MeshData, read_capped, read_mesh_file, resolve_inside, smooth_normals};
+use crate::source::{Instancing, MeshData, SharedMesh, read_capped, read_mesh_file, resolve_inside, smooth_normals};
 use crate::validate::{MAX_OBJ_BYTES, MAX_SCENE_TRIANGLES};
 use std::path::{Path, PathBuf};
 
@@ -172,6 +172,12 @@ pub(crate) fn import(bytes: &[u8], file: &str, folders: Option<(&Path, &Path)>) 
     let mut triangles = Vec::with_capacity(planned);
     let mut normals = Vec::with_capacity(planned);
     let meshes_used = placed.iter().map(|p| p.0.index()).collect::<std::collections::BTreeSet<_>>().len();
+    // Nodes that share a mesh are kept as instances of it too (read once, placed by each
+    // node's matrix), unless a matrix mirrors: the placed triangles then turn their winding,
+    // which an instance's indices do not.
+    let share = placed.len() > meshes_used && placed.iter().all(|(_, world, _)| Mat3::from_mat4(*world).determinant() > 0.0);
+    let mut instancing = Instancing::default();
+    let mut shared: Vec<Option<usize>> = vec![None; doc.meshes().len()];
     for (mesh, world, _node) in &placed {
         let slot = &mut decoded[mesh.index()];
         if slot.is_none() {
@@ -181,10 +187,18 @@ pub(crate) fn import(bytes: &[u8], file: &str, folders: Option<(&Path, &Path)>) 
         }
         let Some(prims) = slot.as_ref() else { continue };
         place_node(prims, world, &mut triangles, &mut normals);
+        if share {
+            let k = *shared[mesh.index()].get_or_insert_with(|| {
+                instancing.meshes.push(shared_mesh(mesh, prims));
+                instancing.meshes.len() - 1
+            });
+            instancing.instances.push((k, world.to_cols_array()));
+        }
     }
     let mesh = MeshData {
         triangles,
         normals: Some(normals),
+        instancing: share.then_some(instancing),
     };
 
     let (lo, hi) = sshc_light::bounds_of(mesh.triangles.iter().flatten().copied());
@@ -610,6 +624,21 @@ fn read_indices(a: &gltf::Accessor, buffers: &[Vec<u8>], file: &str, what: &str)
             }
         })
         .collect())
+}
+
+/// A glTF mesh's primitives as one indexed mesh, in the order [`place_node`] lists them.
+fn shared_mesh(mesh: &gltf::Mesh, prims: &[Primitive]) -> SharedMesh {
+    let mut out = SharedMesh {
+        name: mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_string),
+        ..Default::default()
+    };
+    for p in prims {
+        let base = out.positions.len() as u32;
+        out.positions.extend(p.positions.iter().map(|v| v.to_array()));
+        out.normals.extend(p.normals.iter().map(|v| v.to_array()));
+        out.indices.extend(p.indices.iter().map(|i| i + base));
+    }
+    out
 }
 
 /// Appends a node's triangles, placed by its world matrix. The identity places nothing

@@ -16,7 +16,11 @@ pub(crate) struct Reads {
 }
 
 pub(crate) fn build_mesh(index: usize, object: &Object, base: &Path, reads: &mut Reads) -> Result<MeshData, SceneError> {
-    let flat = |triangles| MeshData { triangles, normals: None };
+    let flat = |triangles| MeshData {
+        triangles,
+        normals: None,
+        instancing: None,
+    };
     Ok(match &object.mesh {
         Mesh::Plane { size } => {
             let (x, z) = (0.5 * size.x, 0.5 * size.y);
@@ -131,6 +135,7 @@ pub(crate) fn sphere(radius: f32, segments: u32) -> MeshData {
     MeshData {
         triangles,
         normals: Some(normals),
+        instancing: None,
     }
 }
 
@@ -191,6 +196,7 @@ fn load_obj(rel: &str, base: &Path) -> Result<(MeshData, PathBuf), SceneError> {
         MeshData {
             triangles,
             normals: Some(normals),
+            instancing: None,
         },
         path,
     ))

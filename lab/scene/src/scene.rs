@@ -38,6 +38,8 @@ pub struct Scene {
     triangles: Vec<[Vec3; 3]>,
     normals: Vec<[Vec3; 3]>,
     object_triangles: Vec<Range<usize>>,
+    /// Per object: the glTF instancing its triangles were placed from, where kept.
+    instancing: Vec<Option<crate::source::Instancing>>,
     bounds: (Vec3, Vec3),
 }
 
@@ -189,6 +191,7 @@ impl Scene {
         let mut triangles = Vec::new();
         let mut normals = Vec::new();
         let mut object_triangles = Vec::with_capacity(desc.objects.len());
+        let mut instancing = Vec::with_capacity(desc.objects.len());
         let mut reads = Reads::default();
         for (i, object) in desc.objects.iter().enumerate() {
             let start = triangles.len();
@@ -208,7 +211,7 @@ impl Scene {
             {
                 return Err(too_many(start.saturating_add(n)));
             }
-            let mesh = match built.get_mut(i).and_then(Option::take) {
+            let mut mesh = match built.get_mut(i).and_then(Option::take) {
                 Some(mesh) => mesh,
                 None => build_mesh(i, object, base, &mut reads)?,
             };
@@ -217,6 +220,16 @@ impl Scene {
             }
             place(&mesh, object, &mut triangles, &mut normals);
             object_triangles.push(start..triangles.len());
+            // kept where the triangles are its instances' exactly: the object's transform
+            // adds none, its normals are the file's, and no triangle was dropped
+            let identity =
+                object.transform.matrix().to_cols_array().map(f32::to_bits) == glam::Mat4::IDENTITY.to_cols_array().map(f32::to_bits);
+            let placed = triangles.len() - start;
+            instancing.push(
+                mesh.instancing
+                    .take()
+                    .filter(|s| identity && !object.flat_normals && s.triangles() == placed),
+            );
         }
         let bounds = bounds_of(triangles.iter().flatten().copied());
         let scene = Scene {
@@ -233,6 +246,7 @@ impl Scene {
             triangles,
             normals,
             object_triangles,
+            instancing,
             bounds,
         };
         scene.check_precision()?;
@@ -730,6 +744,16 @@ impl Scene {
     /// The range of [`Scene::triangles`] that object `i` produced.
     pub fn object_triangles(&self, i: usize) -> Range<usize> {
         self.object_triangles[i].clone()
+    }
+
+    /// Object `i`'s meshes and instances, where a glTF file shares meshes between nodes
+    /// (read once, each node's instance placed by its matrix): its triangles
+    /// ([`Scene::object_triangles`]) are these instances placed, in order. `None` for
+    /// other objects, and where the scene's triangles are not exactly the instances' (the
+    /// object has a transform of its own or flat normals, a node's matrix mirrors, or a
+    /// degenerate triangle was dropped).
+    pub fn instancing(&self, i: usize) -> Option<&crate::source::Instancing> {
+        self.instancing.get(i)?.as_ref()
     }
 
     /// Vertex buffer for the GPU: 3 vertices per triangle, each 6 `f32`: world position

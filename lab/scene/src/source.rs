@@ -7,10 +7,40 @@ use std::path::{Component, Path, PathBuf};
 
 use glam::Vec3;
 
-/// Object-space triangles with per-corner normals (`None`: use face normals).
+/// Object-space triangles with per-corner normals (`None`: use face normals), and the
+/// instancing they were placed from, where a glTF file shares meshes between nodes.
 pub(crate) struct MeshData {
     pub(crate) triangles: Vec<[Vec3; 3]>,
     pub(crate) normals: Option<Vec<[Vec3; 3]>>,
+    pub(crate) instancing: Option<Instancing>,
+}
+
+/// Meshes read once and placed by several nodes, as a glTF file holds them: indices as
+/// they are, positions and normals in the mesh's own space, and a world matrix per node
+/// that places one. The scene's triangles are these placed (the runtime's
+/// `bind_geometry` takes them as meshes and instances instead of a soup).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Instancing {
+    pub meshes: Vec<SharedMesh>,
+    /// Per node that places a mesh, in the order its triangles are listed: the mesh, and
+    /// its column-major object-to-world matrix.
+    pub instances: Vec<(usize, [f32; 16])>,
+}
+
+/// One indexed mesh of an [`Instancing`] (its primitives' triangles, one after the other).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SharedMesh {
+    pub name: String,
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Vec<[f32; 3]>,
+    pub indices: Vec<u32>,
+}
+
+impl Instancing {
+    /// Triangles its instances place.
+    pub fn triangles(&self) -> usize {
+        self.instances.iter().map(|(m, _)| self.meshes[*m].indices.len() / 3).sum()
+    }
 }
 
 /// Resolves `rel` inside `base`, refusing absolute paths, `..` and links leading out.

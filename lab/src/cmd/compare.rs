@@ -84,8 +84,7 @@ pub(crate) fn moving_light_frames(
         let mut s = scene.clone();
         s.lights[0] = moved_light(light, scene, i as f32 * step);
         if cascading.bind(ex, &s)?.is_none() {
-            let inputs = crate::bind::scene_inputs_for(&s, &ex.graph).map_err(|e| format!("error: {e}"))?;
-            ex.bind_scene(&inputs).map_err(rt)?;
+            crate::bind::bind_scene(ex, &s, false)?;
         }
         ex.run_frame().map_err(rt)?;
         out.push(ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0));
@@ -127,8 +126,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     match a.over.cascading.bind(&mut ex, &scene)? {
         Some(line) => println!("{line}"),
         None => {
-            let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
-            ex.bind_scene(&inputs).map_err(rt)?;
+            crate::bind::bind_scene(&mut ex, &scene, false)?;
         }
     }
     let mut frame_ms = Vec::new();
@@ -209,8 +207,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     let mut lines = lines;
     for i in 1..scene.lights.len() {
         let alone = crate::session::single_light(&scene, i);
-        let inputs = crate::bind::scene_inputs_for(&alone, &ex.graph).map_err(|e| format!("error: light {i}: {e}"))?;
-        ex.bind_scene(&inputs).map_err(rt)?;
+        crate::bind::bind_scene(&mut ex, &alone, false).map_err(|e| format!("light {i}: {e}"))?;
         ex.run_frame().map_err(rt)?;
         let vis = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
         let (t, _) = truth_at(&alone, &positions, &normals, &a.truth)?;

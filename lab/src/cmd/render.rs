@@ -81,21 +81,11 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
             println!("{line}");
         }
         None => {
-            let inputs = (0..n_lights)
-                .map(|i| {
-                    let alone = if scene.lights.len() > 1 {
-                        crate::session::single_light(&scene, i)
-                    } else {
-                        scene.clone()
-                    };
-                    crate::bind::scene_inputs_for(&alone, &ex.graph).map_err(|e| match scene.lights.len() {
-                        1 => format!("error: {e}"),
-                        _ => format!("error: light {i}: {e}"),
-                    })
-                })
-                .collect::<Result<Vec<_>, String>>()?;
-            stages.done("scene inputs (the triangle soup)");
-            ex.bind_lights(&inputs).map_err(rt)?;
+            let how = crate::bind::bind_scene(&mut ex, &scene, true)?;
+            stages.done(match how {
+                "instances" => "scene inputs (meshes and their instances)",
+                _ => "scene inputs (the triangle soup)",
+            });
         }
     }
     gpu.wait().map_err(rt)?;

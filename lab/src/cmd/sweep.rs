@@ -454,7 +454,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     // its memory warm and reads faster on a CPU driver).
     const RETIME: usize = 12;
     let reference_source = read(&resolve(&file.reference))?;
-    type ReferenceRun = (sshc::Compiled, sshc_runtime::gpu::SceneInputs, Vec<f64>, crate::scene::Scene);
+    type ReferenceRun = (sshc::Compiled, Vec<f64>, crate::scene::Scene);
     let mut reference_runs: Vec<Option<ReferenceRun>> = Vec::new();
     for (si_, scene_path) in file.scenes.iter().enumerate() {
         let touches = mine.iter().any(|c| c.scene == si_) || !file.stochastic.is_empty();
@@ -465,14 +465,13 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         let scene = load_entry(scene_path, file.camera)?;
         crate::bind::check_cascades(&scene, &a.cascading)?;
         let c = compile(&resolve(&file.reference), &reference_source, &[], &[], &[])?;
-        let inputs = crate::bind::scene_inputs_for(&scene, &c.graph)?;
-        reference_runs.push(Some((c, inputs, Vec::new(), scene)));
+        reference_runs.push(Some((c, Vec::new(), scene)));
     }
     let time_references = |runs: &mut Vec<Option<ReferenceRun>>| -> Result<(), String> {
-        for (c, inputs, times, scene) in runs.iter_mut().flatten() {
+        for (c, times, scene) in runs.iter_mut().flatten() {
             let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).map_err(rt)?;
             if a.cascading.bind(&mut ex, scene)?.is_none() {
-                ex.bind_scene(inputs).map_err(rt)?;
+                crate::bind::bind_scene(&mut ex, scene, false)?;
             }
             times.extend(time_frames(&mut ex, file.frames)?);
         }
@@ -516,7 +515,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
         crate::bind::check_cascades(&scene, &cascading)?;
         if cascading.bind(&mut ex, &scene)?.is_none() {
-            ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
+            crate::bind::bind_scene(&mut ex, &scene, false)?;
         }
         let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
         let (fetches, ops) = work(&ex.graph, scene.shadow_map, scene.camera_size(), edges);
@@ -567,7 +566,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
                 let scene = load_entry(scene_path, file.camera)?;
                 let c = compile(&resolve(&file.reference), &reference_source, &[], &[], &[])?;
                 let mut ex = Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?;
-                ex.bind_scene(&crate::bind::scene_inputs_for(&scene, &ex.graph)?).map_err(rt)?;
+                crate::bind::bind_scene(&mut ex, &scene, false)?;
                 ex.run_frame().map_err(rt)?;
                 let (p, nrm) = positions_normals(&ex)?;
                 let (truth, _) = bar.suspend(|| truth_at(&scene, &p, &nrm, &a.truth))?;
@@ -605,7 +604,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     let medians: Vec<Option<f64>> = reference_runs
         .iter()
         .map(|r| {
-            r.as_ref().and_then(|(_, _, t, _)| {
+            r.as_ref().and_then(|(_, t, _)| {
                 let mut t = t.clone();
                 t.sort_by(f64::total_cmp);
                 t.get(t.len() / 2).copied()

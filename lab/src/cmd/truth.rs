@@ -55,8 +55,7 @@ pub fn truth(a: TruthArgs) -> Result<(), String> {
     a.truth.check(u64::from(w) * u64::from(h))?;
     let gpu = Gpu::new().map_err(rt)?;
     let mut ex = compile_executor(&gpu, Path::new("techniques/hard.ron"), HARD, &Default::default())?;
-    let inputs = crate::bind::scene_inputs_for(&scene, &ex.graph).map_err(|e| format!("error: {e}"))?;
-    ex.bind_scene(&inputs).map_err(rt)?;
+    crate::bind::bind_scene(&mut ex, &scene, false)?;
     ex.run_frame().map_err(rt)?;
     let (positions, normals) = positions_normals(&ex)?;
     let (t, source) = truth_at(&scene, &positions, &normals, &a.truth)?;

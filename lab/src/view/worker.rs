@@ -6,7 +6,6 @@ use crate::bind::Cascading;
 use crate::scene::Scene;
 use notify::Watcher as _;
 use sshc_runtime::gpu::{Executor, Gpu};
-use sshc_runtime::graph::PassGraph;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -208,22 +207,7 @@ pub fn bind(ex: &mut Executor, scene: &Scene, cascading: &Cascading) -> Result<(
     if cascading.bind(ex, scene)?.is_some() {
         return Ok(());
     }
-    let inputs = light_inputs(&ex.graph, scene)?;
-    ex.bind_lights(&inputs).map_err(|e| format!("error: {e}"))
-}
-
-/// The scene inputs of each light, as `sshc render` makes them.
-pub fn light_inputs(graph: &PassGraph, scene: &Scene) -> Result<Vec<sshc_runtime::gpu::SceneInputs>, String> {
-    (0..scene.lights.len().max(1))
-        .map(|i| {
-            let alone = if scene.lights.len() > 1 {
-                crate::session::single_light(scene, i)
-            } else {
-                scene.clone()
-            };
-            crate::bind::scene_inputs_for(&alone, graph).map_err(|e| format!("error: light {i}: {e}"))
-        })
-        .collect()
+    crate::bind::bind_scene(ex, scene, true).map(|_| ())
 }
 
 /// Watches files and says which of them changed.
