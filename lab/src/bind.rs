@@ -1,7 +1,7 @@
 //! From a [`Scene`] to the plain data the executor binds ([`SceneInputs`]).
 
 use crate::scene::{Light, Scene};
-use sshc_runtime::gpu::{Camera, Executor, Geometry, IDENTITY, Instance, LightInputs, Mesh, SceneInputs};
+use sshc_runtime::gpu::{Camera, Executor, Geometry, IDENTITY, Instance, LightInputs, Mesh, SceneInputs, Slices};
 use sshc_runtime::graph::{MAX_LIGHT_SAMPLES, PassGraph, Views};
 use sshc_runtime::light::{SampleFit, sample_views};
 
@@ -82,44 +82,99 @@ pub fn scene_geometry(scene: &Scene) -> Option<Geometry> {
     Some(g)
 }
 
-/// Bind `scene` on `ex`, every light with its own passes (`all`) or its first light only:
-/// as host geometry where the scene shares meshes ([`scene_geometry`]: meshes once, an
-/// instance per node, `bind_geometry`), else as the triangle soup of each light
-/// ([`scene_inputs_for`], `bind_lights`). Says which: `"instances"` or `"soup"`.
-pub fn bind_scene(ex: &mut Executor, scene: &Scene, all: bool) -> Result<&'static str, String> {
-    let lights = if all { scene.lights.len().max(1) } else { 1 };
-    let alone = |i: usize| {
-        if scene.lights.len() > 1 {
-            crate::session::single_light(scene, i)
-        } else {
-            scene.clone()
+/// A scene made ready to bind ([`SceneBinding::of`]), then bound ([`SceneBinding::bind`]):
+/// the two stages `sshc render` times apart.
+pub enum SceneBinding {
+    /// The triangle soup, one [`SceneInputs`] a light (`bind_lights`).
+    Soup(Vec<SceneInputs>),
+    /// Host geometry ([`scene_geometry`]: a glTF file's shared meshes once, an instance a
+    /// node) seen by the scene's camera under each light (`bind_geometry`).
+    Instances {
+        geometry: Geometry,
+        camera: Camera,
+        lights: Vec<LightInputs>,
+        camera_size: (u32, u32),
+        shadow_size: u32,
+    },
+}
+
+impl SceneBinding {
+    /// `scene` for `graph`, every light with its own passes (`all`) or its first light only:
+    /// as host geometry where the scene shares meshes, else as the triangle soup of each
+    /// light ([`scene_inputs_for`]).
+    pub fn of(scene: &Scene, graph: &PassGraph, all: bool) -> Result<SceneBinding, String> {
+        let lights = if all { scene.lights.len().max(1) } else { 1 };
+        let named = |i: usize, e: String| {
+            if scene.lights.len() > 1 {
+                format!("error: light {i}: {e}")
+            } else {
+                format!("error: {e}")
+            }
+        };
+        if let Some(geometry) = scene_geometry(scene).filter(|_| !scene.lights.is_empty()) {
+            let samples = graph_samples(graph);
+            let lights = scene
+                .lights
+                .iter()
+                .take(lights)
+                .enumerate()
+                .map(|(i, l)| light_inputs_with_samples(scene, l, samples).map_err(|e| named(i, e)))
+                .collect::<Result<Vec<_>, String>>()?;
+            return Ok(SceneBinding::Instances {
+                geometry,
+                camera: camera(scene),
+                lights,
+                camera_size: scene.camera_size(),
+                shadow_size: scene.shadow_map,
+            });
         }
-    };
-    let named = |i: usize, e: String| {
-        if scene.lights.len() > 1 {
-            format!("error: light {i}: {e}")
-        } else {
-            format!("error: {e}")
-        }
-    };
-    if let Some(g) = scene_geometry(scene).filter(|_| !scene.lights.is_empty()) {
-        let samples = graph_samples(&ex.graph);
-        let inputs = scene
-            .lights
-            .iter()
-            .take(lights)
-            .enumerate()
-            .map(|(i, l)| light_inputs_with_samples(scene, l, samples).map_err(|e| named(i, e)))
-            .collect::<Result<Vec<_>, String>>()?;
-        ex.bind_geometry(&g, &camera(scene), &inputs, scene.camera_size(), scene.shadow_map)
-            .map_err(|e| format!("error: {e}"))?;
-        return Ok("instances");
+        let alone = |i: usize| {
+            if scene.lights.len() > 1 {
+                crate::session::single_light(scene, i)
+            } else {
+                scene.clone()
+            }
+        };
+        (0..lights)
+            .map(|i| scene_inputs_for(&alone(i), graph).map_err(|e| named(i, e)))
+            .collect::<Result<Vec<_>, String>>()
+            .map(SceneBinding::Soup)
     }
-    let inputs = (0..lights)
-        .map(|i| scene_inputs_for(&alone(i), &ex.graph).map_err(|e| named(i, e)))
-        .collect::<Result<Vec<_>, String>>()?;
-    ex.bind_lights(&inputs).map_err(|e| format!("error: {e}"))?;
-    Ok("soup")
+
+    /// What it binds, for a stage line: the soup, or the meshes, the instances and their
+    /// bytes on the GPU ([`Geometry::gpu_bytes`]).
+    pub fn describe(&self) -> String {
+        match self {
+            SceneBinding::Soup(_) => "the triangle soup".into(),
+            SceneBinding::Instances { geometry: g, .. } => format!(
+                "{} meshes placed by {} instances, {:.1} MB of vertices and indices on the GPU ({:.1} B a triangle)",
+                g.meshes.len(),
+                g.instances.len(),
+                g.gpu_bytes() as f64 / 1e6,
+                g.gpu_bytes() as f64 / (g.triangles().max(1) as f64)
+            ),
+        }
+    }
+
+    pub fn bind(&self, ex: &mut Executor) -> Result<(), String> {
+        match self {
+            SceneBinding::Soup(inputs) => ex.bind_lights(inputs),
+            SceneBinding::Instances {
+                geometry,
+                camera,
+                lights,
+                camera_size,
+                shadow_size,
+            } => ex.bind_geometry(geometry, camera, lights, *camera_size, *shadow_size),
+        }
+        .map_err(|e| format!("error: {e}"))
+    }
+}
+
+/// Bind `scene` on `ex`, every light with its own passes (`all`) or its first light only,
+/// as [`SceneBinding::of`] makes it ready.
+pub fn bind_scene(ex: &mut Executor, scene: &Scene, all: bool) -> Result<(), String> {
+    SceneBinding::of(scene, &ex.graph, all)?.bind(ex)
 }
 
 /// The light samples `graph` renders views of: [`PassGraph::samples`] when some pass has
@@ -274,7 +329,7 @@ impl Cascading {
             self.cascade_offset.unwrap_or_default(),
         )
         .map_err(|e| format!("error: {e}"))?;
-        ex.set_cascades(&c.lights, &camera(scene), c.eye, c.forward, &c.splits)
+        ex.set_cascades(&c.lights, &camera(scene), &c.slices(r.band))
             .map_err(|e| format!("error: {e}"))
     }
 
@@ -291,7 +346,7 @@ impl Cascading {
         if n < 2 {
             return Ok(None);
         }
-        let c = crate::bind::cascade_inputs(
+        let c = cascade_fit(
             scene,
             &ex.graph,
             n,
@@ -300,8 +355,23 @@ impl Cascading {
             self.cascade_offset.unwrap_or_default(),
         )
         .map_err(|e| format!("error: {e}"))?;
-        ex.bind_cascades(&c.scene, &c.lights, c.eye, c.forward, &c.splits, r.band)
-            .map_err(|e| format!("error: {e}"))?;
+        // a scene of shared meshes as its meshes and instances, else its soup
+        match scene_geometry(scene) {
+            Some(g) => ex.bind_geometry_cascades(
+                &g,
+                &camera(scene),
+                &c.lights,
+                scene.camera_size(),
+                scene.shadow_map,
+                &c.slices(r.band),
+            ),
+            None => ex.bind_cascades(
+                &scene_inputs_for(scene, &ex.graph).map_err(|e| format!("error: {e}"))?,
+                &c.lights,
+                &c.slices(r.band),
+            ),
+        }
+        .map_err(|e| format!("error: {e}"))?;
         let slices: Vec<String> = c
             .splits
             .windows(2)
@@ -364,6 +434,18 @@ pub struct Cascades<S = SceneInputs> {
     pub splits: Vec<f32>,
     /// World units per texel of each cascade's map.
     pub texels: Vec<f32>,
+}
+
+impl<S> Cascades<S> {
+    /// The slices the combining step selects by, mixed over `band` of each.
+    pub fn slices(&self, band: f32) -> Slices {
+        Slices {
+            eye: self.eye,
+            forward: self.forward,
+            splits: self.splits.clone(),
+            band,
+        }
+    }
 }
 
 /// `n` cascades of the scene's light over the view depth the camera sees surfaces at (the

@@ -843,7 +843,13 @@ pub fn verify(
             if planes.len() > 1 {
                 let lights: Vec<_> = planes.iter().map(|p| p.lit_inputs(width).light_inputs()).collect();
                 let (eye, forward) = QueryPlane::camera_axis();
-                ex.bind_cascades(&scene, &lights, eye, forward, &splits, opts.cascade_band)
+                let slices = sshc_runtime::gpu::Slices {
+                    eye,
+                    forward,
+                    splits: splits.clone(),
+                    band: opts.cascade_band,
+                };
+                ex.bind_cascades(&scene, &lights, &slices)
             } else {
                 ex.bind_scene(&scene)
             }

@@ -243,7 +243,7 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
         let one = sshc_lab::bind::cascade_inputs(&scene, &ex.graph, 1, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"));
         assert_eq!(one.lights.len(), 1);
         let inputs = sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap();
-        ex.bind_cascades(&inputs, &[inputs.light_inputs()], one.eye, one.forward, &one.splits, 0.2)
+        ex.bind_cascades(&inputs, &[inputs.light_inputs()], &one.slices(0.2))
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
         let again = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
@@ -322,16 +322,16 @@ fn cascades_refitted_in_place_equal_a_fresh_binding() {
         };
         let mut ex = executor();
         let a = fit(&ex, &first);
-        ex.bind_cascades(&a.scene, &a.lights, a.eye, a.forward, &a.splits, 0.2)
+        ex.bind_cascades(&a.scene, &a.lights, &a.slices(0.2))
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         let before = frame(&mut ex);
         let b = fit(&ex, &moved);
-        ex.set_cascades(&b.lights, &sshc_lab::bind::camera(&moved), b.eye, b.forward, &b.splits)
+        ex.set_cascades(&b.lights, &sshc_lab::bind::camera(&moved), &b.slices(0.2))
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         let in_place = frame(&mut ex);
         let mut fresh = executor();
         fresh
-            .bind_cascades(&b.scene, &b.lights, b.eye, b.forward, &b.splits, 0.2)
+            .bind_cascades(&b.scene, &b.lights, &b.slices(0.2))
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         let fresh = frame(&mut fresh);
         let bits = |v: &[[f32; 4]]| v.iter().flat_map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
@@ -373,7 +373,9 @@ fn a_gltf_of_shared_meshes_binds_as_instances_and_renders_as_its_soup() {
         let run = |instances: bool| {
             let mut ex = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
             if instances {
-                assert_eq!(sshc_lab::bind::bind_scene(&mut ex, &scene, true), Ok("instances"), "{t}");
+                let b = sshc_lab::bind::SceneBinding::of(&scene, &ex.graph, true).unwrap();
+                assert!(matches!(b, sshc_lab::bind::SceneBinding::Instances { .. }), "{t}");
+                b.bind(&mut ex).unwrap_or_else(|e| panic!("{t}: {e}"));
             } else {
                 ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap())
                     .unwrap();
@@ -387,4 +389,28 @@ fn a_gltf_of_shared_meshes_binds_as_instances_and_renders_as_its_soup() {
         assert!(a.iter().any(|v| *v < 0.5), "{t}: no shadow in view");
         assert_eq!(differ, 0, "{t}: {differ} pixels differ from the soup's, by up to {max}");
     }
+    // three cascades of its sun, on its instances (`bind_geometry_cascades`) and on its soup
+    let path = root().join("techniques/pcss.ron");
+    let source = std::fs::read_to_string(&path).unwrap();
+    let cascading = sshc_lab::bind::Cascading {
+        cascades: Some(3),
+        cascade_lambda: Some(0.75),
+        cascade_band: Some(0.2),
+        no_snap: false,
+        cascade_offset: None,
+    };
+    let mut instanced = compile_executor(&gpu, &path, &source, &Default::default()).unwrap();
+    assert!(cascading.bind(&mut instanced, &scene).unwrap().is_some());
+    assert!(instanced.edge_counts().is_ok() && instanced.cascades() == 3);
+    let mut soup = compile_executor(&gpu, &path, &source, &Default::default()).unwrap();
+    let c = sshc_lab::bind::cascade_inputs(&scene, &soup.graph, 3, 0.75, true, [0.0; 3]).unwrap();
+    soup.bind_cascades(&c.scene, &c.lights, &c.slices(0.2)).unwrap();
+    let frame = |ex: &mut sshc_runtime::gpu::Executor| {
+        ex.run_frame().unwrap();
+        ex.read_visibilities().unwrap().rgba
+    };
+    assert!(
+        frame(&mut instanced) == frame(&mut soup),
+        "cascades on the instances differ from the soup's"
+    );
 }

@@ -7,7 +7,7 @@ use crate::frame::{Camera, LightInputs, SceneInputs};
 use crate::geometry::{Geometry, GeometryBuffers};
 use crate::graph::{self, Format, PassGraph, TextureDecl};
 use crate::image::{Image, read_back, read_table};
-use crate::lights::{Combine, Combining, MAX_LIGHTS};
+use crate::lights::{Combine, Combining, MAX_LIGHTS, Slices};
 use crate::pipeline::mip_count;
 use crate::pixels::{HostPixels, PixelsStep};
 use crate::receivers::Unshadowed;
@@ -410,123 +410,107 @@ impl Executor {
     }
 
     /// Bind the cascades of one light at infinity (1 to [`MAX_CASCADES`]): `scene` gives the
-    /// geometry and camera, uploaded once for every cascade as [`Executor::bind_lights`]
-    /// shares one scene; `cascades[i]` is cascade `i`'s light (the same light, its view
-    /// fitted by [`crate::light::cascade_views`]); `splits` the `n + 1` view distances
-    /// bounding them along the camera's unit `forward` from `eye`. Each cascade gets its own
-    /// resources and runs every pass, as a light of [`Executor::bind_lights`] does (so one
-    /// width in texels serves every cascade: a technique's texel-sized kernels cover less
-    /// of the world in nearer cascades); the combining step then takes, per pixel, the
-    /// cascade of its view distance, mixed with the next over the last `band` fraction of
-    /// its slice. The visibility texture holds it in channel 0 and the cascade (fractional
-    /// in a band) in channel 1. One cascade is [`Executor::bind_scene`] with its light.
-    pub fn bind_cascades(
-        &mut self,
-        scene: &SceneInputs,
-        cascades: &[LightInputs],
-        eye: [f32; 3],
-        forward: [f32; 3],
-        splits: &[f32],
-        band: f32,
-    ) -> Result<()> {
-        let n = cascades.len();
-        let bad = |m: String| Err(RuntimeError::Param(m));
-        if !(1..=MAX_CASCADES as usize).contains(&n) {
-            return bad(format!("{n} cascades: a light has 1 to {MAX_CASCADES}"));
-        }
-        if splits.len() != n + 1 || !splits.iter().all(|s| s.is_finite()) || splits.windows(2).any(|w| w[0] >= w[1]) {
-            return bad(format!(
-                "{} split distances for {n} cascades: give {} increasing finite distances",
-                splits.len(),
-                n + 1
-            ));
-        }
-        if !(0.0..1.0).contains(&band) {
-            return bad(format!("cascade band {band}: a fraction of a slice, in [0, 1)"));
-        }
-        if !(eye.iter().chain(&forward).all(|x| x.is_finite())) {
-            return bad("the camera's eye and forward axis must be finite".into());
-        }
-        if let Some(s) = cascades.iter().find(|s| s.position != cascades[0].position || s.position[3] != 0.0) {
-            return bad(format!(
-                "cascades are views of one light at infinity: light position or direction {:?} against {:?}",
-                s.position, cascades[0].position
-            ));
-        }
-        let camera = scene.camera();
-        camera.check()?;
-        for (l, light) in cascades.iter().enumerate() {
-            light.check(l)?;
-        }
+    /// geometry (a soup) and camera, uploaded once for every cascade as
+    /// [`Executor::bind_lights`] shares one scene; `cascades[i]` is cascade `i`'s light (the
+    /// same light, its view fitted by [`crate::light::cascade_views`]); `slices` where they
+    /// split the camera's view. Each cascade gets its own resources and runs every pass, as
+    /// a light of [`Executor::bind_lights`] does (so one width in texels serves every
+    /// cascade: a technique's texel-sized kernels cover less of the world in nearer
+    /// cascades); the combining step then takes, per pixel, the cascade of its view
+    /// distance, mixed with the next over the last `band` fraction of its slice. The
+    /// visibility texture holds it in channel 0 and the cascade (fractional in a band) in
+    /// channel 1. One cascade is [`Executor::bind_scene`] with its light.
+    pub fn bind_cascades(&mut self, scene: &SceneInputs, cascades: &[LightInputs], slices: &Slices) -> Result<()> {
+        self.check_cascades(&scene.camera(), cascades, slices)?;
         self.check_floor(&scene.vertices, scene.casting_vertices, cascades)?;
+        let camera = scene.camera();
         let inputs: Vec<SceneInputs> = cascades
             .iter()
             .map(|l| SceneInputs::of(&camera, l, scene.camera_size, scene.shadow_size))
             .collect();
         self.bind_soup(scene, &inputs)?;
+        self.combine_cascades(slices)
+    }
+
+    /// [`Executor::bind_cascades`] on a host's geometry ([`Executor::bind_geometry`]'s
+    /// meshes and instances), seen by `camera` at these sizes.
+    pub fn bind_geometry_cascades(
+        &mut self,
+        geometry: &Geometry,
+        camera: &Camera,
+        cascades: &[LightInputs],
+        camera_size: (u32, u32),
+        shadow_size: u32,
+        slices: &Slices,
+    ) -> Result<()> {
+        self.check_cascades(camera, cascades, slices)?;
+        self.bind_geometry(geometry, camera, cascades, camera_size, shadow_size)?;
+        self.combine_cascades(slices)
+    }
+
+    /// Refuse cascades that cannot be bound: a count outside 1 to [`MAX_CASCADES`], slices
+    /// they cannot take ([`Slices::check`]), lights that are not one light at infinity, a
+    /// camera or a light whose values the per-frame calls would refuse.
+    fn check_cascades(&self, camera: &Camera, cascades: &[LightInputs], slices: &Slices) -> Result<()> {
+        let n = cascades.len();
+        if !(1..=MAX_CASCADES as usize).contains(&n) {
+            return Err(RuntimeError::Param(format!("{n} cascades: a light has 1 to {MAX_CASCADES}")));
+        }
+        slices.check(n)?;
+        if let Some(s) = cascades.iter().find(|s| s.position != cascades[0].position || s.position[3] != 0.0) {
+            return Err(RuntimeError::Param(format!(
+                "cascades are views of one light at infinity: light position or direction {:?} against {:?}",
+                s.position, cascades[0].position
+            )));
+        }
+        camera.check()?;
+        for (l, light) in cascades.iter().enumerate() {
+            light.check(l)?;
+        }
+        Ok(())
+    }
+
+    /// After the cascades' lights are bound: the combining step that selects among them.
+    fn combine_cascades(&mut self, slices: &Slices) -> Result<()> {
+        let n = self.bound.len();
         if n > 1 {
-            let camera = scene.camera_size;
+            let camera = self.bound[0].camera_size;
             let position = &self.bound[0].camera[CameraOutput::Position as usize];
-            let mode = Combining::Cascades {
-                eye,
-                forward,
-                splits: splits.to_vec(),
-                band,
-            };
+            let mode = Combining::Cascades(slices.clone());
             self.combine = Some(Combine::new(&self.gpu, camera, n, &mode, position)?);
-            self.cascade_band = Some(band);
+            self.cascade_band = Some(slices.band);
         }
         Ok(())
     }
 
     /// Refit the bound cascades for a frame whose camera moved: each cascade's light
-    /// (`lights[i]`, its view fitted to its new slice), the camera, its `eye` and unit
-    /// `forward`, and the `n + 1` splits, all checked as [`Executor::bind_cascades`] checks
-    /// them (the same count and band). Uniforms are written, nothing is created, nothing
-    /// waits: the next frame renders as a fresh binding of these cascades would.
-    pub fn set_cascades(
-        &mut self,
-        lights: &[LightInputs],
-        camera: &Camera,
-        eye: [f32; 3],
-        forward: [f32; 3],
-        splits: &[f32],
-    ) -> Result<()> {
+    /// (`lights[i]`, its view fitted to its new slice), the camera and the slices, all
+    /// checked as [`Executor::bind_cascades`] checks them (the same count; the band may
+    /// change). Uniforms are written, nothing is created, nothing waits: the next frame
+    /// renders as a fresh binding of these cascades would.
+    pub fn set_cascades(&mut self, lights: &[LightInputs], camera: &Camera, slices: &Slices) -> Result<()> {
         let n = self.bound.len();
-        let Some(band) = self.cascade_band else {
+        if self.cascade_band.is_none() {
             return Err(RuntimeError::NotFound(
                 "no cascades are bound (bind_cascades with 2 or more)".into(),
             ));
-        };
-        if lights.len() != n || splits.len() != n + 1 || !splits.iter().all(|s| s.is_finite()) || splits.windows(2).any(|w| w[0] >= w[1]) {
+        }
+        if lights.len() != n {
             return Err(RuntimeError::Param(format!(
-                "{} cascade light(s) and {} split(s) for the {n} bound cascades: give {n} and {} increasing finite distances",
-                lights.len(),
-                splits.len(),
-                n + 1
+                "{} cascade light(s) for the {n} bound cascades",
+                lights.len()
             )));
         }
-        if !(eye.iter().chain(&forward).all(|x| x.is_finite())) {
-            return Err(RuntimeError::Param("the camera's eye and forward axis must be finite".into()));
-        }
         // every value checked before anything is written
-        camera.check()?;
-        for (l, light) in lights.iter().enumerate() {
-            light.check(l)?;
-        }
+        self.check_cascades(camera, lights, slices)?;
         self.set_camera(camera)?;
         for (l, light) in lights.iter().enumerate() {
             self.set_light(l, light)?;
         }
         if let Some(c) = &self.combine {
-            let mode = Combining::Cascades {
-                eye,
-                forward,
-                splits: splits.to_vec(),
-                band,
-            };
-            c.set_slices(&self.gpu.queue, &mode);
+            c.set_slices(&self.gpu.queue, &Combining::Cascades(slices.clone()));
         }
+        self.cascade_band = Some(slices.band);
         Ok(())
     }
 

@@ -40,7 +40,7 @@ pub use crate::fit::{Boxes, Fit};
 pub use crate::frame::{Camera, LightInputs, SampleView, SceneInputs};
 pub use crate::geometry::{Geometry, IDENTITY, Instance, MAX_INSTANCES, Mesh, normal_matrix, transform_point};
 pub use crate::image::Image;
-pub use crate::lights::MAX_LIGHTS;
+pub use crate::lights::{MAX_LIGHTS, Slices};
 pub use crate::pipeline::mip_count;
 pub use crate::pixels::HostPixels;
 pub use crate::requirements::{FeatureNeed, Limit, LimitNeed, Requirements};

@@ -105,12 +105,12 @@ fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
 /// The cascades' uniform (`Slices` of `CASCADES_WGSL`): eye and band, forward and count,
 /// the splits (unused ones past the last); `None` for lights.
 fn slices_words(mode: &Combining) -> Option<[f32; 16]> {
-    let Combining::Cascades {
+    let Combining::Cascades(Slices {
         eye,
         forward,
         splits,
         band,
-    } = mode
+    }) = mode
     else {
         return None;
     };
@@ -141,15 +141,44 @@ pub enum Combining {
     /// Several lights: the mean of their colours; visibility channel `l` light `l`'s.
     Lights,
     /// Cascades of one light: by the pixel's view distance (`CASCADES_WGSL`).
-    Cascades {
-        /// The camera's position and unit view direction.
-        eye: [f32; 3],
-        forward: [f32; 3],
-        /// The `n + 1` split distances along `forward`, increasing.
-        splits: Vec<f32>,
-        /// The fraction of each slice, at its far end, over which it mixes into the next.
-        band: f32,
-    },
+    Cascades(Slices),
+}
+
+/// Where cascades split the camera's view, for the combining step: each pixel takes the
+/// cascade whose slice holds its view distance, mixed with the next over a band.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Slices {
+    /// The camera's position and unit view direction.
+    pub eye: [f32; 3],
+    pub forward: [f32; 3],
+    /// The `n + 1` split distances along `forward`, increasing.
+    pub splits: Vec<f32>,
+    /// The fraction of each slice, at its far end, over which it mixes into the next, in
+    /// [0, 1).
+    pub band: f32,
+}
+
+impl Slices {
+    /// Refuse slices that `n` cascades cannot take: not `n + 1` finite increasing splits, a
+    /// band outside [0, 1), an eye or axis not finite.
+    pub fn check(&self, n: usize) -> crate::gpu::Result<()> {
+        let bad = |m: String| Err(crate::gpu::RuntimeError::Param(m));
+        let s = &self.splits;
+        if s.len() != n + 1 || !s.iter().all(|x| x.is_finite()) || s.windows(2).any(|w| w[0] >= w[1]) {
+            return bad(format!(
+                "{} split distances for {n} cascades: give {} increasing finite distances",
+                s.len(),
+                n + 1
+            ));
+        }
+        if !(0.0..1.0).contains(&self.band) {
+            return bad(format!("cascade band {}: a fraction of a slice, in [0, 1)", self.band));
+        }
+        if !(self.eye.iter().chain(&self.forward).all(|x| x.is_finite())) {
+            return bad("the camera's eye and forward axis must be finite".into());
+        }
+        Ok(())
+    }
 }
 
 /// The combining step and its textures, at one camera size and number of lights.
@@ -215,7 +244,7 @@ impl Combine {
             let visibility = texture("visibility per light", wgpu::TextureFormat::Rgba32Float, 1, output);
             let source = match mode {
                 Combining::Lights => COMBINE_WGSL,
-                Combining::Cascades { .. } => CASCADES_WGSL,
+                Combining::Cascades(_) => CASCADES_WGSL,
             };
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("combine lights"),

@@ -81,11 +81,15 @@ pub fn render(a: RenderArgs) -> Result<(), String> {
             println!("{line}");
         }
         None => {
-            let how = crate::bind::bind_scene(&mut ex, &scene, true)?;
-            stages.done(match how {
-                "instances" => "scene inputs (meshes and their instances)",
-                _ => "scene inputs (the triangle soup)",
+            let binding = crate::bind::SceneBinding::of(&scene, &ex.graph, true)?;
+            stages.done(match binding {
+                crate::bind::SceneBinding::Soup(_) => "scene inputs (the triangle soup)",
+                crate::bind::SceneBinding::Instances { .. } => "scene inputs (meshes and their instances)",
             });
+            if let crate::bind::SceneBinding::Instances { .. } = binding {
+                println!("geometry: {}", binding.describe());
+            }
+            binding.bind(&mut ex)?;
         }
     }
     gpu.wait().map_err(rt)?;

@@ -207,7 +207,7 @@ pub fn bind(ex: &mut Executor, scene: &Scene, cascading: &Cascading) -> Result<(
     if cascading.bind(ex, scene)?.is_some() {
         return Ok(());
     }
-    crate::bind::bind_scene(ex, scene, true).map(|_| ())
+    crate::bind::bind_scene(ex, scene, true)
 }
 
 /// Watches files and says which of them changed.
