@@ -128,12 +128,13 @@ impl SceneBinding {
                 shadow_size: scene.shadow_map,
             });
         }
+        // light i alone (`session::single_light`, which imports this module)
         let alone = |i: usize| {
+            let mut s = scene.clone();
             if scene.lights.len() > 1 {
-                crate::session::single_light(scene, i)
-            } else {
-                scene.clone()
+                s.lights = vec![scene.lights[i].clone()];
             }
+            s
         };
         (0..lights)
             .map(|i| scene_inputs_for(&alone(i), graph).map_err(|e| named(i, e)))

@@ -161,8 +161,8 @@ pub struct Slices {
 impl Slices {
     /// Refuse slices that `n` cascades cannot take: not `n + 1` finite increasing splits, a
     /// band outside [0, 1), an eye or axis not finite.
-    pub fn check(&self, n: usize) -> crate::gpu::Result<()> {
-        let bad = |m: String| Err(crate::gpu::RuntimeError::Param(m));
+    pub fn check(&self, n: usize) -> Result<()> {
+        let bad = |m: String| Err(RuntimeError::Param(m));
         let s = &self.splits;
         if s.len() != n + 1 || !s.iter().all(|x| x.is_finite()) || s.windows(2).any(|w| w[0] >= w[1]) {
             return bad(format!(

@@ -1257,7 +1257,7 @@ fn world_space_instances_keep_no_placed_copy_and_match_instances_placed_on_the_g
 /// and gives the visibility the full device gives it, and the same mesh placed on the GPU
 /// is refused, naming the limit.
 #[test]
-fn world_space_meshes_are_free_of_the_storage_binding_limit() {
+fn world_space_and_upload_placed_meshes_are_free_of_the_storage_binding_limit() {
     const LIMIT: u64 = 64 << 10;
     let c = compile("pcss");
     let s = inputs(&scene("triangle", 32, 64), &c);
@@ -1306,8 +1306,19 @@ fn world_space_meshes_are_free_of_the_storage_binding_limit() {
         .unwrap();
     full.run_frame().unwrap();
     assert!(ex.read_visibilities().unwrap().rgba == full.read_visibilities().unwrap().rgba);
-    // placed on the GPU, the floor's vertices would be bound whole
     let last = g.instances.len() - 1;
+    // still but moved (placed at upload, on the CPU): its placed copy is written, never
+    // bound as storage, so it binds as well, and gives the full device's visibility
+    g.instances[last].transform[13] = -0.005;
+    assert!(g.instances[last].placed_at_upload());
+    ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap();
+    ex.run_frame().unwrap();
+    full.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap();
+    full.run_frame().unwrap();
+    assert!(ex.read_visibilities().unwrap().rgba == full.read_visibilities().unwrap().rgba);
+    // placed on the GPU, the floor's vertices would be bound whole
     g.instances[last].moves = true;
     let e = ex
         .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
