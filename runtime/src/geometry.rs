@@ -686,16 +686,15 @@ fn write_placed(a: &Adjacency, at: [u32; 3], welded: u32, m: Option<&[f32; 16]>,
 /// and normal, 24 bytes a vertex).
 fn placed_copy(mesh: &Mesh, m: &[f32; 16]) -> Vec<u8> {
     let n = normal_matrix(m).unwrap_or(IDENTITY);
-    mesh.positions
-        .iter()
-        .zip(&mesh.normals)
-        .flat_map(|(p, q)| {
-            let p = transform_point(m, *p);
-            let q = [0, 1, 2].map(|r| n[r] * q[0] + n[4 + r] * q[1] + n[8 + r] * q[2]);
-            p.into_iter().chain(q)
-        })
-        .flat_map(f32::to_le_bytes)
-        .collect()
+    let mut out = Vec::with_capacity(mesh.positions.len() * 24);
+    for (p, q) in mesh.positions.iter().zip(&mesh.normals) {
+        let p = transform_point(m, *p);
+        let q = [0, 1, 2].map(|r| n[r] * q[0] + n[4 + r] * q[1] + n[8 + r] * q[2]);
+        for x in p.into_iter().chain(q) {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    out
 }
 
 const PLACE_WGSL: &str = "
