@@ -118,6 +118,22 @@ fn colours_below_panels(img: &image::RgbaImage) -> usize {
     seen.len()
 }
 
+/// The visibility a screenshot's log entry wrote (`pixels` of them), asserted equal to
+/// `sshc render`'s with the command the entry gives (its `--out` in `dir`), bit for bit.
+fn renders_as_logged(dir: &Path, shot: &serde_json::Value, pixels: usize) -> Vec<f32> {
+    let (viewer, rendered) = render_logged(dir, shot);
+    assert_eq!(viewer.len(), pixels);
+    let same = viewer.iter().zip(&rendered).filter(|(a, b)| a.to_bits() == b.to_bits()).count();
+    assert_eq!(
+        same,
+        viewer.len(),
+        "{} of {} visibilities differ from `sshc render`'s",
+        viewer.len() - same,
+        viewer.len()
+    );
+    viewer
+}
+
 /// The visibility a screenshot's log entry wrote, and `sshc render`'s with the command the
 /// entry gives (its `--out` in `dir`).
 fn render_logged(dir: &Path, shot: &serde_json::Value) -> (Vec<f32>, Vec<f32>) {
@@ -192,16 +208,7 @@ fn a_scripted_session_moves_the_light_sets_a_param_and_matches_render_bit_for_bi
         command.contains("--set 'slope_bias=2.5'") || command.contains("--set slope_bias=2.5"),
         "{command}"
     );
-    let (viewer, rendered) = render_logged(&dir, shot);
-    assert_eq!(viewer.len(), 160 * 120);
-    let same = viewer.iter().zip(&rendered).filter(|(a, b)| a.to_bits() == b.to_bits()).count();
-    assert_eq!(
-        same,
-        viewer.len(),
-        "{} of {} visibilities differ from `sshc render`'s",
-        viewer.len() - same,
-        viewer.len()
-    );
+    let viewer = renders_as_logged(&dir, shot, 160 * 120);
     // a penumbra: not every pixel lit or hidden
     assert!(viewer.iter().any(|v| *v > 0.05 && *v < 0.95));
     for mode in ["set", "visibility", "texture"] {
@@ -639,15 +646,6 @@ fn the_viewer_draws_the_cascades_and_refits_them_as_the_camera_moves() {
         "{}",
         shots[1]["command"]
     );
-    let (viewer, rendered) = render_logged(&dir, shots[1]);
-    assert_eq!(viewer.len(), 160 * 120);
-    let same = viewer.iter().zip(&rendered).filter(|(a, b)| a.to_bits() == b.to_bits()).count();
-    assert_eq!(
-        same,
-        viewer.len(),
-        "{} of {} visibilities differ from `sshc render`'s",
-        viewer.len() - same,
-        viewer.len()
-    );
+    let viewer = renders_as_logged(&dir, shots[1], 160 * 120);
     assert!(viewer.iter().any(|v| *v < 0.5), "no shadow in view");
 }
