@@ -773,6 +773,9 @@ pub enum Sig {
     Length,
     /// `dot`: two vectors of one size; the result is f32.
     Dot,
+    /// `div_or(num, den, eps, fallback)`: `num` and `den` f32 or vectors of one size, the
+    /// result their type; `eps` and `fallback` that type or f32, which lowering splats.
+    Guarded,
 }
 
 /// How a call on constants is evaluated at compile time.
@@ -801,6 +804,8 @@ pub enum Wgsl {
     Callee(&'static str),
     /// Any other expression of the arguments.
     Expr(fn(&[String]) -> String),
+    /// An expression of the arguments that depends on the result's type.
+    Typed(fn(&[String], Ty) -> String),
 }
 
 impl fmt::Debug for Builtin {
@@ -816,12 +821,14 @@ impl fmt::Debug for Builtin {
 impl Func {
     /// The WGSL of a call of this function on `args` (WGSL expressions), as its
     /// descriptor says: the same name, another callee, or an expression of its own.
-    pub fn wgsl_call(self, args: &[String]) -> String {
+    /// `ty` is the call's result type.
+    pub fn wgsl_call(self, args: &[String], ty: Ty) -> String {
         let d = self.desc();
         match d.wgsl {
             Wgsl::Same => format!("{}({})", d.name, args.join(", ")),
             Wgsl::Callee(callee) => format!("{callee}({})", args.join(", ")),
             Wgsl::Expr(write) => write(args),
+            Wgsl::Typed(write) => write(args, ty),
         }
     }
 
@@ -875,7 +882,7 @@ impl Func {
         use Accuracy::{Bound, Exact, Rounded};
         use Fold::{Custom, Float, Hook, IntOrFloat, Never};
         use Sig::{Construct, Convert, Dot, Length, Numeric, SameNumeric, Scalars};
-        use Wgsl::{Callee, Expr, Same};
+        use Wgsl::{Callee, Expr, Same, Typed};
         match self {
             Func::Abs => &Builtin {
                 name: "abs",
@@ -1348,7 +1355,7 @@ impl Func {
             Func::DivOr => &Builtin {
                 name: "div_or",
                 arity: 4,
-                sig: Scalars,
+                sig: Sig::Guarded,
                 fold: Float(|x| Some(if x[1].abs() >= x[2] && x[1] != 0.0 { x[0] / x[1] } else { x[3] })),
                 range: |v| {
                     // the quotient over the denominators at least eps away from 0, and the fallback
@@ -1365,15 +1372,25 @@ impl Func {
                     r
                 },
                 // the denominator is replaced by 1 where it is refused, so that no
-                // infinity or NaN is computed even in the branch select discards
-                wgsl: Expr(|v| {
-                    format!(
+                // infinity or NaN is computed even in the branch select discards; on
+                // vectors, component by component (lowering has splatted eps and fallback)
+                wgsl: Typed(|v, ty| match ty {
+                    Ty::Vec(k) => {
+                        let ok = format!("(abs({d}) >= {e}) & ({d} != vec{k}<f32>(0.0))", d = v[1], e = v[2]);
+                        format!(
+                            "select({fb}, {n} / select(vec{k}<f32>(1.0), {d}, {ok}), {ok})",
+                            n = v[0],
+                            d = v[1],
+                            fb = v[3]
+                        )
+                    }
+                    Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => format!(
                         "select({fb}, {n} / select(1.0, {d}, abs({d}) >= {e} && {d} != 0.0), abs({d}) >= {e} && {d} != 0.0)",
                         n = v[0],
                         d = v[1],
                         e = v[2],
                         fb = v[3]
-                    )
+                    ),
                 }),
                 accuracy: Bound(|v, _| 2.5 * ulp(v)),
             },
@@ -1459,6 +1476,10 @@ impl Sig {
             Sig::Scalars => format!("{}: f32 scalars", params(&["a", "b", "c", "d"])),
             Sig::Length => format!("{}: one vector", params(&["v"])),
             Sig::Dot => format!("{}: two vectors of one size", params(&["a", "b"])),
+            Sig::Guarded => format!(
+                "{}: `num` and `den` f32 or vectors of one size; `eps` and `fallback` their type or f32",
+                params(&["num", "den", "eps", "fallback"])
+            ),
         }
     }
 
@@ -1510,6 +1531,29 @@ impl Sig {
                 Some(t) if t.is_float_like() => Ok(if t == Ty::AbstractInt { Ty::F32 } else { t }),
                 _ => Err(format!("`{name}` expects f32 or vector arguments, found {}", list(args))),
             },
+            Sig::Guarded => {
+                let t = match same(&args[..2]) {
+                    Some(t) if t.is_float_like() => {
+                        if t == Ty::AbstractInt {
+                            Ty::F32
+                        } else {
+                            t
+                        }
+                    }
+                    _ => {
+                        return Err(format!(
+                            "`{name}` expects `num` and `den` of one type, f32 or a vector, found {}",
+                            list(&args[..2])
+                        ));
+                    }
+                };
+                match args[2..].iter().find(|a| !matches!(a, Ty::F32 | Ty::AbstractInt) && **a != t) {
+                    None => Ok(t),
+                    Some(a) => Err(format!(
+                        "`{name}` takes `eps` and `fallback` as f32 or the type of `num` ({t}), found {a}"
+                    )),
+                }
+            }
         }
     }
 
@@ -1527,13 +1571,21 @@ impl Sig {
                     Ty::F32
                 }
             }
+            // num and den the result's type; eps and fallback as given (f32 splatted later)
+            Sig::Guarded => {
+                if i < 2 || matches!(args.get(i), Some(Ty::Vec(_))) {
+                    result
+                } else {
+                    Ty::F32
+                }
+            }
         }
     }
 
     fn keeps_abstract(self) -> bool {
         match self {
             Sig::Numeric | Sig::SameNumeric => true,
-            Sig::Float | Sig::Select | Sig::Convert(_) | Sig::Construct(_) | Sig::Scalars | Sig::Length | Sig::Dot => false,
+            Sig::Float | Sig::Select | Sig::Convert(_) | Sig::Construct(_) | Sig::Scalars | Sig::Length | Sig::Dot | Sig::Guarded => false,
         }
     }
 }
@@ -2091,7 +2143,7 @@ mod tests {
             for sig in signatures(f) {
                 let ty = f.result(&sig).unwrap();
                 let args: Vec<String> = sig.iter().map(|t| arg(*t)).collect();
-                body.push_str(&format!("    let call{k}: {} = {};\n", ty.wgsl(), f.wgsl_call(&args)));
+                body.push_str(&format!("    let call{k}: {} = {};\n", ty.wgsl(), f.wgsl_call(&args, ty)));
                 k += 1;
             }
         }

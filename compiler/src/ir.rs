@@ -620,7 +620,7 @@ impl Arena {
                             (_, Sig::Dot) => (0..width(a[0])).map(|k| get(&a[0], k) * get(&a[1], k)).sum(),
                             (
                                 Fold::Never | Fold::Float(_) | Fold::IntOrFloat(..) | Fold::Custom(_),
-                                Sig::Float | Sig::Numeric | Sig::SameNumeric | Sig::Convert(_) | Sig::Scalars,
+                                Sig::Float | Sig::Numeric | Sig::SameNumeric | Sig::Convert(_) | Sig::Scalars | Sig::Guarded,
                             ) => componentwise(),
                         }
                     }

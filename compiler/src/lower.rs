@@ -460,8 +460,17 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         }
         let f = Func::from_name(name).ok_or_else(|| internal(span, "unknown function"))?;
         let lowered = args.iter().map(|a| self.expr(a)).collect::<Result<Vec<_>, _>>()?;
-        let hs: Vec<ExprId> = lowered.into_iter().zip(args).map(|(h, a)| self.coerce(a, h)).collect();
+        let mut hs: Vec<ExprId> = lowered.into_iter().zip(args).map(|(h, a)| self.coerce(a, h)).collect();
         let ty = self.ty(e)?;
+        // a guarded division of vectors takes a scalar eps or fallback in every component
+        if let (crate::builtins::Sig::Guarded, Ty::Vec(k)) = (f.desc().sig, ty) {
+            for h in &mut hs {
+                if self.arena.ty(*h) != ty {
+                    let splat = [Func::Vec2, Func::Vec3, Func::Vec4][usize::from(k).saturating_sub(2).min(2)];
+                    *h = self.arena.add(Node::Call(splat, vec![*h; usize::from(k)]), ty, span);
+                }
+            }
+        }
         self.int_fault(IntOp::Call(f), &hs, ty, span, span)?;
         Ok(self.arena.add(Node::Call(f, hs), ty, span))
     }

@@ -231,6 +231,36 @@ fn div_or_divides_where_the_denominator_is_large_enough() {
     assert!(counts.iter().all(|&c| c > 0), "every branch is exercised: {counts:?}");
 }
 
+/// `div_or` on vectors: component by component, a scalar `eps` splatted and a vector
+/// fallback, the GPU against the closed form. Component x divides 0.1 by `d - 0.5`,
+/// component y divides -0.1 by `0.5 - d`; their sum is `0.2 / (d - 0.5)` where both
+/// denominators are at least 0.2 from 0, and the fallbacks' 0.25 + 0.5 elsewhere.
+#[test]
+fn div_or_divides_vectors_component_by_component() {
+    let p = plane();
+    let run = run_plane(
+        &probe_expr("saturate(dot(div_or(vec2(0.1, -0.1), vec2(d - 0.5, 0.5 - d), 0.2, vec2(0.25, 0.5)), vec2(1.0, 1.0)))"),
+        &p,
+        &depth_field("one", N),
+        &[],
+        1,
+    );
+    let mut counts = [0; 2];
+    for (v, pos) in run.visibility.iter().zip(&run.positions) {
+        let (_, d) = p.project(*pos);
+        let den = d - 0.5;
+        if (den.abs() - 0.2).abs() < 1e-5 {
+            continue;
+        }
+        let divides = den.abs() >= 0.2;
+        let want = if divides { (0.2 / den).clamp(0.0, 1.0) } else { 0.75 };
+        counts[usize::from(divides)] += 1;
+        // as the scalar test: a few ulps of d, amplified by at most 0.2 / 0.2^2 = 5
+        assert!((*v as f64 - want).abs() <= 2e-5, "d = {d}: {v} vs {want}");
+    }
+    assert!(counts.iter().all(|&c| c > 0), "both branches are exercised: {counts:?}");
+}
+
 /// A per-sample Depth pass takes one override map per light sample's view, each in its
 /// own layer; a single map serves every view; any other count is refused, naming the pass.
 #[test]

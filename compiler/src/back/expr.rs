@@ -234,7 +234,7 @@ impl<'a> Emitter<'a> {
             Node::Swizzle(x, c) => format!("{}.{}", self.n(x), c.iter().map(|i| COMP[*i as usize]).collect::<String>()),
             Node::Call(f, args) => {
                 let v: Vec<String> = args.iter().map(|x| self.n(*x).to_string()).collect();
-                f.wgsl_call(&v)
+                f.wgsl_call(&v, self.ir.arena.ty(h))
             }
         })
     }
