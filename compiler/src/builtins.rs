@@ -1710,6 +1710,14 @@ pub enum SampleFn {
     Box,
     /// `sample_at(ch, du, dv)`: hardware-filtered (bilinear) at `uv + (du, dv)`, level 0.
     SampleAt,
+    /// `sample_box_at(ch, du, dv, wx, wy)`: [`SampleFn::Box`] centred at `uv + (du, dv)`:
+    /// a region off the receiver (a sub-region of a filter kernel, a tile).
+    BoxAt,
+    /// `sample_width_at(ch, du, dv, w)`: [`SampleFn::SampleWidth`] centred at `uv + (du, dv)`.
+    SampleWidthAt,
+    /// `nearest_level(ch, level)`: the texel of mip level `level` (an i32, clamped to the
+    /// chain) containing `uv`, unfiltered: a min or max mip read as it is.
+    NearestLevel,
 }
 
 /// Everything the compiler knows about one lookup function.
@@ -1749,7 +1757,7 @@ impl fmt::Debug for SampleWgsl {
 }
 
 impl SampleFn {
-    pub const ALL: [SampleFn; 8] = [
+    pub const ALL: [SampleFn; 11] = [
         SampleFn::Sample,
         SampleFn::SampleLod,
         SampleFn::SampleWidth,
@@ -1758,11 +1766,14 @@ impl SampleFn {
         SampleFn::Box,
         SampleFn::NearestAt,
         SampleFn::SampleAt,
+        SampleFn::BoxAt,
+        SampleFn::SampleWidthAt,
+        SampleFn::NearestLevel,
     ];
 
     /// Every lookup function of the language (the names of [`SampleFn::ALL`], then their
     /// `expand` forms).
-    pub const NAMES: [&'static str; 16] = [
+    pub const NAMES: [&'static str; 22] = [
         "sample",
         "sample_lod",
         "sample_width",
@@ -1771,6 +1782,9 @@ impl SampleFn {
         "sample_box",
         "nearest_at",
         "sample_at",
+        "sample_box_at",
+        "sample_width_at",
+        "nearest_level",
         "expand",
         "expand_lod",
         "expand_width",
@@ -1779,7 +1793,21 @@ impl SampleFn {
         "expand_box",
         "expand_nearest_at",
         "expand_at",
+        "expand_box_at",
+        "expand_width_at",
+        "expand_nearest_level",
     ];
+
+    /// Lookups that read a summed-area table: the box ones always, `nearest` and
+    /// `nearest_at` where the resource read is a table (the texel's stored value).
+    pub fn reads_table(self) -> bool {
+        matches!(self, SampleFn::Box | SampleFn::BoxAt)
+    }
+
+    /// Lookups a summed-area table answers.
+    pub fn table_may_answer(self) -> bool {
+        matches!(self, SampleFn::Box | SampleFn::BoxAt | SampleFn::Nearest | SampleFn::NearestAt)
+    }
 
     /// The descriptor: adding a lookup means adding a variant, its entries in
     /// [`SampleFn::ALL`] and [`SampleFn::NAMES`] and its arm here.
@@ -1876,6 +1904,41 @@ impl SampleFn {
                 extra_args: &[Ty::F32, Ty::F32],
                 wgsl: SummedAreaTable,
             },
+            SampleFn::BoxAt => &SampleDesc {
+                name: "sample_box_at",
+                expand_name: "expand_box_at",
+                extra_args: &[Ty::F32, Ty::F32, Ty::F32, Ty::F32],
+                wgsl: SummedAreaTable,
+            },
+            SampleFn::SampleWidthAt => &SampleDesc {
+                name: "sample_width_at",
+                expand_name: "expand_width_at",
+                extra_args: &[Ty::F32, Ty::F32, Ty::F32],
+                wgsl: Texture {
+                    sampler: true,
+                    read: |tex, layer, uv, _base, a| {
+                        format!(
+                            "textureSampleLevel({tex}, smp, {uv} + vec2<f32>({}, {}), {layer}, log2(max({} * frame.shadow_size.x, 1.0)))",
+                            a[0], a[1], a[2]
+                        )
+                    },
+                },
+            },
+            SampleFn::NearestLevel => &SampleDesc {
+                name: "nearest_level",
+                expand_name: "expand_nearest_level",
+                extra_args: &[Ty::I32],
+                wgsl: Texture {
+                    sampler: false,
+                    read: |tex, layer, uv, _base, a| {
+                        let level = format!("clamp({}, 0i, i32(textureNumLevels({tex})) - 1i)", a[0]);
+                        let size = format!("vec2<i32>(textureDimensions({tex}, {level}))");
+                        format!(
+                            "textureLoad({tex}, clamp(vec2<i32>(floor({uv} * vec2<f32>({size}))), vec2<i32>(0i), {size} - 1i), {layer}, {level})"
+                        )
+                    },
+                },
+            },
         }
     }
 
@@ -1950,7 +2013,7 @@ mod tests {
         order.sort_unstable();
         assert_eq!(order, (0..SampleFn::ALL.len()).collect::<Vec<_>>());
         assert_eq!(
-            SampleFn::SampleAt as usize + 1,
+            SampleFn::NearestLevel as usize + 1,
             SampleFn::ALL.len(),
             "a SampleFn is missing from SampleFn::ALL"
         );

@@ -376,6 +376,30 @@ impl Level {
         (self.v[k], self.a[k])
     }
 
+    /// The texel containing texel-space point `p` (`floor(p)`, clamped to the edge), with its
+    /// allowance; where `p` lies within `margin` (the GPU's coordinate error, in this
+    /// level's texels) of a texel boundary the neighbour across it may be read instead,
+    /// so the difference is allowed too.
+    fn nearest(&self, p: [f64; 2], margin: f64) -> (f64, f64) {
+        let (x, y) = (p[0].floor() as i64, p[1].floor() as i64);
+        let (v, mut a) = self.at(x, y);
+        for (axis, c) in p.into_iter().enumerate() {
+            let f = c - c.floor();
+            let across = if f < margin {
+                Some(-1)
+            } else if f > 1.0 - margin {
+                Some(1)
+            } else {
+                None
+            };
+            if let Some(o) = across {
+                let (dx, dy) = if axis == 0 { (o, 0) } else { (0, o) };
+                a += (self.at(x + dx, y + dy).0 - v).abs();
+            }
+        }
+        (v, a)
+    }
+
     /// Bilinear at uv: the value and the allowance of the blend.
     fn bilinear(&self, uv: [f64; 2]) -> (f64, f64) {
         let n = self.size as f64;
@@ -437,23 +461,18 @@ impl Texels {
     /// allowance; where `p` lies within the GPU's coordinate error of a texel boundary the
     /// neighbour across it may be read instead, so the difference is allowed too.
     fn nearest(&self, p: [f64; 2], margin: f64) -> (f64, f64) {
-        let (x, y) = (p[0].floor(), p[1].floor());
-        let (v, mut a) = self.texel(x as i64, y as i64);
-        for (axis, c) in [p[0], p[1]].into_iter().enumerate() {
-            let f = c - c.floor();
-            let across = if f < margin {
-                Some(-1)
-            } else if f > 1.0 - margin {
-                Some(1)
-            } else {
-                None
-            };
-            if let Some(o) = across {
-                let (dx, dy) = if axis == 0 { (o, 0) } else { (0, o) };
-                a += (self.texel(x as i64 + dx, y as i64 + dy).0 - v).abs();
-            }
-        }
-        (v, a)
+        self.base().nearest(p, margin)
+    }
+
+    /// `nearest_level`: the texel of level `level` (truncated toward 0 as the GPU's i32 is,
+    /// clamped to the chain) containing uv, with [`Texels::nearest`]'s allowance at a
+    /// texel boundary (`margin` in level-0 texels, scaled to the level's).
+    fn nearest_level(&self, uv: [f64; 2], level: f64, margin: f64) -> (f64, f64) {
+        let last = self.levels.len() - 1;
+        let l = if level.is_nan() { 0 } else { (level.trunc().max(0.0) as usize).min(last) };
+        let lv = &self.levels[l];
+        let size = lv.size as f64;
+        lv.nearest([uv[0] * size, uv[1] * size], margin * size / self.base().size as f64)
     }
 
     /// Filtered at uv and level of detail `lod` (clamped to the chain): value and allowance.
@@ -669,7 +688,7 @@ impl<'p> Evaluation<'p> {
             if let Node::Sample { how, view, .. } = p.arena.node(h)
                 && matches!(
                     how,
-                    SampleFn::Sample | SampleFn::SampleLod | SampleFn::SampleWidth | SampleFn::SampleAt
+                    SampleFn::Sample | SampleFn::SampleLod | SampleFn::SampleWidth | SampleFn::SampleAt | SampleFn::SampleWidthAt
                 )
                 && !filtered.contains(view)
             {
@@ -959,6 +978,11 @@ impl<'p> Evaluation<'p> {
                         SampleFn::NearestAt => texel([s.uv[0] + a(0), s.uv[1] + a(1)]),
                         SampleFn::Fetch => t.nearest([s.uv[0] * n - 0.5 + a(0), s.uv[1] * n - 0.5 + a(1)], margin),
                         SampleFn::Box => t.boxed(s.uv, [a(0), a(1)], self.model),
+                        SampleFn::BoxAt => t.boxed([s.uv[0] + a(0), s.uv[1] + a(1)], [a(2), a(3)], self.model),
+                        SampleFn::SampleWidthAt => {
+                            t.filtered([at[0] + a(0), at[1] + a(1)], (a(2) * n).max(1.0).log2() + by[2])
+                        }
+                        SampleFn::NearestLevel => t.nearest_level(s.uv, a(0), margin),
                     })
                 }
                 Node::Channel(..)

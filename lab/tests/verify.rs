@@ -196,3 +196,57 @@ fn cascaded_techniques_are_verified_on_the_cpu() {
         );
     }
 }
+
+/// A probe of the region and level lookups: `sample_box_at` and `nearest` / `nearest_at` on
+/// a summed-area table, `sample_width_at` on a mean mip chain, `nearest_level` on a max mip
+/// chain. The GPU agrees with the CPU's f64 evaluation (the compiler's own reading of each
+/// lookup) on every input, and a bug injected into each lookup's WGSL is caught.
+const REGION_PROBE: &str = r#"Technique(
+    name: "region_probe",
+    channels: {
+        "z": Channel(precision: F32),
+        "m": Channel(precision: Unorm8, value: "z"),
+        "a": Channel(precision: F16, value: "z"),
+        "x": Channel(precision: F16, value: "z"),
+    },
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Map(name: "map", reads: ["shadow"], writes: "mapped", channels: ["m"]),
+        SummedArea(name: "sat", reads: "mapped", writes: "table"),
+        Map(name: "mean", reads: ["shadow"], writes: "means", channels: ["a"]),
+        Mipmap(name: "mips", reads: "means", writes: "mean_mips", reduce: Mean),
+        Map(name: "maxes", reads: ["shadow"], writes: "max_base", channels: ["x"]),
+        Mipmap(name: "max_mips", reads: "max_base", writes: "max_chain", reduce: Max),
+        Shade(name: "shade", reads: ["table", "mean_mips", "max_chain"],
+              visibility: "saturate(0.2 * (sample_box_at(m, 2.0 * texel_size, -1.0 * texel_size, 3.0 * texel_size, 2.0 * texel_size) + nearest(m) + nearest_at(m, texel_size, 0.0) + sample_width_at(a, -2.0 * texel_size, texel_size, 4.0 * texel_size) + nearest_level(x, 2)))"),
+    ],
+)"#;
+
+#[test]
+fn region_and_level_lookups_agree_and_injected_bugs_are_caught() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("verify needs an adapter: {e}"));
+    let c = sshc::compile_str(REGION_PROBE, &sshc::CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("region_probe", REGION_PROBE)));
+    let good = verdicts(&rows(&gpu, &c));
+    assert!(good.iter().all(|v| *v == Verdict::Agrees), "as generated: {good:?}");
+    for (what, from, to) in [
+        // the box's centre moved the wrong way
+        ("sample_box_at", "box_table(in_uv + vec2<f32>(", "box_table(in_uv - vec2<f32>("),
+        // the table's texel rounded instead of floored
+        ("nearest on a table", "floor(uv * n)), vec2<i32>(0i)", "floor(uv * n + 0.5)), vec2<i32>(0i)"),
+        // the footprint's centre moved the wrong way
+        ("sample_width_at", "smp, in_uv + vec2<f32>(", "smp, in_uv - vec2<f32>("),
+        // the texel looked up at level 2's coordinates in level 1
+        (
+            "nearest_level",
+            "), 0i, clamp(2i, 0i, i32(textureNumLevels(t_max_base)) - 1i));",
+            "), 0i, clamp(1i, 0i, i32(textureNumLevels(t_max_base)) - 1i));",
+        ),
+    ] {
+        let bad = rows(&gpu, &injected(&c, "shade", from, to));
+        assert!(
+            verdicts(&bad).contains(&Verdict::Differs),
+            "{what}: `{from}` -> `{to}` was not caught: {:?}",
+            verdicts(&bad)
+        );
+    }
+}

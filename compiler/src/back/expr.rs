@@ -8,7 +8,7 @@
 
 use crate::back::internal;
 use crate::back::parts::{self, Line, Split};
-use crate::back::summed_area::box_lookup;
+use crate::back::summed_area::{box_lookup, sat_read, texel_read};
 use crate::back::text::{COMP, decode_expr, f32_lit, i32_lit, params_struct};
 use crate::builtins::{Input, SampleFn, SampleWgsl, Sig, Ty};
 use crate::diag::{Diagnostic, Phase};
@@ -48,6 +48,9 @@ pub(crate) struct Emitter<'a> {
     pub(crate) bindings: Vec<(String, View)>,
     /// Of those, the summed-area tables (storage buffers) and the unorm scale of their codes.
     tables: Vec<(String, u32)>,
+    /// The tables read by box lookups, and by `nearest` (each WGSL helper written once, where used).
+    table_boxes: std::collections::BTreeSet<String>,
+    table_texels: std::collections::BTreeSet<String>,
     pub(crate) uses_params: bool,
     pub(crate) uses_sampler: bool,
     /// Map side: the resources the pass reads.
@@ -77,6 +80,8 @@ impl<'a> Emitter<'a> {
             fetches: HashMap::new(),
             bindings: vec![],
             tables: vec![],
+            table_boxes: Default::default(),
+            table_texels: Default::default(),
             uses_params: false,
             uses_sampler: false,
             reads,
@@ -289,8 +294,9 @@ impl<'a> Emitter<'a> {
             Some(v) => v.clone(),
             None => {
                 let v = self.fresh("s");
+                let on_table = how.table_may_answer() && table_source(self.ir, res).is_some();
                 let call = match how.desc().wgsl {
-                    SampleWgsl::SummedAreaTable => {
+                    _ if on_table || how.reads_table() => {
                         let r = &self.ir.resources[res];
                         let t = r.slot_of(ch).map(|s| &r.textures[s.texture]);
                         let scale = match t.map(|t| t.precision) {
@@ -307,7 +313,33 @@ impl<'a> Emitter<'a> {
                         if !self.tables.iter().any(|(n, _)| *n == name) {
                             self.tables.push((name.clone(), scale));
                         }
-                        format!("box_{name}({uv}, vec2<f32>({}, {}), {layer})", args[0], args[1])
+                        let at = |du: &str, dv: &str| format!("{uv} + vec2<f32>({du}, {dv})");
+                        match how {
+                            SampleFn::Box | SampleFn::BoxAt => {
+                                self.table_boxes.insert(name.clone());
+                                let (centre, w) = if how == SampleFn::BoxAt {
+                                    (at(&args[0], &args[1]), &args[2..])
+                                } else {
+                                    (uv.clone(), &args[..])
+                                };
+                                format!("box_{name}({centre}, vec2<f32>({}, {}), {layer})", w[0], w[1])
+                            }
+                            SampleFn::NearestAt => {
+                                self.table_texels.insert(name.clone());
+                                format!("texel_{name}({}, {layer})", at(&args[0], &args[1]))
+                            }
+                            SampleFn::Nearest => {
+                                self.table_texels.insert(name.clone());
+                                format!("texel_{name}({uv}, {layer})")
+                            }
+                            SampleFn::Sample
+                            | SampleFn::SampleLod
+                            | SampleFn::SampleWidth
+                            | SampleFn::Fetch
+                            | SampleFn::SampleAt
+                            | SampleFn::SampleWidthAt
+                            | SampleFn::NearestLevel => return Err(internal("a texture lookup of a summed-area table")),
+                        }
                     }
                     // `shade_refusal` keeps per-sample implicit-LOD lookups forward
                     SampleWgsl::Texture { sampler, .. } if self.deferred && how == SampleFn::Sample && view.is_none() => {
@@ -318,6 +350,8 @@ impl<'a> Emitter<'a> {
                         self.uses_sampler |= sampler;
                         read(&tex, &layer, &uv, &base, &args)
                     }
+                    // reads_table holds for every lookup of this form
+                    SampleWgsl::SummedAreaTable => return Err(internal("a table lookup left unread")),
                 };
                 // every lookup returns the texel's four components
                 self.let_line(&v, "vec4<f32>", call);
@@ -348,7 +382,14 @@ impl<'a> Emitter<'a> {
             match self.tables.iter().find(|(n, _)| n == name) {
                 Some((_, scale)) => {
                     let _ = writeln!(s, "@group(1) @binding({i}) var<storage, read> t_{name}: array<vec4<u32>>;");
-                    s.push_str(&box_lookup(name, *scale));
+                    if self.table_boxes.contains(name) {
+                        s.push_str(&box_lookup(name, *scale));
+                    } else {
+                        s.push_str(&sat_read(name));
+                    }
+                    if self.table_texels.contains(name) {
+                        s.push_str(&texel_read(name, *scale));
+                    }
                 }
                 None => {
                     let _ = writeln!(s, "@group(1) @binding({i}) var t_{name}: texture_2d_array<f32>;");

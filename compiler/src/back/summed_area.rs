@@ -21,6 +21,43 @@ use std::fmt::Write as _;
 /// 2^32: always for unorm8 up to 4096^2 texels, up to 65536 texels of area for unorm16)
 /// before it is weighted in f32. A box one texel wide is bilinear interpolation.
 pub(crate) fn box_lookup(name: &str, scale: u32) -> String {
+    format!("{}{}", sat_read(name), box_mean(name, scale))
+}
+
+/// WGSL of the table's inclusive prefix sum at a texel (what every table lookup reads).
+pub(crate) fn sat_read(name: &str) -> String {
+    format!(
+        "
+// inclusive prefix sum at texel (x, y); 0 left of or above the map
+fn sat_{name}(x: i32, y: i32, layer: i32) -> vec4<u32> {{
+    if x < 0i || y < 0i {{
+        return vec4<u32>(0u);
+    }}
+    let n = vec2<i32>(frame.shadow_size.xy);
+    return t_{name}[u32((layer * n.y + y) * n.x + x)];
+}}
+"
+    )
+}
+
+/// WGSL of `nearest` on a table: the stored value of the texel containing `uv` (clamped to
+/// the map), the difference of four prefix sums, exact in u32 before one f32 division.
+pub(crate) fn texel_read(name: &str, scale: u32) -> String {
+    format!(
+        "
+// the stored value of the texel containing `uv`, clamped to the map
+fn texel_{name}(uv: vec2<f32>, layer: i32) -> vec4<f32> {{
+    let n = frame.shadow_size.xy;
+    let i = clamp(vec2<i32>(floor(uv * n)), vec2<i32>(0i), vec2<i32>(n) - 1i);
+    let s = sat_{name}(i.x, i.y, layer) - sat_{name}(i.x - 1i, i.y, layer) - sat_{name}(i.x, i.y - 1i, layer) + sat_{name}(i.x - 1i, i.y - 1i, layer);
+    return vec4<f32>(s) / {scale}.0;
+}}
+"
+    )
+}
+
+/// WGSL of `sample_box` on a table (after [`sat_read`]).
+fn box_mean(name: &str, scale: u32) -> String {
     // p{y}{x}: the table at x in (i0.x - 1, i0.x, i1.x - 1, i1.x), y likewise: 16 loads
     let mut loads = String::new();
     for y in 0..4 {
@@ -32,15 +69,6 @@ pub(crate) fn box_lookup(name: &str, scale: u32) -> String {
     let rect = |xa: u32, xb: u32, ya: u32, yb: u32| format!("vec4<f32>(p{yb}{xb} - p{yb}{xa} - p{ya}{xb} + p{ya}{xa})");
     format!(
         "
-// inclusive prefix sum at texel (x, y); 0 left of or above the map
-fn sat_{name}(x: i32, y: i32, layer: i32) -> vec4<u32> {{
-    if x < 0i || y < 0i {{
-        return vec4<u32>(0u);
-    }}
-    let n = vec2<i32>(frame.shadow_size.xy);
-    return t_{name}[u32((layer * n.y + y) * n.x + x)];
-}}
-
 // mean stored value over a box `w` (uv units, at least one texel) centred at `uv`, clipped to the map
 fn box_{name}(uv: vec2<f32>, w: vec2<f32>, layer: i32) -> vec4<f32> {{
     let n = frame.shadow_size.xy;

@@ -1064,16 +1064,18 @@ impl<'s, 'a> Typer<'s, 'a> {
                         .help("look it up outside `at_sample`")
                     });
                 }
-                if table != (how == SampleFn::Box) {
+                if if table { !how.table_may_answer() } else { how.reads_table() } {
                     let d = if table {
                         Self::err(
                             span,
                             format!("`{name}` cannot read `{target}` from `{holder}`, a summed-area table"),
-                            "summed-area tables are read by box lookups",
+                            "summed-area tables are read by box lookups and `nearest`",
                         )
                         .help(format!(
-                            "use `{}({target}, wx, wy)`, the mean over a box wx x wy wide in uv units",
-                            if expand { "expand_box" } else { "sample_box" }
+                            "use `{}({target}, wx, wy)`, the mean over a box wx x wy wide in uv units (`{}` off the receiver), or `{}` for one texel's stored value",
+                            if expand { "expand_box" } else { "sample_box" },
+                            if expand { "expand_box_at" } else { "sample_box_at" },
+                            if expand { "expand_nearest" } else { "nearest" },
                         ))
                     } else {
                         Self::err(
