@@ -469,7 +469,11 @@ impl Texels {
     /// texel boundary (`margin` in level-0 texels, scaled to the level's).
     fn nearest_level(&self, uv: [f64; 2], level: f64, margin: f64) -> (f64, f64) {
         let last = self.levels.len() - 1;
-        let l = if level.is_nan() { 0 } else { (level.trunc().max(0.0) as usize).min(last) };
+        let l = if level.is_nan() {
+            0
+        } else {
+            (level.trunc().max(0.0) as usize).min(last)
+        };
         let lv = &self.levels[l];
         let size = lv.size as f64;
         lv.nearest([uv[0] * size, uv[1] * size], margin * size / self.base().size as f64)
@@ -979,9 +983,7 @@ impl<'p> Evaluation<'p> {
                         SampleFn::Fetch => t.nearest([s.uv[0] * n - 0.5 + a(0), s.uv[1] * n - 0.5 + a(1)], margin),
                         SampleFn::Box => t.boxed(s.uv, [a(0), a(1)], self.model),
                         SampleFn::BoxAt => t.boxed([s.uv[0] + a(0), s.uv[1] + a(1)], [a(2), a(3)], self.model),
-                        SampleFn::SampleWidthAt => {
-                            t.filtered([at[0] + a(0), at[1] + a(1)], (a(2) * n).max(1.0).log2() + by[2])
-                        }
+                        SampleFn::SampleWidthAt => t.filtered([at[0] + a(0), at[1] + a(1)], (a(2) * n).max(1.0).log2() + by[2]),
                         SampleFn::NearestLevel => t.nearest_level(s.uv, a(0), margin),
                     })
                 }

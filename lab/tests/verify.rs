@@ -225,14 +225,19 @@ const REGION_PROBE: &str = r#"Technique(
 #[test]
 fn region_and_level_lookups_agree_and_injected_bugs_are_caught() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("verify needs an adapter: {e}"));
-    let c = sshc::compile_str(REGION_PROBE, &sshc::CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("region_probe", REGION_PROBE)));
+    let c = sshc::compile_str(REGION_PROBE, &sshc::CompileOptions::default())
+        .unwrap_or_else(|d| panic!("{}", d.render("region_probe", REGION_PROBE)));
     let good = verdicts(&rows(&gpu, &c));
     assert!(good.iter().all(|v| *v == Verdict::Agrees), "as generated: {good:?}");
     for (what, from, to) in [
         // the box's centre moved the wrong way
         ("sample_box_at", "box_table(in_uv + vec2<f32>(", "box_table(in_uv - vec2<f32>("),
         // the table's texel rounded instead of floored
-        ("nearest on a table", "floor(uv * n)), vec2<i32>(0i)", "floor(uv * n + 0.5)), vec2<i32>(0i)"),
+        (
+            "nearest on a table",
+            "floor(uv * n)), vec2<i32>(0i)",
+            "floor(uv * n + 0.5)), vec2<i32>(0i)",
+        ),
         // the footprint's centre moved the wrong way
         ("sample_width_at", "smp, in_uv + vec2<f32>(", "smp, in_uv - vec2<f32>("),
         // the texel looked up at level 2's coordinates in level 1
