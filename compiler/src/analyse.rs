@@ -172,6 +172,12 @@ pub fn scene_slot_ranges(ir: &Ir) -> Vec<Vec<Interval>> {
 }
 
 fn ranges_from(ir: &Ir, param_range: Option<(ParamId, Interval)>, scene: bool) -> Vec<Vec<Interval>> {
+    ranges_with(ir, param_range, scene, true)
+}
+
+/// [`ranges_from`], taking each channel's declared range (`declared`) or its value's
+/// analysed interval.
+fn ranges_with(ir: &Ir, param_range: Option<(ParamId, Interval)>, scene: bool, declared: bool) -> Vec<Vec<Interval>> {
     let mut out: Vec<Vec<Interval>> = ir.resources.iter().map(|r| vec![Interval::UNBOUNDED; r.slots.len()]).collect();
     for pass in &ir.passes {
         let Some(w) = pass.writes else { continue };
@@ -207,9 +213,12 @@ fn ranges_from(ir: &Ir, param_range: Option<(ParamId, Interval)>, scene: bool) -
                 let mut ev = RangeEval::new(ir, env);
                 ev.param_range = param_range;
                 for s in &res.slots {
-                    ranges.push(match ir.channels[s.channel].value {
-                        Some(v) => ev.eval(v),
-                        None => Interval::UNIT,
+                    let ch = &ir.channels[s.channel];
+                    ranges.push(match (ch.range, ch.value) {
+                        // clamped to it when stored
+                        (Some((lo, hi)), Some(_)) if declared => Interval { lo, hi },
+                        (_, Some(v)) => ev.eval(v),
+                        (_, None) => Interval::UNIT,
                     });
                 }
             }
@@ -358,6 +367,35 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
         .collect();
     let mut diags = Diagnostics::default();
     let mut warnings = Vec::new();
+    // a declared range the value cannot reach: every texel would be clamped to its edge
+    let analysed = ranges_with(ir, None, false, false);
+    for (ri, res) in ir.resources.with_handles() {
+        if !matches!(ir.passes[res.writer].kind, IrPassKind::Map) {
+            continue;
+        }
+        for (si, slot) in res.slots.iter().enumerate() {
+            let ch = &ir.channels[slot.channel];
+            let (Some((lo, hi)), Some(_)) = (ch.range, ch.value) else {
+                continue;
+            };
+            let r = analysed[ri.index()][si];
+            if r.hi < lo || r.lo > hi {
+                diags.push(
+                    Diagnostic::error(
+                        Phase::Analyse,
+                        format!(
+                            "the value of `{}` lies in [{}, {}], outside its declared range ({lo}, {hi}): every texel would be clamped to an end of it",
+                            ch.name,
+                            short(r.lo),
+                            short(r.hi)
+                        ),
+                    )
+                    .at(ch.span, "declared here")
+                    .help("declare the range the value takes, or fix the value"),
+                );
+            }
+        }
+    }
     for (ri, res) in ir.resources.with_handles() {
         // A resource repeats its source's complaint: report each channel once, where it is made.
         let own = ir.passes[res.writer].kind.reports_own_range();

@@ -680,9 +680,17 @@ pub struct Evaluation<'p> {
     /// the filtering hardware's positions on its own.
     filtered: Vec<Option<u8>>,
     model: Model,
+    /// Per Map channel with a declared range: the texels whose value it clamped.
+    clamped: Vec<(ChannelId, usize)>,
 }
 
 impl<'p> Evaluation<'p> {
+    /// The channels whose declared range clamped some stored value: their names and how
+    /// many texels (what `sshc verify` reports).
+    pub fn clamped(&self) -> Vec<(String, usize)> {
+        self.clamped.iter().map(|(c, n)| (self.p.channels[*c].name.clone(), *n)).collect()
+    }
+
     /// Run every pass after Depth and Geometry, whose outputs are `given` (`size` x `size`
     /// texels per view, row 0 first).
     pub fn new(p: Program<'p>, given: &Given, frame: Frame, rounding: Rounding, model: Model) -> Result<Evaluation<'p>, String> {
@@ -706,6 +714,7 @@ impl<'p> Evaluation<'p> {
             shade,
             filtered,
             model,
+            clamped: Vec::new(),
         };
         for (id, pass) in p.passes.with_handles() {
             if !pass.live {
@@ -779,7 +788,10 @@ impl<'p> Evaluation<'p> {
             }
             IrPassKind::Map => {
                 for slot in self.slots(out) {
-                    let level = self.map_channel(id, &slot, size, rounding)?;
+                    let (level, clamped) = self.map_channel(id, &slot, size, rounding)?;
+                    if clamped > 0 {
+                        self.clamped.push((slot.channel, clamped));
+                    }
                     self.insert(out, &slot, vec![level]);
                 }
             }
@@ -832,7 +844,9 @@ impl<'p> Evaluation<'p> {
     }
 
     /// One Map channel at every texel: value and allowance (with its storage's rounding).
-    fn map_channel(&self, pass: PassId, slot: &PlacedSlot, size: usize, rounding: Rounding) -> Result<Level, String> {
+    /// A Map channel's texels, and how many were clamped to its declared range.
+    fn map_channel(&self, pass: PassId, slot: &PlacedSlot, size: usize, rounding: Rounding) -> Result<(Level, usize), String> {
+        let mut clamped = 0;
         let c = slot.channel;
         let h = self.p.channels[c]
             .value
@@ -869,14 +883,23 @@ impl<'p> Evaluation<'p> {
                     }
                 };
                 let r = self.allowed(&prepared, &leaf, &mut scratch);
+                // a declared range: clamped to it when stored (1-Lipschitz: the allowance holds)
+                let value = match self.p.channels[c].range {
+                    Some((lo, hi)) => {
+                        let kept = r.value.clamp(lo, hi);
+                        clamped += usize::from(kept != r.value);
+                        kept
+                    }
+                    None => r.value,
+                };
                 v.push(match rounding {
-                    Rounding::Exact => r.value,
-                    Rounding::Stored => stored(slot, r.value),
+                    Rounding::Exact => value,
+                    Rounding::Stored => stored(slot, value),
                 });
-                a.push(r.allowance + self.model.storage(slot, r.value));
+                a.push(r.allowance + self.model.storage(slot, value));
             }
         }
-        Ok(Level { size, v, a })
+        Ok((Level { size, v, a }, clamped))
     }
 
     /// The clamped visibility at one receiver and the interval allowed about it.

@@ -698,6 +698,8 @@ pub struct IrChannel {
     /// The precision is left to the compiler (`Auto`): `analyse::choose_precisions` sets it.
     pub precision_auto: bool,
     pub value: Option<ExprId>,
+    /// The declared range (`range: (lo, hi)`): values are clamped to it when stored.
+    pub range: Option<(f64, f64)>,
     pub origin: Origin,
     pub span: Span,
 }

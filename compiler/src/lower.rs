@@ -507,6 +507,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             precision_overridden: sym.channel_precision[i] != c.precision.value,
             precision_auto: sym.channel_auto[i],
             value: None,
+            range: c.range.as_ref().map(|(lo, hi)| (lo.value, hi.value)),
             origin: if c.value.is_some() { Origin::Declared } else { Origin::Depth },
             span: c.span,
         })
@@ -566,6 +567,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     precision_overridden: sym.expansion_precision[ei] != e.precision.value,
                     precision_auto: sym.expansion_auto[ei],
                     value: Some(basis),
+                    range: None,
                     origin: Origin::Basis {
                         expansion: ExpansionId::new(ei),
                         term: ti,

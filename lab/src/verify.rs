@@ -690,6 +690,9 @@ pub struct Row {
     /// Every receiver compared: its pixel index, the GPU's value, the CPU's, and the
     /// difference over the allowance (above 1: outside).
     pub compared: Vec<(usize, f64, f64, f64)>,
+    /// Channels with a declared range (`range: (lo, hi)`) whose stored values it clamped,
+    /// and at how many texels (every cascade's summed).
+    pub clamped: Vec<(String, usize)>,
 }
 
 impl Row {
@@ -906,7 +909,16 @@ pub fn verify(
                 reference: reference_program.map(|_| (0, 0.0, None)),
                 verdict: Verdict::Agrees,
                 compared: Vec::with_capacity(evaluated.len()),
+                clamped: Vec::new(),
             };
+            for c in &cascades {
+                for (name, n) in c.exact.clamped() {
+                    match row.clamped.iter_mut().find(|(m, _)| *m == name) {
+                        Some((_, total)) => *total += n,
+                        None => row.clamped.push((name, n)),
+                    }
+                }
+            }
             let mut allowances = Vec::new();
             let mut storage = Vec::new();
             for &(i, e, s, f) in &evaluated {

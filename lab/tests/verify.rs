@@ -255,3 +255,49 @@ fn region_and_level_lookups_agree_and_injected_bugs_are_caught() {
         );
     }
 }
+
+/// A declared channel range (`range: (lo, hi)`): the value `4z - 1` (in [-1, 3]) clamped
+/// to (0, 1) at F16 and to (0, 2) at Unorm8, encoded over the declared range. The GPU
+/// agrees with the CPU's evaluation (which clamps as declared) and `verify` reports the
+/// clamped texels; the clamp removed from the Map's WGSL is caught.
+const DECLARED_RANGE: &str = r#"Technique(
+    name: "declared_range",
+    channels: {
+        "z": Channel(precision: F32),
+        "a": Channel(precision: F16, value: "z * 4.0 - 1.0", range: (0.0, 1.0)),
+        "b": Channel(precision: Unorm8, value: "z * 4.0 - 1.0", range: (0.0, 2.0)),
+    },
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Map(name: "map", reads: ["shadow"], writes: "mapped", channels: ["a", "b"]),
+        Shade(name: "shade", reads: ["mapped"], visibility: "saturate(0.5 * nearest(a) + 0.25 * nearest(b))"),
+    ],
+)"#;
+
+#[test]
+fn declared_ranges_clamp_at_encode_and_verify_reports_the_clamped_texels() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("verify needs an adapter: {e}"));
+    let c = sshc::compile_str(DECLARED_RANGE, &sshc::CompileOptions::default())
+        .unwrap_or_else(|d| panic!("{}", d.render("declared_range", DECLARED_RANGE)));
+    // the encodes use the declared ranges: b's Unorm8 over [0, 2]
+    let p = sshc::ir::Program::new(&c.ir, &c.layout);
+    let mapped = p.resources.iter().find(|r| r.name == "mapped").expect("mapped");
+    let b = mapped.slots.iter().find(|s| p.channels[s.channel].name == "b").expect("b");
+    assert_eq!((b.range.lo, b.range.hi), (0.0, 2.0));
+    let good = rows(&gpu, &c);
+    assert!(verdicts(&good).iter().all(|v| *v == Verdict::Agrees), "{:?}", verdicts(&good));
+    // the step and noise fields and the bunny hold depths below 1/4 and above 3/4
+    let clamped: usize = good.iter().flat_map(|r| &r.clamped).map(|(_, n)| n).sum();
+    assert!(
+        clamped > 0,
+        "no texel was clamped: {:?}",
+        good.iter().map(|r| &r.clamped).collect::<Vec<_>>()
+    );
+    assert!(good.iter().flat_map(|r| &r.clamped).any(|(name, _)| name == "a"));
+    let bad = rows(&gpu, &injected(&c, "map", "clamp(e4, 0.0f, 1.0f)", "e4"));
+    assert!(
+        verdicts(&bad).contains(&Verdict::Differs),
+        "the clamp removed was not caught: {:?}",
+        verdicts(&bad)
+    );
+}

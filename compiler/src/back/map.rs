@@ -7,7 +7,7 @@ use crate::back::formats::texture_format;
 use crate::back::internal;
 use crate::back::parts::Split;
 use crate::back::steps::{fullscreen_step, layer_chunks};
-use crate::back::text::{FULLSCREEN_VS, encode_expr, header, out_struct};
+use crate::back::text::{FULLSCREEN_VS, encode_expr, f32_lit, header, out_struct};
 use crate::diag::Diagnostic;
 use crate::front::ast::LightView;
 use crate::ir::{IrPass, IrPassKind, PlacedSlot, Program};
@@ -144,6 +144,11 @@ pub(crate) fn channel_entries<'a>(
                         .value
                         .ok_or_else(|| internal(format!("channel `{}` without value", ir.channels[slot.channel].name)))?;
                     let name = em.emit(v)?;
+                    // a declared range: the value clamped to it before it is encoded
+                    let name = match ir.channels[slot.channel].range {
+                        Some((lo, hi)) => format!("clamp({name}, {}, {})", f32_lit(lo as f32), f32_lit(hi as f32)),
+                        None => name,
+                    };
                     comps[slot.component as usize] = (form.store)(slot, encode_expr(&name, slot.encode))?;
                 }
                 outs.push(if form.compute {

@@ -172,6 +172,9 @@ pub struct Channel {
     pub precision_auto: bool,
     /// The per-texel value (map side). `None`: the channel is written by a Depth pass.
     pub value: Option<Expr>,
+    /// `range: (lo, hi)`: the values the channel stores, declared (clamped at encode; the
+    /// encodes use it in place of the analysed interval).
+    pub range: Option<(Spanned<f64>, Spanned<f64>)>,
     pub doc: Option<String>,
     pub span: Span,
 }

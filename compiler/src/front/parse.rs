@@ -541,6 +541,39 @@ fn channel(name: Name, node: &Node) -> Result<Channel, Diagnostic> {
     let mut f = Fields::of(node, "Channel")?;
     let (precision, precision_auto) = precision(f.req("precision")?)?;
     let value = f.opt("value")?.map(expression).transpose()?;
+    let range = match f.opt("range")? {
+        None => None,
+        Some(r) => {
+            let (lo, hi) = match &r.value {
+                Value::Tuple { name: None, items } if items.len() == 2 => (number(&items[0])?, number(&items[1])?),
+                _ => {
+                    return Err(err(
+                        r.span,
+                        format!("expected a range `(lo, hi)`, found {}", r.describe()),
+                        "expected `(lo, hi)`",
+                    ));
+                }
+            };
+            if !(lo.value.is_finite() && hi.value.is_finite() && lo.value < hi.value) {
+                return Err(err(
+                    r.span,
+                    format!(
+                        "the range ({}, {}) is not two finite numbers, the first below the second",
+                        lo.value, hi.value
+                    ),
+                    "not a range",
+                ));
+            }
+            if value.is_none() {
+                return Err(err(
+                    r.span,
+                    "a declared range belongs to a channel with a `value`: a Depth pass's channel stores depths in [0, 1]".to_string(),
+                    "no value to clamp",
+                ));
+            }
+            Some((lo, hi))
+        }
+    };
     let doc = opt_string(&mut f, "doc")?;
     f.finish()?;
     Ok(Channel {
@@ -548,6 +581,7 @@ fn channel(name: Name, node: &Node) -> Result<Channel, Diagnostic> {
         precision,
         precision_auto,
         value,
+        range,
         doc,
         span: node.span,
     })

@@ -173,6 +173,14 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
         args.light_width
     );
     print!("{table}");
+    for r in &rows {
+        for (channel, n) in &r.clamped {
+            println!(
+                "note: {} (camera {}): `{channel}` was clamped to its declared range at {n} texel(s)",
+                r.input, r.camera
+            );
+        }
+    }
     if let Some(dir) = &args.images {
         std::fs::create_dir_all(dir).map_err(|e| format!("error: cannot create `{}`: {e}", dir.display()))?;
         for r in &rows {
