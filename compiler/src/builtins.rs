@@ -1718,6 +1718,8 @@ pub enum SampleFn {
     /// `nearest_level(ch, level)`: the texel of mip level `level` (an i32, clamped to the
     /// chain) containing `uv`, unfiltered: a min or max mip read as it is.
     NearestLevel,
+    /// `nearest_level_at(ch, level, du, dv)`: [`SampleFn::NearestLevel`] at `uv + (du, dv)`.
+    NearestLevelAt,
 }
 
 /// Everything the compiler knows about one lookup function.
@@ -1757,7 +1759,7 @@ impl fmt::Debug for SampleWgsl {
 }
 
 impl SampleFn {
-    pub const ALL: [SampleFn; 11] = [
+    pub const ALL: [SampleFn; 12] = [
         SampleFn::Sample,
         SampleFn::SampleLod,
         SampleFn::SampleWidth,
@@ -1769,11 +1771,12 @@ impl SampleFn {
         SampleFn::BoxAt,
         SampleFn::SampleWidthAt,
         SampleFn::NearestLevel,
+        SampleFn::NearestLevelAt,
     ];
 
     /// Every lookup function of the language (the names of [`SampleFn::ALL`], then their
     /// `expand` forms).
-    pub const NAMES: [&'static str; 22] = [
+    pub const NAMES: [&'static str; 24] = [
         "sample",
         "sample_lod",
         "sample_width",
@@ -1785,6 +1788,7 @@ impl SampleFn {
         "sample_box_at",
         "sample_width_at",
         "nearest_level",
+        "nearest_level_at",
         "expand",
         "expand_lod",
         "expand_width",
@@ -1796,6 +1800,7 @@ impl SampleFn {
         "expand_box_at",
         "expand_width_at",
         "expand_nearest_level",
+        "expand_nearest_level_at",
     ];
 
     /// Lookups that read a summed-area table: the box ones always, `nearest` and
@@ -1930,13 +1935,16 @@ impl SampleFn {
                 extra_args: &[Ty::I32],
                 wgsl: Texture {
                     sampler: false,
-                    read: |tex, layer, uv, _base, a| {
-                        let level = format!("clamp({}, 0i, i32(textureNumLevels({tex})) - 1i)", a[0]);
-                        let size = format!("vec2<i32>(textureDimensions({tex}, {level}))");
-                        format!(
-                            "textureLoad({tex}, clamp(vec2<i32>(floor({uv} * vec2<f32>({size}))), vec2<i32>(0i), {size} - 1i), {layer}, {level})"
-                        )
-                    },
+                    read: |tex, layer, uv, _base, a| level_read(tex, layer, uv, &a[0]),
+                },
+            },
+            SampleFn::NearestLevelAt => &SampleDesc {
+                name: "nearest_level_at",
+                expand_name: "expand_nearest_level_at",
+                extra_args: &[Ty::I32, Ty::F32, Ty::F32],
+                wgsl: Texture {
+                    sampler: false,
+                    read: |tex, layer, uv, _base, a| level_read(tex, layer, &format!("({uv} + vec2<f32>({}, {}))", a[1], a[2]), &a[0]),
                 },
             },
         }
@@ -1964,6 +1972,14 @@ impl SampleFn {
     pub fn name(self, expand: bool) -> &'static str {
         if expand { self.desc().expand_name } else { self.desc().name }
     }
+}
+
+/// WGSL of an unfiltered read of mip level `level` (an i32 expression, clamped to the
+/// chain) at `uv`: the texel of that level containing it, clamped to the edge.
+fn level_read(tex: &str, layer: &str, uv: &str, level: &str) -> String {
+    let level = format!("clamp({level}, 0i, i32(textureNumLevels({tex})) - 1i)");
+    let size = format!("vec2<i32>(textureDimensions({tex}, {level}))");
+    format!("textureLoad({tex}, clamp(vec2<i32>(floor({uv} * vec2<f32>({size}))), vec2<i32>(0i), {size} - 1i), {layer}, {level})")
 }
 
 /// Every name reserved by the language (declarations may not take them).
@@ -2013,7 +2029,7 @@ mod tests {
         order.sort_unstable();
         assert_eq!(order, (0..SampleFn::ALL.len()).collect::<Vec<_>>());
         assert_eq!(
-            SampleFn::NearestLevel as usize + 1,
+            SampleFn::NearestLevelAt as usize + 1,
             SampleFn::ALL.len(),
             "a SampleFn is missing from SampleFn::ALL"
         );

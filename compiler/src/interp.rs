@@ -1008,6 +1008,7 @@ impl<'p> Evaluation<'p> {
                         SampleFn::BoxAt => t.boxed([s.uv[0] + a(0), s.uv[1] + a(1)], [a(2), a(3)], self.model),
                         SampleFn::SampleWidthAt => t.filtered([at[0] + a(0), at[1] + a(1)], (a(2) * n).max(1.0).log2() + by[2]),
                         SampleFn::NearestLevel => t.nearest_level(s.uv, a(0), margin),
+                        SampleFn::NearestLevelAt => t.nearest_level([s.uv[0] + a(1), s.uv[1] + a(2)], a(0), margin),
                     })
                 }
                 Node::Channel(..)

@@ -248,13 +248,23 @@ fn the_example_techniques_compile_and_use_what_they_show() {
         ("vsm-bleeding", "techniques/examples", &["functions:", "reduce_bleeding("][..]),
         // the independent reading `sshc verify --reference` checks msm.ron against
         ("msm-reference", "techniques/examples", &["functions:", "det3(", "shadow("][..]),
+        // the region and level lookups (language.md 8.7)
+        ("vssm-subdivided", "techniques/examples", &["functions:", "sample_box_at("][..]),
+        (
+            "pcf-min-early-out",
+            "techniques/examples",
+            &["reduce: Min", "nearest_level_at("][..],
+        ),
     ] {
         let src = std::fs::read_to_string(root().join(folder).join(format!("{name}.ron"))).unwrap();
         for u in uses {
             assert!(src.contains(u), "{name} does not use `{u}`");
         }
         let c = compile(&src).unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert!(c.warnings.is_empty(), "{name}: {:?}", c.warnings);
+        // a table of Unorm16 moments is rendered into Rg16Unorm, which WebGPU renders to only
+        // with an adapter feature (lavapipe has it): that warning, and no other
+        let expected = |w: &sshc::diag::Diagnostic| name == "vssm-subdivided" && w.message.contains("16-bit norm format");
+        assert!(c.warnings.iter().all(expected), "{name}: {:?}", c.warnings);
         seen += usize::from(folder == "techniques/examples");
     }
     assert_eq!(seen, std::fs::read_dir(&dir).unwrap().count(), "an example is not listed here");

@@ -857,6 +857,8 @@ fn verify_agrees_on_every_bundled_technique() {
         "examples/poisson-pcf",
         "examples/vsm-bleeding",
         "examples/msm-reference",
+        "examples/vssm-subdivided",
+        "examples/pcf-min-early-out",
     ];
     let geometry = ["penumbra-maps", "penumbra-limit-maps", "smoothies", "single-sample", "linear-light"];
     let mut listed: Vec<String> = std::fs::read_dir(root().join("techniques"))

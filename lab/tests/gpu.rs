@@ -417,3 +417,34 @@ fn a_gltf_of_shared_meshes_binds_as_instances_and_renders_as_its_soup() {
         "cascades on the instances differ from the soup's"
     );
 }
+
+/// techniques/examples/pcf-min-early-out.ron returns 1 where the receiver is in front of
+/// the min mip chain's blocks under its 7 x 7 footprint: exactly where every tap passes,
+/// so its visibility is its PCF's, bit for bit (the same file with the early-out taken
+/// out), on scenes with contact and with open penumbrae; and the early-out is taken (at a
+/// quarter of the pixels or more).
+#[test]
+fn the_min_mip_early_out_gives_its_pcf_bit_for_bit() {
+    let path = root().join("techniques/examples/pcf-min-early-out.ron");
+    let source = std::fs::read_to_string(&path).unwrap();
+    let plain = source.replace("select(pcf, 1.0, r <= nearest_blocker)", "pcf + 0.0 * nearest_blocker");
+    assert_ne!(plain, source);
+    let early = source.replace("select(pcf, 1.0, r <= nearest_blocker)", "select(0.0, 1.0, r <= nearest_blocker)");
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
+    for sc in ["bunny", "contact"] {
+        let scene = Scene::load(root().join(format!("scenes/{sc}.ron"))).unwrap_or_else(|e| panic!("{e}"));
+        let run = |src: &str| {
+            let mut ex = compile_executor(&gpu, &path, src, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+            ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap())
+                .unwrap();
+            ex.run_frame().unwrap();
+            ex.read_camera(CameraOutput::Visibility).unwrap().channel(0)
+        };
+        let (a, b) = (run(&source), run(&plain));
+        let differ = a.iter().zip(&b).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
+        assert_eq!(differ, 0, "{sc}: the early-out changed {differ} pixels");
+        let taken = run(&early).iter().filter(|v| **v == 1.0).count();
+        assert!(taken * 4 > a.len(), "{sc}: the early-out is taken at {taken} of {} pixels", a.len());
+        assert!(a.iter().any(|v| *v < 0.5), "{sc}: no shadow");
+    }
+}

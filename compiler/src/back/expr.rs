@@ -338,7 +338,8 @@ impl<'a> Emitter<'a> {
                             | SampleFn::Fetch
                             | SampleFn::SampleAt
                             | SampleFn::SampleWidthAt
-                            | SampleFn::NearestLevel => return Err(internal("a texture lookup of a summed-area table")),
+                            | SampleFn::NearestLevel
+                            | SampleFn::NearestLevelAt => return Err(internal("a texture lookup of a summed-area table")),
                         }
                     }
                     // `shade_refusal` keeps per-sample implicit-LOD lookups forward
