@@ -401,21 +401,29 @@ fn the_truth_refines_while_the_view_stands_still_and_starts_over_when_the_light_
     let log = log(&log_path);
     let truth = entries(&log, "truth");
     let rounds: Vec<u64> = truth.iter().map(|e| e["rounds"].as_u64().unwrap()).collect();
-    // rounds 1, 2, ... up to at least 4 (WaitTruth(4) waits for the fourth; the truth's
-    // thread goes on refining while the screenshot is taken), then the moved light's first
+    // rounds rising to at least 4 (WaitTruth(4) waits for the fourth; the truth's thread
+    // goes on refining while the screenshot is taken), then the moved light's first. Each
+    // frame shows the newest estimate (`Refiner::poll`), so rounds that end within one
+    // frame are logged once, the newest: the rounds rise, not necessarily by one.
     let restart = rounds
         .windows(2)
         .position(|w| w[1] < w[0])
         .expect("the truth starts over after the light moved");
-    let before: Vec<u64> = (1..=rounds[restart]).collect();
-    assert_eq!(&rounds[..restart + 1], before, "{rounds:?}");
-    assert!(rounds[restart] >= 4, "{rounds:?}");
-    assert_eq!(rounds[restart + 1], 1, "{rounds:?}");
+    assert!(rounds[..restart + 1].windows(2).all(|w| w[0] < w[1]), "{rounds:?}");
+    assert!(rounds[0] <= 2 && rounds[restart] >= 4, "{rounds:?}");
+    assert!(rounds[restart + 1] <= 2, "{rounds:?}");
     let se = |i: usize| truth[i]["mean_std_error"].as_f64().unwrap();
-    // the mean of 4 rounds has about half the standard error of 1 (1 / sqrt(4)); the
-    // estimates of the spread are themselves noisy, so only the direction is asserted
-    assert!(se(3) < se(0), "standard error {} after 1 round, {} after 4", se(0), se(3));
-    let rms = truth[3]["rms"].as_f64().unwrap();
+    // the mean of at least twice the rounds has at most 1 / sqrt(2) of the standard error;
+    // the estimates of the spread are themselves noisy, so only the direction is asserted
+    assert!(
+        se(restart) < se(0),
+        "standard error {} after {} round(s), {} after {}",
+        se(0),
+        rounds[0],
+        se(restart),
+        rounds[restart]
+    );
+    let rms = truth[restart]["rms"].as_f64().unwrap();
     assert!(rms.is_finite() && rms > 0.0 && rms < 0.5, "RMS {rms}");
     for name in ["error", "std-error"] {
         let img = png(&dir.join(format!("{name}.png")));
