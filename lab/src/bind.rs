@@ -128,16 +128,19 @@ impl SceneBinding {
                 shadow_size: scene.shadow_map,
             });
         }
-        // light i alone (`session::single_light`, which imports this module)
-        let alone = |i: usize| {
-            let mut s = scene.clone();
+        // light i alone (`session::single_light`, which imports this module); a scene of
+        // one light as it is, without a copy of its triangles
+        let inputs_of = |i: usize| {
             if scene.lights.len() > 1 {
+                let mut s = scene.clone();
                 s.lights = vec![scene.lights[i].clone()];
+                scene_inputs_for(&s, graph)
+            } else {
+                scene_inputs_for(scene, graph)
             }
-            s
         };
         (0..lights)
-            .map(|i| scene_inputs_for(&alone(i), graph).map_err(|e| named(i, e)))
+            .map(|i| inputs_of(i).map_err(|e| named(i, e)))
             .collect::<Result<Vec<_>, String>>()
             .map(SceneBinding::Soup)
     }
@@ -334,6 +337,15 @@ impl Cascading {
             .map_err(|e| format!("error: {e}"))
     }
 
+    /// Binds the scene's cascades where they are asked for ([`Cascading::bind`], its line
+    /// returned), else the scene itself ([`bind_scene`], every light or the first).
+    pub fn bind_or_scene(&self, ex: &mut Executor, scene: &Scene, all: bool) -> Result<Option<String>, String> {
+        match self.bind(ex, scene)? {
+            Some(line) => Ok(Some(line)),
+            None => bind_scene(ex, scene, all).map(|()| None),
+        }
+    }
+
     /// More than one cascade asked for, here or by the scene file.
     pub fn on(&self, scene: &Scene) -> bool {
         self.resolved(scene).count > 1
@@ -488,10 +500,10 @@ pub fn cascade_fit(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, snap: 
     frustum.eye += glam::Vec3::from_array(offset);
     let (camera_near, camera_far) = scene.camera_near_far();
     let (mut near, mut far) = (f32::INFINITY, 0.0f32);
-    for p in scene.visible_points() {
+    scene.for_each_visible_point(|p| {
         let d = (p - frustum.eye).dot(frustum.forward);
         (near, far) = (near.min(d), far.max(d));
-    }
+    });
     let (near, far) = if near < far {
         (near.max(camera_near), far.min(camera_far).max(near * (1.0 + 1e-3)))
     } else {

@@ -164,8 +164,6 @@ pub struct Executor {
     depth_override: Option<Vec<Vec<f32>>>,
     /// Refuse scenes whose textures would take more than this many bytes.
     pub max_bytes: u64,
-    /// The band of the bound cascades (`None` unless `bind_cascades` bound 2 or more).
-    cascade_band: Option<f32>,
     /// Bounds on what Geometry passes bind and generate (default: the device's), read at
     /// binding.
     pub generated_limits: crate::resources::GeneratedLimits,
@@ -329,7 +327,6 @@ impl Executor {
             timestamps,
             depth_override: None,
             max_bytes: 4 << 30,
-            cascade_band: None,
             generated_limits: Default::default(),
         })
     }
@@ -398,11 +395,10 @@ impl Executor {
     /// Upload `soup`'s vertices as geometry ([`Geometry::from_soup`]) and bind `lights` on it
     /// (their own vertices are not read).
     fn bind_soup(&mut self, soup: &SceneInputs, lights: &[SceneInputs]) -> Result<()> {
-        let first = soup;
-        let geometry = Geometry::from_soup(&first.vertices, &first.meshes, first.casting_vertices, &first.unshadowed)?;
+        let geometry = Geometry::from_soup(&soup.vertices, &soup.meshes, soup.casting_vertices, &soup.unshadowed)?;
         self.geometry = None;
         self.bound = Vec::new();
-        let buffers = crate::resources::scene_buffers(&self.gpu, &self.graph, self.usages.edges, first, &geometry, self.max_bytes);
+        let buffers = crate::resources::scene_buffers(&self.gpu, &self.graph, self.usages.edges, soup, &geometry, self.max_bytes);
         // the soup's copy is freed before the textures are made
         drop(geometry);
         self.geometry = Some(buffers?);
@@ -421,9 +417,9 @@ impl Executor {
     /// visibility texture holds it in channel 0 and the cascade (fractional in a band) in
     /// channel 1. One cascade is [`Executor::bind_scene`] with its light.
     pub fn bind_cascades(&mut self, scene: &SceneInputs, cascades: &[LightInputs], slices: &Slices) -> Result<()> {
-        self.check_cascades(&scene.camera(), cascades, slices)?;
-        self.check_floor(&scene.vertices, scene.casting_vertices, cascades)?;
         let camera = scene.camera();
+        self.check_cascades(&camera, cascades, slices)?;
+        self.check_floor(&scene.vertices, scene.casting_vertices, cascades)?;
         let inputs: Vec<SceneInputs> = cascades
             .iter()
             .map(|l| SceneInputs::of(&camera, l, scene.camera_size, scene.shadow_size))
@@ -478,7 +474,6 @@ impl Executor {
             let position = &self.bound[0].camera[CameraOutput::Position as usize];
             let mode = Combining::Cascades(slices.clone());
             self.combine = Some(Combine::new(&self.gpu, camera, n, &mode, position)?);
-            self.cascade_band = Some(slices.band);
         }
         Ok(())
     }
@@ -490,7 +485,7 @@ impl Executor {
     /// renders as a fresh binding of these cascades would.
     pub fn set_cascades(&mut self, lights: &[LightInputs], camera: &Camera, slices: &Slices) -> Result<()> {
         let n = self.bound.len();
-        if self.cascade_band.is_none() {
+        if self.cascades() < 2 {
             return Err(RuntimeError::NotFound(
                 "no cascades are bound (bind_cascades with 2 or more)".into(),
             ));
@@ -508,9 +503,8 @@ impl Executor {
             self.set_light(l, light)?;
         }
         if let Some(c) = &self.combine {
-            c.set_slices(&self.gpu.queue, &Combining::Cascades(slices.clone()));
+            c.set_slices(&self.gpu.queue, slices);
         }
-        self.cascade_band = Some(slices.band);
         Ok(())
     }
 
@@ -664,7 +658,6 @@ impl Executor {
         self.bound = Vec::new();
         self.lights_state = Vec::new();
         self.combine = None;
-        self.cascade_band = None;
         self.unshadowed = None;
         if lights.is_empty() || lights.len() > MAX_LIGHTS {
             return Err(RuntimeError::Param(format!(
@@ -869,7 +862,11 @@ impl Executor {
 
     /// Cascades bound ([`Executor::bind_cascades`] with 2 or more); 1 otherwise.
     pub fn cascades(&self) -> usize {
-        if self.cascade_band.is_some() { self.bound.len() } else { 1 }
+        if self.combine.as_ref().is_some_and(|c| c.cascades) {
+            self.bound.len()
+        } else {
+            1
+        }
     }
 
     /// Lights bound ([`Executor::bind_lights`]); 0 before a scene is bound.

@@ -24,8 +24,8 @@
 //! ([`Instance::placed_at_upload`]): their placed vertices, edges, face planes and face
 //! references are computed once on the CPU, with the arithmetic of [`Geometry::soup`]
 //! (so they equal the soup's triangles bit for bit), and written with the rest; the
-//! placement step never binds them, so they are free of its storage-binding limit. A triangle soup binds as such instances, one
-//! per object ([`Geometry::from_soup`]), and a mesh listed out (indices 0, 1, 2, ...) is
+//! placement step never binds them, so they are free of its storage-binding limit. A
+//! triangle soup binds as instances in world space, one per object ([`Geometry::from_soup`]), and a mesh listed out (indices 0, 1, 2, ...) is
 //! drawn without an index buffer, so a soup keeps its 72 bytes a triangle.
 //!
 //! Memory: the meshes once (24 bytes a vertex and 4 an index) and the placed vertices
@@ -124,6 +124,12 @@ const RECORD_BYTES: u64 = 256;
 /// `M p` for a column-major affine `m`, as the placement shader computes it.
 pub fn transform_point(m: &[f32; 16], p: [f32; 3]) -> [f32; 3] {
     [0, 1, 2].map(|r| m[r] * p[0] + m[4 + r] * p[1] + m[8 + r] * p[2] + m[12 + r])
+}
+
+/// `N q` for a normal matrix `n` ([`normal_matrix`]) as [`Geometry::soup`] and the
+/// placement at upload compute it (not normalised).
+fn transform_normal(n: &[f32; 16], q: [f32; 3]) -> [f32; 3] {
+    [0, 1, 2].map(|r| n[r] * q[0] + n[4 + r] * q[1] + n[8 + r] * q[2])
 }
 
 /// The inverse transpose of `m`'s upper 3 x 3, column-major in a 4 x 4 (for normals);
@@ -453,7 +459,7 @@ impl Geometry {
                 for &ix in &m.indices {
                     let (p, q) = (m.positions[ix as usize], m.normals[ix as usize]);
                     out.extend(transform_point(&inst.transform, p));
-                    out.extend([0, 1, 2].map(|r| n[r] * q[0] + n[4 + r] * q[1] + n[8 + r] * q[2]));
+                    out.extend(transform_normal(&n, q));
                 }
             }
             if pass {
@@ -665,7 +671,7 @@ fn write_placed(a: &Adjacency, at: [u32; 3], welded: u32, m: Option<&[f32; 16]>,
     for (k, p) in a.planes.iter().enumerate() {
         let plane = match (m, &normal) {
             (Some(m), Some((n, side))) => {
-                let q = [0, 1, 2].map(|r| n[r] * p[0] + n[4 + r] * p[1] + n[8 + r] * p[2]);
+                let q = transform_normal(n, [p[0], p[1], p[2]]);
                 let d = p[3] - (q[0] * m[12] + q[1] * m[13] + q[2] * m[14]);
                 [q[0], q[1], q[2], d].map(|x| side * x)
             }
@@ -689,7 +695,7 @@ fn placed_copy(mesh: &Mesh, m: &[f32; 16]) -> Vec<u8> {
     let mut out = Vec::with_capacity(mesh.positions.len() * 24);
     for (p, q) in mesh.positions.iter().zip(&mesh.normals) {
         let p = transform_point(m, *p);
-        let q = [0, 1, 2].map(|r| n[r] * q[0] + n[4 + r] * q[1] + n[8 + r] * q[2]);
+        let q = transform_normal(&n, *q);
         for x in p.into_iter().chain(q) {
             out.extend_from_slice(&x.to_le_bytes());
         }
@@ -993,10 +999,9 @@ impl GeometryBuffers {
             }
             if let (true, Some(a)) = (inst.casts, &adjacency[inst.mesh]) {
                 let at = [placed.edges[2], placed.planes[2], placed.faces[2]];
-                if w {
-                    write_placed(a, at, placed.welded, None, &mut placed_data);
-                } else if !inst.moves {
-                    write_placed(a, at, placed.welded, Some(&inst.transform), &mut placed_data);
+                if !inst.moves {
+                    // in world space as it is, else placed here under its transform
+                    write_placed(a, at, placed.welded, (!w).then_some(&inst.transform), &mut placed_data);
                 } else {
                     s.edges = [f[3], a.edges.len() as u32, at[0]];
                     s.planes = [f[4], a.planes.len() as u32, at[1]];

@@ -103,19 +103,16 @@ fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
 ";
 
 /// The cascades' uniform (`Slices` of `CASCADES_WGSL`): eye and band, forward and count,
-/// the splits (unused ones past the last); `None` for lights.
-fn slices_words(mode: &Combining) -> Option<[f32; 16]> {
-    let Combining::Cascades(Slices {
+/// the splits (unused ones past the last).
+fn slices_words(s: &Slices) -> [f32; 16] {
+    let Slices {
         eye,
         forward,
         splits,
         band,
-    }) = mode
-    else {
-        return None;
-    };
+    } = s;
     let at = |i: usize| splits.get(i).copied().unwrap_or(f32::MAX);
-    Some([
+    [
         eye[0],
         eye[1],
         eye[2],
@@ -132,7 +129,7 @@ fn slices_words(mode: &Combining) -> Option<[f32; 16]> {
         0.0,
         0.0,
         0.0,
-    ])
+    ]
 }
 
 /// How the combining step makes one frame of the bound light views.
@@ -267,7 +264,11 @@ impl Combine {
             let (v_in, c_in) = (array(&layers[0]), array(&layers[1]));
             let (c_out, v_out) = (color.create_view(&Default::default()), visibility.create_view(&Default::default()));
             let p_in = position.create_view(&Default::default());
-            let slices = slices_words(mode).map(|words| {
+            let cascades = match mode {
+                Combining::Cascades(s) => Some(slices_words(s)),
+                Combining::Lights => None,
+            };
+            let slices = cascades.map(|words| {
                 let b = device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("cascade slices"),
                     size: 64,
@@ -324,11 +325,11 @@ impl Combine {
         })
     }
 
-    /// Cascades: the camera and splits of this frame (`Combining::Cascades`), written to the
-    /// uniform the combining step reads; nothing is created. Ignored for lights.
-    pub fn set_slices(&self, queue: &wgpu::Queue, mode: &Combining) {
-        if let (Some(b), Some(words)) = (&self.slices, slices_words(mode)) {
-            queue.write_buffer(b, 0, &crate::resources::f32_bytes(&words));
+    /// Cascades: the camera and splits of this frame, written to the uniform the combining
+    /// step reads; nothing is created. Ignored for lights.
+    pub fn set_slices(&self, queue: &wgpu::Queue, slices: &Slices) {
+        if let Some(b) = &self.slices {
+            queue.write_buffer(b, 0, &crate::resources::f32_bytes(&slices_words(slices)));
         }
     }
 

@@ -386,10 +386,17 @@ impl Scene {
     /// frustum (Sutherland-Hodgman in clip space, where world positions interpolate
     /// linearly), its clipped polygon's corners in world space.
     pub fn visible_points(&self) -> Vec<Vec3> {
+        let mut out = Vec::new();
+        self.for_each_visible_point(|p| out.push(p));
+        out
+    }
+
+    /// [`Scene::visible_points`] one by one, collecting nothing (what a refit every frame
+    /// reads: the cascades' depth range).
+    pub fn for_each_visible_point(&self, mut f: impl FnMut(Vec3)) {
         let vp = self.camera_view_proj();
         // the six planes of WebGPU's clip volume: -w <= x, y <= w, 0 <= z <= w
         let planes: [fn(Vec4) -> f32; 6] = [|c| c.w + c.x, |c| c.w - c.x, |c| c.w + c.y, |c| c.w - c.y, |c| c.z, |c| c.w - c.z];
-        let mut out = Vec::new();
         let mut poly: Vec<(Vec4, Vec3)> = Vec::with_capacity(9);
         let mut next: Vec<(Vec4, Vec3)> = Vec::with_capacity(9);
         for tri in &self.triangles {
@@ -413,9 +420,10 @@ impl Scene {
                     break;
                 }
             }
-            out.extend(poly.iter().map(|p| p.1));
+            for p in &poly {
+                f(p.1);
+            }
         }
-        out
     }
 
     /// The corners, in `view`'s space, of every caster triangle clipped to the region where

@@ -83,9 +83,7 @@ pub(crate) fn moving_light_frames(
     for i in 1..frames {
         let mut s = scene.clone();
         s.lights[0] = moved_light(light, scene, i as f32 * step);
-        if cascading.bind(ex, &s)?.is_none() {
-            crate::bind::bind_scene(ex, &s, false)?;
-        }
+        cascading.bind_or_scene(ex, &s, false)?;
         ex.run_frame().map_err(rt)?;
         out.push(ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0));
     }
@@ -123,11 +121,8 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     {
         return Err(format!("error: `--range {r}`: expected a half-width > 0 in 0..255 units"));
     }
-    match a.over.cascading.bind(&mut ex, &scene)? {
-        Some(line) => println!("{line}"),
-        None => {
-            crate::bind::bind_scene(&mut ex, &scene, false)?;
-        }
+    if let Some(line) = a.over.cascading.bind_or_scene(&mut ex, &scene, false)? {
+        println!("{line}");
     }
     let mut frame_ms = Vec::new();
     for _ in 0..a.frames.max(1) {

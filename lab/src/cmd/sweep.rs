@@ -470,9 +470,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
     let time_references = |runs: &mut Vec<Option<ReferenceRun>>| -> Result<(), String> {
         for (c, times, scene) in runs.iter_mut().flatten() {
             let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).map_err(rt)?;
-            if a.cascading.bind(&mut ex, scene)?.is_none() {
-                crate::bind::bind_scene(&mut ex, scene, false)?;
-            }
+            a.cascading.bind_or_scene(&mut ex, scene, false)?;
             times.extend(time_frames(&mut ex, file.frames)?);
         }
         Ok(())
@@ -514,9 +512,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         let compiled = compile_for(&path, &sources[c.technique], &set, &precision, &schedule, facts)?;
         let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
         crate::bind::check_cascades(&scene, &cascading)?;
-        if cascading.bind(&mut ex, &scene)?.is_none() {
-            crate::bind::bind_scene(&mut ex, &scene, false)?;
-        }
+        cascading.bind_or_scene(&mut ex, &scene, false)?;
         let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
         let (fetches, ops) = work(&ex.graph, scene.shadow_map, scene.camera_size(), edges);
         let ms = time_frames(&mut ex, file.frames)?;

@@ -204,10 +204,7 @@ fn build(gpu: &Gpu, r: Request) -> Result<Ready, String> {
 /// light's cascades where `cascading` or the scene asks for them.
 pub fn bind(ex: &mut Executor, scene: &Scene, cascading: &Cascading) -> Result<(), String> {
     crate::bind::check_cascades(scene, cascading)?;
-    if cascading.bind(ex, scene)?.is_some() {
-        return Ok(());
-    }
-    crate::bind::bind_scene(ex, scene, true)
+    cascading.bind_or_scene(ex, scene, true).map(|_| ())
 }
 
 /// Watches files and says which of them changed.
