@@ -329,7 +329,12 @@ impl Combine {
     /// step reads; nothing is created. Ignored for lights.
     pub fn set_slices(&self, queue: &wgpu::Queue, slices: &Slices) {
         if let Some(b) = &self.slices {
-            queue.write_buffer(b, 0, &crate::resources::f32_bytes(&slices_words(slices)));
+            // on the stack: a host refits every frame the camera moves
+            let mut bytes = [0u8; 64];
+            for (chunk, w) in bytes.chunks_exact_mut(4).zip(slices_words(slices)) {
+                chunk.copy_from_slice(&w.to_le_bytes());
+            }
+            queue.write_buffer(b, 0, &bytes);
         }
     }
 
