@@ -690,6 +690,10 @@ pub enum Func {
     /// rendering"), for per-pixel and per-frame random numbers: `noise(pixel.x, pixel.y,
     /// f32(frame))`.
     Noise,
+    /// `if c { t } else { f }` (arguments `f`, `t`, `c`, as `select`): a real branch,
+    /// whose arms the code generator emits inside an `if` (`back::expr`); evaluated,
+    /// folded and bounded as `select`. Not callable by name: the parser reads `if`.
+    Branch,
 }
 
 /// The WGSL of [`Func::Noise`], added to a module whose code calls it: PCG3D
@@ -832,7 +836,7 @@ impl Func {
         }
     }
 
-    pub const ALL: [Func; 41] = [
+    pub const ALL: [Func; 42] = [
         Func::Abs,
         Func::Exp,
         Func::Exp2,
@@ -874,6 +878,7 @@ impl Func {
         Func::DivOr,
         Func::UvWidth,
         Func::Noise,
+        Func::Branch,
     ];
 
     /// The descriptor: adding a function means adding a variant, its entry in
@@ -1393,6 +1398,20 @@ impl Func {
                     ),
                 }),
                 accuracy: Bound(|v, _| 2.5 * ulp(v)),
+            },
+            Func::Branch => &Builtin {
+                name: "if",
+                arity: 3,
+                sig: Sig::Select,
+                fold: Custom(|v| match v[2] {
+                    ConstValue::Bool(true) => Some(v[1]),
+                    ConstValue::Bool(false) => Some(v[0]),
+                    ConstValue::Int(_) | ConstValue::Uint(_) | ConstValue::Float(_) => None,
+                }),
+                range: |v| Interval::hull(v[0], v[1]),
+                // never a call: `back::expr` emits the arms inside an `if`
+                wgsl: Same,
+                accuracy: Exact,
             },
             Func::Noise => &Builtin {
                 name: "noise",
@@ -1994,7 +2013,10 @@ pub fn is_reserved(name: &str) -> bool {
         || constant(name).is_some()
         || Func::from_name(name).is_some()
         || SampleFn::from_name(name).is_some()
-        || matches!(name, "let" | "sum" | "in" | "true" | "false" | "at_sample" | NEIGHBOUR)
+        || matches!(
+            name,
+            "let" | "sum" | "in" | "true" | "false" | "if" | "else" | "at_sample" | NEIGHBOUR
+        )
         || name == crate::front::expr::COMPARE_AT
 }
 
@@ -2009,7 +2031,7 @@ mod tests {
             assert_eq!(Func::from_name(f.name()), Some(f));
             assert!(is_reserved(f.name()));
         }
-        assert_eq!(Func::Noise as usize + 1, Func::ALL.len(), "a Func is missing from Func::ALL");
+        assert_eq!(Func::Branch as usize + 1, Func::ALL.len(), "a Func is missing from Func::ALL");
         for (i, input) in Input::ALL.into_iter().enumerate() {
             assert_eq!(input as usize, i, "Input::ALL out of declaration order at {input:?}");
             assert_eq!(Input::from_name(input.name()), Some(input));
@@ -2158,7 +2180,9 @@ mod tests {
             &doc[a..b]
         };
         let functions = section("### 8.6 Functions", "### 8.7");
-        for f in Func::ALL {
+        // `if` is syntax (8.4), not a function
+        assert!(section("### 8.4", "### 8.5").contains("if cond { a } else { b }"));
+        for f in Func::ALL.into_iter().filter(|f| *f != Func::Branch) {
             assert!(
                 functions.contains(&format!("`{}(", f.name())),
                 "docs/language.md 8.6 lacks `{}`",
@@ -2218,7 +2242,8 @@ mod tests {
             body.push_str(&format!("    let input{k}: {} = {};\n", i.ty().wgsl(), i.desc().wgsl));
         }
         let mut k = 0;
-        for f in Func::ALL {
+        // a branch is never a call: the code generator writes an `if` (back::expr)
+        for f in Func::ALL.into_iter().filter(|f| *f != Func::Branch) {
             for sig in signatures(f) {
                 let ty = f.result(&sig).unwrap();
                 let args: Vec<String> = sig.iter().map(|t| arg(*t)).collect();

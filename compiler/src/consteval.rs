@@ -339,6 +339,12 @@ pub fn eval(sym: &Symbols, e: &Expr, env: &mut Env) -> Result<ConstValue, NotCon
             let v = usize::try_from(k).ok().and_then(|k| a.values.get(k)).ok_or(NotConst::NoValue)?;
             eval(sym, v, &mut Vec::new())?
         }
+        // only the arm taken is evaluated (the other may divide by zero where it is not)
+        ExprKind::If { cond, then, els } => match eval(sym, cond, env)? {
+            Bool(true) => eval(sym, then, env)?,
+            Bool(false) => eval(sym, els, env)?,
+            Int(_) | Uint(_) | Float(_) => return Err(NotConst::NoValue),
+        },
         ExprKind::Let { name, value, body, .. } => {
             let v = eval(sym, value, env)?;
             env.push((name.clone(), Some(v)));

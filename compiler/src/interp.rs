@@ -1175,7 +1175,7 @@ impl<'p> Evaluation<'p> {
                 }
             }
             // a `select` whose condition may flip takes either branch with its own error
-            if let Node::Call(Func::Select, a) = arena.node(h)
+            if let Node::Call(Func::Select | Func::Branch, a) = arena.node(h)
                 && let [f, t, c] = a.as_slice()
                 && errors.get(c.index()).is_some_and(|e| e[0] > 0.0)
             {

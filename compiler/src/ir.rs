@@ -327,7 +327,7 @@ impl Arena {
                 let v = consteval::binary(*op, x?, y?)?;
                 self.constant(v, ty, span)
             }
-            Node::Call(Func::Select, args) => match self.as_const(args[2])? {
+            Node::Call(Func::Select | Func::Branch, args) => match self.as_const(args[2])? {
                 Bool(true) => Some(args[1]),
                 Bool(false) => Some(args[0]),
                 Int(_) | Uint(_) | Float(_) => None,
@@ -462,6 +462,15 @@ impl Arena {
                 let _ = write!(s, " {} ", op.symbol());
                 self.write(s, *b, ir, depth + 1);
                 s.push(')');
+            }
+            Node::Call(Func::Branch, args) if args.len() == 3 => {
+                s.push_str("if ");
+                self.write(s, args[2], ir, depth + 1);
+                s.push_str(" { ");
+                self.write(s, args[1], ir, depth + 1);
+                s.push_str(" } else { ");
+                self.write(s, args[0], ir, depth + 1);
+                s.push_str(" }");
             }
             Node::Call(f, args) => {
                 let _ = write!(s, "{}(", f.name());

@@ -214,6 +214,21 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 }
                 self.arena.add(Node::Swizzle(h, comps), ty, e.span)
             }
+            ExprKind::If { cond, then, els } => {
+                let c = self.expr(cond)?;
+                let ty = self.ty(e)?;
+                // a condition known here (a series variable's test) takes one arm: the
+                // other is not lowered (it may divide by zero where it is not taken)
+                match self.arena.as_const(c) {
+                    Some(ConstValue::Bool(true)) => self.expr_coerced(then)?,
+                    Some(ConstValue::Bool(false)) => self.expr_coerced(els)?,
+                    _ => {
+                        let t = self.expr_coerced(then)?;
+                        let f = self.expr_coerced(els)?;
+                        self.arena.add(Node::Call(Func::Branch, vec![f, t, c]), ty, e.span)
+                    }
+                }
+            }
             ExprKind::Let { name, value, body, .. } => {
                 let h = self.expr_coerced(value)?;
                 self.locals.push((name.clone(), h));

@@ -427,9 +427,13 @@ fn a_gltf_of_shared_meshes_binds_as_instances_and_renders_as_its_soup() {
 fn the_min_mip_early_out_gives_its_pcf_bit_for_bit() {
     let path = root().join("techniques/examples/pcf-min-early-out.ron");
     let source = std::fs::read_to_string(&path).unwrap();
-    let plain = source.replace("select(pcf, 1.0, r <= nearest_blocker)", "pcf + 0.0 * nearest_blocker");
+    // the early-out's condition folded to false: the `else` arm alone, the plain PCF
+    let plain = source.replace("if r <= nearest_blocker {", "if false && r <= nearest_blocker {");
     assert_ne!(plain, source);
-    let early = source.replace("select(pcf, 1.0, r <= nearest_blocker)", "select(0.0, 1.0, r <= nearest_blocker)");
+    // the taps taken out: 0 wherever the early-out is not taken
+    let taps = "sum(i in 0..=6, sum(j in 0..=6, select(0.0, 1.0, r <= fetch(z, i - 3, j - 3)))) / 49.0";
+    let early = source.replace(taps, "0.0");
+    assert_ne!(early, source);
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
     for sc in ["bunny", "contact"] {
         let scene = Scene::load(root().join(format!("scenes/{sc}.ron"))).unwrap_or_else(|e| panic!("{e}"));

@@ -256,6 +256,62 @@ fn region_and_level_lookups_agree_and_injected_bugs_are_caught() {
     }
 }
 
+/// A probe of real branches (`if c { a } else { b }`): a branch in a Map channel's value,
+/// and in the Shade an `else if` chain whose arms share a value, read a lookup with an
+/// implicit level bound before the `if`, and hold a series whose branch folds per term.
+/// The GPU agrees with the CPU's f64 evaluation on every input; the arms really are
+/// inside the `if` (the taps of the last arm are read there only); a negated condition is
+/// caught on either side.
+const BRANCH_PROBE: &str = r#"Technique(
+    name: "branch_probe",
+    channels: {
+        "z": Channel(precision: F32),
+        "w": Channel(precision: F32, value: "if z > 0.5 { z * z } else { 1.0 - z }"),
+    },
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Map(name: "map", reads: ["shadow"], writes: "mapped", channels: ["w"]),
+        Shade(name: "shade", reads: ["shadow", "mapped"], visibility: "
+            let s = sample(z);
+            let shared = 0.5 * nearest(w);
+            let v = if d <= s {
+                shared + 0.5
+            } else if d < s + 0.05 {
+                shared + 0.1 * sum(i in -1..=1, if i == 0 { 0.0 } else { nearest_at(w, f32(i) * texel_size, 0.0) })
+            } else {
+                shared * select(0.0, 1.0, d <= fetch(z, 1, 0))
+            };
+            saturate(v)
+        "),
+    ],
+)"#;
+
+#[test]
+fn branches_agree_and_a_negated_condition_is_caught() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("verify needs an adapter: {e}"));
+    let c = sshc::compile_str(BRANCH_PROBE, &sshc::CompileOptions::default())
+        .unwrap_or_else(|d| panic!("{}", d.render("branch_probe", BRANCH_PROBE)));
+    let good = verdicts(&rows(&gpu, &c));
+    assert!(good.iter().all(|v| *v == Verdict::Agrees), "as generated: {good:?}");
+    let shade = &c
+        .shaders
+        .iter()
+        .find(|(n, _)| n.ends_with(".shade.wgsl"))
+        .expect("a shade module")
+        .1;
+    // the last arm's tap is read inside the inner `if`'s `else`, after both conditions
+    let (inner_else, fetch) = (shade.find("    } else {\n").expect("an else"), shade.find("vec2<i32>(1i, 0i)"));
+    assert!(fetch.is_some_and(|f| f > inner_else), "the tap is read outside its arm:\n{shade}");
+    for pass in ["map", "shade"] {
+        let bad = rows(&gpu, &injected(&c, pass, "if e", "if !e"));
+        assert!(
+            verdicts(&bad).contains(&Verdict::Differs),
+            "{pass}: a negated condition was not caught: {:?}",
+            verdicts(&bad)
+        );
+    }
+}
+
 /// A declared channel range (`range: (lo, hi)`): the value `4z - 1` (in [-1, 3]) clamped
 /// to (0, 1) at F16 and to (0, 2) at Unorm8, encoded over the declared range. The GPU
 /// agrees with the CPU's evaluation (which clamps as declared) and `verify` reports the

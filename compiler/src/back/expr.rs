@@ -10,7 +10,7 @@ use crate::back::internal;
 use crate::back::parts::{self, Line, Split};
 use crate::back::summed_area::{box_lookup, sat_read, texel_read};
 use crate::back::text::{COMP, decode_expr, f32_lit, i32_lit, params_struct};
-use crate::builtins::{Input, SampleFn, SampleWgsl, Sig, Ty};
+use crate::builtins::{Func, Input, SampleFn, SampleWgsl, Sig, Ty};
 use crate::diag::{Diagnostic, Phase};
 use crate::front::ast::{ConstValue, Precision};
 use crate::front::expr::{BinOp, UnOp};
@@ -160,27 +160,106 @@ impl<'a> Emitter<'a> {
     }
 
     pub(crate) fn emit(&mut self, root: ExprId) -> Result<String, Diagnostic> {
-        for h in self.ir.arena.postorder(&[root]) {
-            if self.names.contains_key(&h) {
+        self.emit_at(root)?;
+        let name = self.names[&root].clone();
+        self.roots.insert(name.clone());
+        Ok(name)
+    }
+
+    /// Emit `root` and every operand not yet named, in operand order. Below a branch
+    /// (`if c { t } else { f }`: `Func::Branch`), only what is read whichever arm is
+    /// taken is emitted here: each arm's own operations go inside the `if` ([`Self::branch`]).
+    fn emit_at(&mut self, root: ExprId) -> Result<(), Diagnostic> {
+        let a = &self.ir.arena;
+        let order: Vec<ExprId> = a.postorder(&[root]).into_iter().filter(|h| !self.names.contains_key(h)).collect();
+        let branches = order.iter().any(|h| matches!(a.node(*h), Node::Call(Func::Branch, _)));
+        let here = if branches { Some(self.unconditional(root)) } else { None };
+        for h in order {
+            if self.names.contains_key(&h) || here.as_ref().is_some_and(|u| !u.contains(&h)) {
+                continue;
+            }
+            if let Node::Call(Func::Branch, args) = a.node(h)
+                && let [f, t, c] = args[..]
+            {
+                self.branch(h, f, t, c)?;
                 continue;
             }
             let e = self.expr(h)?;
-            let node = self.ir.arena.node(h);
             let leaf = matches!(
-                node,
+                a.node(h),
                 Node::F32(_) | Node::I32(_) | Node::U32(_) | Node::Bool(_) | Node::Param(_) | Node::Input(..) | Node::Channel(..)
             );
             if leaf {
                 self.names.insert(h, e);
             } else {
                 let name = format!("e{}", h.index());
-                self.let_line(&name, self.ir.arena.ty(h).wgsl(), e);
+                self.let_line(&name, a.ty(h).wgsl(), e);
                 self.names.insert(h, name);
             }
         }
-        let name = self.names[&root].clone();
-        self.roots.insert(name.clone());
-        Ok(name)
+        Ok(())
+    }
+
+    /// What `root` reads whichever way its branches go (not yet named): every operand, but
+    /// only the condition of a branch, and every lookup with an implicit level of detail
+    /// with what it reads (WGSL allows screen-space derivatives in uniform control flow
+    /// only; `check` refuses such lookups written inside an arm, so these were bound
+    /// before the `if` with `let`).
+    fn unconditional(&self, root: ExprId) -> std::collections::HashSet<ExprId> {
+        let a = &self.ir.arena;
+        let implicit = |h: &ExprId| matches!(a.node(*h), Node::Sample { how: SampleFn::Sample, .. });
+        let mut stack: Vec<ExprId> = vec![root];
+        stack.extend(
+            a.postorder(&[root])
+                .into_iter()
+                .filter(|h| !self.names.contains_key(h) && implicit(h)),
+        );
+        let mut out = std::collections::HashSet::new();
+        while let Some(h) = stack.pop() {
+            if self.names.contains_key(&h) || !out.insert(h) {
+                continue;
+            }
+            if let Node::Call(Func::Branch, args) = a.node(h) {
+                stack.push(args[2]);
+            } else {
+                stack.extend(a.operands(h));
+            }
+        }
+        out
+    }
+
+    /// `if c { t } else { f }` as a WGSL `if` assigning a `var` named as the node: what
+    /// both arms read first, then each arm's own operations inside its block (their names
+    /// are scoped to it, and forgotten after).
+    fn branch(&mut self, h: ExprId, f: ExprId, t: ExprId, c: ExprId) -> Result<(), Diagnostic> {
+        let a = &self.ir.arena;
+        let reach = |x: ExprId| -> std::collections::HashSet<ExprId> { a.postorder(&[x]).into_iter().collect() };
+        let (in_t, in_f) = (reach(t), reach(f));
+        for s in a.postorder(&[t, f]) {
+            if in_t.contains(&s) && in_f.contains(&s) && !self.names.contains_key(&s) {
+                self.emit_at(s)?;
+            }
+        }
+        let name = format!("e{}", h.index());
+        let ty = a.ty(h).wgsl();
+        let mut text = format!("var {name}: {ty};\nif {} {{\n", self.n(c));
+        for (arm, x) in [("} else {\n", t), ("}\n", f)] {
+            let saved = (std::mem::take(&mut self.body), self.names.clone(), self.fetches.clone());
+            self.emit_at(x)?;
+            let value = self.names[&x].clone();
+            let lines = std::mem::replace(&mut self.body, saved.0);
+            (self.names, self.fetches) = (saved.1, saved.2);
+            text.push_str(&parts::indented(&lines));
+            let _ = writeln!(text, "    {name} = {value};");
+            text.push_str(arm);
+        }
+        self.body.push(Line::Branch {
+            name: name.clone(),
+            ty,
+            text,
+        });
+        self.names.insert(h, name);
+        Ok(())
     }
 
     fn n(&self, h: ExprId) -> &str {

@@ -54,6 +54,31 @@ pub enum Line {
     Let { name: String, ty: &'static str, rhs: String },
     /// Anything else (a control-flow statement, a `let` of an entry local), kept in the entry.
     Raw(String),
+    /// A branch: `var name: ty;` and the `if` that assigns it (`text`, lines without the
+    /// body's indentation), kept in the entry like [`Line::Raw`]; later lines read `name`.
+    Branch { name: String, ty: &'static str, text: String },
+}
+
+/// The text of `lines` as a block's body, one level in (an arm of a branch).
+pub fn indented(lines: &[Line]) -> String {
+    let mut body = String::new();
+    lines.iter().for_each(|l| render(l, &mut body));
+    body
+}
+
+impl Line {
+    /// The statement's text, for what it reads.
+    fn text(&self) -> &str {
+        match self {
+            Line::Let { rhs, .. } => rhs,
+            Line::Raw(s) | Line::Branch { text: s, .. } => s,
+        }
+    }
+
+    /// Whether the line is kept in the entry (ends a run of `let`s that may be split).
+    fn kept(&self) -> bool {
+        !matches!(self, Line::Let { .. })
+    }
 }
 
 /// The WGSL type of an entry point's local that generated code may read: the `in_*`
@@ -108,6 +133,11 @@ fn render(line: &Line, out: &mut String) {
         Line::Raw(s) => {
             let _ = writeln!(out, "    {s}");
         }
+        Line::Branch { text, .. } => {
+            for l in text.lines() {
+                let _ = writeln!(out, "    {l}");
+            }
+        }
     }
 }
 
@@ -118,7 +148,7 @@ pub fn split(lines: &[Line], prefix: &str, kept: &HashSet<String>, at: Split) ->
     let Split { max_run, part: part_len } = at;
     let part_len = part_len.max(1);
     let (mut functions, mut body) = (String::new(), String::new());
-    let long_run = lines.split(|l| matches!(l, Line::Raw(_))).any(|run| run.len() > max_run);
+    let long_run = lines.split(Line::kept).any(|run| run.len() > max_run);
     if !long_run {
         lines.iter().for_each(|l| render(l, &mut body));
         return (functions, body);
@@ -126,11 +156,7 @@ pub fn split(lines: &[Line], prefix: &str, kept: &HashSet<String>, at: Split) ->
     // the last line reading each name (usize::MAX: read after the body)
     let mut last_read: HashMap<&str, usize> = HashMap::new();
     for (i, l) in lines.iter().enumerate() {
-        let text = match l {
-            Line::Let { rhs, .. } => rhs,
-            Line::Raw(s) => s,
-        };
-        for id in identifiers(text) {
+        for id in identifiers(l.text()) {
             last_read.insert(id, i);
         }
     }
@@ -140,14 +166,11 @@ pub fn split(lines: &[Line], prefix: &str, kept: &HashSet<String>, at: Split) ->
     let mut let_ty: HashMap<&str, &'static str> = HashMap::new();
     let (mut i, mut part) = (0, 0);
     while i < lines.len() {
-        let run_end = lines[i..]
-            .iter()
-            .position(|l| matches!(l, Line::Raw(_)))
-            .map_or(lines.len(), |p| i + p);
+        let run_end = lines[i..].iter().position(Line::kept).map_or(lines.len(), |p| i + p);
         if run_end - i <= max_run {
             for l in &lines[i..run_end.max(i + 1)] {
                 render(l, &mut body);
-                if let Line::Let { name, ty, .. } = l {
+                if let Line::Let { name, ty, .. } | Line::Branch { name, ty, .. } = l {
                     let_ty.insert(name, ty);
                 }
             }
@@ -160,7 +183,7 @@ pub fn split(lines: &[Line], prefix: &str, kept: &HashSet<String>, at: Split) ->
                 .iter()
                 .filter_map(|l| match l {
                     Line::Let { name, ty, rhs } => Some((name.as_str(), *ty, rhs.as_str())),
-                    Line::Raw(_) => None,
+                    Line::Raw(_) | Line::Branch { .. } => None,
                 })
                 .collect();
             let defined: HashSet<&str> = lets.iter().map(|l| l.0).collect();
@@ -255,6 +278,30 @@ mod tests {
         assert!(functions.is_empty());
         assert_eq!(body.lines().count(), MAX_RUN);
         assert!(body.starts_with("    let e0 = in_d;\n"));
+    }
+
+    #[test]
+    fn a_branch_is_kept_in_the_entry_and_its_value_passed_to_the_parts_that_read_it() {
+        let mut lines = vec![Line::Branch {
+            name: "b0".into(),
+            ty: "vec2<f32>",
+            text: "var b0: vec2<f32>;\nif in_d > 0.5 {\n    b0 = vec2<f32>(1.0);\n} else {\n    b0 = vec2<f32>(0.0);\n}\n".into(),
+        }];
+        lines.extend(chain(MAX_RUN + 1));
+        if let Line::Let { rhs, .. } = &mut lines[1] {
+            *rhs = "b0.x".into();
+        }
+        let (functions, body) = split(&lines, "fs", &HashSet::from([format!("e{MAX_RUN}")]), Split::default());
+        // the branch stays in the entry, indented as a body's lines, before the parts
+        assert!(
+            body.starts_with("    var b0: vec2<f32>;\n    if in_d > 0.5 {\n        b0 = vec2<f32>(1.0);\n"),
+            "{body}"
+        );
+        assert!(body.contains("    let fs_p1 = fs_part1_f(b0, in_d);\n"), "{body}");
+        assert!(
+            functions.contains("fn fs_part1_f(b0: vec2<f32>, in_d: f32) -> fs_part1 {"),
+            "{functions}"
+        );
     }
 
     #[test]

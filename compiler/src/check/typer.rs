@@ -66,6 +66,11 @@ fn free_names<'e>(e: &'e Expr, out: &mut std::collections::HashSet<&'e str>) {
             free_names(to, out);
             free_names(body, out);
         }
+        ExprKind::If { cond, then, els } => {
+            free_names(cond, out);
+            free_names(then, out);
+            free_names(els, out);
+        }
     }
 }
 
@@ -108,6 +113,9 @@ pub(crate) struct Typer<'s, 'a> {
     pub(crate) carriers: Vec<(Item, String)>,
     /// Inside `at_sample(k, ..)`.
     in_sample: bool,
+    /// The `if` expressions whose arms enclose the expression being checked, outermost
+    /// first (lookups with implicit derivatives are refused inside them).
+    arms: Vec<Span>,
     /// One entry per term the enclosing series unroll to (one empty entry outside any):
     /// the values of their variables, outermost first (`None` where a bound was not known).
     envs: Vec<Vec<Option<i64>>>,
@@ -135,6 +143,7 @@ impl<'s, 'a> Typer<'s, 'a> {
             per_sample: vec![],
             carriers: vec![],
             in_sample: false,
+            arms: vec![],
             envs: vec![vec![]],
             floor: 0,
             calling: vec![],
@@ -217,6 +226,7 @@ impl<'s, 'a> Typer<'s, 'a> {
             | ExprKind::Member(..)
             | ExprKind::Index { .. }
             | ExprKind::Let { .. }
+            | ExprKind::If { .. }
             | ExprKind::Sum { .. } => return Ok(()),
         };
         // a divisor or a shift count may be known where the other operand is not
@@ -417,6 +427,49 @@ impl<'s, 'a> Typer<'s, 'a> {
                 let r = self.infer(body);
                 self.locals.pop();
                 r
+            }
+            ExprKind::If { cond, then, els } => {
+                let c = self.infer(cond)?;
+                if c != Ty::Bool {
+                    return Err(Self::err(
+                        cond.span,
+                        format!("type mismatch: the condition of `if` is a bool, found {c}"),
+                        format!("this is {c}"),
+                    )
+                    .help("compare it (`x > 0.0`), or use `select` to pick between values"));
+                }
+                self.arms.push(e.span);
+                let arms = self.infer(then).and_then(|t| Ok((t, self.infer(els)?)));
+                self.arms.pop();
+                let (t, f) = arms?;
+                // as `select`: one type (abstract integers take the other arm's), and two
+                // abstract arms are i32
+                let ty = match crate::builtins::unify(t, f) {
+                    Some(u)
+                        if !matches!(
+                            (t, f),
+                            (Ty::Vec(_), Ty::F32 | Ty::AbstractInt) | (Ty::F32 | Ty::AbstractInt, Ty::Vec(_))
+                        ) =>
+                    {
+                        u.concrete()
+                    }
+                    _ => {
+                        return Err(Self::err(
+                            els.span,
+                            format!("type mismatch: the arms of `if` have one type, found {t} and {f}"),
+                            format!("this is {f}"),
+                        )
+                        .also(then.span, format!("this is {t}")));
+                    }
+                };
+                let to = match ty {
+                    Ty::U32 => Ty::U32,
+                    Ty::F32 | Ty::Vec(_) => Ty::F32,
+                    Ty::I32 | Ty::AbstractInt | Ty::Bool => Ty::I32,
+                };
+                self.settle(then, to)?;
+                self.settle(els, to)?;
+                Ok(ty)
             }
             ExprKind::Sum {
                 var,
@@ -975,6 +1028,24 @@ impl<'s, 'a> Typer<'s, 'a> {
                 )
                 .note("channel values and basis functions are computed per texel from the channels of the map"));
             }
+            // naga's uniformity analysis refuses implicit derivatives (`textureSample`) in
+            // non-uniform control flow; a branch's arms are
+            if how == SampleFn::Sample
+                && let Some(&arm) = self.arms.last()
+            {
+                return Err(Self::err(
+                    span,
+                    format!("`{name}` takes the level of detail from screen-space derivatives, which are undefined inside a branch"),
+                    "implicit level of detail",
+                )
+                .also(arm, "inside an arm of this `if`")
+                .note("neighbouring pixels may take different arms, so the derivatives between them do not exist (WGSL's uniformity rules refuse it)")
+                .help(format!(
+                    "give the level explicitly (`{}`, `{}`), or look it up before the `if` with `let`",
+                    SampleFn::SampleLod.name(expand),
+                    SampleFn::SampleWidth.name(expand)
+                )));
+            }
             let extra = how.extra_args();
             if args.len() != extra.len() + 1 {
                 return Err(Self::err(
@@ -1103,7 +1174,7 @@ impl<'s, 'a> Typer<'s, 'a> {
             return Ok(Ty::F32);
         }
         let Some(f) = Func::from_name(name) else {
-            let mut cands: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
+            let mut cands: Vec<&str> = Func::ALL.iter().filter(|f| **f != Func::Branch).map(|f| f.name()).collect();
             cands.extend(SampleFn::NAMES);
             cands.push("sum");
             let mut d = Self::err(name_span, format!("unknown function `{name}`"), "not a built-in function");

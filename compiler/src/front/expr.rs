@@ -97,6 +97,10 @@ enum Tok {
     LBracket,
     #[token("]")]
     RBracket,
+    #[token("{")]
+    LBrace,
+    #[token("}")]
+    RBrace,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -236,6 +240,13 @@ pub enum ExprKind {
         value: Box<Expr>,
         body: Box<Expr>,
     },
+    /// `if cond { then } else { els }`: a real branch, only the taken arm evaluated
+    /// (`else if` is an `If` as the `else` arm).
+    If {
+        cond: Box<Expr>,
+        then: Box<Expr>,
+        els: Box<Expr>,
+    },
     /// `sum(var in from..=to, body)`
     Sum {
         var: String,
@@ -280,6 +291,11 @@ impl Expr {
                 add(to);
                 add(body);
             }
+            ExprKind::If { cond, then, els } => {
+                add(cond);
+                add(then);
+                add(els);
+            }
         }
         Expr {
             kind,
@@ -313,6 +329,11 @@ impl Expr {
                 from.walk(f);
                 to.walk(f);
                 body.walk(f);
+            }
+            ExprKind::If { cond, then, els } => {
+                cond.walk(f);
+                then.walk(f);
+                els.walk(f);
             }
         }
     }
@@ -357,6 +378,7 @@ impl fmt::Display for Expr {
             ExprKind::Index { name, index, .. } => write!(f, "{name}[{index}]"),
             ExprKind::Let { name, value, body, .. } => write!(f, "let {name} = {value}; {body}"),
             ExprKind::Sum { var, from, to, body, .. } => write!(f, "sum({var} in {from}..={to}, {body})"),
+            ExprKind::If { cond, then, els } => write!(f, "if {cond} {{ {then} }} else {{ {els} }}"),
         }
     }
 }
@@ -393,7 +415,7 @@ pub fn parse(lit: &StrLit) -> Result<Expr, Diagnostic> {
                     format!("unexpected character `{}` in expression", &text[lex.span()].escape_debug()),
                 )
                 .at(lit.map_span(span), "not part of the expression language")
-                .help("expressions use numbers, names, `+ - * / %`, comparisons, `&& || !`, bit operations `& | ^ ~ << >>`, calls `f(x)`, `let x = e;` and `sum(k in a..=b, e)`"));
+                .help("expressions use numbers, names, `+ - * / %`, comparisons, `&& || !`, bit operations `& | ^ ~ << >>`, calls `f(x)`, `let x = e;`, `if c { a } else { b }` and `sum(k in a..=b, e)`"));
             }
         }
     }
@@ -598,6 +620,8 @@ impl Parser<'_> {
             | Tok::Assign
             | Tok::LBracket
             | Tok::RBracket
+            | Tok::LBrace
+            | Tok::RBrace
             | Tok::Bang => return None,
         })
     }
@@ -713,6 +737,10 @@ impl Parser<'_> {
             )
             .at(fspan, "unexpected `let`")),
             Tok::Ident if text == "sum" && self.peek() == Some(Tok::LParen) => self.sum(fspan),
+            Tok::Ident if text == "if" => self.branch(fspan),
+            Tok::Ident if text == "else" => Err(Diagnostic::error(Phase::Syntax, "`else` without an `if`")
+                .at(fspan, "unexpected `else`")
+                .help("write `if cond { a } else { b }`")),
             Tok::Ident => {
                 if self.peek() == Some(Tok::LParen) {
                     self.bump();
@@ -768,6 +796,8 @@ impl Parser<'_> {
             Tok::RParen
             | Tok::LBracket
             | Tok::RBracket
+            | Tok::LBrace
+            | Tok::RBrace
             | Tok::Comma
             | Tok::Semi
             | Tok::Dot
@@ -797,6 +827,44 @@ impl Parser<'_> {
                 Err(self.err_here("a value"))
             }
         }
+    }
+
+    /// `if cond { a } else { b }` after the `if` (at `start`); `else if` chains. Both arms
+    /// are required: the expression has a value whichever is taken.
+    fn branch(&mut self, start: Span) -> Result<Expr, Diagnostic> {
+        self.enter()?;
+        let cond = self.expr(0)?;
+        let arm = |p: &mut Self, what: &str| -> Result<(Expr, Span), Diagnostic> {
+            p.expect(Tok::LBrace, what)?;
+            let e = p.block()?;
+            let end = p.expect(Tok::RBrace, "`}` at the end of the arm")?;
+            Ok((e, end))
+        };
+        let (then, then_end) = arm(self, "`{` before the arm taken when the condition holds")?;
+        if !self.peek_is_ident("else") {
+            return Err(Diagnostic::error(Phase::Syntax, "an `if` needs an `else` arm")
+                .at(self.map(then_end), "the `if` ends here without an `else`")
+                .help("an expression has a value whichever arm is taken: write `if c { a } else { b }`"));
+        }
+        self.bump();
+        let (els, end) = if self.peek_is_ident("if") {
+            let (_, s) = self.bump().unwrap_or((Tok::Ident, Span::UNDEFINED));
+            let e = self.branch(self.map(s))?;
+            let end = e.span;
+            (e, end)
+        } else {
+            let (e, end) = arm(self, "`{` or `if` after `else`")?;
+            (e, self.map(end))
+        };
+        self.depth -= 1;
+        self.node(
+            ExprKind::If {
+                cond: Box::new(cond),
+                then: Box::new(then),
+                els: Box::new(els),
+            },
+            start.join(end),
+        )
     }
 
     /// `sum(k in a..=b, body)` after the name `sum`.
@@ -846,6 +914,8 @@ mod tests {
         assert_eq!(e.to_string(), "let a = 2.5; ((a < 3) && !(b))");
         let e = parse(&lit("sum(k in 1..=M, 2 * k)")).unwrap();
         assert_eq!(e.to_string(), "sum(k in 1..=M, (2 * k))");
+        let e = parse(&lit("if a < 1 { let b = 2; b } else if c { 3 } else { 4 } + 1")).unwrap();
+        assert_eq!(e.to_string(), "(if (a < 1) { let b = 2; b } else { if c { 3 } else { 4 } } + 1)");
     }
 
     #[test]
@@ -863,5 +933,9 @@ mod tests {
         assert!(parse(&lit("a $ b")).is_err());
         assert!(parse(&lit(&"(".repeat(500))).is_err());
         assert!(parse(&lit(&"-".repeat(500))).is_err());
+        // an `if` needs both arms, in braces
+        assert!(parse(&lit("if a { 1 }")).is_err());
+        assert!(parse(&lit("if a 1 else 2")).is_err());
+        assert!(parse(&lit("else { 1 }")).is_err());
     }
 }
