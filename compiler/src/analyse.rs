@@ -25,6 +25,9 @@ pub struct RangeEval<'a> {
     channels: HashMap<ChannelId, Interval>,
     /// One runtime param evaluated over another range than its declared one.
     pub param_range: Option<(ParamId, Interval)>,
+    /// Inputs taken over another range than their descriptor's (`texel_size` at one map
+    /// size, for `tables`).
+    pub inputs: HashMap<crate::builtins::Input, Interval>,
     memo: HashMap<ExprId, Interval>,
 }
 
@@ -34,6 +37,7 @@ impl<'a> RangeEval<'a> {
             ir,
             channels,
             param_range: None,
+            inputs: HashMap::new(),
             memo: HashMap::new(),
         }
     }
@@ -82,10 +86,10 @@ impl<'a> RangeEval<'a> {
                     (None, _) => Interval::UNBOUNDED,
                 }
             }
-            Node::Input(i, _) => {
+            Node::Input(i, _) => self.inputs.get(i).copied().unwrap_or_else(|| {
                 let (lo, hi) = i.range();
                 Interval { lo, hi }
-            }
+            }),
             Node::Channel(c, _) => self.channels.get(c).copied().unwrap_or(Interval::UNBOUNDED),
             // Receiver side: a lookup's range is not known before the slot is laid out.
             Node::Sample { .. } => Interval::UNBOUNDED,
@@ -234,7 +238,7 @@ fn ranges_with(ir: &Ir, param_range: Option<(ParamId, Interval)>, scene: bool, d
             | IrPassKind::Mipmap {
                 reduce: Reduce::Mean | Reduce::Max | Reduce::Min,
             }
-            | IrPassKind::SummedArea => {
+            | IrPassKind::SummedArea { .. } => {
                 // convex combinations, maxima and minima stay within the source range
                 for s in &res.slots {
                     ranges.push(src(s.channel).unwrap_or(Interval::UNBOUNDED));

@@ -16,7 +16,7 @@ fn kind(p: &IrPass) -> graph::PassKind {
         IrPassKind::Map => graph::PassKind::Map,
         IrPassKind::Filter { .. } => graph::PassKind::Filter,
         IrPassKind::Mipmap { .. } => graph::PassKind::Mipmap,
-        IrPassKind::SummedArea => graph::PassKind::SummedArea,
+        IrPassKind::SummedArea { .. } => graph::PassKind::SummedArea,
         IrPassKind::Geometry { .. } => graph::PassKind::Geometry,
         IrPassKind::Shade { .. } => graph::PassKind::Shade,
     }
@@ -76,7 +76,18 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
                 .collect();
             textures.push(TextureDecl {
                 name: t.name.clone(),
-                format: if table { graph::Format::SummedAreaU32 } else { texture_format(t) },
+                format: match table {
+                    false => texture_format(t),
+                    // codegen has read every table's code (`table_code` fails on no table)
+                    true if matches!(
+                        crate::back::summed_area::table_code(ir, ri, ti),
+                        Ok(crate::back::summed_area::TableCode::Float)
+                    ) =>
+                    {
+                        graph::Format::SummedAreaF32
+                    }
+                    true => graph::Format::SummedAreaU32,
+                },
                 layers: t.layers,
                 extent: Extent::ShadowMap,
                 mips,
@@ -118,7 +129,7 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
                 | IrPassKind::Map
                 | IrPassKind::Filter { .. }
                 | IrPassKind::Mipmap { .. }
-                | IrPassKind::SummedArea
+                | IrPassKind::SummedArea { .. }
                 | IrPassKind::Geometry { .. }
                 | IrPassKind::Shade { .. } => Views::LightCenter,
             },

@@ -35,7 +35,7 @@ fn cascades(s: &mut String, ir: &Program, g: &sshc_graph::PassGraph) {
             IrPassKind::Depth { .. }
             | IrPassKind::Map
             | IrPassKind::Mipmap { .. }
-            | IrPassKind::SummedArea
+            | IrPassKind::SummedArea { .. }
             | IrPassKind::Geometry { .. }
             | IrPassKind::Shade { .. } => None,
         })
@@ -127,7 +127,7 @@ pub fn explain(c: &Compiled) -> String {
                     "one dispatch per level, 8 x 8 texels per workgroup"
                 )
             ),
-            IrPassKind::SummedArea => "builds a summed-area table".to_string(),
+            IrPassKind::SummedArea { .. } => format!("builds a summed-area table{}", table_sums(ir, p.writes)),
             IrPassKind::Geometry {
                 primitive: Primitive::BackFaces,
                 keep,
@@ -364,5 +364,44 @@ fn schedule(choice: Option<&Choice>, fragment: &str, compute: &str) -> String {
         Some(Choice::Fragment) | None => format!("schedule: fragment, {fragment}"),
         Some(Choice::Compute) => format!("schedule: compute, {compute}"),
         Some(Choice::Refused(why)) => format!("schedule: fragment; compute was asked for, but {why}"),
+    }
+}
+
+/// What a table over float textures sums, with its stated error (`tables`); empty for
+/// unorm codes.
+fn table_sums(ir: &crate::ir::Program, table: Option<crate::ir::ResId>) -> String {
+    use crate::back::summed_area::{TableCode, table_code};
+    let Some(t) = table else {
+        return String::new();
+    };
+    let r = &ir.resources[t];
+    let mut parts = Vec::new();
+    for (ti, tex) in r.textures.iter().enumerate() {
+        let slots: Vec<_> = r.slots.iter().filter(|s| s.texture == ti).collect();
+        let width = slots.iter().map(|s| s.range.hi - s.range.lo).fold(0.0, f64::max);
+        let n = crate::tables::REFERENCE_SIZE;
+        match table_code(ir, t, ti) {
+            Ok(TableCode::Codes { fixed: true, scale }) => {
+                let bits = (f64::from(scale) + 1.0).log2().round() as u8;
+                parts.push(format!(
+                    "`{}`: {bits}-bit fixed-point codes over each channel's range, summed exactly in u32 for boxes of up to {} texels (a box is then within half a step, {:.3e} of the widest range, {width:.4})",
+                    tex.name,
+                    crate::tables::fixed_max_area(bits),
+                    0.5 / f64::from(scale)
+                ));
+            }
+            Ok(TableCode::Float) => parts.push(format!(
+                "`{}`: f32 sums of the values less each channel's midpoint; at {n} x {n} an entry is within {:.3e} of the f64 sum and a box of A texels within {:.3e} / A (stated bounds, the widest range {width:.4})",
+                tex.name,
+                crate::tables::f32_entry_bound(n, 0.5 * width),
+                crate::tables::f32_box_bound(n, 0.5 * width, 1.0)
+            )),
+            Ok(TableCode::Codes { fixed: false, .. }) | Err(_) => {}
+        }
+    }
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", parts.join("; "))
     }
 }

@@ -207,7 +207,11 @@ pub fn given_slots(p: &Program) -> Vec<GivenSlot> {
         let geometry = match pass.kind {
             IrPassKind::Depth { .. } => false,
             IrPassKind::Geometry { .. } => true,
-            IrPassKind::Map | IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea | IrPassKind::Shade { .. } => {
+            IrPassKind::Map
+            | IrPassKind::Filter { .. }
+            | IrPassKind::Mipmap { .. }
+            | IrPassKind::SummedArea { .. }
+            | IrPassKind::Shade { .. } => {
                 continue;
             }
         };
@@ -415,12 +419,37 @@ impl Level {
     }
 }
 
-/// A stored channel: its levels (one without mips) and, read by `sample_box`, the prefix
-/// sums of level 0's values and allowances.
+/// A summed-area table as the GPU builds it: prefix sums of the texels' values and of their
+/// allowances (on an `(n + 1)^2` grid, row and column 0 zero), and what its sums leave.
+#[derive(Clone, Debug)]
+struct Table {
+    sums: Vec<f64>,
+    asums: Vec<f64>,
+    kind: TableModel,
+}
+
+/// What a table's storage adds to a lookup's allowance.
+#[derive(Clone, Debug)]
+enum TableModel {
+    /// Exact u32 sums of a unorm texture's own codes (the texels' allowances hold their
+    /// rounding).
+    Codes,
+    /// Exact u32 sums of fixed-point codes over `[lo, hi]` (half a code step is in
+    /// `asums`): the mean code `e` is weighed in f32 as a unorm's, relative to `e`, and the
+    /// decode `lo + e * (hi - lo)` rounds too.
+    Fixed { lo: f64 },
+    /// f32 sums of the values less the channel's midpoint: `err` bounds each entry's
+    /// rounding (rows summed first, then columns, as the GPU does) and `csums` holds the
+    /// sums of `v - centre`, whose magnitudes the lookup's own f32 arithmetic rounds.
+    Float { err: Vec<f64>, csums: Vec<f64> },
+}
+
+/// A stored channel: its levels (one without mips) and, read by the box lookups and
+/// `nearest` on a table, the table over level 0.
 #[derive(Clone, Debug)]
 struct Texels {
     levels: Vec<Level>,
-    sat: Option<(Vec<f64>, Vec<f64>)>,
+    sat: Option<Table>,
     /// What a filtered lookup's result may be off by beyond its texels' allowance: one code
     /// of an 8- or 16-bit unorm format, which a device may filter in fixed point and round
     /// to a code (lavapipe filters 8-bit formats so: tests/tests/lookups.rs measures its
@@ -498,7 +527,7 @@ impl Texels {
     /// `sample_box`: the mean over a box `w` (uv units, at least a texel each way) centred
     /// at uv, clipped to the map (the centre clamped to it first).
     fn boxed(&self, uv: [f64; 2], w: [f64; 2], model: Model) -> (f64, f64) {
-        let Some((sums, asums)) = &self.sat else {
+        let Some(Table { sums, asums, kind }) = &self.sat else {
             return (f64::NAN, 0.0);
         };
         let n = self.base().size;
@@ -525,8 +554,117 @@ impl Texels {
         let mean = |s: &[f64]| (integral(s, x1, y1) - integral(s, x0, y1) - integral(s, x1, y0) + integral(s, x0, y0)) / area;
         let v = mean(sums);
         // the GPU weighs exact integer sums in f32
-        (v, mean(asums) + 32.0 * model.ulp(v))
+        let weighing = 32.0 * model.ulp(v);
+        let corners = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)];
+        let table = match kind {
+            TableModel::Codes => 0.0,
+            // the mean code is weighed in f32 (relative to the codes' scale), then decoded
+            TableModel::Fixed { lo } => 32.0 * model.ulp(v - lo) + 2.0 * model.ulp(v),
+            // each corner's entries' rounding, and the lookup's f32 arithmetic on entries as
+            // large as the largest it reads (nine rectangles of four entries, weighed and
+            // added: 512 roundings of that magnitude bound it, docs/language.md)
+            TableModel::Float { err, csums, .. } => {
+                let row = n + 1;
+                let near = |x: f64, y: f64, s: &[f64]| {
+                    let (i, j) = ((x.floor() as usize).min(n), (y.floor() as usize).min(n));
+                    let (i1, j1) = ((i + 1).min(n), (j + 1).min(n));
+                    [(i, j), (i1, j), (i, j1), (i1, j1)]
+                        .iter()
+                        .map(|&(a, b)| s[b * row + a].abs())
+                        .fold(0.0, f64::max)
+                };
+                let entries: f64 = corners.iter().map(|&(x, y)| near(x, y, err)).sum();
+                let largest = corners.iter().map(|&(x, y)| near(x, y, csums)).fold(0.0, f64::max);
+                (entries + 256.0 * model.ulp(largest)) / area + 4.0 * model.ulp(v)
+            }
+        };
+        (v, mean(asums) + weighing + table)
     }
+
+    /// `nearest` on a table: the texel's value from four entries, with what the table's
+    /// storage adds (an f32 table's four entries' rounding and three f32 subtractions of
+    /// entries that large; a fixed-point table's decode).
+    fn table_texel(&self, p: [f64; 2], margin: f64, model: Model) -> (f64, f64) {
+        let (v, a) = self.nearest(p, margin);
+        let extra = match self.sat.as_ref().map(|t| &t.kind) {
+            None | Some(TableModel::Codes) => 0.0,
+            Some(TableModel::Fixed { lo }) => 4.0 * model.ulp(v - lo) + 2.0 * model.ulp(v),
+            Some(TableModel::Float { err, csums, .. }) => {
+                let n = self.base().size;
+                let row = n + 1;
+                // the texel (i, j) is entries (i + 1, j + 1) less its left and upper neighbours
+                let (i, j) = (
+                    p[0].floor().clamp(0.0, n as f64 - 1.0) as usize,
+                    p[1].floor().clamp(0.0, n as f64 - 1.0) as usize,
+                );
+                // within `margin` of a boundary the neighbour may be read: take the worse
+                let (i1, j1) = ((i + 2).min(n), (j + 2).min(n));
+                let (mut e, mut big) = (0.0f64, 0.0f64);
+                for b in j.saturating_sub(1)..=j1 {
+                    for a in i.saturating_sub(1)..=i1 {
+                        e = e.max(err[b * row + a]);
+                        big = big.max(csums[b * row + a].abs());
+                    }
+                }
+                4.0 * e + 8.0 * model.ulp(big) + 2.0 * model.ulp(v)
+            }
+        };
+        (v, a + extra)
+    }
+}
+
+/// The table the GPU builds over `base` (a channel stored in `slot`) as `code` says: the
+/// texels' values (clamped to the range a fixed-point code spans) and allowances (half a
+/// code step more there), and for an f32 table each entry's rounding bound.
+fn table(base: &Level, slot: &PlacedSlot, code: crate::back::summed_area::TableCode, model: Model) -> (Level, Table) {
+    use crate::back::summed_area::TableCode;
+    let mut level = base.clone();
+    let kind = match code {
+        TableCode::Codes { fixed: false, .. } => TableModel::Codes,
+        TableCode::Codes { fixed: true, scale } => {
+            let (lo, hi) = (slot.range.lo, slot.range.hi);
+            let step = if hi > lo { (hi - lo) / f64::from(scale) } else { 0.0 };
+            for (v, a) in level.v.iter_mut().zip(level.a.iter_mut()) {
+                *v = v.clamp(lo, hi.max(lo));
+                *a += 0.5 * step;
+            }
+            TableModel::Fixed { lo }
+        }
+        TableCode::Float => {
+            let centre = crate::back::summed_area::centre(slot);
+            // the subtraction `v - centre` rounds in f32 too
+            for (v, a) in level.v.iter().zip(level.a.iter_mut()) {
+                *a += model.ulp(v - centre + a.abs());
+            }
+            let n = level.size;
+            let row = n + 1;
+            let (mut csums, mut err) = (vec![0.0; row * row], vec![0.0; row * row]);
+            // rows: running sums, each addition rounding at the partial sum's magnitude
+            for y in 0..n {
+                let (mut acc, mut e) = (0.0f64, 0.0f64);
+                for x in 0..n {
+                    acc += level.v[y * n + x] - centre;
+                    e += model.ulp(acc.abs() + e);
+                    csums[(y + 1) * row + x + 1] = acc;
+                    err[(y + 1) * row + x + 1] = e;
+                }
+            }
+            // columns: running sums of the rounded row sums, in place
+            for x in 1..=n {
+                let (mut acc, mut e) = (0.0f64, 0.0f64);
+                for y in 1..=n {
+                    acc += csums[y * row + x];
+                    e += err[y * row + x] + model.ulp(acc.abs() + e);
+                    csums[y * row + x] = acc;
+                    err[y * row + x] = e;
+                }
+            }
+            TableModel::Float { err, csums }
+        }
+    };
+    let sums = prefix_sums(&level, true);
+    let asums = prefix_sums(&level, false);
+    (level, Table { sums, asums, kind })
 }
 
 fn prefix_sums(l: &Level, values: bool) -> Vec<f64> {
@@ -811,13 +949,14 @@ impl<'p> Evaluation<'p> {
                     self.insert(out, &slot, levels);
                 }
             }
-            IrPassKind::SummedArea => {
+            IrPassKind::SummedArea { .. } => {
                 let src = self.source(id)?;
                 for slot in self.slots(out) {
                     let base = self.read(src, slot.channel)?.base().clone();
-                    let sat = Some((prefix_sums(&base, true), prefix_sums(&base, false)));
+                    let code = crate::back::summed_area::table_code(&self.p, out, slot.texture).map_err(|d| d.message.clone())?;
+                    let (base, sat) = table(&base, &slot, code, self.model);
                     let texels = Texels {
-                        sat,
+                        sat: Some(sat),
                         ..Texels::new(vec![base], &slot)
                     };
                     self.texels.insert((out, slot.channel), vec![texels]);
@@ -993,7 +1132,7 @@ impl<'p> Evaluation<'p> {
                         Model::Gpu => n * 4.0 * input_error(Input::Uv, 0.0),
                         Model::F64 => 0.0,
                     };
-                    let texel = |uv: [f64; 2]| t.nearest([uv[0] * n, uv[1] * n], margin);
+                    let texel = |uv: [f64; 2]| t.table_texel([uv[0] * n, uv[1] * n], margin, self.model);
                     let by = if shift.view == *view { shift.by } else { [0.0; 3] };
                     let at = [s.uv[0] + by[0], s.uv[1] + by[1]];
                     Some(match how {

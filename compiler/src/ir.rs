@@ -907,7 +907,11 @@ pub enum IrPassKind {
     Mipmap {
         reduce: Reduce,
     },
-    SummedArea,
+    /// A summed-area table of the source; `sum` is what a float texture's table sums
+    /// (`None`: not written, `F32`), with the span it was written at.
+    SummedArea {
+        sum: Option<(crate::front::ast::TableSum, Span)>,
+    },
     Geometry {
         primitive: Primitive,
         resolve: Resolve,
@@ -928,7 +932,7 @@ impl IrPassKind {
     /// facts (its precision, its quantisation) are its source's.
     pub fn copies_source(&self) -> bool {
         match self {
-            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea => true,
+            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea { .. } => true,
             IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::Geometry { .. } | IrPassKind::Shade { .. } => false,
         }
     }
@@ -942,7 +946,7 @@ impl IrPassKind {
                 IrKernel::LoG => true,
                 IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::Max(_) | IrKernel::Min(_) => false,
             },
-            IrPassKind::Mipmap { .. } | IrPassKind::SummedArea => false,
+            IrPassKind::Mipmap { .. } | IrPassKind::SummedArea { .. } => false,
             IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::Geometry { .. } | IrPassKind::Shade { .. } => true,
         }
     }
@@ -969,7 +973,7 @@ impl IrPass {
             IrPassKind::Map => "Map",
             IrPassKind::Filter { .. } => "Filter",
             IrPassKind::Mipmap { .. } => "Mipmap",
-            IrPassKind::SummedArea => "SummedArea",
+            IrPassKind::SummedArea { .. } => "SummedArea",
             IrPassKind::Geometry { .. } => "Geometry",
             IrPassKind::Shade { .. } => "Shade",
         }
@@ -1065,7 +1069,7 @@ impl<S> Program<'_, S> {
             | IrPassKind::Map
             | IrPassKind::Filter { .. }
             | IrPassKind::Mipmap { .. }
-            | IrPassKind::SummedArea
+            | IrPassKind::SummedArea { .. }
             | IrPassKind::Geometry { .. } => None,
         })
     }
@@ -1231,7 +1235,7 @@ impl<S: SlotView> Program<'_, S> {
                 IrPassKind::Mipmap { reduce } => write!(f, " reduce {reduce:?}")?,
                 IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self.ir)))?,
                 IrPassKind::Geometry { keep: Some(k), .. } => write!(f, "\n      keep = {}", self.arena.display(*k, Some(self.ir)))?,
-                IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::SummedArea | IrPassKind::Geometry { .. } => {}
+                IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::SummedArea { .. } | IrPassKind::Geometry { .. } => {}
             }
             writeln!(f)?;
         }

@@ -36,6 +36,7 @@ pub mod resolve;
 pub mod rounding;
 pub mod schedule;
 pub mod span;
+pub mod tables;
 pub mod types;
 
 pub use diag::{Diagnostic, Diagnostics};
@@ -260,6 +261,8 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         if opts.rounding {
             warnings.extend(rounding_warning(&program));
         }
+        // a fixed-point table's overflow always; an f32 table's bound with the estimate
+        warnings.extend(tables::warnings(&program, opts.rounding));
         if want(DumpPhase::Pack) {
             dump = Some(program.to_string());
         }

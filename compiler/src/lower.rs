@@ -619,7 +619,9 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                     .ok_or_else(|| Diagnostic::error(Phase::Lower, "filter kernel was not resolved").at(p.span, "here"))?,
             },
             PassKind::Mipmap { reduce, .. } => IrPassKind::Mipmap { reduce: *reduce },
-            PassKind::SummedArea { .. } => IrPassKind::SummedArea,
+            PassKind::SummedArea { sum, .. } => IrPassKind::SummedArea {
+                sum: sum.as_ref().map(|s| (s.value, s.span)),
+            },
             PassKind::Geometry {
                 primitive,
                 view,

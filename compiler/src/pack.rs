@@ -4,7 +4,7 @@
 //! many layers as needed, within the limits profile (docs/architecture.md section 10).
 
 use crate::diag::{Diagnostic, Diagnostics, Phase};
-use crate::front::ast::Precision;
+use crate::front::ast::{Precision, TableSum};
 use crate::handle::Table;
 use crate::ir::*;
 use std::collections::{HashMap, HashSet};
@@ -100,7 +100,7 @@ fn eliminate(ir: &Ir, lay: &mut Working) {
                     }
                 }
             }
-            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea => {
+            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea { .. } => {
                 for c in needed {
                     if let Some(r) = carrier(c) {
                         live.insert((r, c));
@@ -202,20 +202,50 @@ pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Dia
                 if let Some(p) = places.get(&(src, s.channel)).copied() {
                     places.insert((ri, s.channel), p);
                 }
-                if !matches!(s.precision, Precision::Unorm8 | Precision::Unorm16) {
-                    diags.push(
+                let sum = match &ir.passes[res.writer].kind {
+                    IrPassKind::SummedArea { sum } => *sum,
+                    IrPassKind::Depth { .. }
+                    | IrPassKind::Map
+                    | IrPassKind::Filter { .. }
+                    | IrPassKind::Mipmap { .. }
+                    | IrPassKind::Geometry { .. }
+                    | IrPassKind::Shade { .. } => None,
+                };
+                let channel = &ir.channels[s.channel].name;
+                match (s.precision, sum) {
+                    // a unorm channel's table sums its codes
+                    (Precision::Unorm8 | Precision::Unorm16, Some((how, span))) => diags.push(
                         Diagnostic::error(
                             Phase::Pack,
                             format!(
-                                "summed-area table `{}` sums channel `{}`, stored at {}; tables sum unorm codes in u32 fixed point",
-                                res.name,
-                                ir.channels[s.channel].name,
-                                s.precision.name()
+                                "`sum: {}` sets what a table over a float channel sums, but channel `{channel}` is stored at {}, whose codes table `{}` sums",
+                                how.describe(),
+                                s.precision.name(),
+                                res.name
                             ),
                         )
-                        .at(res.span, "summed here")
-                        .help("store the channel at Unorm8 or Unorm16 (`--precision NAME=Unorm8`)"),
-                    );
+                        .at(span, "for a float channel")
+                        .help("remove `sum:`, or store the channel at F16 or F32"),
+                    ),
+                    // fixed-point codes span the channel's range
+                    (Precision::F16 | Precision::F32, Some((TableSum::Fixed(bits), span))) => {
+                        let range = infos.get(&(src, s.channel)).map(|i| i.range);
+                        if range.is_none_or(|r| !r.lo.is_finite() || !r.hi.is_finite()) {
+                            diags.push(
+                                Diagnostic::error(
+                                    Phase::Pack,
+                                    format!(
+                                        "a fixed-point table maps channel `{channel}`'s range onto {bits}-bit codes, and its range is not finite{}",
+                                        range.map(|r| format!(" ({r})")).unwrap_or_default()
+                                    ),
+                                )
+                                .at(span, "fixed-point codes")
+                                .also(ir.channels[s.channel].span, "declared here")
+                                .help("declare the channel's range, `range: (lo, hi)`, or sum it in f32 (`sum: F32`)"),
+                            );
+                        }
+                    }
+                    (Precision::F16 | Precision::F32, None | Some((TableSum::F32, _))) | (Precision::Unorm8 | Precision::Unorm16, None) => {}
                 }
             }
             continue;
@@ -351,7 +381,7 @@ pub fn mip_source(ir: &Ir, r: ResId) -> Option<ResId> {
         IrPassKind::Depth { .. }
         | IrPassKind::Map
         | IrPassKind::Filter { .. }
-        | IrPassKind::SummedArea
+        | IrPassKind::SummedArea { .. }
         | IrPassKind::Geometry { .. }
         | IrPassKind::Shade { .. } => None,
     }
@@ -361,7 +391,7 @@ pub fn mip_source(ir: &Ir, r: ResId) -> Option<ResId> {
 pub fn table_source(ir: &Ir, r: ResId) -> Option<ResId> {
     let w = &ir.passes[ir.resources[r].writer];
     match w.kind {
-        IrPassKind::SummedArea => Some(w.reads[0]),
+        IrPassKind::SummedArea { .. } => Some(w.reads[0]),
         IrPassKind::Depth { .. }
         | IrPassKind::Map
         | IrPassKind::Filter { .. }

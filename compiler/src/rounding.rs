@@ -84,7 +84,7 @@ pub fn unsupported(p: &Program) -> Option<String> {
             | IrPassKind::Map
             | IrPassKind::Filter { .. }
             | IrPassKind::Mipmap { .. }
-            | IrPassKind::SummedArea
+            | IrPassKind::SummedArea { .. }
             | IrPassKind::Shade { .. } => continue,
         };
         let (resource, channels) = match pass.writes {
@@ -145,6 +145,13 @@ pub enum Detail {
 /// [`Detail::Explain`], each channel's error at every precision). `None` where
 /// [`unsupported`] or nothing is looked up.
 pub fn estimate(p: &Program, detail: Detail) -> Option<Estimate> {
+    estimate_with(p, detail, &HashMap::new())
+}
+
+/// [`estimate`] with the lookups of some (resource, channel) pairs moved by a given amount
+/// (value units) instead of their precision's half step: what a summed-area table's
+/// storage leaves in its lookups (`tables`).
+pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, ChannelId), f64>) -> Option<Estimate> {
     if unsupported(p).is_some() {
         return None;
     }
@@ -242,8 +249,9 @@ pub fn estimate(p: &Program, detail: Detail) -> Option<Estimate> {
             configurations += 1;
             let mut sum = 0.0;
             for (k, (_, _, slot, _)) in looked.iter().enumerate() {
+                let fixed = moved_by.get(&(looked[k].0, looked[k].1)).copied();
                 let mut worst_at = |q: Precision| {
-                    let step = half_step(q, stored[k], (slot.range.lo, slot.range.hi));
+                    let step = fixed.unwrap_or_else(|| half_step(q, stored[k], (slot.range.lo, slot.range.hi)));
                     let (up, down) = (visibility(Some((k, step))), visibility(Some((k, -step))));
                     [up, down]
                         .iter()
@@ -283,7 +291,7 @@ fn mix_of(p: &Program, r: ResId) -> Mix {
         let mix = match &pass.kind {
             IrPassKind::Filter { kernel: IrKernel::Max(_) } | IrPassKind::Mipmap { reduce: Reduce::Max } => Some(Mix::Max),
             IrPassKind::Filter { kernel: IrKernel::Min(_) } | IrPassKind::Mipmap { reduce: Reduce::Min } => Some(Mix::Min),
-            IrPassKind::Filter { .. } | IrPassKind::Mipmap { reduce: Reduce::Mean } | IrPassKind::SummedArea => None,
+            IrPassKind::Filter { .. } | IrPassKind::Mipmap { reduce: Reduce::Mean } | IrPassKind::SummedArea { .. } => None,
             IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::Geometry { .. } | IrPassKind::Shade { .. } => {
                 return Mix::Mean;
             }

@@ -65,7 +65,7 @@ fn choice(ir: &Program, pass: &IrPass) -> Option<Choice> {
     let refusal = match pass.kind {
         IrPassKind::Map | IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } => compute_refusal,
         IrPassKind::Shade { .. } => shade_refusal,
-        IrPassKind::Depth { .. } | IrPassKind::SummedArea | IrPassKind::Geometry { .. } => return None,
+        IrPassKind::Depth { .. } | IrPassKind::SummedArea { .. } | IrPassKind::Geometry { .. } => return None,
     };
     Some(match pass.schedule {
         Schedule::Fragment => Choice::Fragment,

@@ -572,7 +572,7 @@ fn cssm_grid_order_filter_and_precision() {
             assert_eq!(texture(&c, "basis"), with_mips(packed(p, 4 * m + 1), false), "cssm M = {m} {p:?}");
             assert_eq!(packed(p, 4 * m + 1).1, m + 1);
         }
-        // summed-area tables: unorm only; a float channel is refused by the pack phase
+        // summed-area tables of unorm channels: their codes in u32
         for p in [Precision::Unorm8, Precision::Unorm16] {
             let o = opts(&[("M", m.to_string()), ("filter", "1".into())], &[("fs", p), ("gs", p), ("zhs", p)]);
             let c = compiles("cssm", &o);
@@ -589,9 +589,22 @@ fn cssm_grid_order_filter_and_precision() {
             );
         }
     }
+    // a float channel's table sums in f32 (`sum: F32`, the default), one buffer of
+    // f32 sums beside the unorm textures' codes where precisions mix
     for p in [Precision::F16, Precision::F32] {
-        let o = opts(&[("filter", "1".into())], &[("gs", p)]);
-        variant("cssm", &o, Some("tables sum unorm codes in u32 fixed point"));
+        let c = compiles("cssm", &opts(&[("filter", "1".into())], &[("fs", p), ("gs", p), ("zhs", p)]));
+        // M = 4 by default: 4M + 1 = 17 channels in 5 layers of 4
+        assert_eq!(texture(&c, "table"), ("SummedAreaF32".into(), 5, false), "cssm f32 table {p:?}");
+        let mixed = compiles("cssm", &opts(&[("filter", "1".into())], &[("gs", p)]));
+        let formats: Vec<String> = mixed
+            .graph
+            .textures
+            .iter()
+            .filter(|t| t.format.is_table())
+            .map(|t| format!("{:?}", t.format))
+            .collect();
+        assert_eq!(formats.len(), 2, "cssm mixed tables {p:?}: {formats:?}");
+        assert!(formats.contains(&"SummedAreaF32".to_string()) && formats.contains(&"SummedAreaU32".to_string()));
     }
     for fix in 0..=2 {
         for alpha in ["0.0", "1.0", "4.0"] {

@@ -2,7 +2,8 @@
 //! warnings must match `warnings/*.stderr` (empty: none). The storage-rounding estimate
 //! (`sshc::rounding`) warns for VSM and MSM moments at Unorm8 (VSM's in a summed-area table
 //! too), the render-target check
-//! for Unorm16 channels; EVSM at F32 and at F16 within its exponent limits gives none.
+//! for Unorm16 channels; EVSM at F32 and at F16 within its exponent limits gives none;
+//! tables over float channels warn of their stated bound (`sshc::tables`).
 //! Set `UPDATE_EXPECT=1` to rewrite the expected files after reviewing a change.
 
 mod expect;
@@ -12,7 +13,7 @@ use std::path::Path;
 #[test]
 fn every_precision_fixture_has_its_warnings() {
     let fixtures = expect::fixtures("tests/warnings");
-    assert_eq!(fixtures.len(), 6, "{fixtures:?}");
+    assert_eq!(fixtures.len(), 8, "{fixtures:?}");
     expect::check(&fixtures, "warnings", |f, name| {
         let source = std::fs::read_to_string(f).unwrap();
         let opts = sshc::CompileOptions {
@@ -27,6 +28,10 @@ fn every_precision_fixture_has_its_warnings() {
             "vsm_unorm8_moments.ron" | "msm_unorm8_moments.ron" | "vsm_unorm8_table_moments.ron" => assert!(rounding, "{name}: {got}"),
             "vsm_unorm16_render_target.ron" => assert!(got.contains("Rg16Unorm") && !rounding, "{name}: {got}"),
             "evsm_f32.ron" | "evsm_f16_within_limits.ron" => assert!(got.is_empty(), "{name}: {got}"),
+            // a table over float channels: its stated bound (f32 sums) or its exact area
+            // (fixed-point codes), not the channels' own precision
+            "vsm_f32_table_small_boxes.ron" => assert!(got.contains("in f32: at 2048 x 2048") && !rounding, "{name}: {got}"),
+            "vsm_fixed_table_overflow.ron" => assert!(got.contains("wraps around 2^32") && !rounding, "{name}: {got}"),
             other => panic!("{other}: a fixture without its expectation here"),
         }
         got

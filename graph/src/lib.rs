@@ -12,8 +12,8 @@
 //!   light sample's view), present when [`Step::light_samples`] is true. A step of a
 //!   `PerLightSample` pass runs once per sample k with view k's `frame` (`sample.x = k`).
 //! - `@group(1) @binding(i)`: the textures in [`Step::reads`], in order; a summed-area table
-//!   ([`Format::SummedAreaU32`]) is a read-only storage buffer `array<vec4<u32>>`, one
-//!   element per texel, rows of the shadow map's width, layers one after another.
+//!   ([`Format::SummedAreaU32`], [`Format::SummedAreaF32`]) is a read-only storage buffer
+//!   `array<vec4<u32>>` (or `array<vec4<f32>>`), one element per texel, rows of the shadow map's width, layers one after another.
 //! - `@group(2) @binding(i)`: compute steps only: the tables in [`Step::writes`], read-write.
 //! - Scene draws use one vertex buffer: `@location(0)` position and `@location(1)` normal,
 //!   `vec3<f32>` each, interleaved (24-byte stride), in world space.

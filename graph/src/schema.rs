@@ -204,6 +204,8 @@ pub enum Format {
     Rgba32Float,
     /// Summed-area tables: u32 fixed point, stored in a storage buffer.
     SummedAreaU32,
+    /// Summed-area tables of f32 sums, stored in a storage buffer.
+    SummedAreaF32,
 }
 
 impl Format {
@@ -214,8 +216,13 @@ impl Format {
             Format::Rgba8Unorm | Format::Rg16Unorm | Format::Rg16Float | Format::R32Float => 4,
             Format::Rgba16Unorm | Format::Rgba16Float | Format::Rg32Float => 8,
             Format::Rgba32Float => 16,
-            Format::SummedAreaU32 => 16,
+            Format::SummedAreaU32 | Format::SummedAreaF32 => 16,
         }
+    }
+
+    /// A summed-area table: a storage buffer of `vec4` prefix sums, one per texel.
+    pub fn is_table(self) -> bool {
+        matches!(self, Format::SummedAreaU32 | Format::SummedAreaF32)
     }
 
     /// Whether WebGPU can write the format from a shader without an optional feature
@@ -243,6 +250,7 @@ impl Format {
             Format::Rg32Float => "rg32float",
             Format::Rgba32Float => "rgba32float",
             Format::SummedAreaU32 => "rgba32uint",
+            Format::SummedAreaF32 => "rgba32float",
         }
     }
 }

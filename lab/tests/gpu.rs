@@ -454,3 +454,66 @@ fn the_min_mip_early_out_gives_its_pcf_bit_for_bit() {
         assert!(a.iter().any(|v| *v < 0.5), "{sc}: no shadow");
     }
 }
+
+/// An f32 summed-area table (`SummedArea(sum: F32)`) is the CPU's f32 emulation
+/// (`sshc::tables::f32_table`: the same additions in the same order) bit for bit, at
+/// 2048 x 2048 on the bunny's depth map; and that table's rounding against the f64 sums,
+/// which docs/language.md quotes (run with `--no-capture`), lies within the stated bounds.
+#[test]
+fn an_f32_table_is_its_cpu_emulation_bit_for_bit_and_within_the_stated_bound() {
+    const TECHNIQUE: &str = r#"Technique(
+        name: "f32_table",
+        channels: {
+            "z": Channel(precision: F32),
+            "m": Channel(precision: F32, value: "z", range: (0.0, 1.0)),
+        },
+        passes: [
+            Depth(name: "depth", writes: "shadow", channel: "z"),
+            Map(name: "map", reads: ["shadow"], writes: "mapped", channels: ["m"]),
+            SummedArea(name: "sat", reads: "mapped", writes: "table", sum: F32),
+            Shade(name: "shade", reads: ["table"], visibility: "saturate(sample_box(m, 4.0 * texel_size, 4.0 * texel_size))"),
+        ],
+    )"#;
+    let n = 2048usize;
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
+    let mut scene = Scene::load(root().join("scenes/bunny.ron")).unwrap_or_else(|e| panic!("{e}"));
+    scene.shadow_map = n as u32;
+    let mut ex = compile_executor(&gpu, Path::new("f32_table.ron"), TECHNIQUE, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+    ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap())
+        .unwrap();
+    ex.run_frame().unwrap();
+    let values = ex.read_texture("mapped", 0, 0).unwrap().channel(0);
+    let table = ex.read_texture("table", 0, 0).unwrap().channel(0);
+    let cpu = sshc::tables::f32_table(&values, n, 0.5);
+    let differ = table.iter().zip(&cpu).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
+    assert_eq!(differ, 0, "{differ} of {} entries differ from the emulation", n * n);
+    // the rounding against the exact sums: entries, and box means of side k anywhere
+    let exact = sshc::tables::f64_table(&values, n, 0.5);
+    let entry = table.iter().zip(&exact).map(|(a, b)| (f64::from(*a) - b).abs()).fold(0.0, f64::max);
+    let bound = sshc::tables::f32_entry_bound(n as f64, 0.5);
+    eprintln!("f32 table, bunny depth, {n}^2: largest entry error {entry:.3e} (stated bound {bound:.3e})");
+    assert!(entry <= bound);
+    let at = |t: &dyn Fn(usize) -> f64, x: isize, y: isize| if x < 0 || y < 0 { 0.0 } else { t(y as usize * n + x as usize) };
+    for k in [1usize, 4, 16, 64, 256] {
+        let (gpu_t, f64_t) = (|i: usize| f64::from(table[i]), |i: usize| exact[i]);
+        let mean = |t: &dyn Fn(usize) -> f64, x: usize, y: usize| {
+            let (x0, y0, x1, y1) = (x as isize - 1, y as isize - 1, (x + k - 1) as isize, (y + k - 1) as isize);
+            (at(t, x1, y1) - at(t, x0, y1) - at(t, x1, y0) + at(t, x0, y0)) / (k * k) as f64
+        };
+        let (mut worst, mut sq, mut count) = (0.0f64, 0.0f64, 0usize);
+        for y in (0..=n - k).step_by(k.max(3)) {
+            for x in (0..=n - k).step_by(k.max(3)) {
+                let e = (mean(&gpu_t, x, y) - mean(&f64_t, x, y)).abs();
+                worst = worst.max(e);
+                sq += e * e;
+                count += 1;
+            }
+        }
+        let stated = sshc::tables::f32_box_bound(n as f64, 0.5, (k * k) as f64);
+        eprintln!(
+            "  boxes of {k} x {k}: largest error {worst:.3e}, RMS {:.3e} over {count} boxes (stated bound {stated:.3e})",
+            (sq / count as f64).sqrt()
+        );
+        assert!(worst <= stated, "{k} x {k}: {worst} above the stated bound {stated}");
+    }
+}

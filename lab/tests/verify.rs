@@ -312,6 +312,53 @@ fn branches_agree_and_a_negated_condition_is_caught() {
     }
 }
 
+/// A probe of the tables over float channels: f32 sums (`sum: F32`) and fixed-point codes
+/// (`sum: Fixed(bits: 12)`), read by `sample_box_at`, `sample_box`, `nearest` and
+/// `nearest_at`. The GPU agrees with the CPU's model of each table (f32 sums within their
+/// bound, fixed-point codes within half a step) on every input; a wrong centre, a wrong
+/// code scale and a wrong decode are each caught.
+const FLOAT_TABLE_PROBE: &str = r#"Technique(
+    name: "float_table_probe",
+    channels: {
+        "z": Channel(precision: F32),
+        "m": Channel(precision: F32, value: "z"),
+        "q": Channel(precision: F32, value: "z * z", range: (0.0, 1.0)),
+    },
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Map(name: "map", reads: ["shadow"], writes: "mapped", channels: ["m"]),
+        SummedArea(name: "sat", reads: "mapped", writes: "table", sum: F32),
+        Map(name: "map2", reads: ["shadow"], writes: "mapped2", channels: ["q"]),
+        SummedArea(name: "sat2", reads: "mapped2", writes: "table2", sum: Fixed(bits: 12)),
+        Shade(name: "shade", reads: ["table", "table2"],
+              visibility: "saturate(0.25 * (sample_box_at(m, 2.0 * texel_size, -1.0 * texel_size, 3.0 * texel_size, 2.0 * texel_size) + nearest(m) + sample_box(q, 5.0 * texel_size, 3.0 * texel_size) + nearest_at(q, texel_size, 0.0)))"),
+    ],
+)"#;
+
+#[test]
+fn float_tables_agree_and_injected_bugs_are_caught() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("verify needs an adapter: {e}"));
+    let c = sshc::compile_str(FLOAT_TABLE_PROBE, &sshc::CompileOptions::default())
+        .unwrap_or_else(|d| panic!("{}", d.render("float_table_probe", FLOAT_TABLE_PROBE)));
+    let good = verdicts(&rows(&gpu, &c));
+    assert!(good.iter().all(|v| *v == Verdict::Agrees), "as generated: {good:?}");
+    for (what, pass, from, to) in [
+        // the f32 table's centre subtracted, but not the one added back
+        ("f32 centre", "sat", "- vec4<f32>(5e-1f,", "- vec4<f32>(4.9e-1f,"),
+        // fixed-point codes at a scale one code short of the lookup's
+        ("fixed scale", "sat2", "* 4095.0));", "* 4094.0));"),
+        // the fixed-point decode offset by a thousandth of the range
+        ("fixed decode", "shade", "(0.0f + s3.x * 1.0f)", "(1e-3f + s3.x * 1.0f)"),
+    ] {
+        let bad = rows(&gpu, &injected(&c, pass, from, to));
+        assert!(
+            verdicts(&bad).contains(&Verdict::Differs),
+            "{what}: `{from}` -> `{to}` was not caught: {:?}",
+            verdicts(&bad)
+        );
+    }
+}
+
 /// A declared channel range (`range: (lo, hi)`): the value `4z - 1` (in [-1, 3]) clamped
 /// to (0, 1) at F16 and to (0, 2) at Unorm8, encoded over the declared range. The GPU
 /// agrees with the CPU's evaluation (which clamps as declared) and `verify` reports the

@@ -257,7 +257,7 @@ impl Executor {
             }
         }
         for t in &graph.textures {
-            if t.format == Format::SummedAreaU32 && t.mips {
+            if t.format.is_table() && t.mips {
                 return Err(RuntimeError::NotFound(format!(
                     "texture `{}`: a summed-area table has no mip levels",
                     t.name
@@ -1108,8 +1108,8 @@ impl Executor {
             )));
         }
         let size = (b.shadow_size >> level).max(1);
-        if decl.format == Format::SummedAreaU32 {
-            return read_table(&self.gpu, b.table(name)?, layer, size);
+        if decl.format.is_table() {
+            return read_table(&self.gpu, b.table(name)?, decl.format, layer, size);
         }
         read_back(&self.gpu, b.texture(name)?, layer, level, size, size, decl.format)
     }

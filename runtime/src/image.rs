@@ -22,8 +22,8 @@ impl Image {
 }
 
 /// One layer of a summed-area table: the u32 sums (wrapping) as f32, rows top first.
-pub(crate) fn read_table(gpu: &Gpu, table: &wgpu::Buffer, layer: u32, size: u32) -> Result<Image> {
-    let bytes = Format::SummedAreaU32.bytes_per_texel() as u64 * size as u64 * size as u64;
+pub(crate) fn read_table(gpu: &Gpu, table: &wgpu::Buffer, format: Format, layer: u32, size: u32) -> Result<Image> {
+    let bytes = format.bytes_per_texel() as u64 * size as u64 * size as u64;
     let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("read back table"),
         size: bytes,
@@ -36,16 +36,7 @@ pub(crate) fn read_table(gpu: &Gpu, table: &wgpu::Buffer, layer: u32, size: u32)
         gpu.queue.submit([enc.finish()]);
     })?;
     let raw = gpu.map_read(&buf)?;
-    let rgba = raw
-        .chunks_exact(16)
-        .map(|t| {
-            let mut v = [0.0f32; 4];
-            for (i, c) in t.chunks_exact(4).enumerate() {
-                v[i] = u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f32;
-            }
-            v
-        })
-        .collect();
+    let rgba = raw.chunks_exact(16).map(|t| decode_texel(t, format)).collect();
     Ok(Image {
         width: size,
         height: size,
@@ -105,9 +96,12 @@ fn decode_texel(b: &[u8], f: Format) -> [f32; 4] {
     let (n, size) = match f {
         Format::R8Unorm | Format::R16Unorm | Format::R16Float | Format::R32Float => (1, f.bytes_per_texel()),
         Format::Rg8Unorm | Format::Rg16Unorm | Format::Rg16Float | Format::Rg32Float => (2, f.bytes_per_texel() / 2),
-        Format::Rgba8Unorm | Format::Rgba16Unorm | Format::Rgba16Float | Format::Rgba32Float | Format::SummedAreaU32 => {
-            (4, f.bytes_per_texel() / 4)
-        }
+        Format::Rgba8Unorm
+        | Format::Rgba16Unorm
+        | Format::Rgba16Float
+        | Format::Rgba32Float
+        | Format::SummedAreaU32
+        | Format::SummedAreaF32 => (4, f.bytes_per_texel() / 4),
     };
     for (i, o) in out.iter_mut().enumerate().take(n) {
         let c = &b[i * size as usize..(i + 1) * size as usize];
@@ -115,9 +109,10 @@ fn decode_texel(b: &[u8], f: Format) -> [f32; 4] {
             Format::R8Unorm | Format::Rg8Unorm | Format::Rgba8Unorm => c[0] as f32 / 255.0,
             Format::R16Unorm | Format::Rg16Unorm | Format::Rgba16Unorm => u16::from_le_bytes([c[0], c[1]]) as f32 / 65535.0,
             Format::R16Float | Format::Rg16Float | Format::Rgba16Float => half::f16::from_bits(u16::from_le_bytes([c[0], c[1]])).to_f32(),
-            Format::R32Float | Format::Rg32Float | Format::Rgba32Float | Format::SummedAreaU32 => {
+            Format::R32Float | Format::Rg32Float | Format::Rgba32Float | Format::SummedAreaF32 => {
                 f32::from_le_bytes([c[0], c[1], c[2], c[3]])
             }
+            Format::SummedAreaU32 => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f32,
         };
     }
     out

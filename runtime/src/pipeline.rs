@@ -32,7 +32,7 @@ pub(crate) fn wgpu_format(f: Format) -> Option<wgpu::TextureFormat> {
         Format::R32Float => T::R32Float,
         Format::Rg32Float => T::Rg32Float,
         Format::Rgba32Float => T::Rgba32Float,
-        Format::SummedAreaU32 => return None,
+        Format::SummedAreaU32 | Format::SummedAreaF32 => return None,
     })
 }
 

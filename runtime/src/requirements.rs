@@ -141,7 +141,7 @@ struct StepCounts {
 
 /// The counts of a step, from its plan ([`steps::plan`], the runtime's one reading of `Draw`).
 fn step_counts(graph: &PassGraph, step: &graph::Step) -> StepCounts {
-    let table = |name: &str| graph.texture(name).is_some_and(|t| t.format == Format::SummedAreaU32);
+    let table = |name: &str| graph.texture(name).is_some_and(|t| t.format.is_table());
     let format = |name: &str| graph.texture(name).and_then(|t| wgpu_format(t.format));
     let mut c = StepCounts {
         uniforms: 1 + u64::from(step.params) + u64::from(step.light_samples),

@@ -7,14 +7,14 @@ use crate::adjacency::Adjacency;
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
 use crate::geometry::{EdgeBuffers, Geometry, GeometryBuffers, HostScene, SceneDraw};
-use crate::graph::{self, FRAME_SIZE, Format, GENERATED_HEADER_BYTES, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
+use crate::graph::{self, FRAME_SIZE, GENERATED_HEADER_BYTES, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
 use crate::pipeline::{CAMERA_FORMATS, DEPTH_FORMAT, mip_count, wgpu_format};
 use crate::usages::Usages;
 use std::collections::HashMap;
 
-/// Bytes of a summed-area table at a shadow-map size: one `vec4<u32>` per texel and layer.
+/// Bytes of a summed-area table at a shadow-map size: one `vec4` per texel and layer.
 fn table_bytes(t: &TextureDecl, shadow_size: u32) -> u64 {
-    Format::SummedAreaU32.bytes_per_texel() as u64 * t.layers as u64 * shadow_size as u64 * shadow_size as u64
+    t.format.bytes_per_texel() as u64 * t.layers as u64 * shadow_size as u64 * shadow_size as u64
 }
 
 pub(crate) fn f32_bytes(v: &[f32]) -> Vec<u8> {
@@ -242,7 +242,7 @@ fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) ->
         });
     }
     let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-    for t in graph.textures.iter().filter(|t| t.format == Format::SummedAreaU32) {
+    for t in graph.textures.iter().filter(|t| t.format.is_table()) {
         let size = table_bytes(t, s.shadow_size);
         if size > storage_limit {
             return Err(RuntimeError::Limit {

@@ -5,7 +5,7 @@
 
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::geometry::SceneDraw;
-use crate::graph::{self, Binding, Draw, Format, PassGraph, PassKind, Resolve, Target, View};
+use crate::graph::{self, Binding, Draw, PassGraph, PassKind, Resolve, Target, View};
 use crate::pipeline::{
     BindingLayout, ColorTarget, DEPTH_FORMAT, DepthState, GeometryGroup, Pipeline, PipelineKey, Slot, Stages, StepPipeline,
 };
@@ -379,7 +379,7 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{name}`")))?;
                 wgpu_format(t.format).ok_or_else(|| RuntimeError::NotFound(format!("texture `{name}` has no texture format")))
             };
-            let is_table = |name: &str| graph.texture(name).is_some_and(|t| t.format == Format::SummedAreaU32);
+            let is_table = |name: &str| graph.texture(name).is_some_and(|t| t.format.is_table());
             let kind = plan(step);
             if let NodeKind::Raster(r) = &kind
                 && let Targets::Textures(t) = &r.targets

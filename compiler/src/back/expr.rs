@@ -8,11 +8,11 @@
 
 use crate::back::internal;
 use crate::back::parts::{self, Line, Split};
-use crate::back::summed_area::{box_lookup, sat_read, texel_read};
+use crate::back::summed_area::{TableCode, box_lookup, sat_read, table_code, table_decode, texel_read};
 use crate::back::text::{COMP, decode_expr, f32_lit, i32_lit, params_struct};
 use crate::builtins::{Func, Input, SampleFn, SampleWgsl, Sig, Ty};
 use crate::diag::{Diagnostic, Phase};
-use crate::front::ast::{ConstValue, Precision};
+use crate::front::ast::ConstValue;
 use crate::front::expr::{BinOp, UnOp};
 use crate::ir::{ChannelId, Encode, ExprId, Node, Program, ResId};
 use crate::pack::table_source;
@@ -46,8 +46,8 @@ pub(crate) struct Emitter<'a> {
     fetches: HashMap<String, String>,
     /// Textures this module reads: (name, binding).
     pub(crate) bindings: Vec<(String, View)>,
-    /// Of those, the summed-area tables (storage buffers) and the unorm scale of their codes.
-    tables: Vec<(String, u32)>,
+    /// Of those, the summed-area tables (storage buffers) and what they sum.
+    tables: Vec<(String, TableCode)>,
     /// The tables read by box lookups, and by `nearest` (each WGSL helper written once, where used).
     table_boxes: std::collections::BTreeSet<String>,
     table_texels: std::collections::BTreeSet<String>,
@@ -369,28 +369,28 @@ impl<'a> Emitter<'a> {
         let (tex, layer, comp, enc) = self.locate(res, ch, View::All, view)?;
         let args: Vec<String> = args.iter().map(|a| self.n(*a).to_string()).collect();
         let key = format!("{tex}/{layer}/{how:?}/{}", args.join(","));
+        let on_table = how.table_may_answer() && table_source(self.ir, res).is_some();
+        // what a table sums, and its slot (to decode the component read)
+        let table = if on_table || how.reads_table() {
+            if table_source(self.ir, res).is_none() {
+                return Err(internal("box lookup of a texture"));
+            }
+            let slot = *self.ir.resources[res]
+                .slot_of(ch)
+                .ok_or_else(|| internal("a table lookup of a channel it lacks"))?;
+            Some((table_code(self.ir, res, slot.texture)?, slot))
+        } else {
+            None
+        };
         let v = match self.fetches.get(&key) {
             Some(v) => v.clone(),
             None => {
                 let v = self.fresh("s");
-                let on_table = how.table_may_answer() && table_source(self.ir, res).is_some();
                 let call = match how.desc().wgsl {
-                    _ if on_table || how.reads_table() => {
-                        let r = &self.ir.resources[res];
-                        let t = r.slot_of(ch).map(|s| &r.textures[s.texture]);
-                        let scale = match t.map(|t| t.precision) {
-                            Some(Precision::Unorm8) => 255,
-                            Some(Precision::Unorm16) => 65535,
-                            Some(Precision::F16 | Precision::F32) | None => {
-                                return Err(internal("summed-area table over a non-unorm texture"));
-                            }
-                        };
+                    _ if let Some((code, _)) = table => {
                         let name = tex.trim_start_matches("t_").to_string();
-                        if table_source(self.ir, res).is_none() {
-                            return Err(internal("box lookup of a texture"));
-                        }
                         if !self.tables.iter().any(|(n, _)| *n == name) {
-                            self.tables.push((name.clone(), scale));
+                            self.tables.push((name.clone(), code));
                         }
                         let at = |du: &str, dv: &str| format!("{uv} + vec2<f32>({du}, {dv})");
                         match how {
@@ -439,7 +439,11 @@ impl<'a> Emitter<'a> {
                 v
             }
         };
-        Ok(decode_expr(&format!("{v}.{}", COMP[comp as usize]), enc))
+        let x = format!("{v}.{}", COMP[comp as usize]);
+        Ok(match table {
+            Some((code, slot)) => decode_expr(&table_decode(code, &slot, &x), enc),
+            None => decode_expr(&x, enc),
+        })
     }
 
     /// Module-level declarations for what the body used.
@@ -460,15 +464,15 @@ impl<'a> Emitter<'a> {
         }
         for (i, (name, _)) in self.bindings.iter().enumerate() {
             match self.tables.iter().find(|(n, _)| n == name) {
-                Some((_, scale)) => {
-                    let _ = writeln!(s, "@group(1) @binding({i}) var<storage, read> t_{name}: array<vec4<u32>>;");
+                Some((_, code)) => {
+                    let _ = writeln!(s, "@group(1) @binding({i}) var<storage, read> t_{name}: array<{}>;", code.elem());
                     if self.table_boxes.contains(name) {
-                        s.push_str(&box_lookup(name, *scale));
+                        s.push_str(&box_lookup(name, *code));
                     } else {
-                        s.push_str(&sat_read(name));
+                        s.push_str(&sat_read(name, *code));
                     }
                     if self.table_texels.contains(name) {
-                        s.push_str(&texel_read(name, *scale));
+                        s.push_str(&texel_read(name, *code));
                     }
                 }
                 None => {

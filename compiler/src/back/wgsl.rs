@@ -62,7 +62,7 @@ pub fn codegen(ir: &Program, schedules: &Schedules, limits: &Limits, split: Spli
             IrPassKind::Filter { kernel } => filter(ir, pass, kernel, compute, limits, &mut scratch),
             IrPassKind::Mipmap { reduce } => mipmap(ir, pass, *reduce, compute, limits),
             IrPassKind::Shade { visibility } => shade(ir, pass, *visibility, compute, split),
-            IrPassKind::SummedArea => summed_area(ir, pass),
+            IrPassKind::SummedArea { .. } => summed_area(ir, pass),
             IrPassKind::Geometry {
                 primitive, resolve, keep, ..
             } => geometry(ir, pass, *primitive, *resolve, *keep, limits, split),

@@ -281,6 +281,30 @@ impl Schedule {
     }
 }
 
+/// What a summed-area table over a float channel sums (`SummedArea(sum: ...)`); a table
+/// over a unorm channel sums its unorm codes in u32.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TableSum {
+    /// f32 prefix sums of the values less the midpoint of the channel's range (0 where
+    /// it is not finite).
+    F32,
+    /// u32 prefix sums of fixed-point codes: `round((v - lo) / (hi - lo) * (2^bits - 1))`
+    /// over the channel's range, as a unorm of `bits` bits.
+    Fixed(u8),
+}
+
+impl TableSum {
+    /// The widest fixed-point code: codes are converted exactly in f32.
+    pub const MAX_BITS: u8 = 24;
+
+    pub fn describe(self) -> String {
+        match self {
+            TableSum::F32 => "F32".into(),
+            TableSum::Fixed(b) => format!("Fixed(bits: {b})"),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reduce {
     Mean,
@@ -411,6 +435,9 @@ pub enum PassKind {
     SummedArea {
         reads: Name,
         writes: Name,
+        /// What a table over a float channel sums (`F32` where absent); refused over a
+        /// unorm channel, whose codes are summed.
+        sum: Option<Spanned<TableSum>>,
     },
     Geometry {
         reads: Vec<Name>,

@@ -740,6 +740,7 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
         "SummedArea" => PassKind::SummedArea {
             reads: self::name(f.req("reads")?)?,
             writes: self::name(f.req("writes")?)?,
+            sum: f.opt("sum")?.map(table_sum).transpose()?,
         },
         "Geometry" => {
             let reads = names(f.req("reads")?)?;
@@ -817,6 +818,38 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
 }
 
 const KERNELS: &[&str] = &["Box", "Gaussian", "Max", "Min", "LoG"];
+
+/// `F32` or `Fixed(bits: B)`, B in 1..=24.
+fn table_sum(node: &Node) -> Result<Spanned<TableSum>, Diagnostic> {
+    let (v, span) = variant(node)?;
+    let sum = match v.as_str() {
+        "F32" => {
+            if !matches!(node.value, Value::Ident(_)) {
+                Fields::of(node, "F32")?.finish()?;
+            }
+            TableSum::F32
+        }
+        "Fixed" => {
+            let mut f = Fields::of(node, "Fixed")?;
+            let b = f.req("bits")?;
+            let bits = match b.value {
+                Value::Int(v) if (1..=i64::from(TableSum::MAX_BITS)).contains(&v) => v as u8,
+                _ => {
+                    return Err(err(
+                        b.span,
+                        format!("a fixed-point table's codes have 1 to {} bits", TableSum::MAX_BITS),
+                        format!("expected an integer in 1..={}", TableSum::MAX_BITS),
+                    )
+                    .note("codes are converted to f32 exactly, which holds integers up to 2^24"));
+                }
+            };
+            f.finish()?;
+            TableSum::Fixed(bits)
+        }
+        _ => return Err(unknown_variant(span, &v, "table sum", &["F32", "Fixed"])),
+    };
+    Ok(Spanned::new(sum, node.span))
+}
 
 fn kernel(node: &Node) -> Result<Spanned<Kernel>, Diagnostic> {
     let (v, span) = variant(node)?;

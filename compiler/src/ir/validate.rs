@@ -396,7 +396,7 @@ fn resources_and_passes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationEr
         }
         let shape = |why: &str| ValidationError::PassShape { pass: p, why: why.into() };
         match &pass.kind {
-            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea => {
+            IrPassKind::Filter { .. } | IrPassKind::Mipmap { .. } | IrPassKind::SummedArea { .. } => {
                 if pass.reads.len() != 1 || pass.writes.is_none() {
                     return Err(shape("reads one resource and writes one"));
                 }

@@ -383,9 +383,15 @@ fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
                         .collect()
                 };
                 for (name, c, mut range) in comps {
-                    if t.format == sshc_runtime::graph::Format::SummedAreaU32 {
-                        // prefix sums of codes: viewed from 0 to the largest (the far corner)
-                        range = (0.0, img.rgba.iter().map(|p| p[c]).fold(1.0, f32::max));
+                    if t.format.is_table() {
+                        // prefix sums (of codes, or of f32 values less their midpoint):
+                        // viewed over what they hold (the far corner's is the largest)
+                        let (lo, hi) = img
+                            .rgba
+                            .iter()
+                            .map(|p| p[c])
+                            .fold((0.0f32, 1.0f32), |(a, b), v| (a.min(v), b.max(v)));
+                        range = (lo, hi);
                     }
                     let stem = format!("{}.layer{layer}.level{level}.{name}", t.name);
                     img.write_png(&dir.join(format!("{stem}.png")), Some(c), range)?;

@@ -751,10 +751,7 @@ impl App {
             ex.encode(&mut encoder).map_err(|e| format!("error: {e}"))?;
             // a summed-area table is a storage buffer: read back and shown as a texture
             if let Mode::Texture { name, layer, level, .. } = &self.state.mode
-                && ex
-                    .graph
-                    .texture(name)
-                    .is_some_and(|t| t.format == sshc_runtime::graph::Format::SummedAreaU32)
+                && ex.graph.texture(name).is_some_and(|t| t.format.is_table())
             {
                 let img = ex.read_texture(name, *layer, *level).map_err(|e| format!("error: {e}"))?;
                 self.table = Some(upload(&gfx.device, &gfx.queue, &img));
@@ -1510,8 +1507,8 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
     } = &mut mode
         && let Some(decl) = ex.graph.texture(name)
     {
-        if decl.format == sshc_runtime::graph::Format::SummedAreaU32 {
-            ui.label("a summed-area table (u32 sums in a storage buffer): read back every frame");
+        if decl.format.is_table() {
+            ui.label("a summed-area table (prefix sums in a storage buffer): read back every frame");
         }
         let layers = decl.array_layers().max(1);
         let levels = if decl.mips {
