@@ -682,6 +682,9 @@ pub struct Evaluation<'p> {
     model: Model,
     /// Per Map channel with a declared range: the texels whose value it clamped.
     clamped: Vec<(ChannelId, usize)>,
+    /// The Shade's debug outputs (where the build has them), each with the views of its
+    /// filtered lookups.
+    debug: Vec<(Prepared, Vec<Option<u8>>)>,
 }
 
 impl<'p> Evaluation<'p> {
@@ -695,18 +698,16 @@ impl<'p> Evaluation<'p> {
     /// texels per view, row 0 first).
     pub fn new(p: Program<'p>, given: &Given, frame: Frame, rounding: Rounding, model: Model) -> Result<Evaluation<'p>, String> {
         let shade = Prepared::new(&p, p.shade().ok_or("the technique has no live Shade pass")?);
-        let mut filtered: Vec<Option<u8>> = Vec::new();
-        for &h in &shade.order {
-            if let Node::Sample { how, view, .. } = p.arena.node(h)
-                && matches!(
-                    how,
-                    SampleFn::Sample | SampleFn::SampleLod | SampleFn::SampleWidth | SampleFn::SampleAt | SampleFn::SampleWidthAt
-                )
-                && !filtered.contains(view)
-            {
-                filtered.push(*view);
-            }
-        }
+        let filtered = filtered_views(&p, &shade.order);
+        let debug = p
+            .debug
+            .iter()
+            .map(|d| {
+                let e = Prepared::new(&p, d.expr);
+                let views = filtered_views(&p, &e.order);
+                (e, views)
+            })
+            .collect();
         let mut ev = Evaluation {
             p,
             frame,
@@ -715,6 +716,7 @@ impl<'p> Evaluation<'p> {
             filtered,
             model,
             clamped: Vec::new(),
+            debug,
         };
         for (id, pass) in p.passes.with_handles() {
             if !pass.live {
@@ -930,12 +932,65 @@ impl<'p> Evaluation<'p> {
 
     /// The raw visibility (NaN read as 1) at `r` with filtered lookups shifted by `shift`.
     fn raw(&self, r: &Receiver, shift: Shift, scratch: &mut Scratch) -> f64 {
+        raw_visibility(self.shifted(&self.shade, r, shift, scratch)[0])
+    }
+
+    /// The value of `e` at `r` with filtered lookups shifted by `shift`.
+    fn shifted(&self, e: &Prepared, r: &Receiver, shift: Shift, scratch: &mut Scratch) -> [f64; 4] {
         let leaf = self.receiver_leaf(r, shift);
         let plain = |h: ExprId, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
         self.p
             .arena
-            .eval_span(&self.shade.order, &Hooks { leaf: &plain, exact: true }, &mut scratch.vals);
-        raw_visibility(scratch.vals.get(self.shade.root.index()).map_or(f64::NAN, |v| v[0]))
+            .eval_span(&e.order, &Hooks { leaf: &plain, exact: true }, &mut scratch.vals);
+        scratch.vals.get(e.root.index()).copied().unwrap_or([f64::NAN; 4])
+    }
+
+    /// Debug outputs this evaluation has (the build's, `CompileOptions::debug`): their names.
+    pub fn debug_names(&self) -> Vec<&str> {
+        self.p.debug.iter().map(|d| d.name.as_str()).collect()
+    }
+
+    /// Debug output `i` at one receiver: each component's value (unclamped, NaN kept) and
+    /// the interval allowed about it, by the visibility's error model (a running bound
+    /// node by node, widened by the filtering hardware's positions).
+    pub fn debug(&self, i: usize, r: &Receiver, scratch: &mut Scratch) -> Vec<Allowed> {
+        let Some((e, views)) = self.debug.get(i) else { return Vec::new() };
+        scratch.fit(self.p.arena.len());
+        self.allowed(e, &self.receiver_leaf(r, Shift::NONE), scratch);
+        let width = match self.p.arena.ty(e.root) {
+            Ty::Vec(n) => usize::from(n).clamp(1, 4),
+            Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => 1,
+        };
+        let v = scratch.vals.get(e.root.index()).copied().unwrap_or([f64::NAN; 4]);
+        let err = scratch.errors.get(e.root.index()).copied().unwrap_or([f64::INFINITY; 4]);
+        let mut out: Vec<Allowed> = (0..width)
+            .map(|k| {
+                let mut a = Allowed::new(v[k], false);
+                a.widen(err[k], false);
+                a
+            })
+            .collect();
+        if self.model == Model::F64 {
+            return out;
+        }
+        let texel = FILTER_SHIFT / self.frame.shadow_size as f64;
+        for &view in views {
+            for axis in 0..3 {
+                let mut worst = [0.0f64; 4];
+                for sign in [1.0, -1.0] {
+                    let mut by = [0.0; 3];
+                    by[axis] = sign * if axis == 2 { FILTER_SHIFT } else { texel };
+                    let moved = self.shifted(e, r, Shift { view, by }, scratch);
+                    for k in 0..width {
+                        worst[k] = worst[k].max(change(moved[k], v[k]));
+                    }
+                }
+                for (a, w) in out.iter_mut().zip(worst) {
+                    a.widen(w, false);
+                }
+            }
+        }
+        out
     }
 
     /// The clamped visibility at one receiver, without its allowance.
@@ -1034,7 +1089,8 @@ impl<'p> Evaluation<'p> {
     /// clamped.
     fn allowed(&self, e: &Prepared, leaf: &LeafAllowed, scratch: &mut Scratch) -> Allowed {
         let arena = &self.p.arena;
-        let shade = e.root == self.shade.root;
+        // the visibility (a debug output may be the same node, and is not clamped)
+        let shade = std::ptr::eq(e, &self.shade);
         let plain = |h: ExprId, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
         let Scratch { vals, errors } = scratch;
         let hooks = Hooks { leaf: &plain, exact: true };
@@ -1197,6 +1253,24 @@ impl<'p> Evaluation<'p> {
         out.widen(error, shade);
         out
     }
+}
+
+/// The views (`None`: the centre's) of the filtered lookups among `order`'s nodes: each is
+/// shifted by the filtering hardware's positions on its own.
+fn filtered_views(p: &Program, order: &[ExprId]) -> Vec<Option<u8>> {
+    let mut filtered: Vec<Option<u8>> = Vec::new();
+    for &h in order {
+        if let Node::Sample { how, view, .. } = p.arena.node(h)
+            && matches!(
+                how,
+                SampleFn::Sample | SampleFn::SampleLod | SampleFn::SampleWidth | SampleFn::SampleAt | SampleFn::SampleWidthAt
+            )
+            && !filtered.contains(view)
+        {
+            filtered.push(*view);
+        }
+    }
+    filtered
 }
 
 /// The filtering hardware's error as one shift of the filtered lookups of one view: uv by
