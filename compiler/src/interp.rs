@@ -1485,6 +1485,47 @@ mod tests {
         assert_eq!(round_f16(-0.3 * 2f64.powi(-24)), 0.0);
     }
 
+    /// Debug outputs evaluate to their closed forms at a receiver: the receiver's depth,
+    /// a vector of a lookup and a product, and the visibility's own expression unclamped
+    /// (the same node as the visibility, which is clamped); a build without them has none.
+    #[test]
+    fn debug_outputs_evaluate_unclamped_to_their_closed_forms() {
+        let src = r#"Technique(name: "t", channels: { "z": Channel(precision: F32) }, passes: [
+            Depth(name: "depth", writes: "shadow", channel: "z"),
+            Shade(name: "shade", reads: ["shadow"], visibility: "let k = 4.0; d * k", debug: {
+                "depth": "d", "pair": "vec2(sample(z), d * 2.0)", "raw": "d * k",
+            }),
+        ])"#;
+        let opts = crate::CompileOptions {
+            debug: true,
+            ..Default::default()
+        };
+        let c = crate::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("t.ron", src)));
+        let p = Program::new(&c.ir, &c.layout);
+        let n = 8;
+        let map = vec![0.375f32; (n * n) as usize];
+        let ev = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        assert_eq!(ev.debug_names(), ["depth", "pair", "raw"]);
+        let mut s = Scratch::default();
+        let d = 0.75;
+        let r = receiver(d);
+        let one = |i: usize, s: &mut Scratch| ev.debug(i, &r, s);
+        let depth_out = one(0, &mut s);
+        assert_eq!(depth_out.len(), 1);
+        // d from the receiver's view distance, (d_world - near) / (far - near), in f64
+        assert!((depth_out[0].value - d).abs() < 1e-12 && depth_out[0].admits(d), "{depth_out:?}");
+        let pair = one(1, &mut s);
+        assert_eq!(pair.len(), 2);
+        // a constant map filters to its value wherever it is read
+        assert!(pair[0].admits(0.375) && (pair[1].value - 2.0 * d).abs() < 1e-12, "{pair:?}");
+        let raw = one(2, &mut s);
+        assert!((raw[0].value - 4.0 * d).abs() < 1e-12 && raw[0].value > 1.0, "{raw:?}");
+        assert_eq!(ev.visibility(&r, &mut s).value, 1.0, "the visibility is clamped");
+        // without the option the same source has none
+        let plain = compiled(src);
+        assert!(plain.ir.debug.is_empty() && plain.ir.debug_omitted == ["depth", "pair", "raw"]);
+    }
+
     #[test]
     fn hard_shadows_evaluate_exactly_and_allow_both_sides_only_at_a_tie() {
         let c = compiled(include_str!("../../techniques/hard.ron"));

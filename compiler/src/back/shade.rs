@@ -151,7 +151,7 @@ pub(crate) fn shade(
     let prologues: String = em.views.iter().map(|(&k, used)| sample_prologue(k, used)).collect();
     let receiver = shade_receiver(ir.ir.specialised.as_ref().map(|s| s.facts.light.is_distant()));
     // the `pixel` input, where the code reads it
-    let uses_pixel = body.contains("in_pixel") || functions.contains("in_pixel");
+    let uses_pixel = body.contains("in_pixel") || functions.contains("in_pixel") || debug.iter().any(|(_, v, _)| v.contains("in_pixel"));
     let pixel = |from: &str| {
         if uses_pixel {
             format!("    let in_pixel = {from};\n")
