@@ -59,6 +59,14 @@ fn compile(name: &str, src: &str, opts: &CompileOptions) -> sshc::Compiled {
     sshc::compile_str(src, opts).unwrap_or_else(|d| panic!("{name}: {}", d.render(name, src)))
 }
 
+/// The options of a build with its debug outputs.
+fn debugged() -> CompileOptions {
+    CompileOptions {
+        debug: true,
+        ..Default::default()
+    }
+}
+
 fn shade_source(c: &sshc::Compiled) -> &str {
     let shade = c.graph.passes.iter().find(|p| p.kind == PassKind::Shade).expect("a Shade pass");
     &c.shaders.iter().find(|(f, _)| *f == shade.shader).expect("its module").1
@@ -159,14 +167,7 @@ fn the_example_with_debug_outputs_builds_as_if_it_had_none() {
     assert_eq!(a.graph.to_ron(), b.graph.to_ron());
     assert_eq!(a.shaders, b.shaders);
     assert!(sshc::explain::explain(&a).contains("left out of this build"));
-    let on = compile(
-        "vssm-subdivided",
-        &src,
-        &CompileOptions {
-            debug: true,
-            ..Default::default()
-        },
-    );
+    let on = compile("vssm-subdivided", &src, &debugged());
     let explained = sshc::explain::explain(&on);
     assert!(explained.contains("z_mean -> debug_z_mean (R32Float)"), "{explained}");
 }
@@ -185,14 +186,7 @@ fn debug_outputs_share_the_visibilitys_lets_and_take_their_widths_formats() {
                 "r": "r", "three": "vec3(r, d, 1.0)", "four": "vec4(sample(z), r, d, 2.0)",
             }),
         ])"#;
-    let on = compile(
-        "t",
-        src,
-        &CompileOptions {
-            debug: true,
-            ..Default::default()
-        },
-    );
+    let on = compile("t", src, &debugged());
     let formats: Vec<(String, Format)> = on
         .graph
         .textures
@@ -215,14 +209,7 @@ fn debug_outputs_share_the_visibilitys_lets_and_take_their_widths_formats() {
     // the per-sample technique: sample 1's depth, only through `at_sample`
     let ps = std::fs::read_to_string(root().join("techniques/point-samples.ron")).unwrap();
     let ps = with_debug(&ps, r#"{ "d1": "at_sample(1, d)" }"#).unwrap();
-    let on = compile(
-        "point-samples",
-        &ps,
-        &CompileOptions {
-            debug: true,
-            ..Default::default()
-        },
-    );
+    let on = compile("point-samples", &ps, &debugged());
     assert!(
         shade_source(&on).contains("out.debug_d1 = vec4<f32>(in_d_v1, 0.0, 0.0, 0.0);"),
         "{}",

@@ -721,21 +721,28 @@ impl DebugRow {
         if got.is_nan() && e.value.is_nan() {
             return;
         }
-        let w = Worst {
-            pixel,
-            got,
-            expected: e.value,
-            allowance: e.half_width(),
-        };
-        let diff = (got - e.value).abs();
-        self.max_diff = if diff.is_nan() { f64::NAN } else { self.max_diff.max(diff) };
-        if !e.admits(got) {
-            self.outside += 1;
-        }
-        if self.worst.is_none_or(|x| w.ratio() > x.ratio() || w.ratio().is_nan()) {
-            self.worst = Some(w);
-        }
+        tally((&mut self.outside, &mut self.max_diff, &mut self.worst), pixel, got, e);
     }
+}
+
+/// Count one receiver's `got` against its allowed `e` into a row's (outside, largest
+/// difference, worst): whether it lies outside, and the difference kept where largest.
+fn tally((outside, max_diff, worst): (&mut usize, &mut f64, &mut Option<Worst>), pixel: (usize, usize), got: f64, e: &Allowed) -> Worst {
+    let w = Worst {
+        pixel,
+        got,
+        expected: e.value,
+        allowance: e.half_width(),
+    };
+    let diff = (got - e.value).abs();
+    *max_diff = if diff.is_nan() { f64::NAN } else { max_diff.max(diff) };
+    if !e.admits(got) {
+        *outside += 1;
+    }
+    if worst.is_none_or(|x| w.ratio() > x.ratio() || w.ratio().is_nan()) {
+        *worst = Some(w);
+    }
+    w
 }
 
 impl Row {
@@ -968,26 +975,13 @@ pub fn verify(
             for &(i, e, s, f) in &evaluated {
                 let at = (i % camera as usize, i / camera as usize);
                 let g = got.get(i).copied().unwrap_or(f32::NAN) as f64;
-                let w = Worst {
-                    pixel: at,
-                    got: g,
-                    expected: e.value,
-                    allowance: e.half_width(),
-                };
-                let diff = (g - e.value).abs();
-                row.max_diff = if diff.is_nan() { f64::NAN } else { row.max_diff.max(diff) };
-                if !e.admits(g) {
-                    row.outside += 1;
-                }
+                let w = tally((&mut row.outside, &mut row.max_diff, &mut row.worst), at, g, &e);
                 let ratio = if e.admits(g) {
                     w.ratio().min(1.0)
                 } else {
                     w.ratio().max(1.0 + f64::EPSILON)
                 };
                 row.compared.push((i, g, e.value, ratio));
-                if row.worst.is_none_or(|x| w.ratio() > x.ratio() || w.ratio().is_nan()) {
-                    row.worst = Some(w);
-                }
                 if e.half_width() >= 0.5 {
                     row.loose += 1;
                 }
