@@ -302,7 +302,9 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                 Ok(k) => kernels[pi] = Some(k),
                 Err(d) => diags.push(d),
             },
-            PassKind::Shade { reads, visibility, .. } => {
+            PassKind::Shade {
+                reads, visibility, debug, ..
+            } => {
                 let carried: Vec<(Item, String, bool)> = reads
                     .iter()
                     .flat_map(|r| {
@@ -323,7 +325,17 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                     .flat_map(|(r, list)| list.iter().map(move |i| (*i, r.clone())))
                     .collect();
                 match ty.infer_as(visibility, Ty::F32) {
-                    Ok(t) => expect_f32(t, visibility.span, "the visibility", &mut diags),
+                    Ok(t) => {
+                        expect_f32(t, visibility.span, "the visibility", &mut diags);
+                        // the debug outputs, in the visibility's `let`s: checked where the
+                        // visibility is, so that an error in a `let` is reported once
+                        for o in debug {
+                            match ty.infer_as(&o.value, Ty::F32) {
+                                Ok(t) => expect_debug(t, &o.name, o.value.span, &mut diags),
+                                Err(d) => diags.push(d),
+                            }
+                        }
+                    }
                     Err(d) => diags.push(d),
                 }
                 for u in ty.uses.iter().filter(|u| u.side == Side::Geometry) {
@@ -493,6 +505,27 @@ fn expect_f32(t: Ty, span: Span, what: &str, diags: &mut Diagnostics) {
                 } else {
                     "reduce it to one f32"
                 }),
+        );
+    }
+}
+
+/// A debug output is an f32 or a vector of f32 (what a float texture stores).
+fn expect_debug(t: Ty, name: &Name, span: Span, diags: &mut Diagnostics) {
+    if !matches!(t, Ty::F32 | Ty::AbstractInt | Ty::Vec(_)) {
+        diags.push(
+            Diagnostic::error(
+                Phase::Check,
+                format!(
+                    "type mismatch: debug output `{}` must be f32 or a vector of f32, found {t}",
+                    name.value
+                ),
+            )
+            .at(span, format!("this is {t}"))
+            .help(if t == Ty::Bool {
+                "show a condition as a number with `select(0.0, 1.0, cond)`"
+            } else {
+                "convert it with `f32(...)`"
+            }),
         );
     }
 }

@@ -111,6 +111,35 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
             });
         }
     }
+    // the Shade's debug outputs: camera-sized, one layer, unencoded
+    for d in &ir.debug {
+        let ty = ir.arena.ty(d.expr);
+        let components = crate::back::shade::debug_components(ty);
+        textures.push(TextureDecl {
+            name: d.texture.clone(),
+            format: crate::back::shade::debug_format(ty),
+            layers: 1,
+            extent: Extent::Camera,
+            mips: false,
+            transient: false,
+            channels: (0..components)
+                .map(|component| ChannelDecl {
+                    name: if components == 1 {
+                        d.name.clone()
+                    } else {
+                        format!("{}.{}", d.name, ["x", "y", "z", "w"][component as usize])
+                    },
+                    layer: 0,
+                    component,
+                    bias: 0.0,
+                    scale: 1.0,
+                    // any f32: the value is stored as computed
+                    range: (-f64::from(f32::MAX), f64::from(f32::MAX)),
+                })
+                .collect(),
+            views: 1,
+        });
+    }
     let passes = out
         .modules
         .iter()
@@ -167,9 +196,11 @@ pub struct Cost {
 
 impl Cost {
     pub fn of(g: &PassGraph) -> Cost {
+        // per shadow-map texel: the camera-sized debug outputs are not among them
         let textures = g
             .textures
             .iter()
+            .filter(|t| t.extent == Extent::ShadowMap)
             .map(|t| {
                 // a per-sample texture holds `layers` per light sample
                 let base = (t.format.bytes_per_texel() * t.array_layers()) as f64;

@@ -12,6 +12,26 @@ use std::fmt::Write as _;
 /// compiled graph for every cascade, so what is counted in texels is the same count in each
 /// cascade, while what the Frame uniform gives per view (the light's size in the map, a
 /// texel's world size) is each cascade's own.
+/// The Shade's debug outputs: what this build writes (each texture, its format, its
+/// expression after folding), or which ones it leaves out.
+fn debug_outputs(s: &mut String, ir: &Program, g: &sshc_graph::PassGraph) {
+    if !ir.debug_omitted.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nDebug outputs: {} declared, left out of this build (compile with `--debug`, or `render --dump`, to write them)",
+            ir.debug_omitted.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+        );
+    }
+    if ir.debug.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "\nDebug outputs (camera-sized textures the Shade writes, unclamped):");
+    for d in &ir.debug {
+        let format = g.texture(&d.texture).map_or_else(String::new, |t| format!(" ({:?})", t.format));
+        let _ = writeln!(s, "  {} -> {}{format} = {}", d.name, d.texture, ir.arena.display(d.expr, Some(ir)));
+    }
+}
+
 fn cascades(s: &mut String, ir: &Program, g: &sshc_graph::PassGraph) {
     let _ = writeln!(s, "\nUnder cascades (`--cascades N`, a light at infinity):");
     if g.passes.iter().any(|p| p.views == sshc_graph::Views::PerLightSample) {
@@ -223,6 +243,7 @@ pub fn explain(c: &Compiled) -> String {
         };
         let _ = writeln!(s, "\nVisibility after lowering and constant folding:\n  {shown}");
     }
+    debug_outputs(&mut s, ir, g);
     cascades(&mut s, ir, g);
     let _ = writeln!(s, "\nChannels and packing:");
     for r in ir.resources.iter().filter(|r| r.live) {

@@ -820,6 +820,9 @@ pub struct Evaluation<'p> {
     model: Model,
     /// Per Map channel with a declared range: the texels whose value it clamped.
     clamped: Vec<(ChannelId, usize)>,
+    /// The Shade's debug outputs (where the build has them), each with the views of its
+    /// filtered lookups.
+    debug: Vec<(Prepared, Vec<Option<u8>>)>,
 }
 
 impl<'p> Evaluation<'p> {
@@ -833,18 +836,16 @@ impl<'p> Evaluation<'p> {
     /// texels per view, row 0 first).
     pub fn new(p: Program<'p>, given: &Given, frame: Frame, rounding: Rounding, model: Model) -> Result<Evaluation<'p>, String> {
         let shade = Prepared::new(&p, p.shade().ok_or("the technique has no live Shade pass")?);
-        let mut filtered: Vec<Option<u8>> = Vec::new();
-        for &h in &shade.order {
-            if let Node::Sample { how, view, .. } = p.arena.node(h)
-                && matches!(
-                    how,
-                    SampleFn::Sample | SampleFn::SampleLod | SampleFn::SampleWidth | SampleFn::SampleAt | SampleFn::SampleWidthAt
-                )
-                && !filtered.contains(view)
-            {
-                filtered.push(*view);
-            }
-        }
+        let filtered = filtered_views(&p, &shade.order);
+        let debug = p
+            .debug
+            .iter()
+            .map(|d| {
+                let e = Prepared::new(&p, d.expr);
+                let views = filtered_views(&p, &e.order);
+                (e, views)
+            })
+            .collect();
         let mut ev = Evaluation {
             p,
             frame,
@@ -853,6 +854,7 @@ impl<'p> Evaluation<'p> {
             filtered,
             model,
             clamped: Vec::new(),
+            debug,
         };
         for (id, pass) in p.passes.with_handles() {
             if !pass.live {
@@ -1069,12 +1071,65 @@ impl<'p> Evaluation<'p> {
 
     /// The raw visibility (NaN read as 1) at `r` with filtered lookups shifted by `shift`.
     fn raw(&self, r: &Receiver, shift: Shift, scratch: &mut Scratch) -> f64 {
+        raw_visibility(self.shifted(&self.shade, r, shift, scratch)[0])
+    }
+
+    /// The value of `e` at `r` with filtered lookups shifted by `shift`.
+    fn shifted(&self, e: &Prepared, r: &Receiver, shift: Shift, scratch: &mut Scratch) -> [f64; 4] {
         let leaf = self.receiver_leaf(r, shift);
         let plain = |h: ExprId, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
         self.p
             .arena
-            .eval_span(&self.shade.order, &Hooks { leaf: &plain, exact: true }, &mut scratch.vals);
-        raw_visibility(scratch.vals.get(self.shade.root.index()).map_or(f64::NAN, |v| v[0]))
+            .eval_span(&e.order, &Hooks { leaf: &plain, exact: true }, &mut scratch.vals);
+        scratch.vals.get(e.root.index()).copied().unwrap_or([f64::NAN; 4])
+    }
+
+    /// Debug outputs this evaluation has (the build's, `CompileOptions::debug`): their names.
+    pub fn debug_names(&self) -> Vec<&str> {
+        self.p.debug.iter().map(|d| d.name.as_str()).collect()
+    }
+
+    /// Debug output `i` at one receiver: each component's value (unclamped, NaN kept) and
+    /// the interval allowed about it, by the visibility's error model (a running bound
+    /// node by node, widened by the filtering hardware's positions).
+    pub fn debug(&self, i: usize, r: &Receiver, scratch: &mut Scratch) -> Vec<Allowed> {
+        let Some((e, views)) = self.debug.get(i) else { return Vec::new() };
+        scratch.fit(self.p.arena.len());
+        self.allowed(e, &self.receiver_leaf(r, Shift::NONE), scratch);
+        let width = match self.p.arena.ty(e.root) {
+            Ty::Vec(n) => usize::from(n).clamp(1, 4),
+            Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => 1,
+        };
+        let v = scratch.vals.get(e.root.index()).copied().unwrap_or([f64::NAN; 4]);
+        let err = scratch.errors.get(e.root.index()).copied().unwrap_or([f64::INFINITY; 4]);
+        let mut out: Vec<Allowed> = (0..width)
+            .map(|k| {
+                let mut a = Allowed::new(v[k], false);
+                a.widen(err[k], false);
+                a
+            })
+            .collect();
+        if self.model == Model::F64 {
+            return out;
+        }
+        let texel = FILTER_SHIFT / self.frame.shadow_size as f64;
+        for &view in views {
+            for axis in 0..3 {
+                let mut worst = [0.0f64; 4];
+                for sign in [1.0, -1.0] {
+                    let mut by = [0.0; 3];
+                    by[axis] = sign * if axis == 2 { FILTER_SHIFT } else { texel };
+                    let moved = self.shifted(e, r, Shift { view, by }, scratch);
+                    for k in 0..width {
+                        worst[k] = worst[k].max(change(moved[k], v[k]));
+                    }
+                }
+                for (a, w) in out.iter_mut().zip(worst) {
+                    a.widen(w, false);
+                }
+            }
+        }
+        out
     }
 
     /// The clamped visibility at one receiver, without its allowance.
@@ -1173,7 +1228,8 @@ impl<'p> Evaluation<'p> {
     /// clamped.
     fn allowed(&self, e: &Prepared, leaf: &LeafAllowed, scratch: &mut Scratch) -> Allowed {
         let arena = &self.p.arena;
-        let shade = e.root == self.shade.root;
+        // the visibility (a debug output may be the same node, and is not clamped)
+        let shade = std::ptr::eq(e, &self.shade);
         let plain = |h: ExprId, k: usize, vals: &[[f64; 4]]| leaf(h, k, vals).map(|(v, _)| v);
         let Scratch { vals, errors } = scratch;
         let hooks = Hooks { leaf: &plain, exact: true };
@@ -1336,6 +1392,24 @@ impl<'p> Evaluation<'p> {
         out.widen(error, shade);
         out
     }
+}
+
+/// The views (`None`: the centre's) of the filtered lookups among `order`'s nodes: each is
+/// shifted by the filtering hardware's positions on its own.
+fn filtered_views(p: &Program, order: &[ExprId]) -> Vec<Option<u8>> {
+    let mut filtered: Vec<Option<u8>> = Vec::new();
+    for &h in order {
+        if let Node::Sample { how, view, .. } = p.arena.node(h)
+            && matches!(
+                how,
+                SampleFn::Sample | SampleFn::SampleLod | SampleFn::SampleWidth | SampleFn::SampleAt | SampleFn::SampleWidthAt
+            )
+            && !filtered.contains(view)
+        {
+            filtered.push(*view);
+        }
+    }
+    filtered
 }
 
 /// The filtering hardware's error as one shift of the filtered lookups of one view: uv by
@@ -1548,6 +1622,47 @@ mod tests {
         assert_eq!(round_f16(2f64.powi(-24)), 2f64.powi(-24));
         assert_eq!(round_f16(0.7 * 2f64.powi(-24)), 2f64.powi(-24));
         assert_eq!(round_f16(-0.3 * 2f64.powi(-24)), 0.0);
+    }
+
+    /// Debug outputs evaluate to their closed forms at a receiver: the receiver's depth,
+    /// a vector of a lookup and a product, and the visibility's own expression unclamped
+    /// (the same node as the visibility, which is clamped); a build without them has none.
+    #[test]
+    fn debug_outputs_evaluate_unclamped_to_their_closed_forms() {
+        let src = r#"Technique(name: "t", channels: { "z": Channel(precision: F32) }, passes: [
+            Depth(name: "depth", writes: "shadow", channel: "z"),
+            Shade(name: "shade", reads: ["shadow"], visibility: "let k = 4.0; d * k", debug: {
+                "depth": "d", "pair": "vec2(sample(z), d * 2.0)", "raw": "d * k",
+            }),
+        ])"#;
+        let opts = crate::CompileOptions {
+            debug: true,
+            ..Default::default()
+        };
+        let c = crate::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("t.ron", src)));
+        let p = Program::new(&c.ir, &c.layout);
+        let n = 8;
+        let map = vec![0.375f32; (n * n) as usize];
+        let ev = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
+        assert_eq!(ev.debug_names(), ["depth", "pair", "raw"]);
+        let mut s = Scratch::default();
+        let d = 0.75;
+        let r = receiver(d);
+        let one = |i: usize, s: &mut Scratch| ev.debug(i, &r, s);
+        let depth_out = one(0, &mut s);
+        assert_eq!(depth_out.len(), 1);
+        // d from the receiver's view distance, (d_world - near) / (far - near), in f64
+        assert!((depth_out[0].value - d).abs() < 1e-12 && depth_out[0].admits(d), "{depth_out:?}");
+        let pair = one(1, &mut s);
+        assert_eq!(pair.len(), 2);
+        // a constant map filters to its value wherever it is read
+        assert!(pair[0].admits(0.375) && (pair[1].value - 2.0 * d).abs() < 1e-12, "{pair:?}");
+        let raw = one(2, &mut s);
+        assert!((raw[0].value - 4.0 * d).abs() < 1e-12 && raw[0].value > 1.0, "{raw:?}");
+        assert_eq!(ev.visibility(&r, &mut s).value, 1.0, "the visibility is clamped");
+        // without the option the same source has none
+        let plain = compiled(src);
+        assert!(plain.ir.debug.is_empty() && plain.ir.debug_omitted == ["depth", "pair", "raw"]);
     }
 
     #[test]

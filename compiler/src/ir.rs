@@ -1000,6 +1000,22 @@ pub struct Ir {
     /// The precisions left to the compiler (`Auto`) and why each was chosen, one line
     /// each (`analyse::choose_precisions`; shown by `explain`).
     pub precision_choices: Vec<String>,
+    /// The Shade's debug outputs, where the build asks for them (`CompileOptions::debug`;
+    /// else empty): roots of the Shade besides its visibility.
+    pub debug: Vec<IrDebug>,
+    /// The debug outputs the technique declares and this build leaves out (it did not ask
+    /// for them): their names, for `explain`.
+    pub debug_omitted: Vec<String>,
+}
+
+/// A debug output of the Shade: an f32 or vector expression of the Shade's, written
+/// unclamped to the camera-sized texture `texture` (`debug_<name>`).
+#[derive(Clone, Debug)]
+pub struct IrDebug {
+    pub name: String,
+    pub texture: String,
+    pub expr: ExprId,
+    pub span: Span,
 }
 
 /// A compilation specialised for a scene's facts.
@@ -1011,6 +1027,11 @@ pub struct Specialised {
 }
 
 impl Ir {
+    /// The Shade's roots: its visibility, then its debug outputs (where the build has them).
+    pub fn shade_roots(&self, visibility: ExprId) -> Vec<ExprId> {
+        std::iter::once(visibility).chain(self.debug.iter().map(|d| d.expr)).collect()
+    }
+
     /// Whether resource `r` holds one layer block per light sample (a per-sample pass
     /// writes it).
     pub fn per_sample(&self, r: ResId) -> bool {
@@ -1233,7 +1254,12 @@ impl<S: SlotView> Program<'_, S> {
             match &p.kind {
                 IrPassKind::Filter { kernel } => write!(f, " kernel {kernel:?}")?,
                 IrPassKind::Mipmap { reduce } => write!(f, " reduce {reduce:?}")?,
-                IrPassKind::Shade { visibility } => write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self.ir)))?,
+                IrPassKind::Shade { visibility } => {
+                    write!(f, "\n      visibility = {}", self.arena.display(*visibility, Some(self.ir)))?;
+                    for d in &self.ir.debug {
+                        write!(f, "\n      debug {} = {}", d.name, self.arena.display(d.expr, Some(self.ir)))?;
+                    }
+                }
                 IrPassKind::Geometry { keep: Some(k), .. } => write!(f, "\n      keep = {}", self.arena.display(*k, Some(self.ir)))?,
                 IrPassKind::Depth { .. } | IrPassKind::Map | IrPassKind::SummedArea { .. } | IrPassKind::Geometry { .. } => {}
             }

@@ -119,6 +119,11 @@ pub struct CompileOptions {
     /// against 7 ms for the rest of its compilation; docs/language.md section 5), so a
     /// library compilation asks for it.
     pub rounding: bool,
+    /// Compile the Shade's debug outputs (`debug: {...}`, `sshc compile --debug`): each
+    /// becomes a camera-sized texture `debug_<name>` the Shade writes. Without it they are
+    /// checked and then left out: the WGSL and the graph are those of a technique without
+    /// them.
+    pub debug: bool,
 }
 
 /// A compiled technique.

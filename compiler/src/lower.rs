@@ -607,6 +607,8 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
     let mut resources: Table<IrResource> = Table::default();
     let mut res_index = std::collections::HashMap::new();
     let mut passes: Table<IrPass> = Table::default();
+    let mut debug: Vec<IrDebug> = Vec::new();
+    let mut debug_omitted: Vec<String> = Vec::new();
     for &pi in &checked.order {
         let p = &t.passes[pi];
         let reads: Vec<ResId> = p.kind.reads().iter().map(|r| res_index[&r.value]).collect();
@@ -642,7 +644,10 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                 },
             },
             PassKind::Shade {
-                reads: rnames, visibility, ..
+                reads: rnames,
+                visibility,
+                debug: outputs,
+                ..
             } => {
                 let mut shade_reads = Vec::new();
                 for r in rnames {
@@ -654,6 +659,19 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                 let mut l = Lowerer::new(sym, types, &mut arena, &channel_ids, &expansions, Some(shade_reads));
                 l.samples = checked.samples;
                 let v = l.expr_coerced(visibility).map_err(Diagnostics::from)?;
+                // only a build that asks for them has debug outputs
+                if !sym.debug {
+                    debug_omitted.extend(outputs.iter().map(|o| o.name.value.clone()));
+                }
+                for o in outputs.iter().filter(|_| sym.debug) {
+                    let expr = l.expr_coerced(&o.value).map_err(Diagnostics::from)?;
+                    debug.push(IrDebug {
+                        name: o.name.value.clone(),
+                        texture: crate::resolve::debug_texture(&o.name.value),
+                        expr,
+                        span: o.value.span,
+                    });
+                }
                 IrPassKind::Shade { visibility: v }
             }
         };
@@ -720,6 +738,8 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         passes,
         arena,
         samples: checked.samples,
+        debug,
+        debug_omitted,
         specialised: sym.scene.as_ref().map(|facts| Specialised {
             // the casters' least depth matters only to precisions left to the compiler: a
             // graph without one does not assume it (nor does the runtime check it)

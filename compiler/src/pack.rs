@@ -65,7 +65,7 @@ fn eliminate(ir: &Ir, lay: &mut Working) {
     let mut live_pass = vec![false; lay.passes.len()];
     live_pass[shade.index()] = true;
     if let IrPassKind::Shade { visibility } = lay.passes[shade].kind {
-        for h in ir.arena.postorder(&[visibility]) {
+        for h in ir.arena.postorder(&ir.shade_roots(visibility)) {
             if let Node::Sample { channel, resource, .. } = ir.arena.node(h) {
                 live.insert((*resource, *channel));
             }

@@ -50,6 +50,8 @@ pub struct Symbols<'a> {
     pub schedules: Vec<Option<Schedule>>,
     /// `--scene`: the facts to specialise for, admitted by the technique's `light:` list.
     pub scene: Option<sshc_graph::SceneFacts>,
+    /// Whether the Shade's debug outputs are compiled (`CompileOptions::debug`).
+    pub debug: bool,
 }
 
 impl<'a> Symbols<'a> {
@@ -72,6 +74,7 @@ impl<'a> Symbols<'a> {
             expansion_auto: self.expansion_auto.clone(),
             schedules: self.schedules.clone(),
             scene: self.scene.clone(),
+            debug: self.debug,
         }
     }
 
@@ -202,6 +205,56 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
                         writer: i,
                         span: w.span,
                     },
+                );
+            }
+        }
+    }
+
+    // Debug outputs: one name each, and a texture name (`debug_<name>`) no resource's
+    // textures (`<resource>` or `<resource>_<suffix>`) can take.
+    for p in &t.passes {
+        let PassKind::Shade { debug, .. } = &p.kind else { continue };
+        if let Some(extra) = debug.get(sshc_graph::MAX_DEBUG_OUTPUTS) {
+            diags.push(
+                Diagnostic::error(
+                    Phase::Resolve,
+                    format!(
+                        "{} debug outputs: a Shade pass has at most {}",
+                        debug.len(),
+                        sshc_graph::MAX_DEBUG_OUTPUTS
+                    ),
+                )
+                .at(extra.name.span, "one too many")
+                .note("a forward Shade renders each as a colour attachment after its four camera outputs, and WebGPU has 8")
+                .help("show the others in another build, or put up to four scalars in one `vec4(...)`"),
+            );
+        }
+        for (i, o) in debug.iter().enumerate() {
+            if let Some(first) = debug[..i].iter().find(|f| f.name.value == o.name.value) {
+                diags.push(
+                    Diagnostic::error(Phase::Resolve, format!("two debug outputs are named `{}`", o.name.value))
+                        .at(o.name.span, "named again here")
+                        .also(first.name.span, "first named here")
+                        .help("each debug output becomes a texture of its name: rename one of them"),
+                );
+                continue;
+            }
+            let texture = debug_texture(&o.name.value);
+            if let Some(r) = resources
+                .values()
+                .find(|r| texture == r.name || texture.strip_prefix(r.name.as_str()).is_some_and(|s| s.starts_with('_')))
+            {
+                diags.push(
+                    Diagnostic::error(
+                        Phase::Resolve,
+                        format!(
+                            "debug output `{}` would be texture `{texture}`, a name resource `{}`'s textures may take",
+                            o.name.value, r.name
+                        ),
+                    )
+                    .at(o.name.span, format!("becomes texture `{texture}`"))
+                    .also(r.span, "this resource's textures are named after it")
+                    .help("rename the debug output or the resource"),
                 );
             }
         }
@@ -376,5 +429,12 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
         expansion_auto,
         schedules,
         scene: opts.scene.clone(),
+        debug: opts.debug,
     })
+}
+
+/// The texture a debug output is written to: `debug_<name>` (a name of the graph, and the
+/// one `Executor::read_debug` and `sshc render --dump` take).
+pub fn debug_texture(name: &str) -> String {
+    format!("{}{name}", sshc_graph::DEBUG_PREFIX)
 }

@@ -126,7 +126,7 @@ pub fn shade_refusal(ir: &Program, pass: &IrPass) -> Option<String> {
     let IrPassKind::Shade { visibility } = pass.kind else { return None };
     let arena = &ir.ir.arena;
     // the per-sample lookups and inputs
-    arena.postorder(&[visibility]).into_iter().find_map(|h| {
+    arena.postorder(&ir.shade_roots(visibility)).into_iter().find_map(|h| {
         if let Node::Input(Input::DepthSlope, Some(k)) = arena.node(h) {
             return Some(format!(
                 "it reads `depth_slope` in light sample {k}'s view, and the G-buffer carries the centre view's only"

@@ -249,7 +249,11 @@ fn the_example_techniques_compile_and_use_what_they_show() {
         // the independent reading `sshc verify --reference` checks msm.ron against
         ("msm-reference", "techniques/examples", &["functions:", "det3(", "shadow("][..]),
         // the region and level lookups (language.md 8.7)
-        ("vssm-subdivided", "techniques/examples", &["functions:", "sample_box_at("][..]),
+        (
+            "vssm-subdivided",
+            "techniques/examples",
+            &["functions:", "sample_box_at(", "debug:"][..],
+        ),
         (
             "pcf-min-early-out",
             "techniques/examples",

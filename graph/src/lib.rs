@@ -100,6 +100,101 @@ mod tests {
         assert_eq!(LightModel::Any.kind(), None);
     }
 
+    /// Camera-sized textures (a Shade's debug outputs) are written by a Shade's camera
+    /// steps only, have one layer and no mip chain, and no step reads them.
+    #[test]
+    fn camera_sized_textures_are_a_shades_camera_steps_own() {
+        let shade = |draw: Draw, reads: bool| {
+            let mut g = tiny();
+            g.textures.push(TextureDecl {
+                name: format!("{DEBUG_PREFIX}x"),
+                extent: Extent::Camera,
+                ..g.textures[0].clone()
+            });
+            let (vertex, fragment, compute) = if draw.is_dispatch() {
+                (None, None, Some("cs".to_string()))
+            } else {
+                (Some("vs".to_string()), Some("fs".to_string()), None)
+            };
+            let mut steps = vec![];
+            if draw == Draw::ComputePixels {
+                steps.push(Step {
+                    draw: Draw::CameraGBuffer,
+                    writes: vec![],
+                    ..g.passes[0].steps[0].clone()
+                });
+            }
+            steps.push(Step {
+                vertex,
+                fragment,
+                compute,
+                draw,
+                writes: vec![Target {
+                    texture: "debug_x".into(),
+                    layer: 0,
+                }],
+                ..g.passes[0].steps[0].clone()
+            });
+            g.passes.push(PassDecl {
+                name: "shade".into(),
+                kind: PassKind::Shade,
+                views: Views::LightCenter,
+                shader: "t.shade.wgsl".into(),
+                steps,
+            });
+            if reads {
+                // a later pass reading the output
+                g.passes.push(PassDecl {
+                    name: "after".into(),
+                    kind: PassKind::Map,
+                    views: Views::LightCenter,
+                    shader: "t.after.wgsl".into(),
+                    steps: vec![Step {
+                        draw: Draw::FullScreen,
+                        reads: vec![Binding {
+                            binding: 0,
+                            texture: "debug_x".into(),
+                            view: View::Base,
+                        }],
+                        ..g.passes[0].steps[0].clone()
+                    }],
+                });
+            }
+            g
+        };
+        for draw in [Draw::SceneFromCamera, Draw::ComputePixels] {
+            let g = shade(draw.clone(), false);
+            assert_eq!(PassGraph::from_ron(&g.to_ron()).as_ref(), Ok(&g), "{draw:?}");
+            // a step that reads it
+            let e = PassGraph::from_ron(&shade(draw.clone(), true).to_ron()).expect_err("read");
+            assert!(
+                matches!(&e, GraphError::Step { message, .. } if message.contains("reads camera-sized")),
+                "{e}"
+            );
+            // two layers, or a mip chain
+            for (layers, mips) in [(2, false), (1, true)] {
+                let mut g = shade(draw.clone(), false);
+                g.textures[1].layers = layers;
+                g.textures[1].mips = mips;
+                let e = PassGraph::from_ron(&g.to_ron()).expect_err("shape");
+                assert!(matches!(&e, GraphError::Texture { field: "extent", .. }), "{e}");
+            }
+        }
+        // written from the light
+        let mut g = tiny();
+        g.textures[0].extent = Extent::Camera;
+        let e = PassGraph::from_ron(&g.to_ron()).expect_err("from the light");
+        assert!(
+            matches!(&e, GraphError::Step { pass, message } if pass == "depth" && message.contains("camera-sized")),
+            "{e}"
+        );
+        // a camera step writing a shadow-map-sized texture
+        let mut g = shade(Draw::SceneFromCamera, false);
+        g.textures[1].extent = Extent::ShadowMap;
+        let e = PassGraph::from_ron(&g.to_ron()).expect_err("a shadow-map target of the camera");
+        assert!(matches!(&e, GraphError::Step { pass, .. } if pass == "shade"), "{e}");
+    }
+
     #[test]
     fn refuses_channel_tables_that_do_not_describe_the_storage() {
         let channel = |bias: f64, scale: f64, range: (f64, f64), layer: u32, component: u32| ChannelDecl {

@@ -86,6 +86,25 @@ impl Draw {
         }
     }
 
+    /// Whether the step's targets are camera-sized ([`Extent::Camera`]: a Shade's debug
+    /// outputs, after its camera outputs); every other step's are the shadow map's.
+    pub fn writes_camera_textures(&self) -> bool {
+        match self {
+            Draw::SceneFromCamera | Draw::ComputePixels => true,
+            Draw::SceneFromLight
+            | Draw::CameraGBuffer
+            | Draw::FullScreen
+            | Draw::MipLevels
+            | Draw::ComputeRows
+            | Draw::ComputeColumns
+            | Draw::ComputeTexels
+            | Draw::ComputeMipLevels
+            | Draw::Silhouettes { .. }
+            | Draw::Primitives { .. }
+            | Draw::Discontinuities { .. } => false,
+        }
+    }
+
     /// Whether the step writes the levels below the base of its targets' mip chains.
     pub fn writes_levels_below_base(&self) -> bool {
         match self {
@@ -124,6 +143,15 @@ pub const GBUFFER: [Format; 3] = [Format::Rgba32Float, Format::Rg32Float, Format
 /// The four camera outputs of a Shade pass, in the order of [`Draw::SceneFromCamera`]'s
 /// targets and [`Draw::ComputePixels`]'s bindings.
 pub const CAMERA_OUTPUTS: [Format; 4] = [Format::R32Float, Format::Rgba8Unorm, Format::Rgba32Float, Format::Rgba16Float];
+
+/// The most debug outputs a Shade pass writes besides [`CAMERA_OUTPUTS`]: a forward Shade
+/// renders them as colour attachments after the camera outputs, and WebGPU has 8.
+pub const MAX_DEBUG_OUTPUTS: usize = 4;
+
+/// The prefix of the camera-sized textures ([`Extent::Camera`]) that hold a Shade pass's
+/// debug outputs: `debug_<name>`, written by its [`Draw::SceneFromCamera`] or
+/// [`Draw::ComputePixels`] step and read by no pass.
+pub const DEBUG_PREFIX: &str = "debug_";
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -2,7 +2,8 @@
 //! references, params, layers, samples and formats.
 
 use crate::schema::{
-    BufferDecl, Draw, GraphError, MAX_RECORD_BYTES, MAX_VERTICES_PER_RECORD, PassGraph, PassKind, SCHEMA_VERSION, TextureDecl, View, Views,
+    BufferDecl, Draw, Extent, GraphError, MAX_RECORD_BYTES, MAX_VERTICES_PER_RECORD, PassGraph, PassKind, SCHEMA_VERSION, TextureDecl,
+    View, Views,
 };
 use crate::uniforms::MAX_LIGHT_SAMPLES;
 use serde::Deserialize;
@@ -77,6 +78,13 @@ impl PassGraph {
                     texture: t.name.clone(),
                     field: "views",
                     message: format!("{} views; a texture holds 1 or the graph's {} samples", t.views, g.samples),
+                });
+            }
+            if t.extent == Extent::Camera && (t.layers != 1 || t.mips || t.views != 1) {
+                return Err(GraphError::Texture {
+                    texture: t.name.clone(),
+                    field: "extent",
+                    message: "a camera-sized texture has one layer, one view and no mip chain".into(),
                 });
             }
             if t.layers == 0 {
@@ -242,8 +250,36 @@ impl PassGraph {
                         });
                     }
                 }
+                // camera-sized textures: a Shade's debug outputs, written by its camera
+                // steps (after the camera outputs), one layer, no mip chain, read by no pass
                 for w in &s.writes {
-                    if s.draw.stores_textures()
+                    if let Some(t) = self.texture(&w.texture)
+                        && (t.extent == Extent::Camera) != s.draw.writes_camera_textures()
+                    {
+                        return Err(GraphError::Step {
+                            pass: p.name.clone(),
+                            message: format!(
+                                "a {:?} step writes texture `{}` of extent {:?}: camera-sized textures are written by a Shade's SceneFromCamera or ComputePixels step, and only they",
+                                s.draw, t.name, t.extent
+                            ),
+                        });
+                    }
+                }
+                if let Some(b) = s
+                    .reads
+                    .iter()
+                    .find(|b| self.texture(&b.texture).is_some_and(|t| t.extent == Extent::Camera))
+                {
+                    return Err(GraphError::Step {
+                        pass: p.name.clone(),
+                        message: format!(
+                            "a step reads camera-sized texture `{}`: no pass reads a Shade's debug outputs",
+                            b.texture
+                        ),
+                    });
+                }
+                for w in &s.writes {
+                    if (s.draw.stores_textures() || s.draw.writes_camera_textures() && s.draw.is_dispatch())
                         && let Some(t) = self.texture(&w.texture)
                         && !t.format.storable()
                     {

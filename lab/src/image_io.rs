@@ -13,6 +13,27 @@ pub trait ImageFiles {
     /// Write component `c` (or RGB when `None`) as an 8-bit PNG, values clamped to [0, 1].
     /// `range` maps [lo, hi] to [0, 1] first (for depth and basis images).
     fn write_png(&self, path: &Path, c: Option<usize>, range: (f32, f32)) -> Result<()>;
+    /// Write component `c` as an 8-bit RGB PNG through the viridis map, normalised to its
+    /// finite values' [min, max] (a constant image at the map's middle), NaN and infinities
+    /// black; returns that range (`None`: no finite value).
+    fn write_png_viridis(&self, path: &Path, c: usize) -> Result<Option<(f32, f32)>>;
+}
+
+/// The finite values' [min, max] of `values` (`None` if there is none).
+pub fn finite_range(values: impl IntoIterator<Item = f32>) -> Option<(f32, f32)> {
+    values
+        .into_iter()
+        .filter(|v| v.is_finite())
+        .fold(None, |r, v| Some(r.map_or((v, v), |(lo, hi): (f32, f32)| (lo.min(v), hi.max(v)))))
+}
+
+/// `v` in [lo, hi] as a position on a colour map, in [0, 1] (the middle where lo = hi).
+pub fn normalised(v: f32, (lo, hi): (f32, f32)) -> f64 {
+    if hi > lo {
+        (((v - lo) / (hi - lo)) as f64).clamp(0.0, 1.0)
+    } else {
+        0.5
+    }
 }
 
 impl ImageFiles for Image {
@@ -23,6 +44,29 @@ impl ImageFiles for Image {
     fn write_pfm_rgb(&self, path: &Path) -> Result<()> {
         let data = self.rgba.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         write_pfm(path, self.width, self.height, true, data)
+    }
+
+    fn write_png_viridis(&self, path: &Path, c: usize) -> Result<Option<(f32, f32)>> {
+        let range = finite_range(self.rgba.iter().map(|p| p[c]));
+        let buf: Vec<u8> = self
+            .rgba
+            .iter()
+            .flat_map(|p| match range.filter(|_| p[c].is_finite()) {
+                Some(r) => {
+                    let col = colorous::VIRIDIS.eval_continuous(normalised(p[c], r));
+                    [col.r, col.g, col.b]
+                }
+                None => [0, 0, 0],
+            })
+            .collect();
+        ::image::RgbImage::from_raw(self.width, self.height, buf)
+            .ok_or_else(|| RuntimeError::NotFound("image size mismatch".into()))?
+            .save(path)
+            .map_err(|e| RuntimeError::File {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })?;
+        Ok(range)
     }
 
     fn write_png(&self, path: &Path, c: Option<usize>, range: (f32, f32)) -> Result<()> {

@@ -61,6 +61,10 @@ pub struct Variants {
     /// Override the schedule of a Map, Filter, Mipmap or Shade pass: PASS=fragment|compute (`*` for all of them). Repeatable.
     #[arg(long = "schedule", value_name = "PASS=SCHEDULE", value_parser = pair)]
     pub schedule: Vec<(String, String)>,
+    /// Compile the Shade's debug outputs (`debug: {...}`): each becomes a camera-sized
+    /// texture `debug_<name>` (`render --dump` writes them, `verify` compares them).
+    #[arg(long)]
+    pub debug: bool,
 }
 
 impl Variants {
@@ -70,6 +74,7 @@ impl Variants {
             set: self.set.clone(),
             precision: self.precision.clone(),
             schedule: self.schedule.clone(),
+            debug: self.debug,
             ..Default::default()
         }
     }

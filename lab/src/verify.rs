@@ -693,6 +693,56 @@ pub struct Row {
     /// Channels with a declared range (`range: (lo, hi)`) whose stored values it clamped,
     /// and at how many texels (every cascade's summed).
     pub clamped: Vec<(String, usize)>,
+    /// The Shade's debug outputs (a build with them, `--debug`), each compared as the
+    /// visibility is: every component at every receiver, each cascade's own.
+    pub debug: Vec<DebugRow>,
+}
+
+/// One debug output's comparison over a row's receivers: the GPU's value (read back from
+/// its texture) against the CPU's f64 evaluation of the same expression, within the same
+/// running error bound as the visibility's, without the clamp.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DebugRow {
+    pub name: String,
+    /// Values compared (receivers x components x cascades).
+    pub values: usize,
+    /// Values outside their allowance.
+    pub outside: usize,
+    pub max_diff: f64,
+    /// The value with the largest difference over its allowance.
+    pub worst: Option<Worst>,
+}
+
+impl DebugRow {
+    /// Compare the GPU's `got` with the CPU's allowed value `e` at `pixel` (two NaNs agree:
+    /// the expression is undefined there on both).
+    fn add(&mut self, pixel: (usize, usize), got: f64, e: &Allowed) {
+        self.values += 1;
+        if got.is_nan() && e.value.is_nan() {
+            return;
+        }
+        tally((&mut self.outside, &mut self.max_diff, &mut self.worst), pixel, got, e);
+    }
+}
+
+/// Count one receiver's `got` against its allowed `e` into a row's (outside, largest
+/// difference, worst): whether it lies outside, and the difference kept where largest.
+fn tally((outside, max_diff, worst): (&mut usize, &mut f64, &mut Option<Worst>), pixel: (usize, usize), got: f64, e: &Allowed) -> Worst {
+    let w = Worst {
+        pixel,
+        got,
+        expected: e.value,
+        allowance: e.half_width(),
+    };
+    let diff = (got - e.value).abs();
+    *max_diff = if diff.is_nan() { f64::NAN } else { max_diff.max(diff) };
+    if !e.admits(got) {
+        *outside += 1;
+    }
+    if worst.is_none_or(|x| w.ratio() > x.ratio() || w.ratio().is_nan()) {
+        *worst = Some(w);
+    }
+    w
 }
 
 impl Row {
@@ -910,6 +960,7 @@ pub fn verify(
                 verdict: Verdict::Agrees,
                 compared: Vec::with_capacity(evaluated.len()),
                 clamped: Vec::new(),
+                debug: debug_rows(&ex, &cascades, &points, camera as usize, &scene.samples)?,
             };
             for c in &cascades {
                 for (name, n) in c.exact.clamped() {
@@ -924,26 +975,13 @@ pub fn verify(
             for &(i, e, s, f) in &evaluated {
                 let at = (i % camera as usize, i / camera as usize);
                 let g = got.get(i).copied().unwrap_or(f32::NAN) as f64;
-                let w = Worst {
-                    pixel: at,
-                    got: g,
-                    expected: e.value,
-                    allowance: e.half_width(),
-                };
-                let diff = (g - e.value).abs();
-                row.max_diff = if diff.is_nan() { f64::NAN } else { row.max_diff.max(diff) };
-                if !e.admits(g) {
-                    row.outside += 1;
-                }
+                let w = tally((&mut row.outside, &mut row.max_diff, &mut row.worst), at, g, &e);
                 let ratio = if e.admits(g) {
                     w.ratio().min(1.0)
                 } else {
                     w.ratio().max(1.0 + f64::EPSILON)
                 };
                 row.compared.push((i, g, e.value, ratio));
-                if row.worst.is_none_or(|x| w.ratio() > x.ratio() || w.ratio().is_nan()) {
-                    row.worst = Some(w);
-                }
                 if e.half_width() >= 0.5 {
                     row.loose += 1;
                 }
@@ -974,7 +1012,7 @@ pub fn verify(
                 .or(storage.last())
                 .copied()
                 .unwrap_or(0.0);
-            row.verdict = if row.outside > 0 || row.reference.is_some_and(|r| r.0 > 0) {
+            row.verdict = if row.outside > 0 || row.reference.is_some_and(|r| r.0 > 0) || row.debug.iter().any(|d| d.outside > 0) {
                 Verdict::Differs
             } else if row.storage > sshc::rounding::WARN_ABOVE {
                 Verdict::Lossy
@@ -983,6 +1021,46 @@ pub fn verify(
             };
             rows.push(row);
         }
+    }
+    Ok(rows)
+}
+
+/// Every debug output of the build compared at every receiver: each cascade's texture
+/// (every cascade's Shade writes its own at every pixel) against that cascade's
+/// evaluation, component by component.
+fn debug_rows(
+    ex: &Executor,
+    cascades: &[Cascade],
+    points: &[(usize, [f32; 3])],
+    camera: usize,
+    samples: &[SampleView],
+) -> Result<Vec<DebugRow>, String> {
+    let Some(first) = cascades.first() else { return Ok(Vec::new()) };
+    let mut rows = Vec::new();
+    for (d, name) in first.exact.debug_names().into_iter().enumerate() {
+        let mut row = DebugRow {
+            name: name.to_string(),
+            values: 0,
+            outside: 0,
+            max_diff: 0.0,
+            worst: None,
+        };
+        for (k, c) in cascades.iter().enumerate() {
+            let got = ex.read_debug(k, name).map_err(crate::session::rt)?.rgba;
+            let expected: Vec<(usize, Vec<Allowed>)> = points
+                .par_iter()
+                .map_init(Scratch::default, |scratch, &(i, p)| {
+                    (i, c.exact.debug(d, &c.plane.receiver(i, p, samples), scratch))
+                })
+                .collect();
+            for (i, e) in expected {
+                let g = got.get(i).copied().unwrap_or([f32::NAN; 4]);
+                for (component, e) in e.iter().enumerate() {
+                    row.add((i % camera, i / camera), g[component] as f64, e);
+                }
+            }
+        }
+        rows.push(row);
     }
     Ok(rows)
 }
@@ -1140,6 +1218,28 @@ pub fn table(rows: &[Row]) -> String {
             }
         }
         let _ = writeln!(s, " {} |", r.verdict.name());
+    }
+    let debug: Vec<&str> = rows
+        .first()
+        .map(|r| r.debug.iter().map(|d| d.name.as_str()).collect())
+        .unwrap_or_default();
+    if !debug.is_empty() {
+        s.push_str("\nDebug outputs, each against its CPU evaluation (every component, every cascade):\n\n| input | camera | output | values | outside | max diff | worst (pixel: got, expected, allowance) |\n|---|---|---|---|---|---|---|\n");
+        for r in rows {
+            for d in &r.debug {
+                let worst = d.worst.map_or("-".into(), |w| {
+                    format!(
+                        "({}, {}): {:.6}, {:.6}, {:.2e}",
+                        w.pixel.0, w.pixel.1, w.got, w.expected, w.allowance
+                    )
+                });
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {} | {} | {:.2e} | {worst} |",
+                    r.input, r.camera, d.name, d.values, d.outside, d.max_diff
+                );
+            }
+        }
     }
     s
 }

@@ -1154,3 +1154,95 @@ fn compare_with_cascades_states_them_and_keeps_them_while_the_light_moves() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `sshc render --dump` compiles the Shade's debug outputs in and writes each as PFM (the
+/// f32 values) and PNG (viridis over the printed [min, max]): a technique's `pixel` (its
+/// closed form: column x, row y from the top, at every pixel that sees a surface; NaN, as
+/// the positions, where none is seen) and the receiver's depth `d` (in [0, 1] wherever
+/// the visibility is defined). Without `--dump` nothing is compiled in.
+#[test]
+fn render_dump_writes_debug_outputs_as_pfm_and_png() {
+    let dir = temp_dir("debug-dump");
+    let technique = dir.join("probe.ron");
+    std::fs::write(
+        &technique,
+        r#"Technique(name: "probe", params: { "bias": Param(ty: F32, default: 0.002) },
+            channels: { "z": Channel(precision: F32) },
+            passes: [
+                Depth(name: "depth", writes: "shadow", channel: "z"),
+                Shade(name: "shade", reads: ["shadow"], visibility: "select(0.0, 1.0, d - bias <= sample(z))",
+                      debug: { "px": "pixel", "depth": "d" }),
+            ])"#,
+    )
+    .unwrap();
+    let (t, dump, pos) = (technique.to_str().unwrap(), dir.join("dump"), dir.join("pos.pfm"));
+    let png = dir.join("r.png");
+    let base = [
+        "render",
+        t,
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "48x32",
+        "--shadow-map",
+        "64",
+        "-o",
+        png.to_str().unwrap(),
+    ];
+    let plain = ok(&base);
+    assert!(!plain.contains("debug_"), "no debug output without --dump:\n{plain}");
+    let out = ok(&[&base[..], &["--dump", dump.to_str().unwrap(), "--positions", pos.to_str().unwrap()]].concat());
+    let positions = read_pfm(&pos);
+    let seen: Vec<bool> = positions.data.chunks(3).map(|p| p.iter().all(|c| c.is_finite())).collect();
+    assert_eq!(seen.len(), 48 * 32);
+    assert!(
+        seen.iter().filter(|s| **s).count() > 48 * 32 / 2,
+        "the contact scene fills most of the view"
+    );
+    for (stem, closed) in [
+        ("debug_px.x", (|x: usize, _y: usize| x as f32) as fn(usize, usize) -> f32),
+        ("debug_px.y", |_x, y| y as f32),
+    ] {
+        let img = read_pfm(&dump.join(format!("{stem}.pfm")));
+        assert_eq!((img.width, img.height, img.color), (48, 32, false), "{stem}");
+        for y in 0..32 {
+            for x in 0..48 {
+                let v = img.data[y * 48 + x];
+                if seen[y * 48 + x] {
+                    assert_eq!(v, closed(x, y), "{stem} at ({x}, {y})");
+                } else {
+                    assert!(v.is_nan(), "{stem} at ({x}, {y}): {v} where no surface is seen");
+                }
+            }
+        }
+        // the printed range is the values' and the PNG maps it through viridis
+        let finite: Vec<f32> = img.data.iter().copied().filter(|v| v.is_finite()).collect();
+        let (lo, hi) = (
+            finite.iter().copied().fold(f32::MAX, f32::min),
+            finite.iter().copied().fold(f32::MIN, f32::max),
+        );
+        assert!(
+            out.contains(&format!("debug output {stem}: [{lo:e}, {hi:e}]")),
+            "{stem}: [{lo}, {hi}] in\n{out}"
+        );
+        let picture = image::open(dump.join(format!("{stem}.png"))).unwrap().to_rgb8();
+        let at = img.data.iter().position(|v| *v == hi).unwrap();
+        let top = colorous::VIRIDIS.eval_continuous(1.0);
+        assert_eq!(
+            picture.get_pixel((at % 48) as u32, (at / 48) as u32).0,
+            [top.r, top.g, top.b],
+            "{stem}"
+        );
+    }
+    let depth = read_pfm(&dump.join("debug_depth.pfm"));
+    let depths: Vec<f32> = depth.data.iter().copied().filter(|v| v.is_finite()).collect();
+    assert_eq!(depths.len(), seen.iter().filter(|s| **s).count());
+    // the camera sees what the light's fitted depth range holds
+    assert!(
+        depths.iter().all(|d| (0.0..=1.0).contains(d)),
+        "{:?}",
+        depths.iter().fold((f32::MAX, f32::MIN), |a, d| (a.0.min(*d), a.1.max(*d)))
+    );
+    assert!(dump.join("debug_depth.png").is_file() && dump.join("visibility.pfm").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -404,3 +404,79 @@ fn declared_ranges_clamp_at_encode_and_verify_reports_the_clamped_texels() {
         verdicts(&bad)
     );
 }
+
+/// Debug outputs (`debug: {...}`, compiled with `--debug`) are compared with their CPU
+/// evaluation as the visibility is: the vssm-subdivided example's region mean depth
+/// `z_mean` (four summed-area lookups) and the receiver's biased depth `receiver` (the
+/// query plane's closed form, `d = 1 - u`, less the bias) agree in the forward and the
+/// deferred Shade and in each of two cascades; a bug injected into one output's store (its
+/// value 1 % high, as a code generator writing the wrong node would) makes that output
+/// DIFFER while the visibility and the other output still agree.
+#[test]
+fn debug_outputs_agree_with_the_cpu_and_a_bug_in_one_is_caught() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("verify needs an adapter: {e}"));
+    let path = root().join("techniques/examples/vssm-subdivided.ron");
+    let src = std::fs::read_to_string(&path).unwrap();
+    let n = 16;
+    let inputs: Vec<Input> = ["step", "noise"]
+        .iter()
+        .map(|f| Input {
+            name: f.to_string(),
+            source: Source::Depth(verify::depth_field(f, n).expect("a bundled field")),
+        })
+        .collect();
+    let run = |c: &sshc::Compiled, cascades: u32| {
+        let opts = Options {
+            shadow: n,
+            cascades,
+            ..Options::default()
+        };
+        verify::verify(&gpu, c, None, &inputs, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let outputs = |r: &verify::Row| r.debug.iter().map(|d| (d.name.clone(), d.outside)).collect::<Vec<_>>();
+    for (schedule, from, to) in [
+        ("fragment", "out.debug_z_mean = vec4<f32>(", "out.debug_z_mean = 1.01 * vec4<f32>("),
+        (
+            "compute",
+            "textureStore(o_debug_z_mean, pixel, 0i, vec4<f32>(e",
+            "textureStore(o_debug_z_mean, pixel, 0i, 1.01 * vec4<f32>(e",
+        ),
+    ] {
+        let opts = sshc::CompileOptions {
+            debug: true,
+            schedule: vec![("shade".into(), schedule.into())],
+            ..Default::default()
+        };
+        let c = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render("vssm-subdivided", &src)));
+        let cascades = if schedule == "fragment" { [1, 2].as_slice() } else { &[1] };
+        for &k in cascades {
+            for r in run(&c, k) {
+                assert_eq!(
+                    r.verdict,
+                    Verdict::Agrees,
+                    "{schedule}, {k} cascade(s), {}: {:?} {:?}",
+                    r.input,
+                    r.worst,
+                    r.debug
+                );
+                assert_eq!(outputs(&r), [("z_mean".to_string(), 0), ("receiver".to_string(), 0)], "{schedule}");
+                // every receiver of every cascade, one component each
+                assert!(
+                    r.debug.iter().all(|d| d.values == r.receivers * k as usize && d.values > 0),
+                    "{:?}",
+                    r.debug
+                );
+            }
+        }
+        let bad = run(&injected(&c, "shade", from, to), 1);
+        for r in &bad {
+            assert_eq!(r.verdict, Verdict::Differs, "{schedule}: {}", r.input);
+            assert_eq!(r.outside, 0, "{schedule}: the visibility is untouched");
+            assert!(
+                r.debug[0].outside > 0 && r.debug[1].outside == 0,
+                "{schedule}: only z_mean differs: {:?}",
+                r.debug
+            );
+        }
+    }
+}

@@ -493,10 +493,12 @@ fn every_texture_of_a_graph_draws_an_image() {
     let dir = temp_dir("textures");
     // (scene, techniques, `--set` of the first): CSSM's filter 1 takes summed-area tables,
     // storage buffers the viewer reads back to show
-    let runs: [Run; 3] = [
+    // the example's debug outputs (the viewer compiles them in): camera-sized textures
+    let runs: [Run; 4] = [
         ("contact", &["vsm", "msm", "cssm", "penumbra-limit-maps", "smoothies"], &[]),
         ("contact", &["cssm"], &[("filter", "1")]),
         ("linear", &["linear-light"], &[]),
+        ("contact", &["examples/vssm-subdivided"], &[]),
     ];
     for (scene, techniques, set) in runs {
         let mut steps = String::from("[\n");
@@ -510,6 +512,7 @@ fn every_texture_of_a_graph_draws_an_image() {
                 } else {
                     vec![]
                 },
+                debug: true,
                 ..Default::default()
             };
             let graph = sshc::compile_str(&source, &options).expect("it compiles").graph;
@@ -524,7 +527,7 @@ fn every_texture_of_a_graph_draws_an_image() {
             }
             steps.push_str("    WaitReady,\n");
             for tex in &graph.textures {
-                let shot = dir.join(format!("{t}-{}{}.png", tex.name, set.len()));
+                let shot = dir.join(format!("{}-{}{}.png", t.replace('/', "-"), tex.name, set.len()));
                 let level = u32::from(tex.mips);
                 steps.push_str(&format!(
                     "    Show(Texture(name: \"{}\", layer: {}, level: {level}, channel: 0, lo: 0.0, hi: 1.0, map: Viridis)),\n    Wait(1),\n    Screenshot(\"{}\"),\n",
@@ -554,6 +557,8 @@ fn every_texture_of_a_graph_draws_an_image() {
         let (ok, out) = view(&args.iter().map(String::as_str).collect::<Vec<_>>());
         assert!(ok, "sshc view failed:\n{out}");
         assert!(shots.len() >= techniques.len(), "{shots:?}");
+        let debug = shots.iter().filter(|s| s.to_string_lossy().contains("-debug_")).count();
+        assert_eq!(debug, if techniques[0].starts_with("examples/") { 2 } else { 0 }, "{shots:?}");
         for shot in shots {
             let img = png(&shot);
             // the clear colour: (0.02, 0.02, 0.03) in unorm8

@@ -12,7 +12,7 @@ use crate::pipeline::mip_count;
 use crate::pixels::{HostPixels, PixelsStep};
 use crate::receivers::Unshadowed;
 use crate::requirements::Requirements;
-use crate::resources::{Resources, f32_bytes};
+use crate::resources::{Resources, f32_bytes, texture_bytes};
 use crate::steps::{self, Group0, PassNode};
 use crate::timing::{FrameTimes, Timestamps};
 use crate::update::{FrameWriter, LightUniforms};
@@ -94,6 +94,17 @@ pub enum CameraOutput {
     Color = 1,
     Position = 2,
     Normal = 3,
+}
+
+/// A debug output of the Shade pass ([`Executor::debug_outputs`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DebugOutput {
+    /// Its name in the technique (`debug: {"name": "..."}`).
+    pub name: String,
+    /// The camera-sized texture holding it (`debug_<name>`).
+    pub texture: String,
+    /// Its components: 1 for an f32, 2 to 4 for a vector.
+    pub components: usize,
 }
 
 /// What a frame generated into one buffer ([`Executor::generated`]).
@@ -236,7 +247,6 @@ impl Executor {
                 limit: MAX_PASSES as u64,
             });
         }
-        steps::unsupported(&graph)?;
         // every feature and limit the graph needs, all missing ones listed at once
         Requirements::of(&graph).check(gpu, &graph.technique)?;
         let mut sources: HashMap<String, Arc<str>> = HashMap::new();
@@ -1111,7 +1121,48 @@ impl Executor {
         if decl.format.is_table() {
             return read_table(&self.gpu, b.table(name)?, decl.format, layer, size);
         }
-        read_back(&self.gpu, b.texture(name)?, layer, level, size, size, decl.format)
+        let (w, h) = match decl.extent {
+            graph::Extent::ShadowMap => (size, size),
+            graph::Extent::Camera => b.camera_size,
+        };
+        read_back(&self.gpu, b.texture(name)?, layer, level, w, h, decl.format)
+    }
+
+    /// The Shade's debug outputs this graph writes (compiled with `CompileOptions::debug`):
+    /// each one's name (`debug: {"name": ...}` in the technique), its texture
+    /// (`debug_<name>`) and its components (1 to 4). Empty for a graph without them.
+    pub fn debug_outputs(&self) -> Vec<DebugOutput> {
+        self.graph
+            .textures
+            .iter()
+            .filter(|t| t.extent == graph::Extent::Camera)
+            .filter_map(|t| {
+                Some(DebugOutput {
+                    name: t.name.strip_prefix(graph::DEBUG_PREFIX)?.to_string(),
+                    texture: t.name.clone(),
+                    components: t.channels.len().clamp(1, 4),
+                })
+            })
+            .collect()
+    }
+
+    /// Debug output `name` of light (or cascade) `light`'s Shade, at the camera's size, as
+    /// computed (unclamped; NaN where the camera sees no surface): components 0.. of each
+    /// pixel hold the output's, the others 0. Light `l`'s Shade writes its own; with
+    /// cascades, each cascade's is evaluated at every pixel, not only in its slice.
+    pub fn read_debug(&self, light: usize, name: &str) -> Result<Image> {
+        let texture = format!("{}{name}", graph::DEBUG_PREFIX);
+        if self.graph.texture(&texture).is_none_or(|t| t.extent != graph::Extent::Camera) {
+            let known: Vec<String> = self.debug_outputs().into_iter().map(|d| d.name).collect();
+            return Err(RuntimeError::NotFound(if known.is_empty() {
+                format!(
+                    "no debug output `{name}`: the graph has none (compile it with debug outputs: `CompileOptions::debug`, `sshc compile --debug`)"
+                )
+            } else {
+                format!("no debug output `{name}`; the graph has {}", known.join(", "))
+            }));
+        }
+        self.read_light_texture(light, &texture, 0, 0)
     }
 
     /// Read a camera output of the Shade pass. The visibility (and the colour, computed from
@@ -1213,14 +1264,10 @@ impl Executor {
     }
 
     fn texture_bytes(&self, b: &Resources) -> Vec<(String, u64)> {
-        let texels = b.shadow_size as u64 * b.shadow_size as u64;
         self.graph
             .textures
             .iter()
-            .map(|t: &TextureDecl| {
-                let per = t.format.bytes_per_texel() as u64 * t.array_layers() as u64 * texels;
-                (t.name.clone(), if t.mips { per * 4 / 3 } else { per })
-            })
+            .map(|t: &TextureDecl| (t.name.clone(), texture_bytes(t, b.shadow_size, b.camera_size)))
             .collect()
     }
 

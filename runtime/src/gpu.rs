@@ -34,7 +34,8 @@
 
 pub use crate::device::{Gpu, INSTALL_HINT, Result, RuntimeError, WANTED_FEATURES};
 pub use crate::executor::{
-    CameraOutput, Executor, Generated, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility, read_capped,
+    CameraOutput, DebugOutput, Executor, Generated, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility,
+    read_capped,
 };
 pub use crate::fit::{Boxes, Fit};
 pub use crate::frame::{Camera, LightInputs, SampleView, SceneInputs};

@@ -161,7 +161,11 @@ fn step_counts(graph: &PassGraph, step: &graph::Step) -> StepCounts {
         NodeKind::Raster(r) => {
             c.attachments = match &r.targets {
                 Targets::Textures(t) => t.iter().filter_map(|w| format(&w.texture)).collect(),
-                Targets::Camera => CAMERA_FORMATS.to_vec(),
+                Targets::Camera(t) => CAMERA_FORMATS
+                    .iter()
+                    .copied()
+                    .chain(t.iter().filter_map(|w| format(&w.texture)))
+                    .collect(),
                 Targets::GBuffer => graph::GBUFFER.iter().filter_map(|f| wgpu_format(*f)).collect(),
             };
             c.blends = r.blend.is_some();
@@ -175,8 +179,9 @@ fn step_counts(graph: &PassGraph, step: &graph::Step) -> StepCounts {
             c.groups = if group3 { 4 } else { 3 };
             c.workgroup = Some(match k.dispatch {
                 Dispatch::Pixels => {
-                    // the four camera outputs stored, the G-buffer read at group 3
-                    c.storage_textures = CAMERA_FORMATS.len() as u64;
+                    // the four camera outputs and the debug outputs stored, the G-buffer
+                    // read at group 3
+                    c.storage_textures = CAMERA_FORMATS.len() as u64 + writes;
                     c.sampled += graph::GBUFFER.len() as u64;
                     texel
                 }

@@ -17,6 +17,17 @@ fn table_bytes(t: &TextureDecl, shadow_size: u32) -> u64 {
     t.format.bytes_per_texel() as u64 * t.layers as u64 * shadow_size as u64 * shadow_size as u64
 }
 
+/// Bytes of a graph texture at a shadow-map and camera size: the shadow map's texels, or
+/// the camera's for a camera-sized one (a Shade's debug output), a mip chain's 4/3 included.
+pub(crate) fn texture_bytes(t: &TextureDecl, shadow_size: u32, (cw, ch): (u32, u32)) -> u64 {
+    let texels = match t.extent {
+        graph::Extent::ShadowMap => shadow_size as u64 * shadow_size as u64,
+        graph::Extent::Camera => cw as u64 * ch as u64,
+    };
+    let per = t.format.bytes_per_texel() as u64 * t.array_layers() as u64 * texels;
+    if t.mips { per * 4 / 3 } else { per }
+}
+
 pub(crate) fn f32_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
@@ -128,7 +139,7 @@ impl Resources {
         }
         gpu.scoped("scene resources", || {
             let make = Make { gpu };
-            let (textures, tables) = make.graph_textures(graph, usages, s.shadow_size);
+            let (textures, tables) = make.graph_textures(graph, usages, s.shadow_size, s.camera_size);
             let (cw, ch) = s.camera_size;
             let none = wgpu::TextureUsages::empty();
             let sampled = wgpu::TextureUsages::TEXTURE_BINDING;
@@ -228,11 +239,9 @@ fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) ->
             limit: max_dim as u64,
         });
     }
-    let texels = s.shadow_size as u64 * s.shadow_size as u64;
-    let mut bytes: u64 = texels * 4 + cw as u64 * ch as u64 * (4 + 4 + 16 + 8 + 4);
+    let mut bytes: u64 = s.shadow_size as u64 * s.shadow_size as u64 * 4 + cw as u64 * ch as u64 * (4 + 4 + 16 + 8 + 4);
     for t in &graph.textures {
-        let per = t.format.bytes_per_texel() as u64 * t.array_layers() as u64 * texels;
-        bytes += if t.mips { per * 4 / 3 } else { per };
+        bytes += texture_bytes(t, s.shadow_size, s.camera_size);
     }
     if bytes > max_bytes {
         return Err(RuntimeError::Limit {
@@ -315,13 +324,14 @@ struct Make<'a> {
 }
 
 impl Make<'_> {
-    /// The graph's textures at the shadow map's size, and its summed-area tables
-    /// (storage buffers), by name.
+    /// The graph's textures at the shadow map's size (a Shade's debug outputs at the
+    /// camera's), and its summed-area tables (storage buffers), by name.
     fn graph_textures(
         &self,
         graph: &PassGraph,
         usages: &Usages,
         shadow_size: u32,
+        camera_size: (u32, u32),
     ) -> (HashMap<String, wgpu::Texture>, HashMap<String, wgpu::Buffer>) {
         let (mut textures, mut tables) = (HashMap::new(), HashMap::new());
         for t in &graph.textures {
@@ -335,11 +345,15 @@ impl Make<'_> {
                 tables.insert(t.name.clone(), buf);
                 continue;
             };
+            let (width, height) = match t.extent {
+                graph::Extent::ShadowMap => (shadow_size, shadow_size),
+                graph::Extent::Camera => camera_size,
+            };
             let tex = self.gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(&t.name),
                 size: wgpu::Extent3d {
-                    width: shadow_size,
-                    height: shadow_size,
+                    width,
+                    height,
                     depth_or_array_layers: t.array_layers(),
                 },
                 mip_level_count: if t.mips { mip_count(shadow_size) } else { 1 },

@@ -66,8 +66,8 @@ pub(crate) struct RasterStep {
 pub(crate) enum Targets {
     /// Layers of the graph's textures.
     Textures(Vec<Target>),
-    /// The four camera outputs.
-    Camera,
+    /// The four camera outputs, then the Shade's debug outputs (camera-sized textures).
+    Camera(Vec<Target>),
     /// The G-buffer of a deferred Shade.
     GBuffer,
 }
@@ -265,8 +265,9 @@ pub(crate) fn plan(step: &graph::Step) -> NodeKind {
             Levels::Base,
         ),
         Draw::SceneFromCamera => raster(
-            Targets::Camera,
-            CAMERA_CLEAR.to_vec(),
+            Targets::Camera(step.writes.clone()),
+            // debug outputs: NaN where the camera sees no surface, as the position
+            CAMERA_CLEAR.iter().copied().chain(std::iter::repeat_n(NAN, n)).collect(),
             Some(DepthTarget::Camera),
             DrawCall::Scene,
             Levels::Base,
@@ -279,7 +280,8 @@ pub(crate) fn plan(step: &graph::Step) -> NodeKind {
             Levels::Base,
         ),
         Draw::ComputePixels => NodeKind::Compute(ComputeStep {
-            writes: vec![],
+            // the debug outputs, stored after the camera outputs
+            writes: step.writes.iter().map(|t| t.texture.clone()).collect(),
             dispatch: Dispatch::Pixels,
             generated: None,
         }),
@@ -413,7 +415,12 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     fragment: step.fragment.clone(),
                     scene_vertices: matches!(r.draw, DrawCall::Scene),
                     targets: match &r.targets {
-                        Targets::Camera => CAMERA_FORMATS.to_vec(),
+                        Targets::Camera(t) => CAMERA_FORMATS
+                            .iter()
+                            .copied()
+                            .map(Ok)
+                            .chain(t.iter().map(|t| texture_format(&t.texture)))
+                            .collect::<Result<Vec<_>>>()?,
                         Targets::GBuffer => graph::GBUFFER.iter().filter_map(|f| wgpu_format(*f)).collect(),
                         Targets::Textures(t) => t.iter().map(|t| texture_format(&t.texture)).collect::<Result<_>>()?,
                     }
@@ -428,8 +435,9 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 },
                 NodeKind::Compute(c) => {
                     // a `ComputeTexels` step stores into textures (of storage formats:
-                    // `PassGraph::from_ron` checks), the others into tables
-                    let texels = matches!(c.dispatch, Dispatch::Texels | Dispatch::MipTexels);
+                    // `PassGraph::from_ron` checks), and a `ComputePixels` step into its debug
+                    // outputs; the others into tables
+                    let texels = matches!(c.dispatch, Dispatch::Texels | Dispatch::MipTexels | Dispatch::Pixels);
                     if let Some(w) = c.writes.iter().find(|w| is_table(w) == texels) {
                         let what = if texels { "a summed-area table" } else { "not a summed-area table" };
                         return Err(RuntimeError::NotFound(format!(
@@ -448,10 +456,16 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     .iter()
                     .map(|w| texture_format(w).map(|format| Slot::StorageTexture { format }))
                     .collect::<Result<_>>()?,
-                // the camera outputs, stored per pixel
-                NodeKind::Compute(c) if matches!(c.dispatch, Dispatch::Pixels) => {
-                    CAMERA_FORMATS.iter().map(|&format| Slot::StorageTexture { format }).collect()
-                }
+                // the camera outputs, then the debug outputs, stored per pixel
+                NodeKind::Compute(c) if matches!(c.dispatch, Dispatch::Pixels) => CAMERA_FORMATS
+                    .iter()
+                    .map(|&format| Ok(Slot::StorageTexture { format }))
+                    .chain(
+                        c.writes
+                            .iter()
+                            .map(|w| texture_format(w).map(|format| Slot::StorageTexture { format })),
+                    )
+                    .collect::<Result<_>>()?,
                 NodeKind::Compute(c) => vec![Slot::Buffer { read_only: false }; c.writes.len()],
                 NodeKind::Raster(_) => vec![],
             };
@@ -539,7 +553,15 @@ impl StepNode {
                 let mut passes = Vec::new();
                 for level in levels {
                     let color = match &r.targets {
-                        Targets::Camera => res.camera.iter().map(|t| t.create_view(&Default::default())).collect(),
+                        Targets::Camera(t) => res
+                            .camera
+                            .iter()
+                            .map(|t| Ok(t.create_view(&Default::default())))
+                            .chain(
+                                t.iter()
+                                    .map(|w| res.texture(&w.texture).map(|t| t.create_view(&Default::default()))),
+                            )
+                            .collect::<Result<_>>()?,
                         Targets::GBuffer => res.gbuffer.iter().map(|t| t.create_view(&Default::default())).collect(),
                         Targets::Textures(ts) => ts
                             .iter()
@@ -632,18 +654,20 @@ impl StepNode {
                 let group2 = match &self.pipeline.group2 {
                     // a mip chain binds each level's storage view (`levels`)
                     _ if matches!(c.dispatch, Dispatch::MipTexels) => None,
-                    // the camera outputs as one-layer arrays
+                    // the camera outputs, then the debug outputs, as one-layer arrays
                     Some(layout) if matches!(c.dispatch, Dispatch::Pixels) => {
+                        let array = |t: &wgpu::Texture| {
+                            t.create_view(&wgpu::TextureViewDescriptor {
+                                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                                ..Default::default()
+                            })
+                        };
                         let views: Vec<wgpu::TextureView> = res
                             .camera
                             .iter()
-                            .map(|t| {
-                                t.create_view(&wgpu::TextureViewDescriptor {
-                                    dimension: Some(wgpu::TextureViewDimension::D2Array),
-                                    ..Default::default()
-                                })
-                            })
-                            .collect();
+                            .map(|t| Ok(array(t)))
+                            .chain(c.writes.iter().map(|w| res.texture(w).map(array)))
+                            .collect::<Result<_>>()?;
                         Some(bind_views(gpu, layout, &views))
                     }
                     None => None,
@@ -1096,28 +1120,6 @@ fn bind_views(gpu: &Gpu, layout: &wgpu::BindGroupLayout, views: &[wgpu::TextureV
         layout,
         entries: &entries,
     })
-}
-
-/// Why a pass cannot run here: features the schema expresses but this runtime does not
-/// honour yet. A graph using one is refused rather than run another way.
-pub(crate) fn unsupported(graph: &PassGraph) -> Result<()> {
-    for p in &graph.passes {
-        let refuse = |feature: &str| {
-            Err(RuntimeError::Unsupported {
-                pass: p.name.clone(),
-                feature: feature.into(),
-            })
-        };
-        // Every texture is allocated at the shadow map's size.
-        let writes = p.steps.iter().flat_map(|s| &s.writes);
-        if let Some(t) = writes
-            .filter_map(|w| graph.texture(&w.texture))
-            .find(|t| t.extent == graph::Extent::Camera)
-        {
-            return refuse(&format!("texture `{}` at the camera's resolution (`extent: Camera`)", t.name));
-        }
-    }
-    Ok(())
 }
 
 /// The clear value and blend state of a resolve rule (see [`Resolve`]); `Nearest` does not

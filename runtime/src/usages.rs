@@ -15,8 +15,9 @@ pub(crate) struct Usages {
     /// `STORAGE_BINDING` where a compute step stores into it, `TEXTURE_BINDING` where a
     /// step reads it, `COPY_DST` where a Depth pass writes it (the lab's depth override
     /// writes its output from the CPU), and `COPY_SRC` on every one (read-back:
-    /// [`crate::gpu::Executor::read_texture`]). A texture no step writes or reads is only
-    /// `COPY_SRC`.
+    /// [`crate::gpu::Executor::read_texture`]), and `TEXTURE_BINDING` on a Shade's debug
+    /// outputs (a host looks at them: [`crate::gpu::Executor::texture`]). A texture no step
+    /// writes or reads is only `COPY_SRC`.
     pub textures: std::collections::HashMap<String, wgpu::TextureUsages>,
     /// A compute step stores the camera outputs (a deferred Shade).
     pub camera_stored: bool,
@@ -66,9 +67,19 @@ impl Usages {
                             }
                         }
                         Targets::GBuffer => u.gbuffer = true,
-                        Targets::Camera => {}
+                        Targets::Camera(targets) => {
+                            for t in targets {
+                                add(&t.texture, U::RENDER_ATTACHMENT);
+                            }
+                        }
                     },
                 }
+            }
+        }
+        // a Shade's debug outputs: a host binds them to look at them, as the camera outputs
+        for t in graph.textures.iter().filter(|t| t.extent == graph::Extent::Camera) {
+            if let Some(usage) = u.textures.get_mut(&t.name) {
+                *usage |= U::TEXTURE_BINDING;
             }
         }
         u

@@ -379,6 +379,19 @@ fn check_accepted(g: &PassGraph, text: &str) {
             assert_eq!(views, want, "pass {} writes a texture of {views} view(s): {text}", p.name);
         }
     }
+    // Camera-sized textures (a Shade's debug outputs): one layer, one view, no mip chain,
+    // written by a Shade's camera steps only (and those write nothing else), read by none.
+    for t in g.textures.iter().filter(|t| t.extent == Extent::Camera) {
+        assert!(t.layers == 1 && t.views == 1 && !t.mips, "a camera-sized texture's shape: {text}");
+    }
+    for st in g.passes.iter().flat_map(|p| &p.steps) {
+        for w in &st.writes {
+            let camera = g.texture(&w.texture).is_some_and(|t| t.extent == Extent::Camera);
+            assert_eq!(camera, st.draw.writes_camera_textures(), "{:?} writes {}: {text}", st.draw, w.texture);
+        }
+        let read_camera = st.reads.iter().any(|b| g.texture(&b.texture).is_some_and(|t| t.extent == Extent::Camera));
+        assert!(!read_camera, "a camera-sized texture read: {text}");
+    }
     // Steps name the entry points their draw needs.
     for st in g.passes.iter().flat_map(|p| &p.steps) {
         if st.draw.is_dispatch() {

@@ -6,7 +6,7 @@
 use crate::back::expr::{Emitter, Site};
 use crate::back::parts::Split;
 use crate::back::text::header;
-use crate::builtins::{InView, Input};
+use crate::builtins::{InView, Input, Ty};
 use crate::diag::Diagnostic;
 use crate::ir::{ExprId, IrPass, Program};
 use sshc_graph::{self as graph, Draw, OpCount, Step};
@@ -135,6 +135,13 @@ pub(crate) fn shade(
     em.split = split;
     em.deferred = deferred;
     let v = em.emit(visibility)?;
+    // the debug outputs, where the build has them: (WGSL name, value as a vec4, format)
+    let mut debug = Vec::new();
+    for d in &ir.ir.debug {
+        let value = em.emit(d.expr)?;
+        let ty = ir.arena.ty(d.expr);
+        debug.push((d.texture.clone(), widened(&value, ty), debug_format(ty)));
+    }
     let mut s = header(ir, pass);
     s.push_str(&em.declarations(ir));
     let entry = if deferred { "cs_shade" } else { "fs_shade" };
@@ -144,7 +151,7 @@ pub(crate) fn shade(
     let prologues: String = em.views.iter().map(|(&k, used)| sample_prologue(k, used)).collect();
     let receiver = shade_receiver(ir.ir.specialised.as_ref().map(|s| s.facts.light.is_distant()));
     // the `pixel` input, where the code reads it
-    let uses_pixel = body.contains("in_pixel") || functions.contains("in_pixel");
+    let uses_pixel = body.contains("in_pixel") || functions.contains("in_pixel") || debug.iter().any(|(_, v, _)| v.contains("in_pixel"));
     let pixel = |from: &str| {
         if uses_pixel {
             format!("    let in_pixel = {from};\n")
@@ -159,20 +166,29 @@ pub(crate) fn shade(
     let raw = {v};
     let vis = select(select(clamp(raw, 0.0, 1.0), 1.0, raw != raw), 0.0, in_ndotl <= 0.0);
     let lambert = max(in_ndotl, 0.0);
-{}{}{}{}",
+{}{}{}{}{}",
             store("visibility", "vec4<f32>(vis, 0.0, 0.0, 1.0)"),
             store("color", graph::SHADE_COLOR_WGSL),
             store("position", "vec4<f32>(in.world, 1.0)"),
             store("normal", "vec4<f32>(n, 0.0)"),
+            debug.iter().map(|(name, value, _)| store(name, value)).collect::<String>(),
         )
     };
+    // the debug textures each step writes after the camera outputs
+    let targets: Vec<graph::Target> = debug
+        .iter()
+        .map(|(name, ..)| graph::Target {
+            texture: name.clone(),
+            layer: 0,
+        })
+        .collect();
     let step = |vertex: Option<&str>, fragment: Option<&str>, compute: Option<&str>, draw: Draw, reads: bool| Step {
         vertex: vertex.map(str::to_string),
         fragment: fragment.map(str::to_string),
         compute: compute.map(str::to_string),
         draw,
         reads: if reads { em.graph_bindings() } else { vec![] },
-        writes: vec![],
+        writes: if reads { targets.clone() } else { vec![] },
         params: reads && em.uses_params,
         sampler: reads && em.uses_sampler,
         light_samples: reads && !em.views.is_empty(),
@@ -190,7 +206,7 @@ struct ShadeOut {{
     @location(1) color: vec4<f32>,
     @location(2) position: vec4<f32>,
     @location(3) normal: vec4<f32>,
-}}
+{}}}
 {SHADE_VERTEX}
 @fragment
 fn fs_shade(in: ShadeVarying) -> ShadeOut {{
@@ -198,6 +214,15 @@ fn fs_shade(in: ShadeVarying) -> ShadeOut {{
 {receiver}{SHADE_SLOPE}{DEPTH_SLOPE}{}{prologues}{body}{}    return out;
 }}
 ",
+            debug
+                .iter()
+                .enumerate()
+                .map(|(i, (name, ..))| format!(
+                    "    // debug output `{}`, unclamped (its step's target {i} after the camera outputs)\n    @location({}) {name}: vec4<f32>,\n",
+                    &name[graph::DEBUG_PREFIX.len()..],
+                    graph::CAMERA_OUTPUTS.len() + i
+                ))
+                .collect::<String>(),
             pixel("floor(in.clip.xy)"),
             outputs(&|field, value| {
                 let decl = if field == "visibility" { "    var out: ShadeOut;\n" } else { "" };
@@ -238,7 +263,7 @@ fn fs_gbuffer(in: ShadeVarying) -> GBufferOut {{
 @group(2) @binding(1) var o_color: texture_storage_2d_array<rgba8unorm, write>;
 @group(2) @binding(2) var o_position: texture_storage_2d_array<rgba32float, write>;
 @group(2) @binding(3) var o_normal: texture_storage_2d_array<rgba16float, write>;
-@group(3) @binding(0) var g_world: texture_2d<f32>;
+{}@group(3) @binding(0) var g_world: texture_2d<f32>;
 @group(3) @binding(1) var g_normal: texture_2d<f32>;
 @group(3) @binding(2) var g_duv: texture_2d<f32>;
 
@@ -258,7 +283,7 @@ fn cs_shade(@builtin(global_invocation_id) id: vec3<u32>) {{
         textureStore(o_color, pixel, 0i, vec4<f32>(0.02, 0.02, 0.03, 1.0));
         textureStore(o_position, pixel, 0i, vec4<f32>(nan));
         textureStore(o_normal, pixel, 0i, vec4<f32>(nan));
-        return;
+{}        return;
     }}
     let in = ShadeVarying(vec4<f32>(0.0), gbuffer.xyz, vec3<f32>(0.0));
     let n = from_octahedral(textureLoad(g_normal, pixel, 0i).xy);
@@ -269,6 +294,19 @@ fn cs_shade(@builtin(global_invocation_id) id: vec3<u32>) {{
     let in_duv_dy = footprint.zw;
 {}{prologues}{body}{}}}
 ",
+        debug
+            .iter()
+            .enumerate()
+            .map(|(i, (name, _, format))| format!(
+                "@group(2) @binding({}) var o_{name}: texture_storage_2d_array<{}, write>;\n",
+                graph::CAMERA_OUTPUTS.len() + i,
+                format.wgsl()
+            ))
+            .collect::<String>(),
+        debug
+            .iter()
+            .map(|(name, ..)| format!("        textureStore(o_{name}, pixel, 0i, vec4<f32>(nan));\n"))
+            .collect::<String>(),
         pixel("vec2<f32>(pixel)"),
         outputs(&|field, value| format!("    textureStore(o_{field}, pixel, 0i, {value});\n")),
         wg = graph::TEXEL_WORKGROUP,
@@ -276,6 +314,34 @@ fn cs_shade(@builtin(global_invocation_id) id: vec3<u32>) {{
     let gbuffer = step(Some("vs_shade"), Some("fs_gbuffer"), None, Draw::CameraGBuffer, false);
     let pixels = step(None, None, Some("cs_shade"), Draw::ComputePixels, true);
     Ok((s, vec![gbuffer, pixels]))
+}
+
+/// The texture format of a debug output of type `ty`: R32Float for an f32, Rg32Float for
+/// a `vec2`, Rgba32Float for a `vec3` (its w 0) and a `vec4`.
+pub(crate) fn debug_format(ty: Ty) -> graph::Format {
+    match ty {
+        Ty::Vec(2) => graph::Format::Rg32Float,
+        Ty::Vec(_) => graph::Format::Rgba32Float,
+        Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => graph::Format::R32Float,
+    }
+}
+
+/// The components a debug output of type `ty` has (1 for an f32).
+pub(crate) fn debug_components(ty: Ty) -> u32 {
+    match ty {
+        Ty::Vec(n) => u32::from(n),
+        Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => 1,
+    }
+}
+
+/// A debug output's value as the `vec4<f32>` its target takes (unused components 0).
+fn widened(value: &str, ty: Ty) -> String {
+    match ty {
+        Ty::Vec(2) => format!("vec4<f32>({value}, 0.0, 0.0)"),
+        Ty::Vec(3) => format!("vec4<f32>({value}, 0.0)"),
+        Ty::Vec(_) => value.to_string(),
+        Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => format!("vec4<f32>({value}, 0.0, 0.0, 0.0)"),
+    }
 }
 
 #[cfg(test)]
@@ -304,7 +370,6 @@ fn main(@location(0) w: vec3<f32>) -> @location(0) vec4<f32> {{
                 graph::LIGHT_SAMPLES_WGSL
             )
         };
-        use crate::builtins::Ty;
         let read = |i: Input, k: u8| match i.ty() {
             Ty::Vec(_) => format!("{}_v{k}.x", i.desc().wgsl),
             Ty::F32 | Ty::I32 | Ty::U32 | Ty::Bool | Ty::AbstractInt => format!("f32({}_v{k})", i.desc().wgsl),

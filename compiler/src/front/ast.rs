@@ -457,7 +457,21 @@ pub enum PassKind {
         visibility: Expr,
         /// How it runs; the compiler's default where absent.
         schedule: Option<Spanned<Schedule>>,
+        /// Named per-pixel debug outputs (`debug: {"name": "expr"}`), in the order written;
+        /// compiled only where `CompileOptions::debug` asks for them.
+        debug: Vec<DebugOutput>,
     },
+}
+
+/// A named per-pixel debug output of the Shade pass: an f32 or vector the Shade computes
+/// besides the visibility, written to a camera-sized texture `debug_<name>` by builds that
+/// ask for it (`CompileOptions::debug`) and left out of the others.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DebugOutput {
+    pub name: Name,
+    /// The expression inside the visibility's leading `let`s, so that it sees them (what
+    /// check and lower read); its span, and the wrappers', is the expression as written.
+    pub value: Expr,
 }
 
 impl PassKind {

@@ -802,12 +802,32 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
                 from,
             }
         }
-        _ => PassKind::Shade {
-            reads: names(f.req("reads")?)?,
-            visibility: expression(f.req("visibility")?)?,
-            schedule: schedule(&mut f)?,
-        },
+        _ => {
+            let reads = names(f.req("reads")?)?;
+            let visibility = expression(f.req("visibility")?)?;
+            let schedule = schedule(&mut f)?;
+            let debug = match f.opt("debug")? {
+                None => vec![],
+                Some(n) => debug_outputs(n, &visibility)?,
+            };
+            PassKind::Shade {
+                reads,
+                visibility,
+                schedule,
+                debug,
+            }
+        }
     };
+    if what != "Shade"
+        && let Some(n) = f.opt("debug")?
+    {
+        return Err(err(
+            n.span,
+            format!("`debug` outputs belong to the Shade pass, not to a {what} pass"),
+            "not a field of this pass",
+        )
+        .help("move the debug outputs to the Shade pass: they are evaluated per camera pixel, with the visibility"));
+    }
     f.finish()?;
     Ok(Pass {
         name,
@@ -815,6 +835,55 @@ fn pass(node: &Node) -> Result<Pass, Diagnostic> {
         kind_span,
         span: node.span,
     })
+}
+
+/// A Shade's `debug: {"name": "expr", ...}`: each expression wrapped in the visibility's
+/// leading `let`s (`let a = ..; let b = ..; body`), so that it sees them as the visibility's
+/// body does. The wrappers take the expression's span, so what check says of a debug
+/// output points at its string.
+fn debug_outputs(node: &Node, visibility: &Expr) -> Result<Vec<DebugOutput>, Diagnostic> {
+    let mut lets = Vec::new();
+    let mut at = visibility;
+    while let ExprKind::Let {
+        name,
+        name_span,
+        value,
+        body,
+    } = &at.kind
+    {
+        lets.push((name, *name_span, value));
+        at = body;
+    }
+    let mut out = Vec::new();
+    for (name, v) in map_entries(node)? {
+        let written = expression(v)?;
+        let span = written.span;
+        let mut value = written;
+        for (n, name_span, let_value) in lets.iter().rev() {
+            let kind = ExprKind::Let {
+                name: (*n).clone(),
+                name_span: *name_span,
+                value: (*let_value).clone(),
+                body: Box::new(value),
+            };
+            value = Expr::new(kind, span);
+        }
+        if value.height() > expr::MAX_TREE_DEPTH {
+            return Err(err(
+                span,
+                format!(
+                    "debug output `{}` inside the visibility's {} `let`(s) is deeper than {} levels",
+                    name.value,
+                    lets.len(),
+                    expr::MAX_TREE_DEPTH
+                ),
+                "too deep",
+            )
+            .help("split it with `let` bindings of its own, or a function"));
+        }
+        out.push(DebugOutput { name, value });
+    }
+    Ok(out)
 }
 
 const KERNELS: &[&str] = &["Box", "Gaussian", "Max", "Min", "LoG"];

@@ -272,6 +272,12 @@ fn root<S: SlotView>(ir: &Program<S>, h: ExprId, at: &str, map: bool) -> Result<
     if ty != Ty::F32 {
         return Err(ValidationError::RootType { at: at.to_string(), ty });
     }
+    receiver_side(ir, h, at, map)
+}
+
+/// Every node of `h` is of one side: no channel read as a plain value on the receiver
+/// side, no lookup on the map side.
+fn receiver_side<S: SlotView>(ir: &Program<S>, h: ExprId, at: &str, map: bool) -> Result<(), ValidationError> {
     for n in ir.arena.postorder(&[h]) {
         let wrong = match ir.arena.node(n) {
             Node::Channel(..) => !map,
@@ -412,7 +418,18 @@ fn resources_and_passes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationEr
                     return Err(shape("a Shade pass writes no resource"));
                 }
                 root(ir, *visibility, &format!("the visibility of {p:?}"), false)?;
-                for n in ir.arena.postorder(&[*visibility]) {
+                for d in &ir.debug {
+                    let at = format!("debug output `{}`", d.name);
+                    if d.expr.index() >= ir.arena.len() {
+                        return Err(ValidationError::BadNode { at, node: d.expr });
+                    }
+                    let ty = ir.arena.ty(d.expr);
+                    if !matches!(ty, Ty::F32 | Ty::Vec(_)) {
+                        return Err(ValidationError::RootType { at, ty });
+                    }
+                    receiver_side(ir, d.expr, &at, false)?;
+                }
+                for n in ir.arena.postorder(&ir.shade_roots(*visibility)) {
                     if let Node::Sample { channel, resource, .. } = ir.arena.node(n) {
                         let why = if !pass.reads.contains(resource) {
                             format!("{resource:?} is not read by the Shade pass")

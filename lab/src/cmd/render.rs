@@ -53,7 +53,9 @@ fn median(v: &[f64]) -> f64 {
 const BANDWIDTH_COPY_BYTES: u64 = 64 << 20;
 const BANDWIDTH_RUNS: usize = 5;
 
-pub fn render(a: RenderArgs) -> Result<(), String> {
+pub fn render(mut a: RenderArgs) -> Result<(), String> {
+    // a dump shows the Shade's debug outputs: compiled in for it
+    a.over.variants.debug |= a.dump.is_some();
     if let Some(b) = a.bandwidth
         && !(b.is_finite() && b > 0.0)
     {
@@ -364,7 +366,13 @@ fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
     std::fs::create_dir_all(dir).map_err(io)?;
     let levels_of = |mips: bool, size: u32| if mips { sshc_runtime::gpu::mip_count(size) } else { 1 };
     let size = ex.shadow_size()?;
-    for t in &ex.graph.textures {
+    // the camera-sized debug outputs: below, each light's
+    for t in ex
+        .graph
+        .textures
+        .iter()
+        .filter(|t| t.extent == sshc_runtime::graph::Extent::ShadowMap)
+    {
         for layer in 0..t.layers {
             for level in 0..levels_of(t.mips, size) {
                 let img = ex.read_texture(&t.name, layer, level)?;
@@ -417,7 +425,37 @@ fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
             (0.0, 1.0),
         )?;
     }
+    dump_debug(ex, dir)?;
     println!("wrote every texture to {}", dir.display());
+    Ok(())
+}
+
+/// The Shade's debug outputs, each light's (or cascade's), each component: PFM (the f32
+/// values as computed, NaN where no surface is seen) and a PNG through viridis over the
+/// component's finite [min, max], which is printed (NaN black).
+fn dump_debug(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
+    let lights = ex.lights();
+    for d in ex.debug_outputs() {
+        for light in 0..lights {
+            let img = ex.read_debug(light, &d.name)?;
+            for c in 0..d.components {
+                let mut stem = d.texture.clone();
+                if d.components > 1 {
+                    stem.push('.');
+                    stem.push(['x', 'y', 'z', 'w'][c]);
+                }
+                if lights > 1 {
+                    stem.push_str(&format!(".light{light}"));
+                }
+                img.write_pfm_gray(&dir.join(format!("{stem}.pfm")), c)?;
+                let range = img.write_png_viridis(&dir.join(format!("{stem}.png")), c)?;
+                match range {
+                    Some((lo, hi)) => println!("debug output {stem}: [{lo:e}, {hi:e}] (the PNG maps it through viridis; NaN black)"),
+                    None => println!("debug output {stem}: no finite value"),
+                }
+            }
+        }
+    }
     Ok(())
 }
 

@@ -181,6 +181,12 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
             );
         }
     }
+    if !c.ir.debug_omitted.is_empty() {
+        println!(
+            "note: debug outputs {} were left out of this build: `--debug` compiles them in and compares each with its CPU evaluation",
+            c.ir.debug_omitted.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+        );
+    }
     if let Some(dir) = &args.images {
         std::fs::create_dir_all(dir).map_err(|e| format!("error: cannot create `{}`: {e}", dir.display()))?;
         for r in &rows {

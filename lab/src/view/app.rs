@@ -1055,6 +1055,8 @@ fn options(state: &ViewState) -> sshc::CompileOptions {
         set: state.fixed.clone().into_iter().collect(),
         precision: state.precisions.clone().into_iter().collect(),
         schedule: state.schedules.clone().into_iter().collect(),
+        // the Shade's debug outputs, to look at (nothing where it declares none)
+        debug: true,
         ..Default::default()
     }
 }
@@ -1135,7 +1137,11 @@ fn shown<'a>(mode: &Mode, ex: &'a Executor, truth: Option<&'a [wgpu::Texture; 3]
                 map: map.index(),
                 lo: *lo,
                 hi: *hi,
-                square: true,
+                // a shadow map's texture in a square; a debug output over the camera's view
+                square: ex
+                    .graph
+                    .texture(name)
+                    .is_none_or(|t| t.extent != sshc_runtime::graph::Extent::Camera),
             },
         ),
     }
@@ -1474,6 +1480,32 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
         ui.label(format!(
             "RMS error: {all:.4} over the pixels facing the light, {pen:.4} over the penumbra"
         ));
+    }
+    // the Shade's debug outputs: each over the view, its values fitted to viridis
+    let debug = ex.debug_outputs();
+    if !debug.is_empty() {
+        ui.horizontal(|ui| {
+            ui.label("debug:");
+            for o in &debug {
+                let on = matches!(&mode, Mode::Texture { name, .. } if *name == o.texture);
+                if ui.selectable_label(on, &o.name).clicked() && !on {
+                    let (lo, hi) = ex
+                        .read_debug(0, &o.name)
+                        .ok()
+                        .and_then(|img| crate::image_io::finite_range(img.rgba.iter().map(|p| p[0])))
+                        .map_or((0.0, 1.0), |(lo, hi)| (lo, if hi > lo { hi } else { lo + 1.0 }));
+                    mode = Mode::Texture {
+                        name: o.texture.clone(),
+                        layer: 0,
+                        level: 0,
+                        channel: 0,
+                        lo,
+                        hi,
+                        map: ColourMap::Viridis,
+                    };
+                }
+            }
+        });
     }
     let current = match &mode {
         Mode::Texture { name, .. } => name.clone(),
