@@ -1154,3 +1154,107 @@ fn compare_with_cascades_states_them_and_keeps_them_while_the_light_moves() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Two `sshc truth` processes fill the same key of one cache folder at once (as two tasks
+/// of a cluster do on a shared filesystem): one claims the key and computes, the other
+/// waits for it and reads the stored truth. Both write the same truth, the cache holds
+/// one whole record and nothing else (no claim, temporary or beat file), and the truth is
+/// computed once. Then a claim that stands still (an owner on another host that stopped
+/// beating) is taken over after `--claim-stale` seconds.
+#[test]
+fn two_truth_commands_at_once_compute_the_truth_once_and_share_it() {
+    let dir = temp_dir("truth-race");
+    let cache = dir.join("cache");
+    // about 3 s of ray casting, well beyond the time the second process takes to start
+    let spawn = |name: &str| {
+        Command::new(env!("CARGO_BIN_EXE_sshc"))
+            .args([
+                "truth",
+                "--scene",
+                "scenes/triangle.ron",
+                "--size",
+                "48x48",
+                "--samples",
+                "4096",
+                "--runs",
+                "4",
+            ])
+            .arg("--cache")
+            .arg(&cache)
+            .arg("-o")
+            .arg(dir.join(format!("{name}.pfm")))
+            .current_dir(root())
+            .env("LP_NUM_THREADS", "2")
+            .env(
+                "XDG_RUNTIME_DIR",
+                std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| "/tmp".into()),
+            )
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("sshc starts")
+    };
+    let (a, b) = (spawn("a"), spawn("b"));
+    let text = |c: std::process::Child| {
+        let o = c.wait_with_output().unwrap();
+        let t = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        assert!(o.status.success(), "{t}");
+        t
+    };
+    let (ta, tb) = (text(a), text(b));
+    let computed = [&ta, &tb].iter().filter(|t| t.contains("truth: computed, cached in")).count();
+    let read = [&ta, &tb].iter().filter(|t| t.contains("truth: read from the cache")).count();
+    assert_eq!((computed, read), (1, 1), "one computes, one reads:\n{ta}\n---\n{tb}");
+    let waited = if ta.contains("truth: read from the cache") { &ta } else { &tb };
+    assert!(
+        waited.contains("truth: waiting for host ") && waited.contains(", which is computing this truth"),
+        "the reader waited for the claim's owner:\n{waited}"
+    );
+    let (va, vb) = (read_pfm(&dir.join("a.pfm")), read_pfm(&dir.join("b.pfm")));
+    assert_eq!(va.data, vb.data, "the same truth");
+    let files: Vec<String> = std::fs::read_dir(&cache)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        files.len() == 1 && files[0].ends_with(".ron"),
+        "one record and nothing else: {files:?}"
+    );
+    let key = u128::from_str_radix(files[0].trim_end_matches(".ron"), 16).unwrap();
+    let record = sshc_lab::truth::TruthCache::new(&cache).load(sshc_lab::truth::CacheKey(key));
+    assert!(
+        matches!(record, sshc_lab::truth::CacheLookup::Hit(_)),
+        "the record is whole: {record:?}"
+    );
+
+    // A claim on another host whose beats stopped: taken over after 1 s, then computed.
+    std::fs::remove_file(cache.join(&files[0])).unwrap();
+    let claim = cache.join(files[0].replace(".ron", ".claim"));
+    std::fs::write(&claim, "host=elsewhere pid=1 since=0\nbeat=3\n").unwrap();
+    let start = std::time::Instant::now();
+    let out = ok(&[
+        "truth",
+        "--scene",
+        "scenes/triangle.ron",
+        "--size",
+        "48x48",
+        "--samples",
+        "4096",
+        "--runs",
+        "4",
+        "--cache",
+        cache.to_str().unwrap(),
+        "--claim-stale",
+        "1",
+        "-o",
+        dir.join("c.pfm").to_str().unwrap(),
+    ]);
+    assert!(out.contains("truth: computed, cached in"), "{out}");
+    assert!(
+        start.elapsed().as_secs_f64() >= 1.0,
+        "the stale claim was waited on for its stale time"
+    );
+    assert_eq!(read_pfm(&dir.join("c.pfm")).data, va.data);
+    assert!(!claim.exists(), "the claim taken over is released");
+    let _ = std::fs::remove_dir_all(&dir);
+}
