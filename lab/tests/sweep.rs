@@ -6,6 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod common;
+use common::{assert_merged_equals, csv_rows as rows};
+
 fn run(out: &Path, extra: &[&str]) -> String {
     run_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/sweep.ron"), out, extra)
 }
@@ -25,27 +28,6 @@ fn run_file(sweep: &Path, out: &Path, extra: &[&str]) -> String {
     let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(o.status.success(), "sshc sweep failed:\n{text}");
     std::fs::read_to_string(out.join("sweep.csv")).expect("sweep.csv written")
-}
-
-fn rows(csv: &str) -> Vec<Vec<String>> {
-    // quoted fields hold no commas except the device name, which is quoted
-    csv.lines()
-        .skip(1)
-        .map(|l| {
-            let mut fields = Vec::new();
-            let mut cur = String::new();
-            let mut quoted = false;
-            for ch in l.chars() {
-                match ch {
-                    '"' => quoted = !quoted,
-                    ',' if !quoted => fields.push(std::mem::take(&mut cur)),
-                    c => cur.push(c),
-                }
-            }
-            fields.push(cur);
-            fields
-        })
-        .collect()
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -313,49 +295,6 @@ fn merge(dirs: &[&Path], out: &Path) -> (bool, String) {
     args.extend(dirs.iter().map(|d| d.as_os_str()));
     args.extend(["-o".as_ref(), out.as_os_str()]);
     sshc(&args)
-}
-
-/// The columns a merged sweep must have exactly as the unsharded run has them: every
-/// accuracy, memory and count column (the time columns are measured again by each shard).
-const SAME_COLUMNS: &[&str] = &[
-    "scene",
-    "technique",
-    "config",
-    "shadow_map",
-    "light_scale",
-    "peak_bytes",
-    "fetches",
-    "ops",
-    "rms_facing",
-    "max_facing",
-    "rms_penumbra",
-    "max_penumbra",
-    "facing_pixels",
-    "penumbra_pixels",
-    "truth_max_se",
-    "rms_ground",
-    "max_ground",
-    "ground_pixels",
-];
-
-/// Asserts that `merged` has `whole`'s rows, in its order, with every [`SAME_COLUMNS`]
-/// equal, a time ratio on every GPU row and each row's shard `i/n` for configuration i.
-fn assert_merged_equals(whole: &str, merged: &str, n: usize) {
-    let header: Vec<&str> = whole.lines().next().unwrap().split(',').collect();
-    assert_eq!(merged.lines().next(), whole.lines().next(), "the same columns");
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
-    let (a, b) = (rows(whole), rows(merged));
-    assert_eq!(a.len(), b.len(), "{merged}");
-    for (k, (x, y)) in a.iter().zip(&b).enumerate() {
-        for c in SAME_COLUMNS {
-            assert_eq!(x[col(c)], y[col(c)], "row {k}, column {c}: {x:?} against {y:?}");
-        }
-        if !y[col("technique")].contains("(CPU)") {
-            let ratio: f64 = y[col("time_ratio")].parse().unwrap_or_else(|_| panic!("row {k}: {y:?}"));
-            assert!(ratio.is_finite() && ratio > 0.0, "row {k}: {y:?}");
-            assert_eq!(y[col("shard")], format!("{}/{n}", k % n), "row {k}: {y:?}");
-        }
-    }
 }
 
 /// A sweep run unsharded and as 3 shards merged (`sshc sweep merge`): every accuracy,

@@ -576,6 +576,9 @@ fn resume(out: &Path, new: &Manifest, fresh: bool) -> Result<(Done, Vec<shard::R
 }
 
 fn run(a: SweepArgs) -> Result<(), String> {
+    // the run's wall time, recorded in the manifest: from here (before the sweep file is
+    // read and the device opened) to its outputs written
+    let start = Instant::now();
     let sweep_path = a.sweep.clone().ok_or("error: name a sweep file")?;
     let l = load(&sweep_path)?;
     let file = &l.file;
@@ -636,7 +639,8 @@ fn run(a: SweepArgs) -> Result<(), String> {
         );
     }
     manifest.runs = runs;
-    if todo.is_empty() && todo_baselines.is_empty() {
+    let nothing_left = todo.is_empty() && todo_baselines.is_empty();
+    if nothing_left {
         manifest.finished = true;
         eprintln!("sweep: nothing left to measure (--fresh measures again); writing the outputs");
     } else {
@@ -648,12 +652,8 @@ fn run(a: SweepArgs) -> Result<(), String> {
             seconds: None,
         });
         shard::write_manifest(&a.out, &manifest)?;
-        let start = Instant::now();
         measure(&a, &l, &gpu, &todo, &todo_baselines, done.rows.len(), manifest.rows)?;
         manifest.finished = true;
-        if let Some(r) = manifest.runs.last_mut() {
-            r.seconds = Some(start.elapsed().as_secs_f64());
-        }
     }
     // the outputs from what the folder holds, as the merge reads it
     let (done, _) = shard::read_records(&a.out, false)?;
@@ -674,6 +674,9 @@ fn run(a: SweepArgs) -> Result<(), String> {
             pixels: file.pixels,
         },
     )?;
+    if let (Some(r), false) = (manifest.runs.last_mut(), nothing_left) {
+        r.seconds = Some(start.elapsed().as_secs_f64());
+    }
     shard::write_manifest(&a.out, &manifest)
 }
 

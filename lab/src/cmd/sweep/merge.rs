@@ -227,10 +227,11 @@ fn print_summary(shards: &[Shard], rows: &[Row]) {
             })
             .collect();
         println!(
-            "  shard {}/{}: {} rows on {}; runs: {}; reference {}",
+            "  shard {}/{}: {} row{} on {}; runs: {}; reference {}",
             m.shard.0,
             m.shard.1,
             s.done.rows.len(),
+            if s.done.rows.len() == 1 { "" } else { "s" },
             m.device.1,
             runs.join(", "),
             if reference.is_empty() {

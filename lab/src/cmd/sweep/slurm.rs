@@ -116,8 +116,8 @@ pub fn scripts(j: &Job) -> [(&'static str, String); 3] {
     let dir = format!("\"{}\"", shard_dir("$i").replace('"', "\\\""));
     sweep.push_str(&format!(
         "set -euo pipefail\n\
-         # the truth's ray casting: a thread per CPU of the task\n\
-         export RAYON_NUM_THREADS=\"${{SLURM_CPUS_PER_TASK:-$(nproc)}}\"\n\
+         # the truth's ray casting: a thread per CPU the task was given\n\
+         export RAYON_NUM_THREADS=\"${{SLURM_CPUS_PER_TASK:-${{SLURM_CPUS_ON_NODE:-$(nproc)}}}}\"\n\
          i=\"$SLURM_ARRAY_TASK_ID\"\n\
          exec {sshc} sweep {sweep} --shard \"$i/{n}\" -o {dir} {options}\n",
         sshc = quote(&j.sshc.display().to_string()),
