@@ -504,7 +504,7 @@ impl Progress {
         self.ran += 1;
         self.bar.inc(1);
         if self.plain {
-            let left = self.total - self.done;
+            let left = self.total.saturating_sub(self.done);
             let spent = self.start.elapsed().as_secs_f64();
             let eta = spent / self.ran as f64 * left as f64;
             eprintln!(
@@ -623,7 +623,10 @@ fn run(a: SweepArgs) -> Result<(), String> {
     let (done, runs) = resume(&a.out, &manifest, a.fresh)?;
     let todo: Vec<&(usize, Config)> = mine.iter().filter(|(i, _)| !done.rows.contains_key(i)).collect();
     let todo_baselines: Vec<&(usize, usize, u32)> = baselines.iter().filter(|(i, ..)| !done.rows.contains_key(i)).collect();
-    if done.rows.is_empty() {
+    let left = todo.len() + todo_baselines.len();
+    // rows of this shard's done (`records.ron` holds no others unless it was edited)
+    let finished_rows = manifest.rows - left;
+    if finished_rows == 0 {
         eprintln!(
             "sweep: {} configurations ({} in shard {si}/{sn}) on {device}",
             all.len(),
@@ -633,13 +636,13 @@ fn run(a: SweepArgs) -> Result<(), String> {
         eprintln!(
             "sweep: resuming shard {si}/{sn} in {}: {} of its {} rows done by an earlier run, skipped; {} left, on {device}",
             a.out.display(),
-            done.rows.len(),
+            finished_rows,
             manifest.rows,
-            todo.len() + todo_baselines.len()
+            left
         );
     }
     manifest.runs = runs;
-    let nothing_left = todo.is_empty() && todo_baselines.is_empty();
+    let nothing_left = left == 0;
     if nothing_left {
         manifest.finished = true;
         eprintln!("sweep: nothing left to measure (--fresh measures again); writing the outputs");
@@ -648,11 +651,11 @@ fn run(a: SweepArgs) -> Result<(), String> {
             host: crate::claim::host(),
             pid: std::process::id(),
             started: crate::claim::unix_now(),
-            resumed_at: done.rows.len(),
+            resumed_at: finished_rows,
             seconds: None,
         });
         shard::write_manifest(&a.out, &manifest)?;
-        measure(&a, &l, &gpu, &todo, &todo_baselines, done.rows.len(), manifest.rows)?;
+        measure(&a, &l, &gpu, &todo, &todo_baselines, finished_rows, manifest.rows)?;
         manifest.finished = true;
     }
     // the outputs from what the folder holds, as the merge reads it
