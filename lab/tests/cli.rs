@@ -8,17 +8,21 @@ use std::process::{Command, Output};
 mod common;
 use common::{root, temp_dir};
 
-fn sshc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sshc"))
-        .args(args)
+/// `sshc ARGS` from the repository's root, on lavapipe's two threads.
+fn command(args: &[&str]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_sshc"));
+    c.args(args)
         .current_dir(root())
         .env("LP_NUM_THREADS", std::env::var("LP_NUM_THREADS").unwrap_or_else(|_| "2".into()))
         .env(
             "XDG_RUNTIME_DIR",
             std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| "/tmp".into()),
-        )
-        .output()
-        .expect("the sshc binary runs")
+        );
+    c
+}
+
+fn sshc(args: &[&str]) -> Output {
+    command(args).output().expect("the sshc binary runs")
 }
 
 /// Runs `sshc` and returns its standard output; fails with its output when it fails.
@@ -1166,29 +1170,15 @@ fn two_truth_commands_at_once_compute_the_truth_once_and_share_it() {
     let dir = temp_dir("truth-race");
     let cache = dir.join("cache");
     // about 3 s of ray casting, well beyond the time the second process takes to start
+    let truth = |name: &str, extra: &[&str]| -> Command {
+        let (cache, out) = (cache.to_str().unwrap(), dir.join(format!("{name}.pfm")));
+        let mut args = vec!["truth", "--scene", "scenes/triangle.ron", "--size", "48x48"];
+        args.extend(["--samples", "4096", "--runs", "4", "--cache", cache, "-o", out.to_str().unwrap()]);
+        args.extend(extra);
+        command(&args)
+    };
     let spawn = |name: &str| {
-        Command::new(env!("CARGO_BIN_EXE_sshc"))
-            .args([
-                "truth",
-                "--scene",
-                "scenes/triangle.ron",
-                "--size",
-                "48x48",
-                "--samples",
-                "4096",
-                "--runs",
-                "4",
-            ])
-            .arg("--cache")
-            .arg(&cache)
-            .arg("-o")
-            .arg(dir.join(format!("{name}.pfm")))
-            .current_dir(root())
-            .env("LP_NUM_THREADS", "2")
-            .env(
-                "XDG_RUNTIME_DIR",
-                std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| "/tmp".into()),
-            )
+        truth(name, &[])
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::piped())
             .spawn()
@@ -1232,23 +1222,9 @@ fn two_truth_commands_at_once_compute_the_truth_once_and_share_it() {
     let claim = cache.join(files[0].replace(".ron", ".claim"));
     std::fs::write(&claim, "host=elsewhere pid=1 since=0\nbeat=3\n").unwrap();
     let start = std::time::Instant::now();
-    let out = ok(&[
-        "truth",
-        "--scene",
-        "scenes/triangle.ron",
-        "--size",
-        "48x48",
-        "--samples",
-        "4096",
-        "--runs",
-        "4",
-        "--cache",
-        cache.to_str().unwrap(),
-        "--claim-stale",
-        "1",
-        "-o",
-        dir.join("c.pfm").to_str().unwrap(),
-    ]);
+    let o = truth("c", &["--claim-stale", "1"]).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{out}{}", String::from_utf8_lossy(&o.stderr));
     assert!(out.contains("truth: computed, cached in"), "{out}");
     assert!(
         start.elapsed().as_secs_f64() >= 1.0,

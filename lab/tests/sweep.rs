@@ -289,6 +289,24 @@ fn sshc(args: &[&std::ffi::OsStr]) -> (bool, String) {
     (o.status.success(), text)
 }
 
+/// `sshc sweep tests/sweep.ron --shard SHARD -o DIR` with a small truth cached in `cache`.
+fn shard_of_sweep(shard: &str, dir: &Path, cache: &Path) -> (bool, String) {
+    sshc(&[
+        "sweep".as_ref(),
+        sweep_file("sweep.ron").as_os_str(),
+        "-o".as_ref(),
+        dir.as_os_str(),
+        "--shard".as_ref(),
+        shard.as_ref(),
+        "--samples".as_ref(),
+        "16".as_ref(),
+        "--runs".as_ref(),
+        "2".as_ref(),
+        "--cache".as_ref(),
+        cache.as_os_str(),
+    ])
+}
+
 /// `sshc sweep merge DIRS -o OUT`.
 fn merge(dirs: &[&Path], out: &Path) -> (bool, String) {
     let mut args: Vec<&std::ffi::OsStr> = vec!["sweep".as_ref(), "merge".as_ref()];
@@ -309,21 +327,7 @@ fn three_shards_merged_equal_the_unsharded_sweep() {
     let cache = base.join("cache");
     let dirs: Vec<PathBuf> = (0..3).map(|i| base.join(format!("shard-{i}"))).collect();
     for (i, d) in dirs.iter().enumerate() {
-        let shard = format!("{i}/3");
-        let (ok, text) = sshc(&[
-            "sweep".as_ref(),
-            sweep_file("sweep.ron").as_os_str(),
-            "-o".as_ref(),
-            d.as_os_str(),
-            "--shard".as_ref(),
-            shard.as_ref(),
-            "--samples".as_ref(),
-            "16".as_ref(),
-            "--runs".as_ref(),
-            "2".as_ref(),
-            "--cache".as_ref(),
-            cache.as_os_str(),
-        ]);
+        let (ok, text) = shard_of_sweep(&format!("{i}/3"), d, &cache);
         assert!(ok, "{text}");
         // configurations i, i + 3 (and shard 0's CPU baseline): the last line says none is left
         let rows = if i == 0 { 3 } else { 2 };
@@ -355,20 +359,7 @@ fn three_shards_merged_equal_the_unsharded_sweep() {
         assert!(std::fs::metadata(out.join(f)).is_ok_and(|m| m.len() > 100), "{f}");
     }
     // run again: nothing measured, the same rows written
-    let (ok, text) = sshc(&[
-        "sweep".as_ref(),
-        sweep_file("sweep.ron").as_os_str(),
-        "-o".as_ref(),
-        dirs[1].as_os_str(),
-        "--shard".as_ref(),
-        "1/3".as_ref(),
-        "--samples".as_ref(),
-        "16".as_ref(),
-        "--runs".as_ref(),
-        "2".as_ref(),
-        "--cache".as_ref(),
-        cache.as_os_str(),
-    ]);
+    let (ok, text) = shard_of_sweep("1/3", &dirs[1], &cache);
     assert!(ok, "{text}");
     assert!(
         text.contains("2 of its 2 rows done by an earlier run, skipped; 0 left") && text.contains("nothing left to measure"),

@@ -104,25 +104,24 @@ fn check(shards: Vec<Shard>) -> Result<Vec<Shard>, Vec<String>> {
     }
     for s in &shards {
         let m = &s.manifest;
-        if !m.finished {
-            problems.push(format!(
-                "{} (shard {}/{}) is unfinished: {} of its {} rows done; run its command again to resume it",
-                name(&s.dir),
-                m.shard.0,
-                m.shard.1,
-                s.done.rows.len(),
-                m.rows
-            ));
+        let (what, fix) = if !m.finished {
+            ("is unfinished:", "run its command again to resume it")
         } else if s.done.rows.len() != m.rows {
-            problems.push(format!(
-                "{} (shard {}/{}) says it finished but holds {} of its {} rows: its records.ron was changed; run the shard again with --fresh",
-                name(&s.dir),
-                m.shard.0,
-                m.shard.1,
-                s.done.rows.len(),
-                m.rows
-            ));
-        }
+            (
+                "says it finished but holds",
+                "its records.ron was changed; run the shard again with --fresh",
+            )
+        } else {
+            continue;
+        };
+        problems.push(format!(
+            "{} (shard {}/{}) {what} {} of its {} rows done; {fix}",
+            name(&s.dir),
+            m.shard.0,
+            m.shard.1,
+            s.done.rows.len(),
+            m.rows
+        ));
     }
     if !problems.is_empty() {
         return Err(problems);
