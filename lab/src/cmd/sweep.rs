@@ -662,7 +662,7 @@ fn run(a: SweepArgs) -> Result<(), String> {
     let (done, _) = shard::read_records(&a.out, false)?;
     if done.rows.len() != manifest.rows {
         return Err(format!(
-            "error: {}: {} of the shard's {} rows are recorded: was the folder written by two runs at once? Run again with --fresh",
+            "error: {}: {} rows are recorded for the shard's {}: the file was changed; run again with --fresh",
             a.out.join(shard::RECORDS).display(),
             done.rows.len(),
             manifest.rows
