@@ -1,7 +1,9 @@
 //! `sshc sweep` end to end on a sweep of under 20 configurations (tests/sweep.ron): the
 //! CSV and Markdown hold one row per configuration with finite figures, the shards of a
 //! split sweep together hold exactly the configurations of the whole, and the Pareto
-//! charts are written as SVG and PNG. Runs on the GPU (lavapipe without one).
+//! charts are written as SVG and PNG. Shards merged by `sshc sweep merge` equal the
+//! unsharded sweep, a shard stopped by a signal resumes, and every bad merge is refused
+//! (docs/cluster.md). Runs on the GPU (lavapipe without one).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
