@@ -56,18 +56,19 @@ fn main() {
         git(&root, &["rev-parse", "--absolute-git-dir"]),
         git(&root, &["rev-parse", "--git-common-dir"]),
     ) {
-        // a commit, a checkout or a staged change moves these
+        // a commit or a checkout moves these: HEAD, and the branch it names (a loose ref,
+        // else in packed-refs); not the index, which every `git add` touches, nor other
+        // branches
         let common = if Path::new(&common).is_absolute() {
             PathBuf::from(&common)
         } else {
             root.join(&common)
         };
-        for p in [
-            Path::new(&dir).join("HEAD"),
-            Path::new(&dir).join("index"),
-            common.join("packed-refs"),
-            common.join("refs/heads"),
-        ] {
+        let mut watched = vec![Path::new(&dir).join("HEAD"), common.join("packed-refs")];
+        if let Some(branch) = git(&root, &["symbolic-ref", "-q", "HEAD"]) {
+            watched.push(common.join(branch));
+        }
+        for p in watched {
             // (a path that does not exist would run this script at every build)
             if p.exists() {
                 println!("cargo:rerun-if-changed={}", p.display());
