@@ -624,7 +624,7 @@ fn run(a: SweepArgs) -> Result<(), String> {
     let todo: Vec<&(usize, Config)> = mine.iter().filter(|(i, _)| !done.rows.contains_key(i)).collect();
     let todo_baselines: Vec<&(usize, usize, u32)> = baselines.iter().filter(|(i, ..)| !done.rows.contains_key(i)).collect();
     let left = todo.len() + todo_baselines.len();
-    // rows of this shard's done (`records.ron` holds no others unless it was edited)
+    // this shard's rows done (`records.ron` holds no others unless it was edited)
     let finished_rows = manifest.rows - left;
     if finished_rows == 0 {
         eprintln!(
