@@ -9,6 +9,11 @@ phase() { printf '\n== %s (at %ss)\n' "$1" "$(( $(date +%s) - start ))"; }
 phase "set-up"
 source scripts/setup.sh --test
 echo "spirv-val: $(spirv-val --version 2>&1 | head -1)"
+# Slurm and munge for the last phase (scripts/slurm-test.sh), installed where missing
+# beside the build: the install waits on the network and the disk, not the cores.
+slurm_install_log=$(mktemp)
+scripts/slurm-local.sh install >"$slurm_install_log" 2>&1 &
+slurm_install=$!
 
 phase "format"
 cargo fmt --all -- --check
@@ -20,7 +25,7 @@ cargo fmt --all -- --check
 fuzz_build_log=$(mktemp)
 setsid scripts/fuzz.sh build >"$fuzz_build_log" 2>&1 &
 fuzz_build=$!
-trap 'kill -- -"$fuzz_build" 2>/dev/null || true; rm -f "$fuzz_build_log"' EXIT
+trap 'kill -- -"$fuzz_build" 2>/dev/null || true; rm -f "$fuzz_build_log" "$slurm_install_log"' EXIT
 
 # The lint runs inside the one build the tests use. `cargo clippy` is `cargo check` with
 # clippy-driver wrapping rustc for the workspace's own crates; wrapping `cargo test
@@ -94,5 +99,16 @@ if cargo nextest --version >/dev/null 2>&1; then
 else
     linted cargo test --workspace --no-fail-fast
 fi
+
+phase "slurm (a single-node cluster runs a sharded sweep)"
+# A real Slurm cluster on this machine (scripts/slurm-local.sh): the job scripts of `sshc
+# sweep --slurm` for 4 shards, submitted, waited for and merged, against the unsharded
+# run (lab/tests/slurm.rs). The cluster is stopped whatever the outcome; a time limit.
+if ! wait "$slurm_install"; then
+    cat "$slurm_install_log"
+    echo "error: slurm-wlm and munge are missing and could not be installed"
+    exit 1
+fi
+scripts/slurm-test.sh
 
 phase "done"

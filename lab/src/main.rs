@@ -68,8 +68,10 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Sweep techniques x their parameter axes x scenes: error against the ground truth,
     /// GPU time (as a ratio to a reference technique) and memory; CSV, Markdown and Pareto
-    /// charts.
-    Sweep(sweep::SweepArgs),
+    /// charts. A run resumes where an earlier one in its folder stopped; `--shard i/n` runs
+    /// a slice, `--slurm` writes job scripts for a Slurm cluster, and `sshc sweep merge`
+    /// joins the shards' folders (docs/cluster.md).
+    Sweep(sweep::SweepCommand),
     /// Run a technique on the GPU over synthetic depth fields and scene depth maps and
     /// compare every receiver with an f64 evaluation of the same technique on the CPU: a
     /// table and a verdict per input (agrees, differs, lossy).

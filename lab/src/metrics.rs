@@ -55,7 +55,7 @@ impl fmt::Display for MetricsError {
 impl std::error::Error for MetricsError {}
 
 /// Error figures over one set of pixels, in 0..255 units.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ErrorStats {
     /// Root-mean-square error.
     pub rms: f64,
@@ -71,7 +71,7 @@ pub struct ErrorStats {
 
 /// Accuracy of one image: over the pixels that face the light, and over the penumbra
 /// pixels among them.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Accuracy {
     /// Pixels whose surface faces the light.
     pub facing: ErrorStats,

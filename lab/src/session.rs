@@ -197,6 +197,19 @@ pub struct TruthOpts {
     /// Neither read nor write the cache.
     #[arg(long)]
     pub no_cache: bool,
+    /// Seconds a claim on a truth may stand still (its owner beats four times in this
+    /// time) before another process takes it over: the cache folder may be shared by the
+    /// tasks of a cluster, of which one computes each truth while the others wait.
+    #[arg(long, value_name = "SECONDS", default_value_t = 120.0, value_parser = claim_seconds)]
+    pub claim_stale: f64,
+}
+
+/// `--claim-stale`: a finite number of seconds, at least 0.1.
+fn claim_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && (0.1..=1e7).contains(&x) => Ok(x),
+        _ => Err(format!("`{s}`: need a number of seconds from 0.1 to 10000000")),
+    }
 }
 
 /// The most light samples one truth may take: samples per run (as the stratified grid
@@ -463,19 +476,38 @@ pub fn positions_normals(ex: &Executor) -> Result<(Vec<Vec3>, Vec<Vec3>), String
 pub fn truth_at(scene: &Scene, positions: &[Vec3], normals: &[Vec3], opts: &TruthOpts) -> Result<(Truth, Source), String> {
     let (w, h) = scene.camera_size();
     opts.check(u64::from(w) * u64::from(h))?;
-    let cache = (!opts.no_cache).then(|| TruthCache::new(&opts.cache));
+    let cache =
+        (!opts.no_cache).then(|| TruthCache::new(&opts.cache).with_stale_after(std::time::Duration::from_secs_f64(opts.claim_stale)));
     let bar = indicatif::ProgressBar::new(0);
     bar.set_style(
         indicatif::ProgressStyle::with_template("truth {msg} [{bar:40}] {percent}% {elapsed_precise} (eta {eta})")
             .map_err(|e| format!("error: {e}"))?
             .progress_chars("=> "),
     );
+    // Not on a terminal (a cluster job's log), a plain line at each tenth of a truth that
+    // has taken over 10 s so far.
+    let plain = !std::io::stderr().is_terminal();
+    let start = std::time::Instant::now();
+    let tenth_shown = std::sync::atomic::AtomicU64::new(0);
     let progress = |p: truth::Progress| {
         if bar.length() != Some(p.total) {
             bar.set_length(p.total);
             bar.set_message(format!("{} samples x {} runs", p.samples, opts.runs));
         }
         bar.set_position(p.done);
+        if plain && p.total > 0 && start.elapsed().as_secs() >= 10 {
+            let tenth = p.done * 10 / p.total;
+            let mark = (u64::from(p.samples) << 8) | tenth;
+            if tenth_shown.swap(mark, std::sync::atomic::Ordering::Relaxed) != mark {
+                eprintln!(
+                    "truth: {} samples x {} runs: {}% after {:.0} s",
+                    p.samples,
+                    opts.runs,
+                    tenth * 10,
+                    start.elapsed().as_secs_f64()
+                );
+            }
+        }
     };
     let points = truth::Points {
         width: w,
@@ -483,8 +515,8 @@ pub fn truth_at(scene: &Scene, positions: &[Vec3], normals: &[Vec3], opts: &Trut
         positions,
         normals,
     };
-    let warn = |m: &str| eprintln!("warning: {m}");
-    let result = truth::compute_cached(scene, &points, &opts.settings(), cache.as_ref(), &progress, &warn);
+    let note = |m: &str| bar.suspend(|| eprintln!("{m}"));
+    let result = truth::compute_cached(scene, &points, &opts.settings(), cache.as_ref(), &progress, &note);
     bar.finish_and_clear();
     result.map_err(|e| format!("error: {e}"))
 }

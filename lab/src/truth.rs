@@ -33,12 +33,13 @@
 
 use std::fmt;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use xxhash_rust::xxh3::{Xxh3, xxh3_64};
 
+use crate::claim::{self, Attempt, Claim, Watch};
 use crate::scene::{Light, Scene};
 use crate::visibility::Visibility;
 
@@ -551,10 +552,15 @@ pub enum CacheLookup {
     Unreadable(String),
 }
 
-/// Ground truths stored on disk, one RON file per key.
+/// Ground truths stored on disk, one RON file per key. The folder may be shared by any
+/// number of processes and hosts: [`compute_cached`] claims a key before computing it
+/// (`KEY.claim`, [`crate::claim`]), so that one computes and the others wait and read.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct TruthCache {
     dir: PathBuf,
+    /// How long a claim may stand still (its owner's beats stopped) before a waiter takes
+    /// it over.
+    stale_after: Duration,
 }
 
 /// The record stored per key (the key is checked again on load).
@@ -568,9 +574,21 @@ impl TruthCache {
     /// The default folder, relative to the working directory: `.sshc-cache/truth`.
     pub const DEFAULT_DIR: &'static str = ".sshc-cache/truth";
 
+    /// How long a claim stands still before it is taken over, by default: its owner
+    /// beats four times in this time.
+    pub const DEFAULT_STALE_AFTER: Duration = Duration::from_secs(120);
+
     /// A cache in `dir` (created on the first store).
     pub fn new(dir: impl Into<PathBuf>) -> TruthCache {
-        TruthCache { dir: dir.into() }
+        TruthCache {
+            dir: dir.into(),
+            stale_after: Self::DEFAULT_STALE_AFTER,
+        }
+    }
+
+    /// The same cache with claims taken over after `stale_after` without a beat.
+    pub fn with_stale_after(self, stale_after: Duration) -> TruthCache {
+        TruthCache { stale_after, ..self }
     }
 
     /// The cache's folder.
@@ -581,6 +599,11 @@ impl TruthCache {
     /// The file of `key`.
     pub fn path(&self, key: CacheKey) -> PathBuf {
         self.dir.join(format!("{key}.ron"))
+    }
+
+    /// The claim file of `key`, present while a process computes it.
+    pub fn claim_path(&self, key: CacheKey) -> PathBuf {
+        self.dir.join(format!("{key}.claim"))
     }
 
     /// The truth stored for `key`, if any.
@@ -606,9 +629,9 @@ impl TruthCache {
     }
 
     /// Stores `truth` under `key`: written to a temporary file of a name no other writer
-    /// has (random, created exclusively: another process, thread or machine sharing the
-    /// folder writes its own), then renamed over the record, so that a reader never sees
-    /// half a file and the last writer's whole record wins.
+    /// has (`KEY.HOST.PID.RANDOM.tmp`, created exclusively: another process, thread or
+    /// machine sharing the folder writes its own), then renamed over the record, so that a
+    /// reader never sees half a file and the last writer's whole record wins.
     pub fn store(&self, key: CacheKey, truth: &Truth) -> Result<PathBuf, TruthError> {
         std::fs::create_dir_all(&self.dir).map_err(io_error(&self.dir))?;
         let path = self.path(key);
@@ -621,7 +644,7 @@ impl TruthCache {
             message: e.to_string(),
         })?;
         let mut tmp = tempfile::Builder::new()
-            .prefix(&format!("{key}."))
+            .prefix(&format!("{key}.{}.", crate::claim::process_tag()))
             .suffix(".tmp")
             .tempfile_in(&self.dir)
             .map_err(io_error(&self.dir))?;
@@ -641,36 +664,106 @@ pub enum Source {
 }
 
 /// [`compute`], through `cache` when given: a stored truth for the same key is returned
-/// as it is; otherwise the truth is computed and stored. A cache file that cannot be used
-/// is recomputed (`warn` is told why).
+/// as it is; otherwise the key is claimed (`KEY.claim`), computed and stored, while the
+/// claim's owner beats every quarter of the cache's stale time. A key another process
+/// claims is waited for and read once stored; a claim that stands still for the stale time
+/// (or whose process ended on this host) is taken over. A cache file that cannot be used
+/// is recomputed. `note` is told, in lines to print as they are, of an unusable file, a
+/// wait and a take-over.
 pub fn compute_cached(
     scene: &Scene,
     points: &Points,
     settings: &TruthSettings,
     cache: Option<&TruthCache>,
     progress: &(dyn Fn(Progress) + Sync),
-    warn: &dyn Fn(&str),
+    note: &dyn Fn(&str),
 ) -> Result<(Truth, Source), TruthError> {
     check_inputs(points, settings)?;
     if scene.lights.is_empty() {
         return Err(TruthError::NoLight);
     }
-    let key = match cache {
-        Some(_) => Some(cache_key(scene, points, settings)?),
-        None => None,
+    let Some(cache) = cache else {
+        let vis = Visibility::new(scene);
+        return Ok((compute(scene, &vis, points, settings, progress)?, Source::Computed(None)));
     };
-    if let (Some(c), Some(k)) = (cache, key) {
-        match c.load(k) {
-            CacheLookup::Hit(t) => return Ok((*t, Source::Cached(c.path(k)))),
+    let key = cache_key(scene, points, settings)?;
+    let claim_path = cache.claim_path(key);
+    let mut watch = Watch::new(cache.stale_after);
+    let poll = (cache.stale_after / 8).clamp(Duration::from_millis(10), Duration::from_secs(1));
+    let (mut waiting, mut warned) = (false, false);
+    loop {
+        match cache.load(key) {
+            CacheLookup::Hit(t) => return Ok((*t, Source::Cached(cache.path(key)))),
             CacheLookup::Miss => {}
-            CacheLookup::Unreadable(why) => warn(&format!("ignoring an unusable cached truth: {why}")),
+            CacheLookup::Unreadable(why) if !warned => {
+                warned = true;
+                note(&format!("warning: ignoring an unusable cached truth: {why}"));
+            }
+            CacheLookup::Unreadable(_) => {}
+        }
+        std::fs::create_dir_all(&cache.dir).map_err(io_error(&cache.dir))?;
+        match Claim::try_take(&claim_path).map_err(io_error(&claim_path))? {
+            Attempt::Taken(claim) => {
+                // stored between the look-up and the claim: read it
+                if let CacheLookup::Hit(t) = cache.load(key) {
+                    return Ok((*t, Source::Cached(cache.path(key))));
+                }
+                let (truth, claim) = compute_beating(scene, points, settings, progress, claim, cache.stale_after / 4);
+                let truth = truth?;
+                let stored = cache.store(key, &truth)?;
+                // released once the record is in place: a waiter reads it next
+                drop(claim);
+                return Ok((truth, Source::Computed(Some(stored))));
+            }
+            Attempt::Held(text) => {
+                if watch.is_stale(&text) {
+                    note(&format!(
+                        "truth: taking over the stale claim of {} ({}: no beat for {} s, or its process ended)",
+                        claim::describe(&text),
+                        claim_path.display(),
+                        cache.stale_after.as_secs_f64()
+                    ));
+                    claim::remove_stale(&claim_path, &text).map_err(io_error(&claim_path))?;
+                    watch.reset();
+                    continue;
+                }
+                if !waiting {
+                    waiting = true;
+                    note(&format!(
+                        "truth: waiting for {}, which is computing this truth ({})",
+                        claim::describe(&text),
+                        claim_path.display()
+                    ));
+                }
+                std::thread::sleep(poll);
+            }
         }
     }
-    let vis = Visibility::new(scene);
-    let truth = compute(scene, &vis, points, settings, progress)?;
-    let stored = match (cache, key) {
-        (Some(c), Some(k)) => Some(c.store(k, &truth)?),
-        _ => None,
-    };
-    Ok((truth, Source::Computed(stored)))
+}
+
+/// [`compute`] while a thread beats `claim` every `interval`; the claim is handed back
+/// (to be dropped, which releases it, once the truth is stored).
+fn compute_beating(
+    scene: &Scene,
+    points: &Points,
+    settings: &TruthSettings,
+    progress: &(dyn Fn(Progress) + Sync),
+    claim: Claim,
+    interval: Duration,
+) -> (Result<Truth, TruthError>, Option<Claim>) {
+    let (stop, stopped) = std::sync::mpsc::channel::<()>();
+    std::thread::scope(|s| {
+        let beating = s.spawn(move || {
+            let mut claim = claim;
+            while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) = stopped.recv_timeout(interval) {
+                // a beat that fails (a full disk) only lets waiters take over sooner
+                let _ = claim.beat();
+            }
+            claim
+        });
+        let vis = Visibility::new(scene);
+        let truth = compute(scene, &vis, points, settings, progress);
+        drop(stop);
+        (truth, beating.join().ok())
+    })
 }

@@ -8,17 +8,21 @@ use std::process::{Command, Output};
 mod common;
 use common::{root, temp_dir};
 
-fn sshc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sshc"))
-        .args(args)
+/// `sshc ARGS` from the repository's root, on lavapipe's two threads.
+fn command(args: &[&str]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_sshc"));
+    c.args(args)
         .current_dir(root())
         .env("LP_NUM_THREADS", std::env::var("LP_NUM_THREADS").unwrap_or_else(|_| "2".into()))
         .env(
             "XDG_RUNTIME_DIR",
             std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| "/tmp".into()),
-        )
-        .output()
-        .expect("the sshc binary runs")
+        );
+    c
+}
+
+fn sshc(args: &[&str]) -> Output {
+    command(args).output().expect("the sshc binary runs")
 }
 
 /// Runs `sshc` and returns its standard output; fails with its output when it fails.
@@ -1244,5 +1248,81 @@ fn render_dump_writes_debug_outputs_as_pfm_and_png() {
         depths.iter().fold((f32::MAX, f32::MIN), |a, d| (a.0.min(*d), a.1.max(*d)))
     );
     assert!(dump.join("debug_depth.png").is_file() && dump.join("visibility.pfm").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Two `sshc truth` processes fill the same key of one cache folder at once (as two tasks
+/// of a cluster do on a shared filesystem): one claims the key and computes, the other
+/// waits for it and reads the stored truth. Both write the same truth, the cache holds
+/// one whole record and nothing else (no claim, temporary or beat file), and the truth is
+/// computed once. Then a claim that stands still (an owner on another host that stopped
+/// beating) is taken over after `--claim-stale` seconds.
+#[test]
+fn two_truth_commands_at_once_compute_the_truth_once_and_share_it() {
+    let dir = temp_dir("truth-race");
+    let cache = dir.join("cache");
+    // about 3 s of ray casting, well beyond the time the second process takes to start
+    let truth = |name: &str, extra: &[&str]| -> Command {
+        let (cache, out) = (cache.to_str().unwrap(), dir.join(format!("{name}.pfm")));
+        let mut args = vec!["truth", "--scene", "scenes/triangle.ron", "--size", "48x48"];
+        args.extend(["--samples", "4096", "--runs", "4", "--cache", cache, "-o", out.to_str().unwrap()]);
+        args.extend(extra);
+        command(&args)
+    };
+    let spawn = |name: &str| {
+        truth(name, &[])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("sshc starts")
+    };
+    let (a, b) = (spawn("a"), spawn("b"));
+    let text = |c: std::process::Child| {
+        let o = c.wait_with_output().unwrap();
+        let t = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        assert!(o.status.success(), "{t}");
+        t
+    };
+    let (ta, tb) = (text(a), text(b));
+    let computed = [&ta, &tb].iter().filter(|t| t.contains("truth: computed, cached in")).count();
+    let read = [&ta, &tb].iter().filter(|t| t.contains("truth: read from the cache")).count();
+    assert_eq!((computed, read), (1, 1), "one computes, one reads:\n{ta}\n---\n{tb}");
+    let waited = if ta.contains("truth: read from the cache") { &ta } else { &tb };
+    assert!(
+        waited.contains("truth: waiting for host ") && waited.contains(", which is computing this truth"),
+        "the reader waited for the claim's owner:\n{waited}"
+    );
+    let (va, vb) = (read_pfm(&dir.join("a.pfm")), read_pfm(&dir.join("b.pfm")));
+    assert_eq!(va.data, vb.data, "the same truth");
+    let files: Vec<String> = std::fs::read_dir(&cache)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        files.len() == 1 && files[0].ends_with(".ron"),
+        "one record and nothing else: {files:?}"
+    );
+    let key = u128::from_str_radix(files[0].trim_end_matches(".ron"), 16).unwrap();
+    let record = sshc_lab::truth::TruthCache::new(&cache).load(sshc_lab::truth::CacheKey(key));
+    assert!(
+        matches!(record, sshc_lab::truth::CacheLookup::Hit(_)),
+        "the record is whole: {record:?}"
+    );
+
+    // A claim on another host whose beats stopped: taken over after 1 s, then computed.
+    std::fs::remove_file(cache.join(&files[0])).unwrap();
+    let claim = cache.join(files[0].replace(".ron", ".claim"));
+    std::fs::write(&claim, "host=elsewhere pid=1 since=0\nbeat=3\n").unwrap();
+    let start = std::time::Instant::now();
+    let o = truth("c", &["--claim-stale", "1"]).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{out}{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("truth: computed, cached in"), "{out}");
+    assert!(
+        start.elapsed().as_secs_f64() >= 1.0,
+        "the stale claim was waited on for its stale time"
+    );
+    assert_eq!(read_pfm(&dir.join("c.pfm")).data, va.data);
+    assert!(!claim.exists(), "the claim taken over is released");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -3,41 +3,84 @@
 //! `precision:NAMES` and `schedule:PASS` or `schedule:*`, as the command line's
 //! `--precision` and `--schedule`), timed (median of repeated frames, as a ratio to a reference
 //! technique timed in the same run) and compared with the cached ground truth; a CSV, a
-//! Markdown table and Pareto charts (error against time, error against memory).
+//! Markdown table and Pareto charts (error against time, error against memory:
+//! [`report`]).
 //!
 //! `--shard i/n` runs every n-th configuration starting at i; every shard times the
 //! reference technique on each of its scenes, so time ratios from separate shards (run on
-//! separate machines by any batch scheduler) stay comparable, and their CSVs merge by
-//! concatenation (drop the header lines after the first).
+//! separate machines by any batch scheduler) stay comparable. Every run, sharded or not,
+//! keeps its folder resumable ([`shard`]): each configuration's row is written as it
+//! finishes, and the same command run again carries on from there. `sshc sweep merge`
+//! ([`merge`]) joins the shard folders into what an unsharded run writes; `--slurm`
+//! ([`slurm`]) writes the job scripts that run the shards as a Slurm array and then the
+//! merge (docs/cluster.md).
 
+pub mod merge;
+pub mod report;
+pub mod shard;
+pub mod slurm;
+
+use crate::cmd::sweep::report::{Outputs, PixelSet, Row, split_entry, stem};
+use crate::cmd::sweep::shard::{Done, Log, Manifest, Record};
 use crate::metrics;
 use crate::scene::Light;
 use crate::session::{TruthOpts, load_scene, positions_normals, rt, truth_at};
 use crate::session::{read, report};
 use indexmap::IndexMap;
-use plotters::prelude::*;
 use serde::Deserialize;
 use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
 use sshc_runtime::graph::PassGraph;
-use std::fmt::Write as _;
+use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// `sshc sweep`: a sweep file run (or its Slurm scripts written), or `merge` of shards.
+#[derive(clap::Args)]
+#[command(
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    override_usage = "sshc sweep [OPTIONS] <SWEEP>\n       sshc sweep <SWEEP> --slurm --shards <N> -o <OUT> [OPTIONS]\n       sshc sweep merge <DIR>... -o <OUT>",
+    after_help = "`sshc sweep merge` is the merge: a word first, before any option. A sweep file named `merge` is run as `sshc sweep ./merge`. (docs/cluster.md)"
+)]
+pub struct SweepCommand {
+    #[command(subcommand)]
+    action: Option<Action>,
+    #[command(flatten)]
+    run: SweepArgs,
+}
+
+#[derive(clap::Subcommand)]
+enum Action {
+    /// Merge the folders of a sweep's shards (`--shard i/n -o DIR`) into what an unsharded
+    /// run writes: sweep.csv, sweep.md and the charts. Refuses, naming the shard, a missing
+    /// or duplicate shard, shards of different sweeps or code, and an unfinished shard.
+    Merge(merge::MergeArgs),
+}
 
 #[derive(clap::Args)]
 pub struct SweepArgs {
     /// The sweep file (RON): scenes, a reference technique and techniques with their axes.
-    sweep: PathBuf,
-    /// Output folder: sweep.csv, sweep.md and the Pareto charts (SVG and PNG).
+    #[arg(required = true)]
+    sweep: Option<PathBuf>,
+    /// Output folder: sweep.csv, sweep.md and the Pareto charts (SVG and PNG), and what
+    /// resumes the run (shard.ron, records.ron).
     #[arg(short, long, default_value = "out/sweep")]
     out: PathBuf,
     /// Run one slice of the configurations: `i/n` runs those whose index is i modulo n.
     #[arg(long, value_parser = shard, default_value = "0/1")]
     shard: (usize, usize),
+    /// Measure everything again: forget the rows of an earlier run in the output folder
+    /// (by default a run carries on from them).
+    #[arg(long)]
+    fresh: bool,
     #[command(flatten)]
     truth: TruthOpts,
     /// Cascades for every configuration (each scene file's `cascades:` otherwise): see
     /// `sshc render --help`. The reference technique is timed with them too.
     #[command(flatten)]
     cascading: crate::bind::Cascading,
+    #[command(flatten)]
+    slurm: slurm::SlurmArgs,
 }
 
 fn shard(s: &str) -> Result<(usize, usize), String> {
@@ -77,31 +120,6 @@ struct SweepFile {
     /// scene needs an object with `casts: false`). The CSV has every set's figures.
     #[serde(default)]
     pixels: PixelSet,
-}
-
-/// The pixel set a sweep's charts rank by.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-enum PixelSet {
-    #[default]
-    Penumbra,
-    ShadowOnGround,
-}
-
-impl PixelSet {
-    /// The RMS error of `r` over this set.
-    fn rms(self, r: &Row) -> f64 {
-        match self {
-            PixelSet::Penumbra => r.acc.penumbra.rms,
-            PixelSet::ShadowOnGround => r.acc.ground.map_or(f64::NAN, |g| g.rms),
-        }
-    }
-
-    fn describe(self) -> &'static str {
-        match self {
-            PixelSet::Penumbra => "RMS error in penumbra (0..255)",
-            PixelSet::ShadowOnGround => "RMS error, shadow on the ground (0..255)",
-        }
-    }
 }
 
 fn default_frames() -> usize {
@@ -228,26 +246,6 @@ fn settings(c: &Config) -> Result<Settings, String> {
     Ok(out)
 }
 
-fn stem(p: &str) -> String {
-    let (path, light) = split_entry(p);
-    let s = Path::new(path)
-        .file_stem()
-        .map(|s| s.to_string_lossy().trim_end_matches(".graph").to_string())
-        .unwrap_or_else(|| path.to_string());
-    match light {
-        Some(k) => format!("{s} light {k}"),
-        None => s,
-    }
-}
-
-/// A scene entry `PATH` or `PATH#k` (light k alone): the path and the light.
-fn split_entry(entry: &str) -> (&str, Option<usize>) {
-    match entry.rsplit_once('#') {
-        Some((path, k)) if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) => (path, k.parse().ok()),
-        _ => (entry, None),
-    }
-}
-
 /// Scale a light's extent (radius, half-extents, segment length about its midpoint,
 /// triangle about its centroid, angular diameter).
 fn scale_light(l: &mut Light, f: f32) {
@@ -258,30 +256,6 @@ fn scale_light(l: &mut Light, f: f32) {
 /// which pixels face the light, and the shadow on the ground (`metrics::ground_set`;
 /// `None` where every object casts).
 type SceneTruth = (Vec<f32>, f64, Vec<bool>, Option<Vec<bool>>);
-
-/// One measured row.
-#[derive(Clone, Debug)]
-struct Row {
-    scene: String,
-    label: String,
-    config: String,
-    shadow_map: u32,
-    light_scale: f64,
-    /// Median GPU ms per frame (all passes), or none for CPU baselines.
-    ms: Option<f64>,
-    reference_ms: Option<f64>,
-    peak_bytes: u64,
-    fetches: f64,
-    ops: f64,
-    acc: metrics::Accuracy,
-    truth_se: f64,
-}
-
-impl Row {
-    fn ratio(&self) -> Option<f64> {
-        Some(self.ms? / self.reference_ms?)
-    }
-}
 
 /// Median of per-frame GPU times (sum over passes) over `frames` frames after a warm-up.
 fn time_frames(ex: &mut Executor, frames: usize) -> Result<Option<f64>, String> {
@@ -368,29 +342,81 @@ fn check_axes(file: &SweepFile) -> Result<(), String> {
     Ok(())
 }
 
-pub fn sweep(a: SweepArgs) -> Result<(), String> {
-    let text = read(&a.sweep)?;
-    let file: SweepFile = ron::from_str(&text).map_err(|e| {
-        format!(
-            "error: {}:{}:{}: {}",
-            a.sweep.display(),
-            e.span.start.line,
-            e.span.start.col,
-            e.code
-        )
-    })?;
-    if file.scenes.is_empty() || (file.techniques.is_empty() && file.stochastic.is_empty()) {
-        return Err(format!("error: {}: a sweep needs scenes and techniques", a.sweep.display()));
+pub fn sweep(c: SweepCommand) -> Result<(), String> {
+    match c.action {
+        Some(Action::Merge(m)) => merge::merge(m),
+        None if c.run.slurm.slurm => write_slurm(c.run),
+        None => run(c.run),
     }
-    check_axes(&file).map_err(|e| format!("error: {}: {e}", a.sweep.display()))?;
-    let base = a.sweep.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let resolve = |p: &str| -> PathBuf { base.join(p) };
+}
+
+/// A sweep file read and checked, with its scenes as entries (`PATH#k` for each light of a
+/// scene of several) and the files it pulls in.
+struct Loaded {
+    path: PathBuf,
+    file: SweepFile,
+    base: PathBuf,
+    /// The sweep file, the reference, the techniques, the scene files and the meshes they
+    /// load, each with the hash of its bytes.
+    inputs: Vec<(String, String)>,
+}
+
+impl Loaded {
+    fn resolve(&self, p: &str) -> PathBuf {
+        self.base.join(p)
+    }
+
+    /// An entry's scene: the file, with light k alone for `PATH#k`.
+    fn scene(&self, entry: &str) -> Result<crate::scene::Scene, String> {
+        let (path, light) = split_entry(entry);
+        let scene = load_scene(&self.resolve(path), self.file.camera, None)?;
+        Ok(match light {
+            Some(k) if k < scene.lights.len() => crate::session::single_light(&scene, k),
+            _ => scene,
+        })
+    }
+}
+
+fn load(path: &Path) -> Result<Loaded, String> {
+    if path == Path::new("merge") && !path.exists() {
+        return Err(
+            "error: cannot read the sweep file `merge`: the merge is `sshc sweep merge DIR... -o OUT`, the word `merge` before any option (a sweep file named merge is `./merge`)"
+                .into(),
+        );
+    }
+    let text = read(path)?;
+    let file: SweepFile =
+        ron::from_str(&text).map_err(|e| format!("error: {}:{}:{}: {}", path.display(), e.span.start.line, e.span.start.col, e.code))?;
+    if file.scenes.is_empty() || (file.techniques.is_empty() && file.stochastic.is_empty()) {
+        return Err(format!("error: {}: a sweep needs scenes and techniques", path.display()));
+    }
+    check_axes(&file).map_err(|e| format!("error: {}: {e}", path.display()))?;
+    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let mut inputs = vec![(
+        path.file_name()
+            .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned()),
+        shard::hash_file(path)?,
+    )];
+    for t in std::iter::once(&file.reference).chain(file.techniques.iter().map(|t| &t.file)) {
+        if !inputs.iter().any(|(n, _)| n == t) {
+            inputs.push((t.clone(), shard::hash_file(&base.join(t))?));
+        }
+    }
     // Several lights: a scene of n lights becomes n entries `PATH#k`, each that
     // light alone (its own truth, metrics and rows).
     let mut file = file;
     let mut entries = Vec::new();
     for path in &file.scenes {
-        let scene = load_scene(&resolve(path), file.camera, None)?;
+        let scene = load_scene(&base.join(path), file.camera, None)?;
+        if !inputs.iter().any(|(n, _)| n == path) {
+            inputs.push((path.clone(), shard::hash_file(&base.join(path))?));
+        }
+        for mesh in scene.files() {
+            let name = mesh.strip_prefix(&base).unwrap_or(mesh).display().to_string();
+            if !inputs.iter().any(|(n, _)| *n == name) {
+                inputs.push((name, shard::hash_file(mesh)?));
+            }
+        }
         if scene.lights.len() > 1 {
             entries.extend((0..scene.lights.len()).map(|k| format!("{path}#{k}")));
         } else {
@@ -398,90 +424,324 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         }
     }
     file.scenes = entries;
-    // an entry's scene: the file, with light k alone for `PATH#k`
-    let load_entry = |entry: &str, camera: Option<(u32, u32)>| -> Result<crate::scene::Scene, String> {
-        let (path, light) = split_entry(entry);
-        let scene = load_scene(&resolve(path), camera, None)?;
-        Ok(match light {
-            Some(k) if k < scene.lights.len() => crate::session::single_light(&scene, k),
-            _ => scene,
-        })
+    let loaded = Loaded {
+        path: path.to_path_buf(),
+        file,
+        base,
+        inputs,
     };
-    if file.pixels == PixelSet::ShadowOnGround {
-        for scene_path in &file.scenes {
-            let scene = load_entry(scene_path, file.camera)?;
+    if loaded.file.pixels == PixelSet::ShadowOnGround {
+        for entry in &loaded.file.scenes {
+            let scene = loaded.scene(entry)?;
             if (0..scene.objects().len()).all(|i| scene.casts(i)) {
                 return Err(format!(
-                    "error: {}: `pixels: ShadowOnGround` needs a ground that casts no shadow, but every object of `{scene_path}` casts; mark the ground `casts: false` or write `pixels: Penumbra`",
-                    a.sweep.display()
+                    "error: {}: `pixels: ShadowOnGround` needs a ground that casts no shadow, but every object of `{entry}` casts; mark the ground `casts: false` or write `pixels: Penumbra`",
+                    path.display()
                 ));
             }
         }
     }
-    let all = configs(&file);
+    Ok(loaded)
+}
+
+/// The options that change what a sweep measures, in words (part of a shard's identity).
+fn measuring_options(t: &TruthOpts, c: &crate::bind::Cascading) -> String {
+    format!(
+        "samples={} runs={} target_se={:?} max_samples={} seed={} cascades={:?} cascade_lambda={:?} cascade_band={:?} no_snap={} cascade_offset={:?}",
+        t.samples, t.runs, t.target_se, t.max_samples, t.seed, c.cascades, c.cascade_lambda, c.cascade_band, c.no_snap, c.cascade_offset
+    )
+}
+
+/// Seconds in words: `42 s`, `12 min`, `3.5 h`.
+fn duration(s: f64) -> String {
+    if s < 120.0 {
+        format!("{s:.0} s")
+    } else if s < 7200.0 {
+        format!("{:.0} min", s / 60.0)
+    } else {
+        format!("{:.1} h", s / 3600.0)
+    }
+}
+
+/// A shard's progress: a bar on a terminal, else (a cluster job's log) a plain line per
+/// configuration with what is done and left and the estimated time left.
+struct Progress {
+    bar: indicatif::ProgressBar,
+    plain: bool,
+    shard: (usize, usize),
+    total: usize,
+    done: usize,
+    ran: usize,
+    start: Instant,
+}
+
+impl Progress {
+    fn new(total: usize, done: usize, shard: (usize, usize)) -> Result<Progress, String> {
+        let bar = indicatif::ProgressBar::new(total as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("sweep [{bar:40}] {pos}/{len} {elapsed_precise} (eta {eta}) {msg}")
+                .map_err(|e| format!("error: {e}"))?
+                .progress_chars("=> "),
+        );
+        bar.set_position(done as u64);
+        Ok(Progress {
+            bar,
+            plain: !std::io::stderr().is_terminal(),
+            shard,
+            total,
+            done,
+            ran: 0,
+            start: Instant::now(),
+        })
+    }
+
+    fn doing(&self, what: &str) {
+        self.bar.set_message(what.to_string());
+    }
+
+    fn did(&mut self, what: &str) {
+        self.done += 1;
+        self.ran += 1;
+        self.bar.inc(1);
+        if self.plain {
+            let left = self.total.saturating_sub(self.done);
+            let spent = self.start.elapsed().as_secs_f64();
+            let eta = spent / self.ran as f64 * left as f64;
+            eprintln!(
+                "sweep {}/{}: {} of {} done, {left} left, {} so far, about {} to go ({what})",
+                self.shard.0,
+                self.shard.1,
+                self.done,
+                self.total,
+                duration(spent),
+                duration(eta)
+            );
+        }
+    }
+}
+
+/// What the output folder holds for `new`, the manifest of the run about to start: the
+/// rows done by an earlier run of the same shard (same sweep, code and device), or none
+/// when it starts afresh (saying why). A folder of another shard is refused without
+/// `--fresh`.
+fn resume(out: &Path, new: &Manifest, fresh: bool) -> Result<(Done, Vec<shard::Run>), String> {
+    let old = match shard::read_manifest(out) {
+        Ok(m) => m,
+        Err(e) if fresh => {
+            eprintln!("sweep: {} (starting afresh: --fresh)", e.trim_start_matches("error: "));
+            None
+        }
+        Err(e) => {
+            return Err(format!(
+                "{e}\nerror: pass --fresh to measure the sweep there afresh, or name another folder"
+            ));
+        }
+    };
+    let forget = || -> Result<(), String> {
+        let records = out.join(shard::RECORDS);
+        match std::fs::remove_file(&records) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(format!("error: {}: {e}", records.display())),
+            _ => Ok(()),
+        }
+    };
+    let Some(old) = old else {
+        forget()?;
+        return Ok((Done::default(), Vec::new()));
+    };
+    let (i, n) = new.shard;
+    if old.shard != new.shard && !fresh {
+        return Err(format!(
+            "error: {} holds shard {}/{} of {}, not shard {i}/{n}: name another folder, or pass --fresh to measure shard {i}/{n} there instead",
+            out.display(),
+            old.shard.0,
+            old.shard.1,
+            old.sweep
+        ));
+    }
+    if fresh {
+        eprintln!("sweep: {}: forgetting the rows of its earlier runs (--fresh)", out.display());
+        forget()?;
+        return Ok((Done::default(), Vec::new()));
+    }
+    if let Some(why) = new.differs_from(&old) {
+        eprintln!("sweep: {} holds shard {i}/{n} of {why}: starting afresh", out.display());
+        forget()?;
+        return Ok((Done::default(), Vec::new()));
+    }
+    let (done, cut) = shard::read_records(out, true)?;
+    if cut {
+        eprintln!("sweep: dropped the half-written last record of a stopped run");
+    }
+    Ok((done, old.runs))
+}
+
+fn run(a: SweepArgs) -> Result<(), String> {
+    // the run's wall time, recorded in the manifest: from here (before the sweep file is
+    // read and the device opened) to its outputs written
+    let start = Instant::now();
+    let sweep_path = a.sweep.clone().ok_or("error: name a sweep file")?;
+    let l = load(&sweep_path)?;
+    let file = &l.file;
+    let all = configs(file);
     let (si, sn) = a.shard;
-    let mine: Vec<Config> = all
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| i % sn == si)
-        .map(|(_, c)| c.clone())
-        .collect();
+    // (index in the whole sweep, configuration)
+    let mine: Vec<(usize, Config)> = all.iter().cloned().enumerate().filter(|(i, _)| i % sn == si).collect();
+    // CPU baselines, in shard 0: (index, scene entry, samples), after every configuration
+    let baselines: Vec<(usize, usize, u32)> = if si == 0 {
+        (0..file.scenes.len())
+            .flat_map(|sc| file.stochastic.iter().map(move |&n| (sc, n)))
+            .enumerate()
+            .map(|(k, (sc, n))| (all.len() + k, sc, n))
+            .collect()
+    } else {
+        Vec::new()
+    };
     let gpu = Gpu::new().map_err(rt)?;
     let device = gpu.describe();
     // charts name the device briefly: the adapter's name
     let short = gpu.info.name.clone();
-    eprintln!(
-        "sweep: {} configurations ({} in shard {si}/{sn}) on {device}",
-        all.len(),
-        mine.len()
-    );
-    let sources: Vec<String> = file.techniques.iter().map(|t| read(&resolve(&t.file))).collect::<Result<_, _>>()?;
-    let bar = indicatif::ProgressBar::new((mine.len() + file.scenes.len() * file.stochastic.len()) as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("sweep [{bar:40}] {pos}/{len} {elapsed_precise} (eta {eta}) {msg}")
-            .map_err(|e| format!("error: {e}"))?
-            .progress_chars("=> "),
-    );
-    let mut rows = Vec::new();
-    // the scene index of each row
-    let mut row_scenes: Vec<usize> = Vec::new();
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("error: {}: {e}", a.out.display()))?;
+    let options = measuring_options(&a.truth, &a.cascading);
+    let mut manifest = Manifest {
+        format: shard::FORMAT,
+        sweep: sweep_path.display().to_string(),
+        identity: shard::identity(&l.inputs, &options),
+        inputs: l.inputs.clone(),
+        options,
+        code: shard::code()?,
+        shard: a.shard,
+        device: (device.clone(), short),
+        reference: file.reference.clone(),
+        pixels: file.pixels,
+        scenes: file.scenes.clone(),
+        configurations: all.len(),
+        baselines: file.scenes.len() * file.stochastic.len(),
+        rows: mine.len() + baselines.len(),
+        finished: false,
+        runs: Vec::new(),
+    };
+    let (done, runs) = resume(&a.out, &manifest, a.fresh)?;
+    let todo: Vec<&(usize, Config)> = mine.iter().filter(|(i, _)| !done.rows.contains_key(i)).collect();
+    let todo_baselines: Vec<&(usize, usize, u32)> = baselines.iter().filter(|(i, ..)| !done.rows.contains_key(i)).collect();
+    let left = todo.len() + todo_baselines.len();
+    // this shard's rows done (`records.ron` holds no others unless it was edited)
+    let finished_rows = manifest.rows - left;
+    if finished_rows == 0 {
+        eprintln!(
+            "sweep: {} configurations ({} in shard {si}/{sn}) on {device}",
+            all.len(),
+            mine.len()
+        );
+    } else {
+        eprintln!(
+            "sweep: resuming shard {si}/{sn} in {}: {} of its {} rows done by an earlier run, skipped; {} left, on {device}",
+            a.out.display(),
+            finished_rows,
+            manifest.rows,
+            left
+        );
+    }
+    manifest.runs = runs;
+    let nothing_left = left == 0;
+    if nothing_left {
+        manifest.finished = true;
+        eprintln!("sweep: nothing left to measure (--fresh measures again); writing the outputs");
+    } else {
+        manifest.runs.push(shard::Run {
+            host: crate::claim::host(),
+            pid: std::process::id(),
+            started: crate::claim::unix_now(),
+            resumed_at: finished_rows,
+            seconds: None,
+        });
+        shard::write_manifest(&a.out, &manifest)?;
+        measure(&a, &l, &gpu, &todo, &todo_baselines, finished_rows, manifest.rows)?;
+        manifest.finished = true;
+    }
+    // the outputs from what the folder holds, as the merge reads it
+    let (done, _) = shard::read_records(&a.out, false)?;
+    if done.rows.len() != manifest.rows {
+        return Err(format!(
+            "error: {}: {} rows are recorded for the shard's {}: the file was changed; run again with --fresh",
+            a.out.join(shard::RECORDS).display(),
+            done.rows.len(),
+            manifest.rows
+        ));
+    }
+    report::write(
+        &a.out,
+        &Outputs {
+            rows: &done.gathered(&manifest),
+            scenes: &file.scenes,
+            reference: &file.reference,
+            pixels: file.pixels,
+        },
+    )?;
+    if let (Some(r), false) = (manifest.runs.last_mut(), nothing_left) {
+        r.seconds = Some(start.elapsed().as_secs_f64());
+    }
+    shard::write_manifest(&a.out, &manifest)
+}
+
+/// Measures the configurations and CPU baselines `todo` (indices in the whole sweep),
+/// appending each row to the folder's records as it is done, and each timing of the
+/// reference.
+fn measure(
+    a: &SweepArgs,
+    l: &Loaded,
+    gpu: &Gpu,
+    todo: &[&(usize, Config)],
+    todo_baselines: &[&(usize, usize, u32)],
+    done: usize,
+    total: usize,
+) -> Result<(), String> {
+    let file = &l.file;
+    let mut log = Log::open(&a.out)?;
+    let sources: Vec<String> = file
+        .techniques
+        .iter()
+        .map(|t| read(&l.resolve(&t.file)))
+        .collect::<Result<_, _>>()?;
+    let mut progress = Progress::new(total, done, a.shard)?;
     // truths by (scene, light scale)
     let mut truths: Vec<((usize, String), SceneTruth)> = Vec::new();
     // The reference is timed on each scene before the first configuration, after every
     // `RETIME` configurations and after the last; its time is the median of those, so that
     // a machine that speeds up or slows down during the shard moves the ratios less. Each
     // timing builds a fresh executor, as every configuration does (a long-lived one keeps
-    // its memory warm and reads faster on a CPU driver).
+    // its memory warm and reads faster on a CPU driver). A resumed shard adds its timings
+    // to those recorded before it stopped.
     const RETIME: usize = 12;
-    let reference_source = read(&resolve(&file.reference))?;
-    type ReferenceRun = (sshc::Compiled, Vec<f64>, crate::scene::Scene);
-    let mut reference_runs: Vec<Option<ReferenceRun>> = Vec::new();
-    for (si_, scene_path) in file.scenes.iter().enumerate() {
-        let touches = mine.iter().any(|c| c.scene == si_) || !file.stochastic.is_empty();
-        if !touches {
-            reference_runs.push(None);
-            continue;
+    let reference_source = read(&l.resolve(&file.reference))?;
+    type ReferenceRun = (usize, sshc::Compiled, crate::scene::Scene);
+    let mut reference_runs: Vec<ReferenceRun> = Vec::new();
+    for (sc, entry) in file.scenes.iter().enumerate() {
+        let touches = todo.iter().any(|(_, c)| c.scene == sc) || !file.stochastic.is_empty();
+        if touches {
+            let scene = l.scene(entry)?;
+            crate::bind::check_cascades(&scene, &a.cascading)?;
+            let c = compile(&l.resolve(&file.reference), &reference_source, &[], &[], &[])?;
+            reference_runs.push((sc, c, scene));
         }
-        let scene = load_entry(scene_path, file.camera)?;
-        crate::bind::check_cascades(&scene, &a.cascading)?;
-        let c = compile(&resolve(&file.reference), &reference_source, &[], &[], &[])?;
-        reference_runs.push(Some((c, Vec::new(), scene)));
     }
-    let time_references = |runs: &mut Vec<Option<ReferenceRun>>| -> Result<(), String> {
-        for (c, times, scene) in runs.iter_mut().flatten() {
-            let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).map_err(rt)?;
+    let time_references = |log: &mut Log| -> Result<(), String> {
+        for (sc, c, scene) in &reference_runs {
+            let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(rt)?;
             a.cascading.bind_or_scene(&mut ex, scene, false)?;
-            times.extend(time_frames(&mut ex, file.frames)?);
+            if let Some(ms) = time_frames(&mut ex, file.frames)? {
+                log.append(&Record::Reference { scene: *sc, ms })?;
+            }
         }
         Ok(())
     };
-    time_references(&mut reference_runs)?;
-    for (ci, c) in mine.iter().enumerate() {
-        if ci > 0 && ci % RETIME == 0 {
-            time_references(&mut reference_runs)?;
+    time_references(&mut log)?;
+    for (ran, (index, c)) in todo.iter().map(|x| (x.0, &x.1)).enumerate() {
+        if ran > 0 && ran % RETIME == 0 {
+            time_references(&mut log)?;
         }
-        bar.set_message(format!("{} {} {}", stem(&file.scenes[c.scene]), c.label, c.describe()));
-        let mut scene = load_entry(&file.scenes[c.scene], file.camera)?;
+        let what = format!("{} {} {}", stem(&file.scenes[c.scene]), c.label, c.describe());
+        progress.doing(&what);
+        let mut scene = l.scene(&file.scenes[c.scene])?;
         let Settings {
             shadow_map,
             light_scale,
@@ -503,14 +763,14 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         }
         // The axes change the shadow map and the light: the precision budget again.
         scene.check_precision().map_err(|e| e.to_string())?;
-        let path = resolve(&file.techniques[c.technique].file);
+        let path = l.resolve(&file.techniques[c.technique].file);
         // specialised for the scene's light where the technique admits it
-        let scene_path = resolve(split_entry(&file.scenes[c.scene]).0);
+        let scene_path = l.resolve(split_entry(&file.scenes[c.scene]).0);
         // (generic under cascades: their views are not the scene's)
         let facts = crate::session::scene_facts(&scene_path, &scene)
             .filter(|f| sshc::admits(&sources[c.technique], f.light) && !cascading.on(&scene));
         let compiled = compile_for(&path, &sources[c.technique], &set, &precision, &schedule, facts)?;
-        let mut ex = Executor::new(&gpu, compiled.graph, compiled.shaders).map_err(rt)?;
+        let mut ex = Executor::new(gpu, compiled.graph, compiled.shaders).map_err(rt)?;
         crate::bind::check_cascades(&scene, &cascading)?;
         cascading.bind_or_scene(&mut ex, &scene, false)?;
         let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
@@ -523,7 +783,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
             Some((_, t)) => t.clone(),
             None => {
                 let (p, n) = positions_normals(&ex)?;
-                let (t, _) = bar.suspend(|| truth_at(&scene, &p, &n, &a.truth))?;
+                let (t, _) = progress.bar.suspend(|| truth_at(&scene, &p, &n, &a.truth))?;
                 let facing = metrics::facing_light(&p, &n, &scene.lights[0]).unwrap_or_default();
                 let ground = metrics::ground_set(&scene, &t.visibility, &p, &facing).map_err(|e| format!("error: {e}"))?;
                 (t.visibility.clone(), t.max_std_error() as f64, facing, ground)
@@ -537,123 +797,189 @@ pub fn sweep(a: SweepArgs) -> Result<(), String> {
         if let Some(g) = &ground {
             acc.ground = Some(metrics::error_stats(&vis, &truth, g).map_err(|e| format!("error: {e}"))?);
         }
-        rows.push(Row {
+        let row = Row {
             scene: stem(&file.scenes[c.scene]),
             label: c.label.clone(),
             config: c.describe(),
             shadow_map: scene.shadow_map,
             light_scale,
             ms,
-            reference_ms: None,
             peak_bytes: peak,
             fetches,
             ops,
             acc,
             truth_se: se,
-        });
-        row_scenes.push(c.scene);
-        bar.inc(1);
+            reference_ms: None,
+            shard: a.shard,
+            device: Default::default(),
+        };
+        log.append(&Record::Row {
+            index,
+            scene: c.scene,
+            row: Box::new(row),
+        })?;
+        progress.did(&what);
     }
-    time_references(&mut reference_runs)?;
+    if !todo.is_empty() || !reference_runs.is_empty() {
+        time_references(&mut log)?;
+    }
     // CPU baselines: n light samples per pixel, one run, against the truth
-    if si == 0 {
-        for (sc, scene_path) in file.scenes.iter().enumerate() {
-            for &n in &file.stochastic {
-                let scene = load_entry(scene_path, file.camera)?;
-                let c = compile(&resolve(&file.reference), &reference_source, &[], &[], &[])?;
-                let mut ex = Executor::new(&gpu, c.graph, c.shaders).map_err(rt)?;
-                crate::bind::bind_scene(&mut ex, &scene, false)?;
-                ex.run_frame().map_err(rt)?;
-                let (p, nrm) = positions_normals(&ex)?;
-                let (truth, _) = bar.suspend(|| truth_at(&scene, &p, &nrm, &a.truth))?;
-                let vis = crate::visibility::Visibility::new(&scene);
-                // the visibility query takes samples per axis (an n x n stratified grid)
-                let per_axis = crate::truth::strata(n);
-                let n = per_axis * per_axis;
-                let est = vis.visible_fractions_seeded(&p, &nrm, &scene.lights[0], per_axis, 0x5eed_0000 + n as u64);
-                let est: Vec<f32> = est.iter().zip(&p).map(|(v, p)| if p.is_finite() { *v } else { 1.0 }).collect();
-                let facing = metrics::facing_light(&p, &nrm, &scene.lights[0]).unwrap_or_default();
-                let mut acc = metrics::accuracy(&est, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;
-                if let Some(g) = metrics::ground_set(&scene, &truth.visibility, &p, &facing).map_err(|e| format!("error: {e}"))? {
-                    acc.ground = Some(metrics::error_stats(&est, &truth.visibility, &g).map_err(|e| format!("error: {e}"))?);
-                }
-                rows.push(Row {
-                    scene: stem(&file.scenes[sc]),
-                    label: format!("{n} samples (CPU)"),
-                    config: format!("samples={n}"),
-                    shadow_map: 0,
-                    light_scale: 1.0,
-                    ms: None,
-                    reference_ms: None,
-                    peak_bytes: 0,
-                    fetches: 0.0,
-                    ops: 0.0,
-                    acc,
-                    truth_se: truth.max_std_error() as f64,
-                });
-                row_scenes.push(sc);
-                bar.inc(1);
-            }
+    for &&(index, sc, n) in todo_baselines {
+        let scene = l.scene(&file.scenes[sc])?;
+        let c = compile(&l.resolve(&file.reference), &reference_source, &[], &[], &[])?;
+        let mut ex = Executor::new(gpu, c.graph, c.shaders).map_err(rt)?;
+        crate::bind::bind_scene(&mut ex, &scene, false)?;
+        ex.run_frame().map_err(rt)?;
+        let (p, nrm) = positions_normals(&ex)?;
+        let (truth, _) = progress.bar.suspend(|| truth_at(&scene, &p, &nrm, &a.truth))?;
+        let vis = crate::visibility::Visibility::new(&scene);
+        // the visibility query takes samples per axis (an n x n stratified grid)
+        let per_axis = crate::truth::strata(n);
+        let n = per_axis * per_axis;
+        let est = vis.visible_fractions_seeded(&p, &nrm, &scene.lights[0], per_axis, 0x5eed_0000 + n as u64);
+        let est: Vec<f32> = est.iter().zip(&p).map(|(v, p)| if p.is_finite() { *v } else { 1.0 }).collect();
+        let facing = metrics::facing_light(&p, &nrm, &scene.lights[0]).unwrap_or_default();
+        let mut acc = metrics::accuracy(&est, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;
+        if let Some(g) = metrics::ground_set(&scene, &truth.visibility, &p, &facing).map_err(|e| format!("error: {e}"))? {
+            acc.ground = Some(metrics::error_stats(&est, &truth.visibility, &g).map_err(|e| format!("error: {e}"))?);
+        }
+        let row = Row {
+            scene: stem(&file.scenes[sc]),
+            label: format!("{n} samples (CPU)"),
+            config: format!("samples={n}"),
+            shadow_map: 0,
+            light_scale: 1.0,
+            ms: None,
+            peak_bytes: 0,
+            fetches: 0.0,
+            ops: 0.0,
+            acc,
+            truth_se: truth.max_std_error() as f64,
+            reference_ms: None,
+            shard: a.shard,
+            device: Default::default(),
+        };
+        let what = format!("{} {}", row.scene, row.label);
+        log.append(&Record::Row {
+            index,
+            scene: sc,
+            row: Box::new(row),
+        })?;
+        progress.did(&what);
+    }
+    progress.bar.finish_and_clear();
+    Ok(())
+}
+
+/// `--slurm`: the job scripts of the sweep in `--shards` array tasks (after checking the
+/// sweep file as a run would, so that a mistake shows before anything is submitted).
+fn write_slurm(a: SweepArgs) -> Result<(), String> {
+    let sweep_path = a.sweep.clone().ok_or("error: name a sweep file")?;
+    let n = a
+        .slurm
+        .shards
+        .ok_or("error: --slurm needs --shards N, the number of array tasks (one shard each)")?;
+    let l = load(&sweep_path)?;
+    let rows = configs(&l.file).len();
+    if n == 0 || n > rows.max(1) {
+        return Err(format!(
+            "error: --shards {n}: the sweep has {rows} configurations; give 1 to {} shards",
+            rows.max(1)
+        ));
+    }
+    let s = &a.slurm;
+    for (option, value) in [
+        ("--partition", &s.partition),
+        ("--gres", &s.gres),
+        ("--time", &s.time),
+        ("--mem", &s.mem),
+    ] {
+        if let Some(v) = value {
+            slurm::check_value(option, v)?;
         }
     }
-    bar.finish_and_clear();
-    let medians: Vec<Option<f64>> = reference_runs
-        .iter()
-        .map(|r| {
-            r.as_ref().and_then(|(_, t, _)| {
-                let mut t = t.clone();
-                t.sort_by(f64::total_cmp);
-                t.get(t.len() / 2).copied()
-            })
-        })
-        .collect();
-    for (row, &sc) in rows.iter_mut().zip(&row_scenes) {
-        row.reference_ms = medians[sc];
+    let absolute = |p: &Path| std::path::absolute(p).map_err(|e| format!("error: {}: {e}", p.display()));
+    let out = absolute(&a.out)?;
+    let out_text = out.display().to_string();
+    if out_text.chars().any(|c| !(c.is_ascii_alphanumeric() || "/._-+=:,@".contains(c))) {
+        return Err(format!(
+            "error: `-o {out_text}`: the scripts name the output folder in #SBATCH lines, which read no quotes: choose a path of letters, digits and `/._-+=:,@`"
+        ));
     }
-    std::fs::create_dir_all(&a.out).map_err(|e| format!("error: {}: {e}", a.out.display()))?;
-    let write = |name: &str, text: &str| -> Result<(), String> {
-        let p = a.out.join(name);
-        std::fs::write(&p, text).map_err(|e| format!("error: {}: {e}", p.display()))?;
-        println!("wrote {}", p.display());
-        Ok(())
+    let sshc = match &s.sshc {
+        Some(p) => absolute(p)?,
+        None => std::env::current_exe().map_err(|e| format!("error: cannot find this executable: {e}"))?,
     };
-    write("sweep.csv", &csv(&rows, &device, a.shard))?;
-    write("sweep.md", &markdown(&rows, &device, &file.reference, file.pixels))?;
-    for scene in file.scenes.iter().map(|s| stem(s)) {
-        let these: Vec<&Row> = rows.iter().filter(|r| r.scene == scene).collect();
-        if these.iter().all(|r| r.ms.is_none()) {
-            continue;
-        }
-        for (what, x_of, x_label) in [
-            (
-                "time",
-                (|r: &Row| r.ratio()) as fn(&Row) -> Option<f64>,
-                "GPU time per frame / reference technique's",
-            ),
-            (
-                "memory",
-                |r: &Row| (r.ms.is_some()).then_some(r.peak_bytes as f64 / (1 << 20) as f64),
-                "peak memory (MiB)",
-            ),
-        ] {
-            for ext in ["svg", "png"] {
-                let p = a.out.join(format!("pareto-{scene}-{what}.{ext}"));
-                let set = match file.pixels {
-                    PixelSet::Penumbra => "penumbra",
-                    PixelSet::ShadowOnGround => "shadow-on-ground",
-                };
-                pareto(
-                    &p,
-                    &these,
-                    x_of,
-                    x_label,
-                    file.pixels,
-                    &format!("{scene}: RMS {set} error vs {what} on {short}"),
-                )?;
-                println!("wrote {}", p.display());
-            }
-        }
+    let sweep = absolute(&sweep_path)?;
+    // each shard's options: the truth's (the cache on the shared folder) and the cascades'
+    let t = &a.truth;
+    let mut options: Vec<String> = vec!["--samples".into(), t.samples.to_string(), "--runs".into(), t.runs.to_string()];
+    if let Some(se) = t.target_se {
+        options.extend([
+            "--target-se".into(),
+            se.to_string(),
+            "--max-samples".into(),
+            t.max_samples.to_string(),
+        ]);
     }
+    options.extend(["--seed".into(), t.seed.to_string()]);
+    if t.no_cache {
+        options.push("--no-cache".into());
+    } else {
+        let cache = if t.cache == Path::new(crate::truth::TruthCache::DEFAULT_DIR) {
+            out.join("truth-cache")
+        } else {
+            absolute(&t.cache)?
+        };
+        options.extend([
+            "--cache".into(),
+            cache.display().to_string(),
+            "--claim-stale".into(),
+            t.claim_stale.to_string(),
+        ]);
+    }
+    let c = &a.cascading;
+    if let Some(n) = c.cascades {
+        options.extend(["--cascades".into(), n.to_string()]);
+    }
+    if let Some(x) = c.cascade_lambda {
+        options.extend(["--cascade-lambda".into(), x.to_string()]);
+    }
+    if let Some(x) = c.cascade_band {
+        options.extend(["--cascade-band".into(), x.to_string()]);
+    }
+    if c.no_snap {
+        options.push("--no-snap".into());
+    }
+    if let Some([x, y, z]) = c.cascade_offset {
+        options.extend(["--cascade-offset".into(), format!("{x},{y},{z}")]);
+    }
+    let job = slurm::Job {
+        sshc: &sshc,
+        sweep: &sweep,
+        out: &out,
+        shards: n,
+        options: &options,
+        slurm: s,
+    };
+    let logs = out.join("logs");
+    std::fs::create_dir_all(&logs).map_err(|e| format!("error: {}: {e}", logs.display()))?;
+    for (name, text) in slurm::scripts(&job) {
+        let p = out.join(name);
+        std::fs::write(&p, text).map_err(|e| format!("error: {}: {e}", p.display()))?;
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt as _;
+            std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o755)).map_err(|e| format!("error: {}: {e}", p.display()))?;
+        }
+        println!("wrote {}", p.display());
+    }
+    println!(
+        "{} configurations of {} in {n} shards; submit with {}/submit.sh (the merge writes {out_text}/sweep.csv)",
+        rows,
+        l.path.display(),
+        out_text
+    );
     Ok(())
 }
 
@@ -689,204 +1015,9 @@ fn compile_for(
     })
 }
 
-fn opt(v: Option<f64>, digits: usize) -> String {
-    v.map(|x| format!("{x:.digits$}")).unwrap_or_default()
-}
-
-fn csv(rows: &[Row], device: &str, (si, sn): (usize, usize)) -> String {
-    let mut s = String::from(
-        "shard,device,scene,technique,config,shadow_map,light_scale,gpu_ms,reference_ms,time_ratio,peak_bytes,fetches,ops,rms_facing,max_facing,rms_penumbra,max_penumbra,facing_pixels,penumbra_pixels,truth_max_se,rms_ground,max_ground,ground_pixels\n",
-    );
-    for r in rows {
-        let _ = writeln!(
-            s,
-            "{si}/{sn},\"{device}\",{},{},\"{}\",{},{},{},{},{},{},{:.0},{:.0},{:.3},{:.3},{:.3},{:.3},{},{},{:.5},{},{},{}",
-            r.scene,
-            r.label,
-            r.config,
-            r.shadow_map,
-            r.light_scale,
-            opt(r.ms, 4),
-            opt(r.reference_ms, 4),
-            opt(r.ratio(), 4),
-            r.peak_bytes,
-            r.fetches,
-            r.ops,
-            r.acc.facing.rms,
-            r.acc.facing.max,
-            r.acc.penumbra.rms,
-            r.acc.penumbra.max,
-            r.acc.facing.pixels,
-            r.acc.penumbra.pixels,
-            r.truth_se,
-            opt(r.acc.ground.map(|g| g.rms), 3),
-            opt(r.acc.ground.map(|g| g.max), 3),
-            r.acc.ground.map(|g| g.pixels.to_string()).unwrap_or_default(),
-        );
-    }
-    s
-}
-
-fn markdown(rows: &[Row], device: &str, reference: &str, pixels: PixelSet) -> String {
-    let mut s = format!(
-        "Device: {device}. Errors in 0..255 units against the ground truth (RMS over pixels facing the light, and over penumbra pixels{}); time as a ratio to `{reference}` timed in the same run (median of repeated frames).\n\n",
-        match pixels {
-            PixelSet::Penumbra => "",
-            PixelSet::ShadowOnGround => ", first over Lawlor's shadow on the ground plane",
-        }
-    );
-    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
-    scenes.dedup();
-    for scene in scenes {
-        let _ = writeln!(s, "### {scene}\n");
-        let ground = pixels == PixelSet::ShadowOnGround;
-        if ground {
-            s.push_str("| technique | config | RMS shadow on ground | ");
-        } else {
-            s.push_str("| technique | config | ");
-        }
-        s.push_str("RMS facing | RMS penumbra | max penumbra | time ratio | GPU ms | peak MiB | fetches/frame | ops/frame |\n|---|---|---|---|---|---|---|---|---|---|");
-        s.push_str(if ground { "---|\n" } else { "\n" });
-        for r in rows.iter().filter(|r| r.scene == scene) {
-            let first = if ground {
-                format!(" {} |", opt(r.acc.ground.map(|g| g.rms), 2))
-            } else {
-                String::new()
-            };
-            let _ = writeln!(
-                s,
-                "| {} | {} |{first} {:.2} | {:.2} | {:.1} | {} | {} | {:.2} | {:.3e} | {:.3e} |",
-                r.label,
-                r.config,
-                r.acc.facing.rms,
-                r.acc.penumbra.rms,
-                r.acc.penumbra.max,
-                opt(r.ratio(), 2),
-                opt(r.ms, 2),
-                r.peak_bytes as f64 / (1 << 20) as f64,
-                r.fetches,
-                r.ops
-            );
-        }
-        s.push('\n');
-    }
-    s
-}
-
-/// The configurations no other one beats on both axes (lower x and lower error).
-fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
-    let mut p: Vec<(f64, f64)> = points.to_vec();
-    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    let mut front: Vec<(f64, f64)> = Vec::new();
-    for q in p {
-        if front.last().is_none_or(|l| q.1 < l.1) {
-            front.push(q);
-        }
-    }
-    front
-}
-
-const FONT: &str = "sshc-sweep";
-
-fn pareto(path: &Path, rows: &[&Row], x_of: fn(&Row) -> Option<f64>, x_label: &str, set: PixelSet, title: &str) -> Result<(), String> {
-    let pts: Vec<(String, f64, f64)> = rows
-        .iter()
-        .filter_map(|r| Some((r.label.clone(), x_of(r)?, set.rms(r))))
-        .filter(|(_, x, y)| x.is_finite() && y.is_finite() && *x > 0.0)
-        .collect();
-    if pts.is_empty() {
-        return Err(format!("error: {}: nothing to plot", path.display()));
-    }
-    let svg = path.extension().is_some_and(|e| e == "svg");
-    let size = (900, 600);
-    // text is measured with the bundled font in both backends
-    plotters::style::register_font(FONT, FontStyle::Normal, epaint_default_fonts::HACK_REGULAR)
-        .map_err(|_| "error: the bundled font cannot be read".to_string())?;
-    if svg {
-        let root = SVGBackend::new(path, size).into_drawing_area();
-        draw(&root, &pts, x_label, set.describe(), title, FONT)
-    } else {
-        let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
-        {
-            let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
-            draw(&root, &pts, x_label, set.describe(), title, FONT)?;
-        }
-        image::RgbImage::from_raw(size.0, size.1, buf)
-            .ok_or_else(|| "error: chart buffer of the wrong size".to_string())?
-            .save(path)
-            .map_err(|e| format!("error: {}: {e}", path.display()))
-    }
-}
-
-fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, plotters::coord::Shift>,
-    pts: &[(String, f64, f64)],
-    x_label: &str,
-    y_label: &str,
-    title: &str,
-    font: &str,
-) -> Result<(), String>
-where
-    DB::ErrorType: 'static,
-{
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| format!("error: drawing a chart: {e}");
-    root.fill(&WHITE).map_err(e)?;
-    let (x0, x1) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
-    let y1 = pts.iter().fold(0.0f64, |a, p| a.max(p.2));
-    let mut chart = ChartBuilder::on(root)
-        .caption(title, (font, 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(56)
-        .build_cartesian_2d((x0 * 0.8..x1 * 1.25).log_scale(), 0.0..y1 * 1.1 + 1e-3)
-        .map_err(e)?;
-    chart
-        .configure_mesh()
-        .x_desc(x_label)
-        .y_desc(y_label)
-        .label_style((font, 13))
-        .draw()
-        .map_err(e)?;
-    let mut labels: Vec<&str> = pts.iter().map(|p| p.0.as_str()).collect();
-    labels.sort();
-    labels.dedup();
-    for (i, l) in labels.iter().enumerate() {
-        let colour = Palette99::pick(i).to_rgba();
-        let mine: Vec<(f64, f64)> = pts.iter().filter(|p| p.0 == *l).map(|p| (p.1, p.2)).collect();
-        chart
-            .draw_series(mine.iter().map(|&(x, y)| Circle::new((x, y), 5, colour.filled())))
-            .map_err(e)?
-            .label(*l)
-            .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
-    }
-    let all: Vec<(f64, f64)> = pts.iter().map(|p| (p.1, p.2)).collect();
-    chart
-        .draw_series(LineSeries::new(pareto_front(&all), BLACK.stroke_width(1)))
-        .map_err(e)?
-        .label("Pareto front")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK));
-    chart
-        .configure_series_labels()
-        // low error at low cost is the corner no technique reaches: the legend hides least there
-        .position(SeriesLabelPosition::LowerLeft)
-        .label_font((font, 13))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(e)?;
-    root.present().map_err(e)?;
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn pareto_front_keeps_only_undominated_points() {
-        let f = pareto_front(&[(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (0.5, 9.0)]);
-        assert_eq!(f, vec![(0.5, 9.0), (1.0, 5.0), (2.0, 3.0), (4.0, 1.0)]);
-    }
 
     #[test]
     fn bad_axes_and_huge_stochastic_counts_are_refused_with_the_axis_named() {

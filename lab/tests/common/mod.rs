@@ -29,3 +29,70 @@ pub fn temp_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
     dir
 }
+
+// Sweeps: the CSV that `sshc sweep` and `sshc sweep merge` write (tests/sweep.rs, tests/slurm.rs).
+
+/// The rows of a sweep's CSV, each a list of fields.
+pub fn csv_rows(csv: &str) -> Vec<Vec<String>> {
+    // quoted fields hold no commas except the device name, which is quoted
+    csv.lines()
+        .skip(1)
+        .map(|l| {
+            let mut fields = Vec::new();
+            let mut cur = String::new();
+            let mut quoted = false;
+            for ch in l.chars() {
+                match ch {
+                    '"' => quoted = !quoted,
+                    ',' if !quoted => fields.push(std::mem::take(&mut cur)),
+                    c => cur.push(c),
+                }
+            }
+            fields.push(cur);
+            fields
+        })
+        .collect()
+}
+
+/// The columns a merged sweep must have exactly as the unsharded run has them: every
+/// accuracy, memory and count column (the time columns are measured again by each shard).
+pub const SAME_COLUMNS: &[&str] = &[
+    "scene",
+    "technique",
+    "config",
+    "shadow_map",
+    "light_scale",
+    "peak_bytes",
+    "fetches",
+    "ops",
+    "rms_facing",
+    "max_facing",
+    "rms_penumbra",
+    "max_penumbra",
+    "facing_pixels",
+    "penumbra_pixels",
+    "truth_max_se",
+    "rms_ground",
+    "max_ground",
+    "ground_pixels",
+];
+
+/// Asserts that `merged` has `whole`'s rows, in its order, with every [`SAME_COLUMNS`]
+/// equal, a time ratio on every GPU row and each row's shard `i/n` for configuration i.
+pub fn assert_merged_equals(whole: &str, merged: &str, n: usize) {
+    let header: Vec<&str> = whole.lines().next().unwrap().split(',').collect();
+    assert_eq!(merged.lines().next(), whole.lines().next(), "the same columns");
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
+    let (a, b) = (csv_rows(whole), csv_rows(merged));
+    assert_eq!(a.len(), b.len(), "{merged}");
+    for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+        for c in SAME_COLUMNS {
+            assert_eq!(x[col(c)], y[col(c)], "row {k}, column {c}: {x:?} against {y:?}");
+        }
+        if !y[col("technique")].contains("(CPU)") {
+            let ratio: f64 = y[col("time_ratio")].parse().unwrap_or_else(|_| panic!("row {k}: {y:?}"));
+            assert!(ratio.is_finite() && ratio > 0.0, "row {k}: {y:?}");
+            assert_eq!(y[col("shard")], format!("{}/{n}", k % n), "row {k}: {y:?}");
+        }
+    }
+}

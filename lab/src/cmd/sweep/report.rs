@@ -1,0 +1,411 @@
+//! What a sweep writes, unsharded or merged from shards: `sweep.csv`, `sweep.md` and the
+//! Pareto charts (error against time, error against memory), from its rows.
+
+use crate::metrics;
+use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The pixel set a sweep's charts rank by.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PixelSet {
+    #[default]
+    Penumbra,
+    ShadowOnGround,
+}
+
+impl PixelSet {
+    /// The RMS error of `r` over this set.
+    pub fn rms(self, r: &Row) -> f64 {
+        match self {
+            PixelSet::Penumbra => r.acc.penumbra.rms,
+            PixelSet::ShadowOnGround => r.acc.ground.map_or(f64::NAN, |g| g.rms),
+        }
+    }
+
+    fn describe(self) -> &'static str {
+        match self {
+            PixelSet::Penumbra => "RMS error in penumbra (0..255)",
+            PixelSet::ShadowOnGround => "RMS error, shadow on the ground (0..255)",
+        }
+    }
+}
+
+/// One measured row: what a shard stores per configuration as it finishes
+/// (`records.ron`, [`crate::cmd::sweep::shard`]) and what the outputs print. The last
+/// three fields are the shard's, not stored per row: they are filled when the shard's
+/// rows are gathered.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    pub scene: String,
+    pub label: String,
+    pub config: String,
+    pub shadow_map: u32,
+    pub light_scale: f64,
+    /// Median GPU ms per frame (all passes), or none for CPU baselines.
+    pub ms: Option<f64>,
+    pub peak_bytes: u64,
+    pub fetches: f64,
+    pub ops: f64,
+    pub acc: metrics::Accuracy,
+    pub truth_se: f64,
+    /// The median of the reference technique's times on this row's scene, in its shard
+    /// (none for CPU baselines' scenes where the shard timed nothing).
+    #[serde(skip)]
+    pub reference_ms: Option<f64>,
+    /// The shard that measured it, `(i, n)`.
+    #[serde(skip)]
+    pub shard: (usize, usize),
+    /// That shard's device: in full, and its adapter's name alone.
+    #[serde(skip)]
+    pub device: (String, String),
+}
+
+impl Row {
+    pub fn ratio(&self) -> Option<f64> {
+        Some(self.ms? / self.reference_ms?)
+    }
+}
+
+/// What a sweep's outputs say besides their rows.
+pub struct Outputs<'a> {
+    /// The rows, in the order of the sweep's configurations (CPU baselines last).
+    pub rows: &'a [Row],
+    /// Scene entries (a chart per scene entry with GPU rows), named by [`stem`].
+    pub scenes: &'a [String],
+    /// The reference technique's file as the sweep file names it.
+    pub reference: &'a str,
+    pub pixels: PixelSet,
+}
+
+/// A name for a technique or scene entry: the file stem, `STEM light K` for `PATH#k`.
+pub fn stem(p: &str) -> String {
+    let (path, light) = split_entry(p);
+    let s = Path::new(path)
+        .file_stem()
+        .map(|s| s.to_string_lossy().trim_end_matches(".graph").to_string())
+        .unwrap_or_else(|| path.to_string());
+    match light {
+        Some(k) => format!("{s} light {k}"),
+        None => s,
+    }
+}
+
+/// A scene entry `PATH` or `PATH#k` (light k alone): the path and the light.
+pub fn split_entry(entry: &str) -> (&str, Option<usize>) {
+    match entry.rsplit_once('#') {
+        Some((path, k)) if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) => (path, k.parse().ok()),
+        _ => (entry, None),
+    }
+}
+
+/// A device (in full, and its adapter's name) with the shards `(i, n)` that ran on it.
+pub type DeviceShards<'a> = (&'a (String, String), Vec<(usize, usize)>);
+
+/// The devices of `rows`, each with the shards that ran on it, in order of first use.
+pub fn devices(rows: &[Row]) -> Vec<DeviceShards<'_>> {
+    let mut out: Vec<DeviceShards> = Vec::new();
+    for r in rows {
+        match out.iter_mut().find(|(d, _)| *d == &r.device) {
+            Some((_, shards)) => {
+                if !shards.contains(&r.shard) {
+                    shards.push(r.shard);
+                }
+            }
+            None => out.push((&r.device, vec![r.shard])),
+        }
+    }
+    for (_, shards) in &mut out {
+        shards.sort_unstable();
+    }
+    out
+}
+
+/// Writes `sweep.csv`, `sweep.md` and the charts into `out`, naming each file written.
+pub fn write(out: &Path, o: &Outputs) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("error: {}: {e}", out.display()))?;
+    let write = |name: &str, text: &str| -> Result<(), String> {
+        let p = out.join(name);
+        std::fs::write(&p, text).map_err(|e| format!("error: {}: {e}", p.display()))?;
+        println!("wrote {}", p.display());
+        Ok(())
+    };
+    write("sweep.csv", &csv(o.rows))?;
+    write("sweep.md", &markdown(o.rows, o.reference, o.pixels))?;
+    let devices = devices(o.rows);
+    let short: Vec<&str> = devices.iter().map(|(d, _)| d.1.as_str()).collect();
+    let short = short.join(" + ");
+    for scene in o.scenes.iter().map(|s| stem(s)) {
+        let these: Vec<&Row> = o.rows.iter().filter(|r| r.scene == scene).collect();
+        if these.iter().all(|r| r.ms.is_none()) {
+            continue;
+        }
+        for (what, x_of, x_label) in [
+            (
+                "time",
+                (|r: &Row| r.ratio()) as fn(&Row) -> Option<f64>,
+                "GPU time per frame / reference technique's",
+            ),
+            (
+                "memory",
+                |r: &Row| (r.ms.is_some()).then_some(r.peak_bytes as f64 / (1 << 20) as f64),
+                "peak memory (MiB)",
+            ),
+        ] {
+            for ext in ["svg", "png"] {
+                let p = out.join(format!("pareto-{scene}-{what}.{ext}"));
+                let set = match o.pixels {
+                    PixelSet::Penumbra => "penumbra",
+                    PixelSet::ShadowOnGround => "shadow-on-ground",
+                };
+                pareto(
+                    &p,
+                    &these,
+                    x_of,
+                    x_label,
+                    o.pixels,
+                    &format!("{scene}: RMS {set} error vs {what} on {short}"),
+                )?;
+                println!("wrote {}", p.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+fn opt(v: Option<f64>, digits: usize) -> String {
+    v.map(|x| format!("{x:.digits$}")).unwrap_or_default()
+}
+
+/// The CSV: a row per configuration, every figure a row has, with its shard and device.
+fn csv(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "shard,device,scene,technique,config,shadow_map,light_scale,gpu_ms,reference_ms,time_ratio,peak_bytes,fetches,ops,rms_facing,max_facing,rms_penumbra,max_penumbra,facing_pixels,penumbra_pixels,truth_max_se,rms_ground,max_ground,ground_pixels\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{}/{},\"{}\",{},{},\"{}\",{},{},{},{},{},{},{:.0},{:.0},{:.3},{:.3},{:.3},{:.3},{},{},{:.5},{},{},{}",
+            r.shard.0,
+            r.shard.1,
+            r.device.0,
+            r.scene,
+            r.label,
+            r.config,
+            r.shadow_map,
+            r.light_scale,
+            opt(r.ms, 4),
+            opt(r.reference_ms, 4),
+            opt(r.ratio(), 4),
+            r.peak_bytes,
+            r.fetches,
+            r.ops,
+            r.acc.facing.rms,
+            r.acc.facing.max,
+            r.acc.penumbra.rms,
+            r.acc.penumbra.max,
+            r.acc.facing.pixels,
+            r.acc.penumbra.pixels,
+            r.truth_se,
+            opt(r.acc.ground.map(|g| g.rms), 3),
+            opt(r.acc.ground.map(|g| g.max), 3),
+            r.acc.ground.map(|g| g.pixels.to_string()).unwrap_or_default(),
+        );
+    }
+    s
+}
+
+/// The Markdown table per scene. Rows of several devices (a merge of shards that ran on
+/// different GPUs) are said to be so, with a device column: each row's time ratio is
+/// against the reference timed by its own shard, on its own device.
+fn markdown(rows: &[Row], reference: &str, pixels: PixelSet) -> String {
+    let devices = devices(rows);
+    let mixed = devices.len() > 1;
+    let device_line = match devices.as_slice() {
+        [] => "Device: none".to_string(),
+        [(d, _)] => format!("Device: {}", d.0),
+        several => {
+            let each: Vec<String> = several
+                .iter()
+                .map(|(d, shards)| {
+                    let s: Vec<String> = shards.iter().map(|(i, n)| format!("{i}/{n}")).collect();
+                    format!("{} (shards {})", d.0, s.join(", "))
+                })
+                .collect();
+            format!(
+                "Devices: {}. Time ratios are per device: each row's is against `{reference}` timed by its own shard on its own device",
+                each.join("; ")
+            )
+        }
+    };
+    let mut s = format!(
+        "{device_line}. Errors in 0..255 units against the ground truth (RMS over pixels facing the light, and over penumbra pixels{}); time as a ratio to `{reference}` timed in the same run (median of repeated frames).\n\n",
+        match pixels {
+            PixelSet::Penumbra => "",
+            PixelSet::ShadowOnGround => ", first over Lawlor's shadow on the ground plane",
+        }
+    );
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        let _ = writeln!(s, "### {scene}\n");
+        let ground = pixels == PixelSet::ShadowOnGround;
+        s.push_str("| technique | config | ");
+        if ground {
+            s.push_str("RMS shadow on ground | ");
+        }
+        s.push_str("RMS facing | RMS penumbra | max penumbra | time ratio | GPU ms | peak MiB | fetches/frame | ops/frame |");
+        if mixed {
+            s.push_str(" device |");
+        }
+        s.push_str("\n|---|---|---|---|---|---|---|---|---|---|");
+        if ground {
+            s.push_str("---|");
+        }
+        if mixed {
+            s.push_str("---|");
+        }
+        s.push('\n');
+        for r in rows.iter().filter(|r| r.scene == scene) {
+            let first = if ground {
+                format!(" {} |", opt(r.acc.ground.map(|g| g.rms), 2))
+            } else {
+                String::new()
+            };
+            let last = if mixed { format!(" {} |", r.device.1) } else { String::new() };
+            let _ = writeln!(
+                s,
+                "| {} | {} |{first} {:.2} | {:.2} | {:.1} | {} | {} | {:.2} | {:.3e} | {:.3e} |{last}",
+                r.label,
+                r.config,
+                r.acc.facing.rms,
+                r.acc.penumbra.rms,
+                r.acc.penumbra.max,
+                opt(r.ratio(), 2),
+                opt(r.ms, 2),
+                r.peak_bytes as f64 / (1 << 20) as f64,
+                r.fetches,
+                r.ops
+            );
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// The configurations no other one beats on both axes (lower x and lower error).
+fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut p: Vec<(f64, f64)> = points.to_vec();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let mut front: Vec<(f64, f64)> = Vec::new();
+    for q in p {
+        if front.last().is_none_or(|l| q.1 < l.1) {
+            front.push(q);
+        }
+    }
+    front
+}
+
+const FONT: &str = "sshc-sweep";
+
+fn pareto(path: &Path, rows: &[&Row], x_of: fn(&Row) -> Option<f64>, x_label: &str, set: PixelSet, title: &str) -> Result<(), String> {
+    let pts: Vec<(String, f64, f64)> = rows
+        .iter()
+        .filter_map(|r| Some((r.label.clone(), x_of(r)?, set.rms(r))))
+        .filter(|(_, x, y)| x.is_finite() && y.is_finite() && *x > 0.0)
+        .collect();
+    if pts.is_empty() {
+        return Err(format!("error: {}: nothing to plot", path.display()));
+    }
+    let svg = path.extension().is_some_and(|e| e == "svg");
+    let size = (900, 600);
+    // text is measured with the bundled font in both backends
+    plotters::style::register_font(FONT, FontStyle::Normal, epaint_default_fonts::HACK_REGULAR)
+        .map_err(|_| "error: the bundled font cannot be read".to_string())?;
+    if svg {
+        let root = SVGBackend::new(path, size).into_drawing_area();
+        draw(&root, &pts, x_label, set.describe(), title, FONT)
+    } else {
+        let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
+        {
+            let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
+            draw(&root, &pts, x_label, set.describe(), title, FONT)?;
+        }
+        image::RgbImage::from_raw(size.0, size.1, buf)
+            .ok_or_else(|| "error: chart buffer of the wrong size".to_string())?
+            .save(path)
+            .map_err(|e| format!("error: {}: {e}", path.display()))
+    }
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    pts: &[(String, f64, f64)],
+    x_label: &str,
+    y_label: &str,
+    title: &str,
+    font: &str,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| format!("error: drawing a chart: {e}");
+    root.fill(&WHITE).map_err(e)?;
+    let (x0, x1) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
+    let y1 = pts.iter().fold(0.0f64, |a, p| a.max(p.2));
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (font, 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(56)
+        .build_cartesian_2d((x0 * 0.8..x1 * 1.25).log_scale(), 0.0..y1 * 1.1 + 1e-3)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .label_style((font, 13))
+        .draw()
+        .map_err(e)?;
+    let mut labels: Vec<&str> = pts.iter().map(|p| p.0.as_str()).collect();
+    labels.sort();
+    labels.dedup();
+    for (i, l) in labels.iter().enumerate() {
+        let colour = Palette99::pick(i).to_rgba();
+        let mine: Vec<(f64, f64)> = pts.iter().filter(|p| p.0 == *l).map(|p| (p.1, p.2)).collect();
+        chart
+            .draw_series(mine.iter().map(|&(x, y)| Circle::new((x, y), 5, colour.filled())))
+            .map_err(e)?
+            .label(*l)
+            .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
+    }
+    let all: Vec<(f64, f64)> = pts.iter().map(|p| (p.1, p.2)).collect();
+    chart
+        .draw_series(LineSeries::new(pareto_front(&all), BLACK.stroke_width(1)))
+        .map_err(e)?
+        .label("Pareto front")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK));
+    chart
+        .configure_series_labels()
+        // low error at low cost is the corner no technique reaches: the legend hides least there
+        .position(SeriesLabelPosition::LowerLeft)
+        .label_font((font, 13))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pareto_front_keeps_only_undominated_points() {
+        let f = pareto_front(&[(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (0.5, 9.0)]);
+        assert_eq!(f, vec![(0.5, 9.0), (1.0, 5.0), (2.0, 3.0), (4.0, 1.0)]);
+    }
+}
