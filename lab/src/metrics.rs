@@ -80,6 +80,10 @@ pub struct Accuracy {
     /// The shadow on the ground ([`shadow_on_ground`]), where the scene has objects that
     /// cast no shadow (`None` otherwise; [`accuracy`] leaves it `None`).
     pub ground: Option<ErrorStats>,
+    /// Mean FLIP ([`flip`]) over the facing pixels, 0..1 (`None` where not computed;
+    /// [`accuracy`] leaves it `None`; records written before FLIP read as `None`).
+    #[serde(default)]
+    pub flip: Option<f64>,
 }
 
 fn same_len(what: &str, a: usize, b: usize) -> Result<(), MetricsError> {
@@ -192,7 +196,88 @@ pub fn accuracy(estimate: &[f32], truth: &[f32], facing: &[bool]) -> Result<Accu
         facing: error_stats(estimate, truth, facing)?,
         penumbra: error_stats(estimate, truth, &pen)?,
         ground: None,
+        flip: None,
     })
+}
+
+/// FLIP's viewing condition, in pixels per degree of visual angle: FLIP's own default, 67
+/// (a 0.7 m wide monitor of 3840 pixels seen from 0.7 m). sshc's camera images are far
+/// smaller than such a screen; seen at that pixel density, a penumbra a few pixels wide
+/// spans a few arc-minutes, which is how a viewer sees the figures' images enlarged on a
+/// monitor pixel for pixel.
+pub const FLIP_PIXELS_PER_DEGREE: f32 = 67.0;
+
+/// The image the runtime shades from a visibility (`back::shade`: the grey
+/// `0.12 + 0.88 v max(n . l, 0)` with `l` the unit vector to the light's centre or the
+/// direction of a light at infinity), as 8-bit codes, RGB, rows from the top; black
+/// where no surface is seen. The codes are what `sshc render` writes to its PNG (an
+/// `Rgba8Unorm` target), which a viewer displays as sRGB, as FLIP's LDR metric takes them.
+pub fn shaded(visibility: &[f32], positions: &[Vec3], normals: &[Vec3], light: &Light) -> Result<Vec<u8>, MetricsError> {
+    same_len("visibility and positions", visibility.len(), positions.len())?;
+    same_len("positions and normals", positions.len(), normals.len())?;
+    let mut out = Vec::with_capacity(3 * visibility.len());
+    for ((&v, &p), &n) in visibility.iter().zip(positions).zip(normals) {
+        let l = match (light.center(), light.direction()) {
+            (Some(c), _) => c - p,
+            (None, Some(d)) => d,
+            (None, None) => Vec3::ZERO,
+        };
+        let grey = if p.is_finite() && n.is_finite() {
+            let lambert = n.normalize_or_zero().dot(l.normalize_or_zero()).max(0.0);
+            // a visibility that is not finite counts as lit, as the runtime's shading does
+            let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 1.0 };
+            0.12 + 0.88 * v * lambert
+        } else {
+            0.0
+        };
+        let code = (grey.clamp(0.0, 1.0) * 255.0).round() as u8;
+        out.extend([code; 3]);
+    }
+    Ok(out)
+}
+
+/// FLIP's error map (LDR-FLIP, NVIDIA's implementation through `nv-flip`) of the `test`
+/// image against the `reference`, both `w x h` RGB8: one value in [0, 1] per pixel.
+pub fn flip_map(reference: &[u8], test: &[u8], w: u32, h: u32) -> Result<Vec<f32>, MetricsError> {
+    let n = 3 * w as usize * h as usize;
+    same_len("the reference image's bytes and its size", reference.len(), n)?;
+    same_len("the test image's bytes and its size", test.len(), n)?;
+    if w == 0 || h == 0 {
+        return Err(MetricsError("FLIP of an empty image".into()));
+    }
+    let (r, t) = (
+        nv_flip::FlipImageRgb8::with_data(w, h, reference),
+        nv_flip::FlipImageRgb8::with_data(w, h, test),
+    );
+    Ok(nv_flip::flip(r, t, FLIP_PIXELS_PER_DEGREE).to_vec())
+}
+
+/// Mean FLIP over the pixels of `mask` of the image shaded with `estimate` against the
+/// same image shaded with `truth` ([`shaded`]): 0 where they look alike, towards 1 where a
+/// viewer sees them differ. The error map is computed over the whole image (FLIP filters
+/// spatially), then averaged over the mask, as the RMS figures are.
+pub fn flip(
+    estimate: &[f32],
+    truth: &[f32],
+    positions: &[Vec3],
+    normals: &[Vec3],
+    light: &Light,
+    (w, h): (u32, u32),
+    mask: &[bool],
+) -> Result<f64, MetricsError> {
+    same_len("visibility and mask", estimate.len(), mask.len())?;
+    let map = flip_map(
+        &shaded(truth, positions, normals, light)?,
+        &shaded(estimate, positions, normals, light)?,
+        w,
+        h,
+    )?;
+    let (sum, count) = map
+        .iter()
+        .zip(mask)
+        .filter(|(_, m)| **m)
+        .fold((0.0f64, 0usize), |(s, c), (v, _)| (s + f64::from(*v), c + 1));
+    Ok(if count == 0 { 0.0 } else { sum / count as f64 })
 }
 
 /// The error over Lawlor's shadow on the ground ([`shadow_on_ground`]) of `scene`'s first

@@ -251,6 +251,23 @@ fn compare_command_writes_the_comparison_and_its_figures() {
         );
     }
     assert!(stats(&penumbra).0 > 0.0, "PCF is not exact in the penumbra:\n{out}");
+    // FLIP, recomputed from the same files: the image shaded with the visibility against
+    // it shaded with the truth's, averaged over the facing pixels (printed to 4 decimals)
+    let vec3s = |d: &[f32]| -> Vec<glam::Vec3> { d.chunks(3).map(|c| glam::Vec3::new(c[0], c[1], c[2])).collect() };
+    let (p3, n3) = (vec3s(&pos.data), vec3s(&nrm.data));
+    let light = sshc_lab::scene::Scene::load(root().join("scenes/contact.ron")).unwrap().lights[0].clone();
+    let mask = sshc_lab::metrics::facing_light(&p3, &n3, &light).unwrap();
+    let flip = sshc_lab::metrics::flip(&vis.data, &truth.data, &p3, &n3, &light, (32, 32), &mask).unwrap();
+    let line = out
+        .lines()
+        .find(|l| l.starts_with("FLIP facing the light: "))
+        .unwrap_or_else(|| panic!("no FLIP line:\n{out}"));
+    let printed: f64 = line["FLIP facing the light: ".len()..].split(' ').next().unwrap().parse().unwrap();
+    assert!(
+        (printed - flip).abs() <= 0.00005 + 1e-7,
+        "FLIP printed {printed}, recomputed {flip:.6}\n{out}"
+    );
+    assert!(flip > 0.0 && flip < 1.0, "{flip}");
     // Temporal: the mean |change| per frame while the light moves 0.25 texel per frame. It
     // is above 0 (a penumbra in view moves) and below what one frame can change a PCF
     // pixel by: N x N bilinear taps over (N + 1)^2 texels with N = 5. Moving the kernel by

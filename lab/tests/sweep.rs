@@ -94,6 +94,9 @@ fn sweep_writes_a_row_per_configuration_and_the_charts() {
             // 16 samples are not exact in the penumbra
             assert!(rms_p > 0.0, "{r:?}");
         }
+        // FLIP (0..1) in every row, above 0 where the RMS is (none here is exact)
+        let flip = num(r, "flip");
+        assert!(flip > 0.0 && flip < 1.0, "FLIP {flip}: {r:?}");
         if r[col("technique")] != "16 samples (CPU)" {
             let ratio: f64 = r[col("time_ratio")].parse().unwrap();
             assert!(ratio.is_finite() && ratio > 0.0, "time ratio {ratio}");
@@ -115,6 +118,10 @@ fn sweep_writes_a_row_per_configuration_and_the_charts() {
         "pareto-triangle-time.png",
         "pareto-triangle-memory.svg",
         "pareto-triangle-memory.png",
+        "pareto-triangle-time-flip.svg",
+        "pareto-triangle-time-flip.png",
+        "pareto-triangle-memory-flip.svg",
+        "pareto-triangle-memory-flip.png",
     ] {
         let bytes = std::fs::read(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
         assert!(bytes.len() > 100, "{f} is nearly empty");

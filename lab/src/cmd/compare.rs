@@ -143,6 +143,9 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     let facing = metrics::facing_light(&positions, &normals, &light).map_err(|e| format!("error: {e}"))?;
     metrics::check_visibility("the technique's visibility", &visibility, &facing).map_err(|e| format!("error: {e}"))?;
     let mut acc = metrics::accuracy(&visibility, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;
+    acc.flip = Some(
+        metrics::flip(&visibility, &truth.visibility, &positions, &normals, &light, (w, h), &facing).map_err(|e| format!("error: {e}"))?,
+    );
     if let Some(set) = metrics::ground_set(&scene, &truth.visibility, &positions, &facing).map_err(|e| format!("error: {e}"))? {
         acc.ground = Some(metrics::error_stats(&visibility, &truth.visibility, &set).map_err(|e| format!("error: {e}"))?);
     }
@@ -210,8 +213,10 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
         metrics::check_visibility(&format!("the technique's visibility under light {i}"), &vis, &facing)
             .map_err(|e| format!("error: {e}"))?;
         let acc = metrics::accuracy(&vis, &t.visibility, &facing).map_err(|e| format!("error: {e}"))?;
+        let flip = metrics::flip(&vis, &t.visibility, &positions, &normals, &alone.lights[0], (w, h), &facing)
+            .map_err(|e| format!("error: {e}"))?;
         lines.push(format!(
-            "light {i} ({}): error facing the light: RMS {:.2}, max {:.1} over {} px; in penumbra RMS {:.2} over {} px",
+            "light {i} ({}): error facing the light: RMS {:.2}, max {:.1} over {} px; in penumbra RMS {:.2} over {} px; FLIP {flip:.4}",
             alone.lights[0].kind().name(),
             acc.facing.rms,
             acc.facing.max,
@@ -277,6 +282,12 @@ fn figure_lines(f: &FigureInputs) -> Vec<String> {
     ];
     if let Some(g) = &f.acc.ground {
         lines.push(stats("on the shadow on the ground (Lawlor 2006, fig. 10)", g));
+    }
+    if let Some(flip) = f.acc.flip {
+        lines.push(format!(
+            "FLIP facing the light: {flip:.4} (mean, 0..1; the image shaded with this visibility against it shaded with the truth's, {} pixels per degree)",
+            metrics::FLIP_PIXELS_PER_DEGREE
+        ));
     }
     lines.extend([
         match f.stability {

@@ -255,7 +255,9 @@ fn scale_light(l: &mut Light, f: f32) {
 /// The truth of one scene at one light scale: visibility, its largest standard error,
 /// which pixels face the light, and the shadow on the ground (`metrics::ground_set`;
 /// `None` where every object casts).
-type SceneTruth = (Vec<f32>, f64, Vec<bool>, Option<Vec<bool>>);
+type SceneTruth = (Vec<f32>, f64, Vec<bool>, Option<Vec<bool>>, Positions);
+/// The camera's positions and normals (what FLIP shades with).
+type Positions = (Vec<glam::Vec3>, Vec<glam::Vec3>);
 
 /// Median of per-frame GPU times (sum over passes) over `frames` frames after a warm-up.
 fn time_frames(ex: &mut Executor, frames: usize) -> Result<Option<f64>, String> {
@@ -779,21 +781,24 @@ fn measure(
         let vis = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
         let peak = ex.memory().map_err(rt)?.iter().map(|(_, b)| b).sum();
         let key = (c.scene, format!("{light_scale}"));
-        let (truth, se, facing, ground) = match truths.iter().find(|(k, _)| *k == key) {
+        let (truth, se, facing, ground, (pos, nrm)) = match truths.iter().find(|(k, _)| *k == key) {
             Some((_, t)) => t.clone(),
             None => {
                 let (p, n) = positions_normals(&ex)?;
                 let (t, _) = progress.bar.suspend(|| truth_at(&scene, &p, &n, &a.truth))?;
                 let facing = metrics::facing_light(&p, &n, &scene.lights[0]).unwrap_or_default();
                 let ground = metrics::ground_set(&scene, &t.visibility, &p, &facing).map_err(|e| format!("error: {e}"))?;
-                (t.visibility.clone(), t.max_std_error() as f64, facing, ground)
+                (t.visibility.clone(), t.max_std_error() as f64, facing, ground, (p, n))
             }
         };
         if !truths.iter().any(|(k, _)| *k == key) {
-            truths.push((key, (truth.clone(), se, facing.clone(), ground.clone())));
+            truths.push((key, (truth.clone(), se, facing.clone(), ground.clone(), (pos.clone(), nrm.clone()))));
         }
         metrics::check_visibility(&format!("the visibility of {}", c.label), &vis, &facing).map_err(|e| format!("error: {e}"))?;
         let mut acc = metrics::accuracy(&vis, &truth, &facing).map_err(|e| format!("error: {e}"))?;
+        acc.flip = Some(
+            metrics::flip(&vis, &truth, &pos, &nrm, &scene.lights[0], scene.camera_size(), &facing).map_err(|e| format!("error: {e}"))?,
+        );
         if let Some(g) = &ground {
             acc.ground = Some(metrics::error_stats(&vis, &truth, g).map_err(|e| format!("error: {e}"))?);
         }
@@ -840,6 +845,10 @@ fn measure(
         let est: Vec<f32> = est.iter().zip(&p).map(|(v, p)| if p.is_finite() { *v } else { 1.0 }).collect();
         let facing = metrics::facing_light(&p, &nrm, &scene.lights[0]).unwrap_or_default();
         let mut acc = metrics::accuracy(&est, &truth.visibility, &facing).map_err(|e| format!("error: {e}"))?;
+        acc.flip = Some(
+            metrics::flip(&est, &truth.visibility, &p, &nrm, &scene.lights[0], scene.camera_size(), &facing)
+                .map_err(|e| format!("error: {e}"))?,
+        );
         if let Some(g) = metrics::ground_set(&scene, &truth.visibility, &p, &facing).map_err(|e| format!("error: {e}"))? {
             acc.ground = Some(metrics::error_stats(&est, &truth.visibility, &g).map_err(|e| format!("error: {e}"))?);
         }

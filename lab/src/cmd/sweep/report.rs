@@ -1,5 +1,7 @@
 //! What a sweep writes, unsharded or merged from shards: `sweep.csv`, `sweep.md` and the
-//! Pareto charts (error against time, error against memory), from its rows.
+//! Pareto charts (error against time, error against memory), from its rows. Each chart is
+//! drawn twice, against either metric: the RMS error of the sweep's pixel set
+//! (`pareto-SCENE-WHAT.*`) and FLIP over the facing pixels (`pareto-SCENE-WHAT-flip.*`).
 
 use crate::metrics;
 use plotters::prelude::*;
@@ -153,21 +155,30 @@ pub fn write(out: &Path, o: &Outputs) -> Result<(), String> {
                 "peak memory (MiB)",
             ),
         ] {
-            for ext in ["svg", "png"] {
-                let p = out.join(format!("pareto-{scene}-{what}.{ext}"));
-                let set = match o.pixels {
-                    PixelSet::Penumbra => "penumbra",
-                    PixelSet::ShadowOnGround => "shadow-on-ground",
-                };
-                pareto(
-                    &p,
-                    &these,
-                    x_of,
-                    x_label,
-                    o.pixels,
-                    &format!("{scene}: RMS {set} error vs {what} on {short}"),
-                )?;
-                println!("wrote {}", p.display());
+            let set = match o.pixels {
+                PixelSet::Penumbra => "penumbra",
+                PixelSet::ShadowOnGround => "shadow-on-ground",
+            };
+            let pixels = o.pixels;
+            let rms = move |r: &Row| pixels.rms(r);
+            let flip = |r: &Row| r.acc.flip.unwrap_or(f64::NAN);
+            let metrics: [(&str, YAxis, String); 2] = [
+                ("", (&rms, o.pixels.describe()), format!("RMS {set} error")),
+                ("-flip", (&flip, "mean FLIP facing the light (0..1)"), "FLIP".to_string()),
+            ];
+            for (suffix, (y_of, y_label), metric) in metrics {
+                for ext in ["svg", "png"] {
+                    let p = out.join(format!("pareto-{scene}-{what}{suffix}.{ext}"));
+                    pareto(
+                        &p,
+                        &these,
+                        x_of,
+                        x_label,
+                        (y_of, y_label),
+                        &format!("{scene}: {metric} vs {what} on {short}"),
+                    )?;
+                    println!("wrote {}", p.display());
+                }
             }
         }
     }
@@ -181,12 +192,12 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 /// The CSV: a row per configuration, every figure a row has, with its shard and device.
 fn csv(rows: &[Row]) -> String {
     let mut s = String::from(
-        "shard,device,scene,technique,config,shadow_map,light_scale,gpu_ms,reference_ms,time_ratio,peak_bytes,fetches,ops,rms_facing,max_facing,rms_penumbra,max_penumbra,facing_pixels,penumbra_pixels,truth_max_se,rms_ground,max_ground,ground_pixels\n",
+        "shard,device,scene,technique,config,shadow_map,light_scale,gpu_ms,reference_ms,time_ratio,peak_bytes,fetches,ops,rms_facing,max_facing,rms_penumbra,max_penumbra,facing_pixels,penumbra_pixels,truth_max_se,rms_ground,max_ground,ground_pixels,flip\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{}/{},\"{}\",{},{},\"{}\",{},{},{},{},{},{},{:.0},{:.0},{:.3},{:.3},{:.3},{:.3},{},{},{:.5},{},{},{}",
+            "{}/{},\"{}\",{},{},\"{}\",{},{},{},{},{},{},{:.0},{:.0},{:.3},{:.3},{:.3},{:.3},{},{},{:.5},{},{},{},{}",
             r.shard.0,
             r.shard.1,
             r.device.0,
@@ -211,6 +222,7 @@ fn csv(rows: &[Row]) -> String {
             opt(r.acc.ground.map(|g| g.rms), 3),
             opt(r.acc.ground.map(|g| g.max), 3),
             r.acc.ground.map(|g| g.pixels.to_string()).unwrap_or_default(),
+            opt(r.acc.flip, 5),
         );
     }
     s
@@ -255,11 +267,11 @@ fn markdown(rows: &[Row], reference: &str, pixels: PixelSet) -> String {
         if ground {
             s.push_str("RMS shadow on ground | ");
         }
-        s.push_str("RMS facing | RMS penumbra | max penumbra | time ratio | GPU ms | peak MiB | fetches/frame | ops/frame |");
+        s.push_str("RMS facing | RMS penumbra | max penumbra | FLIP | time ratio | GPU ms | peak MiB | fetches/frame | ops/frame |");
         if mixed {
             s.push_str(" device |");
         }
-        s.push_str("\n|---|---|---|---|---|---|---|---|---|---|");
+        s.push_str("\n|---|---|---|---|---|---|---|---|---|---|---|");
         if ground {
             s.push_str("---|");
         }
@@ -276,12 +288,13 @@ fn markdown(rows: &[Row], reference: &str, pixels: PixelSet) -> String {
             let last = if mixed { format!(" {} |", r.device.1) } else { String::new() };
             let _ = writeln!(
                 s,
-                "| {} | {} |{first} {:.2} | {:.2} | {:.1} | {} | {} | {:.2} | {:.3e} | {:.3e} |{last}",
+                "| {} | {} |{first} {:.2} | {:.2} | {:.1} | {} | {} | {} | {:.2} | {:.3e} | {:.3e} |{last}",
                 r.label,
                 r.config,
                 r.acc.facing.rms,
                 r.acc.penumbra.rms,
                 r.acc.penumbra.max,
+                opt(r.acc.flip, 4),
                 opt(r.ratio(), 2),
                 opt(r.ms, 2),
                 r.peak_bytes as f64 / (1 << 20) as f64,
@@ -309,10 +322,20 @@ fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
 
 const FONT: &str = "sshc-sweep";
 
-fn pareto(path: &Path, rows: &[&Row], x_of: fn(&Row) -> Option<f64>, x_label: &str, set: PixelSet, title: &str) -> Result<(), String> {
+/// The error of a row a chart ranks by, and its axis label.
+type YAxis<'a> = (&'a dyn Fn(&Row) -> f64, &'a str);
+
+fn pareto(
+    path: &Path,
+    rows: &[&Row],
+    x_of: fn(&Row) -> Option<f64>,
+    x_label: &str,
+    (y_of, y_label): YAxis,
+    title: &str,
+) -> Result<(), String> {
     let pts: Vec<(String, f64, f64)> = rows
         .iter()
-        .filter_map(|r| Some((r.label.clone(), x_of(r)?, set.rms(r))))
+        .filter_map(|r| Some((r.label.clone(), x_of(r)?, y_of(r))))
         .filter(|(_, x, y)| x.is_finite() && y.is_finite() && *x > 0.0)
         .collect();
     if pts.is_empty() {
@@ -325,12 +348,12 @@ fn pareto(path: &Path, rows: &[&Row], x_of: fn(&Row) -> Option<f64>, x_label: &s
         .map_err(|_| "error: the bundled font cannot be read".to_string())?;
     if svg {
         let root = SVGBackend::new(path, size).into_drawing_area();
-        draw(&root, &pts, x_label, set.describe(), title, FONT)
+        draw(&root, &pts, x_label, y_label, title, FONT)
     } else {
         let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
         {
             let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
-            draw(&root, &pts, x_label, set.describe(), title, FONT)?;
+            draw(&root, &pts, x_label, y_label, title, FONT)?;
         }
         image::RgbImage::from_raw(size.0, size.1, buf)
             .ok_or_else(|| "error: chart buffer of the wrong size".to_string())?
