@@ -26,6 +26,9 @@
 //!   truth (light leaking, too bright), blue where it lets through less (over-darkening),
 //!   near white at 0 (RdBu's centre, RGB (241, 239, 237)), dark red and dark blue at
 //!   `+range` and `-range` and beyond. Pixels outside the mask are mid grey.
+//! - [`flip`]: NVIDIA's FLIP (LDR, `nv-flip`) of the image shaded with the estimate
+//!   ([`shaded`]) against it shaded with the truth, averaged over the facing pixels, at
+//!   [`FLIP_PIXELS_PER_DEGREE`] (docs/truth.md).
 //! - [`mean_frame_change`]: temporal stability, the mean absolute change of visibility from
 //!   one frame to the next (0..255 units), over the masked pixels and all consecutive
 //!   pairs of frames.
