@@ -874,6 +874,7 @@ fn verify_agrees_on_every_bundled_technique() {
         "csm",
         "cssm",
         "pcss",
+        "vssm",
         "point-samples",
         "examples/poisson-pcf",
         "examples/vsm-bleeding",
