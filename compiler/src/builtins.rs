@@ -782,6 +782,16 @@ pub enum Sig {
     Guarded,
 }
 
+/// `select(f, t, c)` and `if c { t } else { f }` on constants: the operand the condition
+/// picks.
+fn pick(v: &[ConstValue]) -> Option<ConstValue> {
+    match v[2] {
+        ConstValue::Bool(true) => Some(v[1]),
+        ConstValue::Bool(false) => Some(v[0]),
+        ConstValue::Int(_) | ConstValue::Uint(_) | ConstValue::Float(_) => None,
+    }
+}
+
 /// How a call on constants is evaluated at compile time.
 #[derive(Clone, Copy)]
 pub enum Fold {
@@ -1244,11 +1254,7 @@ impl Func {
                 arity: 3,
                 sig: Sig::Select,
                 // the arena also folds a select with a constant condition and other operands
-                fold: Custom(|v| match v[2] {
-                    ConstValue::Bool(true) => Some(v[1]),
-                    ConstValue::Bool(false) => Some(v[0]),
-                    ConstValue::Int(_) | ConstValue::Uint(_) | ConstValue::Float(_) => None,
-                }),
+                fold: Custom(pick),
                 range: |v| Interval::hull(v[0], v[1]),
                 wgsl: Same,
                 accuracy: Exact,
@@ -1403,11 +1409,7 @@ impl Func {
                 name: "if",
                 arity: 3,
                 sig: Sig::Select,
-                fold: Custom(|v| match v[2] {
-                    ConstValue::Bool(true) => Some(v[1]),
-                    ConstValue::Bool(false) => Some(v[0]),
-                    ConstValue::Int(_) | ConstValue::Uint(_) | ConstValue::Float(_) => None,
-                }),
+                fold: Custom(pick),
                 range: |v| Interval::hull(v[0], v[1]),
                 // never a call: `back::expr` emits the arms inside an `if`
                 wgsl: Same,
