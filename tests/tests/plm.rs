@@ -131,15 +131,15 @@ fn penumbra_limit_maps_at_light_angle_zero_are_the_hard_shadow_map() {
 /// ramp's end, kinks that bilinear interpolation rounds over a texel.
 #[test]
 fn smoothies_are_an_outer_penumbra_only() {
-    one_sided_penumbra(SMOOTHIES, 1.0);
+    one_sided_penumbra(SMOOTHIES, 1.0, 2.0);
 }
 
 /// A one-sided technique on `edge.ron` at 128 texels: on the side `sign` points away from
 /// (the hard shadow for smoothies, `sign` 1; the lit side for single-sample shadows, -1)
-/// the hard map's value exactly; on the other, the ramp over twice the penumbra's reach
-/// w = h tan(angle / 2), from the edge's value to the far side's, within 1/255 away by a
-/// texel from the edge and from the ramp's end.
-fn one_sided_penumbra(technique: &str, sign: f64) {
+/// the hard map's value exactly; on the other, the ramp over `reaches` times the penumbra's
+/// reach w = h tan(angle / 2), from the edge's value to the far side's, within 1/255 away by
+/// a texel from the edge and from the ramp's end.
+fn one_sided_penumbra(technique: &str, sign: f64, reaches: f64) {
     let n = 128;
     let scene = edge(n, 10.0);
     let (vis, pos, _) = run(technique, &scene, &[]);
@@ -156,8 +156,8 @@ fn one_sided_penumbra(technique: &str, sign: f64) {
         if x < -texel {
             let hard = if sign > 0.0 { 0.0 } else { 1.0 };
             assert_eq!(f64::from(*v), hard, "{technique}: on the hard side at x = {}", p[0]);
-        } else if x > texel && (x - 2.0 * w).abs() > texel {
-            let ramp = (x / (2.0 * w)).min(1.0);
+        } else if x > texel && (x - reaches * w).abs() > texel {
+            let ramp = (x / (reaches * w)).min(1.0);
             let want = if sign > 0.0 { ramp } else { 1.0 - ramp };
             worst = worst.max((f64::from(*v) - want).abs());
             checked += 1;
@@ -394,10 +394,11 @@ fn the_generated_map_agrees_with_the_f64_reference() {
 }
 
 /// Single-sample soft shadows (Kirsch & Doellner, as Lawlor 2006 describes them) keep the
-/// lit side whole and place the whole penumbra inside the hard shadow: 1 beyond the edge,
-/// then 1 - w / (2 h tan(angle / 2)) at w inside it, 0 past twice the reach. Same F16
-/// storage and texel cuts as smoothies.
+/// lit side whole and return the light over the inner penumbra, inside the hard shadow: 1
+/// beyond the edge, then 1 - w / (h tan(angle / 2)) at w inside it, 0 past the reach, where
+/// the true umbra starts (issue 37; the whole penumbra's width before). Same F16 storage and
+/// texel cuts as smoothies.
 #[test]
 fn single_sample_shadows_are_an_inner_penumbra_only() {
-    one_sided_penumbra("single-sample", -1.0);
+    one_sided_penumbra("single-sample", -1.0, 1.0);
 }
