@@ -173,7 +173,10 @@ fn a_back_face_in_the_edges_umbra_leaves_the_inner_penumbra_to_eq_1() {
             (sum / count as f64).sqrt() * 255.0,
             worst * 255.0
         );
-        assert!(count == 96 * 96 && inner > 1500, "{count} floor pixels, {inner} in the inner penumbra");
+        assert!(
+            count == 96 * 96 && inner > 1500,
+            "{count} floor pixels, {inner} in the inner penumbra"
+        );
         worst_by_rule[b_limit] = worst;
     }
     assert!(worst_by_rule[1] < 1.0 / 255.0, "worst {}/255", worst_by_rule[1] * 255.0);
