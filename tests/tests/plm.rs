@@ -19,7 +19,12 @@ const SMOOTHIES: &str = "smoothies";
 
 /// The visibility and world positions of every camera pixel, and the executor.
 fn run(technique: &str, scene: &Scene, precision: &[(&str, &str)]) -> (Vec<f32>, Vec<[f32; 3]>, Executor) {
-    let compiled = compile_source(technique, &technique_source(technique), &[], precision);
+    run_set(technique, scene, &[], precision)
+}
+
+/// [`run`] with params set (`--set NAME=VALUE`).
+fn run_set(technique: &str, scene: &Scene, set: &[(&str, String)], precision: &[(&str, &str)]) -> (Vec<f32>, Vec<[f32; 3]>, Executor) {
+    let compiled = compile_source(technique, &technique_source(technique), set, precision);
     let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));
     ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
@@ -146,18 +151,9 @@ fn a_back_face_in_the_edges_umbra_leaves_the_inner_penumbra_to_eq_1() {
             ("bias", "0.0".to_string()),
             ("slope_bias", "0.0".to_string()),
         ];
-        let compiled = compile_source(PLM, &technique_source(PLM), &set, &[("c,g,b,p", "F32")]);
-        let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
-        let inputs = sshc_lab::bind::scene_inputs(&scene).unwrap_or_else(|e| panic!("{e}"));
-        ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
-        ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-        let vis = ex
-            .read_camera(CameraOutput::Visibility)
-            .unwrap_or_else(|e| panic!("{e}"))
-            .channel(0);
-        let pos = ex.read_camera(CameraOutput::Position).unwrap_or_else(|e| panic!("{e}"));
+        let (vis, pos, _) = run_set(PLM, &scene, &set, &[("c,g,b,p", "F32")]);
         let (mut sum, mut count, mut inner, mut worst) = (0.0f64, 0usize, 0usize, 0.0f64);
-        for (v, p) in vis.iter().zip(&pos.rgba) {
+        for (v, p) in vis.iter().zip(&pos) {
             assert!(v.is_finite() && (0.0..=1.0).contains(v), "{v}");
             let want = want(f64::from(p[0]));
             if want > 0.0 && want < 0.5 {
