@@ -19,7 +19,12 @@ const SMOOTHIES: &str = "smoothies";
 
 /// The visibility and world positions of every camera pixel, and the executor.
 fn run(technique: &str, scene: &Scene, precision: &[(&str, &str)]) -> (Vec<f32>, Vec<[f32; 3]>, Executor) {
-    let compiled = compile_source(technique, &technique_source(technique), &[], precision);
+    run_set(technique, scene, &[], precision)
+}
+
+/// [`run`] with params set (`--set NAME=VALUE`).
+fn run_set(technique: &str, scene: &Scene, set: &[(&str, String)], precision: &[(&str, &str)]) -> (Vec<f32>, Vec<[f32; 3]>, Executor) {
+    let compiled = compile_source(technique, &technique_source(technique), set, precision);
     let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));
     ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
@@ -98,6 +103,82 @@ fn penumbra_limit_maps_are_exact_on_a_straight_edge_up_to_depth_quantisation() {
         let g = ex.generated("ribbons.silhouettes").unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(g.records, 8);
     }
+}
+
+/// A straight edge under a low sun (issue 35): the quad over x in [-4, 0], z in [-3, 3] at
+/// height 1, wound to face down (from the light, a back face: its far side), under a distant
+/// disk 10 degrees wide 20 degrees above the horizon, over a floor that casts nothing. The
+/// quad recedes from its edge along the rays by 1 / tan 20 = 2.75 per unit across them, so
+/// inside the silhouette it lies more than `bias_b` below c everywhere but within a sliver
+/// of the edge; kept for b by the paper's wording alone (`b_limit = 0`), it clamps the
+/// whole inner penumbra to 0 (eq. 2, "z > b"). It lies in the edge's umbra, though, where
+/// every ray to the light is already blocked: with `b_limit = 1` (the default) it is left
+/// out, and eq. 1 holds.
+///
+/// Against the closed form: a floor point at x < 0 sees the edge at elevation
+/// phi = atan(1 / -x); the light directions below phi pass, so the visible fraction is the
+/// disk's chord f(u) at u = (phi - 20 deg) / 5 deg. F32 storage and no depth bias (the
+/// floor casts nothing, so no surface can shadow itself): eq. 1's only departure is
+/// tan(delta) / tan(5 deg) for delta / 5 deg, and the flat chord for the spherical cap's,
+/// both below 0.13 (5 deg)^2 = 0.001 in u and (2 / pi) 0.001 = 0.16/255 in visibility; with
+/// f32 and the bilinear weights' 8 bits, the bound is 1/255 at every floor pixel.
+#[test]
+fn a_back_face_in_the_edges_umbra_leaves_the_inner_penumbra_to_eq_1() {
+    let scene = Scene::from_str(
+        "Scene(
+    camera: Orthographic(position: (-2.7475, 0.5, 0.0), target: (-2.7475, 0.0, 0.0), up: (0.0, 0.0, -1.0),
+        half_height: 1.0, width: 96, height: 96, near: 0.01, far: 1.0),
+    shadow_map: 128,
+    shadow_fit: Casters,
+    lights: [DistantDisk(direction: (0.93969262, 0.34202014, 0.0), angle_degrees: 10.0)],
+    objects: [
+        Object(name: \"floor\", mesh: Plane(size: (6.0, 6.0)), casts: false, transform: (translate: (-2.75, 0.0, 0.0))),
+        Object(name: \"occluder\", mesh: Quad(a: (-4.0, 1.0, -3.0), b: (0.0, 1.0, -3.0), c: (0.0, 1.0, 3.0), d: (-4.0, 1.0, 3.0))),
+    ],
+)",
+        ".",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let (e, r) = (20.0f64.to_radians(), 5.0f64.to_radians());
+    let want = |x: f64| {
+        let u = (((1.0 / -x).atan() - e) / r).clamp(-1.0, 1.0);
+        0.5 + (u * (1.0 - u * u).sqrt() + u.asin()) / std::f64::consts::PI
+    };
+    let mut worst_by_rule = [0.0f64; 2];
+    for b_limit in [1, 0] {
+        let set = [
+            ("b_limit", b_limit.to_string()),
+            ("bias", "0.0".to_string()),
+            ("slope_bias", "0.0".to_string()),
+        ];
+        let (vis, pos, _) = run_set(PLM, &scene, &set, &[("c,g,b,p", "F32")]);
+        let (mut sum, mut count, mut inner, mut worst) = (0.0f64, 0usize, 0usize, 0.0f64);
+        for (v, p) in vis.iter().zip(&pos) {
+            assert!(v.is_finite() && (0.0..=1.0).contains(v), "{v}");
+            let want = want(f64::from(p[0]));
+            if want > 0.0 && want < 0.5 {
+                inner += 1;
+            }
+            let err = (f64::from(*v) - want).abs();
+            sum += err * err;
+            worst = worst.max(err);
+            count += 1;
+        }
+        eprintln!(
+            "b_limit {b_limit}: RMS {:.3}/255, worst {:.3}/255 over {count} floor pixels ({inner} in the inner penumbra)",
+            (sum / count as f64).sqrt() * 255.0,
+            worst * 255.0
+        );
+        assert!(
+            count == 96 * 96 && inner > 1500,
+            "{count} floor pixels, {inner} in the inner penumbra"
+        );
+        worst_by_rule[b_limit] = worst;
+    }
+    assert!(worst_by_rule[1] < 1.0 / 255.0, "worst {}/255", worst_by_rule[1] * 255.0);
+    // The paper's wording alone blacks out the inner penumbra: at its middle, l = 1/4, the
+    // error is f(-1/2) = 0.196 (50/255) and more towards the edge.
+    assert!(worst_by_rule[0] > 50.0 / 255.0, "b_limit 0: worst {}/255", worst_by_rule[0] * 255.0);
 }
 
 /// A light without size has no penumbra: no ribbons are drawn, c stays 1 and eq. 2 keeps

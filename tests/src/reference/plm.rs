@@ -40,8 +40,12 @@
 //!   back-facing triangles (geometric normal `cross(b - a, c - a)` pointing away from the light:
 //!   `n.z < 0` in view space for a distant light, the light's centre behind the plane,
 //!   `dot(n, a) > 0`, for a local one; edge-on faces are neither) within `[near, far]` whose
-//!   depth exceeds `c + bias_b` ("throw away geometry above or near the occluder depth c");
-//!   1 if none.
+//!   depth exceeds `c + bias_b` ("throw away geometry above or near the occluder depth c")
+//!   and, inside the silhouette (`p_i < 0`), the inner penumbra limit plus `bias_b`
+//!   (`key + bias_b`): a face there lies in the edge's umbra, where every ray to the light is
+//!   already blocked, so it blocks no light the edge lets through (issue 35: under a low light
+//!   a thin occluder's far face recedes fast behind its silhouette and, kept, blacked out its
+//!   own inner penumbra); 1 if none.
 //! - **p**: stored as `p_i / 4 + 1/2` (Lawlor section 2.2), so a unorm channel holds
 //!   `p_i in [-2, 2]`.
 //!
@@ -447,7 +451,8 @@ pub struct PlmMaps {
     pub g: Vec<f64>,
     /// The winning ribbon's occluder depth (1 uncovered).
     pub c: Vec<f64>,
-    /// The nearest back face deeper than `c + bias_b` (1 if none).
+    /// The nearest back face deeper than `c + bias_b`, and than `key + bias_b` where
+    /// `p_i < 0` (1 if none).
     pub b: Vec<f64>,
     /// The winning ribbon's penumbra limit (0 uncovered); stored as `p_i / 4 + 1/2`.
     pub p_i: Vec<f64>,
@@ -541,7 +546,8 @@ pub fn plm_maps(triangles: &[[V3; 3]], setup: &PlmSetup, ribbons: &[Ribbon]) -> 
             }
             maps.g[k] = depth.min(maps.key[k]);
             let (o, d) = light.texel_ray(i, j);
-            let floor = maps.c[k] + setup.bias_b;
+            // inside the silhouette, the inner penumbra limit (the module documentation)
+            let floor = if maps.p_i[k] < 0.0 { maps.key[k] } else { maps.c[k] } + setup.bias_b;
             for t in &view {
                 if let Some(z) = ray_triangle(o, d, t)
                     && z >= light.near

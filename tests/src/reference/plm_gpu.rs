@@ -7,7 +7,7 @@
 //! `reach_scale reach + 2 texels`), and at the texel centre computes `c`, `w`, `p_i` and the
 //! depth-test key; the smallest key wins; `g = min(depth, key)`; then it casts the texel's ray
 //! at every triangle, keeps the back-facing ones, and writes as `b` the nearest hit deeper than
-//! `c + bias_b`. Uploaded from the CPU (as f32): the silhouette edges of the f64 reference's
+//! `c + bias_b` (inside the silhouette, `p_i < 0`, deeper than the key + `bias_b`). Uploaded from the CPU (as f32): the silhouette edges of the f64 reference's
 //! ribbons (view-space end points and which side is outward: the silhouette rule and the face
 //! choice are shared, the ribbon geometry is not), the triangles in view space, and the
 //! unraised nearest-surface depth (the Depth pass, [`PlmMaps::depth`]).

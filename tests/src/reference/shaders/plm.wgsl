@@ -3,7 +3,8 @@
 // ribbons at the texel's centre (evaluated exactly, not rasterised), keeps the one with the
 // smallest depth-test key ("highest penumbra limit wins"), writes its occluder depth c and
 // penumbra limit p_i, raises the nearest-surface depth to g = min(depth, key), then casts the
-// texel's ray at the back-facing triangles for b (the nearest deeper than c + bias_b).
+// texel's ray at the back-facing triangles for b (the nearest deeper than c + bias_b, and
+// inside the silhouette, p_i < 0, than the inner penumbra limit c + |p_i|).
 //
 // View space: the light looks down -z, Z = -z. Image-plane coordinates: a distant disk
 // (orthographic) uses the view x, y (world units); a local light (perspective) uses
@@ -206,7 +207,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     // step 2's raise of g to the outer penumbra limit
     let g = min(depth[k], best_key);
 
-    // step 3: the nearest back face deeper than c + bias_b
+    // step 3: the nearest back face deeper than c + bias_b, and inside the silhouette
+    // (p_i < 0) deeper than the inner penumbra limit, the key (issue 35: a face in the edge's
+    // umbra blocks no light the edge lets through)
+    var floor_b = best_c;
+    if (best_p < 0.0) {
+        floor_b = best_key;
+    }
     var o = vec3<f32>(0.0);
     var d = vec3<f32>(0.0, 0.0, -1.0);
     if (params.perspective == 0u) {
@@ -232,7 +239,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             continue;
         }
         let zl = linear(zh);
-        if (zl > best_c + params.bias_b && zl < b) {
+        if (zl > floor_b + params.bias_b && zl < b) {
             b = zl;
         }
     }
