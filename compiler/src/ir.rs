@@ -927,6 +927,20 @@ pub enum IrPassKind {
 }
 
 impl IrPassKind {
+    /// A SummedArea pass's `sum:` as written, with its span (`None` where it is absent, and
+    /// for every other kind).
+    pub fn table_sum(&self) -> Option<(crate::front::ast::TableSum, Span)> {
+        match self {
+            IrPassKind::SummedArea { sum } => *sum,
+            IrPassKind::Depth { .. }
+            | IrPassKind::Map
+            | IrPassKind::Filter { .. }
+            | IrPassKind::Mipmap { .. }
+            | IrPassKind::Geometry { .. }
+            | IrPassKind::Shade { .. } => None,
+        }
+    }
+
     /// Whether the pass's output carries its source's slots (a filtered copy, a mip chain
     /// or a summed-area table of them) rather than channels the pass makes: the channel's
     /// facts (its precision, its quantisation) are its source's.

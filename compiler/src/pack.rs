@@ -202,15 +202,7 @@ pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Dia
                 if let Some(p) = places.get(&(src, s.channel)).copied() {
                     places.insert((ri, s.channel), p);
                 }
-                let sum = match &ir.passes[res.writer].kind {
-                    IrPassKind::SummedArea { sum } => *sum,
-                    IrPassKind::Depth { .. }
-                    | IrPassKind::Map
-                    | IrPassKind::Filter { .. }
-                    | IrPassKind::Mipmap { .. }
-                    | IrPassKind::Geometry { .. }
-                    | IrPassKind::Shade { .. } => None,
-                };
+                let sum = ir.passes[res.writer].kind.table_sum();
                 let channel = &ir.channels[s.channel].name;
                 match (s.precision, sum) {
                     // a unorm channel's table sums its codes

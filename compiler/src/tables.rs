@@ -27,7 +27,7 @@ use crate::back::summed_area::{TableCode, table_code};
 use crate::builtins::SampleFn;
 use crate::diag::{Diagnostic, Phase};
 use crate::front::ast::TableSum;
-use crate::ir::{ChannelId, IrPassKind, Node, Program, ResId};
+use crate::ir::{ChannelId, Node, Program, ResId};
 use std::collections::HashMap;
 
 /// The map size the stated bounds and the warnings take (the runtime's size is the
@@ -111,7 +111,7 @@ fn lookups(p: &Program) -> Vec<Lookup> {
             | SampleFn::NearestLevelAt => &[][..],
         };
         let area = if widths.len() == 2 {
-            let side = |w: ExprIdRange| ((w.0 * n).clamp(1.0, n), (w.1 * n).clamp(1.0, n));
+            let side = |w: WidthRange| ((w.0 * n).clamp(1.0, n), (w.1 * n).clamp(1.0, n));
             let (x, y) = (side(range(&mut ranges, widths[0])), side(range(&mut ranges, widths[1])));
             (x.0 * y.0, x.1 * y.1)
         } else {
@@ -127,10 +127,11 @@ fn lookups(p: &Program) -> Vec<Lookup> {
     out
 }
 
-/// The range of a width, `(lo, hi)`: an unbounded end is a texel or the whole map.
-type ExprIdRange = (f64, f64);
+/// The range of a box's width in uv, `(lo, hi)`: an unknown low end is 0 (a texel, once
+/// clamped), an unknown high end infinite (the whole map).
+type WidthRange = (f64, f64);
 
-fn range(ranges: &mut RangeEval, h: crate::ir::ExprId) -> ExprIdRange {
+fn range(ranges: &mut RangeEval, h: crate::ir::ExprId) -> WidthRange {
     let r = ranges.eval(h);
     (
         if r.lo.is_finite() { r.lo.max(0.0) } else { 0.0 },
@@ -140,16 +141,7 @@ fn range(ranges: &mut RangeEval, h: crate::ir::ExprId) -> ExprIdRange {
 
 /// Where a table's `sum:` is written (the pass where it is not).
 fn sum_span(pass: &crate::ir::IrPass) -> crate::span::Span {
-    match pass.kind {
-        IrPassKind::SummedArea { sum: Some((_, s)) } => s,
-        IrPassKind::SummedArea { sum: None }
-        | IrPassKind::Depth { .. }
-        | IrPassKind::Map
-        | IrPassKind::Filter { .. }
-        | IrPassKind::Mipmap { .. }
-        | IrPassKind::Geometry { .. }
-        | IrPassKind::Shade { .. } => pass.span,
-    }
+    pass.kind.table_sum().map_or(pass.span, |s| s.1)
 }
 
 /// The warnings of the tables over float channels: a fixed-point table whose boxes may

@@ -36,15 +36,11 @@ impl TableCode {
 
 /// How texture `texture` of summed-area table `table` holds its sums.
 pub(crate) fn table_code(ir: &Program, table: ResId, texture: usize) -> Result<TableCode, Diagnostic> {
-    let sum = match &ir.passes[ir.resources[table].writer].kind {
-        IrPassKind::SummedArea { sum } => sum.map(|s| s.0),
-        IrPassKind::Depth { .. }
-        | IrPassKind::Map
-        | IrPassKind::Filter { .. }
-        | IrPassKind::Mipmap { .. }
-        | IrPassKind::Geometry { .. }
-        | IrPassKind::Shade { .. } => return Err(internal("a summed-area table not written by a SummedArea pass")),
-    };
+    let writer = &ir.passes[ir.resources[table].writer].kind;
+    if !matches!(writer, IrPassKind::SummedArea { .. }) {
+        return Err(internal("a summed-area table not written by a SummedArea pass"));
+    }
+    let sum = writer.table_sum().map(|s| s.0);
     let precision = ir.resources[table]
         .textures
         .get(texture)
