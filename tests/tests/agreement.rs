@@ -292,3 +292,35 @@ fn pcss_agrees() {
     }
     agree("pcss", &v, &all_fields());
 }
+
+#[test]
+fn vssm_agrees() {
+    let v = vec![
+        Variant::new("vssm", &[], None).lit(1.0),
+        Variant::new("vssm", &[("subdivide", 0.0)], None).lit(1.0),
+        Variant::new("vssm", &[], None).lit(0.5),
+        Variant::new("vssm", &[], None).lit(1.0).scheduled("compute"),
+    ];
+    agree("vssm", &v, &["step", "noise", "one", "bunny", "fence"]);
+}
+
+#[test]
+fn msm_hausdorff_agrees() {
+    let v = vec![
+        Variant::new("msm-hausdorff", &[], None),
+        Variant::new("msm-hausdorff", &[("K", 1.0)], None),
+        Variant::new("msm-hausdorff", &[], None).scheduled("compute"),
+    ];
+    agree("msm-hausdorff", &v, &all_fields());
+}
+
+#[test]
+fn mssm_agrees() {
+    let v = vec![
+        Variant::new("mssm", &[], None).lit(1.0),
+        Variant::new("mssm", &[("quantise", 0.0)], None).lit(1.0),
+        Variant::new("mssm", &[], None).lit(0.5),
+        Variant::new("mssm", &[], None).lit(1.0).scheduled("compute"),
+    ];
+    agree("mssm", &v, &["step", "noise", "one", "bunny", "fence"]);
+}

@@ -358,7 +358,7 @@ pub fn prefilter(t: &Technique, map: &DepthMap) -> Result<Prefiltered, String> {
                 })
                 .collect()
         }
-        Kind::Msm => {
+        Kind::Msm | Kind::MsmHausdorff => {
             // Map: the moments b_k = z^k, k = 1..4 (Peters & Klein 2015); Filter: box of K;
             // Mipmap: mean.
             let blur = box_weights(k);
@@ -411,6 +411,26 @@ pub fn prefilter(t: &Technique, map: &DepthMap) -> Result<Prefiltered, String> {
                 } else {
                     out.push(channel(c.name, mip_chain(blurred)));
                 }
+            }
+            out
+        }
+        Kind::Vssm | Kind::Mssm => {
+            // Map: VSSM's (z, z^2) (Yang et al. 2010), or MSSM's q1..q4 (the sparse
+            // quantisation of the signed-depth powers, or z^k); no Filter; a summed-area
+            // table of each, exact in f64 (the GPU's f32 or fixed-point rounding is the
+            // error model's).
+            let values: Vec<(String, Level)> = if technique.kind == Kind::Vssm {
+                vec![("m1".into(), z.clone()), ("m2".into(), z.map(|z| z * z))]
+            } else {
+                let quantise = technique.int("quantise") != 0;
+                (0..4)
+                    .map(|k| (format!("q{}", k + 1), z.map(|z| super::moments::mssm_channels(quantise, z)[k])))
+                    .collect()
+            };
+            let mut out = Vec::new();
+            for (name, level) in values {
+                tables.push((name.clone(), Table::new(&level)));
+                out.push(channel(name, Chain { levels: vec![level] }));
             }
             out
         }
@@ -509,6 +529,15 @@ pub fn shade(pre: &Prefiltered, q: &Query) -> f64 {
             linstep(t.get("bleed"), 1.0, vp.min(vn))
         }
         Kind::Msm => 1.0 - msm_intensity(msm_biased(t, msm_moments(pre, uv, lod)), d_biased),
+        Kind::MsmHausdorff => {
+            // Peters & Klein 2015, the Hausdorff variant: the bound over distributions of
+            // depths in [0, 1] (super::moments::hausdorff_intensity), clamped
+            let b = msm_biased(t, msm_moments(pre, uv, lod));
+            let g = super::moments::hausdorff_intensity([b[0], b[1], b[1], b[2], b[3]], b, d_biased);
+            1.0 - g.clamp(0.0, 1.0)
+        }
+        Kind::Vssm => super::moments::vssm_trace(pre, q).value,
+        Kind::Mssm => super::moments::mssm_trace(pre, q).value,
         Kind::Esm => {
             let c = t.get("c");
             let e = pre.chain("e_t0_k1");

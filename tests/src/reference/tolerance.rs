@@ -358,6 +358,9 @@ pub fn allowed(pre: &Prefiltered, q: &Query) -> Allowed {
         }
         Kind::Cssm => cssm_allowed(pre, q),
         Kind::Pcss => pcss_allowed(pre, q),
+        Kind::Vssm => super::moments_tolerance::vssm_allowed(pre, q),
+        Kind::Mssm => super::moments_tolerance::mssm_allowed(pre, q),
+        Kind::MsmHausdorff => super::moments_tolerance::hausdorff_allowed(pre, q),
     }
 }
 
