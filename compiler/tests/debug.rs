@@ -150,7 +150,7 @@ fn debug_outputs_change_nothing_unless_asked_for_and_leave_the_visibility_untouc
     assert!(seen >= 19, "techniques given debug outputs: {seen}");
     assert_eq!(
         declared,
-        ["vssm", "vssm-subdivided"],
+        ["mssm", "vssm", "vssm-subdivided"],
         "the techniques that declare debug outputs already"
     );
 }

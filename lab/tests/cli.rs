@@ -875,6 +875,8 @@ fn verify_agrees_on_every_bundled_technique() {
         "cssm",
         "pcss",
         "vssm",
+        "mssm",
+        "msm-hausdorff",
         "point-samples",
         "examples/poisson-pcf",
         "examples/vsm-bleeding",

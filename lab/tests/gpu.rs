@@ -234,7 +234,7 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
     // from points on a local light, and cascades refuse them
     let geometry = ["penumbra-limit-maps", "penumbra-maps", "smoothies", "single-sample"];
     // and the methods since 2010
-    for t in TECHNIQUES.into_iter().chain(geometry).chain(["vssm"]) {
+    for t in TECHNIQUES.into_iter().chain(geometry).chain(["vssm", "mssm", "msm-hausdorff"]) {
         let path = root().join("techniques").join(format!("{t}.ron"));
         let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let mut ex = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));

@@ -856,7 +856,7 @@ fn a_deferred_shade_gives_the_forward_values() {
     }
     // every technique but the two that read a light sample's view's derivatives
     // (linear-light and point-samples: `depth_slope` inside `at_sample`), which stay forward
-    assert_eq!(deferred_ones.len(), 14, "{deferred_ones:?}");
+    assert_eq!(deferred_ones.len(), 16, "{deferred_ones:?}");
 }
 
 /// Specialised for its scene, every bundled technique gives the generic build's
