@@ -301,7 +301,9 @@ fn vssm_agrees() {
         Variant::new("vssm", &[], None).lit(0.5),
         Variant::new("vssm", &[], None).lit(1.0).scheduled("compute"),
     ];
-    agree("vssm", &v, &["step", "noise", "one", "bunny", "fence"]);
+    // the fields whose regions mix depths (ramp: the only one here where the subdivision
+    // changes the result, at a few queries) and two scenes; "one" (no occluder) adds nothing
+    agree("vssm", &v, &["ramp", "step", "noise", "bunny", "fence"]);
 }
 
 #[test]
@@ -311,7 +313,9 @@ fn msm_hausdorff_agrees() {
         Variant::new("msm-hausdorff", &[("K", 1.0)], None),
         Variant::new("msm-hausdorff", &[], None).scheduled("compute"),
     ];
-    agree("msm-hausdorff", &v, &all_fields());
+    // the f32 forward error of the four-point branch is measured at 17 points per corner of
+    // the weights: five fields (an edge, noise, a ramp, two scenes) keep it near 5 s
+    agree("msm-hausdorff", &v, &["ramp", "step", "noise", "bunny", "fence"]);
 }
 
 #[test]
@@ -322,5 +326,6 @@ fn mssm_agrees() {
         Variant::new("mssm", &[], None).lit(0.5),
         Variant::new("mssm", &[], None).lit(1.0).scheduled("compute"),
     ];
+    // the error model evaluates the Hamburger bound at 512 corners twice per query: five fields
     agree("mssm", &v, &["step", "noise", "one", "bunny", "fence"]);
 }

@@ -137,12 +137,7 @@ const SHADE_PCSS: Program = program!("shade_pcss.wgsl", "main", [Read, ReadWrite
 
 const SAT_F32_ROWS: Program = program!("sat_f32.wgsl", "rows", [Texels, ReadWrite, Uniform], false);
 const SAT_F32_COLUMNS: Program = program!("sat_f32.wgsl", "columns", [Texels, ReadWrite, Uniform], false);
-const SHADE_VSSM: Program = program!(
-    "shade_vssm.wgsl" + "box_runs.wgsl",
-    "main",
-    [Read, ReadWrite, Read, Uniform],
-    true
-);
+const SHADE_VSSM: Program = program!("shade_vssm.wgsl" + "box_runs.wgsl", "main", [Read, ReadWrite, Read, Uniform], true);
 const MAP_MSSM: Program = program!("map_mssm.wgsl", "main", [Depth, Write, Uniform], false);
 const SHADE_MSSM: Program = Program {
     file: "shade_mssm.wgsl",
@@ -435,7 +430,10 @@ impl<'g> GpuReference<'g> {
                 return Err("u32 summed-area tables of unorm8 codes hold maps up to 4096 x 4096".into());
             }
         }
-        if matches!(r.kind, Kind::Vsm | Kind::Esm | Kind::Evsm | Kind::Msm | Kind::MsmHausdorff | Kind::Csm) {
+        if matches!(
+            r.kind,
+            Kind::Vsm | Kind::Esm | Kind::Evsm | Kind::Msm | Kind::MsmHausdorff | Kind::Csm
+        ) {
             if r.storage == Storage::Unorm16 && !features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM) {
                 return Err("Unorm16 storage needs the device feature TEXTURE_FORMAT_16BIT_NORM".into());
             }

@@ -263,6 +263,25 @@ pub fn mssm_channels(quantise: bool, z: f64) -> [f64; 4] {
     }
 }
 
+/// [`mssm_channels`] in f32, as the Map pass computes them (for the error model's codes).
+pub fn mssm_channels_f32(quantise: bool, z: f32) -> [f32; 4] {
+    if quantise {
+        let r3 = 1.732_050_8f32;
+        let s = 2.0 * z - 1.0;
+        let (s2, s3) = (s * s, s * s * s);
+        let s4 = s2 * s2;
+        [
+            1.5 * s - 2.0 * s3 + 0.5,
+            4.0 * s2 - 4.0 * s4,
+            0.5 * r3 * s - (2.0 * r3 / 9.0) * s3 + 0.5,
+            0.5 * s2 + 0.5 * s4,
+        ]
+    } else {
+        let z2 = z * z;
+        [z, z2, z2 * z, z2 * z2]
+    }
+}
+
 /// Filtered channels back to the signed-depth moments `E[s^k]`: the inverse of the
 /// transform (odd: with u = q1 - 1/2, v = q3 - 1/2, b1 = sqrt(3) v - u / 3,
 /// b3 = 3/4 (sqrt(3) v - u); even: b2 = q4 + q2 / 8, b4 = q4 - q2 / 8), or the binomial
@@ -338,12 +357,18 @@ pub struct MssmTrace {
     pub value: f64,
 }
 
-/// MSSM's box means of q1..q4 (f64 tables).
-pub fn mssm_box(pre: &Prefiltered, uv: [f64; 2], w: [f64; 2]) -> [f64; 4] {
-    ["q1", "q2", "q3", "q4"].map(|name| pre.table(name).map_or(f64::NAN, |t| t.box_mean(uv, w)))
+/// MSSM's box means of q1..q4 from `tables`.
+pub fn mssm_box(tables: &[(String, Table)], uv: [f64; 2], w: [f64; 2]) -> [f64; 4] {
+    ["q1", "q2", "q3", "q4"].map(|name| tables.iter().find(|(n, _)| n == name).map_or(f64::NAN, |(_, t)| t.box_mean(uv, w)))
 }
 
 pub fn mssm_trace(pre: &Prefiltered, q: &Query) -> MssmTrace {
+    mssm_trace_with(pre, q, &pre.tables)
+}
+
+/// [`mssm_trace`] reading the box means from `tables` (the exact ones, or the error
+/// model's tables of the GPU's codes).
+pub fn mssm_trace_with(pre: &Prefiltered, q: &Query, tables: &[(String, Table)]) -> MssmTrace {
     let r = &pre.technique;
     let light = r.light();
     let quantise = r.int("quantise") != 0;
@@ -354,11 +379,11 @@ pub fn mssm_trace(pre: &Prefiltered, q: &Query) -> MssmTrace {
     let sf = 2.0 * ts - 1.0;
     let dist = distance(&light, d);
     let su = search_region(&light, dist);
-    let search = mssm_biased(r, mssm_decode(quantise, mssm_box(pre, uv, su)));
+    let search = mssm_biased(r, mssm_decode(quantise, mssm_box(tables, uv, su)));
     let s_occ = mssm_blocker(hankel(search), search[0], search[1], sf, r.get("lit_weight"));
     let z_occ = 0.5 * (s_occ + 1.0);
     let pu = filter_region(&light, dist, z_occ, texel);
-    let filter = mssm_biased(r, mssm_decode(quantise, mssm_box(pre, uv, pu)));
+    let filter = mssm_biased(r, mssm_decode(quantise, mssm_box(tables, uv, pu)));
     // tf = d - bias (depth_slope = 0): the same receiver as the search's
     let (z2, z3) = hamburger_roots(hankel(filter), sf);
     let g = hamburger_intensity(z2, z3, filter[0], filter[1], sf);
@@ -375,4 +400,74 @@ pub fn mssm_trace(pre: &Prefiltered, q: &Query) -> MssmTrace {
         g,
         value: 1.0 - g.clamp(0.0, 1.0),
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// The same steps in f32, for the error models' estimate of the forward error of what
+// follows the Cholesky solve (as `cpu::msm_intensity_f32` does for MSM)
+
+fn hamburger_roots_f32(b: [f32; 4], zf: f32) -> (f32, f32) {
+    let [b1, b2, b3, b4] = b;
+    let pivot = MSM_PIVOT as f32;
+    let l22 = (b2 - b1 * b1).max(pivot).sqrt();
+    let l32 = (b3 - b1 * b2) / l22;
+    let l33 = (b4 - b2 * b2 - l32 * l32).max(pivot).sqrt();
+    let y2 = (zf - b1) / l22;
+    let y3 = (zf * zf - b2 - l32 * y2) / l33;
+    let c3 = y3 / l33;
+    let c2 = (y2 - l32 * c3) / l22;
+    let c1 = 1.0 - b1 * c2 - b2 * c3;
+    let (p, q) = (c2 / c3, c1 / c3);
+    let r = (0.25 * p * p - q).max(0.0).sqrt();
+    (-0.5 * p - r, -0.5 * p + r)
+}
+
+/// [`hausdorff_intensity`] in f32 at the moments `b`.
+pub fn hausdorff_intensity_f32(b: [f32; 4], t: f32) -> f32 {
+    let (z2, z3) = hamburger_roots_f32(b, t);
+    let [b1, b2, b3, b4] = b;
+    let three = |x: f32, y: f32, z: f32| (b2 - (y + z) * b1 + y * z) / ((x - y) * (x - z));
+    if (z2 >= 0.0 && z3 <= 1.0) || t >= 1.0 {
+        return if t <= z2 {
+            0.0
+        } else if t <= z3 {
+            three(z2, t, z3)
+        } else {
+            1.0 - three(t, z2, z3)
+        };
+    }
+    if t <= 0.0 {
+        return 0.0;
+    }
+    let eq = b3 - (1.0 + t) * b2 + t * b1;
+    if eq.abs() < 1e-12 {
+        return (b2 - (1.0 + t) * b1 + t) / t;
+    }
+    let g = (b4 - (1.0 + t) * b3 + t * b2) / eq;
+    let guarded = |num: f32, den: f32| if den.abs() < 1e-12 { 0.0 } else { num / den };
+    let w0 = guarded(b3 - (1.0 + t + g) * b2 + (t * g + t + g) * b1 - t * g, -t * g);
+    let wg = guarded(eq, g * (g - t) * (g - 1.0));
+    if g < t { w0 + wg } else { w0 }
+}
+
+/// [`mssm_blocker`] in f32 at the moments `b`.
+pub fn mssm_blocker_f32(b: [f32; 4], sf: f32, lit_weight: f32) -> f32 {
+    let (s1, s2) = hamburger_roots_f32(b, sf);
+    let weight = |x: f32, y: f32, z: f32| {
+        let den = (x - y) * (x - z);
+        if den.abs() < 1e-12 {
+            0.0
+        } else {
+            ((b[1] - (y + z) * b[0] + y * z) / den).clamp(0.0, 1.0)
+        }
+    };
+    let (mut w, mut s) = (0.0, 0.0);
+    for (x, other) in [(s1, s2), (s2, s1)] {
+        if x < sf {
+            let wl = weight(x, sf, other);
+            w += wl;
+            s += wl * x;
+        }
+    }
+    ((lit_weight * sf + s) / (lit_weight + w)).clamp(-1.0, 1.0)
 }
