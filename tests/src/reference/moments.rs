@@ -193,44 +193,72 @@ pub fn hamburger_intensity(z2: f64, z3: f64, b1: f64, b2: f64, zf: f64) -> f64 {
     }
 }
 
+/// The three expectations the four-point distribution on `{0, t, g, 1}` is written in:
+/// `R = E[(z - 1)(z - t)]`, `A = E[z (z - 1)(z - t)]`, `B = E[z (z - 1)(z - t)^2]`, from
+/// the moments b1..b4 by nested differences (Newton's form): first `D_k = E[z^k (z - 1)]
+/// = b_(k+1) - b_k` (b0 = 1), then `E[p (z - t)] = E[z p] - t E[p]` once for R and A (and
+/// `C = E[z^2 (z - 1)(z - t)]`), once more for `B = C - t A`. Each subtraction cancels only
+/// what the level before left (the moments of a distribution near {0, t, 1} differ in
+/// their last digits), where the expanded polynomials `b3 - (1 + t) b2 + t b1` and
+/// `b4 - (1 + 2t) b3 + (t^2 + 2t) b2 - t^2 b1` cancel values of the moments' size: in f32,
+/// about 2^-24 |D| instead of 2^-24 |b| of absolute error.
+pub fn hausdorff_functionals(b: [f64; 4], t: f64) -> [f64; 3] {
+    let [b1, b2, b3, b4] = b;
+    let d = [b1 - 1.0, b2 - b1, b3 - b2, b4 - b3];
+    let r = d[1] - t * d[0];
+    let a = d[2] - t * d[1];
+    let c = d[3] - t * d[2];
+    [r, a, c - t * a]
+}
+
 /// Hausdorff MSM's lower bound G of the shadow intensity at `t` (not clamped), the Hankel
 /// matrix given by its entries `a` (see [`hamburger_roots`]) and the moments `b` for the
-/// weights.
+/// weights; and whether the four-point branch gave it.
 ///
 /// Where the Hamburger solution's support `{t, z2, z3}` lies in [0, 1] it is a distribution
 /// of depths in [0, 1] and its bound holds. Otherwise (Peters & Klein 2015, the Hausdorff
 /// variant, as the specification states it): the distribution on `{0, t, g, 1}` with the
-/// moments `b0..b4`. Derivation: every such distribution has `E[p(z)] = 0` for
-/// `p(z) = z (z - 1)(z - t)(z - g) = (z - g) q(z)`, `q(z) = z^3 - (1 + t) z^2 + t z`, so
-/// `E[z q] = g E[q]`: `g = (b4 - (1 + t) b3 + t b2) / (b3 - (1 + t) b2 + t b1)`. The weights
-/// by Lagrange's basis over the four points (moments b0..b3):
-/// `w0 = E[(z - t)(z - g)(z - 1)] / (-t g)`
-///    `= (b3 - (1 + t + g) b2 + (t g + t + g) b1 - t g) / (-t g)`,
-/// `wg = E[q] / (g (g - t)(g - 1))`. G is the weight strictly below t: `w0`, plus `wg` where
-/// `g < t`. Degenerate cases, as handled here:
+/// moments `b0..b4`. Derivation, with R, A, B of [`hausdorff_functionals`]: every such
+/// distribution has `E[p(z)] = 0` for `p(z) = z (z - 1)(z - t)(z - g)`, and
+/// `E[p] = E[z (z - 1)(z - t)^2] + (t - g) E[z (z - 1)(z - t)] = B + (t - g) A`, so
+/// `g - t = B / A`. The weights by Lagrange's basis over the four points (moments b0..b3):
+/// `w0 = E[(z - t)(z - g)(z - 1)] / (-t g) = (A - g R) / (-t g) = (g R - A) / (t g)`
+/// (`E[(z - t)(z - 1)(z - g)] = E[z (z - t)(z - 1)] - g E[(z - t)(z - 1)]`),
+/// `wg = E[z (z - t)(z - 1)] / (g (g - t)(g - 1)) = A / (g (B / A)(g - 1))`.
+/// G is the weight strictly below t: `w0`, plus `wg` where `g < t` (`B / A < 0`).
+/// Degenerate cases, as handled here:
 /// - `t <= 0`: no depth in [0, 1] lies below t: G = 0;
 /// - `t >= 1`: the points t and 1 coincide; the Hamburger bound is kept (the clamp follows);
-/// - `|E[q]| < 1e-12` (g undetermined: the moments are those of a distribution on
-///   {0, t, 1} alone, wg = 0): `G = w0 = (b2 - (1 + t) b1 + t) / t` of the three points;
+/// - `|A| < 1e-12` (g undetermined: the moments are those of a distribution on {0, t, 1}
+///   alone, wg = 0): `G = w0 = R / t` of the three points;
 /// - a vanishing denominator of `w0` (g at 0) or of `wg` (g at t or 1): that weight is 0.
-pub fn hausdorff_intensity(a: [f64; 5], b: [f64; 4], t: f64) -> f64 {
+///
+/// Near the boundary of the moment space (B near 0: the depths lie near {0, t, 1}) G is
+/// a rational function with a pole at `B = 0` and a jump of `wg` where B / A changes sign:
+/// the error model encloses it by interval arithmetic (`moments_tolerance`).
+pub fn hausdorff_branch(a: [f64; 5], b: [f64; 4], t: f64) -> (f64, bool) {
     let (z2, z3) = hamburger_roots(a, t);
-    let [b1, b2, b3, b4] = b;
     if (z2 >= 0.0 && z3 <= 1.0) || t >= 1.0 {
-        return hamburger_intensity(z2, z3, b1, b2, t);
+        return (hamburger_intensity(z2, z3, b[0], b[1], t), false);
     }
     if t <= 0.0 {
-        return 0.0;
+        return (0.0, true);
     }
-    let eq = b3 - (1.0 + t) * b2 + t * b1;
-    if eq.abs() < 1e-12 {
-        return (b2 - (1.0 + t) * b1 + t) / t;
+    let [r, a, bb] = hausdorff_functionals(b, t);
+    if a.abs() < 1e-12 {
+        return (r / t, true);
     }
-    let g = (b4 - (1.0 + t) * b3 + t * b2) / eq;
+    let q = bb / a;
+    let g = t + q;
     let guarded = |num: f64, den: f64| if den.abs() < 1e-12 { 0.0 } else { num / den };
-    let w0 = guarded(b3 - (1.0 + t + g) * b2 + (t * g + t + g) * b1 - t * g, -t * g);
-    let wg = guarded(eq, g * (g - t) * (g - 1.0));
-    if g < t { w0 + wg } else { w0 }
+    let w0 = guarded(g * r - a, t * g);
+    let wg = guarded(a, g * q * (g - 1.0));
+    (if q < 0.0 { w0 + wg } else { w0 }, true)
+}
+
+/// [`hausdorff_branch`]'s G alone.
+pub fn hausdorff_intensity(a: [f64; 5], b: [f64; 4], t: f64) -> f64 {
+    hausdorff_branch(a, b, t).0
 }
 
 // ---------------------------------------------------------------------------------------
@@ -422,7 +450,7 @@ fn hamburger_roots_f32(b: [f32; 4], zf: f32) -> (f32, f32) {
     (-0.5 * p - r, -0.5 * p + r)
 }
 
-/// [`hausdorff_intensity`] in f32 at the moments `b`.
+/// [`hausdorff_intensity`] in f32 at the moments `b` (the hand-written shader's steps).
 pub fn hausdorff_intensity_f32(b: [f32; 4], t: f32) -> f32 {
     let (z2, z3) = hamburger_roots_f32(b, t);
     let [b1, b2, b3, b4] = b;
@@ -439,15 +467,19 @@ pub fn hausdorff_intensity_f32(b: [f32; 4], t: f32) -> f32 {
     if t <= 0.0 {
         return 0.0;
     }
-    let eq = b3 - (1.0 + t) * b2 + t * b1;
-    if eq.abs() < 1e-12 {
-        return (b2 - (1.0 + t) * b1 + t) / t;
+    let d = [b1 - 1.0, b2 - b1, b3 - b2, b4 - b3];
+    let r = d[1] - t * d[0];
+    let a = d[2] - t * d[1];
+    let bb = (d[3] - t * d[2]) - t * a;
+    if a.abs() < 1e-12 {
+        return r / t;
     }
-    let g = (b4 - (1.0 + t) * b3 + t * b2) / eq;
+    let q = bb / a;
+    let g = t + q;
     let guarded = |num: f32, den: f32| if den.abs() < 1e-12 { 0.0 } else { num / den };
-    let w0 = guarded(b3 - (1.0 + t + g) * b2 + (t * g + t + g) * b1 - t * g, -t * g);
-    let wg = guarded(eq, g * (g - t) * (g - 1.0));
-    if g < t { w0 + wg } else { w0 }
+    let w0 = guarded(g * r - a, t * g);
+    let wg = guarded(a, g * q * (g - 1.0));
+    if q < 0.0 { w0 + wg } else { w0 }
 }
 
 /// [`mssm_blocker`] in f32 at the moments `b`.

@@ -167,7 +167,10 @@ pub fn vssm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
     // 4. the whole region
     let [w1, w2] = vssm_moments(pre, uv, tr.pu, zero, pu_err);
     let whole = chebyshev_interval(w1, w2, t, least);
-    let whole = (whole.0 - 4.0 * EPS32, whole.1 + 4.0 * EPS32);
+    // the division rounds: a few ulp, except where t is certainly at or in front of the
+    // mean (then the bound is 1 by selection, no division: the subdivision is certain, not
+    // a tie)
+    let whole = (if whole.0 >= 1.0 { 1.0 } else { whole.0 - 4.0 * EPS32 }, whole.1 + 4.0 * EPS32);
     let subdivide = r.int("subdivide") != 0;
     if subdivide && whole.0 < 1.0 && whole.1 >= 1.0 {
         return Allowed::Tie;
@@ -195,38 +198,146 @@ pub fn vssm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
 // Hausdorff MSM: MSM's model (its lookups, weights, the Cholesky solve's backward error,
 // the f32 forward error after it) with the Hausdorff bound. The moments b3, b4 of the
 // four-point branch are taken with the matrix's entries a23, a33 (the same moments).
+//
+// The corners of the moments' error box bound G where G is monotone over the box. The
+// four-point branch is not: G = (g R - A) / (t g) + [B / A < 0] A / (g (B / A)(g - 1)),
+// g = t + B / A, with the linear functionals R, A, B of `moments::hausdorff_functionals`,
+// has a pole at B = 0 and a jump of wg where B / A changes sign; B = E[z (z - 1)(z - t)^2]
+// is near 0 for depths near {0, t, 1} (a receiver on a surface before a far background),
+// and there a change of 1e-7 in one moment (half an f32 step near 1) moves G by 0.05
+// (bunny, uv (0.2578, 0.3047), d 0.742: G = 0.0486 at the f64 moments, 0.0626 exactly at
+// their f32 roundings, a point inside the box, while the corners reached 0.0607). So
+// wherever the exact moments take the four-point branch, G's range over the
+// box is enclosed by interval arithmetic: R, A, B as intervals (the moments' errors through
+// the nested differences, plus the shader's f32 roundings of them, 2^-24 of each operand
+// and result), then G = R / t + A h(B / A) over them (see the enclosure), every operation
+// outward by 2 2^-24 of its magnitude (its f32 rounding), a divisor's interval holding 0
+// (a pole) or B / A of either sign (the jump) leaving G undetermined.
+
+/// A closed interval.
+#[derive(Clone, Copy, Debug)]
+struct Iv(f64, f64);
+
+impl Iv {
+    fn about(v: f64, h: f64) -> Iv {
+        Iv(v - h, v + h)
+    }
+    /// outward by the f32 rounding of the operation that gave it
+    fn rounded(self) -> Iv {
+        let m = self.0.abs().max(self.1.abs());
+        Iv(self.0 - 2.0 * EPS32 * m, self.1 + 2.0 * EPS32 * m)
+    }
+    fn add(self, o: Iv) -> Iv {
+        Iv(self.0 + o.0, self.1 + o.1).rounded()
+    }
+    fn sub(self, o: Iv) -> Iv {
+        Iv(self.0 - o.1, self.1 - o.0).rounded()
+    }
+    fn mul(self, o: Iv) -> Iv {
+        let p = [self.0 * o.0, self.0 * o.1, self.1 * o.0, self.1 * o.1];
+        Iv(
+            p.iter().copied().fold(f64::INFINITY, f64::min),
+            p.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        )
+        .rounded()
+    }
+    /// None where the divisor may vanish
+    fn div(self, o: Iv) -> Option<Iv> {
+        if o.0 <= 0.0 && o.1 >= 0.0 {
+            return None;
+        }
+        Some(self.mul(Iv(1.0 / o.1, 1.0 / o.0)))
+    }
+    fn below(self, x: f64) -> bool {
+        self.1 < x
+    }
+    fn at_least(self, x: f64) -> bool {
+        self.0 >= x
+    }
+}
+
+/// `(value, half-width)` of `x - t y` in f32: the inputs' half-widths through it, t's
+/// error times |y|, and the roundings of `t y` and of the difference.
+fn nested(x: (f64, f64), y: (f64, f64), t: f64, t_err: f64) -> (f64, f64) {
+    let v = x.0 - t * y.0;
+    let h = x.1 + t.abs() * y.1 + t_err * (y.0.abs() + y.1) + 2.0 * EPS32 * ((t * y.0).abs() + v.abs() + y.1 + x.1);
+    (v, h)
+}
+
+/// The enclosure of the four-point branch's G over the moments `b +- e`, `t +- t_err`
+/// (see above); None where the four-point branch does not apply at the centre's t, an
+/// infinite interval where G is undetermined.
+pub fn hausdorff_four_point_enclosure(b: [f64; 4], e: [f64; 4], t: f64, t_err: f64) -> (f64, f64) {
+    const ANY: (f64, f64) = (f64::NEG_INFINITY, f64::INFINITY);
+    if t + t_err <= 0.0 {
+        return (0.0, 0.0);
+    }
+    if t - t_err <= 0.0 {
+        return ANY;
+    }
+    // D_k = b_(k+1) - b_k (b0 = 1 exact), one rounding each
+    let m = [(1.0, 0.0), (b[0], e[0]), (b[1], e[1]), (b[2], e[2]), (b[3], e[3])];
+    let d: [(f64, f64); 4] = std::array::from_fn(|k| {
+        let v = m[k + 1].0 - m[k].0;
+        (v, m[k + 1].1 + m[k].1 + 2.0 * EPS32 * v.abs())
+    });
+    let r = nested(d[1], d[0], t, t_err);
+    let a = nested(d[2], d[1], t, t_err);
+    let c = nested(d[3], d[2], t, t_err);
+    let bb = nested(c, a, t, t_err);
+    let (r, a, bb) = (Iv::about(r.0, r.1), Iv::about(a.0, a.1), Iv::about(bb.0, bb.1));
+    let ti = Iv::about(t, t_err);
+    // |A| < 1e-12 takes the three points: undetermined where A's interval reaches it (its
+    // G, R / t, is G's limit as A -> 0, but the enclosure below would not show it)
+    if a.0 <= 1e-12 && a.1 >= -1e-12 {
+        return ANY;
+    }
+    let Some(q) = bb.div(a) else { return ANY };
+    if !(q.below(0.0) || q.at_least(0.0)) {
+        return ANY;
+    }
+    // G = R / t + A h(q), h(q) = -1 / (t g) + [q < 0] / (g q (g - 1)), g = t + q: linear in
+    // R and in A at a given q, so G lies in R / t + A h(Q) with Q the interval of B / A;
+    // h's range over Q by interval arithmetic on 64 pieces of Q (the pieces keep the
+    // dependency of g on q small)
+    const PIECES: usize = 64;
+    let (mut h_lo, mut h_hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..PIECES {
+        let x0 = q.0 + (q.1 - q.0) * i as f64 / PIECES as f64;
+        let x1 = q.0 + (q.1 - q.0) * (i + 1) as f64 / PIECES as f64;
+        let qi = Iv(x0, x1);
+        let g = ti.add(qi);
+        let Some(mut h) = Iv(-1.0, -1.0).div(ti.mul(g)) else {
+            return ANY;
+        };
+        if q.below(0.0) {
+            let Some(wg) = Iv(1.0, 1.0).div(g.mul(qi).mul(g.sub(Iv(1.0, 1.0)))) else {
+                return ANY;
+            };
+            h = h.add(wg);
+        }
+        h_lo = h_lo.min(h.0);
+        h_hi = h_hi.max(h.1);
+    }
+    let Some(rt) = r.div(ti) else { return ANY };
+    let s = rt.add(a.mul(Iv(h_lo, h_hi)));
+    // the shader's steps after R, A, B: a few roundings of w0's and wg's numerators and
+    // denominators, relative to the terms' magnitudes
+    let m = 16.0 * EPS32 * (rt.0.abs().max(rt.1.abs()) + a.0.abs().max(a.1.abs()) * h_lo.abs().max(h_hi.abs()));
+    (s.0 - m, s.1 + m)
+}
 
 pub fn hausdorff_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
-    let exact = |b: [f32; 4], t: f32| {
-        let b = b.map(f64::from);
-        moments::hausdorff_intensity([b[0], b[1], b[1], b[2], b[3]], b, t as f64)
+    let bound = |v: [f64; 7], t: f64| moments::hausdorff_intensity([v[0], v[1], v[2], v[3], v[4]], [v[5], v[6], v[3], v[4]], t);
+    // the enclosure where the exact moments take the four-point branch; where only corners
+    // of the box take it (the Hamburger solve's backward error flips the branch test, as for
+    // the moments of a constant region, exactly those of {0, t, 1} after the bias, A = B = 0)
+    // the corners' values stand, as for MSM's own branches
+    let enclose = |b: [f64; 4], e: [f64; 4], t: f64, t_err: f64| {
+        let (_, four) = moments::hausdorff_branch([b[0], b[1], b[1], b[2], b[3]], b, t);
+        four.then(|| hausdorff_four_point_enclosure(b, e, t, t_err))
     };
-    // The four-point branch cancels (E[z (z - 1)(z - t)] and the weights' numerators are
-    // small differences of moments near 1/2), so its f32 forward error varies quickly with
-    // the moments: it is measured at the query's moments and at the 16 corners of a box of
-    // 2^-16 about them (the size of the lookups' errors), and the largest deviation is
-    // reported (as the f32 value the family's model compares with the f64 one).
-    let forward = move |b: [f32; 4], t: f32| -> f32 {
-        let centre = exact(b, t);
-        let mut worst = moments::hausdorff_intensity_f32(b, t) as f64 - centre;
-        for corner in 0..16u32 {
-            let p: [f32; 4] = std::array::from_fn(|k| {
-                let e = if (corner >> k) & 1 == 1 { 1.0 / 65536.0 } else { -1.0 / 65536.0 };
-                b[k] + e
-            });
-            let d = moments::hausdorff_intensity_f32(p, t) as f64 - exact(p, t);
-            if d.is_finite() && d.abs() > worst.abs() {
-                worst = d;
-            }
-        }
-        (centre + worst) as f32
-    };
-    msm_family_allowed(
-        pre,
-        q,
-        &|v, t| moments::hausdorff_intensity([v[0], v[1], v[2], v[3], v[4]], [v[5], v[6], v[3], v[4]], t),
-        &forward,
-    )
+    msm_family_allowed(pre, q, &bound, &moments::hausdorff_intensity_f32, &enclose)
 }
 
 // ---------------------------------------------------------------------------------------

@@ -861,17 +861,26 @@ fn msm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
         q,
         &|v, zf| cpu::msm_bound([v[0], v[1], v[2], v[3], v[4]], v[5], v[6], zf),
         &cpu::msm_intensity_f32,
+        &|_, _, _, _| None,
     )
 }
+
+/// An enclosure of a moment bound over a box (see [`msm_family_allowed`]).
+pub(super) type Enclosure<'a> = dyn Fn([f64; 4], [f64; 4], f64, f64) -> Option<(f64, f64)> + 'a;
 
 /// The model above for a bound of MSM's moments: `bound(v, zf)` with
 /// `v = (a12, a13, a22, a23, a33, b1, b2)` (the matrix entries and the moments of the last
 /// step), `bound32` the same algorithm in f32 at the moments. Hausdorff MSM shares it.
+/// `enclose(b, e, zf, zf_err)`, called once per set of weights after `bound`'s corners,
+/// may add an enclosure of the bound over the whole box `b +- e` (each moment), `zf +-
+/// zf_err`, for a bound the corners do not enclose (Hausdorff MSM's four-point branch); an
+/// infinite end leaves the query undetermined, [0, 1].
 pub(super) fn msm_family_allowed(
     pre: &Prefiltered,
     q: &Query,
     bound: &dyn Fn([f64; 7], f64) -> f64,
     bound32: &dyn Fn([f32; 4], f32) -> f32,
+    enclose: &Enclosure,
 ) -> Allowed {
     let t = &pre.technique;
     let uv = [q.uv[0] as f64, q.uv[1] as f64];
@@ -945,6 +954,10 @@ pub(super) fn msm_family_allowed(
         }
         lo = lo.min(centre - by_zf);
         hi = hi.max(centre + by_zf);
+        if let Some((a, b)) = enclose(b, std::array::from_fn(|k| errors[k]), zf, zf_err) {
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
     }
     // the f32 steps after the solve, measured at the query's moments
     let b = cpu::msm_biased(t, cpu::msm_moments(pre, uv, lod));

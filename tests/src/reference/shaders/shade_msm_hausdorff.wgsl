@@ -2,11 +2,14 @@
 // in [0, 1]): the moments as MSM's (map_msm.wgsl, box blur, mip chain), biased towards
 // (1/2, 1/2, 1/2, 1/2). The Hamburger bounding distribution at t = d - bias (hamburger.wgsl)
 // holds where its support lies in [0, 1]; otherwise the distribution on {0, t, g, 1} with
-// the moments b0..b4: g = (b4 - (1 + t) b3 + t b2) / (b3 - (1 + t) b2 + t b1) (every such
-// distribution has E[z (z - 1)(z - t)(z - g)] = 0), and the shadow intensity is the weight
-// below t, w0 plus wg where g < t (Lagrange over the four points, moments b0..b3). Degenerate
-// cases: t <= 0: 0; t >= 1: the Hamburger bound; b3 - (1 + t) b2 + t b1 = 0 (within 1e-12):
-// the three points {0, t, 1}; a vanishing denominator of a weight: that weight 0.
+// the moments b0..b4 (every such distribution has E[z (z - 1)(z - t)(z - g)] = 0), written
+// in R = E[(z - 1)(z - t)], A = E[z (z - 1)(z - t)], B = E[z (z - 1)(z - t)^2], each taken
+// by nested differences of the moments (D_k = b_(k+1) - b_k = E[z^k (z - 1)], then
+// E[p (z - t)] = E[z p] - t E[p]), so that a subtraction cancels only what the level before
+// left, not values of the moments' size: g - t = B / A, w0 = (g R - A) / (t g),
+// wg = A / (g (g - t)(g - 1)); the shadow intensity is the weight below t, w0 plus wg where
+// g < t. Degenerate cases: t <= 0: 0; t >= 1: the Hamburger bound; |A| < 1e-12: the three
+// points {0, t, 1}, R / t; a vanishing denominator of a weight: that weight 0.
 // Visibility 1 - clamp(G).
 
 struct Params {
@@ -33,14 +36,22 @@ fn hausdorff(b: vec4<f32>, t: f32) -> f32 {
     if (t <= 0.0) {
         return 0.0;
     }
-    let eq = b.z - (1.0 + t) * b.y + t * b.x;
-    if (abs(eq) < 1e-12) {
-        return (b.y - (1.0 + t) * b.x + t) / t;
+    // nested differences: D_k = E[z^k (z - 1)], then E[p (z - t)] = E[z p] - t E[p]
+    let d0 = b.x - 1.0;
+    let d1 = b.y - b.x;
+    let d2 = b.z - b.y;
+    let d3 = b.w - b.z;
+    let r = d1 - t * d0;
+    let a = d2 - t * d1;
+    let bb = (d3 - t * d2) - t * a;
+    if (abs(a) < 1e-12) {
+        return r / t;
     }
-    let g = (b.w - (1.0 + t) * b.z + t * b.y) / eq;
-    let w0 = guarded(b.z - (1.0 + t + g) * b.y + (t * g + t + g) * b.x - t * g, -t * g);
-    let wg = guarded(eq, g * (g - t) * (g - 1.0));
-    return select(w0, w0 + wg, g < t);
+    let q = bb / a;
+    let g = t + q;
+    let w0 = guarded(g * r - a, t * g);
+    let wg = guarded(a, g * q * (g - 1.0));
+    return select(w0, w0 + wg, q < 0.0);
 }
 
 @compute @workgroup_size(64)
