@@ -152,6 +152,12 @@ pub struct Prefiltered {
     /// `technique.stored_channels()`, made once: the error models ask for a channel's
     /// range at every term of every query.
     pub stored: Vec<StoredChannel>,
+    /// VSSM only, for its error model: the f32 summed-area tables the GPU builds
+    /// ([`f32_table`]), by channel name.
+    pub f32_tables: Vec<(String, Vec<f32>)>,
+    /// MSSM only, for its error model: tables of the 16-bit codes the GPU sums (each
+    /// texel's f32 channel value as `round(clamp(v, 0, 1) 65535) / 65535`), by channel name.
+    pub fixed_tables: Vec<(String, Table)>,
 }
 
 impl Prefiltered {
@@ -358,7 +364,7 @@ pub fn prefilter(t: &Technique, map: &DepthMap) -> Result<Prefiltered, String> {
                 })
                 .collect()
         }
-        Kind::Msm => {
+        Kind::Msm | Kind::MsmHausdorff => {
             // Map: the moments b_k = z^k, k = 1..4 (Peters & Klein 2015); Filter: box of K;
             // Mipmap: mean.
             let blur = box_weights(k);
@@ -414,6 +420,60 @@ pub fn prefilter(t: &Technique, map: &DepthMap) -> Result<Prefiltered, String> {
             }
             out
         }
+        Kind::Vssm | Kind::Mssm => {
+            // Map: VSSM's (z, z^2) (Yang et al. 2010), or MSSM's q1..q4 (the sparse
+            // quantisation of the signed-depth powers, or z^k); no Filter; a summed-area
+            // table of each, exact in f64 (the GPU's f32 or fixed-point rounding is the
+            // error model's).
+            let values: Vec<(String, Level)> = if technique.kind == Kind::Vssm {
+                vec![("m1".into(), z.clone()), ("m2".into(), z.map(|z| z * z))]
+            } else {
+                let quantise = technique.int("quantise") != 0;
+                (0..4)
+                    .map(|k| (format!("q{}", k + 1), z.map(|z| super::moments::mssm_channels(quantise, z)[k])))
+                    .collect()
+            };
+            let mut out = Vec::new();
+            for (name, level) in values {
+                tables.push((name.clone(), Table::new(&level)));
+                out.push(channel(name, Chain { levels: vec![level] }));
+            }
+            out
+        }
+    };
+    let f32_tables = if technique.kind == Kind::Vssm {
+        // the Map pass's values in f32 (z, and z * z rounded once), summed less 1/2
+        let n = map.size as usize;
+        vec![
+            ("m1".to_string(), f32_table(&map.z, n, 0.5)),
+            (
+                "m2".to_string(),
+                f32_table(&map.z.iter().map(|z| z * z).collect::<Vec<f32>>(), n, 0.5),
+            ),
+        ]
+    } else {
+        Vec::new()
+    };
+    let fixed_tables = if technique.kind == Kind::Mssm {
+        let quantise = technique.int("quantise") != 0;
+        (0..4)
+            .map(|k| {
+                let codes = Level {
+                    size: z.size,
+                    texels: map
+                        .z
+                        .iter()
+                        .map(|&v| {
+                            let q = super::moments::mssm_channels_f32(quantise, v)[k];
+                            (q.clamp(0.0, 1.0) as f64 * 65535.0).round() / 65535.0
+                        })
+                        .collect(),
+                };
+                (format!("q{}", k + 1), Table::new(&codes))
+            })
+            .collect()
+    } else {
+        Vec::new()
     };
     Ok(Prefiltered {
         stored: technique.stored_channels(),
@@ -421,7 +481,32 @@ pub fn prefilter(t: &Technique, map: &DepthMap) -> Result<Prefiltered, String> {
         depth: Chain { levels: vec![z] },
         channels,
         tables,
+        f32_tables,
+        fixed_tables,
     })
+}
+
+/// An f32 summed-area table as docs/language.md 8.7 ("Tables over float channels")
+/// describes the GPU's: `v - centre` summed along each row in order, then each column of
+/// those in order, every addition rounded to f32. Entry `(x, y)` (row-major, `n x n`)
+/// covers the texels `i <= x`, `j <= y`.
+pub fn f32_table(values: &[f32], n: usize, centre: f32) -> Vec<f32> {
+    let mut t = vec![0.0f32; n * n];
+    for y in 0..n {
+        let mut acc = 0.0f32;
+        for x in 0..n {
+            acc += values[y * n + x] - centre;
+            t[y * n + x] = acc;
+        }
+    }
+    for x in 0..n {
+        let mut acc = 0.0f32;
+        for y in 0..n {
+            acc += t[y * n + x];
+            t[y * n + x] = acc;
+        }
+    }
+    t
 }
 
 /// The value of a CSSM channel at depth z, by its name: `<set>_t<term>_k<order>` with
@@ -509,6 +594,15 @@ pub fn shade(pre: &Prefiltered, q: &Query) -> f64 {
             linstep(t.get("bleed"), 1.0, vp.min(vn))
         }
         Kind::Msm => 1.0 - msm_intensity(msm_biased(t, msm_moments(pre, uv, lod)), d_biased),
+        Kind::MsmHausdorff => {
+            // Peters & Klein 2015, the Hausdorff variant: the bound over distributions of
+            // depths in [0, 1] (super::moments::hausdorff_intensity), clamped
+            let b = msm_biased(t, msm_moments(pre, uv, lod));
+            let g = super::moments::hausdorff_intensity([b[0], b[1], b[1], b[2], b[3]], b, d_biased);
+            1.0 - g.clamp(0.0, 1.0)
+        }
+        Kind::Vssm => super::moments::vssm_trace(pre, q).value,
+        Kind::Mssm => super::moments::mssm_trace(pre, q).value,
         Kind::Esm => {
             let c = t.get("c");
             let e = pre.chain("e_t0_k1");

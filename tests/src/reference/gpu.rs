@@ -135,6 +135,25 @@ const SHADE_CSSM_TABLE: Program = program!(
 );
 const SHADE_PCSS: Program = program!("shade_pcss.wgsl", "main", [Read, ReadWrite, Depth, Uniform], true);
 
+const SAT_F32_ROWS: Program = program!("sat_f32.wgsl", "rows", [Texels, ReadWrite, Uniform], false);
+const SAT_F32_COLUMNS: Program = program!("sat_f32.wgsl", "columns", [Texels, ReadWrite, Uniform], false);
+const SHADE_VSSM: Program = program!("shade_vssm.wgsl" + "box_runs.wgsl", "main", [Read, ReadWrite, Read, Uniform], true);
+const MAP_MSSM: Program = program!("map_mssm.wgsl", "main", [Depth, Write, Uniform], false);
+const SHADE_MSSM: Program = Program {
+    file: "shade_mssm.wgsl",
+    source: include_str!("shaders/shade_mssm.wgsl"),
+    entry: "main",
+    slots: &[Slot::Read, Slot::ReadWrite, Slot::Read, Slot::Uniform],
+    shade: true,
+    tail: concat!(include_str!("shaders/box_runs.wgsl"), "\n", include_str!("shaders/hamburger.wgsl")),
+};
+const SHADE_MSM_HAUSDORFF: Program = program!(
+    "shade_msm_hausdorff.wgsl" + "hamburger.wgsl",
+    "main",
+    [Read, ReadWrite, Filtered, Sampler, Uniform],
+    true
+);
+
 /// The texture format of a storage precision, and its WGSL name.
 pub fn texture_format(s: Storage) -> (wgpu::TextureFormat, &'static str) {
     match s {
@@ -411,7 +430,10 @@ impl<'g> GpuReference<'g> {
                 return Err("u32 summed-area tables of unorm8 codes hold maps up to 4096 x 4096".into());
             }
         }
-        if matches!(r.kind, Kind::Vsm | Kind::Esm | Kind::Evsm | Kind::Msm | Kind::Csm) {
+        if matches!(
+            r.kind,
+            Kind::Vsm | Kind::Esm | Kind::Evsm | Kind::Msm | Kind::MsmHausdorff | Kind::Csm
+        ) {
             if r.storage == Storage::Unorm16 && !features.contains(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM) {
                 return Err("Unorm16 storage needs the device feature TEXTURE_FORMAT_16BIT_NORM".into());
             }
@@ -471,11 +493,65 @@ impl<'g> GpuReference<'g> {
                 let resources = vec![queries, results, view(&filtered), sampler, params.as_entire_binding()];
                 out.push(self.dispatch(&SHADE_EVSM, None, resources, shade_groups)?);
             }
-            Kind::Msm => {
+            Kind::Msm | Kind::MsmHausdorff => {
                 let filtered = self.prefilter(r, n, depth, (&MAP_MSM, Vec::new()), out)?;
                 let params = self.uniform("msm", Words::default().f(r.get("alpha")).f(r.get("bias")));
                 let resources = vec![queries, results, view(&filtered), sampler, params.as_entire_binding()];
-                out.push(self.dispatch(&SHADE_MSM, None, resources, shade_groups)?);
+                let shade = if r.kind == Kind::Msm { &SHADE_MSM } else { &SHADE_MSM_HAUSDORFF };
+                out.push(self.dispatch(shade, None, resources, shade_groups)?);
+            }
+            Kind::Vssm => {
+                // Map (z, z^2) at F32, then f32 tables of v - 1/2 (sat_f32.wgsl)
+                let stack = self.filtered_stack(n, depth, (&MAP_VSM, Vec::new()), Storage::F32, 1, &[1.0], false, out)?;
+                let table = self.table(4 * 2 * (n as u64).pow(2));
+                let sat_params = self.uniform("vssm sat", Words::default().u(n).f(0.5));
+                for program in [&SAT_F32_ROWS, &SAT_F32_COLUMNS] {
+                    let resources = vec![view(&stack), table.as_entire_binding(), sat_params.as_entire_binding()];
+                    out.push(self.dispatch(program, None, resources, [groups(n, 64), 2, 1])?);
+                }
+                let light = r.light();
+                let words = Words::default()
+                    .f(light.width[0])
+                    .f(light.width[1])
+                    .f(light.near)
+                    .f(light.far)
+                    .f(light.uv_per_world(light.near))
+                    .f(r.get("bias"))
+                    .f(r.get("min_variance"))
+                    .u(u32::from(r.int("subdivide") != 0))
+                    .f(n as f64)
+                    .f(0.5);
+                let params = self.uniform("vssm", words);
+                let resources = vec![queries, results, table.as_entire_binding(), params.as_entire_binding()];
+                out.push(self.dispatch(&SHADE_VSSM, None, resources, shade_groups)?);
+            }
+            Kind::Mssm => {
+                // Map q1..q4 at F32, then 16-bit fixed-point tables (sat.wgsl, scale 65535)
+                let quantise = u32::from(r.int("quantise") != 0);
+                let map_params = self.uniform("mssm map", Words::default().u(quantise));
+                let map = (&MAP_MSSM, vec![map_params.as_entire_binding()]);
+                let stack = self.filtered_stack(n, depth, map, Storage::F32, 1, &[1.0], false, out)?;
+                let table = self.table(4 * 4 * (n as u64).pow(2));
+                let sat_params = self.uniform("mssm sat", Words::default().u(n).u(0).f(65535.0));
+                for program in [&SAT_ROWS, &SAT_COLUMNS] {
+                    let resources = vec![view(&stack), table.as_entire_binding(), sat_params.as_entire_binding()];
+                    out.push(self.dispatch(program, Some(Storage::Unorm8), resources, [groups(n, 64), 4, 1])?);
+                }
+                let light = r.light();
+                let words = Words::default()
+                    .f(light.width[0])
+                    .f(light.width[1])
+                    .f(light.near)
+                    .f(light.far)
+                    .f(light.uv_per_world(light.near))
+                    .f(r.get("bias"))
+                    .f(r.get("alpha"))
+                    .f(r.get("lit_weight"))
+                    .u(quantise)
+                    .f(n as f64);
+                let params = self.uniform("mssm", words);
+                let resources = vec![queries, results, table.as_entire_binding(), params.as_entire_binding()];
+                out.push(self.dispatch(&SHADE_MSSM, None, resources, shade_groups)?);
             }
             Kind::Esm => {
                 let c = r.get("c");
@@ -644,7 +720,7 @@ impl<'g> GpuReference<'g> {
             mapped_at_creation: false,
         });
         for (stack, layers, first_channel) in [(&stacks[0], series_layers, 0), (&stacks[1], weighted_layers, 4 * series_layers)] {
-            let sat_params = self.uniform("sat", Words::default().u(n).u(first_channel));
+            let sat_params = self.uniform("sat", Words::default().u(n).u(first_channel).f(255.0));
             let groups = [groups(n, 64), 4 * layers, 1];
             for program in [&SAT_ROWS, &SAT_COLUMNS] {
                 let resources = vec![view(stack), table.as_entire_binding(), sat_params.as_entire_binding()];
@@ -680,7 +756,7 @@ impl<'g> GpuReference<'g> {
             Kind::Csm => (super::cpu::gaussian_weights(r.int("K").max(1) as usize, r.get("sigma")), true),
             _ => (
                 super::cpu::box_weights(r.int("K").max(1) as usize),
-                matches!(r.kind, Kind::Vsm | Kind::Evsm | Kind::Msm),
+                matches!(r.kind, Kind::Vsm | Kind::Evsm | Kind::Msm | Kind::MsmHausdorff),
             ),
         };
         self.filtered_stack(n, depth, map, r.storage, layers(r), &weights, mips, out)
@@ -786,6 +862,16 @@ impl<'g> GpuReference<'g> {
             format,
             usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
             view_formats: &[],
+        })
+    }
+
+    /// A storage buffer of `size` bytes for summed-area tables.
+    fn table(&self, size: u64) -> wgpu::Buffer {
+        self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("summed-area tables"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
         })
     }
 

@@ -1,7 +1,12 @@
 //! Hand-written reference implementations of the bundled techniques (`techniques/hard.ron`,
 //! `pcf.ron`, `vsm.ron`, `esm.ron`, `evsm.ron`, `msm.ron`, `csm.ron`, `cssm.ron`,
-//! `pcss.ron`), written from the papers (Annen 2008, chapters 3, 4, 6, 7 and 8; Fernando
-//! 2005; Lauritzen & McCool 2008; Peters & Klein 2015) and the technique files alone,
+//! `pcss.ron`, and `vssm.ron`, `mssm.ron`, `msm-hausdorff.ron` in [`moments`]), written from
+//! the papers (Annen 2008, chapters 3, 4, 6, 7 and 8; Fernando 2005; Lauritzen & McCool
+//! 2008; Peters & Klein 2015; Yang et al. 2010, "Variance Soft Shadow Mapping"; Peters,
+//! Münstermann, Wetzstein & Klein 2017, "Improved Moment Shadow Maps for Translucent
+//! Occluders, Soft Shadows and Single Scattering") and the technique files alone (for VSSM,
+//! MSSM and Hausdorff MSM, the papers and a specification of their stated choices, without
+//! reading the files' expressions: [`moments`] says which papers could be read),
 //! independently of the compiler's code generator, so that tests can check that generated
 //! and hand-written results agree.
 //!
@@ -75,6 +80,8 @@ pub mod cpu;
 pub mod gpu;
 pub mod linear;
 pub mod linear_gpu;
+pub mod moments;
+pub mod moments_tolerance;
 pub mod penumbra;
 pub mod penumbra_gpu;
 pub mod plm;
@@ -258,10 +265,13 @@ pub enum Kind {
     Csm,
     Cssm,
     Pcss,
+    Vssm,
+    Mssm,
+    MsmHausdorff,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 9] = [
+    pub const ALL: [Kind; 12] = [
         Kind::Hard,
         Kind::Pcf,
         Kind::Vsm,
@@ -271,6 +281,9 @@ impl Kind {
         Kind::Csm,
         Kind::Cssm,
         Kind::Pcss,
+        Kind::Vssm,
+        Kind::Mssm,
+        Kind::MsmHausdorff,
     ];
 
     pub fn name(self) -> &'static str {
@@ -284,6 +297,9 @@ impl Kind {
             Kind::Csm => "csm",
             Kind::Cssm => "cssm",
             Kind::Pcss => "pcss",
+            Kind::Vssm => "vssm",
+            Kind::Mssm => "mssm",
+            Kind::MsmHausdorff => "msm-hausdorff",
         }
     }
 
@@ -298,6 +314,9 @@ impl Kind {
             Kind::Csm => include_str!("../../../techniques/csm.ron"),
             Kind::Cssm => include_str!("../../../techniques/cssm.ron"),
             Kind::Pcss => include_str!("../../../techniques/pcss.ron"),
+            Kind::Vssm => include_str!("../../../techniques/vssm.ron"),
+            Kind::Mssm => include_str!("../../../techniques/mssm.ron"),
+            Kind::MsmHausdorff => include_str!("../../../techniques/msm-hausdorff.ron"),
         }
     }
 
@@ -355,6 +374,16 @@ impl Kind {
                 ("slope_bias", false),
             ],
             Kind::Pcss => &[("N", true), ("M", true), ("bias", false), ("slope_bias", false)],
+            // `subdivide` and `quantise` are Bool params, read as 1 or 0
+            Kind::Vssm => &[("min_variance", false), ("bias", false), ("slope_bias", false), ("subdivide", true)],
+            Kind::Mssm => &[
+                ("alpha", false),
+                ("bias", false),
+                ("slope_bias", false),
+                ("lit_weight", false),
+                ("quantise", true),
+            ],
+            Kind::MsmHausdorff => &[("K", true), ("alpha", false), ("bias", false), ("slope_bias", false)],
         }
     }
 
@@ -366,8 +395,10 @@ impl Kind {
             Kind::Vsm => &["m1", "m2"],
             Kind::Esm => &["e"],
             Kind::Evsm => &["p1", "p2", "n1", "n2"],
-            Kind::Msm => &["b1", "b2", "b3", "b4"],
+            Kind::Msm | Kind::MsmHausdorff => &["b1", "b2", "b3", "b4"],
             Kind::Csm => &["f"],
+            Kind::Vssm => &["m1", "m2"],
+            Kind::Mssm => &["q1", "q2", "q3", "q4"],
         }
     }
 }
@@ -389,6 +420,7 @@ struct FileDecl {
 #[derive(Deserialize)]
 #[serde(rename = "Param")]
 struct ParamDecl {
+    #[serde(deserialize_with = "number_or_bool")]
     default: f64,
     range: Option<(f64, f64)>,
 }
@@ -403,6 +435,20 @@ struct ChannelDecl {
 #[serde(rename = "Expansion")]
 struct ExpansionDecl {
     precision: Storage,
+}
+
+/// A parameter's default: a number, or a `Bool` param's `true` / `false` read as 1 / 0.
+fn number_or_bool<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum V {
+        B(bool),
+        N(f64),
+    }
+    Ok(match V::deserialize(d)? {
+        V::B(b) => f64::from(u8::from(b)),
+        V::N(n) => n,
+    })
 }
 
 impl<'de> Deserialize<'de> for Storage {
@@ -428,7 +474,10 @@ fn read_file(kind: Kind) -> Result<FileDecl, String> {
     let file: FileDecl = options
         .from_str(kind.source())
         .map_err(|e| format!("techniques/{}.ron: {e}", kind.name()))?;
-    if file.name != kind.name() {
+    // the file's own name: its stem, but `msm_hausdorff` in msm-hausdorff.ron (a name is an
+    // identifier)
+    let declared = kind.name().replace('-', "_");
+    if file.name != declared {
         return Err(format!("techniques/{}.ron names itself `{}`", kind.name(), file.name));
     }
     Ok(file)
@@ -505,7 +554,12 @@ impl Resolved {
                 ]
             }
             // z^k of z in [0, 1]
-            Kind::Msm => (1..=4).map(|k| ch(format!("b{k}"), 0.0, 1.0)).collect(),
+            Kind::Msm | Kind::MsmHausdorff => (1..=4).map(|k| ch(format!("b{k}"), 0.0, 1.0)).collect(),
+            // VSSM: z and z^2 of z in [0, 1] (summed into f32 tables less 1/2)
+            Kind::Vssm => vec![ch("m1".into(), 0.0, 1.0), ch("m2".into(), 0.0, 1.0)],
+            // MSSM: the quantised signed moments (each in [0, 1] for s in [-1, 1]; JCGT 2017,
+            // section 3.1), or the raw z^k
+            Kind::Mssm => (1..=4).map(|k| ch(format!("q{k}"), 0.0, 1.0)).collect(),
             // sin(c_k z), cos(c_k z) with c_k = pi (2k - 1) (eq. 6.6): sin(pi z) is
             // non-negative on [0, 1]; every other basis sweeps at least a whole period
             // (c_k >= 3 pi for k >= 2, and cos(pi z) goes from 1 to -1), so spans [-1, 1].
@@ -570,7 +624,7 @@ impl StoredChannel {
 pub fn resolve(t: &Technique) -> Result<Resolved, String> {
     let kind = Kind::ALL.into_iter().find(|k| k.name() == t.name).ok_or_else(|| {
         format!(
-            "no reference implementation of technique `{}` (there are: hard, pcf, vsm, esm, evsm, msm, csm, cssm, pcss)",
+            "no reference implementation of technique `{}` (there are: hard, pcf, vsm, esm, evsm, msm, csm, cssm, pcss, vssm, mssm, msm-hausdorff)",
             t.name
         )
     })?;
@@ -669,7 +723,7 @@ pub fn resolve(t: &Technique) -> Result<Resolved, String> {
         }
     }
     let light = match kind {
-        Kind::Cssm | Kind::Pcss => {
+        Kind::Cssm | Kind::Pcss | Kind::Vssm | Kind::Mssm => {
             let light = t.light.ok_or_else(|| {
                 format!(
                     "`{}` needs the light (`Technique::light`: its width, near, far and projection)",
@@ -706,7 +760,8 @@ pub fn resolve(t: &Technique) -> Result<Resolved, String> {
 fn check_sizes(r: &Resolved) -> Result<(), String> {
     let sizes: Vec<(&str, i64)> = match r.kind {
         Kind::Hard | Kind::Pcf | Kind::Pcss => Vec::new(),
-        Kind::Vsm | Kind::Evsm | Kind::Msm | Kind::Csm | Kind::Cssm => vec![("K", r.int("K"))],
+        Kind::Vsm | Kind::Evsm | Kind::Msm | Kind::MsmHausdorff | Kind::Csm | Kind::Cssm => vec![("K", r.int("K"))],
+        Kind::Vssm | Kind::Mssm => Vec::new(),
         Kind::Esm => vec![("K", r.int("K")), ("K + 2", r.int("K") + 2)],
     };
     for (what, n) in sizes {

@@ -182,7 +182,7 @@ pub enum Allowed {
     Within(f64, f64),
 }
 
-fn clamp_interval(lo: f64, hi: f64) -> Allowed {
+pub(super) fn clamp_interval(lo: f64, hi: f64) -> Allowed {
     Allowed::Within(lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0))
 }
 
@@ -358,6 +358,9 @@ pub fn allowed(pre: &Prefiltered, q: &Query) -> Allowed {
         }
         Kind::Cssm => cssm_allowed(pre, q),
         Kind::Pcss => pcss_allowed(pre, q),
+        Kind::Vssm => super::moments_tolerance::vssm_allowed(pre, q),
+        Kind::Mssm => super::moments_tolerance::mssm_allowed(pre, q),
+        Kind::MsmHausdorff => super::moments_tolerance::hausdorff_allowed(pre, q),
     }
 }
 
@@ -673,7 +676,7 @@ fn pcss_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
 
 /// Chebyshev's one-sided bound ([`cpu::chebyshev`]) over boxes of its inputs: mean, second
 /// moment, receiver and least variance; the bound before any clamp or bleeding reduction.
-fn chebyshev_interval(mean: (f64, f64), m2: (f64, f64), d: (f64, f64), least: (f64, f64)) -> (f64, f64) {
+pub(super) fn chebyshev_interval(mean: (f64, f64), m2: (f64, f64), d: (f64, f64), least: (f64, f64)) -> (f64, f64) {
     let sq = |(lo, hi): (f64, f64)| {
         let (a, b) = (lo * lo, hi * hi);
         if lo <= 0.0 && hi >= 0.0 {
@@ -850,9 +853,35 @@ fn shifted_lookup(chain: &Chain, uv: [f64; 2], lod: f64, shift: [f64; 5]) -> f64
 }
 
 /// The backward error of MSM's f32 Cholesky solve per matrix entry (see above).
-const BACKWARD: f64 = 16.0 * EPS32;
+pub(super) const BACKWARD: f64 = 16.0 * EPS32;
 
 fn msm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
+    msm_family_allowed(
+        pre,
+        q,
+        &|v, zf| cpu::msm_bound([v[0], v[1], v[2], v[3], v[4]], v[5], v[6], zf),
+        &cpu::msm_intensity_f32,
+        &|_, _, _, _| None,
+    )
+}
+
+/// An enclosure of a moment bound over a box (see [`msm_family_allowed`]).
+pub(super) type Enclosure<'a> = dyn Fn([f64; 4], [f64; 4], f64, f64) -> Option<(f64, f64)> + 'a;
+
+/// The model above for a bound of MSM's moments: `bound(v, zf)` with
+/// `v = (a12, a13, a22, a23, a33, b1, b2)` (the matrix entries and the moments of the last
+/// step), `bound32` the same algorithm in f32 at the moments. Hausdorff MSM shares it.
+/// `enclose(b, e, zf, zf_err)`, called once per set of weights after `bound`'s corners,
+/// may add an enclosure of the bound over the whole box `b +- e` (each moment), `zf +-
+/// zf_err`, for a bound the corners do not enclose (Hausdorff MSM's four-point branch); an
+/// infinite end leaves the query undetermined, [0, 1].
+pub(super) fn msm_family_allowed(
+    pre: &Prefiltered,
+    q: &Query,
+    bound: &dyn Fn([f64; 7], f64) -> f64,
+    bound32: &dyn Fn([f32; 4], f32) -> f32,
+    enclose: &Enclosure,
+) -> Allowed {
     let t = &pre.technique;
     let uv = [q.uv[0] as f64, q.uv[1] as f64];
     let lod = q.lod as f64;
@@ -897,11 +926,12 @@ fn msm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
     for shift in shifts {
         let b: [f64; 4] = std::array::from_fn(|k| shifted_lookup(chains[k], uv, lod, shift));
         let b = cpu::msm_biased(t, b);
-        let centre = cpu::msm_intensity(b, zf);
+        let hankel = [b[0], b[1], b[1], b[2], b[3], b[0], b[1]];
+        let centre = bound(hankel, zf);
         // the receiver's rounding, linear over its interval
         let by_zf = [-zf_err, zf_err]
             .iter()
-            .map(|e| (cpu::msm_intensity(b, zf + e) - centre).abs())
+            .map(|e| (bound(hankel, zf + e) - centre).abs())
             .fold(0.0, f64::max);
         // (value, half-width) of a12, a13, a22, a23, a33, then b1 and b2 of the last step
         let inputs = [
@@ -918,17 +948,21 @@ fn msm_allowed(pre: &Prefiltered, q: &Query) -> Allowed {
                 let (x, e) = inputs[k];
                 if (corner >> k) & 1 == 1 { x + e } else { x - e }
             });
-            let g = cpu::msm_bound([v[0], v[1], v[2], v[3], v[4]], v[5], v[6], zf);
+            let g = bound(v, zf);
             lo = lo.min(g - by_zf);
             hi = hi.max(g + by_zf);
         }
         lo = lo.min(centre - by_zf);
         hi = hi.max(centre + by_zf);
+        if let Some((a, b)) = enclose(b, std::array::from_fn(|k| errors[k]), zf, zf_err) {
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
     }
     // the f32 steps after the solve, measured at the query's moments
     let b = cpu::msm_biased(t, cpu::msm_moments(pre, uv, lod));
-    let g64 = cpu::msm_intensity(b, zf);
-    let g32 = cpu::msm_intensity_f32(b.map(|v| v as f32), zf as f32) as f64;
+    let g64 = bound([b[0], b[1], b[1], b[2], b[3], b[0], b[1]], zf);
+    let g32 = bound32(b.map(|v| v as f32), zf as f32) as f64;
     let forward = if g32.is_finite() && g64.is_finite() {
         2.0 * (g32 - g64).abs()
     } else {

@@ -5,6 +5,9 @@
 use super::{QueryPlane, technique_source};
 use sshc_tests::reference::{LightFrame, Storage};
 
+/// The Bool params of the bundled techniques, given to a variant as 1 or 0.
+const BOOL_PARAMS: [&str; 2] = ["subdivide", "quantise"];
+
 /// One selectable variant of a technique: params (`--set`) and the precision of its
 /// stored channel or expansion (`--precision`).
 #[derive(Clone)]
@@ -82,10 +85,13 @@ impl Variant {
         // slope-scaled bias needs screen-space derivatives the references do not model
         let mut set: Vec<(&str, String)> = vec![("slope_bias", "0.0".into())];
         for (k, v) in &self.params {
-            // integral values as integers: i32 params refuse `3.0`, f32 params take `3`
+            // integral values as integers: i32 params refuse `3.0`, f32 params take `3`;
+            // the Bool params (VSSM's `subdivide`, MSSM's `quantise`) as `true` / `false`
             set.push((
                 k,
-                if v.fract() == 0.0 {
+                if BOOL_PARAMS.contains(k) {
+                    format!("{}", *v != 0.0)
+                } else if v.fract() == 0.0 {
                     format!("{}", *v as i64)
                 } else {
                     format!("{v:?}")

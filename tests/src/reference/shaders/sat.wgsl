@@ -1,6 +1,7 @@
-// Summed-area table (Crow 1984; Annen 2008, 8.3.1) of unorm8 images in u32 fixed point, as
-// docs/language.md (8.7) describes: per texel and channel, the sum of the unorm codes
-// round(v * 255) of every texel above and to the left, inclusive. Two steps: `rows` sums
+// Summed-area table (Crow 1984; Annen 2008, 8.3.1) of images in u32 fixed point, as
+// docs/language.md (8.7) describes: per texel and channel, the sum of the codes
+// round(saturate(v) * scale) of every texel above and to the left, inclusive (scale 255 for
+// CSSM's unorm8 channels; 65535 for MSSM's `sum: Fixed(bits: 16)` over [0, 1]). Two steps: `rows` sums
 // each row (one invocation per row and channel), `columns` then sums each column of those
 // (one invocation per column and channel). u32 additions wrap modulo 2^32; box sums taken
 // as differences of four entries stay exact while the box's own sum stays below 2^32.
@@ -10,6 +11,8 @@
 struct Params {
     size: u32,
     first_channel: u32,
+    // 2^B - 1: the largest code
+    scale: f32,
 }
 
 @group(0) @binding(0) var src: texture_2d_array<f32>;
@@ -32,7 +35,7 @@ fn rows(@builtin(global_invocation_id) id: vec3<u32>) {
     var acc = 0u;
     for (var x = 0u; x < n; x++) {
         let v = textureLoad(src, vec2<u32>(x, id.x), layer, 0)[comp];
-        acc += u32(round(saturate(v) * 255.0));
+        acc += u32(round(saturate(v) * params.scale));
         table[entry(id.y, x, id.x)] = acc;
     }
 }
