@@ -723,19 +723,8 @@ pub fn msm_bound(a: [f64; 5], b1: f64, b2: f64, zf: f64) -> f64 {
 /// [`msm_intensity`] in f32 arithmetic, the same steps: the error model's estimate of what
 /// the f32 solve does to the bound.
 pub fn msm_intensity_f32(b: [f32; 4], zf: f32) -> f32 {
-    let [b1, b2, b3, b4] = b;
-    let pivot = MSM_PIVOT as f32;
-    let l22 = (b2 - b1 * b1).max(pivot).sqrt();
-    let l32 = (b3 - b1 * b2) / l22;
-    let l33 = (b4 - b2 * b2 - l32 * l32).max(pivot).sqrt();
-    let y2 = (zf - b1) / l22;
-    let y3 = (zf * zf - b2 - l32 * y2) / l33;
-    let c3 = y3 / l33;
-    let c2 = (y2 - l32 * c3) / l22;
-    let c1 = 1.0 - b1 * c2 - b2 * c3;
-    let (p, q) = (c2 / c3, c1 / c3);
-    let r = (0.25 * p * p - q).max(0.0).sqrt();
-    let (z2, z3) = (-0.5 * p - r, -0.5 * p + r);
+    let [b1, b2, _, _] = b;
+    let (z2, z3) = super::moments::hamburger_roots_f32(b, zf);
     if zf <= z2 {
         0.0
     } else if zf <= z3 {

@@ -190,6 +190,17 @@ struct Dispatch {
 #[derive(Default)]
 struct Words(Vec<u8>);
 
+/// The light as the soft techniques' shaders read it first: its width along u and v, the
+/// depth range's near and far distances, and uv per world unit at the near plane.
+fn light_words(light: &super::LightFrame) -> Words {
+    Words::default()
+        .f(light.width[0])
+        .f(light.width[1])
+        .f(light.near)
+        .f(light.far)
+        .f(light.uv_per_world(light.near))
+}
+
 impl Words {
     fn f(mut self, v: f64) -> Words {
         self.0.extend_from_slice(&(v as f32).to_le_bytes());
@@ -510,12 +521,7 @@ impl<'g> GpuReference<'g> {
                     out.push(self.dispatch(program, None, resources, [groups(n, 64), 2, 1])?);
                 }
                 let light = r.light();
-                let words = Words::default()
-                    .f(light.width[0])
-                    .f(light.width[1])
-                    .f(light.near)
-                    .f(light.far)
-                    .f(light.uv_per_world(light.near))
+                let words = light_words(&light)
                     .f(r.get("bias"))
                     .f(r.get("min_variance"))
                     .u(u32::from(r.int("subdivide") != 0))
@@ -538,12 +544,7 @@ impl<'g> GpuReference<'g> {
                     out.push(self.dispatch(program, Some(Storage::Unorm8), resources, [groups(n, 64), 4, 1])?);
                 }
                 let light = r.light();
-                let words = Words::default()
-                    .f(light.width[0])
-                    .f(light.width[1])
-                    .f(light.near)
-                    .f(light.far)
-                    .f(light.uv_per_world(light.near))
+                let words = light_words(&light)
                     .f(r.get("bias"))
                     .f(r.get("alpha"))
                     .f(r.get("lit_weight"))
@@ -620,15 +621,7 @@ impl<'g> GpuReference<'g> {
             Kind::Cssm => self.cssm(r, n, depth, [queries, results], shade_groups, out)?,
             Kind::Pcss => {
                 let light = r.light();
-                let words = Words::default()
-                    .f(light.width[0])
-                    .f(light.width[1])
-                    .f(light.near)
-                    .f(light.far)
-                    .f(light.uv_per_world(light.near))
-                    .f(r.get("bias"))
-                    .i(r.int("N") as i32)
-                    .i(r.int("M") as i32);
+                let words = light_words(&light).f(r.get("bias")).i(r.int("N") as i32).i(r.int("M") as i32);
                 let params = self.uniform("pcss", words);
                 let resources = vec![queries, results, view(depth), params.as_entire_binding()];
                 out.push(self.dispatch(&SHADE_PCSS, None, resources, shade_groups)?);
@@ -682,12 +675,7 @@ impl<'g> GpuReference<'g> {
         let amplitude = self.buffer("cssm amplitudes", &amplitude.0, wgpu::BufferUsages::STORAGE);
         let light = r.light();
         let fix = r.int("fix");
-        let words = Words::default()
-            .f(light.width[0])
-            .f(light.width[1])
-            .f(light.near)
-            .f(light.far)
-            .f(light.uv_per_world(light.near))
+        let words = light_words(&light)
             .f(r.get("bias"))
             .f(if fix == 1 { 0.5 / m as f64 } else { 0.0 })
             .f(if fix == 2 { 2.0 } else { 1.0 })

@@ -434,7 +434,8 @@ pub fn mssm_trace_with(pre: &Prefiltered, q: &Query, tables: &[(String, Table)])
 // The same steps in f32, for the error models' estimate of the forward error of what
 // follows the Cholesky solve (as `cpu::msm_intensity_f32` does for MSM)
 
-fn hamburger_roots_f32(b: [f32; 4], zf: f32) -> (f32, f32) {
+/// The roots `z2 <= z3` of the Hamburger system in f32 arithmetic, the steps of [`hamburger_roots`].
+pub(crate) fn hamburger_roots_f32(b: [f32; 4], zf: f32) -> (f32, f32) {
     let [b1, b2, b3, b4] = b;
     let pivot = MSM_PIVOT as f32;
     let l22 = (b2 - b1 * b1).max(pivot).sqrt();
