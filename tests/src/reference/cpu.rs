@@ -695,22 +695,8 @@ pub fn msm_intensity(b: [f64; 4], zf: f64) -> f64 {
 /// `a33 = b4`), so that the error model can perturb the entries independently, as the
 /// backward error of a Cholesky solve does.
 pub fn msm_bound(a: [f64; 5], b1: f64, b2: f64, zf: f64) -> f64 {
-    let [a12, a13, a22, a23, a33] = a;
-    // Cholesky factor of the matrix = L L^T, with L = [1 0 0; a12 l22 0; a13 l32 l33]
-    let l22 = (a22 - a12 * a12).max(MSM_PIVOT).sqrt();
-    let l32 = (a23 - a12 * a13) / l22;
-    let l33 = (a33 - a13 * a13 - l32 * l32).max(MSM_PIVOT).sqrt();
-    // L y = (1, zf, zf^2): y1 = 1
-    let y2 = (zf - a12) / l22;
-    let y3 = (zf * zf - a13 - l32 * y2) / l33;
-    // L^T c = y
-    let c3 = y3 / l33;
-    let c2 = (y2 - l32 * c3) / l22;
-    let c1 = 1.0 - a12 * c2 - a13 * c3;
-    // the roots z2 <= z3 of c3 z^2 + c2 z + c1 = 0
-    let (p, q) = (c2 / c3, c1 / c3);
-    let r = (0.25 * p * p - q).max(0.0).sqrt();
-    let (z2, z3) = (-0.5 * p - r, -0.5 * p + r);
+    // the Cholesky solve and the roots z2 <= z3 of c3 z^2 + c2 z + c1 = 0
+    let (z2, z3) = super::moments::hamburger_roots(a, zf);
     if zf <= z2 {
         0.0
     } else if zf <= z3 {
