@@ -4,7 +4,10 @@
 //! [0, 1]; at light size 0 they reduce to their point-light bases (CSM at the finest level,
 //! the hard shadow map); where no occluder lies in front of the receiver (1 - s_f -> 0) CSSM's
 //! guarded division gives the lit fallback; and both penumbrae widen with the light, PCSS's
-//! by Fernando's predicted width.
+//! by Fernando's predicted width. Variance and moment soft shadow maps (techniques/vssm.ron,
+//! techniques/mssm.ron) find an occluder's depth in their blocker searches and give
+//! Fernando's filter width, read from their debug outputs (a wrong sign in either blocker
+//! estimate fails it).
 //! Without an adapter these tests fail, they never skip.
 
 mod support;
@@ -314,5 +317,71 @@ fn cssm_penumbra_widens_as_the_light_grows() {
             (0.6 * expected..=1.2 * expected).contains(&growth),
             "filter {filter}: grew by {growth} pixels from light width 1 to 4, expected about {expected}: {widths:?}"
         );
+    }
+}
+
+#[test]
+fn vssm_and_mssm_find_the_blockers_depth_and_pcss_s_penumbra_width() {
+    // An occluder at z = 0.3 over u < 1/2 (view distance 9.2) and, over u >= 1/2, the flat
+    // receiver's own depth 0.75 (distance 11): the receiver drawn into the map, the
+    // non-blockers at the receiver's depth, as VSSM's blocker estimate (Yang et al. 2010,
+    // section 3) takes them. Both searches must then find the occluder's depth: VSSM's
+    // one-sided bound is exact for two depths one of which is the receiver's, P = 1 - f for
+    // a blocker fraction f; MSSM's bounding distribution has its support points at the two
+    // depths, up to the moment bias alpha and the weight lit_weight on the receiver, which
+    // moves the mean by at most lit_weight (s_f - s_b) / f = 0.009 (signed depth) at f = 0.1.
+    // The filter width is then Fernando's, as in the PCSS test: (11 - 9.2) / 9.2 L at the
+    // receiver, * 8 / 11 at the near plane, / 2 in uv, * 64 texels: 4.553 L texels, which a
+    // blocker depth off by 0.005 moves by 1.3 %. Checked at the camera pixels whose search
+    // region (8.73 L texels wide) holds a blocker fraction of at least 0.1: z_occ within 0.01
+    // of 0.3 and the filter within 3 % of 4.553 L texels; where the search region holds no
+    // blocker, no penumbra (a one-texel filter).
+    let n = 64usize;
+    let plane = QueryPlane::new(n as u32, 2 * n as u32);
+    let depth: Vec<f32> = (0..n * n).map(|k| if k % n < n / 2 { 0.3 } else { 0.75 }).collect();
+    for name in ["vssm", "mssm"] {
+        let opts = sshc::CompileOptions {
+            debug: true,
+            ..Default::default()
+        };
+        let src = technique_source(name);
+        let c = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(name, &src)));
+        for light in [1.0f32, 2.0] {
+            let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+            ex.bind_scene(&flat_inputs(&plane, light)).unwrap_or_else(|e| panic!("{e}"));
+            ex.set_depth_override(Some(depth.clone()));
+            ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
+            let z_occ = ex.read_debug(0, "z_occ").unwrap_or_else(|e| panic!("{e}"));
+            let filter = ex.read_debug(0, "filter_texels").unwrap_or_else(|e| panic!("{e}"));
+            let (search, width) = (8.727 * light as f64, 4.553 * light as f64);
+            let (mut checked, mut unshadowed) = (0, 0);
+            for x in 0..2 * n as u32 {
+                // the blocker fraction of the search box about texel coordinate u n
+                let u = (x as f64 + 0.5) / 2.0;
+                let f = ((n as f64 / 2.0 - (u - search / 2.0)) / search).clamp(0.0, 1.0);
+                let (z, w) = (z_occ.at(x, n as u32)[0] as f64, filter.at(x, n as u32)[0] as f64);
+                if f >= 0.1 {
+                    assert!(
+                        (z - 0.3).abs() <= 0.01,
+                        "{name}, light {light}, pixel {x} (blocker fraction {f:.2}): z_occ {z}"
+                    );
+                    assert!(
+                        (w - width).abs() <= 0.03 * width,
+                        "{name}, light {light}, pixel {x}: the filter is {w} texels wide, Fernando's width {width:.3}"
+                    );
+                    checked += 1;
+                } else if f == 0.0 && u > n as f64 / 2.0 + search / 2.0 + 1.0 {
+                    assert!(
+                        (w - 1.0).abs() < 1e-3,
+                        "{name}, light {light}, pixel {x}: no blocker, but a {w}-texel filter"
+                    );
+                    unshadowed += 1;
+                }
+            }
+            assert!(
+                checked > 60 && unshadowed > 10,
+                "{name}, light {light}: {checked} and {unshadowed} pixels checked"
+            );
+        }
     }
 }
