@@ -168,7 +168,7 @@ pub fn write(out: &Path, o: &Outputs) -> Result<(), String> {
             ];
             for (suffix, (y_of, y_label), metric) in metrics {
                 for ext in ["svg", "png"] {
-                    let p = out.join(format!("pareto-{scene}-{what}{suffix}.{ext}"));
+                    let p = out.join(chart_file(&scene, what, suffix, ext));
                     pareto(
                         &p,
                         &these,
@@ -308,6 +308,12 @@ fn markdown(rows: &[Row], reference: &str, pixels: PixelSet) -> String {
 }
 
 /// The configurations no other one beats on both axes (lower x and lower error).
+/// A chart's file name: `pareto-SCENE-WHAT[-flip].EXT`, the scene's row name with its
+/// spaces as `-` (a scene of several lights has a row per light, `three-lights light 0`).
+fn chart_file(scene: &str, what: &str, suffix: &str, ext: &str) -> String {
+    format!("pareto-{}-{what}{suffix}.{ext}", scene.replace(' ', "-"))
+}
+
 fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
     let mut p: Vec<(f64, f64)> = points.to_vec();
     p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
@@ -425,6 +431,15 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn chart_files_have_no_spaces() {
+        assert_eq!(
+            chart_file("three-lights light 0", "time", "-flip", "svg"),
+            "pareto-three-lights-light-0-time-flip.svg"
+        );
+        assert_eq!(chart_file("bunny", "memory", "", "png"), "pareto-bunny-memory.png");
+    }
 
     #[test]
     fn pareto_front_keeps_only_undominated_points() {
