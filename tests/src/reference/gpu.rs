@@ -63,7 +63,7 @@ struct Program {
 }
 
 /// `program!(file, entry, [slots], shade)`: the shader source comes from `shaders/<file>`;
-/// `program!(file + tail, ...)` appends `shaders/<tail>`.
+/// `program!(file + tail + ..., ...)` appends `shaders/<tail>`, each in turn.
 macro_rules! program {
     ($file:literal, $entry:literal, [$($slot:ident),*], $shade:literal) => {
         Program {
@@ -75,14 +75,14 @@ macro_rules! program {
             tail: "",
         }
     };
-    ($file:literal + $tail:literal, $entry:literal, [$($slot:ident),*], $shade:literal) => {
+    ($file:literal $(+ $tail:literal)+, $entry:literal, [$($slot:ident),*], $shade:literal) => {
         Program {
             file: $file,
             source: include_str!(concat!("shaders/", $file)),
             entry: $entry,
             slots: &[$(Slot::$slot),*],
             shade: $shade,
-            tail: include_str!(concat!("shaders/", $tail)),
+            tail: concat!($(include_str!(concat!("shaders/", $tail)), "\n"),+),
         }
     };
 }
@@ -99,7 +99,12 @@ const SHADE_HARD: Program = program!("shade_hard.wgsl", "main", [Read, ReadWrite
 const SHADE_PCF: Program = program!("shade_pcf.wgsl", "main", [Read, ReadWrite, Depth, Uniform], true);
 const SHADE_VSM: Program = program!("shade_vsm.wgsl", "main", [Read, ReadWrite, Filtered, Sampler, Uniform], true);
 const SHADE_EVSM: Program = program!("shade_evsm.wgsl", "main", [Read, ReadWrite, Filtered, Sampler, Uniform], true);
-const SHADE_MSM: Program = program!("shade_msm.wgsl", "main", [Read, ReadWrite, Filtered, Sampler, Uniform], true);
+const SHADE_MSM: Program = program!(
+    "shade_msm.wgsl" + "hamburger.wgsl",
+    "main",
+    [Read, ReadWrite, Filtered, Sampler, Uniform],
+    true
+);
 /// By `classify`: none, threshold (7.3.2), z-max (7.3.1).
 const SHADE_ESM: [Program; 3] = [
     program!("shade_esm.wgsl", "plain", [Read, ReadWrite, Filtered, Sampler, Uniform], true),
@@ -128,7 +133,7 @@ const SHADE_CSSM_MIPS: Program = program!(
     true
 );
 const SHADE_CSSM_TABLE: Program = program!(
-    "cssm_table.wgsl" + "shade_cssm.wgsl",
+    "cssm_table.wgsl" + "shade_cssm.wgsl" + "box_runs.wgsl",
     "main",
     [Read, ReadWrite, Read, Uniform, Read, Read],
     true
@@ -139,14 +144,12 @@ const SAT_F32_ROWS: Program = program!("sat_f32.wgsl", "rows", [Texels, ReadWrit
 const SAT_F32_COLUMNS: Program = program!("sat_f32.wgsl", "columns", [Texels, ReadWrite, Uniform], false);
 const SHADE_VSSM: Program = program!("shade_vssm.wgsl" + "box_runs.wgsl", "main", [Read, ReadWrite, Read, Uniform], true);
 const MAP_MSSM: Program = program!("map_mssm.wgsl", "main", [Depth, Write, Uniform], false);
-const SHADE_MSSM: Program = Program {
-    file: "shade_mssm.wgsl",
-    source: include_str!("shaders/shade_mssm.wgsl"),
-    entry: "main",
-    slots: &[Slot::Read, Slot::ReadWrite, Slot::Read, Slot::Uniform],
-    shade: true,
-    tail: concat!(include_str!("shaders/box_runs.wgsl"), "\n", include_str!("shaders/hamburger.wgsl")),
-};
+const SHADE_MSSM: Program = program!(
+    "shade_mssm.wgsl" + "box_runs.wgsl" + "hamburger.wgsl",
+    "main",
+    [Read, ReadWrite, Read, Uniform],
+    true
+);
 const SHADE_MSM_HAUSDORFF: Program = program!(
     "shade_msm_hausdorff.wgsl" + "hamburger.wgsl",
     "main",

@@ -1,7 +1,7 @@
 // `sample_box` (docs/language.md 8.7): one axis of the box w wide (uv, at least one texel)
 // centred at c (clamped to the map), clipped to the map, as runs [start, end) of texels with
 // the covered fraction of each: a partial first texel, whole texels, a partial last texel.
-// Appended to the Shade shaders that read summed-area tables (VSSM, MSSM).
+// Appended to the Shade shaders that read summed-area tables (CSSM, VSSM, MSSM).
 
 struct Runs {
     start: vec3<i32>,

@@ -13,36 +13,7 @@
 // 2 a_k / c_k for k = 1..M
 @group(0) @binding(5) var<storage, read> amplitude: array<f32>;
 
-// one axis of the box: runs [start, end) of texels with the covered fraction of each
-struct Runs {
-    start: vec3<i32>,
-    end: vec3<i32>,
-    weight: vec3<f32>,
-    length: f32,
-}
-
-fn runs(c: f32, w: f32) -> Runs {
-    let n = params.size;
-    let last = i32(n) - 1;
-    let wt = max(w * n, 1.0);
-    let centre = clamp(c * n, 0.0, n);
-    let x0 = max(centre - 0.5 * wt, 0.0);
-    let x1 = min(centre + 0.5 * wt, n);
-    let a = clamp(i32(floor(x0)), 0, last);
-    let b = clamp(i32(ceil(x1)) - 1, 0, last);
-    var r: Runs;
-    r.length = x1 - x0;
-    if (a == b) {
-        r.start = vec3<i32>(a, 0, 0);
-        r.end = vec3<i32>(a + 1, 0, 0);
-        r.weight = vec3<f32>(x1 - x0, 0.0, 0.0);
-    } else {
-        r.start = vec3<i32>(a, a + 1, b);
-        r.end = vec3<i32>(a + 1, b, b + 1);
-        r.weight = vec3<f32>(f32(a + 1) - x0, 1.0, x1 - f32(b));
-    }
-    return r;
-}
+// one axis of the box: `box_axis` (box_runs.wgsl, appended)
 
 // table entry (x, y) of channel c, 0 left of or above the map
 fn entry(c: u32, x: i32, y: i32) -> u32 {
@@ -63,8 +34,8 @@ fn block(c: u32, x0: i32, x1: i32, y0: i32, y1: i32) -> u32 {
 
 // the mean of four channels (from `first`) over the box, in [0, 1] (codes / 255)
 fn box_mean(first: u32, uv: vec2<f32>, u: vec2<f32>) -> vec4<f32> {
-    let rx = runs(uv.x, u.x);
-    let ry = runs(uv.y, u.y);
+    let rx = box_axis(uv.x, u.x, params.size);
+    let ry = box_axis(uv.y, u.y, params.size);
     var sum = vec4<f32>(0.0);
     for (var j = 0; j < 3; j++) {
         for (var i = 0; i < 3; i++) {

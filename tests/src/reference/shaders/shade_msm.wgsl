@@ -15,32 +15,9 @@ struct Params {
 @group(0) @binding(3) var linear_clamp: sampler;
 @group(0) @binding(4) var<uniform> params: Params;
 
-const PIVOT: f32 = 1e-12;
-
+// the bound: hamburger.wgsl (appended)
 fn intensity(b: vec4<f32>, zf: f32) -> f32 {
-    // [1 b1 b2; b1 b2 b3; b2 b3 b4] = L L^T, L = [1 0 0; b1 l22 0; b2 l32 l33]
-    let l22 = sqrt(max(b.y - b.x * b.x, PIVOT));
-    let l32 = (b.z - b.x * b.y) / l22;
-    let l33 = sqrt(max(b.w - b.y * b.y - l32 * l32, PIVOT));
-    // forward substitution of (1, zf, zf^2), then back substitution
-    let y2 = (zf - b.x) / l22;
-    let y3 = (zf * zf - b.y - l32 * y2) / l33;
-    let c3 = y3 / l33;
-    let c2 = (y2 - l32 * c3) / l22;
-    let c1 = 1.0 - b.x * c2 - b.y * c3;
-    // roots of c3 z^2 + c2 z + c1
-    let p = c2 / c3;
-    let q = c1 / c3;
-    let r = sqrt(max(0.25 * p * p - q, 0.0));
-    let z2 = -0.5 * p - r;
-    let z3 = -0.5 * p + r;
-    if (zf <= z2) {
-        return 0.0;
-    }
-    if (zf <= z3) {
-        return (zf * z3 - b.x * (zf + z3) + b.y) / ((z3 - z2) * (zf - z2));
-    }
-    return 1.0 - (z2 * z3 - b.x * (z2 + z3) + b.y) / ((zf - z2) * (zf - z3));
+    return hamburger_intensity(hamburger_roots(b, zf), b, zf);
 }
 
 @compute @workgroup_size(64)
