@@ -180,6 +180,7 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
         passes,
         removed: ir.removed.to_vec(),
         specialised: ir.ir.specialised.as_ref().map(|s| s.facts.clone()),
+        shadow_map: ir.ir.shadow_map,
     }
 }
 

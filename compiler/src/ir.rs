@@ -1009,6 +1009,8 @@ pub struct Ir {
     pub arena: Arena,
     /// Light samples the per-sample passes render one view each of (1 without any).
     pub samples: u32,
+    /// The technique's `shadow_map:` (a tuned file's map size), carried to the graph.
+    pub shadow_map: Option<u32>,
     /// The scene it was specialised for (`--scene`), and what that folded.
     pub specialised: Option<Specialised>,
     /// The precisions left to the compiler (`Auto`) and why each was chosen, one line

@@ -37,6 +37,7 @@ pub mod rounding;
 pub mod schedule;
 pub mod span;
 pub mod tables;
+pub mod tune;
 pub mod types;
 
 pub use diag::{Diagnostic, Diagnostics};

@@ -738,6 +738,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         passes,
         arena,
         samples: checked.samples,
+        shadow_map: t.shadow_map.as_ref().map(|s| s.value),
         debug,
         debug_omitted,
         specialised: sym.scene.as_ref().map(|facts| Specialised {

@@ -82,6 +82,7 @@ mod tests {
             }],
             removed: vec![],
             specialised: None,
+            shadow_map: None,
         }
     }
 

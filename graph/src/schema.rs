@@ -182,6 +182,11 @@ pub struct PassGraph {
     /// refuses a scene that breaks them. Absent for a generic graph.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub specialised: Option<SceneFacts>,
+    /// The shadow-map size the technique names (`shadow_map:`, as `sshc tune` writes it):
+    /// a host uses it where nothing else sets the size (a command's `--shadow-map`
+    /// outranks it, and it outranks a scene file's). Absent for most techniques.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shadow_map: Option<u32>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -617,11 +622,18 @@ pub enum GraphError {
     },
     /// Scene facts (`specialised`) no scene can have.
     Facts(String),
+    /// A `shadow_map` size outside 1..=[`MAX_SHADOW_MAP`].
+    ShadowMap(u32),
 }
+
+/// The largest shadow map a technique or graph may name (texels a side): wgpu guarantees
+/// 8,192; the devices sshc runs on reach 16,384 at most.
+pub const MAX_SHADOW_MAP: u32 = 16384;
 
 impl fmt::Display for GraphError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            GraphError::ShadowMap(n) => write!(f, "shadow_map {n} is outside 1..={MAX_SHADOW_MAP} texels"),
             GraphError::Syntax { message, line, column } => write!(f, "{line}:{column}: not a valid pass graph: {message}"),
             GraphError::Version { found, expected } => write!(
                 f,

@@ -72,6 +72,11 @@ impl PassGraph {
                 g.samples
             )));
         }
+        if let Some(n) = g.shadow_map
+            && !(1..=crate::MAX_SHADOW_MAP).contains(&n)
+        {
+            return Err(GraphError::ShadowMap(n));
+        }
         for t in &g.textures {
             if t.views != 1 && t.views != g.samples {
                 return Err(GraphError::Texture {

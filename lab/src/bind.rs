@@ -252,7 +252,7 @@ pub fn scene_inputs_with_samples(scene: &Scene, n: u32) -> Result<SceneInputs, S
 }
 
 /// Cascaded shadow maps for a light at infinity (`bind::cascade_inputs`).
-#[derive(clap::Args, Clone, Copy, Debug)]
+#[derive(clap::Args, Clone, Copy, Debug, Default)]
 pub struct Cascading {
     /// Split the light's view into N cascades (1 to 4) over the camera's view depth, each
     /// fitted to its slice and `--shadow-map` texels wide; 1 is the scene's own fit. A

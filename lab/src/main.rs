@@ -3,7 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use sshc::{CompileOptions, Diagnostics, DumpPhase};
-use sshc_lab::cmd::{compare, render, sweep, truth, verify};
+use sshc_lab::cmd::{compare, render, sweep, truth, tune, verify};
 use sshc_lab::session::{Variants, pair, read, report};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -72,6 +72,11 @@ enum Command {
     /// a slice, `--slurm` writes job scripts for a Slurm cluster, and `sshc sweep merge`
     /// joins the shards' folders (docs/cluster.md).
     Sweep(sweep::SweepCommand),
+    /// Choose the most accurate configuration a budget allows on your scenes: techniques,
+    /// params in their declared ranges, precisions, schedules and the shadow-map size,
+    /// searched by successive halving against the ray-traced truth; writes tuned.ron (a
+    /// technique file with the chosen values), tune.md and tune.csv (docs/tune.md).
+    Tune(Box<tune::TuneArgs>),
     /// Run a technique on the GPU over synthetic depth fields and scene depth maps and
     /// compare every receiver with an f64 evaluation of the same technique on the CPU: a
     /// table and a verdict per input (agrees, differs, lossy).
@@ -171,6 +176,7 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Truth(args) => truth::truth(args),
         Command::Compare(args) => compare::compare(args),
         Command::Sweep(args) => sweep::sweep(args),
+        Command::Tune(args) => tune::tune(*args),
         #[cfg(feature = "view")]
         Command::View(args) => sshc_lab::view::view(args),
         Command::Verify(args) => verify::verify(args),

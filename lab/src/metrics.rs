@@ -80,6 +80,14 @@ pub struct Accuracy {
     pub facing: ErrorStats,
     /// Facing pixels with `0 < truth < 1`.
     pub penumbra: ErrorStats,
+    /// Facing pixels the truth says are lit (`truth = 1`): a negative mean there is acne
+    /// or over-darkening, what a too small depth bias shows ([`regions`]).
+    #[serde(default)]
+    pub lit: ErrorStats,
+    /// Facing pixels in umbra (`truth = 0`): a positive mean there is light leaking or
+    /// peter-panning, what a too large bias shows.
+    #[serde(default)]
+    pub umbra: ErrorStats,
     /// The shadow on the ground ([`shadow_on_ground`]), where the scene has objects that
     /// cast no shadow (`None` otherwise; [`accuracy`] leaves it `None`).
     pub ground: Option<ErrorStats>,
@@ -192,15 +200,49 @@ pub fn error_stats(estimate: &[f32], truth: &[f32], mask: &[bool]) -> Result<Err
     Ok(s)
 }
 
-/// [`error_stats`] over the facing pixels and over the penumbra pixels among them.
+/// The facing pixels split by what the truth says of them: (lit, `truth = 1`; umbra,
+/// `truth = 0`). With [`penumbra`] they partition `mask`. The truth's stratified estimate
+/// is exactly 1 (or 0) only where every light sample of every run was unblocked (blocked),
+/// so a pixel is never called lit for being nearly lit.
+pub fn regions(truth: &[f32], mask: &[bool]) -> Result<(Vec<bool>, Vec<bool>), MetricsError> {
+    same_len("truth and mask", truth.len(), mask.len())?;
+    Ok((
+        truth.iter().zip(mask).map(|(&t, &m)| m && t >= 1.0).collect(),
+        truth.iter().zip(mask).map(|(&t, &m)| m && t <= 0.0).collect(),
+    ))
+}
+
+/// [`error_stats`] over the facing pixels, and over each of the regions the truth splits
+/// them into: penumbra, lit and umbra ([`regions`]).
 pub fn accuracy(estimate: &[f32], truth: &[f32], facing: &[bool]) -> Result<Accuracy, MetricsError> {
     let pen = penumbra(truth, facing)?;
+    let (lit, umbra) = regions(truth, facing)?;
     Ok(Accuracy {
         facing: error_stats(estimate, truth, facing)?,
         penumbra: error_stats(estimate, truth, &pen)?,
+        lit: error_stats(estimate, truth, &lit)?,
+        umbra: error_stats(estimate, truth, &umbra)?,
         ground: None,
         flip: None,
     })
+}
+
+/// The region split in words: each region's signed mean and RMS (0..255), and what a
+/// sign means there (`sshc compare` and `sshc tune` print it).
+pub fn split_line(a: &Accuracy) -> String {
+    let part = |what: &str, s: &ErrorStats| {
+        if s.pixels == 0 {
+            format!("{what}: no pixels")
+        } else {
+            format!("{what} mean {:+.2} RMS {:.2} over {} px", s.mean, s.rms, s.pixels)
+        }
+    };
+    format!(
+        "error by region (signed, technique - truth, 0..255): {}; {}; {} (lit < 0: acne or darkening; umbra and penumbra > 0: leaks or peter-panning)",
+        part("lit", &a.lit),
+        part("penumbra", &a.penumbra),
+        part("umbra", &a.umbra),
+    )
 }
 
 /// FLIP's viewing condition, in pixels per degree of visual angle: FLIP's own default, 67

@@ -17,6 +17,34 @@ pub fn read(path: &Path) -> Result<String, String> {
     std::fs::read_to_string(path).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))
 }
 
+/// Reads a text file of at most `max` bytes that is a regular file (not a FIFO, a device or
+/// a folder): a hostile path neither hangs the reader nor fills its memory.
+pub fn read_capped(path: &Path, max: u64) -> Result<String, String> {
+    use std::io::Read as _;
+    let e = |e: std::io::Error| format!("error: cannot read `{}`: {e}", path.display());
+    let meta = std::fs::metadata(path).map_err(e)?;
+    if !meta.is_file() {
+        return Err(format!("error: `{}` is not a regular file", path.display()));
+    }
+    if meta.len() > max {
+        return Err(format!(
+            "error: `{}` holds {} bytes, above the limit of {max}",
+            path.display(),
+            meta.len()
+        ));
+    }
+    let mut text = String::new();
+    std::fs::File::open(path)
+        .map_err(e)?
+        .take(max + 1)
+        .read_to_string(&mut text)
+        .map_err(e)?;
+    if text.len() as u64 > max {
+        return Err(format!("error: `{}` grew past the limit of {max} bytes while read", path.display()));
+    }
+    Ok(text)
+}
+
 /// Prints diagnostics against their source file on standard error (coloured on a terminal).
 pub fn report(diags: &Diagnostics, path: &Path, source: &str) {
     let choice = if std::io::stderr().is_terminal() {
@@ -167,6 +195,18 @@ impl Overrides {
         specialise(&mut opts, input, path, &scene, self.generic || self.cascading.on(&scene))?;
         let ex = executor(gpu, input, &opts)?;
         stages.done("compile");
+        // a tuned technique names its shadow-map size: it outranks the scene file's, and
+        // `--shadow-map` outranks it
+        if let (None, Some(n)) = (self.shadow_map, ex.graph.shadow_map)
+            && n != scene.shadow_map
+        {
+            eprintln!(
+                "note: shadow map {n} x {n} texels, as the technique's `shadow_map:` names (the scene's is {}; `--shadow-map` overrides both)",
+                scene.shadow_map
+            );
+            scene.shadow_map = n;
+            scene.check_precision().map_err(|e| e.to_string())?;
+        }
         Ok((scene, ex))
     }
 }

@@ -300,13 +300,17 @@ fn shaft(light: &Light) -> Shaft {
 
 /// A small deterministic generator (SplitMix64).
 #[derive(Clone, Debug)]
-struct Rng(u64);
+pub(crate) struct Rng(u64);
 
 impl Rng {
-    fn new(seed: u64) -> Self {
+    pub(crate) fn new(seed: u64) -> Self {
         Rng(mix(seed ^ 0x243f_6a88_85a3_08d3))
     }
-    fn next_u64(&mut self) -> u64 {
+    /// Uniform in [0, 1), 53 bits.
+    pub(crate) fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+    pub(crate) fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         mix(self.0)
     }

@@ -180,3 +180,26 @@ fn a_non_finite_or_absurd_visibility_is_refused_before_any_figure() {
     masked[200] = false;
     assert!(metrics::check_visibility("v", &vis, &masked).is_ok());
 }
+
+/// The region split: lit (truth 1), penumbra and umbra (truth 0) partition the facing
+/// pixels, and the signs tell acne (a lit pixel darkened: negative) from a leak (an umbra
+/// pixel brightened: positive).
+#[test]
+fn regions_split_the_facing_pixels_and_keep_the_sign() {
+    // truth: lit, lit, penumbra, umbra, umbra, lit but not facing
+    let truth = [1.0, 1.0, 0.5, 0.0, 0.0, 1.0];
+    let facing = [true, true, true, true, true, false];
+    // acne on the first lit pixel (-0.2), a leak in the first umbra pixel (+0.4)
+    let est = [0.8, 1.0, 0.5, 0.4, 0.0, 0.0];
+    let (lit, umbra) = metrics::regions(&truth, &facing).unwrap();
+    assert_eq!(lit, [true, true, false, false, false, false]);
+    assert_eq!(umbra, [false, false, false, true, true, false]);
+    let a = metrics::accuracy(&est, &truth, &facing).unwrap();
+    assert_eq!((a.lit.pixels, a.penumbra.pixels, a.umbra.pixels), (2, 1, 2));
+    assert_eq!(a.lit.pixels + a.penumbra.pixels + a.umbra.pixels, a.facing.pixels);
+    assert!((a.lit.mean - 255.0 * -0.1).abs() < 1e-4, "{a:?}");
+    assert!((a.umbra.mean - 255.0 * 0.2).abs() < 1e-4, "{a:?}");
+    assert!(a.penumbra.mean.abs() < EPS);
+    let line = metrics::split_line(&a);
+    assert!(line.contains("lit mean -25.50") && line.contains("umbra mean +51.00"), "{line}");
+}

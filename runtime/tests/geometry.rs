@@ -192,6 +192,7 @@ fn graph() -> (PassGraph, Vec<(String, String)>) {
         ],
         removed: vec![],
         specialised: None,
+        shadow_map: None,
     };
     (graph, vec![("classify.wgsl".into(), classify), ("draw.wgsl".into(), draw)])
 }

@@ -320,12 +320,17 @@ fn graph(u: &mut Unstructured) -> Result<PassGraph> {
         } else {
             None
         },
+        // 0 and sizes past any device too: the validation refuses them
+        shadow_map: if u.arbitrary()? { Some(*u.choose(&[0, 1, 1024, 16384, 16385, u32::MAX])?) } else { None },
     })
 }
 
 /// What `from_ron` promises of a graph it accepts, checked without the library's helpers.
 fn check_accepted(g: &PassGraph, text: &str) {
     assert_eq!(g.version, SCHEMA_VERSION);
+    if let Some(n) = g.shadow_map {
+        assert!((1..=sshc_graph::MAX_SHADOW_MAP).contains(&n), "accepted a shadow map of {n} texels: {text}");
+    }
     for p in &g.params {
         assert!(p.value.is_finite(), "accepted a non-finite param value: {text}");
         if let Some((lo, hi)) = p.range {

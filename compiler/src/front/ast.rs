@@ -25,7 +25,50 @@ pub struct Technique {
     /// `light_samples`: how many light samples the `PerSample` passes render views of, a
     /// compile-time expression (a fixed param); absent: 1.
     pub light_samples: Option<Expr>,
+    /// `shadow_map: N`: the shadow-map size the technique was tuned for (`sshc tune` writes
+    /// it); a command's `--shadow-map` outranks it, and it outranks the scene file's.
+    pub shadow_map: Option<Spanned<u32>>,
+    /// `tune: { "AXIS": ... }`: how `sshc tune` may vary each axis (docs/tune.md).
+    pub tune: Vec<TuneAxis>,
     pub span: Span,
+}
+
+/// One entry of a technique's `tune:` block: an axis of `sshc tune`'s search (a param's
+/// name, `shadow_map`, `cascades`, `precision:NAME` or `schedule:PASS`) narrowed to a list
+/// of values or a sub-range, or frozen at the technique's value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TuneAxis {
+    pub name: Spanned<String>,
+    pub choice: TuneChoice,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum TuneChoice {
+    /// `[v, ...]`: these values only.
+    Values(Vec<Spanned<TuneValue>>),
+    /// `(lo, hi)`: a sub-range of the param's declared range.
+    Range(Spanned<f64>, Spanned<f64>),
+    /// `Frozen`: the technique's own value.
+    Frozen,
+}
+
+/// A value in a `tune:` list: a number, a boolean or a name (`F16`, `Compute`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum TuneValue {
+    Number(f64),
+    Bool(bool),
+    Name(String),
+}
+
+impl fmt::Display for TuneValue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TuneValue::Number(x) => write!(f, "{}", crate::front::expr::fmt_float(*x).trim_end_matches(".0")),
+            TuneValue::Bool(b) => write!(f, "{b}"),
+            TuneValue::Name(n) => f.write_str(n),
+        }
+    }
 }
 
 /// The light model a technique assumes: the pass-graph schema's type, so the compiler
@@ -252,6 +295,17 @@ impl PassKind {
         }
     }
 
+    /// Where the technique writes the pass's `schedule:` value, if it does.
+    pub fn schedule_span(&self) -> Option<Span> {
+        match self {
+            PassKind::Map { schedule, .. }
+            | PassKind::Filter { schedule, .. }
+            | PassKind::Mipmap { schedule, .. }
+            | PassKind::Shade { schedule, .. } => schedule.as_ref().map(|s| s.span),
+            PassKind::Depth { .. } | PassKind::SummedArea { .. } | PassKind::Geometry { .. } => None,
+        }
+    }
+
     /// Whether a pass kind has schedules to choose from.
     pub fn schedulable(&self) -> bool {
         matches!(
@@ -277,6 +331,14 @@ impl Schedule {
         match self {
             Schedule::Fragment => "fragment",
             Schedule::Compute => "compute",
+        }
+    }
+
+    /// The name a technique file writes (`Compute`).
+    pub fn variant(self) -> &'static str {
+        match self {
+            Schedule::Fragment => Schedule::NAMES[0],
+            Schedule::Compute => Schedule::NAMES[1],
         }
     }
 }

@@ -327,8 +327,13 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
         }
     };
     let light_samples = f.opt("light_samples")?.map(expression).transpose()?;
+    let shadow_map = f.opt("shadow_map")?.map(shadow_map_size).transpose()?;
+    let tune = match f.opt("tune")? {
+        None => vec![],
+        Some(n) => tune_block(n)?,
+    };
     f.finish()?;
-    Ok(Technique {
+    let t = Technique {
         name,
         title,
         paper,
@@ -340,8 +345,91 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
         arrays,
         passes,
         light_samples,
+        shadow_map,
+        tune,
         span: root.span,
-    })
+    };
+    crate::tune::check(&t)?;
+    Ok(t)
+}
+
+pub use sshc_graph::MAX_SHADOW_MAP;
+
+/// `shadow_map: N`, a whole number of texels in 1..=[`MAX_SHADOW_MAP`].
+fn shadow_map_size(node: &Node) -> Result<Spanned<u32>, Diagnostic> {
+    match node.value {
+        Value::Int(n) if (1..=i64::from(MAX_SHADOW_MAP)).contains(&n) => Ok(Spanned::new(n as u32, node.span)),
+        _ => Err(err(
+            node.span,
+            format!(
+                "`shadow_map` needs a whole number of texels from 1 to {MAX_SHADOW_MAP}, found {}",
+                node.describe()
+            ),
+            "expected a texel count such as 1024",
+        )),
+    }
+}
+
+/// `tune: { "AXIS": [values] | (lo, hi) | Frozen, ... }`: the axes are checked against the
+/// technique's params, channels and passes by [`crate::tune::check`].
+fn tune_block(node: &Node) -> Result<Vec<TuneAxis>, Diagnostic> {
+    let Value::Map(entries) = &node.value else {
+        return Err(err(
+            node.span,
+            format!("expected a map `{{ \"AXIS\": [values] }}`, found {}", node.describe()),
+            "expected a map",
+        ));
+    };
+    let mut out: Vec<TuneAxis> = Vec::new();
+    for (k, v) in entries {
+        let name = string(k)?;
+        if let Some(first) = out.iter().find(|a| a.name.value == name.value) {
+            return Err(err(name.span, format!("the axis `{}` is named twice", name.value), "again here")
+                .help(format!("its first entry is at byte {}: keep one", first.name.span.start)));
+        }
+        let choice = match &v.value {
+            Value::Ident(w) if w == "Frozen" => TuneChoice::Frozen,
+            Value::List(items) if items.is_empty() => {
+                return Err(err(v.span, format!("the axis `{}` has no values", name.value), "empty list")
+                    .help("give at least one value, or write `Frozen` to keep the technique's own"));
+            }
+            Value::List(items) => TuneChoice::Values(
+                items
+                    .iter()
+                    .map(|i| {
+                        let value = match &i.value {
+                            Value::Int(x) => TuneValue::Number(*x as f64),
+                            Value::Float(x) => TuneValue::Number(*x),
+                            Value::Bool(b) => TuneValue::Bool(*b),
+                            Value::Ident(n) => TuneValue::Name(n.clone()),
+                            _ => {
+                                return Err(err(
+                                    i.span,
+                                    format!("expected a number, `true`, `false` or a name such as `F16`, found {}", i.describe()),
+                                    "not a value of an axis",
+                                ));
+                            }
+                        };
+                        Ok(Spanned::new(value, i.span))
+                    })
+                    .collect::<Result<_, _>>()?,
+            ),
+            Value::Tuple { name: None, items } if items.len() == 2 => TuneChoice::Range(number(&items[0])?, number(&items[1])?),
+            _ => {
+                return Err(err(
+                    v.span,
+                    format!("expected a list of values, a range `(lo, hi)` or `Frozen`, found {}", v.describe()),
+                    "not an axis choice",
+                ));
+            }
+        };
+        out.push(TuneAxis {
+            name,
+            choice,
+            span: k.span.join(v.span),
+        });
+    }
+    Ok(out)
 }
 
 /// A value type of the expression language: `F32`, `I32`, `U32`, `Bool`, `Vec2` to `Vec4`.

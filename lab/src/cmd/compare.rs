@@ -279,6 +279,8 @@ fn figure_lines(f: &FigureInputs) -> Vec<String> {
         f.fit.clone(),
         stats("facing the light", &f.acc.facing),
         stats("in penumbra (0 < truth < 1)", &f.acc.penumbra),
+        metrics::split_line(&f.acc),
+        format!("signed mean error facing the light: {:+.2} (0..255)", f.acc.facing.mean),
     ];
     if let Some(g) = &f.acc.ground {
         lines.push(stats("on the shadow on the ground (Lawlor 2006, fig. 10)", g));

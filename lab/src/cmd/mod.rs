@@ -5,4 +5,5 @@ pub mod compare;
 pub mod render;
 pub mod sweep;
 pub mod truth;
+pub mod tune;
 pub mod verify;

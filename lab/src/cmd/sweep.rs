@@ -143,12 +143,12 @@ struct Entry {
 
 /// One configuration: a technique with one value on each of its axes, on one scene.
 #[derive(Clone, Debug)]
-struct Config {
-    scene: usize,
-    technique: usize,
-    label: String,
+pub(crate) struct Config {
+    pub(crate) scene: usize,
+    pub(crate) technique: usize,
+    pub(crate) label: String,
     /// `name=value` on each axis, in the file's order.
-    values: Vec<(String, String)>,
+    pub(crate) values: Vec<(String, String)>,
 }
 
 impl Config {
@@ -206,25 +206,25 @@ fn configs(file: &SweepFile) -> Vec<Config> {
 
 /// What one configuration's axis values set.
 #[derive(Clone, Debug, PartialEq)]
-struct Settings {
+pub(crate) struct Settings {
     /// The `shadow_map` axis (else the scene's own).
-    shadow_map: Option<u32>,
+    pub(crate) shadow_map: Option<u32>,
     /// The `light_scale` axis (else 1).
-    light_scale: f64,
+    pub(crate) light_scale: f64,
     /// The `cascades` axis (else `--cascades` or the scene file's).
-    cascades: Option<u32>,
+    pub(crate) cascades: Option<u32>,
     /// Params, compiled in as `--set` values: each configuration compiles its technique
     /// afresh, so a fixed param (an I32 `N` of light samples) takes its value there, and
     /// the binding reads the sample count from the compiled graph
     /// ([`crate::bind::scene_inputs_for`]).
-    set: Vec<(String, String)>,
+    pub(crate) set: Vec<(String, String)>,
     /// `precision:NAME` axes.
-    precision: Vec<(String, String)>,
+    pub(crate) precision: Vec<(String, String)>,
     /// `schedule:PASS` axes (`schedule:*`: every Map, Filter and Mipmap pass).
-    schedule: Vec<(String, String)>,
+    pub(crate) schedule: Vec<(String, String)>,
 }
 
-fn settings(c: &Config) -> Result<Settings, String> {
+pub(crate) fn settings(c: &Config) -> Result<Settings, String> {
     let mut out = Settings {
         shadow_map: None,
         light_scale: 1.0,
@@ -252,12 +252,135 @@ fn scale_light(l: &mut Light, f: f32) {
     *l = l.scaled(f);
 }
 
-/// The truth of one scene at one light scale: visibility, its largest standard error,
-/// which pixels face the light, and the shadow on the ground (`metrics::ground_set`;
-/// `None` where every object casts).
-type SceneTruth = (Vec<f32>, f64, Vec<bool>, Option<Vec<bool>>, Positions);
-/// The camera's positions and normals (what FLIP shades with).
-type Positions = (Vec<glam::Vec3>, Vec<glam::Vec3>);
+/// The truth of one scene as the sweep and the tuner score against it: visibility, its
+/// largest standard error, which pixels face the light, the shadow on the ground
+/// (`metrics::ground_set`; `None` where every object casts), and the camera's positions
+/// and normals (what FLIP shades with).
+#[derive(Clone)]
+pub(crate) struct SceneTruth {
+    pub visibility: Vec<f32>,
+    pub se: f64,
+    pub facing: Vec<bool>,
+    pub ground: Option<Vec<bool>>,
+    pub positions: Vec<glam::Vec3>,
+    pub normals: Vec<glam::Vec3>,
+}
+
+impl SceneTruth {
+    /// The truth at the pixels `ex` (bound to `scene`) sees, ray-traced with `opts` (or
+    /// read from the cache they name); `quiet` runs the tracing with the progress bar
+    /// hidden.
+    pub(crate) fn at(
+        ex: &Executor,
+        scene: &crate::scene::Scene,
+        opts: &TruthOpts,
+        quiet: impl FnOnce(&dyn Fn() -> Result<crate::truth::Truth, String>) -> Result<crate::truth::Truth, String>,
+    ) -> Result<SceneTruth, String> {
+        let (p, n) = positions_normals(ex)?;
+        let t = quiet(&|| truth_at(scene, &p, &n, opts).map(|(t, _)| t))?;
+        let facing = metrics::facing_light(&p, &n, &scene.lights[0]).unwrap_or_default();
+        let ground = metrics::ground_set(scene, &t.visibility, &p, &facing).map_err(|e| format!("error: {e}"))?;
+        Ok(SceneTruth {
+            se: t.max_std_error() as f64,
+            visibility: t.visibility,
+            facing,
+            ground,
+            positions: p,
+            normals: n,
+        })
+    }
+
+    /// `vis` against this truth: RMS facing and by region, FLIP, the shadow on the ground.
+    /// `what` names the visibility in the refusal of a non-finite or out-of-range value.
+    pub(crate) fn score(&self, what: &str, vis: &[f32], scene: &crate::scene::Scene) -> Result<metrics::Accuracy, String> {
+        let m = |e: metrics::MetricsError| format!("error: {e}");
+        metrics::check_visibility(what, vis, &self.facing).map_err(m)?;
+        let mut acc = metrics::accuracy(vis, &self.visibility, &self.facing).map_err(m)?;
+        acc.flip = Some(
+            metrics::flip(
+                vis,
+                &self.visibility,
+                &self.positions,
+                &self.normals,
+                &scene.lights[0],
+                scene.camera_size(),
+                &self.facing,
+            )
+            .map_err(m)?,
+        );
+        if let Some(g) = &self.ground {
+            acc.ground = Some(metrics::error_stats(vis, &self.visibility, g).map_err(m)?);
+        }
+        Ok(acc)
+    }
+}
+
+/// One configuration run on one scene, as the sweep and the tuner measure it.
+pub(crate) struct Ran {
+    pub ex: Executor,
+    /// Median GPU ms per frame (none where the device has no timestamps).
+    pub ms: Option<f64>,
+    /// Bytes of every texture and buffer the executor holds.
+    pub peak: u64,
+    pub fetches: f64,
+    pub ops: f64,
+    pub visibility: Vec<f32>,
+}
+
+impl Settings {
+    /// The axes that change the scene: the shadow map and the light's size; the precision
+    /// budget checked again for them.
+    pub(crate) fn apply(&self, scene: &mut crate::scene::Scene) -> Result<(), String> {
+        if let Some(n) = self.shadow_map {
+            scene.shadow_map = n;
+        }
+        if let Some(l) = scene.lights.first_mut() {
+            scale_light(l, self.light_scale as f32);
+        }
+        scene.check_precision().map_err(|e| e.to_string())
+    }
+}
+
+/// Compiles `source` with the settings' params, precisions and schedules (specialised for
+/// the scene's light where the technique admits it and no cascades are on), binds `scene`
+/// (already [`Settings::apply`]'d), times `frames` frames and reads the visibility: the one
+/// measuring step of `sshc sweep` and `sshc tune`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_config(
+    gpu: &Gpu,
+    path: &Path,
+    source: &str,
+    scene: &crate::scene::Scene,
+    scene_path: &Path,
+    s: &Settings,
+    cascading: &crate::bind::Cascading,
+    frames: usize,
+) -> Result<Ran, String> {
+    // the `cascades` axis over `--cascades` (the reference is timed with the latter)
+    let cascading = crate::bind::Cascading {
+        cascades: s.cascades.or(cascading.cascades),
+        ..*cascading
+    };
+    // (generic under cascades: their views are not the scene's)
+    let facts = crate::session::scene_facts(scene_path, scene).filter(|f| sshc::admits(source, f.light) && !cascading.on(scene));
+    let compiled = compile_for(path, source, &s.set, &s.precision, &s.schedule, facts)?;
+    let mut ex = Executor::new(gpu, compiled.graph, compiled.shaders).map_err(rt)?;
+    crate::bind::check_cascades(scene, &cascading)?;
+    cascading.bind_or_scene(&mut ex, scene, false)?;
+    let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
+    let (fetches, ops) = work(&ex.graph, scene.shadow_map, scene.camera_size(), edges);
+    let ms = time_frames(&mut ex, frames)?;
+    let visibility = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
+    let peak = ex.memory().map_err(rt)?.iter().map(|(_, b)| b).sum();
+    Ok(Ran {
+        ex,
+        ms,
+        peak,
+        fetches,
+        ops,
+        visibility,
+    })
+}
 
 /// Median of per-frame GPU times (sum over passes) over `frames` frames after a warm-up.
 fn time_frames(ex: &mut Executor, frames: usize) -> Result<Option<f64>, String> {
@@ -744,64 +867,39 @@ fn measure(
         let what = format!("{} {} {}", stem(&file.scenes[c.scene]), c.label, c.describe());
         progress.doing(&what);
         let mut scene = l.scene(&file.scenes[c.scene])?;
-        let Settings {
-            shadow_map,
-            light_scale,
-            cascades,
-            set,
-            precision,
-            schedule,
-        } = settings(c)?;
-        // the `cascades` axis over `--cascades` (the reference is timed with the latter)
-        let cascading = crate::bind::Cascading {
-            cascades: cascades.or(a.cascading.cascades),
-            ..a.cascading
-        };
-        if let Some(n) = shadow_map {
-            scene.shadow_map = n;
-        }
-        if let Some(l) = scene.lights.first_mut() {
-            scale_light(l, light_scale as f32);
-        }
-        // The axes change the shadow map and the light: the precision budget again.
-        scene.check_precision().map_err(|e| e.to_string())?;
+        let settings = settings(c)?;
+        settings.apply(&mut scene)?;
         let path = l.resolve(&file.techniques[c.technique].file);
-        // specialised for the scene's light where the technique admits it
         let scene_path = l.resolve(split_entry(&file.scenes[c.scene]).0);
-        // (generic under cascades: their views are not the scene's)
-        let facts = crate::session::scene_facts(&scene_path, &scene)
-            .filter(|f| sshc::admits(&sources[c.technique], f.light) && !cascading.on(&scene));
-        let compiled = compile_for(&path, &sources[c.technique], &set, &precision, &schedule, facts)?;
-        let mut ex = Executor::new(gpu, compiled.graph, compiled.shaders).map_err(rt)?;
-        crate::bind::check_cascades(&scene, &cascading)?;
-        cascading.bind_or_scene(&mut ex, &scene, false)?;
-        let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
-        let (fetches, ops) = work(&ex.graph, scene.shadow_map, scene.camera_size(), edges);
-        let ms = time_frames(&mut ex, file.frames)?;
-        let vis = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
-        let peak = ex.memory().map_err(rt)?.iter().map(|(_, b)| b).sum();
+        let Ran {
+            ex,
+            ms,
+            peak,
+            fetches,
+            ops,
+            visibility: vis,
+        } = run_config(
+            gpu,
+            &path,
+            &sources[c.technique],
+            &scene,
+            &scene_path,
+            &settings,
+            &a.cascading,
+            file.frames,
+        )?;
+        let light_scale = settings.light_scale;
         let key = (c.scene, format!("{light_scale}"));
-        let (truth, se, facing, ground, (pos, nrm)) = match truths.iter().find(|(k, _)| *k == key) {
+        let truth = match truths.iter().find(|(k, _)| *k == key) {
             Some((_, t)) => t.clone(),
             None => {
-                let (p, n) = positions_normals(&ex)?;
-                let (t, _) = progress.bar.suspend(|| truth_at(&scene, &p, &n, &a.truth))?;
-                let facing = metrics::facing_light(&p, &n, &scene.lights[0]).unwrap_or_default();
-                let ground = metrics::ground_set(&scene, &t.visibility, &p, &facing).map_err(|e| format!("error: {e}"))?;
-                (t.visibility.clone(), t.max_std_error() as f64, facing, ground, (p, n))
+                let t = SceneTruth::at(&ex, &scene, &a.truth, |f| progress.bar.suspend(f))?;
+                truths.push((key, t.clone()));
+                t
             }
         };
-        if !truths.iter().any(|(k, _)| *k == key) {
-            truths.push((key, (truth.clone(), se, facing.clone(), ground.clone(), (pos.clone(), nrm.clone()))));
-        }
-        metrics::check_visibility(&format!("the visibility of {}", c.label), &vis, &facing).map_err(|e| format!("error: {e}"))?;
-        let mut acc = metrics::accuracy(&vis, &truth, &facing).map_err(|e| format!("error: {e}"))?;
-        acc.flip = Some(
-            metrics::flip(&vis, &truth, &pos, &nrm, &scene.lights[0], scene.camera_size(), &facing).map_err(|e| format!("error: {e}"))?,
-        );
-        if let Some(g) = &ground {
-            acc.ground = Some(metrics::error_stats(&vis, &truth, g).map_err(|e| format!("error: {e}"))?);
-        }
+        let acc = truth.score(&format!("the visibility of {}", c.label), &vis, &scene)?;
+        let se = truth.se;
         let row = Row {
             scene: stem(&file.scenes[c.scene]),
             label: c.label.clone(),

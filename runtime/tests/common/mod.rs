@@ -64,6 +64,7 @@ struct VOut {{ @builtin(position) pos: vec4<f32>, @location(0) d: f32 }}
         }],
         removed: vec![],
         specialised: None,
+        shadow_map: None,
     };
     (graph, vec![("t.depth.wgsl".into(), shader)])
 }

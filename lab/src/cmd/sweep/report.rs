@@ -344,6 +344,20 @@ fn pareto(
         .filter_map(|r| Some((r.label.clone(), x_of(r)?, y_of(r))))
         .filter(|(_, x, y)| x.is_finite() && y.is_finite() && *x > 0.0)
         .collect();
+    chart(path, &pts, None, x_label, y_label, title)
+}
+
+/// A Pareto chart of labelled points (`x > 0`, log scale), each label its own colour, the
+/// front drawn through them, and `mark` (a point and its label) drawn as a cross with its
+/// label beside it: the tuner's chosen configuration. SVG or PNG by the file's extension.
+pub(crate) fn chart(
+    path: &Path,
+    pts: &[(String, f64, f64)],
+    mark: Option<(f64, f64, &str)>,
+    x_label: &str,
+    y_label: &str,
+    title: &str,
+) -> Result<(), String> {
     if pts.is_empty() {
         return Err(format!("error: {}: nothing to plot", path.display()));
     }
@@ -354,12 +368,12 @@ fn pareto(
         .map_err(|_| "error: the bundled font cannot be read".to_string())?;
     if svg {
         let root = SVGBackend::new(path, size).into_drawing_area();
-        draw(&root, &pts, x_label, y_label, title, FONT)
+        draw(&root, pts, mark, x_label, y_label, title, FONT)
     } else {
         let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
         {
             let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
-            draw(&root, &pts, x_label, y_label, title, FONT)?;
+            draw(&root, pts, mark, x_label, y_label, title, FONT)?;
         }
         image::RgbImage::from_raw(size.0, size.1, buf)
             .ok_or_else(|| "error: chart buffer of the wrong size".to_string())?
@@ -371,6 +385,7 @@ fn pareto(
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     pts: &[(String, f64, f64)],
+    mark: Option<(f64, f64, &str)>,
     x_label: &str,
     y_label: &str,
     title: &str,
@@ -415,6 +430,14 @@ where
         .map_err(e)?
         .label("Pareto front")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK));
+    if let Some((x, y, label)) = mark {
+        chart
+            .draw_series(std::iter::once(Cross::new((x, y), 9, BLACK.stroke_width(3))))
+            .map_err(e)?;
+        chart
+            .draw_series(std::iter::once(Text::new(label.to_string(), (x, y), (font, 14).into_font())))
+            .map_err(e)?;
+    }
     chart
         .configure_series_labels()
         // low error at low cost is the corner no technique reaches: the legend hides least there

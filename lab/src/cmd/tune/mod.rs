@@ -1,0 +1,868 @@
+//! `sshc tune`: the most accurate configuration a budget allows, chosen on the user's own
+//! scenes against the ray-traced truth (docs/tune.md).
+//!
+//! Every technique that admits the scenes' lights (or those named) competes over its
+//! search space ([`sshc::tune::space`]: declared param ranges, precisions, schedules, the
+//! shadow-map size, cascades for lights at infinity, as the file's `tune:` block narrows
+//! them). [`search::search`] runs successive halving: every candidate is measured with a
+//! cheap truth on the scene's own view, the best third of those inside the budget again
+//! with more samples and every training view, and so on; then the neighbours of the best
+//! along each axis. Each measurement is the sweep's ([`crate::cmd::sweep::run_config`],
+//! [`crate::cmd::sweep::SceneTruth`]): one measuring step for both commands. Times are
+//! budgeted against the reference timed beside each configuration, repeated at the final
+//! rung, and a configuration whose repeated timings straddle the budget is marked.
+//!
+//! The output folder holds `tuned.ron` (the technique with the chosen values as its
+//! defaults), `tune.md`, `tune.csv`, the Pareto charts with the chosen point marked, and
+//! the error images of the chosen configuration and of the technique's defaults; with
+//! `--ladder`, one technique file per budget and `tiers.ron`. Each measurement is appended
+//! to `records.ron` as it is made, so that the same command run again after a kill
+//! carries on (the search is deterministic given `--seed`).
+
+pub mod report;
+pub mod search;
+
+use crate::cmd::sweep::{Config, Ran, SceneTruth, run_config, settings};
+use crate::scene::{Camera, Scene};
+use crate::session::{TruthOpts, load_scene, read_capped, report as report_diags, rt};
+use search::{Candidate, Measured, Plan};
+use sshc_runtime::gpu::Gpu;
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The largest technique or scene file the tuner reads (bytes).
+const MAX_SOURCE_BYTES: u64 = 4 << 20;
+/// The largest `records.ron` a resumed run reads (bytes): about 100,000 records.
+const MAX_RECORDS_BYTES: u64 = 64 << 20;
+
+#[derive(clap::Args)]
+pub struct TuneArgs {
+    /// A scene to tune on (RON); repeatable: the error is the mean over the scenes, and the
+    /// time budget must hold on each.
+    #[arg(long = "scene", required = true)]
+    pub scenes: Vec<PathBuf>,
+    /// A technique that competes; repeatable. Default: every bundled technique whose light
+    /// kinds admit every scene's light.
+    #[arg(long = "technique")]
+    pub techniques: Vec<PathBuf>,
+    /// Output folder: tuned.ron, tune.md, tune.csv, charts, error images, records.ron.
+    #[arg(short, long, default_value = "out/tune")]
+    pub out: PathBuf,
+    /// Budget: GPU milliseconds per frame on this device (median of the repeated timings).
+    #[arg(long, value_name = "MS", conflicts_with = "budget_vs")]
+    pub budget_ms: Option<f64>,
+    /// Budget: at most F times the GPU time of technique REF, timed beside each configuration
+    /// in the same run (default `hard.ron=3`; REF is a path, or a bundled technique's file name).
+    #[arg(long, value_name = "REF.ron=F", value_parser = budget_vs)]
+    pub budget_vs: Option<(PathBuf, f64)>,
+    /// Budget: texture and buffer bytes, in MiB (exact, from the graph and the executor).
+    #[arg(long, value_name = "MB")]
+    pub memory_mb: Option<f64>,
+    /// The error ranked by: `flip` (mean FLIP over the pixels facing the light), `facing`
+    /// (RMS over them) or `penumbra` (RMS over their penumbra). The others are printed beside.
+    #[arg(long, default_value = "flip", value_parser = ["flip", "facing", "penumbra"])]
+    pub metric: String,
+    /// Training views besides the scene's own camera: cameras orbited about its target.
+    #[arg(long, default_value_t = 2)]
+    pub views: usize,
+    /// Held-out views, never used to choose: the chosen configuration is measured there
+    /// at the end, and the difference is the generalisation gap.
+    #[arg(long, default_value_t = 2)]
+    pub holdout: usize,
+    /// Move the light by up to this much (world units, each axis, seeded) in every view but
+    /// the scene's own, so that the choice does not fit one light position.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub light_jitter: f32,
+    /// Candidates drawn per technique (its defaults among them).
+    #[arg(long, default_value_t = 18)]
+    pub candidates: usize,
+    /// Fidelities of the successive halving (the truth's samples quadruple from one to the
+    /// next up to `--samples`; the first uses the scene's own view only).
+    #[arg(long, default_value_t = 3)]
+    pub rungs: usize,
+    /// Keep one candidate in ETA after each rung.
+    #[arg(long, default_value_t = 3)]
+    pub eta: usize,
+    /// Rounds of refinement around the best at the final fidelity.
+    #[arg(long, default_value_t = 2)]
+    pub refine: usize,
+    /// Interleaved timings of a configuration and the reference at the final rung (their
+    /// spread marks configurations within the noise of the budget).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
+    /// Frames timed per timing (the median).
+    #[arg(long, default_value_t = 5)]
+    pub frames: usize,
+    /// Camera size for every scene and view, WIDTHxHEIGHT (default: each scene's own).
+    #[arg(long, value_parser = crate::session::size)]
+    pub size: Option<(u32, u32)>,
+    /// Budgets as multiples of the reference (or, with --budget-ms, milliseconds): one
+    /// configuration per budget, sharing measurements; writes tiers.ron and a technique
+    /// file per tier.
+    #[arg(long, value_delimiter = ',', value_name = "B1,B2,...")]
+    pub ladder: Vec<f64>,
+    /// Measure everything again: forget the records of an earlier run in the folder.
+    #[arg(long)]
+    pub fresh: bool,
+    /// The truth's options (`--samples` is the final rung's; `--seed` also seeds the search).
+    #[command(flatten)]
+    pub truth: TruthOpts,
+}
+
+fn budget_vs(s: &str) -> Result<(PathBuf, f64), String> {
+    let (p, f) = s.rsplit_once('=').ok_or_else(|| format!("expected REF.ron=F, found `{s}`"))?;
+    let f: f64 = f.trim().parse().map_err(|_| format!("`{f}` is not a number"))?;
+    if !(f.is_finite() && f > 0.0) {
+        return Err(format!("the factor {f} must be a finite number above 0"));
+    }
+    Ok((PathBuf::from(p), f))
+}
+
+/// The folder of the bundled techniques: beside the executable's repository (a build in
+/// `target/`), or the source tree this binary was built from, or `./techniques`.
+pub fn bundled_dir() -> PathBuf {
+    let has = |d: &Path| d.join("hard.ron").is_file();
+    if let Ok(exe) = std::env::current_exe() {
+        for a in exe.ancestors().skip(1) {
+            let d = a.join("techniques");
+            if has(&d) {
+                return d;
+            }
+        }
+    }
+    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join("../techniques");
+    if has(&built) {
+        return built;
+    }
+    PathBuf::from("techniques")
+}
+
+/// A technique file that takes part: its path, source and search space.
+pub struct Entry {
+    pub path: PathBuf,
+    pub source: String,
+    pub space: sshc::tune::Space,
+    /// The file's name in tables and records.
+    pub label: String,
+}
+
+fn load_technique(path: &Path) -> Result<Entry, String> {
+    let source = read_capped(path, MAX_SOURCE_BYTES)?;
+    let space = sshc::tune::space(&source).map_err(|d| {
+        report_diags(&d, path, &source);
+        format!("error: {} cannot be tuned: it does not parse", path.display())
+    })?;
+    Ok(Entry {
+        label: path
+            .file_stem()
+            .map_or_else(|| space.technique.clone(), |s| s.to_string_lossy().into_owned()),
+        path: path.to_path_buf(),
+        source,
+        space,
+    })
+}
+
+/// A scene the tuner measures on: its training views (the scene's own first) and held-out
+/// views.
+pub struct SceneViews {
+    pub path: PathBuf,
+    pub name: String,
+    pub train: Vec<Scene>,
+    pub holdout: Vec<Scene>,
+}
+
+/// The camera orbited by `degrees` about its up axis through its target.
+fn orbited(c: &Camera, degrees: f32) -> Camera {
+    let turn = |position: glam::Vec3, target: glam::Vec3, up: glam::Vec3| {
+        let q = glam::Quat::from_axis_angle(up.normalize_or(glam::Vec3::Y), degrees.to_radians());
+        target + q * (position - target)
+    };
+    let mut c = c.clone();
+    match &mut c {
+        Camera::Perspective { position, target, up, .. } | Camera::Orthographic { position, target, up, .. } => {
+            *position = turn(*position, *target, *up);
+        }
+    }
+    c
+}
+
+/// The views of one scene: the scene's own camera, then `train` and `holdout` cameras
+/// orbited about its target at angles spread over [-40, 40] degrees (held-out ones
+/// interleaved with the training ones), each with the light moved by up to `jitter`.
+fn scene_views(path: &Path, scene: &Scene, train: usize, holdout: usize, jitter: f32, seed: u64) -> Result<SceneViews, String> {
+    let mut rng = crate::visibility::Rng::new(seed ^ 0x7475_6e65);
+    let total = train + holdout;
+    let (mut tr, mut ho) = (vec![scene.clone()], Vec::new());
+    // holdout views take every other slot first, so that they sit between training views
+    let mut hold_left = holdout;
+    for j in 0..total {
+        let deg = -40.0 + 80.0 * (j as f32 + 0.5) / total as f32;
+        let mut s = scene.clone();
+        s.set_camera(orbited(&scene.camera, deg))
+            .map_err(|e| format!("error: {}: view at {deg:.0} degrees: {e}", path.display()))?;
+        if jitter > 0.0 {
+            let mut d = || (rng.next_f64() as f32 * 2.0 - 1.0) * jitter;
+            let by = glam::Vec3::new(d(), d(), d());
+            let moved = s.lights[0].translated(by);
+            s.set_light(0, moved)
+                .map_err(|e| format!("error: {}: jittered light: {e}", path.display()))?;
+        }
+        if hold_left > 0 && j % 2 == 1 {
+            hold_left -= 1;
+            ho.push(s);
+        } else if tr.len() < train + 1 {
+            tr.push(s);
+        } else {
+            ho.push(s);
+        }
+    }
+    Ok(SceneViews {
+        path: path.to_path_buf(),
+        name: path.file_stem().map_or_else(String::new, |s| s.to_string_lossy().into_owned()),
+        train: tr,
+        holdout: ho,
+    })
+}
+
+/// The mean figures of one configuration over the scenes and views of a fidelity (0..255
+/// units but FLIP, 0..1).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Detail {
+    pub flip: f64,
+    pub rms_facing: f64,
+    pub rms_penumbra: f64,
+    /// Signed means and RMS by region (`metrics::regions`).
+    pub lit_mean: f64,
+    pub lit_rms: f64,
+    pub penumbra_mean: f64,
+    pub umbra_mean: f64,
+    pub umbra_rms: f64,
+    /// Median GPU ms per frame (the largest over the scenes).
+    pub ms: f64,
+    pub fetches: f64,
+    pub ops: f64,
+    pub samples: u32,
+    pub views: usize,
+}
+
+/// One line of `records.ron`: a configuration measured at a rung, or why it was not.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub(crate) struct Record {
+    technique: String,
+    config: String,
+    rung: usize,
+    pub(crate) result: Result<(Measured, Detail), String>,
+}
+
+impl Record {
+    /// Refuses records a run could not have written: non-finite or negative figures.
+    fn check(&self) -> Result<(), String> {
+        if let Ok((m, d)) = &self.result {
+            let finite = [m.error, d.flip, d.rms_facing, d.rms_penumbra, d.ms]
+                .iter()
+                .chain(&m.times)
+                .all(|x| x.is_finite() && *x >= 0.0);
+            if !finite || m.times.is_empty() {
+                return Err(format!(
+                    "the record of {} {} at rung {} holds a figure that is not a finite number >= 0",
+                    self.technique, self.config, self.rung
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+const RECORDS: &str = "records.ron";
+const IDENTITY: &str = "tune.id";
+
+/// The records of an earlier run of the same tune in `out`, by (technique, config, rung):
+/// none where the folder is new, `--fresh` is given, or the run differs (its identity,
+/// the hash of its inputs and options, says so).
+fn resume(out: &Path, identity: &str, fresh: bool) -> Result<HashMap<(String, String, usize), Record>, String> {
+    let id_path = out.join(IDENTITY);
+    let records = out.join(RECORDS);
+    let old = read_capped(&id_path, 4096).ok();
+    let mut found = HashMap::new();
+    if !fresh && old.as_deref() == Some(identity) && records.exists() {
+        let text = read_capped(&records, MAX_RECORDS_BYTES)?;
+        let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+        for (i, line) in lines.iter().enumerate() {
+            match ron::from_str::<Record>(line) {
+                Ok(r) => {
+                    r.check()
+                        .map_err(|e| format!("error: {}:{}: {e}; run again with --fresh", records.display(), i + 1))?;
+                    found.insert((r.technique.clone(), r.config.clone(), r.rung), r);
+                }
+                // the last line of a killed run may be cut short: dropped, and the file
+                // rewritten without it so that the next record starts a line of its own
+                Err(_) if i + 1 == lines.len() => {
+                    eprintln!("tune: dropped the half-written last record of a stopped run");
+                    let kept: String = lines[..i].iter().map(|l| format!("{l}\n")).collect();
+                    crate::cmd::tune::report::write_new(&records, &kept)?;
+                }
+                Err(e) => {
+                    return Err(format!(
+                        "error: {}:{}: not a record ({}); run again with --fresh",
+                        records.display(),
+                        i + 1,
+                        e.code
+                    ));
+                }
+            }
+        }
+        eprintln!(
+            "tune: resuming in {}: {} measurements of an earlier run",
+            out.display(),
+            found.len()
+        );
+    } else {
+        if old.is_some() && !fresh {
+            eprintln!("tune: {} holds another tune's records: starting afresh", out.display());
+        }
+        match std::fs::remove_file(&records) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(format!("error: {}: {e}", records.display())),
+            _ => {}
+        }
+        crate::cmd::tune::report::write_new(&id_path, identity)?;
+    }
+    Ok(found)
+}
+
+/// The budget as the search sees it, and in words.
+pub struct Budget {
+    /// (reference technique, factor) or none with `--budget-ms`.
+    pub reference: Option<(Entry, f64)>,
+    pub ms: Option<f64>,
+    pub memory: Option<u64>,
+}
+
+impl Budget {
+    pub fn time_limit(&self) -> f64 {
+        self.ms.or(self.reference.as_ref().map(|r| r.1)).unwrap_or(f64::INFINITY)
+    }
+
+    pub fn words(&self) -> String {
+        let mut w = match (&self.reference, self.ms) {
+            (_, Some(ms)) => format!("{ms} GPU ms per frame"),
+            (Some((r, f)), None) => format!("{f} x the GPU time of {} (timed beside each configuration)", r.label),
+            (None, None) => "no time limit".into(),
+        };
+        if let Some(m) = self.memory {
+            w.push_str(&format!(", {:.2} MiB of textures and buffers", m as f64 / (1 << 20) as f64));
+        }
+        w
+    }
+
+    /// The unit of the time figures: `ms` or `x REF`.
+    pub fn unit(&self) -> String {
+        match (&self.reference, self.ms) {
+            (Some((r, _)), None) => format!("x {}", r.label),
+            _ => "ms".into(),
+        }
+    }
+}
+
+/// Shared state of a tune's measurements.
+pub(crate) struct Tuner<'a> {
+    pub gpu: &'a Gpu,
+    pub a: &'a TuneArgs,
+    pub entries: &'a [Entry],
+    pub scenes: &'a [SceneViews],
+    pub budget: &'a Budget,
+    /// Truths by (scene, view, holdout, samples).
+    truths: RefCell<HashMap<(usize, usize, bool, u32), SceneTruth>>,
+    /// Measurements by (technique, config, rung): those of this run and those resumed.
+    pub done: RefCell<HashMap<(String, String, usize), Record>>,
+    log: RefCell<Option<std::fs::File>>,
+    /// (technique, precision and schedule values, fetches, ops) of configurations over the
+    /// time budget beyond its noise: a configuration of the same technique, precisions and
+    /// schedules with at least as many fetches and operations per frame cannot meet it.
+    over: RefCell<Vec<(usize, String, f64, f64)>>,
+    pub started: Instant,
+    pub measured_now: RefCell<usize>,
+}
+
+impl Tuner<'_> {
+    /// The truth's samples at `rung`: `--samples` at the last, a quarter of that at each
+    /// rung before (at least 16).
+    pub fn samples(&self, rung: usize) -> u32 {
+        let down = (self.a.rungs.max(1) - 1 - rung.min(self.a.rungs.max(1) - 1)) as u32;
+        (self.a.truth.samples >> (2 * down).min(30)).max(16)
+    }
+
+    pub(crate) fn settings_of(&self, c: &Candidate) -> Result<crate::cmd::sweep::Settings, String> {
+        let mut s = settings(&Config {
+            scene: 0,
+            technique: c.technique,
+            label: String::new(),
+            values: c.values.clone(),
+        })?;
+        // a technique that names its map size (a tuned file) runs at it
+        if s.shadow_map.is_none() {
+            s.shadow_map = self.entries.get(c.technique).and_then(|e| e.space.shadow_map);
+        }
+        Ok(s)
+    }
+
+    fn truth(&self, scene: usize, view: usize, holdout: bool, samples: u32, ran: &Ran, s: &Scene) -> Result<SceneTruth, String> {
+        let key = (scene, view, holdout, samples);
+        if let Some(t) = self.truths.borrow().get(&key) {
+            return Ok(t.clone());
+        }
+        let opts = TruthOpts {
+            samples,
+            ..self.a.truth.clone()
+        };
+        let t = SceneTruth::at(&ran.ex, s, &opts, |f| f())?;
+        self.truths.borrow_mut().insert(key, t.clone());
+        Ok(t)
+    }
+
+    fn metric(&self, acc: &crate::metrics::Accuracy) -> f64 {
+        match self.a.metric.as_str() {
+            "facing" => acc.facing.rms,
+            "penumbra" => acc.penumbra.rms,
+            _ => acc.flip.unwrap_or(f64::NAN),
+        }
+    }
+
+    /// One configuration on the views given (per scene: training views up to `views`, or
+    /// the held-out ones), timed `repeats` times on each scene's own view beside the
+    /// reference: its error, timings and bytes, and the figures in detail.
+    pub fn measure_on(
+        &self,
+        c: &Candidate,
+        views: usize,
+        holdout: bool,
+        samples: u32,
+        repeats: usize,
+    ) -> Result<(Measured, Detail), String> {
+        let e = &self.entries[c.technique];
+        let s = self.settings_of(c)?;
+        let mut errors = Vec::new();
+        let mut accs: Vec<crate::metrics::Accuracy> = Vec::new();
+        // per repeat, the largest time figure over the scenes
+        let mut times = vec![0.0f64; repeats.max(1)];
+        let (mut bytes, mut ms, mut fetches, mut ops) = (0u64, 0.0f64, 0.0f64, 0.0f64);
+        let mut nviews = 0;
+        for (si, sv) in self.scenes.iter().enumerate() {
+            let list: Vec<&Scene> = if holdout {
+                sv.holdout.iter().collect()
+            } else {
+                sv.train.iter().take(views.max(1)).collect()
+            };
+            for (vi, scene) in list.into_iter().enumerate() {
+                let mut scene = scene.clone();
+                s.apply(&mut scene)?;
+                let timed = vi == 0 && !holdout;
+                let frames = if timed { self.a.frames } else { 1 };
+                let mut ran = run_config(self.gpu, &e.path, &e.source, &scene, &sv.path, &s, &Default::default(), frames)?;
+                if timed {
+                    let mut mss = Vec::new();
+                    for (k, t) in times.iter_mut().enumerate() {
+                        if k > 0 {
+                            ran = run_config(self.gpu, &e.path, &e.source, &scene, &sv.path, &s, &Default::default(), frames)?;
+                        }
+                        let ms_c = ran
+                            .ms
+                            .ok_or("error: the device has no timestamp queries: a time budget cannot be measured")?;
+                        mss.push(ms_c);
+                        let figure = match &self.budget.reference {
+                            Some((r, _)) if self.budget.ms.is_none() => {
+                                // the reference at its own defaults on the scene as written
+                                let rs = &self.scenes[si].train[0];
+                                let reference = run_config(
+                                    self.gpu,
+                                    &r.path,
+                                    &r.source,
+                                    rs,
+                                    &sv.path,
+                                    &self.settings_of(&Candidate {
+                                        technique: 0,
+                                        values: vec![],
+                                    })?,
+                                    &Default::default(),
+                                    self.a.frames,
+                                )?;
+                                let ms_r = reference.ms.ok_or("error: the device has no timestamp queries")?;
+                                ms_c / ms_r.max(1e-9)
+                            }
+                            _ => ms_c,
+                        };
+                        *t = t.max(figure);
+                    }
+                    ms = ms.max(search::median(&mss));
+                    bytes = bytes.max(ran.peak);
+                    fetches = fetches.max(ran.fetches);
+                    ops = ops.max(ran.ops);
+                }
+                let truth = self.truth(si, vi, holdout, samples, &ran, &scene)?;
+                let acc = truth.score(&format!("the visibility of {} {}", e.label, c.describe()), &ran.visibility, &scene)?;
+                errors.push(self.metric(&acc));
+                accs.push(acc);
+                nviews += 1;
+            }
+        }
+        let n = accs.len().max(1) as f64;
+        let mean = |f: &dyn Fn(&crate::metrics::Accuracy) -> f64| accs.iter().map(f).sum::<f64>() / n;
+        let detail = Detail {
+            flip: mean(&|a| a.flip.unwrap_or(f64::NAN)),
+            rms_facing: mean(&|a| a.facing.rms),
+            rms_penumbra: mean(&|a| a.penumbra.rms),
+            lit_mean: mean(&|a| a.lit.mean),
+            lit_rms: mean(&|a| a.lit.rms),
+            penumbra_mean: mean(&|a| a.penumbra.mean),
+            umbra_mean: mean(&|a| a.umbra.mean),
+            umbra_rms: mean(&|a| a.umbra.rms),
+            ms,
+            fetches,
+            ops,
+            samples,
+            views: nviews,
+        };
+        let m = Measured {
+            error: errors.iter().sum::<f64>() / n,
+            times: if holdout { vec![] } else { times },
+            bytes,
+        };
+        Ok((m, detail))
+    }
+
+    /// The search's measuring step at `rung`: memoised (resumed records included), logged.
+    pub fn measure(&self, c: &Candidate, rung: usize, plan: &Plan) -> Result<Measured, String> {
+        let e = &self.entries[c.technique];
+        let key = (e.label.clone(), c.describe(), rung);
+        if let Some(r) = self.done.borrow().get(&key) {
+            return r.result.clone().map(|(m, _)| m);
+        }
+        let last = rung + 1 == self.a.rungs.max(1);
+        let views = if rung == 0 { 1 } else { self.a.views + 1 };
+        let repeats = if last { self.a.repeats.max(1) } else { 1 };
+        let result = self.measure_on(c, views, false, self.samples(rung), repeats);
+        if let Ok((m, d)) = &result
+            && plan.verdict(m) == search::Verdict::Over
+            && m.times.iter().all(|&t| t > plan.time_limit)
+        {
+            self.over.borrow_mut().push((c.technique, kinds(c), d.fetches, d.ops));
+        }
+        let record = Record {
+            technique: e.label.clone(),
+            config: c.describe(),
+            rung,
+            result: result.clone(),
+        };
+        self.append(&record)?;
+        self.done.borrow_mut().insert(key, record);
+        *self.measured_now.borrow_mut() += 1;
+        result.map(|(m, _)| m)
+    }
+
+    fn append(&self, r: &Record) -> Result<(), String> {
+        use std::io::Write as _;
+        let path = self.a.out.join(RECORDS);
+        let mut log = self.log.borrow_mut();
+        if log.is_none() {
+            *log = Some(
+                std::fs::OpenOptions::new()
+                    .create(true)
+                    .append(true)
+                    .open(&path)
+                    .map_err(|e| format!("error: {}: {e}", path.display()))?,
+            );
+        }
+        let line = ron::to_string(r).map_err(|e| format!("error: a record: {e}"))?;
+        if let Some(f) = log.as_mut() {
+            writeln!(f, "{line}").map_err(|e| format!("error: {}: {e}", path.display()))?;
+        }
+        Ok(())
+    }
+
+    /// Why `c` cannot meet the budget, known before running it: the bytes of its
+    /// shadow-map textures (from its graph, exact) over the memory budget, or at least the
+    /// fetches and operations per frame of a configuration of the same technique,
+    /// precisions and schedules already measured over the time budget.
+    pub fn skip(&self, c: &Candidate) -> Option<String> {
+        let e = &self.entries[c.technique];
+        let s = self.settings_of(c).ok()?;
+        let opts = sshc::CompileOptions {
+            set: s.set.clone(),
+            precision: s.precision.clone(),
+            schedule: s.schedule.clone(),
+            ..Default::default()
+        };
+        let compiled = sshc::compile_str(&e.source, &opts).ok()?;
+        let scene = &self.scenes[0].train[0];
+        let n = s.shadow_map.unwrap_or(scene.shadow_map) as f64;
+        let cost = sshc::emit::Cost::of(&compiled.graph);
+        let map_bytes: f64 = cost.textures.iter().map(|t| t.3 * n * n).sum();
+        if let Some(limit) = self.budget.memory
+            && map_bytes > limit as f64
+        {
+            return Some(format!(
+                "its shadow-map textures alone take {:.2} MiB (from the graph), over the {:.2} MiB budget",
+                map_bytes / (1 << 20) as f64,
+                limit as f64 / (1 << 20) as f64
+            ));
+        }
+        let (fetches, ops) = crate::cmd::render::pass_work(&compiled.graph, n as u32, scene.camera_size(), 0)
+            .iter()
+            .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops));
+        let k = kinds(c);
+        self.over
+            .borrow()
+            .iter()
+            .find(|(t, kk, f, o)| *t == c.technique && *kk == k && fetches >= *f && ops >= *o && (*f > 0.0 || *o > 0.0))
+            .map(|(_, _, f, o)| {
+                format!("{fetches:.3e} fetches and {ops:.3e} operations per frame, at least those of a configuration measured over the time budget ({f:.3e}, {o:.3e})")
+            })
+    }
+}
+
+/// The precision and schedule values of a candidate: what changes the cost per fetch.
+fn kinds(c: &Candidate) -> String {
+    c.values
+        .iter()
+        .filter(|(k, _)| k.starts_with("precision:") || k.starts_with("schedule:"))
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Seconds in words.
+pub(crate) fn duration(s: f64) -> String {
+    if s < 120.0 {
+        format!("{s:.0} s")
+    } else if s < 7200.0 {
+        format!("{:.0} min", s / 60.0)
+    } else {
+        format!("{:.1} h", s / 3600.0)
+    }
+}
+
+pub fn tune(a: TuneArgs) -> Result<(), String> {
+    if a.rungs == 0 || a.rungs > 6 {
+        return Err(format!("error: `--rungs {}`: give 1 to 6 fidelities", a.rungs));
+    }
+    if a.candidates == 0 || a.candidates > 10_000 {
+        return Err(format!("error: `--candidates {}`: give 1 to 10000 per technique", a.candidates));
+    }
+    if a.views > 64 || a.holdout > 64 {
+        return Err("error: `--views` and `--holdout` take at most 64 views each".into());
+    }
+    if !(a.light_jitter.is_finite() && a.light_jitter >= 0.0) {
+        return Err(format!("error: `--light-jitter {}`: need a finite distance >= 0", a.light_jitter));
+    }
+    if let Some(ms) = a.budget_ms
+        && !(ms.is_finite() && ms > 0.0)
+    {
+        return Err(format!("error: `--budget-ms {ms}`: need a finite number of milliseconds above 0"));
+    }
+    let memory = match a.memory_mb {
+        Some(m) if m.is_finite() && m > 0.0 && m < 1e9 => Some((m * (1 << 20) as f64) as u64),
+        Some(m) => return Err(format!("error: `--memory-mb {m}`: need a finite number of MiB above 0")),
+        None => None,
+    };
+    if a.ladder.iter().any(|b| !(b.is_finite() && *b > 0.0)) || a.ladder.len() > 8 {
+        return Err("error: `--ladder`: give up to 8 budgets, each a finite number above 0".into());
+    }
+    // the scenes and their views
+    let mut scenes = Vec::new();
+    for p in &a.scenes {
+        let mut scene = load_scene(p, a.size, None)?;
+        if scene.lights.len() > 1 {
+            eprintln!("note: {}: tuning for its first light of {}", p.display(), scene.lights.len());
+            scene = crate::session::single_light(&scene, 0);
+        }
+        scenes.push(scene_views(p, &scene, a.views, a.holdout, a.light_jitter, a.truth.seed)?);
+    }
+    let kinds_of: Vec<sshc_graph::LightKind> = scenes.iter().map(|s| s.train[0].lights[0].kind()).collect();
+    let distant = scenes.iter().all(|s| s.train[0].lights[0].is_distant());
+    // the techniques
+    let bundled = bundled_dir();
+    let named = !a.techniques.is_empty();
+    let paths: Vec<PathBuf> = if named {
+        a.techniques.clone()
+    } else {
+        let mut v: Vec<PathBuf> = std::fs::read_dir(&bundled)
+            .map_err(|e| format!("error: the bundled techniques at {}: {e}", bundled.display()))?
+            .filter_map(|d| d.ok().map(|d| d.path()))
+            .filter(|p| p.extension().is_some_and(|e| e == "ron") && p.is_file())
+            .collect();
+        v.sort();
+        v
+    };
+    let mut entries = Vec::new();
+    let mut left_out = Vec::new();
+    for p in &paths {
+        let e = load_technique(p)?;
+        let refused: Vec<usize> = (0..scenes.len()).filter(|&i| !sshc::admits(&e.source, kinds_of[i])).collect();
+        if let Some(&i) = refused.first() {
+            if named {
+                return Err(format!(
+                    "error: {} does not admit the {} light of {} (its `light:` list names the kinds it is made for); name a technique that does, or another scene",
+                    p.display(),
+                    kinds_of[i].name(),
+                    scenes[i].path.display()
+                ));
+            }
+            left_out.push(e.label.clone());
+            continue;
+        }
+        entries.push(e);
+    }
+    if !left_out.is_empty() {
+        eprintln!(
+            "tune: left out (their `light:` lists do not admit the scenes' lights): {}",
+            left_out.join(", ")
+        );
+    }
+    if entries.is_empty() {
+        return Err("error: no technique admits the scenes' lights".into());
+    }
+    // the budget
+    let reference = if a.budget_ms.is_some() {
+        None
+    } else {
+        let (p, f) = a.budget_vs.clone().unwrap_or((PathBuf::from("hard.ron"), 3.0));
+        let p = if p.is_file() { p } else { bundled.join(&p) };
+        // (timed compiled generic where its `light:` list does not name a scene's light,
+        // as the sweep times its reference)
+        let r = load_technique(&p)?;
+        Some((r, f))
+    };
+    let budget = Budget {
+        reference,
+        ms: a.budget_ms,
+        memory,
+    };
+    // the search space; the map size's default is the technique's own, else the first scene's
+    for e in &mut entries {
+        let own = e.space.shadow_map.unwrap_or(scenes[0].train[0].shadow_map).to_string();
+        for axis in e.space.axes.iter_mut().filter(|a| a.name == "shadow_map") {
+            axis.default = Some(own.clone());
+        }
+    }
+    let axes: Vec<Vec<&sshc::tune::Axis>> = entries.iter().map(|e| search::varying(&e.space, distant)).collect();
+    let mut candidates = Vec::new();
+    for (t, ax) in axes.iter().enumerate() {
+        candidates.extend(search::draw_candidates(t, ax, a.candidates, a.truth.seed));
+    }
+    // the run's identity: what it measures and how
+    let mut id = format!(
+        "format=1 metric={} views={} holdout={} jitter={} candidates={} rungs={} eta={} refine={} repeats={} frames={} size={:?} samples={} runs={} seed={} budget={}",
+        a.metric,
+        a.views,
+        a.holdout,
+        a.light_jitter,
+        a.candidates,
+        a.rungs,
+        a.eta,
+        a.refine,
+        a.repeats,
+        a.frames,
+        a.size,
+        a.truth.samples,
+        a.truth.runs,
+        a.truth.seed,
+        budget.words()
+    );
+    for e in &entries {
+        id.push_str(&format!(" {}:{:016x}", e.label, xxhash_rust::xxh3::xxh3_64(e.source.as_bytes())));
+    }
+    for s in &a.scenes {
+        let text = read_capped(s, MAX_SOURCE_BYTES)?;
+        id.push_str(&format!(" {}:{:016x}", s.display(), xxhash_rust::xxh3::xxh3_64(text.as_bytes())));
+    }
+    report::create_out(&a.out)?;
+    let done = resume(&a.out, &id, a.fresh)?;
+    let gpu = Gpu::new().map_err(rt)?;
+    eprintln!(
+        "tune: {} techniques ({}), {} candidates, {} rungs, budget {}, on {}",
+        entries.len(),
+        entries.iter().map(|e| e.label.as_str()).collect::<Vec<_>>().join(", "),
+        candidates.len(),
+        a.rungs,
+        budget.words(),
+        gpu.describe()
+    );
+    let tuner = Tuner {
+        gpu: &gpu,
+        a: &a,
+        entries: &entries,
+        scenes: &scenes,
+        budget: &budget,
+        truths: RefCell::new(HashMap::new()),
+        done: RefCell::new(done),
+        log: RefCell::new(None),
+        over: RefCell::new(Vec::new()),
+        started: Instant::now(),
+        measured_now: RefCell::new(0),
+    };
+    // the planned measurements: every candidate, a third of them, ..., then refinement
+    let mut planned = 0usize;
+    let mut n = candidates.len();
+    for _ in 0..a.rungs {
+        planned += n;
+        n = n.div_ceil(a.eta.max(2));
+    }
+    // each refinement round tries about two neighbours per axis of the best
+    planned += a.refine * 2 * axes.iter().map(Vec::len).max().unwrap_or(0);
+    let ladder: Vec<f64> = if a.ladder.is_empty() {
+        vec![budget.time_limit()]
+    } else {
+        a.ladder.clone()
+    };
+    let mut tiers = Vec::new();
+    for (li, limit) in ladder.iter().enumerate() {
+        let plan = Plan {
+            rungs: a.rungs,
+            eta: a.eta,
+            time_limit: *limit,
+            memory_limit: memory,
+            refine: a.refine,
+        };
+        let count = RefCell::new(0usize);
+        let found = search::search(
+            &plan,
+            candidates.clone(),
+            &axes,
+            |c| tuner.skip(c),
+            |c, rung| {
+                *count.borrow_mut() += 1;
+                tuner.measure(c, rung, &plan)
+            },
+            |stage, best| {
+                let done = *count.borrow();
+                let ran = *tuner.measured_now.borrow();
+                let spent = tuner.started.elapsed().as_secs_f64();
+                let left = planned.saturating_sub(done);
+                let eta = if ran > 0 { spent / ran as f64 * left as f64 } else { 0.0 };
+                let best = best.map_or("none inside the budget yet".to_string(), |(c, m)| {
+                    format!(
+                        "{} {} error {:.4} time {:.3} {}",
+                        entries[c.technique].label,
+                        c.describe(),
+                        m.error,
+                        search::median(&m.times),
+                        budget.unit()
+                    )
+                });
+                let tier = if ladder.len() > 1 {
+                    format!("tier {}/{}, ", li + 1, ladder.len())
+                } else {
+                    String::new()
+                };
+                eprintln!(
+                    "tune: {tier}{stage}: {done} of about {planned} measured, {} so far, about {} left; best: {best}",
+                    duration(spent),
+                    duration(eta)
+                );
+            },
+        );
+        tiers.push((*limit, plan, found));
+    }
+    report::write(&tuner, &tiers)
+}
