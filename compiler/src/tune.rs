@@ -197,7 +197,7 @@ fn check_axis(t: &Technique, axis: &TuneAxis) -> Result<(), Diagnostic> {
     let whole = |v: &crate::span::Spanned<TuneValue>, lo: u32, hi: u32, what: &str| -> Result<(), Diagnostic> {
         match v.value {
             TuneValue::Number(x) if x.fract() == 0.0 && x >= f64::from(lo) && x <= f64::from(hi) => Ok(()),
-            _ => Err(diag(
+            TuneValue::Number(_) | TuneValue::Bool(_) | TuneValue::Name(_) => Err(diag(
                 v.span,
                 format!("`{name}`: `{}` is not {what} from {lo} to {hi}", v.value),
                 "out of range",
@@ -258,6 +258,36 @@ pub fn space(source: &str) -> Result<Space, Diagnostics> {
     Ok(space_of(&t))
 }
 
+/// Why [`space_with`] failed: the technique's source, or one override, whose text (as
+/// `{ "NAME": VALUE }`) the diagnostics' spans point into.
+#[derive(Debug)]
+pub enum SpaceError {
+    Source(Diagnostics),
+    Override { text: String, diagnostics: Diagnostics },
+}
+
+/// [`space`], with `overrides` (axis name, choice as a `tune:` entry writes it: `[v, ...]`,
+/// `(lo, hi)` or `Frozen`) added to the technique's `tune:` block or replacing its entry
+/// for that axis, each checked as the block is: `sshc tune --axis NAME=CHOICE`.
+pub fn space_with(source: &str, overrides: &[(String, String)]) -> Result<Space, SpaceError> {
+    let mut t = crate::front::parse::parse(source).map_err(|d| SpaceError::Source(Diagnostics(vec![d])))?;
+    for (name, choice) in overrides {
+        let quoted = format!("\"{}\"", name.replace('\\', "\\\\").replace('"', "\\\""));
+        let text = format!("{{ {quoted}: {choice} }}");
+        let fail = |d: Diagnostic| SpaceError::Override {
+            text: text.clone(),
+            diagnostics: Diagnostics(vec![d]),
+        };
+        let node = crate::front::ron::parse(&text).map_err(fail)?;
+        for axis in crate::front::parse::tune_block(&node).map_err(fail)? {
+            check_axis(&t, &axis).map_err(fail)?;
+            t.tune.retain(|a| a.name.value != axis.name.value);
+            t.tune.push(axis);
+        }
+    }
+    Ok(space_of(&t))
+}
+
 fn space_of(t: &Technique) -> Space {
     let narrowed = |name: &str| t.tune.iter().find(|a| a.name.value == name).map(|a| &a.choice);
     let texts = |v: &[crate::span::Spanned<TuneValue>]| v.iter().map(|v| v.value.to_string()).collect::<Vec<_>>();
@@ -284,7 +314,7 @@ fn space_of(t: &Technique) -> Space {
                     v.iter()
                         .map(|v| match &v.value {
                             TuneValue::Number(x) => literal(p.ty.value, *x),
-                            other => other.to_string(),
+                            other @ (TuneValue::Bool(_) | TuneValue::Name(_)) => other.to_string(),
                         })
                         .collect(),
                 ),
@@ -372,7 +402,7 @@ pub fn rewrite(source: &str, values: &[(String, String)], header: &[String]) -> 
         if let Some(p) = t.params.iter().find(|p| p.name.value == *name) {
             let text = match p.ty.value {
                 ScalarTy::Bool => value.clone(),
-                ty => literal(
+                ty @ (ScalarTy::F32 | ScalarTy::I32) => literal(
                     ty,
                     value
                         .parse::<f64>()
@@ -414,7 +444,7 @@ pub fn rewrite(source: &str, values: &[(String, String)], header: &[String]) -> 
             return Err(fail(format!("the technique has no axis `{name}`")));
         }
     }
-    edits.sort_by(|a, b| b.0.cmp(&a.0));
+    edits.sort_by_key(|e| std::cmp::Reverse(e.0));
     let mut out = source.to_string();
     for (start, end, text) in edits {
         out.replace_range(start..end, &text);
@@ -545,6 +575,31 @@ Technique(
         assert_eq!(again.matches("shadow_map:").count(), 1);
         assert_eq!(again.matches("schedule:").count(), 1);
         assert!(rewrite(&src, &[("nope".into(), "1".into())], &[]).is_err());
+    }
+
+    #[test]
+    fn command_line_axes_narrow_like_the_block_and_are_checked_in_their_own_text() {
+        let s = space_with(
+            &with(r#"tune: { "N": [3, 5] },"#),
+            &[("N".into(), "[2, 6]".into()), ("bias".into(), "Frozen".into())],
+        )
+        .unwrap();
+        let axis = |n: &str| s.axes.iter().find(|a| a.name == n).unwrap().clone();
+        assert_eq!(axis("N").domain, Domain::Choice(vec!["2".into(), "6".into()]));
+        assert!(!axis("bias").varies());
+        match space_with(&with(""), &[("N".into(), "[3, 40]".into())]) {
+            Err(SpaceError::Override { text, diagnostics }) => {
+                let d = &diagnostics.0[0];
+                assert!(d.message.contains("`N` = 40 is outside"), "{}", d.message);
+                assert_eq!(&text[d.primary.0.start as usize..d.primary.0.end as usize], "40");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(
+            space_with(&with(""), &[("N".into(), "[3".into())]),
+            Err(SpaceError::Override { .. })
+        ));
+        assert!(matches!(space_with("Technique(", &[]), Err(SpaceError::Source(_))));
     }
 
     #[test]

@@ -306,3 +306,72 @@ fn tune_refuses_bad_input_with_clear_errors() {
         assert!(e.contains(bad[0]), "{bad:?}: {e}");
     }
 }
+
+/// `--ladder`: one configuration per budget in one run, the measurements shared (each
+/// configuration measured once whatever the number of tiers), `tiers.ron` and a technique
+/// file per tier, a larger budget never choosing a worse configuration.
+#[test]
+fn a_ladder_tunes_one_configuration_per_budget_sharing_measurements() {
+    let dir = temp_dir("tune-ladder");
+    let out = dir.join("out");
+    let args = [
+        "tune",
+        "--scene",
+        "scenes/contact.ron",
+        "--technique",
+        "techniques/pcf.ron",
+        "--size",
+        "16x16",
+        "--candidates",
+        "4",
+        "--rungs",
+        "1",
+        "--views",
+        "0",
+        "--holdout",
+        "0",
+        "--samples",
+        "16",
+        "--runs",
+        "2",
+        "--frames",
+        "1",
+        "--repeats",
+        "1",
+        "--refine",
+        "0",
+        "--no-cache",
+        "--ladder",
+        "3,1000",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    ok(&args);
+    let tiers = std::fs::read_to_string(out.join("tiers.ron")).unwrap();
+    assert!(tiers.contains("name: \"low\"") && tiers.contains("name: \"medium\""), "{tiers}");
+    for f in ["tier-low.ron", "tier-medium.ron"] {
+        let (c, _) = ok(&["check", out.join(f).to_str().unwrap()]);
+        assert!(c.contains(": ok"), "{c}");
+    }
+    assert_eq!(
+        std::fs::read_to_string(out.join("tuned.ron")).unwrap(),
+        std::fs::read_to_string(out.join("tier-medium.ron")).unwrap()
+    );
+    let csv = std::fs::read_to_string(out.join("tune.csv")).unwrap();
+    let rows = rows(&csv);
+    let measured = |tier: &str| rows.iter().filter(|r| r["tier"] == tier && r["outcome"] == "measured").count();
+    assert!(measured("0") > 0 && measured("1") > 0, "{csv}");
+    // shared: the records hold each configuration and fidelity once, whatever the tiers
+    let records = std::fs::read_to_string(out.join("records.ron")).unwrap();
+    let mut keys: Vec<&str> = records.lines().map(|l| &l[..l.find(",result:").unwrap()]).collect();
+    let n = keys.len();
+    keys.sort();
+    keys.dedup();
+    assert_eq!(keys.len(), n, "{records}");
+    let error = |tier: &str| -> f64 {
+        rows.iter().find(|r| r["tier"] == tier && r["chosen"] == "true").unwrap()["error"]
+            .parse()
+            .unwrap()
+    };
+    assert!(error("1") <= error("0"), "{csv}");
+}

@@ -370,9 +370,49 @@ fn shadow_map_size(node: &Node) -> Result<Spanned<u32>, Diagnostic> {
     }
 }
 
+/// One `tune:` entry's choice: `[v, ...]`, `(lo, hi)` or `Frozen` (also `sshc tune --axis`).
+pub fn tune_choice(name: &str, v: &Node) -> Result<TuneChoice, Diagnostic> {
+    Ok(match &v.value {
+        Value::Ident(w) if w == "Frozen" => TuneChoice::Frozen,
+        Value::List(items) if items.is_empty() => {
+            return Err(err(v.span, format!("the axis `{}` has no values", name), "empty list")
+                .help("give at least one value, or write `Frozen` to keep the technique's own"));
+        }
+        Value::List(items) => TuneChoice::Values(
+            items
+                .iter()
+                .map(|i| {
+                    let value = match &i.value {
+                        Value::Int(x) => TuneValue::Number(*x as f64),
+                        Value::Float(x) => TuneValue::Number(*x),
+                        Value::Bool(b) => TuneValue::Bool(*b),
+                        Value::Ident(n) => TuneValue::Name(n.clone()),
+                        _ => {
+                            return Err(err(
+                                i.span,
+                                format!("expected a number, `true`, `false` or a name such as `F16`, found {}", i.describe()),
+                                "not a value of an axis",
+                            ));
+                        }
+                    };
+                    Ok(Spanned::new(value, i.span))
+                })
+                .collect::<Result<_, _>>()?,
+        ),
+        Value::Tuple { name: None, items } if items.len() == 2 => TuneChoice::Range(number(&items[0])?, number(&items[1])?),
+        _ => {
+            return Err(err(
+                v.span,
+                format!("expected a list of values, a range `(lo, hi)` or `Frozen`, found {}", v.describe()),
+                "not an axis choice",
+            ));
+        }
+    })
+}
+
 /// `tune: { "AXIS": [values] | (lo, hi) | Frozen, ... }`: the axes are checked against the
 /// technique's params, channels and passes by [`crate::tune::check`].
-fn tune_block(node: &Node) -> Result<Vec<TuneAxis>, Diagnostic> {
+pub(crate) fn tune_block(node: &Node) -> Result<Vec<TuneAxis>, Diagnostic> {
     let Value::Map(entries) = &node.value else {
         return Err(err(
             node.span,
@@ -387,42 +427,7 @@ fn tune_block(node: &Node) -> Result<Vec<TuneAxis>, Diagnostic> {
             return Err(err(name.span, format!("the axis `{}` is named twice", name.value), "again here")
                 .help(format!("its first entry is at byte {}: keep one", first.name.span.start)));
         }
-        let choice = match &v.value {
-            Value::Ident(w) if w == "Frozen" => TuneChoice::Frozen,
-            Value::List(items) if items.is_empty() => {
-                return Err(err(v.span, format!("the axis `{}` has no values", name.value), "empty list")
-                    .help("give at least one value, or write `Frozen` to keep the technique's own"));
-            }
-            Value::List(items) => TuneChoice::Values(
-                items
-                    .iter()
-                    .map(|i| {
-                        let value = match &i.value {
-                            Value::Int(x) => TuneValue::Number(*x as f64),
-                            Value::Float(x) => TuneValue::Number(*x),
-                            Value::Bool(b) => TuneValue::Bool(*b),
-                            Value::Ident(n) => TuneValue::Name(n.clone()),
-                            _ => {
-                                return Err(err(
-                                    i.span,
-                                    format!("expected a number, `true`, `false` or a name such as `F16`, found {}", i.describe()),
-                                    "not a value of an axis",
-                                ));
-                            }
-                        };
-                        Ok(Spanned::new(value, i.span))
-                    })
-                    .collect::<Result<_, _>>()?,
-            ),
-            Value::Tuple { name: None, items } if items.len() == 2 => TuneChoice::Range(number(&items[0])?, number(&items[1])?),
-            _ => {
-                return Err(err(
-                    v.span,
-                    format!("expected a list of values, a range `(lo, hi)` or `Frozen`, found {}", v.describe()),
-                    "not an axis choice",
-                ));
-            }
-        };
+        let choice = tune_choice(&name.value, v)?;
         out.push(TuneAxis {
             name,
             choice,

@@ -103,6 +103,16 @@ pub struct TuneArgs {
     /// file per tier.
     #[arg(long, value_delimiter = ',', value_name = "B1,B2,...")]
     pub ladder: Vec<f64>,
+    /// Narrow or freeze an axis of every technique that has it, as a `tune:` entry would:
+    /// `N=[3, 6, 9]`, `bias=(0.0, 0.01)`, `precision:z=Frozen`. Repeatable.
+    #[arg(long = "axis", value_name = "NAME=CHOICE", value_parser = crate::session::pair)]
+    pub axes: Vec<(String, String)>,
+    /// Measure every combination of each axis's grid values (every choice, up to five values
+    /// of a param) at the final fidelity instead of searching: the exhaustive grid a sweep
+    /// would measure, to compare the search with (docs/tune.md). Implies one rung and no
+    /// refinement.
+    #[arg(long)]
+    pub grid: bool,
     /// Measure everything again: forget the records of an earlier run in the folder.
     #[arg(long)]
     pub fresh: bool,
@@ -148,11 +158,20 @@ pub struct Entry {
     pub label: String,
 }
 
-fn load_technique(path: &Path) -> Result<Entry, String> {
+fn load_technique(path: &Path, overrides: &[(String, String)]) -> Result<Entry, String> {
     let source = read_capped(path, MAX_SOURCE_BYTES)?;
-    let space = sshc::tune::space(&source).map_err(|d| {
-        report_diags(&d, path, &source);
-        format!("error: {} cannot be tuned: it does not parse", path.display())
+    // `--axis` entries apply to the techniques that have the axis
+    let has = |name: &str| sshc::tune::space(&source).is_ok_and(|s| s.axes.iter().any(|a| a.name == name));
+    let mine: Vec<(String, String)> = overrides.iter().filter(|(n, _)| has(n)).cloned().collect();
+    let space = sshc::tune::space_with(&source, &mine).map_err(|e| match e {
+        sshc::tune::SpaceError::Source(d) => {
+            report_diags(&d, path, &source);
+            format!("error: {} cannot be tuned: it does not parse", path.display())
+        }
+        sshc::tune::SpaceError::Override { text, diagnostics } => {
+            report_diags(&diagnostics, Path::new("--axis"), &text);
+            format!("error: `--axis` does not fit {}", path.display())
+        }
     })?;
     Ok(Entry {
         label: path
@@ -642,7 +661,11 @@ pub(crate) fn duration(s: f64) -> String {
     }
 }
 
-pub fn tune(a: TuneArgs) -> Result<(), String> {
+pub fn tune(mut a: TuneArgs) -> Result<(), String> {
+    if a.grid {
+        a.rungs = 1;
+        a.refine = 0;
+    }
     if a.rungs == 0 || a.rungs > 6 {
         return Err(format!("error: `--rungs {}`: give 1 to 6 fidelities", a.rungs));
     }
@@ -696,8 +719,20 @@ pub fn tune(a: TuneArgs) -> Result<(), String> {
     };
     let mut entries = Vec::new();
     let mut left_out = Vec::new();
+    for (name, _) in &a.axes {
+        if !paths.iter().any(|p| {
+            read_capped(p, MAX_SOURCE_BYTES)
+                .ok()
+                .and_then(|s| sshc::tune::space(&s).ok())
+                .is_some_and(|s| s.axes.iter().any(|x| x.name == *name))
+        }) {
+            return Err(format!(
+                "error: `--axis {name}=...`: no technique taking part has the axis `{name}`"
+            ));
+        }
+    }
     for p in &paths {
-        let e = load_technique(p)?;
+        let e = load_technique(p, &a.axes)?;
         let refused: Vec<usize> = (0..scenes.len()).filter(|&i| !sshc::admits(&e.source, kinds_of[i])).collect();
         if let Some(&i) = refused.first() {
             if named {
@@ -730,7 +765,7 @@ pub fn tune(a: TuneArgs) -> Result<(), String> {
         let p = if p.is_file() { p } else { bundled.join(&p) };
         // (timed compiled generic where its `light:` list does not name a scene's light,
         // as the sweep times its reference)
-        let r = load_technique(&p)?;
+        let r = load_technique(&p, &[])?;
         Some((r, f))
     };
     let budget = Budget {
@@ -748,11 +783,24 @@ pub fn tune(a: TuneArgs) -> Result<(), String> {
     let axes: Vec<Vec<&sshc::tune::Axis>> = entries.iter().map(|e| search::varying(&e.space, distant)).collect();
     let mut candidates = Vec::new();
     for (t, ax) in axes.iter().enumerate() {
-        candidates.extend(search::draw_candidates(t, ax, a.candidates, a.truth.seed));
+        if a.grid {
+            candidates.extend(search::grid(t, ax));
+        } else {
+            candidates.extend(search::draw_candidates(t, ax, a.candidates, a.truth.seed));
+        }
+    }
+    const MAX_GRID: usize = 20_000;
+    if candidates.len() > MAX_GRID {
+        return Err(format!(
+            "error: --grid: {} configurations, above the limit of {MAX_GRID}; narrow the axes with a `tune:` block",
+            candidates.len()
+        ));
     }
     // the run's identity: what it measures and how
     let mut id = format!(
-        "format=1 metric={} views={} holdout={} jitter={} candidates={} rungs={} eta={} refine={} repeats={} frames={} size={:?} samples={} runs={} seed={} budget={}",
+        "format=1 axes={:?} grid={} metric={} views={} holdout={} jitter={} candidates={} rungs={} eta={} refine={} repeats={} frames={} size={:?} samples={} runs={} seed={} budget={}",
+        a.axes,
+        a.grid,
         a.metric,
         a.views,
         a.holdout,

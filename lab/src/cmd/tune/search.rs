@@ -47,7 +47,7 @@ fn log_scale(lo: f64, hi: f64) -> bool {
 fn draw(axis: &Axis, rng: &mut Rng) -> Option<String> {
     match &axis.domain {
         Domain::Real { lo, hi } if log_scale(*lo, *hi) => {
-            if *lo == 0.0 && rng.next_u64() % 8 == 0 {
+            if *lo == 0.0 && rng.next_u64().is_multiple_of(8) {
                 return Some(real(0.0));
             }
             let a = lo.max(hi * 1e-4).ln();
@@ -95,6 +95,50 @@ pub fn draw_candidates(t: usize, axes: &[&Axis], n: usize, seed: u64) -> Vec<Can
         }
     }
     out
+}
+
+/// The values of `axis` an exhaustive grid takes: every choice, every integer up to five of
+/// them (else five spread evenly), five reals (log-spaced on a log-scaled axis, with `lo`).
+pub fn grid_values(axis: &Axis) -> Vec<String> {
+    match &axis.domain {
+        Domain::Choice(v) => v.clone(),
+        Domain::Int { lo, hi } if hi - lo < 5 => (*lo..=*hi).map(|i| i.to_string()).collect(),
+        Domain::Int { lo, hi } => {
+            let mut v: Vec<String> = (0..5).map(|k| (lo + (hi - lo) * k / 4).to_string()).collect();
+            v.dedup();
+            v
+        }
+        Domain::Real { lo, hi } if log_scale(*lo, *hi) => {
+            let a = lo.max(hi * 1e-4);
+            let mut v = if *lo == 0.0 { vec![real(0.0)] } else { vec![] };
+            let n = if *lo == 0.0 { 4 } else { 5 };
+            v.extend((0..n).map(|k| real(a * (hi / a).powf(k as f64 / (n - 1) as f64))));
+            v
+        }
+        Domain::Real { lo, hi } => (0..5).map(|k| real(lo + (hi - lo) * k as f64 / 4.0)).collect(),
+    }
+}
+
+/// Every combination of the axes' [`grid_values`] (the technique's own values written as
+/// absent): what `sshc tune --grid` measures, as an exhaustive sweep would.
+pub fn grid(t: usize, axes: &[&Axis]) -> Vec<Candidate> {
+    let mut out: Vec<Vec<(String, String)>> = vec![vec![]];
+    for a in axes {
+        let values = grid_values(a);
+        out = out
+            .into_iter()
+            .flat_map(|c| {
+                values.iter().map(move |v| {
+                    let mut c = c.clone();
+                    if a.default.as_ref() != Some(v) {
+                        c.push((a.name.clone(), v.clone()));
+                    }
+                    c
+                })
+            })
+            .collect();
+    }
+    out.into_iter().map(|values| Candidate { technique: t, values }).collect()
 }
 
 /// The neighbours of `c` along each axis: a real value halved and doubled (log scale) or
@@ -450,6 +494,45 @@ mod tests {
     }
 
     #[test]
+    fn the_grid_is_every_combination_of_each_axis_values() {
+        let s = sshc::tune::space(
+            r#"Technique(name: "t",
+                params: {
+                    "bias": Param(ty: F32, default: 0.001, range: (0.0, 0.1)),
+                    "N": Param(ty: I32, default: 4, range: (1, 8), fixed: true),
+                },
+                channels: { "z": Channel(precision: F32) },
+                passes: [
+                    Depth(name: "depth", writes: "shadow", channel: "z"),
+                    Shade(name: "shade", reads: ["shadow"], visibility: "select(0.0, 1.0, d - bias <= sample(z))"),
+                ],
+                tune: { "precision:z": Frozen, "schedule:shade": Frozen, "shadow_map": [256, 512] })"#,
+        )
+        .unwrap();
+        let axes = varying(&s, false);
+        let names: Vec<&str> = axes.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(names, ["bias", "N", "shadow_map"]);
+        assert_eq!(
+            grid_values(axes[0]),
+            ["0.0", "1e-5", "0.000464", "0.0215", "1.0"]
+                .map(|s| s.to_string())
+                .map(|s| if s == "1.0" { "0.1".to_string() } else { s })
+        );
+        assert_eq!(grid_values(axes[1]), ["1", "2", "4", "6", "8"]);
+        let g = grid(0, &axes);
+        assert_eq!(g.len(), 5 * 5 * 2);
+        let mut unique = g.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), g.len());
+        // the technique's own values are written as absent: its defaults are one of them
+        assert!(
+            g.iter()
+                .any(|c| c.value("N").is_none() && c.value("bias") == Some("0.0") && c.value("shadow_map") == Some("256"))
+        );
+    }
+
+    #[test]
     fn verdicts_mark_the_noise() {
         assert_eq!(verdict(&[0.9, 1.0, 0.95], 1.0), Verdict::Within);
         assert_eq!(verdict(&[0.9, 1.1], 1.0), Verdict::Noise);
@@ -484,7 +567,7 @@ mod tests {
             let found = search(
                 &plan,
                 cands.clone(),
-                &[axes.clone()],
+                std::slice::from_ref(&axes),
                 |c| {
                     let (_, _, b) = world(c);
                     memory.filter(|&l| b > l).map(|l| format!("{b} bytes > {l}"))
@@ -535,7 +618,7 @@ mod tests {
         let found = search(
             &plan,
             draw_candidates(0, &axes, 9, 1),
-            &[axes.clone()],
+            std::slice::from_ref(&axes),
             |_| None,
             |_, _| {
                 Ok(Measured {
