@@ -13,11 +13,11 @@ mkdir -p "$out"
 cache=$(mktemp -d)
 trap 'rm -rf "$cache"' EXIT
 
-# PCSS over five axes of three values each (243 configurations), precision and schedule
-# frozen; the same truth (64 samples x 4 runs, seed 0) and views for the grid and the search.
+# PCSS over five axes of three values each (243 configurations), precision, schedule and
+# cascades frozen; the grid measures every one (no configuration skipped by the cost model); the same truth (64 samples x 4 runs, seed 0) and views for the grid and the search.
 axes=(--axis 'N=[3, 6, 9]' --axis 'M=[4, 8, 12]' --axis 'bias=[0.0001, 0.0005, 0.002]'
     --axis 'slope_bias=[0.5, 1.5, 4.0]' --axis 'shadow_map=[256, 512, 1024]'
-    --axis 'precision:z=Frozen' --axis 'schedule:shade=Frozen')
+    --axis 'precision:z=Frozen' --axis 'schedule:shade=Frozen' --axis 'cascades=Frozen')
 common=(--technique techniques/pcss.ron "${axes[@]}" --budget-vs techniques/hard.ron=4
     --size 96x96 --views 1 --holdout 2 --samples 64 --runs 4 --frames 3 --repeats 3
     --cache "$cache")
@@ -32,7 +32,7 @@ done
 # pixels; against the bundled defaults and the best single constant bias of a sweep (the
 # grid over `bias` alone, the slope bias at its default).
 acne=(--scene scenes/acne-grazing.ron --technique techniques/pcf.ron --axis 'N=Frozen'
-    --axis 'precision:z=Frozen' --axis 'schedule:shade=Frozen' --axis 'shadow_map=Frozen'
+    --axis 'precision:z=Frozen' --axis 'schedule:shade=Frozen' --axis 'shadow_map=Frozen' --axis 'cascades=Frozen'
     --metric facing --budget-vs techniques/hard.ron=4 --size 128x128 --views 1 --holdout 2
     --samples 64 --runs 4 --frames 3 --repeats 3 --cache "$cache")
 "$sshc" tune "${acne[@]}" --axis 'slope_bias=Frozen' \

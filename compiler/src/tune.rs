@@ -564,6 +564,12 @@ Technique(
         assert_eq!(default("schedule:shade"), "Compute");
         assert_eq!(s.shadow_map, Some(1024));
         assert!(out.contains(r#"tune: { "N": [3, 5] },"#));
+        // it compiles, and the graph carries the map size to every host
+        let c = crate::compile_str(&out, &Default::default()).unwrap();
+        assert_eq!(c.graph.shadow_map, Some(1024));
+        let back = sshc_graph::PassGraph::from_ron(&c.graph.to_ron()).unwrap();
+        assert_eq!(back.shadow_map, Some(1024));
+        assert_eq!(crate::compile_str(&src, &Default::default()).unwrap().graph.shadow_map, None);
         // rewriting a tuned file again replaces in place rather than inserting twice
         let again = rewrite(
             &out,

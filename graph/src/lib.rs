@@ -101,6 +101,22 @@ mod tests {
         assert_eq!(LightModel::Any.kind(), None);
     }
 
+    /// A graph's `shadow_map` (a tuned technique's map size) round-trips, and a size no
+    /// device can hold is refused.
+    #[test]
+    fn a_shadow_map_size_round_trips_and_is_bounded() {
+        let mut g = tiny();
+        g.shadow_map = Some(1024);
+        assert_eq!(PassGraph::from_ron(&g.to_ron()).unwrap().shadow_map, Some(1024));
+        for bad in [0, MAX_SHADOW_MAP + 1, u32::MAX] {
+            g.shadow_map = Some(bad);
+            assert_eq!(PassGraph::from_ron(&g.to_ron()), Err(GraphError::ShadowMap(bad)));
+        }
+        // absent: not written, and an old graph without it reads as none
+        g.shadow_map = None;
+        assert!(!g.to_ron().contains("shadow_map"));
+    }
+
     /// Camera-sized textures (a Shade's debug outputs) are written by a Shade's camera
     /// steps only, have one layer and no mip chain, and no step reads them.
     #[test]

@@ -88,6 +88,11 @@ pub struct TuneArgs {
     /// Rounds of refinement around the best at the final fidelity.
     #[arg(long, default_value_t = 2)]
     pub refine: usize,
+    /// Before the final rung, a configuration is dropped, and those of more work skipped,
+    /// only when its one timing exceeds the time budget by this factor (the final rung's
+    /// repeated timings decide by their median and mark their spread).
+    #[arg(long, default_value_t = 1.25)]
+    pub noise: f64,
     /// Interleaved timings of a configuration and the reference at the final rung (their
     /// spread marks configurations within the noise of the budget).
     #[arg(long, default_value_t = 3)]
@@ -558,12 +563,13 @@ impl Tuner<'_> {
             return r.result.clone().map(|(m, _)| m);
         }
         let last = rung + 1 == self.a.rungs.max(1);
-        let views = if rung == 0 { 1 } else { self.a.views + 1 };
+        // the cheap rungs' first on the scene's own view alone; the final one on every
+        // training view (a single-rung search, the grid, is all final)
+        let views = if rung == 0 && !last { 1 } else { self.a.views + 1 };
         let repeats = if last { self.a.repeats.max(1) } else { 1 };
         let result = self.measure_on(c, views, false, self.samples(rung), repeats);
         if let Ok((m, d)) = &result
-            && plan.verdict(m) == search::Verdict::Over
-            && m.times.iter().all(|&t| t > plan.time_limit)
+            && m.times.iter().all(|&t| t > plan.time_limit * plan.noise)
         {
             self.over.borrow_mut().push((c.technique, kinds(c), d.fetches, d.ops));
         }
@@ -605,6 +611,15 @@ impl Tuner<'_> {
     /// precisions and schedules already measured over the time budget.
     pub fn skip(&self, c: &Candidate) -> Option<String> {
         let e = &self.entries[c.technique];
+        // a measurement outranks the model: a configuration measured inside the budget at
+        // any fidelity is measured again
+        let within = self.done.borrow().values().any(|r| {
+            r.technique == e.label
+                && r.config == c.describe()
+                && r.result
+                    .as_ref()
+                    .is_ok_and(|(m, _)| m.times.iter().any(|&t| t <= self.budget.time_limit()))
+        });
         let s = self.settings_of(c).ok()?;
         let opts = sshc::CompileOptions {
             set: s.set.clone(),
@@ -629,6 +644,10 @@ impl Tuner<'_> {
         let (fetches, ops) = crate::cmd::render::pass_work(&compiled.graph, n as u32, scene.camera_size(), 0)
             .iter()
             .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops));
+        if within || self.a.grid {
+            // the grid measures every configuration its memory allows, as a sweep would
+            return None;
+        }
         let k = kinds(c);
         self.over
             .borrow()
@@ -640,11 +659,13 @@ impl Tuner<'_> {
     }
 }
 
-/// The precision and schedule values of a candidate: what changes the cost per fetch.
+/// The values of a candidate the work model (fetches and operations per frame of its
+/// graph) does not see: precisions and schedules change the cost of a fetch, cascades
+/// the number of views.
 fn kinds(c: &Candidate) -> String {
     c.values
         .iter()
-        .filter(|(k, _)| k.starts_with("precision:") || k.starts_with("schedule:"))
+        .filter(|(k, _)| k.starts_with("precision:") || k.starts_with("schedule:") || k == "cascades")
         .map(|(k, v)| format!("{k}={v}"))
         .collect::<Vec<_>>()
         .join(" ")
@@ -671,6 +692,9 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
     }
     if a.candidates == 0 || a.candidates > 10_000 {
         return Err(format!("error: `--candidates {}`: give 1 to 10000 per technique", a.candidates));
+    }
+    if !(a.noise.is_finite() && (1.0..=10.0).contains(&a.noise)) {
+        return Err(format!("error: `--noise {}`: give a factor from 1 to 10", a.noise));
     }
     if a.views > 64 || a.holdout > 64 {
         return Err("error: `--views` and `--holdout` take at most 64 views each".into());
@@ -798,7 +822,8 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
     }
     // the run's identity: what it measures and how
     let mut id = format!(
-        "format=1 axes={:?} grid={} metric={} views={} holdout={} jitter={} candidates={} rungs={} eta={} refine={} repeats={} frames={} size={:?} samples={} runs={} seed={} budget={}",
+        "format=1 noise={} axes={:?} grid={} metric={} views={} holdout={} jitter={} candidates={} rungs={} eta={} refine={} repeats={} frames={} size={:?} samples={} runs={} seed={} budget={}",
+        a.noise,
         a.axes,
         a.grid,
         a.metric,
@@ -871,6 +896,7 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
             time_limit: *limit,
             memory_limit: memory,
             refine: a.refine,
+            noise: a.noise,
         };
         let count = RefCell::new(0usize);
         let found = search::search(

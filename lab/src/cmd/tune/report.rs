@@ -396,7 +396,15 @@ pub(crate) fn write(t: &Tuner, tiers: &[(f64, Plan, Found)]) -> Result<(), Strin
             ));
             continue;
         };
+        let before = *t.measured_now.borrow();
         let ch = finish(t, plan, c, m)?;
+        let extra = *t.measured_now.borrow() - before;
+        let _ = writeln!(
+            md,
+            "The report measured {extra} more configurations at the final fidelity (the chosen point's neighbours, for the sensitivity{}), and the chosen configuration and its technique's defaults on the {} held-out views.\n",
+            if ch.default.is_some() { ", and the defaults" } else { "" },
+            t.a.holdout
+        );
         let e = &t.entries[ch.candidate.technique];
         let file = if tiers.len() == 1 {
             "tuned.ron".to_string()
