@@ -228,6 +228,8 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
     let want = |p: DumpPhase| opts.dump_after == Some(p);
     let result = (|| {
         let ast = front::parse::parse(source).map_err(Diagnostics::from)?;
+        // the `tune:` block names params, channels and passes: checked once they are read
+        tune::check(&ast).map_err(Diagnostics::from)?;
         if want(DumpPhase::Parse) {
             dump = Some(format!("{ast:#?}\n"));
         }

@@ -113,6 +113,16 @@ pub fn check(t: &Technique) -> Result<(), Diagnostic> {
 fn check_axis(t: &Technique, axis: &TuneAxis) -> Result<(), Diagnostic> {
     let name = axis.name.value.as_str();
     let span = axis.name.span;
+    if !axis_kinds(t).iter().any(|k| k == name) {
+        let what = if let Some(target) = name.strip_prefix("precision:") {
+            format!("no channel or expansion is named `{target}`")
+        } else if let Some(target) = name.strip_prefix("schedule:") {
+            format!("no Map, Filter, Mipmap or Shade pass is named `{target}`")
+        } else {
+            format!("the technique has no param `{name}`")
+        };
+        return Err(unknown(t, axis, what));
+    }
     let values: &[crate::span::Spanned<TuneValue>] = match &axis.choice {
         TuneChoice::Values(v) => v,
         TuneChoice::Frozen => &[],
@@ -251,10 +261,17 @@ fn unknown(t: &Technique, axis: &TuneAxis, msg: String) -> Diagnostic {
     d.note(format!("the axes are: {}", names.join(", ")))
 }
 
+/// The technique parsed and its `tune:` block checked.
+fn parsed(source: &str) -> Result<Technique, Diagnostic> {
+    let t = crate::front::parse::parse(source)?;
+    check(&t)?;
+    Ok(t)
+}
+
 /// A technique's search space, its `tune:` block applied. Parses the source (its errors
 /// as diagnostics).
 pub fn space(source: &str) -> Result<Space, Diagnostics> {
-    let t = crate::front::parse::parse(source).map_err(|d| Diagnostics(vec![d]))?;
+    let t = parsed(source).map_err(|d| Diagnostics(vec![d]))?;
     Ok(space_of(&t))
 }
 
@@ -270,7 +287,7 @@ pub enum SpaceError {
 /// `(lo, hi)` or `Frozen`) added to the technique's `tune:` block or replacing its entry
 /// for that axis, each checked as the block is: `sshc tune --axis NAME=CHOICE`.
 pub fn space_with(source: &str, overrides: &[(String, String)]) -> Result<Space, SpaceError> {
-    let mut t = crate::front::parse::parse(source).map_err(|d| SpaceError::Source(Diagnostics(vec![d])))?;
+    let mut t = parsed(source).map_err(|d| SpaceError::Source(Diagnostics(vec![d])))?;
     for (name, choice) in overrides {
         let quoted = format!("\"{}\"", name.replace('\\', "\\\\").replace('"', "\\\""));
         let text = format!("{{ {quoted}: {choice} }}");
@@ -392,7 +409,7 @@ fn space_of(t: &Technique) -> Space {
 /// above it. `cascades` is not a property of a technique and is left to the header. The
 /// result parses (checked) and keeps everything else of the source as written.
 pub fn rewrite(source: &str, values: &[(String, String)], header: &[String]) -> Result<String, Diagnostics> {
-    let t = crate::front::parse::parse(source).map_err(|d| Diagnostics(vec![d]))?;
+    let t = parsed(source).map_err(|d| Diagnostics(vec![d]))?;
     let fail = |msg: String| Diagnostics(vec![Diagnostic::error(Phase::Parse, msg)]);
     // (start, end, replacement) edits; an insertion has start == end
     let mut edits: Vec<(usize, usize, String)> = Vec::new();
@@ -454,7 +471,7 @@ pub fn rewrite(source: &str, values: &[(String, String)], header: &[String]) -> 
         .map(|l| if l.is_empty() { "//\n".to_string() } else { format!("// {l}\n") })
         .collect();
     head.push_str(&out);
-    crate::front::parse::parse(&head).map_err(|d| Diagnostics(vec![d]))?;
+    parsed(&head).map_err(|d| Diagnostics(vec![d]))?;
     Ok(head)
 }
 

@@ -349,7 +349,6 @@ fn technique(root: &Node) -> Result<Technique, Diagnostic> {
         tune,
         span: root.span,
     };
-    crate::tune::check(&t)?;
     Ok(t)
 }
 
@@ -411,7 +410,8 @@ pub fn tune_choice(name: &str, v: &Node) -> Result<TuneChoice, Diagnostic> {
 }
 
 /// `tune: { "AXIS": [values] | (lo, hi) | Frozen, ... }`: the axes are checked against the
-/// technique's params, channels and passes by [`crate::tune::check`].
+/// technique's params, channels and passes by `tune::check`, which the driver runs after
+/// the parse.
 pub(crate) fn tune_block(node: &Node) -> Result<Vec<TuneAxis>, Diagnostic> {
     let Value::Map(entries) = &node.value else {
         return Err(err(
