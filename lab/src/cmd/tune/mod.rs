@@ -389,6 +389,12 @@ impl Budget {
     }
 }
 
+/// A measured configuration's (technique, cost class, fetches, operations, fastest time
+/// figure).
+type Rate = (usize, String, f64, f64, f64);
+/// A configuration's (fetches, operations, shadow-map bytes) per frame, from its graph.
+type Work = (f64, f64, f64);
+
 /// Shared state of a tune's measurements.
 pub(crate) struct Tuner<'a> {
     pub gpu: &'a Gpu,
@@ -401,10 +407,13 @@ pub(crate) struct Tuner<'a> {
     /// Measurements by (technique, config, rung): those of this run and those resumed.
     pub done: RefCell<HashMap<(String, String, usize), Record>>,
     log: RefCell<Option<std::fs::File>>,
-    /// (technique, precision and schedule values, fetches, ops) of configurations over the
-    /// time budget beyond its noise: a configuration of the same technique, precisions and
-    /// schedules with at least as many fetches and operations per frame cannot meet it.
-    over: RefCell<Vec<(usize, String, f64, f64)>>,
+    /// (technique, cost class, fetches, operations, fastest time figure) of every measured
+    /// configuration: the fastest rates of fetches and operations a technique's cost class
+    /// reached on this device, from which [`Tuner::skip`] bounds an unmeasured one's time.
+    rates: RefCell<Vec<Rate>>,
+    /// Fetches, operations and shadow-map bytes per frame of each candidate's graph (the
+    /// compiler's counts at the first scene's sizes), by technique and configuration.
+    work: RefCell<HashMap<(usize, String), Option<Work>>>,
     pub started: Instant,
     pub measured_now: RefCell<usize>,
 }
@@ -568,11 +577,15 @@ impl Tuner<'_> {
         let views = if rung == 0 && !last { 1 } else { self.a.views + 1 };
         let repeats = if last { self.a.repeats.max(1) } else { 1 };
         let result = self.measure_on(c, views, false, self.samples(rung), repeats);
-        if let Ok((m, d)) = &result
-            && m.times.iter().all(|&t| t > plan.time_limit * plan.noise)
+        if let Ok((m, _)) = &result
+            && let Some((f, o, _)) = self.work_of(c)
         {
-            self.over.borrow_mut().push((c.technique, kinds(c), d.fetches, d.ops));
+            let fastest = m.times.iter().copied().fold(f64::INFINITY, f64::min);
+            if fastest.is_finite() && fastest > 0.0 {
+                self.rates.borrow_mut().push((c.technique, kinds(c), f, o, fastest));
+            }
         }
+        let _ = plan;
         let record = Record {
             technique: e.label.clone(),
             config: c.describe(),
@@ -605,33 +618,49 @@ impl Tuner<'_> {
         Ok(())
     }
 
-    /// Why `c` cannot meet the budget, known before running it: the bytes of its
-    /// shadow-map textures (from its graph, exact) over the memory budget, or at least the
-    /// fetches and operations per frame of a configuration of the same technique,
-    /// precisions and schedules already measured over the time budget.
-    pub fn skip(&self, c: &Candidate) -> Option<String> {
+    /// The fetches, operations and shadow-map bytes per frame of `c`'s graph, from the
+    /// compiler's counts (`render::pass_work`, `emit::Cost`) at the first scene's camera and
+    /// `c`'s map size: known before running it. None where it does not compile.
+    fn work_of(&self, c: &Candidate) -> Option<Work> {
+        let key = (c.technique, c.describe());
+        if let Some(w) = self.work.borrow().get(&key) {
+            return *w;
+        }
         let e = &self.entries[c.technique];
-        // a measurement outranks the model: a configuration measured inside the budget at
-        // any fidelity is measured again
-        let within = self.done.borrow().values().any(|r| {
-            r.technique == e.label
-                && r.config == c.describe()
-                && r.result
-                    .as_ref()
-                    .is_ok_and(|(m, _)| m.times.iter().any(|&t| t <= self.budget.time_limit()))
+        let w = self.settings_of(c).ok().and_then(|s| {
+            let opts = sshc::CompileOptions {
+                set: s.set.clone(),
+                precision: s.precision.clone(),
+                schedule: s.schedule.clone(),
+                ..Default::default()
+            };
+            let compiled = sshc::compile_str(&e.source, &opts).ok()?;
+            let scene = &self.scenes[0].train[0];
+            let n = s.shadow_map.unwrap_or(scene.shadow_map);
+            let bytes: f64 = sshc::emit::Cost::of(&compiled.graph)
+                .textures
+                .iter()
+                .map(|t| t.3 * f64::from(n) * f64::from(n))
+                .sum();
+            let (f, o) = crate::cmd::render::pass_work(&compiled.graph, n, scene.camera_size(), 0)
+                .iter()
+                .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops));
+            Some((f, o, bytes))
         });
-        let s = self.settings_of(c).ok()?;
-        let opts = sshc::CompileOptions {
-            set: s.set.clone(),
-            precision: s.precision.clone(),
-            schedule: s.schedule.clone(),
-            ..Default::default()
-        };
-        let compiled = sshc::compile_str(&e.source, &opts).ok()?;
-        let scene = &self.scenes[0].train[0];
-        let n = s.shadow_map.unwrap_or(scene.shadow_map) as f64;
-        let cost = sshc::emit::Cost::of(&compiled.graph);
-        let map_bytes: f64 = cost.textures.iter().map(|t| t.3 * n * n).sum();
+        self.work.borrow_mut().insert(key, w);
+        w
+    }
+
+    /// Why `c` cannot meet the budget, known before running it: the bytes of its
+    /// shadow-map textures (from its graph, exact) over the memory budget, or a time that
+    /// must exceed the budget beyond its noise: its fetches (and operations) per frame at
+    /// the fastest rate of fetches (operations) any measured configuration of the same
+    /// technique and cost class (precisions, schedules, cascades) reached. That bound holds
+    /// as long as the device never runs the technique's work faster than it was seen to;
+    /// the grid and configurations already measured inside the budget are never skipped.
+    pub fn skip(&self, c: &Candidate, time_limit: f64) -> Option<String> {
+        let e = &self.entries[c.technique];
+        let (fetches, ops, map_bytes) = self.work_of(c)?;
         if let Some(limit) = self.budget.memory
             && map_bytes > limit as f64
         {
@@ -641,21 +670,37 @@ impl Tuner<'_> {
                 limit as f64 / (1 << 20) as f64
             ));
         }
-        let (fetches, ops) = crate::cmd::render::pass_work(&compiled.graph, n as u32, scene.camera_size(), 0)
-            .iter()
-            .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops));
+        // a measurement outranks the model: a configuration measured inside the budget at
+        // any fidelity is measured again
+        let within = self.done.borrow().values().any(|r| {
+            r.technique == e.label
+                && r.config == c.describe()
+                && r.result.as_ref().is_ok_and(|(m, _)| m.times.iter().any(|&t| t <= time_limit))
+        });
         if within || self.a.grid {
             // the grid measures every configuration its memory allows, as a sweep would
             return None;
         }
         let k = kinds(c);
-        self.over
-            .borrow()
+        let rates = self.rates.borrow();
+        let mine: Vec<&Rate> = rates.iter().filter(|r| r.0 == c.technique && r.1 == k).collect();
+        if mine.is_empty() {
+            return None;
+        }
+        let fastest_fetches = mine.iter().map(|r| r.2 / r.4).fold(0.0, f64::max);
+        let fastest_ops = mine.iter().map(|r| r.3 / r.4).fold(0.0, f64::max);
+        let bound = [(fetches, fastest_fetches), (ops, fastest_ops)]
             .iter()
-            .find(|(t, kk, f, o)| *t == c.technique && *kk == k && fetches >= *f && ops >= *o && (*f > 0.0 || *o > 0.0))
-            .map(|(_, _, f, o)| {
-                format!("{fetches:.3e} fetches and {ops:.3e} operations per frame, at least those of a configuration measured over the time budget ({f:.3e}, {o:.3e})")
-            })
+            .filter(|(_, rate)| *rate > 0.0)
+            .map(|(w, rate)| w / rate)
+            .fold(0.0, f64::max);
+        let limit = time_limit * self.a.noise;
+        (bound > limit).then(|| {
+            format!(
+                "{fetches:.3e} fetches and {ops:.3e} operations per frame need at least {bound:.3} {} at the fastest rates measured for its technique and cost class, over the budget beyond its noise ({limit:.3})",
+                self.budget.unit()
+            )
+        })
     }
 }
 
@@ -870,7 +915,8 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
         truths: RefCell::new(HashMap::new()),
         done: RefCell::new(done),
         log: RefCell::new(None),
-        over: RefCell::new(Vec::new()),
+        rates: RefCell::new(Vec::new()),
+        work: RefCell::new(HashMap::new()),
         started: Instant::now(),
         measured_now: RefCell::new(0),
     };
@@ -903,7 +949,7 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
             &plan,
             candidates.clone(),
             &axes,
-            |c| tuner.skip(c),
+            |c| tuner.skip(c, *limit),
             |c, rung| {
                 *count.borrow_mut() += 1;
                 tuner.measure(c, rung, &plan)
