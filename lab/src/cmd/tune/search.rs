@@ -141,8 +141,14 @@ pub fn grid(t: usize, axes: &[&Axis]) -> Vec<Candidate> {
     out.into_iter().map(|values| Candidate { technique: t, values }).collect()
 }
 
+/// The most values of a choice or an integer axis the refinement tries all of (a line
+/// search along the axis: error is not convex in a sample count or a map size, so the next
+/// value either side can hide the best one); longer axes step to the next value either side.
+const LINE_SEARCH: usize = 5;
+
 /// The neighbours of `c` along each axis: a real value halved and doubled (log scale) or
-/// moved by a tenth of its range, an integer by one, a choice to the next value either side.
+/// moved by a tenth of its range; every other value of a choice or integer axis of at most
+/// [`LINE_SEARCH`] values, else the next value either side.
 pub fn neighbours(c: &Candidate, axes: &[&Axis]) -> Vec<Candidate> {
     let mut out = Vec::new();
     for a in axes {
@@ -158,6 +164,7 @@ pub fn neighbours(c: &Candidate, axes: &[&Axis]) -> Vec<Candidate> {
                 };
                 steps.into_iter().map(|y| real(y.clamp(*lo, *hi))).collect()
             }
+            (Domain::Int { lo, hi }, Some(_)) if hi - lo < LINE_SEARCH as i64 => (*lo..=*hi).map(|y| y.to_string()).collect(),
             (Domain::Int { lo, hi }, Some(v)) => {
                 let Ok(x) = v.parse::<i64>() else { continue };
                 [x - 1, x + 1]
@@ -166,6 +173,7 @@ pub fn neighbours(c: &Candidate, axes: &[&Axis]) -> Vec<Candidate> {
                     .map(|y| y.to_string())
                     .collect()
             }
+            (Domain::Choice(v), _) if v.len() <= LINE_SEARCH => v.clone(),
             (Domain::Choice(v), cur) => {
                 let i = cur.and_then(|c| v.iter().position(|x| x == c));
                 match i {
@@ -501,6 +509,8 @@ mod tests {
         // N = 9 is outside the range; 256 has no smaller neighbour
         assert!(!descr.iter().any(|d| d.contains("N=9")));
         assert!(descr.contains(&"N=8 shadow_map=512".to_string()), "{descr:?}");
+        // a choice of five values is searched along its whole line, not only next door
+        assert!(descr.contains(&"N=8 shadow_map=4096".to_string()), "{descr:?}");
         assert_eq!(descr.iter().filter(|d| d.contains("shadow_map")).count(), descr.len());
     }
 
