@@ -4,22 +4,13 @@
 //! a clear error. They never skip: with no adapter the commands fail, and so do these.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 mod common;
 use common::{root, temp_dir};
 
 fn sshc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sshc"))
-        .args(args)
-        .current_dir(root())
-        .env("LP_NUM_THREADS", std::env::var("LP_NUM_THREADS").unwrap_or_else(|_| "2".into()))
-        .env(
-            "XDG_RUNTIME_DIR",
-            std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| "/tmp".into()),
-        )
-        .output()
-        .expect("the sshc binary runs")
+    common::sshc(env!("CARGO_BIN_EXE_sshc"), args)
 }
 
 fn ok(args: &[&str]) -> (String, String) {
@@ -37,6 +28,31 @@ fn fails(args: &[&str]) -> String {
     assert!(!out.status.success(), "sshc {} succeeded", args.join(" "));
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
+
+/// The smallest tune: a 16 x 16 image, one fidelity, the scene's own view, few samples.
+const QUICK: [&str; 21] = [
+    "--size",
+    "16x16",
+    "--candidates",
+    "4",
+    "--rungs",
+    "1",
+    "--views",
+    "0",
+    "--holdout",
+    "0",
+    "--samples",
+    "16",
+    "--runs",
+    "2",
+    "--frames",
+    "1",
+    "--repeats",
+    "1",
+    "--refine",
+    "0",
+    "--no-cache",
+];
 
 /// The budget of the tune below: PCF and PCSS against 2.5 times the hard shadow map.
 const BUDGET: f64 = 2.5;
@@ -211,29 +227,7 @@ fn tune_refuses_bad_input_with_clear_errors() {
     let dir = temp_dir("tune-bad");
     let out = dir.join("out");
     let o = out.to_str().unwrap();
-    let quick = [
-        "--size",
-        "16x16",
-        "--candidates",
-        "2",
-        "--rungs",
-        "1",
-        "--views",
-        "0",
-        "--holdout",
-        "0",
-        "--samples",
-        "16",
-        "--runs",
-        "2",
-        "--frames",
-        "1",
-        "--repeats",
-        "1",
-        "--refine",
-        "0",
-        "--no-cache",
-    ];
+    let quick = QUICK;
     // a budget no configuration meets: which came closest, by how much
     let mut a = vec![
         "tune",
@@ -314,38 +308,18 @@ fn tune_refuses_bad_input_with_clear_errors() {
 fn a_ladder_tunes_one_configuration_per_budget_sharing_measurements() {
     let dir = temp_dir("tune-ladder");
     let out = dir.join("out");
-    let args = [
+    let mut args = vec![
         "tune",
         "--scene",
         "scenes/contact.ron",
         "--technique",
         "techniques/pcf.ron",
-        "--size",
-        "16x16",
-        "--candidates",
-        "4",
-        "--rungs",
-        "1",
-        "--views",
-        "0",
-        "--holdout",
-        "0",
-        "--samples",
-        "16",
-        "--runs",
-        "2",
-        "--frames",
-        "1",
-        "--repeats",
-        "1",
-        "--refine",
-        "0",
-        "--no-cache",
         "--ladder",
         "3,1000",
         "-o",
         out.to_str().unwrap(),
     ];
+    args.extend(QUICK);
     ok(&args);
     let tiers = std::fs::read_to_string(out.join("tiers.ron")).unwrap();
     assert!(tiers.contains("name: \"low\"") && tiers.contains("name: \"medium\""), "{tiers}");

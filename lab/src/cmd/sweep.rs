@@ -578,7 +578,7 @@ fn measuring_options(t: &TruthOpts, c: &crate::bind::Cascading) -> String {
 }
 
 /// Seconds in words: `42 s`, `12 min`, `3.5 h`.
-fn duration(s: f64) -> String {
+pub(crate) fn duration(s: f64) -> String {
     if s < 120.0 {
         format!("{s:.0} s")
     } else if s < 7200.0 {

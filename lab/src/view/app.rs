@@ -158,6 +158,16 @@ struct App {
 impl App {
     fn new(args: ViewArgs, _event_loop: &EventLoop<()>) -> Result<App, String> {
         let mut scene = crate::session::load_scene(&args.scene, args.size, args.shadow_map)?;
+        // a tuned technique names its map size: it outranks the scene's, `--shadow-map` it
+        if args.shadow_map.is_none()
+            && let Some(n) = crate::session::read_capped(&args.technique, 4 << 20)
+                .ok()
+                .and_then(|s| sshc::tune::space(&s).ok())
+                .and_then(|s| s.shadow_map)
+        {
+            scene.shadow_map = n;
+            scene.check_precision().map_err(|e| e.to_string())?;
+        }
         if let Some((w, h)) = args.size {
             scene.set_camera_size(w, h);
         }

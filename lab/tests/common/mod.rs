@@ -21,6 +21,21 @@ pub fn bundled_scenes() -> Vec<String> {
     names
 }
 
+/// Runs the `sshc` binary at `exe` (a test's `env!("CARGO_BIN_EXE_sshc")`) with `args` from
+/// the repository's root, on lavapipe's two threads, and returns what it did.
+pub fn sshc(exe: &str, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(exe)
+        .args(args)
+        .current_dir(root())
+        .env("LP_NUM_THREADS", std::env::var("LP_NUM_THREADS").unwrap_or_else(|_| "2".into()))
+        .env(
+            "XDG_RUNTIME_DIR",
+            std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| "/tmp".into()),
+        )
+        .output()
+        .expect("the sshc binary runs")
+}
+
 /// A fresh empty folder under the system's temporary folder, named after the test binary,
 /// the process and `name`.
 pub fn temp_dir(name: &str) -> PathBuf {

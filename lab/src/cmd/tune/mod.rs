@@ -22,7 +22,7 @@
 pub mod report;
 pub mod search;
 
-use crate::cmd::sweep::{Config, Ran, SceneTruth, run_config, settings};
+use crate::cmd::sweep::{Config, Ran, SceneTruth, duration, run_config, settings};
 use crate::scene::{Camera, Scene};
 use crate::session::{TruthOpts, load_scene, read_capped, report as report_diags, rt};
 use search::{Candidate, Measured, Plan};
@@ -714,17 +714,6 @@ fn kinds(c: &Candidate) -> String {
         .map(|(k, v)| format!("{k}={v}"))
         .collect::<Vec<_>>()
         .join(" ")
-}
-
-/// Seconds in words.
-pub(crate) fn duration(s: f64) -> String {
-    if s < 120.0 {
-        format!("{s:.0} s")
-    } else if s < 7200.0 {
-        format!("{:.0} min", s / 60.0)
-    } else {
-        format!("{:.1} h", s / 3600.0)
-    }
 }
 
 pub fn tune(mut a: TuneArgs) -> Result<(), String> {
