@@ -27,7 +27,7 @@ common=(--technique techniques/pcss.ron "${axes[@]}" --budget-vs techniques/hard
 for scene in contact bunny edge; do
     "$sshc" tune --scene "scenes/$scene.ron" "${common[@]}" --grid --fresh -o "$out/grid-$scene" 2>"$out/grid-$scene.log" \
         || { tail -5 "$out/grid-$scene.log"; exit 1; }
-    "$sshc" tune --scene "scenes/$scene.ron" "${common[@]}" --candidates 16 --rungs 2 --refine 2 --fresh \
+    "$sshc" tune --scene "scenes/$scene.ron" "${common[@]}" --candidates 16 --rungs 2 --refine 4 --fresh \
         -o "$out/search-$scene" 2>"$out/search-$scene.log" || { tail -5 "$out/search-$scene.log"; exit 1; }
 done
 
@@ -41,7 +41,7 @@ acne=(--scene scenes/acne-grazing.ron --technique techniques/pcf.ron --axis 'N=F
 "$sshc" tune "${acne[@]}" --axis 'slope_bias=Frozen' \
     --axis 'bias=[0.0, 0.0001, 0.0003, 0.001, 0.003, 0.01, 0.03, 0.1]' --grid --fresh \
     -o "$out/acne-sweep" 2>"$out/acne-sweep.log" || { tail -5 "$out/acne-sweep.log"; exit 1; }
-"$sshc" tune "${acne[@]}" --candidates 16 --rungs 2 --refine 3 --fresh -o "$out/acne" 2>"$out/acne.log" \
+"$sshc" tune "${acne[@]}" --candidates 16 --rungs 2 --refine 4 --fresh -o "$out/acne" 2>"$out/acne.log" \
     || { tail -5 "$out/acne.log"; exit 1; }
 
 # The tuned file loads everywhere: it compiles, verifies, and `compare` measures it again.

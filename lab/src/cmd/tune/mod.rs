@@ -85,8 +85,9 @@ pub struct TuneArgs {
     /// Keep one candidate in ETA after each rung.
     #[arg(long, default_value_t = 3)]
     pub eta: usize,
-    /// Rounds of refinement around the best at the final fidelity.
-    #[arg(long, default_value_t = 2)]
+    /// Rounds of refinement around the best at the final fidelity, at most (it stops at
+    /// the first round that finds nothing better).
+    #[arg(long, default_value_t = 4)]
     pub refine: usize,
     /// Before the final rung, a configuration is dropped, and those of more work skipped,
     /// only when its one timing exceeds the time budget by this factor (the final rung's
