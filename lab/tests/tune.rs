@@ -287,6 +287,25 @@ fn tune_refuses_bad_input_with_clear_errors() {
         let out = sshc(&["check", path.to_str().unwrap()]);
         assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains(want));
     }
+    // a link planted in the output folder is not written through
+    let planted = dir.join("planted");
+    std::fs::create_dir_all(&planted).unwrap();
+    let outside = dir.join("outside.txt");
+    std::fs::write(&outside, "kept").unwrap();
+    std::os::unix::fs::symlink(&outside, planted.join("tune.csv")).unwrap();
+    let mut a = vec![
+        "tune",
+        "--scene",
+        "scenes/contact.ron",
+        "--technique",
+        "techniques/pcf.ron",
+        "-o",
+        planted.to_str().unwrap(),
+    ];
+    a.extend(quick);
+    let e = fails(&a);
+    assert!(e.contains("tune.csv` exists and is not a regular file"), "{e}");
+    assert_eq!(std::fs::read_to_string(&outside).unwrap(), "kept");
     // options out of range
     for bad in [
         ["--budget-ms", "NaN"],

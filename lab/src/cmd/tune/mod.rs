@@ -566,11 +566,15 @@ impl Tuner<'_> {
     }
 
     /// The search's measuring step at `rung`: memoised (resumed records included), logged.
-    pub fn measure(&self, c: &Candidate, rung: usize, plan: &Plan) -> Result<Measured, String> {
+    pub fn measure(&self, c: &Candidate, rung: usize) -> Result<Measured, String> {
         let e = &self.entries[c.technique];
         let key = (e.label.clone(), c.describe(), rung);
-        if let Some(r) = self.done.borrow().get(&key) {
-            return r.result.clone().map(|(m, _)| m);
+        let known = self.done.borrow().get(&key).map(|r| r.result.clone());
+        if let Some(result) = known {
+            // a resumed (or shared) measurement counts towards the rates as it did when it
+            // was made, so that a resumed search skips what the first one skipped
+            self.note_rate(c, &result);
+            return result.map(|(m, _)| m);
         }
         let last = rung + 1 == self.a.rungs.max(1);
         // the cheap rungs' first on the scene's own view alone; the final one on every
@@ -578,15 +582,7 @@ impl Tuner<'_> {
         let views = if rung == 0 && !last { 1 } else { self.a.views + 1 };
         let repeats = if last { self.a.repeats.max(1) } else { 1 };
         let result = self.measure_on(c, views, false, self.samples(rung), repeats);
-        if let Ok((m, _)) = &result
-            && let Some((f, o, _)) = self.work_of(c)
-        {
-            let fastest = m.times.iter().copied().fold(f64::INFINITY, f64::min);
-            if fastest.is_finite() && fastest > 0.0 {
-                self.rates.borrow_mut().push((c.technique, kinds(c), f, o, fastest));
-            }
-        }
-        let _ = plan;
+        self.note_rate(c, &result);
         let record = Record {
             technique: e.label.clone(),
             config: c.describe(),
@@ -599,11 +595,25 @@ impl Tuner<'_> {
         result.map(|(m, _)| m)
     }
 
+    /// Adds a measured configuration's rates of fetches and operations (per unit of its
+    /// fastest time figure) to those [`Tuner::skip`] bounds times with.
+    fn note_rate(&self, c: &Candidate, result: &Result<(Measured, Detail), String>) {
+        if let Ok((m, _)) = result
+            && let Some((f, o, _)) = self.work_of(c)
+        {
+            let fastest = m.times.iter().copied().fold(f64::INFINITY, f64::min);
+            if fastest.is_finite() && fastest > 0.0 {
+                self.rates.borrow_mut().push((c.technique, kinds(c), f, o, fastest));
+            }
+        }
+    }
+
     fn append(&self, r: &Record) -> Result<(), String> {
         use std::io::Write as _;
         let path = self.a.out.join(RECORDS);
         let mut log = self.log.borrow_mut();
         if log.is_none() {
+            report::writable(&path)?;
             *log = Some(
                 std::fs::OpenOptions::new()
                     .create(true)
@@ -942,7 +952,7 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
             |c| tuner.skip(c, *limit),
             |c, rung| {
                 *count.borrow_mut() += 1;
-                tuner.measure(c, rung, &plan)
+                tuner.measure(c, rung)
             },
             |stage, best| {
                 let done = *count.borrow();

@@ -14,16 +14,21 @@ pub(crate) fn create_out(out: &Path) -> Result<(), String> {
     std::fs::create_dir_all(out).map_err(|e| format!("error: cannot create `{}`: {e}", out.display()))
 }
 
-/// Writes `text` to `path`, replacing a file but refusing to follow a link planted there.
-pub(crate) fn write_new(path: &Path, text: &str) -> Result<(), String> {
-    if let Ok(m) = std::fs::symlink_metadata(path)
-        && !m.is_file()
-    {
-        return Err(format!(
+/// Refuses to write `path` where something other than a regular file stands there (a
+/// planted link, a FIFO, a folder): what a command writes stays in its output folder.
+pub(crate) fn writable(path: &Path) -> Result<(), String> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !m.is_file() => Err(format!(
             "error: `{}` exists and is not a regular file: refusing to write through it",
             path.display()
-        ));
+        )),
+        _ => Ok(()),
     }
+}
+
+/// Writes `text` to `path`, replacing a file but refusing to follow a link planted there.
+pub(crate) fn write_new(path: &Path, text: &str) -> Result<(), String> {
+    writable(path)?;
     std::fs::write(path, text).map_err(|e| format!("error: cannot write `{}`: {e}", path.display()))
 }
 
@@ -169,7 +174,7 @@ fn finish(t: &Tuner, plan: &Plan, candidate: Candidate, measured: Measured) -> R
             .unwrap_or_default();
         let m = match detail_of(t, &n, last) {
             Some((m, _)) => Ok(m),
-            None => t.measure(&n, last, plan),
+            None => t.measure(&n, last),
         };
         if let Ok(m) = m {
             sensitivity.push((axis, value, m.error));
@@ -291,6 +296,7 @@ fn error_images(t: &Tuner, ch: &Chosen) -> Result<(), String> {
         let img = crate::metrics::error_image(&r.visibility, &truth.visibility, Some(&truth.facing), w, h, range)
             .map_err(|e| format!("error: {e}"))?;
         let p = t.a.out.join(name);
+        writable(&p)?;
         img.save(&p).map_err(|e| format!("error: cannot write `{}`: {e}", p.display()))?;
     }
     Ok(())
@@ -501,6 +507,8 @@ pub(crate) fn write(t: &Tuner, tiers: &[(f64, Plan, Found)]) -> Result<(), Strin
         let label = format!("  chosen: {}", e.label);
         let time_chart = format!("pareto-{name}-time.png");
         let mem_chart = format!("pareto-{name}-memory.png");
+        writable(&out.join(&time_chart))?;
+        writable(&out.join(&mem_chart))?;
         crate::cmd::sweep::report::chart(
             &out.join(&time_chart),
             &pts,
