@@ -174,3 +174,117 @@ fn the_job_scripts_run_a_sweep_of_4_shards_on_slurm_and_merge_it() {
         median(&mut overhead_s)
     );
 }
+
+/// `sshc tune --slurm --shards 2`: the array's two tasks share each rung of the tune
+/// through the output folder, task 0 writes the outputs, and the choice is the unsharded
+/// run's (a budget nothing reaches: errors alone decide, and they are deterministic).
+#[test]
+#[ignore = "needs a Slurm cluster: run scripts/slurm-test.sh"]
+fn the_job_scripts_run_a_tune_of_2_shards_on_slurm() {
+    assert!(
+        Command::new("sinfo").output().is_ok_and(|o| o.status.success()),
+        "no Slurm cluster answers (`sinfo` fails): run scripts/slurm-test.sh"
+    );
+    let base = temp_dir("slurm-tune");
+    let r = root();
+    let file = |p: &str| r.join(p).display().to_string();
+    let hard = format!("{}=1000", file("techniques/hard.ron"));
+    let tune: Vec<String> = [
+        "--scene",
+        &file("scenes/contact.ron"),
+        "--technique",
+        &file("techniques/pcf.ron"),
+        "--budget-vs",
+        &hard,
+        "--size",
+        "16x16",
+        "--candidates",
+        "4",
+        "--rungs",
+        "2",
+        "--views",
+        "0",
+        "--holdout",
+        "0",
+        "--samples",
+        "16",
+        "--runs",
+        "2",
+        "--frames",
+        "1",
+        "--repeats",
+        "1",
+        "--refine",
+        "1",
+        "--no-cache",
+        "--wait",
+        "10",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let whole = base.join("whole");
+    run(sshc().arg("tune").args(&tune).arg("-o").arg(&whole));
+    let jobs = base.join("jobs");
+    run(sshc()
+        .arg("tune")
+        .args(&tune)
+        .arg("--slurm")
+        .arg("-o")
+        .arg(&jobs)
+        .args(["--shards", "2", "--time", "5:00"]));
+    let t = Instant::now();
+    let submitted = run(Command::new(jobs.join("submit.sh")).env("LP_NUM_THREADS", "1"));
+    // "array job A (2 tasks)"
+    let words: Vec<&str> = submitted.split_whitespace().collect();
+    let array = match words.as_slice() {
+        ["array", "job", a, "(2", "tasks)"] => a.to_string(),
+        _ => panic!("submit.sh printed: {submitted}"),
+    };
+    let deadline = Duration::from_secs(300);
+    loop {
+        let queued = run(Command::new("squeue").args(["-h", "-o", "%i %T", "-j", &array]));
+        if queued.trim().is_empty() {
+            break;
+        }
+        assert!(t.elapsed() < deadline, "still queued after {deadline:?}:\n{queued}");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let states: Vec<String> = run(Command::new("scontrol").args(["show", "job", &array]))
+        .split_whitespace()
+        .filter_map(|w| w.strip_prefix("JobState=").map(str::to_string))
+        .collect();
+    let logs = || {
+        (0..2)
+            .map(|i| std::fs::read_to_string(jobs.join(format!("logs/tune-{i}.log"))).unwrap_or_default())
+            .collect::<Vec<_>>()
+            .join("\n----\n")
+    };
+    assert_eq!(states, ["COMPLETED"; 2], "the array's tasks:\n{}", logs());
+    let chosen = |out: &Path| -> String {
+        let csv = std::fs::read_to_string(out.join("tune.csv")).unwrap_or_else(|e| panic!("{}: {e}\n{}", out.display(), logs()));
+        let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let col = |k: &str| head.iter().position(|h| *h == k).unwrap();
+        let row: Vec<&str> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .find(|f| f[col("chosen")] == "true")
+            .unwrap();
+        format!("{} {} {}", row[col("technique")], row[col("config")], row[col("error")])
+    };
+    assert_eq!(chosen(&whole), chosen(&jobs), "{}", logs());
+    assert!(logs().contains("shard 0 writes the outputs"), "{}", logs());
+    // whether the tasks ran side by side (they share each rung) or one after the other (the
+    // first measured the second's part past `--wait`): the logs say
+    let waited = logs().contains("measuring them here");
+    println!(
+        "slurm tune: the tasks ran {}",
+        if waited { "one after the other" } else { "side by side" }
+    );
+    println!(
+        "slurm tune: 2 shards on the local cluster {:.2} s from submit.sh to the outputs",
+        t.elapsed().as_secs_f64()
+    );
+    let _ = std::fs::remove_dir_all(&base);
+}

@@ -368,3 +368,104 @@ fn a_ladder_tunes_one_configuration_per_budget_sharing_measurements() {
     };
     assert!(error("1") <= error("0"), "{csv}");
 }
+
+/// The tune of `tune_args`'s shape with a budget nothing reaches (errors alone decide, and
+/// they are deterministic), into `out`, as shard `shard` when given.
+fn shard_args(out: &Path, shard: Option<&str>) -> Vec<String> {
+    let mut v: Vec<String> = [
+        "tune",
+        "--scene",
+        "scenes/contact.ron",
+        "--technique",
+        "techniques/pcf.ron",
+        "--technique",
+        "techniques/pcss.ron",
+        "--budget-vs",
+        "techniques/hard.ron=1000",
+        "--size",
+        "16x16",
+        "--candidates",
+        "4",
+        "--rungs",
+        "2",
+        "--views",
+        "1",
+        "--holdout",
+        "0",
+        "--samples",
+        "16",
+        "--runs",
+        "2",
+        "--frames",
+        "1",
+        "--repeats",
+        "1",
+        "--refine",
+        "1",
+        "--no-cache",
+        "--wait",
+        "120",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    if let Some(s) = shard {
+        v.extend(["--shard".to_string(), s.to_string()]);
+    }
+    v.extend(["-o".to_string(), out.display().to_string()]);
+    v
+}
+
+/// `--shard i/n`: two processes on one folder each measure a part of every rung, wait for
+/// the other's records and choose what one process chooses; shard 0 writes the outputs.
+#[test]
+fn two_shards_share_each_rung_and_choose_as_one_process() {
+    let dir = temp_dir("tune-shards");
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    let args = shard_args(&one, None);
+    ok(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let spawn = |s: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_sshc"))
+            .args(shard_args(&two, Some(s)))
+            .current_dir(root())
+            .env("LP_NUM_THREADS", "1")
+            .env(
+                "XDG_RUNTIME_DIR",
+                std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| "/tmp".into()),
+            )
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("sshc starts")
+    };
+    let (s0, s1) = (spawn("0/2"), spawn("1/2"));
+    let (o0, o1) = (s0.wait_with_output().unwrap(), s1.wait_with_output().unwrap());
+    let text = |o: &Output| format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o0.status.success() && o1.status.success(),
+        "shard 0:\n{}\nshard 1:\n{}",
+        text(&o0),
+        text(&o1)
+    );
+    assert!(text(&o1).contains("shard 0 writes the outputs"), "{}", text(&o1));
+    // each measured a part
+    for r in ["records-0-of-2.ron", "records-1-of-2.ron"] {
+        let n = std::fs::read_to_string(two.join(r)).unwrap().lines().count();
+        assert!(n > 0, "{r} is empty");
+    }
+    let chosen = |out: &Path| -> String {
+        let csv = std::fs::read_to_string(out.join("tune.csv")).unwrap();
+        let r = rows(&csv).into_iter().find(|r| r["chosen"] == "true").unwrap();
+        format!("{} {} {}", r["technique"], r["config"], r["error"])
+    };
+    assert_eq!(chosen(&one), chosen(&two));
+    let body = |out: &Path| -> String {
+        std::fs::read_to_string(out.join("tuned.ron"))
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with("//"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    assert_eq!(body(&one), body(&two));
+}

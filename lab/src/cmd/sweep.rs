@@ -83,7 +83,7 @@ pub struct SweepArgs {
     slurm: slurm::SlurmArgs,
 }
 
-fn shard(s: &str) -> Result<(usize, usize), String> {
+pub(crate) fn shard(s: &str) -> Result<(usize, usize), String> {
     let (i, n) = s.split_once('/').ok_or_else(|| format!("expected i/n, found `{s}`"))?;
     let (i, n): (usize, usize) = (
         i.trim().parse().map_err(|e| format!("`{i}`: {e}"))?,

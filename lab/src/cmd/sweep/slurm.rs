@@ -75,7 +75,7 @@ pub fn check_value(option: &str, value: &str) -> Result<(), String> {
     Ok(())
 }
 
-fn directives(s: &mut String, slurm: &SlurmArgs, gpu: bool) {
+pub(crate) fn directives(s: &mut String, slurm: &SlurmArgs, gpu: bool) {
     let mut line = |k: &str, v: &str| s.push_str(&format!("#SBATCH --{k}={v}\n"));
     if let Some(p) = &slurm.partition {
         line("partition", p);

@@ -21,6 +21,7 @@
 
 pub mod report;
 pub mod search;
+pub mod slurm;
 
 use crate::cmd::sweep::{Config, Ran, SceneTruth, duration, run_config, settings};
 use crate::scene::{Camera, Scene};
@@ -122,6 +123,18 @@ pub struct TuneArgs {
     /// Measure everything again: forget the records of an earlier run in the folder.
     #[arg(long)]
     pub fresh: bool,
+    /// Measure one slice of each rung, `i/n`, beside n - 1 more processes running the same
+    /// command with the same `-o` (a cluster's shared folder): each measures its part of a
+    /// rung, waits for the others' (their records in the folder), and goes on; shard 0
+    /// writes the outputs. The choice is the unsharded run's.
+    #[arg(long, value_parser = crate::cmd::sweep::shard, default_value = "0/1")]
+    pub shard: (usize, usize),
+    /// With --shard: seconds to wait for another shard's part of a rung; past it this shard
+    /// measures that part itself (a shard lost does not stop the tune).
+    #[arg(long, value_name = "SECONDS", default_value_t = 3600.0)]
+    pub wait: f64,
+    #[command(flatten)]
+    pub slurm: crate::cmd::sweep::slurm::SlurmArgs,
     /// The truth's options (`--samples` is the final rung's; `--seed` also seeds the search).
     #[command(flatten)]
     pub truth: TruthOpts,
@@ -303,52 +316,101 @@ impl Record {
 const RECORDS: &str = "records.ron";
 const IDENTITY: &str = "tune.id";
 
-/// The records of an earlier run of the same tune in `out`, by (technique, config, rung):
-/// none where the folder is new, `--fresh` is given, or the run differs (its identity,
-/// the hash of its inputs and options, says so).
-fn resume(out: &Path, identity: &str, fresh: bool) -> Result<HashMap<(String, String, usize), Record>, String> {
-    let id_path = out.join(IDENTITY);
-    let records = out.join(RECORDS);
-    let old = read_capped(&id_path, 4096).ok();
-    let mut found = HashMap::new();
-    if !fresh && old.as_deref() == Some(identity) && records.exists() {
-        let text = read_capped(&records, MAX_RECORDS_BYTES)?;
-        let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
-        for (i, line) in lines.iter().enumerate() {
-            match ron::from_str::<Record>(line) {
-                Ok(r) => {
-                    r.check()
-                        .map_err(|e| format!("error: {}:{}: {e}; run again with --fresh", records.display(), i + 1))?;
-                    found.insert((r.technique.clone(), r.config.clone(), r.rung), r);
-                }
-                // the last line of a killed run may be cut short: dropped, and the file
-                // rewritten without it so that the next record starts a line of its own
-                Err(_) if i + 1 == lines.len() => {
-                    eprintln!("tune: dropped the half-written last record of a stopped run");
-                    let kept: String = lines[..i].iter().map(|l| format!("{l}\n")).collect();
-                    crate::cmd::tune::report::write_new(&records, &kept)?;
-                }
-                Err(e) => {
-                    return Err(format!(
-                        "error: {}:{}: not a record ({}); run again with --fresh",
-                        records.display(),
-                        i + 1,
-                        e.code
-                    ));
-                }
+/// The records file of shard `(i, n)`: `records.ron` unsharded, else `records-I-of-N.ron`.
+fn records_name((i, n): (usize, usize)) -> String {
+    if n <= 1 {
+        RECORDS.to_string()
+    } else {
+        format!("records-{i}-of-{n}.ron")
+    }
+}
+
+/// The records in one file. A last line that does not parse is a record being written (by
+/// another shard) or cut short by a kill: left out, and reported as `true`. A line before
+/// it that does not parse, or a record with a figure a run cannot write, is refused with
+/// its line.
+fn read_records(path: &Path) -> Result<(Vec<Record>, bool), String> {
+    let text = read_capped(path, MAX_RECORDS_BYTES)?;
+    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    let mut out = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        match ron::from_str::<Record>(line) {
+            Ok(r) => {
+                r.check()
+                    .map_err(|e| format!("error: {}:{}: {e}; run again with --fresh", path.display(), i + 1))?;
+                out.push(r);
+            }
+            Err(_) if i + 1 == lines.len() => return Ok((out, true)),
+            Err(e) => {
+                return Err(format!(
+                    "error: {}:{}: not a record ({}); run again with --fresh",
+                    path.display(),
+                    i + 1,
+                    e.code
+                ));
             }
         }
-        eprintln!(
-            "tune: resuming in {}: {} measurements of an earlier run",
-            out.display(),
-            found.len()
-        );
+    }
+    Ok((out, false))
+}
+
+/// Every shard's records files in `out` (`records.ron`, `records-I-of-N.ron`).
+fn records_files(out: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(out)
+        .map(|d| {
+            d.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| {
+                    p.file_name()
+                        .and_then(|n| n.to_str())
+                        .is_some_and(|n| n.starts_with("records") && n.ends_with(".ron"))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// The records of an earlier run of the same tune in `out`, every shard's, by (technique,
+/// config, rung): none where the folder is new, `--fresh` is given, or the run differs (its
+/// identity, the hash of its inputs and options, says so). Starting afresh, a shard
+/// forgets its own records only.
+fn resume(out: &Path, identity: &str, fresh: bool, shard: (usize, usize)) -> Result<HashMap<(String, String, usize), Record>, String> {
+    let id_path = out.join(IDENTITY);
+    let mine = out.join(records_name(shard));
+    let old = read_capped(&id_path, 4096).ok();
+    let mut found = HashMap::new();
+    if !fresh && old.as_deref() == Some(identity) {
+        for path in records_files(out) {
+            let (records, cut) = read_records(&path)?;
+            if cut && path == mine {
+                // cut short by a kill: dropped, and the file rewritten without it so that
+                // the next record starts a line of its own
+                eprintln!("tune: dropped the half-written last record of a stopped run");
+                let kept: Result<Vec<String>, String> = records
+                    .iter()
+                    .map(|r| ron::to_string(r).map_err(|e| format!("error: a record: {e}")))
+                    .collect();
+                let kept: String = kept?.iter().map(|l| format!("{l}\n")).collect();
+                crate::cmd::tune::report::write_new(&mine, &kept)?;
+            }
+            for r in records {
+                found.insert((r.technique.clone(), r.config.clone(), r.rung), r);
+            }
+        }
+        if !found.is_empty() {
+            eprintln!(
+                "tune: resuming in {}: {} measurements of an earlier run",
+                out.display(),
+                found.len()
+            );
+        }
     } else {
         if old.is_some() && !fresh {
             eprintln!("tune: {} holds another tune's records: starting afresh", out.display());
         }
-        match std::fs::remove_file(&records) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(format!("error: {}: {e}", records.display())),
+        match std::fs::remove_file(&mine) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(format!("error: {}: {e}", mine.display())),
             _ => {}
         }
         crate::cmd::tune::report::write_new(&id_path, identity)?;
@@ -412,6 +474,9 @@ pub(crate) struct Tuner<'a> {
     /// configuration: the fastest rates of fetches and operations a technique's cost class
     /// reached on this device, from which [`Tuner::skip`] bounds an unmeasured one's time.
     rates: RefCell<Vec<Rate>>,
+    /// Rates measured since the last batch: they join `rates` at the next, so that no
+    /// measurement in a batch decides a skip in the same batch (shards agree on skips).
+    pending: RefCell<Vec<Rate>>,
     /// Fetches, operations and shadow-map bytes per frame of each candidate's graph (the
     /// compiler's counts at the first scene's sizes), by technique and configuration.
     work: RefCell<HashMap<(usize, String), Option<Work>>>,
@@ -603,14 +668,75 @@ impl Tuner<'_> {
         {
             let fastest = m.times.iter().copied().fold(f64::INFINITY, f64::min);
             if fastest.is_finite() && fastest > 0.0 {
-                self.rates.borrow_mut().push((c.technique, kinds(c), f, o, fastest));
+                self.pending.borrow_mut().push((c.technique, kinds(c), f, o, fastest));
             }
+        }
+    }
+
+    /// Before a rung or a round of refinement: the rates measured since the last batch join
+    /// those skips are decided on; with `--shard i/n`, this shard measures its part of the
+    /// configurations the batch will measure (every n-th, from the i-th, of those not
+    /// skipped nor measured yet) and waits until the other shards' records hold the rest,
+    /// measuring here what `--wait` seconds did not bring.
+    pub fn batch(&self, cands: &[Candidate], rung: usize, time_limit: f64) {
+        let pending: Vec<Rate> = self.pending.borrow_mut().drain(..).collect();
+        self.rates.borrow_mut().extend(pending);
+        let (i, n) = self.a.shard;
+        if n <= 1 {
+            return;
+        }
+        let key = |c: &Candidate| (self.entries[c.technique].label.clone(), c.describe(), rung);
+        let todo: Vec<&Candidate> = cands
+            .iter()
+            .filter(|c| !self.done.borrow().contains_key(&key(c)) && self.skip(c, time_limit).is_none())
+            .collect();
+        for c in todo.iter().skip(i).step_by(n) {
+            // a failure is a record too: every shard reads it
+            let _ = self.measure(c, rung);
+        }
+        let start = Instant::now();
+        let mut said = false;
+        loop {
+            for path in records_files(&self.a.out) {
+                if path == self.a.out.join(records_name(self.a.shard)) {
+                    continue;
+                }
+                match read_records(&path) {
+                    Ok((records, _)) => {
+                        let mut done = self.done.borrow_mut();
+                        for r in records {
+                            done.entry((r.technique.clone(), r.config.clone(), r.rung)).or_insert(r);
+                        }
+                    }
+                    Err(e) => eprintln!("tune {i}/{n}: {}", e.trim_start_matches("error: ")),
+                }
+            }
+            let missing = todo.iter().filter(|c| !self.done.borrow().contains_key(&key(c))).count();
+            if missing == 0 {
+                return;
+            }
+            if start.elapsed().as_secs_f64() > self.a.wait {
+                eprintln!(
+                    "tune {i}/{n}: {missing} configurations of rung {} not measured by the other shards after {} s: measuring them here",
+                    rung + 1,
+                    self.a.wait
+                );
+                return;
+            }
+            if !said {
+                eprintln!(
+                    "tune {i}/{n}: waiting for the other shards' {missing} configurations of rung {}",
+                    rung + 1
+                );
+                said = true;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(250));
         }
     }
 
     fn append(&self, r: &Record) -> Result<(), String> {
         use std::io::Write as _;
-        let path = self.a.out.join(RECORDS);
+        let path = self.a.out.join(records_name(self.a.shard));
         let mut log = self.log.borrow_mut();
         if log.is_none() {
             report::writable(&path)?;
@@ -737,6 +863,9 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
     }
     if a.candidates == 0 || a.candidates > 10_000 {
         return Err(format!("error: `--candidates {}`: give 1 to 10000 per technique", a.candidates));
+    }
+    if !(a.wait.is_finite() && a.wait >= 0.0) {
+        return Err(format!("error: `--wait {}`: need a finite number of seconds >= 0", a.wait));
     }
     if !(a.noise.is_finite() && (1.0..=10.0).contains(&a.noise)) {
         return Err(format!("error: `--noise {}`: give a factor from 1 to 10", a.noise));
@@ -894,8 +1023,11 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
         let text = read_capped(s, MAX_SOURCE_BYTES)?;
         id.push_str(&format!(" {}:{:016x}", s.display(), xxhash_rust::xxh3::xxh3_64(text.as_bytes())));
     }
+    if a.slurm.slurm {
+        return slurm::write(&a);
+    }
     report::create_out(&a.out)?;
-    let done = resume(&a.out, &id, a.fresh)?;
+    let done = resume(&a.out, &id, a.fresh, a.shard)?;
     let gpu = Gpu::new().map_err(rt)?;
     eprintln!(
         "tune: {} techniques ({}), {} candidates, {} rungs, budget {}, on {}",
@@ -916,6 +1048,7 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
         done: RefCell::new(done),
         log: RefCell::new(None),
         rates: RefCell::new(Vec::new()),
+        pending: RefCell::new(Vec::new()),
         work: RefCell::new(HashMap::new()),
         started: Instant::now(),
         measured_now: RefCell::new(0),
@@ -954,6 +1087,7 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
                 *count.borrow_mut() += 1;
                 tuner.measure(c, rung)
             },
+            |cands, rung| tuner.batch(cands, rung, *limit),
             |stage, best| {
                 let done = *count.borrow();
                 let ran = *tuner.measured_now.borrow();
@@ -983,6 +1117,15 @@ pub fn tune(mut a: TuneArgs) -> Result<(), String> {
             },
         );
         tiers.push((*limit, plan, found));
+    }
+    if a.shard.0 != 0 {
+        eprintln!(
+            "tune {}/{}: done ({} measured here); shard 0 writes the outputs",
+            a.shard.0,
+            a.shard.1,
+            tuner.measured_now.borrow()
+        );
+        return Ok(());
     }
     report::write(&tuner, &tiers)
 }

@@ -371,14 +371,20 @@ impl Found {
 /// beyond its noise are dropped, and the best `1/eta` of the rest (fewest error) go on to
 /// the next rung; at the last rung, `refine` rounds measure the neighbours of the best
 /// admitted one. `skip` says before measuring why a candidate cannot meet the budget (its
-/// bytes known from the graph); `measure` runs one at a rung. The best admitted one at the
-/// final rung is returned: no admitted configuration measured there has a lower error.
+/// bytes known from the graph); `measure` runs one at a rung. `batch` is told, before each
+/// rung and each round of refinement, every configuration about to be measured there (none
+/// of whose measurements decide another's skip within the batch): where shards share the
+/// work, each measures its part of the batch and waits for the others'. The best admitted
+/// one at the final rung is returned: no admitted configuration measured there has a lower
+/// error.
+#[allow(clippy::too_many_arguments)]
 pub fn search(
     plan: &Plan,
     candidates: Vec<Candidate>,
     axes: &[Vec<&Axis>],
     mut skip: impl FnMut(&Candidate) -> Option<String>,
     mut measure: impl FnMut(&Candidate, usize) -> Result<Measured, String>,
+    mut batch: impl FnMut(&[Candidate], usize),
     mut progress: impl FnMut(&str, Option<(&Candidate, &Measured)>),
 ) -> Found {
     let mut steps: Vec<Step> = Vec::new();
@@ -414,6 +420,7 @@ pub fn search(
         }
     };
     for rung in 0..=last {
+        batch(&alive, rung);
         let mut scored: Vec<(Candidate, Measured)> = Vec::new();
         for c in &alive {
             if let Some(m) = run(c, rung, &mut steps) {
@@ -434,7 +441,9 @@ pub fn search(
     for _ in 0..plan.refine {
         let Some((best, _)) = best_so_far(&steps, last) else { break };
         let before = best_so_far(&steps, last).map(|(_, m)| m.error);
-        for n in neighbours(&best, &axes[best.technique]) {
+        let round = neighbours(&best, &axes[best.technique]);
+        batch(&round, last);
+        for n in round {
             run(&n, last, &mut steps);
             let b = best_so_far(&steps, last);
             progress("refining", b.as_ref().map(|(c, m)| (c, m)));
@@ -603,6 +612,7 @@ mod tests {
                     })
                 },
                 |_, _| {},
+                |_, _| {},
             );
             let (best, m) = found.best.clone().expect("something fits");
             assert!(plan.admits(&m), "{limit}: {best:?} {m:?}");
@@ -660,6 +670,7 @@ mod tests {
                 })
             },
             |_, _| {},
+            |_, _| {},
         );
         assert_eq!(found.best.map(|(c, _)| c), Some(best.clone()));
         // beyond the noise it is dropped at rung 0
@@ -681,6 +692,7 @@ mod tests {
                     bytes: 1,
                 })
             },
+            |_, _| {},
             |_, _| {},
         );
         assert_ne!(found.best.map(|(c, _)| c), Some(best));
@@ -710,6 +722,7 @@ mod tests {
                     bytes: 1,
                 })
             },
+            |_, _| {},
             |_, _| {},
         );
         assert!(found.best.is_none());
