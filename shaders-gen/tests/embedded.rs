@@ -20,6 +20,9 @@ sshc_shaders_gen::technique!(
 sshc_shaders_gen::technique!(mod no_runtime_params = "tests/techniques/no_runtime_params.ron");
 sshc_shaders_gen::technique!(mod typed_params = "tests/techniques/typed_params.ron");
 sshc_shaders_gen::technique!(mod unused_params = "tests/techniques/unused_params.ron");
+// what `sshc tune` writes (docs/tune/acne/tuned.ron): chosen defaults, `shadow_map:` and a
+// `tune:` block
+sshc_shaders_gen::technique!(mod tuned_pcf = "tests/techniques/tuned_pcf.ron");
 sshc_shaders_gen::technique!(mod esm_f16 = "../techniques/esm.ron", set: { "c" = 10.0 }, precision: { e = "F16" }, graph: ::sshc_graph);
 
 // Attributes and visibility on the module, overrides by name and by string as `sshc --set`
@@ -88,7 +91,10 @@ fn embedded_modules_equal_the_compiler_output() {
         ),
         (embedded!(typed_params), compile("tests/techniques/typed_params.ron", &[], &[])),
         (embedded!(unused_params), compile("tests/techniques/unused_params.ron", &[], &[])),
+        (embedded!(tuned_pcf), compile("tests/techniques/tuned_pcf.ron", &[], &[])),
     ];
+    // a tuned file's map size reaches the embedded graph
+    assert_eq!(embedded!(tuned_pcf).graph.shadow_map, Some(256));
     for (e, c) in cases {
         assert_eq!(e.technique, c.graph.technique);
         assert_eq!(e.graph, c.graph, "{}", e.technique);
