@@ -569,7 +569,11 @@ fn param(name: Name, node: &Node) -> Result<Param, Diagnostic> {
     let range = match f.opt("range")? {
         None => None,
         Some(r) => match &r.value {
-            Value::Tuple { name: None, items } if items.len() == 2 => Some((number(&items[0])?, number(&items[1])?)),
+            Value::Tuple { name: None, items } if items.len() == 2 => {
+                let (lo, hi) = (number(&items[0])?, number(&items[1])?);
+                f32_range(r.span, lo.value, hi.value)?;
+                Some((lo, hi))
+            }
             _ => {
                 return Err(err(
                     r.span,
@@ -591,6 +595,23 @@ fn param(name: Name, node: &Node) -> Result<Param, Diagnostic> {
         doc,
         span: node.span,
     })
+}
+
+/// A declared range the shaders can hold: both ends and their width finite in f32 (the
+/// generated WGSL clamps and encodes with them in f32; `1e39` would be written `inff`,
+/// which naga refuses, and `(-3e38, 3e38)` has a width f32 cannot hold).
+fn f32_range(span: Span, lo: f64, hi: f64) -> Result<(), Diagnostic> {
+    let max = f64::from(f32::MAX);
+    let width = (hi as f32) - (lo as f32);
+    if lo.is_finite() && hi.is_finite() && lo.abs() <= max && hi.abs() <= max && width.is_finite() {
+        return Ok(());
+    }
+    Err(err(
+        span,
+        format!("the range ({lo:?}, {hi:?}) is beyond f32: its ends and its width must stay within ±3.4e38"),
+        "beyond f32",
+    )
+    .help("the shaders evaluate in f32; declare the range the values really take"))
 }
 
 /// A value of type `ty` as written in RON (used for defaults and `--set`).
@@ -657,6 +678,7 @@ fn channel(name: Name, node: &Node) -> Result<Channel, Diagnostic> {
                     "not a range",
                 ));
             }
+            f32_range(r.span, lo.value, hi.value)?;
             if value.is_none() {
                 return Err(err(
                     r.span,
