@@ -643,3 +643,25 @@ fn bad_merges_are_refused_naming_the_shard_and_the_reason() {
     );
     let _ = std::fs::remove_dir_all(&base);
 }
+
+/// Issue 48, item 1: a newline in the sweep file's name would end the job script's comment
+/// and run as a command on every node: `--slurm` refuses it before writing anything.
+#[test]
+fn slurm_scripts_refuse_a_control_character_in_a_path() {
+    let dir = tmp("slurm-newline");
+    std::fs::create_dir_all(&dir).unwrap();
+    let evil = dir.join("s\nrm -rf ~\n#.ron");
+    std::fs::copy(sweep_file("sweep.ron"), &evil).unwrap();
+    let out = dir.join("jobs");
+    let (ok, text) = sshc(&[
+        "sweep".as_ref(),
+        evil.as_os_str(),
+        "--slurm".as_ref(),
+        "--shards".as_ref(),
+        "1".as_ref(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(!ok && text.contains("holds a control character"), "{text}");
+    assert!(!out.exists(), "nothing written");
+}

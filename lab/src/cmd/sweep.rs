@@ -982,6 +982,13 @@ fn measure(
 /// sweep file as a run would, so that a mistake shows before anything is submitted).
 fn write_slurm(a: SweepArgs) -> Result<(), String> {
     let sweep_path = a.sweep.clone().ok_or("error: name a sweep file")?;
+    // every path the scripts carry, before anything is read
+    slurm::no_control_characters("the sweep file", &sweep_path.display().to_string())?;
+    slurm::no_control_characters("the output folder", &a.out.display().to_string())?;
+    slurm::no_control_characters("the truth cache", &a.truth.cache.display().to_string())?;
+    if let Some(p) = &a.slurm.sshc {
+        slurm::no_control_characters("--sshc", &p.display().to_string())?;
+    }
     let n = a
         .slurm
         .shards

@@ -64,6 +64,32 @@ pub fn quote(s: &str) -> String {
     }
 }
 
+/// Text for a comment line of a script: control characters (a newline would end the
+/// comment and start a command on every node) written as escapes.
+pub fn comment(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
+}
+
+/// Refuses a path or value with a control character (a newline, a carriage return) that a
+/// job script would carry, naming what it is.
+pub fn no_control_characters(what: &str, value: &str) -> Result<(), String> {
+    if value.chars().any(char::is_control) {
+        return Err(format!(
+            "error: {what} `{}` holds a control character (a newline, say): the job scripts would carry it to every node; rename it",
+            comment(value)
+        ));
+    }
+    Ok(())
+}
+
 /// Refuses a value that an `#SBATCH` line cannot hold (sbatch splits them at white space
 /// and reads no quotes), naming the option.
 pub fn check_value(option: &str, value: &str) -> Result<(), String> {
@@ -108,7 +134,7 @@ pub fn scripts(j: &Job) -> [(&'static str, String); 3] {
          #SBATCH --job-name=sshc-sweep\n\
          #SBATCH --array=0-{last}\n\
          #SBATCH --output={out}/logs/shard-%a.log\n",
-        sweep = j.sweep.display(),
+        sweep = comment(&j.sweep.display().to_string()),
         last = n - 1,
     );
     directives(&mut sweep, j.slurm, true);
@@ -130,7 +156,7 @@ pub fn scripts(j: &Job) -> [(&'static str, String); 3] {
          # submit.sh starts it once every array task has ended well.\n\
          #SBATCH --job-name=sshc-sweep-merge\n\
          #SBATCH --output={out}/logs/merge.log\n",
-        sweep = j.sweep.display(),
+        sweep = comment(&j.sweep.display().to_string()),
     );
     directives(&mut merge, j.slurm, false);
     let dirs: Vec<String> = (0..n).map(|i| quote(&shard_dir(&i.to_string()))).collect();
@@ -210,6 +236,20 @@ mod tests {
             "{submit}"
         );
         assert_eq!(quote("it's"), r"'it'\''s'");
+        // a newline in the sweep file's name neither ends a comment nor starts a command
+        let evil = Job {
+            sweep: Path::new("/home/u/s\nrm -rf ~\n#.ron"),
+            ..job
+        };
+        for (name, text) in scripts(&evil) {
+            // the comments hold it escaped (`--slurm` refuses such a path before writing:
+            // `no_control_characters`)
+            for l in text.lines().filter(|l| l.starts_with("# The ")) {
+                assert!(l.contains("/home/u/s\\nrm -rf ~\\n#.ron"), "{name}:\n{text}");
+            }
+        }
+        assert!(no_control_characters("the sweep file", "/a\nb").unwrap_err().contains("`/a\\nb`"));
+        assert!(no_control_characters("the sweep file", "/a b").is_ok());
         assert!(check_value("--partition", "a b").unwrap_err().contains("`--partition a b`"));
         assert!(check_value("--gres", "gpu:1").is_ok());
     }

@@ -7,7 +7,7 @@
 //! and the truth cache belong on the filesystem every node shares.
 
 use super::TuneArgs;
-use crate::cmd::sweep::slurm::{check_value, directives, quote};
+use crate::cmd::sweep::slurm::{check_value, directives, no_control_characters, quote};
 use std::path::{Path, PathBuf};
 
 /// Absolute, without `..` taken apart (the nodes resolve it as this one does).
@@ -112,7 +112,11 @@ pub fn scripts(a: &TuneArgs, sshc: &Path, out: &Path, shards: usize) -> Result<[
             "error: `-o {out_text}`: the scripts name the output folder in #SBATCH lines, which read no quotes: choose a path of letters, digits and `/._-+=:,@`"
         ));
     }
-    let args: Vec<String> = task_arguments(a, out)?.iter().map(|x| quote(x)).collect();
+    let args = task_arguments(a, out)?;
+    for x in args.iter().chain(std::iter::once(&sshc.display().to_string())) {
+        no_control_characters("a value of the tune", x)?;
+    }
+    let args: Vec<String> = args.iter().map(|x| quote(x)).collect();
     let mut job = format!(
         "#!/bin/bash\n\
          # A tune in {shards} shards: array task i runs `sshc tune ... --shard i/{shards}` in {out_text};\n\
@@ -239,6 +243,13 @@ mod tests {
             scripts(&cli.a, Path::new("/opt/sshc"), Path::new("/shared/o\nut"), 3)
                 .unwrap_err()
                 .contains("#SBATCH")
+        );
+        // a newline in a scene's path: refused, not carried to every node
+        let evil = Cli::try_parse_from(["tune", "--scene", "/s/a\nrm -rf ~", "--slurm", "--shards", "2"]).unwrap();
+        assert!(
+            scripts(&evil.a, Path::new("/opt/sshc"), Path::new("/o"), 2)
+                .unwrap_err()
+                .contains("control character")
         );
         // a value an #SBATCH line cannot hold
         let bad = Cli::try_parse_from(["tune", "--scene", "a.ron", "--slurm", "--shards", "2", "--time", "1:00 #x"]).unwrap();
