@@ -77,7 +77,7 @@ impl Claim {
                     beats: 0,
                 }))
             }
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => match std::fs::read_to_string(path) {
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => match read_claim(path) {
                 Ok(t) => Ok(Attempt::Held(t)),
                 // released between the two calls: try again
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => Claim::try_take(path),
@@ -105,7 +105,7 @@ impl Claim {
 impl Drop for Claim {
     fn drop(&mut self) {
         // Remove only our own claim: one taken over as stale is another's now.
-        if std::fs::read_to_string(&self.path).is_ok_and(|t| t.starts_with(&self.owner)) {
+        if read_claim(&self.path).is_ok_and(|t| t.starts_with(&self.owner)) {
             let _ = std::fs::remove_file(&self.path);
         }
     }
@@ -177,10 +177,19 @@ impl Watch {
     }
 }
 
+/// A claim file's text: a regular file of at most [`MAX_CLAIM_BYTES`] (a FIFO planted in a
+/// shared cache would hang every task that needs the truth).
+fn read_claim(path: &Path) -> std::io::Result<String> {
+    sshc_scene::read_text(path, MAX_CLAIM_BYTES)
+}
+
+/// The largest claim file read: a host name, a process id and a time.
+pub const MAX_CLAIM_BYTES: u64 = 4096;
+
 /// Removes a stale claim at `path` if it still reads `text` (a take-over: the caller then
 /// tries [`Claim::try_take`] again).
 pub fn remove_stale(path: &Path, text: &str) -> std::io::Result<()> {
-    match std::fs::read_to_string(path) {
+    match read_claim(path) {
         Ok(t) if t == text => match std::fs::remove_file(path) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(e),
             _ => Ok(()),

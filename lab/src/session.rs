@@ -14,35 +14,13 @@ use std::path::{Path, PathBuf};
 
 /// Reads a text file, with the path in the error.
 pub fn read(path: &Path) -> Result<String, String> {
-    std::fs::read_to_string(path).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))
+    read_capped(path, sshc_scene::MAX_TEXT_BYTES)
 }
 
 /// Reads a text file of at most `max` bytes that is a regular file (not a FIFO, a device or
 /// a folder): a hostile path neither hangs the reader nor fills its memory.
 pub fn read_capped(path: &Path, max: u64) -> Result<String, String> {
-    use std::io::Read as _;
-    let e = |e: std::io::Error| format!("error: cannot read `{}`: {e}", path.display());
-    let meta = std::fs::metadata(path).map_err(e)?;
-    if !meta.is_file() {
-        return Err(format!("error: `{}` is not a regular file", path.display()));
-    }
-    if meta.len() > max {
-        return Err(format!(
-            "error: `{}` holds {} bytes, above the limit of {max}",
-            path.display(),
-            meta.len()
-        ));
-    }
-    let mut text = String::new();
-    std::fs::File::open(path)
-        .map_err(e)?
-        .take(max + 1)
-        .read_to_string(&mut text)
-        .map_err(e)?;
-    if text.len() as u64 > max {
-        return Err(format!("error: `{}` grew past the limit of {max} bytes while read", path.display()));
-    }
-    Ok(text)
+    sshc_scene::read_text(path, max).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))
 }
 
 /// Prints diagnostics against their source file on standard error (coloured on a terminal).
@@ -599,4 +577,74 @@ pub fn describe(t: &Truth, source: &Source) -> Vec<String> {
         t.rays_at_least as f64
     ));
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 48, item 8: every file a command reads goes through one capped, regular-file
+    /// only reader (`sshc_scene::read_capped`). A FIFO is refused without being opened (it
+    /// would hang the reader), a device such as /dev/zero too (it would fill the memory),
+    /// and a file over the cap before it is read.
+    #[test]
+    fn the_one_reader_refuses_fifos_devices_and_files_over_the_cap() {
+        let dir = std::env::temp_dir().join(format!("sshc-reader-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let fifo = dir.join("fifo.ron");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+        assert!(made.success());
+        let start = std::time::Instant::now();
+        let e = read(&fifo).unwrap_err();
+        assert!(e.contains("not a regular file") && start.elapsed().as_secs() < 5, "{e}");
+        let e = read(Path::new("/dev/zero")).unwrap_err();
+        assert!(e.contains("not a regular file"), "{e}");
+        let big = dir.join("big.ron");
+        std::fs::write(&big, vec![b' '; 2048]).unwrap();
+        let e = read_capped(&big, 1024).unwrap_err();
+        assert!(e.contains("2048 bytes, above the limit of 1024"), "{e}");
+        assert_eq!(read_capped(&big, 4096).unwrap().len(), 2048);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// No reader of files in the lab or the scene crate but the one: a `read_to_string`,
+    /// `fs::read` or `File::open` outside it is a reader that a FIFO can hang. The two kept
+    /// are named here with why.
+    #[test]
+    fn no_file_is_read_around_the_one_reader() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        // (file, what it reads): not a user's file
+        let allowed = [
+            ("src/session.rs", "/proc/self/status"),        // the kernel's, for the memory in stage lines
+            ("src/cmd/sweep/shard.rs", "File::open(&exe)"), // this executable, hashed as the shard's code
+        ];
+        let mut files = Vec::new();
+        let mut stack = vec![root.join("src"), root.join("scene/src")];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap().flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else if p.extension().is_some_and(|x| x == "rs") {
+                    files.push(p);
+                }
+            }
+        }
+        let mut found = Vec::new();
+        for f in files {
+            let rel = f.strip_prefix(root).unwrap().display().to_string();
+            let text = std::fs::read_to_string(&f).unwrap();
+            // the code before the file's tests
+            let code = text.split("#[cfg(test)]").next().unwrap_or_default();
+            for (n, line) in code.lines().enumerate() {
+                let reads = ["fs::read_to_string(", "fs::read(", "File::open("].iter().any(|r| line.contains(r));
+                let kept = allowed.iter().any(|(file, what)| rel == *file && line.contains(what));
+                if reads && !kept && !line.trim_start().starts_with("//") && rel != "scene/src/source.rs" {
+                    found.push(format!("{rel}:{}: {}", n + 1, line.trim()));
+                }
+            }
+        }
+        assert!(found.is_empty(), "files read around sshc_scene::read_capped:\n{}", found.join("\n"));
+    }
 }

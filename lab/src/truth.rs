@@ -43,6 +43,10 @@ use crate::claim::{self, Attempt, Claim, Watch};
 use crate::scene::{Light, Scene};
 use crate::visibility::Visibility;
 
+/// The largest cached truth record read: the most pixels a camera has
+/// (`scene::MAX_CAMERA_PIXELS`, 4096^2) at 32 bytes of RON each, and its header.
+pub const MAX_RECORD_BYTES: u64 = 32 * 4096 * 4096 + (1 << 20);
+
 /// Version of the ground-truth computation, part of every cache key: bump it whenever the
 /// sampling (here or in [`crate::visibility`]) changes what a given key computes.
 pub const TRUTH_VERSION: u32 = 2;
@@ -510,10 +514,10 @@ pub fn cache_key(scene: &Scene, points: &Points, settings: &TruthSettings) -> Re
     };
     field("version", format!("{TRUTH_VERSION} {}", env!("CARGO_PKG_VERSION")).as_bytes());
     if let Some(path) = scene.source() {
-        let text = std::fs::read(path).map_err(io_error(path))?;
+        let text = sshc_scene::read_capped(path, sshc_scene::MAX_TEXT_BYTES).map_err(io_error(path))?;
         field("scene file", &text);
         for mesh in scene.files() {
-            let bytes = std::fs::read(mesh).map_err(io_error(mesh))?;
+            let bytes = sshc_scene::read_capped(mesh, crate::scene::MAX_OBJ_BYTES).map_err(io_error(mesh))?;
             field("mesh", &bytes);
         }
     }
@@ -606,10 +610,10 @@ impl TruthCache {
         self.dir.join(format!("{key}.claim"))
     }
 
-    /// The truth stored for `key`, if any.
+    /// The truth stored for `key`, if any (a regular file of at most [`MAX_RECORD_BYTES`]).
     pub fn load(&self, key: CacheKey) -> CacheLookup {
         let path = self.path(key);
-        let text = match std::fs::read_to_string(&path) {
+        let text = match sshc_scene::read_text(&path, MAX_RECORD_BYTES) {
             Ok(t) => t,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return CacheLookup::Miss,
             Err(e) => return CacheLookup::Unreadable(format!("{}: {e}", path.display())),

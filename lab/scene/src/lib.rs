@@ -58,7 +58,7 @@ pub use error::*;
 pub use gltf::{CAMERA_HEIGHT as GLTF_CAMERA_HEIGHT, DEFAULT_RADIUS_FRACTION, DEFAULT_SUN_DEGREES, MAX_GLTF_BYTES};
 pub use scene::*;
 pub use schema::*;
-pub use source::{Instancing, SharedMesh};
+pub use source::{Instancing, MAX_TEXT_BYTES, SharedMesh, read_capped, read_text};
 pub use validate::*;
 
 /// The lights a scene file names and the views fitted to them live in `sshc-light`, which

@@ -69,7 +69,7 @@ impl Scene {
         if is_gltf(path) {
             return Scene::load_gltf(path);
         }
-        let text = std::fs::read_to_string(path).map_err(|e| {
+        let text = crate::source::read_text(path, crate::source::MAX_TEXT_BYTES).map_err(|e| {
             SceneError::new(SceneErrorKind::Io, format!("cannot read the scene: {e}"))
                 .with_file(Some(path))
                 .with_hint("check the path of the scene file")

@@ -99,7 +99,11 @@ pub(crate) fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
 
 /// Reads a regular file of at most `cap` bytes; anything else (a FIFO, a device, a folder,
 /// a larger file) is refused without reading it (or, if it grows, past `cap + 1` bytes).
-pub(crate) fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
+/// The one reader of files for sshc's commands (issue 48, item 8): a regular file (after
+/// links; FIFOs, devices and folders are refused from their metadata, never opened) of at
+/// most `cap` bytes, read through `take` so that a file growing while read stops at the
+/// cap. A missing file keeps its `NotFound` kind.
+pub fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
     let meta = std::fs::metadata(path)?;
     if !meta.is_file() {
@@ -119,6 +123,15 @@ pub(crate) fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
     }
     Ok(bytes)
 }
+
+/// [`read_capped`] as UTF-8 text.
+pub fn read_text(path: &Path, cap: u64) -> std::io::Result<String> {
+    String::from_utf8(read_capped(path, cap)?).map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidData, "it is not UTF-8 text"))
+}
+
+/// The largest text file a command reads: a technique, a scene, a sweep file, a viewer
+/// script, a shard's manifest or a claim (the bundled ones are under 40 KiB).
+pub const MAX_TEXT_BYTES: u64 = 16 << 20;
 
 /// Reads the mesh file `rel` (a `what` file: "OBJ", "glTF") inside `base`, refusing paths
 /// that leave it and files over [`MAX_OBJ_BYTES`]: its path and bytes.

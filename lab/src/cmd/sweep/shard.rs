@@ -13,12 +13,14 @@
 use crate::cmd::sweep::report::{PixelSet, Row};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::io::{BufRead as _, Read as _, Write as _};
+use std::io::{BufRead as _, Write as _};
 use std::path::{Path, PathBuf};
 use xxhash_rust::xxh3::{Xxh3, xxh3_128};
 
 pub const MANIFEST: &str = "shard.ron";
 pub const RECORDS: &str = "records.ron";
+/// The largest `records.ron` read: about 200,000 rows of a sweep.
+pub const MAX_RECORDS_BYTES: u64 = 256 << 20;
 /// The manifest's format; a folder of another is refused by the merge and started
 /// afresh by a run.
 pub const FORMAT: u32 = 1;
@@ -167,7 +169,7 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> String + '_ {
 /// The manifest in `dir`, none if there is no `shard.ron`.
 pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, String> {
     let path = dir.join(MANIFEST);
-    let text = match std::fs::read_to_string(&path) {
+    let text = match sshc_scene::read_text(&path, sshc_scene::MAX_TEXT_BYTES) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(io(&path)(e)),
@@ -198,14 +200,11 @@ pub fn write_manifest(dir: &Path, m: &Manifest) -> Result<(), String> {
 /// position.
 pub fn read_records(dir: &Path, repair: bool) -> Result<(Done, bool), String> {
     let path = dir.join(RECORDS);
-    let mut bytes = Vec::new();
-    match std::fs::File::open(&path) {
-        Ok(mut f) => {
-            f.read_to_end(&mut bytes).map_err(io(&path))?;
-        }
+    let bytes = match sshc_scene::read_capped(&path, MAX_RECORDS_BYTES) {
+        Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Done::default(), false)),
         Err(e) => return Err(io(&path)(e)),
-    }
+    };
     let whole = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
     let cut = whole < bytes.len();
     if cut {
@@ -271,7 +270,8 @@ impl Log {
 
 /// The hash of a file's bytes, as 32 hexadecimal digits.
 pub fn hash_file(path: &Path) -> Result<String, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))?;
+    let bytes =
+        sshc_scene::read_capped(path, crate::scene::MAX_OBJ_BYTES).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))?;
     Ok(format!("{:032x}", xxh3_128(&bytes)))
 }
 
