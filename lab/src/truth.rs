@@ -571,7 +571,18 @@ pub struct TruthCache {
 #[derive(Serialize, Deserialize)]
 struct Record {
     key: String,
+    /// The xxh3 of the truth as written (its RON text), so that a record altered after it
+    /// was written is told from one written by a run (issue 48, item 9). Records without
+    /// it (written before it existed) are recomputed.
+    #[serde(default)]
+    checksum: Option<String>,
     truth: Truth,
+}
+
+/// The checksum a record stores of its truth.
+fn checksum(truth: &Truth) -> Result<String, String> {
+    let text = ron::to_string(truth).map_err(|e| e.to_string())?;
+    Ok(format!("{:016x}", xxh3_64(text.as_bytes())))
 }
 
 impl TruthCache {
@@ -629,6 +640,33 @@ impl TruthCache {
         if record.key != key.to_string() || t.visibility.len() != pixels || t.std_error.len() != pixels {
             return CacheLookup::Unreadable(format!("{}: the record does not match its key", path.display()));
         }
+        // values a run can write: a visibility in [0, 1], a standard error finite and >= 0
+        if let Some(i) = t.visibility.iter().position(|v| !(0.0..=1.0).contains(v)) {
+            return CacheLookup::Unreadable(format!(
+                "{}: pixel {i} holds a visibility of {}, outside [0, 1]",
+                path.display(),
+                t.visibility[i]
+            ));
+        }
+        if let Some(i) = t.std_error.iter().position(|e| !(e.is_finite() && *e >= 0.0)) {
+            return CacheLookup::Unreadable(format!(
+                "{}: pixel {i} holds a standard error of {}",
+                path.display(),
+                t.std_error[i]
+            ));
+        }
+        match (&record.checksum, checksum(t)) {
+            (Some(stored), Ok(now)) if *stored == now => {}
+            (Some(_), _) => {
+                return CacheLookup::Unreadable(format!(
+                    "{}: its checksum does not match its contents: the record was altered after it was written",
+                    path.display()
+                ));
+            }
+            (None, _) => {
+                return CacheLookup::Unreadable(format!("{}: the record has no checksum (an older sshc wrote it)", path.display()));
+            }
+        }
         CacheLookup::Hit(Box::new(record.truth))
     }
 
@@ -641,6 +679,10 @@ impl TruthCache {
         let path = self.path(key);
         let record = Record {
             key: key.to_string(),
+            checksum: Some(checksum(truth).map_err(|message| TruthError::Io {
+                path: path.clone(),
+                message,
+            })?),
             truth: truth.clone(),
         };
         let text = ron::to_string(&record).map_err(|e| TruthError::Io {

@@ -373,6 +373,46 @@ fn the_cache_hits_on_the_second_call_and_misses_when_samples_or_scene_change() {
         "deterministic"
     );
     assert!(matches!(TruthCache::new(&cache_dir).load(key), CacheLookup::Hit(_)));
+    // Issue 48, item 9: a record altered after it was written (a value changed, its
+    // structure intact) is not trusted, nor is one whose values no run writes (7.5, NaN)
+    // even with a matching checksum: both are recomputed.
+    let stored = std::fs::read_to_string(&file).unwrap();
+    let altered = stored
+        .replacen("visibility:[", "visibility:[0.5,", 1)
+        .replacen("std_error:[", "std_error:[0.0,", 1);
+    let first_value = |text: &str| -> String {
+        let at = text.find("visibility:[").unwrap() + "visibility:[".len();
+        text[at..].split([',', ']']).next().unwrap().to_string()
+    };
+    let v0 = first_value(&stored);
+    let swapped = stored.replacen(
+        &format!("visibility:[{v0}"),
+        &format!("visibility:[{}", if v0 == "1.0" { "0.0" } else { "1.0" }),
+        1,
+    );
+    assert_ne!(swapped, stored);
+    for (what, text) in [
+        ("a value changed", swapped),
+        ("a pixel added", altered),
+        ("7.5", stored.replacen(&format!("visibility:[{v0}"), "visibility:[7.5", 1)),
+        ("NaN", stored.replacen(&format!("visibility:[{v0}"), "visibility:[NaN", 1)),
+    ] {
+        std::fs::write(&file, text).unwrap();
+        match TruthCache::new(&cache_dir).load(key) {
+            CacheLookup::Unreadable(why) => assert!(
+                why.contains("checksum") || why.contains("outside [0, 1]") || why.contains("does not match its key"),
+                "{what}: {why}"
+            ),
+            other => panic!(
+                "{what}: {}",
+                if matches!(other, CacheLookup::Hit(_)) {
+                    "trusted"
+                } else {
+                    "a miss"
+                }
+            ),
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
