@@ -725,3 +725,42 @@ fn the_large_scenes_parse_and_name_a_city() {
     }
     assert!(seen >= 2, "{seen} large scenes");
 }
+
+/// Issue 48, item 12: a camera f32 cannot resolve is refused by the precision check that
+/// every command runs (it drew nothing and was accepted): a near of 1e-9 against a fitted
+/// far, an orthographic half height of 1e-30; the bundled scenes' cameras pass.
+#[test]
+fn a_camera_f32_cannot_resolve_is_refused() {
+    let scene = |camera: &str| {
+        Scene::from_str(
+            &format!(
+                "Scene(camera: {camera}, shadow_map: 64, lights: [Point(position: (0.0, 4.0, 0.0))], objects: [Object(mesh: Plane(size: (4.0, 4.0)))])"
+            ),
+            ".",
+        )
+        .and_then(|s| s.check_precision().map(|_| s))
+        .map_err(|e| e.to_string())
+    };
+    let e =
+        scene("Perspective(position: (0.0, 3.0, 5.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 45.0, width: 32, height: 32, near: 1e-9)")
+            .unwrap_err();
+    assert!(e.contains("camera (Perspective).near") && e.contains("far / near is"), "{e}");
+    let e = scene(
+        "Orthographic(position: (0.0, 3.0, 0.0), target: (0.0, 0.0, 0.0), up: (0.0, 0.0, -1.0), half_height: 1e-30, width: 32, height: 32)",
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("camera (Orthographic).half_height") && e.contains("cannot place its pixels"),
+        "{e}"
+    );
+    for ok in [
+        "Perspective(position: (0.0, 3.0, 5.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 45.0, width: 32, height: 32, near: 0.01)",
+        "Orthographic(position: (0.0, 3.0, 0.0), target: (0.0, 0.0, 0.0), up: (0.0, 0.0, -1.0), half_height: 0.5, width: 32, height: 32)",
+    ] {
+        assert!(scene(ok).is_ok(), "{ok}: {:?}", scene(ok).err());
+    }
+    for name in bundled_scenes() {
+        let s = Scene::load(common::root().join("scenes").join(format!("{name}.ron"))).unwrap();
+        assert!(s.check_precision().is_ok(), "{name}");
+    }
+}

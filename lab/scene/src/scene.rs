@@ -5,7 +5,9 @@ use crate::error::{SceneError, SceneErrorKind, syntax_error};
 use crate::mesh::{Reads, analytic_triangles, build_mesh, place};
 use crate::schema::{Camera, Object, SceneDesc, ShadowFit};
 use crate::source::MeshData;
-use crate::validate::{LIGHT_PRECISION_MARGIN, MAX_SCENE_TRIANGLES, PRECISION_RATIO, validate, validate_camera, validate_light};
+use crate::validate::{
+    LIGHT_PRECISION_MARGIN, MAX_DEPTH_RATIO, MAX_SCENE_TRIANGLES, PRECISION_RATIO, validate, validate_camera, validate_light,
+};
 use std::fmt;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -649,6 +651,7 @@ impl Scene {
                 "move the far object nearer the others, or remove it; objects far apart belong in separate scenes",
             ));
         }
+        self.check_camera_depth()?;
         // Local lights against the light view's resolution.
         let centre = (lo + hi) * 0.5;
         let radius = (0.5 * (hi - lo).length()).max(f32::MIN_POSITIVE);
@@ -813,6 +816,52 @@ impl Scene {
                 look_at(*position, *target, *up)
             }
         }
+    }
+
+    /// The camera against what f32 resolves (issue 48, item 12): a perspective camera's
+    /// far / near at most [`MAX_DEPTH_RATIO`], and an orthographic camera's pixel wider than
+    /// f32's step at the camera's coordinates.
+    fn check_camera_depth(&self) -> Result<(), SceneError> {
+        let (near, far) = self.camera_near_far();
+        let kind = match &self.camera {
+            Camera::Perspective { .. } => "Perspective",
+            Camera::Orthographic { .. } => "Orthographic",
+        };
+        if let Camera::Perspective { .. } = &self.camera
+            && far / near > MAX_DEPTH_RATIO
+        {
+            return Err(SceneError::invalid(
+                format!("camera ({kind}).near"),
+                format!(
+                    "far / near is {:e} ({far:e} / {near:e}), above the limit of {MAX_DEPTH_RATIO:e}: the f32 depth test orders surfaces at the far plane only {:.0} % of their distance apart at the limit, and not at all beyond it",
+                    far / near,
+                    100.0 * MAX_DEPTH_RATIO * 2f32.powi(-24)
+                ),
+                "write a larger near, or leave near and far out to fit the scene",
+            ));
+        }
+        if let Camera::Orthographic {
+            half_height,
+            position,
+            target,
+            height,
+            ..
+        } = &self.camera
+        {
+            let reach = position.abs().max(target.abs()).max_element().max(1.0);
+            let pixel = 2.0 * half_height / (*height).max(1) as f32;
+            if pixel < 4.0 * f32::EPSILON * reach {
+                return Err(SceneError::invalid(
+                    format!("camera ({kind}).half_height"),
+                    format!(
+                        "a pixel is {pixel:e} wide, where f32 resolves {:e} at the camera's coordinates ({reach:e}): the view cannot place its pixels",
+                        f32::EPSILON * reach
+                    ),
+                    "write a larger half height",
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The camera's (near, far) distances along the view axis: as written, or fitted to

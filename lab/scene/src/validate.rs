@@ -89,6 +89,11 @@ pub(crate) fn validate(desc: &mut SceneDesc) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// The most a perspective camera's far may exceed its near: at the far plane the f32 depth
+/// test then orders surfaces 2^-24 x 1e6 = 6 % of their distance apart (the step of a
+/// depth near 1 is 2^-24, and depth changes by about near / z^2 per unit of z).
+pub const MAX_DEPTH_RATIO: f32 = 1e6;
+
 pub(crate) fn validate_camera(camera: &Camera) -> Result<(), SceneError> {
     let (name, position, target, up, width, height, near, far) = match camera {
         Camera::Perspective {
