@@ -665,3 +665,33 @@ fn slurm_scripts_refuse_a_control_character_in_a_path() {
     assert!(!ok && text.contains("holds a control character"), "{text}");
     assert!(!out.exists(), "nothing written");
 }
+
+/// Issue 48, item 11: `--slurm` checks the options every task would refuse before writing
+/// the scripts (docs/cluster.md promises the check on the login node).
+#[test]
+fn slurm_scripts_are_not_written_for_options_every_task_refuses() {
+    let dir = tmp("slurm-options");
+    std::fs::create_dir_all(&dir).unwrap();
+    let sweep = sweep_file("sweep.ron");
+    for (bad, want) in [
+        (&["--cascades", "7"][..], "`--cascades 7`"),
+        (&["--cascade-lambda", "NaN"][..], "`--cascade-lambda NaN`"),
+        (&["--samples", "4294967295"][..], "--samples 4294967295"),
+        (&["--cpus-per-task", "0"][..], "`--cpus-per-task 0`"),
+    ] {
+        let out = dir.join(bad[0].trim_start_matches('-'));
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "sweep".as_ref(),
+            sweep.as_os_str(),
+            "--slurm".as_ref(),
+            "--shards".as_ref(),
+            "1".as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ];
+        args.extend(bad.iter().map(|s| std::ffi::OsStr::new(*s)));
+        let (ok, text) = sshc(&args);
+        assert!(!ok && text.contains(want), "{bad:?}: {text}");
+        assert!(!out.join("sweep.sbatch").exists(), "{bad:?}: scripts written");
+    }
+}

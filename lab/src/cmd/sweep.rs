@@ -994,6 +994,15 @@ fn write_slurm(a: SweepArgs) -> Result<(), String> {
         .shards
         .ok_or("error: --slurm needs --shards N, the number of array tasks (one shard each)")?;
     let l = load(&sweep_path)?;
+    // what every task will check, checked here first: the cascades and the truth's budget
+    // on each scene (issue 48, item 11)
+    for entry in &l.file.scenes {
+        let scene = l.scene(entry)?;
+        crate::bind::check_cascades(&scene, &a.cascading)?;
+        let (w, h) = scene.camera_size();
+        a.truth.check(u64::from(w) * u64::from(h))?;
+    }
+    slurm::check_cpus(&a.slurm)?;
     let rows = configs(&l.file).len();
     if n == 0 || n > rows.max(1) {
         return Err(format!(

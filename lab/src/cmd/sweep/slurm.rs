@@ -90,6 +90,14 @@ pub fn no_control_characters(what: &str, value: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// Refuses `--cpus-per-task 0`, which sbatch refuses for every task.
+pub fn check_cpus(s: &SlurmArgs) -> Result<(), String> {
+    match s.cpus_per_task {
+        Some(0) => Err("error: `--cpus-per-task 0`: a task needs at least one CPU".into()),
+        _ => Ok(()),
+    }
+}
+
 /// Refuses a value that an `#SBATCH` line cannot hold (sbatch splits them at white space
 /// and reads no quotes), naming the option.
 pub fn check_value(option: &str, value: &str) -> Result<(), String> {

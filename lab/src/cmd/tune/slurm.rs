@@ -167,6 +167,13 @@ pub fn write(a: &TuneArgs) -> Result<(), String> {
         Some(p) => absolute(p)?,
         None => std::env::current_exe().map_err(|e| format!("error: cannot find this executable: {e}"))?,
     };
+    crate::cmd::sweep::slurm::check_cpus(&a.slurm)?;
+    // the truth's budget on each scene, as every task will check it
+    for s in &a.scenes {
+        let scene = crate::session::load_scene(s, a.size, None)?;
+        let (w, h) = scene.camera_size();
+        a.truth.check(u64::from(w) * u64::from(h))?;
+    }
     let scripts = scripts(a, &sshc, &out, n)?;
     let logs = out.join("logs");
     std::fs::create_dir_all(&logs).map_err(|e| format!("error: {}: {e}", logs.display()))?;
