@@ -132,6 +132,42 @@ pub enum Record {
     Reference { scene: usize, ms: f64 },
 }
 
+impl Record {
+    /// What no run writes (issue 48, item 10): a time that is not a finite number above 0,
+    /// an error figure or count that is not finite or negative, a FLIP outside [0, 1].
+    pub fn impossible(&self) -> Option<String> {
+        let bad = |x: f64| !(x.is_finite() && x >= 0.0);
+        match self {
+            Record::Reference { ms, .. } if !(ms.is_finite() && *ms > 0.0) => Some(format!("a reference timing of {ms} ms")),
+            Record::Reference { .. } => None,
+            Record::Row { row, .. } => {
+                let a = &row.acc;
+                let stats = [&a.facing, &a.penumbra, &a.lit, &a.umbra].into_iter().chain(a.ground.as_ref());
+                if let Some(ms) = row.ms
+                    && !(ms.is_finite() && ms > 0.0)
+                {
+                    return Some(format!("a row timed at {ms} ms"));
+                }
+                for s in stats {
+                    if bad(s.rms) || bad(s.max) || !s.mean.is_finite() {
+                        return Some(format!("a row with an error of RMS {}, max {}, mean {}", s.rms, s.max, s.mean));
+                    }
+                }
+                if a.flip.is_some_and(|f| !(0.0..=1.0).contains(&f)) {
+                    return Some(format!("a row with a FLIP of {:?}", a.flip));
+                }
+                if bad(row.fetches) || bad(row.ops) || bad(row.truth_se) || bad(row.light_scale) {
+                    return Some(format!(
+                        "a row with {} fetches, {} operations, a truth standard error of {}, a light scale of {}",
+                        row.fetches, row.ops, row.truth_se, row.light_scale
+                    ));
+                }
+                None
+            }
+        }
+    }
+}
+
 /// What `records.ron` holds.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Done {
@@ -232,6 +268,13 @@ pub fn read_records(dir: &Path, repair: bool) -> Result<(Done, bool), String> {
                 e.code
             )
         })?;
+        if let Some(what) = record.impossible() {
+            return Err(format!(
+                "error: {}:{}: {what}: no run writes it (remove the folder, or pass --fresh, to measure the shard again)",
+                path.display(),
+                n + 1
+            ));
+        }
         match record {
             Record::Row { index, scene, row } => {
                 done.rows.insert(index, (scene, *row));
@@ -311,6 +354,77 @@ pub fn code() -> Result<String, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 48, item 10: records holding what no run writes (a NaN or infinite timing, a
+    /// NaN error, a FLIP above 1) are refused with their line, in resume and merge alike.
+    #[test]
+    fn records_no_run_writes_are_refused_with_their_line() {
+        let dir = std::env::temp_dir().join(format!("sshc-shard-records-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let row = Row {
+            scene: "a".into(),
+            label: "pcf".into(),
+            config: "N=3".into(),
+            shadow_map: 64,
+            light_scale: 1.0,
+            ms: Some(1.0),
+            peak_bytes: 1,
+            fetches: 1.0,
+            ops: 1.0,
+            acc: crate::metrics::Accuracy::default(),
+            truth_se: 0.5,
+            reference_ms: None,
+            shard: (0, 1),
+            device: Default::default(),
+        };
+        let line = |r: &Record| format!("{}\n", ron::to_string(r).unwrap());
+        let good = Record::Row {
+            index: 0,
+            scene: 0,
+            row: Box::new(row.clone()),
+        };
+        std::fs::write(dir.join(RECORDS), line(&good) + &line(&Record::Reference { scene: 0, ms: 2.0 })).unwrap();
+        assert_eq!(read_records(&dir, false).unwrap().0.rows.len(), 1);
+        let mut nan_error = row.clone();
+        nan_error.acc.facing.rms = f64::NAN;
+        let mut big_flip = row.clone();
+        big_flip.acc.flip = Some(7.5);
+        let mut inf_ms = row.clone();
+        inf_ms.ms = Some(f64::INFINITY);
+        for (bad, want) in [
+            (Record::Reference { scene: 0, ms: f64::NAN }, "a reference timing of NaN ms"),
+            (
+                Record::Row {
+                    index: 1,
+                    scene: 0,
+                    row: Box::new(inf_ms),
+                },
+                "a row timed at inf ms",
+            ),
+            (
+                Record::Row {
+                    index: 1,
+                    scene: 0,
+                    row: Box::new(nan_error),
+                },
+                "a row with an error of RMS NaN",
+            ),
+            (
+                Record::Row {
+                    index: 1,
+                    scene: 0,
+                    row: Box::new(big_flip),
+                },
+                "a row with a FLIP of Some(7.5)",
+            ),
+        ] {
+            std::fs::write(dir.join(RECORDS), line(&good) + &line(&bad)).unwrap();
+            let e = read_records(&dir, false).unwrap_err();
+            assert!(e.contains("records.ron:2:") && e.contains(want), "{e}");
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     fn manifest() -> Manifest {
         Manifest {
