@@ -23,6 +23,24 @@ pub fn read_capped(path: &Path, max: u64) -> Result<String, String> {
     sshc_scene::read_text(path, max).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))
 }
 
+/// Refuses to write `path` where something other than a regular file stands there (a
+/// planted link, a FIFO, a folder): what a command writes stays in its output folder.
+pub fn writable(path: &Path) -> Result<(), String> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !m.is_file() => Err(format!(
+            "error: `{}` exists and is not a regular file: refusing to write through it",
+            path.display()
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Writes `text` to `path`, replacing a file but refusing to follow a link planted there.
+pub fn write_new(path: &Path, text: &str) -> Result<(), String> {
+    writable(path)?;
+    std::fs::write(path, text).map_err(|e| format!("error: cannot write `{}`: {e}", path.display()))
+}
+
 /// Prints diagnostics against their source file on standard error (coloured on a terminal).
 pub fn report(diags: &Diagnostics, path: &Path, source: &str) {
     let choice = if std::io::stderr().is_terminal() {

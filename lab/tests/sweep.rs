@@ -695,3 +695,33 @@ fn slurm_scripts_are_not_written_for_options_every_task_refuses() {
         assert!(!out.join("sweep.sbatch").exists(), "{bad:?}: scripts written");
     }
 }
+
+/// Issue 48, item 15: `--slurm` does not write through a link planted in its output folder
+/// (nor make its target 0755): it refuses, naming the file.
+#[test]
+fn slurm_scripts_are_not_written_through_a_planted_link() {
+    let dir = tmp("slurm-link");
+    let out = dir.join("jobs");
+    std::fs::create_dir_all(&out).unwrap();
+    let outside = dir.join("outside.sh");
+    std::fs::write(&outside, "kept").unwrap();
+    std::os::unix::fs::symlink(&outside, out.join("submit.sh")).unwrap();
+    let sweep = sweep_file("sweep.ron");
+    let (ok, text) = sshc(&[
+        "sweep".as_ref(),
+        sweep.as_os_str(),
+        "--slurm".as_ref(),
+        "--shards".as_ref(),
+        "1".as_ref(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(!ok && text.contains("submit.sh` exists and is not a regular file"), "{text}");
+    assert_eq!(std::fs::read_to_string(&outside).unwrap(), "kept");
+    use std::os::unix::fs::PermissionsExt as _;
+    assert_eq!(
+        std::fs::metadata(&outside).unwrap().permissions().mode() & 0o111,
+        0,
+        "made executable"
+    );
+}

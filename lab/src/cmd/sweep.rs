@@ -1089,7 +1089,8 @@ fn write_slurm(a: SweepArgs) -> Result<(), String> {
     std::fs::create_dir_all(&logs).map_err(|e| format!("error: {}: {e}", logs.display()))?;
     for (name, text) in slurm::scripts(&job) {
         let p = out.join(name);
-        std::fs::write(&p, text).map_err(|e| format!("error: {}: {e}", p.display()))?;
+        // a link planted in the folder is refused, not written through (and not made 0755)
+        crate::session::write_new(&p, &text)?;
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt as _;

@@ -129,7 +129,7 @@ pub fn write(out: &Path, o: &Outputs) -> Result<(), String> {
     std::fs::create_dir_all(out).map_err(|e| format!("error: {}: {e}", out.display()))?;
     let write = |name: &str, text: &str| -> Result<(), String> {
         let p = out.join(name);
-        std::fs::write(&p, text).map_err(|e| format!("error: {}: {e}", p.display()))?;
+        crate::session::write_new(&p, text)?;
         println!("wrote {}", p.display());
         Ok(())
     };
@@ -361,6 +361,7 @@ pub(crate) fn chart(
     if pts.is_empty() {
         return Err(format!("error: {}: nothing to plot", path.display()));
     }
+    crate::session::writable(path)?;
     let svg = path.extension().is_some_and(|e| e == "svg");
     let size = (900, 600);
     // text is measured with the bundled font in both backends

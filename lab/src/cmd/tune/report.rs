@@ -14,23 +14,7 @@ pub(crate) fn create_out(out: &Path) -> Result<(), String> {
     std::fs::create_dir_all(out).map_err(|e| format!("error: cannot create `{}`: {e}", out.display()))
 }
 
-/// Refuses to write `path` where something other than a regular file stands there (a
-/// planted link, a FIFO, a folder): what a command writes stays in its output folder.
-pub(crate) fn writable(path: &Path) -> Result<(), String> {
-    match std::fs::symlink_metadata(path) {
-        Ok(m) if !m.is_file() => Err(format!(
-            "error: `{}` exists and is not a regular file: refusing to write through it",
-            path.display()
-        )),
-        _ => Ok(()),
-    }
-}
-
-/// Writes `text` to `path`, replacing a file but refusing to follow a link planted there.
-pub(crate) fn write_new(path: &Path, text: &str) -> Result<(), String> {
-    writable(path)?;
-    std::fs::write(path, text).map_err(|e| format!("error: cannot write `{}`: {e}", path.display()))
-}
+pub(crate) use crate::session::{writable, write_new};
 
 /// The command line as typed, each word quoted where the shell would need it.
 fn command_line() -> String {
