@@ -305,6 +305,15 @@ pub fn space_with(source: &str, overrides: &[(String, String)]) -> Result<Space,
     Ok(space_of(&t))
 }
 
+/// The whole numbers of a declared I32 range, within i32 (a range may be written wider).
+fn int_domain(lo: f64, hi: f64) -> Domain {
+    let (min, max) = (f64::from(i32::MIN), f64::from(i32::MAX));
+    Domain::Int {
+        lo: lo.ceil().clamp(min, max) as i64,
+        hi: hi.floor().clamp(min, max) as i64,
+    }
+}
+
 fn space_of(t: &Technique) -> Space {
     let narrowed = |name: &str| t.tune.iter().find(|a| a.name.value == name).map(|a| &a.choice);
     let texts = |v: &[crate::span::Spanned<TuneValue>]| v.iter().map(|v| v.value.to_string()).collect::<Vec<_>>();
@@ -314,10 +323,7 @@ fn space_of(t: &Technique) -> Space {
         let default = Some(literal(p.ty.value, p.default.value.as_f64()));
         let declared = match (p.ty.value, &p.range) {
             (ScalarTy::Bool, _) => Some(Domain::Choice(vec!["false".into(), "true".into()])),
-            (ScalarTy::I32, Some((lo, hi))) => Some(Domain::Int {
-                lo: lo.value.ceil() as i64,
-                hi: hi.value.floor() as i64,
-            }),
+            (ScalarTy::I32, Some((lo, hi))) => Some(int_domain(lo.value, hi.value)),
             (ScalarTy::F32, Some((lo, hi))) => Some(Domain::Real {
                 lo: lo.value,
                 hi: hi.value,
@@ -337,13 +343,7 @@ fn space_of(t: &Technique) -> Space {
                 ),
                 None,
             ),
-            (Some(TuneChoice::Range(lo, hi)), _) if p.ty.value == ScalarTy::I32 => (
-                Domain::Int {
-                    lo: lo.value.ceil() as i64,
-                    hi: hi.value.floor() as i64,
-                },
-                None,
-            ),
+            (Some(TuneChoice::Range(lo, hi)), _) if p.ty.value == ScalarTy::I32 => (int_domain(lo.value, hi.value), None),
             (Some(TuneChoice::Range(lo, hi)), _) => (
                 Domain::Real {
                     lo: lo.value,

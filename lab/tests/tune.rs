@@ -287,6 +287,25 @@ fn tune_refuses_bad_input_with_clear_errors() {
         let out = sshc(&["check", path.to_str().unwrap()]);
         assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains(want));
     }
+    // a technique that does not compile (an empty declared range: the search would draw
+    // from it) is refused with its diagnostic, before any measurement
+    let empty = dir.join("empty-range.ron");
+    std::fs::write(&empty, pcf.replace("range: (0.0, 0.1)", "range: (0.1, 0.0)")).unwrap();
+    let mut a = vec![
+        "tune",
+        "--scene",
+        "scenes/contact.ron",
+        "--technique",
+        empty.to_str().unwrap(),
+        "-o",
+        o,
+    ];
+    a.extend(quick);
+    let e = fails(&a);
+    assert!(
+        e.contains("has an empty range") && e.contains("empty-range.ron:") && e.contains("does not compile"),
+        "{e}"
+    );
     // a link planted in the output folder is not written through
     let planted = dir.join("planted");
     std::fs::create_dir_all(&planted).unwrap();

@@ -1002,7 +1002,6 @@ fn write_slurm(a: SweepArgs) -> Result<(), String> {
         let (w, h) = scene.camera_size();
         a.truth.check(u64::from(w) * u64::from(h))?;
     }
-    slurm::check_cpus(&a.slurm)?;
     let rows = configs(&l.file).len();
     if n == 0 || n > rows.max(1) {
         return Err(format!(
@@ -1011,24 +1010,10 @@ fn write_slurm(a: SweepArgs) -> Result<(), String> {
         ));
     }
     let s = &a.slurm;
-    for (option, value) in [
-        ("--partition", &s.partition),
-        ("--gres", &s.gres),
-        ("--time", &s.time),
-        ("--mem", &s.mem),
-    ] {
-        if let Some(v) = value {
-            slurm::check_value(option, v)?;
-        }
-    }
     let absolute = |p: &Path| std::path::absolute(p).map_err(|e| format!("error: {}: {e}", p.display()));
     let out = absolute(&a.out)?;
+    slurm::check_options(s, &out)?;
     let out_text = out.display().to_string();
-    if out_text.chars().any(|c| !(c.is_ascii_alphanumeric() || "/._-+=:,@".contains(c))) {
-        return Err(format!(
-            "error: `-o {out_text}`: the scripts name the output folder in #SBATCH lines, which read no quotes: choose a path of letters, digits and `/._-+=:,@`"
-        ));
-    }
     let sshc = match &s.sshc {
         Some(p) => absolute(p)?,
         None => std::env::current_exe().map_err(|e| format!("error: cannot find this executable: {e}"))?,

@@ -90,6 +90,37 @@ pub fn no_control_characters(what: &str, value: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// What an array task runs first: the truth's ray casting gets a thread per CPU the task was
+/// given, and `i` is the task's index.
+pub const TASK_PREAMBLE: &str = "set -euo pipefail\n\
+     # the truth's ray casting: a thread per CPU the task was given\n\
+     export RAYON_NUM_THREADS=\"${SLURM_CPUS_PER_TASK:-${SLURM_CPUS_ON_NODE:-$(nproc)}}\"\n\
+     i=\"$SLURM_ARRAY_TASK_ID\"\n";
+
+/// The checks every `--slurm` makes before writing (the sweep's and the tune's): each
+/// `#SBATCH` value as sbatch reads it, at least one CPU per task, and an output folder
+/// (named in `#SBATCH --output` lines, which read no quotes) of plain characters.
+pub fn check_options(s: &SlurmArgs, out: &Path) -> Result<(), String> {
+    for (option, value) in [
+        ("--partition", &s.partition),
+        ("--gres", &s.gres),
+        ("--time", &s.time),
+        ("--mem", &s.mem),
+    ] {
+        if let Some(v) = value {
+            check_value(option, v)?;
+        }
+    }
+    check_cpus(s)?;
+    let out_text = out.display().to_string();
+    if out_text.chars().any(|c| !(c.is_ascii_alphanumeric() || "/._-+=:,@".contains(c))) {
+        return Err(format!(
+            "error: `-o {out_text}`: the scripts name the output folder in #SBATCH lines, which read no quotes: choose a path of letters, digits and `/._-+=:,@`"
+        ));
+    }
+    Ok(())
+}
+
 /// Refuses `--cpus-per-task 0`, which sbatch refuses for every task.
 pub fn check_cpus(s: &SlurmArgs) -> Result<(), String> {
     match s.cpus_per_task {
@@ -148,12 +179,9 @@ pub fn scripts(j: &Job) -> [(&'static str, String); 3] {
     directives(&mut sweep, j.slurm, true);
     let options: Vec<String> = j.options.iter().map(|o| quote(o)).collect();
     let dir = format!("\"{}\"", shard_dir("$i").replace('"', "\\\""));
+    sweep.push_str(TASK_PREAMBLE);
     sweep.push_str(&format!(
-        "set -euo pipefail\n\
-         # the truth's ray casting: a thread per CPU the task was given\n\
-         export RAYON_NUM_THREADS=\"${{SLURM_CPUS_PER_TASK:-${{SLURM_CPUS_ON_NODE:-$(nproc)}}}}\"\n\
-         i=\"$SLURM_ARRAY_TASK_ID\"\n\
-         exec {sshc} sweep {sweep} --shard \"$i/{n}\" -o {dir} {options}\n",
+        "exec {sshc} sweep {sweep} --shard \"$i/{n}\" -o {dir} {options}\n",
         sshc = quote(&j.sshc.display().to_string()),
         sweep = quote(&j.sweep.display().to_string()),
         options = options.join(" "),

@@ -192,6 +192,12 @@ fn load_technique(path: &Path, overrides: &[(String, String)]) -> Result<Entry, 
             format!("error: `--axis` does not fit {}", path.display())
         }
     })?;
+    // the technique as written must compile (every check of `sshc check`: an empty declared
+    // range, a default outside it), so that the search starts from a valid point
+    sshc::compile_str(&source, &Default::default()).map_err(|d| {
+        report_diags(&d, path, &source);
+        format!("error: {} does not compile: fix it before tuning it (`sshc check`)", path.display())
+    })?;
     Ok(Entry {
         label: path
             .file_stem()

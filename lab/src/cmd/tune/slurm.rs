@@ -7,7 +7,7 @@
 //! and the truth cache belong on the filesystem every node shares.
 
 use super::TuneArgs;
-use crate::cmd::sweep::slurm::{check_value, directives, no_control_characters, quote};
+use crate::cmd::sweep::slurm::{TASK_PREAMBLE, check_options, directives, no_control_characters, quote};
 use std::path::{Path, PathBuf};
 
 /// Absolute, without `..` taken apart (the nodes resolve it as this one does).
@@ -96,22 +96,8 @@ pub fn task_arguments(a: &TuneArgs, out: &Path) -> Result<Vec<String>, String> {
 /// `tune.sbatch` and `submit.sh` for `shards` tasks.
 pub fn scripts(a: &TuneArgs, sshc: &Path, out: &Path, shards: usize) -> Result<[(&'static str, String); 2], String> {
     let s = &a.slurm;
-    for (option, value) in [
-        ("--partition", &s.partition),
-        ("--gres", &s.gres),
-        ("--time", &s.time),
-        ("--mem", &s.mem),
-    ] {
-        if let Some(v) = value {
-            check_value(option, v)?;
-        }
-    }
+    check_options(s, out)?;
     let out_text = out.display().to_string();
-    if out_text.chars().any(|c| !(c.is_ascii_alphanumeric() || "/._-+=:,@".contains(c))) {
-        return Err(format!(
-            "error: `-o {out_text}`: the scripts name the output folder in #SBATCH lines, which read no quotes: choose a path of letters, digits and `/._-+=:,@`"
-        ));
-    }
     let args = task_arguments(a, out)?;
     for x in args.iter().chain(std::iter::once(&sshc.display().to_string())) {
         no_control_characters("a value of the tune", x)?;
@@ -129,12 +115,9 @@ pub fn scripts(a: &TuneArgs, sshc: &Path, out: &Path, shards: usize) -> Result<[
         last = shards - 1,
     );
     directives(&mut job, s, true);
+    job.push_str(TASK_PREAMBLE);
     job.push_str(&format!(
-        "set -euo pipefail\n\
-         # the truth's ray casting: a thread per CPU the task was given\n\
-         export RAYON_NUM_THREADS=\"${{SLURM_CPUS_PER_TASK:-${{SLURM_CPUS_ON_NODE:-$(nproc)}}}}\"\n\
-         i=\"$SLURM_ARRAY_TASK_ID\"\n\
-         exec {sshc} tune {args} --shard \"$i/{shards}\" -o {out}\n",
+        "exec {sshc} tune {args} --shard \"$i/{shards}\" -o {out}\n",
         sshc = quote(&sshc.display().to_string()),
         args = args.join(" "),
         out = quote(&out_text),
@@ -167,7 +150,6 @@ pub fn write(a: &TuneArgs) -> Result<(), String> {
         Some(p) => absolute(p)?,
         None => std::env::current_exe().map_err(|e| format!("error: cannot find this executable: {e}"))?,
     };
-    crate::cmd::sweep::slurm::check_cpus(&a.slurm)?;
     // the truth's budget on each scene, as every task will check it
     for s in &a.scenes {
         let scene = crate::session::load_scene(s, a.size, None)?;
