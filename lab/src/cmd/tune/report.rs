@@ -54,14 +54,23 @@ fn detail_of(t: &Tuner, c: &Candidate, rung: usize) -> Option<(Measured, Detail)
 
 /// The configuration that came closest to the budget, in words.
 fn closest(t: &Tuner, found: &Found, plan: &Plan) -> String {
-    let best = found.steps.iter().filter_map(|s| Some((s, s.measured()?))).min_by(|a, b| {
-        let over = |m: &Measured| {
-            let time = median(&m.times) / plan.time_limit;
-            let mem = plan.memory_limit.map_or(0.0, |l| m.bytes as f64 / l as f64);
-            time.max(mem)
-        };
-        over(a.1).total_cmp(&over(b.1))
-    });
+    // the final fidelity decides: a cheaper rung's single timing is only named where
+    // nothing reached the final one
+    let last = plan.rungs - 1;
+    let at_last = found.steps.iter().any(|s| s.rung == last && s.measured().is_some());
+    let best = found
+        .steps
+        .iter()
+        .filter(|s| !at_last || s.rung == last)
+        .filter_map(|s| Some((s, s.measured()?)))
+        .min_by(|a, b| {
+            let over = |m: &Measured| {
+                let time = median(&m.times) / plan.time_limit;
+                let mem = plan.memory_limit.map_or(0.0, |l| m.bytes as f64 / l as f64);
+                time.max(mem)
+            };
+            over(a.1).total_cmp(&over(b.1))
+        });
     match best {
         Some((s, m)) => {
             let mut w = format!(
@@ -72,6 +81,9 @@ fn closest(t: &Tuner, found: &Found, plan: &Plan) -> String {
                 t.budget.unit(),
                 plan.time_limit
             );
+            if !at_last {
+                let _ = write!(w, " (a timing at a cheaper fidelity: nothing reached the final one)");
+            }
             if let Some(l) = plan.memory_limit {
                 let _ = write!(
                     w,
