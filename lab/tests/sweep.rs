@@ -725,3 +725,145 @@ fn slurm_scripts_are_not_written_through_a_planted_link() {
         "made executable"
     );
 }
+
+/// Issue 48, items 2 and 10: a shard folder is read as hostile. A shard count or a
+/// configuration count no split has (2^64-1 panicked allocating, 2^40 aborted, a sum of
+/// counts wrapped to 0), an emptied scene list, a sweep of no configuration, and records
+/// naming a scene or a row the sweep does not have are refused, naming the file and the
+/// line, by the merge and by a resumed run, with nothing written.
+#[test]
+fn tampered_shard_counts_and_records_are_refused() {
+    let base = tmp("tampered");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    std::fs::create_dir_all(&base).unwrap();
+    std::fs::copy(root.join("techniques/hard.ron"), base.join("hard.ron")).unwrap();
+    std::fs::copy(root.join("scenes/triangle.ron"), base.join("triangle.ron")).unwrap();
+    let s = base.join("s.ron");
+    std::fs::write(
+        &s,
+        r#"(scenes: ["triangle.ron"], camera: Some((16, 16)), frames: 1, reference: "hard.ron", techniques: [(file: "hard.ron", axes: { "shadow_map": [16, 32] })])"#,
+    )
+    .unwrap();
+    let run = |i: usize, dir: &Path, fresh: bool| {
+        let shard = format!("{i}/2");
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "sweep".as_ref(),
+            s.as_os_str(),
+            "-o".as_ref(),
+            dir.as_os_str(),
+            "--shard".as_ref(),
+            shard.as_ref(),
+            "--samples".as_ref(),
+            "4".as_ref(),
+            "--runs".as_ref(),
+            "2".as_ref(),
+            "--no-cache".as_ref(),
+        ];
+        if fresh {
+            args.push("--fresh".as_ref());
+        }
+        sshc(&args)
+    };
+    let (s0, s1) = (base.join("s0"), base.join("s1"));
+    for (i, d) in [(0, &s0), (1, &s1)] {
+        let (ok, text) = run(i, d, false);
+        assert!(ok, "{text}");
+    }
+    let out = base.join("out");
+    let field = |m: &str, key: &str, value: &str| -> String {
+        let line = m.lines().find(|l| l.trim_start().starts_with(key)).unwrap().to_string();
+        m.replace(&line, &format!("    {key} {value},"))
+    };
+    let count = |k: &str| base.join(format!("tampered-{k}"));
+    let cases: Vec<(&str, Box<dyn Fn(String) -> String>, &str)> = vec![
+        (
+            "max",
+            Box::new(move |m| field(&m, "shard:", "(1, 18446744073709551615)")),
+            "shard.ron: a split into 18446744073709551615 shards",
+        ),
+        (
+            "huge",
+            Box::new(move |m| field(&m, "shard:", "(1, 1099511627776)")),
+            "shard.ron: a split into 1099511627776 shards",
+        ),
+        (
+            "configs",
+            Box::new(move |m| field(&m, "configurations:", "18446744073709551615")),
+            "shard.ron: 18446744073709551615 configurations",
+        ),
+        (
+            "none",
+            Box::new(move |m| field(&m, "configurations:", "0")),
+            "shard.ron: a sweep of no configuration",
+        ),
+        (
+            "rows",
+            Box::new(move |m| field(&m, "rows:", "5")),
+            "shard.ron: 5 rows for shard 1/2",
+        ),
+        (
+            "scenes",
+            Box::new(|m: String| {
+                let start = m.find("scenes: [").unwrap();
+                let end = start + m[start..].find(']').unwrap();
+                format!("{}scenes: []{}", &m[..start], &m[end + 1..])
+            }),
+            "shard.ron: no scene",
+        ),
+    ];
+    for (k, edit, want) in &cases {
+        let d = count(k);
+        copy_shard(&s1, &d, edit);
+        // a split's count alone decides what the merge expects: given alone, the folder
+        // of a tampered count is all the merge sees
+        let dirs: Vec<&Path> = if *k == "max" || *k == "huge" { vec![&d] } else { vec![&s0, &d] };
+        let (ok, text) = merge(&dirs, &out);
+        assert!(
+            !ok && text.contains(want) && text.contains("error: nothing merged"),
+            "{k}: `{want}` not in:\n{text}"
+        );
+        assert!(!out.join("sweep.csv").exists(), "{k}");
+        // a resumed run refuses the folder too, and --fresh starts it afresh
+        let (ok, text) = run(1, &d, false);
+        assert!(!ok && text.contains(want), "{k}: {text}");
+    }
+    // records naming a scene or a configuration the sweep has not
+    let records = std::fs::read_to_string(s1.join("records.ron")).unwrap();
+    let row = records.lines().position(|l| l.starts_with("Row(")).unwrap() + 1;
+    for (k, from, to, want) in [
+        (
+            "scene99",
+            "scene:0,",
+            "scene:99,",
+            format!("records.ron:{row}: scene entry 99 of a sweep of 1 scene"),
+        ),
+        (
+            "row99",
+            "Row(index:1,",
+            "Row(index:99,",
+            format!("records.ron:{row}: row 99 is not shard 1/2's (the sweep has 2 configurations and 0 baselines)"),
+        ),
+    ] {
+        let d = count(k);
+        copy_shard(&s1, &d, |m| m);
+        let edited: Vec<String> = records
+            .lines()
+            .map(|l| {
+                if l.starts_with("Row(") {
+                    l.replacen(from, to, 1)
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect();
+        std::fs::write(d.join("records.ron"), edited.join("\n") + "\n").unwrap();
+        let (ok, text) = merge(&[&s0, &d], &out);
+        assert!(!ok && text.contains(&want), "{k}: `{want}` not in:\n{text}");
+        let (ok, text) = run(1, &d, false);
+        assert!(!ok && text.contains(&want), "{k}: {text}");
+        let (ok, text) = run(1, &d, true);
+        assert!(ok, "{k}: --fresh: {text}");
+    }
+    assert!(!out.exists());
+    let _ = std::fs::remove_dir_all(&base);
+}

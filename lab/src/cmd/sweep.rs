@@ -92,6 +92,9 @@ pub(crate) fn shard(s: &str) -> Result<(usize, usize), String> {
     if n == 0 || i >= n {
         return Err(format!("`{s}`: need 0 <= i < n"));
     }
+    if n > shard::MAX_SHARDS {
+        return Err(format!("`{s}`: at most {} shards", shard::MAX_SHARDS));
+    }
     Ok((i, n))
 }
 
@@ -457,6 +460,24 @@ fn check_axes(file: &SweepFile) -> Result<(), String> {
             }
         }
     }
+    // the grid's size, before `configs` builds it: a few long axes multiply past memory
+    let per_scene = file.techniques.iter().try_fold(0usize, |sum, t| {
+        t.axes
+            .values()
+            .try_fold(1usize, |p, v| p.checked_mul(v.len()))
+            .and_then(|p| sum.checked_add(p))
+    });
+    let rows = per_scene
+        .and_then(|p| p.checked_mul(file.scenes.len()))
+        .and_then(|c| c.checked_add(file.scenes.len().checked_mul(file.stochastic.len())?));
+    if rows.is_none_or(|r| r > shard::MAX_ROWS) {
+        return Err(format!(
+            "the grid has {} configurations and baselines over its {} scenes; a sweep has at most {} (split it into several sweeps, or use `sshc tune` to search a large space)",
+            rows.map_or_else(|| "more than 2^64".to_string(), |r| r.to_string()),
+            file.scenes.len(),
+            shard::MAX_ROWS
+        ));
+    }
     for (k, &n) in file.stochastic.iter().enumerate() {
         if n == 0 || n > MAX_STOCHASTIC_SAMPLES {
             return Err(format!(
@@ -693,7 +714,7 @@ fn resume(out: &Path, new: &Manifest, fresh: bool) -> Result<(Done, Vec<shard::R
         forget()?;
         return Ok((Done::default(), Vec::new()));
     }
-    let (done, cut) = shard::read_records(out, true)?;
+    let (done, cut) = shard::read_records(out, true, new)?;
     if cut {
         eprintln!("sweep: dropped the half-written last record of a stopped run");
     }
@@ -784,7 +805,7 @@ fn run(a: SweepArgs) -> Result<(), String> {
         manifest.finished = true;
     }
     // the outputs from what the folder holds, as the merge reads it
-    let (done, _) = shard::read_records(&a.out, false)?;
+    let (done, _) = shard::read_records(&a.out, false, &manifest)?;
     if done.rows.len() != manifest.rows {
         return Err(format!(
             "error: {}: {} rows are recorded for the shard's {}: the file was changed; run again with --fresh",
@@ -1160,6 +1181,15 @@ mod tests {
         }
         let e = check_axes(&file("", "4294967295")).unwrap_err();
         assert!(e.contains("stochastic[0] = 4294967295") && e.contains("1..=4096"), "{e}");
+        // a grid past what a sweep holds is refused before it is built: five axes of 100
+        // values (10^10 configurations), and twelve (a product past 2^64)
+        let axis = format!("[{}]", (0..100).map(|v| v.to_string()).collect::<Vec<_>>().join(", "));
+        for (k, want) in [(5, "10000000000 configurations"), (12, "more than 2^64 configurations")] {
+            let axes: Vec<String> = (0..k).map(|i| format!(r#""a{i}": {axis}"#)).collect();
+            let e = check_axes(&file(&axes.join(", "), "")).unwrap_err();
+            assert!(e.contains(want) && e.contains("at most 1048576"), "{e}");
+        }
+        assert!(shard("0/65537").unwrap_err().contains("at most 65536 shards"));
     }
 
     #[test]

@@ -40,19 +40,8 @@ fn name(dir: &Path) -> String {
 /// The shard folders' problems, if any (each a line naming the shard), else the shards
 /// in index order.
 fn check(shards: Vec<Shard>) -> Result<Vec<Shard>, Vec<String>> {
+    // each manifest holds a split some run writes (`Manifest::impossible`, at read)
     let mut problems = Vec::new();
-    for s in &shards {
-        let (i, n) = s.manifest.shard;
-        if n == 0 || i >= n {
-            problems.push(format!(
-                "{} names shard {i}/{n}, which no split has: its shard.ron was changed",
-                name(&s.dir)
-            ));
-        }
-    }
-    if !problems.is_empty() {
-        return Err(problems);
-    }
     let first = &shards[0];
     let (a, am) = (name(&first.dir), &first.manifest);
     for s in &shards[1..] {
@@ -74,6 +63,16 @@ fn check(shards: Vec<Shard>) -> Result<Vec<Shard>, Vec<String>> {
                 "{b} was run by other code than {a} ({} against {}): run every shard with one build",
                 bm.code, am.code
             ));
+        } else if (bm.configurations, bm.baselines, &bm.scenes) != (am.configurations, am.baselines, &am.scenes) {
+            problems.push(format!(
+                "{b} counts {} configurations, {} baselines and {} scenes, {a} {}, {} and {}: one sweep has one count; a shard.ron was changed",
+                bm.configurations,
+                bm.baselines,
+                bm.scenes.len(),
+                am.configurations,
+                am.baselines,
+                am.scenes.len()
+            ));
         } else if bm.shard.1 != am.shard.1 {
             problems.push(format!(
                 "{b} is shard {}/{}, but {a} is one of {}: the shards of one split have one count",
@@ -85,21 +84,26 @@ fn check(shards: Vec<Shard>) -> Result<Vec<Shard>, Vec<String>> {
         return Err(problems);
     }
     let n = am.shard.1;
-    let mut by_index: Vec<Vec<&Shard>> = vec![Vec::new(); n];
+    let mut by_index: std::collections::BTreeMap<usize, Vec<&Shard>> = Default::default();
     for s in &shards {
-        by_index[s.manifest.shard.0].push(s);
+        by_index.entry(s.manifest.shard.0).or_default().push(s);
     }
-    for (i, these) in by_index.iter().enumerate() {
-        match these.as_slice() {
-            [] => problems.push(format!(
-                "shard {i}/{n} is missing: no folder given holds it (run `sshc sweep {} --shard {i}/{n} -o DIR` and name DIR)",
-                am.sweep
-            )),
-            [_] => {}
-            several => {
-                let dirs: Vec<String> = several.iter().map(|s| name(&s.dir)).collect();
-                problems.push(format!("{} all hold shard {i}/{n}: give each shard once", dirs.join(" and ")));
-            }
+    // the missing ones, named up to a few
+    const NAMED: usize = 8;
+    let missing: Vec<usize> = (0..n).filter(|i| !by_index.contains_key(i)).take(NAMED + 1).collect();
+    for &i in missing.iter().take(NAMED) {
+        problems.push(format!(
+            "shard {i}/{n} is missing: no folder given holds it (run `sshc sweep {} --shard {i}/{n} -o DIR` and name DIR)",
+            am.sweep
+        ));
+    }
+    if missing.len() > NAMED {
+        problems.push(format!("and {} more of the {n} shards are missing", n - by_index.len() - NAMED));
+    }
+    for (i, these) in &by_index {
+        if these.len() > 1 {
+            let dirs: Vec<String> = these.iter().map(|s| name(&s.dir)).collect();
+            problems.push(format!("{} all hold shard {i}/{n}: give each shard once", dirs.join(" and ")));
         }
     }
     for s in &shards {
@@ -136,7 +140,7 @@ pub fn merge(a: MergeArgs) -> Result<(), String> {
     let mut problems = Vec::new();
     for dir in &a.shards {
         match shard::read_manifest(dir) {
-            Ok(Some(manifest)) => match shard::read_records(dir, false) {
+            Ok(Some(manifest)) => match shard::read_records(dir, false, &manifest) {
                 Ok((done, _)) => shards.push(Shard {
                     dir: dir.clone(),
                     manifest,
@@ -175,8 +179,10 @@ pub fn merge(a: MergeArgs) -> Result<(), String> {
     rows.sort_by_key(|(i, _)| *i);
     let expected = m0.configurations + m0.baselines;
     if rows.len() != expected || rows.iter().enumerate().any(|(k, (i, _))| k != *i) {
+        // each shard holds its own rows, as many as its split gives it (checked at read and
+        // above): only shards of one sweep disagreeing on it reach here
         return Err(format!(
-            "error: the shards hold {} rows, not the sweep's {expected} configurations once each: their records.ron were changed; run them again with --fresh\nerror: nothing merged",
+            "error: the shards hold {} rows where the sweep has {expected} (configurations and baselines), each once: their records.ron were changed; run them again with --fresh\nerror: nothing merged",
             rows.len()
         ));
     }

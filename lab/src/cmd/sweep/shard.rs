@@ -24,6 +24,15 @@ pub const MAX_RECORDS_BYTES: u64 = 256 << 20;
 /// The manifest's format; a folder of another is refused by the merge and started
 /// afresh by a run.
 pub const FORMAT: u32 = 1;
+/// The most shards a split has (`--shard i/n`): Slurm's own array limit is 1001 by
+/// default and 4,000,001 at most, and a merge of more folders than this is no one's
+/// plan. A count beyond it in `shard.ron` was written by no run (a count of 2^64-1 made
+/// the merge's table of shards panic; issue 48, item 2).
+pub const MAX_SHARDS: usize = 1 << 16;
+/// The most rows (GPU configurations and CPU baselines) a sweep has: `records.ron` holds
+/// about 200,000 at its size cap ([`MAX_RECORDS_BYTES`]), and a sweep file whose grid is
+/// larger is refused at load.
+pub const MAX_ROWS: usize = 1 << 20;
 
 /// What a shard belongs to and where it stands.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -75,6 +84,68 @@ pub struct Run {
 }
 
 impl Manifest {
+    /// What no run writes (issue 48, items 2 and 10): a split no `--shard` names, counts
+    /// beyond [`MAX_SHARDS`] and [`MAX_ROWS`], a sweep of no configuration or no scene,
+    /// baselines that are not a whole number per scene, and a row count other than the
+    /// split gives this shard. Checked before any count sizes anything.
+    pub fn impossible(&self) -> Option<String> {
+        let (i, n) = self.shard;
+        let (c, b) = (self.configurations, self.baselines);
+        if n > MAX_SHARDS {
+            return Some(format!("a split into {n} shards (at most {MAX_SHARDS})"));
+        }
+        if n == 0 || i >= n {
+            return Some(format!("shard {i}/{n}, which no split has"));
+        }
+        if c > MAX_ROWS || b > MAX_ROWS {
+            return Some(format!(
+                "{c} configurations and {b} baselines (a sweep has at most {MAX_ROWS} rows)"
+            ));
+        }
+        if c == 0 {
+            return Some("a sweep of no configuration".to_string());
+        }
+        if self.scenes.is_empty() {
+            return Some("no scene".to_string());
+        }
+        if self.scenes.len() > c || !b.is_multiple_of(self.scenes.len()) {
+            return Some(format!(
+                "{} scenes for {c} configurations and {b} baselines (each scene has its configurations and as many baselines)",
+                self.scenes.len()
+            ));
+        }
+        let expected = self.expected_rows();
+        if self.rows != expected {
+            return Some(format!(
+                "{} rows for shard {i}/{n} of a sweep of {c} configurations and {b} baselines, which gives it {expected}",
+                self.rows
+            ));
+        }
+        None
+    }
+
+    /// The rows shard `i` of `n` writes: every n-th configuration from the i-th, and shard
+    /// 0 the baselines too.
+    pub fn expected_rows(&self) -> usize {
+        let (i, n) = self.shard;
+        let gpu = if i < self.configurations {
+            (self.configurations - i - 1) / n.max(1) + 1
+        } else {
+            0
+        };
+        gpu + if i == 0 { self.baselines } else { 0 }
+    }
+
+    /// Whether row `index` of the whole sweep is this shard's.
+    pub fn holds(&self, index: usize) -> bool {
+        let (i, n) = self.shard;
+        if index < self.configurations {
+            index % n.max(1) == i
+        } else {
+            i == 0 && index - self.configurations < self.baselines
+        }
+    }
+
     /// Why a shard run with `self` cannot carry on the folder's `old` work, or none.
     pub fn differs_from(&self, old: &Manifest) -> Option<String> {
         if old.format != self.format {
@@ -210,9 +281,15 @@ pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, String> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(io(&path)(e)),
     };
-    ron::from_str(&text)
-        .map(Some)
-        .map_err(|e| format!("error: {}:{}:{}: {}", path.display(), e.span.start.line, e.span.start.col, e.code))
+    let m: Manifest =
+        ron::from_str(&text).map_err(|e| format!("error: {}:{}:{}: {}", path.display(), e.span.start.line, e.span.start.col, e.code))?;
+    if let Some(what) = m.impossible() {
+        return Err(format!(
+            "error: {}: {what}: no run writes it, the file was changed (remove the folder, or pass --fresh, to measure the shard again)",
+            path.display()
+        ));
+    }
+    Ok(Some(m))
 }
 
 /// Writes `m` as `dir/shard.ron`, whole: a temporary file of this process's own renamed
@@ -233,8 +310,9 @@ pub fn write_manifest(dir: &Path, m: &Manifest) -> Result<(), String> {
 /// Reads `dir/records.ron`. A last line without its newline is what a killed run left
 /// half written: with `repair` it is cut off the file (and counted in the answer's second
 /// field), otherwise refused. Any other line that does not read is refused with its
-/// position.
-pub fn read_records(dir: &Path, repair: bool) -> Result<(Done, bool), String> {
+/// position, and so is a record of a scene or a row that `m`, the shard's manifest, has
+/// not.
+pub fn read_records(dir: &Path, repair: bool, m: &Manifest) -> Result<(Done, bool), String> {
     let path = dir.join(RECORDS);
     let bytes = match sshc_scene::read_capped(&path, MAX_RECORDS_BYTES) {
         Ok(b) => b,
@@ -268,7 +346,20 @@ pub fn read_records(dir: &Path, repair: bool) -> Result<(Done, bool), String> {
                 e.code
             )
         })?;
-        if let Some(what) = record.impossible() {
+        let (si, sn) = m.shard;
+        let scenes = m.scenes.len();
+        let misplaced = match &record {
+            Record::Row { index, .. } if !m.holds(*index) => Some(format!(
+                "row {index} is not shard {si}/{sn}'s (the sweep has {} configurations and {} baselines)",
+                m.configurations, m.baselines
+            )),
+            Record::Row { scene, .. } | Record::Reference { scene, .. } if *scene >= scenes => Some(format!(
+                "scene entry {scene} of a sweep of {scenes} scene{}",
+                if scenes == 1 { "" } else { "s" }
+            )),
+            _ => None,
+        };
+        if let Some(what) = misplaced.or_else(|| record.impossible()) {
             return Err(format!(
                 "error: {}:{}: {what}: no run writes it (remove the folder, or pass --fresh, to measure the shard again)",
                 path.display(),
@@ -385,7 +476,13 @@ mod tests {
             row: Box::new(row.clone()),
         };
         std::fs::write(dir.join(RECORDS), line(&good) + &line(&Record::Reference { scene: 0, ms: 2.0 })).unwrap();
-        assert_eq!(read_records(&dir, false).unwrap().0.rows.len(), 1);
+        let m = Manifest {
+            shard: (0, 1),
+            rows: 3,
+            ..manifest()
+        };
+        assert_eq!(m.impossible(), None);
+        assert_eq!(read_records(&dir, false, &m).unwrap().0.rows.len(), 1);
         let mut nan_error = row.clone();
         nan_error.acc.facing.rms = f64::NAN;
         let mut big_flip = row.clone();
@@ -420,7 +517,7 @@ mod tests {
             ),
         ] {
             std::fs::write(dir.join(RECORDS), line(&good) + &line(&bad)).unwrap();
-            let e = read_records(&dir, false).unwrap_err();
+            let e = read_records(&dir, false, &m).unwrap_err();
             assert!(e.contains("records.ron:2:") && e.contains(want), "{e}");
         }
         let _ = std::fs::remove_dir_all(&dir);
@@ -447,6 +544,96 @@ mod tests {
         }
     }
 
+    /// The rows of each shard of a split are the split's, once each, and a count no split
+    /// gives is refused before it sizes anything.
+    #[test]
+    fn a_split_gives_each_row_to_one_shard_and_impossible_counts_are_named() {
+        for (c, b) in [(1, 0), (3, 0), (7, 2), (5, 5)] {
+            for n in 1..=9 {
+                let shards: Vec<Manifest> = (0..n)
+                    .map(|i| {
+                        let mut m = Manifest {
+                            shard: (i, n),
+                            configurations: c,
+                            baselines: b,
+                            ..manifest()
+                        };
+                        m.rows = m.expected_rows();
+                        m
+                    })
+                    .collect();
+                let rows: usize = shards.iter().map(|m| m.rows).sum();
+                assert_eq!(rows, c + b, "{c} {b} {n}");
+                for index in 0..c + b + 3 {
+                    let owners = shards.iter().filter(|m| m.holds(index)).count();
+                    assert_eq!(owners, usize::from(index < c + b), "row {index} of {c}+{b} in {n}");
+                }
+                assert!(shards.iter().all(|m| m.impossible().is_none()));
+            }
+        }
+        let m = manifest();
+        assert_eq!(m.impossible(), None);
+        for (bad, want) in [
+            (
+                Manifest {
+                    shard: (0, usize::MAX),
+                    ..m.clone()
+                },
+                "a split into",
+            ),
+            (
+                Manifest {
+                    shard: (2, 2),
+                    ..m.clone()
+                },
+                "shard 2/2, which no split has",
+            ),
+            (
+                Manifest {
+                    configurations: usize::MAX,
+                    ..m.clone()
+                },
+                "configurations and 0 baselines (a sweep has at most",
+            ),
+            (
+                Manifest {
+                    baselines: usize::MAX,
+                    ..m.clone()
+                },
+                "baselines (a sweep has at most",
+            ),
+            (
+                Manifest {
+                    configurations: 0,
+                    ..m.clone()
+                },
+                "a sweep of no configuration",
+            ),
+            (
+                Manifest {
+                    scenes: vec![],
+                    ..m.clone()
+                },
+                "no scene",
+            ),
+            (
+                Manifest {
+                    baselines: 1,
+                    scenes: vec!["a".into(), "b".into()],
+                    ..m.clone()
+                },
+                "2 scenes for 3 configurations and 1 baselines",
+            ),
+            (
+                Manifest { rows: 3, ..m.clone() },
+                "3 rows for shard 0/2 of a sweep of 3 configurations and 0 baselines, which gives it 2",
+            ),
+        ] {
+            let e = bad.impossible().unwrap_or_else(|| panic!("{bad:?} passed"));
+            assert!(e.contains(want), "`{want}` not in `{e}`");
+        }
+    }
+
     #[test]
     fn a_half_written_last_line_is_cut_and_the_rest_read() {
         let dir = std::env::temp_dir().join(format!("sshc-shard-records-{}", std::process::id()));
@@ -459,19 +646,23 @@ mod tests {
         let mut f = std::fs::OpenOptions::new().append(true).open(dir.join(RECORDS)).unwrap();
         f.write_all(b"Reference(scene: 0, m").unwrap();
         drop(f);
-        assert!(read_records(&dir, false).unwrap_err().contains("half written"));
-        let (done, cut) = read_records(&dir, true).unwrap();
+        assert!(read_records(&dir, false, &manifest()).unwrap_err().contains("half written"));
+        let (done, cut) = read_records(&dir, true, &manifest()).unwrap();
         assert!(cut);
         // every value read back bit for bit
         assert_eq!(done.reference[&0], [1.5, 0.1 + 0.2]);
-        assert_eq!(read_records(&dir, false).unwrap(), (done, false), "the file was repaired");
+        assert_eq!(
+            read_records(&dir, false, &manifest()).unwrap(),
+            (done, false),
+            "the file was repaired"
+        );
         // a damaged line inside is refused with its line
         std::fs::write(
             dir.join(RECORDS),
             "Reference(scene: 0, ms: 1.0)\nRow(\nReference(scene: 0, ms: 1.0)\n",
         )
         .unwrap();
-        let e = read_records(&dir, true).unwrap_err();
+        let e = read_records(&dir, true, &manifest()).unwrap_err();
         assert!(e.contains("records.ron:2:"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }
