@@ -775,7 +775,8 @@ fn tampered_shard_counts_and_records_are_refused() {
         m.replace(&line, &format!("    {key} {value},"))
     };
     let count = |k: &str| base.join(format!("tampered-{k}"));
-    let cases: Vec<(&str, Box<dyn Fn(String) -> String>, &str)> = vec![
+    type Edit = Box<dyn Fn(String) -> String>;
+    let cases: Vec<(&str, Edit, &str)> = vec![
         (
             "max",
             Box::new(move |m| field(&m, "shard:", "(1, 18446744073709551615)")),
