@@ -356,9 +356,66 @@ fn concentric(u: f32, v: f32) -> Vec2 {
     Vec2::new(r * phi.cos(), r * phi.sin())
 }
 
+/// The deepest BVH that `obvhs`'s traversal walks whole: its stack holds 32 entries
+/// (`TRAVERSAL_STACK_SIZE` in obvhs 0.4) and past that overwrites its last entry, so a
+/// deeper tree would silently miss triangles. Its own check is a debug assertion.
+pub const MAX_BVH_DEPTH: usize = 31;
+
+/// The first of each set of coincident triangles (the same three corners in any order,
+/// compared bit for bit), in scene order, and whether any of its set casts.
+fn distinct(tris: &[[Vec3; 3]], casting: &[bool]) -> (Vec<u32>, Vec<bool>) {
+    let key = |t: &[Vec3; 3]| {
+        let mut k = t.map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]);
+        k.sort_unstable();
+        k
+    };
+    let mut first: std::collections::HashMap<[[u32; 3]; 3], usize> = std::collections::HashMap::with_capacity(tris.len());
+    let (mut unique, mut casts) = (Vec::with_capacity(tris.len()), Vec::with_capacity(tris.len()));
+    for (i, t) in tris.iter().enumerate() {
+        let c = casting.get(i).copied().unwrap_or(true);
+        match first.entry(key(t)) {
+            std::collections::hash_map::Entry::Occupied(e) => casts[*e.get()] |= c,
+            std::collections::hash_map::Entry::Vacant(e) => {
+                e.insert(unique.len());
+                unique.push(i as u32);
+                casts.push(c);
+            }
+        }
+    }
+    (unique, casts)
+}
+
+/// `d` with each -0.0 component made +0.0. obvhs's traversal picks the ray's octant from
+/// the sign bits and divides by the components: a direction of (-0, -1, -0) (what `-Vec3::Y`
+/// is, or a light direction written `-0.0`) missed every triangle.
+fn positive_zeros(d: Vec3) -> Vec3A {
+    // IEEE 754: -0 + +0 is +0 in round-to-nearest; every other value is unchanged
+    Vec3A::from(d) + Vec3A::ZERO
+}
+
+/// The depth of `bvh`'s deepest inner node (the root at 0), walked with a stack of its
+/// own.
+fn bvh_depth(bvh: &CwBvh) -> usize {
+    let mut deepest = 0;
+    let mut todo = vec![(0usize, 0usize)];
+    while let Some((n, depth)) = todo.pop() {
+        deepest = deepest.max(depth);
+        let Some(node) = bvh.nodes.get(n) else { continue };
+        for ch in 0..8 {
+            if !node.is_child_empty(ch) && !node.is_leaf(ch) {
+                todo.push((node.child_node_index(ch) as usize, depth + 1));
+            }
+        }
+    }
+    deepest
+}
+
 /// Ray casting against a scene's triangles.
 pub struct Visibility {
     bvh: Option<CwBvh>,
+    /// The BVH could not be kept within [`MAX_BVH_DEPTH`]: rays test every triangle (slow,
+    /// but no triangle is missed). [`Visibility::light_warnings`] says so.
+    flat: bool,
     /// Triangles in the BVH's primitive order.
     triangles: Vec<RtTriangle>,
     /// For each of `triangles`, its index in [`Scene::triangles`].
@@ -412,6 +469,7 @@ impl Visibility {
         if tris.is_empty() {
             return Visibility {
                 bvh: None,
+                flat: false,
                 triangles: Vec::new(),
                 original: Vec::new(),
                 casts: Vec::new(),
@@ -420,17 +478,27 @@ impl Visibility {
                 epsilon,
             };
         }
-        let input: Vec<Triangle> = tris
+        // Coincident triangles (the same three corners, in any order) answer every ray
+        // alike: the BVH gets the first of each, casting if any of them casts. The
+        // builder cannot separate identical boxes (PLOC's distances tie): 90 k copies of
+        // one triangle took 82 s and built a tree deeper than its traversal walks
+        // (issue 48, item 3).
+        let casting = scene.casting_triangles();
+        let (unique, casts_any) = distinct(tris, &casting);
+        let input: Vec<Triangle> = unique
             .iter()
-            .map(|t| Triangle {
-                v0: t[0].into(),
-                v1: t[1].into(),
-                v2: t[2].into(),
+            .map(|&i| {
+                let t = &tris[i as usize];
+                Triangle {
+                    v0: t[0].into(),
+                    v1: t[1].into(),
+                    v2: t[2].into(),
+                }
             })
             .collect();
         let bvh = build_cwbvh_from_tris(&input, BvhBuildParams::medium_build(), &mut Duration::default());
-        let triangles = bvh
-            .primitive_indices
+        let order: Vec<u32> = bvh.primitive_indices.clone();
+        let triangles = order
             .iter()
             .map(|&i| {
                 let t = &input[i as usize];
@@ -441,11 +509,12 @@ impl Visibility {
                 }
             })
             .collect();
-        let original = bvh.primitive_indices.clone();
-        let casting = scene.casting_triangles();
-        let casts = original.iter().map(|&i| casting[i as usize]).collect();
+        let original = order.iter().map(|&i| unique[i as usize]).collect();
+        let casts = order.iter().map(|&i| casts_any[i as usize]).collect();
+        let flat = bvh_depth(&bvh) > MAX_BVH_DEPTH;
         Visibility {
             bvh: Some(bvh),
+            flat,
             triangles,
             original,
             casts,
@@ -453,6 +522,12 @@ impl Visibility {
             floor,
             epsilon,
         }
+    }
+
+    /// Whether rays test every triangle because no BVH shallow enough for the traversal
+    /// could be built ([`MAX_BVH_DEPTH`]).
+    pub fn is_flat(&self) -> bool {
+        self.flat
     }
 
     /// The largest ray origin offset anywhere within the scene's bounds (that of the
@@ -549,7 +624,17 @@ impl Visibility {
         if !(origin.is_finite() && dir.is_finite() && t_max > 0.0) {
             return None;
         }
-        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, t_max);
+        if self.flat {
+            let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+            return self
+                .triangles
+                .iter()
+                .enumerate()
+                .filter_map(|(k, t)| Some((t.hit(o, d, 0.0, t_max)?, k)))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|(t, k)| (t, self.original[k] as usize));
+        }
+        let ray = Ray::new(Vec3A::from(origin), positive_zeros(dir), 0.0, t_max);
         let mut hit = RayHit::none();
         bvh.ray_traverse(ray, &mut hit, |ray, id| {
             self.triangles[id]
@@ -566,7 +651,14 @@ impl Visibility {
         if t_max.partial_cmp(&t_min) != Some(std::cmp::Ordering::Greater) {
             return false;
         }
-        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let (o, d) = (Vec3A::from(origin), positive_zeros(dir));
+        if self.flat {
+            return self
+                .triangles
+                .iter()
+                .zip(&self.casts)
+                .any(|(t, &c)| c && t.hit(o, d, t_min, t_max).is_some());
+        }
         let ray = Ray::new(o, d, t_min, t_max);
         !bvh.ray_traverse_miss(ray, |ray, id| {
             if !self.casts[id] {
@@ -762,6 +854,12 @@ impl Visibility {
             None => format!("objects[{i}]"),
         };
         let mut out = Vec::new();
+        if self.flat {
+            out.push(format!(
+                "the scene's {} triangles could not be arranged in a BVH of at most {MAX_BVH_DEPTH} levels (many nearly coincident triangles?): the truth's rays test every triangle, which is slow on a large scene",
+                self.triangles.len()
+            ));
+        }
         for (li, light) in scene.lights.iter().enumerate() {
             let Some(c) = light.center() else { continue };
             let what = format!("lights[{li}] ({})", light.kind_name());
@@ -958,6 +1056,70 @@ mod tests {
             // The edge scene's occluder hangs over every point the camera sees.
             assert!(skipped > 0 || name == "edge", "{name}: the skip test never fired");
         }
+    }
+
+    /// Issue 48, item 3: copies of one triangle (90 k of them took 82 s to build and made a
+    /// tree deeper than obvhs's traversal walks) go into the BVH once, casting if any copy
+    /// casts; nearly coincident ones that still build too deep a tree make every ray test
+    /// every triangle, with a warning, rather than miss some.
+    #[test]
+    fn coincident_triangles_build_once_and_a_tree_too_deep_is_never_walked() {
+        let scene = |copies: usize, jitter: f32| {
+            let tris: Vec<String> = (0..copies)
+                .map(|k| {
+                    format!(
+                        "Object(casts: {}, mesh: Triangle(a: ({}, 1.0, -0.5), b: (-0.5, 1.0, -0.5), c: (0.0, 1.0, 0.5)))",
+                        k > 0,
+                        0.5 + k as f32 * jitter
+                    )
+                })
+                .collect();
+            Scene::from_str(
+                &format!(
+                    "Scene(camera: Perspective(position: (0.0, 3.0, 3.0), target: (0.0, 0.0, 0.0), fov_y_degrees: 40.0, width: 8, height: 8),
+                     shadow_map: 16, lights: [Point(position: (0.0, 3.0, 0.0))],
+                     objects: [Object(mesh: Plane(size: (3.0, 3.0))), {}])",
+                    tris.join(", ")
+                ),
+                ".",
+            )
+            .unwrap()
+        };
+        let under = Vec3::new(0.0, 0.0, -0.1);
+        let beside = Vec3::new(1.2, 0.0, 1.2);
+        let light = Vec3::new(0.0, 3.0, 0.0);
+        let down = Vec3::new(0.01, -1.0, 0.02).normalize();
+        let same = scene(3000, 0.0);
+        let vis = Visibility::new(&same);
+        assert_eq!(vis.triangle_count(), 2 + 1, "the plane's two and one copy");
+        assert!(!vis.is_flat() && vis.light_warnings(&same).is_empty());
+        // the first copy casts nothing, the others do: the one kept casts
+        assert!(vis.occluded(under, light) && !vis.occluded(beside, light));
+        // the camera sees the first copy (the plane's two triangles come first)
+        let (_, t) = vis.closest_hit(Vec3::new(0.01, 2.0, -0.1), down, 5.0).unwrap();
+        assert_eq!(t, 2);
+        // a direction with negative zeros hits as its positive twin (it missed everything)
+        for o in [Vec3::new(0.2, 2.0, 0.7), Vec3::new(0.0, 2.0, -0.1)] {
+            assert_eq!(
+                vis.closest_hit(o, -Vec3::Y, 5.0),
+                vis.closest_hit(o, Vec3::new(0.0, -1.0, 0.0), 5.0)
+            );
+            assert!(vis.closest_hit(o, -Vec3::Y, 5.0).is_some());
+            assert!(vis.occluded(Vec3::new(o.x, 1.5, o.z), Vec3::new(o.x, -1.0, o.z)));
+        }
+        // copies 1e-7 apart: distinct, and a tree too deep for the traversal
+        let near = scene(3000, 1e-7);
+        let vis = Visibility::new(&near);
+        assert_eq!(vis.triangle_count(), 2 + 3000);
+        assert!(vis.is_flat(), "a BVH of depth {}", vis.bvh.as_ref().map_or(0, bvh_depth));
+        assert!(vis.occluded(under, light) && !vis.occluded(beside, light));
+        let (_, t) = vis.closest_hit(Vec3::new(0.01, 2.0, -0.1), down, 5.0).unwrap();
+        assert!((2..3002).contains(&t), "{t}");
+        let w = vis.light_warnings(&near);
+        assert!(
+            w.len() == 1 && w[0].contains("could not be arranged in a BVH of at most 31 levels"),
+            "{w:?}"
+        );
     }
 
     /// A triangle light is sampled uniformly over its area: the right triangle x, z >= 0,
