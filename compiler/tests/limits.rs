@@ -522,3 +522,53 @@ fn lets_read_twice_by_the_next_check_in_linear_time_and_memory() {
     assert_eq!(got.matches("non-separable term").count(), 1, "{got}");
     assert!(got.contains("used through this binding"), "{got}");
 }
+
+/// The functions of a WGSL module and the `let`s each declares, in order.
+fn lets_per_function(wgsl: &str) -> Vec<(String, usize)> {
+    let mut out: Vec<(String, usize)> = Vec::new();
+    for line in wgsl.lines() {
+        let t = line.trim_start();
+        if let Some(rest) = t.strip_prefix("fn ") {
+            out.push((rest.split('(').next().unwrap_or("").to_string(), 0));
+        } else if t.starts_with("let ")
+            && let Some(f) = out.last_mut()
+        {
+            f.1 += 1;
+        }
+    }
+    out
+}
+
+#[test]
+fn series_inside_if_arms_compile_in_linear_time() {
+    // Issue 48, item 4: one 4,096-term series in each of sixteen `if` arms took 10 s to
+    // check in a release build (each arm's lets in the entry's arena, which naga's WGSL
+    // front end types in quadratic time), and the same series in both arms of one `if`
+    // 3.9 s here (codegen walked the shared chain again at each of its terms). Long arms
+    // are now split into functions as long bodies are, and codegen walks each node once.
+    let series = "sum(k in 0..=4095, f32(k) * d)";
+    let arms: Vec<String> = (0..8)
+        .map(|i| format!("let a{i} = if d > 0.{} {{ {series} }} else {{ 0.0 }};", i + 1))
+        .collect();
+    let total: Vec<String> = (0..8).map(|i| format!("a{i}")).collect();
+    for visibility in [
+        format!("{} select(0.0, 1.0, {} <= nearest(z))", arms.join(" "), total.join(" + ")),
+        format!("let a = if d > 0.5 {{ {series} }} else {{ {series} * 0.5 }}; select(0.0, 1.0, a <= nearest(z))"),
+    ] {
+        let src = technique(&visibility);
+        let t = Instant::now();
+        let c = sshc::compile_str(&src, &sshc::CompileOptions::default()).unwrap_or_else(|e| panic!("{}", e.render("t.ron", &src)));
+        let took = t.elapsed();
+        let shade = &c.shaders.iter().find(|(f, _)| f.ends_with("shade.wgsl")).expect("a shade module").1;
+        // no function holds more than a small share of the lets: the entry keeps two per
+        // part (its call and its result) where it held every term of every arm
+        let per = lets_per_function(shade);
+        let all: usize = per.iter().map(|f| f.1).sum();
+        let most = per.into_iter().max_by_key(|f| f.1).unwrap();
+        assert!(all > 8000 && most.1 * 16 < all, "{} declares {} of {all} lets", most.0, most.1);
+        assert!(shade.contains("_part1_f("), "split into parts");
+        // 0.2 s (both arms) and 1.8 s (eight arms) in this crate's build; the bound is for
+        // a loaded machine, and under what the quadratic forms took
+        assert!(took < Duration::from_secs(8), "took {took:?}");
+    }
+}

@@ -300,8 +300,8 @@ fn same_bits(a: &[f32], b: &[f32], what: &str) {
     }
 }
 
-/// Long bodies are emitted as functions (`sshc::back::parts`: naga's WGSL front end is
-/// quadratic in a function's expressions). Split at every fifth `let` here, every bundled
+/// Long bodies, and long arms of branches, are emitted as functions (`sshc::back::parts`:
+/// naga's WGSL front end is quadratic in a function's expressions). Split at every fifth `let` here, every bundled
 /// technique's passes run as chains of small functions, and the visibility is the same, bit
 /// for bit: the split moves code into functions that the shader compiler inlines, in the
 /// same order, so no rounding may differ.
@@ -309,7 +309,7 @@ fn same_bits(a: &[f32], b: &[f32], what: &str) {
 fn bodies_split_into_functions_compute_the_same_visibility() {
     let gpu = gpu();
     let tiny = sshc::back::parts::Split { max_run: 4, part: 3 };
-    let mut split_passes = 0;
+    let (mut split_passes, mut split_arms) = (0, 0);
     for t in bundled("techniques") {
         let src = std::fs::read_to_string(root().join("techniques").join(format!("{t}.ron"))).unwrap();
         let whole = compile(&t, &[]);
@@ -321,6 +321,17 @@ fn bodies_split_into_functions_compute_the_same_visibility() {
         let parts = split.shaders.iter().filter(|(_, s)| s.contains("_part1_f(")).count();
         assert!(parts >= 1, "{t}: no pass was split");
         split_passes += parts;
+        // an arm of a branch split into functions of its own: `ENTRY_eN{t,f}_part1_f`
+        split_arms += split
+            .shaders
+            .iter()
+            .filter(|(_, s)| {
+                s.split("_part1_f(").any(|before| {
+                    let arm = before.trim_end_matches(['t', 'f']);
+                    arm.len() < before.len() && arm.trim_end_matches(|c: char| c.is_ascii_digit()).ends_with("_e")
+                })
+            })
+            .count();
         // the same operation counts: a called function counts at its call site
         assert_eq!(whole.cost.passes, split.cost.passes, "{t}");
         let sc = if sshc_lab::bind::graph_samples(&whole.graph) > 0 {
@@ -333,6 +344,8 @@ fn bodies_split_into_functions_compute_the_same_visibility() {
         same_bits(&a.visibility.channel(0), &b.visibility.channel(0), &format!("{t} on {sc}"));
     }
     assert!(split_passes >= 13, "{split_passes} split passes");
+    // VSSM's branches (issue 48, item 4: long arms are split as long bodies are)
+    assert!(split_arms >= 1, "no arm of a branch was split");
 }
 
 /// The compute schedule of Map, Filter and Mipmap passes (`--schedule *=compute`): every

@@ -32,6 +32,10 @@ pub(crate) enum Site {
     Receiver,
 }
 
+/// Stands for the entry's name in the functions a long arm is split into, until
+/// [`Emitter::finish`] knows it (entries of one module have different names).
+const ARM_ENTRY: &str = "sshc_arm_of_entry";
+
 /// Emits straight-line WGSL for a set of expression roots.
 pub(crate) struct Emitter<'a> {
     ir: &'a Program<'a>,
@@ -43,6 +47,12 @@ pub(crate) struct Emitter<'a> {
     /// Where long bodies are split into functions.
     pub(crate) split: Split,
     names: HashMap<ExprId, String>,
+    /// The WGSL type of every `let` and branch `var` emitted, by name (names are unique in
+    /// an entry): what a split arm's functions take as arguments from the enclosing scope.
+    let_types: HashMap<String, &'static str>,
+    /// Functions long arms were split into ([`Self::branch`]), named with [`ARM_ENTRY`]
+    /// for the entry's name, which [`Self::finish`] puts in.
+    arm_functions: String,
     fetches: HashMap<String, String>,
     /// Textures this module reads: (name, binding).
     pub(crate) bindings: Vec<(String, View)>,
@@ -77,6 +87,8 @@ impl<'a> Emitter<'a> {
             roots: Default::default(),
             split: Split::default(),
             names: HashMap::new(),
+            let_types: HashMap::new(),
+            arm_functions: String::new(),
             fetches: HashMap::new(),
             bindings: vec![],
             tables: vec![],
@@ -121,6 +133,7 @@ impl<'a> Emitter<'a> {
     }
 
     fn let_line(&mut self, name: &str, ty: &'static str, rhs: String) {
+        self.let_types.insert(name.to_string(), ty);
         self.body.push(Line::Let {
             name: name.to_string(),
             ty,
@@ -131,7 +144,14 @@ impl<'a> Emitter<'a> {
     /// The body's text and the functions it calls (long bodies are split: `back::parts`).
     /// `entry` names the entry point.
     pub(crate) fn finish(&self, entry: &str) -> (String, String) {
-        parts::split(&self.body, entry, &self.roots, self.split)
+        let (functions, body) = parts::split(&self.body, entry, &self.roots, self.split, &|_| None);
+        if self.arm_functions.is_empty() {
+            return (functions, body);
+        }
+        (
+            format!("{}{functions}", self.arm_functions).replace(ARM_ENTRY, entry),
+            body.replace(ARM_ENTRY, entry),
+        )
     }
 
     fn input(&mut self, i: Input) -> String {
@@ -171,7 +191,7 @@ impl<'a> Emitter<'a> {
     /// taken is emitted here: each arm's own operations go inside the `if` ([`Self::branch`]).
     fn emit_at(&mut self, root: ExprId) -> Result<(), Diagnostic> {
         let a = &self.ir.arena;
-        let order: Vec<ExprId> = a.postorder(&[root]).into_iter().filter(|h| !self.names.contains_key(h)).collect();
+        let order: Vec<ExprId> = a.postorder_until(&[root], |h| self.names.contains_key(&h));
         let branches = order.iter().any(|h| matches!(a.node(*h), Node::Call(Func::Branch, _)));
         let here = if branches { Some(self.unconditional(root)) } else { None };
         for h in order {
@@ -210,9 +230,9 @@ impl<'a> Emitter<'a> {
         let implicit = |h: &ExprId| matches!(a.node(*h), Node::Sample { how: SampleFn::Sample, .. });
         let mut stack: Vec<ExprId> = vec![root];
         stack.extend(
-            a.postorder(&[root])
+            a.postorder_until(&[root], |h| self.names.contains_key(&h))
                 .into_iter()
-                .filter(|h| !self.names.contains_key(h) && implicit(h)),
+                .filter(implicit),
         );
         let mut out = std::collections::HashSet::new();
         while let Some(h) = stack.pop() {
@@ -233,9 +253,10 @@ impl<'a> Emitter<'a> {
     /// are scoped to it, and forgotten after).
     fn branch(&mut self, h: ExprId, f: ExprId, t: ExprId, c: ExprId) -> Result<(), Diagnostic> {
         let a = &self.ir.arena;
-        let reach = |x: ExprId| -> std::collections::HashSet<ExprId> { a.postorder(&[x]).into_iter().collect() };
+        let named = |h: ExprId| self.names.contains_key(&h);
+        let reach = |x: ExprId| -> std::collections::HashSet<ExprId> { a.postorder_until(&[x], named).into_iter().collect() };
         let (in_t, in_f) = (reach(t), reach(f));
-        for s in a.postorder(&[t, f]) {
+        for s in a.postorder_until(&[t, f], named) {
             if in_t.contains(&s) && in_f.contains(&s) && !self.names.contains_key(&s) {
                 self.emit_at(s)?;
             }
@@ -243,16 +264,29 @@ impl<'a> Emitter<'a> {
         let name = format!("e{}", h.index());
         let ty = a.ty(h).wgsl();
         let mut text = format!("var {name}: {ty};\nif {} {{\n", self.n(c));
-        for (arm, x) in [("} else {\n", t), ("}\n", f)] {
+        for (side, arm, x) in [("t", "} else {\n", t), ("f", "}\n", f)] {
             let saved = (std::mem::take(&mut self.body), self.names.clone(), self.fetches.clone());
             self.emit_at(x)?;
             let value = self.names[&x].clone();
             let lines = std::mem::replace(&mut self.body, saved.0);
             (self.names, self.fetches) = (saved.1, saved.2);
-            text.push_str(&parts::indented(&lines));
+            // a long arm is split into functions as a long body is (`back::parts`): naga
+            // types an arm's expressions in its function's arena, so sixteen arms of a
+            // 4,096-term series each took 10 s to parse (issue 48, item 4)
+            let types = &self.let_types;
+            let (functions, body) = parts::split(
+                &lines,
+                &format!("{ARM_ENTRY}_{name}{side}"),
+                &std::collections::HashSet::from([value.clone()]),
+                self.split,
+                &|id| types.get(id).copied(),
+            );
+            self.arm_functions.push_str(&functions);
+            text.push_str(&body);
             let _ = writeln!(text, "    {name} = {value};");
             text.push_str(arm);
         }
+        self.let_types.insert(name.clone(), ty);
         self.body.push(Line::Branch {
             name: name.clone(),
             ty,
