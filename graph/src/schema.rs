@@ -141,7 +141,10 @@ pub const TEXEL_WORKGROUP: u32 = 8;
 pub const GBUFFER: [Format; 3] = [Format::Rgba32Float, Format::Rg32Float, Format::Rgba16Float];
 
 /// The four camera outputs of a Shade pass, in the order of [`Draw::SceneFromCamera`]'s
-/// targets and [`Draw::ComputePixels`]'s bindings.
+/// targets and [`Draw::ComputePixels`]'s bindings: the visibility (finite, in [0, 1]), the
+/// shaded colour, the world position (w = 1 on a surface) and the normal turned to the
+/// camera, whose w is 1 where the technique's visibility at a receiver facing the light
+/// was not a finite number (written as 1 for NaN, clamped for an infinity), else 0.
 pub const CAMERA_OUTPUTS: [Format; 4] = [Format::R32Float, Format::Rgba8Unorm, Format::Rgba32Float, Format::Rgba16Float];
 
 /// The most debug outputs a Shade pass writes besides [`CAMERA_OUTPUTS`]: a forward Shade

@@ -1346,3 +1346,50 @@ fn two_truth_commands_at_once_compute_the_truth_once_and_share_it() {
     assert!(!claim.exists(), "the claim taken over is released");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 48, item 6: a visibility expression that is NaN, or infinite, at the receivers
+/// facing the light is reported and the image refused; lavapipe folded the Shade's
+/// `raw != raw` test away and drew NaN as 0 (shadowed) with exit 0. The hard shadow of the
+/// same scene renders.
+#[test]
+fn a_visibility_that_is_not_a_number_is_reported_not_drawn_as_shadow() {
+    let dir = temp_dir("nan");
+    let png = dir.join("r.png");
+    for (name, visibility, want) in [
+        ("nan", "sqrt(-1.0 - d)", "not a finite number (NaN or infinite)"),
+        ("inf", "1.0 / (d - d)", "not a finite number (NaN or infinite)"),
+        ("finite", "select(0.0, 1.0, d - 0.001 <= nearest(z))", ""),
+    ] {
+        let t = dir.join(format!("{name}.ron"));
+        std::fs::write(
+            &t,
+            format!(
+                r#"Technique(name: "{name}", channels: {{ "z": Channel(precision: F32) }},
+    passes: [Depth(name: "depth", writes: "shadow", channel: "z"),
+        Shade(name: "shade", reads: ["shadow"], visibility: "{visibility}")])"#
+            ),
+        )
+        .unwrap();
+        let args = [
+            "render",
+            t.to_str().unwrap(),
+            "--scene",
+            "scenes/contact.ron",
+            "--size",
+            "16x16",
+            "-o",
+            png.to_str().unwrap(),
+        ];
+        let out = sshc(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if want.is_empty() {
+            assert!(out.status.success(), "{name}: {stderr}");
+        } else {
+            assert!(
+                !out.status.success() && stderr.contains(want) && stderr.contains("at pixel ("),
+                "{name}: {stderr}"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -57,6 +57,28 @@ pub fn check_visibility(values: &[f32], width: u32, pass: &str) -> Result<()> {
     }
 }
 
+/// Refuses a frame where the technique's visibility expression was not a finite number at
+/// a receiver facing the light: `flags` is the Shade's normal output's w, 1 there (the
+/// visibility written there is finite, so [`check_visibility`] cannot see it).
+pub fn check_finite_visibility(flags: &[f32], width: u32, pass: &str) -> Result<()> {
+    let count = flags.iter().filter(|&&f| f > 0.5).count();
+    match flags.iter().position(|&f| f > 0.5) {
+        None => Ok(()),
+        Some(i) => {
+            let w = width.max(1) as usize;
+            Err(RuntimeError::Output {
+                pass: pass.to_string(),
+                message: format!(
+                    "the visibility expression is not a finite number (NaN or infinite) at pixel ({}, {}) and {} more pixel(s) facing the light (drawn lit where NaN, clamped where infinite); look for a division by zero, or the log or square root of a negative number; the image is refused",
+                    i % w,
+                    i / w,
+                    count - 1
+                ),
+            })
+        }
+    }
+}
+
 /// Read a UTF-8 file of at most `cap` bytes, and only a regular file (after links): a FIFO,
 /// a device or anything else is refused before it is opened for reading, and the read is
 /// bounded, so a file that grows past the cap is refused too.
@@ -1214,6 +1236,10 @@ impl Executor {
         let img = read_back(&self.gpu, &b.camera[which as usize], 0, 0, w, h, format)?;
         if which == CameraOutput::Visibility {
             check_visibility(&img.channel(0), w, self.shade_name())?;
+            // the Shade wrote a finite visibility where the technique's was not: the
+            // normal's w says where (`graph::CAMERA_OUTPUTS`)
+            let normal = read_back(&self.gpu, &b.camera[CameraOutput::Normal as usize], 0, 0, w, h, Format::Rgba16Float)?;
+            check_finite_visibility(&normal.channel(3), w, self.shade_name())?;
         }
         Ok(img)
     }

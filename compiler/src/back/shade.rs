@@ -161,16 +161,24 @@ pub(crate) fn shade(
     };
     let outputs = |store: &dyn Fn(&str, &str) -> String| {
         format!(
-            "    // outputs stay finite and in [0, 1]; a receiver facing away from the light's centre
-    // is shadowed by its own surface
+            "    // outputs stay finite and in [0, 1]: NaN is drawn lit, an infinity clamped; a
+    // receiver facing away from the light's centre is shadowed by its own surface. NaN and
+    // the infinities are told from the bits (all exponent bits set): `raw != raw` is
+    // folded to false by drivers that assume no NaN (lavapipe drew NaN as 0). The normal's
+    // w is 1 where a receiver facing the light got a value that is not finite, for the
+    // host to report (`sshc_graph::CAMERA_OUTPUTS`)
     let raw = {v};
-    let vis = select(select(clamp(raw, 0.0, 1.0), 1.0, raw != raw), 0.0, in_ndotl <= 0.0);
+    let raw_bits = bitcast<u32>(raw);
+    let raw_special = (raw_bits & 0x7f800000u) == 0x7f800000u;
+    let raw_nan = raw_special && (raw_bits & 0x007fffffu) != 0u;
+    let vis = select(select(clamp(raw, 0.0, 1.0), 1.0, raw_nan), 0.0, in_ndotl <= 0.0);
+    let not_finite = select(0.0, 1.0, raw_special && in_ndotl > 0.0);
     let lambert = max(in_ndotl, 0.0);
 {}{}{}{}{}",
             store("visibility", "vec4<f32>(vis, 0.0, 0.0, 1.0)"),
             store("color", graph::SHADE_COLOR_WGSL),
             store("position", "vec4<f32>(in.world, 1.0)"),
-            store("normal", "vec4<f32>(n, 0.0)"),
+            store("normal", "vec4<f32>(n, not_finite)"),
             debug.iter().map(|(name, value, _)| store(name, value)).collect::<String>(),
         )
     };
