@@ -23,10 +23,18 @@ pub fn scene_inputs(scene: &Scene) -> Result<SceneInputs, String> {
 /// file has it, and an instance per node with the node's matrix (`moves: false`: placed
 /// once, at upload); every other object a mesh of its triangles listed out, in world space.
 /// Casting objects first, in file order, then the others, as [`scene_inputs`] lists the
-/// soup. `None` when no object shares meshes (the soup is then what is bound).
+/// soup. `None` when no object shares meshes, or when the placements would exceed
+/// [`sshc_runtime::gpu::MAX_INSTANCES`] (the soup is then what is bound).
 pub fn scene_geometry(scene: &Scene) -> Option<Geometry> {
     let n = scene.objects().len();
     if !(0..n).any(|i| scene.instancing(i).is_some()) {
+        return None;
+    }
+    // past the runtime's bound on instances a geometry is refused at bind; the soup (the
+    // same triangles, already placed in world space) draws the same pixels with more
+    // memory (issue 48, item 13: 70,000 nodes of one mesh failed to bind)
+    let placements: usize = (0..n).map(|i| scene.instancing(i).map_or(1, |inst| inst.instances.len())).sum();
+    if placements > sshc_runtime::gpu::MAX_INSTANCES {
         return None;
     }
     let order = (0..n).filter(|&i| scene.casts(i)).chain((0..n).filter(|&i| !scene.casts(i)));

@@ -185,9 +185,15 @@ fn run(cli: Cli) -> Result<(), String> {
             if triangles as usize > limit {
                 return Err(format!("error: `--triangles {triangles}` is above the scene limit of {limit}"));
             }
+            if triangles == 0 {
+                return Err("error: `--triangles 0`: a city has a ground and at least one tower; ask for 1 or more".into());
+            }
             let bytes = sshc_lab::scene::generate::city_glb(triangles as usize, seed);
-            std::fs::write(&out, &bytes).map_err(|e| format!("error: cannot write `{}`: {e}", out.display()))?;
-            let scene = sshc_lab::scene::Scene::load(&out).map_err(|e| e.to_string())?;
+            // read back before writing: the last tower may carry the count past the limit,
+            // and a file the scene loader refuses is not written (issue 48, item 16)
+            let scene = sshc_lab::scene::Scene::from_gltf_slice(&bytes)
+                .map_err(|e| format!("error: `--triangles {triangles}`: the city drawn would be refused: {e}; ask for fewer"))?;
+            sshc_lab::session::write_new(&out, &bytes)?;
             let (nodes, meshes) = scene.placements();
             println!(
                 "wrote {}: {} triangles, {nodes} nodes placing {meshes} meshes, {} bytes",

@@ -1393,3 +1393,49 @@ fn a_visibility_that_is_not_a_number_is_reported_not_drawn_as_shadow() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Issue 48, item 16: `--camera` takes the scene file's own syntax (`near: 0.01`, an
+/// implicit `Some`, was refused); a `--light` inside the geometry is warned about as the
+/// scene file's lights are (it was not); `sshc scene city` refuses a count it would write
+/// a file the loader refuses for (the last tower carried 2^24 past the limit) and a count
+/// of 0, writing nothing.
+#[test]
+fn camera_and_light_overrides_and_the_city_generator_are_checked_as_scene_files_are() {
+    let dir = temp_dir("overrides");
+    let png = dir.join("r.png");
+    let png = png.to_str().unwrap();
+    let base = [
+        "render",
+        "techniques/pcf.ron",
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "16x16",
+        "-o",
+        png,
+    ];
+    let camera = "Perspective(position: (0.3, 2.4, 3.6), target: (0.1, 0.3, -0.4), fov_y_degrees: 45.0, width: 16, height: 16, near: 0.01)";
+    let mut args = base.to_vec();
+    args.extend(["--camera", camera]);
+    ok(&args);
+    // a sphere light inside the resting box
+    let mut args = base.to_vec();
+    args.extend(["--light", "Sphere(center: (-0.8, 0.4, 0.0), radius: 0.1)"]);
+    let out = sshc(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("warning: --light: lights[0]") && stderr.contains("objects[1] (\"resting\")"),
+        "{stderr}"
+    );
+    for (n, want) in [
+        ("0", "`--triangles 0`: a city has a ground and at least one tower"),
+        ("16777216", "`--triangles 16777216`: the city drawn would be refused"),
+    ] {
+        let glb = dir.join(format!("city-{n}.glb"));
+        let out = sshc(&["scene", "city", "--triangles", n, "-o", glb.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && stderr.contains(want), "{n}: {stderr}");
+        assert!(!glb.exists(), "{n}: a file was written");
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -518,3 +518,29 @@ fn an_f32_table_is_its_cpu_emulation_bit_for_bit_and_within_the_stated_bound() {
         assert!(worst <= stated, "{k} x {k}: {worst} above the stated bound {stated}");
     }
 }
+
+/// Issue 48, item 13: a valid glTF of more instances of one mesh than the runtime binds
+/// (`MAX_INSTANCES`, 65,536) failed at bind with no fallback; such a scene binds its soup
+/// (the triangles the importer placed) and renders.
+#[test]
+fn more_instances_than_the_runtime_binds_fall_back_to_the_soup() {
+    use sshc_lab::scene::generate::instances_glb;
+    let copies = sshc_runtime::gpu::MAX_INSTANCES + 10;
+    let dir = std::env::temp_dir().join(format!("sshc-instances-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("many.glb"), instances_glb(copies)).unwrap();
+    let scene = Scene::from_str(
+        "Scene(camera: Perspective(position: (-20.0, 60.0, -20.0), target: (128.0, 0.0, 128.0), fov_y_degrees: 60.0, width: 32, height: 32),
+               shadow_map: 256, lights: [Directional(direction: (0.3, 1.0, 0.2))],
+               objects: [Object(mesh: Plane(size: (600.0, 600.0))), Object(mesh: Gltf(path: \"many.glb\"))])",
+        &dir,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.triangles().len(), 2 + copies);
+    assert!(scene.instancing(1).is_some(), "the importer keeps the instancing");
+    assert!(sshc_lab::bind::scene_geometry(&scene).is_none(), "bound as a soup");
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
+    let pixels = render(&gpu, "hard", &scene);
+    assert!(pixels.len() > 500, "the camera sees {} pixels", pixels.len());
+    let _ = std::fs::remove_dir_all(&dir);
+}

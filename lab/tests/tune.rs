@@ -423,7 +423,7 @@ fn shard_args(out: &Path, shard: Option<&str>) -> Vec<String> {
         "1",
         "--no-cache",
         "--wait",
-        "120",
+        "30",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -457,7 +457,16 @@ fn two_shards_share_each_rung_and_choose_as_one_process() {
             .spawn()
             .expect("sshc starts")
     };
-    let (s0, s1) = (spawn("0/2"), spawn("1/2"));
+    // shard 1 starts once shard 0 has measured: it finds part of the first batch done, and
+    // must still take its own part of it (it dealt what was left, took shard 0's, and both
+    // waited out `--wait`: 138 s in a loaded suite run)
+    let s0 = spawn("0/2");
+    let first = two.join("records-0-of-2.ron");
+    let start = std::time::Instant::now();
+    while std::fs::read_to_string(&first).map_or(0, |t| t.lines().count()) == 0 && start.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let s1 = spawn("1/2");
     let (o0, o1) = (s0.wait_with_output().unwrap(), s1.wait_with_output().unwrap());
     let text = |o: &Output| format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(
@@ -466,6 +475,13 @@ fn two_shards_share_each_rung_and_choose_as_one_process() {
         text(&o0),
         text(&o1)
     );
+    for o in [&o0, &o1] {
+        assert!(
+            !text(o).contains("not measured by the other shards"),
+            "a shard waited out --wait:\n{}",
+            text(o)
+        );
+    }
     assert!(text(&o1).contains("shard 0 writes the outputs"), "{}", text(&o1));
     // each measured a part
     for r in ["records-0-of-2.ron", "records-1-of-2.ron"] {

@@ -662,3 +662,52 @@ fn the_viewer_draws_the_cascades_and_refits_them_as_the_camera_moves() {
     let viewer = renders_as_logged(&dir, shots[1], 160 * 120);
     assert!(viewer.iter().any(|v| *v < 0.5), "no shadow in view");
 }
+
+/// Issue 48, item 16: a `WaitCompiled` with nothing to compile never ended, and a texture
+/// the graph has not was shown as nothing: the first fails after `--wait-limit` seconds
+/// saying what it waited for, the second at once, naming the graph's textures.
+#[test]
+fn a_wait_for_nothing_ends_and_an_unknown_texture_is_named() {
+    let dir = temp_dir("waits");
+    let log = dir.join("log.jsonl");
+    let run = |script: &str, limit: &str| {
+        let script = write_script(&dir, script);
+        let (script, logp) = (script.display().to_string(), log.display().to_string());
+        view(&[
+            "techniques/vsm.ron",
+            "--scene",
+            "scenes/contact.ron",
+            "--size",
+            "64x64",
+            "--shadow-map",
+            "128",
+            "--script",
+            &script,
+            "--log",
+            &logp,
+            "--wait-limit",
+            limit,
+        ])
+    };
+    let start = Instant::now();
+    let (ok, text) = run("[WaitReady, WaitCompiled]", "2");
+    assert!(
+        !ok && text.contains("waited 2 s (--wait-limit) for WaitCompiled: a compilation's answer"),
+        "{text}"
+    );
+    assert!(start.elapsed() < Duration::from_secs(60), "took {:?}", start.elapsed());
+    let (ok, text) = run(
+        "[WaitReady, Show(Texture(name: \"no-such\", layer: 0, level: 0, channel: 0, lo: 0.0, hi: 1.0, map: Viridis))]",
+        "60",
+    );
+    assert!(
+        !ok && text.contains("the graph has no texture `no-such`; it has ") && text.contains("moments"),
+        "{text}"
+    );
+    let (ok, text) = run("[LightSize(light: 0, size: NaN)]", "60");
+    assert!(
+        !ok && text.contains("event 0") && text.contains("a light's size is a finite number >= 0"),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

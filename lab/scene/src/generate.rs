@@ -205,6 +205,35 @@ pub fn soup_glb(triangles: &[[Vec3; 3]], normals: &[[Vec3; 3]]) -> Vec<u8> {
     glb(&root, bin)
 }
 
+/// One small triangle placed by `copies` nodes on a square grid of unit spacing over the
+/// ground (no ground, camera or light: a scene file adds them), as GLB: a scene of many
+/// instances of one mesh.
+pub fn instances_glb(copies: usize) -> Vec<u8> {
+    let tri = [[0.0f32, 0.0, 0.0], [0.4, 0.0, 0.0], [0.0, 0.4, 0.0]];
+    let mut bin: Vec<u8> = tri.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let split = bin.len();
+    bin.extend([[0.0f32, 0.0, 1.0]; 3].iter().flatten().flat_map(|x| x.to_le_bytes()));
+    let side = (copies as f64).sqrt().ceil().max(1.0) as usize;
+    let nodes: Vec<serde_json::Value> = (0..copies)
+        .map(|k| json!({"mesh": 0, "translation": [(k % side) as f32, 0.5, (k / side) as f32]}))
+        .collect();
+    let root = json!({
+        "asset": {"version": "2.0", "generator": "sshc instances_glb"},
+        "nodes": nodes,
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [0.4, 0.4, 0.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"},
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": split},
+            {"buffer": 0, "byteOffset": split, "byteLength": bin.len() - split},
+        ],
+        "buffers": [{"byteLength": bin.len()}],
+    });
+    glb(&root, bin)
+}
+
 /// A GLB container (glTF 2.0 section 4.4) around `json` and one binary chunk, written by
 /// the `gltf` crate (which pads both chunks to 4 bytes and sets the lengths).
 pub fn glb(json: &serde_json::Value, bin: Vec<u8>) -> Vec<u8> {

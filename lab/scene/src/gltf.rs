@@ -178,7 +178,7 @@ pub(crate) fn import(bytes: &[u8], file: &str, folders: Option<(&Path, &Path)>) 
     let share = placed.len() > meshes_used && placed.iter().all(|(_, world, _)| Mat3::from_mat4(*world).determinant() > 0.0);
     let mut instancing = Instancing::default();
     let mut shared: Vec<Option<usize>> = vec![None; doc.meshes().len()];
-    for (mesh, world, _node) in &placed {
+    for (mesh, world, node) in &placed {
         let slot = &mut decoded[mesh.index()];
         if slot.is_none() {
             let (prims, skip) = decode_mesh(mesh, &buffers, file)?;
@@ -186,7 +186,22 @@ pub(crate) fn import(bytes: &[u8], file: &str, folders: Option<(&Path, &Path)>) 
             *slot = Some(prims);
         }
         let Some(prims) = slot.as_ref() else { continue };
+        let before = triangles.len();
         place_node(prims, world, &mut triangles, &mut normals);
+        // a finite matrix can still carry a finite position past f32 (a scale of 1e30 on a
+        // corner at 1e10)
+        if let Some(t) = triangles[before..].iter().position(|t| !t.iter().all(|p| p.is_finite())) {
+            return Err(fail(
+                file,
+                format_args!(
+                    "{} places triangle {t} of mesh {} outside f32's range (a corner at {:?})",
+                    node_label(&doc, *node),
+                    mesh.index(),
+                    triangles[before + t]
+                ),
+                "scale the node or the mesh down",
+            ));
+        }
         if share {
             let k = *shared[mesh.index()].get_or_insert_with(|| {
                 instancing.meshes.push(shared_mesh(mesh, prims));
@@ -303,6 +318,15 @@ fn traverse<'a>(
             ));
         }
         let world = if parent == Mat4::IDENTITY { local } else { parent * local };
+        if !world.is_finite() {
+            // each factor finite, their product not: two nested scales of 1e20 (issue 48,
+            // item 7, placed NaN and infinite triangles and drew an empty, all-lit image)
+            return Err(fail(
+                file,
+                format_args!("{name}'s world transform (its parents' times its own) overflows f32"),
+                "scale the nodes so that their product stays within about 1e38",
+            ));
+        }
         if let Some(mesh) = node.mesh() {
             meshes.push((mesh, world, i));
         }
@@ -318,6 +342,11 @@ fn traverse<'a>(
         stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
     Ok((meshes, camera, lights))
+}
+
+/// [`node_name`] of node `i` of `doc`.
+fn node_label(doc: &gltf::Document, i: usize) -> String {
+    doc.nodes().nth(i).map_or_else(|| format!("node {i}"), |n| node_name(&n))
 }
 
 fn node_name(node: &gltf::Node) -> String {
@@ -931,6 +960,34 @@ mod tests {
             // a turn by 90 degrees in f32 (cos is 4e-8, not 0), scaled by 2: a few ulps of 3
             assert!(got.distance(want) < 4.0 * f32::EPSILON * 3.0, "{tri:?} against {want:?}");
         }
+    }
+
+    /// Issue 48, item 7: two nested scales of 1e20 multiply past f32 (each finite), and a
+    /// finite scale of 1e30 carries a corner past it: both are refused naming the node,
+    /// where they placed NaN and infinite triangles and drew an empty, all-lit image.
+    #[test]
+    fn transforms_that_overflow_f32_are_refused_naming_the_node() {
+        let nested = json!({
+            "scenes": [{"nodes": [0]}],
+            "nodes": [
+                {"name": "outer", "children": [1], "scale": [1e20, 1e20, 1e20]},
+                {"name": "inner", "mesh": 0, "scale": [1e20, 1e20, 1e20]},
+            ],
+        });
+        let e = Scene::from_gltf_slice(&with_buffer(nested, &TRIANGLE, &[0, 1, 2]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("inner") && e.contains("world transform (its parents' times its own) overflows f32"),
+            "{e}"
+        );
+        let far = json!({
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"name": "far", "mesh": 0, "scale": [1e30, 1e30, 1e30]}],
+        });
+        let big = [1e10f32, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0];
+        let e = Scene::from_gltf_slice(&with_buffer(far, &big, &[0, 1, 2])).unwrap_err().to_string();
+        assert!(e.contains("far") && e.contains("outside f32's range"), "{e}");
     }
 
     /// A mesh placed by two nodes is read once and placed twice; the scene says so.

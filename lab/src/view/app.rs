@@ -4,7 +4,7 @@
 use super::ViewArgs;
 use super::present::{Part, Pick, Present};
 use super::refine::{Estimate, Refiner};
-use super::script::{Event, Log};
+use super::script::{self, Event, Log};
 use super::state::{self, ColourMap, Mode, Orbit, ViewState};
 use super::worker::{self, Answer, Controls, Watch, Worker};
 use crate::image_io::ImageFiles as _;
@@ -130,6 +130,8 @@ struct App {
     answers: u64,
     wait_answers: Option<u64>,
     wait_truth: Option<u32>,
+    /// When the wait for a compilation or the truth began (bounded by `--wait-limit`).
+    wait_since: Option<Instant>,
     log: Log,
     watch: Option<Watch>,
     mouse: Mouse,
@@ -224,6 +226,7 @@ impl App {
             answers: 0,
             wait_answers: None,
             wait_truth: None,
+            wait_since: None,
             log,
             watch: None,
             mouse: Mouse::default(),
@@ -498,7 +501,20 @@ impl App {
                 self.state.schedules.insert(pass, value);
                 self.recompile();
             }
-            Event::Show(m) => self.state.mode = m,
+            Event::Show(m) => {
+                if let (Mode::Texture { name, .. }, Some(ex)) = (&m, &self.ex)
+                    && ex.graph.texture(name).is_none()
+                    && !ex.debug_outputs().iter().any(|o| o.texture == *name)
+                {
+                    let mut known: Vec<String> = ex.graph.textures.iter().map(|t| t.name.clone()).collect();
+                    known.extend(ex.debug_outputs().into_iter().map(|o| o.texture));
+                    return Err(format!(
+                        "error: Show: the graph has no texture `{name}`; it has {}",
+                        known.join(", ")
+                    ));
+                }
+                self.state.mode = m;
+            }
             Event::Split(split) => {
                 self.state.split = split;
                 self.watch_files();
@@ -615,6 +631,25 @@ impl App {
 
     /// Run the script until it must wait.
     fn step_script(&mut self) -> Result<(), String> {
+        let waiting_for = if self.wait_truth.is_some() {
+            Some("WaitTruth: the truth's rounds")
+        } else if self.wait_answers.is_some() {
+            Some(
+                "WaitCompiled: a compilation's answer (it waits for the next one asked for: a save, an Edit, a Precision, a Schedule or a fixed param's Set; WaitReady waits for one in flight)",
+            )
+        } else if self.wait_ready {
+            Some("WaitReady: the compilation in flight")
+        } else {
+            None
+        };
+        match (waiting_for, self.wait_since) {
+            (None, _) => self.wait_since = None,
+            (Some(_), None) => self.wait_since = Some(Instant::now()),
+            (Some(what), Some(t)) if t.elapsed().as_secs() >= self.args.wait_limit => {
+                return Err(format!("error: waited {} s (--wait-limit) for {what}", self.args.wait_limit));
+            }
+            _ => {}
+        }
         if let Some(n) = self.wait_truth {
             if self.truth_stale || self.truth.as_ref().is_none_or(|t| t.rounds < n) {
                 return Ok(());

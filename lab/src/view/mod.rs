@@ -50,6 +50,10 @@ pub struct ViewArgs {
     /// diagnostics, each screenshot with the view's state.
     #[arg(long)]
     pub log: Option<PathBuf>,
+    /// The longest a script's `WaitReady`, `WaitCompiled` or `WaitTruth` waits, in seconds,
+    /// before the script fails saying what it waited for.
+    #[arg(long, value_name = "SECONDS", default_value_t = script::MAX_WAIT_SECONDS, value_parser = clap::value_parser!(u64).range(1..=86_400))]
+    pub wait_limit: u64,
 }
 
 /// What to install for a display, for the message shown without one.

@@ -692,14 +692,19 @@ impl Tuner<'_> {
             return;
         }
         let key = |c: &Candidate| (self.entries[c.technique].label.clone(), c.describe(), rung);
-        let todo: Vec<&Candidate> = cands
-            .iter()
-            .filter(|c| !self.done.borrow().contains_key(&key(c)) && self.skip(c, time_limit).is_none())
-            .collect();
-        for c in todo.iter().skip(i).step_by(n) {
+        // the parts are dealt over the whole batch, not over what is left of it: a shard
+        // that reaches the batch later finds some of the others' part done already, and
+        // dealing what was left gave it other parts than theirs (both then waited `--wait`
+        // seconds for configurations neither would measure)
+        let batch: Vec<&Candidate> = cands.iter().filter(|c| self.skip(c, time_limit).is_none()).collect();
+        for c in batch.iter().skip(i).step_by(n) {
+            if self.done.borrow().contains_key(&key(c)) {
+                continue;
+            }
             // a failure is a record too: every shard reads it
             let _ = self.measure(c, rung);
         }
+        let todo: Vec<&Candidate> = batch.into_iter().filter(|c| !self.done.borrow().contains_key(&key(c))).collect();
         let start = Instant::now();
         let mut said = false;
         loop {

@@ -354,7 +354,7 @@ fn tier_name(k: usize, n: usize) -> &'static str {
 /// budget is met by no configuration, naming the closest.
 pub(crate) fn write(t: &Tuner, tiers: &[(f64, Plan, Found)]) -> Result<(), String> {
     let out = &t.a.out;
-    write_new(&out.join("tune.csv"), &csv(t, tiers))?;
+    write_new(&out.join("tune.csv"), csv(t, tiers))?;
     let mut md = String::new();
     let _ = writeln!(md, "# sshc tune\n");
     let _ = writeln!(md, "Command: `{}`\n", command_line());
