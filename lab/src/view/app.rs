@@ -4,7 +4,7 @@
 use super::ViewArgs;
 use super::present::{Part, Pick, Present};
 use super::refine::{Estimate, Refiner};
-use super::script::{self, Event, Log};
+use super::script::{Event, Log};
 use super::state::{self, ColourMap, Mode, Orbit, ViewState};
 use super::worker::{self, Answer, Controls, Watch, Worker};
 use crate::image_io::ImageFiles as _;
