@@ -426,17 +426,28 @@ fn resolve_dump(sym: &resolve::Symbols) -> String {
 /// Write the outputs of `sshc compile` into `dir`: WGSL files, `<name>.graph.ron`, `<name>.cost.md`.
 pub fn write_outputs(c: &Compiled, dir: &Path) -> std::io::Result<Vec<std::path::PathBuf>> {
     std::fs::create_dir_all(dir)?;
+    // what stands at an output's name must be a regular file: a link planted in the
+    // output folder is refused, not written through (issue 48, item 15)
+    let write = |p: &Path, text: &str| -> std::io::Result<()> {
+        match std::fs::symlink_metadata(p) {
+            Ok(m) if !m.is_file() => Err(std::io::Error::other(format!(
+                "`{}` exists and is not a regular file: refusing to write through it",
+                p.display()
+            ))),
+            _ => std::fs::write(p, text),
+        }
+    };
     let mut written = Vec::new();
     for (file, src) in &c.shaders {
         let p = dir.join(file);
-        std::fs::write(&p, src)?;
+        write(&p, src)?;
         written.push(p);
     }
     let g = dir.join(format!("{}.graph.ron", c.graph.technique));
-    std::fs::write(&g, c.graph.to_ron())?;
+    write(&g, &c.graph.to_ron())?;
     written.push(g);
     let cost = dir.join(format!("{}.cost.md", c.graph.technique));
-    std::fs::write(&cost, c.cost.markdown(&c.graph.technique))?;
+    write(&cost, &c.cost.markdown(&c.graph.technique))?;
     written.push(cost);
     Ok(written)
 }

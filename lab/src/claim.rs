@@ -97,7 +97,12 @@ impl Claim {
     pub fn beat(&mut self) -> std::io::Result<()> {
         self.beats += 1;
         let tmp = self.path.with_extension(format!("{}.beat", process_tag()));
-        std::fs::write(&tmp, format!("{}\nbeat={}\n", self.owner, self.beats))?;
+        // created exclusively: a link planted under the temporary name in a shared cache
+        // is refused, not written through
+        let _ = std::fs::remove_file(&tmp);
+        let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(&tmp)?;
+        std::io::Write::write_all(&mut f, format!("{}\nbeat={}\n", self.owner, self.beats).as_bytes())?;
+        drop(f);
         std::fs::rename(&tmp, &self.path)
     }
 }

@@ -1,6 +1,7 @@
 //! Writing the runtime's read-back [`Image`]s to files: PFM (float) and 8-bit PNG. The
 //! codecs live here, in the lab, so that the executor carries none.
 
+use crate::session::write_new;
 use sshc_runtime::gpu::{Image, Result, RuntimeError};
 use std::path::Path;
 
@@ -59,13 +60,9 @@ impl ImageFiles for Image {
                 None => [0, 0, 0],
             })
             .collect();
-        ::image::RgbImage::from_raw(self.width, self.height, buf)
-            .ok_or_else(|| RuntimeError::NotFound("image size mismatch".into()))?
-            .save(path)
-            .map_err(|e| RuntimeError::File {
-                path: path.to_path_buf(),
-                message: e.to_string(),
-            })?;
+        let img = ::image::RgbImage::from_raw(self.width, self.height, buf)
+            .ok_or_else(|| RuntimeError::NotFound("image size mismatch".into()))?;
+        crate::session::save_image(&img, path).map_err(file_error(path))?;
         Ok(range)
     }
 
@@ -78,41 +75,44 @@ impl ImageFiles for Image {
             };
             (t.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
         };
-        let err = |e: ::image::ImageError| RuntimeError::File {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        };
+        let mismatch = || RuntimeError::NotFound("image size mismatch".into());
         match c {
             Some(c) => {
                 let buf: Vec<u8> = self.rgba.iter().map(|p| scale(p[c])).collect();
-                ::image::GrayImage::from_raw(self.width, self.height, buf)
-                    .ok_or_else(|| RuntimeError::NotFound("image size mismatch".into()))?
-                    .save(path)
-                    .map_err(err)
+                let img = ::image::GrayImage::from_raw(self.width, self.height, buf).ok_or_else(mismatch)?;
+                crate::session::save_image(&img, path).map_err(file_error(path))
             }
             None => {
                 let buf: Vec<u8> = self.rgba.iter().flat_map(|p| [scale(p[0]), scale(p[1]), scale(p[2])]).collect();
-                ::image::RgbImage::from_raw(self.width, self.height, buf)
-                    .ok_or_else(|| RuntimeError::NotFound("image size mismatch".into()))?
-                    .save(path)
-                    .map_err(err)
+                let img = ::image::RgbImage::from_raw(self.width, self.height, buf).ok_or_else(mismatch)?;
+                crate::session::save_image(&img, path).map_err(file_error(path))
             }
         }
     }
 }
 
-fn write_pfm(path: &Path, w: u32, h: u32, color: bool, data: Vec<f32>) -> Result<()> {
-    let file_error = |message: String| RuntimeError::File {
+/// A writer's message as the runtime's file error on `path`.
+fn file_error(path: &Path) -> impl Fn(String) -> RuntimeError + '_ {
+    move |message| RuntimeError::File {
         path: path.to_path_buf(),
-        message,
-    };
+        message: message.trim_start_matches("error: ").to_string(),
+    }
+}
+
+fn write_pfm(path: &Path, w: u32, h: u32, color: bool, data: Vec<f32>) -> Result<()> {
+    write_new(path, &pfm_bytes(w, h, color, data).map_err(file_error(path))?).map_err(file_error(path))
+}
+
+/// A PFM file's bytes (rows top first in `data`).
+pub fn pfm_bytes(w: u32, h: u32, color: bool, data: Vec<f32>) -> std::result::Result<Vec<u8>, String> {
     let pfm = pxm::PFMBuilder::new()
         .size(w as usize, h as usize)
         .color(color)
         .scale(-1.0)
         .data(data)
         .build()
-        .map_err(|e| file_error(e.to_string()))?;
-    let mut f = std::fs::File::create(path).map_err(|e| file_error(e.to_string()))?;
-    pfm.write_into(&mut f).map_err(|e| file_error(e.to_string()))
+        .map_err(|e| e.to_string())?;
+    let mut bytes = Vec::new();
+    pfm.write_into(&mut bytes).map_err(|e| e.to_string())?;
+    Ok(bytes)
 }

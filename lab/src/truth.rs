@@ -215,9 +215,9 @@ impl Truth {
         let bytes = self.visibility.iter().map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8).collect();
         let img = image::GrayImage::from_raw(self.width, self.height, bytes)
             .ok_or_else(|| TruthError::Input("the truth's size does not match its data".into()))?;
-        img.save(path).map_err(|e| TruthError::Io {
+        crate::session::save_image(&img, path).map_err(|e| TruthError::Io {
             path: path.to_path_buf(),
-            message: e.to_string(),
+            message: e.trim_start_matches("error: ").to_string(),
         })
     }
 }
@@ -231,17 +231,11 @@ pub fn write_pfm_gray(path: &Path, width: u32, height: u32, data: &[f32]) -> Res
             data.len()
         )));
     }
-    let pfm = pxm::PFMBuilder::new()
-        .size(width as usize, height as usize)
-        .color(false)
-        .scale(-1.0)
-        .data(data.to_vec())
-        .build()
+    let bytes = crate::image_io::pfm_bytes(width, height, false, data.to_vec())
         .map_err(|e| TruthError::Input(format!("cannot write {}: {e}", path.display())))?;
-    let mut f = std::fs::File::create(path).map_err(io_error(path))?;
-    pfm.write_into(&mut f).map_err(|e| TruthError::Io {
+    crate::session::write_new(path, bytes).map_err(|e| TruthError::Io {
         path: path.to_path_buf(),
-        message: e.to_string(),
+        message: e.trim_start_matches("error: ").to_string(),
     })
 }
 

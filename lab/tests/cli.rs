@@ -1439,3 +1439,104 @@ fn camera_and_light_overrides_and_the_city_generator_are_checked_as_scene_files_
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Issue 48, item 15: no command writes through a link planted where its output goes.
+/// Each output of each command gets a link to a file outside the output folder; the
+/// command refuses, naming the link, and the file outside is as it was.
+#[test]
+fn no_command_writes_through_a_link_planted_at_its_output() {
+    let dir = temp_dir("links");
+    let outside = dir.join("outside.txt");
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let p = |name: &str| out.join(name).to_str().unwrap().to_string();
+    let scene = ["--scene", "scenes/contact.ron", "--size", "8x8"];
+    let truth = ["--samples", "4", "--runs", "2", "--no-cache"];
+    // (the command, the output it plants a link at)
+    let runs: Vec<(Vec<String>, String)> = vec![
+        (
+            ["render", "techniques/hard.ron"]
+                .iter()
+                .chain(&scene)
+                .map(|s| s.to_string())
+                .chain(["-o".into(), p("r.png")])
+                .collect(),
+            p("r.png"),
+        ),
+        (
+            ["render", "techniques/hard.ron"]
+                .iter()
+                .chain(&scene)
+                .map(|s| s.to_string())
+                .chain(["-o".into(), p("r2.png"), "--visibility".into(), p("v.pfm")])
+                .collect(),
+            p("v.pfm"),
+        ),
+        (
+            ["render", "techniques/vsm.ron"]
+                .iter()
+                .chain(&scene)
+                .map(|s| s.to_string())
+                .chain(["-o".into(), p("r3.png"), "--dump".into(), p("dump")])
+                .collect(),
+            p("dump/visibility.pfm"),
+        ),
+        (
+            ["truth"]
+                .iter()
+                .chain(&scene)
+                .chain(&truth)
+                .map(|s| s.to_string())
+                .chain(["-o".into(), p("t.pfm")])
+                .collect(),
+            p("t.png"),
+        ),
+        (
+            ["compare", "techniques/hard.ron"]
+                .iter()
+                .chain(&scene)
+                .chain(&truth)
+                .map(|s| s.to_string())
+                .chain(["-o".into(), p("c.png")])
+                .collect(),
+            p("c.png"),
+        ),
+        (
+            ["compile", "techniques/hard.ron", "-o", &p("compiled")]
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            p("compiled/hard.graph.ron"),
+        ),
+        (
+            ["scene", "city", "--triangles", "100", "-o", &p("city.glb")]
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            p("city.glb"),
+        ),
+    ];
+    for (args, link) in runs {
+        std::fs::write(&outside, "kept").unwrap();
+        let link = Path::new(&link);
+        std::fs::create_dir_all(link.parent().unwrap()).unwrap();
+        let _ = std::fs::remove_file(link);
+        std::os::unix::fs::symlink(&outside, link).unwrap();
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = sshc(&refs);
+        let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        assert!(
+            !o.status.success() && text.contains("is not a regular file"),
+            "sshc {}: {text}",
+            args.join(" ")
+        );
+        assert_eq!(
+            std::fs::read_to_string(&outside).unwrap(),
+            "kept",
+            "sshc {} wrote through the link",
+            args.join(" ")
+        );
+        std::fs::remove_file(link).unwrap();
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -239,8 +239,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
         ("signed error (technique - truth)", error),
     ];
     let img = composite(&panels, &figures)?;
-    img.save(&a.out)
-        .map_err(|e| format!("error: cannot write `{}`: {e}", a.out.display()))?;
+    crate::session::save_image(&img, &a.out)?;
     println!("wrote {}", a.out.display());
     for l in describe(&truth, &source) {
         println!("{l}");

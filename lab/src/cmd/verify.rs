@@ -193,14 +193,12 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
             let path = dir.join(format!("{}-{}.png", r.input, r.camera));
             // at least 128 screen pixels per panel
             let scale = 128u32.div_ceil(r.camera.max(1)).max(1);
-            r.picture(scale)
-                .save(&path)
-                .map_err(|e| format!("error: cannot write `{}`: {e}", path.display()))?;
+            crate::session::save_image(&r.picture(scale), &path)?;
         }
         println!("wrote {} pictures to {}", rows.len(), dir.display());
     }
     if let Some(out) = &args.out {
-        std::fs::write(out, &table).map_err(|e| format!("error: cannot write `{}`: {e}", out.display()))?;
+        crate::session::write_new(out, &table)?;
     }
     let bad: Vec<String> = rows
         .iter()

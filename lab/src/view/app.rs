@@ -534,7 +534,7 @@ impl App {
                 if !text.contains(&from) {
                     return Err(format!("error: Edit: `{from}` is not in {}", path.display()));
                 }
-                std::fs::write(&path, text.replacen(&from, &to, 1)).map_err(|e| format!("error: cannot write {}: {e}", path.display()))?;
+                crate::session::write_new(&path, text.replacen(&from, &to, 1))?;
                 self.saved_at = Some(Instant::now());
             }
             Event::Screenshot(p) => self.screenshot = Some(p),
@@ -1305,7 +1305,7 @@ fn write_png(
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("error: {}: {e}", dir.display()))?;
     }
-    img.save(path).map_err(|e| format!("error: cannot write {}: {e}", path.display()))
+    crate::session::save_image(&img, path)
 }
 
 /// The visibility beside a screenshot: `NAME.visibility.pfm`, as `sshc render --visibility`

@@ -114,7 +114,10 @@ pub struct Log {
 impl Log {
     pub fn open(path: Option<&Path>) -> Result<Log, String> {
         let file = path
-            .map(|p| std::fs::File::create(p).map_err(|e| format!("error: cannot write `{}`: {e}", p.display())))
+            .map(|p| {
+                crate::session::writable(p)?;
+                std::fs::File::create(p).map_err(|e| format!("error: cannot write `{}`: {e}", p.display()))
+            })
             .transpose()?;
         Ok(Log { file })
     }

@@ -368,18 +368,20 @@ pub(crate) fn chart(
     plotters::style::register_font(FONT, FontStyle::Normal, epaint_default_fonts::HACK_REGULAR)
         .map_err(|_| "error: the bundled font cannot be read".to_string())?;
     if svg {
-        let root = SVGBackend::new(path, size).into_drawing_area();
-        draw(&root, pts, mark, x_label, y_label, title, FONT)
+        let mut text = String::new();
+        {
+            let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+            draw(&root, pts, mark, x_label, y_label, title, FONT)?;
+        }
+        crate::session::write_new(path, text)
     } else {
         let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
         {
             let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
             draw(&root, pts, mark, x_label, y_label, title, FONT)?;
         }
-        image::RgbImage::from_raw(size.0, size.1, buf)
-            .ok_or_else(|| "error: chart buffer of the wrong size".to_string())?
-            .save(path)
-            .map_err(|e| format!("error: {}: {e}", path.display()))
+        let img = image::RgbImage::from_raw(size.0, size.1, buf).ok_or_else(|| "error: chart buffer of the wrong size".to_string())?;
+        crate::session::save_image(&img, path)
     }
 }
 

@@ -328,6 +328,7 @@ pub fn read_records(dir: &Path, repair: bool, m: &Manifest) -> Result<(Done, boo
                 path.display()
             ));
         }
+        crate::session::writable(&path)?;
         let f = std::fs::OpenOptions::new().write(true).open(&path).map_err(io(&path))?;
         f.set_len(whole as u64).map_err(io(&path))?;
     }
@@ -385,11 +386,7 @@ pub struct Log {
 impl Log {
     pub fn open(dir: &Path) -> Result<Log, String> {
         let path = dir.join(RECORDS);
-        let file = std::fs::OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(&path)
-            .map_err(io(&path))?;
+        let file = crate::session::append_to(&path)?;
         Ok(Log { path, file })
     }
 

@@ -750,14 +750,7 @@ impl Tuner<'_> {
         let path = self.a.out.join(records_name(self.a.shard));
         let mut log = self.log.borrow_mut();
         if log.is_none() {
-            report::writable(&path)?;
-            *log = Some(
-                std::fs::OpenOptions::new()
-                    .create(true)
-                    .append(true)
-                    .open(&path)
-                    .map_err(|e| format!("error: {}: {e}", path.display()))?,
-            );
+            *log = Some(crate::session::append_to(&path)?);
         }
         let line = ron::to_string(r).map_err(|e| format!("error: a record: {e}"))?;
         if let Some(f) = log.as_mut() {

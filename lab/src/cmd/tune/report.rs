@@ -292,8 +292,7 @@ fn error_images(t: &Tuner, ch: &Chosen) -> Result<(), String> {
         let img = crate::metrics::error_image(&r.visibility, &truth.visibility, Some(&truth.facing), w, h, range)
             .map_err(|e| format!("error: {e}"))?;
         let p = t.a.out.join(name);
-        writable(&p)?;
-        img.save(&p).map_err(|e| format!("error: cannot write `{}`: {e}", p.display()))?;
+        crate::session::save_image(&img, &p)?;
     }
     Ok(())
 }
