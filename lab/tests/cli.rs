@@ -1540,3 +1540,43 @@ fn no_command_writes_through_a_link_planted_at_its_output() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Issue 48, item 14: a scene of 12 M triangles under a 4 GB address-space cap
+/// (`ulimit -v`) was read until an allocation failed (the BVH builder panicked at 2^24);
+/// it is refused before its triangles are decoded, with the memory it needs and what
+/// bounds what is available.
+#[test]
+fn a_scene_larger_than_the_memory_available_is_refused_before_it_is_built() {
+    let dir = temp_dir("memory");
+    std::fs::write(dir.join("big.glb"), sshc_lab::scene::generate::city_glb(12_000_000, 1)).unwrap();
+    std::fs::write(
+        dir.join("big.ron"),
+        r#"Scene(camera: Perspective(position: (-6.0, 5.0, 15.0), target: (1.0, 0.0, 2.0), fov_y_degrees: 50.0, width: 8, height: 8),
+                 shadow_map: 64, lights: [DistantDisk(direction: (0.77, 0.342, 0.54), angle_degrees: 0.53)],
+                 objects: [Object(mesh: Gltf(path: "big.glb"))])"#,
+    )
+    .unwrap();
+    let script = format!(
+        "ulimit -v 4000000 && exec '{}' render techniques/hard.ron --scene '{}' -o '{}'",
+        env!("CARGO_BIN_EXE_sshc"),
+        dir.join("big.ron").display(),
+        dir.join("big.png").display()
+    );
+    let start = std::time::Instant::now();
+    let o = Command::new("bash")
+        .args(["-c", &script])
+        .current_dir(root())
+        .env("LP_NUM_THREADS", "2")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("triangles need about")
+            && stderr.contains("the address-space limit (ulimit -v) leaves")
+            && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+    assert!(start.elapsed().as_secs() < 30, "took {:?}", start.elapsed());
+    let _ = std::fs::remove_dir_all(dir);
+}

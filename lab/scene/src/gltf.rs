@@ -166,6 +166,8 @@ pub(crate) fn import(bytes: &[u8], file: &str, folders: Option<(&Path, &Path)>) 
             ));
         }
     }
+    // the memory the placed triangles will take, before any is decoded
+    crate::memory::check(planned).map_err(|why| fail(file, why, "use a coarser scene, or a machine with more memory"))?;
 
     let mut decoded: Vec<Option<Vec<Primitive>>> = vec![None; doc.meshes().len()];
     let mut skipped = 0usize;

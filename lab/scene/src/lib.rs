@@ -48,6 +48,7 @@
 mod error;
 pub mod generate;
 mod gltf;
+pub mod memory;
 mod mesh;
 mod scene;
 mod schema;

@@ -190,6 +190,11 @@ impl Scene {
                 ));
             }
         }
+        // the memory the analytic meshes (and what is already read) will take, before any
+        // is built
+        let read: usize = built.iter().flatten().map(|m| m.triangles.len()).sum();
+        crate::memory::check(planned.saturating_add(read))
+            .map_err(|why| SceneError::invalid("objects", why, "use coarser meshes, or a machine with more memory"))?;
         let mut triangles = Vec::new();
         let mut normals = Vec::new();
         let mut object_triangles = Vec::with_capacity(desc.objects.len());
