@@ -425,6 +425,23 @@ pub fn check_cascades(scene: &Scene, c: &Cascading) -> Result<(), String> {
     if !(0.0..1.0).contains(&r.band) {
         return Err(format!("error: `--cascade-band {}`: a fraction of a slice, in [0, 1)", r.band));
     }
+    if let Some(o) = c.cascade_offset {
+        // the camera the cascades are fitted to, moved: within a thousand scene sizes of
+        // where it was (farther, the cascades fit nothing of the scene, and at 1e30 the
+        // fit overflowed and was reported as light 0's non-finite matrix)
+        let (lo, hi) = scene.bounds();
+        let size = (hi - lo).length().max(1.0);
+        let len = o.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>().sqrt();
+        if !(len <= 1000.0 * f64::from(size)) {
+            let num = |x: f32| if x.abs() >= 1e6 { format!("{x:e}") } else { x.to_string() };
+            return Err(format!(
+                "error: `--cascade-offset {},{},{}`: moves the camera the cascades are fitted to by {len:.3e}, more than 1000 times the scene's size ({size:.3})",
+                num(o[0]),
+                num(o[1]),
+                num(o[2])
+            ));
+        }
+    }
     if n > 1 {
         if scene.lights.len() != 1 {
             return Err(format!(

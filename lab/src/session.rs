@@ -209,7 +209,9 @@ impl Overrides {
         let path = scene;
         let mut scene = load_scene(path, self.size, self.shadow_map)?;
         if let Some(c) = &self.camera {
-            scene.set_camera(c.clone()).map_err(|e| format!("error: --camera: {e}"))?;
+            scene
+                .set_camera(c.clone())
+                .map_err(|e| format!("error: --camera: {}", e.describe()))?;
             if let Some((w, h)) = self.size {
                 scene.set_camera_size(w, h);
             }
@@ -217,7 +219,7 @@ impl Overrides {
         for (i, l) in self.light.iter().enumerate() {
             scene
                 .set_light(i, l.clone())
-                .map_err(|e| format!("error: --light (light {i}): {e}"))?;
+                .map_err(|e| format!("error: --light (light {i}): {}", e.describe()))?;
         }
         if self.camera.is_some() || !self.light.is_empty() {
             scene.check_precision().map_err(|e| format!("error: {e}"))?;

@@ -741,8 +741,23 @@ pub fn compute_cached(
             }
             CacheLookup::Unreadable(_) => {}
         }
-        std::fs::create_dir_all(&cache.dir).map_err(io_error(&cache.dir))?;
-        match Claim::try_take(&claim_path).map_err(io_error(&claim_path))? {
+        // a cache that cannot be written is left out, said once, and the truth computed
+        // without it (it ended the run with a bare OS error; issue 48, item 17)
+        let uncached = |why: String| -> Result<(Truth, Source), TruthError> {
+            note(&format!(
+                "warning: the truth cache cannot be written ({why}): computing without it (pass --no-cache, or --cache DIR with a writable folder)"
+            ));
+            let vis = Visibility::new(scene);
+            Ok((compute(scene, &vis, points, settings, progress)?, Source::Computed(None)))
+        };
+        if let Err(e) = std::fs::create_dir_all(&cache.dir) {
+            return uncached(format!("{}: {e}", cache.dir.display()));
+        }
+        let attempt = match Claim::try_take(&claim_path) {
+            Ok(a) => a,
+            Err(e) => return uncached(format!("{}: {e}", claim_path.display())),
+        };
+        match attempt {
             Attempt::Taken(claim) => {
                 // stored between the look-up and the claim: read it
                 if let CacheLookup::Hit(t) = cache.load(key) {
@@ -750,10 +765,19 @@ pub fn compute_cached(
                 }
                 let (truth, claim) = compute_beating(scene, points, settings, progress, claim, cache.stale_after / 4);
                 let truth = truth?;
-                let stored = cache.store(key, &truth)?;
+                // a record that cannot be stored leaves the truth computed: kept, and said
+                let stored = match cache.store(key, &truth) {
+                    Ok(p) => Some(p),
+                    Err(e) => {
+                        note(&format!(
+                            "warning: the truth was computed but cannot be cached ({e}); it is used as computed (pass --no-cache to skip the cache)"
+                        ));
+                        None
+                    }
+                };
                 // released once the record is in place: a waiter reads it next
                 drop(claim);
-                return Ok((truth, Source::Computed(Some(stored))));
+                return Ok((truth, Source::Computed(stored)));
             }
             Attempt::Held(text) => {
                 if watch.is_stale(&text) {

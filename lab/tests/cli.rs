@@ -1580,3 +1580,134 @@ fn a_scene_larger_than_the_memory_available_is_refused_before_it_is_built() {
     assert!(start.elapsed().as_secs() < 30, "took {:?}", start.elapsed());
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Issue 48, item 17: messages that named the wrong thing. A bad `--camera` read
+/// "error: --camera: <scene>: error: ..."; `--cascade-offset 1e30,0,0` was "light 0: a
+/// matrix ... is not finite"; a glTF corner at 3e38 was blamed on the camera, a `yfov` in
+/// radians reported as `fov_y_degrees`; a glTF in a subfolder naming `../sub2.bin`, inside
+/// the scene's folder, was "leaving the folder"; a cache folder that cannot be written
+/// ended the run with a bare OS error, the computed truth lost.
+#[test]
+fn messages_name_the_option_the_file_and_the_unit_at_fault() {
+    let dir = temp_dir("messages");
+    let png = dir.join("r.png");
+    let png = png.to_str().unwrap();
+    let fails = |args: &[&str]| -> String {
+        let o = sshc(args);
+        let e = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(!o.status.success(), "sshc {} succeeded: {e}", args.join(" "));
+        e
+    };
+    let e = fails(&[
+        "render",
+        "techniques/hard.ron",
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "8x8",
+        "-o",
+        png,
+        "--camera",
+        "Perspective(position: (0.0, 2.0, 4.0), target: (0.0, 2.0, 4.0), fov_y_degrees: 40.0, width: 8, height: 8)",
+    ]);
+    assert!(
+        e.contains("error: --camera: the camera looks at its own position") && !e.contains("<scene>"),
+        "{e}"
+    );
+    assert_eq!(e.matches("error:").count(), 1, "{e}");
+    let e = fails(&[
+        "render",
+        "techniques/csm.ron",
+        "--scene",
+        "scenes/triangle.ron",
+        "--size",
+        "8x8",
+        "-o",
+        png,
+        "--cascades",
+        "2",
+        "--cascade-offset",
+        "1e30,0,0",
+    ]);
+    assert!(
+        e.contains("`--cascade-offset 1e30,0,0`: moves the camera the cascades are fitted to"),
+        "{e}"
+    );
+    // glTF files: a triangle with a corner at `corner`, a camera of `yfov` radians
+    let gltf = |name: &str, corner: f32, yfov: f32, uri: &str| {
+        let floats: Vec<f32> = vec![corner, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0];
+        let mut bin: Vec<u8> = floats.iter().flat_map(|x| x.to_le_bytes()).collect();
+        bin.extend([0u32, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+        let doc = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "scenes": [{{"nodes": [0, 1]}}], "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0, 0, 5]}}],
+               "cameras": [{{"type": "perspective", "perspective": {{"yfov": {yfov}, "znear": 0.1}}}}],
+               "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+               "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [{corner}, 1, 1]}},
+                             {{"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"}}],
+               "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 12}}],
+               "buffers": [{{"byteLength": 48, "uri": "{uri}"}}]}}"#
+        );
+        let path = dir.join(name);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, doc).unwrap();
+        (path, bin)
+    };
+    let render = |scene: &Path| -> std::process::Output {
+        sshc(&[
+            "render",
+            "techniques/hard.ron",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--size",
+            "8x8",
+            "-o",
+            png,
+        ])
+    };
+    let (huge, bin) = gltf("huge.gltf", 3e38, 0.8, "huge.bin");
+    std::fs::write(dir.join("huge.bin"), &bin).unwrap();
+    let e = String::from_utf8_lossy(&render(&huge).stderr).into_owned();
+    assert!(
+        e.contains("the placed triangles span from") && e.contains("overflow f32") && !e.contains("camera (Perspective)"),
+        "{e}"
+    );
+    let (wide, bin) = gltf("wide.gltf", 1.0, 3.5, "wide.bin");
+    std::fs::write(dir.join("wide.bin"), &bin).unwrap();
+    let e = String::from_utf8_lossy(&render(&wide).stderr).into_owned();
+    assert!(e.contains("camera 0's yfov is 3.5 radians (200.5 degrees), outside (0, pi)"), "{e}");
+    // a scene file beside `sub2.bin`, naming `sub/x.gltf`, whose buffer is `../sub2.bin`
+    let (_, bin) = gltf("sub/x.gltf", 1.0, 0.8, "../sub2.bin");
+    std::fs::write(dir.join("sub2.bin"), &bin).unwrap();
+    std::fs::write(
+        dir.join("s.ron"),
+        r#"Scene(camera: Perspective(position: (0.5, 2.0, 3.0), target: (0.3, 0.3, 0.3), fov_y_degrees: 40.0, width: 8, height: 8),
+                 shadow_map: 64, lights: [Point(position: (0.0, 3.0, 1.0))], objects: [Object(mesh: Gltf(path: "sub/x.gltf"))])"#,
+    )
+    .unwrap();
+    let o = render(&dir.join("s.ron"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // a cache folder below a file: warned, and the truth computed and written
+    std::fs::write(dir.join("a-file"), "").unwrap();
+    let t = dir.join("t.pfm");
+    let o = sshc(&[
+        "truth",
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "8x8",
+        "--samples",
+        "4",
+        "--runs",
+        "2",
+        "--cache",
+        dir.join("a-file/cache").to_str().unwrap(),
+        "-o",
+        t.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && e.contains("the truth cache cannot be written") && e.contains("--no-cache") && t.exists(),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

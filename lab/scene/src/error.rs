@@ -88,6 +88,20 @@ impl SceneError {
     pub fn at(&self) -> Option<&str> {
         self.0.at.as_deref()
     }
+    /// The message with its `at` and `hint` lines, without the file: for a value that
+    /// came from somewhere else than a file (a command-line option), which the caller
+    /// names.
+    pub fn describe(&self) -> String {
+        let mut s = self.0.message.clone();
+        if let Some(at) = &self.0.at {
+            s.push_str(&format!("\n  at: {at}"));
+        }
+        if let Some(hint) = &self.0.hint {
+            s.push_str(&format!("\n  hint: {hint}"));
+        }
+        s
+    }
+
     /// What is wrong.
     pub fn message(&self) -> &str {
         &self.0.message

@@ -212,6 +212,21 @@ pub(crate) fn import(bytes: &[u8], file: &str, folders: Option<(&Path, &Path)>) 
             instancing.instances.push((k, world.to_cols_array()));
         }
     }
+    // the scene's extent must stay a finite f32 distance: a corner at 3e38 overflowed
+    // where the camera and the light are placed from the bounds, and was blamed on them
+    let (lo, hi) = triangles
+        .iter()
+        .flatten()
+        .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
+    if !triangles.is_empty() && !((hi - lo).length_squared().is_finite() && lo.is_finite() && hi.is_finite()) {
+        return Err(fail(
+            file,
+            format_args!("the placed triangles span from {lo} to {hi}: distances across them overflow f32"),
+            "scale the scene down: keep coordinates well within 1e18",
+        ));
+    }
     let mesh = MeshData {
         triangles,
         normals: Some(normals),
@@ -823,6 +838,19 @@ fn map_camera(camera: &gltf::Camera, world: &Mat4, node: usize, file: &str) -> R
     };
     Ok(match camera.projection() {
         gltf::camera::Projection::Perspective(p) => {
+            // glTF's yfov is in radians: said so here, not as the scene format's degrees
+            let yfov = p.yfov();
+            if !(yfov.is_finite() && yfov > 0.0 && yfov < std::f32::consts::PI) {
+                return Err(fail(
+                    file,
+                    format_args!(
+                        "camera {}'s yfov is {yfov} radians ({:.1} degrees), outside (0, pi)",
+                        camera.index(),
+                        yfov.to_degrees()
+                    ),
+                    "write `yfov` in radians, such as 0.8 (46 degrees)",
+                ));
+            }
             let (width, height) = size(p.aspect_ratio().unwrap_or(1.0));
             Camera::Perspective {
                 position,

@@ -56,14 +56,23 @@ pub(crate) fn resolve_inside(rel: &str, base: &Path) -> Result<PathBuf, SceneErr
     if p.is_absolute() || p.has_root() {
         return Err(escape("is absolute"));
     }
+    // `..` is taken lexically: a path that climbs and comes back down inside the folder
+    // (`sub/../sub2.bin`, a glTF in `sub/` naming `../sub2.bin`) stays inside; one that
+    // climbs above the folder leaves it
+    let mut inside = PathBuf::new();
     for c in p.components() {
         match c {
-            Component::Normal(_) | Component::CurDir => {}
-            Component::ParentDir => return Err(escape("leaves the scene's folder (`..`)")),
+            Component::Normal(n) => inside.push(n),
+            Component::CurDir => {}
+            Component::ParentDir => {
+                if !inside.pop() {
+                    return Err(escape("leaves the scene's folder (`..`)"));
+                }
+            }
             Component::RootDir | Component::Prefix(_) => return Err(escape("is absolute")),
         }
     }
-    let joined = base.join(p);
+    let joined = base.join(&inside);
     let canon_base = base.canonicalize().map_err(|e| {
         SceneError::new(
             SceneErrorKind::Io,
