@@ -220,7 +220,8 @@ pub(crate) fn import(bytes: &[u8], file: &str, folders: Option<(&Path, &Path)>) 
         .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| {
             (lo.min(*p), hi.max(*p))
         });
-    if !triangles.is_empty() && !((hi - lo).length_squared().is_finite() && lo.is_finite() && hi.is_finite()) {
+    let spans = (hi - lo).length_squared().is_finite() && lo.is_finite() && hi.is_finite();
+    if !triangles.is_empty() && !spans {
         return Err(fail(
             file,
             format_args!("the placed triangles span from {lo} to {hi}: distances across them overflow f32"),
