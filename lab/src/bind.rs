@@ -432,7 +432,7 @@ pub fn check_cascades(scene: &Scene, c: &Cascading) -> Result<(), String> {
         let (lo, hi) = scene.bounds();
         let size = (hi - lo).length().max(1.0);
         let len = o.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>().sqrt();
-        if !(len <= 1000.0 * f64::from(size)) {
+        if !len.is_finite() || len > 1000.0 * f64::from(size) {
             let num = |x: f32| if x.abs() >= 1e6 { format!("{x:e}") } else { x.to_string() };
             return Err(format!(
                 "error: `--cascade-offset {},{},{}`: moves the camera the cascades are fitted to by {len:.3e}, more than 1000 times the scene's size ({size:.3})",
