@@ -1,7 +1,7 @@
 //! Writing the runtime's read-back [`Image`]s to files: PFM (float) and 8-bit PNG. The
 //! codecs live here, in the lab, so that the executor carries none.
 
-use crate::session::write_new;
+use crate::files::write_new;
 use sshc_runtime::gpu::{Image, Result, RuntimeError};
 use std::path::Path;
 
@@ -62,7 +62,7 @@ impl ImageFiles for Image {
             .collect();
         let img = ::image::RgbImage::from_raw(self.width, self.height, buf)
             .ok_or_else(|| RuntimeError::NotFound("image size mismatch".into()))?;
-        crate::session::save_image(&img, path).map_err(file_error(path))?;
+        crate::files::save_image(&img, path).map_err(file_error(path))?;
         Ok(range)
     }
 
@@ -80,12 +80,12 @@ impl ImageFiles for Image {
             Some(c) => {
                 let buf: Vec<u8> = self.rgba.iter().map(|p| scale(p[c])).collect();
                 let img = ::image::GrayImage::from_raw(self.width, self.height, buf).ok_or_else(mismatch)?;
-                crate::session::save_image(&img, path).map_err(file_error(path))
+                crate::files::save_image(&img, path).map_err(file_error(path))
             }
             None => {
                 let buf: Vec<u8> = self.rgba.iter().flat_map(|p| [scale(p[0]), scale(p[1]), scale(p[2])]).collect();
                 let img = ::image::RgbImage::from_raw(self.width, self.height, buf).ok_or_else(mismatch)?;
-                crate::session::save_image(&img, path).map_err(file_error(path))
+                crate::files::save_image(&img, path).map_err(file_error(path))
             }
         }
     }

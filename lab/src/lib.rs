@@ -11,6 +11,7 @@
 pub mod bind;
 pub mod claim;
 pub mod cmd;
+pub mod files;
 pub mod image_io;
 pub mod metrics;
 pub mod session;

@@ -215,7 +215,7 @@ impl Truth {
         let bytes = self.visibility.iter().map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8).collect();
         let img = image::GrayImage::from_raw(self.width, self.height, bytes)
             .ok_or_else(|| TruthError::Input("the truth's size does not match its data".into()))?;
-        crate::session::save_image(&img, path).map_err(|e| TruthError::Io {
+        crate::files::save_image(&img, path).map_err(|e| TruthError::Io {
             path: path.to_path_buf(),
             message: e.trim_start_matches("error: ").to_string(),
         })
@@ -233,7 +233,7 @@ pub fn write_pfm_gray(path: &Path, width: u32, height: u32, data: &[f32]) -> Res
     }
     let bytes = crate::image_io::pfm_bytes(width, height, false, data.to_vec())
         .map_err(|e| TruthError::Input(format!("cannot write {}: {e}", path.display())))?;
-    crate::session::write_new(path, bytes).map_err(|e| TruthError::Io {
+    crate::files::write_new(path, bytes).map_err(|e| TruthError::Io {
         path: path.to_path_buf(),
         message: e.trim_start_matches("error: ").to_string(),
     })
