@@ -3,7 +3,7 @@
 # flags cargo-fuzz 0.13 passes, driven through cargo directly so that cargo-fuzz need not
 # be installed) and runs them. Stable Rust: RUSTC_BOOTSTRAP=1 admits the -Z flags.
 #
-#   scripts/fuzz.sh build [--asan]            build all five targets
+#   scripts/fuzz.sh build [--asan]            build all eight targets
 #   scripts/fuzz.sh run TARGET [--asan] [LIBFUZZER FLAGS...]
 #                                             fuzz TARGET on its corpus (FUZZ_CORPUS, default
 #                                             compiler/fuzz/corpus/TARGET) and its seeds
@@ -24,7 +24,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 FUZZ=compiler/fuzz
 TRIPLE=$(rustc -vV | sed -n 's/^host: //p')
-TARGETS=(front expr graph scene gltf)
+TARGETS=(front expr graph scene gltf shard truth script)
 
 flags() {
     local f="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4"

@@ -66,7 +66,7 @@ phase "dependency boundaries"
 # The compiler library, the build-time embedding macro, the scene crate and the light crate carry no GPU, command line, image
 # codec or measurement code: their trees must not contain these crates
 # (docs/architecture.md section 2).
-for pkg in sshc sshc-shaders-gen sshc-scene sshc-light; do
+for pkg in sshc sshc-shaders-gen sshc-scene sshc-light sshc-records; do
     tree=$(cargo tree -p "$pkg" -e normal --prefix none --format '{p}')
     for banned in wgpu clap image rayon sshc-runtime sshc-lab; do
         if grep -q "^$banned v" <<<"$tree"; then

@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::Vec3;
 use sshc_lab::scene::{Light, Scene};
-use sshc_lab::truth::{self, CacheLookup, Points, Source, Truth, TruthCache, TruthError, TruthSettings};
+use sshc_lab::truth::{self, CacheLookup, Points, Source, Truth, TruthCache, TruthError, TruthFiles as _, TruthSettings};
 use sshc_lab::visibility::Visibility;
 
 mod common;

@@ -7,6 +7,7 @@
 //! truth options and the cached, progress-reporting truth computation.
 
 use crate::session::{TruthOpts, compile_executor, describe, load_scene, positions_normals, rt, size, truth_at};
+use crate::truth::TruthFiles as _;
 use sshc_runtime::gpu::Gpu;
 use std::path::{Path, PathBuf};
 

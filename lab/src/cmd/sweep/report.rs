@@ -3,70 +3,25 @@
 //! drawn twice, against either metric: the RMS error of the sweep's pixel set
 //! (`pareto-SCENE-WHAT.*`) and FLIP over the facing pixels (`pareto-SCENE-WHAT-flip.*`).
 
-use crate::metrics;
 use plotters::prelude::*;
-use serde::{Deserialize, Serialize};
+
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The pixel set a sweep's charts rank by.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub enum PixelSet {
-    #[default]
-    Penumbra,
-    ShadowOnGround,
+/// The pixel set and the row (in `sshc-records`, with the shard folder's reading).
+pub use sshc_records::sweep::{PixelSet, Row};
+
+/// What a chart's axis says of a pixel set.
+trait Describe {
+    fn describe(self) -> &'static str;
 }
 
-impl PixelSet {
-    /// The RMS error of `r` over this set.
-    pub fn rms(self, r: &Row) -> f64 {
-        match self {
-            PixelSet::Penumbra => r.acc.penumbra.rms,
-            PixelSet::ShadowOnGround => r.acc.ground.map_or(f64::NAN, |g| g.rms),
-        }
-    }
-
+impl Describe for PixelSet {
     fn describe(self) -> &'static str {
         match self {
             PixelSet::Penumbra => "RMS error in penumbra (0..255)",
             PixelSet::ShadowOnGround => "RMS error, shadow on the ground (0..255)",
         }
-    }
-}
-
-/// One measured row: what a shard stores per configuration as it finishes
-/// (`records.ron`, [`crate::cmd::sweep::shard`]) and what the outputs print. The last
-/// three fields are the shard's, not stored per row: they are filled when the shard's
-/// rows are gathered.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Row {
-    pub scene: String,
-    pub label: String,
-    pub config: String,
-    pub shadow_map: u32,
-    pub light_scale: f64,
-    /// Median GPU ms per frame (all passes), or none for CPU baselines.
-    pub ms: Option<f64>,
-    pub peak_bytes: u64,
-    pub fetches: f64,
-    pub ops: f64,
-    pub acc: metrics::Accuracy,
-    pub truth_se: f64,
-    /// The median of the reference technique's times on this row's scene, in its shard
-    /// (none for CPU baselines' scenes where the shard timed nothing).
-    #[serde(skip)]
-    pub reference_ms: Option<f64>,
-    /// The shard that measured it, `(i, n)`.
-    #[serde(skip)]
-    pub shard: (usize, usize),
-    /// That shard's device: in full, and its adapter's name alone.
-    #[serde(skip)]
-    pub device: (String, String),
-}
-
-impl Row {
-    pub fn ratio(&self) -> Option<f64> {
-        Some(self.ms? / self.reference_ms?)
     }
 }
 
