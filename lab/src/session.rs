@@ -170,10 +170,13 @@ impl Overrides {
         if let Some(k) = self.lights {
             let n = scene.lights.len();
             if k == 0 || k > n {
-                return Err(format!(
-                    "error: `--lights {k}`: {} has {n} light(s); keep between 1 and {n}",
-                    path.display()
-                ));
+                // the lights counted are the file's as `--light` left them
+                let whose = if self.light.is_empty() {
+                    path.display().to_string()
+                } else {
+                    format!("{} with its {} `--light`(s)", path.display(), self.light.len())
+                };
+                return Err(format!("error: `--lights {k}`: {whose} has {n} light(s); keep between 1 and {n}"));
             }
             scene.lights.truncate(k);
         }

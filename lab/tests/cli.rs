@@ -1686,6 +1686,32 @@ fn messages_name_the_option_the_file_and_the_unit_at_fault() {
     .unwrap();
     let o = render(&dir.join("s.ron"));
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // four `--light`s on a scene file of one: the count is theirs, not the file's
+    let l = "Sphere(center: (0.0, 3.0, 0.0), radius: 0.3)";
+    let e = fails(&[
+        "render",
+        "techniques/pcf.ron",
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "8x8",
+        "-o",
+        png,
+        "--light",
+        l,
+        "--light",
+        l,
+        "--light",
+        l,
+        "--light",
+        l,
+        "--lights",
+        "5",
+    ]);
+    assert!(
+        e.contains("`--lights 5`: scenes/contact.ron with its 4 `--light`(s) has 4 light(s)"),
+        "{e}"
+    );
     // a cache folder below a file: warned, and the truth computed and written
     std::fs::write(dir.join("a-file"), "").unwrap();
     let t = dir.join("t.pfm");

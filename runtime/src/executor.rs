@@ -35,48 +35,58 @@ pub const MAX_PASSES: usize = wgpu::QUERY_SET_MAX_QUERIES as usize / 2;
 /// How far outside [0, 1] a visibility may lie (rounding of the technique's arithmetic).
 pub const VISIBILITY_EPSILON: f32 = 1e-3;
 
+/// Refuses an image of pass `pass` (row-major, `width` per row) where `bad` holds at some
+/// pixel: `say` words the first such pixel's value, its `(x, y)` and the count of them.
+fn refuse_pixels(
+    values: &[f32],
+    width: u32,
+    pass: &str,
+    bad: impl Fn(f32) -> bool,
+    say: impl Fn(f32, (usize, usize), usize) -> String,
+) -> Result<()> {
+    let Some(i) = values.iter().position(|v| bad(*v)) else {
+        return Ok(());
+    };
+    let count = values.iter().filter(|v| bad(**v)).count();
+    let w = width.max(1) as usize;
+    Err(RuntimeError::Output {
+        pass: pass.to_string(),
+        message: say(values[i], (i % w, i / w), count),
+    })
+}
+
 /// Check a visibility image (row-major, `width` per row) that pass `pass` wrote: every value
 /// finite and within [0, 1] up to [`VISIBILITY_EPSILON`]; the first bad pixel is named.
 pub fn check_visibility(values: &[f32], width: u32, pass: &str) -> Result<()> {
-    let bad = |v: f32| !v.is_finite() || !(-VISIBILITY_EPSILON..=1.0 + VISIBILITY_EPSILON).contains(&v);
-    let count = values.iter().filter(|v| bad(**v)).count();
-    match values.iter().position(|v| bad(*v)) {
-        None => Ok(()),
-        Some(i) => {
-            let w = width.max(1) as usize;
-            Err(RuntimeError::Output {
-                pass: pass.to_string(),
-                message: format!(
-                    "visibility {} at pixel ({}, {}) ({count} pixel(s) non-finite or outside [0, 1] by more than {VISIBILITY_EPSILON}); the image is refused",
-                    values[i],
-                    i % w,
-                    i / w
-                ),
-            })
-        }
-    }
+    refuse_pixels(
+        values,
+        width,
+        pass,
+        |v| !v.is_finite() || !(-VISIBILITY_EPSILON..=1.0 + VISIBILITY_EPSILON).contains(&v),
+        |v, (x, y), count| {
+            format!(
+                "visibility {v} at pixel ({x}, {y}) ({count} pixel(s) non-finite or outside [0, 1] by more than {VISIBILITY_EPSILON}); the image is refused"
+            )
+        },
+    )
 }
 
 /// Refuses a frame where the technique's visibility expression was not a finite number at
 /// a receiver facing the light: `flags` is the Shade's normal output's w, 1 there (the
 /// visibility written there is finite, so [`check_visibility`] cannot see it).
 pub fn check_finite_visibility(flags: &[f32], width: u32, pass: &str) -> Result<()> {
-    let count = flags.iter().filter(|&&f| f > 0.5).count();
-    match flags.iter().position(|&f| f > 0.5) {
-        None => Ok(()),
-        Some(i) => {
-            let w = width.max(1) as usize;
-            Err(RuntimeError::Output {
-                pass: pass.to_string(),
-                message: format!(
-                    "the visibility expression is not a finite number (NaN or infinite) at pixel ({}, {}) and {} more pixel(s) facing the light (drawn lit where NaN, clamped where infinite); look for a division by zero, or the log or square root of a negative number; the image is refused",
-                    i % w,
-                    i / w,
-                    count - 1
-                ),
-            })
-        }
-    }
+    refuse_pixels(
+        flags,
+        width,
+        pass,
+        |f| f > 0.5,
+        |_, (x, y), count| {
+            format!(
+                "the visibility expression is not a finite number (NaN or infinite) at pixel ({x}, {y}) and {} more pixel(s) facing the light (drawn lit where NaN, clamped where infinite); look for a division by zero, or the log or square root of a negative number; the image is refused",
+                count - 1
+            )
+        },
+    )
 }
 
 /// Read a UTF-8 file of at most `cap` bytes, and only a regular file (after links): a FIFO,
