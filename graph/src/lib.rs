@@ -415,6 +415,41 @@ mod tests {
         assert!(e.to_string().contains("sparse"), "{e}");
     }
 
+    /// A graph in memory is checked as its text is, without the text (issue 49: the
+    /// runtime wrote every graph out and parsed it again to validate it): the same graphs
+    /// pass, and those from_ron refuses are refused with the same error.
+    #[test]
+    fn a_graph_in_memory_is_checked_as_its_text_is() {
+        let good = PassGraph::from_ron(&valid_text()).unwrap();
+        let valid = ValidGraph::try_from(good.clone()).unwrap();
+        assert_eq!(*valid, good);
+        assert_eq!(valid.into_inner(), good);
+        type Edit = Box<dyn Fn(&mut PassGraph)>;
+        let edits: [(&str, Edit); 5] = [
+            ("a NaN param", Box::new(|g| g.params[0].value = f64::NAN)),
+            ("another version", Box::new(|g| g.version += 1)),
+            ("no samples", Box::new(|g| g.samples = 0)),
+            (
+                "a texture twice",
+                Box::new(|g| {
+                    let t = g.textures[0].clone();
+                    g.textures.push(t)
+                }),
+            ),
+            (
+                "a shader path out of the folder",
+                Box::new(|g| g.passes[0].shader = "../x.wgsl".into()),
+            ),
+        ];
+        for (what, edit) in edits {
+            let mut g = good.clone();
+            edit(&mut g);
+            let in_memory = ValidGraph::try_from(g.clone()).unwrap_err();
+            let from_text = PassGraph::from_ron(&g.to_ron()).unwrap_err();
+            assert_eq!(in_memory.to_string(), from_text.to_string(), "{what}");
+        }
+    }
+
     #[test]
     fn refuses_nan_param() {
         let e = changed("value: 0.5,", "value: NaN,").unwrap_err();

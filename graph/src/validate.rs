@@ -8,6 +8,38 @@ use crate::schema::{
 use crate::uniforms::MAX_LIGHT_SAMPLES;
 use serde::Deserialize;
 
+/// A pass graph that passed every check the runtime relies on ([`PassGraph::from_ron`]'s,
+/// made on the value: no text round trip), the only kind `sshc_runtime::Executor::new`
+/// takes a graph as (issue 49's first stage). Read it through `Deref`; take it apart with
+/// [`ValidGraph::into_inner`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ValidGraph(PassGraph);
+
+impl TryFrom<PassGraph> for ValidGraph {
+    type Error = GraphError;
+
+    /// The checks of [`PassGraph::from_ron`] after its parse: the schema version, params,
+    /// unique names, buffers, samples, the shadow-map size, textures and their channels,
+    /// shader paths, references, the passes' order and the scene facts.
+    fn try_from(g: PassGraph) -> Result<ValidGraph, GraphError> {
+        g.validated().map(ValidGraph)
+    }
+}
+
+impl ValidGraph {
+    /// The graph, no longer known to be valid once changed.
+    pub fn into_inner(self) -> PassGraph {
+        self.0
+    }
+}
+
+impl std::ops::Deref for ValidGraph {
+    type Target = PassGraph;
+    fn deref(&self) -> &PassGraph {
+        &self.0
+    }
+}
+
 impl PassGraph {
     /// The `Params` uniform with every runtime param at its default value (`params_size`
     /// bytes, each param at its offset, padding zero): what an executor binds first.
@@ -54,6 +86,13 @@ impl PassGraph {
             });
         }
         let g: PassGraph = ron::from_str(text).map_err(syntax)?;
+        ValidGraph::try_from(g).map(ValidGraph::into_inner)
+    }
+
+    /// Every check of [`PassGraph::from_ron`] on a graph already in memory (what the
+    /// compiler returns): the body of [`ValidGraph::try_from`].
+    fn validated(self) -> Result<PassGraph, GraphError> {
+        let g = self;
         if g.version != SCHEMA_VERSION {
             return Err(GraphError::Version {
                 found: g.version,

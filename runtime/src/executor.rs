@@ -264,8 +264,9 @@ impl Executor {
         // The graph is untrusted: check references, refuse what this runtime cannot honour,
         // re-validate every module with naga, and check declared sizes against the device
         // before creating anything.
-        let text = graph.to_ron();
-        let graph = PassGraph::from_ron(&text)?;
+        // the checks of `PassGraph::from_ron` made on the value (it was written to text and
+        // parsed again)
+        let graph = graph::ValidGraph::try_from(graph)?.into_inner();
         if graph.passes.is_empty() {
             return Err(RuntimeError::NotFound(format!(
                 "technique `{}`: the graph has no passes; there is nothing to run",
