@@ -114,16 +114,22 @@ fn finite(values: &[f32]) -> bool {
 }
 
 impl Camera {
-    /// Refuse a non-finite matrix or position.
+    /// Refuse a non-finite matrix or position, and a matrix that maps every point to one
+    /// (no inverse: an all-zero matrix drew every pixel lit; issue 49).
     pub fn check(&self) -> Result<()> {
-        if finite(&self.view_proj) && finite(&self.position) {
-            Ok(())
-        } else {
-            Err(RuntimeError::Param(format!(
+        if !(finite(&self.view_proj) && finite(&self.position)) {
+            return Err(RuntimeError::Param(format!(
                 "the camera's matrix or position is not finite: {:?} at {:?}",
                 self.view_proj, self.position
-            )))
+            )));
         }
+        let det = sshc_light::glam::Mat4::from_cols_array(&self.view_proj).determinant();
+        if !(det.is_finite() && det != 0.0) {
+            return Err(RuntimeError::Param(format!(
+                "the camera's view-projection matrix has no inverse (determinant {det}): it maps the whole scene to a point or a plane"
+            )));
+        }
+        Ok(())
     }
 }
 

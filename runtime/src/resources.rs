@@ -224,7 +224,18 @@ impl Resources {
 /// textures' bytes.
 fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) -> Result<u64> {
     let max_dim = gpu.limits.max_texture_dimension_2d;
-    if s.shadow_size == 0 || s.shadow_size > max_dim {
+    // a size of 0 is no image at all, not one above the device's limit (a camera of
+    // (0, 240) read "needs 240, above the device's limit of 8192"; issue 49)
+    if s.shadow_size == 0 {
+        return Err(RuntimeError::Param("the shadow map is 0 texels wide: it needs at least 1".into()));
+    }
+    if s.camera_size.0 == 0 || s.camera_size.1 == 0 {
+        return Err(RuntimeError::Param(format!(
+            "the camera image is {} x {} pixels: it needs at least 1 x 1",
+            s.camera_size.0, s.camera_size.1
+        )));
+    }
+    if s.shadow_size > max_dim {
         return Err(RuntimeError::Limit {
             what: "shadow map (texels per side)".into(),
             needed: s.shadow_size as u64,
@@ -232,7 +243,7 @@ fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) ->
         });
     }
     let (cw, ch) = s.camera_size;
-    if cw == 0 || ch == 0 || cw.max(ch) > max_dim {
+    if cw.max(ch) > max_dim {
         return Err(RuntimeError::Limit {
             what: "camera image (pixels per side)".into(),
             needed: cw.max(ch) as u64,

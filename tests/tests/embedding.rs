@@ -385,8 +385,27 @@ fn per_frame_updates_refuse_what_would_need_a_new_binding() {
     let s = inputs(&scene("triangle", 32, 64), &c);
     let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
     let e = ex.set_camera(&s.camera()).unwrap_err();
-    assert!(e.to_string().contains("no scene is bound"), "{e}");
+    // every way of binding is named (a host of `bind_geometry` was told `bind_scene`)
+    assert!(
+        e.to_string()
+            .contains("nothing is bound: bind a scene first (bind_scene, bind_geometry"),
+        "{e}"
+    );
+    // issue 49: a camera of no pixels is said to be so, not "above the device's limit"
+    let mut empty = s.clone();
+    empty.camera_size = (0, 240);
+    let e = ex.bind_scene(&empty).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("the camera image is 0 x 240 pixels: it needs at least 1 x 1"),
+        "{e}"
+    );
     ex.bind_scene(&s).unwrap();
+    // issue 49: an all-zero camera matrix drew every pixel lit; refused
+    let mut flat = s.camera();
+    flat.view_proj = [0.0; 16];
+    let e = ex.set_camera(&flat).unwrap_err();
+    assert!(e.to_string().contains("has no inverse"), "{e}");
     let mut cam = s.camera();
     cam.view_proj[5] = f32::NAN;
     let e = ex.set_camera(&cam).unwrap_err();
@@ -1021,7 +1040,7 @@ fn host_pixels_of_the_wrong_format_or_size_are_refused() {
         sshc_runtime::gpu::HostPixels { world, normal }
     }
     let e = ex.set_host_pixels(Some(pixels(&good, &good))).unwrap_err();
-    assert!(e.to_string().contains("no scene is bound"), "{e}");
+    assert!(e.to_string().contains("nothing is bound"), "{e}");
     ex.bind_scene(&s).unwrap();
     for (world, normal, want) in [
         (
