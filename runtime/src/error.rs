@@ -90,3 +90,7 @@ impl From<graph::GraphError> for RuntimeError {
         RuntimeError::Graph(e)
     }
 }
+
+/// What a call that needs a binding says before one: every way of binding is named (a
+/// host that binds with `bind_geometry` was told to call `bind_scene`; issue 49).
+pub(crate) const NOTHING_BOUND: &str = "nothing is bound: bind a scene first (bind_scene, bind_geometry, bind_lights or bind_cascades)";

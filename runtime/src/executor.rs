@@ -89,10 +89,6 @@ pub fn check_finite_visibility(flags: &[f32], width: u32, pass: &str) -> Result<
     )
 }
 
-/// What a call that needs a binding says before one: every way of binding is named (a
-/// host that binds with `bind_geometry` was told to call `bind_scene`; issue 49).
-pub(crate) const NOTHING_BOUND: &str = "nothing is bound: bind a scene first (bind_scene, bind_geometry, bind_lights or bind_cascades)";
-
 /// Read a UTF-8 file of at most `cap` bytes, and only a regular file (after links): a FIFO,
 /// a device or anything else is refused before it is opened for reading, and the read is
 /// bounded, so a file that grows past the cap is refused too.
@@ -902,7 +898,9 @@ impl Executor {
     }
 
     fn bound(&self) -> Result<&Resources> {
-        self.bound.first().ok_or_else(|| RuntimeError::NotFound(NOTHING_BOUND.into()))
+        self.bound
+            .first()
+            .ok_or_else(|| RuntimeError::NotFound(crate::error::NOTHING_BOUND.into()))
     }
 
     /// Cascades bound ([`Executor::bind_cascades`] with 2 or more); 1 otherwise.

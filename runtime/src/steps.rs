@@ -911,7 +911,7 @@ impl StepNode {
             .bound
             .get(light)
             .and_then(|b| b.get(view as usize))
-            .ok_or_else(|| RuntimeError::NotFound(crate::executor::NOTHING_BOUND.into()))?;
+            .ok_or_else(|| RuntimeError::NotFound(crate::error::NOTHING_BOUND.into()))?;
         match (&self.kind, bound, &self.pipeline.pipeline) {
             (
                 NodeKind::Raster(r),
