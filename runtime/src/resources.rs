@@ -9,12 +9,34 @@ use crate::frame::SceneInputs;
 use crate::geometry::{EdgeBuffers, Geometry, GeometryBuffers, HostScene, SceneDraw};
 use crate::graph::{self, FRAME_SIZE, GENERATED_HEADER_BYTES, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
 use crate::pipeline::{CAMERA_FORMATS, DEPTH_FORMAT, mip_count, wgpu_format};
-use crate::usages::Usages;
 use std::collections::HashMap;
 
 /// Bytes of a summed-area table at a shadow-map size: one `vec4` per texel and layer.
 fn table_bytes(t: &TextureDecl, shadow_size: u32) -> u64 {
     t.format.bytes_per_texel() as u64 * t.layers as u64 * shadow_size as u64 * shadow_size as u64
+}
+
+/// What the resources of a graph are used as, from its steps' declared reads and writes
+/// and their plans: the one source of the usages that
+/// [`Resources::new`] gives them.
+#[derive(Default)]
+pub(crate) struct Usages {
+    /// Each graph texture's usages: `RENDER_ATTACHMENT` where a raster step writes it,
+    /// `STORAGE_BINDING` where a compute step stores into it, `TEXTURE_BINDING` where a
+    /// step reads it, `COPY_DST` where a Depth pass writes it (the lab's depth override
+    /// writes its output from the CPU), and `COPY_SRC` on every one (read-back:
+    /// [`crate::gpu::Executor::read_texture`]), and `TEXTURE_BINDING` on a Shade's debug
+    /// outputs (a host looks at them: [`crate::gpu::Executor::texture`]). A texture no step
+    /// writes or reads is only `COPY_SRC`.
+    pub textures: std::collections::HashMap<String, wgpu::TextureUsages>,
+    /// A compute step stores the camera outputs (a deferred Shade).
+    pub camera_stored: bool,
+    /// A raster step draws the G-buffer (a deferred Shade).
+    pub gbuffer: bool,
+    /// Generated buffers filled per cell of the map (`Discontinuities`), not per edge.
+    pub per_cell: std::collections::HashSet<String>,
+    /// A step classifies the scene's edges (`Silhouettes`): the edge adjacency is built.
+    pub edges: bool,
 }
 
 /// Bytes of a graph texture at a shadow-map and camera size: the shadow map's texels, or

@@ -1,33 +1,13 @@
-//! What the resources of a graph are used as ([`Usages`]), from its steps' declared reads
-//! and writes and from each step's plan ([`crate::steps::plan`]): the one source of the
-//! usages the allocation path ([`crate::resources::Resources::new`]) gives.
+//! What the resources of a graph are used as ([`Usages::of`]), from its steps' declared
+//! reads and writes and from each step's plan ([`crate::steps::plan`]): the one source of
+//! the usages the allocation path ([`crate::resources::Resources::new`]) gives. The type
+//! lives with the allocation path: this module reads the steps, which read the resources,
+//! and the resources read only the type (no circle of imports).
 
 use crate::graph::{self, PassGraph};
 use crate::pipeline::wgpu_format;
+use crate::resources::Usages;
 use crate::steps::{Dispatch, NodeKind, Targets, plan};
-
-/// What the resources of a graph are used as, from its steps' declared reads and writes
-/// and their plans: the one source of the usages that
-/// [`crate::resources::Resources::new`] gives them.
-#[derive(Default)]
-pub(crate) struct Usages {
-    /// Each graph texture's usages: `RENDER_ATTACHMENT` where a raster step writes it,
-    /// `STORAGE_BINDING` where a compute step stores into it, `TEXTURE_BINDING` where a
-    /// step reads it, `COPY_DST` where a Depth pass writes it (the lab's depth override
-    /// writes its output from the CPU), and `COPY_SRC` on every one (read-back:
-    /// [`crate::gpu::Executor::read_texture`]), and `TEXTURE_BINDING` on a Shade's debug
-    /// outputs (a host looks at them: [`crate::gpu::Executor::texture`]). A texture no step
-    /// writes or reads is only `COPY_SRC`.
-    pub textures: std::collections::HashMap<String, wgpu::TextureUsages>,
-    /// A compute step stores the camera outputs (a deferred Shade).
-    pub camera_stored: bool,
-    /// A raster step draws the G-buffer (a deferred Shade).
-    pub gbuffer: bool,
-    /// Generated buffers filled per cell of the map (`Discontinuities`), not per edge.
-    pub per_cell: std::collections::HashSet<String>,
-    /// A step classifies the scene's edges (`Silhouettes`): the edge adjacency is built.
-    pub edges: bool,
-}
 
 impl Usages {
     pub fn of(graph: &PassGraph) -> Usages {
