@@ -604,9 +604,13 @@ pub fn compute_cached(
     if scene.lights.is_empty() {
         return Err(TruthError::NoLight);
     }
-    let Some(cache) = cache else {
+    // computed here, without a cache (none given, or one that cannot be written)
+    let uncached = || -> Result<(Truth, Source), TruthError> {
         let vis = Visibility::new(scene);
-        return Ok((compute(scene, &vis, points, settings, progress)?, Source::Computed(None)));
+        Ok((compute(scene, &vis, points, settings, progress)?, Source::Computed(None)))
+    };
+    let Some(cache) = cache else {
+        return uncached();
     };
     let key = cache_key(scene, points, settings)?;
     let claim_path = cache.claim_path(key);
@@ -625,19 +629,18 @@ pub fn compute_cached(
         }
         // a cache that cannot be written is left out, said once, and the truth computed
         // without it (it ended the run with a bare OS error; issue 48, item 17)
-        let uncached = |why: String| -> Result<(Truth, Source), TruthError> {
+        let unwritable = |why: String| -> Result<(Truth, Source), TruthError> {
             note(&format!(
                 "warning: the truth cache cannot be written ({why}): computing without it (pass --no-cache, or --cache DIR with a writable folder)"
             ));
-            let vis = Visibility::new(scene);
-            Ok((compute(scene, &vis, points, settings, progress)?, Source::Computed(None)))
+            uncached()
         };
         if let Err(e) = std::fs::create_dir_all(&cache.dir) {
-            return uncached(format!("{}: {e}", cache.dir.display()));
+            return unwritable(format!("{}: {e}", cache.dir.display()));
         }
         let attempt = match Claim::try_take(&claim_path) {
             Ok(a) => a,
-            Err(e) => return uncached(format!("{}: {e}", claim_path.display())),
+            Err(e) => return unwritable(format!("{}: {e}", claim_path.display())),
         };
         match attempt {
             Attempt::Taken(claim) => {

@@ -2,12 +2,12 @@
 //! before its triangles are built (issue 48, item 14: the limit of 2^24 triangles needed
 //! 5.8 GB, and under a 4 GB address-space cap the BVH builder panicked).
 //!
-//! The cost is measured, not derived: `sshc truth` (the heaviest path: the triangles,
-//! their normals, the ray-casting BVH built over them, the G-buffer frame) peaked at
-//! 682 MB for a generated city of 1.0 M triangles and at 1,125 MB for 2.0 M (`/usr/bin/time
-//! -f %M`, lavapipe, this repository's build): 443 bytes a triangle beyond about 240 MB.
-//! `sshc render` took 240 bytes a triangle. [`BYTES_PER_TRIANGLE`] and [`BASE_BYTES`] round
-//! the truth's figures up.
+//! The cost is measured, not derived (`scripts/memory-figures.sh`, the debug build on
+//! lavapipe): `sshc truth` (the heaviest path: the triangles, their normals, the
+//! ray-casting BVH built over them, the G-buffer frame) peaked at 625 and 648 MiB (two runs) for a
+//! generated city of 1.0 M triangles and at 1,060 MiB for 2.0 M: 432 to 456 bytes a
+//! triangle beyond about 200 MiB. `sshc render` took 246 to 288 bytes a triangle.
+//! [`BYTES_PER_TRIANGLE`] and [`BASE_BYTES`] round the truth's figures up.
 
 use std::path::Path;
 
