@@ -19,9 +19,13 @@
 //! `n . D > 0`. An edge-on face counts as facing away, so a silhouette seen edge-on is
 //! still classified, never both or neither.
 //!
-//! Vertices are welded within one mesh by exact position (the scene's triangles are a
-//! soup, but vertices that an indexed mesh shares transform to bit-identical positions);
-//! meshes are never welded to each other, so a box resting on the floor stays two meshes.
+//! Vertices are welded within one mesh by position, within [`WELD_TOLERANCE`] of the
+//! mesh's extent (the scene's triangles are a soup; vertices that an indexed mesh shares
+//! transform to bit-identical positions, but a mesh exported with its seam duplicated,
+//! such as a UV sphere's, has seam vertices a few ulps apart, and welding them only when
+//! bit-identical opened the seam into a boundary whose silhouette edges drew ribbons and
+//! holes across the sphere; issue 49); meshes are never welded to each other, so a box
+//! resting on the floor stays two meshes.
 //! Degenerate triangles (two equal welded vertices, zero area or a non-finite vertex)
 //! are skipped and counted: they have no plane and cannot cast a silhouette.
 //!
@@ -32,6 +36,116 @@
 
 use std::collections::HashMap;
 use std::ops::Range;
+
+/// Vertices of one mesh this close, in every coordinate, as a fraction of the mesh's
+/// extent (its bounding box's largest side), are one vertex. 2^-17 of the extent: a seam
+/// computed twice in f32 (`cos 0` against `cos 2 pi`) differs by a few ulps, about 2^-23
+/// of the coordinate, far inside it; a detail smaller than a 100,000th of its mesh is far
+/// below any shadow map's texel (16,384 at most), so no true edge is welded away.
+pub const WELD_TOLERANCE: f32 = 1.0 / 131_072.0;
+
+/// The welded vertices of one mesh: exact positions first (a hash of their bits), then a
+/// grid of cells [`CELLS_PER_TOLERANCE`] tolerances wide, each a chain of its vertices,
+/// searched in the point's cell and in the neighbours it lies within the tolerance of.
+struct Weld {
+    tolerance: f32,
+    cell: f32,
+    exact: HashMap<[u32; 3], u32>,
+    /// First vertex of each occupied cell; `chain[v]` the next in `v`'s cell (`u32::MAX`: none).
+    cells: HashMap<[i64; 3], u32>,
+    chain: Vec<u32>,
+    welded: Vec<[f32; 3]>,
+    /// Vertices joined to another within the tolerance, not bit-identical to it.
+    near: u32,
+}
+
+/// A grid cell's width in tolerances: wide enough that most points are more than a
+/// tolerance from every side of their cell (searched alone), narrow enough that a cell
+/// holds few vertices.
+const CELLS_PER_TOLERANCE: f32 = 8.0;
+
+impl Weld {
+    /// A weld for the triangles of one mesh (its extent from their finite vertices).
+    fn new(triangles: &[[[f32; 3]; 3]]) -> Weld {
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for p in triangles.iter().flatten().filter(|p| p.iter().all(|c| c.is_finite())) {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+        let tolerance = if extent.is_finite() { extent * WELD_TOLERANCE } else { 0.0 };
+        Weld {
+            tolerance,
+            cell: tolerance * CELLS_PER_TOLERANCE,
+            exact: HashMap::new(),
+            cells: HashMap::new(),
+            chain: Vec::new(),
+            welded: Vec::new(),
+            near: 0,
+        }
+    }
+
+    /// The cell of `p`, where the grid applies (a finite point, a mesh of some extent).
+    fn cell_of(&self, p: [f32; 3]) -> Option<[i64; 3]> {
+        let cell = f64::from(self.cell);
+        (cell > 0.0 && p.iter().all(|c| c.is_finite())).then(|| p.map(|c| (f64::from(c) / cell).floor() as i64))
+    }
+
+    /// The index of `p`'s welded vertex, added when no vertex lies within the tolerance.
+    fn id(&mut self, p: [f32; 3]) -> u32 {
+        // -0.0 and 0.0 are one position (`+ 0.0` turns the first into the second)
+        let key = p.map(|c| (c + 0.0).to_bits());
+        if let Some(&i) = self.exact.get(&key) {
+            return i;
+        }
+        let cell = self.cell_of(p);
+        let i = match cell.and_then(|c| self.nearby(p, c)) {
+            Some(i) => {
+                self.near += 1;
+                i
+            }
+            None => {
+                let i = self.welded.len() as u32;
+                self.welded.push(p);
+                let head = cell.and_then(|c| self.cells.insert(c, i));
+                self.chain.push(head.unwrap_or(u32::MAX));
+                i
+            }
+        };
+        self.exact.insert(key, i);
+        i
+    }
+
+    /// A welded vertex within the tolerance of `p` in every coordinate, in `p`'s cell `c`
+    /// or a neighbour that `p` lies within the tolerance of.
+    fn nearby(&self, p: [f32; 3], c: [i64; 3]) -> Option<u32> {
+        let cell = f64::from(self.cell);
+        let tol = f64::from(self.tolerance);
+        // per axis: the neighbour offsets worth searching (0, and -1 or +1 near a side)
+        let offsets = |a: usize| {
+            let x = f64::from(p[a]) - c[a] as f64 * cell;
+            [(x < tol).then_some(-1i64), Some(0), (cell - x < tol).then_some(1)]
+        };
+        let (ox, oy, oz) = (offsets(0), offsets(1), offsets(2));
+        for dx in ox.iter().flatten() {
+            for dy in oy.iter().flatten() {
+                for dz in oz.iter().flatten() {
+                    let mut v = self.cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]).copied().unwrap_or(u32::MAX);
+                    while v != u32::MAX {
+                        let q = self.welded[v as usize];
+                        if (0..3).all(|a| (q[a] - p[a]).abs() <= self.tolerance) {
+                            return Some(v);
+                        }
+                        v = self.chain[v as usize];
+                    }
+                }
+            }
+        }
+        None
+    }
+}
 
 /// One edge as the GPU reads it (std430, 48 bytes): its two welded end points, the range
 /// of its face references in [`Adjacency::edge_faces`], and its end points' indices among
@@ -83,6 +197,8 @@ pub struct AdjacencyCounts {
     pub non_manifold: u32,
     /// Triangles skipped: repeated welded vertex, zero area or non-finite.
     pub degenerate_faces: u32,
+    /// Vertex positions joined to another within [`WELD_TOLERANCE`], not bit-identical.
+    pub welded_near: u32,
 }
 
 /// The edge adjacency of every mesh of a scene, in the layout the GPU reads.
@@ -121,19 +237,11 @@ impl Adjacency {
         for range in meshes {
             let range = range.start.min(triangles.len())..range.end.min(triangles.len());
             out.counts.meshes += 1;
-            let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
-            let mut welded: Vec<[f32; 3]> = Vec::new();
+            let mut weld = Weld::new(&triangles[range.clone()]);
             faces_of.clear();
             for (t, tri) in triangles[range.clone()].iter().enumerate() {
                 let t = range.start + t;
-                let ids = tri.map(|p| {
-                    let next = welded.len() as u32;
-                    // -0.0 and 0.0 are one position (`+ 0.0` turns the first into the second)
-                    *weld.entry(p.map(|c| (c + 0.0).to_bits())).or_insert_with(|| {
-                        welded.push(p);
-                        next
-                    })
-                });
+                let ids = tri.map(|p| weld.id(p));
                 let Some(plane) = plane(tri).filter(|_| ids[0] != ids[1] && ids[1] != ids[2] && ids[0] != ids[2]) else {
                     out.counts.degenerate_faces += 1;
                     continue;
@@ -163,16 +271,17 @@ impl Adjacency {
                     _ => out.counts.non_manifold += 1,
                 }
                 out.edges.push(GpuEdge {
-                    a: welded[lo as usize],
+                    a: weld.welded[lo as usize],
                     first_face,
-                    b: welded[hi as usize],
+                    b: weld.welded[hi as usize],
                     face_count,
                     ia: out.vertices + lo,
                     ib: out.vertices + hi,
                     pad: [0; 2],
                 });
             }
-            out.vertices += welded.len() as u32;
+            out.vertices += weld.welded.len() as u32;
+            out.counts.welded_near += weld.near;
         }
         out.counts.edges = out.edges.len() as u32;
         out
@@ -397,5 +506,66 @@ mod tests {
         let adj = Adjacency::build(&tris, once(6..100));
         assert_eq!(adj.counts.edges as usize, adj.edges.len());
         assert!(adj.counts.boundary > 0);
+    }
+
+    /// A UV sphere of `rings` x `segments` quads, its seam duplicated as exporters write
+    /// it: the last column of vertices computed at angle 2 pi, a few ulps from the first
+    /// column's at 0. The poles' fans carry one degenerate triangle per quad.
+    fn seam_sphere(rings: u32, segments: u32) -> Vec<[[f32; 3]; 3]> {
+        let at = |r: u32, s: u32| {
+            let (theta, phi) = (
+                std::f32::consts::PI * r as f32 / rings as f32,
+                std::f32::consts::TAU * s as f32 / segments as f32,
+            );
+            [theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()]
+        };
+        let mut tris = Vec::new();
+        for r in 0..rings {
+            for s in 0..segments {
+                let (a, b, c, d) = (at(r, s), at(r, s + 1), at(r + 1, s + 1), at(r + 1, s));
+                tris.push([a, c, b]);
+                tris.push([a, d, c]);
+            }
+        }
+        tris
+    }
+
+    /// Issue 49: a sphere whose seam vertices are not bit-identical is closed once welded
+    /// within the tolerance (no open boundary, so no silhouette along the seam), and the
+    /// seam's welds are counted; points ten tolerances apart stay two vertices (a slit
+    /// stays open).
+    #[test]
+    fn a_seam_a_few_ulps_apart_is_welded_and_a_real_slit_is_not() {
+        let tris = seam_sphere(12, 24);
+        let seam_differs = (1..12).any(|r| {
+            let theta = std::f32::consts::PI * r as f32 / 12.0;
+            (theta.sin() * std::f32::consts::TAU.cos()).to_bits() != theta.sin().to_bits()
+                || (theta.sin() * std::f32::consts::TAU.sin()).to_bits() != 0.0f32.to_bits()
+        });
+        assert!(seam_differs, "the seam's two columns differ in their bits");
+        let adj = Adjacency::build(&tris, once(0..tris.len()));
+        assert_eq!(adj.counts.boundary, 0, "{:?}", adj.counts);
+        assert_eq!(adj.counts.non_manifold, 0, "{:?}", adj.counts);
+        assert!(adj.counts.welded_near >= 11, "{:?}", adj.counts);
+        // 11 rings of 24 vertices and the two poles
+        assert_eq!(adj.vertices, 11 * 24 + 2);
+        // a slit: two quads side by side whose shared side is split by ten tolerances
+        let gap = 10.0 * WELD_TOLERANCE * 2.0;
+        let quad = |x0: f32, x1: f32| {
+            [
+                [[x0, 0.0, 0.0], [x1, 0.0, 0.0], [x1, 0.0, 1.0]],
+                [[x0, 0.0, 0.0], [x1, 0.0, 1.0], [x0, 0.0, 1.0]],
+            ]
+        };
+        let [a, b] = quad(-1.0, 0.0);
+        let [c, d] = quad(gap, 1.0);
+        let slit = Adjacency::build(&[a, b, c, d], once(0..4));
+        assert_eq!(slit.counts.boundary, 8, "{:?}", slit.counts);
+        assert_eq!(slit.counts.welded_near, 0);
+        // and the same quads meeting within the tolerance are one sheet
+        let [c, d] = quad(0.1 * WELD_TOLERANCE, 1.0);
+        let sheet = Adjacency::build(&[a, b, c, d], once(0..4));
+        assert_eq!(sheet.counts.boundary, 6, "{:?}", sheet.counts);
+        assert_eq!(sheet.counts.manifold, 3, "{:?}", sheet.counts);
     }
 }

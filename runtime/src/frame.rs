@@ -134,6 +134,13 @@ impl Camera {
 }
 
 impl LightInputs {
+    /// A warning where a perspective view's near plane is so close to the light that depth
+    /// precision and near-plane kernels suffer ([`sshc_light::LightView::depth_warning`]:
+    /// a caster reaches the light's plane). A host shows it once; the frame still runs.
+    pub fn depth_warning(&self) -> Option<String> {
+        sshc_light::depth_warning(self.near, self.far, self.orthographic)
+    }
+
     /// Refuse non-finite matrices, positions or sizes, and an empty depth range.
     pub fn check(&self, light: usize) -> Result<()> {
         // every value, without collecting them (this runs on every `set_light`)

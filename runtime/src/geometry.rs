@@ -1017,6 +1017,7 @@ impl GeometryBuffers {
                 counts.manifold += a.counts.manifold;
                 counts.non_manifold += a.counts.non_manifold;
                 counts.degenerate_faces += a.counts.degenerate_faces;
+                counts.welded_near += a.counts.welded_near;
             }
             spans.push(s);
         }

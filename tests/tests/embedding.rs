@@ -1404,3 +1404,102 @@ fn static_instances_placed_at_upload_match_the_same_triangles_listed_out() {
         );
     }
 }
+
+/// A box of half-size `h` on the ground (y from 0 to 2h), its 12 triangles with flat
+/// normals, indexed.
+fn box_mesh(h: f32) -> sshc_runtime::gpu::Mesh {
+    let mut m = sshc_runtime::gpu::Mesh {
+        name: "box".into(),
+        ..Default::default()
+    };
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let n = glam::Vec3::from_array(std::array::from_fn(|i| if i == axis { sign } else { 0.0 }));
+            let (u, v) = (n.any_orthonormal_pair().0 * h, n.any_orthonormal_pair().1 * h);
+            let c = n * h + glam::Vec3::new(0.0, h, 0.0);
+            let base = m.positions.len() as u32;
+            for p in [c - u - v, c + u - v, c + u + v, c - u + v] {
+                m.positions.push(p.to_array());
+                m.normals.push(n.to_array());
+            }
+            // counter-clockwise seen from outside
+            let ccw = (u.cross(v)).dot(n) > 0.0;
+            let quad = if ccw { [0, 1, 2, 0, 2, 3] } else { [0, 2, 1, 0, 3, 2] };
+            m.indices.extend(quad.map(|i| base + i));
+        }
+    }
+    m
+}
+
+/// Issue 49: PCSS and VSSM cast a shadow on a ground of half-size 4 to 64 under the fit
+/// docs/embedding.md recommends (`Fit::Casters`). Before, a ground of half-size 6 or more
+/// took the light's near plane to its floor (far * 1e-4): the blocker search, sized on the
+/// near plane, spread over the whole map and found nothing, and every pixel was lit. The
+/// shadow is the box's, and the fit's lateral extent the box's too, so only the depth
+/// range changes with the ground (its far plane holds every receiver): the box-to-ground
+/// gap then takes a smaller share of the normalised depth, and a filtered technique's
+/// penumbra edge moves a little (measured: PCSS's count of shadowed ground pixels the
+/// same for every ground, VSSM's about a tenth less on the largest). What is checked is that each ground keeps at
+/// least half the smallest ground's shadow; the defect left none.
+#[test]
+fn pcss_and_vssm_cast_shadows_on_a_ground_of_any_size_under_the_casters_fit() {
+    use sshc_runtime::gpu::{Camera, Fit, Instance, LightInputs, Mesh};
+    use sshc_runtime::light::{Light, look_at, perspective};
+    let camera_view_proj = perspective(0.9, 1.0, 0.1, 100.0) * look_at(glam::Vec3::new(0.0, 5.0, 5.0), glam::Vec3::ZERO, glam::Vec3::Y);
+    let camera = Camera {
+        view_proj: camera_view_proj.to_cols_array(),
+        position: [0.0, 5.0, 5.0],
+    };
+    let light = Light::Sphere {
+        center: glam::Vec3::new(1.5, 3.0, 0.5),
+        radius: 0.3,
+    };
+    for t in ["pcss", "vssm"] {
+        let c = compile(t);
+        let mut counts = Vec::new();
+        for half in [4.0f32, 6.0, 16.0, 64.0] {
+            let ground = Mesh {
+                name: "ground".into(),
+                positions: vec![[-half, 0.0, -half], [half, 0.0, -half], [half, 0.0, half], [-half, 0.0, half]],
+                normals: vec![[0.0, 1.0, 0.0]; 4],
+                indices: vec![0, 2, 1, 0, 3, 2],
+            };
+            let instance = |name: &str, mesh: usize, casts: bool| Instance {
+                name: name.into(),
+                mesh,
+                transform: sshc_runtime::gpu::IDENTITY,
+                casts,
+                receives: true,
+                moves: false,
+            };
+            let g = Geometry {
+                meshes: vec![box_mesh(0.5), ground],
+                instances: vec![instance("box", 0, true), instance("ground", 1, false)],
+            };
+            let inputs = LightInputs::fit(&light, &g.boxes(), Fit::Casters, 256, 0).unwrap_or_else(|e| panic!("{t}: {e}"));
+            let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+            ex.bind_geometry(&g, &camera, &[inputs], (64, 64), 256)
+                .unwrap_or_else(|e| panic!("{t}: {e}"));
+            ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
+            let v = ex.read_camera(CameraOutput::Visibility).unwrap_or_else(|e| panic!("{t}: {e}"));
+            // on the ground only (the box's faces turned from the light read 0 anyway)
+            let p = ex.read_camera(CameraOutput::Position).unwrap_or_else(|e| panic!("{t}: {e}"));
+            let on_ground = |i: usize| p.rgba[i][1].abs() < 1e-3;
+            counts.push((
+                half,
+                v.channel(0).iter().enumerate().filter(|(i, x)| on_ground(*i) && **x < 0.5).count(),
+            ));
+        }
+        let least = counts[0].1;
+        assert!(
+            least > 40,
+            "{t}: only {least} of 4096 pixels of the ground in shadow on the smallest ground"
+        );
+        for (half, n) in &counts {
+            assert!(
+                2 * n >= least,
+                "{t}: ground of half-size {half}: {n} pixels in shadow against {least} on a ground of half-size 4 ({counts:?})"
+            );
+        }
+    }
+}

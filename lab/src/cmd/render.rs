@@ -176,8 +176,14 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
     let edges = ex.edge_counts().map_err(rt)?;
     if let Some(c) = edges {
         println!(
-            "edges: {} in {} mesh(es): {} open boundary, {} non-manifold; {} degenerate triangle(s) skipped",
-            c.edges, c.meshes, c.boundary, c.non_manifold, c.degenerate_faces
+            "edges: {} in {} mesh(es): {} open boundary, {} non-manifold; {} degenerate triangle(s) skipped; {} vertex position(s) welded within {} of their mesh's extent",
+            c.edges,
+            c.meshes,
+            c.boundary,
+            c.non_manifold,
+            c.degenerate_faces,
+            c.welded_near,
+            sshc_runtime::adjacency::WELD_TOLERANCE
         );
         for b in &ex.graph.buffers {
             let g = ex.generated(&b.name).map_err(rt)?;

@@ -586,6 +586,37 @@ impl Light {
     }
 }
 
+/// The least ratio of a perspective light view's near distance to its far one: where a
+/// caster reaches the light's own plane (a light inside or beside a caster), the near
+/// plane stops here and [`LightView::depth_warning`] says what is lost.
+pub const MIN_NEAR_OVER_FAR: f32 = 1e-4;
+
+/// Above this ratio of far to near, [`LightView::depth_warning`] warns: the depth buffer
+/// of the light's raster (`z = far (d - near) / (d (far - near))`, f32) then resolves
+/// casters less than about `2^-24 * far / near` of their distance apart, and kernels sized
+/// on the near plane span most of the map.
+pub const WARN_FAR_OVER_NEAR: f32 = 1e3;
+
+impl LightView {
+    /// [`depth_warning`] of this view.
+    pub fn depth_warning(&self) -> Option<String> {
+        depth_warning(self.near, self.far, self.orthographic)
+    }
+}
+
+/// A warning where a perspective view's near plane is so close to the light, against its
+/// far plane, that depth precision and near-plane kernels suffer (a caster reaches the
+/// light's plane: the light is inside or beside it). `None` for an orthographic view and
+/// a sound range.
+pub fn depth_warning(near: f32, far: f32, orthographic: bool) -> Option<String> {
+    (!orthographic && far > WARN_FAR_OVER_NEAR * near).then(|| {
+        format!(
+            "the light's view has its near plane at {near:e}, {:.0} times nearer than its far plane at {far:e}: a shadow caster reaches the light's own plane (the light is inside or beside it), so the light's depth loses precision and techniques that size their search on the near plane (PCSS, VSSM) may find no blocker; move the light clear of the casters",
+            far / near
+        )
+    })
+}
+
 /// The `Casters` fit's guard band: the lateral extent is multiplied by `n / (n - 2)` for a
 /// map of `n >= 3` texels, which adds one texel on each side (a caster never reaches the
 /// outermost texels, which a lookup clamped to the map's edge reads); `1.001` below that
@@ -646,7 +677,7 @@ fn perspective_view(eye: Vec3, bounds: (Vec3, Vec3)) -> LightView {
     let view = look_at(eye, eye + forward, any_perpendicular_up(forward));
     let (lo, hi) = depth_range(&view, bounds);
     let far = (hi * 1.001).max(1e-6);
-    let near = (lo * 0.999).max(far * 1e-4);
+    let near = (lo * 0.999).max(far * MIN_NEAR_OVER_FAR);
     // Widest tangent over the corners in front of the near plane.
     let mut tan = 0.0f32;
     for c in corners(bounds) {
@@ -777,14 +808,17 @@ fn local_reach(light: &Light, scene: &impl Occluders) -> Option<(LightView, f32,
     let cb = bounds_of(scene.casters());
     let forward = enclosing_axis(eye, padded(cb));
     let view = look_at(eye, eye + forward, any_perpendicular_up(forward));
-    let (lo, hi) = depth_range(&view, padded(scene.bounds()));
+    let (_, hi) = depth_range(&view, padded(scene.bounds()));
     let far = (hi * 1.001).max(1e-6);
-    let near = (lo * 0.999).max(far * 1e-4);
-    let dc = scene
-        .casters()
-        .map(|p| -view.transform_point3(p).z)
-        .fold(f32::INFINITY, f32::min)
-        .max(near);
+    // The near plane at the nearest caster, what the Depth pass draws: not at the scene
+    // box's nearest corner, which for a wide ground reaches beside or behind the light
+    // (its corners at the casters' height, far to the side) and took the near plane to
+    // its floor, far * 1e-4, where techniques that size their kernels on the near plane
+    // (PCSS's blocker search, Fernando 2005 equation 1) searched the whole map and found
+    // nothing (issue 49). Receivers nearer than every caster are lit whatever their depth.
+    let lo = scene.casters().map(|p| -view.transform_point3(p).z).fold(f32::INFINITY, f32::min);
+    let near = (lo * 0.999).min(far * 0.999).max(far * MIN_NEAR_OVER_FAR);
+    let dc = lo.max(near);
     let dr = scene.points().map(|p| -view.transform_point3(p).z).fold(dc, f32::max);
     // the projection is the caller's (identity here, so `view_proj` is `view` until then)
     let base = perspective_light_view(view, Mat4::IDENTITY, eye, near, far);
@@ -923,4 +957,83 @@ pub fn sample_views(
         })
         .collect();
     Ok((fits, closed))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Boxes as occluders: casters' corners, and every object's.
+    struct Boxes {
+        casters: Vec<(Vec3, Vec3)>,
+        others: Vec<(Vec3, Vec3)>,
+    }
+
+    impl Occluders for Boxes {
+        fn casters(&self) -> impl Iterator<Item = Vec3> + '_ {
+            self.casters.iter().flat_map(|b| corners(*b))
+        }
+        fn points(&self) -> impl Iterator<Item = Vec3> + '_ {
+            self.casters.iter().chain(&self.others).flat_map(|b| corners(*b))
+        }
+        fn bounds(&self) -> (Vec3, Vec3) {
+            bounds_of(self.points())
+        }
+        fn has_casters(&self) -> bool {
+            !self.casters.is_empty()
+        }
+    }
+
+    /// Issue 49: a box of half-size 0.5 standing on a ground of half-size 4 to 64 under a
+    /// sphere light to one side. The `Casters` fit's near plane lies at the nearest caster
+    /// (within the 0.999 rounding margin), whatever the ground's size; before, a ground of
+    /// half-size 6 or more took it to far * 1e-4 (the scene box's top corners, at the
+    /// caster's height and far to the side, lay behind the light's plane).
+    #[test]
+    fn the_casters_fit_puts_the_near_plane_at_the_nearest_caster_whatever_the_ground() {
+        let light = Light::Sphere {
+            center: Vec3::new(1.5, 3.0, 0.5),
+            radius: 0.3,
+        };
+        let caster = (Vec3::new(-0.5, 0.0, -0.5), Vec3::new(0.5, 1.0, 0.5));
+        for half in [4.0f32, 6.0, 16.0, 64.0] {
+            let scene = Boxes {
+                casters: vec![caster],
+                others: vec![(Vec3::new(-half, -0.1, -half), Vec3::new(half, 0.0, half))],
+            };
+            let v = casters_view(&light, &scene, 1024);
+            let nearest = corners(caster)
+                .iter()
+                .map(|p| -v.view.transform_point3(*p).z)
+                .fold(f32::INFINITY, f32::min);
+            assert!(nearest > 0.0);
+            assert!(
+                v.near <= nearest && v.near >= 0.998 * nearest,
+                "ground {half}: near {} against the nearest caster at {nearest}",
+                v.near
+            );
+            assert_eq!(v.depth_warning(), None, "ground {half}");
+            // every caster corner inside the clip volume, in depth
+            for p in corners(caster) {
+                let c = v.view_proj.project_point3(p);
+                assert!((0.0..=1.0).contains(&c.z), "ground {half}: caster corner {p} at clip depth {}", c.z);
+            }
+        }
+    }
+
+    /// A light inside a caster: the near plane stops at its floor, and the view says so.
+    #[test]
+    fn a_light_inside_a_caster_is_warned_about() {
+        let light = Light::Point {
+            position: Vec3::new(0.0, 0.5, 0.0),
+        };
+        let scene = Boxes {
+            casters: vec![(Vec3::splat(-1.0), Vec3::splat(1.0))],
+            others: vec![(Vec3::new(-8.0, -1.1, -8.0), Vec3::new(8.0, -1.0, 8.0))],
+        };
+        let v = casters_view(&light, &scene, 1024);
+        assert!((v.near - v.far * MIN_NEAR_OVER_FAR).abs() <= v.far * 1e-7, "{} {}", v.near, v.far);
+        let w = v.depth_warning().expect("a warning");
+        assert!(w.contains("inside or beside"), "{w}");
+    }
 }
