@@ -11,26 +11,13 @@ use crate::lights::{Combine, Combining, MAX_LIGHTS, Slices};
 use crate::pipeline::mip_count;
 use crate::pixels::{HostPixels, PixelsStep};
 use crate::receivers::Unshadowed;
-use crate::requirements::Requirements;
-use crate::resources::Usages;
 use crate::resources::{Resources, f32_bytes, texture_bytes};
-use crate::steps::{self, Group0, PassNode};
+use crate::steps::{Group0, StepBinding};
+use crate::technique::{MAX_PASSES, Technique};
 use crate::timing::{FrameTimes, Timestamps};
 use crate::update::{FrameWriter, LightUniforms};
-use crate::validate::validate_wgsl;
 use sshc_light::MAX_CASCADES;
-use std::collections::HashMap;
 use std::path::Path;
-use std::sync::Arc;
-
-/// The largest graph file the runtime reads.
-pub const MAX_GRAPH_BYTES: u64 = 4 << 20;
-/// The largest shader file the runtime reads.
-pub const MAX_SHADER_BYTES: u64 = 16 << 20;
-
-/// The most passes a graph may have: two timestamp queries each must fit one query set
-/// (`wgpu::QUERY_SET_MAX_QUERIES`). Applied on every device, with or without timestamps.
-pub const MAX_PASSES: usize = wgpu::QUERY_SET_MAX_QUERIES as usize / 2;
 
 /// How far outside [0, 1] a visibility may lie (rounding of the technique's arithmetic).
 pub const VISIBILITY_EPSILON: f32 = 1e-3;
@@ -89,36 +76,6 @@ pub fn check_finite_visibility(flags: &[f32], width: u32, pass: &str) -> Result<
     )
 }
 
-/// Read a UTF-8 file of at most `cap` bytes, and only a regular file (after links): a FIFO,
-/// a device or anything else is refused before it is opened for reading, and the read is
-/// bounded, so a file that grows past the cap is refused too.
-pub fn read_capped(path: &Path, cap: u64) -> Result<String> {
-    use std::io::Read;
-    let err = |message: String| RuntimeError::File {
-        path: path.to_path_buf(),
-        message,
-    };
-    let meta = std::fs::metadata(path).map_err(|e| err(e.to_string()))?;
-    if !meta.is_file() {
-        return Err(err("is not a regular file (a FIFO, device or folder); refused".into()));
-    }
-    if meta.len() > cap {
-        return Err(err(format!("is {} bytes, above the limit of {cap} bytes", meta.len())));
-    }
-    let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
-    // Checked again on the open file: the path may have been replaced since.
-    let meta = file.metadata().map_err(|e| err(e.to_string()))?;
-    if !meta.is_file() {
-        return Err(err("is not a regular file (a FIFO, device or folder); refused".into()));
-    }
-    let mut bytes = Vec::with_capacity(meta.len().min(cap) as usize);
-    file.take(cap + 1).read_to_end(&mut bytes).map_err(|e| err(e.to_string()))?;
-    if bytes.len() as u64 > cap {
-        return Err(err(format!("is above the limit of {cap} bytes")));
-    }
-    String::from_utf8(bytes).map_err(|e| err(format!("is not UTF-8: {e}")))
-}
-
 /// The camera outputs of the Shade pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CameraOutput {
@@ -168,13 +125,10 @@ pub struct Generated {
 pub struct Executor {
     gpu: Gpu,
     pub graph: PassGraph,
-    /// One node per step, per pass, in execution order.
-    passes: Vec<PassNode>,
-    /// What the graph's resources are used as (from the steps' plans).
-    usages: Usages,
+    /// The loaded technique: its pipelines, shared.
+    technique: Technique,
     params: Vec<u8>,
     params_buf: Option<wgpu::Buffer>,
-    sampler: wgpu::Sampler,
     /// The resources of each bound light (one for `bind_scene`; see [`Executor::bind_lights`]).
     bound: Vec<Resources>,
     /// What each bound light's uniforms were last set from, and the camera.
@@ -213,131 +167,24 @@ pub struct Executor {
 }
 
 impl Executor {
-    /// Load `T.graph.ron` and the shader files it names, from the graph's own folder.
+    /// Load `T.graph.ron` and the shader files it names, from the graph's own folder
+    /// ([`Technique::load`]).
     pub fn load(gpu: &Gpu, graph_path: &Path) -> Result<Executor> {
-        let io = |path: &Path, e: std::io::Error| RuntimeError::File {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        };
-        let text = read_capped(graph_path, MAX_GRAPH_BYTES)?;
-        // A syntax error has a line and column: named with the file (file:line:column).
-        let graph = PassGraph::from_ron(&text).map_err(|e| {
-            if let graph::GraphError::Syntax { message, line, column } = e {
-                RuntimeError::File {
-                    path: format!("{}:{line}:{column}", graph_path.display()).into(),
-                    message: format!("not a valid pass graph: {message}"),
-                }
-            } else {
-                RuntimeError::Graph(e)
-            }
-        })?;
-        let dir = graph_path.parent().unwrap_or(Path::new("."));
-        let canon_dir = dir.canonicalize().map_err(|e| io(dir, e))?;
-        let mut shaders = Vec::new();
-        for p in &graph.passes {
-            let path = dir.join(&p.shader);
-            let canon = path.canonicalize().map_err(|e| io(&path, e))?;
-            if !canon.starts_with(&canon_dir) {
-                return Err(RuntimeError::File {
-                    path,
-                    message: "lies outside the graph's folder (through a link)".into(),
-                });
-            }
-            // a file error names the path as the graph gives it, not the resolved one
-            let src = read_capped(&canon, MAX_SHADER_BYTES).map_err(|e| {
-                if let RuntimeError::File { message, .. } = e {
-                    RuntimeError::File {
-                        path: path.clone(),
-                        message,
-                    }
-                } else {
-                    e
-                }
-            })?;
-            shaders.push((p.shader.clone(), src));
-        }
-        Executor::new(gpu, graph, shaders)
+        Executor::from_technique(&Technique::load(gpu, graph_path)?)
     }
 
-    /// Build from a graph and its shader sources (as the compiler's API returns them).
+    /// Build from a graph and its shader sources (as the compiler's API returns them),
+    /// checked as a graph file is ([`graph::ValidGraph`], [`Technique::new`]).
     pub fn new(gpu: &Gpu, graph: PassGraph, shaders: Vec<(String, String)>) -> Result<Executor> {
-        // The graph is untrusted: check references, refuse what this runtime cannot honour,
-        // re-validate every module with naga, and check declared sizes against the device
-        // before creating anything.
-        // the checks of `PassGraph::from_ron` made on the value (it was written to text and
-        // parsed again)
-        let graph = graph::ValidGraph::try_from(graph)?.into_inner();
-        if graph.passes.is_empty() {
-            return Err(RuntimeError::NotFound(format!(
-                "technique `{}`: the graph has no passes; there is nothing to run",
-                graph.technique
-            )));
-        }
-        if graph.passes.len() > MAX_PASSES {
-            return Err(RuntimeError::Limit {
-                what: format!("technique `{}`: passes (two GPU timestamps each, one query set)", graph.technique),
-                needed: graph.passes.len() as u64,
-                limit: MAX_PASSES as u64,
-            });
-        }
-        // every feature and limit the graph needs, all missing ones listed at once
-        Requirements::of(&graph).check(gpu, &graph.technique)?;
-        let mut sources: HashMap<String, Arc<str>> = HashMap::new();
-        for p in &graph.passes {
-            let src = shaders
-                .iter()
-                .find(|(f, _)| f == &p.shader)
-                .map(|(_, s)| s.as_str())
-                .ok_or_else(|| RuntimeError::NotFound(format!("pass `{}` names shader `{}`, which was not given", p.name, p.shader)))?;
-            validate_wgsl(src).map_err(|message| RuntimeError::Shader {
-                file: p.shader.clone(),
-                message,
-            })?;
-            if !sources.contains_key(&p.shader) {
-                let src: Arc<str> = src.into();
-                gpu.module(&p.shader, &src)?;
-                sources.insert(p.shader.clone(), src);
-            }
-        }
-        for t in &graph.textures {
-            if t.format.is_table() && t.mips {
-                return Err(RuntimeError::NotFound(format!(
-                    "texture `{}`: a summed-area table has no mip levels",
-                    t.name
-                )));
-            }
-        }
-        // Params: the uniform must fit the device, and every field must lie inside it.
-        let max_uniform = gpu.limits.max_uniform_buffer_binding_size;
-        if graph.params_size as u64 > max_uniform || graph.params_size % 4 != 0 {
-            return Err(RuntimeError::Limit {
-                what: "the Params uniform (bytes, a multiple of 4)".into(),
-                needed: graph.params_size as u64,
-                limit: max_uniform,
-            });
-        }
-        for p in &graph.params {
-            if let Some(off) = p.offset
-                && (off % 4 != 0 || off as u64 + 4 > graph.params_size as u64)
-            {
-                return Err(RuntimeError::Param(format!(
-                    "param `{}` lies at byte {off}, outside the {}-byte Params uniform",
-                    p.name, graph.params_size
-                )));
-            }
-        }
+        Executor::from_technique(&Technique::new(gpu, graph::ValidGraph::try_from(graph)?, shaders)?)
+    }
+
+    /// Run a loaded technique (shared: its pipelines are not built again).
+    pub fn from_technique(technique: &Technique) -> Result<Executor> {
+        let graph = technique.graph().clone();
+        let gpu = technique.gpu().clone();
+        let gpu = &gpu;
         let params = graph.default_params();
-        let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("sshc linear clamp"),
-            address_mode_u: wgpu::AddressMode::ClampToEdge,
-            address_mode_v: wgpu::AddressMode::ClampToEdge,
-            address_mode_w: wgpu::AddressMode::ClampToEdge,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            ..Default::default()
-        });
-        let passes = steps::build(gpu, &graph, &sources)?;
         let params_buf = (graph.params_size > 0).then(|| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("params"),
@@ -346,15 +193,13 @@ impl Executor {
                 mapped_at_creation: false,
             })
         });
-        let timestamps = Timestamps::new(gpu, passes.iter().map(|p| p.name.clone()).collect(), 1);
+        let timestamps = Timestamps::new(gpu, graph.passes.iter().map(|p| p.name.clone()).collect(), 1);
         Ok(Executor {
             gpu: gpu.clone(),
-            usages: Usages::of(&graph),
             graph,
-            passes,
+            technique: technique.clone(),
             params,
             params_buf,
-            sampler,
             bound: Vec::new(),
             lights_state: Vec::new(),
             uniforms: Vec::new(),
@@ -441,7 +286,14 @@ impl Executor {
         let geometry = Geometry::from_soup(&soup.vertices, &soup.meshes, soup.casting_vertices, &soup.unshadowed)?;
         self.geometry = None;
         self.bound = Vec::new();
-        let buffers = crate::resources::scene_buffers(&self.gpu, &self.graph, self.usages.edges, soup, &geometry, self.max_bytes);
+        let buffers = crate::resources::scene_buffers(
+            &self.gpu,
+            &self.graph,
+            self.technique.usages().edges,
+            soup,
+            &geometry,
+            self.max_bytes,
+        );
         // the soup's copy is freed before the textures are made
         drop(geometry);
         self.geometry = Some(buffers?);
@@ -585,7 +437,7 @@ impl Executor {
         self.geometry = Some(crate::resources::scene_buffers(
             &self.gpu,
             &self.graph,
-            self.usages.edges,
+            self.technique.usages().edges,
             first,
             geometry,
             self.max_bytes,
@@ -680,7 +532,7 @@ impl Executor {
         self.pixels = None;
         let Some(pixels) = pixels else { return Ok(()) };
         self.bound()?;
-        if !self.usages.gbuffer {
+        if !self.technique.usages().gbuffer {
             let shade = self.shade_name().to_string();
             return Err(RuntimeError::Unsupported {
                 pass: shade,
@@ -746,7 +598,7 @@ impl Executor {
             let position = &bound[0].camera[CameraOutput::Position as usize];
             self.combine = Some(Combine::new(&gpu, camera, lights.len(), &Combining::Lights, position)?);
         }
-        self.timestamps = Timestamps::new(&gpu, self.passes.iter().map(|p| p.name.clone()).collect(), lights.len());
+        self.timestamps = Timestamps::new(&gpu, self.technique.passes().iter().map(|p| p.name.clone()).collect(), lights.len());
         self.unshadowed = Unshadowed::new(&gpu, &bound)?;
         self.bound = bound;
         self.lights_state = lights.iter().map(SceneInputs::light_inputs).collect();
@@ -867,7 +719,15 @@ impl Executor {
             .as_ref()
             .map(|g| &g.scene)
             .ok_or_else(|| RuntimeError::NotFound("no scene geometry: bind_scene, bind_lights or bind_geometry".into()))?;
-        let res = Resources::new(gpu, &self.graph, &self.usages, s, scene, max_bytes, self.generated_limits)?;
+        let mut res = Resources::new(
+            gpu,
+            &self.graph,
+            self.technique.usages(),
+            s,
+            scene,
+            max_bytes,
+            self.generated_limits,
+        )?;
         if self.graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample) && s.samples.len() != self.graph.samples as usize {
             return Err(RuntimeError::Param(format!(
                 "technique `{}` renders {} light-sample view(s), but the scene gives {} (`SceneInputs::samples`)",
@@ -876,20 +736,82 @@ impl Executor {
                 s.samples.len()
             )));
         }
+        res.bindings = self.bind_steps(&res)?;
+        Ok(res)
+    }
+
+    /// What every step binds on one light's resources.
+    fn bind_steps(&self, res: &Resources) -> Result<Vec<Vec<Vec<StepBinding>>>> {
         let shared = Group0 {
             frame: &res.frame,
             sample_frames: &res.sample_frames,
             light_samples: &res.light_samples,
             params: self.params_buf.as_ref(),
-            sampler: &self.sampler,
+            sampler: self.technique.sampler(),
         };
-        gpu.scoped("binding the passes to the scene", || -> Result<()> {
-            for node in self.passes.iter_mut().flat_map(|p| &mut p.steps) {
-                node.bind(gpu, &res, &shared, l)?;
-            }
-            Ok(())
-        })??;
-        Ok(res)
+        let gpu = &self.gpu;
+        gpu.scoped("binding the passes to the scene", || -> Result<Vec<Vec<Vec<StepBinding>>>> {
+            self.technique
+                .passes()
+                .iter()
+                .map(|p| p.steps.iter().map(|node| node.bind(gpu, res, &shared)).collect())
+                .collect()
+        })?
+    }
+
+    /// A new camera size (a window resized): only what depends on it is created again:
+    /// each light's camera-sized targets (the camera outputs and depth, a deferred Shade's
+    /// G-buffer, camera-sized debug outputs), the lights' combination, and the step
+    /// bindings over them. The geometry, its edge adjacency, the shadow-map-sized textures
+    /// and tables, the uniforms, the pipelines and the timestamps stay; the camera, lights
+    /// and params stay as set. Bumps [`Executor::generation`] (the host's views of the
+    /// visibility changed); host pixels are given again, as after a binding. Refused, with
+    /// nothing changed, for a size the device or [`Executor::max_bytes`] cannot take.
+    pub fn resize(&mut self, camera_size: (u32, u32)) -> Result<()> {
+        let shadow_size = self.bound()?.shadow_size;
+        if self.bound[0].camera_size == camera_size {
+            return Ok(());
+        }
+        let lights = self.bound.len();
+        // every light's textures and the combination, checked before anything is created
+        let per_light: u64 = self.graph.textures.iter().map(|t| texture_bytes(t, shadow_size, camera_size)).sum();
+        let need = (per_light * lights as u64).saturating_add(if lights > 1 { Combine::bytes(camera_size, lights) } else { 0 });
+        if need > self.max_bytes {
+            return Err(RuntimeError::Limit {
+                what: format!("textures of {lights} light(s) at this camera size (bytes)"),
+                needed: need,
+                limit: self.max_bytes,
+            });
+        }
+        self.pixels = None;
+        let resized = self.resize_targets(camera_size);
+        if resized.is_err() {
+            // a failure past the checks (out of memory): nothing half-resized stays bound
+            self.bound = Vec::new();
+            self.combine = None;
+            self.unshadowed = None;
+        }
+        resized?;
+        self.generation += 1;
+        Ok(())
+    }
+
+    fn resize_targets(&mut self, camera_size: (u32, u32)) -> Result<()> {
+        let technique = self.technique.clone();
+        for res in &mut self.bound {
+            res.resize_camera(&self.gpu, &self.graph, technique.usages(), camera_size, self.max_bytes)?;
+        }
+        for l in 0..self.bound.len() {
+            let bindings = self.bind_steps(&self.bound[l])?;
+            self.bound[l].bindings = bindings;
+        }
+        if let Some(c) = &mut self.combine {
+            c.resize(&self.gpu, camera_size, &self.bound[0].camera[CameraOutput::Position as usize])?;
+        }
+        if let Some(u) = &mut self.unshadowed {
+            u.resize(&self.bound);
+        }
+        Ok(())
     }
 
     /// Bytes of the graph's textures on one light's resources ([`Executor::memory`]).
@@ -1017,7 +939,7 @@ impl Executor {
         }
         let slot = self.timestamps.as_ref().and_then(|t| t.begin(frame));
         for (l, res) in self.bound.iter().enumerate() {
-            for (pi, (pass, decl)) in self.passes.iter().zip(&self.graph.passes).enumerate() {
+            for (pi, (pass, decl)) in self.technique.passes().iter().zip(&self.graph.passes).enumerate() {
                 if pass.kind == graph::PassKind::Depth
                     && let Some(maps) = &self.depth_override
                 {
@@ -1042,16 +964,17 @@ impl Executor {
                 // The pass's first render or compute pass writes its start, the last its
                 // end. A per-sample pass records all its steps for one view, then the next.
                 let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
-                let recording: Vec<_> = (0..views)
-                    .flat_map(|v| {
+                let bindings = &res.bindings[pi];
+                let recording = || {
+                    (0..views).flat_map(move |v| {
                         pass.steps
                             .iter()
-                            .filter(move |n| n.passes() > 0 && v < n.views())
-                            .map(move |n| (n, v))
+                            .zip(bindings)
+                            .filter_map(move |(n, b)| Some((n, b.get(v as usize).filter(|b| b.passes() > 0)?, v)))
                     })
-                    .collect();
-                let last = recording.len().saturating_sub(1);
-                for (i, (node, view)) in recording.into_iter().enumerate() {
+                };
+                let last = recording().count().saturating_sub(1);
+                for (i, (node, bound, view)) in recording().enumerate() {
                     let stamps = match (&self.timestamps, slot) {
                         (Some(t), Some(slot)) => Some(t.stamps(slot, l, pi, i == 0, i == last)),
                         _ => None,
@@ -1059,7 +982,7 @@ impl Executor {
                     match &self.pixels {
                         // the host's pixels in place of the G-buffer raster
                         Some(p) if node.draws_gbuffer() => p.record(encoder, l, stamps),
-                        Some(_) | None => node.record(encoder, res, stamps, l, view)?,
+                        Some(_) | None => node.record(encoder, bound, res, stamps, view)?,
                     }
                 }
             }
@@ -1105,7 +1028,7 @@ impl Executor {
         gpu.scoped("recording the frame", || self.encode(&mut encoder))??;
         let frame = self.frames - 1;
         gpu.scoped("submitting the frame", || gpu.queue.submit([encoder.finish()]))?;
-        let names: Vec<String> = self.passes.iter().map(|p| p.name.clone()).collect();
+        let names: Vec<String> = self.technique.passes().iter().map(|p| p.name.clone()).collect();
         let Some(t) = &mut self.timestamps else {
             return Ok(FrameTimes::untimed(&names, self.bound.len()));
         };

@@ -33,10 +33,7 @@
 //! (lavapipe keeps allocating past its limits).
 
 pub use crate::device::{Gpu, INSTALL_HINT, Result, RuntimeError, WANTED_FEATURES};
-pub use crate::executor::{
-    CameraOutput, DebugOutput, Executor, Generated, MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, VISIBILITY_EPSILON, check_visibility,
-    read_capped,
-};
+pub use crate::executor::{CameraOutput, DebugOutput, Executor, Generated, VISIBILITY_EPSILON, check_visibility};
 pub use crate::fit::{Boxes, Fit};
 pub use crate::frame::{Camera, LightInputs, SampleView, SceneInputs};
 pub use crate::geometry::{Geometry, IDENTITY, Instance, MAX_INSTANCES, Mesh, normal_matrix, transform_point};
@@ -46,5 +43,6 @@ pub use crate::pipeline::mip_count;
 pub use crate::pixels::HostPixels;
 pub use crate::requirements::{FeatureNeed, Limit, LimitNeed, Requirements};
 pub use crate::resources::GeneratedLimits;
+pub use crate::technique::{MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, Technique, read_capped};
 pub use crate::timing::FrameTimes;
 pub use crate::validate::validate_wgsl;

@@ -27,6 +27,7 @@ mod receivers;
 mod requirements;
 mod resources;
 mod steps;
+mod technique;
 mod timing;
 mod update;
 mod usages;

@@ -102,6 +102,71 @@ fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 ";
 
+/// The combining step's textures at a camera size, for `n` lights, and its bind group.
+fn targets(
+    device: &wgpu::Device,
+    pipeline: &wgpu::ComputePipeline,
+    slices: Option<&wgpu::Buffer>,
+    camera: (u32, u32),
+    n: u32,
+    position: &wgpu::Texture,
+) -> ([wgpu::Texture; 2], wgpu::Texture, wgpu::Texture, wgpu::BindGroup) {
+    let texture = |label: &str, format: wgpu::TextureFormat, layers: u32, usage: wgpu::TextureUsages| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: camera.0,
+                height: camera.1,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let input = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+    // the host samples the visibilities (`Executor::visibility`)
+    let output = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING;
+    let layers = [
+        texture("lights' visibility", wgpu::TextureFormat::R32Float, n, input),
+        texture("lights' colour", wgpu::TextureFormat::Rgba8Unorm, n, input),
+    ];
+    let color = texture("combined colour", wgpu::TextureFormat::Rgba8Unorm, 1, output);
+    let visibility = texture("visibility per light", wgpu::TextureFormat::Rgba32Float, 1, output);
+    let array = |t: &wgpu::Texture| {
+        t.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        })
+    };
+    let (v_in, c_in) = (array(&layers[0]), array(&layers[1]));
+    let (c_out, v_out) = (color.create_view(&Default::default()), visibility.create_view(&Default::default()));
+    let p_in = position.create_view(&Default::default());
+    fn view(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+        wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(view),
+        }
+    }
+    let mut entries = vec![view(0, &v_in), view(1, &c_in), view(2, &c_out), view(3, &v_out)];
+    if let Some(b) = slices {
+        entries.push(view(4, &p_in));
+        entries.push(wgpu::BindGroupEntry {
+            binding: 5,
+            resource: b.as_entire_binding(),
+        });
+    }
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("combine lights"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    });
+    (layers, color, visibility, group)
+}
+
 /// The cascades' uniform (`Slices` of `CASCADES_WGSL`): eye and band, forward and count,
 /// the splits (unused ones past the last).
 fn slices_words(s: &Slices) -> [f32; 16] {
@@ -213,32 +278,6 @@ impl Combine {
         }
         gpu.scoped("creating the lights' combining step", || {
             let device = &gpu.device;
-            let texture = |label: &str, format: wgpu::TextureFormat, layers: u32, usage: wgpu::TextureUsages| {
-                device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width: camera.0,
-                        height: camera.1,
-                        depth_or_array_layers: layers,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                })
-            };
-            let n = lights as u32;
-            let input = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
-            // the host samples the visibilities (`Executor::visibility`)
-            let output = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING;
-            let layers = [
-                texture("lights' visibility", wgpu::TextureFormat::R32Float, n, input),
-                texture("lights' colour", wgpu::TextureFormat::Rgba8Unorm, n, input),
-            ];
-            let color = texture("combined colour", wgpu::TextureFormat::Rgba8Unorm, 1, output);
-            let visibility = texture("visibility per light", wgpu::TextureFormat::Rgba32Float, 1, output);
             let source = match mode {
                 Combining::Lights => COMBINE_WGSL,
                 Combining::Cascades(_) => CASCADES_WGSL,
@@ -255,62 +294,21 @@ impl Combine {
                 compilation_options: Default::default(),
                 cache: None,
             });
-            let array = |t: &wgpu::Texture| {
-                t.create_view(&wgpu::TextureViewDescriptor {
-                    dimension: Some(wgpu::TextureViewDimension::D2Array),
-                    ..Default::default()
-                })
-            };
-            let (v_in, c_in) = (array(&layers[0]), array(&layers[1]));
-            let (c_out, v_out) = (color.create_view(&Default::default()), visibility.create_view(&Default::default()));
-            let p_in = position.create_view(&Default::default());
-            let cascades = match mode {
-                Combining::Cascades(s) => Some(slices_words(s)),
+            let slices = match mode {
+                Combining::Cascades(s) => {
+                    let b = device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("cascade slices"),
+                        size: 64,
+                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    });
+                    gpu.queue.write_buffer(&b, 0, &crate::resources::f32_bytes(&slices_words(s)));
+                    Some(b)
+                }
                 Combining::Lights => None,
             };
-            let slices = cascades.map(|words| {
-                let b = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("cascade slices"),
-                    size: 64,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                gpu.queue.write_buffer(&b, 0, &crate::resources::f32_bytes(&words));
-                b
-            });
-            let mut entries = vec![
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&v_in),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&c_in),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&c_out),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&v_out),
-                },
-            ];
-            if let Some(b) = &slices {
-                entries.push(wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::TextureView(&p_in),
-                });
-                entries.push(wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: b.as_entire_binding(),
-                });
-            }
-            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("combine lights"),
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &entries,
-            });
+            let n = lights as u32;
+            let (layers, color, visibility, group) = targets(device, &pipeline, slices.as_ref(), camera, n, position);
             Combine {
                 pipeline,
                 group,
@@ -323,6 +321,17 @@ impl Combine {
                 slices,
             }
         })
+    }
+
+    /// A new camera size: the combining textures and their bind group are created again
+    /// (`position`: light 0's camera positions at that size); the pipeline and the
+    /// cascades' uniform stay.
+    pub fn resize(&mut self, gpu: &Gpu, camera: (u32, u32), position: &wgpu::Texture) -> Result<()> {
+        let (layers, color, visibility, group) = gpu.scoped("resizing the lights' combining step", || {
+            targets(&gpu.device, &self.pipeline, self.slices.as_ref(), camera, self.lights, position)
+        })?;
+        (self.layers, self.color, self.visibility, self.group, self.size) = (layers, color, visibility, group, camera);
+        Ok(())
     }
 
     /// Cascades: the camera and splits of this frame, written to the uniform the combining

@@ -139,6 +139,15 @@ impl Unshadowed {
         })
     }
 
+    /// The lights' camera targets were created again at a new size: their attachment views
+    /// are made again; the pipeline and the bind groups (each light's `Frame`) stay.
+    pub fn resize(&mut self, bound: &[Resources]) {
+        for ((_, views), res) in self.lights.iter_mut().zip(bound) {
+            let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+            *views = [view(&res.camera[0]), view(&res.camera[1]), view(&res.camera_depth)];
+        }
+    }
+
     /// Record the draw for light `l` (after its passes, before the lights are combined).
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, l: usize, res: &Resources) {
         let Some((group, [visibility, color, depth])) = self.lights.get(l) else {

@@ -130,6 +130,8 @@ pub(crate) struct Resources {
     generated: HashMap<String, wgpu::Buffer>,
     /// Edges a classification dispatch binds at once ([`GeneratedLimits::chunk`]).
     pub edges_per_chunk: u64,
+    /// What each step binds on these resources: per pass, per step, per view.
+    pub bindings: Vec<Vec<Vec<crate::steps::StepBinding>>>,
 }
 
 impl Resources {
@@ -149,7 +151,7 @@ impl Resources {
     ) -> Result<Resources> {
         // every size checked before anything is created (lavapipe keeps allocating past
         // its limits)
-        let texture_bytes = check_sizes(gpu, graph, s, max_bytes)?;
+        let texture_bytes = check_sizes(gpu, graph, s.shadow_size, s.camera_size, max_bytes)?;
         let edge_count = scene.edges.as_ref().map_or(0, |e| e.counts.edges.into());
         let bytes = texture_bytes + check_generated(gpu, graph, usages, s.shadow_size, edge_count, limits)?;
         if bytes > max_bytes {
@@ -161,41 +163,22 @@ impl Resources {
         }
         gpu.scoped("scene resources", || {
             let make = Make { gpu };
-            let (textures, tables) = make.graph_textures(graph, usages, s.shadow_size, s.camera_size);
-            let (cw, ch) = s.camera_size;
-            let none = wgpu::TextureUsages::empty();
-            let sampled = wgpu::TextureUsages::TEXTURE_BINDING;
-            // a deferred Shade stores the camera outputs from a compute step
-            let camera_stored = if usages.camera_stored {
-                wgpu::TextureUsages::STORAGE_BINDING
-            } else {
-                none
-            };
-            let gbuffer = if usages.gbuffer {
-                ["g-buffer world", "g-buffer normal", "g-buffer footprint"]
-                    .iter()
-                    .zip(graph::GBUFFER)
-                    // storage: a host's pixels are written into it by a compute step
-                    .filter_map(|(n, f)| {
-                        wgpu_format(f).map(|f| make.attachment(n, (cw, ch), f, sampled | wgpu::TextureUsages::STORAGE_BINDING))
-                    })
-                    .collect()
-            } else {
-                Vec::new()
-            };
+            let (textures, tables) = make.graph_textures(graph, usages, s.shadow_size, s.camera_size, None);
+            let (camera, camera_depth, gbuffer) = make.camera_targets(usages, s.camera_size);
             Resources {
                 shadow_size: s.shadow_size,
                 camera_size: s.camera_size,
                 draw: scene.draw.clone(),
                 textures,
                 tables,
-                light_depth: make.attachment("light depth", (s.shadow_size, s.shadow_size), DEPTH_FORMAT, none),
-                camera: ["visibility", "color", "position", "normal"]
-                    .iter()
-                    .zip(CAMERA_FORMATS)
-                    .map(|(n, f)| make.attachment(n, (cw, ch), f, camera_stored | sampled))
-                    .collect(),
-                camera_depth: make.attachment("camera depth", (cw, ch), DEPTH_FORMAT, none),
+                light_depth: make.attachment(
+                    "light depth",
+                    (s.shadow_size, s.shadow_size),
+                    DEPTH_FORMAT,
+                    wgpu::TextureUsages::empty(),
+                ),
+                camera,
+                camera_depth,
                 gbuffer,
                 frame: make.uniform("frame", &s.frame().to_bytes()),
                 sample_frames: (0..s.samples.len())
@@ -212,8 +195,29 @@ impl Resources {
                 edges: scene.edges.clone(),
                 generated: make.generated(graph, usages, edge_count, s.shadow_size, limits),
                 edges_per_chunk: limits.chunk(&gpu.limits),
+                bindings: Vec::new(),
             }
         })
+    }
+
+    /// A new camera size: the camera-sized targets (the camera outputs and depth, a
+    /// deferred Shade's G-buffer, camera-sized graph textures such as debug outputs) are
+    /// created again, checked first as at binding; the shadow-map-sized ones, the tables,
+    /// the uniforms and the generated buffers stay. The step bindings are dropped: the
+    /// caller binds again.
+    pub fn resize_camera(&mut self, gpu: &Gpu, graph: &PassGraph, usages: &Usages, camera_size: (u32, u32), max_bytes: u64) -> Result<()> {
+        check_sizes(gpu, graph, self.shadow_size, camera_size, max_bytes)?;
+        let (textures, targets) = gpu.scoped("camera-sized targets", || {
+            let make = Make { gpu };
+            let (textures, _) = make.graph_textures(graph, usages, self.shadow_size, camera_size, Some(graph::Extent::Camera));
+            (textures, make.camera_targets(usages, camera_size))
+        })?;
+        let (camera, camera_depth, gbuffer) = targets;
+        self.textures.extend(textures);
+        (self.camera, self.camera_depth, self.gbuffer) = (camera, camera_depth, gbuffer);
+        self.camera_size = camera_size;
+        self.bindings = Vec::new();
+        Ok(())
     }
 
     pub fn texture(&self, name: &str) -> Result<&wgpu::Texture> {
@@ -244,27 +248,27 @@ impl Resources {
 /// The sizes of a scene checked against the device and `max_bytes`: the shadow map and
 /// the camera image, the graph's textures and the summed-area tables. Returns the
 /// textures' bytes.
-fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) -> Result<u64> {
+fn check_sizes(gpu: &Gpu, graph: &PassGraph, shadow_size: u32, camera_size: (u32, u32), max_bytes: u64) -> Result<u64> {
     let max_dim = gpu.limits.max_texture_dimension_2d;
     // a size of 0 is no image at all, not one above the device's limit (a camera of
     // (0, 240) read "needs 240, above the device's limit of 8192"; issue 49)
-    if s.shadow_size == 0 {
+    if shadow_size == 0 {
         return Err(RuntimeError::Param("the shadow map is 0 texels wide: it needs at least 1".into()));
     }
-    if s.camera_size.0 == 0 || s.camera_size.1 == 0 {
+    if camera_size.0 == 0 || camera_size.1 == 0 {
         return Err(RuntimeError::Param(format!(
             "the camera image is {} x {} pixels: it needs at least 1 x 1",
-            s.camera_size.0, s.camera_size.1
+            camera_size.0, camera_size.1
         )));
     }
-    if s.shadow_size > max_dim {
+    if shadow_size > max_dim {
         return Err(RuntimeError::Limit {
             what: "shadow map (texels per side)".into(),
-            needed: s.shadow_size as u64,
+            needed: shadow_size as u64,
             limit: max_dim as u64,
         });
     }
-    let (cw, ch) = s.camera_size;
+    let (cw, ch) = camera_size;
     if cw.max(ch) > max_dim {
         return Err(RuntimeError::Limit {
             what: "camera image (pixels per side)".into(),
@@ -272,9 +276,9 @@ fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) ->
             limit: max_dim as u64,
         });
     }
-    let mut bytes: u64 = s.shadow_size as u64 * s.shadow_size as u64 * 4 + cw as u64 * ch as u64 * (4 + 4 + 16 + 8 + 4);
+    let mut bytes: u64 = shadow_size as u64 * shadow_size as u64 * 4 + cw as u64 * ch as u64 * (4 + 4 + 16 + 8 + 4);
     for t in &graph.textures {
-        bytes += texture_bytes(t, s.shadow_size, s.camera_size);
+        bytes += texture_bytes(t, shadow_size, camera_size);
     }
     if bytes > max_bytes {
         return Err(RuntimeError::Limit {
@@ -285,7 +289,7 @@ fn check_sizes(gpu: &Gpu, graph: &PassGraph, s: &SceneInputs, max_bytes: u64) ->
     }
     let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
     for t in graph.textures.iter().filter(|t| t.format.is_table()) {
-        let size = table_bytes(t, s.shadow_size);
+        let size = table_bytes(t, shadow_size);
         if size > storage_limit {
             return Err(RuntimeError::Limit {
                 what: format!("summed-area table `{}` (storage buffer bytes)", t.name),
@@ -309,7 +313,7 @@ pub(crate) fn scene_buffers(
     g: &Geometry,
     max_bytes: u64,
 ) -> Result<GeometryBuffers> {
-    let texture_bytes = check_sizes(gpu, graph, s, max_bytes)?;
+    let texture_bytes = check_sizes(gpu, graph, s.shadow_size, s.camera_size, max_bytes)?;
     if edges {
         let tris = g.casting_triangles();
         let needed = texture_bytes.saturating_add(Adjacency::max_bytes(tris));
@@ -365,9 +369,12 @@ impl Make<'_> {
         usages: &Usages,
         shadow_size: u32,
         camera_size: (u32, u32),
+        only: Option<graph::Extent>,
     ) -> (HashMap<String, wgpu::Texture>, HashMap<String, wgpu::Buffer>) {
         let (mut textures, mut tables) = (HashMap::new(), HashMap::new());
-        for t in &graph.textures {
+        // every texture, or those of one extent (tables are shadow-map sized)
+        let wanted = |t: &&TextureDecl| only.is_none_or(|e| t.extent == e && !t.format.is_table());
+        for t in graph.textures.iter().filter(wanted) {
             let Some(format) = wgpu_format(t.format) else {
                 let buf = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(&t.name),
@@ -400,6 +407,40 @@ impl Make<'_> {
             textures.insert(t.name.clone(), tex);
         }
         (textures, tables)
+    }
+
+    /// The camera-sized attachments: the camera outputs ([`CAMERA_FORMATS`]), the camera's
+    /// depth, and a deferred Shade's G-buffer ([`graph::GBUFFER`]; empty without one).
+    fn camera_targets(&self, usages: &Usages, (cw, ch): (u32, u32)) -> (Vec<wgpu::Texture>, wgpu::Texture, Vec<wgpu::Texture>) {
+        let none = wgpu::TextureUsages::empty();
+        let sampled = wgpu::TextureUsages::TEXTURE_BINDING;
+        // a deferred Shade stores the camera outputs from a compute step
+        let camera_stored = if usages.camera_stored {
+            wgpu::TextureUsages::STORAGE_BINDING
+        } else {
+            none
+        };
+        let gbuffer = if usages.gbuffer {
+            ["g-buffer world", "g-buffer normal", "g-buffer footprint"]
+                .iter()
+                .zip(graph::GBUFFER)
+                // storage: a host's pixels are written into it by a compute step
+                .filter_map(|(n, f)| {
+                    wgpu_format(f).map(|f| self.attachment(n, (cw, ch), f, sampled | wgpu::TextureUsages::STORAGE_BINDING))
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        (
+            ["visibility", "color", "position", "normal"]
+                .iter()
+                .zip(CAMERA_FORMATS)
+                .map(|(n, f)| self.attachment(n, (cw, ch), f, camera_stored | sampled))
+                .collect(),
+            self.attachment("camera depth", (cw, ch), DEPTH_FORMAT, none),
+            gbuffer,
+        )
     }
 
     /// A render attachment of one layer and level (a depth buffer, a camera output, the

@@ -1,6 +1,8 @@
 //! The step nodes: each step of the graph becomes, once at load, a node that owns its
-//! pipeline; binding a scene gives it its bind groups and attachments, and each frame it
-//! records itself into the command encoder. [`build`] is the one place that reads
+//! pipeline (immutable, shared by every light, view and target set that runs the
+//! technique); binding a scene makes its [`StepBinding`]s (bind groups and attachments,
+//! kept with the targets, not in the node), and each frame it records itself with them
+//! into the command encoder. [`build`] is the one place that reads
 //! [`Draw`]: what a step draws or dispatches is decided there and nowhere else.
 
 use crate::device::{Gpu, Result, RuntimeError};
@@ -40,10 +42,6 @@ pub(crate) struct StepNode {
     /// Layers per view of each texture it writes (a per-sample pass writes view k's
     /// layer l at `k * layers + l`).
     view_layers: Vec<u32>,
-    /// Bind groups, views and draw arguments at the bound scene's sizes: per light (the
-    /// light-dependent passes run once per scene light, each on its own resources), one per
-    /// view.
-    bound: Vec<Vec<Bound>>,
 }
 
 pub(crate) enum NodeKind {
@@ -139,8 +137,9 @@ pub(crate) struct IndirectArgs {
     pub offset: u64,
 }
 
-/// What binding a scene gives a node.
-enum Bound {
+/// What binding a scene gives a node, for one light and view: bind groups, attachment
+/// views and draw arguments at the targets' sizes.
+pub(crate) enum StepBinding {
     Raster {
         group0: wgpu::BindGroup,
         /// One render pass per level.
@@ -170,11 +169,22 @@ enum Bound {
     },
 }
 
+impl StepBinding {
+    /// Number of render or compute passes it records per frame (0 for a mip chain of one
+    /// level).
+    pub fn passes(&self) -> usize {
+        match self {
+            StepBinding::Raster { passes, .. } => passes.len(),
+            StepBinding::Compute { .. } => 1,
+        }
+    }
+}
+
 /// A Geometry compute step's group 3 per chunk, with the invocations of each, and the
 /// buffers reset before it (the generated buffer's header, the vertex claims).
 type GeometryGroups = (Vec<(wgpu::BindGroup, u32)>, [wgpu::Buffer; 2]);
 
-struct RasterPass {
+pub(crate) struct RasterPass {
     group1: Option<wgpu::BindGroup>,
     color: Vec<wgpu::TextureView>,
     depth: Option<wgpu::TextureView>,
@@ -501,7 +511,6 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                     .iter()
                     .map(|w| graph.texture(&w.texture).map_or(1, |t| t.layers))
                     .collect(),
-                bound: Vec::new(),
             });
         }
         passes.push(PassNode {
@@ -514,24 +523,15 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
 }
 
 impl StepNode {
-    /// Create the bind groups, attachment views and draw arguments at `res`'s sizes, for
-    /// light `light` (light 0 forgets what was bound before; the others are added in order).
-    pub fn bind(&mut self, gpu: &Gpu, res: &Resources, shared: &Group0, light: usize) -> Result<()> {
-        if light == 0 {
-            self.bound = Vec::new();
-        }
-        debug_assert_eq!(self.bound.len(), light, "lights are bound in order");
-        let mut bound = Vec::new();
-        for view in 0..self.views {
-            bound.push(self.bind_view(gpu, res, shared, view)?);
-        }
-        self.bound.push(bound);
-        Ok(())
+    /// Create the bind groups, attachment views and draw arguments at `res`'s sizes: one
+    /// [`StepBinding`] per view.
+    pub fn bind(&self, gpu: &Gpu, res: &Resources, shared: &Group0) -> Result<Vec<StepBinding>> {
+        (0..self.views).map(|view| self.bind_view(gpu, res, shared, view)).collect()
     }
 
     /// What view `view` binds: its `Frame` and its layers of the targets (a pass of one
     /// view binds the centre's `Frame` and layer 0's block).
-    fn bind_view(&self, gpu: &Gpu, res: &Resources, shared: &Group0, view: u32) -> Result<Bound> {
+    fn bind_view(&self, gpu: &Gpu, res: &Resources, shared: &Group0, view: u32) -> Result<StepBinding> {
         let frame = if self.per_sample {
             shared.sample_frames.get(view as usize).ok_or_else(|| {
                 RuntimeError::Param(format!(
@@ -607,7 +607,7 @@ impl StepNode {
                     }
                     DrawCall::Scene | DrawCall::FullScreenTriangle => (None, None),
                 };
-                Bound::Raster {
+                StepBinding::Raster {
                     group0,
                     passes,
                     vertices,
@@ -750,7 +750,7 @@ impl StepNode {
                     }
                     _ => None,
                 };
-                Bound::Compute {
+                StepBinding::Compute {
                     group0,
                     group1: self.group1(gpu, res, 0)?,
                     group2,
@@ -877,16 +877,6 @@ impl StepNode {
         })))
     }
 
-    /// Number of render or compute passes the node records per frame (0 for a mip chain
-    /// of one level).
-    pub fn passes(&self) -> usize {
-        match self.bound.first().and_then(|b| b.first()) {
-            Some(Bound::Raster { passes, .. }) => passes.len(),
-            Some(Bound::Compute { .. }) => 1,
-            None => 0,
-        }
-    }
-
     /// Whether the node rasterises the deferred Shade's G-buffer (what a host's pixels
     /// replace).
     pub fn draws_gbuffer(&self) -> bool {
@@ -895,27 +885,22 @@ impl StepNode {
 
     /// Views the node records (one per light sample in a per-sample pass).
     pub fn views(&self) -> u32 {
-        self.bound.first().map_or(0, |b| b.len() as u32)
+        self.views
     }
 
     /// Record the node's passes; `stamps.begin` goes to its first pass, `stamps.end` to its last.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        bound: &StepBinding,
         res: &Resources,
         stamps: Option<Stamps>,
-        light: usize,
         view: u32,
     ) -> Result<()> {
-        let bound = self
-            .bound
-            .get(light)
-            .and_then(|b| b.get(view as usize))
-            .ok_or_else(|| RuntimeError::NotFound(crate::error::NOTHING_BOUND.into()))?;
         match (&self.kind, bound, &self.pipeline.pipeline) {
             (
                 NodeKind::Raster(r),
-                Bound::Raster {
+                StepBinding::Raster {
                     group0,
                     passes,
                     vertices,
@@ -994,7 +979,7 @@ impl StepNode {
             }
             (
                 NodeKind::Compute(c),
-                Bound::Compute {
+                StepBinding::Compute {
                     group0,
                     group1,
                     group2,

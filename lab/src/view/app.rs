@@ -691,8 +691,10 @@ impl App {
         let scene = &self.scene;
         for ex in [&mut self.ex, &mut self.ex_b].into_iter().flatten() {
             if self.resized {
-                worker::bind(ex, scene, &self.args.cascading)?;
-                continue;
+                // only the camera-sized targets are made again: the geometry, its edges,
+                // the shadow maps and the pipelines stay (issue 49); the camera and lights
+                // of the new aspect follow below
+                ex.resize(scene.camera_size()).map_err(|e| format!("error: {e}"))?;
             }
             if ex.cascades() > 1 {
                 // the cascades follow the camera: refitted to its slices in place

@@ -1,0 +1,85 @@
+//! What a window resize costs the viewer (docs/embedding.md, "Resizing"): before issue 49
+//! it bound the scene again at the new size (`bind_scene`: the soup uploaded again, the edge
+//! adjacency built again, every texture and bind group made again); now it calls
+//! `Executor::resize`, which makes only the camera-sized targets. For a few bundled
+//! techniques on the bunny (a raster one, one with Geometry passes and a mip chain, one
+//! with summed-area tables), alternately one and the other between two sizes, the median
+//! wall time of each (until the device is idle, so that lazily made objects count), and
+//! the textures each made again (the fall of wgpu-hal's live texture count, which counts
+//! a texture when it is destroyed but not when it is made: every texture made again
+//! replaces one).
+//!
+//! `cargo bench -p sshc-tests --bench resize_cost` (about a minute on lavapipe);
+//! `SSHC_RESIZES` (default 9 of each). Writes `target/embedding/resize-cost.md`.
+
+#[path = "../tests/support/mod.rs"]
+mod support;
+
+use sshc_lab::scene::Scene;
+use sshc_runtime::gpu::Executor;
+use std::time::Instant;
+use support::{gpu, root};
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+fn main() {
+    let n: usize = std::env::var("SSHC_RESIZES").ok().and_then(|v| v.parse().ok()).unwrap_or(9);
+    let gpu = gpu();
+    let textures = || gpu.device.get_internal_counters().hal.textures.read();
+    let mut table = format!(
+        "Device: {}. Bunny scene (`scenes/bunny.ron`), shadow map 1024^2, window 640 x 480 <-> 800 x 600, {n} resizes of each kind, alternating; wall time until the device is idle.\n\n| technique | rebind (before), ms median | textures made | `resize` (now), ms median | textures made | rebind / resize |\n|---|---|---|---|---|---|\n",
+        gpu.describe()
+    );
+    for t in ["hard", "pcss", "vssm", "penumbra-maps"] {
+        let c = support::compile_source(t, &support::technique_source(t), &[], &[]);
+        let mut scene = Scene::load(root().join("scenes").join("bunny.ron")).unwrap();
+        scene.shadow_map = 1024;
+        let sizes = [(640, 480), (800, 600)];
+        let inputs: Vec<_> = sizes
+            .iter()
+            .map(|&(w, h)| {
+                scene.set_camera_size(w, h);
+                sshc_lab::bind::scene_inputs_for(&scene, &c.graph).unwrap()
+            })
+            .collect();
+        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        ex.bind_scene(&inputs[0]).unwrap();
+        ex.run_frame().unwrap();
+        let (mut rebind, mut resize) = (Vec::new(), Vec::new());
+        let (mut made_rebind, mut made_resize) = (0, 0);
+        for i in 0..2 * n {
+            let to = (i + 1) % 2;
+            let before = textures();
+            let t0 = Instant::now();
+            if i % 2 == 0 {
+                ex.bind_scene(&inputs[to]).unwrap();
+            } else {
+                ex.resize(inputs[to].camera_size).unwrap();
+                ex.set_camera(&inputs[to].camera()).unwrap();
+            }
+            gpu.wait().unwrap();
+            let ms = t0.elapsed().as_secs_f64() * 1e3;
+            // the replaced textures are destroyed once the next frame's submission is done
+            ex.run_frame().unwrap();
+            let made = before - textures();
+            if i % 2 == 0 {
+                rebind.push(ms);
+                made_rebind = made;
+            } else {
+                resize.push(ms);
+                made_resize = made;
+            }
+        }
+        let (a, b) = (median(&mut rebind), median(&mut resize));
+        let row = format!("| {t} | {a:.2} | {made_rebind} | {b:.2} | {made_resize} | {:.1} |\n", a / b);
+        print!("{row}");
+        table.push_str(&row);
+    }
+    let dir = root().join("target").join("embedding");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("resize-cost.md"), &table).unwrap();
+    println!("\n{table}");
+}
