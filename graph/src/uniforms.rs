@@ -122,8 +122,13 @@ macro_rules! uniform_struct {
             /// The struct's bytes (little-endian), its size of them, each field at its
             /// [`field_offset`].
             pub fn to_bytes(&self) -> Vec<u8> {
-                let mut out = vec![0u8; $size as usize];
-                let values: &[&[f32]] = &[$(&self.$name,)+];
+                self.to_array().to_vec()
+            }
+
+            /// [`Self::to_bytes`] on the stack (the per-frame path allocates nothing).
+            pub fn to_array(&self) -> [u8; $size as usize] {
+                let mut out = [0u8; $size as usize];
+                let values: [&[f32]; $fields.len()] = [$(&self.$name,)+];
                 for (i, v) in values.iter().enumerate() {
                     let at = field_offset($fields, i) as usize;
                     for (k, x) in v.iter().enumerate() {
@@ -211,9 +216,14 @@ impl SampleViewUniform {
     /// The bytes of `views` as the `LightSamples` uniform ([`LIGHT_SAMPLES_SIZE`] bytes;
     /// views past [`MAX_LIGHT_SAMPLES`] are dropped, missing ones zero).
     pub fn light_samples_bytes(views: &[SampleViewUniform]) -> Vec<u8> {
-        let mut out = Vec::with_capacity(LIGHT_SAMPLES_SIZE as usize);
-        for k in 0..MAX_LIGHT_SAMPLES as usize {
-            out.extend(views.get(k).copied().unwrap_or_default().to_bytes());
+        Self::light_samples_array(views).to_vec()
+    }
+
+    /// [`Self::light_samples_bytes`] on the stack (the per-frame path allocates nothing).
+    pub fn light_samples_array(views: &[SampleViewUniform]) -> [u8; LIGHT_SAMPLES_SIZE as usize] {
+        let mut out = [0u8; LIGHT_SAMPLES_SIZE as usize];
+        for (k, chunk) in out.chunks_exact_mut(SAMPLE_VIEW_SIZE as usize).enumerate() {
+            chunk.copy_from_slice(&views.get(k).copied().unwrap_or_default().to_array());
         }
         out
     }

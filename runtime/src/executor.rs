@@ -143,8 +143,13 @@ pub struct Executor {
     caster_bounds: Option<[[f32; 3]; 2]>,
     /// Bumped by every binding (every reallocation).
     generation: u64,
-    /// Frames recorded since the last binding.
+    /// Frames prepared since the last binding.
     frames: u64,
+    /// The frame [`Executor::prepare`] began (its counter), its timestamp slot, and whether
+    /// it places the instances again.
+    frame: u64,
+    slot: Option<usize>,
+    place: bool,
     /// The bound geometry, shared by every light: a host's ([`Executor::bind_geometry`]) or
     /// a triangle soup's ([`Executor::bind_lights`], through [`Geometry::from_soup`]).
     geometry: Option<GeometryBuffers>,
@@ -208,6 +213,9 @@ impl Executor {
             caster_bounds: None,
             generation: 0,
             frames: 0,
+            frame: 0,
+            slot: None,
+            place: false,
             geometry: None,
             pixels: None,
             combine: None,
@@ -505,12 +513,13 @@ impl Executor {
             return Ok(());
         };
         let Some(floor) = facts.depth_floor else { return Ok(()) };
-        let corners: Vec<f32> = (0..8)
-            .flat_map(|i| {
-                let c = |axis: usize| bounds[(i >> axis) & 1][axis];
-                [c(0), c(1), c(2), 0.0, 0.0, 0.0]
-            })
-            .collect();
+        // on the stack: this runs on every `set_light` and `set_transforms`
+        let mut corners = [0.0f32; 48];
+        for (i, v) in corners.chunks_exact_mut(6).enumerate() {
+            for axis in 0..3 {
+                v[axis] = bounds[(i >> axis) & 1][axis];
+            }
+        }
         match graph::caster_depth_floor(&corners, None, &light.view, light.near, light.far) {
             Some(here) if here < floor => Err(RuntimeError::Param(format!(
                 "technique `{}` was specialised for scene {}, whose casters lie at normalised depth {floor} or more in the light's view; under light {l} as set, the casters' bounding box reaches {here}, so the specialisation may not hold; bind again (binding checks the triangles themselves) or compile without `--scene`",
@@ -657,8 +666,9 @@ impl Executor {
         }
         self.check_light_kind(l, light.kind)?;
         self.check_floor_from_bounds(l, light, self.caster_bounds)?;
-        self.uniforms[l] = LightUniforms::new(&camera, light, res.shadow_size, false);
-        self.lights_state[l] = light.clone();
+        // in place: nothing is allocated once the light's samples are bound
+        self.uniforms[l].set(&camera, light, res.shadow_size, false);
+        self.lights_state[l].assign(light);
         Ok(())
     }
 
@@ -904,19 +914,19 @@ impl Executor {
         })
     }
 
-    /// Record one frame into the host's `encoder`: every pass once for each bound light,
-    /// then the lights' combination. The host submits it; the visibility
-    /// ([`Executor::visibility`]) holds the frame's result once the submission completes.
-    ///
-    /// One recording per submission: the uniforms written before this call
-    /// ([`Executor::set_camera`], [`Executor::set_light`], the params and the frame
-    /// counter) are applied by wgpu at the next submission, before its command buffers,
-    /// so two recordings in one submission would both see the last state written.
-    ///
-    /// Nothing is created and nothing waits: the GPU times go into a ring of query sets
-    /// and come back a frame or more later ([`Executor::frame_times`]). Validation errors
-    /// of the recording surface where the host finishes its encoder.
+    /// Record one frame into the host's `encoder`: [`Executor::prepare`], then
+    /// [`Executor::record`].
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        self.prepare()?;
+        self.record(encoder)
+    }
+
+    /// Begin a frame: write what changed since the last one (the params, each light's
+    /// uniforms with the frame's counter, the cascades' slices) through the queue, take the
+    /// frame's timestamp slot, and note whether the instances are placed again. Queue
+    /// writes only: no encoder, nothing created, nothing waits. wgpu applies the writes at
+    /// the next submission, before its command buffers.
+    pub fn prepare(&mut self) -> Result<()> {
         self.bound()?;
         if let Some(t) = &mut self.timestamps {
             // the host's submissions fire the mapping callbacks: no poll here
@@ -929,36 +939,44 @@ impl Executor {
             writer.params(buf, &self.params);
             self.params_dirty = false;
         }
-        let frame = self.frames;
+        self.frame = self.frames;
+        self.frames += 1;
         for (res, u) in self.bound.iter().zip(&mut self.uniforms) {
-            writer.light(res, u, frame as u32);
+            writer.light(res, u, self.frame as u32);
         }
         // a host geometry's instances, placed again after their transforms changed
-        if let Some(g) = &mut self.geometry {
+        self.place = self.geometry.as_mut().is_some_and(GeometryBuffers::take_due);
+        self.slot = self.timestamps.as_mut().and_then(|t| t.begin(self.frame));
+        if let Some(maps) = &self.depth_override {
+            self.write_depth_overrides(maps)?;
+        }
+        Ok(())
+    }
+
+    /// Record the frame [`Executor::prepare`] began into the host's `encoder`: every pass
+    /// once for each bound light, then the lights' combination. Encoder commands only
+    /// (nothing written through the queue, nothing created, nothing waits), from `&self`:
+    /// a host may record the prepared frame more than once in a submission (several
+    /// encoders, a frame recorded again), and every recording sees the same uniforms. The
+    /// host submits; the visibility ([`Executor::visibility`]) holds the frame's result
+    /// once the submission completes. The GPU times go into a ring of query sets and come
+    /// back a frame or more later ([`Executor::frame_times`]). Validation errors of the
+    /// recording surface where the host finishes its encoder.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        self.bound()?;
+        if self.frames == 0 {
+            return Err(RuntimeError::NotFound(
+                "no frame was prepared: call prepare (queue writes), then record (encoder commands)".into(),
+            ));
+        }
+        if let (true, Some(g)) = (self.place, &self.geometry) {
             g.record(encoder);
         }
-        let slot = self.timestamps.as_ref().and_then(|t| t.begin(frame));
+        let slot = self.slot;
         for (l, res) in self.bound.iter().enumerate() {
-            for (pi, (pass, decl)) in self.technique.passes().iter().zip(&self.graph.passes).enumerate() {
-                if pass.kind == graph::PassKind::Depth
-                    && let Some(maps) = &self.depth_override
-                {
-                    let views = if decl.views == graph::Views::PerLightSample {
-                        self.graph.samples
-                    } else {
-                        1
-                    };
-                    if maps.len() != 1 && maps.len() != views as usize {
-                        return Err(RuntimeError::Param(format!(
-                            "depth override has {} maps, the Depth pass `{}` {views} view(s)",
-                            maps.len(),
-                            decl.name
-                        )));
-                    }
-                    for view in 0..views {
-                        let depth = &maps[(view as usize).min(maps.len() - 1)];
-                        self.write_depth_override(res, decl, depth, view)?;
-                    }
+            for (pi, pass) in self.technique.passes().iter().enumerate() {
+                if pass.kind == graph::PassKind::Depth && self.depth_override.is_some() {
+                    // written by `prepare` in its place
                     continue;
                 }
                 // The pass's first render or compute pass writes its start, the last its
@@ -995,10 +1013,34 @@ impl Executor {
         if let Some(c) = &self.combine {
             c.record(encoder, &self.bound);
         }
-        if let (Some(t), Some(slot)) = (&mut self.timestamps, slot) {
-            t.finish(encoder, slot, frame);
+        if let (Some(t), Some(slot)) = (&self.timestamps, slot) {
+            t.finish(encoder, slot);
         }
-        self.frames += 1;
+        Ok(())
+    }
+
+    /// Write the depth override of every light's Depth pass (each of its views).
+    fn write_depth_overrides(&self, maps: &[Vec<f32>]) -> Result<()> {
+        for res in &self.bound {
+            for decl in self.graph.passes.iter().filter(|p| p.kind == graph::PassKind::Depth) {
+                let views = if decl.views == graph::Views::PerLightSample {
+                    self.graph.samples
+                } else {
+                    1
+                };
+                if maps.len() != 1 && maps.len() != views as usize {
+                    return Err(RuntimeError::Param(format!(
+                        "depth override has {} maps, the Depth pass `{}` {views} view(s)",
+                        maps.len(),
+                        decl.name
+                    )));
+                }
+                for view in 0..views {
+                    let depth = &maps[(view as usize).min(maps.len() - 1)];
+                    self.write_depth_override(res, decl, depth, view)?;
+                }
+            }
+        }
         Ok(())
     }
 

@@ -141,6 +141,37 @@ impl LightInputs {
         sshc_light::depth_warning(self.near, self.far, self.orthographic)
     }
 
+    /// Become `from`, in place: the samples' vector keeps its capacity (a derived
+    /// `clone_from` would allocate a new one every frame).
+    pub(crate) fn assign(&mut self, from: &LightInputs) {
+        let samples = std::mem::take(&mut self.samples);
+        *self = LightInputs {
+            samples: Vec::new(),
+            ..from.without_samples()
+        };
+        self.samples = samples;
+        self.samples.clone_from(&from.samples);
+    }
+
+    /// A copy without its sample views (nothing allocated).
+    fn without_samples(&self) -> LightInputs {
+        LightInputs {
+            view: self.view,
+            view_proj: self.view_proj,
+            position: self.position,
+            near: self.near,
+            far: self.far,
+            size: self.size,
+            half_extents: self.half_extents,
+            angle: self.angle,
+            proj_y: self.proj_y,
+            orthographic: self.orthographic,
+            samples: Vec::new(),
+            samples_closed: self.samples_closed,
+            kind: self.kind,
+        }
+    }
+
     /// Refuse non-finite matrices, positions or sizes, and an empty depth range.
     pub fn check(&self, light: usize) -> Result<()> {
         // every value, without collecting them (this runs on every `set_light`)
@@ -217,22 +248,27 @@ impl LightInputs {
 
     /// The `LightSamples` uniform: every sample's view.
     pub fn light_samples(&self, shadow_size: u32) -> Vec<SampleViewUniform> {
+        let mut out = Vec::with_capacity(self.samples.len());
+        self.write_light_samples(shadow_size, &mut out);
+        out
+    }
+
+    /// [`LightInputs::light_samples`] into `out`, in place (its capacity kept).
+    pub(crate) fn write_light_samples(&self, shadow_size: u32, out: &mut Vec<SampleViewUniform>) {
         let n = shadow_size as f32;
-        self.samples
-            .iter()
-            .map(|s| SampleViewUniform {
-                view_proj: s.light_view_proj,
-                view: s.light_view,
-                position: [s.position[0], s.position[1], s.position[2], 1.0],
-                depth_range: [s.near, s.far, 1.0 / (s.far - s.near).max(f32::MIN_POSITIVE), 0.0],
-                weights: [
-                    s.weights[0],
-                    s.weights[1],
-                    2.0 / (s.light_proj_y.max(f32::MIN_POSITIVE) * n),
-                    1.0 / s.light_proj_y.max(f32::MIN_POSITIVE),
-                ],
-            })
-            .collect()
+        out.clear();
+        out.extend(self.samples.iter().map(|s| SampleViewUniform {
+            view_proj: s.light_view_proj,
+            view: s.light_view,
+            position: [s.position[0], s.position[1], s.position[2], 1.0],
+            depth_range: [s.near, s.far, 1.0 / (s.far - s.near).max(f32::MIN_POSITIVE), 0.0],
+            weights: [
+                s.weights[0],
+                s.weights[1],
+                2.0 / (s.light_proj_y.max(f32::MIN_POSITIVE) * n),
+                1.0 / s.light_proj_y.max(f32::MIN_POSITIVE),
+            ],
+        }));
     }
 }
 

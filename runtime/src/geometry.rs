@@ -506,6 +506,15 @@ impl Geometry {
 /// have none.
 fn world_boxes(boxes: &[Option<[[f32; 3]; 2]>], casts: &[bool], transforms: &[[f32; 16]]) -> Boxes {
     let mut out = Boxes::default();
+    write_world_boxes(&mut out, boxes, casts, transforms);
+    out
+}
+
+/// [`world_boxes`] into `out`, in place (its vectors keep their capacity: this runs on every
+/// `set_transforms`).
+fn write_world_boxes(out: &mut Boxes, boxes: &[Option<[[f32; 3]; 2]>], casts: &[bool], transforms: &[[f32; 16]]) {
+    out.casters.clear();
+    out.others.clear();
     for ((b, &c), t) in boxes.iter().zip(casts).zip(transforms) {
         let Some(b) = b else { continue };
         let placed = box_of((0..8).map(|i| transform_point(t, [0, 1, 2].map(|a| b[(i >> a) & 1][a]))));
@@ -513,7 +522,6 @@ fn world_boxes(boxes: &[Option<[[f32; 3]; 2]>], casts: &[bool], transforms: &[[f
             if c { &mut out.casters } else { &mut out.others }.push(w);
         }
     }
-    out
 }
 
 /// The bounding box of the casting instances, world space: each instance's mesh box
@@ -819,6 +827,8 @@ const STEPS: [&str; 4] = ["place_vertices", "place_edges", "place_planes", "plac
 pub(crate) struct GeometryBuffers {
     pub scene: HostScene,
     records: wgpu::Buffer,
+    /// The placement records' bytes as last written (their vector reused every frame).
+    record_bytes: Vec<u8>,
     pipelines: Vec<wgpu::ComputePipeline>,
     group: Option<wgpu::BindGroup>,
     spans: Vec<Spans>,
@@ -1211,6 +1221,7 @@ impl GeometryBuffers {
                     .map(|i| box_of(g.meshes[i.mesh].positions.iter().copied()))
                     .collect(),
                 world: Boxes::default(),
+                record_bytes: Vec::new(),
             };
             out.world = world_boxes(&out.boxes, &out.casts, &out.transforms);
             out.write_records(&gpu.queue);
@@ -1243,13 +1254,15 @@ impl GeometryBuffers {
     /// placement records are written and placement runs in the next frame.
     pub fn write_transforms(&mut self, queue: &wgpu::Queue, transforms: &[[f32; 16]]) {
         self.transforms.copy_from_slice(transforms);
-        self.world = world_boxes(&self.boxes, &self.casts, &self.transforms);
+        write_world_boxes(&mut self.world, &self.boxes, &self.casts, &self.transforms);
         self.write_records(queue);
     }
 
     /// Write every placement record and mark placement due.
     fn write_records(&mut self, queue: &wgpu::Queue) {
-        let mut bytes = vec![0u8; self.transforms.len() * RECORD_BYTES as usize];
+        // kept from one frame to the next: nothing is allocated per frame
+        let mut bytes = std::mem::take(&mut self.record_bytes);
+        bytes.resize(self.transforms.len() * RECORD_BYTES as usize, 0);
         for (i, (t, s)) in self.transforms.iter().zip(&self.spans).enumerate() {
             let n = normal_matrix(t).unwrap_or(IDENTITY);
             // a mirroring matrix turns the winding: the planes are negated to follow it
@@ -1282,6 +1295,7 @@ impl GeometryBuffers {
         if !bytes.is_empty() {
             queue.write_buffer(&self.records, 0, &bytes);
         }
+        self.record_bytes = bytes;
         self.dirty = true;
     }
 
@@ -1295,12 +1309,16 @@ impl GeometryBuffers {
         instances_bounds(&self.boxes, &self.casts, transforms)
     }
 
+    /// Whether the next frame places the instances (their transforms changed since the
+    /// last frame was prepared); the question clears the flag.
+    pub fn take_due(&mut self) -> bool {
+        std::mem::take(&mut self.dirty) && self.places
+    }
+
     /// Record the placement of every instance (its vertices, and its edges, planes and face
-    /// references where it has them), when it is due.
-    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        if !std::mem::take(&mut self.dirty) || !self.places {
-            return;
-        }
+    /// references where it has them): where [`GeometryBuffers::take_due`] said so for the
+    /// frame. Placing twice gives the same world-space copies.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder) {
         let Some(group) = &self.group else { return };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("place instances"),

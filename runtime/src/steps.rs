@@ -208,6 +208,10 @@ pub(crate) struct Stamps<'a> {
     pub end: Option<u32>,
 }
 
+/// The colour attachments a render pass may have (WebGPU's `maxColorAttachments`; a
+/// Shade's camera outputs and debug outputs come to at most this).
+const MAX_COLOR_ATTACHMENTS: usize = 8;
+
 const WHITE: wgpu::Color = wgpu::Color {
     r: 1.0,
     g: 1.0,
@@ -918,25 +922,23 @@ impl StepNode {
                             end_of_pass_write_index: s.end.filter(|_| i == last),
                         })
                         .filter(|t| t.beginning_of_pass_write_index.is_some() || t.end_of_pass_write_index.is_some());
-                    let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = p
-                        .color
-                        .iter()
-                        .zip(&r.clear)
-                        .map(|(view, clear)| {
-                            Some(wgpu::RenderPassColorAttachment {
-                                view,
-                                depth_slice: None,
-                                resolve_target: None,
-                                ops: wgpu::Operations {
-                                    load: wgpu::LoadOp::Clear(*clear),
-                                    store: wgpu::StoreOp::Store,
-                                },
-                            })
-                        })
-                        .collect();
+                    // on the stack (WebGPU's 8 colour attachments at most): nothing is
+                    // allocated per frame
+                    let mut attachments: [Option<wgpu::RenderPassColorAttachment>; MAX_COLOR_ATTACHMENTS] = Default::default();
+                    for (slot, (view, clear)) in attachments.iter_mut().zip(p.color.iter().zip(&r.clear)) {
+                        *slot = Some(wgpu::RenderPassColorAttachment {
+                            view,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(*clear),
+                                store: wgpu::StoreOp::Store,
+                            },
+                        });
+                    }
                     let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                         label: Some(&self.label),
-                        color_attachments: &attachments,
+                        color_attachments: &attachments[..p.color.len().min(MAX_COLOR_ATTACHMENTS)],
                         depth_stencil_attachment: p.depth.as_ref().map(|view| wgpu::RenderPassDepthStencilAttachment {
                             view,
                             depth_ops: Some(wgpu::Operations {

@@ -99,10 +99,14 @@ impl Timestamps {
         })
     }
 
-    /// The slot frame `frame` records its timestamps into, if it is free.
-    pub fn begin(&self, frame: u64) -> Option<usize> {
+    /// The slot frame `frame` records its timestamps into, if it is free (taken for it).
+    pub fn begin(&mut self, frame: u64) -> Option<usize> {
         let i = (frame % RING as u64) as usize;
-        (self.slots[i].state.load(Ordering::Acquire) == FREE).then_some(i)
+        let s = &mut self.slots[i];
+        (s.state.load(Ordering::Acquire) == FREE).then(|| {
+            s.frame = frame;
+            i
+        })
     }
 
     /// The writes of pass `pass` of light `light` into slot `slot`: its start (`first`)
@@ -116,13 +120,14 @@ impl Timestamps {
         }
     }
 
-    /// Resolve slot `slot`'s queries into its readable copy, at the end of frame `frame`.
-    pub fn finish(&mut self, encoder: &mut wgpu::CommandEncoder, slot: usize, frame: u64) {
-        let s = &mut self.slots[slot];
+    /// Resolve slot `slot`'s queries into its readable copy, at the end of the frame that
+    /// took it ([`Timestamps::begin`]). A frame recorded twice resolves twice: the second
+    /// recording's times are the ones read.
+    pub fn finish(&self, encoder: &mut wgpu::CommandEncoder, slot: usize) {
+        let s = &self.slots[slot];
         let n = (self.passes.len() * self.lights * 2) as u32;
         encoder.resolve_query_set(&s.set, 0..n, &s.resolve, 0);
         encoder.copy_buffer_to_buffer(&s.resolve, 0, &s.read, 0, n as u64 * 8);
-        s.frame = frame;
         s.state.store(RECORDED, Ordering::Release);
     }
 
@@ -150,20 +155,26 @@ impl Timestamps {
             let s = &self.slots[i];
             match s.state.load(Ordering::Acquire) {
                 MAPPED => {
-                    let ticks: Vec<u64> = match s.read.slice(..).get_mapped_range() {
-                        Ok(view) => view
-                            .chunks_exact(8)
-                            .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
-                            .collect(),
-                        Err(_) => Vec::new(),
-                    };
-                    s.read.unmap();
                     let frame = s.frame;
-                    s.state.store(FREE, Ordering::Release);
-                    let times = self.times(&ticks, period);
                     if self.latest.as_ref().is_none_or(|(f, _)| *f < frame) {
-                        self.latest = Some((frame, times));
+                        // the times written in place (made once): nothing is allocated
+                        // per frame
+                        let (_, times) = self
+                            .latest
+                            .get_or_insert_with(|| (frame, FrameTimes::untimed(&self.passes, self.lights)));
+                        if let Ok(view) = s.read.slice(..).get_mapped_range() {
+                            let tick = |i: usize| {
+                                view.get(8 * i..8 * i + 8)
+                                    .map_or(0, |c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                            };
+                            times_into(tick, self.passes.len(), self.lights, period, times);
+                        }
+                        if let Some(l) = &mut self.latest {
+                            l.0 = frame;
+                        }
                     }
+                    s.read.unmap();
+                    s.state.store(FREE, Ordering::Release);
                 }
                 FAILED => {
                     s.state.store(FREE, Ordering::Release);
@@ -178,31 +189,19 @@ impl Timestamps {
     pub fn latest(&self) -> Option<&(u64, FrameTimes)> {
         self.latest.as_ref()
     }
+}
 
-    /// Each pass's time (summed over lights) and each light's, from the raw ticks.
-    fn times(&self, ticks: &[u64], period: f64) -> FrameTimes {
-        let n = self.passes.len();
-        let per_light: Vec<Vec<Option<f64>>> = (0..self.lights)
-            .map(|l| {
-                (0..n)
-                    .map(|i| {
-                        let (a, z) = (
-                            ticks.get(2 * (l * n + i)).copied().unwrap_or(0),
-                            ticks.get(2 * (l * n + i) + 1).copied().unwrap_or(0),
-                        );
-                        (z >= a && a > 0).then(|| (z - a) as f64 * period * 1e-6)
-                    })
-                    .collect()
-            })
-            .collect();
-        FrameTimes {
-            passes: self
-                .passes
-                .iter()
-                .enumerate()
-                .map(|(i, p)| (p.clone(), per_light.iter().map(|t| t[i]).sum()))
-                .collect(),
-            lights: per_light.iter().map(|t| t.iter().copied().sum()).collect(),
-        }
+/// Each pass's time (summed over lights) and each light's, from the raw ticks (`tick(q)`,
+/// query `q`), written into `out` (made for `passes` passes and `lights` lights).
+fn times_into(tick: impl Fn(usize) -> u64, passes: usize, lights: usize, period: f64, out: &mut FrameTimes) {
+    let ms = |l: usize, i: usize| {
+        let (a, z) = (tick(2 * (l * passes + i)), tick(2 * (l * passes + i) + 1));
+        (z >= a && a > 0).then(|| (z - a) as f64 * period * 1e-6)
+    };
+    for (i, (_, t)) in out.passes.iter_mut().enumerate() {
+        *t = (0..lights).map(|l| ms(l, i)).sum();
+    }
+    for (l, t) in out.lights.iter_mut().enumerate() {
+        *t = (0..passes).map(|i| ms(l, i)).sum();
     }
 }

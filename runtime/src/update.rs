@@ -14,33 +14,45 @@ use crate::frame::{Camera, LightInputs};
 use crate::graph::{FrameUniform, SampleViewUniform};
 use crate::resources::Resources;
 
-/// One light's uniforms as the next frame writes them.
+/// One light's uniforms as the next frame writes them. Set again in place (its vectors
+/// keep their capacity): setting a camera or a light allocates nothing once the light's
+/// number of samples is bound.
 pub(crate) struct LightUniforms {
     /// The centre view's `Frame` and each light sample's.
     centre: FrameUniform,
     samples: Vec<FrameUniform>,
-    /// The `LightSamples` uniform, when it changed since it was last written.
-    light_samples: Option<Vec<SampleViewUniform>>,
+    /// The `LightSamples` uniform, and whether it changed since it was last written.
+    light_samples: Vec<SampleViewUniform>,
+    light_samples_pending: bool,
 }
 
 impl LightUniforms {
     /// The uniforms of `light` seen by `camera`; the `LightSamples` pending when `fresh`
     /// (binding has just written them: not pending).
     pub fn new(camera: &Camera, light: &LightInputs, shadow_size: u32, fresh: bool) -> LightUniforms {
-        LightUniforms {
-            centre: light.frame(camera, shadow_size),
-            samples: (0..light.samples.len())
-                .filter_map(|k| light.sample_frame(camera, shadow_size, k))
-                .collect(),
-            light_samples: (!fresh && !light.samples.is_empty()).then(|| light.light_samples(shadow_size)),
-        }
+        let mut u = LightUniforms {
+            centre: FrameUniform::default(),
+            samples: Vec::with_capacity(light.samples.len()),
+            light_samples: Vec::with_capacity(light.samples.len()),
+            light_samples_pending: false,
+        };
+        u.set(camera, light, shadow_size, fresh);
+        u
+    }
+
+    /// Light `light` seen by `camera`, in place; its `LightSamples` pending unless `fresh`.
+    pub fn set(&mut self, camera: &Camera, light: &LightInputs, shadow_size: u32, fresh: bool) {
+        self.set_camera(camera, light, shadow_size);
+        light.write_light_samples(shadow_size, &mut self.light_samples);
+        self.light_samples_pending = !fresh && !light.samples.is_empty();
     }
 
     /// A new camera: the `Frame` uniforms change, the `LightSamples` do not.
     pub fn set_camera(&mut self, camera: &Camera, light: &LightInputs, shadow_size: u32) {
-        let pending = self.light_samples.take();
-        *self = LightUniforms::new(camera, light, shadow_size, true);
-        self.light_samples = pending;
+        self.centre = light.frame(camera, shadow_size);
+        self.samples.clear();
+        self.samples
+            .extend((0..light.samples.len()).filter_map(|k| light.sample_frame(camera, shadow_size, k)));
     }
 }
 
@@ -58,14 +70,14 @@ impl<'a> FrameWriter<'a> {
     /// changed.
     pub fn light(&self, res: &Resources, u: &mut LightUniforms, frame: u32) {
         u.centre.counters[0] = frame as f32;
-        self.queue.write_buffer(&res.frame, 0, &u.centre.to_bytes());
+        self.queue.write_buffer(&res.frame, 0, &u.centre.to_array());
         for (f, buf) in u.samples.iter_mut().zip(&res.sample_frames) {
             f.counters[0] = frame as f32;
-            self.queue.write_buffer(buf, 0, &f.to_bytes());
+            self.queue.write_buffer(buf, 0, &f.to_array());
         }
-        if let Some(views) = u.light_samples.take() {
+        if std::mem::take(&mut u.light_samples_pending) {
             self.queue
-                .write_buffer(&res.light_samples, 0, &SampleViewUniform::light_samples_bytes(&views));
+                .write_buffer(&res.light_samples, 0, &SampleViewUniform::light_samples_array(&u.light_samples));
         }
     }
 

@@ -1593,3 +1593,40 @@ fn a_camera_resize_makes_only_the_camera_sized_targets_and_renders_as_a_fresh_bi
         );
     }
 }
+
+/// Issue 49: `prepare` writes a frame's uniforms through the queue and `record` (from
+/// `&self`) only records: a prepared frame recorded twice in one submission, into two
+/// encoders, gives the frame recorded once, bit for bit; `record` before any `prepare` is
+/// refused with what to call.
+#[test]
+fn a_prepared_frame_recorded_twice_in_one_submission_is_the_frame_recorded_once() {
+    let gpu = gpu();
+    for (t, sc) in [("pcss", "triangle"), ("penumbra-maps", "triangle"), ("pcss", "three-lights")] {
+        let c = compile(t);
+        let base = scene(sc, 32, 64);
+        let lights = all_lights(&base, &c);
+        let moved = all_lights(&at_frame(&base, 3), &c);
+        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        ex.bind_lights(&lights).unwrap();
+        let e = ex
+            .record(&mut gpu.device.create_command_encoder(&Default::default()))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("prepare"), "{e}");
+        update(&mut ex, &moved);
+        ex.prepare().unwrap();
+        let (mut a, mut b) = (
+            gpu.device.create_command_encoder(&Default::default()),
+            gpu.device.create_command_encoder(&Default::default()),
+        );
+        ex.record(&mut a).unwrap();
+        ex.record(&mut b).unwrap();
+        gpu.queue.submit([a.finish(), b.finish()]);
+        gpu.wait().unwrap();
+        let twice = ex.read_visibilities().unwrap().rgba;
+        assert!(
+            twice == fresh(&c, &moved),
+            "{t} on {sc}: recorded twice, the frame differs from one recording"
+        );
+    }
+}
