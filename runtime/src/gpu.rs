@@ -19,7 +19,9 @@
 //! - `timing`: [`FrameTimes`] and the ring of timestamp queries read back later;
 //! - `adjacency` (public): the edge adjacency of a scene's meshes, built on the CPU for
 //!   Geometry passes, and the silhouette rule;
-//! - `executor`: [`Executor`]: load, bind, update, encode, run, read back;
+//! - `technique`: [`Technique`], a loaded technique (graph, pipelines), immutable and
+//!   shared; the file caps and [`read_capped`];
+//! - `executor`: [`Executor`]: bind, resize, update, prepare, record, run, read back;
 //! - `fit`: a light's view fitted by the runtime ([`LightInputs::fit`], [`Fit`], [`Boxes`]);
 //! - `frame`: [`SceneInputs`], [`Camera`], [`LightInputs`] and the `Frame` uniform's values;
 //! - `lights`: several lights combined in one frame;

@@ -163,7 +163,7 @@ impl Technique {
         }
         // Params: the uniform must fit the device, and every field must lie inside it.
         let max_uniform = gpu.limits.max_uniform_buffer_binding_size;
-        if graph.params_size as u64 > max_uniform || graph.params_size % 4 != 0 {
+        if graph.params_size as u64 > max_uniform || !graph.params_size.is_multiple_of(4) {
             return Err(RuntimeError::Limit {
                 what: "the Params uniform (bytes, a multiple of 4)".into(),
                 needed: graph.params_size as u64,
@@ -172,7 +172,7 @@ impl Technique {
         }
         for p in &graph.params {
             if let Some(off) = p.offset
-                && (off % 4 != 0 || off as u64 + 4 > graph.params_size as u64)
+                && (!off.is_multiple_of(4) || off as u64 + 4 > graph.params_size as u64)
             {
                 return Err(RuntimeError::Param(format!(
                     "param `{}` lies at byte {off}, outside the {}-byte Params uniform",

@@ -6,7 +6,7 @@ use super::present::{Part, Pick, Present};
 use super::refine::{Estimate, Refiner};
 use super::script::{Event, Log};
 use super::state::{self, ColourMap, Mode, Orbit, ViewState};
-use super::worker::{self, Answer, Controls, Watch, Worker};
+use super::worker::{Answer, Controls, Watch, Worker};
 use crate::image_io::ImageFiles as _;
 use crate::scene::Scene;
 use serde_json::json;

@@ -202,7 +202,7 @@ fn build(gpu: &Gpu, r: Request) -> Result<Ready, String> {
 
 /// Bind every light of `scene` as `sshc render` does (each light its own passes), or its
 /// light's cascades where `cascading` or the scene asks for them.
-pub fn bind(ex: &mut Executor, scene: &Scene, cascading: &Cascading) -> Result<(), String> {
+fn bind(ex: &mut Executor, scene: &Scene, cascading: &Cascading) -> Result<(), String> {
     crate::bind::check_cascades(scene, cascading)?;
     cascading.bind_or_scene(ex, scene, true).map(|_| ())
 }
