@@ -863,9 +863,6 @@ impl Visibility {
         for (li, light) in scene.lights.iter().enumerate() {
             let Some(c) = light.center() else { continue };
             let what = format!("lights[{li}] ({})", light.kind_name());
-            if let Some(w) = scene.light_view(light).depth_warning() {
-                out.push(format!("{what}: {w}"));
-            }
             // The nearest triangle to the centre.
             let nearest = tris
                 .iter()

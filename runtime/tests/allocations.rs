@@ -144,6 +144,13 @@ fn camera(f: u32) -> Camera {
 
 #[test]
 fn a_frame_allocates_nothing_in_sshc_on_every_bundled_technique() {
+    // A `Backtrace::capture` inside the counted calls (enabled when the suite sets
+    // `RUST_BACKTRACE`) would hold the standard library's backtrace lock while it
+    // allocates, and the count's own capture would wait on it forever: library captures
+    // are turned off before anything runs (the one test of this binary; panics keep their
+    // backtraces, which `RUST_BACKTRACE` still governs).
+    // SAFETY: no other thread of this process runs yet.
+    unsafe { std::env::set_var("RUST_LIB_BACKTRACE", "0") };
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../techniques");
     let mut names: Vec<_> = std::fs::read_dir(&dir)
