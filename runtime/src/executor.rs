@@ -131,6 +131,8 @@ pub struct Executor {
     params_buf: Option<wgpu::Buffer>,
     /// The resources of each bound light (one for `bind_scene`; see [`Executor::bind_lights`]).
     bound: Vec<Resources>,
+    /// What each step binds on each light's resources: per light, pass, step and view.
+    bindings: Vec<Vec<Vec<Vec<StepBinding>>>>,
     /// What each bound light's uniforms were last set from, and the camera.
     lights_state: Vec<LightInputs>,
     /// Each bound light's uniforms as the next frame writes them.
@@ -206,6 +208,7 @@ impl Executor {
             params,
             params_buf,
             bound: Vec::new(),
+            bindings: Vec::new(),
             lights_state: Vec::new(),
             uniforms: Vec::new(),
             params_dirty: true,
@@ -560,6 +563,7 @@ impl Executor {
         let gpu = self.gpu.clone();
         self.pixels = None;
         self.bound = Vec::new();
+        self.bindings = Vec::new();
         self.lights_state = Vec::new();
         self.combine = None;
         self.unshadowed = None;
@@ -588,10 +592,11 @@ impl Executor {
             });
         }
         let mut used = 0u64;
-        let mut bound = Vec::new();
+        let (mut bound, mut bindings) = (Vec::new(), Vec::new());
         for (l, s) in lights.iter().enumerate() {
             let res = self.bind_light(s, l, self.max_bytes.saturating_sub(used))?;
             used += self.light_bytes(&res);
+            bindings.push(self.bind_steps(&res)?);
             bound.push(res);
         }
         if lights.len() > 1 {
@@ -610,6 +615,7 @@ impl Executor {
         self.timestamps = Timestamps::new(&gpu, self.technique.passes().iter().map(|p| p.name.clone()).collect(), lights.len());
         self.unshadowed = Unshadowed::new(&gpu, &bound)?;
         self.bound = bound;
+        self.bindings = bindings;
         self.lights_state = lights.iter().map(SceneInputs::light_inputs).collect();
         // binding wrote every uniform: nothing is pending
         self.uniforms = lights
@@ -729,7 +735,7 @@ impl Executor {
             .as_ref()
             .map(|g| &g.scene)
             .ok_or_else(|| RuntimeError::NotFound("no scene geometry: bind_scene, bind_lights or bind_geometry".into()))?;
-        let mut res = Resources::new(
+        let res = Resources::new(
             gpu,
             &self.graph,
             self.technique.usages(),
@@ -746,7 +752,6 @@ impl Executor {
                 s.samples.len()
             )));
         }
-        res.bindings = self.bind_steps(&res)?;
         Ok(res)
     }
 
@@ -812,8 +817,7 @@ impl Executor {
             res.resize_camera(&self.gpu, &self.graph, technique.usages(), camera_size, self.max_bytes)?;
         }
         for l in 0..self.bound.len() {
-            let bindings = self.bind_steps(&self.bound[l])?;
-            self.bound[l].bindings = bindings;
+            self.bindings[l] = self.bind_steps(&self.bound[l])?;
         }
         if let Some(c) = &mut self.combine {
             c.resize(&self.gpu, camera_size, &self.bound[0].camera[CameraOutput::Position as usize])?;
@@ -982,7 +986,7 @@ impl Executor {
                 // The pass's first render or compute pass writes its start, the last its
                 // end. A per-sample pass records all its steps for one view, then the next.
                 let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
-                let bindings = &res.bindings[pi];
+                let bindings = &self.bindings[l][pi];
                 let recording = || {
                     (0..views).flat_map(move |v| {
                         pass.steps

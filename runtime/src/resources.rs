@@ -130,8 +130,6 @@ pub(crate) struct Resources {
     generated: HashMap<String, wgpu::Buffer>,
     /// Edges a classification dispatch binds at once ([`GeneratedLimits::chunk`]).
     pub edges_per_chunk: u64,
-    /// What each step binds on these resources: per pass, per step, per view.
-    pub bindings: Vec<Vec<Vec<crate::steps::StepBinding>>>,
 }
 
 impl Resources {
@@ -195,7 +193,6 @@ impl Resources {
                 edges: scene.edges.clone(),
                 generated: make.generated(graph, usages, edge_count, s.shadow_size, limits),
                 edges_per_chunk: limits.chunk(&gpu.limits),
-                bindings: Vec::new(),
             }
         })
     }
@@ -203,8 +200,7 @@ impl Resources {
     /// A new camera size: the camera-sized targets (the camera outputs and depth, a
     /// deferred Shade's G-buffer, camera-sized graph textures such as debug outputs) are
     /// created again, checked first as at binding; the shadow-map-sized ones, the tables,
-    /// the uniforms and the generated buffers stay. The step bindings are dropped: the
-    /// caller binds again.
+    /// the uniforms and the generated buffers stay. The caller binds the steps again.
     pub fn resize_camera(&mut self, gpu: &Gpu, graph: &PassGraph, usages: &Usages, camera_size: (u32, u32), max_bytes: u64) -> Result<()> {
         check_sizes(gpu, graph, self.shadow_size, camera_size, max_bytes)?;
         let (textures, targets) = gpu.scoped("camera-sized targets", || {
@@ -216,7 +212,6 @@ impl Resources {
         self.textures.extend(textures);
         (self.camera, self.camera_depth, self.gbuffer) = (camera, camera_depth, gbuffer);
         self.camera_size = camera_size;
-        self.bindings = Vec::new();
         Ok(())
     }
 
