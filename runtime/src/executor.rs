@@ -986,7 +986,9 @@ impl Executor {
                 // The pass's first render or compute pass writes its start, the last its
                 // end. A per-sample pass records all its steps for one view, then the next.
                 let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
-                let bindings = &self.bindings[l][pi];
+                let Some(bindings) = self.bindings.get(l).and_then(|b| b.get(pi)) else {
+                    return Err(RuntimeError::NotFound(crate::error::NOTHING_BOUND.into()));
+                };
                 let recording = || {
                     (0..views).flat_map(move |v| {
                         pass.steps

@@ -144,13 +144,12 @@ impl LightInputs {
     /// Become `from`, in place: the samples' vector keeps its capacity (a derived
     /// `clone_from` would allocate a new one every frame).
     pub(crate) fn assign(&mut self, from: &LightInputs) {
-        let samples = std::mem::take(&mut self.samples);
+        let mut samples = std::mem::take(&mut self.samples);
+        samples.clone_from(&from.samples);
         *self = LightInputs {
-            samples: Vec::new(),
+            samples,
             ..from.without_samples()
         };
-        self.samples = samples;
-        self.samples.clone_from(&from.samples);
     }
 
     /// A copy without its sample views (nothing allocated).

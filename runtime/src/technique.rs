@@ -205,17 +205,6 @@ impl Technique {
         &self.0.graph
     }
 
-    /// What the technique needs of a device (features, limits), for a host that opens or
-    /// checks its device ([`Requirements::union`] over several techniques).
-    pub fn requirements(&self) -> Requirements {
-        Requirements::of(&self.0.graph)
-    }
-
-    /// Whether the same loaded technique (not an equal one loaded again) is behind both.
-    pub fn ptr_eq(&self, other: &Technique) -> bool {
-        Arc::ptr_eq(&self.0, &other.0)
-    }
-
     /// The device it was loaded on (a handle: the device, queue and caches are shared).
     pub fn gpu(&self) -> &Gpu {
         &self.0.gpu

@@ -159,18 +159,16 @@ impl Timestamps {
                     if self.latest.as_ref().is_none_or(|(f, _)| *f < frame) {
                         // the times written in place (made once): nothing is allocated
                         // per frame
-                        let (_, times) = self
+                        let (latest, times) = self
                             .latest
                             .get_or_insert_with(|| (frame, FrameTimes::untimed(&self.passes, self.lights)));
+                        *latest = frame;
                         if let Ok(view) = s.read.slice(..).get_mapped_range() {
                             let tick = |i: usize| {
                                 view.get(8 * i..8 * i + 8)
                                     .map_or(0, |c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
                             };
                             times_into(tick, self.passes.len(), self.lights, period, times);
-                        }
-                        if let Some(l) = &mut self.latest {
-                            l.0 = frame;
                         }
                     }
                     s.read.unmap();
