@@ -1,7 +1,8 @@
 //! From a [`Scene`] to the plain data the executor binds ([`SceneInputs`]).
 
 use crate::scene::{Light, Scene};
-use sshc_runtime::gpu::{Camera, Executor, Geometry, IDENTITY, Instance, LightInputs, Mesh, SceneInputs, Slices};
+use crate::run::{Bound, Loaded};
+use sshc_runtime::gpu::{Camera, Geometry, IDENTITY, Instance, LightInputs, Mesh, SceneInputs, Slices};
 use sshc_runtime::graph::{MAX_LIGHT_SAMPLES, PassGraph, Views};
 use sshc_runtime::light::{SampleFit, sample_views};
 
@@ -168,7 +169,7 @@ impl SceneBinding {
         }
     }
 
-    pub fn bind(&self, ex: &mut Executor) -> Result<(), String> {
+    pub fn bind(&self, ex: &Loaded) -> Result<Bound, String> {
         match self {
             SceneBinding::Soup(inputs) => ex.bind_lights(inputs),
             SceneBinding::Instances {
@@ -185,8 +186,8 @@ impl SceneBinding {
 
 /// Bind `scene` on `ex`, every light with its own passes (`all`) or its first light only,
 /// as [`SceneBinding::of`] makes it ready.
-pub fn bind_scene(ex: &mut Executor, scene: &Scene, all: bool) -> Result<(), String> {
-    SceneBinding::of(scene, &ex.graph, all)?.bind(ex)
+pub fn bind_scene(ex: &Loaded, scene: &Scene, all: bool) -> Result<Bound, String> {
+    SceneBinding::of(scene, ex.graph(), all)?.bind(ex)
 }
 
 /// The light samples `graph` renders views of: [`PassGraph::samples`] when some pass has
@@ -329,28 +330,39 @@ impl Cascading {
     }
 
     /// Refit the cascades bound by [`Cascading::bind`] to the scene's camera and light as
-    /// they are now, in place (nothing created; see `Executor::set_cascades`).
-    pub fn refit(&self, ex: &mut Executor, scene: &Scene) -> Result<(), String> {
+    /// they are now, in the frame's state (nothing created: the next prepare writes them).
+    pub fn refit(&self, ex: &mut Bound, scene: &Scene) -> Result<(), String> {
         let r = self.resolved(scene);
         let c = cascade_fit(
             scene,
-            &ex.graph,
+            ex.graph(),
             r.count,
             r.lambda,
             !self.no_snap,
             self.cascade_offset.unwrap_or_default(),
         )
         .map_err(|e| format!("error: {e}"))?;
-        ex.set_cascades(&c.lights, &camera(scene), &c.slices(r.band))
-            .map_err(|e| format!("error: {e}"))
+        if c.lights.len() != ex.state.lights.len() {
+            return Err(format!(
+                "error: {} cascade(s) for the {} bound: a new count is a new binding",
+                c.lights.len(),
+                ex.state.lights.len()
+            ));
+        }
+        ex.state.camera = camera(scene);
+        for (slot, light) in ex.state.lights.iter_mut().zip(&c.lights) {
+            slot.clone_from(light);
+        }
+        ex.state.slices = Some(c.slices(r.band));
+        Ok(())
     }
 
     /// Binds the scene's cascades where they are asked for ([`Cascading::bind`], its line
     /// returned), else the scene itself ([`bind_scene`], every light or the first).
-    pub fn bind_or_scene(&self, ex: &mut Executor, scene: &Scene, all: bool) -> Result<Option<String>, String> {
+    pub fn bind_or_scene(&self, ex: &Loaded, scene: &Scene, all: bool) -> Result<(Bound, Option<String>), String> {
         match self.bind(ex, scene)? {
-            Some(line) => Ok(Some(line)),
-            None => bind_scene(ex, scene, all).map(|()| None),
+            Some((bound, line)) => Ok((bound, Some(line))),
+            None => bind_scene(ex, scene, all).map(|b| (b, None)),
         }
     }
 
@@ -361,7 +373,7 @@ impl Cascading {
 
     /// Binds the scene's cascades when more than one is asked for: a line saying where
     /// they split and how fine each is; `None` (nothing bound) otherwise.
-    pub fn bind(&self, ex: &mut Executor, scene: &Scene) -> Result<Option<String>, String> {
+    pub fn bind(&self, ex: &Loaded, scene: &Scene) -> Result<Option<(Bound, String)>, String> {
         let r = self.resolved(scene);
         let n = r.count;
         if n < 2 {
@@ -369,7 +381,7 @@ impl Cascading {
         }
         let c = cascade_fit(
             scene,
-            &ex.graph,
+            ex.graph(),
             n,
             r.lambda,
             !self.no_snap,
@@ -377,7 +389,7 @@ impl Cascading {
         )
         .map_err(|e| format!("error: {e}"))?;
         // a scene of shared meshes as its meshes and instances, else its soup
-        match scene_geometry(scene) {
+        let bound = match scene_geometry(scene) {
             Some(g) => ex.bind_geometry_cascades(
                 &g,
                 &camera(scene),
@@ -387,7 +399,7 @@ impl Cascading {
                 &c.slices(r.band),
             ),
             None => ex.bind_cascades(
-                &scene_inputs_for(scene, &ex.graph).map_err(|e| format!("error: {e}"))?,
+                &scene_inputs_for(scene, ex.graph()).map_err(|e| format!("error: {e}"))?,
                 &c.lights,
                 &c.slices(r.band),
             ),
@@ -399,14 +411,15 @@ impl Cascading {
             .zip(&c.texels)
             .map(|(w, t)| format!("{:.3}..{:.3} at {t:.4} world units a texel", w[0], w[1]))
             .collect();
-        Ok(Some(format!(
+        let line = format!(
             "cascades: {n} of {} texels, split at lambda {} ({}), mixed over the last {} of each slice: {}",
             scene.shadow_map,
             r.lambda,
             if self.no_snap { "not snapped" } else { "snapped to whole texels" },
             r.band,
             slices.join("; ")
-        )))
+        );
+        Ok(Some((bound, line)))
     }
 }
 
@@ -460,8 +473,8 @@ pub fn check_cascades(scene: &Scene, c: &Cascading) -> Result<(), String> {
 }
 
 /// The cascades of the scene's one light at infinity, as
-/// [`sshc_runtime::gpu::Executor::bind_cascades`] binds them ([`cascade_inputs`]) or
-/// [`sshc_runtime::gpu::Executor::set_cascades`] refits them ([`cascade_fit`]: no scene).
+/// [`crate::run::Loaded::bind_cascades`] binds them ([`cascade_inputs`]) or
+/// [`Cascading::refit`] refits them ([`cascade_fit`]: no scene).
 pub struct Cascades<S = SceneInputs> {
     /// The scene (geometry and camera; light 0's view), bound once for every cascade.
     pub scene: S,
@@ -507,7 +520,7 @@ pub fn cascade_inputs(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, sna
 }
 
 /// [`cascade_inputs`] without the scene's triangles: what a frame whose camera or light
-/// moved refits (`Executor::set_cascades`).
+/// moved refits ([`Cascading::refit`]).
 pub fn cascade_fit(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, snap: bool, offset: [f32; 3]) -> Result<Cascades<()>, String> {
     use sshc_runtime::light::{CameraFrustum, cascade_views, practical_splits};
     let light = scene.lights.first().ok_or("the scene has no light")?;
@@ -569,7 +582,7 @@ pub fn camera(scene: &Scene) -> Camera {
 
 /// `light`'s inputs in `scene` for `graph` (its view fitted as the scene's `shadow_fit`
 /// says, and the light-sample views `graph` renders): what [`scene_inputs_for`] binds, for
-/// a light that moves between frames (`Executor::set_light`). `scene` is the light's alone
+/// a light that moves between frames (the frame's state: `FrameState::lights`). `scene` is the light's alone
 /// where a scene has several ([`crate::session::single_light`]), as it is for binding.
 pub fn light_inputs(scene: &Scene, light: &Light, graph: &PassGraph) -> Result<LightInputs, String> {
     light_inputs_with_samples(scene, light, graph_samples(graph))

@@ -14,6 +14,7 @@ pub mod cmd;
 pub mod files;
 pub mod image_io;
 pub mod metrics;
+pub mod run;
 pub mod session;
 pub mod truth;
 pub mod verify;

@@ -8,7 +8,8 @@ use crate::truth::{self, Source, Truth, TruthCache, TruthSettings};
 use codespan_reporting::term::termcolor::{ColorChoice, StandardStream};
 use glam::Vec3;
 use sshc::Diagnostics;
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
+use crate::run::{Bound, Loaded};
+use sshc_runtime::gpu::{CameraOutput, Gpu, RuntimeError};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -139,9 +140,9 @@ fn ron_value<T: serde::de::DeserializeOwned>(s: &str) -> Result<T, String> {
 }
 
 impl Overrides {
-    /// The scene at `path` with the size and shadow-map overrides, and an executor of
-    /// `input` (a technique compiled with the overrides, or a graph with params set).
-    pub fn load(&self, gpu: &Gpu, input: &Path, scene: &Path) -> Result<(Scene, Executor), String> {
+    /// The scene at `path` with the size and shadow-map overrides, and `input` loaded (a
+    /// technique compiled with the overrides, or a graph with params set).
+    pub fn load(&self, gpu: &Gpu, input: &Path, scene: &Path) -> Result<(Scene, Loaded), String> {
         let path = scene;
         let mut scene = load_scene(path, self.size, self.shadow_map)?;
         if let Some(c) = &self.camera {
@@ -193,7 +194,7 @@ impl Overrides {
         stages.done("compile");
         // a tuned technique names its shadow-map size: it outranks the scene file's, and
         // `--shadow-map` outranks it
-        if let (None, Some(n)) = (self.shadow_map, ex.graph.shadow_map)
+        if let (None, Some(n)) = (self.shadow_map, ex.graph().shadow_map)
             && n != scene.shadow_map
         {
             eprintln!(
@@ -403,11 +404,11 @@ pub fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>
     Ok(scene)
 }
 
-/// An executor for a technique (`.ron`, compiled with the overrides) or a compiled graph
-/// (`.graph.ron`, params set as uniforms), as `sshc render` does.
+/// A technique (`.ron`, compiled with the overrides) or a compiled graph (`.graph.ron`,
+/// params set as uniforms) loaded, as `sshc render` does.
 /// `opts` holds the command line's `--set`, `--precision` and `--schedule`; a graph takes
 /// `--set` only.
-pub fn executor(gpu: &Gpu, input: &Path, opts: &sshc::CompileOptions) -> Result<Executor, String> {
+pub fn executor(gpu: &Gpu, input: &Path, opts: &sshc::CompileOptions) -> Result<Loaded, String> {
     if input.to_string_lossy().ends_with(".graph.ron") {
         if !opts.precision.is_empty() {
             return Err("error: `--precision` needs a technique, not a compiled graph".into());
@@ -415,7 +416,7 @@ pub fn executor(gpu: &Gpu, input: &Path, opts: &sshc::CompileOptions) -> Result<
         if !opts.schedule.is_empty() {
             return Err("error: `--schedule` needs a technique, not a compiled graph".into());
         }
-        let mut ex = Executor::load(gpu, input).map_err(rt)?;
+        let mut ex = Loaded::load(gpu, input).map_err(rt)?;
         for (k, v) in &opts.set {
             let v: f64 = v.parse().map_err(|_| format!("error: `--set {k}={v}`: expected a number"))?;
             ex.set_param(k, v).map_err(rt)?;
@@ -426,12 +427,12 @@ pub fn executor(gpu: &Gpu, input: &Path, opts: &sshc::CompileOptions) -> Result<
     compile_executor(gpu, input, &source, opts)
 }
 
-pub fn compile_executor(gpu: &Gpu, path: &Path, source: &str, opts: &sshc::CompileOptions) -> Result<Executor, String> {
+pub fn compile_executor(gpu: &Gpu, path: &Path, source: &str, opts: &sshc::CompileOptions) -> Result<Loaded, String> {
     let c = sshc::compile_str(source, opts).map_err(|d| {
         report(&d, path, source);
         String::new()
     })?;
-    Executor::new(gpu, c.graph, c.shaders).map_err(rt)
+    Loaded::new(gpu, c.graph, c.shaders).map_err(rt)
 }
 
 /// `scene` with its light `i` alone (each light of a scene has its own light
@@ -500,10 +501,10 @@ pub fn specialise(opts: &mut sshc::CompileOptions, input: &Path, scene_path: &Pa
 }
 
 /// The camera pass's world positions and normals (NaN where no surface is seen).
-pub fn positions_normals(ex: &Executor) -> Result<(Vec<Vec3>, Vec<Vec3>), String> {
+pub fn positions_normals(ex: &Bound) -> Result<(Vec<Vec3>, Vec<Vec3>), String> {
     let xyz = |img: sshc_runtime::gpu::Image| img.rgba.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect::<Vec<_>>();
-    let p = xyz(ex.read_camera(CameraOutput::Position).map_err(rt)?);
-    let n = xyz(ex.read_camera(CameraOutput::Normal).map_err(rt)?);
+    let p = xyz(ex.inspect().read_camera(CameraOutput::Position).map_err(rt)?);
+    let n = xyz(ex.inspect().read_camera(CameraOutput::Normal).map_err(rt)?);
     Ok((p, n))
 }
 

@@ -23,7 +23,8 @@ use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use sshc::interp::{Allowed, Evaluation, Frame, Given, GivenSlot, Model, Receiver, Rounding, Scratch, Seen};
 use sshc::ir::Program;
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, SampleView, SceneInputs};
+use crate::run::{Bound, Loaded};
+use sshc_runtime::gpu::{CameraOutput, Gpu, SampleView, SceneInputs};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -413,8 +414,8 @@ pub fn scene_depth(gpu: &Gpu, path: &Path, n: u32) -> Result<Vec<f32>, String> {
     if s.lights.len() > 1 {
         s.lights.truncate(1);
     }
-    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(crate::session::rt)?;
-    ex.bind_scene(&crate::bind::scene_inputs(&s)?).map_err(crate::session::rt)?;
+    let loaded = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(crate::session::rt)?;
+    let mut ex = loaded.bind_scene(&crate::bind::scene_inputs(&s)?).map_err(crate::session::rt)?;
     ex.run_frame().map_err(crate::session::rt)?;
     let depth = c
         .graph
@@ -423,6 +424,7 @@ pub fn scene_depth(gpu: &Gpu, path: &Path, n: u32) -> Result<Vec<f32>, String> {
         .find(|p| p.kind == sshc_runtime::graph::PassKind::Depth)
         .ok_or("the hard technique has no Depth pass")?;
     Ok(ex
+        .inspect()
         .read_texture(&depth.steps[0].writes[0].texture, 0, 0)
         .map_err(crate::session::rt)?
         .channel(0))
@@ -785,12 +787,13 @@ const LOSSY_SHARE: f64 = 0.01;
 
 /// Read back every channel of `slots` after a frame, light (cascade) `light`'s: one decoded
 /// map per view.
-fn read_given(ex: &Executor, slots: &[GivenSlot], light: usize) -> Result<Given, String> {
+fn read_given(ex: &Bound, slots: &[GivenSlot], light: usize) -> Result<Given, String> {
     let mut given = Given::default();
     for s in slots {
         let views = (0..s.views)
             .map(|k| {
                 let image = ex
+                    .inspect()
                     .read_light_texture(light, &s.texture, s.array_layer(k), 0)
                     .map_err(crate::session::rt)?;
                 Ok(image.channel(s.component as usize).into_iter().map(|v| s.decode(v)).collect())
@@ -851,7 +854,9 @@ pub fn verify(
     }
     let splits = opts.splits();
     let mut rows = Vec::new();
-    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(crate::session::rt)?;
+    let mut loaded = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(crate::session::rt)?;
+    // every cascade's textures are read back: each keeps its own
+    loaded.limits.share_light_textures = false;
     for input in inputs {
         if let Source::Depth(depth) = &input.source {
             if let Some(pass) = &geometry {
@@ -873,6 +878,7 @@ pub fn verify(
                 ..QueryPlane::new(n, camera)
             };
             let width = opts.light_width as f32;
+            let mut depth_maps = None;
             let mut scene = match &input.source {
                 Source::Depth(depth) => {
                     let maps = if per_sample {
@@ -882,18 +888,15 @@ pub fn verify(
                     } else {
                         vec![depth.clone()]
                     };
-                    ex.set_depth_override_views(Some(maps));
+                    depth_maps = Some(maps);
                     plane.lit_inputs(width)
                 }
-                Source::Casters(vertices, meshes) => {
-                    ex.set_depth_override(None);
-                    plane.caster_inputs(width, vertices, meshes)
-                }
+                Source::Casters(vertices, meshes) => plane.caster_inputs(width, vertices, meshes),
             };
             scene.samples = plane.sample_views(samples, opts.light_width);
             // cascade k's light over the plane (cascade 0 is the plane's own square)
             let planes: Vec<QueryPlane> = (0..opts.cascades).map(|k| plane.cascade(k)).collect();
-            if planes.len() > 1 {
+            let mut ex = if planes.len() > 1 {
                 let lights: Vec<_> = planes.iter().map(|p| p.lit_inputs(width).light_inputs()).collect();
                 let (eye, forward) = QueryPlane::camera_axis();
                 let slices = sshc_runtime::gpu::Slices {
@@ -902,14 +905,18 @@ pub fn verify(
                     splits: splits.clone(),
                     band: opts.cascade_band,
                 };
-                ex.bind_cascades(&scene, &lights, &slices)
+                loaded.bind_cascades(&scene, &lights, &slices)
             } else {
-                ex.bind_scene(&scene)
+                loaded.bind_scene(&scene)
             }
             .map_err(crate::session::rt)?;
-            ex.run_frame().map_err(crate::session::rt)?;
-            let got = ex.read_camera(CameraOutput::Visibility).map_err(crate::session::rt)?.channel(0);
-            let positions = ex.read_camera(CameraOutput::Position).map_err(crate::session::rt)?.rgba;
+            match &depth_maps {
+                Some(maps) => ex.run_frame_with_depth(maps),
+                None => ex.run_frame(),
+            }
+            .map_err(crate::session::rt)?;
+            let got = ex.inspect().read_camera(CameraOutput::Visibility).map_err(crate::session::rt)?.channel(0);
+            let positions = ex.inspect().read_camera(CameraOutput::Position).map_err(crate::session::rt)?.rgba;
             let points: Vec<(usize, [f32; 3])> = positions
                 .iter()
                 .enumerate()
@@ -1029,7 +1036,7 @@ pub fn verify(
 /// (every cascade's Shade writes its own at every pixel) against that cascade's
 /// evaluation, component by component.
 fn debug_rows(
-    ex: &Executor,
+    ex: &Bound,
     cascades: &[Cascade],
     points: &[(usize, [f32; 3])],
     camera: usize,
@@ -1046,7 +1053,7 @@ fn debug_rows(
             worst: None,
         };
         for (k, c) in cascades.iter().enumerate() {
-            let got = ex.read_debug(k, name).map_err(crate::session::rt)?.rgba;
+            let got = ex.inspect().read_debug(k, name).map_err(crate::session::rt)?.rgba;
             let expected: Vec<(usize, Vec<Allowed>)> = points
                 .par_iter()
                 .map_init(Scratch::default, |scratch, &(i, p)| {

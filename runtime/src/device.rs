@@ -22,7 +22,7 @@ pub const WANTED_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
 
 /// A device the runtime runs on: its own ([`Gpu::new`]) or a host renderer's
 /// ([`Gpu::from_host`]). A handle: cloning it is cheap, and every clone shares the device,
-/// the queue and the caches of shader modules and pipelines, so an [`crate::gpu::Executor`]
+/// the queue and the caches of shader modules and pipelines, so an [`crate::gpu::Technique`] or [`crate::gpu::Targets`]
 /// owns one and a host can keep executors in its own structs.
 #[derive(Clone)]
 pub struct Gpu {

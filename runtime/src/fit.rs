@@ -3,8 +3,8 @@
 //! ([`Boxes`]: world-space bounding boxes, which a bound [`crate::gpu::Geometry`] gives
 //! under its current transforms). [`LightInputs::fit`] makes the [`LightInputs`] a frame
 //! needs (matrices, near and far, extents, and the per-sample views of linear and area
-//! lights); [`crate::gpu::Executor::place_light`] does it every frame for the bound
-//! geometry. Explicit matrices remain possible: [`crate::gpu::Executor::set_light`] takes
+//! lights); [`crate::gpu::Targets::fit_light`] does it every frame for the bound
+//! geometry. Explicit matrices remain possible: a host's [`crate::gpu::FrameState`] takes
 //! any [`LightInputs`].
 //!
 //! The math is the crate `sshc-light`, which the lab's scenes use too: a scene's `Scene`

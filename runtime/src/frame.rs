@@ -74,7 +74,7 @@ pub struct SceneInputs {
 }
 
 /// The camera: what a host may change every frame without reallocation
-/// ([`crate::gpu::Executor::set_camera`]).
+/// ([`crate::gpu::FrameState::camera`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     /// Column-major world-to-clip matrix (WebGPU clip space: depth in [0, 1]).
@@ -84,7 +84,7 @@ pub struct Camera {
 }
 
 /// One light as the passes see it: what a host may change every frame without
-/// reallocation ([`crate::gpu::Executor::set_light`]). The number of light samples is a
+/// reallocation ([`crate::gpu::FrameState::lights`]). The number of light samples is a
 /// size: changing it reallocates.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightInputs {

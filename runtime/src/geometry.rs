@@ -8,7 +8,7 @@
 //! normalised: the shaders normalise the interpolated normal). The scene's draws then take
 //! the mesh's index buffer with the instance's placed vertices as base vertex, one indexed
 //! draw per instance; the light's draws take the casting instances only. Placement runs in
-//! the frame after the transforms change ([`crate::gpu::Executor::set_transforms`]), so a
+//! the frame after the transforms change ([`crate::gpu::Scene::set_transforms`]), so a
 //! frame whose transforms did not move pays nothing for it.
 //!
 //! Geometry passes classify the edges of the casting instances. Each mesh's edge adjacency
@@ -81,7 +81,7 @@ pub struct Instance {
     /// Receives shadows. An instance that does not (a sky dome, a light's own fixture, a
     /// marker) is drawn unshadowed and reads visibility 1 (runtime/src/receivers.rs).
     pub receives: bool,
-    /// Its transform may change after binding ([`crate::gpu::Executor::set_transforms`]).
+    /// Its transform may change after binding ([`crate::gpu::Scene::set_transforms`]).
     /// One that does not keeps the transform it was bound with. With the identity transform
     /// (a mesh given in world space, as static level geometry or the lab's scenes are), it
     /// is *in world space*: drawn straight from its mesh's vertices, with no placed copy and
@@ -335,7 +335,7 @@ impl Geometry {
         (placed + world) * 24 + indices * 4 + self.placed_vertices() * 24 + self.instances.len() as u64 * RECORD_BYTES
     }
 
-    /// A triangle soup as geometry: the adapter [`crate::gpu::Executor::bind_scene`] binds a
+    /// A triangle soup as geometry: the adapter [`crate::gpu::Scene::from_soup`] uploads a
     /// soup through ([`crate::frame::SceneInputs`]'s `vertices`, `meshes`,
     /// `casting_vertices` and `unshadowed`). Each object of the soup (a run of triangles
     /// with one mesh range, one side of the casting boundary and one receiving flag)

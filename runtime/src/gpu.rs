@@ -1,9 +1,13 @@
-//! The wgpu executor, as one namespace: [`Gpu`] (a device, its own or a host's, with error
-//! scopes and the shader and pipeline caches), [`Executor`] (a loaded graph as step nodes,
-//! bound resources, frames), [`SceneInputs`] and [`Geometry`] (what a scene gives the
-//! draws), [`Camera`] and [`LightInputs`] (what may change every frame), [`Requirements`]
-//! (what a graph needs of a device), [`HostPixels`] (a host's G-buffer) and [`Image`]
-//! (read-back textures). The parts live in their own modules:
+//! The wgpu runtime, as one namespace. Its stages, each made from the one before:
+//! [`Gpu`] (a device, its own or a host's, with error scopes and the shader and pipeline
+//! caches); [`crate::graph::ValidGraph`] (a checked pass graph); [`Technique`] (its
+//! pipelines, immutable, shared); [`Scene`] (a host's [`Geometry`] on the GPU, uploaded
+//! once); [`Targets`] (a technique on a scene at [`Sizes`], for its lights: the frame path,
+//! `prepare` and `record`, of a host's [`FrameState`]); [`Inspect`] (read-backs and memory
+//! figures). Besides: [`Camera`] and [`LightInputs`] (a frame's camera and lights),
+//! [`Requirements`] (what a graph needs of a device), [`HostPixels`] (a host's G-buffer),
+//! [`Image`] (read-back textures) and [`SceneInputs`] (a triangle soup with one camera and
+//! light, the lab's plain scene). The parts live in their own modules:
 //!
 //! - `error`: [`RuntimeError`];
 //! - `device`: [`Gpu`], error scopes, the caches;
@@ -21,7 +25,10 @@
 //!   Geometry passes, and the silhouette rule;
 //! - `technique`: [`Technique`], a loaded technique (graph, pipelines), immutable and
 //!   shared; the file caps and [`read_capped`];
-//! - `executor`: [`Executor`]: bind, resize, update, prepare, record, run, read back;
+//! - `scene`: [`Scene`], uploaded geometry;
+//! - `state`: [`FrameState`] and [`Params`], the host's plain per-frame state;
+//! - `targets`: [`Targets`]: sizes, resize, prepare, record, run;
+//! - `inspect`: [`Inspect`]: read-backs, memory figures, the checks of a read-back;
 //! - `fit`: a light's view fitted by the runtime ([`LightInputs::fit`], [`Fit`], [`Boxes`]);
 //! - `frame`: [`SceneInputs`], [`Camera`], [`LightInputs`] and the `Frame` uniform's values;
 //! - `lights`: several lights combined in one frame;
@@ -35,7 +42,10 @@
 //! (lavapipe keeps allocating past its limits).
 
 pub use crate::device::{Gpu, INSTALL_HINT, Result, RuntimeError, WANTED_FEATURES};
-pub use crate::executor::{CameraOutput, DebugOutput, Executor, Generated, VISIBILITY_EPSILON, check_visibility};
+pub use crate::inspect::{CameraOutput, DebugOutput, Generated, Inspect, VISIBILITY_EPSILON, check_visibility, debug_outputs};
+pub use crate::scene::{DEFAULT_MAX_BYTES, Scene};
+pub use crate::state::{FrameState, Params};
+pub use crate::targets::{Sizes, TargetLimits, Targets};
 pub use crate::fit::{Boxes, Fit};
 pub use crate::frame::{Camera, LightInputs, SampleView, SceneInputs};
 pub use crate::geometry::{Geometry, IDENTITY, Instance, MAX_INSTANCES, Mesh, normal_matrix, transform_point};

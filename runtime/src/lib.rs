@@ -14,19 +14,22 @@
 pub mod adjacency;
 mod device;
 mod error;
-mod executor;
 mod fit;
 mod frame;
 mod geometry;
 pub mod gpu;
 mod image;
+mod inspect;
 mod lights;
 mod pipeline;
 mod pixels;
 mod receivers;
 mod requirements;
 mod resources;
+mod scene;
+mod state;
 mod steps;
+mod targets;
 mod technique;
 mod timing;
 mod update;
@@ -36,5 +39,7 @@ mod validate;
 pub use sshc_graph as graph;
 pub use sshc_graph::*;
 /// Lights and their views as plain math (the crate `sshc-light`, shared with the lab's
-/// scenes): what [`gpu::LightInputs::fit`] and [`gpu::Executor::place_light`] fit.
+/// scenes): what [`gpu::LightInputs::fit`] and [`gpu::Targets::fit_light`] fit.
 pub use sshc_light as light;
+/// The wgpu the runtime is built on: a host records into its encoders.
+pub use wgpu;

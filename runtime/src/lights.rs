@@ -128,7 +128,7 @@ fn targets(
         })
     };
     let input = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
-    // the host samples the visibilities (`Executor::visibility`)
+    // the host samples the visibilities (`Targets::visibility`)
     let output = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING;
     let layers = [
         texture("lights' visibility", wgpu::TextureFormat::R32Float, n, input),

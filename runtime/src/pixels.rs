@@ -3,7 +3,7 @@
 //! A deferred renderer already has, per pixel, the world position and the normal of what
 //! its camera sees. A graph whose Shade runs deferred (the compute schedule) rasterises
 //! them into its G-buffer ([`crate::graph::GBUFFER`]) and then shades every pixel from
-//! there. With host pixels ([`crate::gpu::Executor::set_host_pixels`]) that raster is
+//! there. With host pixels ([`crate::gpu::Targets::set_host_pixels`]) that raster is
 //! replaced by one compute step of the runtime's that writes the same G-buffer from the
 //! host's textures:
 //!

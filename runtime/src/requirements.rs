@@ -1,7 +1,7 @@
 //! What a graph needs of a device: the wgpu features and limits beyond WebGPU's defaults,
 //! each with the pass that needs it and why. [`Requirements::of`] reads only the graph, so
 //! a host can ask before it opens its device ([`Requirements::features`],
-//! [`Requirements::limits`]); loading a graph ([`crate::gpu::Executor::new`]) checks them
+//! [`Requirements::limits`]); loading a graph ([`crate::gpu::Technique::new`]) checks them
 //! against the device and refuses it with every missing feature and limit listed.
 
 use crate::device::Gpu;

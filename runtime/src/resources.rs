@@ -3,10 +3,9 @@
 //! `Frame` uniform. Sizes are checked against the device before anything is allocated
 //! (lavapipe keeps allocating past its limits).
 
-use crate::adjacency::Adjacency;
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::frame::SceneInputs;
-use crate::geometry::{EdgeBuffers, Geometry, GeometryBuffers, HostScene, SceneDraw};
+use crate::geometry::{EdgeBuffers, HostScene, SceneDraw};
 use crate::graph::{self, FRAME_SIZE, GENERATED_HEADER_BYTES, LIGHT_SAMPLES_SIZE, PassGraph, SampleViewUniform, TextureDecl};
 use crate::pipeline::{CAMERA_FORMATS, DEPTH_FORMAT, mip_count, wgpu_format};
 use std::collections::HashMap;
@@ -25,8 +24,8 @@ pub(crate) struct Usages {
     /// `STORAGE_BINDING` where a compute step stores into it, `TEXTURE_BINDING` where a
     /// step reads it, `COPY_DST` where a Depth pass writes it (the lab's depth override
     /// writes its output from the CPU), and `COPY_SRC` on every one (read-back:
-    /// [`crate::gpu::Executor::read_texture`]), and `TEXTURE_BINDING` on a Shade's debug
-    /// outputs (a host looks at them: [`crate::gpu::Executor::texture`]). A texture no step
+    /// [`crate::gpu::Inspect::read_texture`]), and `TEXTURE_BINDING` on a Shade's debug
+    /// outputs (a host looks at them: [`crate::gpu::Targets::texture`]). A texture no step
     /// writes or reads is only `COPY_SRC`.
     pub textures: std::collections::HashMap<String, wgpu::TextureUsages>,
     /// A compute step stores the camera outputs (a deferred Shade).
@@ -146,10 +145,14 @@ impl Resources {
         scene: &HostScene,
         max_bytes: u64,
         limits: GeneratedLimits,
+        pool: &mut Pool,
     ) -> Result<Resources> {
         // every size checked before anything is created (lavapipe keeps allocating past
         // its limits)
-        let texture_bytes = check_sizes(gpu, graph, s.shadow_size, s.camera_size, max_bytes)?;
+        // the textures the pool already holds are not made again (checked against
+        // `max_bytes` below, with the generated buffers)
+        let all = check_sizes(gpu, graph, s.shadow_size, s.camera_size, u64::MAX)?;
+        let texture_bytes = all.saturating_sub(pool.bytes());
         let edge_count = scene.edges.as_ref().map_or(0, |e| e.counts.edges.into());
         let bytes = texture_bytes + check_generated(gpu, graph, usages, s.shadow_size, edge_count, limits)?;
         if bytes > max_bytes {
@@ -161,7 +164,7 @@ impl Resources {
         }
         gpu.scoped("scene resources", || {
             let make = Make { gpu };
-            let (textures, tables) = make.graph_textures(graph, usages, s.shadow_size, s.camera_size, None);
+            let (textures, tables) = make.graph_textures(graph, usages, s.shadow_size, s.camera_size, None, Some(pool));
             let (camera, camera_depth, gbuffer) = make.camera_targets(usages, s.camera_size);
             Resources {
                 shadow_size: s.shadow_size,
@@ -169,12 +172,14 @@ impl Resources {
                 draw: scene.draw.clone(),
                 textures,
                 tables,
-                light_depth: make.attachment(
-                    "light depth",
-                    (s.shadow_size, s.shadow_size),
-                    DEPTH_FORMAT,
-                    wgpu::TextureUsages::empty(),
-                ),
+                light_depth: pool.light_depth(|| {
+                    make.attachment(
+                        "light depth",
+                        (s.shadow_size, s.shadow_size),
+                        DEPTH_FORMAT,
+                        wgpu::TextureUsages::empty(),
+                    )
+                }),
                 camera,
                 camera_depth,
                 gbuffer,
@@ -205,7 +210,7 @@ impl Resources {
         check_sizes(gpu, graph, self.shadow_size, camera_size, max_bytes)?;
         let (textures, targets) = gpu.scoped("camera-sized targets", || {
             let make = Make { gpu };
-            let (textures, _) = make.graph_textures(graph, usages, self.shadow_size, camera_size, Some(graph::Extent::Camera));
+            let (textures, _) = make.graph_textures(graph, usages, self.shadow_size, camera_size, Some(graph::Extent::Camera), None);
             (textures, make.camera_targets(usages, camera_size))
         })?;
         let (camera, camera_depth, gbuffer) = targets;
@@ -296,33 +301,6 @@ fn check_sizes(gpu: &Gpu, graph: &PassGraph, shadow_size: u32, camera_size: (u32
     Ok(bytes)
 }
 
-/// A geometry on the GPU as every light's resources take it, checked first against `s`'s
-/// sizes: the textures ([`check_sizes`]), then, for a graph with Geometry passes (`edges`),
-/// the edge adjacency bounded from the casting triangles with the textures' bytes before it
-/// is built ([`Adjacency::max_bytes`]).
-pub(crate) fn scene_buffers(
-    gpu: &Gpu,
-    graph: &PassGraph,
-    edges: bool,
-    s: &SceneInputs,
-    g: &Geometry,
-    max_bytes: u64,
-) -> Result<GeometryBuffers> {
-    let texture_bytes = check_sizes(gpu, graph, s.shadow_size, s.camera_size, max_bytes)?;
-    if edges {
-        let tris = g.casting_triangles();
-        let needed = texture_bytes.saturating_add(Adjacency::max_bytes(tris));
-        if needed > max_bytes {
-            return Err(RuntimeError::Limit {
-                what: format!("edge adjacency of {tris} casting triangles, with the textures (bytes)"),
-                needed,
-                limit: max_bytes,
-            });
-        }
-    }
-    GeometryBuffers::new(gpu, g, edges)
-}
-
 /// Each generated buffer, sized from the edge count, against the storage-binding limit:
 /// their bytes together.
 fn check_generated(
@@ -350,6 +328,64 @@ fn check_generated(
     Ok(bytes)
 }
 
+/// A graph texture as made: a texture, or a summed-area table's storage buffer.
+#[derive(Clone)]
+enum Made {
+    Texture(wgpu::Texture),
+    Table(wgpu::Buffer),
+}
+
+/// The textures the lights of one set of targets share, made once at the targets' sizes
+/// and keyed by declaration: every transient one, and, when the lights share their
+/// textures, every shadow-map-sized one (tables included) and the light's depth buffer.
+/// Each light's passes run before the next light's, and nothing after a light's passes
+/// reads these, so one serves every light.
+pub(crate) struct Pool {
+    share_light: bool,
+    entries: HashMap<String, (Made, u64)>,
+    light_depth: Option<wgpu::Texture>,
+}
+
+impl Pool {
+    pub fn new(share_light: bool) -> Pool {
+        Pool {
+            share_light,
+            entries: HashMap::new(),
+            light_depth: None,
+        }
+    }
+
+    /// Whether `t` is made once for every light.
+    fn shares(&self, t: &TextureDecl) -> bool {
+        t.transient || (self.share_light && t.extent == graph::Extent::ShadowMap)
+    }
+
+    /// The light's depth buffer: shared when the lights share their textures.
+    fn light_depth(&mut self, make: impl FnOnce() -> wgpu::Texture) -> wgpu::Texture {
+        if !self.share_light {
+            return make();
+        }
+        self.light_depth.get_or_insert_with(make).clone()
+    }
+
+    /// Bytes of the graph textures made so far.
+    pub fn bytes(&self) -> u64 {
+        self.entries.values().map(|e| e.1).sum()
+    }
+
+    /// Whether graph texture `name` was made here.
+    pub fn holds(&self, name: &str) -> bool {
+        self.entries.contains_key(name)
+    }
+
+    /// The names of the graph textures made here, sorted.
+    pub fn names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self.entries.keys().cloned().collect();
+        names.sort();
+        names
+    }
+}
+
 /// Creating the resources, inside the caller's error scope (the sizes are checked).
 struct Make<'a> {
     gpu: &'a Gpu,
@@ -365,11 +401,38 @@ impl Make<'_> {
         shadow_size: u32,
         camera_size: (u32, u32),
         only: Option<graph::Extent>,
+        mut pool: Option<&mut Pool>,
     ) -> (HashMap<String, wgpu::Texture>, HashMap<String, wgpu::Buffer>) {
         let (mut textures, mut tables) = (HashMap::new(), HashMap::new());
         // every texture, or those of one extent (tables are shadow-map sized)
         let wanted = |t: &&TextureDecl| only.is_none_or(|e| t.extent == e && !t.format.is_table());
         for t in graph.textures.iter().filter(wanted) {
+            // made once for the lights that share it
+            if let Some(pool) = pool.as_deref_mut()
+                && pool.shares(t)
+            {
+                let bytes = texture_bytes(t, shadow_size, camera_size);
+                let (made, _) = pool
+                    .entries
+                    .entry(t.name.clone())
+                    .or_insert_with(|| (self.graph_texture(t, usages, shadow_size, camera_size), bytes));
+                match made.clone() {
+                    Made::Texture(tex) => textures.insert(t.name.clone(), tex).map(drop),
+                    Made::Table(buf) => tables.insert(t.name.clone(), buf).map(drop),
+                };
+                continue;
+            }
+            match self.graph_texture(t, usages, shadow_size, camera_size) {
+                Made::Texture(tex) => textures.insert(t.name.clone(), tex).map(drop),
+                Made::Table(buf) => tables.insert(t.name.clone(), buf).map(drop),
+            };
+        }
+        (textures, tables)
+    }
+
+    /// One graph texture (or summed-area table) at these sizes.
+    fn graph_texture(&self, t: &TextureDecl, usages: &Usages, shadow_size: u32, camera_size: (u32, u32)) -> Made {
+        {
             let Some(format) = wgpu_format(t.format) else {
                 let buf = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(&t.name),
@@ -377,8 +440,7 @@ impl Make<'_> {
                     usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                     mapped_at_creation: false,
                 });
-                tables.insert(t.name.clone(), buf);
-                continue;
+                return Made::Table(buf);
             };
             let (width, height) = match t.extent {
                 graph::Extent::ShadowMap => (shadow_size, shadow_size),
@@ -399,9 +461,8 @@ impl Make<'_> {
                 usage: usages.texture(&t.name),
                 view_formats: &[],
             });
-            textures.insert(t.name.clone(), tex);
+            Made::Texture(tex)
         }
-        (textures, tables)
     }
 
     /// The camera-sized attachments: the camera outputs ([`CAMERA_FORMATS`]), the camera's

@@ -222,3 +222,28 @@ impl Technique {
         &self.0.sampler
     }
 }
+
+impl Technique {
+    /// Whether `other` is this loaded technique (a clone of it), not another load.
+    pub fn same(&self, other: &Technique) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+
+    /// What the technique needs of a device ([`Requirements::of`]).
+    pub fn requirements(&self) -> Requirements {
+        Requirements::of(self.graph())
+    }
+}
+
+impl std::fmt::Debug for Technique {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Technique").field("name", &self.graph().technique).finish_non_exhaustive()
+    }
+}
+
+impl PartialEq for Technique {
+    /// The same load (not merely an equal graph: pipelines are per load).
+    fn eq(&self, other: &Technique) -> bool {
+        self.same(other)
+    }
+}

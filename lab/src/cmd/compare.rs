@@ -11,7 +11,8 @@ use crate::session::Overrides;
 use crate::session::{TruthOpts, describe, positions_normals, rt, truth_at};
 use glam::Vec3;
 use plotters::prelude::*;
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
+use crate::run::Loaded;
+use sshc_runtime::gpu::{CameraOutput, Gpu};
 use std::path::PathBuf;
 
 /// The most frames of the temporal-stability run (each frame's visibility is kept).
@@ -67,9 +68,9 @@ pub(crate) fn moved_light(light: &Light, scene: &Scene, texels: f32) -> Light {
 
 /// Visibility of `frames` frames, the light moving by `step` texels between consecutive
 /// ones (`first` is frame 0, as already rendered), bound with `cascading`'s cascades where
-/// it asks for them; the executor is left bound to the last.
+/// it asks for them.
 pub(crate) fn moving_light_frames(
-    ex: &mut Executor,
+    ex: &Loaded,
     scene: &Scene,
     cascading: &crate::bind::Cascading,
     first: Vec<f32>,
@@ -83,9 +84,9 @@ pub(crate) fn moving_light_frames(
     for i in 1..frames {
         let mut s = scene.clone();
         s.lights[0] = moved_light(light, scene, i as f32 * step);
-        cascading.bind_or_scene(ex, &s, false)?;
-        ex.run_frame().map_err(rt)?;
-        out.push(ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0));
+        let (mut bound, _) = cascading.bind_or_scene(ex, &s, false)?;
+        bound.run_frame().map_err(rt)?;
+        out.push(bound.inspect().read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0));
     }
     Ok(out)
 }
@@ -104,7 +105,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
         ));
     }
     let gpu = Gpu::new().map_err(rt)?;
-    let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
+    let (scene, loaded) = a.over.load(&gpu, &a.input, &a.scene)?;
     let light = scene
         .lights
         .first()
@@ -121,7 +122,8 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     {
         return Err(format!("error: `--range {r}`: expected a half-width > 0 in 0..255 units"));
     }
-    if let Some(line) = a.over.cascading.bind_or_scene(&mut ex, &scene, false)? {
+    let (mut ex, line) = a.over.cascading.bind_or_scene(&loaded, &scene, false)?;
+    if let Some(line) = line {
         println!("{line}");
     }
     let mut frame_ms = Vec::new();
@@ -134,8 +136,8 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     }
     frame_ms.sort_by(f64::total_cmp);
     let median_ms = frame_ms.get(frame_ms.len() / 2).copied();
-    let peak: u64 = ex.memory().map_err(rt)?.iter().map(|(_, b)| b).sum();
-    let visibility = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
+    let peak: u64 = ex.inspect().memory().iter().map(|(_, b)| b).sum();
+    let visibility = ex.inspect().read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
     let (positions, normals) = positions_normals(&ex)?;
     let (w, h) = scene.camera_size();
 
@@ -156,7 +158,7 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     let error = metrics::error_image(&visibility, &truth.visibility, Some(&facing), w, h, range).map_err(|e| format!("error: {e}"))?;
     let stability = if a.stability_frames >= 2 {
         let frames = moving_light_frames(
-            &mut ex,
+            &loaded,
             &scene,
             &a.over.cascading,
             visibility.clone(),
@@ -205,9 +207,9 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
     let mut lines = lines;
     for i in 1..scene.lights.len() {
         let alone = crate::session::single_light(&scene, i);
-        crate::bind::bind_scene(&mut ex, &alone, false).map_err(|e| format!("light {i}: {e}"))?;
+        let mut ex = crate::bind::bind_scene(&loaded, &alone, false).map_err(|e| format!("light {i}: {e}"))?;
         ex.run_frame().map_err(rt)?;
-        let vis = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
+        let vis = ex.inspect().read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
         let (t, _) = truth_at(&alone, &positions, &normals, &a.truth)?;
         let facing = metrics::facing_light(&positions, &normals, &alone.lights[0]).map_err(|e| format!("error: {e}"))?;
         metrics::check_visibility(&format!("the technique's visibility under light {i}"), &vis, &facing)

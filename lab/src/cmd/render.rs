@@ -3,7 +3,8 @@
 
 use crate::image_io::ImageFiles;
 use crate::session::{Overrides, rt};
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
+use crate::run::Bound;
+use sshc_runtime::gpu::{CameraOutput, Gpu, RuntimeError};
 use sshc_runtime::graph::{Draw, PassGraph, Views, traffic};
 use std::path::{Path, PathBuf};
 
@@ -62,9 +63,11 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
         return Err(format!("error: --bandwidth {b}: a bandwidth is a positive number of GB/s"));
     }
     let gpu = Gpu::new().map_err(rt)?;
-    let (scene, mut ex) = a.over.load(&gpu, &a.input, &a.scene)?;
+    let (scene, mut loaded) = a.over.load(&gpu, &a.input, &a.scene)?;
+    // a dump reads every light's textures back: each light keeps its own
+    loaded.limits.share_light_textures = a.dump.is_none();
     // Several lights: each light gets its own resources and passes in the same
-    // frame, and the GPU combines their shaded images (`Executor::bind_lights`).
+    // frame, and the GPU combines their shaded images (`crate::run::Loaded::bind_lights`).
     let n_lights = scene.lights.len().max(1);
     if let Some(p) = &a.visibility
         && n_lights > 3
@@ -77,13 +80,14 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
     }
     let mut stages = crate::session::Stages::default();
     // cascades build their own inputs (one soup, a view per cascade)
-    match a.over.cascading.bind(&mut ex, &scene)? {
-        Some(line) => {
+    let mut ex = match a.over.cascading.bind(&loaded, &scene)? {
+        Some((bound, line)) => {
             stages.done("scene inputs and the cascades' binding");
             println!("{line}");
+            bound
         }
         None => {
-            let binding = crate::bind::SceneBinding::of(&scene, &ex.graph, true)?;
+            let binding = crate::bind::SceneBinding::of(&scene, loaded.graph(), true)?;
             stages.done(match binding {
                 crate::bind::SceneBinding::Soup(_) => "scene inputs (the triangle soup)",
                 crate::bind::SceneBinding::Instances { .. } => "scene inputs (meshes and their instances)",
@@ -91,9 +95,9 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
             if let crate::bind::SceneBinding::Instances { .. } = binding {
                 println!("geometry: {}", binding.describe());
             }
-            binding.bind(&mut ex)?;
+            binding.bind(&loaded)?
         }
-    }
+    };
     gpu.wait().map_err(rt)?;
     stages.done("bind (upload, edge adjacency, resources)");
     let mut all: Vec<Vec<Option<f64>>> = Vec::new();
@@ -117,9 +121,9 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
         }
     }
     stages.done(&format!("{} frame(s)", a.frames.max(1)));
-    let color = ex.read_camera(CameraOutput::Color).map_err(rt)?;
+    let color = ex.inspect().read_camera(CameraOutput::Color).map_err(rt)?;
     if let Some(p) = &a.visibility {
-        let vis = ex.read_visibilities().map_err(rt)?;
+        let vis = ex.inspect().read_visibilities().map_err(rt)?;
         if n_lights == 1 {
             vis.write_pfm_gray(p, 0).map_err(rt)?;
             println!("wrote {}", p.display());
@@ -144,11 +148,11 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
     color.write_png(&a.out, None, (0.0, 1.0)).map_err(rt)?;
     println!("wrote {}", a.out.display());
     if let Some(p) = &a.positions {
-        ex.read_camera(CameraOutput::Position).map_err(rt)?.write_pfm_rgb(p).map_err(rt)?;
+        ex.inspect().read_camera(CameraOutput::Position).map_err(rt)?.write_pfm_rgb(p).map_err(rt)?;
         println!("wrote {}", p.display());
     }
     if let Some(p) = &a.normals {
-        ex.read_camera(CameraOutput::Normal).map_err(rt)?.write_pfm_rgb(p).map_err(rt)?;
+        ex.inspect().read_camera(CameraOutput::Normal).map_err(rt)?.write_pfm_rgb(p).map_err(rt)?;
         println!("wrote {}", p.display());
     }
     if let Some(dir) = &a.dump {
@@ -165,7 +169,7 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
     }
     // Every texture is allocated when the scene is bound and lives for the whole frame, so
     // the peak is the sum.
-    let memory = ex.memory().map_err(rt)?;
+    let memory = ex.inspect().memory();
     let total: u64 = memory.iter().map(|(_, b)| b).sum();
     println!("| texture | bytes |\n|---|---|");
     for (name, bytes) in &memory {
@@ -173,7 +177,7 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
     }
     println!("| peak (all textures resident) | {total} |");
     // Geometry passes: the scene's edges and what the last frame generated from them.
-    let edges = ex.edge_counts().map_err(rt)?;
+    let edges = ex.scene.edge_counts();
     if let Some(c) = edges {
         println!(
             "edges: {} in {} mesh(es): {} open boundary, {} non-manifold; {} degenerate triangle(s) skipped; {} vertex position(s) welded within {} of their mesh's extent",
@@ -185,11 +189,11 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
             c.welded_near,
             sshc_runtime::adjacency::WELD_TOLERANCE
         );
-        for b in &ex.graph.buffers {
-            let g = ex.generated(&b.name).map_err(rt)?;
+        for b in &ex.graph().buffers {
+            let g = ex.inspect().generated(&b.name).map_err(rt)?;
             // skins come from a neighbouring sample's depth steps, the rest from silhouettes
             let skins = ex
-                .graph
+                .graph()
                 .passes
                 .iter()
                 .flat_map(|p| &p.steps)
@@ -209,7 +213,7 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
         }
     }
     let work = pass_work(
-        &ex.graph,
+        ex.graph(),
         scene.shadow_map,
         scene.camera_size(),
         edges.map_or(0, |c| u64::from(c.edges)),
@@ -218,7 +222,7 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
         shadow: scene.shadow_map,
         camera: scene.camera_size(),
     };
-    let bytes = traffic::passes(&ex.graph, sizes);
+    let bytes = traffic::passes(ex.graph(), sizes);
     let gbps = match a.bandwidth {
         Some(b) => {
             println!("bandwidth: {b:.1} GB/s (given)");
@@ -265,7 +269,7 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
             }
             None => " | | | ".into(),
         };
-        let schedule = ex.graph.passes.iter().find(|p| &p.name == n).map_or("", |p| schedule(&p.steps));
+        let schedule = ex.graph().passes.iter().find(|p| &p.name == n).map_or("", |p| schedule(&p.steps));
         println!("| {n} | {shown} | {counts} | {memory} | {schedule} |");
     }
     Ok(())
@@ -364,24 +368,24 @@ pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edge
 }
 
 /// Every texture, layer, mip level and channel as PNG (scaled by the channel's range) and PFM.
-fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
+fn dump(ex: &Bound, dir: &Path) -> Result<(), RuntimeError> {
     let io = |e: std::io::Error| RuntimeError::File {
         path: dir.to_path_buf(),
         message: e.to_string(),
     };
     std::fs::create_dir_all(dir).map_err(io)?;
     let levels_of = |mips: bool, size: u32| if mips { sshc_runtime::gpu::mip_count(size) } else { 1 };
-    let size = ex.shadow_size()?;
+    let size = ex.targets.shadow_size();
     // the camera-sized debug outputs: below, each light's
     for t in ex
-        .graph
+        .graph()
         .textures
         .iter()
         .filter(|t| t.extent == sshc_runtime::graph::Extent::ShadowMap)
     {
         for layer in 0..t.layers {
             for level in 0..levels_of(t.mips, size) {
-                let img = ex.read_texture(&t.name, layer, level)?;
+                let img = ex.inspect().read_texture(&t.name, layer, level)?;
                 let comps: Vec<(String, usize, (f32, f32))> = if t.channels.is_empty() {
                     (0..4).map(|c| (format!("c{c}"), c, (0.0, 1.0))).collect()
                 } else {
@@ -420,7 +424,7 @@ fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
         (CameraOutput::Position, "position"),
         (CameraOutput::Normal, "normal"),
     ] {
-        let img = ex.read_camera(which)?;
+        let img = ex.inspect().read_camera(which)?;
         match which {
             CameraOutput::Visibility => img.write_pfm_gray(&dir.join(format!("{name}.pfm")), 0)?,
             _ => img.write_pfm_rgb(&dir.join(format!("{name}.pfm")))?,
@@ -439,11 +443,11 @@ fn dump(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
 /// The Shade's debug outputs, each light's (or cascade's), each component: PFM (the f32
 /// values as computed, NaN where no surface is seen) and a PNG through viridis over the
 /// component's finite [min, max], which is printed (NaN black).
-fn dump_debug(ex: &Executor, dir: &Path) -> Result<(), RuntimeError> {
-    let lights = ex.lights();
-    for d in ex.debug_outputs() {
+fn dump_debug(ex: &Bound, dir: &Path) -> Result<(), RuntimeError> {
+    let lights = ex.targets.lights();
+    for d in ex.inspect().debug_outputs() {
         for light in 0..lights {
-            let img = ex.read_debug(light, &d.name)?;
+            let img = ex.inspect().read_debug(light, &d.name)?;
             for c in 0..d.components {
                 let mut stem = d.texture.clone();
                 if d.components > 1 {

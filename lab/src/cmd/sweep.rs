@@ -28,7 +28,8 @@ use crate::session::{TruthOpts, load_scene, positions_normals, rt, truth_at};
 use crate::session::{read, report};
 use indexmap::IndexMap;
 use serde::Deserialize;
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
+use crate::run::Bound;
+use sshc_runtime::gpu::{CameraOutput, Gpu};
 use sshc_runtime::graph::PassGraph;
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
@@ -274,7 +275,7 @@ impl SceneTruth {
     /// read from the cache they name); `quiet` runs the tracing with the progress bar
     /// hidden.
     pub(crate) fn at(
-        ex: &Executor,
+        ex: &Bound,
         scene: &crate::scene::Scene,
         opts: &TruthOpts,
         quiet: impl FnOnce(&dyn Fn() -> Result<crate::truth::Truth, String>) -> Result<crate::truth::Truth, String>,
@@ -320,10 +321,10 @@ impl SceneTruth {
 
 /// One configuration run on one scene, as the sweep and the tuner measure it.
 pub(crate) struct Ran {
-    pub ex: Executor,
+    pub ex: Bound,
     /// Median GPU ms per frame (none where the device has no timestamps).
     pub ms: Option<f64>,
-    /// Bytes of every texture and buffer the executor holds.
+    /// Bytes of every texture the targets hold.
     pub peak: u64,
     pub fetches: f64,
     pub ops: f64,
@@ -367,14 +368,14 @@ pub(crate) fn run_config(
     // (generic under cascades: their views are not the scene's)
     let facts = crate::session::scene_facts(scene_path, scene).filter(|f| sshc::admits(source, f.light) && !cascading.on(scene));
     let compiled = compile_for(path, source, &s.set, &s.precision, &s.schedule, facts)?;
-    let mut ex = Executor::new(gpu, compiled.graph, compiled.shaders).map_err(rt)?;
+    let loaded = crate::run::Loaded::new(gpu, compiled.graph, compiled.shaders).map_err(rt)?;
     crate::bind::check_cascades(scene, &cascading)?;
-    cascading.bind_or_scene(&mut ex, scene, false)?;
-    let edges = ex.edge_counts().map_err(rt)?.map_or(0, |c| u64::from(c.edges));
-    let (fetches, ops) = work(&ex.graph, scene.shadow_map, scene.camera_size(), edges);
+    let (mut ex, _) = cascading.bind_or_scene(&loaded, scene, false)?;
+    let edges = ex.scene.edge_counts().map_or(0, |c| u64::from(c.edges));
+    let (fetches, ops) = work(ex.graph(), scene.shadow_map, scene.camera_size(), edges);
     let ms = time_frames(&mut ex, frames)?;
-    let visibility = ex.read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
-    let peak = ex.memory().map_err(rt)?.iter().map(|(_, b)| b).sum();
+    let visibility = ex.inspect().read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
+    let peak = ex.inspect().memory().iter().map(|(_, b)| b).sum();
     Ok(Ran {
         ex,
         ms,
@@ -386,7 +387,7 @@ pub(crate) fn run_config(
 }
 
 /// Median of per-frame GPU times (sum over passes) over `frames` frames after a warm-up.
-fn time_frames(ex: &mut Executor, frames: usize) -> Result<Option<f64>, String> {
+fn time_frames(ex: &mut Bound, frames: usize) -> Result<Option<f64>, String> {
     ex.run_frame().map_err(rt)?;
     let mut t = Vec::new();
     for _ in 0..frames.max(1) {
@@ -872,8 +873,8 @@ fn measure(
     }
     let time_references = |log: &mut Log| -> Result<(), String> {
         for (sc, c, scene) in &reference_runs {
-            let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(rt)?;
-            a.cascading.bind_or_scene(&mut ex, scene, false)?;
+            let loaded = crate::run::Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(rt)?;
+            let (mut ex, _) = a.cascading.bind_or_scene(&loaded, scene, false)?;
             if let Some(ms) = time_frames(&mut ex, file.frames)? {
                 log.append(&Record::Reference { scene: *sc, ms })?;
             }
@@ -951,8 +952,8 @@ fn measure(
     for &&(index, sc, n) in todo_baselines {
         let scene = l.scene(&file.scenes[sc])?;
         let c = compile(&l.resolve(&file.reference), &reference_source, &[], &[], &[])?;
-        let mut ex = Executor::new(gpu, c.graph, c.shaders).map_err(rt)?;
-        crate::bind::bind_scene(&mut ex, &scene, false)?;
+        let loaded = crate::run::Loaded::new(gpu, c.graph, c.shaders).map_err(rt)?;
+        let mut ex = crate::bind::bind_scene(&loaded, &scene, false)?;
         ex.run_frame().map_err(rt)?;
         let (p, nrm) = positions_normals(&ex)?;
         let (truth, _) = progress.bar.suspend(|| truth_at(&scene, &p, &nrm, &a.truth))?;

@@ -55,8 +55,8 @@ pub fn truth(a: TruthArgs) -> Result<(), String> {
     let (w, h) = scene.camera_size();
     a.truth.check(u64::from(w) * u64::from(h))?;
     let gpu = Gpu::new().map_err(rt)?;
-    let mut ex = compile_executor(&gpu, Path::new("techniques/hard.ron"), HARD, &Default::default())?;
-    crate::bind::bind_scene(&mut ex, &scene, false)?;
+    let loaded = compile_executor(&gpu, Path::new("techniques/hard.ron"), HARD, &Default::default())?;
+    let mut ex = crate::bind::bind_scene(&loaded, &scene, false)?;
     ex.run_frame().map_err(rt)?;
     let (positions, normals) = positions_normals(&ex)?;
     let (t, source) = truth_at(&scene, &positions, &normals, &a.truth)?;

@@ -10,7 +10,8 @@ use super::worker::{Answer, Controls, Watch, Worker};
 use crate::image_io::ImageFiles as _;
 use crate::scene::Scene;
 use serde_json::json;
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
+use crate::run::Bound;
+use sshc_runtime::gpu::{CameraOutput, Gpu};
 use sshc_runtime::graph::ParamType;
 use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
@@ -110,10 +111,10 @@ struct App {
     orbit: Orbit,
     gfx: Option<Gfx>,
     worker: Option<Worker>,
-    ex: Option<Executor>,
+    ex: Option<Bound>,
     /// The split view's right half: its own worker and executor.
     worker_b: Option<Worker>,
-    ex_b: Option<Executor>,
+    ex_b: Option<Bound>,
     controls: Controls,
     /// The diagnostics of the last compilation that failed, until one succeeds.
     diagnostics: Option<String>,
@@ -422,7 +423,7 @@ impl App {
                 self.resized |= self.view_size() != first_size(&ex);
                 self.moved = true;
                 // runtime params the new graph still has keep their values
-                self.state.params.retain(|k, v| ex.set_param(k, *v).is_ok());
+                self.state.params.retain(|k, v| ex.state.params.set(k, *v).is_ok());
                 self.ex = Some(ex);
                 self.fresh = Some((r.compile_ms, r.pipelines_ms, r.bind_ms));
                 // GPU times are the new graph's from here
@@ -503,11 +504,11 @@ impl App {
             }
             Event::Show(m) => {
                 if let (Mode::Texture { name, .. }, Some(ex)) = (&m, &self.ex)
-                    && ex.graph.texture(name).is_none()
-                    && !ex.debug_outputs().iter().any(|o| o.texture == *name)
+                    && ex.graph().texture(name).is_none()
+                    && !ex.inspect().debug_outputs().iter().any(|o| o.texture == *name)
                 {
-                    let mut known: Vec<String> = ex.graph.textures.iter().map(|t| t.name.clone()).collect();
-                    known.extend(ex.debug_outputs().into_iter().map(|o| o.texture));
+                    let mut known: Vec<String> = ex.graph().textures.iter().map(|t| t.name.clone()).collect();
+                    known.extend(ex.inspect().debug_outputs().into_iter().map(|o| o.texture));
                     return Err(format!(
                         "error: Show: the graph has no texture `{name}`; it has {}",
                         known.join(", ")
@@ -550,7 +551,7 @@ impl App {
                 self.orbit = Orbit::of(&self.state.camera);
                 if let Some(ex) = &mut self.ex {
                     for (k, v) in &self.state.params {
-                        ex.set_param(k, *v).map_err(|e| format!("error: {e}"))?;
+                        ex.state.params.set(k, *v).map_err(|e| format!("error: {e}"))?;
                     }
                 }
                 self.moved = true;
@@ -569,9 +570,9 @@ impl App {
                 self.state.params.clear();
                 if let Some(ex) = &mut self.ex {
                     for k in defaults {
-                        if let Some(p) = ex.graph.params.iter().find(|p| p.name == k) {
+                        if let Some(p) = ex.graph().params.iter().find(|p| p.name == k) {
                             let v = p.value;
-                            let _ = ex.set_param(&k, v);
+                            let _ = ex.state.params.set(&k, v);
                         }
                     }
                 }
@@ -607,11 +608,11 @@ impl App {
         let decl = self
             .ex
             .as_ref()
-            .and_then(|ex| ex.graph.params.iter().find(|p| p.name == name).cloned());
+            .and_then(|ex| ex.graph().params.iter().find(|p| p.name == name).cloned());
         match decl {
             Some(d) if d.offset.is_some() => {
                 if let Some(ex) = &mut self.ex {
-                    ex.set_param(name, value).map_err(|e| format!("error: {e}"))?;
+                    ex.state.params.set(name, value).map_err(|e| format!("error: {e}"))?;
                 }
                 self.state.params.insert(name.to_string(), value);
             }
@@ -694,18 +695,22 @@ impl App {
                 // only the camera-sized targets are made again: the geometry, its edges,
                 // the shadow maps and the pipelines stay (issue 49); the camera and lights
                 // of the new aspect follow below
-                ex.resize(scene.camera_size()).map_err(|e| format!("error: {e}"))?;
+                ex.targets.resize(scene.camera_size()).map_err(|e| format!("error: {e}"))?;
             }
-            if ex.cascades() > 1 {
+            if ex.targets.cascades() > 1 {
                 // the cascades follow the camera: refitted to its slices in place
                 self.args.cascading.refit(ex, scene)?;
                 continue;
             }
-            ex.set_camera(&crate::bind::camera(scene)).map_err(|e| format!("error: {e}"))?;
+            // plain state: checked and written by the next frame's prepare
+            ex.state.camera = crate::bind::camera(scene);
             // each light's view depends on the geometry and that light alone
             for (l, light) in scene.lights.iter().enumerate() {
-                let inputs = crate::bind::light_inputs(scene, light, &ex.graph)?;
-                ex.set_light(l, &inputs).map_err(|e| format!("error: light {l}: {e}"))?;
+                let inputs = crate::bind::light_inputs(scene, light, ex.graph())?;
+                match ex.state.lights.get_mut(l) {
+                    Some(slot) => *slot = inputs,
+                    None => return Err(format!("error: light {l}: the view was bound with {} light(s)", ex.state.lights.len())),
+                }
             }
         }
         self.resized = false;
@@ -730,7 +735,7 @@ impl App {
                 Answer::Ready(r) => {
                     let mut ex = r.executor;
                     if let Some(split) = &mut self.state.split {
-                        split.params.retain(|k, v| ex.set_param(k, *v).is_ok());
+                        split.params.retain(|k, v| ex.state.params.set(k, *v).is_ok());
                     }
                     self.resized |= self.view_size() != first_size(&ex);
                     self.moved = true;
@@ -798,9 +803,9 @@ impl App {
             ex.encode(&mut encoder).map_err(|e| format!("error: {e}"))?;
             // a summed-area table is a storage buffer: read back and shown as a texture
             if let Mode::Texture { name, layer, level, .. } = &self.state.mode
-                && ex.graph.texture(name).is_some_and(|t| t.format.is_table())
+                && ex.graph().texture(name).is_some_and(|t| t.format.is_table())
             {
-                let img = ex.read_texture(name, *layer, *level).map_err(|e| format!("error: {e}"))?;
+                let img = ex.inspect().read_texture(name, *layer, *level).map_err(|e| format!("error: {e}"))?;
                 self.table = Some(upload(&gfx.device, &gfx.queue, &img));
             } else {
                 self.table = None;
@@ -920,7 +925,7 @@ impl App {
         self.frame += 1;
         self.refine()?;
         if let Some(ex) = &mut self.ex
-            && let Ok(Some((n, t))) = ex.frame_times()
+            && let Ok(Some((n, t))) = ex.targets.frame_times()
             && self.times.gpu_frame != Some(n)
         {
             self.times.gpu_frame = Some(n);
@@ -1002,7 +1007,7 @@ impl App {
         }
         let Some(ex) = &self.ex else { return Ok(()) };
         let Some(e) = self.refiner.poll() else { return Ok(()) };
-        let vis = ex.read_visibilities().map_err(|e| format!("error: {e}"))?.channel(0);
+        let vis = ex.inspect().read_visibilities().map_err(|e| format!("error: {e}"))?.channel(0);
         let error: Vec<f32> = vis
             .iter()
             .zip(&e.visibility)
@@ -1110,12 +1115,12 @@ fn options(state: &ViewState) -> sshc::CompileOptions {
 
 /// The texture a mode shows from `ex` (the truth's from `truth`: the truth, the error, the
 /// standard error), and how to read it.
-fn shown<'a>(mode: &Mode, ex: &'a Executor, truth: Option<&'a [wgpu::Texture; 3]>) -> (Option<&'a wgpu::Texture>, Pick) {
+fn shown<'a>(mode: &Mode, ex: &'a Bound, truth: Option<&'a [wgpu::Texture; 3]>) -> (Option<&'a wgpu::Texture>, Pick) {
     match mode {
-        Mode::Shaded => (ex.camera_texture(CameraOutput::Color).ok(), shaded()),
+        Mode::Shaded => (Some(ex.targets.camera_texture(CameraOutput::Color)), shaded()),
         // light 0's visibility, or the cascades' combination
         Mode::Visibility => (
-            ex.visibility().ok(),
+            Some(ex.targets.visibility()),
             Pick {
                 layer: 0,
                 level: 0,
@@ -1128,14 +1133,14 @@ fn shown<'a>(mode: &Mode, ex: &'a Executor, truth: Option<&'a [wgpu::Texture; 3]
         ),
         // the combining step's channel 1: the cascade, `k + t` in a band
         Mode::Cascades => {
-            let n = ex.cascades();
+            let n = ex.targets.cascades();
             let texture = if n > 1 {
-                ex.visibility()
+                ex.targets.visibility()
             } else {
-                ex.camera_texture(CameraOutput::Visibility)
+                ex.targets.camera_texture(CameraOutput::Visibility)
             };
             (
-                texture.ok(),
+                Some(texture),
                 Pick {
                     layer: 0,
                     level: 0,
@@ -1176,7 +1181,7 @@ fn shown<'a>(mode: &Mode, ex: &'a Executor, truth: Option<&'a [wgpu::Texture; 3]
             hi,
             map,
         } => (
-            ex.texture(name).ok(),
+            ex.targets.texture(name).ok(),
             Pick {
                 layer: *layer,
                 level: *level,
@@ -1186,7 +1191,7 @@ fn shown<'a>(mode: &Mode, ex: &'a Executor, truth: Option<&'a [wgpu::Texture; 3]
                 hi: *hi,
                 // a shadow map's texture in a square; a debug output over the camera's view
                 square: ex
-                    .graph
+                    .graph()
                     .texture(name)
                     .is_none_or(|t| t.extent != sshc_runtime::graph::Extent::Camera),
             },
@@ -1224,10 +1229,8 @@ fn upload(device: &wgpu::Device, queue: &wgpu::Queue, img: &sshc_runtime::gpu::I
     t
 }
 
-fn first_size(ex: &Executor) -> (u32, u32) {
-    ex.camera_texture(CameraOutput::Color)
-        .map(|t| (t.width(), t.height()))
-        .unwrap_or((0, 0))
+fn first_size(ex: &Bound) -> (u32, u32) {
+    ex.targets.camera_size()
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {
@@ -1312,11 +1315,11 @@ fn write_png(
 
 /// The visibility beside a screenshot: `NAME.visibility.pfm`, as `sshc render --visibility`
 /// writes it (light 0's alone, or each light's in a channel).
-fn write_visibility(ex: &Executor, png: &Path) -> Result<Option<PathBuf>, String> {
+fn write_visibility(ex: &Bound, png: &Path) -> Result<Option<PathBuf>, String> {
     let p = png.with_extension("visibility.pfm");
-    let vis = ex.read_visibilities().map_err(|e| format!("error: {e}"))?;
+    let vis = ex.inspect().read_visibilities().map_err(|e| format!("error: {e}"))?;
     // cascades: their combination in channel 0 (`sshc render --visibility` writes it)
-    match if ex.cascades() > 1 { 1 } else { ex.lights() } {
+    match if ex.targets.cascades() > 1 { 1 } else { ex.targets.lights() } {
         1 => vis.write_pfm_gray(&p, 0),
         2 | 3 => vis.write_pfm_rgb(&p),
         _ => return Ok(None),
@@ -1328,7 +1331,7 @@ fn write_visibility(ex: &Executor, png: &Path) -> Result<Option<PathBuf>, String
 /// What the panels read.
 struct UiData<'a> {
     state: &'a ViewState,
-    ex: Option<&'a Executor>,
+    ex: Option<&'a Bound>,
     controls: &'a Controls,
     diagnostics: Option<&'a str>,
     status: &'a str,
@@ -1396,8 +1399,8 @@ fn panels(ctx: &egui::Context, d: &UiData, actions: &mut Vec<Action>) {
     }
 }
 
-fn params(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>) {
-    for p in &ex.graph.params {
+fn params(ui: &mut egui::Ui, d: &UiData, ex: &Bound, actions: &mut Vec<Action>) {
+    for p in &ex.graph().params {
         let uniform = p.offset.is_some();
         let mut v = d.state.params.get(&p.name).copied().unwrap_or(p.value);
         if !uniform && let Some(f) = d.state.fixed.get(&p.name).and_then(|s| s.parse::<f64>().ok()) {
@@ -1489,13 +1492,13 @@ fn lights(ui: &mut egui::Ui, d: &UiData, actions: &mut Vec<Action>) {
     }
 }
 
-fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>) {
+fn show(ui: &mut egui::Ui, d: &UiData, ex: &Bound, actions: &mut Vec<Action>) {
     let mut mode = d.state.mode.clone();
     ui.horizontal(|ui| {
         ui.selectable_value(&mut mode, Mode::Shaded, "shaded");
         ui.selectable_value(&mut mode, Mode::Visibility, "visibility");
         ui.selectable_value(&mut mode, Mode::Truth, "truth");
-        if ex.cascades() > 1 {
+        if ex.targets.cascades() > 1 {
             ui.selectable_value(&mut mode, Mode::Cascades, "cascades");
         }
     });
@@ -1529,7 +1532,7 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
         ));
     }
     // the Shade's debug outputs: each over the view, its values fitted to viridis
-    let debug = ex.debug_outputs();
+    let debug = ex.inspect().debug_outputs();
     if !debug.is_empty() {
         ui.horizontal(|ui| {
             ui.label("debug:");
@@ -1537,6 +1540,7 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
                 let on = matches!(&mode, Mode::Texture { name, .. } if *name == o.texture);
                 if ui.selectable_label(on, &o.name).clicked() && !on {
                     let (lo, hi) = ex
+                        .inspect()
                         .read_debug(0, &o.name)
                         .ok()
                         .and_then(|img| crate::image_io::finite_range(img.rgba.iter().map(|p| p[0])))
@@ -1560,7 +1564,7 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
     };
     let mut name = current.clone();
     egui::ComboBox::from_label("texture").selected_text(&name).show_ui(ui, |ui| {
-        for t in &ex.graph.textures {
+        for t in &ex.graph().textures {
             ui.selectable_value(&mut name, t.name.clone(), &t.name);
         }
     });
@@ -1584,14 +1588,14 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
         hi,
         map,
     } = &mut mode
-        && let Some(decl) = ex.graph.texture(name)
+        && let Some(decl) = ex.graph().texture(name)
     {
         if decl.format.is_table() {
             ui.label("a summed-area table (prefix sums in a storage buffer): read back every frame");
         }
         let layers = decl.array_layers().max(1);
         let levels = if decl.mips {
-            ex.shadow_size().map_or(1, |s| 32 - s.leading_zeros())
+            32 - ex.targets.shadow_size().leading_zeros()
         } else {
             1
         };
@@ -1603,7 +1607,7 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
             ui.add(egui::DragValue::new(hi).speed(0.01).prefix("hi "));
             // the channel's finite values, read back once
             if ui.button("fit").clicked()
-                && let Ok(img) = ex.read_texture(name, *layer, *level)
+                && let Ok(img) = ex.inspect().read_texture(name, *layer, *level)
             {
                 let c = (*channel).min(3) as usize;
                 let (a, b) = img
@@ -1665,7 +1669,7 @@ fn show(ui: &mut egui::Ui, d: &UiData, ex: &Executor, actions: &mut Vec<Action>)
     }
 }
 
-fn times(ui: &mut egui::Ui, d: &UiData, ex: &Executor) {
+fn times(ui: &mut egui::Ui, d: &UiData, ex: &Bound) {
     ui.label(format!(
         "frame {:.1} ms; panels {:.2} ms and presentation {:.2} ms of CPU (medians of the last {})",
         median(&d.times.frame_ms),
@@ -1688,12 +1692,11 @@ fn times(ui: &mut egui::Ui, d: &UiData, ex: &Executor) {
             ui.label(format!("{name} {t:.3} ms"));
         });
     }
-    if let Ok(mem) = ex.memory() {
-        let sum: u64 = mem.iter().map(|m| m.1).sum();
-        ui.label(format!("memory: {:.1} MiB", sum as f64 / 1048576.0));
-        for (name, bytes) in mem {
-            ui.label(format!("  {name}: {:.2} MiB", bytes as f64 / 1048576.0));
-        }
+    let mem = ex.inspect().memory();
+    let sum: u64 = mem.iter().map(|m| m.1).sum();
+    ui.label(format!("memory: {:.1} MiB", sum as f64 / 1048576.0));
+    for (name, bytes) in mem {
+        ui.label(format!("  {name}: {:.2} MiB", bytes as f64 / 1048576.0));
     }
 }
 

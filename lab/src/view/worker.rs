@@ -5,7 +5,8 @@
 use crate::bind::Cascading;
 use crate::scene::Scene;
 use notify::Watcher as _;
-use sshc_runtime::gpu::{Executor, Gpu};
+use crate::run::{Bound, Loaded};
+use sshc_runtime::gpu::Gpu;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -46,7 +47,7 @@ pub enum Answer {
 
 pub struct Ready {
     pub id: u64,
-    pub executor: Executor,
+    pub executor: Bound,
     pub controls: Controls,
     /// Compilation, pipeline creation and binding, in ms.
     pub compile_ms: f64,
@@ -185,10 +186,12 @@ fn build(gpu: &Gpu, r: Request) -> Result<Ready, String> {
         warnings,
     };
     let t = Instant::now();
-    let mut executor = Executor::new(gpu, compiled.graph, compiled.shaders).map_err(|e| format!("error: {e}"))?;
+    let mut loaded = Loaded::new(gpu, compiled.graph, compiled.shaders).map_err(|e| format!("error: {e}"))?;
+    // the viewer shows any texture of light 0: each light keeps its own
+    loaded.limits.share_light_textures = false;
     let pipelines_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
-    bind(&mut executor, &r.scene, &r.cascading)?;
+    let executor = bind(&loaded, &r.scene, &r.cascading)?;
     let bind_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok(Ready {
         id: r.id,
@@ -202,9 +205,9 @@ fn build(gpu: &Gpu, r: Request) -> Result<Ready, String> {
 
 /// Bind every light of `scene` as `sshc render` does (each light its own passes), or its
 /// light's cascades where `cascading` or the scene asks for them.
-fn bind(ex: &mut Executor, scene: &Scene, cascading: &Cascading) -> Result<(), String> {
+fn bind(ex: &Loaded, scene: &Scene, cascading: &Cascading) -> Result<Bound, String> {
     crate::bind::check_cascades(scene, cascading)?;
-    cascading.bind_or_scene(ex, scene, true).map(|_| ())
+    cascading.bind_or_scene(ex, scene, true).map(|(b, _)| b)
 }
 
 /// Watches files and says which of them changed.
