@@ -35,11 +35,12 @@ fn quad_scene(eye: Vec3) -> Scene {
 fn render(gpu: &Gpu, technique: &str, scene: &Scene) -> Vec<(f32, Vec3, f32)> {
     let path = root().join("techniques").join(format!("{technique}.ron"));
     let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut ex = compile_executor(gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{technique}: {e}"));
+    let loaded = compile_executor(gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{technique}: {e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap();
-    ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{technique}: {e}"));
+    let mut ex = loaded.bind_scene(&inputs).unwrap_or_else(|e| panic!("{technique}: {e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{technique}: {e}"));
     let vis = ex
+        .inspect()
         .read_camera(CameraOutput::Visibility)
         .unwrap_or_else(|e| panic!("{technique}: {e}"));
     let (positions, normals) = positions_normals(&ex).unwrap();
@@ -99,11 +100,12 @@ fn ground_scene(ground_casts: bool, quad_casts: bool, fit: &str) -> Scene {
 fn render_positions(gpu: &Gpu, technique: &str, scene: &Scene) -> Vec<(f32, Vec3, f32)> {
     let path = root().join("techniques").join(format!("{technique}.ron"));
     let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut ex = compile_executor(gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{technique}: {e}"));
-    ex.bind_scene(&sshc_lab::bind::scene_inputs(scene).unwrap())
+    let loaded = compile_executor(gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{technique}: {e}"));
+    let mut ex = loaded
+        .bind_scene(&sshc_lab::bind::scene_inputs(scene).unwrap())
         .unwrap_or_else(|e| panic!("{technique}: {e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{technique}: {e}"));
-    let vis = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
+    let vis = ex.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0);
     let (positions, normals) = positions_normals(&ex).unwrap();
     let truth = Visibility::new(scene).visible_fractions(&positions, &normals, &scene.lights[0], 8);
     positions
@@ -208,7 +210,7 @@ fn a_gltf_file_and_the_same_geometry_as_obj_give_the_same_visibility() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Cascades (`Executor::bind_cascades`, fitted by `bind::cascade_inputs`): one cascade is
+/// Cascades (`Loaded::bind_cascades`, fitted by `bind::cascade_inputs`): one cascade is
 /// the plain binding, bit for bit, for every bundled technique a sun serves; with several,
 /// each pixel takes the cascade whose slice holds its view distance, mixed with the next
 /// over the band at its slice's far end, exactly as the combining step states (channel 1
@@ -237,34 +239,39 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
     for t in TECHNIQUES.into_iter().chain(geometry).chain(["vssm", "mssm", "msm-hausdorff"]) {
         let path = root().join("techniques").join(format!("{t}.ron"));
         let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let mut ex = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
-        ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap())
+        let loaded = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let mut ex = loaded
+            .bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, loaded.graph()).unwrap())
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
-        let plain = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
+        let plain = ex.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0);
         // one cascade: bound as the scene is
-        assert!(cascading(1).bind(&mut ex, &scene).unwrap_or_else(|e| panic!("{t}: {e}")).is_none());
-        let one = sshc_lab::bind::cascade_inputs(&scene, &ex.graph, 1, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"));
+        assert!(cascading(1).bind(&loaded, &scene).unwrap_or_else(|e| panic!("{t}: {e}")).is_none());
+        let one = sshc_lab::bind::cascade_inputs(&scene, loaded.graph(), 1, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"));
         assert_eq!(one.lights.len(), 1);
-        let inputs = sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap();
-        ex.bind_cascades(&inputs, &[inputs.light_inputs()], &one.slices(0.2))
+        let inputs = sshc_lab::bind::scene_inputs_for(&scene, loaded.graph()).unwrap();
+        let mut ex = loaded
+            .bind_cascades(&inputs, &[inputs.light_inputs()], &one.slices(0.2))
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
-        let again = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
+        let again = ex.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0);
         assert!(
             plain.iter().zip(&again).all(|(a, b)| a.to_bits() == b.to_bits()),
             "{t}: one cascade differs"
         );
 
         // three cascades: the selection and the mixture, pixel by pixel
-        assert!(cascading(3).bind(&mut ex, &scene).unwrap_or_else(|e| panic!("{t}: {e}")).is_some());
-        let c = sshc_lab::bind::cascade_inputs(&scene, &ex.graph, 3, 0.75, true, [0.0; 3]).unwrap();
+        let (mut ex, _) = cascading(3)
+            .bind(&loaded, &scene)
+            .unwrap_or_else(|e| panic!("{t}: {e}"))
+            .expect("three cascades are bound");
+        let c = sshc_lab::bind::cascade_inputs(&scene, loaded.graph(), 3, 0.75, true, [0.0; 3]).unwrap();
         ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
-        let combined = ex.read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}"));
+        let combined = ex.inspect().read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}"));
         let own: Vec<Vec<f32>> = (0..3)
-            .map(|k| ex.read_light_camera(k, CameraOutput::Visibility).unwrap().channel(0))
+            .map(|k| ex.inspect().read_light_camera(k, CameraOutput::Visibility).unwrap().channel(0))
             .collect();
-        let positions = ex.read_light_camera(0, CameraOutput::Position).unwrap();
+        let positions = ex.inspect().read_light_camera(0, CameraOutput::Position).unwrap();
         let (eye, forward) = (Vec3::from_array(c.eye), Vec3::from_array(c.forward));
         let mut seen = [0usize; 3];
         for (i, p) in positions.rgba.iter().enumerate() {
@@ -296,8 +303,8 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
     }
 }
 
-/// A host moving its camera refits the cascades in place (`Executor::set_cascades`: the
-/// lights' views, the camera and the splits written, nothing created); the frame equals a
+/// A host moving its camera refits the cascades in place (the frame's state: the
+/// lights' views, the camera and the splits written by prepare, nothing created); the frame equals a
 /// fresh binding of the new fit, bit for bit.
 #[test]
 fn cascades_refitted_in_place_equal_a_fresh_binding() {
@@ -316,25 +323,26 @@ fn cascades_refitted_in_place_equal_a_fresh_binding() {
     for t in ["hard", "pcss"] {
         let path = root().join("techniques").join(format!("{t}.ron"));
         let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let executor = || compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
-        let fit = |ex: &sshc_runtime::gpu::Executor, s: &Scene| {
-            sshc_lab::bind::cascade_inputs(s, &ex.graph, 3, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"))
+        let loaded = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let fit = |s: &Scene| {
+            sshc_lab::bind::cascade_inputs(s, loaded.graph(), 3, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"))
         };
-        let frame = |ex: &mut sshc_runtime::gpu::Executor| {
+        let frame = |ex: &mut sshc_lab::run::Bound| {
             ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
-            ex.read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba
+            ex.inspect().read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba
         };
-        let mut ex = executor();
-        let a = fit(&ex, &first);
-        ex.bind_cascades(&a.scene, &a.lights, &a.slices(0.2))
+        let a = fit(&first);
+        let mut ex = loaded
+            .bind_cascades(&a.scene, &a.lights, &a.slices(0.2))
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         let before = frame(&mut ex);
-        let b = fit(&ex, &moved);
-        ex.set_cascades(&b.lights, &sshc_lab::bind::camera(&moved), &b.slices(0.2))
-            .unwrap_or_else(|e| panic!("{t}: {e}"));
+        let b = fit(&moved);
+        // the frame's state changed in place: the next prepare checks and writes it
+        ex.state.lights.clone_from(&b.lights);
+        ex.state.camera = sshc_lab::bind::camera(&moved);
+        ex.state.slices = Some(b.slices(0.2));
         let in_place = frame(&mut ex);
-        let mut fresh = executor();
-        fresh
+        let mut fresh = loaded
             .bind_cascades(&b.scene, &b.lights, &b.slices(0.2))
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         let fresh = frame(&mut fresh);
@@ -375,17 +383,18 @@ fn a_gltf_of_shared_meshes_binds_as_instances_and_renders_as_its_soup() {
         let path = root().join("techniques").join(format!("{t}.ron"));
         let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let run = |instances: bool| {
-            let mut ex = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
-            if instances {
-                let b = sshc_lab::bind::SceneBinding::of(&scene, &ex.graph, true).unwrap();
+            let loaded = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
+            let mut ex = if instances {
+                let b = sshc_lab::bind::SceneBinding::of(&scene, loaded.graph(), true).unwrap();
                 assert!(matches!(b, sshc_lab::bind::SceneBinding::Instances { .. }), "{t}");
-                b.bind(&mut ex).unwrap_or_else(|e| panic!("{t}: {e}"));
+                b.bind(&loaded).unwrap_or_else(|e| panic!("{t}: {e}"))
             } else {
-                ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap())
-                    .unwrap();
-            }
+                loaded
+                    .bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, loaded.graph()).unwrap())
+                    .unwrap()
+            };
             ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
-            ex.read_camera(CameraOutput::Visibility).unwrap().channel(0)
+            ex.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0)
         };
         let (a, b) = (run(true), run(false));
         let differ = a.iter().zip(&b).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
@@ -403,15 +412,14 @@ fn a_gltf_of_shared_meshes_binds_as_instances_and_renders_as_its_soup() {
         no_snap: false,
         cascade_offset: None,
     };
-    let mut instanced = compile_executor(&gpu, &path, &source, &Default::default()).unwrap();
-    assert!(cascading.bind(&mut instanced, &scene).unwrap().is_some());
-    assert!(instanced.edge_counts().is_ok() && instanced.cascades() == 3);
-    let mut soup = compile_executor(&gpu, &path, &source, &Default::default()).unwrap();
-    let c = sshc_lab::bind::cascade_inputs(&scene, &soup.graph, 3, 0.75, true, [0.0; 3]).unwrap();
-    soup.bind_cascades(&c.scene, &c.lights, &c.slices(0.2)).unwrap();
-    let frame = |ex: &mut sshc_runtime::gpu::Executor| {
+    let loaded = compile_executor(&gpu, &path, &source, &Default::default()).unwrap();
+    let (mut instanced, _) = cascading.bind(&loaded, &scene).unwrap().expect("cascades are bound");
+    assert!(instanced.targets.cascades() == 3);
+    let c = sshc_lab::bind::cascade_inputs(&scene, loaded.graph(), 3, 0.75, true, [0.0; 3]).unwrap();
+    let mut soup = loaded.bind_cascades(&c.scene, &c.lights, &c.slices(0.2)).unwrap();
+    let frame = |ex: &mut sshc_lab::run::Bound| {
         ex.run_frame().unwrap();
-        ex.read_visibilities().unwrap().rgba
+        ex.inspect().read_visibilities().unwrap().rgba
     };
     assert!(
         frame(&mut instanced) == frame(&mut soup),
@@ -439,11 +447,12 @@ fn the_min_mip_early_out_gives_its_pcf_bit_for_bit() {
     for sc in ["bunny", "contact"] {
         let scene = Scene::load(root().join(format!("scenes/{sc}.ron"))).unwrap_or_else(|e| panic!("{e}"));
         let run = |src: &str| {
-            let mut ex = compile_executor(&gpu, &path, src, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
-            ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap())
+            let loaded = compile_executor(&gpu, &path, src, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+            let mut ex = loaded
+                .bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, loaded.graph()).unwrap())
                 .unwrap();
             ex.run_frame().unwrap();
-            ex.read_camera(CameraOutput::Visibility).unwrap().channel(0)
+            ex.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0)
         };
         let (a, b) = (run(&source), run(&plain));
         let differ = a.iter().zip(&b).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
@@ -479,12 +488,13 @@ fn an_f32_table_is_its_cpu_emulation_bit_for_bit_and_within_the_stated_bound() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
     let mut scene = Scene::load(root().join("scenes/bunny.ron")).unwrap_or_else(|e| panic!("{e}"));
     scene.shadow_map = n as u32;
-    let mut ex = compile_executor(&gpu, Path::new("f32_table.ron"), TECHNIQUE, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, &ex.graph).unwrap())
+    let loaded = compile_executor(&gpu, Path::new("f32_table.ron"), TECHNIQUE, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = loaded
+        .bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, loaded.graph()).unwrap())
         .unwrap();
     ex.run_frame().unwrap();
-    let values = ex.read_texture("mapped", 0, 0).unwrap().channel(0);
-    let table = ex.read_texture("table", 0, 0).unwrap().channel(0);
+    let values = ex.inspect().read_texture("mapped", 0, 0).unwrap().channel(0);
+    let table = ex.inspect().read_texture("table", 0, 0).unwrap().channel(0);
     let cpu = sshc::tables::f32_table(&values, n, 0.5);
     let differ = table.iter().zip(&cpu).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
     assert_eq!(differ, 0, "{differ} of {} entries differ from the emulation", n * n);

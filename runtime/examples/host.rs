@@ -14,7 +14,10 @@
 
 use clap::Parser;
 use glam::{Mat4, Vec3};
-use sshc_runtime::gpu::{Camera, Executor, Fit, Geometry, Gpu, INSTALL_HINT, Instance, LightInputs, Mesh, Requirements};
+use sshc_runtime::gpu::{
+    Camera, Fit, FrameState, Geometry, Gpu, INSTALL_HINT, Instance, LightInputs, Mesh, Requirements, Scene, Sizes, Targets, Technique,
+};
+use sshc_runtime::graph::ValidGraph;
 use sshc_runtime::light::Light;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -109,14 +112,20 @@ fn run(args: Args) -> Result<(), String> {
     let mut transforms: Vec<[f32; 16]> = geometry.instances.iter().map(|i| i.transform).collect();
     let turning = 5;
 
-    // 3. sshc, bound once.
+    // 3. sshc's stages, each made once: the technique (pipelines), the scene (meshes,
+    // instances), the targets (textures at the sizes), and the frame's state (plain data).
     let size = (args.size, args.size);
     let camera = camera(size);
-    let mut shadows = Executor::new(&gpu, compiled.graph.clone(), compiled.shaders.clone()).map_err(|e| e.to_string())?;
-    let first = LightInputs::fit(&light(0.0), &geometry.boxes(), Fit::Casters, SHADOW_MAP, 0).map_err(|e| e.to_string())?;
-    shadows
-        .bind_geometry(&geometry, &camera, &[first], size, SHADOW_MAP)
-        .map_err(|e| e.to_string())?;
+    let graph = ValidGraph::try_from(compiled.graph.clone()).map_err(|e| e.to_string())?;
+    let technique = Technique::new(&gpu, graph, compiled.shaders.clone()).map_err(|e| e.to_string())?;
+    let mut scene = Scene::upload(&gpu, &geometry, &[&technique]).map_err(|e| e.to_string())?;
+    let first = LightInputs::fit(&light(0.0), scene.boxes(), Fit::Casters, SHADOW_MAP, 0).map_err(|e| e.to_string())?;
+    let mut state = FrameState::new(&technique, camera, vec![first]);
+    let sizes = Sizes {
+        camera: size,
+        shadow: SHADOW_MAP,
+    };
+    let mut shadows = Targets::new(&technique, &scene, &state, sizes).map_err(|e| e.to_string())?;
 
     // 4. The host's own lighting pass, reading sshc's visibility.
     let host = HostPass::new(
@@ -125,7 +134,7 @@ fn run(args: Args) -> Result<(), String> {
         &geometry,
         &camera,
         size,
-        shadows.visibility().map_err(|e| e.to_string())?,
+        shadows.visibility(),
     );
 
     std::fs::create_dir_all(&args.out_dir).map_err(|e| format!("{}: {e}", args.out_dir.display()))?;
@@ -139,9 +148,10 @@ fn run(args: Args) -> Result<(), String> {
         let mut encoder = device.create_command_encoder(&Default::default());
         // sshc's share of the frame: the light and a bunny move, then the passes are recorded
         let t = Instant::now();
-        shadows.set_transforms(&transforms).map_err(|e| e.to_string())?;
-        shadows.place_light(0, &light, Fit::Casters).map_err(|e| e.to_string())?;
-        shadows.encode(&mut encoder).map_err(|e| e.to_string())?;
+        scene.set_transforms(&transforms).map_err(|e| e.to_string())?;
+        state.lights[0] = shadows.fit_light(&scene, 0, &light, Fit::Casters).map_err(|e| e.to_string())?;
+        shadows.prepare(&mut scene, &state).map_err(|e| e.to_string())?;
+        shadows.record(&scene, &mut encoder).map_err(|e| e.to_string())?;
         sshc_us.push(t.elapsed().as_secs_f64() * 1e6);
         host.record(&mut encoder, light.center().unwrap_or(Vec3::Y).extend(1.0).to_array(), &transforms);
         queue.submit([encoder.finish()]);

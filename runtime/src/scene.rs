@@ -6,6 +6,7 @@
 use crate::adjacency::{Adjacency, AdjacencyCounts};
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::fit::Boxes;
+use crate::frame::SceneInputs;
 use crate::geometry::{Geometry, GeometryBuffers};
 use crate::technique::Technique;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -87,6 +88,19 @@ impl Scene {
             scene.soup = Some((vertices.to_vec(), casting_vertices));
         }
         Ok(scene)
+    }
+
+    /// [`Scene::from_soup`] of a [`SceneInputs`]' soup, within [`DEFAULT_MAX_BYTES`].
+    pub fn from_inputs(gpu: &Gpu, s: &SceneInputs, techniques: &[&Technique]) -> Result<Scene> {
+        Scene::from_soup(
+            gpu,
+            &s.vertices,
+            &s.meshes,
+            s.casting_vertices,
+            &s.unshadowed,
+            techniques,
+            DEFAULT_MAX_BYTES,
+        )
     }
 
     /// Set every instance's transform (column-major, one per instance, each finite, affine

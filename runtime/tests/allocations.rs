@@ -9,7 +9,8 @@
 //! writes, the boxed map callbacks) are counted apart and printed, not asserted: they are
 //! wgpu's, and no host can avoid them.
 
-use sshc_runtime::gpu::{Camera, Executor, Fit, Geometry, Gpu, IDENTITY, Instance, LightInputs, Mesh};
+use sshc_runtime::graph::ValidGraph;
+use sshc_runtime::gpu::{Camera, Fit, FrameState, Geometry, Gpu, IDENTITY, Instance, LightInputs, Mesh, Scene, Sizes, Targets, Technique};
 use sshc_runtime::light::Light;
 use sshc_runtime::light::glam::Vec3;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -184,10 +185,16 @@ fn a_frame_allocates_nothing_in_sshc_on_every_bundled_technique() {
             )
         };
         let mut g = geometry();
-        let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
-        let first = LightInputs::fit(&light, &g.boxes(), Fit::Casters, 128, n).unwrap();
-        ex.bind_geometry(&g, &camera(0), &[first], (48, 48), 128)
+        let technique = Technique::new(&gpu, ValidGraph::try_from(c.graph.clone()).unwrap(), c.shaders.clone())
             .unwrap_or_else(|e| panic!("{t}: {e}"));
+        let first = LightInputs::fit(&light, &g.boxes(), Fit::Casters, 128, n).unwrap();
+        let mut scene = Scene::upload(&gpu, &g, &[&technique]).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let mut state = FrameState::new(&technique, camera(0), vec![first]);
+        let sizes = Sizes {
+            camera: (48, 48),
+            shadow: 128,
+        };
+        let mut targets = Targets::new(&technique, &scene, &state, sizes).unwrap_or_else(|e| panic!("{t}: {e}"));
         let mut counted = (0, 0);
         for f in 1..=6 {
             g.instances[0].transform[12] = 0.05 * f as f32;
@@ -199,17 +206,17 @@ fn a_frame_allocates_nothing_in_sshc_on_every_bundled_technique() {
             let counting = f > 4;
             let (s0, o0) = (SSHC.load(Ordering::Relaxed), OTHERS.load(Ordering::Relaxed));
             COUNTING.with(|c| c.set(counting));
-            ex.set_transforms(&transforms).unwrap();
-            ex.set_camera(&camera(f)).unwrap();
+            scene.set_transforms(&transforms).unwrap();
+            state.camera = camera(f);
             // sshc's fit of a light with sample views builds the sample chain (vectors):
             // those lights are fitted outside the count and set
             if f % 2 == 0 || n > 0 {
-                ex.set_light(0, &moved).unwrap();
+                state.lights[0] = moved;
             } else {
-                ex.place_light(0, &light, Fit::Casters).unwrap();
+                state.lights[0] = targets.fit_light(&scene, 0, &light, Fit::Casters).unwrap();
             }
-            ex.prepare().unwrap();
-            ex.record(&mut encoder).unwrap();
+            targets.prepare(&mut scene, &state).unwrap();
+            targets.record(&scene, &mut encoder).unwrap();
             COUNTING.with(|c| c.set(false));
             if counting {
                 counted.0 += SSHC.load(Ordering::Relaxed) - s0;

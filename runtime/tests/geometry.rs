@@ -8,7 +8,7 @@
 //! against the CPU statement of the rule (`Adjacency::silhouette_count`).
 
 use sshc_runtime::adjacency::Adjacency;
-use sshc_runtime::gpu::{Executor, GeneratedLimits, Gpu, RuntimeError, SceneInputs};
+use sshc_runtime::gpu::{GeneratedLimits, Gpu, RuntimeError, SceneInputs, TargetLimits};
 use sshc_runtime::graph::*;
 
 mod common;
@@ -264,7 +264,7 @@ fn inputs(tris: &[[[f32; 3]; 3]], meshes: Vec<std::ops::Range<u32>>, light: [f32
 fn silhouettes_classified_on_the_gpu_match_the_cpu_count_and_draw_under_every_resolve_rule() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     let (g, shaders) = graph();
-    let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
+    let t = common::load(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
     let (tris, ranges) = meshes();
     let adj = Adjacency::build(&tris, ranges.iter().map(|r| r.start as usize..r.end as usize));
     let lights = [
@@ -276,17 +276,13 @@ fn silhouettes_classified_on_the_gpu_match_the_cpu_count_and_draw_under_every_re
     ];
     let mut counts = Vec::new();
     for light in lights {
-        ex.bind_scene(&inputs(&tris, ranges.clone(), light))
-            .unwrap_or_else(|e| panic!("{e}"));
-        let c = ex
-            .edge_counts()
-            .unwrap_or_else(|e| panic!("{e}"))
-            .expect("a graph with Geometry passes has edges");
+        let mut ex = common::bind(&t, &inputs(&tris, ranges.clone(), light)).unwrap_or_else(|e| panic!("{e}"));
+        let c = ex.scene.edge_counts().expect("a graph with Geometry passes has edges");
         assert_eq!(c, adj.counts, "the runtime's adjacency is the CPU's");
         assert_eq!((c.meshes, c.boundary, c.non_manifold), (3, 4 + 6, 1), "{c:?}");
         ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
         let expected = adj.silhouette_count(light);
-        let generated = ex.generated("sil").unwrap_or_else(|e| panic!("{e}"));
+        let generated = ex.targets.inspect().generated("sil").unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(generated.records as usize, expected, "light {light:?}");
         assert_eq!((generated.vertices, generated.instances), (VERTS * generated.records, 1));
         counts.push(expected);
@@ -294,7 +290,7 @@ fn silhouettes_classified_on_the_gpu_match_the_cpu_count_and_draw_under_every_re
         // Every texel is covered by every record's triangle. f16 targets: each blend rounds
         // to 11 significant bits (relative 2^-11), so n blends are within n 2^-11.
         let n = expected as f32;
-        let texel = |t: &str| ex.read_texture(t, 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0);
+        let texel = |t: &str| ex.targets.inspect().read_texture(t, 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0);
         let ulp = 2f32.powi(-11);
         for v in texel("add") {
             assert!((v - (1.0 - n / 64.0)).abs() <= (n + 1.0) * ulp, "add: {v} for {n} records");
@@ -336,19 +332,21 @@ fn edges_classified_in_chunks_give_the_same_records_and_textures() {
     let light = [10.0, 10.0, 10.0, 1.0];
     let run = |chunk: Option<u32>| {
         let (g, shaders) = graph();
-        let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
-        ex.generated_limits = GeneratedLimits {
-            edges_per_chunk: chunk,
-            records: None,
+        let t = common::load(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
+        let limits = TargetLimits {
+            generated: GeneratedLimits {
+                edges_per_chunk: chunk,
+                records: None,
+            },
+            ..TargetLimits::default()
         };
-        ex.bind_scene(&inputs(&tris, ranges.clone(), light))
-            .unwrap_or_else(|e| panic!("{e}"));
+        let mut ex = common::bind_within(&t, &inputs(&tris, ranges.clone(), light), limits).unwrap_or_else(|e| panic!("{e}"));
         ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-        let g = ex.generated("sil").unwrap_or_else(|e| panic!("{e}"));
+        let g = ex.targets.inspect().generated("sil").unwrap_or_else(|e| panic!("{e}"));
         let textures: Vec<Vec<u32>> = ["add", "multiply", "min", "max", "nearest"]
             .iter()
             .map(|t| {
-                let img = ex.read_texture(t, 0, 0).unwrap_or_else(|e| panic!("{e}"));
+                let img = ex.targets.inspect().read_texture(t, 0, 0).unwrap_or_else(|e| panic!("{e}"));
                 img.channel(0).iter().map(|v| v.to_bits()).collect()
             })
             .collect();
@@ -384,16 +382,19 @@ fn silhouettes_past_the_buffer_are_counted_as_dropped_and_the_rest_drawn() {
     let expected = adj.silhouette_count(light) as u32;
     assert!(expected > 3, "{expected}");
     let (g, shaders) = graph();
-    let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
-    ex.generated_limits = GeneratedLimits {
-        edges_per_chunk: None,
-        records: Some(3),
+    let t = common::load(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
+    let limits = TargetLimits {
+        generated: GeneratedLimits {
+            edges_per_chunk: None,
+            records: Some(3),
+        },
+        ..TargetLimits::default()
     };
-    ex.bind_scene(&inputs(&tris, ranges, light)).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = common::bind_within(&t, &inputs(&tris, ranges, light), limits).unwrap_or_else(|e| panic!("{e}"));
     for _ in 0..2 {
         // twice: the header's counts are reset every frame
         ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-        let g = ex.generated("sil").unwrap_or_else(|e| panic!("{e}"));
+        let g = ex.targets.inspect().generated("sil").unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(
             (g.records, g.vertices, g.claimed, g.dropped),
             (3, 3 * VERTS, expected, expected - 3),
@@ -402,7 +403,7 @@ fn silhouettes_past_the_buffer_are_counted_as_dropped_and_the_rest_drawn() {
     }
     // three records drawn, each a full-screen 1/64 shadow amount under `Add`
     let ulp = 2f32.powi(-11);
-    for v in ex.read_texture("add", 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0) {
+    for v in ex.targets.inspect().read_texture("add", 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0) {
         assert!((v - (1.0 - 3.0 / 64.0)).abs() <= 4.0 * ulp, "add: {v}");
     }
 }
@@ -411,15 +412,18 @@ fn silhouettes_past_the_buffer_are_counted_as_dropped_and_the_rest_drawn() {
 fn generated_buffers_are_bounded_before_allocation() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     let (g, shaders) = graph();
-    let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
+    let t = common::load(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
     let (tris, ranges) = meshes();
     // The textures (4 x 16 texels of 2 bytes, the 16-texel depth and the 16-pixel camera
     // outputs: about 800 bytes) fit; the adjacency's bound for 17 triangles (2,108 bytes)
     // does not.
-    ex.max_bytes = 1500;
-    let e = ex
-        .bind_scene(&inputs(&tris, ranges, [0.0, 10.0, 0.0, 1.0]))
-        .expect_err("a budget below the adjacency's bound must be refused");
+    let limits = TargetLimits {
+        max_bytes: 1500,
+        ..TargetLimits::default()
+    };
+    let e = common::bind_within(&t, &inputs(&tris, ranges, [0.0, 10.0, 0.0, 1.0]), limits)
+        .err()
+        .expect("a budget below the adjacency's bound must be refused");
     assert!(
         matches!(&e, RuntimeError::Limit { what, .. } if what.contains("edge adjacency")),
         "{e}"
@@ -431,13 +435,13 @@ fn drawing_a_buffer_nothing_wrote_is_refused_at_load() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     let (mut g, shaders) = graph();
     g.passes.swap(0, 1);
-    let e = Executor::new(&gpu, g, shaders)
+    let e = common::load(&gpu, g, shaders)
         .err()
         .expect("drawing before classifying must be refused");
     assert!(e.to_string().contains("no earlier Silhouettes step writes it"), "{e}");
     let (mut g, shaders) = graph();
     g.buffers[0].record_bytes = 24;
-    let e = Executor::new(&gpu, g, shaders)
+    let e = common::load(&gpu, g, shaders)
         .err()
         .expect("a record size off the 16-byte grid must be refused");
     assert!(e.to_string().contains("record_bytes 24"), "{e}");

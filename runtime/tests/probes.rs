@@ -3,7 +3,7 @@
 //! the shaded colour is refused with the visibility it is computed from (a plain render
 //! read only the colour, so a NaN visibility passed on into the PNG and exited 0).
 
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError};
+use sshc_runtime::gpu::{CameraOutput, Gpu, RuntimeError, Technique};
 use sshc_runtime::graph::*;
 
 mod common;
@@ -22,7 +22,7 @@ fn a_graph_syntax_error_names_the_file_line_and_column() {
         std::fs::write(dir.join(name), src).unwrap();
     }
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
-    let e = Executor::load(&gpu, &graph).err().expect("an unknown field is refused");
+    let e = Technique::load(&gpu, &graph).err().expect("an unknown field is refused");
     let want = format!(
         "{}:{line}:3: not a valid pass graph: Unexpected field named `colour`",
         graph.display()

@@ -1,7 +1,7 @@
 //! A graph whose features this runtime cannot honour is refused at load, naming the pass
 //! and the feature, rather than run another way; and light-sample views, which it honours.
 
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError, SampleView};
+use sshc_runtime::gpu::{CameraOutput, Gpu, RuntimeError, SampleView};
 use sshc_runtime::graph::*;
 
 mod common;
@@ -16,8 +16,8 @@ fn per_light_sample_views_render_one_layer_block_each() {
     let (mut g, shaders) = depth_graph(Views::PerLightSample);
     g.samples = 3;
     g.textures[0].views = 3;
-    let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
-    let e = ex.bind_scene(&one_triangle()).expect_err("no samples bound");
+    let t = common::load(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
+    let e = common::bind(&t, &one_triangle()).err().expect("no samples bound");
     assert!(
         matches!(&e, RuntimeError::Param(m) if m.contains("3 light-sample view(s)") && m.contains("gives 0")),
         "{e}"
@@ -34,22 +34,22 @@ fn per_light_sample_views_render_one_layer_block_each() {
             weights: [0.5, 0.5],
         })
         .collect();
-    ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = common::bind(&t, &inputs).unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     for k in 0..3 {
-        let z = ex.read_texture("z", k, 0).unwrap_or_else(|e| panic!("{e}"));
+        let z = ex.targets.inspect().read_texture("z", k, 0).unwrap_or_else(|e| panic!("{e}"));
         let want = 0.5 + k as f32;
         assert!(z.rgba.iter().all(|p| p[0] == want), "layer {k}: {:?}", z.rgba);
     }
-    assert!(ex.read_texture("z", 3, 0).is_err(), "three layers, not four");
+    assert!(ex.targets.inspect().read_texture("z", 3, 0).is_err(), "three layers, not four");
 
     // The same graph from the light's centre writes one layer with sample.x = 0.
     let (g, shaders) = depth_graph(Views::LightCenter);
-    let mut ex = Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&one_triangle()).unwrap_or_else(|e| panic!("{e}"));
+    let t = common::load(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = common::bind(&t, &one_triangle()).unwrap_or_else(|e| panic!("{e}"));
     let times = ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(times.passes.len(), 1);
-    let z = ex.read_texture("z", 0, 0).unwrap_or_else(|e| panic!("{e}"));
+    let z = ex.targets.inspect().read_texture("z", 0, 0).unwrap_or_else(|e| panic!("{e}"));
     assert!(z.rgba.iter().all(|p| p[0] == 0.5), "{:?}", z.rgba);
 }
 
@@ -60,7 +60,7 @@ fn camera_sized_textures_outside_the_shade_are_refused() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     let (mut g, shaders) = depth_graph(Views::LightCenter);
     g.textures[0].extent = Extent::Camera;
-    let e = Executor::new(&gpu, g, shaders)
+    let e = common::load(&gpu, g, shaders)
         .err()
         .expect("a camera-sized texture must be refused");
     assert!(
@@ -74,7 +74,7 @@ fn graphs_with_no_passes_are_refused() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     let (mut g, shaders) = depth_graph(Views::LightCenter);
     g.passes.clear();
-    let e = Executor::new(&gpu, g, shaders)
+    let e = common::load(&gpu, g, shaders)
         .err()
         .expect("a graph with no passes must be refused");
     assert!(e.to_string().contains("no passes"), "{e}");
@@ -95,7 +95,7 @@ fn graphs_with_more_passes_than_timestamps_are_refused() {
         })
         .collect();
     let start = std::time::Instant::now();
-    let e = Executor::new(&gpu, g, shaders).err().expect("2,100 passes must be refused");
+    let e = common::load(&gpu, g, shaders).err().expect("2,100 passes must be refused");
     assert!(
         matches!(&e, RuntimeError::Limit { needed: 2100, limit, .. } if *limit == MAX_PASSES as u64),
         "{e}"
@@ -111,7 +111,7 @@ fn graphs_with_more_passes_than_timestamps_are_refused() {
             ..pass.clone()
         })
         .collect();
-    Executor::new(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
+    common::load(&gpu, g, shaders).unwrap_or_else(|e| panic!("{e}"));
 }
 
 #[test]

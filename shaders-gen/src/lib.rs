@@ -7,7 +7,7 @@
 //! sshc_shaders_gen::technique!(pub mod pcf5 = "techniques/pcf.ron", set: { N = 5 }, precision: { z = F16 });
 //!
 //! let graph = pcf::graph()?;                 // sshc_graph::PassGraph
-//! let shaders = pcf::shaders();              // [(file name, WGSL)] for Executor::new
+//! let shaders = pcf::shaders();              // [(file name, WGSL)] for Technique::new
 //! let bytes = pcf::Params::default().to_bytes(); // the `Params` uniform
 //! ```
 //!

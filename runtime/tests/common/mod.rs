@@ -2,7 +2,7 @@
 //! visibility a test writes directly, and a scene of one triangle covering both views.
 #![allow(dead_code)]
 
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, RuntimeError, SceneInputs};
+use sshc_runtime::gpu::{CameraOutput, FrameState, FrameTimes, Gpu, RuntimeError, Scene, SceneInputs, TargetLimits, Targets, Technique};
 use sshc_runtime::graph::*;
 
 /// One Depth pass drawing the scene from the light into `z`.
@@ -157,8 +157,46 @@ struct ShadeOut {{
 /// read back camera output `which`.
 pub fn run_shade(gpu: &Gpu, value: &str, which: CameraOutput) -> Result<Vec<f32>, RuntimeError> {
     let (g, shaders) = shade_graph(value);
-    let mut ex = Executor::new(gpu, g, shaders)?;
-    ex.bind_scene(&one_triangle())?;
-    ex.run_frame()?;
-    Ok(ex.read_camera(which)?.channel(0))
+    let mut run = bind(&load(gpu, g, shaders)?, &one_triangle())?;
+    run.run_frame()?;
+    Ok(run.targets.inspect().read_camera(which)?.channel(0))
+}
+
+/// A graph and its shaders loaded (checked as a graph file is).
+pub fn load(gpu: &Gpu, g: PassGraph, shaders: Vec<(String, String)>) -> Result<Technique, RuntimeError> {
+    Technique::new(gpu, ValidGraph::try_from(g)?, shaders)
+}
+
+/// A technique on one scene: its stages, as a host holds them.
+pub struct Run {
+    pub scene: Scene,
+    pub targets: Targets,
+    pub state: FrameState,
+}
+
+impl Run {
+    pub fn run_frame(&mut self) -> Result<FrameTimes, RuntimeError> {
+        self.targets.run_frame(&mut self.scene, &self.state)
+    }
+}
+
+/// `technique` on the soup, camera and light of `s`.
+pub fn bind(technique: &Technique, s: &SceneInputs) -> Result<Run, RuntimeError> {
+    bind_within(technique, s, TargetLimits::default())
+}
+
+/// [`bind`] within `limits`.
+pub fn bind_within(technique: &Technique, s: &SceneInputs, limits: TargetLimits) -> Result<Run, RuntimeError> {
+    let scene = Scene::from_soup(
+        technique.gpu(),
+        &s.vertices,
+        &s.meshes,
+        s.casting_vertices,
+        &s.unshadowed,
+        &[technique],
+        limits.max_bytes,
+    )?;
+    let state = s.frame_state(technique);
+    let targets = Targets::with_limits(technique, &scene, &state, s.sizes(), limits)?;
+    Ok(Run { scene, targets, state })
 }

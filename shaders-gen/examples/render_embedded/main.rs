@@ -14,7 +14,8 @@
 
 use sshc_lab::image_io::ImageFiles;
 use sshc_lab::scene::Scene;
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu};
+use sshc_runtime::gpu::{CameraOutput, Gpu, Scene as Uploaded, Targets, Technique};
+use sshc_runtime::graph::ValidGraph;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -50,18 +51,21 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> Result<Summary, String> 
     let scene = Scene::load(&scene_path).map_err(|e| e.to_string())?;
     let gpu = Gpu::new().map_err(|e| format!("no GPU adapter: {e}"))?;
     let graph = pcf::graph().map_err(|e| format!("embedded graph: {e}"))?;
-    let mut ex = Executor::new(&gpu, graph, pcf::shaders()).map_err(|e| e.to_string())?;
+    let graph = ValidGraph::try_from(graph).map_err(|e| e.to_string())?;
+    let technique = Technique::new(&gpu, graph, pcf::shaders()).map_err(|e| e.to_string())?;
+    let inputs = sshc_lab::bind::scene_inputs(&scene)?;
+    let mut uploaded = Uploaded::from_inputs(&gpu, &inputs, &[&technique]).map_err(|e| e.to_string())?;
+    let mut state = inputs.frame_state(&technique);
     // The technique's defaults, through the generated Params struct (whose layout the
-    // build checked against the WGSL uniform); the executor writes them at their offsets.
+    // build checked against the WGSL uniform); the frame's params hold them at their offsets.
     let params = pcf::Params::default();
     for (name, value) in params.values() {
-        ex.set_param(name, value).map_err(|e| e.to_string())?;
+        state.params.set(name, value).map_err(|e| e.to_string())?;
     }
-    let inputs = sshc_lab::bind::scene_inputs(&scene)?;
-    ex.bind_scene(&inputs).map_err(|e| e.to_string())?;
-    let times = ex.run_frame().map_err(|e| e.to_string())?;
-    let color = ex.read_camera(CameraOutput::Color).map_err(|e| e.to_string())?;
-    let visibility = ex.read_camera(CameraOutput::Visibility).map_err(|e| e.to_string())?;
+    let mut targets = Targets::new(&technique, &uploaded, &state, inputs.sizes()).map_err(|e| e.to_string())?;
+    let times = targets.run_frame(&mut uploaded, &state).map_err(|e| e.to_string())?;
+    let color = targets.inspect().read_camera(CameraOutput::Color).map_err(|e| e.to_string())?;
+    let visibility = targets.inspect().read_camera(CameraOutput::Visibility).map_err(|e| e.to_string())?;
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }

@@ -542,7 +542,7 @@ fn generate(input: &TechniqueInput, base: &Path) -> Result<TokenStream, TokenStr
                 #graph_crate::PassGraph::from_ron(GRAPH_RON)
             }
 
-            /// [`SHADERS`] as owned pairs, as `Executor::new` takes them.
+            /// [`SHADERS`] as owned pairs, as `Technique::new` takes them.
             pub fn shaders() -> ::std::vec::Vec<(::std::string::String, ::std::string::String)> {
                 SHADERS.iter().map(|(f, s)| ((*f).to_string(), (*s).to_string())).collect()
             }
@@ -581,7 +581,7 @@ fn generate(input: &TechniqueInput, base: &Path) -> Result<TokenStream, TokenStr
                     b
                 }
 
-                /// (name, value) of every field, for `Executor::set_param`.
+                /// (name, value) of every field, for `Params::set`.
                 pub fn values(&self) -> [(&'static str, f64); #n_uniform] {
                     [#(#values)*]
                 }
