@@ -1,7 +1,7 @@
 //! From a [`Scene`] to the plain data the executor binds ([`SceneInputs`]).
 
-use crate::scene::{Light, Scene};
 use crate::run::{Bound, Loaded};
+use crate::scene::{Light, Scene};
 use sshc_runtime::gpu::{Camera, Geometry, IDENTITY, Instance, LightInputs, Mesh, SceneInputs, Slices};
 use sshc_runtime::graph::{MAX_LIGHT_SAMPLES, PassGraph, Views};
 use sshc_runtime::light::{SampleFit, sample_views};

@@ -7,8 +7,8 @@
 //! [`Scene`], [`Targets`] at the scene's sizes and a [`FrameState`] of its camera and lights.
 
 use sshc_runtime::gpu::{
-    Camera, FrameState, FrameTimes, Geometry, Gpu, Inspect, LightInputs, Params, Result, RuntimeError, Scene, SceneInputs,
-    Sizes, Slices, TargetLimits, Targets, Technique,
+    Camera, FrameState, FrameTimes, Geometry, Gpu, Inspect, LightInputs, Params, Result, RuntimeError, Scene, SceneInputs, Sizes, Slices,
+    TargetLimits, Targets, Technique,
 };
 use sshc_runtime::graph::{PassGraph, ValidGraph};
 use std::path::Path;
@@ -134,7 +134,12 @@ impl Loaded {
             slices,
         };
         let targets = Targets::with_limits(&self.technique, &scene, &state, sizes, self.limits)?;
-        Ok(Bound { scene, targets, state })
+        Ok(Bound {
+            scene,
+            targets,
+            state,
+            depth_override: None,
+        })
     }
 }
 
@@ -179,17 +184,35 @@ pub struct Bound {
     pub scene: Scene,
     pub targets: Targets,
     pub state: FrameState,
+    /// The Depth passes' outputs given instead of rasterised, one map per view (or one for
+    /// every view): `sshc verify`'s synthetic depth fields ([`Targets::run_frame_with_depth`]).
+    pub depth_override: Option<Vec<Vec<f32>>>,
 }
 
 impl Bound {
-    /// One frame of the state, submitted and waited for ([`Targets::run_frame`]).
+    /// One frame of the state, submitted and waited for ([`Targets::run_frame`]), with
+    /// the depth override where one is set.
     pub fn run_frame(&mut self) -> Result<FrameTimes> {
-        self.targets.run_frame(&mut self.scene, &self.state)
+        match &self.depth_override {
+            Some(maps) => self.targets.run_frame_with_depth(&mut self.scene, &self.state, maps),
+            None => self.targets.run_frame(&mut self.scene, &self.state),
+        }
     }
 
     /// One frame with the Depth passes' outputs given ([`Targets::run_frame_with_depth`]).
     pub fn run_frame_with_depth(&mut self, maps: &[Vec<f32>]) -> Result<FrameTimes> {
         self.targets.run_frame_with_depth(&mut self.scene, &self.state, maps)
+    }
+
+    /// The Depth pass's output given as `depth` in every frame from now on (`None`:
+    /// rasterised again).
+    pub fn set_depth_override(&mut self, depth: Option<Vec<f32>>) {
+        self.depth_override = depth.map(|d| vec![d]);
+    }
+
+    /// [`Bound::set_depth_override`] with one map per view of a per-sample Depth pass.
+    pub fn set_depth_override_views(&mut self, views: Option<Vec<Vec<f32>>>) {
+        self.depth_override = views;
     }
 
     /// Prepare and record a frame into a host's encoder.
@@ -215,5 +238,15 @@ impl Bound {
 
     pub fn graph(&self) -> &PassGraph {
         self.targets.technique().graph()
+    }
+}
+
+impl std::fmt::Debug for Bound {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Bound")
+            .field("technique", &self.graph().technique)
+            .field("lights", &self.targets.lights())
+            .field("sizes", &(self.targets.camera_size(), self.targets.shadow_size()))
+            .finish_non_exhaustive()
     }
 }

@@ -3,12 +3,12 @@
 //! graph; plus the ground-truth options and the cached, progress-reporting truth, and the
 //! reading, reporting and argument helpers of the `sshc` command line.
 
+use crate::run::{Bound, Loaded};
 use crate::scene::Scene;
 use crate::truth::{self, Source, Truth, TruthCache, TruthSettings};
 use codespan_reporting::term::termcolor::{ColorChoice, StandardStream};
 use glam::Vec3;
 use sshc::Diagnostics;
-use crate::run::{Bound, Loaded};
 use sshc_runtime::gpu::{CameraOutput, Gpu, RuntimeError};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};

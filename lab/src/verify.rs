@@ -18,12 +18,12 @@
 //! signal. With a reference technique (`--reference`), its f64 CPU evaluation is compared
 //! with the technique's under the same allowance: an independent reading of the math.
 
+use crate::run::{Bound, Loaded};
 use crate::scene;
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use sshc::interp::{Allowed, Evaluation, Frame, Given, GivenSlot, Model, Receiver, Rounding, Scratch, Seen};
 use sshc::ir::Program;
-use crate::run::{Bound, Loaded};
 use sshc_runtime::gpu::{CameraOutput, Gpu, SampleView, SceneInputs};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -915,7 +915,11 @@ pub fn verify(
                 None => ex.run_frame(),
             }
             .map_err(crate::session::rt)?;
-            let got = ex.inspect().read_camera(CameraOutput::Visibility).map_err(crate::session::rt)?.channel(0);
+            let got = ex
+                .inspect()
+                .read_camera(CameraOutput::Visibility)
+                .map_err(crate::session::rt)?
+                .channel(0);
             let positions = ex.inspect().read_camera(CameraOutput::Position).map_err(crate::session::rt)?.rgba;
             let points: Vec<(usize, [f32; 3])> = positions
                 .iter()

@@ -324,9 +324,8 @@ fn cascades_refitted_in_place_equal_a_fresh_binding() {
         let path = root().join("techniques").join(format!("{t}.ron"));
         let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let loaded = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
-        let fit = |s: &Scene| {
-            sshc_lab::bind::cascade_inputs(s, loaded.graph(), 3, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"))
-        };
+        let fit =
+            |s: &Scene| sshc_lab::bind::cascade_inputs(s, loaded.graph(), 3, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"));
         let frame = |ex: &mut sshc_lab::run::Bound| {
             ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
             ex.inspect().read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba

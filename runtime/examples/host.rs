@@ -128,14 +128,7 @@ fn run(args: Args) -> Result<(), String> {
     let mut shadows = Targets::new(&technique, &scene, &state, sizes).map_err(|e| e.to_string())?;
 
     // 4. The host's own lighting pass, reading sshc's visibility.
-    let host = HostPass::new(
-        &device,
-        &queue,
-        &geometry,
-        &camera,
-        size,
-        shadows.visibility(),
-    );
+    let host = HostPass::new(&device, &queue, &geometry, &camera, size, shadows.visibility());
 
     std::fs::create_dir_all(&args.out_dir).map_err(|e| format!("{}: {e}", args.out_dir.display()))?;
     let mut sshc_us = Vec::new();

@@ -42,19 +42,19 @@
 //! (lavapipe keeps allocating past its limits).
 
 pub use crate::device::{Gpu, INSTALL_HINT, Result, RuntimeError, WANTED_FEATURES};
-pub use crate::inspect::{CameraOutput, DebugOutput, Generated, Inspect, VISIBILITY_EPSILON, check_visibility, debug_outputs};
-pub use crate::scene::{DEFAULT_MAX_BYTES, Scene};
-pub use crate::state::{FrameState, Params};
-pub use crate::targets::{Sizes, TargetLimits, Targets};
 pub use crate::fit::{Boxes, Fit};
 pub use crate::frame::{Camera, LightInputs, SampleView, SceneInputs};
 pub use crate::geometry::{Geometry, IDENTITY, Instance, MAX_INSTANCES, Mesh, normal_matrix, transform_point};
 pub use crate::image::Image;
+pub use crate::inspect::{CameraOutput, DebugOutput, Generated, Inspect, VISIBILITY_EPSILON, check_visibility, debug_outputs};
 pub use crate::lights::{MAX_LIGHTS, Slices};
 pub use crate::pipeline::mip_count;
 pub use crate::pixels::HostPixels;
 pub use crate::requirements::{FeatureNeed, Limit, LimitNeed, Requirements};
 pub use crate::resources::GeneratedLimits;
+pub use crate::scene::{DEFAULT_MAX_BYTES, Scene};
+pub use crate::state::{FrameState, Params};
+pub use crate::targets::{Sizes, TargetLimits, Targets};
 pub use crate::technique::{MAX_GRAPH_BYTES, MAX_PASSES, MAX_SHADER_BYTES, Technique, read_capped};
 pub use crate::timing::FrameTimes;
 pub use crate::validate::validate_wgsl;

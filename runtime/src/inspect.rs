@@ -105,7 +105,6 @@ pub struct Generated {
     pub dropped: u32,
 }
 
-
 /// A view over [`Targets`] for reading back what the last frame wrote, and for memory
 /// figures ([`Targets::inspect`]). Every read waits for the GPU.
 pub struct Inspect<'a> {

@@ -132,25 +132,26 @@ pub(crate) struct Resources {
 }
 
 impl Resources {
-    /// Check the scene's sizes against the device and `max_bytes`, then create everything.
+    /// Check the scene's sizes against the device and `limits.max_bytes` (what is left of
+    /// the targets' budget), then create everything; textures the lights share are taken
+    /// from `pool` (made there by the first light).
     ///
     /// `scene`: what the draws bind and the edges Silhouettes steps classify, shared by
-    /// every light ([`scene_buffers`]: a host geometry, or a triangle soup through
-    /// [`Geometry::from_soup`]); the scene's `vertices` are not read here.
+    /// every light (the uploaded [`crate::gpu::Scene`]); `s` gives the sizes, the camera and
+    /// the light, and its `vertices` are not read here.
     pub fn new(
         gpu: &Gpu,
         graph: &PassGraph,
         usages: &Usages,
         s: &SceneInputs,
         scene: &HostScene,
-        max_bytes: u64,
-        limits: GeneratedLimits,
+        limits: crate::targets::TargetLimits,
         pool: &mut Pool,
     ) -> Result<Resources> {
+        let (max_bytes, limits) = (limits.max_bytes, limits.generated);
         // every size checked before anything is created (lavapipe keeps allocating past
-        // its limits)
-        // the textures the pool already holds are not made again (checked against
-        // `max_bytes` below, with the generated buffers)
+        // its limits); the textures the pool already holds are not made again (checked
+        // against `max_bytes` below, with the generated buffers)
         let all = check_sizes(gpu, graph, s.shadow_size, s.camera_size, u64::MAX)?;
         let texture_bytes = all.saturating_sub(pool.bytes());
         let edge_count = scene.edges.as_ref().map_or(0, |e| e.counts.edges.into());

@@ -181,8 +181,10 @@ impl Targets {
                 technique.usages(),
                 &s,
                 &scene.buffers().scene,
-                limits.max_bytes.saturating_sub(used),
-                limits.generated,
+                TargetLimits {
+                    max_bytes: limits.max_bytes.saturating_sub(used),
+                    ..limits
+                },
                 &mut pool,
             )?;
             // what this light made: its own textures, and the shared ones made for it
@@ -291,9 +293,11 @@ impl Targets {
             .filter(|t| self.shared.contains(&t.name))
             .map(|t| texture_bytes(t, shadow_size, camera_size))
             .sum();
-        let need = (per_light * lights as u64)
-            .saturating_add(shared)
-            .saturating_add(if lights > 1 { Combine::bytes(camera_size, lights) } else { 0 });
+        let need = (per_light * lights as u64).saturating_add(shared).saturating_add(if lights > 1 {
+            Combine::bytes(camera_size, lights)
+        } else {
+            0
+        });
         if need > self.limits.max_bytes {
             return Err(RuntimeError::Limit {
                 what: format!("textures of {lights} light(s) at this camera size (bytes)"),
@@ -412,7 +416,8 @@ impl Targets {
     fn check_scene(&self, scene: &Scene) -> Result<()> {
         if scene.id() != self.scene {
             return Err(RuntimeError::Param(
-                "these targets were made on another scene (their bind groups hold its buffers): make targets on this one (`Targets::new`)".into(),
+                "these targets were made on another scene (their bind groups hold its buffers): make targets on this one (`Targets::new`)"
+                    .into(),
             ));
         }
         Ok(())

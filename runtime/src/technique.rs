@@ -237,7 +237,9 @@ impl Technique {
 
 impl std::fmt::Debug for Technique {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Technique").field("name", &self.graph().technique).finish_non_exhaustive()
+        f.debug_struct("Technique")
+            .field("name", &self.graph().technique)
+            .finish_non_exhaustive()
     }
 }
 

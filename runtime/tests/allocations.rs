@@ -9,8 +9,8 @@
 //! writes, the boxed map callbacks) are counted apart and printed, not asserted: they are
 //! wgpu's, and no host can avoid them.
 
-use sshc_runtime::graph::ValidGraph;
 use sshc_runtime::gpu::{Camera, Fit, FrameState, Geometry, Gpu, IDENTITY, Instance, LightInputs, Mesh, Scene, Sizes, Targets, Technique};
+use sshc_runtime::graph::ValidGraph;
 use sshc_runtime::light::Light;
 use sshc_runtime::light::glam::Vec3;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -185,8 +185,8 @@ fn a_frame_allocates_nothing_in_sshc_on_every_bundled_technique() {
             )
         };
         let mut g = geometry();
-        let technique = Technique::new(&gpu, ValidGraph::try_from(c.graph.clone()).unwrap(), c.shaders.clone())
-            .unwrap_or_else(|e| panic!("{t}: {e}"));
+        let technique =
+            Technique::new(&gpu, ValidGraph::try_from(c.graph.clone()).unwrap(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
         let first = LightInputs::fit(&light, &g.boxes(), Fit::Casters, 128, n).unwrap();
         let mut scene = Scene::upload(&gpu, &g, &[&technique]).unwrap_or_else(|e| panic!("{t}: {e}"));
         let mut state = FrameState::new(&technique, camera(0), vec![first]);

@@ -1,7 +1,7 @@
 //! Files a graph names are read only if they are regular files below a size cap, with a
 //! bounded reader: FIFOs, devices and huge (sparse) files are refused naming the path.
 
-use sshc_runtime::gpu::{Gpu, Technique, MAX_GRAPH_BYTES, MAX_SHADER_BYTES, RuntimeError, read_capped};
+use sshc_runtime::gpu::{Gpu, MAX_GRAPH_BYTES, MAX_SHADER_BYTES, RuntimeError, Technique, read_capped};
 use sshc_runtime::graph::*;
 
 mod common;
@@ -37,7 +37,7 @@ fn within_20s<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
 fn load_err(graph: PathBuf) -> RuntimeError {
     within_20s(move || {
         let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
-        Technique::load(&gpu, &graph).err().expect("must be refused")
+        Technique::load(&gpu, &graph).expect_err("must be refused")
     })
 }
 

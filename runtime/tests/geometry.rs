@@ -290,7 +290,13 @@ fn silhouettes_classified_on_the_gpu_match_the_cpu_count_and_draw_under_every_re
         // Every texel is covered by every record's triangle. f16 targets: each blend rounds
         // to 11 significant bits (relative 2^-11), so n blends are within n 2^-11.
         let n = expected as f32;
-        let texel = |t: &str| ex.targets.inspect().read_texture(t, 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0);
+        let texel = |t: &str| {
+            ex.targets
+                .inspect()
+                .read_texture(t, 0, 0)
+                .unwrap_or_else(|e| panic!("{e}"))
+                .channel(0)
+        };
         let ulp = 2f32.powi(-11);
         for v in texel("add") {
             assert!((v - (1.0 - n / 64.0)).abs() <= (n + 1.0) * ulp, "add: {v} for {n} records");
@@ -403,7 +409,13 @@ fn silhouettes_past_the_buffer_are_counted_as_dropped_and_the_rest_drawn() {
     }
     // three records drawn, each a full-screen 1/64 shadow amount under `Add`
     let ulp = 2f32.powi(-11);
-    for v in ex.targets.inspect().read_texture("add", 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0) {
+    for v in ex
+        .targets
+        .inspect()
+        .read_texture("add", 0, 0)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .channel(0)
+    {
         assert!((v - (1.0 - 3.0 / 64.0)).abs() <= 4.0 * ulp, "add: {v}");
     }
 }
@@ -435,14 +447,10 @@ fn drawing_a_buffer_nothing_wrote_is_refused_at_load() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     let (mut g, shaders) = graph();
     g.passes.swap(0, 1);
-    let e = common::load(&gpu, g, shaders)
-        .err()
-        .expect("drawing before classifying must be refused");
+    let e = common::load(&gpu, g, shaders).expect_err("drawing before classifying must be refused");
     assert!(e.to_string().contains("no earlier Silhouettes step writes it"), "{e}");
     let (mut g, shaders) = graph();
     g.buffers[0].record_bytes = 24;
-    let e = common::load(&gpu, g, shaders)
-        .err()
-        .expect("a record size off the 16-byte grid must be refused");
+    let e = common::load(&gpu, g, shaders).expect_err("a record size off the 16-byte grid must be refused");
     assert!(e.to_string().contains("record_bytes 24"), "{e}");
 }

@@ -22,7 +22,7 @@ fn a_graph_syntax_error_names_the_file_line_and_column() {
         std::fs::write(dir.join(name), src).unwrap();
     }
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
-    let e = Technique::load(&gpu, &graph).err().expect("an unknown field is refused");
+    let e = Technique::load(&gpu, &graph).expect_err("an unknown field is refused");
     let want = format!(
         "{}:{line}:3: not a valid pass graph: Unexpected field named `colour`",
         graph.display()

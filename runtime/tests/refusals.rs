@@ -60,9 +60,7 @@ fn camera_sized_textures_outside_the_shade_are_refused() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     let (mut g, shaders) = depth_graph(Views::LightCenter);
     g.textures[0].extent = Extent::Camera;
-    let e = common::load(&gpu, g, shaders)
-        .err()
-        .expect("a camera-sized texture must be refused");
+    let e = common::load(&gpu, g, shaders).expect_err("a camera-sized texture must be refused");
     assert!(
         matches!(&e, RuntimeError::Graph(GraphError::Step { pass, message }) if pass == "depth" && message.contains("camera-sized")),
         "{e}"
@@ -74,9 +72,7 @@ fn graphs_with_no_passes_are_refused() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     let (mut g, shaders) = depth_graph(Views::LightCenter);
     g.passes.clear();
-    let e = common::load(&gpu, g, shaders)
-        .err()
-        .expect("a graph with no passes must be refused");
+    let e = common::load(&gpu, g, shaders).expect_err("a graph with no passes must be refused");
     assert!(e.to_string().contains("no passes"), "{e}");
 }
 
@@ -95,7 +91,7 @@ fn graphs_with_more_passes_than_timestamps_are_refused() {
         })
         .collect();
     let start = std::time::Instant::now();
-    let e = common::load(&gpu, g, shaders).err().expect("2,100 passes must be refused");
+    let e = common::load(&gpu, g, shaders).expect_err("2,100 passes must be refused");
     assert!(
         matches!(&e, RuntimeError::Limit { needed: 2100, limit, .. } if *limit == MAX_PASSES as u64),
         "{e}"

@@ -1,10 +1,10 @@
 //! The per-frame cost of the embedding API, for every bundled technique:
 //!
-//! - **CPU**: the time a host spends in sshc each frame, `set_camera` + `set_light` (for
-//!   every light) + `encode` into the host's encoder, timed on the CPU with `Instant`,
+//! - **CPU**: the time a host spends in sshc each frame, the frame's state changed (camera
+//!   and every light) + `prepare` + `record` into the host's encoder, timed on the CPU with `Instant`,
 //!   median (and 90th percentile) of `FRAMES` frames after 10 untimed ones, with the scene
 //!   bound as a triangle soup and again as host geometry, there also with the light's view
-//!   fitted by sshc every frame (`place_light`). The host's own encoder creation,
+//!   fitted by sshc every frame (`Targets::fit_light`). The host's own encoder creation,
 //!   its submission and the wait are outside the timing.
 //! - **GPU, moving against static**: the GPU time of a frame (the sum of its passes'
 //!   timestamps, read back through the ring) with the light and camera moving every frame,
@@ -23,8 +23,9 @@
 #[path = "../tests/support/mod.rs"]
 mod support;
 
+use sshc_lab::run::Loaded;
 use sshc_lab::scene::{Light, Scene};
-use sshc_runtime::gpu::{Executor, Fit, SceneInputs};
+use sshc_runtime::gpu::{Fit, SceneInputs};
 use std::time::Instant;
 use support::host::at_frame;
 use support::{gpu, root};
@@ -72,8 +73,8 @@ fn main() {
             .map(|f| sshc_lab::bind::scene_inputs_for(&at_frame(&base, f), &c.graph).unwrap())
             .collect();
         let views: Vec<_> = states.iter().map(|s| (s.camera(), s.light_inputs())).collect();
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
-        ex.bind_scene(&states[0]).unwrap();
+        let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let mut ex = ex.bind_scene(&states[0]).unwrap();
         let mut cpu = Vec::new();
         let (mut moving, mut still) = (Vec::new(), Vec::new());
         let mut last: Option<u64> = None;
@@ -83,8 +84,8 @@ fn main() {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             let t0 = Instant::now();
             if move_this {
-                ex.set_camera(cam).unwrap();
-                ex.set_light(0, light).unwrap();
+                ex.state.camera = *cam;
+                ex.state.lights[0].clone_from(light);
             }
             ex.encode(&mut encoder).unwrap();
             let dt = t0.elapsed().as_secs_f64() * 1e6;
@@ -101,7 +102,7 @@ fn main() {
                 }
             }
             // the newest frame's times, read through the ring (each counted once)
-            if let Some((n, times)) = ex.frame_times().unwrap()
+            if let Some((n, times)) = ex.targets.frame_times().unwrap()
                 && last.is_none_or(|l| n > l)
             {
                 last = Some(n);
@@ -134,10 +135,10 @@ fn main() {
     println!("\n{table}");
 }
 
-/// The median CPU µs of `set_camera` + `set_light` + `encode` over the same orbit with
-/// the scene bound as host geometry (`bind_geometry`: its soup welded into indexed meshes,
-/// one instance each), and of `set_camera` + `place_light` (the view fitted by sshc to the
-/// instances' boxes) + `encode`; `None` for a graph with Geometry passes (refused on that
+/// The median CPU µs of the state changed + `prepare` + `record` over the same orbit with
+/// the scene uploaded as host geometry (its soup welded into indexed meshes, one instance
+/// each), and with the light's view fitted by sshc to the instances' boxes
+/// (`Targets::fit_light`); `None` for a graph with Geometry passes (refused on that
 /// path).
 fn host_geometry_cpu(
     c: &sshc::Compiled,
@@ -148,25 +149,26 @@ fn host_geometry_cpu(
     let gpu = gpu();
     let mut g = support::host::geometry_of(s, [0.0; 3]);
     g.instances.pop(); // the turned copy
-    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
-    ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+    let loaded = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut ex = loaded
+        .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .ok()?;
     let (mut cpu, mut placed) = (Vec::new(), Vec::new());
     for (f, ((cam, light), shape)) in views.iter().zip(lights).enumerate() {
         for place in [false, true] {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             let t0 = Instant::now();
-            ex.set_camera(cam).unwrap();
+            ex.state.camera = *cam;
             if place {
                 ex.place_light(0, shape, Fit::Casters).unwrap();
             } else {
-                ex.set_light(0, light).unwrap();
+                ex.state.lights[0].clone_from(light);
             }
             ex.encode(&mut encoder).unwrap();
             let dt = t0.elapsed().as_secs_f64() * 1e6;
             gpu.queue.submit([encoder.finish()]);
             gpu.wait().unwrap();
-            ex.frame_times().unwrap();
+            ex.targets.frame_times().unwrap();
             if f >= 10 {
                 if place { &mut placed } else { &mut cpu }.push(dt);
             }
@@ -217,15 +219,15 @@ fn bytes_table() -> String {
             });
         }
         let soup = support::host::listed_out(&s, &g);
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        let loaded = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
         let m0 = memory();
-        ex.bind_scene(&soup).unwrap();
+        let ex = loaded.bind_scene(&soup).unwrap();
         let soup_bytes = memory() - m0;
         drop(ex);
         gpu.wait().unwrap();
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
         let m0 = memory();
-        ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        let ex = loaded
+            .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
             .unwrap();
         let indexed_bytes = memory() - m0;
         drop(ex);
@@ -236,11 +238,12 @@ fn bytes_table() -> String {
         for i in still.instances.iter_mut().filter(|i| i.transform == IDENTITY) {
             i.moves = false;
         }
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
         let m0 = memory();
-        ex.bind_geometry(&still, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        let ex = loaded
+            .bind_geometry(&still, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
             .unwrap();
         let still_bytes = memory() - m0;
+        drop(ex);
         let tris = g.triangles();
         let host_indexed: usize =
             g.meshes.iter().map(|m| m.positions.len() * 24 + m.indices.len() * 4).sum::<usize>() + g.instances.len() * 64;

@@ -1,7 +1,7 @@
 //! What a window resize costs the viewer (docs/embedding.md, "Resizing"): before issue 49
 //! it bound the scene again at the new size (`bind_scene`: the soup uploaded again, the edge
 //! adjacency built again, every texture and bind group made again); now it calls
-//! `Executor::resize`, which makes only the camera-sized targets. For a few bundled
+//! `Bound::resize`, which makes only the camera-sized targets. For a few bundled
 //! techniques on the bunny (a raster one, one with Geometry passes and a mip chain, one
 //! with summed-area tables), alternately one and the other between two sizes, the median
 //! wall time of each (until the device is idle, so that lazily made objects count), and
@@ -15,8 +15,8 @@
 #[path = "../tests/support/mod.rs"]
 mod support;
 
+use sshc_lab::run::Loaded;
 use sshc_lab::scene::Scene;
-use sshc_runtime::gpu::Executor;
 use std::time::Instant;
 use support::{gpu, root};
 
@@ -45,8 +45,8 @@ fn main() {
                 sshc_lab::bind::scene_inputs_for(&scene, &c.graph).unwrap()
             })
             .collect();
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
-        ex.bind_scene(&inputs[0]).unwrap();
+        let loaded = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        let mut ex = loaded.bind_scene(&inputs[0]).unwrap();
         ex.run_frame().unwrap();
         let (mut rebind, mut resize) = (Vec::new(), Vec::new());
         let (mut made_rebind, mut made_resize) = (0, 0);
@@ -55,10 +55,10 @@ fn main() {
             let before = textures();
             let t0 = Instant::now();
             if i % 2 == 0 {
-                ex.bind_scene(&inputs[to]).unwrap();
+                ex = loaded.bind_scene(&inputs[to]).unwrap();
             } else {
-                ex.resize(inputs[to].camera_size).unwrap();
-                ex.set_camera(&inputs[to].camera()).unwrap();
+                ex.targets.resize(inputs[to].camera_size).unwrap();
+                ex.state.camera = inputs[to].camera();
             }
             gpu.wait().unwrap();
             let ms = t0.elapsed().as_secs_f64() * 1e3;

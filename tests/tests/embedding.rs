@@ -6,8 +6,9 @@
 
 mod support;
 
+use sshc_lab::run::{Bound, Loaded};
 use sshc_lab::scene::Scene;
-use sshc_runtime::gpu::{CameraOutput, Executor, Geometry, Gpu, Requirements, RuntimeError, SceneInputs};
+use sshc_runtime::gpu::{CameraOutput, Geometry, Gpu, Requirements, RuntimeError, SceneInputs};
 use support::host::{at_frame, geometry_of, listed_out};
 use support::{gpu, root};
 
@@ -44,17 +45,17 @@ fn all_lights(s: &Scene, c: &sshc::Compiled) -> Vec<SceneInputs> {
 
 /// The visibility of a freshly loaded and bound executor for these lights.
 fn fresh(c: &sshc::Compiled, lights: &[SceneInputs]) -> Vec<[f32; 4]> {
-    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_lights(lights).unwrap_or_else(|e| panic!("{e}"));
+    let ex = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_lights(lights).unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-    ex.read_visibilities().unwrap_or_else(|e| panic!("{e}")).rgba
+    ex.inspect().read_visibilities().unwrap_or_else(|e| panic!("{e}")).rgba
 }
 
 /// Set every light and the camera of `ex` to these inputs (the per-frame path).
-fn update(ex: &mut Executor, lights: &[SceneInputs]) {
-    ex.set_camera(&lights[0].camera()).unwrap_or_else(|e| panic!("{e}"));
+fn update(ex: &mut Bound, lights: &[SceneInputs]) {
+    ex.state.camera = lights[0].camera();
     for (l, s) in lights.iter().enumerate() {
-        ex.set_light(l, &s.light_inputs()).unwrap_or_else(|e| panic!("{e}"));
+        ex.state.lights[l] = s.light_inputs();
     }
 }
 
@@ -78,10 +79,10 @@ fn live_objects(gpu: &Gpu) -> [(&'static str, isize); 11] {
 }
 
 /// One frame as a host runs it: its encoder, `encode`, its submission, then a wait.
-fn host_frame(ex: &mut Executor) {
+fn host_frame(ex: &mut Bound) {
     let gpu = gpu();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    ex.encode(&mut encoder).unwrap_or_else(|e| panic!("{}: {e}", ex.graph.technique));
+    ex.encode(&mut encoder).unwrap_or_else(|e| panic!("{}: {e}", ex.graph().technique));
     gpu.queue.submit([encoder.finish()]);
     gpu.wait().unwrap_or_else(|e| panic!("{e}"));
 }
@@ -102,20 +103,20 @@ fn every_bundled_technique_updated_in_place_matches_a_fresh_binding() {
     for t in &names {
         let c = compile(t);
         let base = scene(scene_for(&c), 32, 64);
-        let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-        ex.bind_scene(&inputs(&base, &c)).unwrap_or_else(|e| panic!("{t}: {e}"));
-        let generation = ex.generation();
+        let ex = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+        let mut ex = ex.bind_scene(&inputs(&base, &c)).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let generation = ex.targets.generation();
         for f in 1..=2 {
             let now = [inputs(&at_frame(&base, f), &c)];
             update(&mut ex, &now);
             ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
-            let moved = ex.read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba;
+            let moved = ex.inspect().read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba;
             assert!(
                 moved == fresh(&c, &now),
                 "{t}, frame {f}: the updated executor differs from a fresh binding"
             );
         }
-        assert_eq!(ex.generation(), generation, "{t}: updates reallocated");
+        assert_eq!(ex.targets.generation(), generation, "{t}: updates reallocated");
     }
 }
 
@@ -131,9 +132,9 @@ fn a_hundred_moving_frames_create_no_wgpu_object_and_match_fresh_bindings() {
         let c = compile(t);
         let base = scene(sc, 32, 64);
         let gpu = gpu();
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-        ex.bind_lights(&all_lights(&base, &c)).unwrap_or_else(|e| panic!("{t}: {e}"));
-        let generation = ex.generation();
+        let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+        let mut ex = ex.bind_lights(&all_lights(&base, &c)).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let generation = ex.targets.generation();
         host_frame(&mut ex);
         let before = live_objects(gpu);
         let mut checked = Vec::new();
@@ -144,11 +145,11 @@ fn a_hundred_moving_frames_create_no_wgpu_object_and_match_fresh_bindings() {
             // read after each frame completes, before any read-back of this frame
             assert_eq!(live_objects(gpu), before, "{t}: frame {f} created or destroyed wgpu objects");
             if [25, 50, 100].contains(&f) {
-                checked.push((now, ex.read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba));
+                checked.push((now, ex.inspect().read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba));
             }
         }
-        assert_eq!(ex.generation(), generation, "{t}: updates reallocated");
-        assert_eq!(ex.frames(), 101);
+        assert_eq!(ex.targets.generation(), generation, "{t}: updates reallocated");
+        assert_eq!(ex.targets.frames(), 101);
         // the orbit moves the shadows: the checked frames differ from each other
         assert!(
             checked[0].1 != checked[1].1 && checked[1].1 != checked[2].1,
@@ -168,8 +169,8 @@ fn timestamps_come_back_frames_later_without_a_wait_in_recording() {
     let c = compile("pcss");
     let s = inputs(&scene("triangle", 32, 64), &c);
     let gpu = gpu();
-    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&s).unwrap();
+    let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_scene(&s).unwrap();
     for _ in 0..5 {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         ex.encode(&mut encoder).unwrap();
@@ -178,9 +179,9 @@ fn timestamps_come_back_frames_later_without_a_wait_in_recording() {
     gpu.wait().unwrap();
     // the last frame's slot is mapped by this call and read by the next, after the device
     // has answered; no call waited
-    ex.frame_times().unwrap();
+    ex.targets.frame_times().unwrap();
     gpu.wait().unwrap();
-    let (frame, times) = ex.frame_times().unwrap().expect("lavapipe has timestamp queries");
+    let (frame, times) = ex.targets.frame_times().unwrap().expect("lavapipe has timestamp queries");
     assert_eq!(frame, 4, "the newest frame's times");
     assert_eq!(times.passes.len(), c.graph.passes.len());
     for (pass, ms) in &times.passes {
@@ -289,25 +290,25 @@ fn on_a_hosts_device_the_graph_records_into_its_frame_and_its_error_handler_stay
     let req = Requirements::of(&c.graph);
     let (host, errors) = host_device(req.features() | wgpu::Features::TIMESTAMP_QUERY, |a| req.limits(a.limits()));
     assert!(host.is_host_device());
-    let mut ex = Executor::new(&host, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&s).unwrap_or_else(|e| panic!("{e}"));
+    let ex = Loaded::new(&host, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_scene(&s).unwrap_or_else(|e| panic!("{e}"));
     // the host's frame: its encoder, its submission
     let mut encoder = host.device.create_command_encoder(&Default::default());
     ex.encode(&mut encoder).unwrap();
     host.queue.submit([encoder.finish()]);
     host.wait().unwrap();
-    let ours = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
+    let ours = ex.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0);
     // the same graph on the runtime's own device
-    let mut own = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-    own.bind_scene(&s).unwrap();
+    let own = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut own = own.bind_scene(&s).unwrap();
     own.run_frame().unwrap();
     assert!(
-        ours == own.read_camera(CameraOutput::Visibility).unwrap().channel(0),
+        ours == own.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0),
         "the host's device gives another visibility"
     );
     // the host samples the visibility texture in its own pass
     assert!(
-        host_samples(&host, ex.visibility().unwrap()) == ours,
+        host_samples(&host, ex.targets.visibility()) == ours,
         "the host's pass reads another visibility"
     );
     assert_eq!(errors.load(std::sync::atomic::Ordering::SeqCst), 0);
@@ -335,7 +336,7 @@ fn a_device_without_what_a_graph_needs_is_refused_with_each_need_and_its_pass() 
     for t in techniques() {
         let c = compile(&t);
         let missing = Requirements::of(&c.graph).missing(&bare);
-        match Executor::new(&bare, c.graph.clone(), c.shaders.clone()) {
+        match Loaded::new(&bare, c.graph.clone(), c.shaders.clone()) {
             Ok(_) => assert!(missing.is_empty(), "{t} loaded on a device lacking {missing:?}"),
             Err(RuntimeError::Unsatisfied {
                 technique,
@@ -376,68 +377,77 @@ fn a_device_without_what_a_graph_needs_is_refused_with_each_need_and_its_pass() 
         let _ = a;
         req.limits(wgpu::Limits::default())
     });
-    Executor::new(&fit, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    Loaded::new(&fit, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
 }
 
 #[test]
-fn per_frame_updates_refuse_what_would_need_a_new_binding() {
+fn per_frame_states_refuse_what_would_need_new_targets() {
     let c = compile("pcss");
     let s = inputs(&scene("triangle", 32, 64), &c);
-    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-    let e = ex.set_camera(&s.camera()).unwrap_err();
-    // every way of binding is named (a host of `bind_geometry` was told `bind_scene`)
-    assert!(
-        e.to_string()
-            .contains("nothing is bound: bind a scene first (bind_scene, bind_geometry"),
-        "{e}"
-    );
+    let loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
     // issue 49: a camera of no pixels is said to be so, not "above the device's limit"
     let mut empty = s.clone();
     empty.camera_size = (0, 240);
-    let e = ex.bind_scene(&empty).unwrap_err();
+    let e = loaded.bind_scene(&empty).unwrap_err();
     assert!(
         e.to_string()
             .contains("the camera image is 0 x 240 pixels: it needs at least 1 x 1"),
         "{e}"
     );
-    ex.bind_scene(&s).unwrap();
+    let mut ex = loaded.bind_scene(&s).unwrap();
+    ex.run_frame().unwrap();
+    // The state is plain data: prepare checks what changed, refuses it with the reason,
+    // and writes nothing (the next good frame renders as before).
+    let before = ex.inspect().read_visibilities().unwrap().rgba;
+    let refused = |ex: &mut sshc_lab::run::Bound, change: &dyn Fn(&mut sshc_runtime::gpu::FrameState)| {
+        let good = ex.state.clone();
+        change(&mut ex.state);
+        let e = ex.run_frame().unwrap_err().to_string();
+        ex.state = good;
+        e
+    };
     // issue 49: an all-zero camera matrix drew every pixel lit; refused
-    let mut flat = s.camera();
-    flat.view_proj = [0.0; 16];
-    let e = ex.set_camera(&flat).unwrap_err();
-    assert!(e.to_string().contains("has no inverse"), "{e}");
-    let mut cam = s.camera();
-    cam.view_proj[5] = f32::NAN;
-    let e = ex.set_camera(&cam).unwrap_err();
-    assert!(e.to_string().contains("not finite"), "{e}");
-    let mut light = s.light_inputs();
-    light.position[0] = f32::INFINITY;
-    let e = ex.set_light(0, &light).unwrap_err();
-    assert!(e.to_string().contains("light 0") && e.to_string().contains("not finite"), "{e}");
-    let mut light = s.light_inputs();
-    light.far = light.near;
-    assert!(ex.set_light(0, &light).unwrap_err().to_string().contains("depth range"));
-    let e = ex.set_light(1, &s.light_inputs()).unwrap_err();
-    assert!(e.to_string().contains("light 1 is not bound"), "{e}");
+    let e = refused(&mut ex, &|st| st.camera.view_proj = [0.0; 16]);
+    assert!(e.contains("has no inverse"), "{e}");
+    let e = refused(&mut ex, &|st| st.camera.view_proj[5] = f32::NAN);
+    assert!(e.contains("not finite"), "{e}");
+    let e = refused(&mut ex, &|st| st.lights[0].position[0] = f32::INFINITY);
+    assert!(e.contains("light 0") && e.contains("not finite"), "{e}");
+    let e = refused(&mut ex, &|st| st.lights[0].far = st.lights[0].near);
+    assert!(e.contains("depth range"), "{e}");
+    let e = refused(&mut ex, &|st| st.lights.push(st.lights[0].clone()));
+    assert!(e.contains("2 light(s) in the frame for targets made for 1"), "{e}");
+    let other = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let e = refused(&mut ex, &|st| st.params = other.params.clone());
+    assert!(e.contains("params were made for another technique"), "{e}");
+    // targets run only on the scene they were made on
+    let mut elsewhere = loaded.bind_scene(&s).unwrap();
+    let mut encoder = gpu().device.create_command_encoder(&Default::default());
+    let e = ex.targets.prepare(&mut elsewhere.scene, &ex.state).unwrap_err().to_string();
+    assert!(e.contains("made on another scene"), "{e}");
+    // recording before any prepare is refused with what to call
+    let e = elsewhere.targets.record(&elsewhere.scene, &mut encoder).unwrap_err().to_string();
+    assert!(e.contains("call prepare (queue writes), then record"), "{e}");
+    drop(encoder);
     // a sample count is a size
     let lc = compile("linear-light");
     let ls = inputs(&scene("linear", 32, 64), &lc);
-    let mut lex = Executor::new(gpu(), lc.graph.clone(), lc.shaders.clone()).unwrap();
-    lex.bind_scene(&ls).unwrap();
-    let mut light = ls.light_inputs();
-    light.samples.pop();
-    let e = lex.set_light(0, &light).unwrap_err();
-    assert!(e.to_string().contains("a new number of samples is a new binding"), "{e}");
-    assert_eq!(ex.generation(), 1);
+    let lloaded = Loaded::new(gpu(), lc.graph.clone(), lc.shaders.clone()).unwrap();
+    let mut lex = lloaded.bind_scene(&ls).unwrap();
+    let e = refused(&mut lex, &|st| {
+        st.lights[0].samples.pop();
+    });
+    assert!(e.contains("a new number of samples is new targets"), "{e}");
     // the lights of a frame share one scene (uploaded once for all of them): a light whose
-    // soup differs is refused, and the bound scene stays as it was
+    // soup differs is refused
     let mut moved = s.clone();
     moved.vertices[0] += 0.5;
-    let e = ex.bind_lights(&[s.clone(), moved]).unwrap_err().to_string();
+    let e = loaded.bind_lights(&[s.clone(), moved]).unwrap_err().to_string();
     assert!(e.contains("light 1's scene differs") && e.contains("share one scene"), "{e}");
-    assert_eq!((ex.generation(), ex.lights()), (1, 1));
-    ex.set_camera(&s.camera()).unwrap();
+    // every refusal left the targets as they were
+    assert_eq!((ex.targets.generation(), ex.targets.lights()), (0, 1));
     ex.run_frame().unwrap();
+    assert!(ex.inspect().read_visibilities().unwrap().rgba == before);
 }
 
 // Host geometry: indexed meshes, instances, transforms.
@@ -461,14 +471,15 @@ fn indexed_instanced_geometry_matches_the_same_triangles_listed_out() {
             // its face planes are its mesh's permuted and negated, exactly (a translation
             // would round the planes' offsets apart from the listed-out triangles' own)
             let g = geometry_of(&s, [0.0; 3]);
-            let mut host = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-            host.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+            let host = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+            let mut host = host
+                .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
                 .unwrap_or_else(|e| panic!("{what}: {e}"));
             host.run_frame().unwrap();
-            let mut soup = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-            soup.bind_scene(&listed_out(&s, &g)).unwrap();
+            let soup = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+            let mut soup = soup.bind_scene(&listed_out(&s, &g)).unwrap();
             soup.run_frame().unwrap();
-            let visibility = |ex: &Executor| ex.read_visibilities().unwrap().rgba;
+            let visibility = |ex: &Bound| ex.inspect().read_visibilities().unwrap().rgba;
             assert!(
                 visibility(&host) == visibility(&soup),
                 "{what}: indexed and instanced differs from listed out"
@@ -482,13 +493,16 @@ fn indexed_instanced_geometry_matches_the_same_triangles_listed_out() {
                 .iter()
                 .flat_map(|p| &p.steps)
                 .any(|st| matches!(st.draw, sshc_runtime::graph::Draw::Silhouettes { .. }));
-            let edges = host.edge_counts().unwrap();
+            let edges = host.scene.edge_counts();
             assert_eq!(edges.is_some(), classifies, "{what}");
             if classifies {
-                assert_eq!(edges, soup.edge_counts().unwrap(), "{what}");
+                assert_eq!(edges, soup.scene.edge_counts(), "{what}");
             }
             for b in &c.graph.buffers {
-                let (h, l) = (host.generated(&b.name).unwrap(), soup.generated(&b.name).unwrap());
+                let (h, l) = (
+                    host.inspect().generated(&b.name).unwrap(),
+                    soup.inspect().generated(&b.name).unwrap(),
+                );
                 assert_eq!(h, l, "{what}: buffer `{}`", b.name);
                 records += h.records;
             }
@@ -525,8 +539,9 @@ fn moving_instances_create_no_wgpu_object_and_match_listed_out() {
             .position(|i| g.meshes[i.mesh].indices.len() == 3)
             .expect("the triangle");
         let gpu = gpu();
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
-        ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        let loaded = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        let mut ex = loaded
+            .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
             .unwrap();
         host_frame(&mut ex);
         let before = live_objects(gpu);
@@ -535,14 +550,14 @@ fn moving_instances_create_no_wgpu_object_and_match_listed_out() {
             // the caster slides in steps of 1/128 (exact in f32), inside the light's fitted view
             g.instances[moving].transform[12] = f as f32 / 128.0;
             let transforms: Vec<[f32; 16]> = g.instances.iter().map(|i| i.transform).collect();
-            ex.set_transforms(&transforms).unwrap();
+            ex.scene.set_transforms(&transforms).unwrap();
             host_frame(&mut ex);
             assert_eq!(live_objects(gpu), before, "{t}: frame {f} created or destroyed wgpu objects");
             if f % 10 == 0 {
-                checked.push((g.clone(), ex.read_visibilities().unwrap().rgba));
+                checked.push((g.clone(), ex.inspect().read_visibilities().unwrap().rgba));
             }
         }
-        assert_eq!(ex.generation(), 1);
+        assert_eq!(ex.targets.generation(), 0);
         assert!(checked[0].1 != checked[1].1, "{t}: the caster's shadow did not move");
         for (g, moved) in &checked {
             assert!(
@@ -570,8 +585,9 @@ fn lights_placed_by_the_runtime_every_frame_create_nothing_and_match_fresh_fits(
         let fitted = |g: &Geometry, light: &sshc_lab::scene::Light| {
             LightInputs::fit(light, &g.boxes(), Fit::Casters, s.shadow_size, samples).unwrap_or_else(|e| panic!("{t}: {e}"))
         };
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
-        ex.bind_geometry(&g, &s.camera(), &[fitted(&g, &base.lights[0])], s.camera_size, s.shadow_size)
+        let loaded = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        let mut ex = loaded
+            .bind_geometry(&g, &s.camera(), &[fitted(&g, &base.lights[0])], s.camera_size, s.shadow_size)
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         host_frame(&mut ex);
         let before = live_objects(gpu);
@@ -581,27 +597,26 @@ fn lights_placed_by_the_runtime_every_frame_create_nothing_and_match_fresh_fits(
             let light = at_frame(&base, f).lights.remove(0);
             g.instances[moving].transform[12] = f as f32 / 64.0;
             let transforms: Vec<[f32; 16]> = g.instances.iter().map(|i| i.transform).collect();
-            ex.set_transforms(&transforms).unwrap();
+            ex.scene.set_transforms(&transforms).unwrap();
             ex.place_light(0, &light, Fit::Casters)
                 .unwrap_or_else(|e| panic!("{t}: frame {f}: {e}"));
             host_frame(&mut ex);
             assert_eq!(live_objects(gpu), before, "{t}: frame {f} created or destroyed wgpu objects");
             if f % 10 == 0 {
-                checked.push((g.clone(), light, ex.read_visibilities().unwrap().rgba));
+                checked.push((g.clone(), light, ex.inspect().read_visibilities().unwrap().rgba));
             }
         }
-        assert_eq!(ex.generation(), 1);
+        assert_eq!(ex.targets.generation(), 0);
         assert!(checked[0].2 != checked[1].2, "{t}: the shadows did not move");
         for (g, light, moved) in &checked {
-            let mut again = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
             let inputs = fitted(g, light);
             assert_eq!(inputs.samples.len(), samples as usize);
-            again
+            let mut again = loaded
                 .bind_geometry(g, &s.camera(), &[inputs], s.camera_size, s.shadow_size)
                 .unwrap();
             again.run_frame().unwrap();
             assert!(
-                *moved == again.read_visibilities().unwrap().rgba,
+                *moved == again.inspect().read_visibilities().unwrap().rgba,
                 "{t}: a light placed per frame differs from a fresh binding of the same fit"
             );
         }
@@ -613,32 +628,27 @@ fn lights_placed_by_the_runtime_every_frame_create_nothing_and_match_fresh_fits(
         assert!(e.contains("not finite"), "{t}: {e}");
         host_frame(&mut ex);
         assert!(
-            ex.read_visibilities().unwrap().rgba == checked[1].2,
+            ex.inspect().read_visibilities().unwrap().rgba == checked[1].2,
             "{t}: a refused light changed the frame"
         );
     }
-    // over a triangle soup, the instances fitted to are its objects; with nothing bound,
-    // the host is told what to do
+    // over a triangle soup, the instances fitted to are its objects; a light the targets
+    // were not made for is refused
     let c = compile("pcss");
     let s = inputs(&scene("triangle", 8, 16), &c);
     let light = sshc_lab::scene::Light::Point { position: glam::Vec3::Y };
-    let e = Executor::new(gpu(), c.graph.clone(), c.shaders.clone())
-        .unwrap()
-        .place_light(0, &light, Fit::Scene)
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("no geometry is bound") && e.contains("bind_scene"), "{e}");
-    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-    ex.bind_scene(&s).unwrap();
+    let loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut ex = loaded.bind_scene(&s).unwrap();
+    let e = ex.targets.fit_light(&ex.scene, 1, &light, Fit::Scene).unwrap_err().to_string();
+    assert!(e.contains("light 1 is not in these targets (1 light(s) are)"), "{e}");
     ex.place_light(0, &light, Fit::Casters).unwrap();
     ex.run_frame().unwrap();
     let objects = Geometry::from_soup(&s.vertices, &s.meshes, s.casting_vertices, &s.unshadowed).unwrap();
     let fitted = LightInputs::fit(&light, &objects.boxes(), Fit::Casters, s.shadow_size, 0).unwrap();
-    let mut by_hand = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-    by_hand.bind_scene(&s).unwrap();
-    by_hand.set_light(0, &fitted).unwrap();
+    let mut by_hand = loaded.bind_scene(&s).unwrap();
+    by_hand.state.lights[0] = fitted.clone();
     by_hand.run_frame().unwrap();
-    assert!(ex.read_visibilities().unwrap().rgba == by_hand.read_visibilities().unwrap().rgba);
+    assert!(ex.inspect().read_visibilities().unwrap().rgba == by_hand.inspect().read_visibilities().unwrap().rgba);
 }
 
 #[test]
@@ -646,9 +656,10 @@ fn host_geometry_is_checked_at_upload_naming_the_mesh_or_instance() {
     let c = compile("pcss");
     let s = inputs(&scene("triangle", 32, 64), &c);
     let good = geometry_of(&s, [0.0; 3]);
-    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
     let mut bind = |g: &Geometry| {
-        ex.bind_geometry(g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        loaded
+            .bind_geometry(g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
             .map(|_| ())
     };
     let refused = |g: Geometry, want: &str, bind: &mut dyn FnMut(&Geometry) -> sshc_runtime::gpu::Result<()>| {
@@ -682,12 +693,15 @@ fn host_geometry_is_checked_at_upload_naming_the_mesh_or_instance() {
     refused(g, "places mesh 9", &mut bind);
     // nothing at all is a scene with nothing in it, not an error
     bind(&Geometry::default()).unwrap();
-    bind(&good).unwrap();
+    let mut ex = loaded
+        .bind_geometry(&good, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        .unwrap();
     // per frame: the count, and NaN
     let mut ts: Vec<[f32; 16]> = good.instances.iter().map(|i| i.transform).collect();
     ts.pop();
     assert!(
-        ex.set_transforms(&ts)
+        ex.scene
+            .set_transforms(&ts)
             .unwrap_err()
             .to_string()
             .contains("a new instance set is a new binding")
@@ -695,28 +709,23 @@ fn host_geometry_is_checked_at_upload_naming_the_mesh_or_instance() {
     let mut ts: Vec<[f32; 16]> = good.instances.iter().map(|i| i.transform).collect();
     ts[1][12] = f32::INFINITY;
     assert!(
-        ex.set_transforms(&ts)
+        ex.scene
+            .set_transforms(&ts)
             .unwrap_err()
             .to_string()
             .contains("instance 1: its transform is not finite")
     );
     // a soup's objects are instances in world space: their transforms stay the identity
-    ex.bind_scene(&s).unwrap();
+    let mut ex = loaded.bind_scene(&s).unwrap();
     let objects = Geometry::from_soup(&s.vertices, &s.meshes, s.casting_vertices, &s.unshadowed)
         .unwrap()
         .instances
         .len();
     let mut ts = vec![sshc_runtime::gpu::IDENTITY; objects];
-    ex.set_transforms(&ts).unwrap();
+    ex.scene.set_transforms(&ts).unwrap();
     ts[0][12] = 1.0;
-    let e = ex.set_transforms(&ts).unwrap_err().to_string();
+    let e = ex.scene.set_transforms(&ts).unwrap_err().to_string();
     assert!(e.contains("instance 0 does not move"), "{e}");
-    let e = Executor::new(gpu(), c.graph.clone(), c.shaders.clone())
-        .unwrap()
-        .set_transforms(&ts)
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("no geometry is bound"), "{e}");
 }
 
 #[test]
@@ -738,20 +747,25 @@ fn a_specialised_graph_is_rechecked_per_frame_from_the_casters_bounds() {
     };
     let c = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render("esm", &src)));
     assert_eq!(c.graph.specialised.as_ref().and_then(|f| f.depth_floor), Some(floor));
-    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-    ex.bind_scene(&s).unwrap();
+    let loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut ex = loaded.bind_scene(&s).unwrap();
     // the same light passes: the bounds' least depth is the triangles' here (the top corner)
-    ex.set_light(0, &s.light_inputs()).unwrap();
+    ex.state.lights[0] = s.light_inputs();
+    ex.run_frame().unwrap();
     // a near plane pushed towards the casters brings them below the floor
     let mut closer = s.light_inputs();
     closer.near += 0.5 * (closer.far - closer.near) * floor;
-    let e = ex.set_light(0, &closer).unwrap_err();
+    ex.state.lights[0] = closer.clone();
+    let e = ex.run_frame().unwrap_err();
     assert!(e.to_string().contains("bounding box reaches"), "{e}");
-    // host geometry: the exact check at binding, the bounds per frame, on transforms too
+    // host geometry: the exact check at making the targets, the bounds per frame, on
+    // transforms too
     let mut g = geometry_of(&s, [0.0; 3]);
     g.instances.pop();
-    ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+    let mut ex = loaded
+        .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap();
+    ex.run_frame().unwrap();
     let raised: Vec<[f32; 16]> = g
         .instances
         .iter()
@@ -761,20 +775,23 @@ fn a_specialised_graph_is_rechecked_per_frame_from_the_casters_bounds() {
             t
         })
         .collect();
-    let e = ex.set_transforms(&raised).unwrap_err();
+    ex.scene.set_transforms(&raised).unwrap();
+    let e = ex.run_frame().unwrap_err();
     assert!(e.to_string().contains("bounding box reaches"), "{e}");
-    // refused transforms are not kept: the bound ones still pass
-    ex.set_light(0, &s.light_inputs()).unwrap();
+    // the transforms back where they were: the frame passes again
+    let back: Vec<[f32; 16]> = g.instances.iter().map(|i| i.transform).collect();
+    ex.scene.set_transforms(&back).unwrap();
+    ex.run_frame().unwrap();
     for (i, t) in g.instances.iter_mut().zip(&raised) {
         i.transform = *t;
     }
-    let e = ex
+    let e = loaded
         .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap_err();
     assert!(e.to_string().contains("under light 0 these come to"), "{e}");
     // the exact check reads the placed casters: a bad geometry is refused before it, not a panic
     g.meshes[0].indices[0] = u32::MAX;
-    let e = ex
+    let e = loaded
         .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap_err();
     assert!(e.to_string().contains("out of range"), "{e}");
@@ -955,25 +972,25 @@ fn host_pixels_give_the_forward_shade_where_a_quad_lies_on_one_triangle() {
         };
         let deferred = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(t, &src)));
         let s = inputs(&scene("triangle", 48, 128), &forward);
-        let mut ex = Executor::new(gpu(), forward.graph.clone(), forward.shaders.clone()).unwrap();
-        ex.bind_scene(&s).unwrap();
+        let ex = Loaded::new(gpu(), forward.graph.clone(), forward.shaders.clone()).unwrap();
+        let mut ex = ex.bind_scene(&s).unwrap();
         ex.run_frame().unwrap();
-        let want = ex.read_camera(CameraOutput::Visibility).unwrap();
-        let position = ex.read_camera(CameraOutput::Position).unwrap();
+        let want = ex.inspect().read_camera(CameraOutput::Visibility).unwrap();
+        let position = ex.inspect().read_camera(CameraOutput::Position).unwrap();
         // a forward graph is refused host pixels, with the reason
         let [world, normal] = host_gbuffer(gpu(), &s);
         let pixels = sshc_runtime::gpu::HostPixels {
             world: &world,
             normal: &normal,
         };
-        let e = ex.set_host_pixels(Some(pixels)).unwrap_err();
+        let e = ex.targets.set_host_pixels(Some(pixels)).unwrap_err();
         assert!(e.to_string().contains("need the deferred Shade"), "{e}");
         // the deferred graph on the host's pixels
-        let mut host = Executor::new(gpu(), deferred.graph.clone(), deferred.shaders.clone()).unwrap();
-        host.bind_scene(&s).unwrap();
-        host.set_host_pixels(Some(pixels)).unwrap();
+        let host = Loaded::new(gpu(), deferred.graph.clone(), deferred.shaders.clone()).unwrap();
+        let mut host = host.bind_scene(&s).unwrap();
+        host.targets.set_host_pixels(Some(pixels)).unwrap();
         host.run_frame().unwrap();
-        let got = host.read_camera(CameraOutput::Visibility).unwrap();
+        let got = host.inspect().read_camera(CameraOutput::Visibility).unwrap();
         let (w, h) = (want.width, want.height);
         let tri = |x: u32, y: u32| {
             let p = position.at(x, y);
@@ -1017,7 +1034,7 @@ fn host_pixels_of_the_wrong_format_or_size_are_refused() {
     };
     let c = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render("pcss", &src)));
     let s = inputs(&scene("triangle", 32, 64), &c);
-    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let ex = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
     let texture = |format, size: u32, usage| {
         gpu().device.create_texture(&wgpu::TextureDescriptor {
             label: None,
@@ -1039,9 +1056,7 @@ fn host_pixels_of_the_wrong_format_or_size_are_refused() {
     fn pixels<'a>(world: &'a wgpu::Texture, normal: &'a wgpu::Texture) -> sshc_runtime::gpu::HostPixels<'a> {
         sshc_runtime::gpu::HostPixels { world, normal }
     }
-    let e = ex.set_host_pixels(Some(pixels(&good, &good))).unwrap_err();
-    assert!(e.to_string().contains("nothing is bound"), "{e}");
-    ex.bind_scene(&s).unwrap();
+    let mut ex = ex.bind_scene(&s).unwrap();
     for (world, normal, want) in [
         (
             texture(wgpu::TextureFormat::Rgba16Float, 32, sampled),
@@ -1065,10 +1080,10 @@ fn host_pixels_of_the_wrong_format_or_size_are_refused() {
         ),
     ] {
         let normal = normal.as_ref().unwrap_or(&good);
-        let e = ex.set_host_pixels(Some(pixels(&world, normal))).unwrap_err();
+        let e = ex.targets.set_host_pixels(Some(pixels(&world, normal))).unwrap_err();
         assert!(e.to_string().contains(want), "{e}");
     }
-    ex.set_host_pixels(Some(pixels(&good, &good))).unwrap();
+    ex.targets.set_host_pixels(Some(pixels(&good, &good))).unwrap();
 }
 
 /// Objects that receive no shadow (`receives: false` in a scene, `Instance::receives` in a
@@ -1103,10 +1118,10 @@ fn objects_that_receive_no_shadow_read_one_in_the_techniques_and_the_truth() {
     };
     let vis = Visibility::new(&unlit);
     let run = |c: &sshc::Compiled, s: &SceneInputs| {
-        let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-        ex.bind_scene(s).unwrap();
+        let ex = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+        let mut ex = ex.bind_scene(s).unwrap();
         ex.run_frame().unwrap();
-        let read = |o| ex.read_camera(o).unwrap().rgba;
+        let read = |o| ex.inspect().read_camera(o).unwrap().rgba;
         (
             read(CameraOutput::Visibility),
             read(CameraOutput::Color),
@@ -1171,12 +1186,13 @@ fn objects_that_receive_no_shadow_read_one_in_the_techniques_and_the_truth() {
         g.instances[ground].receives = false;
         let listed = listed_out(&su, &g);
         assert!(!listed.unshadowed.is_empty());
-        let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-        ex.bind_geometry(&g, &su.camera(), &[su.light_inputs()], su.camera_size, su.shadow_size)
+        let ex = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+        let mut ex = ex
+            .bind_geometry(&g, &su.camera(), &[su.light_inputs()], su.camera_size, su.shadow_size)
             .unwrap();
         ex.run_frame().unwrap();
         assert!(
-            ex.read_camera(CameraOutput::Visibility).unwrap().rgba == run(&c, &listed).0,
+            ex.inspect().read_camera(CameraOutput::Visibility).unwrap().rgba == run(&c, &listed).0,
             "{name}: host geometry differs from its triangles listed out"
         );
     }
@@ -1236,35 +1252,44 @@ fn world_space_instances_keep_no_placed_copy_and_match_instances_placed_on_the_g
             .map(|&i| world.meshes[world.instances[i].mesh].positions.len() as u64 * 24)
             .sum();
         assert_eq!(placed.gpu_bytes() - world.gpu_bytes(), saved, "{t}");
+        let loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
         let bind = |g: &Geometry| {
-            let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-            ex.bind_geometry(g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+            let mut ex = loaded
+                .bind_geometry(g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
                 .unwrap_or_else(|e| panic!("{t}: {e}"));
             ex.run_frame().unwrap();
             ex
         };
         let (mut w, p) = (bind(&world), bind(&placed));
-        assert!(w.read_visibilities().unwrap().rgba == p.read_visibilities().unwrap().rgba, "{t}");
+        assert!(
+            w.inspect().read_visibilities().unwrap().rgba == p.inspect().read_visibilities().unwrap().rgba,
+            "{t}"
+        );
         if !c.graph.buffers.is_empty() {
-            assert_eq!(w.edge_counts().unwrap(), p.edge_counts().unwrap(), "{t}");
+            assert_eq!(w.scene.edge_counts(), p.scene.edge_counts(), "{t}");
             for b in &c.graph.buffers {
-                assert_eq!(w.generated(&b.name).unwrap(), p.generated(&b.name).unwrap(), "{t}: `{}`", b.name);
+                assert_eq!(
+                    w.inspect().generated(&b.name).unwrap(),
+                    p.inspect().generated(&b.name).unwrap(),
+                    "{t}: `{}`",
+                    b.name
+                );
             }
         }
         // the bound transforms are accepted again; a changed one is refused for a still
         // instance, and taken for the moving one
         let mut transforms: Vec<[f32; 16]> = world.instances.iter().map(|i| i.transform).collect();
-        w.set_transforms(&transforms).unwrap();
+        w.scene.set_transforms(&transforms).unwrap();
         let mut bad = transforms.clone();
         bad[still[0]][13] = 0.25;
-        let e = w.set_transforms(&bad).unwrap_err().to_string();
+        let e = w.scene.set_transforms(&bad).unwrap_err().to_string();
         assert!(e.contains(&format!("instance {} does not move", still[0])), "{t}: {e}");
         transforms[moving][13] = 1.0 / 64.0;
-        w.set_transforms(&transforms).unwrap();
+        w.scene.set_transforms(&transforms).unwrap();
         w.run_frame().unwrap();
         world.instances[moving].transform = transforms[moving];
         assert!(
-            w.read_visibilities().unwrap().rgba == fresh(&c, &[listed_out(&s, &world)]),
+            w.inspect().read_visibilities().unwrap().rgba == fresh(&c, &[listed_out(&s, &world)]),
             "{t}: the moving instance beside still ones differs from its triangles listed out"
         );
     }
@@ -1316,30 +1341,34 @@ fn world_space_and_upload_placed_meshes_are_free_of_the_storage_binding_limit() 
         max_storage_buffer_binding_size: LIMIT,
         ..a.limits()
     });
-    let mut ex = Executor::new(&host, c.graph.clone(), c.shaders.clone()).unwrap();
-    ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+    let on_host = Loaded::new(&host, c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut ex = on_host
+        .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap();
     ex.run_frame().unwrap();
-    let mut full = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-    full.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+    let loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut full = loaded
+        .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap();
     full.run_frame().unwrap();
-    assert!(ex.read_visibilities().unwrap().rgba == full.read_visibilities().unwrap().rgba);
+    assert!(ex.inspect().read_visibilities().unwrap().rgba == full.inspect().read_visibilities().unwrap().rgba);
     let last = g.instances.len() - 1;
     // still but moved (placed at upload, on the CPU): its placed copy is written, never
     // bound as storage, so it binds as well, and gives the full device's visibility
     g.instances[last].transform[13] = -0.005;
     assert!(g.instances[last].placed_at_upload());
-    ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+    let mut ex = on_host
+        .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap();
     ex.run_frame().unwrap();
-    full.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+    let mut full = loaded
+        .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap();
     full.run_frame().unwrap();
-    assert!(ex.read_visibilities().unwrap().rgba == full.read_visibilities().unwrap().rgba);
+    assert!(ex.inspect().read_visibilities().unwrap().rgba == full.inspect().read_visibilities().unwrap().rgba);
     // placed on the GPU, the floor's vertices would be bound whole
     g.instances[last].moves = true;
-    let e = ex
+    let e = on_host
         .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap_err();
     assert!(
@@ -1386,13 +1415,14 @@ fn static_instances_placed_at_upload_match_the_same_triangles_listed_out() {
         let copy = g.instances.len() - 1;
         g.instances[copy].transform = turn;
         assert!(g.instances[copy].placed_at_upload() && g.instances[..copy].iter().all(|i| i.in_world_space()));
-        let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-        ex.bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
+        let ex = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+        let mut ex = ex
+            .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
             .unwrap_or_else(|e| panic!("{t}: {e}"));
         ex.run_frame().unwrap();
         let listed = fresh(&c, &[listed_out(&s, &g)]);
         assert!(
-            ex.read_visibilities().unwrap().rgba == listed,
+            ex.inspect().read_visibilities().unwrap().rgba == listed,
             "{t}: an instance placed at upload differs from its triangles listed out"
         );
         // the copy casts a shadow of its own: without it the frame differs
@@ -1477,13 +1507,20 @@ fn pcss_and_vssm_cast_shadows_on_a_ground_of_any_size_under_the_casters_fit() {
                 instances: vec![instance("box", 0, true), instance("ground", 1, false)],
             };
             let inputs = LightInputs::fit(&light, &g.boxes(), Fit::Casters, 256, 0).unwrap_or_else(|e| panic!("{t}: {e}"));
-            let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-            ex.bind_geometry(&g, &camera, &[inputs], (64, 64), 256)
+            let ex = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+            let mut ex = ex
+                .bind_geometry(&g, &camera, &[inputs], (64, 64), 256)
                 .unwrap_or_else(|e| panic!("{t}: {e}"));
             ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
-            let v = ex.read_camera(CameraOutput::Visibility).unwrap_or_else(|e| panic!("{t}: {e}"));
+            let v = ex
+                .inspect()
+                .read_camera(CameraOutput::Visibility)
+                .unwrap_or_else(|e| panic!("{t}: {e}"));
             // on the ground only (the box's faces turned from the light read 0 anyway)
-            let p = ex.read_camera(CameraOutput::Position).unwrap_or_else(|e| panic!("{t}: {e}"));
+            let p = ex
+                .inspect()
+                .read_camera(CameraOutput::Position)
+                .unwrap_or_else(|e| panic!("{t}: {e}"));
             let on_ground = |i: usize| p.rgba[i][1].abs() < 1e-3;
             counts.push((
                 half,
@@ -1520,31 +1557,34 @@ fn a_camera_resize_makes_only_the_camera_sized_targets_and_renders_as_a_fresh_bi
         let sc = if sc.is_empty() { scene_for(&c) } else { sc };
         let base = scene(sc, 24, 64);
         let lights = all_lights(&base, &c);
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
-        ex.bind_lights(&lights).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let mut ex = ex.bind_lights(&lights).unwrap_or_else(|e| panic!("{t}: {e}"));
         host_frame(&mut ex);
         let shadow_sized: Vec<(String, wgpu::Texture)> = c
             .graph
             .textures
             .iter()
             .filter(|d| d.extent == sshc_runtime::graph::Extent::ShadowMap && !d.format.is_table())
-            .map(|d| (d.name.clone(), ex.texture(&d.name).unwrap().clone()))
+            .map(|d| (d.name.clone(), ex.targets.texture(&d.name).unwrap().clone()))
             .collect();
-        let old_visibility = ex.visibility().unwrap().clone();
-        let generation = ex.generation();
+        let old_visibility = ex.targets.visibility().clone();
+        let generation = ex.targets.generation();
         let mut bigger = base.clone();
         bigger.set_camera_size(40, 32);
         let now = all_lights(&bigger, &c);
         let before = live_objects(gpu);
-        ex.resize((40, 32)).unwrap_or_else(|e| panic!("{t}: {e}"));
-        let v = ex.visibility().unwrap();
+        ex.targets.resize((40, 32)).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let v = ex.targets.visibility();
         assert!(
             v != &old_visibility && (v.width(), v.height()) == (40, 32),
             "{t}: the visibility was not made at the new size"
         );
         drop(old_visibility);
         for (name, old) in &shadow_sized {
-            assert!(ex.texture(name).unwrap() == old, "{t}: `{name}` was made again by a camera resize");
+            assert!(
+                ex.targets.texture(name).unwrap() == old,
+                "{t}: `{name}` was made again by a camera resize"
+            );
         }
         update(&mut ex, &now);
         host_frame(&mut ex);
@@ -1582,13 +1622,13 @@ fn a_camera_resize_makes_only_the_camera_sized_targets_and_renders_as_a_fresh_bi
             "{t} on {sc}: a resize made or kept objects besides the camera-sized targets"
         );
         assert_eq!(
-            ex.generation(),
+            ex.targets.generation(),
             generation + 1,
             "{t}: a resize changes the host's views: the generation says so"
         );
         ex.run_frame().unwrap();
         assert!(
-            ex.read_visibilities().unwrap().rgba == fresh(&c, &now),
+            ex.inspect().read_visibilities().unwrap().rgba == fresh(&c, &now),
             "{t} on {sc}: a resized executor differs from a fresh binding at the new size"
         );
     }
@@ -1606,24 +1646,25 @@ fn a_prepared_frame_recorded_twice_in_one_submission_is_the_frame_recorded_once(
         let base = scene(sc, 32, 64);
         let lights = all_lights(&base, &c);
         let moved = all_lights(&at_frame(&base, 3), &c);
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
-        ex.bind_lights(&lights).unwrap();
+        let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        let mut ex = ex.bind_lights(&lights).unwrap();
         let e = ex
-            .record(&mut gpu.device.create_command_encoder(&Default::default()))
+            .targets
+            .record(&ex.scene, &mut gpu.device.create_command_encoder(&Default::default()))
             .unwrap_err()
             .to_string();
         assert!(e.contains("prepare"), "{e}");
         update(&mut ex, &moved);
-        ex.prepare().unwrap();
+        ex.targets.prepare(&mut ex.scene, &ex.state).unwrap();
         let (mut a, mut b) = (
             gpu.device.create_command_encoder(&Default::default()),
             gpu.device.create_command_encoder(&Default::default()),
         );
-        ex.record(&mut a).unwrap();
-        ex.record(&mut b).unwrap();
+        ex.targets.record(&ex.scene, &mut a).unwrap();
+        ex.targets.record(&ex.scene, &mut b).unwrap();
         gpu.queue.submit([a.finish(), b.finish()]);
         gpu.wait().unwrap();
-        let twice = ex.read_visibilities().unwrap().rgba;
+        let twice = ex.inspect().read_visibilities().unwrap().rgba;
         assert!(
             twice == fresh(&c, &moved),
             "{t} on {sc}: recorded twice, the frame differs from one recording"

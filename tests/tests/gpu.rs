@@ -2,9 +2,10 @@
 //! no adapter they fail and name what to install (`scripts/test.sh` installs it).
 
 use glam::Vec3;
+use sshc_lab::run::Loaded;
 use sshc_lab::scene::Scene;
 use sshc_lab::visibility::Visibility;
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, Image, RuntimeError};
+use sshc_runtime::gpu::{CameraOutput, Gpu, Image, RuntimeError};
 use std::path::{Path, PathBuf};
 
 /// One device per test process: `cargo test` runs every test of this binary on it (and
@@ -55,14 +56,15 @@ struct Frame {
 }
 
 fn render(gpu: &Gpu, c: &sshc::Compiled, s: &Scene) -> Frame {
-    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&sshc_lab::bind::scene_inputs_for(s, &c.graph).unwrap_or_else(|e| panic!("{e}")))
+    let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex
+        .bind_scene(&sshc_lab::bind::scene_inputs_for(s, &c.graph).unwrap_or_else(|e| panic!("{e}")))
         .unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     Frame {
-        visibility: ex.read_camera(CameraOutput::Visibility).unwrap(),
-        position: ex.read_camera(CameraOutput::Position).unwrap(),
-        normal: ex.read_camera(CameraOutput::Normal).unwrap(),
+        visibility: ex.inspect().read_camera(CameraOutput::Visibility).unwrap(),
+        position: ex.inspect().read_camera(CameraOutput::Position).unwrap(),
+        normal: ex.inspect().read_camera(CameraOutput::Normal).unwrap(),
     }
 }
 
@@ -440,13 +442,13 @@ fn rejected_graphs_say_why() {
 
     // A compiled graph loads from its folder.
     let ok = write_compiled(&c, &base.join("ok"));
-    Executor::load(gpu, &ok).unwrap_or_else(|e| panic!("{e}"));
+    Loaded::load(gpu, &ok).unwrap_or_else(|e| panic!("{e}"));
 
     // Another schema version.
     let g = write_compiled(&c, &base.join("version"));
     let text = std::fs::read_to_string(&g).unwrap().replacen("version: 1", "version: 2", 1);
     std::fs::write(&g, text).unwrap();
-    let e = Executor::load(gpu, &g).err().expect("version 2 must be refused");
+    let e = Loaded::load(gpu, &g).expect_err("version 2 must be refused");
     assert!(
         matches!(e, RuntimeError::Graph(sshc_runtime::GraphError::Version { found: 2, expected: 1 })),
         "{e}"
@@ -458,7 +460,7 @@ fn rejected_graphs_say_why() {
         .unwrap()
         .replace("\"hard.shade.wgsl\"", "\"../ok/hard.shade.wgsl\"");
     std::fs::write(&g, text).unwrap();
-    let e = Executor::load(gpu, &g).err().expect("a path leaving the folder must be refused");
+    let e = Loaded::load(gpu, &g).expect_err("a path leaving the folder must be refused");
     assert!(matches!(e, RuntimeError::Graph(sshc_runtime::GraphError::Path { .. })), "{e}");
 
     // A link that leaves the folder.
@@ -466,7 +468,7 @@ fn rejected_graphs_say_why() {
     let shade = g.parent().unwrap().join("hard.shade.wgsl");
     std::fs::remove_file(&shade).unwrap();
     std::os::unix::fs::symlink(base.join("ok").join("hard.shade.wgsl"), &shade).unwrap();
-    let e = Executor::load(gpu, &g).err().expect("a link leaving the folder must be refused");
+    let e = Loaded::load(gpu, &g).expect_err("a link leaving the folder must be refused");
     assert!(e.to_string().contains("outside the graph's folder"), "{e}");
 
     // A shader that does not validate.
@@ -474,15 +476,13 @@ fn rejected_graphs_say_why() {
     let shade = g.parent().unwrap().join("hard.shade.wgsl");
     let text = std::fs::read_to_string(&shade).unwrap().replace("let vis = ", "let vis: i32 = ");
     std::fs::write(&shade, text).unwrap();
-    let e = Executor::load(gpu, &g).err().expect("an invalid shader must be refused");
+    let e = Loaded::load(gpu, &g).expect_err("an invalid shader must be refused");
     assert!(matches!(e, RuntimeError::Shader { .. }), "{e}");
 
     // A Params uniform larger than the device allows, and a param outside the uniform.
     let mut g = c.graph.clone();
     g.params_size = u32::try_from(gpu.limits.max_uniform_buffer_binding_size + 16).unwrap_or(u32::MAX);
-    let e = Executor::new(gpu, g, c.shaders.clone())
-        .err()
-        .expect("an oversized uniform must be refused");
+    let e = Loaded::new(gpu, g, c.shaders.clone()).expect_err("an oversized uniform must be refused");
     assert!(
         matches!(&e, RuntimeError::Unsatisfied { missing, .. } if missing.iter().any(|m| m.contains("max_uniform_buffer_binding_size") && m.contains("Params uniform"))),
         "{e}"
@@ -491,13 +491,11 @@ fn rejected_graphs_say_why() {
     if let Some(p) = g.params.iter_mut().find(|p| p.offset.is_some()) {
         p.offset = Some(g.params_size);
     }
-    let e = Executor::new(gpu, g, c.shaders.clone())
-        .err()
-        .expect("a param outside the uniform must be refused");
+    let e = Loaded::new(gpu, g, c.shaders.clone()).expect_err("a param outside the uniform must be refused");
     assert!(matches!(e, RuntimeError::Param(_)), "{e}");
 
     // A shadow map one texel above the device's limit is refused before allocation.
-    let mut ex = Executor::load(gpu, &ok).unwrap();
+    let ex = Loaded::load(gpu, &ok).unwrap();
     let mut s = scene("contact", 16, 16);
     s.shadow_map = gpu.limits.max_texture_dimension_2d + 1;
     let e = ex
@@ -710,8 +708,8 @@ fn gpu_times_and_memory_are_reported_per_pass_and_texture() {
     let gpu = gpu();
     let c = compile("csm", &[]);
     let s = scene("contact", 32, 64);
-    let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
-    ex.bind_scene(&sshc_lab::bind::scene_inputs(&s).unwrap()).unwrap();
+    let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut ex = ex.bind_scene(&sshc_lab::bind::scene_inputs(&s).unwrap()).unwrap();
     let times = ex.run_frame().unwrap();
     let names: Vec<&str> = times.passes.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(names, ["depth", "basis", "blur", "mips", "shade"]);
@@ -724,7 +722,7 @@ fn gpu_times_and_memory_are_reported_per_pass_and_texture() {
     // CSM M = 4 at unorm8: 8 basis channels in 2 RGBA8 layers; with a full mip chain the
     // blurred copy takes 4/3 of its level 0; the blur's scratch is F16 (8 bytes x 2 layers).
     let texels = 64u64 * 64;
-    let memory: std::collections::HashMap<String, u64> = ex.memory().unwrap().into_iter().collect();
+    let memory: std::collections::HashMap<String, u64> = ex.inspect().memory().into_iter().collect();
     assert_eq!(memory["shadow"], texels * 4);
     assert_eq!(memory["basis"], texels * 4 * 2);
     assert_eq!(memory["blurred"], texels * 4 * 2 * 4 / 3);
@@ -737,19 +735,19 @@ fn pipelines_are_built_once_per_device() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
     let c = compile("vsm", &[]);
     let steps: usize = c.graph.passes.iter().map(|p| p.steps.len()).sum();
-    let first = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+    let first = Loaded::new(&gpu, c.graph.clone(), c.shaders.clone()).unwrap();
     assert_eq!(gpu.cached_pipelines(), steps);
     drop(first);
     // The same technique on another scene reuses every pipeline.
     for sc in ["contact", "edge"] {
-        let mut ex = Executor::new(&gpu, c.graph.clone(), c.shaders.clone()).unwrap();
-        ex.bind_scene(&sshc_lab::bind::scene_inputs(&scene(sc, 16, 32)).unwrap()).unwrap();
+        let ex = Loaded::new(&gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+        let mut ex = ex.bind_scene(&sshc_lab::bind::scene_inputs(&scene(sc, 16, 32)).unwrap()).unwrap();
         ex.run_frame().unwrap();
     }
     assert_eq!(gpu.cached_pipelines(), steps);
     // Another variant adds only the pipelines whose shaders changed.
     let c2 = compile("vsm", &[("K", "5")]);
-    let _ = Executor::new(&gpu, c2.graph.clone(), c2.shaders.clone()).unwrap();
+    let _ = Loaded::new(&gpu, c2.graph.clone(), c2.shaders.clone()).unwrap();
     let blur_steps = c2.graph.passes.iter().find(|p| p.name == "blur").map(|p| p.steps.len()).unwrap();
     assert_eq!(gpu.cached_pipelines(), steps + blur_steps);
 }
@@ -816,8 +814,9 @@ fn a_deferred_shade_gives_the_forward_values() {
         };
         let s = scene(sc, 48, 128);
         let outputs = |c: &sshc::Compiled| {
-            let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-            ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&s, &c.graph).unwrap_or_else(|e| panic!("{e}")))
+            let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+            let mut ex = ex
+                .bind_scene(&sshc_lab::bind::scene_inputs_for(&s, &c.graph).unwrap_or_else(|e| panic!("{e}")))
                 .unwrap_or_else(|e| panic!("{e}"));
             ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
             [
@@ -826,7 +825,7 @@ fn a_deferred_shade_gives_the_forward_values() {
                 CameraOutput::Position,
                 CameraOutput::Normal,
             ]
-            .map(|o| ex.read_camera(o).unwrap_or_else(|e| panic!("{e}")))
+            .map(|o| ex.inspect().read_camera(o).unwrap_or_else(|e| panic!("{e}")))
         };
         let (a, b) = (outputs(&forward), outputs(&deferred));
         let what = format!("{t} on {sc}");
@@ -918,10 +917,10 @@ fn specialised_builds_give_the_generic_visibility_bit_for_bit() {
             let special = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(&t, &src)));
             assert_eq!(special.graph.specialised.as_ref(), Some(&facts));
             let visibility = |c: &sshc::Compiled| {
-                let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-                ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{t} on {name}: {e}"));
+                let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+                let mut ex = ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{t} on {name}: {e}"));
                 ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-                ex.read_camera(CameraOutput::Visibility).unwrap().channel(0)
+                ex.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0)
             };
             same_bits(&visibility(&generic), &visibility(&special), &format!("{t} on {name}"));
             // never more work, per pass
@@ -975,12 +974,12 @@ fn assert_pcg3d_per_pixel(visibility: &str, schedules: &[&str]) {
             ..Default::default()
         };
         let c = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render("hashed.ron", &src)));
-        let mut ex = Executor::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-        ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&s, &c.graph).unwrap()).unwrap();
+        let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+        let mut ex = ex.bind_scene(&sshc_lab::bind::scene_inputs_for(&s, &c.graph).unwrap()).unwrap();
         for frame in 0..2 {
             ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-            let vis = ex.read_camera(CameraOutput::Visibility).unwrap();
-            let pos = ex.read_camera(CameraOutput::Position).unwrap();
+            let vis = ex.inspect().read_camera(CameraOutput::Visibility).unwrap();
+            let pos = ex.inspect().read_camera(CameraOutput::Position).unwrap();
             let (mut lit, mut surface) = (0, 0);
             for y in 0..vis.height {
                 for x in 0..vis.width {

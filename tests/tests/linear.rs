@@ -6,8 +6,9 @@
 
 mod support;
 
+use sshc_lab::run::{Bound, Loaded};
 use sshc_lab::scene::Scene;
-use sshc_runtime::gpu::{CameraOutput, Executor, SceneInputs};
+use sshc_runtime::gpu::{CameraOutput, SceneInputs};
 use support::{compile_source, gpu, root, technique_source};
 
 const LINEAR: &str = "linear-light";
@@ -46,10 +47,11 @@ fn sample_inputs(scene: &Scene, n: u32) -> SceneInputs {
 /// The visibility of every camera pixel.
 fn run(technique: &str, set: &[(&str, String)], inputs: &SceneInputs) -> Vec<f32> {
     let compiled = compile_source(technique, &technique_source(technique), set, &[]);
-    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
+    let ex = Loaded::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-    ex.read_camera(CameraOutput::Visibility)
+    ex.inspect()
+        .read_camera(CameraOutput::Visibility)
         .unwrap_or_else(|e| panic!("{e}"))
         .channel(0)
 }
@@ -111,21 +113,23 @@ fn strip(x0: f32, x1: f32, z_half: f32, shadow: u32, n: u32) -> (Scene, SceneInp
 }
 
 /// The executor after one frame of `technique` with `set`.
-fn frame(technique: &str, set: &[(&str, String)], inputs: &SceneInputs) -> Executor {
+fn frame(technique: &str, set: &[(&str, String)], inputs: &SceneInputs) -> Bound {
     let compiled = compile_source(technique, &technique_source(technique), set, &[]);
-    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
+    let ex = Loaded::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     ex
 }
 
 /// Every visibility channel of every sample finite and in [0, 1] (stored), and the camera's
 /// visibility too (`read_camera` refuses a non-finite value or one outside [0, 1]).
-fn assert_finite(what: &str, ex: &Executor, n: u32) {
-    ex.read_camera(CameraOutput::Visibility).unwrap_or_else(|e| panic!("{what}: {e}"));
+fn assert_finite(what: &str, ex: &Bound, n: u32) {
+    ex.inspect()
+        .read_camera(CameraOutput::Visibility)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
     for t in ["vis_prev", "vis_next"] {
         for k in 0..n {
-            let v = ex.read_texture(t, k, 0).unwrap_or_else(|e| panic!("{e}")).channel(0);
+            let v = ex.inspect().read_texture(t, k, 0).unwrap_or_else(|e| panic!("{e}")).channel(0);
             assert!(
                 v.iter().all(|x| x.is_finite() && (0.0..=1.0).contains(x)),
                 "{what}: {t} of sample {k}"
@@ -175,8 +179,8 @@ fn skins_leave_no_cracks_along_a_straight_edge() {
     let (_, inputs) = strip(-0.4, 0.4, 1.5, shadow, 2);
     let ex = frame(LINEAR, &[("N", "2".into())], &inputs);
     // sample 0's v_next: the skins of sample 1 warped into view 0
-    let v = ex.read_texture("vis_next", 0, 0).unwrap().channel(0);
-    let z = ex.read_texture("shadow", 0, 0).unwrap().channel(0);
+    let v = ex.inspect().read_texture("vis_next", 0, 0).unwrap().channel(0);
+    let z = ex.inspect().read_texture("shadow", 0, 0).unwrap().channel(0);
     let n = shadow as usize;
     let covered = |x: usize, y: usize| v[y * n + x] < 0.75;
     // the floor's texels: the floor lies a whole unit behind the strip (a quarter of the
@@ -214,8 +218,8 @@ fn skins_leave_no_cracks_along_a_straight_edge() {
     // texels in all
     let texel = 2.0 * w(-1.3) / (view.light_proj_y * shadow as f32);
     let tol = 1.5 * texel + 2.0 / 255.0 + projective;
-    let vis = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
-    let pos = ex.read_camera(CameraOutput::Position).unwrap().rgba;
+    let vis = ex.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0);
+    let pos = ex.inspect().read_camera(CameraOutput::Position).unwrap().rgba;
     let (mut worst, mut count) = (0.0f32, 0);
     for (v, p) in vis.iter().zip(&pos) {
         // the floor, inside the band (a margin at each end), away from the strip's ends
@@ -272,7 +276,8 @@ fn the_channels_agree_with_the_f64_reference() {
             let size = s.shadow_map as usize;
             let depth: Vec<Vec<f64>> = (0..n)
                 .map(|k| {
-                    ex.read_texture("shadow", k, 0)
+                    ex.inspect()
+                        .read_texture("shadow", k, 0)
                         .unwrap()
                         .channel(0)
                         .iter()
@@ -292,7 +297,7 @@ fn the_channels_agree_with_the_f64_reference() {
             let maps = linear_maps_from_depth(depth, &setup).unwrap_or_else(|e| panic!("{e}"));
             for (texture, reference) in [("vis_prev", &maps.v_prev), ("vis_next", &maps.v_next)] {
                 for (k, want) in reference.iter().enumerate() {
-                    let got = ex.read_texture(texture, k as u32, 0).unwrap().channel(0);
+                    let got = ex.inspect().read_texture(texture, k as u32, 0).unwrap().channel(0);
                     // a texel's value is within the Unorm8 step of the reference's, or the
                     // texel counts as a different winner (below)
                     let tol = 1.0 / 255.0 + 1e-5;

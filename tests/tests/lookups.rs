@@ -44,12 +44,12 @@ fn plane() -> QueryPlane {
 
 /// The unorm codes the Map pass stored, read back, as integers.
 fn codes(c: &sshc::Compiled, depth: &[f32], scale: f64) -> (Vec<u64>, Vec<[f32; 4]>) {
-    let mut ex = sshc_runtime::gpu::Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-    ex.bind_scene(&plane().inputs()).unwrap();
+    let ex = sshc_lab::run::Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut ex = ex.bind_scene(&plane().inputs()).unwrap();
     ex.set_depth_override(Some(depth.to_vec()));
     ex.run_frame().unwrap();
-    let stored = ex.read_texture("mapped", 0, 0).unwrap();
-    let table = ex.read_texture("table", 0, 0).unwrap();
+    let stored = ex.inspect().read_texture("mapped", 0, 0).unwrap();
+    let table = ex.inspect().read_texture("table", 0, 0).unwrap();
     let codes = stored.rgba.iter().map(|t| (t[0] as f64 * scale).round() as u64).collect();
     (codes, table.rgba)
 }
@@ -269,10 +269,10 @@ fn depth_overrides_fill_each_light_samples_view() {
     let p = plane();
     let mut inputs = p.inputs();
     inputs.samples = p.sample_views(2, 0.5);
-    let mut ex = sshc_runtime::gpu::Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
-    ex.bind_scene(&inputs).unwrap();
+    let ex = sshc_lab::run::Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut ex = ex.bind_scene(&inputs).unwrap();
     let texels = (N * N) as usize;
-    let layer = |ex: &sshc_runtime::gpu::Executor, k: u32| ex.read_texture("shadow", k, 0).unwrap().channel(0);
+    let layer = |ex: &sshc_lab::run::Bound, k: u32| ex.inspect().read_texture("shadow", k, 0).unwrap().channel(0);
     ex.set_depth_override_views(Some(vec![vec![0.25; texels], vec![0.75; texels]]));
     ex.run_frame().unwrap();
     assert!(layer(&ex, 0).iter().all(|&z| z == 0.25) && layer(&ex, 1).iter().all(|&z| z == 0.75));

@@ -6,9 +6,10 @@
 
 mod support;
 
+use sshc_lab::run::{Bound, Loaded};
 use sshc_lab::scene::Scene;
 use sshc_runtime::adjacency::Adjacency;
-use sshc_runtime::gpu::{CameraOutput, Executor, SceneInputs};
+use sshc_runtime::gpu::{CameraOutput, SceneInputs};
 use sshc_tests::reference::penumbra::{self as reference, AreaLight, LightProjection, PenumbraSetup, Primitive, Resolve};
 use support::{compile_source, gpu, technique_source};
 
@@ -81,18 +82,19 @@ fn meshes(scene: &Scene) -> Vec<std::ops::Range<usize>> {
 
 /// Run the generated technique on `scene`: the penumbra map (row 0 at the top), the hard
 /// test's inputs and the visibility buffer.
-fn run(scene: &Scene, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Executor) {
+fn run(scene: &Scene, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Bound) {
     run_source(scene, &technique_source(TECHNIQUE), set)
 }
 
-fn run_source(scene: &Scene, source: &str, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Executor) {
+fn run_source(scene: &Scene, source: &str, set: &[(&str, String)]) -> (Vec<f32>, Vec<f32>, SceneInputs, Bound) {
     let compiled = compile_source(TECHNIQUE, source, set, &[]);
-    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    let ex = Loaded::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-    let pmap = ex.read_texture("pmap", 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0);
+    let pmap = ex.inspect().read_texture("pmap", 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0);
     let vis = ex
+        .inspect()
         .read_camera(CameraOutput::Visibility)
         .unwrap_or_else(|e| panic!("{e}"))
         .channel(0);
@@ -109,7 +111,7 @@ fn the_generated_penumbra_map_agrees_with_the_f64_reference() {
 
     // The silhouettes the GPU classified: the two quads' 8 boundary edges (their
     // diagonals are not silhouettes), as the CPU rule and the reference count them.
-    let generated = ex.generated("penumbra.silhouettes").unwrap_or_else(|e| panic!("{e}"));
+    let generated = ex.inspect().generated("penumbra.silhouettes").unwrap_or_else(|e| panic!("{e}"));
     let f32_tris: Vec<[[f32; 3]; 3]> = scene.triangles().iter().map(|t| t.map(|p| p.to_array())).collect();
     let adj = Adjacency::build(&f32_tris, meshes(&scene));
     assert_eq!(generated.records as usize, adj.silhouette_count(inputs.light_position));
@@ -154,11 +156,13 @@ fn a_light_of_radius_zero_gives_exactly_the_hard_shadow_map() {
     assert!(pmap.iter().all(|&p| p == 1.0), "no penumbra without a light radius");
     drop(ex);
     let hard = compile_source("hard", &technique_source("hard"), &[], &[]);
-    let mut ex = Executor::new(gpu(), hard.graph, hard.shaders).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&sshc_lab::bind::scene_inputs(&scene).unwrap_or_else(|e| panic!("{e}")))
+    let ex = Loaded::new(gpu(), hard.graph, hard.shaders).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex
+        .bind_scene(&sshc_lab::bind::scene_inputs(&scene).unwrap_or_else(|e| panic!("{e}")))
         .unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     let hard_vis = ex
+        .inspect()
         .read_camera(CameraOutput::Visibility)
         .unwrap_or_else(|e| panic!("{e}"))
         .channel(0);
@@ -191,7 +195,7 @@ fn every_resolve_rule_agrees_with_the_reference() {
     {
         // the technique's fixed param `rule` picks the resolve rule
         let (pmap, _, inputs, ex) = run(&scene, &[("rule", index.to_string())]);
-        let drawn = ex.graph.passes.iter().flat_map(|p| &p.steps).find_map(|st| match &st.draw {
+        let drawn = ex.graph().passes.iter().flat_map(|p| &p.steps).find_map(|st| match &st.draw {
             sshc_runtime::graph::Draw::Primitives { resolve, .. } => Some(format!("{resolve:?}")),
             _ => None,
         });
@@ -375,9 +379,9 @@ fn open_non_manifold_contact_and_edge_on_meshes_stay_finite_and_count_their_silh
         assert!(pmap.iter().any(|&p| p < 0.5), "a penumbra is drawn");
         let tris: Vec<[[f32; 3]; 3]> = scene.triangles().iter().map(|t| t.map(|p| p.to_array())).collect();
         let adj = Adjacency::build(&tris, meshes(scene));
-        let generated = ex.generated("penumbra.silhouettes").unwrap_or_else(|e| panic!("{e}"));
+        let generated = ex.inspect().generated("penumbra.silhouettes").unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(generated.records as usize, adj.silhouette_count(inputs.light_position));
-        let counts = ex.edge_counts().unwrap_or_else(|e| panic!("{e}")).expect("edges");
+        let counts = ex.scene.edge_counts().expect("edges");
         assert_eq!(counts, adj.counts);
     }
     let c = Adjacency::build(

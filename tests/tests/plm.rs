@@ -7,8 +7,9 @@
 
 mod support;
 
+use sshc_lab::run::{Bound, Loaded};
 use sshc_lab::scene::Scene;
-use sshc_runtime::gpu::{CameraOutput, Executor};
+use sshc_runtime::gpu::CameraOutput;
 use sshc_tests::reference::Storage;
 use sshc_tests::reference::penumbra::{AreaLight, LightProjection, PenumbraSetup, Resolve};
 use sshc_tests::reference::plm;
@@ -18,22 +19,23 @@ const PLM: &str = "penumbra-limit-maps";
 const SMOOTHIES: &str = "smoothies";
 
 /// The visibility and world positions of every camera pixel, and the executor.
-fn run(technique: &str, scene: &Scene, precision: &[(&str, &str)]) -> (Vec<f32>, Vec<[f32; 3]>, Executor) {
+fn run(technique: &str, scene: &Scene, precision: &[(&str, &str)]) -> (Vec<f32>, Vec<[f32; 3]>, Bound) {
     run_set(technique, scene, &[], precision)
 }
 
 /// [`run`] with params set (`--set NAME=VALUE`).
-fn run_set(technique: &str, scene: &Scene, set: &[(&str, String)], precision: &[(&str, &str)]) -> (Vec<f32>, Vec<[f32; 3]>, Executor) {
+fn run_set(technique: &str, scene: &Scene, set: &[(&str, String)], precision: &[(&str, &str)]) -> (Vec<f32>, Vec<[f32; 3]>, Bound) {
     let compiled = compile_source(technique, &technique_source(technique), set, precision);
-    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    let ex = Loaded::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     let vis = ex
+        .inspect()
         .read_camera(CameraOutput::Visibility)
         .unwrap_or_else(|e| panic!("{e}"))
         .channel(0);
-    let pos = ex.read_camera(CameraOutput::Position).unwrap_or_else(|e| panic!("{e}"));
+    let pos = ex.inspect().read_camera(CameraOutput::Position).unwrap_or_else(|e| panic!("{e}"));
     let pos = pos.rgba.iter().map(|p| [p[0], p[1], p[2]]).collect();
     (vis, pos, ex)
 }
@@ -100,7 +102,7 @@ fn penumbra_limit_maps_are_exact_on_a_straight_edge_up_to_depth_quantisation() {
         );
         assert!(rms < 2.0 / 255.0, "{n} texels, {precision}: RMS {} / 255", rms * 255.0);
         // One silhouette edge per open boundary edge of the two quads (4 + 4).
-        let g = ex.generated("ribbons.silhouettes").unwrap_or_else(|e| panic!("{e}"));
+        let g = ex.inspect().generated("ribbons.silhouettes").unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(g.records, 8);
     }
 }
@@ -201,7 +203,13 @@ fn penumbra_limit_maps_at_light_angle_zero_are_the_hard_shadow_map() {
         }
     }
     assert!(compared > 50_000, "{compared}");
-    assert_eq!(ex.generated("ribbons.silhouettes").unwrap_or_else(|e| panic!("{e}")).records, 0);
+    assert_eq!(
+        ex.inspect()
+            .generated("ribbons.silhouettes")
+            .unwrap_or_else(|e| panic!("{e}"))
+            .records,
+        0
+    );
 }
 
 /// Smoothies keep the hard shadow whole and place the whole penumbra outside it
@@ -300,11 +308,15 @@ fn back_faces_are_those_turned_away_from_the_light() {
     )
     .unwrap_or_else(|e| panic!("{e}"));
     let compiled = compile_source("back_faces", src, &[], &[]);
-    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    let ex = Loaded::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
     let inputs = sshc_lab::bind::scene_inputs(&scene).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-    let b = ex.read_texture("lower", 0, 0).unwrap_or_else(|e| panic!("{e}")).channel(0);
+    let b = ex
+        .inspect()
+        .read_texture("lower", 0, 0)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .channel(0);
     let (near, far) = (f64::from(inputs.near), f64::from(inputs.far));
     // the normalised light depth of the point at height y on the vertical through the centre
     let view = glam::Mat4::from_cols_array(&inputs.light_view);
@@ -412,11 +424,14 @@ fn the_generated_map_agrees_with_the_f64_reference() {
         let meshes: Vec<std::ops::Range<usize>> = (0..scene.objects().len()).map(|i| scene.object_triangles(i)).collect();
         let r = plm::PlmReference::new(&tris, &meshes, &setup).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(
-            ex.generated("ribbons.silhouettes").unwrap_or_else(|e| panic!("{e}")).records as usize,
+            ex.inspect()
+                .generated("ribbons.silhouettes")
+                .unwrap_or_else(|e| panic!("{e}"))
+                .records as usize,
             r.ribbons.len(),
             "{name}: ribbons"
         );
-        let got = ex.read_texture("plm", 0, 0).unwrap_or_else(|e| panic!("{e}"));
+        let got = ex.inspect().read_texture("plm", 0, 0).unwrap_or_else(|e| panic!("{e}"));
         let n = setup.light.size;
         let m = &r.maps;
         let step = 1.0 / 255.0 + 1e-6;

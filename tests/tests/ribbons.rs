@@ -15,8 +15,9 @@
 
 mod support;
 
+use sshc_lab::run::Loaded;
 use sshc_lab::scene::Scene;
-use sshc_runtime::gpu::{CameraOutput, Executor};
+use sshc_runtime::gpu::CameraOutput;
 use support::{compile_source, gpu, technique_source};
 
 const SMOOTHIES: &str = "smoothies";
@@ -25,15 +26,16 @@ const SINGLE_SAMPLE: &str = "single-sample";
 /// The visibility and world position of every camera pixel.
 fn run(technique: &str, scene: &Scene) -> (Vec<f32>, Vec<[f32; 3]>) {
     let compiled = compile_source(technique, &technique_source(technique), &[], &[]);
-    let mut ex = Executor::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
+    let ex = Loaded::new(gpu(), compiled.graph, compiled.shaders).unwrap_or_else(|e| panic!("{e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap_or_else(|e| panic!("{e}"));
-    ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_scene(&inputs).unwrap_or_else(|e| panic!("{e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     let vis = ex
+        .inspect()
         .read_camera(CameraOutput::Visibility)
         .unwrap_or_else(|e| panic!("{e}"))
         .channel(0);
-    let pos = ex.read_camera(CameraOutput::Position).unwrap_or_else(|e| panic!("{e}"));
+    let pos = ex.inspect().read_camera(CameraOutput::Position).unwrap_or_else(|e| panic!("{e}"));
     (vis, pos.rgba.iter().map(|p| [p[0], p[1], p[2]]).collect())
 }
 

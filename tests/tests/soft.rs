@@ -12,8 +12,9 @@
 
 mod support;
 
+use sshc_lab::run::Loaded;
 use sshc_lab::scene::{Light, Scene};
-use sshc_runtime::gpu::{CameraOutput, Executor, SceneInputs};
+use sshc_runtime::gpu::{CameraOutput, SceneInputs};
 use support::{QueryPlane, compile_source, depth_field, gpu, root, technique_source};
 
 const SCENES: [&str; 5] = ["bunny", "contact", "fence", "edge", "triangle"];
@@ -33,18 +34,23 @@ fn scene(name: &str, camera: u32, shadow: u32) -> Scene {
 /// Visibility and world positions (NaN where no surface) of one frame of `c` over `inputs`,
 /// with runtime params set and, optionally, a synthetic depth field instead of the Depth pass.
 fn run(c: &sshc::Compiled, inputs: &SceneInputs, depth: Option<&[f32]>, params: &[(&str, f64)]) -> (Vec<f32>, Vec<[f32; 4]>) {
-    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
     for (k, v) in params {
         ex.set_param(k, *v).unwrap_or_else(|e| panic!("{e}"));
     }
-    ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
     ex.set_depth_override(depth.map(<[f32]>::to_vec));
     ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
     let vis = ex
+        .inspect()
         .read_camera(CameraOutput::Visibility)
         .unwrap_or_else(|e| panic!("{e}"))
         .channel(0);
-    let pos = ex.read_camera(CameraOutput::Position).unwrap_or_else(|e| panic!("{e}")).rgba;
+    let pos = ex
+        .inspect()
+        .read_camera(CameraOutput::Position)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .rgba;
     (vis, pos)
 }
 
@@ -347,12 +353,12 @@ fn vssm_and_mssm_find_the_blockers_depth_and_pcss_s_penumbra_width() {
         let src = technique_source(name);
         let c = sshc::compile_str(&src, &opts).unwrap_or_else(|d| panic!("{}", d.render(name, &src)));
         for light in [1.0f32, 2.0] {
-            let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
-            ex.bind_scene(&flat_inputs(&plane, light)).unwrap_or_else(|e| panic!("{e}"));
+            let ex = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+            let mut ex = ex.bind_scene(&flat_inputs(&plane, light)).unwrap_or_else(|e| panic!("{e}"));
             ex.set_depth_override(Some(depth.clone()));
             ex.run_frame().unwrap_or_else(|e| panic!("{e}"));
-            let z_occ = ex.read_debug(0, "z_occ").unwrap_or_else(|e| panic!("{e}"));
-            let filter = ex.read_debug(0, "filter_texels").unwrap_or_else(|e| panic!("{e}"));
+            let z_occ = ex.inspect().read_debug(0, "z_occ").unwrap_or_else(|e| panic!("{e}"));
+            let filter = ex.inspect().read_debug(0, "filter_texels").unwrap_or_else(|e| panic!("{e}"));
             let (search, width) = (8.727 * light as f64, 4.553 * light as f64);
             let (mut checked, mut unshadowed) = (0, 0);
             for x in 0..2 * n as u32 {

@@ -6,12 +6,12 @@
 //! GPU time per frame, peak memory and the device.
 
 use crate::metrics::{self, Accuracy};
+use crate::run::Loaded;
 use crate::scene::{Light, Scene};
 use crate::session::Overrides;
 use crate::session::{TruthOpts, describe, positions_normals, rt, truth_at};
 use glam::Vec3;
 use plotters::prelude::*;
-use crate::run::Loaded;
 use sshc_runtime::gpu::{CameraOutput, Gpu};
 use std::path::PathBuf;
 

@@ -2,8 +2,8 @@
 //! the GPU and write the images.
 
 use crate::image_io::ImageFiles;
-use crate::session::{Overrides, rt};
 use crate::run::Bound;
+use crate::session::{Overrides, rt};
 use sshc_runtime::gpu::{CameraOutput, Gpu, RuntimeError};
 use sshc_runtime::graph::{Draw, PassGraph, Views, traffic};
 use std::path::{Path, PathBuf};
@@ -148,11 +148,19 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
     color.write_png(&a.out, None, (0.0, 1.0)).map_err(rt)?;
     println!("wrote {}", a.out.display());
     if let Some(p) = &a.positions {
-        ex.inspect().read_camera(CameraOutput::Position).map_err(rt)?.write_pfm_rgb(p).map_err(rt)?;
+        ex.inspect()
+            .read_camera(CameraOutput::Position)
+            .map_err(rt)?
+            .write_pfm_rgb(p)
+            .map_err(rt)?;
         println!("wrote {}", p.display());
     }
     if let Some(p) = &a.normals {
-        ex.inspect().read_camera(CameraOutput::Normal).map_err(rt)?.write_pfm_rgb(p).map_err(rt)?;
+        ex.inspect()
+            .read_camera(CameraOutput::Normal)
+            .map_err(rt)?
+            .write_pfm_rgb(p)
+            .map_err(rt)?;
         println!("wrote {}", p.display());
     }
     if let Some(dir) = &a.dump {

@@ -8,9 +8,9 @@ use super::script::{Event, Log};
 use super::state::{self, ColourMap, Mode, Orbit, ViewState};
 use super::worker::{Answer, Controls, Watch, Worker};
 use crate::image_io::ImageFiles as _;
+use crate::run::Bound;
 use crate::scene::Scene;
 use serde_json::json;
-use crate::run::Bound;
 use sshc_runtime::gpu::{CameraOutput, Gpu};
 use sshc_runtime::graph::ParamType;
 use std::collections::{BTreeMap, VecDeque};
@@ -709,7 +709,12 @@ impl App {
                 let inputs = crate::bind::light_inputs(scene, light, ex.graph())?;
                 match ex.state.lights.get_mut(l) {
                     Some(slot) => *slot = inputs,
-                    None => return Err(format!("error: light {l}: the view was bound with {} light(s)", ex.state.lights.len())),
+                    None => {
+                        return Err(format!(
+                            "error: light {l}: the view was bound with {} light(s)",
+                            ex.state.lights.len()
+                        ));
+                    }
                 }
             }
         }

@@ -3,9 +3,9 @@
 //! new one is ready. Also the file watcher that asks for a recompilation on save.
 
 use crate::bind::Cascading;
+use crate::run::{Bound, Loaded};
 use crate::scene::Scene;
 use notify::Watcher as _;
-use crate::run::{Bound, Loaded};
 use sshc_runtime::gpu::Gpu;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;

@@ -6,7 +6,8 @@
 pub mod host;
 pub mod variant;
 
-use sshc_runtime::gpu::{CameraOutput, Executor, Gpu, SceneInputs};
+use sshc_lab::run::Loaded;
+use sshc_runtime::gpu::{CameraOutput, Gpu, SceneInputs};
 use std::path::{Path, PathBuf};
 
 /// One device per test process (nextest runs each test in its own process).
@@ -70,11 +71,11 @@ pub fn run_plane(c: &sshc::Compiled, plane: &QueryPlane, depth: &[f32], params: 
 
 /// [`run_plane`] with any scene inputs (the query plane under an area light, say).
 pub fn run_inputs(c: &sshc::Compiled, inputs: &SceneInputs, depth: &[f32], params: &[(&str, f64)], frames: usize) -> PlaneRun {
-    let mut ex = Executor::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
     for (k, v) in params {
         ex.set_param(k, *v).unwrap_or_else(|e| panic!("{e}"));
     }
-    ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
+    let mut ex = ex.bind_scene(inputs).unwrap_or_else(|e| panic!("{e}"));
     ex.set_depth_override(Some(depth.to_vec()));
     let mut times = Vec::new();
     for f in 0..frames.max(1) {
@@ -97,8 +98,9 @@ pub fn run_inputs(c: &sshc::Compiled, inputs: &SceneInputs, depth: &[f32], param
         }
     }
     times.sort_by(f64::total_cmp);
-    let visibility = ex.read_camera(CameraOutput::Visibility).unwrap().channel(0);
+    let visibility = ex.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0);
     let positions = ex
+        .inspect()
         .read_camera(CameraOutput::Position)
         .unwrap()
         .rgba
