@@ -597,8 +597,8 @@ fn scene_specialisation_is_recorded_explained_and_enforced() {
 /// frame and combines them on the GPU. Channel i of the visibility file is, bit for bit, a
 /// render of the scene with light i alone; the image is the mean of the lights' images
 /// within one 8-bit quantum (the mean of three 8-bit values lies between two codes, and the
-/// GPU's store may round to either); the textures grow linearly: three lights hold three
-/// lights' textures plus the combining step's; `--lights K` keeps the first K lights;
+/// GPU's store may round to either); three lights share one set of shadow-map-sized
+/// textures, plus the combining step's; `--lights K` keeps the first K lights;
 /// `compare` gives each light its own truth and error.
 #[test]
 fn each_light_of_a_scene_renders_with_its_own_passes_and_compares_alone() {
@@ -662,11 +662,11 @@ fn each_light_of_a_scene_renders_with_its_own_passes_and_compares_alone() {
         .map(|(s, v)| (s / 3.0 - *v as f64).abs())
         .fold(0.0, f64::max);
     assert!(worst <= 1.0, "the image is the lights' mean within one 8-bit code: {worst} codes");
-    // three lights: three lights' textures (every light's map has the same size) and the
-    // combining step's: per pixel, each light's visibility (4 bytes) and colour (4 bytes),
-    // then the combined colour (4) and visibilities (16)
+    // three lights: one light's textures (PCF's are all shadow-map sized, and the lights
+    // share them: issue 49) and the combining step's: per pixel, each light's visibility
+    // (4 bytes) and colour (4 bytes), then the combined colour (4) and visibilities (16)
     let peak = number_after("| peak (all textures resident) |", &out);
-    assert_eq!(peak, 3.0 * one_peak.unwrap() + (24.0 * 24.0) * (3.0 * 8.0 + 20.0), "{out}");
+    assert_eq!(peak, one_peak.unwrap() + (24.0 * 24.0) * (3.0 * 8.0 + 20.0), "{out}");
     // the first two lights: two channels written, the third 0
     let two = render("scenes/three-lights.ron", "v2.pfm", "v2.png", &["--lights", "2"]);
     assert!(two.contains("| 1 | Sphere |") && !two.contains("| 2 |"), "{two}");

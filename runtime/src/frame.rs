@@ -301,19 +301,6 @@ impl SceneInputs {
         }
     }
 
-    /// The sizes targets are made at for this scene.
-    pub fn sizes(&self) -> crate::targets::Sizes {
-        crate::targets::Sizes {
-            camera: self.camera_size,
-            shadow: self.shadow_size,
-        }
-    }
-
-    /// The frame of this scene's camera and light, `technique`'s params at their defaults.
-    pub fn frame_state(&self, technique: &crate::technique::Technique) -> crate::state::FrameState {
-        crate::state::FrameState::new(technique, self.camera(), vec![self.light_inputs()])
-    }
-
     /// The scene's camera.
     pub fn camera(&self) -> Camera {
         Camera {

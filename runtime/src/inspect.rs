@@ -9,8 +9,8 @@ use crate::graph::{self, Format, TextureDecl};
 use crate::image::{Image, read_back, read_table};
 use crate::lights::Combine;
 use crate::pipeline::mip_count;
-use crate::resources::{Resources, f32_bytes, texture_bytes};
-use crate::targets::{Targets, shade_name};
+use crate::resources::{Resources, texture_bytes};
+use crate::targets::{CameraOutput, Targets, shade_name};
 
 /// How far outside [0, 1] a visibility may lie (rounding of the technique's arithmetic).
 pub const VISIBILITY_EPSILON: f32 = 1e-3;
@@ -67,15 +67,6 @@ pub fn check_finite_visibility(flags: &[f32], width: u32, pass: &str) -> Result<
             )
         },
     )
-}
-
-/// The camera outputs of the Shade pass.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CameraOutput {
-    Visibility = 0,
-    Color = 1,
-    Position = 2,
-    Normal = 3,
 }
 
 /// A debug output of the Shade pass ([`Inspect::debug_outputs`]).
@@ -353,84 +344,4 @@ pub fn debug_outputs(graph: &graph::PassGraph) -> Vec<DebugOutput> {
             })
         })
         .collect()
-}
-
-/// Write the depth override of every light's Depth pass (each of its views): `maps` holds
-/// one map per view, or one for every view.
-pub(crate) fn write_depth_overrides(t: &Targets, maps: &[Vec<f32>]) -> Result<()> {
-    let graph = t.technique.graph();
-    for res in &t.bound {
-        for decl in graph.passes.iter().filter(|p| p.kind == graph::PassKind::Depth) {
-            let views = if decl.views == graph::Views::PerLightSample {
-                graph.samples
-            } else {
-                1
-            };
-            if maps.is_empty() || (maps.len() != 1 && maps.len() != views as usize) {
-                return Err(RuntimeError::Param(format!(
-                    "depth override has {} maps, the Depth pass `{}` {views} view(s)",
-                    maps.len(),
-                    decl.name
-                )));
-            }
-            for view in 0..views {
-                let depth = &maps[(view as usize).min(maps.len() - 1)];
-                write_depth_override(t, res, decl, depth, view)?;
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Upload the depth override of view `view` into the Depth pass's output.
-fn write_depth_override(t: &Targets, b: &Resources, pass: &graph::PassDecl, depth: &[f32], view: u32) -> Result<()> {
-    let n = b.shadow_size as usize;
-    if depth.len() != n * n {
-        return Err(RuntimeError::Param(format!(
-            "depth override has {} values, the shadow map {n} x {n}",
-            depth.len()
-        )));
-    }
-    let target = pass
-        .steps
-        .first()
-        .and_then(|s| s.writes.first())
-        .ok_or_else(|| RuntimeError::NotFound(format!("Depth pass `{}` writes nothing", pass.name)))?;
-    let decl = t
-        .technique
-        .graph()
-        .texture(&target.texture)
-        .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{}`", target.texture)))?;
-    if decl.format != Format::R32Float {
-        return Err(RuntimeError::Param(format!(
-            "the Depth pass writes {:?}; a depth override needs R32Float",
-            decl.format
-        )));
-    }
-    let tex = b.texture(&target.texture)?;
-    t.gpu.scoped("writing the depth override", || {
-        t.gpu.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: tex,
-                mip_level: 0,
-                origin: wgpu::Origin3d {
-                    x: 0,
-                    y: 0,
-                    z: view * decl.layers + target.layer,
-                },
-                aspect: wgpu::TextureAspect::All,
-            },
-            &f32_bytes(depth),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * n as u32),
-                rows_per_image: Some(n as u32),
-            },
-            wgpu::Extent3d {
-                width: n as u32,
-                height: n as u32,
-                depth_or_array_layers: 1,
-            },
-        )
-    })
 }

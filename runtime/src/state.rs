@@ -3,7 +3,7 @@
 //! checks it and writes what changed since the frame before; nothing here touches the GPU.
 
 use crate::device::{Result, RuntimeError};
-use crate::frame::{Camera, LightInputs};
+use crate::frame::{Camera, LightInputs, SceneInputs};
 use crate::lights::Slices;
 use crate::technique::Technique;
 
@@ -82,6 +82,11 @@ impl FrameState {
             params: Params::new(technique),
             slices: None,
         }
+    }
+
+    /// The camera and light of a triangle-soup scene ([`SceneInputs`]).
+    pub fn of_inputs(technique: &Technique, s: &SceneInputs) -> FrameState {
+        FrameState::new(technique, s.camera(), vec![s.light_inputs()])
     }
 
     /// Cascades of one light: `lights[i]` is cascade `i`'s view ([`crate::light::cascade_views`]).

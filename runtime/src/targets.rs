@@ -12,12 +12,12 @@
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::fit::Fit;
 use crate::frame::{Camera, LightInputs, SceneInputs};
+use crate::graph::Format;
 use crate::graph::{self, PassGraph};
-use crate::inspect::CameraOutput;
 use crate::lights::{Combine, Combining, MAX_LIGHTS, Slices};
 use crate::pixels::{HostPixels, PixelsStep};
 use crate::receivers::Unshadowed;
-use crate::resources::{GeneratedLimits, Pool, Resources, texture_bytes};
+use crate::resources::{GeneratedLimits, Pool, Resources, f32_bytes, texture_bytes};
 use crate::scene::{DEFAULT_MAX_BYTES, Scene};
 use crate::state::FrameState;
 use crate::steps::{Group0, StepBinding};
@@ -26,6 +26,15 @@ use crate::timing::{FrameTimes, Timestamps};
 use crate::update::{FrameWriter, LightUniforms};
 use sshc_light::MAX_CASCADES;
 
+/// The camera outputs of the Shade pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraOutput {
+    Visibility = 0,
+    Color = 1,
+    Position = 2,
+    Normal = 3,
+}
+
 /// The sizes targets are made at.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Sizes {
@@ -33,6 +42,16 @@ pub struct Sizes {
     pub camera: (u32, u32),
     /// The shadow map, texels per side.
     pub shadow: u32,
+}
+
+impl Sizes {
+    /// The sizes of a triangle-soup scene ([`SceneInputs`]).
+    pub fn of(s: &SceneInputs) -> Sizes {
+        Sizes {
+            camera: s.camera_size,
+            shadow: s.shadow_size,
+        }
+    }
 }
 
 /// Bounds and choices for making targets.
@@ -126,7 +145,7 @@ impl Targets {
         let n = state.lights.len();
         if n == 0 || n > MAX_LIGHTS {
             return Err(RuntimeError::Param(format!(
-                "{n} light(s): a frame combines 1 to {MAX_LIGHTS} lights (their visibilities share one RGBA texel a pixel)"
+                "{n} light(s) bound: a frame combines 1 to {MAX_LIGHTS} lights (their visibilities share one RGBA texel a pixel)"
             )));
         }
         if let Some(slices) = &state.slices {
@@ -461,7 +480,9 @@ impl Targets {
                     check_cascades(&state.lights, s)?;
                 }
             }
+            // one cascade is the light itself: its slices select nothing
             (None, false) => {}
+            (Some(s), false) if n == 1 => check_cascades(&state.lights, s)?,
             (Some(_), false) => {
                 return Err(RuntimeError::Param(
                     "the frame gives cascade slices, but these targets were made for lights, not cascades".into(),
@@ -582,7 +603,7 @@ impl Targets {
         gpu.scoped("recording the frame", || -> Result<()> {
             self.prepare(scene, state)?;
             if let Some(maps) = depth {
-                crate::inspect::write_depth_overrides(self, maps)?;
+                write_depth_overrides(self, maps)?;
             }
             self.record_passes(scene, &mut encoder, depth.is_some())
         })??;
@@ -754,8 +775,10 @@ fn check_floor_exact(graph: &PassGraph, scene: &Scene, lights: &[LightInputs]) -
             && here < floor
         {
             return Err(RuntimeError::Param(format!(
-                "technique `{}` was specialised for scene {}, whose casters lie at normalised depth {floor} or more in the light's view, but under light {l} these come to {here}; compile it for this scene (`--scene`) or without one",
-                graph.technique, facts.scene,
+                "technique `{}` was specialised for scene {}, whose casters lie at normalised depth {floor} or more in the light's view, but this scene's{} come to {here}; compile it for this scene (`--scene`) or without one",
+                graph.technique,
+                facts.scene,
+                if l > 0 { format!(" (light {l})") } else { String::new() },
             )));
         }
     }
@@ -794,4 +817,84 @@ pub(crate) fn shade_name(graph: &PassGraph) -> &str {
         .rev()
         .find(|p| p.kind == graph::PassKind::Shade)
         .map_or("shade", |p| p.name.as_str())
+}
+
+/// Write the depth override of every light's Depth pass (each of its views): `maps` holds
+/// one map per view, or one for every view.
+fn write_depth_overrides(t: &Targets, maps: &[Vec<f32>]) -> Result<()> {
+    let graph = t.technique.graph();
+    for res in &t.bound {
+        for decl in graph.passes.iter().filter(|p| p.kind == graph::PassKind::Depth) {
+            let views = if decl.views == graph::Views::PerLightSample {
+                graph.samples
+            } else {
+                1
+            };
+            if maps.is_empty() || (maps.len() != 1 && maps.len() != views as usize) {
+                return Err(RuntimeError::Param(format!(
+                    "depth override has {} maps, the Depth pass `{}` {views} view(s)",
+                    maps.len(),
+                    decl.name
+                )));
+            }
+            for view in 0..views {
+                let depth = &maps[(view as usize).min(maps.len() - 1)];
+                write_depth_override(t, res, decl, depth, view)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Upload the depth override of view `view` into the Depth pass's output.
+fn write_depth_override(t: &Targets, b: &Resources, pass: &graph::PassDecl, depth: &[f32], view: u32) -> Result<()> {
+    let n = b.shadow_size as usize;
+    if depth.len() != n * n {
+        return Err(RuntimeError::Param(format!(
+            "depth override has {} values, the shadow map {n} x {n}",
+            depth.len()
+        )));
+    }
+    let target = pass
+        .steps
+        .first()
+        .and_then(|s| s.writes.first())
+        .ok_or_else(|| RuntimeError::NotFound(format!("Depth pass `{}` writes nothing", pass.name)))?;
+    let decl = t
+        .technique
+        .graph()
+        .texture(&target.texture)
+        .ok_or_else(|| RuntimeError::NotFound(format!("no texture `{}`", target.texture)))?;
+    if decl.format != Format::R32Float {
+        return Err(RuntimeError::Param(format!(
+            "the Depth pass writes {:?}; a depth override needs R32Float",
+            decl.format
+        )));
+    }
+    let tex = b.texture(&target.texture)?;
+    t.gpu.scoped("writing the depth override", || {
+        t.gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: tex,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: view * decl.layers + target.layer,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            &f32_bytes(depth),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * n as u32),
+                rows_per_image: Some(n as u32),
+            },
+            wgpu::Extent3d {
+                width: n as u32,
+                height: n as u32,
+                depth_or_array_layers: 1,
+            },
+        )
+    })
 }

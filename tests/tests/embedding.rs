@@ -788,7 +788,7 @@ fn a_specialised_graph_is_rechecked_per_frame_from_the_casters_bounds() {
     let e = loaded
         .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .unwrap_err();
-    assert!(e.to_string().contains("under light 0 these come to"), "{e}");
+    assert!(e.to_string().contains("but this scene's come to"), "{e}");
     // the exact check reads the placed casters: a bad geometry is refused before it, not a panic
     g.meshes[0].indices[0] = u32::MAX;
     let e = loaded
@@ -1670,4 +1670,90 @@ fn a_prepared_frame_recorded_twice_in_one_submission_is_the_frame_recorded_once(
             "{t} on {sc}: recorded twice, the frame differs from one recording"
         );
     }
+}
+
+/// Issue 49: the lights of one set of targets share their shadow-map-sized textures (made
+/// once, from a pool keyed by declaration; transient ones always), since each light's
+/// passes run before the next light's and nothing after them reads those textures. With
+/// the three lights of `scenes/three-lights.ron`, every technique that renders them frames
+/// bit for bit as with each light's own textures (the old layout, `share_light_textures`
+/// false), and holds exactly two lights' shadow-map-sized textures fewer. The figure, at
+/// the scene file's sizes, is written to `target/embedding/light-memory.md`
+/// (docs/embedding.md).
+#[test]
+fn three_lights_share_their_shadow_textures_and_frame_as_lights_with_their_own() {
+    use sshc_runtime::graph::Extent;
+    let mut table = String::from(
+        "| technique | before (each light every texture), MiB | each light its own, transients shared, MiB | now (shared by the lights), MiB | now / before |\n|---|---|---|---|---|\n",
+    );
+    let mib = |b: u64| b as f64 / 1048576.0;
+    let total = |ex: &Bound| ex.inspect().memory().iter().map(|m| m.1).sum::<u64>();
+    let mut ran = 0;
+    for t in techniques() {
+        let c = compile(&t);
+        // the per-sample techniques sample a segment light, which the scene has not
+        if sshc_lab::bind::graph_samples(&c.graph) > 0 {
+            continue;
+        }
+        let mut loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let small = all_lights(&scene("three-lights", 32, 64), &c);
+        let frame = |loaded: &Loaded| {
+            let mut ex = loaded.bind_lights(&small).unwrap_or_else(|e| panic!("{t}: {e}"));
+            ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
+            let v = ex.inspect().read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba;
+            let c = ex
+                .inspect()
+                .read_camera(CameraOutput::Color)
+                .unwrap_or_else(|e| panic!("{t}: {e}"))
+                .rgba;
+            (v, c)
+        };
+        let shared = frame(&loaded);
+        loaded.limits.share_light_textures = false;
+        let own = frame(&loaded);
+        assert!(shared == own, "{t}: lights sharing their textures frame differently");
+        // the figure, at the file's sizes (nothing run: the bytes are the targets' own)
+        let file = Scene::load(root().join("scenes/three-lights.ron")).unwrap();
+        let lights = all_lights(&file, &c);
+        let before = total(&loaded.bind_lights(&lights).unwrap_or_else(|e| panic!("{t}: {e}")));
+        loaded.limits.share_light_textures = true;
+        let ex = loaded.bind_lights(&lights).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let now = total(&ex);
+        let per_light: u64 = ex
+            .inspect()
+            .memory()
+            .iter()
+            .filter(|(n, _)| n.ends_with("(shared by the lights)"))
+            .map(|m| m.1)
+            .sum();
+        let bytes = |transient: bool| -> u64 {
+            c.graph
+                .textures
+                .iter()
+                .filter(|d| d.extent == Extent::ShadowMap && (transient || !d.transient))
+                .map(|d| {
+                    let layers = u64::from(d.array_layers());
+                    let texels = u64::from(file.shadow_map).pow(2) * layers * u64::from(d.format.bytes_per_texel());
+                    if d.mips { texels * 4 / 3 } else { texels }
+                })
+                .sum()
+        };
+        assert_eq!(per_light, bytes(true), "{t}: the shared textures are the shadow-map-sized ones");
+        // transient textures (a separable filter's intermediate) were one before as well
+        assert_eq!(before - now, 2 * bytes(false), "{t}: two lights' shadow-map-sized textures fewer");
+        // the old executor's layout: every texture, transient ones too, once per light
+        let old = before + 2 * (bytes(true) - bytes(false));
+        table.push_str(&format!(
+            "| {t} | {:.1} | {:.1} | {:.1} | {:.2} |\n",
+            mib(old),
+            mib(before),
+            mib(now),
+            now as f64 / old as f64
+        ));
+        ran += 1;
+    }
+    assert!(ran >= 15, "{ran} techniques");
+    let dir = root().join("target").join("embedding");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("light-memory.md"), &table).unwrap();
 }

@@ -2,7 +2,9 @@
 //! visibility a test writes directly, and a scene of one triangle covering both views.
 #![allow(dead_code)]
 
-use sshc_runtime::gpu::{CameraOutput, FrameState, FrameTimes, Gpu, RuntimeError, Scene, SceneInputs, TargetLimits, Targets, Technique};
+use sshc_runtime::gpu::{
+    CameraOutput, FrameState, FrameTimes, Gpu, RuntimeError, Scene, SceneInputs, Sizes, TargetLimits, Targets, Technique,
+};
 use sshc_runtime::graph::*;
 
 /// One Depth pass drawing the scene from the light into `z`.
@@ -196,7 +198,7 @@ pub fn bind_within(technique: &Technique, s: &SceneInputs, limits: TargetLimits)
         &[technique],
         limits.max_bytes,
     )?;
-    let state = s.frame_state(technique);
-    let targets = Targets::with_limits(technique, &scene, &state, s.sizes(), limits)?;
+    let state = FrameState::of_inputs(technique, s);
+    let targets = Targets::with_limits(technique, &scene, &state, Sizes::of(s), limits)?;
     Ok(Run { scene, targets, state })
 }

@@ -14,7 +14,7 @@
 
 use sshc_lab::image_io::ImageFiles;
 use sshc_lab::scene::Scene;
-use sshc_runtime::gpu::{CameraOutput, Gpu, Scene as Uploaded, Targets, Technique};
+use sshc_runtime::gpu::{CameraOutput, FrameState, Gpu, Scene as Uploaded, Sizes, Targets, Technique};
 use sshc_runtime::graph::ValidGraph;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
@@ -55,14 +55,14 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> Result<Summary, String> 
     let technique = Technique::new(&gpu, graph, pcf::shaders()).map_err(|e| e.to_string())?;
     let inputs = sshc_lab::bind::scene_inputs(&scene)?;
     let mut uploaded = Uploaded::from_inputs(&gpu, &inputs, &[&technique]).map_err(|e| e.to_string())?;
-    let mut state = inputs.frame_state(&technique);
+    let mut state = FrameState::of_inputs(&technique, &inputs);
     // The technique's defaults, through the generated Params struct (whose layout the
     // build checked against the WGSL uniform); the frame's params hold them at their offsets.
     let params = pcf::Params::default();
     for (name, value) in params.values() {
         state.params.set(name, value).map_err(|e| e.to_string())?;
     }
-    let mut targets = Targets::new(&technique, &uploaded, &state, inputs.sizes()).map_err(|e| e.to_string())?;
+    let mut targets = Targets::new(&technique, &uploaded, &state, Sizes::of(&inputs)).map_err(|e| e.to_string())?;
     let times = targets.run_frame(&mut uploaded, &state).map_err(|e| e.to_string())?;
     let color = targets.inspect().read_camera(CameraOutput::Color).map_err(|e| e.to_string())?;
     let visibility = targets.inspect().read_camera(CameraOutput::Visibility).map_err(|e| e.to_string())?;
