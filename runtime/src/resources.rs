@@ -98,6 +98,37 @@ fn gcd(a: u64, b: u64) -> u64 {
     if b == 0 { a } else { gcd(b, a % b) }
 }
 
+/// What an upload or a set of targets may take unless the host says otherwise
+/// ([`crate::gpu::Scene::upload_within`], [`TargetLimits::max_bytes`]).
+pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
+
+/// Bounds and choices for making targets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TargetLimits {
+    /// Refuse targets whose textures and generated buffers would take more than this many
+    /// bytes.
+    pub max_bytes: u64,
+    /// Bounds on what Geometry passes bind and generate (default: the device's).
+    pub generated: GeneratedLimits,
+    /// Every shadow-map-sized texture (and summed-area table, and the light's depth
+    /// buffer) is one, shared by the lights: they run one after another and nothing after
+    /// a light's passes reads them, so peak memory does not grow with the lights. `false`
+    /// gives each light its own, to read a light's textures back after the frame
+    /// ([`crate::gpu::Inspect::read_light_texture`]). Transient textures are shared either
+    /// way.
+    pub share_light_textures: bool,
+}
+
+impl Default for TargetLimits {
+    fn default() -> TargetLimits {
+        TargetLimits {
+            max_bytes: DEFAULT_MAX_BYTES,
+            generated: GeneratedLimits::default(),
+            share_light_textures: true,
+        }
+    }
+}
+
 /// The resources of one graph bound to one scene.
 pub(crate) struct Resources {
     pub shadow_size: u32,
@@ -145,7 +176,7 @@ impl Resources {
         usages: &Usages,
         s: &SceneInputs,
         scene: &HostScene,
-        limits: crate::targets::TargetLimits,
+        limits: TargetLimits,
         pool: &mut Pool,
     ) -> Result<Resources> {
         let (max_bytes, limits) = (limits.max_bytes, limits.generated);

@@ -8,11 +8,9 @@ use crate::device::{Gpu, Result, RuntimeError};
 use crate::fit::Boxes;
 use crate::frame::SceneInputs;
 use crate::geometry::{Geometry, GeometryBuffers};
+use crate::resources::DEFAULT_MAX_BYTES;
 use crate::technique::Technique;
 use std::sync::atomic::{AtomicU64, Ordering};
-
-/// What an upload may take unless the host says otherwise ([`Scene::upload_within`]).
-pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
 
 /// Each upload's identity: targets remember the scene they were made on.
 static NEXT_SCENE: AtomicU64 = AtomicU64::new(1);

@@ -17,8 +17,8 @@ use crate::graph::{self, PassGraph};
 use crate::lights::{Combine, Combining, MAX_LIGHTS, Slices};
 use crate::pixels::{HostPixels, PixelsStep};
 use crate::receivers::Unshadowed;
-use crate::resources::{GeneratedLimits, Pool, Resources, f32_bytes, texture_bytes};
-use crate::scene::{DEFAULT_MAX_BYTES, Scene};
+use crate::resources::{Pool, Resources, TargetLimits, f32_bytes, texture_bytes};
+use crate::scene::Scene;
 use crate::state::FrameState;
 use crate::steps::{Group0, StepBinding};
 use crate::technique::{MAX_PASSES, Technique};
@@ -50,33 +50,6 @@ impl Sizes {
         Sizes {
             camera: s.camera_size,
             shadow: s.shadow_size,
-        }
-    }
-}
-
-/// Bounds and choices for making targets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct TargetLimits {
-    /// Refuse targets whose textures and generated buffers would take more than this many
-    /// bytes.
-    pub max_bytes: u64,
-    /// Bounds on what Geometry passes bind and generate (default: the device's).
-    pub generated: GeneratedLimits,
-    /// Every shadow-map-sized texture (and summed-area table, and the light's depth
-    /// buffer) is one, shared by the lights: they run one after another and nothing after
-    /// a light's passes reads them, so peak memory does not grow with the lights. `false`
-    /// gives each light its own, to read a light's textures back after the frame
-    /// ([`crate::gpu::Inspect::read_light_texture`]). Transient textures are shared either
-    /// way.
-    pub share_light_textures: bool,
-}
-
-impl Default for TargetLimits {
-    fn default() -> TargetLimits {
-        TargetLimits {
-            max_bytes: DEFAULT_MAX_BYTES,
-            generated: GeneratedLimits::default(),
-            share_light_textures: true,
         }
     }
 }
