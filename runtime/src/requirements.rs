@@ -322,6 +322,28 @@ impl Requirements {
         r
     }
 
+    /// What a set of techniques needs together: a host that switches among them at run
+    /// time asks its device for [`Requirements::features`] and [`Requirements::limits`] of
+    /// this once. Every need of each is kept, named with its technique (`technique `t`,
+    /// pass `p``); the features are their union and each limit the largest asked.
+    pub fn of_all<'a>(graphs: impl IntoIterator<Item = &'a PassGraph>) -> Requirements {
+        let mut all = Requirements::default();
+        for g in graphs {
+            let r = Requirements::of(g);
+            let named = |who: String| format!("technique `{}`, {who}", g.technique);
+            all.features
+                .extend(r.features.into_iter().map(|n| FeatureNeed { who: named(n.who), ..n }));
+            all.limits
+                .extend(r.limits.into_iter().map(|n| LimitNeed { who: named(n.who), ..n }));
+            all.rendered_norm16.extend(
+                r.rendered_norm16
+                    .into_iter()
+                    .map(|(t, f)| (format!("{t}` of technique `{}", g.technique), f)),
+            );
+        }
+        all
+    }
+
     /// Every feature the graph needs, as one set (for a host's `DeviceDescriptor`).
     /// `TIMESTAMP_QUERY` is not among them: without it frames run untimed.
     pub fn features(&self) -> wgpu::Features {

@@ -378,6 +378,35 @@ fn a_device_without_what_a_graph_needs_is_refused_with_each_need_and_its_pass() 
         req.limits(wgpu::Limits::default())
     });
     Loaded::new(&fit, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+    // issue 49: a host switching among every bundled technique asks for their union once:
+    // a device with exactly that loads each of them, and every need is named with its
+    // technique
+    let all: Vec<sshc::Compiled> = techniques().iter().map(|t| compile(t)).collect();
+    let union = Requirements::of_all(all.iter().map(|c| &c.graph));
+    for c in &all {
+        let own = Requirements::of(&c.graph);
+        assert!(union.features().contains(own.features()), "{}", c.graph.technique);
+        let base = wgpu::Limits::default();
+        let (mine, theirs) = (own.limits(base.clone()), union.limits(base));
+        assert!(
+            mine.max_color_attachment_bytes_per_sample <= theirs.max_color_attachment_bytes_per_sample
+                && mine.max_storage_buffers_per_shader_stage <= theirs.max_storage_buffers_per_shader_stage
+                && mine.max_sampled_textures_per_shader_stage <= theirs.max_sampled_textures_per_shader_stage,
+            "{}",
+            c.graph.technique
+        );
+    }
+    assert!(
+        union.features.iter().all(|n| n.who.starts_with("technique `")) && union.limits.iter().all(|n| n.who.starts_with("technique `")),
+        "{union:?}"
+    );
+    let (every, _) = host_device(union.features(), |_| union.limits(wgpu::Limits::default()));
+    for c in &all {
+        Loaded::new(&every, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{}: {e}", c.graph.technique));
+    }
+    // and the bare device is told what each technique lacks, by name
+    let missing = union.missing(&bare);
+    assert!(missing.iter().any(|l| l.contains("technique `pcss`")), "{missing:#?}");
 }
 
 #[test]
