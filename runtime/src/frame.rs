@@ -129,7 +129,45 @@ impl Camera {
                 "the camera's view-projection matrix has no inverse (determinant {det}): it maps the whole scene to a point or a plane"
             )));
         }
+        if self.depth_slope() < 0.0 {
+            return Err(RuntimeError::Param(
+                "the camera's projection gives nearer points the larger depth (reverse-Z): the runtime's camera depth runs from 0 near to 1 far; give the camera as `Camera::from_reverse_z(view_proj, position)`, which maps it so".into(),
+            ));
+        }
         Ok(())
+    }
+
+    /// A camera whose projection reverses depth (1 at the near plane, 0 or towards 0 far
+    /// away, as `sshc_light::perspective_infinite_reverse` and Bevy's cameras give it): its
+    /// matrix mapped to the runtime's depth by `z' = w - z` (x, y and w, and so what every
+    /// pixel sees, are the host's own, bit for bit; depth `1 - z / w`).
+    pub fn from_reverse_z(view_proj: [f32; 16], position: [f32; 3]) -> Camera {
+        let mut m = view_proj;
+        // column-major: element (row 2, column c) is m[4 c + 2]; row 3 is w
+        for c in 0..4 {
+            m[4 * c + 2] = m[4 * c + 3] - m[4 * c + 2];
+        }
+        Camera { view_proj: m, position }
+    }
+
+    /// The sign of how normalised depth changes along the view axis (from the camera,
+    /// where `w` grows): positive for a forward projection, negative for a reversed one, 0
+    /// where `w` is constant (orthographic: the axis's sense cannot be told from the
+    /// matrix). Along any line `z / w` is monotonic, with the sign of
+    /// `z1 w0 - z0 w1` wherever the line starts.
+    fn depth_slope(&self) -> f64 {
+        let m = self.view_proj.map(f64::from);
+        let row = |r: usize| [m[r], m[4 + r], m[8 + r], m[12 + r]];
+        let (rz, rw) = (row(2), row(3));
+        let axis = [rw[0], rw[1], rw[2]];
+        let len = axis.iter().map(|a| a * a).sum::<f64>().sqrt();
+        if len <= 1e-12 * rw[3].abs().max(1.0) {
+            return 0.0;
+        }
+        let p = self.position.map(f64::from);
+        let at = |r: [f64; 4]| r[0] * p[0] + r[1] * p[1] + r[2] * p[2] + r[3];
+        let along = |r: [f64; 4]| (r[0] * axis[0] + r[1] * axis[1] + r[2] * axis[2]) / len;
+        along(rz) * at(rw) - at(rz) * along(rw)
     }
 }
 

@@ -1786,3 +1786,43 @@ fn three_lights_share_their_shadow_textures_and_frame_as_lights_with_their_own()
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("light-memory.md"), &table).unwrap();
 }
+
+/// Issue 49: cameras as hosts build them. An infinite perspective (no far plane) runs as
+/// it is; a reverse-Z one (depth 1 near, towards 0 far, Bevy's default) is given through
+/// `Camera::from_reverse_z`, which keeps x, y and w bit for bit, so every pixel sees what
+/// the forward infinite camera's sees: the frames are equal bit for bit. A reverse-Z matrix
+/// given as it is would draw the farthest surfaces: it is refused, saying what to call.
+#[test]
+fn infinite_and_reverse_z_cameras_render_as_the_forward_camera() {
+    use sshc_runtime::gpu::Camera;
+    use sshc_runtime::light::{glam::Vec3, look_at, perspective_infinite, perspective_infinite_reverse};
+    for t in ["pcss", "penumbra-limit-maps"] {
+        let c = compile(t);
+        let s = inputs(&scene("triangle", 32, 64), &c);
+        let loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+        let mut ex = loaded.bind_scene(&s).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let eye = Vec3::new(1.9, 1.0, 0.6);
+        let view = look_at(eye, Vec3::new(0.0, 0.1, 0.0), Vec3::Y);
+        let fov = 40f32.to_radians();
+        let mut frame = |camera: Camera| {
+            ex.state.camera = camera;
+            ex.run_frame().map(|_| ex.inspect().read_visibilities().unwrap().rgba)
+        };
+        let forward = frame(Camera {
+            view_proj: (perspective_infinite(fov, 1.0, 0.05) * view).to_cols_array(),
+            position: eye.to_array(),
+        })
+        .unwrap_or_else(|e| panic!("{t}: {e}"));
+        assert!(forward.iter().any(|p| p[0] < 0.5), "{t}: no shadow in view");
+        let reversed = (perspective_infinite_reverse(fov, 1.0, 0.05) * view).to_cols_array();
+        let mapped = frame(Camera::from_reverse_z(reversed, eye.to_array())).unwrap_or_else(|e| panic!("{t}: {e}"));
+        assert!(mapped == forward, "{t}: the reverse-Z camera, mapped, sees another frame");
+        let e = frame(Camera {
+            view_proj: reversed,
+            position: eye.to_array(),
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("reverse-Z") && e.contains("Camera::from_reverse_z"), "{t}: {e}");
+    }
+}

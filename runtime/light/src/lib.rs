@@ -153,6 +153,20 @@ pub fn perspective(fov_y: f32, aspect: f32, near: f32, far: f32) -> Mat4 {
     glam::camera::rh::proj::directx::perspective(fov_y, aspect, near, far)
 }
 
+/// Right-handed perspective projection with no far plane, to WebGPU clip space (depth
+/// `1 - near / distance`: [0, 1) from the near plane out).
+pub fn perspective_infinite(fov_y: f32, aspect: f32, near: f32) -> Mat4 {
+    glam::camera::rh::proj::directx::perspective_infinite(fov_y, aspect, near)
+}
+
+/// Right-handed perspective projection with no far plane and reversed depth (depth
+/// `near / distance`: 1 at the near plane, towards 0 far away), as engines use it for its
+/// precision (Bevy's default). A camera built with it is given to the runtime through
+/// `Camera::from_reverse_z`.
+pub fn perspective_infinite_reverse(fov_y: f32, aspect: f32, near: f32) -> Mat4 {
+    glam::camera::rh::proj::directx::perspective_infinite_reverse(fov_y, aspect, near)
+}
+
 /// Right-handed orthographic projection to WebGPU clip space (depth [0, 1], Y up), as
 /// `Mat4::orthographic_rh` of older glam.
 pub fn orthographic(left: f32, right: f32, bottom: f32, top: f32, near: f32, far: f32) -> Mat4 {
