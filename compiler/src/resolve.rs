@@ -434,7 +434,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
 }
 
 /// The texture a debug output is written to: `debug_<name>` (a name of the graph, and the
-/// one `Executor::read_debug` and `sshc render --dump` take).
+/// one `Inspect::read_debug` and `sshc render --dump` take).
 pub fn debug_texture(name: &str) -> String {
     format!("{}{name}", sshc_graph::DEBUG_PREFIX)
 }

@@ -488,7 +488,7 @@ pub enum Resolve {
 /// nowhere) and two words of padding. The runtime sizes it before allocation: at most one
 /// record per edge of the casting meshes, and no more than one storage binding holds; a
 /// record past the capacity is counted in `dropped`, never drawn half-written, and the
-/// runtime reports it (`Executor::generated`).
+/// runtime reports it (`Inspect::generated`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BufferDecl {

@@ -9,7 +9,7 @@ use crate::uniforms::MAX_LIGHT_SAMPLES;
 use serde::Deserialize;
 
 /// A pass graph that passed every check the runtime relies on ([`PassGraph::from_ron`]'s,
-/// made on the value: no text round trip), the only kind `sshc_runtime::Executor::new`
+/// made on the value: no text round trip), the only kind `sshc_runtime::gpu::Technique::new`
 /// takes a graph as (issue 49's first stage). Read it through `Deref`; take it apart with
 /// [`ValidGraph::into_inner`].
 #[derive(Clone, Debug, PartialEq)]
@@ -42,7 +42,7 @@ impl std::ops::Deref for ValidGraph {
 
 impl PassGraph {
     /// The `Params` uniform with every runtime param at its default value (`params_size`
-    /// bytes, each param at its offset, padding zero): what an executor binds first.
+    /// bytes, each param at its offset, padding zero): what the targets write first.
     pub fn default_params(&self) -> Vec<u8> {
         let mut bytes = vec![0u8; self.params_size as usize];
         for p in &self.params {
@@ -64,7 +64,7 @@ impl PassGraph {
 
     /// Parse and check a graph: schema version, shader paths that stay inside the graph's
     /// folder, and texture names that resolve. Shader validation and device limits are
-    /// checked by the executor when it loads the modules.
+    /// checked by the runtime when it loads the modules.
     pub fn from_ron(text: &str) -> Result<PassGraph, GraphError> {
         // Read the version first, so that an old graph gets the version error, not a schema one.
         #[derive(Deserialize)]

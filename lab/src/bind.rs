@@ -1,4 +1,4 @@
-//! From a [`Scene`] to the plain data the executor binds ([`SceneInputs`]).
+//! From a [`Scene`] to the plain data the runtime's stages are made from ([`SceneInputs`]).
 
 use crate::run::{Bound, Loaded};
 use crate::scene::{Light, Scene};
@@ -6,7 +6,7 @@ use sshc_runtime::gpu::{Camera, Geometry, IDENTITY, Instance, LightInputs, Mesh,
 use sshc_runtime::graph::{MAX_LIGHT_SAMPLES, PassGraph, Views};
 use sshc_runtime::light::{SampleFit, sample_views};
 
-/// The scene's geometry, camera and first light, as the executor needs them.
+/// The scene's geometry, camera and first light, as the runtime takes them.
 ///
 /// The vertex buffer lists the objects that cast shadows first, in file order, then those
 /// that do not (`casts: false`), in file order: the light's draws take only the first
@@ -572,7 +572,7 @@ pub fn cascade_fit(scene: &Scene, graph: &PassGraph, n: u32, lambda: f32, snap: 
     })
 }
 
-/// The scene's camera, as the executor takes it.
+/// The scene's camera, as the runtime takes it.
 pub fn camera(scene: &Scene) -> Camera {
     Camera {
         view_proj: scene.camera_view_proj().to_cols_array(),

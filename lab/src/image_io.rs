@@ -1,5 +1,5 @@
 //! Writing the runtime's read-back [`Image`]s to files: PFM (float) and 8-bit PNG. The
-//! codecs live here, in the lab, so that the executor carries none.
+//! codecs live here, in the lab, so that the runtime carries none.
 
 use crate::files::write_new;
 use sshc_runtime::gpu::{Image, Result, RuntimeError};

@@ -1,5 +1,5 @@
 //! What the measurement commands share: one *session* is a scene loaded with the command
-//! line's overrides, a GPU, and an executor of a technique (compiled here) or of a compiled
+//! line's overrides, a GPU, and a technique loaded (compiled here) or a compiled
 //! graph; plus the ground-truth options and the cached, progress-reporting truth, and the
 //! reading, reporting and argument helpers of the `sshc` command line.
 
@@ -190,7 +190,7 @@ impl Overrides {
         crate::bind::check_cascades(&scene, &self.cascading)?;
         // a graph specialised for the scene's light view would refuse the cascades' views
         specialise(&mut opts, input, path, &scene, self.generic || self.cascading.on(&scene))?;
-        let ex = executor(gpu, input, &opts)?;
+        let ex = load_technique(gpu, input, &opts)?;
         stages.done("compile");
         // a tuned technique names its shadow-map size: it outranks the scene file's, and
         // `--shadow-map` outranks it
@@ -408,7 +408,7 @@ pub fn load_scene(path: &Path, size: Option<(u32, u32)>, shadow_map: Option<u32>
 /// params set as uniforms) loaded, as `sshc render` does.
 /// `opts` holds the command line's `--set`, `--precision` and `--schedule`; a graph takes
 /// `--set` only.
-pub fn executor(gpu: &Gpu, input: &Path, opts: &sshc::CompileOptions) -> Result<Loaded, String> {
+pub fn load_technique(gpu: &Gpu, input: &Path, opts: &sshc::CompileOptions) -> Result<Loaded, String> {
     if input.to_string_lossy().ends_with(".graph.ron") {
         if !opts.precision.is_empty() {
             return Err("error: `--precision` needs a technique, not a compiled graph".into());
@@ -424,10 +424,10 @@ pub fn executor(gpu: &Gpu, input: &Path, opts: &sshc::CompileOptions) -> Result<
         return Ok(ex);
     }
     let source = read(input)?;
-    compile_executor(gpu, input, &source, opts)
+    compile_technique(gpu, input, &source, opts)
 }
 
-pub fn compile_executor(gpu: &Gpu, path: &Path, source: &str, opts: &sshc::CompileOptions) -> Result<Loaded, String> {
+pub fn compile_technique(gpu: &Gpu, path: &Path, source: &str, opts: &sshc::CompileOptions) -> Result<Loaded, String> {
     let c = sshc::compile_str(source, opts).map_err(|d| {
         report(&d, path, source);
         String::new()

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use glam::Vec3;
 use sshc_lab::scene::Scene;
-use sshc_lab::session::{compile_executor, positions_normals};
+use sshc_lab::session::{compile_technique, positions_normals};
 use sshc_lab::visibility::Visibility;
 use sshc_runtime::gpu::{CameraOutput, Gpu};
 
@@ -35,7 +35,7 @@ fn quad_scene(eye: Vec3) -> Scene {
 fn render(gpu: &Gpu, technique: &str, scene: &Scene) -> Vec<(f32, Vec3, f32)> {
     let path = root().join("techniques").join(format!("{technique}.ron"));
     let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let loaded = compile_executor(gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{technique}: {e}"));
+    let loaded = compile_technique(gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{technique}: {e}"));
     let inputs = sshc_lab::bind::scene_inputs(scene).unwrap();
     let mut ex = loaded.bind_scene(&inputs).unwrap_or_else(|e| panic!("{technique}: {e}"));
     ex.run_frame().unwrap_or_else(|e| panic!("{technique}: {e}"));
@@ -100,7 +100,7 @@ fn ground_scene(ground_casts: bool, quad_casts: bool, fit: &str) -> Scene {
 fn render_positions(gpu: &Gpu, technique: &str, scene: &Scene) -> Vec<(f32, Vec3, f32)> {
     let path = root().join("techniques").join(format!("{technique}.ron"));
     let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let loaded = compile_executor(gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{technique}: {e}"));
+    let loaded = compile_technique(gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{technique}: {e}"));
     let mut ex = loaded
         .bind_scene(&sshc_lab::bind::scene_inputs(scene).unwrap())
         .unwrap_or_else(|e| panic!("{technique}: {e}"));
@@ -239,7 +239,7 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
     for t in TECHNIQUES.into_iter().chain(geometry).chain(["vssm", "mssm", "msm-hausdorff"]) {
         let path = root().join("techniques").join(format!("{t}.ron"));
         let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let loaded = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let loaded = compile_technique(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
         let mut ex = loaded
             .bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, loaded.graph()).unwrap())
             .unwrap_or_else(|e| panic!("{t}: {e}"));
@@ -323,7 +323,7 @@ fn cascades_refitted_in_place_equal_a_fresh_binding() {
     for t in ["hard", "pcss"] {
         let path = root().join("techniques").join(format!("{t}.ron"));
         let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let loaded = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let loaded = compile_technique(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
         let fit =
             |s: &Scene| sshc_lab::bind::cascade_inputs(s, loaded.graph(), 3, 0.75, true, [0.0; 3]).unwrap_or_else(|e| panic!("{t}: {e}"));
         let frame = |ex: &mut sshc_lab::run::Bound| {
@@ -382,7 +382,7 @@ fn a_gltf_of_shared_meshes_binds_as_instances_and_renders_as_its_soup() {
         let path = root().join("techniques").join(format!("{t}.ron"));
         let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let run = |instances: bool| {
-            let loaded = compile_executor(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
+            let loaded = compile_technique(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));
             let mut ex = if instances {
                 let b = sshc_lab::bind::SceneBinding::of(&scene, loaded.graph(), true).unwrap();
                 assert!(matches!(b, sshc_lab::bind::SceneBinding::Instances { .. }), "{t}");
@@ -411,7 +411,7 @@ fn a_gltf_of_shared_meshes_binds_as_instances_and_renders_as_its_soup() {
         no_snap: false,
         cascade_offset: None,
     };
-    let loaded = compile_executor(&gpu, &path, &source, &Default::default()).unwrap();
+    let loaded = compile_technique(&gpu, &path, &source, &Default::default()).unwrap();
     let (mut instanced, _) = cascading.bind(&loaded, &scene).unwrap().expect("cascades are bound");
     assert!(instanced.targets.cascades() == 3);
     let c = sshc_lab::bind::cascade_inputs(&scene, loaded.graph(), 3, 0.75, true, [0.0; 3]).unwrap();
@@ -446,7 +446,7 @@ fn the_min_mip_early_out_gives_its_pcf_bit_for_bit() {
     for sc in ["bunny", "contact"] {
         let scene = Scene::load(root().join(format!("scenes/{sc}.ron"))).unwrap_or_else(|e| panic!("{e}"));
         let run = |src: &str| {
-            let loaded = compile_executor(&gpu, &path, src, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+            let loaded = compile_technique(&gpu, &path, src, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
             let mut ex = loaded
                 .bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, loaded.graph()).unwrap())
                 .unwrap();
@@ -487,7 +487,7 @@ fn an_f32_table_is_its_cpu_emulation_bit_for_bit_and_within_the_stated_bound() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
     let mut scene = Scene::load(root().join("scenes/bunny.ron")).unwrap_or_else(|e| panic!("{e}"));
     scene.shadow_map = n as u32;
-    let loaded = compile_executor(&gpu, Path::new("f32_table.ron"), TECHNIQUE, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+    let loaded = compile_technique(&gpu, Path::new("f32_table.ron"), TECHNIQUE, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
     let mut ex = loaded
         .bind_scene(&sshc_lab::bind::scene_inputs_for(&scene, loaded.graph()).unwrap())
         .unwrap();

@@ -1,5 +1,5 @@
 //! The device: opening one or taking a host's, wgpu errors as values (error scopes), and
-//! the caches of shader modules and pipelines shared by every executor on it.
+//! the caches of shader modules and pipelines shared by every technique and set of targets on it.
 
 pub use crate::error::{Result, RuntimeError};
 use crate::pipeline::{PipelineKey, StepPipeline};
@@ -23,7 +23,7 @@ pub const WANTED_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
 /// A device the runtime runs on: its own ([`Gpu::new`]) or a host renderer's
 /// ([`Gpu::from_host`]). A handle: cloning it is cheap, and every clone shares the device,
 /// the queue and the caches of shader modules and pipelines, so an [`crate::gpu::Technique`] or [`crate::gpu::Targets`]
-/// owns one and a host can keep executors in its own structs.
+/// owns one and a host can keep them in its own structs.
 #[derive(Clone)]
 pub struct Gpu {
     pub device: wgpu::Device,
@@ -43,7 +43,7 @@ struct Shared {
     /// installs. `None` on a host's device: its own handler sees them, untouched.
     uncaptured: Option<Mutex<Vec<String>>>,
     /// Pipelines by everything that determines them ([`PipelineKey`]): lavapipe compiles
-    /// each pipeline through LLVM, so executors of one technique on several scenes share them.
+    /// each pipeline through LLVM, so loads of one technique on several devices' clones share them.
     pipelines: Mutex<HashMap<PipelineKey, Arc<StepPipeline>>>,
     /// Shader modules by their WGSL source.
     modules: Mutex<HashMap<Arc<str>, wgpu::ShaderModule>>,

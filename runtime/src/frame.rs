@@ -1,4 +1,5 @@
-//! What the executor takes from a scene ([`SceneInputs`]) and the `Frame` uniform made
+//! What the runtime takes from a scene ([`SceneInputs`]: a soup with one camera and light)
+//! and a frame ([`Camera`], [`LightInputs`]), and the `Frame` uniform made
 //! from it. The uniform's layout has one definition, [`crate::graph::FrameUniform`] (with
 //! [`crate::graph::FRAME_WGSL`] and [`crate::graph::FRAME_FIELDS`] derived from it).
 
@@ -25,7 +26,9 @@ pub struct SampleView {
     pub weights: [f32; 2],
 }
 
-/// Everything the executor needs from a scene, as plain data (column-major matrices).
+/// A triangle soup with one camera and light, as plain data (column-major matrices): the
+/// lab's scenes, made into a [`crate::gpu::Scene`], [`crate::gpu::Sizes`] and a
+/// [`crate::gpu::FrameState`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneInputs {
     /// Interleaved world-space position xyz and normal xyz, three vertices per triangle: a
@@ -263,7 +266,7 @@ impl LightInputs {
                 [texel, 0.0, 0.0, 0.0]
             },
             sample: [0.0, self.samples.len() as f32, if self.samples_closed { 1.0 } else { 0.0 }, 0.0],
-            // `counters.x`, the frame index, is written by the executor as it records
+            // `counters.x`, the frame index, is written by `Targets::prepare` for each frame
             counters: [0.0; 4],
         }
     }

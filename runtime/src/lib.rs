@@ -1,4 +1,5 @@
-//! `sshc-runtime`: the wgpu executor of sshc pass graphs.
+//! `sshc-runtime`: sshc pass graphs run on wgpu, as stages a host holds (`gpu`: technique,
+//! scene, targets, frame state).
 //!
 //! It loads a compiled graph (trusted or not: every shader is re-validated with naga and
 //! every size checked against the device before allocation), binds what a frame needs (a

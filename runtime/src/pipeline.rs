@@ -36,7 +36,7 @@ pub(crate) fn wgpu_format(f: Format) -> Option<wgpu::TextureFormat> {
     })
 }
 
-/// The camera outputs of the Shade pass, in [`crate::executor::CameraOutput`] order.
+/// The camera outputs of the Shade pass, in [`crate::gpu::CameraOutput`] order.
 pub(crate) const CAMERA_FORMATS: [wgpu::TextureFormat; 4] = [
     wgpu::TextureFormat::R32Float,
     wgpu::TextureFormat::Rgba8Unorm,

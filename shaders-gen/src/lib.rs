@@ -13,7 +13,7 @@
 //!
 //! The path is relative to the directory of the using crate's `Cargo.toml`. The generated
 //! module names the graph-schema crate as `::sshc_graph`, so the using crate depends on
-//! `sshc-graph` (serde and ron only; the executor, `sshc-runtime`, is needed only to run it);
+//! `sshc-graph` (serde and ron only; the runtime, `sshc-runtime`, is needed only to run it);
 //! `graph: crate::path::to::sshc_graph` names it elsewhere (a path as seen from inside
 //! the generated module). A technique that does not compile fails the
 //! build with the compiler's own diagnostic (`file:line:column`). The module contents are

@@ -855,7 +855,7 @@ fn measure(
     // The reference is timed on each scene before the first configuration, after every
     // `RETIME` configurations and after the last; its time is the median of those, so that
     // a machine that speeds up or slows down during the shard moves the ratios less. Each
-    // timing builds a fresh executor, as every configuration does (a long-lived one keeps
+    // timing builds fresh stages, as every configuration does (long-lived ones keep
     // its memory warm and reads faster on a CPU driver). A resumed shard adds its timings
     // to those recorded before it stopped.
     const RETIME: usize = 12;

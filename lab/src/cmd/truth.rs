@@ -3,10 +3,10 @@
 //! then compute the ground-truth visibility at exactly those points on the CPU
 //! (`crate::truth`), through the on-disk cache.
 //!
-//! Also the pieces `sshc compare` shares: loading a technique into an executor, the
+//! Also the pieces `sshc compare` shares: loading a technique, the
 //! truth options and the cached, progress-reporting truth computation.
 
-use crate::session::{TruthOpts, compile_executor, describe, load_scene, positions_normals, rt, size, truth_at};
+use crate::session::{TruthOpts, compile_technique, describe, load_scene, positions_normals, rt, size, truth_at};
 use crate::truth::TruthFiles as _;
 use sshc_runtime::gpu::Gpu;
 use std::path::{Path, PathBuf};
@@ -55,7 +55,7 @@ pub fn truth(a: TruthArgs) -> Result<(), String> {
     let (w, h) = scene.camera_size();
     a.truth.check(u64::from(w) * u64::from(h))?;
     let gpu = Gpu::new().map_err(rt)?;
-    let loaded = compile_executor(&gpu, Path::new("techniques/hard.ron"), HARD, &Default::default())?;
+    let loaded = compile_technique(&gpu, Path::new("techniques/hard.ron"), HARD, &Default::default())?;
     let mut ex = crate::bind::bind_scene(&loaded, &scene, false)?;
     ex.run_frame().map_err(rt)?;
     let (positions, normals) = positions_normals(&ex)?;

@@ -1,4 +1,4 @@
-//! The window: winit's event loop, the wgpu surface, the technique's executor and the
+//! The window: winit's event loop, the wgpu surface, the technique's stages and the
 //! egui panels.
 
 use super::ViewArgs;
@@ -112,16 +112,16 @@ struct App {
     gfx: Option<Gfx>,
     worker: Option<Worker>,
     ex: Option<Bound>,
-    /// The split view's right half: its own worker and executor.
+    /// The split view's right half: its own worker and bound technique.
     worker_b: Option<Worker>,
     ex_b: Option<Bound>,
     controls: Controls,
     /// The diagnostics of the last compilation that failed, until one succeeds.
     diagnostics: Option<String>,
     status: String,
-    /// The camera or lights changed since the executor last had them.
+    /// The camera or lights changed since the frame's state last had them.
     moved: bool,
-    /// The window's size changed: the executor is bound again at the new size.
+    /// The window's size changed: the targets are resized.
     resized: bool,
     frame: u64,
     script: VecDeque<Event>,
@@ -418,7 +418,7 @@ impl App {
         self.answers += 1;
         match answer {
             Answer::Ready(r) => {
-                let mut ex = r.executor;
+                let mut ex = r.bound;
                 // the worker bound the scene as it was asked; the view may have moved since
                 self.resized |= self.view_size() != first_size(&ex);
                 self.moved = true;
@@ -681,8 +681,8 @@ impl App {
         Ok(())
     }
 
-    /// Hand the executor the camera and lights as they are now.
-    fn update_executor(&mut self) -> Result<(), String> {
+    /// Put the camera and lights as they are now in the frame's state.
+    fn update_state(&mut self) -> Result<(), String> {
         if !(self.moved || self.resized) {
             return Ok(());
         }
@@ -738,7 +738,7 @@ impl App {
         if let Some(a) = self.worker_b.as_mut().and_then(Worker::poll) {
             match a {
                 Answer::Ready(r) => {
-                    let mut ex = r.executor;
+                    let mut ex = r.bound;
                     if let Some(split) = &mut self.state.split {
                         split.params.retain(|k, v| ex.state.params.set(k, *v).is_ok());
                     }
@@ -784,7 +784,7 @@ impl App {
             }
         }
         self.step_script()?;
-        self.update_executor()?;
+        self.update_state()?;
         let Some(gfx) = &mut self.gfx else { return Ok(()) };
         let acquire = Instant::now();
         let frame = match gfx.surface.get_current_texture() {

@@ -47,7 +47,7 @@ pub enum Answer {
 
 pub struct Ready {
     pub id: u64,
-    pub executor: Bound,
+    pub bound: Bound,
     pub controls: Controls,
     /// Compilation, pipeline creation and binding, in ms.
     pub compile_ms: f64,
@@ -191,11 +191,11 @@ fn build(gpu: &Gpu, r: Request) -> Result<Ready, String> {
     loaded.limits.share_light_textures = false;
     let pipelines_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
-    let executor = bind(&loaded, &r.scene, &r.cascading)?;
+    let bound = bind(&loaded, &r.scene, &r.cascading)?;
     let bind_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok(Ready {
         id: r.id,
-        executor,
+        bound,
         controls,
         compile_ms,
         pipelines_ms,

@@ -58,7 +58,7 @@ pub struct TuneArgs {
     /// in the same run (default `hard.ron=3`; REF is a path, or a bundled technique's file name).
     #[arg(long, value_name = "REF.ron=F", value_parser = budget_vs)]
     pub budget_vs: Option<(PathBuf, f64)>,
-    /// Budget: texture and buffer bytes, in MiB (exact, from the graph and the executor).
+    /// Budget: texture and buffer bytes, in MiB (exact, from the graph and the targets).
     #[arg(long, value_name = "MB")]
     pub memory_mb: Option<f64>,
     /// The error ranked by: `flip` (mean FLIP over the pixels facing the light), `facing`
