@@ -126,7 +126,10 @@ impl Loaded {
         )
     }
 
-    fn bound(&self, scene: Scene, camera: Camera, lights: Vec<LightInputs>, slices: Option<Slices>, sizes: Sizes) -> Result<Bound> {
+    fn bound(&self, scene: Scene, camera: Camera, mut lights: Vec<LightInputs>, slices: Option<Slices>, sizes: Sizes) -> Result<Bound> {
+        for l in &mut lights {
+            crate::bind::outside_the_model(self.graph(), l);
+        }
         let state = FrameState {
             camera,
             lights,
@@ -228,7 +231,8 @@ impl Bound {
 
     /// Light `l` fitted to the scene's instances as they are now ([`Targets::fit_light`]).
     pub fn place_light(&mut self, l: usize, light: &sshc_runtime::light::Light, fit: sshc_runtime::gpu::Fit) -> Result<()> {
-        let inputs = self.targets.fit_light(&self.scene, l, light, fit)?;
+        let mut inputs = self.targets.fit_light(&self.scene, l, light, fit)?;
+        crate::bind::outside_the_model(self.graph(), &mut inputs);
         match self.state.lights.get_mut(l) {
             Some(slot) => *slot = inputs,
             None => return Err(RuntimeError::NotFound(format!("light {l} is not bound"))),

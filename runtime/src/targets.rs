@@ -718,9 +718,23 @@ fn check_cascades(cascades: &[LightInputs], slices: &Slices) -> Result<()> {
     Ok(())
 }
 
-/// A graph specialised for a scene's light kind folded inputs another kind needs: light
-/// `l` must be of that kind.
+/// A technique is written for the light models its file lists (`light:`; none or `Any`:
+/// every kind), and a graph specialised for a scene's light kind folded inputs another
+/// kind needs: light `l`, where the host says its kind (`LightInputs::kind`), must be one
+/// of them. A light of no stated kind is not judged.
 fn check_light_kind(graph: &PassGraph, l: usize, kind: Option<graph::LightKind>) -> Result<()> {
+    if let Some(k) = kind
+        && !graph.lights.is_empty()
+        && !graph.lights.iter().any(|m| m.accepts(k))
+    {
+        let listed: Vec<String> = graph.lights.iter().map(|m| format!("{m:?}")).collect();
+        return Err(RuntimeError::Param(format!(
+            "technique `{}` is written for {} lights (its `light:` list), and light {l} is a {} light: its equations assume a light of those kinds; choose a technique that lists it, or list the kind in the technique if its model holds for it",
+            graph.technique,
+            listed.join(", "),
+            k.name()
+        )));
+    }
     match &graph.specialised {
         Some(facts) if kind != Some(facts.light) => Err(RuntimeError::Param(format!(
             "technique `{}` was specialised for the {} light of scene {}, but this scene's light{} is {}; compile it for this scene (`--scene`) or without one",
