@@ -498,3 +498,74 @@ fn the_generated_map_agrees_with_the_f64_reference() {
 fn single_sample_shadows_are_an_inner_penumbra_only() {
     one_sided_penumbra("single-sample", -1.0, 1.0);
 }
+
+/// Issue 49: a UV sphere whose seam an exporter duplicated (`scenes/seam-sphere.obj`: the
+/// last column computed again, a few ulps from the first) is welded within the tolerance,
+/// so its shadow is the shadow of the same sphere with the seam's vertices made
+/// bit-identical: the same silhouettes, and the same visibility up to the ulps the seam's
+/// welded positions differ by (each may move a Unorm8 channel of the map by a code). A slit
+/// of 10 tolerances (`scenes/slit-sphere.obj`) stays open and draws its ribbons: the
+/// test tells the two apart.
+#[test]
+fn a_sphere_whose_seam_is_a_few_ulps_wide_casts_the_shadow_of_its_welded_twin() {
+    let dir = std::env::temp_dir().join(format!("sshc-seam-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = std::fs::read_to_string(root().join("scenes/seam-sphere.obj")).unwrap();
+    // the seam's column copied from the first (vertex r (segments + 1) + segments of each
+    // ring), and each pole's vertices (one a segment, sin(pi) apart at the south pole) from
+    // the pole's first
+    let (rings, segments) = (24, 48);
+    let mut vertices: Vec<String> = obj.lines().filter(|l| l.starts_with("v ")).map(String::from).collect();
+    assert_eq!(vertices.len(), (rings + 1) * (segments + 1));
+    let mut moved = 0;
+    for r in 0..=rings {
+        let first = r * (segments + 1);
+        let copies = if r == 0 || r == rings { 1..=segments } else { segments..=segments };
+        for k in copies {
+            moved += usize::from(vertices[first + k] != vertices[first]);
+            vertices[first + k] = vertices[first].clone();
+        }
+    }
+    assert!(moved > 10, "{moved}: the file's seam is bit-identical already (a test of nothing)");
+    let faces = obj.lines().filter(|l| l.starts_with("f "));
+    let exact: Vec<String> = vertices.into_iter().chain(faces.map(String::from)).collect();
+    std::fs::write(dir.join("exact-sphere.obj"), exact.join("\n") + "\n").unwrap();
+    let scene_text = std::fs::read_to_string(root().join("scenes/seam-sphere.ron")).unwrap();
+    let load = |name: &str| {
+        let text = scene_text.replace("seam-sphere.obj", name);
+        let mut s = Scene::from_str(&text, &dir).unwrap_or_else(|e| panic!("{e}"));
+        s.set_camera_size(96, 96);
+        s.shadow_map = 256;
+        s
+    };
+    std::fs::copy(root().join("scenes/seam-sphere.obj"), dir.join("seam-sphere.obj")).unwrap();
+    std::fs::copy(root().join("scenes/slit-sphere.obj"), dir.join("slit-sphere.obj")).unwrap();
+    let (exact, _, ex) = run(PLM, &load("exact-sphere.obj"), &[]);
+    let exact_edges = ex.scene.edge_counts().expect("edges");
+    let (seam, _, ex) = run(PLM, &load("seam-sphere.obj"), &[]);
+    let seam_edges = ex.scene.edge_counts().expect("edges");
+    let (slit, _, ex) = run(PLM, &load("slit-sphere.obj"), &[]);
+    let slit_edges = ex.scene.edge_counts().expect("edges");
+    // the floor's 4 outline edges are the only boundary of the welded spheres
+    assert_eq!((exact_edges.boundary, seam_edges.boundary), (4, 4), "{seam_edges:?}");
+    assert_eq!(seam_edges.edges, exact_edges.edges);
+    assert!(
+        seam_edges.welded_near > 0 && exact_edges.welded_near == 0,
+        "{seam_edges:?} {exact_edges:?}"
+    );
+    assert_eq!(slit_edges.boundary, 4 + 2 * rings as u32, "{slit_edges:?}");
+    let differing = |a: &[f32], b: &[f32], by: f32| a.iter().zip(b).filter(|(x, y)| (*x - *y).abs() > by).count();
+    // a Unorm8 code of a stored channel, and f32 rounding past it
+    let code = 1.0 / 255.0 + 1e-6;
+    assert_eq!(
+        differing(&seam, &exact, code),
+        0,
+        "the welded seam's shadow differs from its twin's"
+    );
+    assert!(
+        differing(&slit, &exact, code) > 20,
+        "the open slit changes nothing: {} pixels",
+        differing(&slit, &exact, code)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
