@@ -4,8 +4,8 @@
 segment. With `--slit K` the duplicated column is moved K welding tolerances
 (2^-17 of the extent) along the longitude: a real opening, not a seam.
 
-    python3 scripts/seam-sphere.py scenes/seam-sphere.obj
-    python3 scripts/seam-sphere.py scenes/slit-sphere.obj --slit 10
+    python3 scripts/seam-sphere.py scenes/seams/seam-sphere.obj
+    python3 scripts/seam-sphere.py scenes/seams/slit-sphere.obj --slit 10
 """
 import math
 import struct

@@ -499,18 +499,18 @@ fn single_sample_shadows_are_an_inner_penumbra_only() {
     one_sided_penumbra("single-sample", -1.0, 1.0);
 }
 
-/// Issue 49: a UV sphere whose seam an exporter duplicated (`scenes/seam-sphere.obj`: the
+/// Issue 49: a UV sphere whose seam an exporter duplicated (`scenes/seams/seam-sphere.obj`: the
 /// last column computed again, a few ulps from the first) is welded within the tolerance,
 /// so its shadow is the shadow of the same sphere with the seam's vertices made
 /// bit-identical: the same silhouettes, and the same visibility up to the ulps the seam's
 /// welded positions differ by (each may move a Unorm8 channel of the map by a code). A slit
-/// of 10 tolerances (`scenes/slit-sphere.obj`) stays open and draws its ribbons: the
+/// of 10 tolerances (`scenes/seams/slit-sphere.obj`) stays open and draws its ribbons: the
 /// test tells the two apart.
 #[test]
 fn a_sphere_whose_seam_is_a_few_ulps_wide_casts_the_shadow_of_its_welded_twin() {
     let dir = std::env::temp_dir().join(format!("sshc-seam-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let obj = std::fs::read_to_string(root().join("scenes/seam-sphere.obj")).unwrap();
+    let obj = std::fs::read_to_string(root().join("scenes/seams/seam-sphere.obj")).unwrap();
     // the seam's column copied from the first (vertex r (segments + 1) + segments of each
     // ring), and each pole's vertices (one a segment, sin(pi) apart at the south pole) from
     // the pole's first
@@ -530,7 +530,7 @@ fn a_sphere_whose_seam_is_a_few_ulps_wide_casts_the_shadow_of_its_welded_twin() 
     let faces = obj.lines().filter(|l| l.starts_with("f "));
     let exact: Vec<String> = vertices.into_iter().chain(faces.map(String::from)).collect();
     std::fs::write(dir.join("exact-sphere.obj"), exact.join("\n") + "\n").unwrap();
-    let scene_text = std::fs::read_to_string(root().join("scenes/seam-sphere.ron")).unwrap();
+    let scene_text = std::fs::read_to_string(root().join("scenes/seams/seam-sphere.ron")).unwrap();
     let load = |name: &str| {
         let text = scene_text.replace("seam-sphere.obj", name);
         let mut s = Scene::from_str(&text, &dir).unwrap_or_else(|e| panic!("{e}"));
@@ -538,8 +538,8 @@ fn a_sphere_whose_seam_is_a_few_ulps_wide_casts_the_shadow_of_its_welded_twin() 
         s.shadow_map = 256;
         s
     };
-    std::fs::copy(root().join("scenes/seam-sphere.obj"), dir.join("seam-sphere.obj")).unwrap();
-    std::fs::copy(root().join("scenes/slit-sphere.obj"), dir.join("slit-sphere.obj")).unwrap();
+    std::fs::copy(root().join("scenes/seams/seam-sphere.obj"), dir.join("seam-sphere.obj")).unwrap();
+    std::fs::copy(root().join("scenes/seams/slit-sphere.obj"), dir.join("slit-sphere.obj")).unwrap();
     let (exact, _, ex) = run(PLM, &load("exact-sphere.obj"), &[]);
     let exact_edges = ex.scene.edge_counts().expect("edges");
     let (seam, _, ex) = run(PLM, &load("seam-sphere.obj"), &[]);
