@@ -129,6 +129,13 @@ impl Default for TargetLimits {
     }
 }
 
+/// What a light's resources take from the scene ([`Resources::scene_parts`]).
+pub(crate) struct SceneParts {
+    draw: SceneDraw,
+    edges: Option<EdgeBuffers>,
+    generated: HashMap<String, wgpu::Buffer>,
+}
+
 /// The resources of one graph bound to one scene.
 pub(crate) struct Resources {
     pub shadow_size: u32,
@@ -250,6 +257,46 @@ impl Resources {
         (self.camera, self.camera_depth, self.gbuffer) = (camera, camera_depth, gbuffer);
         self.camera_size = camera_size;
         Ok(())
+    }
+
+    /// What these resources take from another scene under the same targets (meshes added
+    /// or removed: a new upload): its draws, its edge adjacency, and generated buffers
+    /// sized from its edges, checked first as at binding (against `limits.max_bytes`, what
+    /// is left of the budget). Nothing here changes until [`Resources::take_scene`].
+    pub fn scene_parts(
+        &self,
+        gpu: &Gpu,
+        graph: &PassGraph,
+        usages: &Usages,
+        scene: &HostScene,
+        limits: TargetLimits,
+    ) -> Result<(SceneParts, u64)> {
+        let edge_count = scene.edges.as_ref().map_or(0, |e| e.counts.edges.into());
+        let bytes = check_generated(gpu, graph, usages, self.shadow_size, edge_count, limits.generated)?;
+        if bytes > limits.max_bytes {
+            return Err(RuntimeError::Limit {
+                what: "generated buffers of this graph on this scene (bytes)".into(),
+                needed: bytes,
+                limit: limits.max_bytes,
+            });
+        }
+        let generated = gpu.scoped("generated buffers", || {
+            Make { gpu }.generated(graph, usages, edge_count, self.shadow_size, limits.generated)
+        })?;
+        let parts = SceneParts {
+            draw: scene.draw.clone(),
+            edges: scene.edges.clone(),
+            generated,
+        };
+        Ok((parts, bytes))
+    }
+
+    /// Take another scene's parts ([`Resources::scene_parts`]); the caller binds the steps
+    /// again.
+    pub fn take_scene(&mut self, parts: SceneParts) {
+        self.draw = parts.draw;
+        self.edges = parts.edges;
+        self.generated = parts.generated;
     }
 
     pub fn texture(&self, name: &str) -> Result<&wgpu::Texture> {

@@ -313,6 +313,53 @@ impl Targets {
         Ok(())
     }
 
+    /// Run on another scene (the host's meshes or instances changed: a new [`Scene`]
+    /// uploaded), keeping every texture: the lights' draws and edges are taken from it,
+    /// the generated buffers (sized from its edges) made again, and the steps bound again.
+    /// The camera-sized and shadow-map-sized targets, the uniforms, the pipelines and the
+    /// timestamps stay; [`Targets::generation`] is bumped and host pixels are given again.
+    /// Refused, with nothing changed, for a scene without the edge adjacency this
+    /// technique's Geometry passes need, or one whose casters break a specialised graph's
+    /// depth floor under the lights of the last frame.
+    pub fn set_scene(&mut self, scene: &Scene) -> Result<()> {
+        let graph = self.technique.graph();
+        if self.technique.usages().edges && !scene.has_edges() {
+            return Err(RuntimeError::Param(format!(
+                "technique `{}` classifies silhouettes, but the scene was uploaded without edge adjacency: upload it for this technique (`Scene::upload(gpu, geometry, &[&technique])`)",
+                graph.technique
+            )));
+        }
+        check_floor_exact(graph, scene, &self.lights_state)?;
+        let technique = self.technique.clone();
+        // the textures stay: what is left of the budget is for the generated buffers
+        let mut left = self
+            .limits
+            .max_bytes
+            .saturating_sub(self.inspect().memory().iter().map(|m| m.1).sum());
+        // every light's parts checked and made before any is taken
+        let mut parts = Vec::with_capacity(self.bound.len());
+        for res in &self.bound {
+            let limits = TargetLimits {
+                max_bytes: left,
+                ..self.limits
+            };
+            let (p, bytes) = res.scene_parts(&self.gpu, technique.graph(), technique.usages(), &scene.buffers().scene, limits)?;
+            left = left.saturating_sub(bytes);
+            parts.push(p);
+        }
+        for (res, p) in self.bound.iter_mut().zip(parts) {
+            res.take_scene(p);
+        }
+        self.pixels = None;
+        self.bindings = self.bind_all_steps()?;
+        self.unshadowed = Unshadowed::new(&self.gpu, &self.bound)?;
+        self.scene = scene.id();
+        self.bounds_checked = None;
+        self.place = false;
+        self.generation += 1;
+        Ok(())
+    }
+
     /// Shade the host's pixels ([`HostPixels`]: world position and normal textures at the
     /// camera's size) instead of rasterising the scene from the camera: the deferred
     /// Shade's G-buffer is written from them by a step of the runtime's

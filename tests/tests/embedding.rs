@@ -1839,3 +1839,74 @@ fn infinite_and_reverse_z_cameras_render_as_the_forward_camera() {
         assert!(e.contains("reverse-Z") && e.contains("Camera::from_reverse_z"), "{t}: {e}");
     }
 }
+
+/// Issue 49: a host's mesh added (a box spawned beside the triangle) is a new scene under
+/// the same targets: `Targets::set_scene` keeps every texture (the shadow-map-sized ones
+/// are the same wgpu objects), takes the new scene's draws and edges, and the frame equals
+/// fresh targets on the new scene, bit for bit; removing the box again gives the first
+/// frame back. For a raster technique and a Geometry one (its edges and generated buffers
+/// follow the scene).
+#[test]
+fn a_mesh_added_or_removed_keeps_the_targets_and_frames_as_fresh_ones() {
+    use sshc_runtime::gpu::{FrameState, IDENTITY, Instance, Scene as Uploaded, Sizes, Targets, Technique};
+    use sshc_runtime::graph::ValidGraph;
+    for t in ["pcss", "penumbra-limit-maps"] {
+        let c = compile(t);
+        let s = inputs(&scene("triangle", 32, 64), &c);
+        let technique = Technique::new(gpu(), ValidGraph::try_from(c.graph.clone()).unwrap(), c.shaders.clone()).unwrap();
+        let first = geometry_of(&s, [0.0; 3]);
+        let mut more = first.clone();
+        more.meshes.push(box_mesh(0.08));
+        let mut at = IDENTITY;
+        (at[12], at[14]) = (-0.3, 0.25);
+        more.instances.push(Instance {
+            name: "spawned box".into(),
+            mesh: more.meshes.len() - 1,
+            transform: at,
+            casts: true,
+            receives: true,
+            moves: true,
+        });
+        let state = FrameState::of_inputs(&technique, &s);
+        let frame = |targets: &mut Targets, scene: &mut Uploaded| {
+            targets.run_frame(scene, &state).unwrap_or_else(|e| panic!("{t}: {e}"));
+            targets.inspect().read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba
+        };
+        let fresh = |g: &sshc_runtime::gpu::Geometry| {
+            let mut scene = Uploaded::upload(gpu(), g, &[&technique]).unwrap();
+            let mut targets = Targets::new(&technique, &scene, &state, Sizes::of(&s)).unwrap();
+            frame(&mut targets, &mut scene)
+        };
+        let mut scene = Uploaded::upload(gpu(), &first, &[&technique]).unwrap();
+        let mut targets = Targets::new(&technique, &scene, &state, Sizes::of(&s)).unwrap();
+        let before = frame(&mut targets, &mut scene);
+        let kept: Vec<(String, wgpu::Texture)> = c
+            .graph
+            .textures
+            .iter()
+            .filter(|d| !d.format.is_table())
+            .map(|d| (d.name.clone(), targets.texture(&d.name).unwrap().clone()))
+            .collect();
+        let visibility = targets.visibility().clone();
+        // spawned: the old scene's targets refuse the new scene until it is set
+        let mut spawned = Uploaded::upload(gpu(), &more, &[&technique]).unwrap();
+        assert!(targets.prepare(&mut spawned, &state).is_err(), "{t}");
+        targets.set_scene(&spawned).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let with_box = frame(&mut targets, &mut spawned);
+        assert!(with_box != before, "{t}: the spawned box casts nothing (a test of nothing)");
+        assert!(
+            with_box == fresh(&more),
+            "{t}: a mesh added differs from fresh targets on the new scene"
+        );
+        for (name, old) in &kept {
+            assert!(targets.texture(name).unwrap() == old, "{t}: `{name}` was made again");
+        }
+        assert!(targets.visibility() == &visibility, "{t}: the visibility was made again");
+        // despawned
+        targets.set_scene(&scene).unwrap_or_else(|e| panic!("{t}: {e}"));
+        assert!(frame(&mut targets, &mut scene) == before, "{t}: the box removed again differs");
+        if t == "penumbra-limit-maps" {
+            assert!(spawned.edge_counts().unwrap().edges > scene.edge_counts().unwrap().edges);
+        }
+    }
+}
