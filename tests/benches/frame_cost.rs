@@ -54,7 +54,7 @@ fn main() {
         names.retain(|n| only.split(',').any(|o| o == n));
     }
     let mut table = format!(
-        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2.\n\n| technique | scene | CPU µs/frame, median | 90th percentile | on host geometry, median | host geometry, light placed by sshc, median | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2.\n\n| technique | scene | CPU µs/frame, median | 90th percentile | of it `prepare` / `record`, medians | on host geometry, median | host geometry, light placed by sshc, median | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         gpu.describe()
     );
     for t in &names {
@@ -76,6 +76,7 @@ fn main() {
         let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
         let mut ex = ex.bind_scene(&states[0]).unwrap();
         let mut cpu = Vec::new();
+        let (mut prepare_us, mut record_us) = (Vec::new(), Vec::new());
         let (mut moving, mut still) = (Vec::new(), Vec::new());
         let mut last: Option<u64> = None;
         let (mut wall_moving, mut wall_still) = (Vec::new(), Vec::new());
@@ -87,7 +88,12 @@ fn main() {
                 ex.state.camera = *cam;
                 ex.state.lights[0].clone_from(light);
             }
-            ex.encode(&mut encoder).unwrap();
+            let tp = Instant::now();
+            ex.targets.prepare(&mut ex.scene, &ex.state).unwrap();
+            let prepared = tp.elapsed().as_secs_f64() * 1e6;
+            let tr = Instant::now();
+            ex.targets.record(&ex.scene, &mut encoder).unwrap();
+            let recorded = tr.elapsed().as_secs_f64() * 1e6;
             let dt = t0.elapsed().as_secs_f64() * 1e6;
             let t1 = Instant::now();
             gpu.queue.submit([encoder.finish()]);
@@ -96,6 +102,8 @@ fn main() {
             if f >= 10 {
                 if move_this {
                     cpu.push(dt);
+                    prepare_us.push(prepared);
+                    record_us.push(recorded);
                     wall_moving.push(wall);
                 } else {
                     wall_still.push(wall);
@@ -119,15 +127,18 @@ fn main() {
                 (format!("{us:.1}"), format!("{placed:.1}"))
             });
         let row = format!(
-            "| {t} | {sc} | {:.1} | {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
+            "| {t} | {sc} | {:.1} | {:.1} | {:.1} / {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
             median(&mut cpu),
             percentile(&mut cpu, 0.9),
+            median(&mut prepare_us),
+            median(&mut record_us),
             gm / gs,
             wm / ws
         );
         print!("{row}");
         table.push_str(&row);
     }
+    table.push_str(&wgpu_floor());
     table.push_str(&bytes_table());
     let dir = root().join("target").join("embedding");
     std::fs::create_dir_all(&dir).unwrap();
@@ -256,4 +267,93 @@ fn bytes_table() -> String {
         ));
     }
     out
+}
+
+/// What bare wgpu costs the host per recorded pass on this device, as the floor under
+/// sshc's per-frame CPU: an encoder recording `k` render passes that only clear one
+/// 256^2 `Rgba8Unorm` target (one with a pair of timestamp writes, as sshc's passes have),
+/// and a 256-byte `Queue::write_buffer` (a `Frame` uniform's write). Medians of 1000.
+fn wgpu_floor() -> String {
+    let gpu = gpu();
+    let device = &gpu.device;
+    let target = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("floor target"),
+        size: wgpu::Extent3d {
+            width: 256,
+            height: 256,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let view = target.create_view(&Default::default());
+    let timed = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY);
+    let queries = timed.then(|| {
+        device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("floor times"),
+            ty: wgpu::QueryType::Timestamp,
+            count: 2,
+        })
+    });
+    let record = |passes: usize| {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let t0 = Instant::now();
+        for _ in 0..passes {
+            let _pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("floor"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: queries.as_ref().map(|q| wgpu::RenderPassTimestampWrites {
+                    query_set: q,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+        }
+        let us = t0.elapsed().as_secs_f64() * 1e6;
+        gpu.queue.submit([encoder.finish()]);
+        us
+    };
+    let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("floor uniform"),
+        size: 256,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let (mut one, mut four, mut writes) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..1010 {
+        let (a, b) = (record(1), record(4));
+        let t0 = Instant::now();
+        gpu.queue.write_buffer(&uniform, 0, &[0u8; 256]);
+        let w = t0.elapsed().as_secs_f64() * 1e6;
+        if i % 50 == 0 {
+            gpu.wait().unwrap();
+        }
+        if i >= 10 {
+            one.push(a);
+            four.push(b);
+            writes.push(w);
+        }
+    }
+    gpu.wait().unwrap();
+    let (one, four, w) = (median(&mut one), median(&mut four), median(&mut writes));
+    format!(
+        "\nBare wgpu on this device (the floor under the CPU columns): an encoder recording 1 render pass that clears one 256^2 target{}: {one:.1} µs; 4 such passes: {four:.1} µs ({:.1} µs a pass); a 256-byte `write_buffer`: {w:.1} µs. Medians of 1000.\n",
+        if timed { " with a pair of timestamp writes" } else { "" },
+        four / 4.0,
+    )
 }
