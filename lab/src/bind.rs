@@ -586,22 +586,8 @@ pub fn camera(scene: &Scene) -> Camera {
 /// where a scene has several ([`crate::session::single_light`]), as it is for binding.
 pub fn light_inputs(scene: &Scene, light: &Light, graph: &PassGraph) -> Result<LightInputs, String> {
     let mut inputs = light_inputs_with_samples(scene, light, graph_samples(graph))?;
-    outside_the_model(graph, &mut inputs);
+    crate::run::outside_the_model(graph, &mut inputs);
     Ok(inputs)
-}
-
-/// The lab runs a technique under lights its file does not list on purpose (how far a
-/// model holds outside its light is a measurement; `sshc render` and `compare` warn of it:
-/// `session::specialise`). The runtime refuses a light whose stated kind the technique
-/// does not list, so the lab gives such a light without its kind, which the runtime does
-/// not judge.
-pub fn outside_the_model(graph: &PassGraph, light: &mut LightInputs) {
-    if let Some(k) = light.kind
-        && !graph.lights.is_empty()
-        && !graph.lights.iter().any(|m| m.accepts(k))
-    {
-        light.kind = None;
-    }
 }
 
 fn light_inputs_with_samples(scene: &Scene, light: &Light, n: u32) -> Result<LightInputs, String> {

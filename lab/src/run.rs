@@ -128,7 +128,7 @@ impl Loaded {
 
     fn bound(&self, scene: Scene, camera: Camera, mut lights: Vec<LightInputs>, slices: Option<Slices>, sizes: Sizes) -> Result<Bound> {
         for l in &mut lights {
-            crate::bind::outside_the_model(self.graph(), l);
+            outside_the_model(self.graph(), l);
         }
         let state = FrameState {
             camera,
@@ -232,7 +232,7 @@ impl Bound {
     /// Light `l` fitted to the scene's instances as they are now ([`Targets::fit_light`]).
     pub fn place_light(&mut self, l: usize, light: &sshc_runtime::light::Light, fit: sshc_runtime::gpu::Fit) -> Result<()> {
         let mut inputs = self.targets.fit_light(&self.scene, l, light, fit)?;
-        crate::bind::outside_the_model(self.graph(), &mut inputs);
+        outside_the_model(self.graph(), &mut inputs);
         match self.state.lights.get_mut(l) {
             Some(slot) => *slot = inputs,
             None => return Err(RuntimeError::NotFound(format!("light {l} is not bound"))),
@@ -252,5 +252,19 @@ impl std::fmt::Debug for Bound {
             .field("lights", &self.targets.lights())
             .field("sizes", &(self.targets.camera_size(), self.targets.shadow_size()))
             .finish_non_exhaustive()
+    }
+}
+
+/// The lab runs a technique under lights its file does not list on purpose (how far a
+/// model holds outside its light is a measurement; `sshc render` and `compare` warn of it:
+/// `session::specialise`). The runtime refuses a light whose stated kind the technique
+/// does not list, so the lab gives such a light without its kind, which the runtime does
+/// not judge.
+pub fn outside_the_model(graph: &PassGraph, light: &mut LightInputs) {
+    if let Some(k) = light.kind
+        && !graph.lights.is_empty()
+        && !graph.lights.iter().any(|m| m.accepts(k))
+    {
+        light.kind = None;
     }
 }

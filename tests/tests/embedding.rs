@@ -448,7 +448,7 @@ fn per_frame_states_refuse_what_would_need_new_targets() {
     assert!(e.contains("2 light(s) in the frame for targets made for 1"), "{e}");
     // issue 49: a light of a kind the technique's file does not list (PCSS is written for
     // area lights) is refused where the host states its kind; the lab, which runs such
-    // pairs on purpose, gives it without its kind (`bind::outside_the_model`)
+    // pairs on purpose, gives it without its kind (`run::outside_the_model`)
     let e = refused(&mut ex, &|st| st.lights[0].kind = Some(sshc_runtime::graph::LightKind::Point));
     assert!(
         e.contains("technique `pcss` is written for Rectangle, Disk, Sphere, DistantDisk lights") && e.contains("light 0 is a Point light"),
