@@ -863,57 +863,67 @@ impl Visibility {
         for (li, light) in scene.lights.iter().enumerate() {
             let Some(c) = light.center() else { continue };
             let what = format!("lights[{li}] ({})", light.kind_name());
-            // The nearest triangle to the centre.
-            let nearest = tris
-                .iter()
-                .enumerate()
-                .map(|(i, t)| (i, closest_on_triangle(c, t).distance(c)))
-                .min_by(|a, b| a.1.total_cmp(&b.1));
-            let Some((t, dist)) = nearest else { continue };
-            let contact = LIGHT_CONTACT_OFFSETS * self.offset_at(c);
-            if dist <= contact {
-                if let Some(o) = object_of(t) {
-                    out.push(format!(
-                        "{what} has its centre {dist:e} from a surface of {}, within {contact:e} (4 ray offsets): a light on a surface has no defined shadow, and the techniques and the truth disagree there; move it off the surface",
-                        name(o)
-                    ));
+            // The light's own depth range, said only where nothing more specific is: a
+            // light on, through or inside a caster loses its near plane too (issue 49).
+            let before = out.len();
+            'specific: {
+                // The nearest triangle to the centre.
+                let nearest = tris
+                    .iter()
+                    .enumerate()
+                    .map(|(i, t)| (i, closest_on_triangle(c, t).distance(c)))
+                    .min_by(|a, b| a.1.total_cmp(&b.1));
+                let Some((t, dist)) = nearest else { break 'specific };
+                let contact = LIGHT_CONTACT_OFFSETS * self.offset_at(c);
+                if dist <= contact {
+                    if let Some(o) = object_of(t) {
+                        out.push(format!(
+                            "{what} has its centre {dist:e} from a surface of {}, within {contact:e} (4 ray offsets): a light on a surface has no defined shadow, and the techniques and the truth disagree there; move it off the surface",
+                            name(o)
+                        ));
+                    }
+                    break 'specific;
                 }
-                continue;
-            }
-            // Area lights meeting a triangle.
-            if let Some(t) = tris.iter().position(|t| light_meets(light, t)) {
-                if let Some(o) = object_of(t) {
-                    out.push(format!(
-                        "{what} passes through {}: part of the light lies inside or behind its surface, which the techniques and the truth treat differently; move the light clear of it",
-                        name(o)
-                    ));
+                // Area lights meeting a triangle.
+                if let Some(t) = tris.iter().position(|t| light_meets(light, t)) {
+                    if let Some(o) = object_of(t) {
+                        out.push(format!(
+                            "{what} passes through {}: part of the light lies inside or behind its surface, which the techniques and the truth treat differently; move the light clear of it",
+                            name(o)
+                        ));
+                    }
+                    break 'specific;
                 }
-                continue;
-            }
-            // Inside a closed mesh: most rays hit back faces of one object.
-            let mut back = vec![0u32; scene.objects().len()];
-            for k in 0..INSIDE_RAYS {
-                // Fibonacci lattice on the sphere.
-                let z = 1.0 - (2.0 * k as f32 + 1.0) / INSIDE_RAYS as f32;
-                let r = (1.0 - z * z).max(0.0).sqrt();
-                let phi = k as f32 * 2.399_963;
-                let dir = Vec3::new(r * phi.cos(), z, r * phi.sin());
-                if let Some((_, t)) = self.closest_hit(c, dir, f32::INFINITY) {
-                    let [a, b, cc] = tris[t];
-                    if (b - a).cross(cc - a).dot(dir) > 0.0
-                        && let Some(o) = object_of(t)
-                    {
-                        back[o] += 1;
+                // Inside a closed mesh: most rays hit back faces of one object.
+                let mut back = vec![0u32; scene.objects().len()];
+                for k in 0..INSIDE_RAYS {
+                    // Fibonacci lattice on the sphere.
+                    let z = 1.0 - (2.0 * k as f32 + 1.0) / INSIDE_RAYS as f32;
+                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    let phi = k as f32 * 2.399_963;
+                    let dir = Vec3::new(r * phi.cos(), z, r * phi.sin());
+                    if let Some((_, t)) = self.closest_hit(c, dir, f32::INFINITY) {
+                        let [a, b, cc] = tris[t];
+                        if (b - a).cross(cc - a).dot(dir) > 0.0
+                            && let Some(o) = object_of(t)
+                        {
+                            back[o] += 1;
+                        }
                     }
                 }
+                if let Some((o, &n)) = back.iter().enumerate().max_by_key(|(_, n)| **n)
+                    && 2 * n > INSIDE_RAYS
+                {
+                    out.push(format!(
+                        "{what} has its centre inside {} ({n} of {INSIDE_RAYS} rays from it hit the inside of its surface): its light cannot leave the mesh, which the techniques and the truth treat differently; move the light outside",
+                        name(o)
+                    ));
+                }
             }
-            if let Some((o, &n)) = back.iter().enumerate().max_by_key(|(_, n)| **n)
-                && 2 * n > INSIDE_RAYS
+            if out.len() == before
+                && let Some(w) = scene.light_view(light).depth_warning()
             {
-                out.push(format!(
-                    "{what} has its centre inside {} ({n} of {INSIDE_RAYS} rays from it hit the inside of its surface): its light cannot leave the mesh, which the techniques and the truth treat differently; move the light outside",
-                    name(o)
-                ));
+                out.push(format!("{what}: {w}"));
             }
         }
         out
