@@ -498,6 +498,9 @@ fn clean_scenes_give_no_warning() {
 fn a_light_beside_the_casters_is_warned_of_its_near_plane() {
     let w = warnings("Point(position: (2.9, 0.2, 2.9))", FLOOR_AND_BOX);
     assert_eq!(w.len(), 1, "{w:?}");
-    assert!(w[0].contains("near plane") && w[0].contains("move the light clear of the casters"), "{w:?}");
+    assert!(
+        w[0].contains("near plane") && w[0].contains("move the light clear of the casters"),
+        "{w:?}"
+    );
     assert!(warnings("Point(position: (0.5, 4.0, 0.3))", FLOOR_AND_BOX).is_empty());
 }
