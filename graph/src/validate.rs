@@ -41,6 +41,13 @@ impl std::ops::Deref for ValidGraph {
 }
 
 impl PassGraph {
+    /// Whether the technique is written for a light of `kind`: its `light:` list (`lights`)
+    /// is empty, `Any`, or names the kind. The one reading of the list the runtime's
+    /// refusal and the lab's choice to run a pair anyway share.
+    pub fn written_for(&self, kind: crate::LightKind) -> bool {
+        self.lights.is_empty() || self.lights.iter().any(|m| m.accepts(kind))
+    }
+
     /// The `Params` uniform with every runtime param at its default value (`params_size`
     /// bytes, each param at its offset, padding zero): what the targets write first.
     pub fn default_params(&self) -> Vec<u8> {

@@ -262,8 +262,7 @@ impl std::fmt::Debug for Bound {
 /// not judge.
 pub fn outside_the_model(graph: &PassGraph, light: &mut LightInputs) {
     if let Some(k) = light.kind
-        && !graph.lights.is_empty()
-        && !graph.lights.iter().any(|m| m.accepts(k))
+        && !graph.written_for(k)
     {
         light.kind = None;
     }

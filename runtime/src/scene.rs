@@ -39,6 +39,18 @@ impl Scene {
     /// [`Scene::upload`], refused when the edge adjacency could take more than `max_bytes`
     /// (bounded from the casting triangles before it is built: [`Adjacency::max_bytes`]).
     pub fn upload_within(gpu: &Gpu, geometry: &Geometry, techniques: &[&Technique], max_bytes: u64) -> Result<Scene> {
+        Scene::build(gpu, geometry, techniques, max_bytes, || geometry.soup().map(|(v, c)| (v, Some(c))))
+    }
+
+    /// The upload; `soup` gives the placed casters for a specialised technique's exact
+    /// depth-floor check, asked only when one of `techniques` is specialised.
+    fn build(
+        gpu: &Gpu,
+        geometry: &Geometry,
+        techniques: &[&Technique],
+        max_bytes: u64,
+        soup: impl FnOnce() -> Result<(Vec<f32>, Option<u32>)>,
+    ) -> Result<Scene> {
         let edges = techniques.iter().any(|t| t.usages().edges);
         if edges {
             let tris = geometry.casting_triangles();
@@ -55,7 +67,7 @@ impl Scene {
         let caster_bounds = buffers.caster_bounds_at(&buffers.transforms);
         // a specialised technique's depth floor is checked on the placed triangles
         let soup = match techniques.iter().any(|t| t.graph().specialised.is_some()) {
-            true => Some(geometry.soup().map(|(v, c)| (v, Some(c)))?),
+            true => Some(soup()?),
             false => None,
         };
         Ok(Scene {
@@ -80,12 +92,8 @@ impl Scene {
         max_bytes: u64,
     ) -> Result<Scene> {
         let geometry = Geometry::from_soup(vertices, meshes, casting_vertices, unshadowed)?;
-        let mut scene = Scene::upload_within(gpu, &geometry, techniques, max_bytes)?;
-        if scene.soup.is_some() {
-            // the soup as given (the geometry's is the same triangles, instance by instance)
-            scene.soup = Some((vertices.to_vec(), casting_vertices));
-        }
-        Ok(scene)
+        // the soup as given: not made again from the geometry
+        Scene::build(gpu, &geometry, techniques, max_bytes, || Ok((vertices.to_vec(), casting_vertices)))
     }
 
     /// [`Scene::from_soup`] of a [`SceneInputs`]' soup, within [`DEFAULT_MAX_BYTES`].

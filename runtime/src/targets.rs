@@ -401,7 +401,7 @@ impl Targets {
     /// the next submission, before its command buffers. A refused state writes nothing.
     pub fn prepare(&mut self, scene: &mut Scene, state: &FrameState) -> Result<()> {
         self.check_scene(scene)?;
-        self.check_state(scene, state)?;
+        let changed = self.check_state(scene, state)?;
         if let Some(t) = &mut self.timestamps {
             // the host's submissions fire the mapping callbacks: no poll here
             t.collect(&self.gpu, false)?;
@@ -417,7 +417,7 @@ impl Targets {
         let camera_moved = self.camera != state.camera;
         let shadow_size = self.shadow_size();
         for (l, light) in state.lights.iter().enumerate() {
-            if self.lights_state[l] != *light {
+            if changed[l] {
                 // in place: nothing is allocated once the light's samples are bound
                 self.uniforms[l].set(&state.camera, light, shadow_size, false);
                 self.lights_state[l].assign(light);
@@ -464,7 +464,8 @@ impl Targets {
 
     /// Refuse a state these targets cannot run: checked where it changed (the camera, a
     /// light, the casters' bounds, the slices), so an unchanged frame costs comparisons.
-    fn check_state(&self, scene: &Scene, state: &FrameState) -> Result<()> {
+    /// Returns which lights changed since the last frame (compared once, here).
+    fn check_state(&self, scene: &Scene, state: &FrameState) -> Result<[bool; MAX_LIGHTS]> {
         let graph = self.technique.graph();
         let n = self.bound.len();
         if state.lights.len() != n {
@@ -479,8 +480,10 @@ impl Targets {
         }
         let bounds = scene.caster_bounds();
         let bounds_moved = bounds != self.bounds_checked;
+        let mut changed = [false; MAX_LIGHTS];
         for (l, (light, res)) in state.lights.iter().zip(&self.bound).enumerate() {
-            if !bounds_moved && self.lights_state[l] == *light {
+            changed[l] = self.lights_state[l] != *light;
+            if !bounds_moved && !changed[l] {
                 continue;
             }
             light.check(l)?;
@@ -496,7 +499,7 @@ impl Targets {
         }
         match (&state.slices, self.combine.as_ref().is_some_and(|c| c.cascades)) {
             (Some(s), true) => {
-                if self.slices.as_ref() != Some(s) || state.lights != self.lights_state {
+                if self.slices.as_ref() != Some(s) || changed.iter().any(|c| *c) {
                     check_cascades(&state.lights, s)?;
                 }
             }
@@ -514,7 +517,7 @@ impl Targets {
                 ));
             }
         }
-        Ok(())
+        Ok(changed)
     }
 
     /// Record the frame [`Targets::prepare`] began into the host's `encoder`: the scene's
@@ -771,8 +774,7 @@ fn check_cascades(cascades: &[LightInputs], slices: &Slices) -> Result<()> {
 /// of them. A light of no stated kind is not judged.
 fn check_light_kind(graph: &PassGraph, l: usize, kind: Option<graph::LightKind>) -> Result<()> {
     if let Some(k) = kind
-        && !graph.lights.is_empty()
-        && !graph.lights.iter().any(|m| m.accepts(k))
+        && !graph.written_for(k)
     {
         let listed: Vec<String> = graph.lights.iter().map(|m| format!("{m:?}")).collect();
         return Err(RuntimeError::Param(format!(
