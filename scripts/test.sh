@@ -23,7 +23,7 @@ cargo fmt --all -- --check
 # themselves wait for the lint to end, so that each has a core of its own.
 # (In a session of its own, so that a failing suite stops the build with its cargo.)
 fuzz_build_log=$(mktemp)
-setsid scripts/fuzz.sh build >"$fuzz_build_log" 2>&1 &
+setsid scripts/fuzz.sh build --smoke >"$fuzz_build_log" 2>&1 &
 fuzz_build=$!
 trap 'kill -- -"$fuzz_build" 2>/dev/null || true; rm -f "$fuzz_build_log" "$slurm_install_log"' EXIT
 
@@ -80,10 +80,10 @@ done
 
 phase "fuzz (short run)"
 # A workspace of its own (compiler/fuzz, excluded from the root one). scripts/fuzz.sh
-# builds the five targets (front, expr, graph, scene, gltf) with libFuzzer's coverage
-# instrumentation, no sanitizer (RUSTC_BOOTSTRAP=1 on stable; libfuzzer-sys's build script
+# builds the eight targets with libFuzzer's coverage instrumentation, no sanitizer, at
+# opt-level 1 (its smoke build; RUSTC_BOOTSTRAP=1 on stable; libfuzzer-sys's build script
 # compiles libFuzzer's C++, so a C++ compiler is needed), then runs each on its seeds plus
-# 20 s of mutation; a crash, a timeout or an out-of-memory fails the phase and leaves the
+# 15 s of mutation; a crash, a timeout or an out-of-memory fails the phase and leaves the
 # input in compiler/fuzz/artifacts/<target>/. The build ran beside the lint; the runs take
 # the targets one per core (docs/fuzzing.md).
 if ! wait "$fuzz_build"; then
@@ -91,7 +91,7 @@ if ! wait "$fuzz_build"; then
     echo "error: the fuzz targets did not build"
     exit 1
 fi
-scripts/fuzz.sh ci 20
+scripts/fuzz.sh ci 15
 
 phase "tests"
 if cargo nextest --version >/dev/null 2>&1; then

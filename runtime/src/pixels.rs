@@ -169,7 +169,7 @@ impl PixelsStep {
                     let views = [&world, &normal, &g[0], &g[1], &g[2]];
                     let mut entries = vec![wgpu::BindGroupEntry {
                         binding: 0,
-                        resource: res.frame.as_entire_binding(),
+                        resource: res.centre_frame(),
                     }];
                     entries.extend(views.iter().enumerate().map(|(i, v)| wgpu::BindGroupEntry {
                         binding: i as u32 + 1,

@@ -128,7 +128,7 @@ impl Unshadowed {
                         layout: &pipeline.get_bind_group_layout(0),
                         entries: &[wgpu::BindGroupEntry {
                             binding: 0,
-                            resource: res.frame.as_entire_binding(),
+                            resource: res.centre_frame(),
                         }],
                     });
                     let view = |t: &wgpu::Texture| t.create_view(&Default::default());

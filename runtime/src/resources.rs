@@ -152,10 +152,12 @@ pub(crate) struct Resources {
     /// A deferred Shade's G-buffer ([`graph::GBUFFER`]), at the camera's size; empty when
     /// no step draws one.
     pub gbuffer: Vec<wgpu::Texture>,
-    pub frame: wgpu::Buffer,
-    /// The `Frame` of each light-sample view (`SceneInputs::sample_frame`), for the passes
-    /// that render one view per sample.
-    pub sample_frames: Vec<wgpu::Buffer>,
+    /// Every view's `Frame` in one uniform buffer, written once a frame: the centre view's
+    /// at offset 0, light sample k's (`SceneInputs::sample_frame`, for the passes that
+    /// render one view per sample) at `(k + 1) * frame_stride`.
+    pub frames: wgpu::Buffer,
+    /// `FRAME_SIZE` rounded up to the device's uniform offset alignment.
+    pub frame_stride: u64,
     /// The `LightSamples` uniform (every sample's view).
     pub light_samples: wgpu::Buffer,
     /// Light samples bound, and whether they close a loop.
@@ -169,7 +171,32 @@ pub(crate) struct Resources {
     pub edges_per_chunk: u64,
 }
 
+/// The distance between two views' `Frame`s in a light's one buffer ([`Resources::frames`]):
+/// `FRAME_SIZE` rounded up to the device's uniform offset alignment.
+pub(crate) fn frame_stride(gpu: &Gpu) -> u64 {
+    u64::from(FRAME_SIZE).next_multiple_of(u64::from(gpu.limits.min_uniform_buffer_offset_alignment.max(1)))
+}
+
 impl Resources {
+    /// The centre view's `Frame`, as a binding.
+    pub fn centre_frame(&self) -> wgpu::BindingResource<'_> {
+        self.frame_at(0)
+    }
+
+    /// Light sample `k`'s `Frame`, as a binding; `None` past the samples bound.
+    pub fn sample_frame(&self, k: usize) -> Option<wgpu::BindingResource<'_>> {
+        (k < self.samples as usize).then(|| self.frame_at(k as u64 + 1))
+    }
+
+    /// The `Frame` in slot `slot` of [`Resources::frames`].
+    fn frame_at(&self, slot: u64) -> wgpu::BindingResource<'_> {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.frames,
+            offset: slot * self.frame_stride,
+            size: wgpu::BufferSize::new(u64::from(FRAME_SIZE)),
+        })
+    }
+
     /// Check the scene's sizes against the device and `limits.max_bytes` (what is left of
     /// the targets' budget), then create everything; textures the lights share are taken
     /// from `pool` (made there by the first light).
@@ -201,6 +228,7 @@ impl Resources {
                 limit: max_bytes,
             });
         }
+        let frame_stride = frame_stride(gpu);
         gpu.scoped("scene resources", || {
             let make = Make { gpu };
             let (textures, tables) = make.graph_textures(graph, usages, s.shadow_size, s.camera_size, None, Some(pool));
@@ -222,11 +250,15 @@ impl Resources {
                 camera,
                 camera_depth,
                 gbuffer,
-                frame: make.uniform("frame", &s.frame().to_bytes()),
-                sample_frames: (0..s.samples.len())
-                    .filter_map(|k| s.sample_frame(k))
-                    .map(|f| make.uniform("sample frame", &f.to_bytes()))
-                    .collect(),
+                frames: {
+                    let mut bytes = vec![0u8; frame_stride as usize * (1 + s.samples.len())];
+                    let views = std::iter::once(s.frame()).chain((0..s.samples.len()).filter_map(|k| s.sample_frame(k)));
+                    for (chunk, f) in bytes.chunks_exact_mut(frame_stride as usize).zip(views) {
+                        chunk[..FRAME_SIZE as usize].copy_from_slice(&f.to_array());
+                    }
+                    make.uniform_sized("frames", &bytes, bytes.len())
+                },
+                frame_stride,
                 light_samples: make.uniform_sized(
                     "light samples",
                     &SampleViewUniform::light_samples_bytes(&s.light_samples()),
@@ -598,10 +630,6 @@ impl Make<'_> {
     }
 
     /// A `Frame`-sized uniform holding `bytes`.
-    fn uniform(&self, label: &str, bytes: &[u8]) -> wgpu::Buffer {
-        self.uniform_sized(label, bytes, FRAME_SIZE as usize)
-    }
-
     /// A uniform of `size` bytes holding `bytes` at its start.
     fn uniform_sized(&self, label: &str, bytes: &[u8], size: usize) -> wgpu::Buffer {
         let buf = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {

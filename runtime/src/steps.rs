@@ -192,9 +192,6 @@ pub(crate) struct RasterPass {
 
 /// What every step's group 0 binds.
 pub(crate) struct Group0<'a> {
-    pub frame: &'a wgpu::Buffer,
-    /// The `Frame` of each light-sample view.
-    pub sample_frames: &'a [wgpu::Buffer],
     pub light_samples: &'a wgpu::Buffer,
     pub params: Option<&'a wgpu::Buffer>,
     pub sampler: &'a wgpu::Sampler,
@@ -537,15 +534,14 @@ impl StepNode {
     /// view binds the centre's `Frame` and layer 0's block).
     fn bind_view(&self, gpu: &Gpu, res: &Resources, shared: &Group0, view: u32) -> Result<StepBinding> {
         let frame = if self.per_sample {
-            shared.sample_frames.get(view as usize).ok_or_else(|| {
+            res.sample_frame(view as usize).ok_or_else(|| {
                 RuntimeError::Param(format!(
                     "pass `{}` renders light sample {view}, but the scene gives {} sample view(s)",
-                    self.label,
-                    shared.sample_frames.len()
+                    self.label, res.samples
                 ))
             })?
         } else {
-            shared.frame
+            res.centre_frame()
         };
         let group0 = self.group0(gpu, shared, frame)?;
         let bound = match &self.kind {
@@ -767,10 +763,10 @@ impl StepNode {
         Ok(bound)
     }
 
-    fn group0(&self, gpu: &Gpu, shared: &Group0, frame: &wgpu::Buffer) -> Result<wgpu::BindGroup> {
+    fn group0(&self, gpu: &Gpu, shared: &Group0, frame: wgpu::BindingResource) -> Result<wgpu::BindGroup> {
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,
-            resource: frame.as_entire_binding(),
+            resource: frame,
         }];
         if self.light_samples {
             entries.push(wgpu::BindGroupEntry {

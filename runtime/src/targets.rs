@@ -17,7 +17,7 @@ use crate::graph::{self, PassGraph};
 use crate::lights::{Combine, Combining, MAX_LIGHTS, Slices};
 use crate::pixels::{HostPixels, PixelsStep};
 use crate::receivers::Unshadowed;
-use crate::resources::{Pool, Resources, TargetLimits, f32_bytes, texture_bytes};
+use crate::resources::{Pool, Resources, TargetLimits, f32_bytes, frame_stride, texture_bytes};
 use crate::scene::Scene;
 use crate::state::FrameState;
 use crate::steps::{Group0, StepBinding};
@@ -196,7 +196,7 @@ impl Targets {
             uniforms: state
                 .lights
                 .iter()
-                .map(|l| LightUniforms::new(&state.camera, l, sizes.shadow, true))
+                .map(|l| LightUniforms::new(&state.camera, l, sizes.shadow, frame_stride(&gpu), true))
                 .collect(),
             bounds_checked: scene.caster_bounds(),
             slices: None,
@@ -242,8 +242,6 @@ impl Targets {
     /// What every step binds on one light's resources.
     fn bind_steps(&self, res: &Resources) -> Result<Vec<Vec<Vec<StepBinding>>>> {
         let shared = Group0 {
-            frame: &res.frame,
-            sample_frames: &res.sample_frames,
             light_samples: &res.light_samples,
             params: self.params_buf.as_ref(),
             sampler: self.technique.sampler(),
@@ -590,6 +588,18 @@ impl Targets {
             t.finish(encoder, slot);
         }
         Ok(())
+    }
+
+    /// The render and compute passes one [`Targets::record`] encodes (the placement of a
+    /// moved scene's instances aside): what a frame costs the host scales with it, each
+    /// pass a descriptor and a driver command list (docs/embedding.md, "Host CPU").
+    pub fn recorded_passes(&self) -> usize {
+        let steps: usize = self.bindings.iter().flatten().flatten().flatten().map(StepBinding::passes).sum();
+        let unshadowed = match (&self.unshadowed, &self.pixels) {
+            (Some(_), None) => self.bound.len(),
+            _ => 0,
+        };
+        steps + unshadowed + usize::from(self.combine.is_some())
     }
 
     /// The newest frame whose GPU times have come back (its number, counted from the

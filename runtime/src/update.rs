@@ -11,7 +11,7 @@
 //! last written before it (last write wins).
 
 use crate::frame::{Camera, LightInputs};
-use crate::graph::{FrameUniform, SampleViewUniform};
+use crate::graph::{FRAME_SIZE, FrameUniform, SampleViewUniform};
 use crate::resources::Resources;
 
 /// One light's uniforms as the next frame writes them. Set again in place (its vectors
@@ -21,6 +21,10 @@ pub(crate) struct LightUniforms {
     /// The centre view's `Frame` and each light sample's.
     centre: FrameUniform,
     samples: Vec<FrameUniform>,
+    /// Their bytes as [`Resources::frames`] holds them (one `Frame` every `stride` bytes),
+    /// made once: each frame writes them with one `write_buffer`.
+    bytes: Vec<u8>,
+    stride: usize,
     /// The `LightSamples` uniform, and whether it changed since it was last written.
     light_samples: Vec<SampleViewUniform>,
     light_samples_pending: bool,
@@ -29,10 +33,14 @@ pub(crate) struct LightUniforms {
 impl LightUniforms {
     /// The uniforms of `light` seen by `camera`; the `LightSamples` pending when `fresh`
     /// (binding has just written them: not pending).
-    pub fn new(camera: &Camera, light: &LightInputs, shadow_size: u32, fresh: bool) -> LightUniforms {
+    /// `stride`: the bytes between two views' `Frame`s ([`Resources::frame_stride`]).
+    pub fn new(camera: &Camera, light: &LightInputs, shadow_size: u32, stride: u64, fresh: bool) -> LightUniforms {
+        let stride = stride as usize;
         let mut u = LightUniforms {
             centre: FrameUniform::default(),
             samples: Vec::with_capacity(light.samples.len()),
+            bytes: vec![0; stride * (1 + light.samples.len())],
+            stride,
             light_samples: Vec::with_capacity(light.samples.len()),
             light_samples_pending: false,
         };
@@ -66,15 +74,15 @@ impl<'a> FrameWriter<'a> {
     }
 
     /// Write light `u`'s uniforms into `res` for frame `frame` (`counters.x`: frames run
-    /// since the scene was bound): every `Frame` buffer once, the `LightSamples` if they
-    /// changed.
+    /// since the scene was bound): every view's `Frame` in one write (each `write_buffer`
+    /// stages through a buffer of its own), the `LightSamples` if they changed.
     pub fn light(&self, res: &Resources, u: &mut LightUniforms, frame: u32) {
-        u.centre.counters[0] = frame as f32;
-        self.queue.write_buffer(&res.frame, 0, &u.centre.to_array());
-        for (f, buf) in u.samples.iter_mut().zip(&res.sample_frames) {
+        let views = std::iter::once(&mut u.centre).chain(u.samples.iter_mut());
+        for (chunk, f) in u.bytes.chunks_exact_mut(u.stride).zip(views) {
             f.counters[0] = frame as f32;
-            self.queue.write_buffer(buf, 0, &f.to_array());
+            chunk[..FRAME_SIZE as usize].copy_from_slice(&f.to_array());
         }
+        self.queue.write_buffer(&res.frames, 0, &u.bytes);
         if std::mem::take(&mut u.light_samples_pending) {
             self.queue
                 .write_buffer(&res.light_samples, 0, &SampleViewUniform::light_samples_array(&u.light_samples));

@@ -34,6 +34,17 @@ fn env(name: &str, default: u32) -> u32 {
     std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
 
+/// The calling thread's own CPU time, in µs (`CLOCK_THREAD_CPUTIME_ID`): the time the host
+/// thread spent running, without the time it waited while lavapipe's threads (which run
+/// the previous frame's passes on the same cores) held them.
+fn thread_cpu_us() -> f64 {
+    let mut t = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: `t` is a valid timespec to write into; the clock exists on Linux
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+    assert_eq!(rc, 0, "clock_gettime(CLOCK_THREAD_CPUTIME_ID)");
+    t.tv_sec as f64 * 1e6 + t.tv_nsec as f64 * 1e-3
+}
+
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
@@ -53,8 +64,9 @@ fn main() {
     if let Ok(only) = std::env::var("SSHC_TECHNIQUES") {
         names.retain(|n| only.split(',').any(|o| o == n));
     }
+    let floor = Floor::new();
     let mut table = format!(
-        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2.\n\n| technique | scene | CPU µs/frame, median | 90th percentile | of it `prepare` / `record`, medians | on host geometry, median | host geometry, light placed by sshc, median | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2. CPU times are the host thread's own (`CLOCK_THREAD_CPUTIME_ID`), medians. *Cold*: each frame recorded just after waiting for the last (as a host that waits for its GPU; on lavapipe the GPU is the same cores, idle a frame's time). *Isolated*: the frames back to back with no GPU work in flight (command buffers dropped unsubmitted). *Floor*: bare wgpu recording as many render passes (each clearing a 256^2 target, with timestamps) and one 256-byte `write_buffer`, in the same conditions, alternating with sshc's frames.\n\n| technique | scene | passes recorded | cold µs | cold floor µs | cold / floor | isolated µs | isolated floor µs | isolated / floor | cold wall µs, 90th percentile | cold `prepare` / `record` wall µs | on host geometry, cold wall µs | host geometry, light placed by sshc, cold wall µs | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         gpu.describe()
     );
     for t in &names {
@@ -75,14 +87,27 @@ fn main() {
         let views: Vec<_> = states.iter().map(|s| (s.camera(), s.light_inputs())).collect();
         let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
         let mut ex = ex.bind_scene(&states[0]).unwrap();
-        let mut cpu = Vec::new();
+        let (mut cpu, mut thread) = (Vec::new(), Vec::new());
         let (mut prepare_us, mut record_us) = (Vec::new(), Vec::new());
         let (mut moving, mut still) = (Vec::new(), Vec::new());
         let mut last: Option<u64> = None;
         let (mut wall_moving, mut wall_still) = (Vec::new(), Vec::new());
+        let passes = ex.targets.recorded_passes();
+        let mut floor_cold = Vec::new();
         for (f, (cam, light)) in views.iter().enumerate() {
             let move_this = f % 2 == 0;
+            if !move_this {
+                // bare wgpu's floor for as many passes, in the same conditions: just after
+                // waiting for a frame of this technique (its clears waited for, untimed)
+                let (us, encoder) = floor.record(passes);
+                gpu.queue.submit([encoder.finish()]);
+                gpu.wait().unwrap();
+                if f >= 10 {
+                    floor_cold.push(us);
+                }
+            }
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            let c0 = thread_cpu_us();
             let t0 = Instant::now();
             if move_this {
                 ex.state.camera = *cam;
@@ -95,6 +120,7 @@ fn main() {
             ex.targets.record(&ex.scene, &mut encoder).unwrap();
             let recorded = tr.elapsed().as_secs_f64() * 1e6;
             let dt = t0.elapsed().as_secs_f64() * 1e6;
+            let dc = thread_cpu_us() - c0;
             let t1 = Instant::now();
             gpu.queue.submit([encoder.finish()]);
             gpu.wait().unwrap();
@@ -102,6 +128,7 @@ fn main() {
             if f >= 10 {
                 if move_this {
                     cpu.push(dt);
+                    thread.push(dc);
                     prepare_us.push(prepared);
                     record_us.push(recorded);
                     wall_moving.push(wall);
@@ -119,6 +146,32 @@ fn main() {
                 }
             }
         }
+        // Isolated: the same frames' prepare + record with no GPU work in flight, their
+        // command buffers dropped unsubmitted (an empty submission applies the writes and
+        // runs the timestamp ring's callbacks): sshc's and wgpu's own code, warm; and bare
+        // wgpu's floor for as many passes, alternating with it.
+        let (mut isolated, mut floor_isolated) = (Vec::new(), Vec::new());
+        for (f, (cam, light)) in views.iter().enumerate() {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            let c0 = thread_cpu_us();
+            if f % 2 == 0 {
+                ex.state.camera = *cam;
+                ex.state.lights[0].clone_from(light);
+            }
+            ex.targets.prepare(&mut ex.scene, &ex.state).unwrap();
+            ex.targets.record(&ex.scene, &mut encoder).unwrap();
+            let dc = thread_cpu_us() - c0;
+            drop(encoder.finish());
+            gpu.queue.submit([]);
+            let (floor_us, encoder) = floor.record(passes);
+            drop(encoder.finish());
+            gpu.queue.submit([]);
+            if f >= 10 {
+                isolated.push(dc);
+                floor_isolated.push(floor_us);
+            }
+        }
+        gpu.wait().unwrap();
         let (gm, gs) = (median(&mut moving), median(&mut still));
         let (wm, ws) = (median(&mut wall_moving), median(&mut wall_still));
         let lights: Vec<Light> = (0..frames + 10).map(|f| at_frame(&base, f).lights.remove(0)).collect();
@@ -126,9 +179,12 @@ fn main() {
             .map_or(("refused (Geometry passes)".to_string(), "refused".to_string()), |(us, placed)| {
                 (format!("{us:.1}"), format!("{placed:.1}"))
             });
+        let (cold, floor_c) = (median(&mut thread), median(&mut floor_cold));
+        let (iso, floor_i) = (median(&mut isolated), median(&mut floor_isolated));
         let row = format!(
-            "| {t} | {sc} | {:.1} | {:.1} | {:.1} / {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
-            median(&mut cpu),
+            "| {t} | {sc} | {passes} | {cold:.1} | {floor_c:.1} | {:.2} | {iso:.1} | {floor_i:.1} | {:.2} | {:.1} | {:.1} / {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
+            cold / floor_c,
+            iso / floor_i,
             percentile(&mut cpu, 0.9),
             median(&mut prepare_us),
             median(&mut record_us),
@@ -138,7 +194,6 @@ fn main() {
         print!("{row}");
         table.push_str(&row);
     }
-    table.push_str(&wgpu_floor());
     table.push_str(&bytes_table());
     let dir = root().join("target").join("embedding");
     std::fs::create_dir_all(&dir).unwrap();
@@ -269,44 +324,65 @@ fn bytes_table() -> String {
     out
 }
 
-/// What bare wgpu costs the host per recorded pass on this device, as the floor under
-/// sshc's per-frame CPU: an encoder recording `k` render passes that only clear one
-/// 256^2 `Rgba8Unorm` target (one with a pair of timestamp writes, as sshc's passes have),
-/// and a 256-byte `Queue::write_buffer` (a `Frame` uniform's write). Medians of 1000.
-fn wgpu_floor() -> String {
-    let gpu = gpu();
-    let device = &gpu.device;
-    let target = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("floor target"),
-        size: wgpu::Extent3d {
-            width: 256,
-            height: 256,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
-    let view = target.create_view(&Default::default());
-    let timed = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY);
-    let queries = timed.then(|| {
-        device.create_query_set(&wgpu::QuerySetDescriptor {
-            label: Some("floor times"),
-            ty: wgpu::QueryType::Timestamp,
-            count: 2,
-        })
-    });
-    let record = |passes: usize| {
-        let mut encoder = device.create_command_encoder(&Default::default());
-        let t0 = Instant::now();
+/// What bare wgpu costs the host, as the floor under sshc's per-frame CPU: an encoder
+/// recording `k` render passes that only clear one 256^2 `Rgba8Unorm` target (each with a
+/// pair of timestamp writes, as sshc's passes have) after one 256-byte
+/// `Queue::write_buffer` (a `Frame` uniform's write).
+struct Floor {
+    view: wgpu::TextureView,
+    queries: Option<wgpu::QuerySet>,
+    uniform: wgpu::Buffer,
+}
+
+impl Floor {
+    fn new() -> Floor {
+        let gpu = gpu();
+        let device = &gpu.device;
+        let target = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("floor target"),
+            size: wgpu::Extent3d {
+                width: 256,
+                height: 256,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let timed = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY);
+        Floor {
+            view: target.create_view(&Default::default()),
+            queries: timed.then(|| {
+                device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("floor times"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                })
+            }),
+            uniform: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("floor uniform"),
+                size: 256,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+        }
+    }
+
+    /// The host thread's CPU µs of one write and `passes` passes, and the encoder (the
+    /// caller submits or drops it).
+    fn record(&self, passes: usize) -> (f64, wgpu::CommandEncoder) {
+        let gpu = gpu();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let c0 = thread_cpu_us();
+        gpu.queue.write_buffer(&self.uniform, 0, &[0u8; 256]);
         for _ in 0..passes {
             let _pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("floor"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
+                    view: &self.view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
@@ -315,7 +391,7 @@ fn wgpu_floor() -> String {
                     },
                 })],
                 depth_stencil_attachment: None,
-                timestamp_writes: queries.as_ref().map(|q| wgpu::RenderPassTimestampWrites {
+                timestamp_writes: self.queries.as_ref().map(|q| wgpu::RenderPassTimestampWrites {
                     query_set: q,
                     beginning_of_pass_write_index: Some(0),
                     end_of_pass_write_index: Some(1),
@@ -324,36 +400,6 @@ fn wgpu_floor() -> String {
                 multiview_mask: None,
             });
         }
-        let us = t0.elapsed().as_secs_f64() * 1e6;
-        gpu.queue.submit([encoder.finish()]);
-        us
-    };
-    let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("floor uniform"),
-        size: 256,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let (mut one, mut four, mut writes) = (Vec::new(), Vec::new(), Vec::new());
-    for i in 0..1010 {
-        let (a, b) = (record(1), record(4));
-        let t0 = Instant::now();
-        gpu.queue.write_buffer(&uniform, 0, &[0u8; 256]);
-        let w = t0.elapsed().as_secs_f64() * 1e6;
-        if i % 50 == 0 {
-            gpu.wait().unwrap();
-        }
-        if i >= 10 {
-            one.push(a);
-            four.push(b);
-            writes.push(w);
-        }
+        (thread_cpu_us() - c0, encoder)
     }
-    gpu.wait().unwrap();
-    let (one, four, w) = (median(&mut one), median(&mut four), median(&mut writes));
-    format!(
-        "\nBare wgpu on this device (the floor under the CPU columns): an encoder recording 1 render pass that clears one 256^2 target{}: {one:.1} µs; 4 such passes: {four:.1} µs ({:.1} µs a pass); a 256-byte `write_buffer`: {w:.1} µs. Medians of 1000.\n",
-        if timed { " with a pair of timestamp writes" } else { "" },
-        four / 4.0,
-    )
 }

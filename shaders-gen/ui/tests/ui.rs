@@ -5,7 +5,8 @@
 //! trybuild builds the cases in its own crate under `target/tests/trybuild`, where
 //! `CARGO_MANIFEST_DIR` is that crate's folder; the macro resolves technique paths against
 //! `SSHC_SHADERS_GEN_BASE_DIR` instead when it is set, so the cases name files as a crate in
-//! `shaders-gen/` would.
+//! `shaders-gen/ui/` would. This package depends on the macro and `sshc-graph` alone:
+//! trybuild builds every dependency of it for the cases.
 
 #[test]
 fn ui() {
