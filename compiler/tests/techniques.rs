@@ -716,8 +716,14 @@ fn map_pass_schedules() {
             .map(|s| s.draw.clone())
             .collect()
     };
-    let vsm = compiles("vsm", &CompileOptions::default());
+    // every pass as fragment (vsm.ron schedules its mip chain as compute)
+    let vsm = compiles("vsm", &sched(&[("mips", "fragment")], &[]));
     assert_eq!(draws(&vsm, "moments"), [Draw::FullScreen]);
+    assert_eq!(draws(&vsm, "mips"), [Draw::MipLevels]);
+    assert_eq!(
+        draws(&compiles("vsm", &CompileOptions::default()), "mips"),
+        [Draw::ComputeMipLevels]
+    );
     assert!(sshc::explain::explain(&vsm).contains("(schedule: fragment, a full-screen triangle)"));
     for name in ["moments", "*"] {
         let c = compiles("vsm", &sched(&[(name, "compute")], &[]));
@@ -733,9 +739,9 @@ fn map_pass_schedules() {
                 // step's workgroup loads its 8 x 8 texels and the apron, 10 x 8 texels, by
                 // 64 invocations: 2 loads each instead of 3 taps, 4 for both steps
                 ("blur", "*") => assert_eq!((a.3.fetches, b.3.fetches), (4, 6), "{a:?} {b:?}"),
-                // the mip chain as compute: the same loads, and its edge check (a comparison
-                // and `any` against the level's size)
-                ("mips", "*") => assert_eq!((a.3.fetches, a.3.ops), (b.3.fetches, b.3.ops + 2), "{a:?} {b:?}"),
+                // the mip chain as compute (by the file, or by `*`): the same loads, and its
+                // edge check (a comparison and `any` against the level's size)
+                ("mips", _) => assert_eq!((a.3.fetches, a.3.ops), (b.3.fetches, b.3.ops + 2), "{a:?} {b:?}"),
                 // `*` makes the Shade deferred: two steps, the G-buffer's three loads more,
                 // and more operations (the octahedral normal's encoding and decoding, the
                 // edge and background checks; VSM: 114 against 77)

@@ -1,11 +1,15 @@
 //! The per-frame cost of the embedding API, for every bundled technique:
 //!
-//! - **CPU**: the time a host spends in sshc each frame, the frame's state changed (camera
-//!   and every light) + `prepare` + `record` into the host's encoder, timed on the CPU with `Instant`,
-//!   median (and 90th percentile) of `FRAMES` frames after 10 untimed ones, with the scene
-//!   bound as a triangle soup and again as host geometry, there also with the light's view
-//!   fitted by sshc every frame (`Targets::fit_light`). The host's own encoder creation,
-//!   its submission and the wait are outside the timing.
+//! - **CPU**: the host thread's own CPU time (`CLOCK_THREAD_CPUTIME_ID`) in the frame's
+//!   state changed (camera and every light) + `prepare` + `record` into the host's encoder,
+//!   median of `FRAMES` frames after 10 untimed ones, two ways: *cold* (each frame recorded
+//!   just after waiting for the last) and *isolated* (frames back to back, no GPU work in
+//!   flight); each beside bare wgpu's floor for as many passes ([`Floor`]) timed the same
+//!   way, alternating with sshc's frames. Beside them, the wall time of the cold frames (and
+//!   its `prepare` / `record` split), with the scene bound as a triangle soup and again as
+//!   host geometry, there also with the light's view fitted by sshc every frame
+//!   (`Targets::fit_light`). The host's own encoder creation, its submission and the wait
+//!   are outside the timing.
 //! - **GPU, moving against static**: the GPU time of a frame (the sum of its passes'
 //!   timestamps, read back through the ring) with the light and camera moving every frame,
 //!   against the same executor with them still. Frames alternate moving and static so that
