@@ -30,17 +30,40 @@ static SSHC: AtomicUsize = AtomicUsize::new(0);
 static OTHERS: AtomicUsize = AtomicUsize::new(0);
 static FIRST_SSHC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
 
-/// The owner of an allocation: the innermost frame of the backtrace whose source lies
-/// outside the standard library (`/rustc/`), this file (the allocator) and hashbrown (the
-/// standard `HashMap`'s); inlined frames carry short names, so their files decide. `true`
-/// for sshc's own source (the workspace's, outside cargo's registry), with the frame.
+/// The owner of an allocation: the innermost frame of the backtrace outside the standard
+/// library, this file (the allocator) and hashbrown (the standard `HashMap`'s). A frame
+/// with a source file is judged by it (inlined frames carry short names, and a
+/// dependency's code inlined into sshc's carries its registry path); dependencies are
+/// built without debug information (the workspace's `Cargo.toml`), so a frame without a
+/// file is a dependency's unless its name is the standard library's. `true` for sshc's own
+/// source (the workspace's, outside cargo's registry), with the frame.
 fn owner(trace: &str) -> (bool, String) {
-    let files = trace.lines().map(str::trim_start).filter_map(|l| l.strip_prefix("at "));
-    for file in files {
-        if file.contains("/rustc/") || file.contains("tests/allocations.rs") || file.contains("/hashbrown-") {
-            continue;
+    // each frame: its name, then the file its `at` line gives, if any
+    let mut frames: Vec<(String, Option<String>)> = Vec::new();
+    for line in trace.lines().map(str::trim_start) {
+        if let Some(file) = line.strip_prefix("at ") {
+            if let Some(f) = frames.last_mut() {
+                f.1.get_or_insert_with(|| file.to_string());
+            }
+        } else if let Some((n, name)) = line.split_once(": ")
+            && n.chars().all(|c| c.is_ascii_digit())
+        {
+            frames.push((name.to_string(), None));
         }
-        return (!file.contains(".cargo/registry"), file.to_string());
+    }
+    let standard = |name: &str| {
+        let name = name.trim_start_matches('<');
+        ["std::", "core::", "alloc::", "__rustc::", "hashbrown::", "allocations::"]
+            .iter()
+            .any(|p| name.starts_with(p))
+    };
+    for (name, file) in frames {
+        match file {
+            Some(file) if file.contains("/rustc/") || file.contains("tests/allocations.rs") || file.contains("/hashbrown-") => {}
+            Some(file) => return (!file.contains(".cargo/registry"), file),
+            None if standard(&name) => {}
+            None => return (false, name),
+        }
     }
     (false, "unknown".into())
 }
