@@ -70,7 +70,7 @@ fn main() {
     }
     let floor = Floor::new();
     let mut table = format!(
-        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2. CPU times are the host thread's own (`CLOCK_THREAD_CPUTIME_ID`), medians. *Cold*: each frame recorded just after waiting for the last (as a host that waits for its GPU; on lavapipe the GPU is the same cores, idle a frame's time). *Isolated*: the frames back to back with no GPU work in flight (command buffers dropped unsubmitted). *Floor*: bare wgpu recording as many render passes (each clearing a 256^2 target, with timestamps) and one 256-byte `write_buffer`, in the same conditions, alternating with sshc's frames.\n\n| technique | scene | passes recorded | cold µs | cold floor µs | cold / floor | isolated µs | isolated floor µs | isolated / floor | cold wall µs, 90th percentile | cold `prepare` / `record` wall µs | on host geometry, cold wall µs | host geometry, light placed by sshc, cold wall µs | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2. CPU times are the host thread's own (`CLOCK_THREAD_CPUTIME_ID`), medians. *Cold*: each frame recorded just after waiting for the last (as a host that waits for its GPU; on lavapipe the GPU is the same cores, idle a frame's time). *Isolated*: the frames back to back with no GPU work in flight (command buffers dropped unsubmitted). *Floor*: bare wgpu recording as many render passes (each clearing a 256^2 target, with timestamps) and one 256-byte `write_buffer`, in the same conditions, alternating with sshc's frames.\n\n| technique | scene | passes recorded | cold µs | cold floor µs | cold / floor | isolated µs | isolated floor µs | isolated / floor | four lights: passes recorded | four lights: isolated µs | cold wall µs, 90th percentile | cold `prepare` / `record` wall µs | on host geometry, cold wall µs | host geometry, light placed by sshc, cold wall µs | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         gpu.describe()
     );
     for t in &names {
@@ -176,6 +176,34 @@ fn main() {
             }
         }
         gpu.wait().unwrap();
+        // Four lights on one set of targets, isolated as above: every light moved every
+        // other frame (each a view of the orbit a frame apart), the camera with them
+        let mut four = Loaded::new(gpu, c.graph.clone(), c.shaders.clone())
+            .unwrap()
+            .bind_lights(&vec![states[0].clone(); 4])
+            .unwrap_or_else(|e| panic!("{t}, four lights: {e}"));
+        let passes4 = four.targets.recorded_passes();
+        let mut isolated4 = Vec::new();
+        for f in 0..views.len() {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            let c0 = thread_cpu_us();
+            if f % 2 == 0 {
+                four.state.camera = views[f].0;
+                for (k, light) in four.state.lights.iter_mut().enumerate() {
+                    light.clone_from(&views[(f + k) % views.len()].1);
+                }
+            }
+            four.targets.prepare(&mut four.scene, &four.state).unwrap();
+            four.targets.record(&four.scene, &mut encoder).unwrap();
+            let dc = thread_cpu_us() - c0;
+            drop(encoder.finish());
+            gpu.queue.submit([]);
+            if f >= 10 {
+                isolated4.push(dc);
+            }
+        }
+        gpu.wait().unwrap();
+        drop(four);
         let (gm, gs) = (median(&mut moving), median(&mut still));
         let (wm, ws) = (median(&mut wall_moving), median(&mut wall_still));
         let lights: Vec<Light> = (0..frames + 10).map(|f| at_frame(&base, f).lights.remove(0)).collect();
@@ -186,9 +214,10 @@ fn main() {
         let (cold, floor_c) = (median(&mut thread), median(&mut floor_cold));
         let (iso, floor_i) = (median(&mut isolated), median(&mut floor_isolated));
         let row = format!(
-            "| {t} | {sc} | {passes} | {cold:.1} | {floor_c:.1} | {:.2} | {iso:.1} | {floor_i:.1} | {:.2} | {:.1} | {:.1} / {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
+            "| {t} | {sc} | {passes} | {cold:.1} | {floor_c:.1} | {:.2} | {iso:.1} | {floor_i:.1} | {:.2} | {passes4} | {:.1} | {:.1} | {:.1} / {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
             cold / floor_c,
             iso / floor_i,
+            median(&mut isolated4),
             percentile(&mut cpu, 0.9),
             median(&mut prepare_us),
             median(&mut record_us),
