@@ -177,6 +177,14 @@ pub(crate) fn frame_stride(gpu: &Gpu) -> u64 {
     u64::from(FRAME_SIZE).next_multiple_of(u64::from(gpu.limits.min_uniform_buffer_offset_alignment.max(1)))
 }
 
+/// Each of `frames` into its slot of `bytes` (one every `stride` bytes), as
+/// [`Resources::frames`] holds them: at binding, and every frame ([`crate::update`]).
+pub(crate) fn pack_frames<F: std::borrow::Borrow<graph::FrameUniform>>(bytes: &mut [u8], stride: usize, frames: impl Iterator<Item = F>) {
+    for (chunk, f) in bytes.chunks_exact_mut(stride).zip(frames) {
+        chunk[..FRAME_SIZE as usize].copy_from_slice(&f.borrow().to_array());
+    }
+}
+
 impl Resources {
     /// The centre view's `Frame`, as a binding.
     pub fn centre_frame(&self) -> wgpu::BindingResource<'_> {
@@ -253,9 +261,7 @@ impl Resources {
                 frames: {
                     let mut bytes = vec![0u8; frame_stride as usize * (1 + s.samples.len())];
                     let views = std::iter::once(s.frame()).chain((0..s.samples.len()).filter_map(|k| s.sample_frame(k)));
-                    for (chunk, f) in bytes.chunks_exact_mut(frame_stride as usize).zip(views) {
-                        chunk[..FRAME_SIZE as usize].copy_from_slice(&f.to_array());
-                    }
+                    pack_frames(&mut bytes, frame_stride as usize, views);
                     make.uniform_sized("frames", &bytes, bytes.len())
                 },
                 frame_stride,

@@ -11,8 +11,8 @@
 //! last written before it (last write wins).
 
 use crate::frame::{Camera, LightInputs};
-use crate::graph::{FRAME_SIZE, FrameUniform, SampleViewUniform};
-use crate::resources::Resources;
+use crate::graph::{FrameUniform, SampleViewUniform};
+use crate::resources::{Resources, pack_frames};
 
 /// One light's uniforms as the next frame writes them. Set again in place (its vectors
 /// keep their capacity): setting a camera or a light allocates nothing once the light's
@@ -77,11 +77,10 @@ impl<'a> FrameWriter<'a> {
     /// since the scene was bound): every view's `Frame` in one write (each `write_buffer`
     /// stages through a buffer of its own), the `LightSamples` if they changed.
     pub fn light(&self, res: &Resources, u: &mut LightUniforms, frame: u32) {
-        let views = std::iter::once(&mut u.centre).chain(u.samples.iter_mut());
-        for (chunk, f) in u.bytes.chunks_exact_mut(u.stride).zip(views) {
+        for f in std::iter::once(&mut u.centre).chain(u.samples.iter_mut()) {
             f.counters[0] = frame as f32;
-            chunk[..FRAME_SIZE as usize].copy_from_slice(&f.to_array());
         }
+        pack_frames(&mut u.bytes, u.stride, std::iter::once(&u.centre).chain(&u.samples));
         self.queue.write_buffer(&res.frames, 0, &u.bytes);
         if std::mem::take(&mut u.light_samples_pending) {
             self.queue

@@ -1910,3 +1910,38 @@ fn a_mesh_added_or_removed_keeps_the_targets_and_frames_as_fresh_ones() {
         }
     }
 }
+
+/// `Targets::recorded_passes` counts what `record` encodes: a pass per step, per level of
+/// a fragment mip chain and per light, and the lights' combine. The bundled mipmapped
+/// techniques schedule their chain as compute (one pass for every level); as fragment the
+/// chain is one render pass per level below the base (6 at a 64^2 map).
+#[test]
+fn the_passes_recorded_follow_the_steps_the_levels_and_the_lights() {
+    let one = scene("contact", 32, 64);
+    let three = scene("three-lights", 32, 64);
+    let passes = |c: &sshc::Compiled, lights: &[SceneInputs]| {
+        let loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{e}"));
+        let ex = loaded.bind_lights(lights).unwrap_or_else(|e| panic!("{e}"));
+        ex.targets.recorded_passes()
+    };
+    // hard: depth, shade; VSM: depth, moments, two blur steps, the chain, shade; CSSM:
+    // depth, basis, six blur steps (two channel groups, layers chunked), two chains, shade
+    for (t, want) in [("hard", 2), ("vsm", 6), ("cssm", 11)] {
+        let c = compile(t);
+        assert_eq!(passes(&c, &[inputs(&one, &c)]), want, "{t}, one light");
+        assert_eq!(
+            passes(&c, &all_lights(&three, &c)),
+            3 * want + 1,
+            "{t}, three lights and their combine"
+        );
+    }
+    let fragment = sshc::compile_str(
+        &support::technique_source("vsm"),
+        &sshc::CompileOptions {
+            schedule: vec![("mips".into(), "fragment".into())],
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|d| panic!("{}", d.render("vsm", &support::technique_source("vsm"))));
+    assert_eq!(passes(&fragment, &[inputs(&one, &fragment)]), 5 + 6, "vsm, its chain as fragment");
+}
