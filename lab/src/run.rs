@@ -38,7 +38,11 @@ impl Loaded {
         Loaded {
             params: Params::new(&technique),
             technique,
-            limits: TargetLimits::default(),
+            // the lab measures: every pass timed on the GPU
+            limits: TargetLimits {
+                timestamps: true,
+                ..TargetLimits::default()
+            },
         }
     }
 

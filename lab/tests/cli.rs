@@ -721,20 +721,34 @@ fn each_light_of_a_scene_renders_with_its_own_passes_and_compares_alone() {
         e.contains("a PFM holds one channel per light, at most 3") && e.contains("has 4 lights"),
         "{e}"
     );
+    // five lights render (their visibilities in two RGBA layers); seventeen are more than
+    // one frame combines, refused where the scene file is read
     std::fs::write(
         dir.join("five.ron"),
         format!("{head}    lights: [\n{lights}\n{sphere}\n{sphere}\n    ],{tail}"),
     )
     .unwrap();
+    let o = ok(&[
+        &["render", "techniques/pcf.ron", "--scene", &p("five.ron"), "-o", &p("5.png")][..],
+        &small[..],
+    ]
+    .concat());
+    assert!(o.contains("| 4 | Sphere |"), "{o}");
+    let many = vec![sphere; 17 - 3].join("\n");
+    std::fs::write(
+        dir.join("seventeen.ron"),
+        format!("{head}    lights: [\n{lights}\n{many}\n    ],{tail}"),
+    )
+    .unwrap();
     let e = refused(
         &[
-            &["render", "techniques/pcf.ron", "--scene", &p("five.ron"), "-o", &p("5.png")][..],
+            &["render", "techniques/pcf.ron", "--scene", &p("seventeen.ron"), "-o", &p("17.png")][..],
             &small[..],
         ]
         .concat(),
         60,
     );
-    assert!(e.contains("5 light(s) bound: a frame combines 1 to 4 lights"), "{e}");
+    assert!(e.contains("17 lights, above the runtime's limit of 16 a frame"), "{e}");
     let cmp = ok(&[
         &[
             "compare",

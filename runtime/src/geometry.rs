@@ -619,21 +619,22 @@ pub(crate) struct SceneDraw {
 }
 
 impl SceneDraw {
-    /// Record the draws into `rp` (the casting ones only when `from_light`).
-    pub fn record(&self, rp: &mut wgpu::RenderPass<'_>, from_light: bool) {
+    /// Record the draws into `rp`, a render pass or bundle (the casting ones only when
+    /// `from_light`).
+    pub fn record<'a>(&'a self, rp: &mut impl wgpu::util::RenderEncoder<'a>, from_light: bool) {
         self.draw(rp, self.ranges.iter().filter(|r| r.casts || !from_light));
     }
 
     /// Record the draws of the objects that receive no shadow.
-    pub fn record_unshadowed(&self, rp: &mut wgpu::RenderPass<'_>) {
+    pub fn record_unshadowed<'a>(&'a self, rp: &mut impl wgpu::util::RenderEncoder<'a>) {
         self.draw(rp, self.unshadowed.iter());
     }
 
-    fn draw<'r>(&self, rp: &mut wgpu::RenderPass<'_>, ranges: impl Iterator<Item = &'r DrawRange>) {
+    fn draw<'a>(&'a self, rp: &mut impl wgpu::util::RenderEncoder<'a>, ranges: impl Iterator<Item = &'a DrawRange>) {
         let (mut bound, mut indices) = (None, false);
         for r in ranges {
             if bound != Some(r.buffer) {
-                rp.set_vertex_buffer(0, self.buffers[r.buffer].slice(..));
+                rp.set_vertex_buffer(0, Some(self.buffers[r.buffer].slice(..)));
                 bound = Some(r.buffer);
             }
             if r.indexed {

@@ -237,20 +237,38 @@ impl Inspect<'_> {
         Ok(img)
     }
 
-    /// Every light's visibility, channel `l` for light `l` (the combining step's gathering
-    /// with several lights; light 0's visibility in channel 0 with one), checked as
-    /// [`Inspect::read_camera`] checks one.
+    /// The visibilities of lights 0 to 3, channel `l` for light `l` (the combining step's
+    /// gathering with several lights; light 0's visibility in channel 0 with one), checked
+    /// as [`Inspect::read_camera`] checks one: [`Inspect::read_visibility_layer`] 0.
     pub fn read_visibilities(&self) -> Result<Image> {
+        self.read_visibility_layer(0)
+    }
+
+    /// Layer `k` of the gathered visibilities: lights `4k` to `4k + 3` in channels 0 to 3
+    /// (those past the last light 0), each checked as [`Inspect::read_camera`] checks one.
+    /// With one light, layer 0 is light 0's visibility in channel 0; with cascades, their
+    /// mixture in channel 0 and the cascade in channel 1.
+    pub fn read_visibility_layer(&self, k: u32) -> Result<Image> {
         let Some(c) = &self.t.combine else {
+            if k > 0 {
+                return Err(RuntimeError::NotFound(format!("visibility layer {k}: one light has layer 0 only")));
+            }
             return self.read_light_camera(0, CameraOutput::Visibility);
         };
+        let layers = c.visibility.depth_or_array_layers();
+        if k >= layers {
+            return Err(RuntimeError::NotFound(format!(
+                "visibility layer {k}: {} light(s) are gathered in {layers} layer(s), four a layer",
+                self.t.bound.len()
+            )));
+        }
         let (w, h) = self.t.camera_size();
-        let img = read_back(&self.t.gpu, &c.visibility, 0, 0, w, h, Format::Rgba32Float)?;
+        let img = read_back(&self.t.gpu, &c.visibility, k, 0, w, h, Format::Rgba32Float)?;
         // cascades: channel 1 is the cascade, checked by nothing
-        let visibilities = if c.cascades { 1 } else { self.t.bound.len() };
+        let lights = if c.cascades { 1 } else { self.t.bound.len() };
         let shade = shade_name(self.t.technique.graph());
-        for l in 0..visibilities {
-            check_visibility(&img.channel(l), w, shade)?;
+        for l in (4 * k as usize..lights).take(4) {
+            check_visibility(&img.channel(l % 4), w, shade)?;
         }
         Ok(img)
     }

@@ -20,7 +20,7 @@ const COMBINE_WGSL: &str = "
 @group(0) @binding(0) var visibility: texture_2d_array<f32>;
 @group(0) @binding(1) var color: texture_2d_array<f32>;
 @group(0) @binding(2) var out_color: texture_storage_2d<rgba8unorm, write>;
-@group(0) @binding(3) var out_visibility: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(3) var out_visibility: texture_storage_2d_array<rgba32float, write>;
 
 @compute @workgroup_size(8, 8)
 fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -33,10 +33,14 @@ fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
     var v = vec4<f32>(0.0);
     for (var l = 0u; l < lights; l++) {
         c += textureLoad(color, id.xy, l, 0);
-        v[l] = textureLoad(visibility, id.xy, l, 0).r;
+        v[l % 4u] = textureLoad(visibility, id.xy, l, 0).r;
+        // four lights a layer; the last layer's unused channels 0
+        if l % 4u == 3u || l + 1u == lights {
+            textureStore(out_visibility, id.xy, l / 4u, v);
+            v = vec4<f32>(0.0);
+        }
     }
     textureStore(out_color, id.xy, c / f32(lights));
-    textureStore(out_visibility, id.xy, v);
 }
 ";
 
@@ -102,6 +106,11 @@ fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 ";
 
+/// Layers of the lights' gathered visibilities: four lights to an RGBA layer.
+pub(crate) fn visibility_layers(lights: usize) -> u32 {
+    lights.div_ceil(4) as u32
+}
+
 /// The combining step's textures at a camera size, for `n` lights, and its bind group.
 fn targets(
     device: &wgpu::Device,
@@ -135,7 +144,9 @@ fn targets(
         texture("lights' colour", wgpu::TextureFormat::Rgba8Unorm, n, input),
     ];
     let color = texture("combined colour", wgpu::TextureFormat::Rgba8Unorm, 1, output);
-    let visibility = texture("visibility per light", wgpu::TextureFormat::Rgba32Float, 1, output);
+    // lights: four to a layer; cascades: one layer (their mixture and the cascade)
+    let visibility_layers = if slices.is_some() { 1 } else { visibility_layers(n as usize) };
+    let visibility = texture("visibility per light", wgpu::TextureFormat::Rgba32Float, visibility_layers, output);
     let array = |t: &wgpu::Texture| {
         t.create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
@@ -143,7 +154,14 @@ fn targets(
         })
     };
     let (v_in, c_in) = (array(&layers[0]), array(&layers[1]));
-    let (c_out, v_out) = (color.create_view(&Default::default()), visibility.create_view(&Default::default()));
+    let c_out = color.create_view(&Default::default());
+    // the lights' shader writes an array (of one layer up to four lights), the cascades' one
+    // layer
+    let v_out = if slices.is_some() {
+        visibility.create_view(&Default::default())
+    } else {
+        array(&visibility)
+    };
     let p_in = position.create_view(&Default::default());
     fn view(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
         wgpu::BindGroupEntry {
@@ -249,7 +267,8 @@ pub(crate) struct Combine {
     group: wgpu::BindGroup,
     /// Layer `l`: light `l`'s visibility (R32Float) and colour (Rgba8Unorm).
     layers: [wgpu::Texture; 2],
-    /// The frame's colour (Rgba8Unorm) and the lights' visibilities (Rgba32Float).
+    /// The frame's colour (Rgba8Unorm) and the lights' visibilities (Rgba32Float, light `l`
+    /// in layer `l / 4`, channel `l % 4`; cascades: one layer).
     pub color: wgpu::Texture,
     pub visibility: wgpu::Texture,
     size: (u32, u32),
@@ -264,14 +283,14 @@ impl Combine {
     /// Bytes of the combining textures at a camera size, for `lights` lights.
     pub fn bytes(camera: (u32, u32), lights: usize) -> u64 {
         let pixels = camera.0 as u64 * camera.1 as u64;
-        pixels * (lights as u64 * (4 + 4) + 4 + 16)
+        pixels * (lights as u64 * (4 + 4) + 4 + 16 * u64::from(visibility_layers(lights)))
     }
 
     /// `position`: light 0's camera positions, which `Combining::Cascades` reads.
     pub fn new(gpu: &Gpu, camera: (u32, u32), lights: usize, mode: &Combining, position: &wgpu::Texture) -> Result<Combine> {
         if !(2..=MAX_LIGHTS).contains(&lights) {
             return Err(RuntimeError::Limit {
-                what: "lights combined in one frame (one RGBA visibility texel a pixel)".into(),
+                what: "lights combined in one frame".into(),
                 needed: lights as u64,
                 limit: MAX_LIGHTS as u64,
             });

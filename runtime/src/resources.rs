@@ -117,6 +117,12 @@ pub struct TargetLimits {
     /// ([`crate::gpu::Inspect::read_light_texture`]). Transient textures are shared either
     /// way.
     pub share_light_textures: bool,
+    /// Time every pass on the GPU: two timestamp writes a pass and light, resolved and
+    /// copied at the end of each frame into a ring read back without waiting
+    /// ([`crate::gpu::Targets::frame_times`]). Off by default: a host with its own GPU
+    /// profiler does not pay the host CPU it costs (about a fifth of a frame's `record` on
+    /// lavapipe, docs/embedding.md section 6); the lab's commands turn it on.
+    pub timestamps: bool,
 }
 
 impl Default for TargetLimits {
@@ -125,6 +131,7 @@ impl Default for TargetLimits {
             max_bytes: DEFAULT_MAX_BYTES,
             generated: GeneratedLimits::default(),
             share_light_textures: true,
+            timestamps: false,
         }
     }
 }

@@ -6,7 +6,6 @@
 //! [`Draw`]: what a step draws or dispatches is decided there and nowhere else.
 
 use crate::device::{Gpu, Result, RuntimeError};
-use crate::geometry::SceneDraw;
 use crate::graph::{self, Binding, Draw, PassGraph, PassKind, Resolve, Target, View};
 use crate::pipeline::{
     BindingLayout, ColorTarget, DEPTH_FORMAT, DepthState, GeometryGroup, Pipeline, PipelineKey, Slot, Stages, StepPipeline,
@@ -141,16 +140,8 @@ pub(crate) struct IndirectArgs {
 /// views and draw arguments at the targets' sizes.
 pub(crate) enum StepBinding {
     Raster {
-        group0: wgpu::BindGroup,
-        /// One render pass per level.
+        /// One render pass per level, its commands in a bundle.
         passes: Vec<RasterPass>,
-        /// The scene's draws, and whether from the light (casters only).
-        vertices: Option<(SceneDraw, bool)>,
-        /// An empty group 1 (when the step reads nothing), an empty group 2 and the
-        /// generated buffer (group 3) of a `Primitives` step.
-        geometry: Option<(Option<wgpu::BindGroup>, wgpu::BindGroup, wgpu::BindGroup)>,
-        /// The buffer whose first 16 bytes are the draw arguments.
-        indirect: Option<wgpu::Buffer>,
     },
     Compute {
         group0: wgpu::BindGroup,
@@ -184,8 +175,10 @@ impl StepBinding {
 /// buffers reset before it (the generated buffer's header, the vertex claims).
 type GeometryGroups = (Vec<(wgpu::BindGroup, u32)>, [wgpu::Buffer; 2]);
 
+/// One render pass of a raster step: its attachments, and its commands (the pipeline, the
+/// bind groups, the draws) recorded once at binding.
 pub(crate) struct RasterPass {
-    group1: Option<wgpu::BindGroup>,
+    bundle: wgpu::RenderBundle,
     color: Vec<wgpu::TextureView>,
     depth: Option<wgpu::TextureView>,
 }
@@ -550,45 +543,43 @@ impl StepNode {
                     Levels::Base => 0..1,
                     Levels::BelowBase => 1..mip_count(res.shadow_size),
                 };
-                let mut passes = Vec::new();
+                // per level: group 1, the colour attachments and their formats, the depth
+                let mut levels_bound = Vec::new();
                 for level in levels {
-                    let color = match &r.targets {
+                    let view_of = |t: &wgpu::Texture, d: &wgpu::TextureViewDescriptor| (t.create_view(d), t.format());
+                    let color: Vec<(wgpu::TextureView, wgpu::TextureFormat)> = match &r.targets {
                         Targets::Camera(t) => res
                             .camera
                             .iter()
-                            .map(|t| Ok(t.create_view(&Default::default())))
-                            .chain(
-                                t.iter()
-                                    .map(|w| res.texture(&w.texture).map(|t| t.create_view(&Default::default()))),
-                            )
+                            .map(|t| Ok(view_of(t, &Default::default())))
+                            .chain(t.iter().map(|w| res.texture(&w.texture).map(|t| view_of(t, &Default::default()))))
                             .collect::<Result<_>>()?,
-                        Targets::GBuffer => res.gbuffer.iter().map(|t| t.create_view(&Default::default())).collect(),
+                        Targets::GBuffer => res.gbuffer.iter().map(|t| view_of(t, &Default::default())).collect(),
                         Targets::Textures(ts) => ts
                             .iter()
                             .zip(&self.view_layers)
                             .map(|(w, per)| {
                                 res.texture(&w.texture).map(|t| {
-                                    t.create_view(&wgpu::TextureViewDescriptor {
-                                        dimension: Some(wgpu::TextureViewDimension::D2),
-                                        base_array_layer: view * per + w.layer,
-                                        array_layer_count: Some(1),
-                                        base_mip_level: level,
-                                        mip_level_count: Some(1),
-                                        ..Default::default()
-                                    })
+                                    view_of(
+                                        t,
+                                        &wgpu::TextureViewDescriptor {
+                                            dimension: Some(wgpu::TextureViewDimension::D2),
+                                            base_array_layer: view * per + w.layer,
+                                            array_layer_count: Some(1),
+                                            base_mip_level: level,
+                                            mip_level_count: Some(1),
+                                            ..Default::default()
+                                        },
+                                    )
                                 })
                             })
                             .collect::<Result<_>>()?,
                     };
                     let depth = r.depth.map(|d| match d {
-                        DepthTarget::Light => res.light_depth.create_view(&Default::default()),
-                        DepthTarget::Camera => res.camera_depth.create_view(&Default::default()),
+                        DepthTarget::Light => view_of(&res.light_depth, &Default::default()),
+                        DepthTarget::Camera => view_of(&res.camera_depth, &Default::default()),
                     });
-                    passes.push(RasterPass {
-                        group1: self.group1(gpu, res, level)?,
-                        color,
-                        depth,
-                    });
+                    levels_bound.push((self.group1(gpu, res, level)?, color, depth));
                 }
                 // Seen from the light, only the shadow casters are drawn.
                 let from_light = matches!(r.depth, Some(DepthTarget::Light));
@@ -607,13 +598,60 @@ impl StepNode {
                     }
                     DrawCall::Scene | DrawCall::FullScreenTriangle => (None, None),
                 };
-                StepBinding::Raster {
-                    group0,
-                    passes,
-                    vertices,
-                    geometry,
-                    indirect,
-                }
+                let Pipeline::Render(pipeline) = &self.pipeline.pipeline else {
+                    return Err(self.mismatch());
+                };
+                // Each level's commands, recorded once into a render bundle: a frame records
+                // a pass and one bundle, not the pipeline, every group and every draw again
+                // (docs/embedding.md, "Host CPU").
+                let passes = levels_bound
+                    .into_iter()
+                    .map(|(group1, color, depth)| {
+                        let formats: Vec<Option<wgpu::TextureFormat>> = color.iter().map(|c| Some(c.1)).collect();
+                        let mut be = gpu.device.create_render_bundle_encoder(&wgpu::RenderBundleEncoderDescriptor {
+                            label: Some(&self.label),
+                            color_formats: &formats,
+                            depth_stencil: depth.as_ref().map(|d| wgpu::RenderBundleDepthStencil {
+                                format: d.1,
+                                depth_read_only: false,
+                                stencil_read_only: true,
+                            }),
+                            sample_count: 1,
+                            multiview: None,
+                        });
+                        be.set_pipeline(pipeline);
+                        be.set_bind_group(0, &group0, &[]);
+                        if let Some(g1) = &group1 {
+                            be.set_bind_group(1, g1, &[]);
+                        }
+                        if let Some((g1, g2, g3)) = &geometry {
+                            if let Some(g1) = g1 {
+                                be.set_bind_group(1, g1, &[]);
+                            }
+                            be.set_bind_group(2, g2, &[]);
+                            be.set_bind_group(3, g3, &[]);
+                        }
+                        match &r.draw {
+                            DrawCall::Scene => {
+                                if let Some((draw, from_light)) = &vertices {
+                                    draw.record(&mut be, *from_light);
+                                }
+                            }
+                            DrawCall::FullScreenTriangle => be.draw(0..3, 0..1),
+                            DrawCall::Generated(_) => {
+                                if let Some(buffer) = &indirect {
+                                    be.draw_indirect(buffer, 0);
+                                }
+                            }
+                        }
+                        RasterPass {
+                            bundle: be.finish(&wgpu::RenderBundleDescriptor { label: Some(&self.label) }),
+                            color: color.into_iter().map(|c| c.0).collect(),
+                            depth: depth.map(|d| d.0),
+                        }
+                    })
+                    .collect();
+                StepBinding::Raster { passes }
             }
             NodeKind::Compute(c) => {
                 // the storage view of every written texture at one mip level, all layers
@@ -898,17 +936,7 @@ impl StepNode {
         view: u32,
     ) -> Result<()> {
         match (&self.kind, bound, &self.pipeline.pipeline) {
-            (
-                NodeKind::Raster(r),
-                StepBinding::Raster {
-                    group0,
-                    passes,
-                    vertices,
-                    geometry,
-                    indirect,
-                },
-                Pipeline::Render(pipeline),
-            ) => {
+            (NodeKind::Raster(r), StepBinding::Raster { passes }, Pipeline::Render(_)) => {
                 let last = passes.len().saturating_sub(1);
                 for (i, p) in passes.iter().enumerate() {
                     let timestamp_writes = stamps
@@ -947,34 +975,65 @@ impl StepNode {
                         occlusion_query_set: None,
                         multiview_mask: None,
                     });
-                    rp.set_pipeline(pipeline);
-                    rp.set_bind_group(0, group0, &[]);
-                    if let Some(g1) = &p.group1 {
-                        rp.set_bind_group(1, g1, &[]);
-                    }
-                    if let Some((g1, g2, g3)) = geometry {
-                        if let Some(g1) = g1 {
-                            rp.set_bind_group(1, g1, &[]);
-                        }
-                        rp.set_bind_group(2, g2, &[]);
-                        rp.set_bind_group(3, g3, &[]);
-                    }
-                    match &r.draw {
-                        DrawCall::Scene => {
-                            if let Some((draw, from_light)) = vertices {
-                                draw.record(&mut rp, *from_light);
-                            }
-                        }
-                        DrawCall::FullScreenTriangle => rp.draw(0..3, 0..1),
-                        DrawCall::Generated(_) => {
-                            if let Some(buffer) = indirect {
-                                rp.draw_indirect(buffer, 0);
-                            }
-                        }
-                    }
+                    rp.execute_bundles(std::iter::once(&p.bundle));
                 }
                 Ok(())
             }
+            (NodeKind::Compute(_), StepBinding::Compute { .. }, Pipeline::Compute(_)) => {
+                self.clear_generated(encoder, bound);
+                let mut cpass = begin_compute(encoder, &self.label, stamps);
+                self.dispatch(&mut cpass, bound, res, view)
+            }
+            _ => Err(self.mismatch()),
+        }
+    }
+
+    /// The buffers a compute step resets before its pass (a Geometry step's generated
+    /// buffer header and vertex claims); `false` when it has none, so that it can join the
+    /// compute pass of the step before it ([`crate::targets::Targets::record`]).
+    pub fn resets_buffers(bound: &StepBinding) -> bool {
+        matches!(bound, StepBinding::Compute { geometry: Some(_), .. })
+    }
+
+    /// The pass's name (the label of its render and compute passes).
+    pub fn label(&self) -> &str {
+        &self.label
+    }
+
+    /// Whether the step runs as a compute dispatch (recorded into a compute pass).
+    pub fn is_compute(&self) -> bool {
+        matches!(self.kind, NodeKind::Compute(_))
+    }
+
+    /// A fresh count of generated vertices and fresh vertex claims every frame
+    /// (instance_count stays 1): encoder commands, outside any pass.
+    pub fn clear_generated(&self, encoder: &mut wgpu::CommandEncoder, bound: &StepBinding) {
+        if let (
+            NodeKind::Compute(c),
+            StepBinding::Compute {
+                geometry: Some((_, [buffer, claims])),
+                ..
+            },
+        ) = (&self.kind, bound)
+        {
+            // the vertex count, then the records claimed and dropped
+            encoder.clear_buffer(buffer, 0, Some(4));
+            encoder.clear_buffer(buffer, 16, Some(8));
+            if matches!(c.dispatch, Dispatch::Edges) {
+                encoder.clear_buffer(claims, 0, None);
+            }
+        }
+    }
+
+    fn mismatch(&self) -> RuntimeError {
+        RuntimeError::NotFound(format!("pass `{}`: a step's node and its pipeline disagree", self.label))
+    }
+
+    /// Record a compute step's dispatches into an open compute pass (its own, or the one
+    /// the compute steps before it in the same pass and view opened: wgpu orders the
+    /// dispatches of one pass that write and read the same resource).
+    pub fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, bound: &StepBinding, res: &Resources, view: u32) -> Result<()> {
+        match (&self.kind, bound, &self.pipeline.pipeline) {
             (
                 NodeKind::Compute(c),
                 StepBinding::Compute {
@@ -987,26 +1046,6 @@ impl StepNode {
                 },
                 Pipeline::Compute(pipeline),
             ) => {
-                // A fresh count of generated vertices and fresh vertex claims every frame
-                // (instance_count stays 1).
-                if let Some((_, [buffer, claims])) = geometry {
-                    // the vertex count, then the records claimed and dropped
-                    encoder.clear_buffer(buffer, 0, Some(4));
-                    encoder.clear_buffer(buffer, 16, Some(8));
-                    if matches!(c.dispatch, Dispatch::Edges) {
-                        encoder.clear_buffer(claims, 0, None);
-                    }
-                }
-                let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some(&self.label),
-                    timestamp_writes: stamps
-                        .filter(|s| s.begin.is_some() || s.end.is_some())
-                        .map(|s| wgpu::ComputePassTimestampWrites {
-                            query_set: s.set,
-                            beginning_of_pass_write_index: s.begin,
-                            end_of_pass_write_index: s.end,
-                        }),
-                });
                 cpass.set_pipeline(pipeline);
                 cpass.set_bind_group(0, group0, &[]);
                 if let Some(g1) = group1 {
@@ -1080,12 +1119,23 @@ impl StepNode {
                 }
                 Ok(())
             }
-            _ => Err(RuntimeError::NotFound(format!(
-                "pass `{}`: a step's node and its pipeline disagree",
-                self.label
-            ))),
+            _ => Err(self.mismatch()),
         }
     }
+}
+
+/// Begin a compute pass labelled `label`, with `stamps`' timestamp writes when it has any.
+pub(crate) fn begin_compute<'e>(encoder: &'e mut wgpu::CommandEncoder, label: &str, stamps: Option<Stamps>) -> wgpu::ComputePass<'e> {
+    encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: stamps
+            .filter(|s| s.begin.is_some() || s.end.is_some())
+            .map(|s| wgpu::ComputePassTimestampWrites {
+                query_set: s.set,
+                beginning_of_pass_write_index: s.begin,
+                end_of_pass_write_index: s.end,
+            }),
+    })
 }
 
 /// A bind group of `views` at bindings 0, 1, ...

@@ -20,7 +20,7 @@ use crate::receivers::Unshadowed;
 use crate::resources::{Pool, Resources, TargetLimits, f32_bytes, frame_stride, texture_bytes};
 use crate::scene::Scene;
 use crate::state::FrameState;
-use crate::steps::{Group0, StepBinding};
+use crate::steps::{Group0, StepBinding, StepNode, begin_compute};
 use crate::technique::{MAX_PASSES, Technique};
 use crate::timing::{FrameTimes, Timestamps};
 use crate::update::{FrameWriter, LightUniforms};
@@ -118,7 +118,7 @@ impl Targets {
         let n = state.lights.len();
         if n == 0 || n > MAX_LIGHTS {
             return Err(RuntimeError::Param(format!(
-                "{n} light(s) bound: a frame combines 1 to {MAX_LIGHTS} lights (their visibilities share one RGBA texel a pixel)"
+                "{n} light(s) bound: a frame combines 1 to {MAX_LIGHTS} lights"
             )));
         }
         if let Some(slices) = &state.slices {
@@ -208,7 +208,10 @@ impl Targets {
             pixels: None,
             combine: None,
             unshadowed: None,
-            timestamps: Timestamps::new(&gpu, graph.passes.iter().map(|p| p.name.clone()).collect(), n),
+            timestamps: limits
+                .timestamps
+                .then(|| Timestamps::new(&gpu, graph.passes.iter().map(|p| p.name.clone()).collect(), n))
+                .flatten(),
             limits,
             bound,
         };
@@ -550,28 +553,33 @@ impl Targets {
                 }
                 // The pass's first render or compute pass writes its start, the last its
                 // end. A per-sample pass records all its steps for one view, then the next.
-                let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
-                let Some(bindings) = self.bindings.get(l).and_then(|b| b.get(pi)) else {
+                if self.bindings.get(l).and_then(|b| b.get(pi)).is_none() {
                     return Err(RuntimeError::NotFound(crate::error::NOTHING_BOUND.into()));
-                };
-                let recording = || {
-                    (0..views).flat_map(move |v| {
-                        pass.steps
-                            .iter()
-                            .zip(bindings)
-                            .filter_map(move |(n, b)| Some((n, b.get(v as usize).filter(|b| b.passes() > 0)?, v)))
-                    })
-                };
+                }
+                let recording = || self.pass_steps(l, pi);
                 let last = recording().count().saturating_sub(1);
-                for (i, (node, bound, view)) in recording().enumerate() {
-                    let stamps = match (&self.timestamps, slot) {
-                        (Some(t), Some(slot)) => Some(t.stamps(slot, l, pi, i == 0, i == last)),
-                        _ => None,
-                    };
+                let stamps = |first: usize, end: usize| match (&self.timestamps, slot) {
+                    (Some(t), Some(slot)) => Some(t.stamps(slot, l, pi, first == 0, end == last)),
+                    _ => None,
+                };
+                let mut steps = recording().enumerate();
+                while let Some((i, (node, bound, view))) = steps.next() {
                     match &self.pixels {
                         // the host's pixels in place of the G-buffer raster
-                        Some(p) if node.draws_gbuffer() => p.record(encoder, l, stamps),
-                        Some(_) | None => node.record(encoder, bound, res, stamps, view)?,
+                        Some(p) if node.draws_gbuffer() => p.record(encoder, l, stamps(i, i)),
+                        _ if node.is_compute() => {
+                            // this compute step and those after it that join its pass
+                            let joined = recording().skip(i + 1).take_while(|&(n, b, _)| joins(n, b)).count();
+                            node.clear_generated(encoder, bound);
+                            let mut cpass = begin_compute(encoder, node.label(), stamps(i, i + joined));
+                            node.dispatch(&mut cpass, bound, res, view)?;
+                            for _ in 0..joined {
+                                if let Some((_, (node, bound, view))) = steps.next() {
+                                    node.dispatch(&mut cpass, bound, res, view)?;
+                                }
+                            }
+                        }
+                        _ => node.record(encoder, bound, res, stamps(i, i), view)?,
                     }
                 }
             }
@@ -590,11 +598,37 @@ impl Targets {
         Ok(())
     }
 
+    /// Pass `pi`'s steps for light `l` in recording order, with what each binds and its
+    /// view: every step for one view, then the next; steps with nothing to record (a mip
+    /// chain of one level) left out. Empty when nothing is bound.
+    fn pass_steps(&self, l: usize, pi: usize) -> impl Iterator<Item = (&StepNode, &StepBinding, u32)> + Clone {
+        let pass = self.technique.passes().get(pi);
+        let bindings = self.bindings.get(l).and_then(|b| b.get(pi));
+        let views = pass.map_or(0, |p| p.steps.iter().map(|n| n.views()).max().unwrap_or(1));
+        (0..views).flat_map(move |v| {
+            pass.into_iter()
+                .flat_map(|p| &p.steps)
+                .zip(bindings.into_iter().flatten())
+                .filter_map(move |(n, b)| Some((n, b.get(v as usize).filter(|b| b.passes() > 0)?, v)))
+        })
+    }
+
     /// The render and compute passes one [`Targets::record`] encodes (the placement of a
     /// moved scene's instances aside): what a frame costs the host scales with it, each
     /// pass a descriptor and a driver command list (docs/embedding.md, "Host CPU").
     pub fn recorded_passes(&self) -> usize {
-        let steps: usize = self.bindings.iter().flatten().flatten().flatten().map(StepBinding::passes).sum();
+        let mut steps = 0;
+        for l in 0..self.bound.len() {
+            for pi in 0..self.technique.passes().len() {
+                let mut after_compute = false;
+                for (node, bound, _) in self.pass_steps(l, pi) {
+                    if !(after_compute && joins(node, bound)) {
+                        steps += bound.passes();
+                    }
+                    after_compute = node.is_compute();
+                }
+            }
+        }
         let unshadowed = match (&self.unshadowed, &self.pixels) {
             (Some(_), None) => self.bound.len(),
             _ => 0,
@@ -644,6 +678,7 @@ impl Targets {
         gpu.scoped("submitting the frame", || gpu.queue.submit([encoder.finish()]))?;
         let names: Vec<String> = self.technique.passes().iter().map(|p| p.name.clone()).collect();
         let Some(t) = &mut self.timestamps else {
+            gpu.wait()?;
             return Ok(FrameTimes::untimed(&names, self.bound.len()));
         };
         // map this frame's slot, wait for the device, and take its times
@@ -728,7 +763,9 @@ impl Targets {
     /// The visibility as a texture the host can bind and sample, valid until the next
     /// resize ([`Targets::generation`]): with one light, light 0's `R32Float` visibility
     /// (1 where the camera sees no surface); with several, an `Rgba32Float` texture with
-    /// light `l`'s visibility in channel `l`. Both are camera-sized, with `TEXTURE_BINDING`
+    /// light `l`'s visibility in layer `l / 4`, channel `l % 4` (one layer up to four
+    /// lights, so that its default view is a 2D texture as with one light; a host binding
+    /// more than four views it as an array). Both are camera-sized, with `TEXTURE_BINDING`
     /// usage; 32-bit floats filter only with `FLOAT32_FILTERABLE`, so sample them with
     /// `textureLoad` or a non-filtering sampler. The check that
     /// [`crate::gpu::Inspect::read_camera`] applies (every value finite and within [0, 1])
@@ -943,4 +980,14 @@ fn write_depth_override(t: &Targets, b: &Resources, pass: &graph::PassDecl, dept
             },
         )
     })
+}
+
+/// Whether a compute step joins the compute pass of the compute step recorded just before
+/// it (in the same pass of the graph, for the same light): it must reset no buffer first
+/// (resets are encoder commands, outside any pass). wgpu orders the dispatches of one
+/// compute pass that write and read the same resource, so joining changes no value; it
+/// saves the host a pass descriptor and the driver a command list (docs/embedding.md,
+/// "Host CPU").
+fn joins(node: &StepNode, bound: &StepBinding) -> bool {
+    node.is_compute() && !StepNode::resets_buffers(bound)
 }

@@ -5,14 +5,15 @@
 //!   median of `FRAMES` frames after 10 untimed ones, two ways: *cold* (each frame recorded
 //!   just after waiting for the last) and *isolated* (frames back to back, no GPU work in
 //!   flight); each beside bare wgpu's floor for as many passes ([`Floor`]) timed the same
-//!   way, alternating with sshc's frames. Beside them, the wall time of the cold frames (and
+//!   way, alternating with sshc's frames; on a host's binding (`TargetLimits::default`: no
+//!   GPU timestamps), and isolated again on the lab's (every pass timed). Beside them, the wall time of the cold frames (and
 //!   its `prepare` / `record` split), with the scene bound as a triangle soup and again as
 //!   host geometry, there also with the light's view fitted by sshc every frame
 //!   (`Targets::fit_light`). The host's own encoder creation, its submission and the wait
 //!   are outside the timing.
 //! - **GPU, moving against static**: the GPU time of a frame (the sum of its passes'
 //!   timestamps, read back through the ring) with the light and camera moving every frame,
-//!   against the same executor with them still. Frames alternate moving and static so that
+//!   against the same executor with them still (the lab's binding). Frames alternate moving and static so that
 //!   drifts of the machine hit both; the ratio is of the two medians, taken in one run.
 //!   Beside it, the wall time of the frame's submission until the device is idle, for the
 //!   same two sets of frames: on lavapipe the end timestamp of a compute pass does not wait
@@ -22,14 +23,14 @@
 //! Prints a Markdown table and writes it to `target/embedding/frame-cost.md` (quoted in
 //! docs/embedding.md). A measurement, minutes on lavapipe: `cargo bench -p sshc-tests
 //! --bench frame_cost`; `SSHC_FRAMES` (default 1000), `SSHC_CAMERA` (side, default 128),
-//! `SSHC_SHADOW` (default 256), `SSHC_TECHNIQUES` (a comma-separated subset). The test suite only builds it (`cargo clippy --all-targets`).
+//! `SSHC_SHADOW` (default 256), `SSHC_TECHNIQUES` (a comma-separated subset), `SSHC_BYTES=0` (without the bytes table). The test suite only builds it (`cargo clippy --all-targets`).
 
 #[path = "../tests/support/mod.rs"]
 mod support;
 
 use sshc_lab::run::Loaded;
 use sshc_lab::scene::{Light, Scene};
-use sshc_runtime::gpu::{Fit, SceneInputs};
+use sshc_runtime::gpu::{Fit, SceneInputs, TargetLimits};
 use std::time::Instant;
 use support::host::at_frame;
 use support::{gpu, root};
@@ -70,7 +71,7 @@ fn main() {
     }
     let floor = Floor::new();
     let mut table = format!(
-        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2. CPU times are the host thread's own (`CLOCK_THREAD_CPUTIME_ID`), medians. *Cold*: each frame recorded just after waiting for the last (as a host that waits for its GPU; on lavapipe the GPU is the same cores, idle a frame's time). *Isolated*: the frames back to back with no GPU work in flight (command buffers dropped unsubmitted). *Floor*: bare wgpu recording as many render passes (each clearing a 256^2 target, with timestamps) and one 256-byte `write_buffer`, in the same conditions, alternating with sshc's frames.\n\n| technique | scene | passes recorded | cold µs | cold floor µs | cold / floor | isolated µs | isolated floor µs | isolated / floor | four lights: passes recorded | four lights: isolated µs | cold wall µs, 90th percentile | cold `prepare` / `record` wall µs | on host geometry, cold wall µs | host geometry, light placed by sshc, cold wall µs | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2. CPU times are the host thread's own (`CLOCK_THREAD_CPUTIME_ID`), medians. *Cold*: each frame recorded just after waiting for the last (as a host that waits for its GPU; on lavapipe the GPU is the same cores, idle a frame's time). *Isolated*: the frames back to back with no GPU work in flight (command buffers dropped unsubmitted). The host's binding (`TargetLimits::default`) has no GPU timestamps; *with timestamps* is the lab's binding (two timestamp writes a pass, resolved and copied every frame). *Floor*: bare wgpu recording as many render passes (each clearing a 256^2 target, with timestamps where sshc's have them) and one 256-byte `write_buffer`, in the same conditions, alternating with sshc's frames. GPU ms: the lab's binding.\n\n| technique | scene | passes recorded | cold µs | cold floor µs | cold / floor | isolated µs | isolated floor µs | isolated / floor | with GPU timestamps: passes recorded | with timestamps: isolated µs | isolated floor with timestamps µs | with timestamps: isolated / floor | four lights: passes recorded | four lights: isolated µs | cold wall µs, 90th percentile | cold `prepare` / `record` wall µs | on host geometry, cold wall µs | host geometry, light placed by sshc, cold wall µs | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         gpu.describe()
     );
     for t in &names {
@@ -89,8 +90,15 @@ fn main() {
             .map(|f| sshc_lab::bind::scene_inputs_for(&at_frame(&base, f), &c.graph).unwrap())
             .collect();
         let views: Vec<_> = states.iter().map(|s| (s.camera(), s.light_inputs())).collect();
-        let ex = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
-        let mut ex = ex.bind_scene(&states[0]).unwrap();
+        // the lab's binding times every pass on the GPU; a host's (`TargetLimits::default`)
+        // does not: the CPU columns are the host's, the GPU columns the lab's
+        let lab = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let host = Loaded {
+            limits: TargetLimits::default(),
+            ..lab.clone()
+        };
+        let mut ex = host.bind_scene(&states[0]).unwrap();
+        let mut timed = lab.bind_scene(&states[0]).unwrap();
         let (mut cpu, mut thread) = (Vec::new(), Vec::new());
         let (mut prepare_us, mut record_us) = (Vec::new(), Vec::new());
         let (mut moving, mut still) = (Vec::new(), Vec::new());
@@ -103,7 +111,7 @@ fn main() {
             if !move_this {
                 // bare wgpu's floor for as many passes, in the same conditions: just after
                 // waiting for a frame of this technique (its clears waited for, untimed)
-                let (us, encoder) = floor.record(passes);
+                let (us, encoder) = floor.record(passes, false);
                 gpu.queue.submit([encoder.finish()]);
                 gpu.wait().unwrap();
                 if f >= 10 {
@@ -140,8 +148,21 @@ fn main() {
                     wall_still.push(wall);
                 }
             }
-            // the newest frame's times, read through the ring (each counted once)
-            if let Some((n, times)) = ex.targets.frame_times().unwrap()
+        }
+        // The GPU time of the same frames on the lab's binding (timestamps on), moving and
+        // still alternating, each submitted and waited for; the newest frame's times read
+        // through the ring (each counted once).
+        for (f, (cam, light)) in views.iter().enumerate() {
+            if f % 2 == 0 {
+                timed.state.camera = *cam;
+                timed.state.lights[0].clone_from(light);
+            }
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            timed.targets.prepare(&mut timed.scene, &timed.state).unwrap();
+            timed.targets.record(&timed.scene, &mut encoder).unwrap();
+            gpu.queue.submit([encoder.finish()]);
+            gpu.wait().unwrap();
+            if let Some((n, times)) = timed.targets.frame_times().unwrap()
                 && last.is_none_or(|l| n > l)
             {
                 last = Some(n);
@@ -154,32 +175,41 @@ fn main() {
         // command buffers dropped unsubmitted (an empty submission applies the writes and
         // runs the timestamp ring's callbacks): sshc's and wgpu's own code, warm; and bare
         // wgpu's floor for as many passes, alternating with it.
+        // The same with the lab's timestamps, beside a floor with them, alternating too.
         let (mut isolated, mut floor_isolated) = (Vec::new(), Vec::new());
+        let (mut isolated_timed, mut floor_timed) = (Vec::new(), Vec::new());
+        let timed_passes = timed.targets.recorded_passes();
         for (f, (cam, light)) in views.iter().enumerate() {
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            let c0 = thread_cpu_us();
-            if f % 2 == 0 {
-                ex.state.camera = *cam;
-                ex.state.lights[0].clone_from(light);
-            }
-            ex.targets.prepare(&mut ex.scene, &ex.state).unwrap();
-            ex.targets.record(&ex.scene, &mut encoder).unwrap();
-            let dc = thread_cpu_us() - c0;
-            drop(encoder.finish());
-            gpu.queue.submit([]);
-            let (floor_us, encoder) = floor.record(passes);
-            drop(encoder.finish());
-            gpu.queue.submit([]);
-            if f >= 10 {
-                isolated.push(dc);
-                floor_isolated.push(floor_us);
+            for (b, is_timed) in [(&mut ex, false), (&mut timed, true)] {
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                let c0 = thread_cpu_us();
+                if f % 2 == 0 {
+                    b.state.camera = *cam;
+                    b.state.lights[0].clone_from(light);
+                }
+                b.targets.prepare(&mut b.scene, &b.state).unwrap();
+                b.targets.record(&b.scene, &mut encoder).unwrap();
+                let dc = thread_cpu_us() - c0;
+                drop(encoder.finish());
+                gpu.queue.submit([]);
+                let (floor_us, encoder) = floor.record(if is_timed { timed_passes } else { passes }, is_timed);
+                drop(encoder.finish());
+                gpu.queue.submit([]);
+                if f >= 10 {
+                    let (sshc, bare) = if is_timed {
+                        (&mut isolated_timed, &mut floor_timed)
+                    } else {
+                        (&mut isolated, &mut floor_isolated)
+                    };
+                    sshc.push(dc);
+                    bare.push(floor_us);
+                }
             }
         }
         gpu.wait().unwrap();
         // Four lights on one set of targets, isolated as above: every light moved every
         // other frame (each a view of the orbit a frame apart), the camera with them
-        let mut four = Loaded::new(gpu, c.graph.clone(), c.shaders.clone())
-            .unwrap()
+        let mut four = host
             .bind_lights(&vec![states[0].clone(); 4])
             .unwrap_or_else(|e| panic!("{t}, four lights: {e}"));
         let passes4 = four.targets.recorded_passes();
@@ -203,7 +233,7 @@ fn main() {
             }
         }
         gpu.wait().unwrap();
-        drop(four);
+        drop((four, timed));
         let (gm, gs) = (median(&mut moving), median(&mut still));
         let (wm, ws) = (median(&mut wall_moving), median(&mut wall_still));
         let lights: Vec<Light> = (0..frames + 10).map(|f| at_frame(&base, f).lights.remove(0)).collect();
@@ -213,10 +243,12 @@ fn main() {
             });
         let (cold, floor_c) = (median(&mut thread), median(&mut floor_cold));
         let (iso, floor_i) = (median(&mut isolated), median(&mut floor_isolated));
+        let (iso_t, floor_t) = (median(&mut isolated_timed), median(&mut floor_timed));
         let row = format!(
-            "| {t} | {sc} | {passes} | {cold:.1} | {floor_c:.1} | {:.2} | {iso:.1} | {floor_i:.1} | {:.2} | {passes4} | {:.1} | {:.1} | {:.1} / {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
+            "| {t} | {sc} | {passes} | {cold:.1} | {floor_c:.1} | {:.2} | {iso:.1} | {floor_i:.1} | {:.2} | {timed_passes} | {iso_t:.1} | {floor_t:.1} | {:.2} | {passes4} | {:.1} | {:.1} | {:.1} / {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
             cold / floor_c,
             iso / floor_i,
+            iso_t / floor_t,
             median(&mut isolated4),
             percentile(&mut cpu, 0.9),
             median(&mut prepare_us),
@@ -227,7 +259,11 @@ fn main() {
         print!("{row}");
         table.push_str(&row);
     }
-    table.push_str(&bytes_table());
+    // `SSHC_BYTES=0`: without the bytes table (minutes and gigabytes: 273 bunnies), so
+    // that a profile of the bench is a profile of the frame loop
+    if env("SSHC_BYTES", 1) != 0 {
+        table.push_str(&bytes_table());
+    }
     let dir = root().join("target").join("embedding");
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("frame-cost.md"), &table).unwrap();
@@ -248,7 +284,8 @@ fn host_geometry_cpu(
     let gpu = gpu();
     let mut g = support::host::geometry_of(s, [0.0; 3]);
     g.instances.pop(); // the turned copy
-    let loaded = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut loaded = Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).unwrap();
+    loaded.limits = TargetLimits::default(); // a host's binding: no GPU timestamps
     let mut ex = loaded
         .bind_geometry(&g, &s.camera(), &[s.light_inputs()], s.camera_size, s.shadow_size)
         .ok()?;
@@ -359,7 +396,7 @@ fn bytes_table() -> String {
 
 /// What bare wgpu costs the host, as the floor under sshc's per-frame CPU: an encoder
 /// recording `k` render passes that only clear one 256^2 `Rgba8Unorm` target (each with a
-/// pair of timestamp writes, as sshc's passes have) after one 256-byte
+/// pair of timestamp writes when sshc's passes have them) after one 256-byte
 /// `Queue::write_buffer` (a `Frame` uniform's write).
 struct Floor {
     view: wgpu::TextureView,
@@ -404,9 +441,9 @@ impl Floor {
         }
     }
 
-    /// The host thread's CPU µs of one write and `passes` passes, and the encoder (the
-    /// caller submits or drops it).
-    fn record(&self, passes: usize) -> (f64, wgpu::CommandEncoder) {
+    /// The host thread's CPU µs of one write and `passes` passes (each with a pair of
+    /// timestamp writes when `timed`), and the encoder (the caller submits or drops it).
+    fn record(&self, passes: usize, timed: bool) -> (f64, wgpu::CommandEncoder) {
         let gpu = gpu();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let c0 = thread_cpu_us();
@@ -424,7 +461,7 @@ impl Floor {
                     },
                 })],
                 depth_stencil_attachment: None,
-                timestamp_writes: self.queries.as_ref().map(|q| wgpu::RenderPassTimestampWrites {
+                timestamp_writes: self.queries.as_ref().filter(|_| timed).map(|q| wgpu::RenderPassTimestampWrites {
                     query_set: q,
                     beginning_of_pass_write_index: Some(0),
                     end_of_pass_write_index: Some(1),

@@ -1714,6 +1714,89 @@ fn a_prepared_frame_recorded_twice_in_one_submission_is_the_frame_recorded_once(
     }
 }
 
+/// Issue 49: more than four lights on one set of targets. Six lights (the three of
+/// `scenes/three-lights.ron` and three moved copies of its rectangle and sphere) gather
+/// their visibilities four to an RGBA layer: light `l`'s in layer `l / 4`, channel `l % 4`,
+/// bit for bit what the light bound alone gives (a copy of its f32 visibility), the unused
+/// channels of the last layer 0; the frame's colour is the mean of the six lights' colours
+/// within one 8-bit quantum (the mean of six 8-bit values lies between two codes, and the
+/// store may round to either). Seventeen lights are refused, naming the limit.
+#[test]
+fn more_than_four_lights_gather_four_to_a_layer_and_frame_as_each_alone() {
+    use sshc_runtime::gpu::MAX_LIGHTS;
+    use sshc_runtime::light::glam::Vec3;
+    let mut six = scene("three-lights", 32, 64);
+    let [rect, sphere] = [six.lights[0].clone(), six.lights[1].clone()];
+    six.lights.extend([
+        rect.translated(Vec3::new(1.2, 0.3, -0.8)),
+        sphere.translated(Vec3::new(-1.5, 0.4, 0.3)),
+        sphere.translated(Vec3::new(-0.6, 0.2, -1.9)),
+    ]);
+    for t in ["pcf", "pcss"] {
+        let c = compile(t);
+        let lights = all_lights(&six, &c);
+        assert_eq!(lights.len(), 6);
+        let loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap_or_else(|e| panic!("{t}: {e}"));
+        let mut ex = loaded.bind_lights(&lights).unwrap_or_else(|e| panic!("{t}: {e}"));
+        ex.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
+        let layers = [0, 1].map(|k| ex.inspect().read_visibility_layer(k).unwrap_or_else(|e| panic!("{t}: {e}")));
+        assert!(ex.inspect().read_visibility_layer(2).is_err(), "{t}: six lights fill two layers");
+        assert!(
+            layers[1].rgba.iter().all(|p| p[2] == 0.0 && p[3] == 0.0),
+            "{t}: the second layer's unused channels"
+        );
+        let combined = ex
+            .inspect()
+            .read_camera(CameraOutput::Color)
+            .unwrap_or_else(|e| panic!("{t}: {e}"))
+            .rgba;
+        let mut sum = vec![[0f32; 4]; combined.len()];
+        let mut differ = 0;
+        for (l, one) in lights.iter().enumerate() {
+            let mut alone = loaded.bind_scene(one).unwrap_or_else(|e| panic!("{t}: {e}"));
+            alone.run_frame().unwrap_or_else(|e| panic!("{t}: {e}"));
+            let v = alone.inspect().read_camera(CameraOutput::Visibility).unwrap().channel(0);
+            let gathered = layers[l / 4].channel(l % 4);
+            assert!(
+                v.iter().zip(&gathered).all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{t}: light {l}'s gathered visibility differs from the light alone"
+            );
+            if l > 0 && gathered != layers[0].channel(0) {
+                differ += 1;
+            }
+            let color = alone.inspect().read_camera(CameraOutput::Color).unwrap().rgba;
+            for (s, c) in sum.iter_mut().zip(&color) {
+                for k in 0..4 {
+                    s[k] += c[k];
+                }
+            }
+        }
+        assert!(
+            differ >= 4,
+            "{t}: the lights should shade differently ({differ} of 5 differ from light 0)"
+        );
+        for (i, (s, c)) in sum.iter().zip(&combined).enumerate() {
+            for k in 0..3 {
+                let mean = s[k] / 6.0;
+                // one 8-bit quantum, and f32 rounding of a sum of six values in [0, 1]
+                assert!(
+                    (mean - c[k]).abs() <= 1.0 / 255.0 + 8.0 * f32::EPSILON,
+                    "{t}: pixel {i} channel {k}: {} against the mean {mean}",
+                    c[k]
+                );
+            }
+        }
+    }
+    // more than a frame combines: refused by the runtime, naming the limit
+    let c = compile("pcf");
+    let one = all_lights(&six, &c).remove(0);
+    let loaded = Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let Err(e) = loaded.bind_lights(&vec![one; MAX_LIGHTS + 1]) else {
+        panic!("17 lights are refused")
+    };
+    assert!(e.to_string().contains(&format!("a frame combines 1 to {MAX_LIGHTS} lights")), "{e}");
+}
+
 /// Issue 49: the lights of one set of targets share their shadow-map-sized textures (made
 /// once, from a pool keyed by declaration; transient ones always), since each light's
 /// passes run before the next light's and nothing after them reads those textures. With
@@ -1911,10 +1994,12 @@ fn a_mesh_added_or_removed_keeps_the_targets_and_frames_as_fresh_ones() {
     }
 }
 
-/// `Targets::recorded_passes` counts what `record` encodes: a pass per step, per level of
-/// a fragment mip chain and per light, and the lights' combine. The bundled mipmapped
-/// techniques schedule their chain as compute (one pass for every level); as fragment the
-/// chain is one render pass per level below the base (6 at a 64^2 map).
+/// `Targets::recorded_passes` counts what `record` encodes: a pass per raster step, per
+/// level of a fragment mip chain and per light, one compute pass for the compute steps of
+/// a graph pass that follow one another (`joins` in targets.rs), and the lights' combine.
+/// The bundled mipmapped techniques schedule their chain as compute (one pass for every
+/// level); as fragment the chain is one render pass per level below the base (6 at a 64^2
+/// map).
 #[test]
 fn the_passes_recorded_follow_the_steps_the_levels_and_the_lights() {
     let one = scene("contact", 32, 64);
@@ -1924,9 +2009,20 @@ fn the_passes_recorded_follow_the_steps_the_levels_and_the_lights() {
         let ex = loaded.bind_lights(lights).unwrap_or_else(|e| panic!("{e}"));
         ex.targets.recorded_passes()
     };
+    let scheduled = |t: &str, schedule: &[(&str, &str)]| {
+        sshc::compile_str(
+            &support::technique_source(t),
+            &sshc::CompileOptions {
+                schedule: schedule.iter().map(|(p, s)| (p.to_string(), s.to_string())).collect(),
+                ..Default::default()
+            },
+        )
+        .unwrap_or_else(|d| panic!("{}", d.render(t, &support::technique_source(t))))
+    };
     // hard: depth, shade; VSM: depth, moments, two blur steps, the chain, shade; CSSM:
-    // depth, basis, six blur steps (two channel groups, layers chunked), two chains, shade
-    for (t, want) in [("hard", 2), ("vsm", 6), ("cssm", 11)] {
+    // depth, basis (two steps), five blur steps (two channel groups, layers chunked), the
+    // chains of its two textures in one compute pass, shade
+    for (t, want) in [("hard", 2), ("vsm", 6), ("cssm", 10)] {
         let c = compile(t);
         assert_eq!(passes(&c, &[inputs(&one, &c)]), want, "{t}, one light");
         assert_eq!(
@@ -1935,13 +2031,9 @@ fn the_passes_recorded_follow_the_steps_the_levels_and_the_lights() {
             "{t}, three lights and their combine"
         );
     }
-    let fragment = sshc::compile_str(
-        &support::technique_source("vsm"),
-        &sshc::CompileOptions {
-            schedule: vec![("mips".into(), "fragment".into())],
-            ..Default::default()
-        },
-    )
-    .unwrap_or_else(|d| panic!("{}", d.render("vsm", &support::technique_source("vsm"))));
+    // CSSM's basis and blur as compute: each graph pass's steps in one compute pass
+    let compute = scheduled("cssm", &[("basis", "compute"), ("blur", "compute")]);
+    assert_eq!(passes(&compute, &[inputs(&one, &compute)]), 5, "cssm, basis and blur as compute");
+    let fragment = scheduled("vsm", &[("mips", "fragment")]);
     assert_eq!(passes(&fragment, &[inputs(&one, &fragment)]), 5 + 6, "vsm, its chain as fragment");
 }

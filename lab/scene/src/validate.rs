@@ -74,6 +74,17 @@ pub(crate) fn validate(desc: &mut SceneDesc) -> Result<(), SceneError> {
         ));
     }
     validate_camera(&desc.camera)?;
+    if desc.lights.len() > sshc_light::MAX_LIGHTS {
+        return Err(SceneError::invalid(
+            "lights",
+            format!(
+                "{} lights, above the runtime's limit of {} a frame",
+                desc.lights.len(),
+                sshc_light::MAX_LIGHTS
+            ),
+            format!("keep at most {} lights in the scene", sshc_light::MAX_LIGHTS),
+        ));
+    }
     for (i, light) in desc.lights.iter_mut().enumerate() {
         let name = light.kind_name();
         let at = |field: &str| format!("lights[{i}] ({name}).{field}");

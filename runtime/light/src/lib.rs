@@ -20,10 +20,11 @@
 mod cascades;
 pub use cascades::{CameraFrustum, Cascade, MAX_CASCADES, cascade_views, practical_splits};
 
-/// Most lights one frame combines: the visibilities go into one RGBA texel a pixel (and
-/// `sshc render --visibility` writes them as the channels of one image). The runtime
+/// Most lights one frame combines: the runtime gathers their visibilities four lights to an
+/// RGBA layer (`Targets::visibility`, light `l` in layer `l / 4`, channel `l % 4`), and each
+/// light runs every pass of the technique and the camera raster once a frame. The runtime
 /// refuses more at binding; scene loaders refuse more when reading.
-pub const MAX_LIGHTS: usize = 4;
+pub const MAX_LIGHTS: usize = 16;
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
