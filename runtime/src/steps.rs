@@ -1000,6 +1000,17 @@ impl StepNode {
         &self.label
     }
 
+    /// Whether a compute step has nothing to dispatch for `view`: a `Cells` step whose view
+    /// has no source sample (the first sample's previous, the last's next, on an open
+    /// chain) or no cells. Its buffers are still reset ([`StepNode::clear_generated`]: the
+    /// draw after it then draws nothing), but no compute pass is begun for it.
+    pub fn dispatches_nothing(&self, bound: &StepBinding, res: &Resources, view: u32) -> bool {
+        match &self.kind {
+            NodeKind::Compute(c) => matches!(c.dispatch, Dispatch::Cells(_)) && source_cells(c, bound, res, view).is_none(),
+            NodeKind::Raster(_) => false,
+        }
+    }
+
     /// Whether the step runs as a compute dispatch (recorded into a compute pass).
     pub fn is_compute(&self) -> bool {
         matches!(self.kind, NodeKind::Compute(_))
@@ -1100,18 +1111,8 @@ impl StepNode {
                             }
                         }
                     }
-                    Dispatch::Cells(source) => {
-                        let cells = geometry.as_ref().and_then(|g| g.0.first()).map_or(0, |g| g.1);
-                        // the shader would find no source view and return at once (it
-                        // checks too); on lavapipe a dispatch of empty invocations costs
-                        // as much as half a full one
-                        let n = res.samples;
-                        let has_source = res.samples_closed
-                            || match source {
-                                graph::Neighbour::Previous => view > 0,
-                                graph::Neighbour::Next => view + 1 < n,
-                            };
-                        if cells > 0 && has_source {
+                    Dispatch::Cells(_) => {
+                        if let Some(cells) = source_cells(c, bound, res, view) {
                             cpass.dispatch_workgroups(cells.div_ceil(graph::COMPUTE_WORKGROUP), cells, 1);
                         }
                     }
@@ -1122,6 +1123,22 @@ impl StepNode {
             _ => Err(self.mismatch()),
         }
     }
+}
+
+/// A `Cells` step's cells for `view`, `None` where it has nothing to do: no source view
+/// (the shader would find none and return at once, and on lavapipe a dispatch of empty
+/// invocations costs as much as half a full one) or no cells.
+fn source_cells(c: &ComputeStep, bound: &StepBinding, res: &Resources, view: u32) -> Option<u32> {
+    let (Dispatch::Cells(source), StepBinding::Compute { geometry, .. }) = (&c.dispatch, bound) else {
+        return None;
+    };
+    let cells = geometry.as_ref().and_then(|g| g.0.first()).map_or(0, |g| g.1);
+    let has_source = res.samples_closed
+        || match source {
+            graph::Neighbour::Previous => view > 0,
+            graph::Neighbour::Next => view + 1 < res.samples,
+        };
+    (cells > 0 && has_source).then_some(cells)
 }
 
 /// Begin a compute pass labelled `label`, with `stamps`' timestamp writes when it has any.

@@ -557,9 +557,12 @@ impl Targets {
                     return Err(RuntimeError::NotFound(crate::error::NOTHING_BOUND.into()));
                 }
                 let recording = || self.pass_steps(l, pi);
-                let last = recording().count().saturating_sub(1);
-                let stamps = |first: usize, end: usize| match (&self.timestamps, slot) {
-                    (Some(t), Some(slot)) => Some(t.stamps(slot, l, pi, first == 0, end == last)),
+                // the steps that begin a pass: the first writes the start, the last the end
+                let begins = || recording().enumerate().filter(|(_, (n, b, v))| !n.dispatches_nothing(b, res, *v));
+                let first = begins().next().map_or(0, |(i, _)| i);
+                let last = begins().last().map_or(0, |(i, _)| i);
+                let stamps = |from: usize, to: usize| match (&self.timestamps, slot) {
+                    (Some(t), Some(slot)) => Some(t.stamps(slot, l, pi, from == first, to == last)),
                     _ => None,
                 };
                 let mut steps = recording().enumerate();
@@ -567,6 +570,8 @@ impl Targets {
                     match &self.pixels {
                         // the host's pixels in place of the G-buffer raster
                         Some(p) if node.draws_gbuffer() => p.record(encoder, l, stamps(i, i)),
+                        // its buffers reset, no pass
+                        _ if node.dispatches_nothing(bound, res, view) => node.clear_generated(encoder, bound),
                         _ if node.is_compute() => {
                             // this compute step and those after it that join its pass
                             let joined = recording().skip(i + 1).take_while(|&(n, b, _)| joins(n, b)).count();
@@ -621,7 +626,11 @@ impl Targets {
         for l in 0..self.bound.len() {
             for pi in 0..self.technique.passes().len() {
                 let mut after_compute = false;
-                for (node, bound, _) in self.pass_steps(l, pi) {
+                for (node, bound, view) in self.pass_steps(l, pi) {
+                    if node.dispatches_nothing(bound, &self.bound[l], view) {
+                        after_compute = false;
+                        continue;
+                    }
                     if !(after_compute && joins(node, bound)) {
                         steps += bound.passes();
                     }

@@ -71,7 +71,7 @@ fn main() {
     }
     let floor = Floor::new();
     let mut table = format!(
-        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2. CPU times are the host thread's own (`CLOCK_THREAD_CPUTIME_ID`), medians. *Cold*: each frame recorded just after waiting for the last (as a host that waits for its GPU; on lavapipe the GPU is the same cores, idle a frame's time). *Isolated*: the frames back to back with no GPU work in flight (command buffers dropped unsubmitted). The host's binding (`TargetLimits::default`) has no GPU timestamps; *with timestamps* is the lab's binding (two timestamp writes a pass, resolved and copied every frame). *Floor*: bare wgpu recording as many render passes (each clearing a 256^2 target, with timestamps where sshc's have them) and one 256-byte `write_buffer`, in the same conditions, alternating with sshc's frames. GPU ms: the lab's binding.\n\n| technique | scene | passes recorded | cold µs | cold floor µs | cold / floor | isolated µs | isolated floor µs | isolated / floor | with GPU timestamps: passes recorded | with timestamps: isolated µs | isolated floor with timestamps µs | with timestamps: isolated / floor | four lights: passes recorded | four lights: isolated µs | cold wall µs, 90th percentile | cold `prepare` / `record` wall µs | on host geometry, cold wall µs | host geometry, light placed by sshc, cold wall µs | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "Device: {}. {frames} frames a technique, camera {camera}^2, shadow map {shadow}^2. CPU times are the host thread's own (`CLOCK_THREAD_CPUTIME_ID`), medians. *Cold*: each frame recorded just after waiting for the last (as a host that waits for its GPU; on lavapipe the GPU is the same cores, idle a frame's time). *Isolated*: the frames back to back with no GPU work in flight (command buffers dropped unsubmitted). The host's binding (`TargetLimits::default`) has no GPU timestamps; *with timestamps* is the lab's binding (two timestamp writes a pass, resolved and copied every frame). *Floor*: bare wgpu recording as many render passes (each clearing a 256^2 target, with timestamps where sshc's have them) and one 256-byte `write_buffer`, in the same conditions, alternating with sshc's frames. GPU ms: the lab's binding.\n\n| technique | scene | passes recorded | cold µs | cold floor µs | cold / floor | isolated µs | isolated floor µs | isolated / floor | with GPU timestamps: passes recorded | with timestamps: isolated µs | isolated floor with timestamps µs | with timestamps: isolated / floor | four lights: passes recorded | four lights: isolated µs | eight lights: passes recorded | eight lights: isolated µs | cold wall µs, 90th percentile | cold `prepare` / `record` wall µs | on host geometry, cold wall µs | host geometry, light placed by sshc, cold wall µs | GPU ms moving | GPU ms static | moving / static | wall ms moving | wall ms static | moving / static |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         gpu.describe()
     );
     for t in &names {
@@ -207,33 +207,37 @@ fn main() {
             }
         }
         gpu.wait().unwrap();
-        // Four lights on one set of targets, isolated as above: every light moved every
-        // other frame (each a view of the orbit a frame apart), the camera with them
-        let mut four = host
-            .bind_lights(&vec![states[0].clone(); 4])
-            .unwrap_or_else(|e| panic!("{t}, four lights: {e}"));
-        let passes4 = four.targets.recorded_passes();
-        let mut isolated4 = Vec::new();
-        for f in 0..views.len() {
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            let c0 = thread_cpu_us();
-            if f % 2 == 0 {
-                four.state.camera = views[f].0;
-                for (k, light) in four.state.lights.iter_mut().enumerate() {
-                    light.clone_from(&views[(f + k) % views.len()].1);
+        // Four and eight lights on one set of targets, isolated as above: every light moved
+        // every other frame (each a view of the orbit a frame apart), the camera with them
+        let mut many = Vec::new();
+        for n in [4, 8] {
+            let mut b = host
+                .bind_lights(&vec![states[0].clone(); n])
+                .unwrap_or_else(|e| panic!("{t}, {n} lights: {e}"));
+            let mut isolated = Vec::new();
+            for f in 0..views.len() {
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                let c0 = thread_cpu_us();
+                if f % 2 == 0 {
+                    b.state.camera = views[f].0;
+                    for (k, light) in b.state.lights.iter_mut().enumerate() {
+                        light.clone_from(&views[(f + k) % views.len()].1);
+                    }
+                }
+                b.targets.prepare(&mut b.scene, &b.state).unwrap();
+                b.targets.record(&b.scene, &mut encoder).unwrap();
+                let dc = thread_cpu_us() - c0;
+                drop(encoder.finish());
+                gpu.queue.submit([]);
+                if f >= 10 {
+                    isolated.push(dc);
                 }
             }
-            four.targets.prepare(&mut four.scene, &four.state).unwrap();
-            four.targets.record(&four.scene, &mut encoder).unwrap();
-            let dc = thread_cpu_us() - c0;
-            drop(encoder.finish());
-            gpu.queue.submit([]);
-            if f >= 10 {
-                isolated4.push(dc);
-            }
+            gpu.wait().unwrap();
+            many.push((b.targets.recorded_passes(), median(&mut isolated)));
         }
-        gpu.wait().unwrap();
-        drop((four, timed));
+        let [(passes4, iso4), (passes8, iso8)] = [many[0], many[1]];
+        drop(timed);
         let (gm, gs) = (median(&mut moving), median(&mut still));
         let (wm, ws) = (median(&mut wall_moving), median(&mut wall_still));
         let lights: Vec<Light> = (0..frames + 10).map(|f| at_frame(&base, f).lights.remove(0)).collect();
@@ -245,11 +249,10 @@ fn main() {
         let (iso, floor_i) = (median(&mut isolated), median(&mut floor_isolated));
         let (iso_t, floor_t) = (median(&mut isolated_timed), median(&mut floor_timed));
         let row = format!(
-            "| {t} | {sc} | {passes} | {cold:.1} | {floor_c:.1} | {:.2} | {iso:.1} | {floor_i:.1} | {:.2} | {timed_passes} | {iso_t:.1} | {floor_t:.1} | {:.2} | {passes4} | {:.1} | {:.1} | {:.1} / {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
+            "| {t} | {sc} | {passes} | {cold:.1} | {floor_c:.1} | {:.2} | {iso:.1} | {floor_i:.1} | {:.2} | {timed_passes} | {iso_t:.1} | {floor_t:.1} | {:.2} | {passes4} | {iso4:.1} | {passes8} | {iso8:.1} | {:.1} | {:.1} / {:.1} | {hosted} | {placed} | {gm:.3} | {gs:.3} | {:.3} | {wm:.3} | {ws:.3} | {:.3} |\n",
             cold / floor_c,
             iso / floor_i,
             iso_t / floor_t,
-            median(&mut isolated4),
             percentile(&mut cpu, 0.9),
             median(&mut prepare_us),
             median(&mut record_us),

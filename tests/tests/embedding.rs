@@ -2031,6 +2031,12 @@ fn the_passes_recorded_follow_the_steps_the_levels_and_the_lights() {
             "{t}, three lights and their combine"
         );
     }
+    // the linear light's two samples: a depth pass each; each Geometry pass a compute step
+    // and a draw per sample, but the first sample has no previous and the last no next
+    // sample to find skins in: no compute pass for those (their draws still clear)
+    let c = compile("linear-light");
+    let linear = scene("linear", 32, 64);
+    assert_eq!(passes(&c, &[inputs(&linear, &c)]), 2 + 3 + 3 + 1, "linear-light");
     // CSSM's basis and blur as compute: each graph pass's steps in one compute pass
     let compute = scheduled("cssm", &[("basis", "compute"), ("blur", "compute")]);
     assert_eq!(passes(&compute, &[inputs(&one, &compute)]), 5, "cssm, basis and blur as compute");
