@@ -1097,12 +1097,16 @@ mod tests {
 
     #[test]
     fn more_lights_than_the_runtime_binds_are_refused_with_the_count() {
-        let lights: Vec<Value> = (0..5).map(|_| json!({"type": "point"})).collect();
+        let n = MAX_LIGHTS + 1;
+        let lights: Vec<Value> = (0..n).map(|_| json!({"type": "point"})).collect();
         let mut nodes = vec![json!({"mesh": 0})];
-        nodes.extend((0..5).map(|i| json!({"extensions": {"KHR_lights_punctual": {"light": i}}})));
+        nodes.extend((0..n).map(|i| json!({"extensions": {"KHR_lights_punctual": {"light": i}}})));
         let root = json!({"extensions": {"KHR_lights_punctual": {"lights": lights}}, "nodes": nodes});
         let e = error_of(&with_buffer(root, &TRIANGLE, &[0, 1, 2]));
-        assert!(e.contains("5 lights") && e.contains("limit of 4"), "{e}");
+        assert!(
+            e.contains(&format!("{n} lights")) && e.contains(&format!("limit of {MAX_LIGHTS}")),
+            "{e}"
+        );
     }
 
     /// The first camera the traversal meets: its node's position, looking down its -Z.
