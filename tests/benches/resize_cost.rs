@@ -9,6 +9,13 @@
 //! a texture when it is destroyed but not when it is made: every texture made again
 //! replaces one).
 //!
+//! Beside it, what a host pays today to add an instance (a spawned entity): the bunny as
+//! host geometry (its soup welded into meshes, one instance each) with and without one
+//! more bunny instance, alternately, each a new `Scene::upload` (every mesh uploaded
+//! again, the adjacency built again where the technique classifies silhouettes) and
+//! `Targets::set_scene` (no texture made again; bind groups and bundles made again): the
+//! baseline for uploading a mesh or instance alone (docs/embedding.md section 7).
+//!
 //! `cargo bench -p sshc-tests --bench resize_cost` (about a minute on lavapipe);
 //! `SSHC_RESIZES` (default 9 of each). Writes `target/embedding/resize-cost.md`.
 
@@ -30,7 +37,7 @@ fn main() {
     let gpu = gpu();
     let textures = || gpu.device.get_internal_counters().hal.textures.read();
     let mut table = format!(
-        "Device: {}. Bunny scene (`scenes/bunny.ron`), shadow map 1024^2, window 640 x 480 <-> 800 x 600, {n} resizes of each kind, alternating; wall time until the device is idle.\n\n| technique | rebind (before), ms median | textures made | `resize` (now), ms median | textures made | rebind / resize |\n|---|---|---|---|---|---|\n",
+        "Device: {}. Bunny scene (`scenes/bunny.ron`), shadow map 1024^2, window 640 x 480 <-> 800 x 600, {n} resizes of each kind, alternating; wall time until the device is idle.\n\n| technique | rebind (before), ms median | textures made | `resize` (now), ms median | textures made | rebind / resize | an instance added or removed: `Scene::upload` + `set_scene`, ms median | textures made |\n|---|---|---|---|---|---|---|---|\n",
         gpu.describe()
     );
     for t in ["hard", "pcss", "vssm", "penumbra-maps"] {
@@ -74,7 +81,44 @@ fn main() {
             }
         }
         let (a, b) = (median(&mut rebind), median(&mut resize));
-        let row = format!("| {t} | {a:.2} | {made_rebind} | {b:.2} | {made_resize} | {:.1} |\n", a / b);
+        // an instance spawned and despawned, alternately: the whole scene uploaded again
+        let mut g = support::host::geometry_of(&inputs[1], [0.0; 3]);
+        g.instances.pop(); // the turned copy
+        let bunny = (0..g.instances.len())
+            .max_by_key(|&i| g.meshes[g.instances[i].mesh].indices.len())
+            .unwrap();
+        let mut more = g.clone();
+        let mut spawned = more.instances[bunny].clone();
+        spawned.transform[12] += 0.6;
+        more.instances.push(spawned);
+        let technique = &loaded.technique;
+        let mut ex = loaded
+            .bind_geometry(
+                &g,
+                &inputs[1].camera(),
+                &[inputs[1].light_inputs()],
+                inputs[1].camera_size,
+                inputs[1].shadow_size,
+            )
+            .unwrap();
+        ex.run_frame().unwrap();
+        let (mut spawn, mut made_spawn) = (Vec::new(), 0);
+        for i in 0..2 * n {
+            let geometry = if i % 2 == 0 { &more } else { &g };
+            let before = textures();
+            let t0 = Instant::now();
+            ex.scene = sshc_runtime::gpu::Scene::upload(gpu, geometry, &[technique]).unwrap();
+            ex.targets.set_scene(&ex.scene).unwrap();
+            gpu.wait().unwrap();
+            spawn.push(t0.elapsed().as_secs_f64() * 1e3);
+            ex.run_frame().unwrap();
+            made_spawn = before - textures();
+        }
+        let row = format!(
+            "| {t} | {a:.2} | {made_rebind} | {b:.2} | {made_resize} | {:.1} | {:.2} | {made_spawn} |\n",
+            a / b,
+            median(&mut spawn)
+        );
         print!("{row}");
         table.push_str(&row);
     }
