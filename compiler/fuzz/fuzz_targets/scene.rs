@@ -1,11 +1,12 @@
 //! Scene files (`sshc_scene::Scene::from_str` with a base folder for OBJ paths).
 //!
 //! Two kinds of input. One whose first byte is 0xFF (never the first byte of UTF-8 text)
-//! drives a generator of `SceneDesc` values with bounded sizes (at most 6 objects and 4
-//! lights; numbers near the edges: 0, -0, 1e-30, 1e30, f32::MAX, NaN, inf; sizes around
-//! the limits: 4096 x 4096 pixels, 1024 sphere segments, u32::MAX), written as RON
-//! (with or without struct names) and then edited as text (see `mutate.rs`). Any other
-//! input is RON text as it is (the seeds are the bundled scenes).
+//! drives a generator of `SceneDesc` values with bounded sizes (at most 6 objects and
+//! `MAX_LIGHTS + 1` lights, one past what a scene may hold; numbers near the edges: 0,
+//! -0, 1e-30, 1e30, f32::MAX, NaN, inf; sizes around the limits: 4096 x 4096 pixels,
+//! 1024 sphere segments, u32::MAX), written as RON (with or without struct names) and
+//! then edited as text (see `mutate.rs`). Any other input is RON text as it is (the
+//! seeds are the bundled scenes).
 //!
 //! OBJ paths resolve in a folder made once per process: small valid and broken OBJ files,
 //! a subfolder, and symbolic links leading out of it (refused by the loader).
@@ -302,7 +303,7 @@ fn scene(u: &mut Unstructured) -> Result<SceneDesc> {
     Ok(SceneDesc {
         camera: camera(u)?,
         shadow_map: size(u)?,
-        lights: (0..u.int_in_range(0..=4)?).map(|_| light(u)).collect::<Result<_>>()?,
+        lights: (0..u.int_in_range(0..=MAX_LIGHTS + 1)?).map(|_| light(u)).collect::<Result<_>>()?,
         objects: (0..u.int_in_range(0..=6)?).map(|_| object(u)).collect::<Result<_>>()?,
         shadow_fit: if u.arbitrary()? { ShadowFit::Casters } else { ShadowFit::Scene },
         cascades: if u.ratio(1u8, 4)? {
@@ -383,6 +384,7 @@ fn drive(text: &str) {
     // What the executor and the ground truth compute from a scene next: no panic.
     let _ = scene.camera_view_proj();
     let _ = scene.fingerprint();
+    assert!(scene.lights.len() <= MAX_LIGHTS, "{} lights accepted: {text}", scene.lights.len());
     for l in &scene.lights {
         let _ = l.view(scene.bounds());
         let _ = scene.light_view(l);
