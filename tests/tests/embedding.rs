@@ -1994,6 +1994,72 @@ fn a_mesh_added_or_removed_keeps_the_targets_and_frames_as_fresh_ones() {
     }
 }
 
+/// Issue 49: one loaded technique serving two views of one scene (split screen): the
+/// technique (its shader modules and pipelines) is made once; each half of the screen is
+/// its own `Targets` (its own camera, a half-width size), both prepared and recorded into
+/// one encoder and submitted together. Making the second view's targets creates no
+/// pipeline, and each half frames bit for bit as that camera bound alone.
+#[test]
+fn one_loaded_technique_serves_two_views_recorded_in_one_submission() {
+    use sshc_runtime::gpu::{Camera, FrameState, Scene as Uploaded, Sizes, Targets, Technique};
+    use sshc_runtime::graph::ValidGraph;
+    use sshc_runtime::light::{glam::Vec3, look_at, perspective};
+    let gpu = gpu();
+    let pipelines = || {
+        let c = gpu.device.get_internal_counters().hal;
+        (c.render_pipelines.read(), c.compute_pipelines.read())
+    };
+    for t in ["pcss", "cssm", "penumbra-limit-maps"] {
+        let c = compile(t);
+        let s = inputs(&scene("contact", 32, 64), &c);
+        let technique = Technique::new(gpu, ValidGraph::try_from(c.graph.clone()).unwrap(), c.shaders.clone()).unwrap();
+        let mut scene = Uploaded::upload(gpu, &geometry_of(&s, [0.0; 3]), &[&technique]).unwrap();
+        // the two halves: 24 x 32 each, from two sides of the scene
+        let sizes = Sizes {
+            camera: (24, 32),
+            shadow: s.shadow_size,
+        };
+        let camera = |eye: Vec3| Camera {
+            view_proj: (perspective(45f32.to_radians(), 24.0 / 32.0, 0.05, 20.0) * look_at(eye, Vec3::new(0.0, 0.2, 0.0), Vec3::Y))
+                .to_cols_array(),
+            position: eye.to_array(),
+        };
+        let states: Vec<FrameState> = [Vec3::new(1.8, 1.4, 1.6), Vec3::new(-1.6, 1.2, 1.9)]
+            .into_iter()
+            .map(|eye| {
+                let mut st = FrameState::of_inputs(&technique, &s);
+                st.camera = camera(eye);
+                st
+            })
+            .collect();
+        let made = pipelines();
+        let mut views: Vec<Targets> = states
+            .iter()
+            .map(|st| Targets::new(&technique, &scene, st, sizes).unwrap_or_else(|e| panic!("{t}: {e}")))
+            .collect();
+        assert_eq!(pipelines(), made, "{t}: a view's targets made a pipeline");
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        for (v, st) in views.iter_mut().zip(&states) {
+            v.prepare(&mut scene, st).unwrap_or_else(|e| panic!("{t}: {e}"));
+            v.record(&scene, &mut encoder).unwrap_or_else(|e| panic!("{t}: {e}"));
+        }
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait().unwrap();
+        let halves: Vec<Vec<[f32; 4]>> = views
+            .iter()
+            .map(|v| v.inspect().read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba)
+            .collect();
+        assert!(halves[0] != halves[1], "{t}: the two cameras see the same (a test of nothing)");
+        for (half, st) in halves.iter().zip(&states) {
+            assert!(half.iter().any(|p| p[0] < 0.5), "{t}: no shadow in a half");
+            let mut alone = Targets::new(&technique, &scene, st, sizes).unwrap();
+            alone.run_frame(&mut scene, st).unwrap_or_else(|e| panic!("{t}: {e}"));
+            let want = alone.inspect().read_visibilities().unwrap().rgba;
+            assert!(*half == want, "{t}: a half of the split screen differs from its camera alone");
+        }
+    }
+}
+
 /// `Targets::recorded_passes` counts what `record` encodes: a pass per raster step, per
 /// level of a fragment mip chain and per light, one compute pass for the compute steps of
 /// a graph pass that follow one another (`joins` in targets.rs), and the lights' combine.
