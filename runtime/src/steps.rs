@@ -1011,6 +1011,19 @@ impl StepNode {
         }
     }
 
+    /// Whether what the step binds comes from the scene: its draws (a Depth pass, a forward
+    /// Shade), its edge adjacency or the buffers generated from it (Geometry passes). Only
+    /// these are bound again when the targets take a new scene
+    /// ([`crate::gpu::Targets::set_scene`]).
+    pub fn binds_scene(&self) -> bool {
+        match &self.kind {
+            NodeKind::Raster(r) => matches!(r.draw, DrawCall::Scene | DrawCall::Generated(_)),
+            NodeKind::Compute(c) => {
+                c.generated.is_some() || matches!(c.dispatch, Dispatch::Edges | Dispatch::Cells(_) | Dispatch::Indirect(_))
+            }
+        }
+    }
+
     /// Whether the step runs as a compute dispatch (recorded into a compute pass).
     pub fn is_compute(&self) -> bool {
         matches!(self.kind, NodeKind::Compute(_))

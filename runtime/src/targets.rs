@@ -95,7 +95,12 @@ pub struct Targets {
     unshadowed: Option<Unshadowed>,
     timestamps: Option<Timestamps>,
     limits: TargetLimits,
+    /// [`Targets::step_bindings_made`].
+    bindings_made: u64,
 }
+
+/// A step bound again: its light, pass and step, and its bindings per view.
+type Rebound = (usize, usize, usize, Vec<StepBinding>);
 
 impl Targets {
     /// Make `technique`'s targets on `scene` at `sizes` for the lights of `state` (their
@@ -214,6 +219,7 @@ impl Targets {
                 .flatten(),
             limits,
             bound,
+            bindings_made: 0,
         };
         targets.bindings = targets.bind_all_steps()?;
         if n > 1 {
@@ -237,9 +243,53 @@ impl Targets {
         Ok(targets)
     }
 
-    /// What every step binds on each light's resources.
-    fn bind_all_steps(&self) -> Result<Vec<Vec<Vec<Vec<StepBinding>>>>> {
-        self.bound.iter().map(|res| self.bind_steps(res)).collect()
+    /// What every step binds on each light's resources (counted in
+    /// [`Targets::step_bindings_made`]).
+    fn bind_all_steps(&mut self) -> Result<Vec<Vec<Vec<Vec<StepBinding>>>>> {
+        let all: Vec<_> = self.bound.iter().map(|res| self.bind_steps(res)).collect::<Result<_>>()?;
+        self.bindings_made += all.iter().flatten().flatten().map(|views| views.len() as u64).sum::<u64>();
+        Ok(all)
+    }
+
+    /// Bind again only the steps whose bindings come from the scene
+    /// ([`StepNode::binds_scene`]: draws, edges, generated buffers), every light's, after
+    /// the lights took a new scene's parts; every other step keeps its bind groups and
+    /// bundles. Nothing is replaced unless every one is made.
+    fn rebind_scene_steps(&mut self) -> Result<()> {
+        let gpu = self.gpu.clone();
+        let made = gpu.scoped("binding the scene's steps", || -> Result<Vec<Rebound>> {
+            let mut made = Vec::new();
+            for (l, res) in self.bound.iter().enumerate() {
+                let shared = Group0 {
+                    light_samples: &res.light_samples,
+                    params: self.params_buf.as_ref(),
+                    sampler: self.technique.sampler(),
+                };
+                for (pi, p) in self.technique.passes().iter().enumerate() {
+                    for (si, node) in p.steps.iter().enumerate().filter(|(_, n)| n.binds_scene()) {
+                        made.push((l, pi, si, node.bind(&gpu, res, &shared)?));
+                    }
+                }
+            }
+            Ok(made)
+        })??;
+        for (l, pi, si, b) in made {
+            self.bindings_made += b.len() as u64;
+            let slot = self.bindings.get_mut(l).and_then(|x| x.get_mut(pi)).and_then(|x| x.get_mut(si));
+            match slot {
+                Some(slot) => *slot = b,
+                None => return Err(RuntimeError::NotFound(crate::error::NOTHING_BOUND.into())),
+            }
+        }
+        Ok(())
+    }
+
+    /// Step bindings (one step's bind groups, attachment views and render bundles, for one
+    /// light and view) these targets have made since they were made: every step's at
+    /// making, on a resize and when host pixels change; only the steps that bind the scene
+    /// on [`Targets::set_scene`]. What a host can read to see what a change cost.
+    pub fn step_bindings_made(&self) -> u64 {
+        self.bindings_made
     }
 
     /// What every step binds on one light's resources.
@@ -316,7 +366,9 @@ impl Targets {
 
     /// Run on another scene (the host's meshes or instances changed: a new [`Scene`]
     /// uploaded), keeping every texture: the lights' draws and edges are taken from it,
-    /// the generated buffers (sized from its edges) made again, and the steps bound again.
+    /// the generated buffers (sized from its edges) made again, and the steps that bind
+    /// the scene bound again (its draws, edges and generated buffers; every other step
+    /// keeps its bind groups and bundles: [`Targets::step_bindings_made`]).
     /// The camera-sized and shadow-map-sized targets, the uniforms, the pipelines and the
     /// timestamps stay; [`Targets::generation`] is bumped and host pixels are given again.
     /// Refused, with nothing changed, for a scene without the edge adjacency this
@@ -352,7 +404,7 @@ impl Targets {
             res.take_scene(p);
         }
         self.pixels = None;
-        self.bindings = self.bind_all_steps()?;
+        self.rebind_scene_steps()?;
         self.unshadowed = Unshadowed::new(&self.gpu, &self.bound)?;
         self.scene = scene.id();
         self.bounds_checked = None;

@@ -1925,7 +1925,8 @@ fn infinite_and_reverse_z_cameras_render_as_the_forward_camera() {
 
 /// Issue 49: a host's mesh added (a box spawned beside the triangle) is a new scene under
 /// the same targets: `Targets::set_scene` keeps every texture (the shadow-map-sized ones
-/// are the same wgpu objects), takes the new scene's draws and edges, and the frame equals
+/// are the same wgpu objects), takes the new scene's draws and edges, binds again only the
+/// steps that bind the scene (`Targets::step_bindings_made`), and the frame equals
 /// fresh targets on the new scene, bit for bit; removing the box again gives the first
 /// frame back. For a raster technique and a Geometry one (its edges and generated buffers
 /// follow the scene).
@@ -1933,6 +1934,7 @@ fn infinite_and_reverse_z_cameras_render_as_the_forward_camera() {
 fn a_mesh_added_or_removed_keeps_the_targets_and_frames_as_fresh_ones() {
     use sshc_runtime::gpu::{FrameState, IDENTITY, Instance, Scene as Uploaded, Sizes, Targets, Technique};
     use sshc_runtime::graph::ValidGraph;
+    let mut kept_some = false;
     for t in ["pcss", "penumbra-limit-maps"] {
         let c = compile(t);
         let s = inputs(&scene("triangle", 32, 64), &c);
@@ -1974,7 +1976,37 @@ fn a_mesh_added_or_removed_keeps_the_targets_and_frames_as_fresh_ones() {
         // spawned: the old scene's targets refuse the new scene until it is set
         let mut spawned = Uploaded::upload(gpu(), &more, &[&technique]).unwrap();
         assert!(targets.prepare(&mut spawned, &state).is_err(), "{t}");
+        let bound_before = targets.step_bindings_made();
         targets.set_scene(&spawned).unwrap_or_else(|e| panic!("{t}: {e}"));
+        // only the steps that bind the scene are bound again (its draws from the light and
+        // the camera, a Geometry pass's edges, generated buffers and their draws): every
+        // other step keeps its bind groups and bundles
+        use sshc_runtime::graph::Draw;
+        let scene_steps = c
+            .graph
+            .passes
+            .iter()
+            .flat_map(|p| &p.steps)
+            .filter(|st| {
+                matches!(
+                    st.draw,
+                    Draw::SceneFromLight
+                        | Draw::SceneFromCamera
+                        | Draw::CameraGBuffer
+                        | Draw::Silhouettes { .. }
+                        | Draw::Primitives { .. }
+                        | Draw::Discontinuities { .. }
+                )
+            })
+            .count() as u64;
+        let all_steps = c.graph.passes.iter().map(|p| p.steps.len()).sum::<usize>() as u64;
+        // PCSS's two steps both bind the scene; penumbra limit maps' Map and Filter steps do not
+        kept_some |= scene_steps < all_steps;
+        assert_eq!(
+            targets.step_bindings_made() - bound_before,
+            scene_steps,
+            "{t}: steps bound again by set_scene"
+        );
         let with_box = frame(&mut targets, &mut spawned);
         assert!(with_box != before, "{t}: the spawned box casts nothing (a test of nothing)");
         assert!(
@@ -1992,6 +2024,7 @@ fn a_mesh_added_or_removed_keeps_the_targets_and_frames_as_fresh_ones() {
             assert!(spawned.edge_counts().unwrap().edges > scene.edge_counts().unwrap().edges);
         }
     }
+    assert!(kept_some, "every step of every technique binds the scene (a test of nothing)");
 }
 
 /// Issue 49: one loaded technique serving two views of one scene (split screen): the
