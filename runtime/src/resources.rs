@@ -642,7 +642,6 @@ impl Make<'_> {
         })
     }
 
-    /// A `Frame`-sized uniform holding `bytes`.
     /// A uniform of `size` bytes holding `bytes` at its start.
     fn uniform_sized(&self, label: &str, bytes: &[u8], size: usize) -> wgpu::Buffer {
         let buf = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {

@@ -76,6 +76,9 @@ pub struct Targets {
     pub(crate) shared: Vec<String>,
     /// What each step binds on each light's resources: per light, pass, step and view.
     bindings: Vec<Vec<Vec<Vec<StepBinding>>>>,
+    /// What `record` encodes for each light and pass, decided when the steps are bound
+    /// ([`Targets::plan_passes`]): a frame walks it and decides nothing.
+    plans: Vec<Vec<PassPlan>>,
     /// What each light's uniforms were last set from, and the camera.
     lights_state: Vec<LightInputs>,
     camera: Camera,
@@ -196,6 +199,7 @@ impl Targets {
             params_written: Vec::new(),
             shared: pool.names(),
             bindings: Vec::new(),
+            plans: Vec::new(),
             lights_state: state.lights.clone(),
             camera: state.camera,
             uniforms: state
@@ -222,6 +226,7 @@ impl Targets {
             bindings_made: 0,
         };
         targets.bindings = targets.bind_all_steps()?;
+        targets.plans = targets.plan_passes();
         if n > 1 {
             let need = used.saturating_add(Combine::bytes(sizes.camera, n));
             if need > limits.max_bytes {
@@ -354,6 +359,7 @@ impl Targets {
             res.resize_camera(&self.gpu, technique.graph(), technique.usages(), camera_size, self.limits.max_bytes)?;
         }
         self.bindings = self.bind_all_steps()?;
+        self.plans = self.plan_passes();
         if let Some(c) = &mut self.combine {
             c.resize(&self.gpu, camera_size, &self.bound[0].camera[CameraOutput::Position as usize])?;
         }
@@ -405,6 +411,7 @@ impl Targets {
         }
         self.pixels = None;
         self.rebind_scene_steps()?;
+        self.plans = self.plan_passes();
         self.unshadowed = Unshadowed::new(&self.gpu, &self.bound)?;
         self.scene = scene.id();
         self.bounds_checked = None;
@@ -603,40 +610,53 @@ impl Targets {
                 if skip_depth && pass.kind == graph::PassKind::Depth {
                     continue;
                 }
-                // The pass's first render or compute pass writes its start, the last its
-                // end. A per-sample pass records all its steps for one view, then the next.
-                if self.bindings.get(l).and_then(|b| b.get(pi)).is_none() {
+                let (Some(plan), Some(bindings)) = (
+                    self.plans.get(l).and_then(|p| p.get(pi)),
+                    self.bindings.get(l).and_then(|b| b.get(pi)),
+                ) else {
                     return Err(RuntimeError::NotFound(crate::error::NOTHING_BOUND.into()));
-                }
-                let recording = || self.pass_steps(l, pi);
-                // the steps that begin a pass: the first writes the start, the last the end
-                let begins = || recording().enumerate().filter(|(_, (n, b, v))| !n.dispatches_nothing(b, res, *v));
-                let first = begins().next().map_or(0, |(i, _)| i);
-                let last = begins().last().map_or(0, |(i, _)| i);
-                let stamps = |from: usize, to: usize| match (&self.timestamps, slot) {
-                    (Some(t), Some(slot)) => Some(t.stamps(slot, l, pi, from == first, to == last)),
-                    _ => None,
                 };
-                let mut steps = recording().enumerate();
-                while let Some((i, (node, bound, view))) = steps.next() {
-                    match &self.pixels {
-                        // the host's pixels in place of the G-buffer raster
-                        Some(p) if node.draws_gbuffer() => p.record(encoder, l, stamps(i, i)),
-                        // its buffers reset, no pass
-                        _ if node.dispatches_nothing(bound, res, view) => node.clear_generated(encoder, bound),
-                        _ if node.is_compute() => {
-                            // this compute step and those after it that join its pass
-                            let joined = recording().skip(i + 1).take_while(|&(n, b, _)| joins(n, b)).count();
+                let step = |(si, view): (usize, u32)| {
+                    let bound = bindings.get(si).and_then(|b| b.get(view as usize));
+                    pass.steps
+                        .get(si)
+                        .zip(bound)
+                        .map(|(n, b)| (n, b, view))
+                        .ok_or_else(|| RuntimeError::NotFound(format!("pass `{}`: a planned step is not bound", pass.name)))
+                };
+                // the pass's first render or compute pass writes its start, the last its end
+                let passes = plan.iter().filter(|r| !matches!(r, Recorded::Reset(_))).count();
+                let mut at = 0;
+                let mut stamps = || {
+                    at += 1;
+                    match (&self.timestamps, slot) {
+                        (Some(t), Some(slot)) => Some(t.stamps(slot, l, pi, at == 1, at == passes)),
+                        _ => None,
+                    }
+                };
+                for r in plan {
+                    match r {
+                        Recorded::Reset(s) => {
+                            let (node, bound, _) = step(*s)?;
                             node.clear_generated(encoder, bound);
-                            let mut cpass = begin_compute(encoder, node.label(), stamps(i, i + joined));
-                            node.dispatch(&mut cpass, bound, res, view)?;
-                            for _ in 0..joined {
-                                if let Some((_, (node, bound, view))) = steps.next() {
-                                    node.dispatch(&mut cpass, bound, res, view)?;
-                                }
+                        }
+                        Recorded::Raster(s) => {
+                            let (node, bound, view) = step(*s)?;
+                            match &self.pixels {
+                                // the host's pixels in place of the G-buffer raster
+                                Some(p) if node.draws_gbuffer() => p.record(encoder, l, stamps()),
+                                Some(_) | None => node.record(encoder, bound, res, stamps(), view)?,
                             }
                         }
-                        _ => node.record(encoder, bound, res, stamps(i, i), view)?,
+                        Recorded::Compute(steps) => {
+                            let (node, bound, _) = step(steps[0])?;
+                            node.clear_generated(encoder, bound);
+                            let mut cpass = begin_compute(encoder, node.label(), stamps());
+                            for &s in steps {
+                                let (node, bound, view) = step(s)?;
+                                node.dispatch(&mut cpass, bound, res, view)?;
+                            }
+                        }
                     }
                 }
             }
@@ -655,19 +675,46 @@ impl Targets {
         Ok(())
     }
 
-    /// Pass `pi`'s steps for light `l` in recording order, with what each binds and its
-    /// view: every step for one view, then the next; steps with nothing to record (a mip
-    /// chain of one level) left out. Empty when nothing is bound.
-    fn pass_steps(&self, l: usize, pi: usize) -> impl Iterator<Item = (&StepNode, &StepBinding, u32)> + Clone {
-        let pass = self.technique.passes().get(pi);
-        let bindings = self.bindings.get(l).and_then(|b| b.get(pi));
-        let views = pass.map_or(0, |p| p.steps.iter().map(|n| n.views()).max().unwrap_or(1));
-        (0..views).flat_map(move |v| {
-            pass.into_iter()
-                .flat_map(|p| &p.steps)
-                .zip(bindings.into_iter().flatten())
-                .filter_map(move |(n, b)| Some((n, b.get(v as usize).filter(|b| b.passes() > 0)?, v)))
-        })
+    /// What `record` encodes for every light and pass, from the steps as bound: each pass's
+    /// steps in recording order (every step for one view, then the next), a step with
+    /// nothing to record left out (a mip chain of one level), a compute step with nothing
+    /// to dispatch only resetting its buffers ([`StepNode::dispatches_nothing`]), and the
+    /// compute steps that follow one another in one compute pass where they may join it
+    /// ([`joins`]). Made whenever the bindings change, so that a frame decides nothing.
+    fn plan_passes(&self) -> Vec<Vec<PassPlan>> {
+        let passes = self.technique.passes();
+        self.bindings
+            .iter()
+            .zip(&self.bound)
+            .map(|(light, res)| {
+                passes
+                    .iter()
+                    .zip(light)
+                    .map(|(pass, steps)| {
+                        let views = pass.steps.iter().map(|n| n.views()).max().unwrap_or(1);
+                        let mut plan: PassPlan = Vec::new();
+                        for v in 0..views {
+                            for (si, (node, bound)) in pass.steps.iter().zip(steps).enumerate() {
+                                let Some(b) = bound.get(v as usize).filter(|b| b.passes() > 0) else {
+                                    continue;
+                                };
+                                let here = (si, v);
+                                if node.dispatches_nothing(b, res, v) {
+                                    plan.push(Recorded::Reset(here));
+                                } else if !node.is_compute() {
+                                    plan.push(Recorded::Raster(here));
+                                } else if let (Some(Recorded::Compute(open)), true) = (plan.last_mut(), joins(node, b)) {
+                                    open.push(here);
+                                } else {
+                                    plan.push(Recorded::Compute(vec![here]));
+                                }
+                            }
+                        }
+                        plan
+                    })
+                    .collect()
+            })
+            .collect()
     }
 
     /// The render and compute passes one [`Targets::record`] encodes (the placement of a
@@ -675,19 +722,17 @@ impl Targets {
     /// pass a descriptor and a driver command list (docs/embedding.md, "Host CPU").
     pub fn recorded_passes(&self) -> usize {
         let mut steps = 0;
-        for l in 0..self.bound.len() {
-            for pi in 0..self.technique.passes().len() {
-                let mut after_compute = false;
-                for (node, bound, view) in self.pass_steps(l, pi) {
-                    if node.dispatches_nothing(bound, &self.bound[l], view) {
-                        after_compute = false;
-                        continue;
-                    }
-                    if !(after_compute && joins(node, bound)) {
-                        steps += bound.passes();
-                    }
-                    after_compute = node.is_compute();
-                }
+        for (plans, bindings) in self.plans.iter().zip(&self.bindings) {
+            for (plan, bound) in plans.iter().zip(bindings) {
+                steps += plan
+                    .iter()
+                    .map(|r| match r {
+                        Recorded::Reset(_) => 0,
+                        // one render pass per level it writes
+                        Recorded::Raster((si, v)) => bound.get(*si).and_then(|b| b.get(*v as usize)).map_or(0, StepBinding::passes),
+                        Recorded::Compute(_) => 1,
+                    })
+                    .sum::<usize>();
             }
         }
         let unshadowed = match (&self.unshadowed, &self.pixels) {
@@ -1052,3 +1097,15 @@ fn write_depth_override(t: &Targets, b: &Resources, pass: &graph::PassDecl, dept
 fn joins(node: &StepNode, bound: &StepBinding) -> bool {
     node.is_compute() && !StepNode::resets_buffers(bound)
 }
+
+/// One entry of what `record` encodes for a pass: a step (its index in the pass, and the
+/// view) whose buffers are reset with no pass, a raster step's render passes, or compute
+/// steps dispatched in one compute pass.
+enum Recorded {
+    Reset((usize, u32)),
+    Raster((usize, u32)),
+    Compute(Vec<(usize, u32)>),
+}
+
+/// What `record` encodes for one pass of the graph, for one light, in order.
+type PassPlan = Vec<Recorded>;

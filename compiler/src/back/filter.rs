@@ -359,19 +359,16 @@ impl Layers<'_> {
                 );
             }
         }
+        // the taps folded left to right with `op`: op(op(a0, a1), a2) ...
+        let fold = |op: &str| {
+            (0..taps.len())
+                .map(|k| format!("a{oi}_{k}"))
+                .reduce(|a, b| format!("{op}({a}, {b})"))
+                .unwrap_or_default()
+        };
         let combined = match kernel {
-            IrKernel::Max(_) => taps
-                .iter()
-                .enumerate()
-                .map(|(k, _)| format!("a{oi}_{k}"))
-                .reduce(|a, b| format!("max({a}, {b})"))
-                .unwrap_or_default(),
-            IrKernel::Min(_) => taps
-                .iter()
-                .enumerate()
-                .map(|(k, _)| format!("a{oi}_{k}"))
-                .reduce(|a, b| format!("min({a}, {b})"))
-                .unwrap_or_default(),
+            IrKernel::Max(_) => fold("max"),
+            IrKernel::Min(_) => fold("min"),
             IrKernel::Box(_) | IrKernel::Gaussian(..) | IrKernel::LoG => taps
                 .iter()
                 .enumerate()
