@@ -201,6 +201,21 @@ pub struct AdjacencyCounts {
     pub welded_near: u32,
 }
 
+impl AdjacencyCounts {
+    /// Every count of `other` added (`sign` 1) or taken away (-1): a casting instance
+    /// added to or removed from a scene.
+    pub(crate) fn add(&mut self, other: &AdjacencyCounts, sign: i32) {
+        let f = |x: &mut u32, y: u32| *x = if sign < 0 { x.saturating_sub(y) } else { x.saturating_add(y) };
+        f(&mut self.meshes, other.meshes);
+        f(&mut self.edges, other.edges);
+        f(&mut self.boundary, other.boundary);
+        f(&mut self.manifold, other.manifold);
+        f(&mut self.non_manifold, other.non_manifold);
+        f(&mut self.degenerate_faces, other.degenerate_faces);
+        f(&mut self.welded_near, other.welded_near);
+    }
+}
+
 /// The edge adjacency of every mesh of a scene, in the layout the GPU reads.
 #[derive(Clone, Debug, Default)]
 pub struct Adjacency {

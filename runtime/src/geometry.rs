@@ -41,6 +41,9 @@ use crate::adjacency::{Adjacency, AdjacencyCounts};
 use crate::device::Gpu;
 use crate::error::{Result, RuntimeError};
 use crate::fit::Boxes;
+use crate::pool::Pool;
+
+mod changes;
 
 /// An indexed triangle mesh in its object space.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -171,30 +174,7 @@ impl Geometry {
     pub fn check_contents(&self) -> Result<()> {
         let bad = |m: String| Err(RuntimeError::Param(m));
         for (i, m) in self.meshes.iter().enumerate() {
-            let name = if m.name.is_empty() {
-                format!("mesh {i}")
-            } else {
-                format!("mesh {i} (`{}`)", m.name)
-            };
-            if m.normals.len() != m.positions.len() {
-                return bad(format!(
-                    "{name} has {} normals for {} positions",
-                    m.normals.len(),
-                    m.positions.len()
-                ));
-            }
-            if m.indices.len() % 3 != 0 {
-                return bad(format!("{name} has {} indices, not a multiple of 3", m.indices.len()));
-            }
-            if let Some((k, ix)) = m.indices.iter().enumerate().find(|(_, ix)| **ix as usize >= m.positions.len()) {
-                return bad(format!(
-                    "{name}: index {k} is {ix}, out of range of its {} vertices",
-                    m.positions.len()
-                ));
-            }
-            if let Some(v) = m.positions.iter().chain(&m.normals).position(|p| !p.iter().all(|c| c.is_finite())) {
-                return bad(format!("{name}: vertex {} is not finite", v % m.positions.len().max(1)));
-            }
+            check_mesh(i, m)?;
         }
         if self.instances.len() > MAX_INSTANCES {
             return Err(RuntimeError::Limit {
@@ -581,6 +561,10 @@ pub(crate) struct EdgeBuffers {
     /// One `u32` per welded vertex, cleared before each classification: the first edge
     /// to claim a vertex draws what is drawn once per silhouette vertex.
     pub claims: wgpu::Buffer,
+    /// Edges the classification runs over: up to the last in use, the holes left by
+    /// removed instances included (their edges zeroed: an edge of no face is never a
+    /// silhouette).
+    pub extent: u32,
     pub counts: AdjacencyCounts,
 }
 
@@ -819,6 +803,265 @@ struct Spans {
     welded: u32,
 }
 
+/// Refuse mesh `i` when it cannot be drawn: a normal count that is not the position count,
+/// an index count not a multiple of 3, an index out of range, a value not finite.
+pub(crate) fn check_mesh(i: usize, m: &Mesh) -> Result<()> {
+    let bad = |m: String| Err(RuntimeError::Param(m));
+    let name = if m.name.is_empty() {
+        format!("mesh {i}")
+    } else {
+        format!("mesh {i} (`{}`)", m.name)
+    };
+    if m.normals.len() != m.positions.len() {
+        return bad(format!(
+            "{name} has {} normals for {} positions",
+            m.normals.len(),
+            m.positions.len()
+        ));
+    }
+    if !m.indices.len().is_multiple_of(3) {
+        return bad(format!("{name} has {} indices, not a multiple of 3", m.indices.len()));
+    }
+    if let Some((k, ix)) = m.indices.iter().enumerate().find(|(_, ix)| **ix as usize >= m.positions.len()) {
+        return bad(format!(
+            "{name}: index {k} is {ix}, out of range of its {} vertices",
+            m.positions.len()
+        ));
+    }
+    if let Some(v) = m.positions.iter().chain(&m.normals).position(|p| !p.iter().all(|c| c.is_finite())) {
+        return bad(format!("{name}: vertex {} is not finite", v % m.positions.len().max(1)));
+    }
+    Ok(())
+}
+
+/// A mesh's edge adjacency in object space: [`Adjacency::build`] of its triangles listed
+/// out, as one mesh.
+fn adjacency_of(m: &Mesh) -> Adjacency {
+    let tris: Vec<[[f32; 3]; 3]> = m
+        .indices
+        .chunks_exact(3)
+        .map(|t| [0, 1, 2].map(|k| m.positions[t[k] as usize]))
+        .collect();
+    Adjacency::build(&tris, std::iter::once(0..tris.len()))
+}
+
+/// An instance's draw: its placed vertices, or (in world space) its mesh's own, where the
+/// mesh lies (among the world-space ones when it is there, else among the placed ones);
+/// its indices, or its vertices listed out.
+fn draw_range(m: &MeshSlot, s: &InstanceSlot, casts: bool) -> Result<DrawRange> {
+    let (buffer, base) = match (s.vertices, m.at) {
+        (Some(v), _) => (0, v),
+        (None, [_, Some(v)]) => (2, v),
+        (None, [Some(v), None]) => (1, v),
+        (None, [None, None]) => {
+            return Err(RuntimeError::NotFound(format!("instance of mesh {} with no vertices", s.mesh)));
+        }
+    };
+    Ok(match m.first_index {
+        None => DrawRange {
+            buffer,
+            elements: base..base + m.elements,
+            base_vertex: 0,
+            indexed: false,
+            casts,
+        },
+        Some(first) => DrawRange {
+            buffer,
+            elements: first..first + m.elements,
+            base_vertex: i32::try_from(base).map_err(|_| RuntimeError::Limit {
+                what: "vertices of one vertex buffer (a base vertex is an i32)".into(),
+                needed: base.into(),
+                limit: i32::MAX as u64,
+            })?,
+            indexed: true,
+            casts,
+        },
+    })
+}
+
+/// One instance's placement record: its matrix and normal matrix, then its spans (the
+/// layout of `Placement` in `PLACE_WGSL`).
+fn record_of(t: &[f32; 16], s: &Spans) -> [u8; RECORD_BYTES as usize] {
+    let mut r = [0u8; RECORD_BYTES as usize];
+    let n = normal_matrix(t).unwrap_or(IDENTITY);
+    // a mirroring matrix turns the winding: the planes are negated to follow it
+    let mirrors = determinant3(t) < 0.0;
+    let values = t.iter().chain(&n).map(|c| c.to_le_bytes());
+    let words = [
+        s.vertices[0],
+        s.vertices[1],
+        s.vertices[2],
+        0,
+        s.edges[0],
+        s.edges[1],
+        s.edges[2],
+        s.welded,
+        s.planes[0],
+        s.planes[1],
+        s.planes[2],
+        u32::from(mirrors),
+        s.faces[0],
+        s.faces[1],
+        s.faces[2],
+        s.planes[2],
+    ]
+    .map(|w| w.to_le_bytes());
+    for (k, b) in values.chain(words).enumerate() {
+        r[4 * k..4 * k + 4].copy_from_slice(&b);
+    }
+    r
+}
+
+/// Where a mesh lies in a scene's buffers.
+#[derive(Clone, Debug)]
+pub(crate) struct MeshSlot {
+    pub vertices: u32,
+    /// Its indices (its vertices when listed out).
+    pub elements: u32,
+    /// Its first index in the index buffer; `None` when listed out ([`Mesh::listed_out`]).
+    pub first_index: Option<u32>,
+    /// Its first vertex among the meshes the placement step reads (0) and among those
+    /// drawn in world space only (1): one at upload, both once an instance added later
+    /// places a mesh uploaded for world space only.
+    pub at: [Option<u32>; 2],
+    /// Its adjacency where the placement step reads it: uploaded when a casting instance
+    /// placed on the GPU needs it.
+    pub edges: Option<EdgeSpan>,
+    /// Its box in object space.
+    pub bbox: Option<[[f32; 3]; 2]>,
+}
+
+/// Edges, face planes, face references and welded vertices: where the first of each lies
+/// and how many, with the adjacency's counts.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct EdgeSpan {
+    pub first: [u32; 4],
+    pub len: [u32; 4],
+    pub counts: AdjacencyCounts,
+}
+
+impl EdgeSpan {
+    pub fn of(a: &Adjacency, first: [u32; 4]) -> EdgeSpan {
+        EdgeSpan {
+            first,
+            len: [a.edges.len() as u32, a.planes.len() as u32, a.edge_faces.len() as u32, a.vertices],
+            counts: a.counts,
+        }
+    }
+}
+
+/// Where an instance's placed data lie.
+#[derive(Clone, Debug)]
+pub(crate) struct InstanceSlot {
+    pub mesh: usize,
+    /// Its placement record (the record's index in the records buffer).
+    pub record: u32,
+    /// Its first placed vertex; `None` in world space (drawn from its mesh).
+    pub vertices: Option<u32>,
+    /// Its placed edges, face planes, face references and welded vertices (a casting one).
+    pub edges: Option<EdgeSpan>,
+    pub receives: bool,
+}
+
+/// What changed in a scene since its upload, counted, so that the targets made on it know
+/// what to take again ([`crate::gpu::Targets::set_scene`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Changes {
+    /// Meshes or instances added or removed: the draws are recorded again.
+    pub draws: u64,
+    /// Buffers made again (a pool grew) or edges added or removed: the steps that bind the
+    /// scene are bound again.
+    pub bindings: u64,
+    /// Times a buffer grew ([`Pools::grown`]).
+    pub grown: u64,
+    /// Bytes written by the changes (vertices, indices, adjacency, placement records).
+    pub uploaded: u64,
+}
+
+/// A scene's buffers, each with its free space ([`Pool`]).
+pub(crate) struct Pools {
+    /// The vertices of the meshes the placement step reads (storage and vertex).
+    pub meshes: Pool,
+    /// The vertices of the meshes drawn in world space only (vertex).
+    pub world: Pool,
+    pub indices: Pool,
+    pub mesh_edges: Pool,
+    pub mesh_planes: Pool,
+    pub mesh_faces: Pool,
+    /// The placed vertices of the instances not in world space.
+    pub placed: Pool,
+    pub edges: Pool,
+    pub planes: Pool,
+    pub faces: Pool,
+    pub claims: Pool,
+    pub records: Pool,
+}
+
+impl Pools {
+    /// The draw's vertex buffers, in [`DrawRange::buffer`]'s order: placed, meshes placed
+    /// on the GPU, world-space meshes.
+    pub fn vertex_buffers(&self) -> Vec<wgpu::Buffer> {
+        vec![self.placed.buffer.clone(), self.meshes.buffer.clone(), self.world.buffer.clone()]
+    }
+
+    /// Times any buffer was made again.
+    pub fn grown(&self) -> u64 {
+        [
+            &self.meshes,
+            &self.world,
+            &self.indices,
+            &self.mesh_edges,
+            &self.mesh_planes,
+            &self.mesh_faces,
+            &self.placed,
+            &self.edges,
+            &self.planes,
+            &self.faces,
+            &self.claims,
+            &self.records,
+        ]
+        .iter()
+        .map(|p| p.grown())
+        .sum()
+    }
+
+    /// The placement step's group: the first record, the meshes' and the placed buffers.
+    /// The buffers the placement step binds whole, in its bindings' order (1 to 8).
+    pub fn bound(&self) -> [&Pool; 8] {
+        [
+            &self.meshes,
+            &self.placed,
+            &self.mesh_edges,
+            &self.edges,
+            &self.mesh_planes,
+            &self.planes,
+            &self.mesh_faces,
+            &self.faces,
+        ]
+    }
+
+    pub fn place_group(&self, device: &wgpu::Device, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
+        let bound = self.bound();
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &self.records.buffer,
+                offset: 0,
+                size: wgpu::BufferSize::new(RECORD_BYTES),
+            }),
+        }];
+        entries.extend(bound.iter().enumerate().map(|(i, p)| wgpu::BindGroupEntry {
+            binding: i as u32 + 1,
+            resource: p.buffer.as_entire_binding(),
+        }));
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("place instances"),
+            layout,
+            entries: &entries,
+        })
+    }
+}
+
 /// The entry points of the placement shader, with the span each dispatches over.
 const STEPS: [&str; 4] = ["place_vertices", "place_edges", "place_planes", "place_faces"];
 
@@ -827,7 +1070,18 @@ const STEPS: [&str; 4] = ["place_vertices", "place_edges", "place_planes", "plac
 /// step, and the draws. Shared by every light.
 pub(crate) struct GeometryBuffers {
     pub scene: HostScene,
-    records: wgpu::Buffer,
+    /// The buffers `scene` draws and classifies, with their free space.
+    pools: Pools,
+    /// The placement step's layout (its group is made again when a bound buffer grows).
+    layout: wgpu::BindGroupLayout,
+    /// Per mesh: where it lies (`None` once removed).
+    meshes: Vec<Option<MeshSlot>>,
+    /// Per instance, in draw order: where its placed data lie.
+    slots: Vec<InstanceSlot>,
+    /// The scene classifies silhouettes: every casting instance has placed edges.
+    edges_on: bool,
+    /// What changed since the upload (for the targets made on it).
+    pub changes: Changes,
     /// The placement records' bytes as last written (their vector reused every frame).
     record_bytes: Vec<u8>,
     pipelines: Vec<wgpu::ComputePipeline>,
@@ -881,6 +1135,7 @@ impl GeometryBuffers {
         let (mut edge_data, mut plane_data, mut face_data) = (Vec::new(), Vec::new(), Vec::new());
         let mut adjacency: Vec<Option<Adjacency>> = Vec::new();
         let mut listed = Vec::new();
+        let mut mesh_slots = Vec::with_capacity(g.meshes.len());
         for (mi, m) in g.meshes.iter().enumerate() {
             let bucket = usize::from(!on_gpu[mi]);
             first.push([
@@ -904,11 +1159,23 @@ impl GeometryBuffers {
                     .collect();
                 Adjacency::build(&tris, std::iter::once(0..tris.len()))
             });
+            let f = first[mi];
+            let mut slot = MeshSlot {
+                vertices: m.positions.len() as u32,
+                elements: m.indices.len() as u32,
+                first_index: (!listed[mi]).then_some(f[2]),
+                at: [None; 2],
+                edges: None,
+                bbox: box_of(m.positions.iter().copied()),
+            };
+            slot.at[bucket] = Some(f[1]);
             if let (Some(a), true) = (&adj, casts_on_gpu[mi]) {
                 edge_data.extend(a.edges.iter().flat_map(|e| e.to_bytes()));
                 plane_data.extend(a.planes.iter().flatten().flat_map(|x| x.to_le_bytes()));
                 words(&mut face_data, &a.edge_faces);
+                slot.edges = Some(EdgeSpan::of(a, [f[3], f[4], f[5], 0]));
             }
+            mesh_slots.push(Some(slot));
             adjacency.push(adj);
         }
         // what the casting instances place, summed in u64 and bounded before the u32 spans
@@ -966,35 +1233,10 @@ impl GeometryBuffers {
         let mut counts = AdjacencyCounts::default();
         // the instances placed at upload and the first of their placed vertices
         let mut at_upload = Vec::new();
-        for (inst, &w) in g.instances.iter().zip(&world) {
+        let mut slots = Vec::with_capacity(g.instances.len());
+        for (i, (inst, &w)) in g.instances.iter().zip(&world).enumerate() {
             let m = &g.meshes[inst.mesh];
             let f = first[inst.mesh];
-            let (buffer, base) = if w { (f[0] as usize + 1, f[1]) } else { (0, placed.vertices[2]) };
-            let n = m.indices.len() as u32;
-            ranges.push(if listed[inst.mesh] {
-                DrawRange {
-                    buffer,
-                    elements: base..base + n,
-                    base_vertex: 0,
-                    indexed: false,
-                    casts: inst.casts,
-                }
-            } else {
-                DrawRange {
-                    buffer,
-                    elements: f[2]..f[2] + n,
-                    base_vertex: i32::try_from(base).map_err(|_| RuntimeError::Limit {
-                        what: "vertices of one vertex buffer (a base vertex is an i32)".into(),
-                        needed: base.into(),
-                        limit: i32::MAX as u64,
-                    })?,
-                    indexed: true,
-                    casts: inst.casts,
-                }
-            });
-            if !inst.receives {
-                unshadowed.extend(ranges.last().cloned());
-            }
             let mut s = Spans {
                 welded: placed.welded,
                 ..Default::default()
@@ -1005,11 +1247,26 @@ impl GeometryBuffers {
             if inst.placed_at_upload() {
                 at_upload.push((inst, placed.vertices[2]));
             }
+            let mut slot = InstanceSlot {
+                mesh: inst.mesh,
+                record: i as u32,
+                vertices: (!w).then_some(placed.vertices[2]),
+                edges: None,
+                receives: inst.receives,
+            };
+            if let Some(mesh) = &mesh_slots[inst.mesh] {
+                let r = draw_range(mesh, &slot, inst.casts)?;
+                if !inst.receives {
+                    unshadowed.push(r.clone());
+                }
+                ranges.push(r);
+            }
             if !w {
                 placed.vertices[2] += m.positions.len() as u32;
             }
             if let (true, Some(a)) = (inst.casts, &adjacency[inst.mesh]) {
                 let at = [placed.edges[2], placed.planes[2], placed.faces[2]];
+                slot.edges = Some(EdgeSpan::of(a, [at[0], at[1], at[2], placed.welded]));
                 if !inst.moves {
                     // in world space as it is, else placed here under its transform
                     write_placed(a, at, placed.welded, (!w).then_some(&inst.transform), &mut placed_data);
@@ -1022,15 +1279,10 @@ impl GeometryBuffers {
                 placed.planes[2] += a.planes.len() as u32;
                 placed.faces[2] += a.edge_faces.len() as u32;
                 placed.welded += a.vertices;
-                counts.meshes += 1;
-                counts.edges += a.counts.edges;
-                counts.boundary += a.counts.boundary;
-                counts.manifold += a.counts.manifold;
-                counts.non_manifold += a.counts.non_manifold;
-                counts.degenerate_faces += a.counts.degenerate_faces;
-                counts.welded_near += a.counts.welded_near;
+                counts.add(&a.counts, 1);
             }
             spans.push(s);
+            slots.push(slot);
         }
         let places = spans
             .iter()
@@ -1041,8 +1293,9 @@ impl GeometryBuffers {
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
                     // a binding may not be empty
-                    size: size.max(48).next_multiple_of(16),
-                    usage,
+                    size: crate::pool::buffer_bytes(size, 1),
+                    // written and grown later: a mesh or an instance added (`Pool`)
+                    usage: usage | Pool::COPIES,
                     mapped_at_creation: false,
                 })
             };
@@ -1160,58 +1413,104 @@ impl GeometryBuffers {
                     })
                 })
                 .collect();
-            let bound = [
-                &meshes,
-                &placed_vertices,
-                &mesh_edges,
-                &placed_edges,
-                &mesh_planes,
-                &placed_planes,
-                &mesh_faces,
-                &placed_faces,
-            ];
-            let mut group_entries = vec![wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &records,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(RECORD_BYTES),
-                }),
-            }];
-            group_entries.extend(bound.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32 + 1,
-                resource: b.as_entire_binding(),
-            }));
+            let limit = gpu.limits.max_buffer_size;
+            let storage_limit = gpu.limits.max_storage_buffer_binding_size.min(limit);
+            let vertex = wgpu::BufferUsages::VERTEX;
+            let storage = wgpu::BufferUsages::STORAGE;
+            let pools = Pools {
+                meshes: Pool::adopt(meshes, "mesh vertices", storage | vertex, 24, vertex_counts[0], storage_limit),
+                world: Pool::adopt(world_vertices, "world-space mesh vertices", vertex, 24, vertex_counts[1], limit),
+                indices: Pool::adopt(
+                    indices,
+                    "mesh indices",
+                    wgpu::BufferUsages::INDEX,
+                    4,
+                    index_data.len() as u64 / 4,
+                    limit,
+                ),
+                mesh_edges: Pool::adopt(mesh_edges, "mesh edges", storage, 48, edge_data.len() as u64 / 48, storage_limit),
+                mesh_planes: Pool::adopt(
+                    mesh_planes,
+                    "mesh face planes",
+                    storage,
+                    16,
+                    plane_data.len() as u64 / 16,
+                    storage_limit,
+                ),
+                mesh_faces: Pool::adopt(
+                    mesh_faces,
+                    "mesh face references",
+                    storage,
+                    4,
+                    face_data.len() as u64 / 4,
+                    storage_limit,
+                ),
+                placed: Pool::adopt(
+                    placed_vertices,
+                    "placed vertices",
+                    storage | vertex,
+                    24,
+                    placed.vertices[2].into(),
+                    storage_limit,
+                ),
+                edges: Pool::adopt(placed_edges, "placed edges", storage, 48, placed.edges[2].into(), storage_limit),
+                planes: Pool::adopt(
+                    placed_planes,
+                    "placed face planes",
+                    storage,
+                    16,
+                    placed.planes[2].into(),
+                    storage_limit,
+                ),
+                faces: Pool::adopt(
+                    placed_faces,
+                    "placed face references",
+                    storage,
+                    4,
+                    placed.faces[2].into(),
+                    storage_limit,
+                ),
+                // one more than the welded vertices: never empty
+                claims: Pool::adopt(claims, "vertex claims", storage, 4, u64::from(placed.welded) + 1, storage_limit),
+                records: Pool::adopt(
+                    records,
+                    "placement records",
+                    wgpu::BufferUsages::UNIFORM,
+                    RECORD_BYTES,
+                    g.instances.len() as u64,
+                    limit,
+                ),
+            };
             // bound only when some instance is placed on the GPU: world-space edges may
             // exceed one binding (they are classified in chunks)
-            let group = places.then(|| {
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("place instances"),
-                    layout: &layout,
-                    entries: &group_entries,
-                })
-            });
+            let group = places.then(|| pools.place_group(device, &layout));
             let mut out = GeometryBuffers {
                 scene: HostScene {
                     draw: SceneDraw {
-                        buffers: vec![placed_vertices, meshes.clone(), world_vertices],
-                        indices,
+                        buffers: pools.vertex_buffers(),
+                        indices: pools.indices.buffer.clone(),
                         ranges,
                         unshadowed,
                     },
                     edges: edges.then(|| EdgeBuffers {
-                        edges: placed_edges,
-                        planes: placed_planes,
-                        edge_faces: placed_faces,
-                        claims,
+                        edges: pools.edges.buffer.clone(),
+                        planes: pools.planes.buffer.clone(),
+                        edge_faces: pools.faces.buffer.clone(),
+                        claims: pools.claims.buffer.clone(),
+                        extent: placed.edges[2],
                         counts,
                     }),
                 },
-                records,
+                pools,
+                layout,
                 pipelines,
                 group,
                 spans,
                 places,
+                meshes: mesh_slots,
+                slots,
+                edges_on: edges,
+                changes: Changes::default(),
                 moves: g.instances.iter().map(|i| i.moves).collect(),
                 dirty: true,
                 transforms: g.instances.iter().map(|i| i.transform).collect(),
@@ -1263,38 +1562,14 @@ impl GeometryBuffers {
     fn write_records(&mut self, queue: &wgpu::Queue) {
         // kept from one frame to the next: nothing is allocated per frame
         let mut bytes = std::mem::take(&mut self.record_bytes);
-        bytes.resize(self.transforms.len() * RECORD_BYTES as usize, 0);
-        for (i, (t, s)) in self.transforms.iter().zip(&self.spans).enumerate() {
-            let n = normal_matrix(t).unwrap_or(IDENTITY);
-            // a mirroring matrix turns the winding: the planes are negated to follow it
-            let mirrors = determinant3(t) < 0.0;
-            let r = &mut bytes[i * RECORD_BYTES as usize..(i + 1) * RECORD_BYTES as usize];
-            let values = t.iter().chain(&n).map(|c| c.to_le_bytes());
-            let words = [
-                s.vertices[0],
-                s.vertices[1],
-                s.vertices[2],
-                0,
-                s.edges[0],
-                s.edges[1],
-                s.edges[2],
-                s.welded,
-                s.planes[0],
-                s.planes[1],
-                s.planes[2],
-                u32::from(mirrors),
-                s.faces[0],
-                s.faces[1],
-                s.faces[2],
-                s.planes[2],
-            ]
-            .map(|w| w.to_le_bytes());
-            for (k, b) in values.chain(words).enumerate() {
-                r[4 * k..4 * k + 4].copy_from_slice(&b);
-            }
+        let records = self.slots.iter().map(|s| s.record as usize + 1).max().unwrap_or(0);
+        bytes.resize(records * RECORD_BYTES as usize, 0);
+        for ((t, s), slot) in self.transforms.iter().zip(&self.spans).zip(&self.slots) {
+            let i = slot.record as usize * RECORD_BYTES as usize;
+            bytes[i..i + RECORD_BYTES as usize].copy_from_slice(&record_of(t, s));
         }
         if !bytes.is_empty() {
-            queue.write_buffer(&self.records, 0, &bytes);
+            queue.write_buffer(&self.pools.records.buffer, 0, &bytes);
         }
         self.record_bytes = bytes;
         self.dirty = true;
@@ -1327,12 +1602,12 @@ impl GeometryBuffers {
         });
         for (step, pipeline) in self.pipelines.iter().enumerate() {
             pass.set_pipeline(pipeline);
-            for (i, s) in self.spans.iter().enumerate() {
+            for (s, slot) in self.spans.iter().zip(&self.slots) {
                 let count = [s.vertices, s.edges, s.planes, s.faces][step][1];
                 if count == 0 {
                     continue;
                 }
-                pass.set_bind_group(0, group, &[(i as u64 * RECORD_BYTES) as u32]);
+                pass.set_bind_group(0, group, &[(u64::from(slot.record) * RECORD_BYTES) as u32]);
                 let groups = count.div_ceil(64);
                 let (x, y) = if groups <= 65535 {
                     (groups, 1)

@@ -24,6 +24,7 @@ mod inspect;
 mod lights;
 mod pipeline;
 mod pixels;
+mod pool;
 mod receivers;
 mod requirements;
 mod resources;

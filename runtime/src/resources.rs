@@ -234,7 +234,7 @@ impl Resources {
         // against `max_bytes` below, with the generated buffers)
         let all = check_sizes(gpu, graph, s.shadow_size, s.camera_size, u64::MAX)?;
         let texture_bytes = all.saturating_sub(pool.bytes());
-        let edge_count = scene.edges.as_ref().map_or(0, |e| e.counts.edges.into());
+        let edge_count = scene.edges.as_ref().map_or(0, |e| e.extent.into());
         let bytes = texture_bytes + check_generated(gpu, graph, usages, s.shadow_size, edge_count, limits)?;
         if bytes > max_bytes {
             return Err(RuntimeError::Limit {
@@ -316,7 +316,7 @@ impl Resources {
         scene: &HostScene,
         limits: TargetLimits,
     ) -> Result<(SceneParts, u64)> {
-        let edge_count = scene.edges.as_ref().map_or(0, |e| e.counts.edges.into());
+        let edge_count = scene.edges.as_ref().map_or(0, |e| e.extent.into());
         let bytes = check_generated(gpu, graph, usages, self.shadow_size, edge_count, limits.generated)?;
         if bytes > limits.max_bytes {
             return Err(RuntimeError::Limit {

@@ -7,7 +7,7 @@ use crate::adjacency::{Adjacency, AdjacencyCounts};
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::fit::Boxes;
 use crate::frame::SceneInputs;
-use crate::geometry::{Geometry, GeometryBuffers};
+use crate::geometry::{Changes, Geometry, GeometryBuffers, Instance, Mesh};
 use crate::resources::DEFAULT_MAX_BYTES;
 use crate::technique::Technique;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -121,6 +121,87 @@ impl Scene {
         Ok(())
     }
 
+    /// Upload one more mesh and return its index, for [`Scene::add_instance`]: its bytes
+    /// only (its vertices, its indices unless listed out and, when a technique the scene
+    /// serves classifies silhouettes, its edge adjacency, built here); nothing else is
+    /// uploaded again. The scene's buffers keep room to grow (at least twofold when one
+    /// is full), so most changes make no buffer. Refused, with nothing changed, as
+    /// [`Geometry`] refuses a mesh, and for a scene kept for a specialised technique.
+    ///
+    /// The targets made on the scene take the change with [`crate::gpu::Targets::set_scene`]
+    /// (their next frame refuses the scene until then).
+    pub fn add_mesh(&mut self, mesh: &Mesh) -> Result<usize> {
+        self.changeable()?;
+        let gpu = self.gpu.clone();
+        gpu.scoped("adding a mesh to the scene", || self.buffers.add_mesh(&gpu, mesh))?
+    }
+
+    /// Add an instance after the others (draw order) and return its index, its place in
+    /// [`Scene::set_transforms`]: its placement record is written and the next frame
+    /// places it on the GPU (an instance added later is placed there even when it does not
+    /// move; in world space it is drawn from its mesh). Refused, with nothing changed, as
+    /// [`Geometry`] refuses an instance, for a mesh the scene does not hold, and (a scene
+    /// with edge adjacency) for a casting instance of a mesh uploaded with no instance that
+    /// casts and moves: add that mesh again.
+    pub fn add_instance(&mut self, instance: &Instance) -> Result<usize> {
+        self.changeable()?;
+        let gpu = self.gpu.clone();
+        let i = gpu.scoped("adding an instance to the scene", || self.buffers.add_instance(&gpu, instance))??;
+        self.caster_bounds = self.buffers.caster_bounds_at(&self.buffers.transforms);
+        Ok(i)
+    }
+
+    /// Remove instance `index`; those after it move down one place (draw order is kept).
+    pub fn remove_instance(&mut self, index: usize) -> Result<()> {
+        self.changeable()?;
+        let gpu = self.gpu.clone();
+        gpu.scoped("removing an instance from the scene", || self.buffers.remove_instance(&gpu, index))??;
+        self.caster_bounds = self.buffers.caster_bounds_at(&self.buffers.transforms);
+        Ok(())
+    }
+
+    /// Remove mesh `index` (the other meshes keep their indices); refused while an instance
+    /// places it.
+    pub fn remove_mesh(&mut self, index: usize) -> Result<()> {
+        self.changeable()?;
+        let gpu = self.gpu.clone();
+        gpu.scoped("removing a mesh from the scene", || self.buffers.remove_mesh(&gpu, index))?
+    }
+
+    /// The meshes the scene holds (removed ones excluded).
+    pub fn mesh_count(&self) -> usize {
+        self.buffers.mesh_count()
+    }
+
+    /// The instances, in draw order.
+    pub fn instance_count(&self) -> usize {
+        self.buffers.instance_count()
+    }
+
+    /// Bytes the changes since the upload wrote to the GPU ([`Scene::add_mesh`],
+    /// [`Scene::add_instance`]; not the transforms): what a change cost.
+    pub fn bytes_added(&self) -> u64 {
+        self.buffers.changes.uploaded
+    }
+
+    /// Times one of the scene's buffers was made again to grow since the upload (each
+    /// holds twice what it then held): a change that grew none made no buffer, and the
+    /// targets take it without binding anything again.
+    pub fn buffers_grown(&self) -> u64 {
+        self.buffers.changes.grown
+    }
+
+    /// A scene kept for a specialised technique keeps its triangles for the exact check of
+    /// its depth floor: it is not changed in place.
+    fn changeable(&self) -> Result<()> {
+        match self.soup {
+            Some(_) => Err(RuntimeError::Param(
+                "this scene was uploaded for a technique specialised for a scene, which keeps its triangles to check its depth floor: upload the changed geometry instead (`Scene::upload`)".into(),
+            )),
+            None => Ok(()),
+        }
+    }
+
     /// The instances' world-space boxes under the current transforms: what a light is
     /// fitted to ([`crate::gpu::LightInputs::fit`]).
     pub fn boxes(&self) -> &Boxes {
@@ -149,6 +230,10 @@ impl Scene {
 
     pub(crate) fn id(&self) -> u64 {
         self.id
+    }
+
+    pub(crate) fn changes(&self) -> Changes {
+        self.buffers.changes
     }
 
     pub(crate) fn buffers(&self) -> &GeometryBuffers {

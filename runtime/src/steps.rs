@@ -181,6 +181,10 @@ pub(crate) struct RasterPass {
     bundle: wgpu::RenderBundle,
     color: Vec<wgpu::TextureView>,
     depth: Option<wgpu::TextureView>,
+    /// What the bundle sets, kept to record it again over a scene's new draws
+    /// ([`StepNode::record_draws`]): its bind groups by index, and its attachments' formats.
+    groups: Vec<(u32, wgpu::BindGroup)>,
+    formats: (Vec<Option<wgpu::TextureFormat>>, Option<wgpu::TextureFormat>),
 }
 
 /// What every step's group 0 binds.
@@ -607,34 +611,17 @@ impl StepNode {
                 let passes = levels_bound
                     .into_iter()
                     .map(|(group1, color, depth)| {
-                        let formats: Vec<Option<wgpu::TextureFormat>> = color.iter().map(|c| Some(c.1)).collect();
-                        let mut be = gpu.device.create_render_bundle_encoder(&wgpu::RenderBundleEncoderDescriptor {
-                            label: Some(&self.label),
-                            color_formats: &formats,
-                            depth_stencil: depth.as_ref().map(|d| wgpu::RenderBundleDepthStencil {
-                                format: d.1,
-                                depth_read_only: false,
-                                stencil_read_only: true,
-                            }),
-                            sample_count: 1,
-                            multiview: None,
-                        });
-                        be.set_pipeline(pipeline);
-                        be.set_bind_group(0, &group0, &[]);
-                        if let Some(g1) = &group1 {
-                            be.set_bind_group(1, g1, &[]);
-                        }
+                        let mut groups = vec![(0, group0.clone())];
+                        groups.extend(group1.map(|g| (1, g)));
                         if let Some((g1, g2, g3)) = &geometry {
-                            if let Some(g1) = g1 {
-                                be.set_bind_group(1, g1, &[]);
-                            }
-                            be.set_bind_group(2, g2, &[]);
-                            be.set_bind_group(3, g3, &[]);
+                            groups.extend(g1.clone().map(|g| (1, g)));
+                            groups.extend([(2, g2.clone()), (3, g3.clone())]);
                         }
-                        match &r.draw {
+                        let formats = (color.iter().map(|c| Some(c.1)).collect(), depth.as_ref().map(|d| d.1));
+                        let bundle = self.bundle(gpu, pipeline, &groups, &formats, |be| match &r.draw {
                             DrawCall::Scene => {
                                 if let Some((draw, from_light)) = &vertices {
-                                    draw.record(&mut be, *from_light);
+                                    draw.record(be, *from_light);
                                 }
                             }
                             DrawCall::FullScreenTriangle => be.draw(0..3, 0..1),
@@ -643,11 +630,13 @@ impl StepNode {
                                     be.draw_indirect(buffer, 0);
                                 }
                             }
-                        }
+                        });
                         RasterPass {
-                            bundle: be.finish(&wgpu::RenderBundleDescriptor { label: Some(&self.label) }),
+                            bundle,
                             color: color.into_iter().map(|c| c.0).collect(),
                             depth: depth.map(|d| d.0),
+                            groups,
+                            formats,
                         }
                     })
                     .collect();
@@ -751,7 +740,7 @@ impl StepNode {
                         // `arrayLength(&cs_edges)` is its chunk's, and an edge names its
                         // faces and welded vertices by their indices in the whole scene
                         let (e, buf) = (res.edges()?, res.generated(name)?);
-                        let (total, chunk) = (u64::from(e.counts.edges), res.edges_per_chunk.max(1));
+                        let (total, chunk) = (u64::from(e.extent), res.edges_per_chunk.max(1));
                         let mut groups = Vec::new();
                         for first in (0..total.max(1)).step_by(chunk as usize) {
                             let n = chunk.min(total - first.min(total));
@@ -1009,6 +998,58 @@ impl StepNode {
             NodeKind::Compute(c) => matches!(c.dispatch, Dispatch::Cells(_)) && source_cells(c, bound, res, view).is_none(),
             NodeKind::Raster(_) => false,
         }
+    }
+
+    /// Each level's commands, recorded once into a render bundle: a frame records a pass
+    /// and one bundle, not the pipeline, every group and every draw again
+    /// (docs/embedding.md, "Host CPU").
+    fn bundle<'a>(
+        &self,
+        gpu: &Gpu,
+        pipeline: &'a wgpu::RenderPipeline,
+        groups: &'a [(u32, wgpu::BindGroup)],
+        (color, depth): &(Vec<Option<wgpu::TextureFormat>>, Option<wgpu::TextureFormat>),
+        draw: impl FnOnce(&mut wgpu::RenderBundleEncoder<'a>),
+    ) -> wgpu::RenderBundle {
+        let mut be = gpu.device.create_render_bundle_encoder(&wgpu::RenderBundleEncoderDescriptor {
+            label: Some(&self.label),
+            color_formats: color,
+            depth_stencil: depth.map(|format| wgpu::RenderBundleDepthStencil {
+                format,
+                depth_read_only: false,
+                stencil_read_only: true,
+            }),
+            sample_count: 1,
+            multiview: None,
+        });
+        be.set_pipeline(pipeline);
+        for (index, group) in groups {
+            be.set_bind_group(*index, group, &[]);
+        }
+        draw(&mut be);
+        be.finish(&wgpu::RenderBundleDescriptor { label: Some(&self.label) })
+    }
+
+    /// Whether the step draws the scene's meshes (a Depth pass, a forward Shade): what
+    /// [`StepNode::record_draws`] records again when the scene's draws change.
+    pub fn draws_scene(&self) -> bool {
+        matches!(&self.kind, NodeKind::Raster(r) if matches!(r.draw, DrawCall::Scene))
+    }
+
+    /// Record a scene-drawing step's bundles again over `res`'s draws (a mesh or an
+    /// instance added or removed, in buffers that did not move): the bind groups, views
+    /// and attachments stay; no bind group or buffer is made.
+    pub fn record_draws(&self, gpu: &Gpu, res: &Resources, bound: &mut StepBinding) -> Result<()> {
+        let (NodeKind::Raster(r), StepBinding::Raster { passes }, Pipeline::Render(pipeline)) =
+            (&self.kind, bound, &self.pipeline.pipeline)
+        else {
+            return Err(self.mismatch());
+        };
+        let from_light = matches!(r.depth, Some(DepthTarget::Light));
+        for p in passes {
+            p.bundle = self.bundle(gpu, pipeline, &p.groups, &p.formats, |be| res.draw.record(be, from_light));
+        }
+        Ok(())
     }
 
     /// Whether what the step binds comes from the scene: its draws (a Depth pass, a forward

@@ -12,6 +12,7 @@
 use crate::device::{Gpu, Result, RuntimeError};
 use crate::fit::Fit;
 use crate::frame::{Camera, LightInputs, SceneInputs};
+use crate::geometry::Changes;
 use crate::graph::Format;
 use crate::graph::{self, PassGraph};
 use crate::lights::{Combine, Combining, MAX_LIGHTS, Slices};
@@ -65,8 +66,10 @@ impl Sizes {
 pub struct Targets {
     pub(crate) gpu: Gpu,
     pub(crate) technique: Technique,
-    /// The scene they were made on ([`Scene`]'s identity).
+    /// The scene they were made on ([`Scene`]'s identity), and what had changed in it
+    /// when they last took it ([`Targets::set_scene`]).
     scene: u64,
+    scene_changes: Changes,
     params_buf: Option<wgpu::Buffer>,
     /// The params as last written (empty before the first frame).
     params_written: Vec<u8>,
@@ -195,6 +198,7 @@ impl Targets {
             gpu: gpu.clone(),
             technique: technique.clone(),
             scene: scene.id(),
+            scene_changes: scene.changes(),
             params_buf,
             params_written: Vec::new(),
             shared: pool.names(),
@@ -381,6 +385,9 @@ impl Targets {
     /// technique's Geometry passes need, or one whose casters break a specialised graph's
     /// depth floor under the lights of the last frame.
     pub fn set_scene(&mut self, scene: &Scene) -> Result<()> {
+        if scene.id() == self.scene && scene.changes().bindings == self.scene_changes.bindings {
+            return self.take_draws(scene);
+        }
         let graph = self.technique.graph();
         if self.technique.usages().edges && !scene.has_edges() {
             return Err(RuntimeError::Param(format!(
@@ -414,9 +421,40 @@ impl Targets {
         self.plans = self.plan_passes();
         self.unshadowed = Unshadowed::new(&self.gpu, &self.bound)?;
         self.scene = scene.id();
+        self.scene_changes = scene.changes();
         self.bounds_checked = None;
         self.place = false;
         self.generation += 1;
+        Ok(())
+    }
+
+    /// [`Targets::set_scene`] of the same scene whose buffers stayed (a mesh or an instance
+    /// added or removed in the room they had, no edges changed): each light takes the new
+    /// draws and the steps that draw the scene record their bundles again. No buffer,
+    /// texture or bind group is made.
+    fn take_draws(&mut self, scene: &Scene) -> Result<()> {
+        let draw = &scene.buffers().scene.draw;
+        let gpu = self.gpu.clone();
+        let technique = self.technique.clone();
+        gpu.scoped("recording the scene's new draws", || -> Result<()> {
+            for (res, per_pass) in self.bound.iter_mut().zip(&mut self.bindings) {
+                res.draw = draw.clone();
+                for (p, per_step) in technique.passes().iter().zip(per_pass.iter_mut()) {
+                    for (node, views) in p.steps.iter().zip(per_step.iter_mut()).filter(|(n, _)| n.draws_scene()) {
+                        for bound in views {
+                            node.record_draws(&gpu, res, bound)?;
+                        }
+                    }
+                }
+            }
+            Ok(())
+        })??;
+        // the draw of objects that receive no shadow is made when the first appears
+        if self.unshadowed.is_none() != draw.unshadowed.is_empty() {
+            self.unshadowed = Unshadowed::new(&self.gpu, &self.bound)?;
+        }
+        self.scene_changes = scene.changes();
+        self.bounds_checked = None;
         Ok(())
     }
 
@@ -516,6 +554,12 @@ impl Targets {
         if scene.id() != self.scene {
             return Err(RuntimeError::Param(
                 "these targets were made on another scene (their bind groups hold its buffers): make targets on this one (`Targets::new`)"
+                    .into(),
+            ));
+        }
+        if scene.changes() != self.scene_changes {
+            return Err(RuntimeError::Param(
+                "a mesh or an instance was added to or removed from the scene since these targets took it: give it to them again (`Targets::set_scene`)"
                     .into(),
             ));
         }

@@ -2027,6 +2027,185 @@ fn a_mesh_added_or_removed_keeps_the_targets_and_frames_as_fresh_ones() {
     assert!(kept_some, "every step of every technique binds the scene (a test of nothing)");
 }
 
+/// Issue 49: a host's mesh or instance added or removed in place (`Scene::add_mesh`,
+/// `add_instance`, `remove_instance`, `remove_mesh`), without uploading or binding the
+/// rest again. Spawned boxes (moving instances of a mesh already uploaded), a static box in
+/// world space, a moving instance of a mesh uploaded for world space only (its vertices
+/// copied on the GPU), then a new mesh: each frames as a fresh upload of the same geometry,
+/// bit for bit (the same shaders place the same transforms). The scene's buffers grow at
+/// most twofold, so the spawn after a growth makes no buffer: for PCSS its targets then
+/// take the change by recording their scene-drawing bundles again, with no bind group made
+/// (`Targets::step_bindings_made`) and wgpu's live buffers and bind groups unchanged. A
+/// new mesh uploads its own bytes only (its vertices, indices and, for penumbra limit
+/// maps, edge adjacency), an instance its 256-byte record. Penumbra limit maps' edges
+/// follow (its classification binds again), a removed instance's edges are zeroed holes;
+/// what cannot be done is refused, saying why.
+#[test]
+fn a_mesh_or_instance_added_or_removed_in_place_frames_as_a_fresh_upload() {
+    use sshc_runtime::adjacency::Adjacency;
+    use sshc_runtime::gpu::{FrameState, IDENTITY, Instance, Scene as Uploaded, Sizes, Targets, Technique};
+    use sshc_runtime::graph::ValidGraph;
+    let gpu = gpu();
+    let counts = || {
+        let c = gpu.device.get_internal_counters().hal;
+        (c.buffers.read(), c.bind_groups.read())
+    };
+    for t in ["pcss", "penumbra-limit-maps"] {
+        let c = compile(t);
+        let s = inputs(&scene("triangle", 32, 64), &c);
+        let technique = Technique::new(gpu, ValidGraph::try_from(c.graph.clone()).unwrap(), c.shaders.clone()).unwrap();
+        let mut g = geometry_of(&s, [0.0; 3]);
+        // the first part stays in world space: its mesh is uploaded for world space only
+        g.instances[0].moves = false;
+        let world_mesh = g.instances[0].mesh;
+        assert!(g.instances.iter().all(|i| i.mesh != world_mesh || !i.moves), "{t}");
+        g.meshes.push(box_mesh(0.06));
+        let boxed = g.meshes.len() - 1;
+        let spawn = |name: &str, x: f32, z: f32, moves: bool| {
+            let mut at = IDENTITY;
+            (at[12], at[14]) = (x, z);
+            Instance {
+                name: name.into(),
+                mesh: boxed,
+                transform: at,
+                casts: true,
+                receives: true,
+                moves,
+            }
+        };
+        g.instances.push(spawn("box 0", -0.3, 0.25, true));
+        let state = FrameState::of_inputs(&technique, &s);
+        let frame = |targets: &mut Targets, scene: &mut Uploaded| {
+            targets.run_frame(scene, &state).unwrap_or_else(|e| panic!("{t}: {e}"));
+            targets.inspect().read_visibilities().unwrap_or_else(|e| panic!("{t}: {e}")).rgba
+        };
+        let fresh = |g: &Geometry| {
+            let mut scene = Uploaded::upload(gpu, g, &[&technique]).unwrap();
+            let mut targets = Targets::new(&technique, &scene, &state, Sizes::of(&s)).unwrap();
+            frame(&mut targets, &mut scene)
+        };
+        let mut scene = Uploaded::upload(gpu, &g, &[&technique]).unwrap();
+        let mut targets = Targets::new(&technique, &scene, &state, Sizes::of(&s)).unwrap();
+        let first = frame(&mut targets, &mut scene);
+        let mut shadows = vec![first.clone()];
+        // spawned boxes: the first may grow the buffers, those after fit in the room left
+        for (k, (x, z)) in [(0.3, 0.2), (0.1, 0.4), (-0.1, 0.45)].into_iter().enumerate() {
+            let inst = spawn(&format!("box {}", k + 1), x, z, true);
+            let (grown, bound, live) = (scene.buffers_grown(), targets.step_bindings_made(), counts());
+            let before = scene.bytes_added();
+            assert_eq!(scene.add_instance(&inst).unwrap(), g.instances.len(), "{t}");
+            assert_eq!(scene.bytes_added() - before, 256, "{t}: an instance writes its record only");
+            g.instances.push(inst);
+            assert!(
+                targets
+                    .prepare(&mut scene, &state)
+                    .unwrap_err()
+                    .to_string()
+                    .contains("Targets::set_scene"),
+                "{t}"
+            );
+            targets.set_scene(&scene).unwrap_or_else(|e| panic!("{t}: {e}"));
+            let now = frame(&mut targets, &mut scene);
+            assert!(now == fresh(&g), "{t}: box {} spawned differs from a fresh upload", k + 1);
+            assert!(!shadows.contains(&now), "{t}: box {} casts nothing (a test of nothing)", k + 1);
+            shadows.push(now);
+            if k > 0 {
+                assert_eq!(scene.buffers_grown(), grown, "{t}: box {} grew a buffer", k + 1);
+                if t == "pcss" {
+                    assert_eq!(targets.step_bindings_made(), bound, "{t}: a step was bound again");
+                    assert_eq!(counts(), live, "{t}: buffers or bind groups made");
+                }
+            }
+        }
+        // a static box in world space: drawn from its mesh, its edges placed exactly
+        let still = spawn("still box", 0.0, 0.0, false);
+        let mut still = Instance {
+            transform: IDENTITY,
+            ..still
+        };
+        scene.add_instance(&still).unwrap_or_else(|e| panic!("{t}: {e}"));
+        g.instances.push(still.clone());
+        targets.set_scene(&scene).unwrap();
+        assert!(frame(&mut targets, &mut scene) == fresh(&g), "{t}: the static box differs");
+        // a moving instance of a mesh uploaded for world space only
+        still.mesh = world_mesh;
+        still.moves = true;
+        still.transform[13] = 0.05;
+        let copied = scene.add_instance(&still);
+        if t == "pcss" {
+            copied.unwrap_or_else(|e| panic!("{t}: {e}"));
+            g.instances.push(still);
+            targets.set_scene(&scene).unwrap();
+            assert!(
+                frame(&mut targets, &mut scene) == fresh(&g),
+                "{t}: the world-space mesh placed differs"
+            );
+        } else {
+            // its adjacency was not kept where the placement step reads it
+            let e = copied.unwrap_err().to_string();
+            assert!(
+                e.contains("Scene::add_mesh") && e.contains(&format!("mesh {world_mesh}")),
+                "{t}: {e}"
+            );
+            assert_eq!(scene.instance_count(), g.instances.len(), "{t}: a refusal changed the scene");
+        }
+        // removed: box 2 (the others move down one place), a hole among the edges
+        scene.remove_instance(2).unwrap();
+        g.instances.remove(2);
+        targets.set_scene(&scene).unwrap();
+        assert!(frame(&mut targets, &mut scene) == fresh(&g), "{t}: box 2 removed differs");
+        // a new mesh: its own bytes
+        let tall = box_mesh(0.04);
+        let mut bytes = 24 * tall.positions.len() + 4 * tall.indices.len();
+        if t == "penumbra-limit-maps" {
+            let tris: Vec<[[f32; 3]; 3]> = tall
+                .indices
+                .chunks(3)
+                .map(|f| [0, 1, 2].map(|k| tall.positions[f[k] as usize]))
+                .collect();
+            let a = Adjacency::build(&tris, [0..tris.len()]);
+            bytes += 48 * a.edges.len() + 16 * a.planes.len() + 4 * a.edge_faces.len();
+        }
+        let before = scene.bytes_added();
+        let mesh = scene.add_mesh(&tall).unwrap();
+        assert_eq!(
+            scene.bytes_added() - before,
+            bytes as u64,
+            "{t}: a new mesh uploads its own bytes only"
+        );
+        g.meshes.push(tall);
+        assert_eq!(mesh, g.meshes.len() - 1, "{t}");
+        let tower = Instance {
+            mesh,
+            ..spawn("tower", 0.1, 0.3, true)
+        };
+        scene.add_instance(&tower).unwrap();
+        g.instances.push(tower);
+        targets.set_scene(&scene).unwrap();
+        assert!(frame(&mut targets, &mut scene) == fresh(&g), "{t}: the new mesh differs");
+        // every spawned box removed, then its mesh: the first frame's boxes but box 0
+        let e = scene.remove_mesh(boxed).unwrap_err().to_string();
+        assert!(e.contains("remove its instances first"), "{t}: {e}");
+        while let Some(k) = g.instances.iter().rposition(|i| i.mesh == boxed) {
+            scene.remove_instance(k).unwrap();
+            g.instances.remove(k);
+        }
+        scene.remove_mesh(boxed).unwrap();
+        let e = scene.add_instance(&spawn("late", 0.0, 0.0, true)).unwrap_err().to_string();
+        assert!(e.contains("does not hold"), "{t}: {e}");
+        targets.set_scene(&scene).unwrap();
+        let last = frame(&mut targets, &mut scene);
+        // the fresh geometry without the box mesh: the tower's mesh index moves down one
+        let mut fewer = g.clone();
+        fewer.meshes.remove(boxed);
+        for i in &mut fewer.instances {
+            i.mesh -= usize::from(i.mesh > boxed);
+        }
+        assert!(last == fresh(&fewer), "{t}: the boxes removed differ");
+        assert_eq!(scene.mesh_count(), fewer.meshes.len(), "{t}");
+    }
+}
+
 /// Issue 49: one loaded technique serving two views of one scene (split screen): the
 /// technique (its shader modules and pipelines) is made once; each half of the screen is
 /// its own `Targets` (its own camera, a half-width size), both prepared and recorded into
