@@ -14,7 +14,11 @@
 //! more bunny instance, alternately, each a new `Scene::upload` (every mesh uploaded
 //! again, the adjacency built again where the technique classifies silhouettes) and
 //! `Targets::set_scene` (no texture made again; bind groups and bundles made again): the
-//! baseline for uploading a mesh or instance alone (docs/embedding.md section 7).
+//! baseline. And what it pays now: the same instance added and removed in place
+//! (`Scene::add_instance`, `remove_instance`, then `Targets::set_scene`): its 256-byte
+//! record written, the draws recorded again into the scene-drawing bundles (the steps
+//! that classify silhouettes bound again where edges changed); the buffers that grew and
+//! the step bindings made, over all the changes (docs/embedding.md section 7).
 //!
 //! `cargo bench -p sshc-tests --bench resize_cost` (about a minute on lavapipe);
 //! `SSHC_RESIZES` (default 9 of each). Writes `target/embedding/resize-cost.md`.
@@ -37,7 +41,7 @@ fn main() {
     let gpu = gpu();
     let textures = || gpu.device.get_internal_counters().hal.textures.read();
     let mut table = format!(
-        "Device: {}. Bunny scene (`scenes/bunny.ron`), shadow map 1024^2, window 640 x 480 <-> 800 x 600, {n} resizes of each kind, alternating; wall time until the device is idle.\n\n| technique | rebind (before), ms median | textures made | `resize` (now), ms median | textures made | rebind / resize | an instance added or removed: `Scene::upload` + `set_scene`, ms median | textures made |\n|---|---|---|---|---|---|---|---|\n",
+        "Device: {}. Bunny scene (`scenes/bunny.ron`), shadow map 1024^2, window 640 x 480 <-> 800 x 600, {n} resizes of each kind, alternating; wall time until the device is idle.\n\n| technique | rebind (before), ms median | textures made | `resize` (now), ms median | textures made | rebind / resize | an instance added or removed: `Scene::upload` + `set_scene`, ms median | textures made | in place: `add_instance` or `remove_instance` + `set_scene`, ms median | upload / in place | buffers grown, all changes | step bindings made per change | bytes written per instance added |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         gpu.describe()
     );
     for t in ["hard", "pcss", "vssm", "penumbra-maps"] {
@@ -114,10 +118,30 @@ fn main() {
             ex.run_frame().unwrap();
             made_spawn = before - textures();
         }
+        // the same instance added and removed in place
+        let spawned = more.instances.last().unwrap().clone();
+        let (grown, bound, written) = (ex.scene.buffers_grown(), ex.targets.step_bindings_made(), ex.scene.bytes_added());
+        let mut in_place = Vec::new();
+        for i in 0..2 * n {
+            let t0 = Instant::now();
+            if i % 2 == 0 {
+                ex.scene.add_instance(&spawned).unwrap();
+            } else {
+                ex.scene.remove_instance(g.instances.len()).unwrap();
+            }
+            ex.targets.set_scene(&ex.scene).unwrap();
+            gpu.wait().unwrap();
+            in_place.push(t0.elapsed().as_secs_f64() * 1e3);
+            ex.run_frame().unwrap();
+        }
+        let (up, here) = (median(&mut spawn), median(&mut in_place));
         let row = format!(
-            "| {t} | {a:.2} | {made_rebind} | {b:.2} | {made_resize} | {:.1} | {:.2} | {made_spawn} |\n",
+            "| {t} | {a:.2} | {made_rebind} | {b:.2} | {made_resize} | {:.1} | {up:.2} | {made_spawn} | {here:.3} | {:.0} | {} | {:.1} | {} |\n",
             a / b,
-            median(&mut spawn)
+            up / here,
+            ex.scene.buffers_grown() - grown,
+            (ex.targets.step_bindings_made() - bound) as f64 / (2 * n) as f64,
+            (ex.scene.bytes_added() - written) / n as u64,
         );
         print!("{row}");
         table.push_str(&row);

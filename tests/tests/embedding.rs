@@ -2163,7 +2163,7 @@ fn a_mesh_or_instance_added_or_removed_in_place_frames_as_a_fresh_upload() {
                 .chunks(3)
                 .map(|f| [0, 1, 2].map(|k| tall.positions[f[k] as usize]))
                 .collect();
-            let a = Adjacency::build(&tris, [0..tris.len()]);
+            let a = Adjacency::build(&tris, std::iter::once(0..tris.len()));
             bytes += 48 * a.edges.len() + 16 * a.planes.len() + 4 * a.edge_faces.len();
         }
         let before = scene.bytes_added();
