@@ -1151,14 +1151,7 @@ impl GeometryBuffers {
             if !listed[mi] {
                 words(&mut index_data, &m.indices);
             }
-            let adj = (edges && casts_any[mi]).then(|| {
-                let tris: Vec<[[f32; 3]; 3]> = m
-                    .indices
-                    .chunks_exact(3)
-                    .map(|t| [0, 1, 2].map(|k| m.positions[t[k] as usize]))
-                    .collect();
-                Adjacency::build(&tris, std::iter::once(0..tris.len()))
-            });
+            let adj = (edges && casts_any[mi]).then(|| adjacency_of(m));
             let f = first[mi];
             let mut slot = MeshSlot {
                 vertices: m.positions.len() as u32,
