@@ -218,6 +218,12 @@ impl Technique {
         &self.0.usages
     }
 
+    /// Whether it classifies silhouettes (a Geometry pass): a scene it runs on must be
+    /// uploaded with edge adjacency (`Scene::upload` with it among the techniques).
+    pub fn needs_edge_adjacency(&self) -> bool {
+        self.0.usages.edges
+    }
+
     pub(crate) fn sampler(&self) -> &wgpu::Sampler {
         &self.0.sampler
     }

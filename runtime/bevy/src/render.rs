@@ -1,0 +1,469 @@
+//! The render world's side: sshc's stages kept across frames, fed from what was extracted.
+//!
+//! - **Extract** (Bevy's `ExtractSchedule`): the mesh entities (their mesh asset, world
+//!   transform, and whether they cast and receive), each mesh asset sshc does not hold yet
+//!   (its positions, normals and indices, read from the main world's `Assets<Mesh>`), the
+//!   light carrying [`crate::SshcShadow`], and the techniques that loaded or reloaded.
+//! - **Prepare** (`RenderSystems::Prepare`): the scene changed in place (meshes and
+//!   instances added or removed: `Scene::add_mesh`, `add_instance`, `remove_instance`;
+//!   every transform set), the targets made, resized or given the changed scene, the light
+//!   fitted to the casters, then `Targets::prepare` (queue writes only).
+//! - **Record** (Bevy's `Core3d` schedule, before the main pass): `Targets::record` into
+//!   Bevy's command encoder, then sshc's visibility copied into the image the receivers'
+//!   material reads.
+//!
+//! Nothing here hands an error to Bevy's device error handler: every sshc call returns its
+//! error as a value, which is logged once (naming the light entity and the technique file)
+//! and put in [`Status`], so that the main world leaves Bevy's own shadow in place for that
+//! light.
+
+use crate::asset::SshcTechnique;
+use bevy::asset::AssetId;
+use bevy::ecs::entity::EntityHashMap;
+use bevy::log::{error, info};
+use bevy::prelude::*;
+use bevy::render::Extract;
+use bevy::render::render_asset::RenderAssets;
+use bevy::render::renderer::{RenderAdapter, RenderContext, RenderDevice, RenderQueue, ViewQuery};
+use bevy::render::texture::GpuImage;
+use bevy::render::view::ExtractedView;
+use sshc_runtime::gpu::{self as sshc_gpu, Camera as SshcCamera, Fit, FrameState, Gpu, LightInputs, Scene, Sizes, Targets, Technique};
+use sshc_runtime::graph::ValidGraph;
+use sshc_runtime::light::Light;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// Per light entity (main world): the error that stopped sshc's shadow for it, if any. Shared
+/// by both worlds: the render world writes it, the main world reads it to leave Bevy's own
+/// shadow in place for a light sshc cannot shade.
+#[derive(Resource, Clone, Default)]
+pub struct Status(pub Arc<Mutex<HashMap<Entity, String>>>);
+
+impl Status {
+    /// The error for `light`, if sshc's shadow does not run for it.
+    pub fn error(&self, light: Entity) -> Option<String> {
+        self.0.lock().ok().and_then(|m| m.get(&light).cloned())
+    }
+
+    fn set(&self, light: Entity, e: Option<String>) {
+        if let Ok(mut m) = self.0.lock() {
+            match e {
+                Some(e) => m.insert(light, e),
+                None => m.remove(&light),
+            };
+        }
+    }
+}
+
+/// One mesh entity as extracted.
+#[derive(Clone, Debug)]
+pub struct ExtractedInstance {
+    pub entity: Entity,
+    pub mesh: AssetId<Mesh>,
+    pub transform: [f32; 16],
+    pub casts: bool,
+    pub receives: bool,
+}
+
+/// The light with sshc's shadow, as extracted.
+#[derive(Clone, Debug)]
+pub struct ExtractedLight {
+    pub entity: Entity,
+    pub technique: AssetId<SshcTechnique>,
+    /// The technique's asset path, for messages.
+    pub path: String,
+    pub params: Vec<(String, f64)>,
+    pub map_size: u32,
+    /// From the scene towards the sun (glam 0.34's order: x, y, z).
+    pub direction: [f32; 3],
+    pub angle_degrees: f32,
+    /// The image the receivers read sshc's visibility from.
+    pub visibility: AssetId<Image>,
+}
+
+/// What the extract step hands the prepare step for one frame.
+#[derive(Resource, Default)]
+pub struct Extracted {
+    pub instances: Vec<ExtractedInstance>,
+    /// Meshes sshc does not hold yet: converted, or why they cannot be.
+    pub new_meshes: Vec<(AssetId<Mesh>, Result<sshc_gpu::Mesh, String>)>,
+    pub light: Option<ExtractedLight>,
+    /// Techniques loaded or reloaded since the last frame.
+    pub techniques: Vec<(AssetId<SshcTechnique>, SshcTechnique)>,
+}
+
+/// sshc's stages in the render world.
+#[derive(Resource)]
+pub struct SshcRender {
+    gpu: Gpu,
+    /// Each technique asset's compiled form, its loaded technique (made on first use) and
+    /// its version (each load or reload a new one).
+    techniques: HashMap<AssetId<SshcTechnique>, Loaded>,
+    versions: u64,
+    scene: Option<Scene>,
+    /// Mesh asset -> sshc's mesh index in `scene`.
+    meshes: HashMap<AssetId<Mesh>, usize>,
+    /// Instance order in `scene`: the main-world entity of each instance.
+    order: Vec<Entity>,
+    transforms: Vec<[f32; 16]>,
+    /// Per view (render-world entity): its targets, the technique they run, their sizes.
+    views: EntityHashMap<ViewTargets>,
+    /// The last error logged, so that a failing frame logs once, not every frame.
+    logged: Option<String>,
+    status: Status,
+    /// What prepare decided for record: the views that are ready, and the image to copy into.
+    ready: Vec<(Entity, AssetId<Image>)>,
+    /// Mesh assets that could not be converted (logged once each).
+    refused: HashMap<AssetId<Mesh>, String>,
+}
+
+struct Loaded {
+    compiled: SshcTechnique,
+    technique: Option<Technique>,
+    version: u64,
+}
+
+struct ViewTargets {
+    technique: AssetId<SshcTechnique>,
+    technique_version: u64,
+    targets: Targets,
+    state: FrameState,
+    sizes: Sizes,
+}
+
+impl SshcRender {
+    pub fn new(adapter: &RenderAdapter, device: &RenderDevice, queue: &RenderQueue, status: Status) -> SshcRender {
+        let gpu = Gpu::from_host(adapter, device.wgpu_device().clone(), (**queue).clone());
+        SshcRender {
+            gpu,
+            techniques: HashMap::new(),
+            versions: 0,
+            scene: None,
+            meshes: HashMap::new(),
+            order: Vec::new(),
+            transforms: Vec::new(),
+            views: EntityHashMap::default(),
+            logged: None,
+            status,
+            ready: Vec::new(),
+            refused: HashMap::new(),
+        }
+    }
+
+    /// Whether sshc holds mesh `id` (or refused it): the extract step converts only the others.
+    pub fn knows_mesh(&self, id: AssetId<Mesh>) -> bool {
+        self.meshes.contains_key(&id) || self.refused.contains_key(&id)
+    }
+}
+
+/// The extract step (main world read through `Extract`).
+#[allow(clippy::type_complexity)]
+pub fn extract(
+    mut out: ResMut<Extracted>,
+    render: Option<Res<SshcRender>>,
+    meshes: Extract<Res<Assets<Mesh>>>,
+    techniques: Extract<Res<Assets<SshcTechnique>>>,
+    mut technique_events: Extract<MessageReader<AssetEvent<SshcTechnique>>>,
+    entities: Extract<
+        Query<(
+            Entity,
+            &Mesh3d,
+            &GlobalTransform,
+            &ViewVisibility,
+            Has<bevy::light::NotShadowCaster>,
+            Has<bevy::light::NotShadowReceiver>,
+        )>,
+    >,
+    lights: Extract<Query<(Entity, &crate::SshcShadow, &GlobalTransform), With<DirectionalLight>>>,
+    server: Extract<Res<AssetServer>>,
+) {
+    out.instances.clear();
+    out.new_meshes.clear();
+    out.techniques.clear();
+    let Some(render) = render else { return };
+    let mut seen = std::collections::HashSet::new();
+    for (entity, mesh, transform, visible, no_cast, no_receive) in &entities {
+        if !visible.get() && no_cast {
+            continue;
+        }
+        let id = mesh.0.id();
+        if !render.knows_mesh(id) && seen.insert(id) {
+            out.new_meshes.push((
+                id,
+                meshes.get(id).map_or_else(
+                    || Err("its mesh asset is not loaded (or not kept in the main world: `RenderAssetUsages::MAIN_WORLD`)".into()),
+                    convert_mesh,
+                ),
+            ));
+        }
+        out.instances.push(ExtractedInstance {
+            entity,
+            mesh: id,
+            transform: transform.to_matrix().to_cols_array(),
+            casts: !no_cast,
+            receives: !no_receive,
+        });
+    }
+    // a stable draw order: by entity
+    out.instances.sort_by_key(|i| i.entity);
+    for e in technique_events.read() {
+        if let AssetEvent::LoadedWithDependencies { id } | AssetEvent::Modified { id } = e
+            && let Some(t) = techniques.get(*id)
+        {
+            out.techniques.push((*id, t.clone()));
+        }
+    }
+    out.light = lights
+        .iter()
+        .find(|(_, s, _)| s.enabled)
+        .map(|(entity, s, transform)| ExtractedLight {
+            entity,
+            technique: s.technique.id(),
+            path: server
+                .get_path(s.technique.id())
+                .map_or_else(|| "(a technique not loaded from a file)".into(), |p| p.to_string()),
+            params: s.params.clone(),
+            map_size: s.map_size,
+            direction: transform.back().to_array(),
+            angle_degrees: s.angular_diameter_degrees,
+            visibility: s.visibility.id(),
+        });
+}
+
+/// A Bevy mesh as sshc's: triangle lists with positions and normals, indexed or not.
+fn convert_mesh(mesh: &Mesh) -> Result<sshc_gpu::Mesh, String> {
+    use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
+    if mesh.primitive_topology() != PrimitiveTopology::TriangleList {
+        return Err(format!(
+            "its topology is {:?}; sshc draws triangle lists",
+            mesh.primitive_topology()
+        ));
+    }
+    let positions = match mesh.attribute(Mesh::ATTRIBUTE_POSITION) {
+        Some(VertexAttributeValues::Float32x3(p)) => p.clone(),
+        _ => return Err("it has no Float32x3 positions".into()),
+    };
+    let normals = match mesh.attribute(Mesh::ATTRIBUTE_NORMAL) {
+        Some(VertexAttributeValues::Float32x3(n)) => n.clone(),
+        _ => return Err("it has no Float32x3 normals (`Mesh::compute_normals` makes them)".into()),
+    };
+    let indices: Vec<u32> = match mesh.indices() {
+        Some(Indices::U16(i)) => i.iter().map(|&x| u32::from(x)).collect(),
+        Some(Indices::U32(i)) => i.clone(),
+        None => (0..positions.len() as u32).collect(),
+    };
+    Ok(sshc_gpu::Mesh {
+        name: String::new(),
+        positions,
+        normals,
+        indices,
+    })
+}
+
+/// The prepare step: the scene, the targets and the frame's uniforms.
+pub fn prepare(
+    render: Option<ResMut<SshcRender>>,
+    mut extracted: ResMut<Extracted>,
+    views: Query<(Entity, &ExtractedView, &bevy::render::camera::ExtractedCamera)>,
+) {
+    let Some(mut render) = render else { return };
+    let render = &mut *render;
+    render.ready.clear();
+    for (id, t) in extracted.techniques.drain(..) {
+        info!("sshc: technique `{}` loaded", t.name());
+        render.versions += 1;
+        let version = render.versions;
+        render.techniques.insert(
+            id,
+            Loaded {
+                compiled: t,
+                technique: None,
+                version,
+            },
+        );
+    }
+    let Some(light) = extracted.light.clone() else {
+        return;
+    };
+    let outcome = prepare_light(render, &mut extracted, &light, &views);
+    let message = outcome
+        .err()
+        .map(|e| format!("sshc's shadow for light {} (technique {}): {e}", light.entity, light.path));
+    if message != render.logged {
+        if let Some(m) = &message {
+            error!("{m}; Bevy's own shadow stays for this light");
+        }
+        render.logged = message.clone();
+    }
+    render.status.set(light.entity, message);
+}
+
+fn prepare_light(
+    render: &mut SshcRender,
+    extracted: &mut Extracted,
+    light: &ExtractedLight,
+    views: &Query<(Entity, &ExtractedView, &bevy::render::camera::ExtractedCamera)>,
+) -> Result<(), String> {
+    let e = |e: sshc_gpu::RuntimeError| e.to_string();
+    let gpu = render.gpu.clone();
+    let loaded = render
+        .techniques
+        .get_mut(&light.technique)
+        .ok_or_else(|| "the technique has not loaded (see the asset log for why)".to_string())?;
+    if loaded.technique.is_none() {
+        let graph = ValidGraph::try_from(loaded.compiled.compiled.graph.clone()).map_err(|e| e.to_string())?;
+        loaded.technique = Some(Technique::new(&gpu, graph, loaded.compiled.compiled.shaders.clone()).map_err(e)?);
+    }
+    let (technique, version) = (loaded.technique.clone().ok_or("no technique")?, loaded.version);
+    // the scene: uploaded empty once, for this technique's needs, then changed in place
+    let edges = technique.needs_edge_adjacency();
+    if render.scene.as_ref().is_none_or(|s| edges && !s.has_edges()) {
+        render.scene = Some(Scene::upload(&gpu, &sshc_gpu::Geometry::default(), &[&technique]).map_err(e)?);
+        render.meshes.clear();
+        render.order.clear();
+        render.transforms.clear();
+        render.views.clear();
+    }
+    let scene = render.scene.as_mut().ok_or("no scene")?;
+    for (id, mesh) in extracted.new_meshes.drain(..) {
+        match mesh.and_then(|m| scene.add_mesh(&m).map_err(|e| e.to_string())) {
+            Ok(index) => {
+                render.meshes.insert(id, index);
+            }
+            Err(why) => {
+                error!("sshc: mesh {id:?} is not drawn in sshc's shadows: {why}");
+                render.refused.insert(id, why);
+            }
+        }
+    }
+    // instances removed (their entity gone, or its mesh changed), from the last down
+    let wanted: EntityHashMap<&ExtractedInstance> = extracted
+        .instances
+        .iter()
+        .filter(|i| render.meshes.contains_key(&i.mesh))
+        .map(|i| (i.entity, i))
+        .collect();
+    for k in (0..render.order.len()).rev() {
+        if !wanted.contains_key(&render.order[k]) {
+            scene.remove_instance(k).map_err(e)?;
+            render.order.remove(k);
+            render.transforms.remove(k);
+        }
+    }
+    let held: std::collections::HashSet<Entity> = render.order.iter().copied().collect();
+    for i in extracted.instances.iter().filter(|i| !held.contains(&i.entity)) {
+        let Some(&mesh) = render.meshes.get(&i.mesh) else { continue };
+        scene
+            .add_instance(&sshc_gpu::Instance {
+                name: format!("{}", i.entity),
+                mesh,
+                transform: i.transform,
+                casts: i.casts,
+                receives: i.receives,
+                moves: true,
+            })
+            .map_err(e)?;
+        render.order.push(i.entity);
+        render.transforms.push(i.transform);
+    }
+    for (k, entity) in render.order.iter().enumerate() {
+        if let Some(i) = wanted.get(entity) {
+            render.transforms[k] = i.transform;
+        }
+    }
+    scene.set_transforms(&render.transforms).map_err(e)?;
+    let sun = Light::DistantDisk {
+        direction: sshc_runtime::light::glam::Vec3::from_array(light.direction),
+        angle_degrees: light.angle_degrees,
+    };
+    for (view, extracted_view, camera) in views {
+        let Some(size) = camera.physical_viewport_size else { continue };
+        let size = (size.x, size.y);
+        let clip_from_world = extracted_view
+            .clip_from_world
+            .unwrap_or_else(|| extracted_view.clip_from_view * extracted_view.world_from_view.to_matrix().inverse());
+        // Bevy's projection is reverse-Z (and infinite): mapped to sshc's forward depth
+        let cam = SshcCamera::from_reverse_z(
+            clip_from_world.to_cols_array(),
+            extracted_view.world_from_view.translation().to_array(),
+        );
+        let sizes = Sizes {
+            camera: size,
+            shadow: light.map_size,
+        };
+        let fresh = match render.views.get(&view) {
+            Some(v) => v.technique != light.technique || v.technique_version != version || v.sizes.shadow != sizes.shadow,
+            None => true,
+        };
+        if fresh {
+            let first = LightInputs::fit(&sun, scene.boxes(), Fit::Casters, sizes.shadow, 0).map_err(e)?;
+            let state = FrameState::new(&technique, cam, vec![first]);
+            let targets = Targets::new(&technique, scene, &state, sizes).map_err(e)?;
+            render.views.insert(
+                view,
+                ViewTargets {
+                    technique: light.technique,
+                    technique_version: version,
+                    targets,
+                    state,
+                    sizes,
+                },
+            );
+        }
+        let v = render.views.get_mut(&view).ok_or("no targets")?;
+        if v.sizes.camera != size {
+            v.targets.resize(size).map_err(e)?;
+            v.sizes.camera = size;
+        }
+        v.targets.set_scene(scene).map_err(e)?;
+        v.state.camera = cam;
+        v.state.lights[0] = v.targets.fit_light(scene, 0, &sun, Fit::Casters).map_err(e)?;
+        for (name, value) in &light.params {
+            v.state.params.set(name, *value).map_err(e)?;
+        }
+        v.targets.prepare(scene, &v.state).map_err(e)?;
+        render.ready.push((view, light.visibility));
+    }
+    Ok(())
+}
+
+/// The record step, per camera view: sshc's passes into Bevy's encoder, then the
+/// visibility copied into the receivers' image.
+pub fn record(
+    view: ViewQuery<&ExtractedView>,
+    render: Option<Res<SshcRender>>,
+    images: Res<RenderAssets<GpuImage>>,
+    mut ctx: RenderContext,
+) {
+    let Some(render) = render else { return };
+    let entity = view.entity();
+    let Some(&(_, image)) = render.ready.iter().find(|(v, _)| *v == entity) else {
+        return;
+    };
+    let (Some(scene), Some(v)) = (&render.scene, render.views.get(&entity)) else {
+        return;
+    };
+    let encoder = ctx.command_encoder();
+    if let Err(e) = v.targets.record(scene, encoder) {
+        error!("sshc: recording the shadow passes: {e}");
+        return;
+    }
+    let Some(gpu_image) = images.get(image) else { return };
+    let source = v.targets.visibility();
+    let (w, h) = (
+        source.width().min(gpu_image.texture.width()),
+        source.height().min(gpu_image.texture.height()),
+    );
+    if source.format() != gpu_image.texture.format() || w == 0 || h == 0 {
+        return;
+    }
+    encoder.copy_texture_to_texture(
+        source.as_image_copy(),
+        gpu_image.texture.as_image_copy(),
+        sshc_runtime::wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+}
