@@ -1504,6 +1504,15 @@ impl Sig {
         }
     }
 
+    /// Whether every argument must be a scalar (a vector is refused, not taken component
+    /// by component): what the typer's help on a vector argument reads.
+    pub fn takes_scalars(self) -> bool {
+        match self {
+            Sig::Scalars | Sig::Convert(_) | Sig::Construct(_) => true,
+            Sig::Numeric | Sig::SameNumeric | Sig::Select | Sig::Length | Sig::Dot | Sig::Float | Sig::Guarded => false,
+        }
+    }
+
     fn result(self, name: &str, args: &[Ty]) -> Result<Ty, String> {
         let same = |tys: &[Ty]| -> Option<Ty> { tys.iter().try_fold(tys[0], |acc, t| unify(acc, *t)) };
         match self {
