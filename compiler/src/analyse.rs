@@ -568,7 +568,7 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
                     let flushed: Vec<f64> = (0..=64)
                         .map(|k| k as f64 / 64.0)
                         .filter(|&z| {
-                            let v = crate::rounding::channel_value(ir, s.channel, z, &mut memo, 0);
+                            let v = channel_value(ir, s.channel, z, &mut memo, 0);
                             v != 0.0 && v.abs() < zero
                         })
                         .collect();
@@ -614,4 +614,40 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
         }
     }
     Ok((analysis, warnings))
+}
+
+/// The value of channel `c` at a texel of depth `z`: the depth itself for a Depth
+/// channel, else its expression with the channels it reads at `z`.
+pub(crate) fn channel_value(p: &Ir, c: ChannelId, z: f64, memo: &mut HashMap<(ChannelId, u64), f64>, depth: usize) -> f64 {
+    let Some(h) = p.channels[c].value else {
+        return z;
+    };
+    // each channel once per depth, however many channels read it
+    if let Some(v) = memo.get(&(c, z.to_bits())) {
+        return *v;
+    }
+    // the channels this value reads, computed first (a Map's value reads earlier
+    // resources); a bound on the chain keeps a malformed one finite
+    let mut known: HashMap<ChannelId, f64> = HashMap::new();
+    for n in p.arena.postorder(&[h]) {
+        if let Node::Channel(r, _) | Node::Sample { channel: r, .. } = p.arena.node(n)
+            && !known.contains_key(r)
+        {
+            let v = if depth < 16 {
+                channel_value(p, *r, z, memo, depth + 1)
+            } else {
+                f64::NAN
+            };
+            known.insert(*r, v);
+        }
+    }
+    let v = p.arena.eval(h, &|n: &Node| match n {
+        Node::Channel(r, _) | Node::Sample { channel: r, .. } => known.get(r).copied(),
+        Node::Input(i, _) => Some(i.desc().typical),
+        Node::Param(id) => Some(p.params[*id].value.as_f64()),
+        Node::Swizzle(..) => None,
+        Node::F32(_) | Node::I32(_) | Node::U32(_) | Node::Bool(_) | Node::Unary(..) | Node::Binary(..) | Node::Call(..) => None,
+    });
+    memo.insert((c, z.to_bits()), v);
+    v
 }

@@ -32,7 +32,7 @@
 
 use crate::builtins::{Func, Input, SampleFn};
 use crate::front::ast::{Precision, Reduce};
-use crate::ir::{ChannelId, ExprId, Ir, IrKernel, IrPassKind, Node, PlacedSlot, Program, ResId};
+use crate::ir::{ChannelId, ExprId, IrKernel, IrPassKind, Node, PlacedSlot, Program, ResId};
 use std::collections::HashMap;
 
 /// Above this estimated visibility error a compilation warns: 5 % of the visibility's
@@ -118,7 +118,7 @@ pub fn typical(i: Input) -> f64 {
 const EDGES: [f64; 6] = [-16.0, -4.0, -1.0, 1.0, 4.0, 16.0];
 
 /// Receivers just behind each plane (in depth), besides the sixteenths.
-const BEHIND: [f64; 2] = [1.0 / 256.0, 1.0 / 64.0];
+const BEHIND: [f64; 1] = [1.0 / 64.0];
 
 /// How the two planes lie in a configuration.
 #[derive(Clone, Copy, PartialEq, Debug)]
@@ -213,7 +213,11 @@ pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, Cha
     }
     let (plane_steps, receiver_steps) = (8, 16);
     let planes: Vec<f64> = (0..=plane_steps).map(|i| i as f64 / plane_steps as f64).collect();
+    // the mixtures first (every lookup the same), then the edges: where the budget
+    // thins, it thins the edges, then the receivers behind the planes, and only then the
+    // mixtures' receivers, so that no estimate samples less than the mixtures alone did
     let mut textures: Vec<(f64, f64, Layout)> = Vec::new();
+    let mut edges: Vec<(f64, f64, Layout)> = Vec::new();
     for (i, &z1) in planes.iter().enumerate() {
         for &z2 in &planes[i..] {
             if z1 == z2 {
@@ -224,30 +228,43 @@ pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, Cha
             // the nearer plane on either side of an edge at these distances: what sets
             // a lookup's share of each plane is then its footprint and offset
             for e in EDGES {
-                textures.push((z1, z2, Layout::Edge(e)));
-                textures.push((z2, z1, Layout::Edge(e)));
+                edges.push((z1, z2, Layout::Edge(e)));
+                edges.push((z2, z1, Layout::Edge(e)));
             }
         }
     }
-    // the sixteenths, and just behind each plane, where a depth test or a Chebyshev bound
-    // is steepest
     let mut receivers: Vec<f64> = (0..=receiver_steps).map(|i| i as f64 / receiver_steps as f64).collect();
-    for &z in &planes {
-        for off in BEHIND {
-            if z + off <= 1.0 {
-                receivers.push(z + off);
-            }
-        }
-    }
-    // thin the receivers where the expression is large
+    // just behind each plane, where a depth test or a Chebyshev bound is steepest
+    let mut behind: Vec<f64> = planes
+        .iter()
+        .flat_map(|z| BEHIND.iter().map(move |off| z + off))
+        .filter(|d| *d <= 1.0)
+        .collect();
     let evals_per_channel = match detail {
         Detail::Warn => 2,
         Detail::Explain => 8,
     };
     let per = order.len().max(1) * (1 + evals_per_channel * looked.len());
-    while receivers.len() > 3 && per * textures.len() * receivers.len() > BUDGET {
+    let cost = |t: usize, r: usize| per * t * r;
+    while !edges.is_empty() && cost(textures.len() + edges.len(), receivers.len() + behind.len()) > BUDGET {
+        edges = if edges.len() == 1 {
+            Vec::new()
+        } else {
+            edges.iter().step_by(2).copied().collect()
+        };
+    }
+    while !behind.is_empty() && cost(textures.len() + edges.len(), receivers.len() + behind.len()) > BUDGET {
+        behind = if behind.len() == 1 {
+            Vec::new()
+        } else {
+            behind.iter().step_by(2).copied().collect()
+        };
+    }
+    while receivers.len() > 3 && cost(textures.len(), receivers.len()) > BUDGET {
         receivers = receivers.iter().step_by(2).copied().collect();
     }
+    textures.extend(edges);
+    receivers.extend(behind);
     let mut channels: Vec<ChannelError> = looked
         .iter()
         .map(|(_, c, slot, _)| ChannelError {
@@ -265,7 +282,12 @@ pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, Cha
     for &(z1, z2, layout) in &textures {
         let planes: Vec<(f64, f64)> = looked
             .iter()
-            .map(|(_, c, _, _)| (channel_value(p.ir, *c, z1, &mut memo, 0), channel_value(p.ir, *c, z2, &mut memo, 0)))
+            .map(|(_, c, _, _)| {
+                (
+                    crate::analyse::channel_value(p.ir, *c, z1, &mut memo, 0),
+                    crate::analyse::channel_value(p.ir, *c, z2, &mut memo, 0),
+                )
+            })
             .collect();
         for &d in &receivers {
             let mut visibility = |moved: Option<(usize, f64, Precision)>| {
@@ -344,7 +366,7 @@ pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, Cha
             }
             configurations += 1;
             let mut sum = 0.0;
-            for k in 0..looked.len() {
+            for (k, channel) in channels.iter_mut().enumerate() {
                 let mut worst_at = |q: Precision| {
                     let (up, down) = (visibility(Some((k, 1.0, q))), visibility(Some((k, -1.0, q))));
                     [up, down]
@@ -354,14 +376,14 @@ pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, Cha
                         .fold(0.0, f64::max)
                 };
                 // the laid-out precision once, the others only for `Detail::Explain`
-                let laid_out = channels[k].precision;
+                let laid_out = channel.precision;
                 let worst = worst_at(laid_out);
                 for (i, q) in Precision::ALL.iter().enumerate() {
-                    if let Some(e) = channels[k].at[i].as_mut() {
+                    if let Some(e) = channel.at[i].as_mut() {
                         *e = e.max(if *q == laid_out { worst } else { worst_at(*q) });
                     }
                 }
-                channels[k].error = channels[k].error.max(worst);
+                channel.error = channel.error.max(worst);
                 sum += worst;
             }
             total = total.max(sum);
@@ -399,40 +421,4 @@ fn mix_of(p: &Program, r: ResId) -> Mix {
         }
     }
     Mix::Mean
-}
-
-/// The value of channel `c` at a texel of depth `z`: the depth itself for a Depth
-/// channel, else its expression with the channels it reads at `z`.
-pub(crate) fn channel_value(p: &Ir, c: ChannelId, z: f64, memo: &mut HashMap<(ChannelId, u64), f64>, depth: usize) -> f64 {
-    let Some(h) = p.channels[c].value else {
-        return z;
-    };
-    // each channel once per depth, however many channels read it
-    if let Some(v) = memo.get(&(c, z.to_bits())) {
-        return *v;
-    }
-    // the channels this value reads, computed first (a Map's value reads earlier
-    // resources); a bound on the chain keeps a malformed one finite
-    let mut known: HashMap<ChannelId, f64> = HashMap::new();
-    for n in p.arena.postorder(&[h]) {
-        if let Node::Channel(r, _) | Node::Sample { channel: r, .. } = p.arena.node(n)
-            && !known.contains_key(r)
-        {
-            let v = if depth < 16 {
-                channel_value(p, *r, z, memo, depth + 1)
-            } else {
-                f64::NAN
-            };
-            known.insert(*r, v);
-        }
-    }
-    let v = p.arena.eval(h, &|n: &Node| match n {
-        Node::Channel(r, _) | Node::Sample { channel: r, .. } => known.get(r).copied(),
-        Node::Input(i, _) => Some(typical(*i)),
-        Node::Param(id) => Some(p.params[*id].value.as_f64()),
-        Node::Swizzle(..) => None,
-        Node::F32(_) | Node::I32(_) | Node::U32(_) | Node::Bool(_) | Node::Unary(..) | Node::Binary(..) | Node::Call(..) => None,
-    });
-    memo.insert((c, z.to_bits()), v);
-    v
 }

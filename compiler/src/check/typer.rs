@@ -372,9 +372,10 @@ impl<'s, 'a> Typer<'s, 'a> {
                         // one type, but vectors do not compare (issue 51: the help said
                         // "both sides need one type" of two vec2s)
                         let vector = if matches!(ta, Ty::Vec(_)) { a } else { b };
-                        let (component, reduced) = match &vector.kind {
-                            ExprKind::Name(n) => (format!("`{n}.x`"), format!("`length({n})`, `max({n}.x, {n}.y)`")),
-                            _ => ("`(...).x`".to_string(), "`length(...)`, `max(v.x, v.y)`".to_string()),
+                        let (component, reduced) = if let ExprKind::Name(n) = &vector.kind {
+                            (format!("`{n}.x`"), format!("`length({n})`, `max({n}.x, {n}.y)`"))
+                        } else {
+                            ("`(...).x`".to_string(), "`length(...)`, `max(v.x, v.y)`".to_string())
                         };
                         return Err(Self::err(
                             e.span,
@@ -1223,9 +1224,10 @@ impl<'s, 'a> Typer<'s, 'a> {
                     diag = diag.also(a.span, format!("{t}: take one component, `.x` or `.y`"));
                 }
                 if let Some((a, _)) = vectors.first() {
-                    let example = match &a.kind {
-                        ExprKind::Name(n) => format!("`{n}.x`"),
-                        _ => "`(...).x`".to_string(),
+                    let example = if let ExprKind::Name(n) = &a.kind {
+                        format!("`{n}.x`")
+                    } else {
+                        "`(...).x`".to_string()
                     };
                     diag = diag.help(format!(
                         "`{name}` takes scalars: pass one component of each vector, such as {example}, and call it once per axis"
