@@ -18,6 +18,17 @@ pub const F32_MAX: f64 = f32::MAX as f64;
 /// The smallest positive normal f16.
 pub const F16_MIN_NORMAL: f64 = 6.103515625e-5;
 
+/// Below this magnitude a value stored at `p` becomes 0: half the smallest subnormal
+/// (2^-24 for F16, 2^-149 for F32), which rounds to even, to 0. `None` for the unorm
+/// precisions, whose smallest step is a fraction of the encoded range instead.
+pub fn flushes_below(p: Precision) -> Option<f64> {
+    match p {
+        Precision::F16 => Some(2f64.powi(-25)),
+        Precision::F32 => Some(2f64.powi(-150)),
+        Precision::Unorm8 | Precision::Unorm16 => None,
+    }
+}
+
 /// Range of every expression node under given channel ranges.
 pub struct RangeEval<'a> {
     ir: &'a Ir,
@@ -542,6 +553,47 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
                 } else {
                     f64::INFINITY
                 };
+                // a range touching or straddling 0 says nothing of how small the nonzero
+                // values get: sample the channel over the depths where its value is a
+                // function of depth (a Map's channel; Geometry outputs are not), and warn
+                // where a nonzero value is stored as 0 (issue 51: exp(-80 z) at F16 with
+                // a range touching 0 was silent)
+                let made_by_map = matches!(ir.passes[res.writer].kind, IrPassKind::Map)
+                    && !ir.passes.iter().any(|p| matches!(p.kind, IrPassKind::Geometry { .. }));
+                if smallest.is_infinite()
+                    && made_by_map
+                    && let Some(zero) = flushes_below(s.precision)
+                {
+                    let mut memo = std::collections::HashMap::new();
+                    let flushed: Vec<f64> = (0..=64)
+                        .map(|k| k as f64 / 64.0)
+                        .filter(|&z| {
+                            let v = channel_value(ir, s.channel, z, &mut memo, 0);
+                            v != 0.0 && v.abs() < zero
+                        })
+                        .collect();
+                    if let (Some(first), Some(last)) = (flushed.first(), flushed.last()) {
+                        let mut d = Diagnostic::warning(
+                            Phase::Analyse,
+                            format!(
+                                "channel `{}` at {} underflows to 0 inside its analysed range {r}: at depths from {} to {} ({} of the 65 sampled) its nonzero value lies below {}, which is stored as 0",
+                                ch.name,
+                                s.precision.name(),
+                                short(*first),
+                                short(*last),
+                                flushed.len(),
+                                short(zero)
+                            ),
+                        )
+                        .at(ch.precision_span, "nonzero values stored as 0")
+                        .note("a quotient or a product with a large factor (an exponential warp undone in the Shade) reads 0 there")
+                        .help("rescale the channel, or store it at F32");
+                        if s.precision == Precision::F16 && !ch.precision_overridden {
+                            d = d.fix(ch.precision_span, "F32");
+                        }
+                        warnings.push(d);
+                    }
+                }
                 if smallest < m {
                     warnings.push(
                         Diagnostic::warning(
@@ -562,4 +614,40 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
         }
     }
     Ok((analysis, warnings))
+}
+
+/// The value of channel `c` at a texel of depth `z`: the depth itself for a Depth
+/// channel, else its expression with the channels it reads at `z`.
+pub(crate) fn channel_value(p: &Ir, c: ChannelId, z: f64, memo: &mut HashMap<(ChannelId, u64), f64>, depth: usize) -> f64 {
+    let Some(h) = p.channels[c].value else {
+        return z;
+    };
+    // each channel once per depth, however many channels read it
+    if let Some(v) = memo.get(&(c, z.to_bits())) {
+        return *v;
+    }
+    // the channels this value reads, computed first (a Map's value reads earlier
+    // resources); a bound on the chain keeps a malformed one finite
+    let mut known: HashMap<ChannelId, f64> = HashMap::new();
+    for n in p.arena.postorder(&[h]) {
+        if let Node::Channel(r, _) | Node::Sample { channel: r, .. } = p.arena.node(n)
+            && !known.contains_key(r)
+        {
+            let v = if depth < 16 {
+                channel_value(p, *r, z, memo, depth + 1)
+            } else {
+                f64::NAN
+            };
+            known.insert(*r, v);
+        }
+    }
+    let v = p.arena.eval(h, &|n: &Node| match n {
+        Node::Channel(r, _) | Node::Sample { channel: r, .. } => known.get(r).copied(),
+        Node::Input(i, _) => Some(i.desc().typical),
+        Node::Param(id) => Some(p.params[*id].value.as_f64()),
+        Node::Swizzle(..) => None,
+        Node::F32(_) | Node::I32(_) | Node::U32(_) | Node::Bool(_) | Node::Unary(..) | Node::Binary(..) | Node::Call(..) => None,
+    });
+    memo.insert((c, z.to_bits()), v);
+    v
 }

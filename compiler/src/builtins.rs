@@ -627,6 +627,13 @@ impl Input {
     }
 }
 
+/// The error of the two exponentials WGSL's `sinh` and `cosh` are specified through
+/// (accuracy inherited from `(exp(x) -+ exp(-x)) / 2`): `exp`'s bound, (3 + 2 |x| log2 e)
+/// ulp, at the larger of the two, e^|x|.
+fn hyperbolic_error(x: f64) -> f64 {
+    (3.0 + 2.0 * (x * std::f64::consts::LOG2_E).abs()) * ulp(x.abs().exp())
+}
+
 /// Named constants.
 pub fn constant(name: &str) -> Option<f64> {
     match name {
@@ -653,6 +660,11 @@ pub enum Func {
     Asin,
     Acos,
     Atan,
+    /// Hyperbolic functions (WGSL `sinh`, `cosh`, `tanh`): exponential soft shadow
+    /// mapping's warps written once (issue 51).
+    Sinh,
+    Cosh,
+    Tanh,
     Floor,
     Ceil,
     Fract,
@@ -846,7 +858,7 @@ impl Func {
         }
     }
 
-    pub const ALL: [Func; 42] = [
+    pub const ALL: [Func; 45] = [
         Func::Abs,
         Func::Exp,
         Func::Exp2,
@@ -860,6 +872,9 @@ impl Func {
         Func::Asin,
         Func::Acos,
         Func::Atan,
+        Func::Sinh,
+        Func::Cosh,
+        Func::Tanh,
         Func::Floor,
         Func::Ceil,
         Func::Fract,
@@ -1017,6 +1032,46 @@ impl Func {
                 },
                 wgsl: Same,
                 accuracy: Bound(|v, _| 2f64.powi(-11) * (1.0 + v * v)),
+            },
+            // WGSL: accuracy "inherited from" (exp(x) - exp(-x)) / 2, (exp(x) + exp(-x)) / 2
+            // and sinh(x) / cosh(x): two exps of |x| (exp's bound at e^|x|), the sum's and the
+            // halving's rounding; tanh divides that by cosh (at least 1)
+            Func::Sinh => &Builtin {
+                name: "sinh",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].sinh())),
+                range: |v| v[0].monotone(f64::sinh),
+                wgsl: Same,
+                accuracy: Bound(|v, x| hyperbolic_error(arg(x, 0)) + 2.0 * ulp(v)),
+            },
+            Func::Cosh => &Builtin {
+                name: "cosh",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].cosh())),
+                // even, least (1) at 0
+                range: |v| {
+                    let x = v[0];
+                    let hi = x.lo.cosh().max(x.hi.cosh());
+                    let lo = if x.lo <= 0.0 && x.hi >= 0.0 {
+                        1.0
+                    } else {
+                        x.lo.cosh().min(x.hi.cosh())
+                    };
+                    Interval { lo, hi }
+                },
+                wgsl: Same,
+                accuracy: Bound(|v, x| hyperbolic_error(arg(x, 0)) + 2.0 * ulp(v)),
+            },
+            Func::Tanh => &Builtin {
+                name: "tanh",
+                arity: 1,
+                sig: Sig::Float,
+                fold: Float(|x| Some(x[0].tanh())),
+                range: |v| v[0].monotone(f64::tanh),
+                wgsl: Same,
+                accuracy: Bound(|v, x| 2.0 * hyperbolic_error(arg(x, 0)) / arg(x, 0).cosh().max(1.0) + 2.5 * ulp(v)),
             },
             Func::Asin => &Builtin {
                 name: "asin",
@@ -1501,6 +1556,15 @@ impl Sig {
                 "{}: `num` and `den` f32 or vectors of one size; `eps` and `fallback` their type or f32",
                 params(&["num", "den", "eps", "fallback"])
             ),
+        }
+    }
+
+    /// Whether every argument must be a scalar (a vector is refused, not taken component
+    /// by component): what the typer's help on a vector argument reads.
+    pub fn takes_scalars(self) -> bool {
+        match self {
+            Sig::Scalars | Sig::Convert(_) | Sig::Construct(_) => true,
+            Sig::Numeric | Sig::SameNumeric | Sig::Select | Sig::Length | Sig::Dot | Sig::Float | Sig::Guarded => false,
         }
     }
 

@@ -615,8 +615,10 @@ impl Texels {
 
 /// The table the GPU builds over `base` (a channel stored in `slot`) as `code` says: the
 /// texels' values (clamped to the range a fixed-point code spans) and allowances (half a
-/// code step more there), and for an f32 table each entry's rounding bound.
-fn table(base: &Level, slot: &PlacedSlot, code: crate::back::summed_area::TableCode, model: Model) -> (Level, Table) {
+/// code step more there; under [`Rounding::Stored`] rounded to the code, `round((v - lo)
+/// / (hi - lo) (2^B - 1))`, as the GPU sums them), and for an f32 table each entry's
+/// rounding bound.
+fn table(base: &Level, slot: &PlacedSlot, code: crate::back::summed_area::TableCode, rounding: Rounding, model: Model) -> (Level, Table) {
     use crate::back::summed_area::TableCode;
     let mut level = base.clone();
     let kind = match code {
@@ -626,6 +628,9 @@ fn table(base: &Level, slot: &PlacedSlot, code: crate::back::summed_area::TableC
             let step = if hi > lo { (hi - lo) / f64::from(scale) } else { 0.0 };
             for (v, a) in level.v.iter_mut().zip(level.a.iter_mut()) {
                 *v = v.clamp(lo, hi.max(lo));
+                if rounding == Rounding::Stored && step > 0.0 {
+                    *v = lo + ((*v - lo) / step).round() * step;
+                }
                 *a += 0.5 * step;
             }
             TableModel::Fixed { lo }
@@ -956,7 +961,7 @@ impl<'p> Evaluation<'p> {
                 for slot in self.slots(out) {
                     let base = self.read(src, slot.channel)?.base().clone();
                     let code = crate::back::summed_area::table_code(&self.p, out, slot.texture).map_err(|d| d.message.clone())?;
-                    let (base, sat) = table(&base, &slot, code, self.model);
+                    let (base, sat) = table(&base, &slot, code, rounding, self.model);
                     let texels = Texels {
                         sat: Some(sat),
                         ..Texels::new(vec![base], &slot)

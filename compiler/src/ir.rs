@@ -988,6 +988,8 @@ pub struct IrPass {
     pub name: String,
     pub kind: IrPassKind,
     pub reads: Vec<ResId>,
+    /// Where each of `reads` is named, in the same order.
+    pub read_spans: Vec<Span>,
     pub writes: Option<ResId>,
     pub span: Span,
     /// False once dead-code elimination removed it.

@@ -266,6 +266,8 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         let program = ir::Program::new(&ir, &layout);
         debug_validate(program, "pack");
         let mut warnings = warnings;
+        // a pass removed because a read goes around it: said, not only explained
+        warnings.extend(pack::removed_pass_warnings(&ir, &layout, source));
         if opts.rounding {
             warnings.extend(rounding_warning(&program));
         }

@@ -612,6 +612,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
     for &pi in &checked.order {
         let p = &t.passes[pi];
         let reads: Vec<ResId> = p.kind.reads().iter().map(|r| res_index[&r.value]).collect();
+        let read_spans: Vec<Span> = p.kind.reads().iter().map(|r| r.span).collect();
         let kind = match &p.kind {
             PassKind::Depth { view, .. } => IrPassKind::Depth { view: *view },
             PassKind::Map { .. } => IrPassKind::Map,
@@ -717,6 +718,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             name: p.name.value.clone(),
             kind,
             reads,
+            read_spans,
             writes,
             span: p.span,
             live: true,

@@ -142,6 +142,79 @@ fn eliminate(ir: &Ir, lay: &mut Working) {
     lay.removed.extend(removed);
 }
 
+/// A warning for every pass elimination removed ([`eliminate`]'s decision, read from the
+/// layout's live flags) whose output no pass reads at all: not a specialisation (a fixed
+/// param folding a lookup away leaves the read in place) but a read that goes around the
+/// pass, as a Shade reading the resource a Mipmap pass reads instead of the chain it builds
+/// (issue 51: `check` said ok, and only `explain` said "Removed"). The warning is at the
+/// pass, names the read that bypasses it (a later live pass reading a resource that carries
+/// the same channels; line and column from `source`) and offers to read the pass's output.
+pub fn removed_pass_warnings(ir: &Ir, layout: &Layout, source: &str) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    for (pi, pass) in layout.passes.with_handles() {
+        let Some(w) = pass.writes else { continue };
+        if pass.live || layout.passes.iter().any(|q| q.reads.contains(&w)) {
+            continue;
+        }
+        let written = &ir.resources[w];
+        let channels: Vec<ChannelId> = written.slots.iter().map(|s| s.channel).collect();
+        // the first live pass after it reading another resource with one of its channels
+        let bypass = layout
+            .passes
+            .with_handles()
+            .filter(|(qi, q)| q.live && qi.index() > pi.index())
+            .find_map(|(_, q)| {
+                q.reads.iter().zip(&q.read_spans).find_map(|(&r, &span)| {
+                    let shared: Vec<&str> = channels
+                        .iter()
+                        .filter(|&&c| ir.resources[r].slot_of(c).is_some())
+                        .map(|&c| ir.channels[c].name.as_str())
+                        .collect();
+                    (r != w && !shared.is_empty()).then_some((q, r, span, shared))
+                })
+            });
+        let mut d = Diagnostic::warning(
+            Phase::Pack,
+            format!(
+                "pass `{}` is removed: no pass reads `{}`, the resource it writes",
+                pass.name, written.name
+            ),
+        )
+        .at(pass.span, format!("removed: nothing reads `{}`", written.name));
+        match bypass {
+            Some((q, r, span, shared)) => {
+                let (line, col) = crate::span::line_col(source, span.start as usize);
+                let list: Vec<String> = shared.iter().map(|c| format!("`{c}`")).collect();
+                d = d
+                    .also(span, format!("`{}` reads `{}` here, around `{}`", q.name, ir.resources[r].name, pass.name))
+                    .note(format!(
+                        "`{}` reads `{}` at line {line}, column {col}, which carries {} as `{}` does: its lookups go around pass `{}` and see none of what it does{}",
+                        q.name,
+                        ir.resources[r].name,
+                        list.join(", "),
+                        written.name,
+                        pass.name,
+                        if matches!(pass.kind, IrPassKind::Mipmap { .. }) {
+                            " (a texture without mip levels)"
+                        } else {
+                            ""
+                        }
+                    ))
+                    .help(format!(
+                        "read `{}` instead of `{}` in the `reads` of `{}`",
+                        written.name, ir.resources[r].name, q.name
+                    ))
+                    .fix(span, format!("\"{}\"", written.name));
+            }
+            None => {
+                d = d.help(format!("read `{}` in a later pass, or remove pass `{}`", written.name, pass.name));
+            }
+        }
+        out.push(d);
+    }
+    out
+}
+
 /// Lay the live slots out in textures. The IR is only read: the result is a [`Layout`]
 /// (resources and passes as laid out, with each slot's range and encoding from
 /// `analysis`; what is dead removed, the rest placed).

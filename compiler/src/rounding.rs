@@ -30,9 +30,9 @@
 //! filters, whose stored values are not functions of a texel's depth; [`unsupported`]
 //! names the channels and why.
 
-use crate::builtins::Input;
+use crate::builtins::{Func, Input, SampleFn};
 use crate::front::ast::{Precision, Reduce};
-use crate::ir::{ChannelId, IrKernel, IrPassKind, Node, PlacedSlot, Program, ResId};
+use crate::ir::{ChannelId, ExprId, IrKernel, IrPassKind, Node, PlacedSlot, Program, ResId};
 use std::collections::HashMap;
 
 /// Above this estimated visibility error a compilation warns: 5 % of the visibility's
@@ -112,6 +112,47 @@ pub fn typical(i: Input) -> f64 {
     i.desc().typical
 }
 
+/// Where the edge configurations put the edge between the two planes, in texels from the
+/// receiver along u: near (a tap's or a small filter's footprint straddles it) and far (a
+/// blocker search's region or a penumbra-wide filter reaches it).
+const EDGES: [f64; 6] = [-16.0, -4.0, -1.0, 1.0, 4.0, 16.0];
+
+/// Receivers just behind each plane (in depth), besides the sixteenths.
+const BEHIND: [f64; 1] = [1.0 / 64.0];
+
+/// How the two planes lie in a configuration.
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Layout {
+    /// Every lookup reads the same mixture, weight `a` on the first plane.
+    Mixed(f64),
+    /// The first plane left of an edge this many texels from the receiver along u, the
+    /// second right of it: a lookup reads the share of its footprint on each side, so a
+    /// channel that sets another lookup's width or offset (a blocker search's depth) moves
+    /// the visibility through it.
+    Edge(f64),
+}
+
+/// A lookup's centre along u and half its footprint, in uv, from its arguments' values:
+/// a texel for a point or bilinear tap, a box's or width's half, a level's texel.
+fn footprint(how: SampleFn, args: &[ExprId], arg: &dyn Fn(&ExprId) -> f64, texel: f64) -> (f64, f64) {
+    let half = 0.5 * texel;
+    let at = |i: usize| args.get(i).map_or(0.0, arg);
+    let level = |i: usize| half * 2f64.powf(at(i).clamp(0.0, 16.0));
+    let (du, h) = match how {
+        SampleFn::Sample | SampleFn::Nearest => (0.0, half),
+        SampleFn::SampleLod => (0.0, level(0)),
+        SampleFn::Fetch => (at(0) * texel, half),
+        SampleFn::NearestAt | SampleFn::SampleAt => (at(0), half),
+        SampleFn::SampleWidth | SampleFn::Box => (0.0, 0.5 * at(0)),
+        SampleFn::BoxAt => (at(0), 0.5 * at(2)),
+        SampleFn::SampleWidthAt => (at(0), 0.5 * at(2)),
+        SampleFn::NearestLevel => (0.0, level(0)),
+        SampleFn::NearestLevelAt => (at(1), level(0)),
+    };
+    let du = if du.is_finite() { du } else { 0.0 };
+    (du, if h.is_finite() { h.max(half) } else { half })
+}
+
 /// How a resource's texels combine the two planes' values.
 #[derive(Clone, Copy, PartialEq)]
 enum Mix {
@@ -172,22 +213,58 @@ pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, Cha
     }
     let (plane_steps, receiver_steps) = (8, 16);
     let planes: Vec<f64> = (0..=plane_steps).map(|i| i as f64 / plane_steps as f64).collect();
-    let mut textures: Vec<(f64, f64, f64)> = Vec::new();
+    // the mixtures first (every lookup the same), then the edges: where the budget
+    // thins, it thins the edges, then the receivers behind the planes, and only then the
+    // mixtures' receivers, so that no estimate samples less than the mixtures alone did
+    let mut textures: Vec<(f64, f64, Layout)> = Vec::new();
+    let mut edges: Vec<(f64, f64, Layout)> = Vec::new();
     for (i, &z1) in planes.iter().enumerate() {
         for &z2 in &planes[i..] {
-            textures.push((z1, z2, if z1 == z2 { 1.0 } else { 0.5 }));
+            if z1 == z2 {
+                textures.push((z1, z2, Layout::Mixed(1.0)));
+                continue;
+            }
+            textures.push((z1, z2, Layout::Mixed(0.5)));
+            // the nearer plane on either side of an edge at these distances: what sets
+            // a lookup's share of each plane is then its footprint and offset
+            for e in EDGES {
+                edges.push((z1, z2, Layout::Edge(e)));
+                edges.push((z2, z1, Layout::Edge(e)));
+            }
         }
     }
     let mut receivers: Vec<f64> = (0..=receiver_steps).map(|i| i as f64 / receiver_steps as f64).collect();
-    // thin the receivers where the expression is large
+    // just behind each plane, where a depth test or a Chebyshev bound is steepest
+    let mut behind: Vec<f64> = planes
+        .iter()
+        .flat_map(|z| BEHIND.iter().map(move |off| z + off))
+        .filter(|d| *d <= 1.0)
+        .collect();
     let evals_per_channel = match detail {
         Detail::Warn => 2,
         Detail::Explain => 8,
     };
     let per = order.len().max(1) * (1 + evals_per_channel * looked.len());
-    while receivers.len() > 3 && per * textures.len() * receivers.len() > BUDGET {
+    let cost = |t: usize, r: usize| per * t * r;
+    while !edges.is_empty() && cost(textures.len() + edges.len(), receivers.len() + behind.len()) > BUDGET {
+        edges = if edges.len() == 1 {
+            Vec::new()
+        } else {
+            edges.iter().step_by(2).copied().collect()
+        };
+    }
+    while !behind.is_empty() && cost(textures.len() + edges.len(), receivers.len() + behind.len()) > BUDGET {
+        behind = if behind.len() == 1 {
+            Vec::new()
+        } else {
+            behind.iter().step_by(2).copied().collect()
+        };
+    }
+    while receivers.len() > 3 && cost(textures.len(), receivers.len()) > BUDGET {
         receivers = receivers.iter().step_by(2).copied().collect();
     }
+    textures.extend(edges);
+    receivers.extend(behind);
     let mut channels: Vec<ChannelError> = looked
         .iter()
         .map(|(_, c, slot, _)| ChannelError {
@@ -201,43 +278,84 @@ pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, Cha
     let (mut total, mut configurations, mut skipped) = (0.0f64, 0, 0);
     let mut scratch = vec![[f64::NAN; 4]; p.arena.len()];
     let mut memo = HashMap::new();
-    for &(z1, z2, a) in &textures {
-        let mut stored = Vec::with_capacity(looked.len());
-        for (_, c, _, mix) in &looked {
-            let f1 = channel_value(p, *c, z1, &mut memo, 0);
-            let f2 = channel_value(p, *c, z2, &mut memo, 0);
-            stored.push(match mix {
-                Mix::Mean => a * f1 + (1.0 - a) * f2,
-                Mix::Max => f1.max(f2),
-                Mix::Min => f1.min(f2),
-            });
-        }
+    let texel = typical(Input::TexelSize);
+    for &(z1, z2, layout) in &textures {
+        let planes: Vec<(f64, f64)> = looked
+            .iter()
+            .map(|(_, c, _, _)| {
+                (
+                    crate::analyse::channel_value(p.ir, *c, z1, &mut memo, 0),
+                    crate::analyse::channel_value(p.ir, *c, z2, &mut memo, 0),
+                )
+            })
+            .collect();
         for &d in &receivers {
-            let mut visibility = |moved: Option<(usize, f64)>| {
-                let v = p.arena.eval_ordered(
-                    &order,
-                    shade,
-                    &|n: &Node| match n {
-                        Node::Sample { channel, resource, .. } => {
+            let mut visibility = |moved: Option<(usize, f64, Precision)>| {
+                let leaf = |h: ExprId, i: usize, vals: &[[f64; 4]]| -> Option<f64> {
+                    let arg = |x: &ExprId| vals.get(x.index()).map_or(f64::NAN, |v| v[0]);
+                    match p.arena.node(h) {
+                        Node::Sample {
+                            channel,
+                            resource,
+                            how,
+                            args,
+                            ..
+                        } => {
                             let k = looked.iter().position(|l| l.0 == *resource && l.1 == *channel)?;
-                            let dv = moved.filter(|m| m.0 == k).map_or(0.0, |m| m.1);
-                            Some(stored[k] + dv)
+                            let a = match layout {
+                                Layout::Mixed(a) => a,
+                                Layout::Edge(e) => {
+                                    let (du, half) = footprint(*how, args, &arg, texel);
+                                    ((e * texel - (du - half)) / (2.0 * half)).clamp(0.0, 1.0)
+                                }
+                            };
+                            let (f1, f2) = planes[k];
+                            let v = match looked[k].3 {
+                                Mix::Mean => a * f1 + (1.0 - a) * f2,
+                                Mix::Max if a >= 1.0 => f1,
+                                Mix::Max if a <= 0.0 => f2,
+                                Mix::Max => f1.max(f2),
+                                Mix::Min if a >= 1.0 => f1,
+                                Mix::Min if a <= 0.0 => f2,
+                                Mix::Min => f1.min(f2),
+                            };
+                            let dv = match moved {
+                                Some((m, sign, q)) if m == k => {
+                                    let slot = &looked[k].2;
+                                    sign * moved_by
+                                        .get(&(looked[k].0, looked[k].1))
+                                        .copied()
+                                        .unwrap_or_else(|| half_step(q, v, (slot.range.lo, slot.range.hi)))
+                                }
+                                Some(_) | None => 0.0,
+                            };
+                            Some(v + dv)
                         }
                         Node::Input(Input::D, _) => Some(d),
                         Node::Input(i, _) => Some(typical(*i)),
                         Node::Param(id) => Some(p.params[*id].value.as_f64()),
                         Node::Channel(..) => Some(0.5),
-                        Node::Swizzle(..) => None,
-                        Node::F32(_)
+                        // one texel at distance D spans 2 D / N world units (a 90-degree
+                        // perspective light), so a length L there is L / (2 D) of the map
+                        Node::Call(Func::UvWidth, a) => Some(arg(&a[0]) / (2.0 * arg(&a[1]))),
+                        // the hash's middle value
+                        Node::Call(Func::Noise, _) => Some(0.5),
+                        Node::Call(..) => None,
+                        Node::Swizzle(..)
+                        | Node::F32(_)
                         | Node::I32(_)
                         | Node::U32(_)
                         | Node::Bool(_)
                         | Node::Unary(..)
-                        | Node::Binary(..)
-                        | Node::Call(..) => None,
-                    },
-                    &mut scratch,
-                );
+                        | Node::Binary(..) => {
+                            let _ = i;
+                            None
+                        }
+                    }
+                };
+                let hooks = crate::ir::Hooks { leaf: &leaf, exact: false };
+                p.arena.eval_span(&order, &hooks, &mut scratch);
+                let v = scratch.get(shade.index()).map_or(f64::NAN, |v| v[0]);
                 // the runtime stores the visibility clamped to [0, 1]
                 if v.is_nan() { f64::NAN } else { v.clamp(0.0, 1.0) }
             };
@@ -248,11 +366,9 @@ pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, Cha
             }
             configurations += 1;
             let mut sum = 0.0;
-            for (k, (_, _, slot, _)) in looked.iter().enumerate() {
-                let fixed = moved_by.get(&(looked[k].0, looked[k].1)).copied();
+            for (k, channel) in channels.iter_mut().enumerate() {
                 let mut worst_at = |q: Precision| {
-                    let step = fixed.unwrap_or_else(|| half_step(q, stored[k], (slot.range.lo, slot.range.hi)));
-                    let (up, down) = (visibility(Some((k, step))), visibility(Some((k, -step))));
+                    let (up, down) = (visibility(Some((k, 1.0, q))), visibility(Some((k, -1.0, q))));
                     [up, down]
                         .iter()
                         .map(|v| (v - v0).abs())
@@ -260,14 +376,14 @@ pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, Cha
                         .fold(0.0, f64::max)
                 };
                 // the laid-out precision once, the others only for `Detail::Explain`
-                let laid_out = channels[k].precision;
+                let laid_out = channel.precision;
                 let worst = worst_at(laid_out);
                 for (i, q) in Precision::ALL.iter().enumerate() {
-                    if let Some(e) = channels[k].at[i].as_mut() {
+                    if let Some(e) = channel.at[i].as_mut() {
                         *e = e.max(if *q == laid_out { worst } else { worst_at(*q) });
                     }
                 }
-                channels[k].error = channels[k].error.max(worst);
+                channel.error = channel.error.max(worst);
                 sum += worst;
             }
             total = total.max(sum);
@@ -305,40 +421,4 @@ fn mix_of(p: &Program, r: ResId) -> Mix {
         }
     }
     Mix::Mean
-}
-
-/// The value of channel `c` at a texel of depth `z`: the depth itself for a Depth
-/// channel, else its expression with the channels it reads at `z`.
-fn channel_value(p: &Program, c: ChannelId, z: f64, memo: &mut HashMap<(ChannelId, u64), f64>, depth: usize) -> f64 {
-    let Some(h) = p.channels[c].value else {
-        return z;
-    };
-    // each channel once per depth, however many channels read it
-    if let Some(v) = memo.get(&(c, z.to_bits())) {
-        return *v;
-    }
-    // the channels this value reads, computed first (a Map's value reads earlier
-    // resources); a bound on the chain keeps a malformed one finite
-    let mut known: HashMap<ChannelId, f64> = HashMap::new();
-    for n in p.arena.postorder(&[h]) {
-        if let Node::Channel(r, _) | Node::Sample { channel: r, .. } = p.arena.node(n)
-            && !known.contains_key(r)
-        {
-            let v = if depth < 16 {
-                channel_value(p, *r, z, memo, depth + 1)
-            } else {
-                f64::NAN
-            };
-            known.insert(*r, v);
-        }
-    }
-    let v = p.arena.eval(h, &|n: &Node| match n {
-        Node::Channel(r, _) | Node::Sample { channel: r, .. } => known.get(r).copied(),
-        Node::Input(i, _) => Some(typical(*i)),
-        Node::Param(id) => Some(p.params[*id].value.as_f64()),
-        Node::Swizzle(..) => None,
-        Node::F32(_) | Node::I32(_) | Node::U32(_) | Node::Bool(_) | Node::Unary(..) | Node::Binary(..) | Node::Call(..) => None,
-    });
-    memo.insert((c, z.to_bits()), v);
-    v
 }

@@ -144,6 +144,25 @@ fn sum_span(pass: &crate::ir::IrPass) -> crate::span::Span {
     pass.kind.table_sum().map_or(pass.span, |s| s.1)
 }
 
+/// The edit that makes table `table`'s `sum:` read `sum`: its value replaced where it is
+/// written, else the field added after the pass's `writes:`.
+fn sum_fix(p: &Program, table: ResId, sum: TableSum) -> crate::diag::Edit {
+    let text = match sum {
+        TableSum::F32 => "F32".to_string(),
+        TableSum::Fixed(bits) => format!("Fixed(bits: {bits})"),
+    };
+    match p.passes[p.resources[table].writer].kind.table_sum() {
+        Some((_, span)) => crate::diag::Edit { span, text },
+        None => {
+            let at = p.resources[table].span.end as usize;
+            crate::diag::Edit {
+                span: crate::span::Span::new(at, at),
+                text: format!(", sum: {text}"),
+            }
+        }
+    }
+}
+
 /// The warnings of the tables over float channels: a fixed-point table whose boxes may
 /// outgrow the area it sums exactly, and an f32 table whose stated bound at
 /// [`REFERENCE_SIZE`] moves the visibility by more than `rounding::WARN_ABOVE`
@@ -189,7 +208,8 @@ pub fn warnings(p: &Program, estimate: bool) -> Vec<Diagnostic> {
                             "`Fixed(bits: {})` sums such boxes exactly (half a step is then {:.3e} of the range), or bound the box's widths",
                             fixed_bits_for(l.area.1),
                             0.5 / ((1u64 << fixed_bits_for(l.area.1)) - 1) as f64
-                        )),
+                        ))
+                        .fix_edit(sum_fix(p, l.table, TableSum::Fixed(fixed_bits_for(l.area.1)))),
                     );
                 }
                 let step = if width.is_finite() { 0.5 * width / f64::from(scale) } else { 0.0 };
@@ -214,47 +234,103 @@ pub fn warnings(p: &Program, estimate: bool) -> Vec<Diagnostic> {
             }
         }
     }
-    if float_reads.is_empty() || !estimate {
+    if moved.is_empty() || !estimate {
         return out;
     }
+    let warn = crate::rounding::WARN_ABOVE;
     let estimate = crate::rounding::estimate_with(p, crate::rounding::Detail::Warn, &moved);
-    let error_of = |channel: ChannelId| {
-        estimate
-            .as_ref()
+    let error_in = |e: &Option<crate::rounding::Estimate>, channel: ChannelId| {
+        e.as_ref()
             .and_then(|e| e.channels.iter().find(|c| c.channel == channel).map(|c| c.error))
             .unwrap_or(f64::INFINITY)
     };
+    let error_of = |channel: ChannelId| error_in(&estimate, channel);
+    // a fixed-point table's codes: half a step of the range they span, judged as an f32
+    // table's bound is (issue 51: `Fixed(bits: 10)` over exp(-80 z) passed unjudged)
+    if estimate.is_some() {
+        let mut fixed: Vec<ResId> = moved
+            .keys()
+            .map(|k| k.0)
+            .filter(|t| !float_reads.iter().any(|r| r.0 == *t))
+            .collect();
+        fixed.sort_by_key(|t| t.index());
+        fixed.dedup();
+        for table in fixed {
+            let mut over: Vec<(ChannelId, f64)> = moved
+                .iter()
+                .filter(|(k, _)| k.0 == table && error_of(k.1) > warn)
+                .map(|(k, step)| (k.1, *step))
+                .collect();
+            over.sort_by_key(|o| o.0.index());
+            let Some(&(_, step)) = over.iter().max_by(|a, b| a.1.total_cmp(&b.1)) else {
+                continue;
+            };
+            let error = over.iter().map(|o| error_of(o.0)).fold(0.0, f64::max);
+            let names: Vec<String> = over.iter().map(|o| format!("`{}`", p.channels[o.0].name)).collect();
+            let bits = match p.passes[p.resources[table].writer].kind.table_sum() {
+                Some((TableSum::Fixed(b), _)) => b,
+                Some((TableSum::F32, _)) | None => continue,
+            };
+            out.push(
+                Diagnostic::warning(
+                    Phase::Analyse,
+                    format!(
+                        "table `{}` sums {bits}-bit codes of {}: half a code step, {step:.3e}, can move the visibility by up to {error:.3} (warned above {warn})",
+                        p.resources[table].name,
+                        names.join(", "),
+                    ),
+                )
+                .at(sum_span(&p.passes[p.resources[table].writer]), "fixed-point codes")
+                .note("a code step is a fixed fraction of the channel's range, so values small against the range (an exponential's tail) lose every digit")
+                .help("store a channel of narrower range, or sum it in f32 (`sum: F32`) where its boxes are large enough for the f32 bound"),
+            );
+        }
+    }
+    if float_reads.is_empty() {
+        return out;
+    }
     // one warning per table, naming its channels above the threshold
     let mut tables: Vec<ResId> = float_reads.iter().map(|r| r.0).collect();
     tables.dedup();
+    let bits = fixed_bits_for(REFERENCE_SIZE * REFERENCE_SIZE);
     for table in tables {
-        let over: Vec<&(ResId, ChannelId, f64, f64)> = float_reads
-            .iter()
-            .filter(|r| r.0 == table && error_of(r.1) > crate::rounding::WARN_ABOVE)
-            .collect();
+        let over: Vec<&(ResId, ChannelId, f64, f64)> = float_reads.iter().filter(|r| r.0 == table && error_of(r.1) > warn).collect();
         let Some(&&(_, _, bound, area)) = over.iter().max_by(|a, b| a.2.total_cmp(&b.2)) else {
             continue;
         };
         let error = over.iter().map(|r| error_of(r.1)).fold(0.0, f64::max);
         let names: Vec<String> = over.iter().map(|r| format!("`{}`", p.channels[r.1].name)).collect();
-        out.push(
-            Diagnostic::warning(
-                Phase::Analyse,
-                format!(
-                    "table `{}` sums {} in f32: at {n} x {n} its stated bound for a box of {area} texel(s) is {bound:.3e}, which can move the visibility by up to {error:.3} (warned above {})",
-                    p.resources[table].name,
-                    names.join(", "),
-                    crate::rounding::WARN_ABOVE,
-                    n = REFERENCE_SIZE
-                ),
-            )
-            .at(sum_span(&p.passes[p.resources[table].writer]), "f32 sums")
-            .note("an f32 table's entries grow with the map (to m n^2, m half the channel's range): their rounding is divided among the box's texels, so small boxes read it whole")
-            .help(format!(
-                "sum fixed-point codes, exact per box: `sum: Fixed(bits: {})` keeps boxes of up to the whole map exact",
-                fixed_bits_for(REFERENCE_SIZE * REFERENCE_SIZE)
-            )),
-        );
+        // the fix offered is judged before it is offered: the same estimate with this
+        // table's channels moved by half a code step of `bits` bits instead
+        let mut codes = moved.clone();
+        for r in float_reads.iter().filter(|r| r.0 == table) {
+            let width = p.resources[table].slot_of(r.1).map_or(f64::INFINITY, |s| s.range.hi - s.range.lo);
+            codes.insert((r.0, r.1), 0.5 * width / ((1u64 << bits) - 1) as f64);
+        }
+        let with_codes = crate::rounding::estimate_with(p, crate::rounding::Detail::Warn, &codes);
+        let coded = over.iter().map(|r| error_in(&with_codes, r.1)).fold(0.0, f64::max);
+        let d = Diagnostic::warning(
+            Phase::Analyse,
+            format!(
+                "table `{}` sums {} in f32: at {n} x {n} its stated bound for a box of {area} texel(s) is {bound:.3e}, which can move the visibility by up to {error:.3} (warned above {warn})",
+                p.resources[table].name,
+                names.join(", "),
+                n = REFERENCE_SIZE
+            ),
+        )
+        .at(sum_span(&p.passes[p.resources[table].writer]), "f32 sums")
+        .note("an f32 table's entries grow with the map (to m n^2, m half the channel's range): their rounding is divided among the box's texels, so small boxes read it whole");
+        out.push(if coded <= warn {
+            d.help(format!(
+                "sum fixed-point codes, exact per box: `sum: Fixed(bits: {bits})` keeps boxes of up to the whole map exact (its half step moves the visibility by up to {coded:.3})"
+            ))
+            .fix_edit(sum_fix(p, table, TableSum::Fixed(bits)))
+        } else {
+            d.note(format!(
+                "fixed-point codes would lose it too: half a step of `Fixed(bits: {bits})` (the most bits that sum the whole map exactly) can move the visibility by up to {coded:.3}"
+            ))
+            .help("read larger boxes (the f32 bound is divided by a box's area), or store a channel of narrower range")
+        });
     }
     out
 }

@@ -273,3 +273,79 @@ fn the_example_techniques_compile_and_use_what_they_show() {
     }
     assert_eq!(seen, std::fs::read_dir(&dir).unwrap().count(), "an example is not listed here");
 }
+
+/// `sinh`, `cosh` and `tanh` (issue 51): typed as the other elementwise builtins (f32 or a
+/// vector), their ranges analysed (`tanh` monotone, `cosh` even with its least value 1 at
+/// 0), folded at compile time, emitted as WGSL's own, and evaluated by the CPU reference.
+#[test]
+fn hyperbolic_functions_are_typed_ranged_folded_and_emitted() {
+    let src = r#"Technique(
+    name: "hyperbolic",
+    channels: {
+        "z": Channel(precision: F32),
+        "t": Channel(precision: F32, value: "tanh(4.0 * z)"),
+        "c": Channel(precision: F32, value: "cosh(z - 0.5)"),
+        "s": Channel(precision: F32, value: "sinh(2.0 * z - 1.0)"),
+    },
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Map(name: "warp", reads: ["shadow"], writes: "warped", channels: ["t", "c", "s"]),
+        Shade(name: "shade", reads: ["warped"], visibility: "
+            let v = tanh(vec2(sample(t), sample(s)));
+            clamp(v.x + v.y * sinh(0.0) + cosh(0.0) - sample(c), 0.0, 1.0)
+        "),
+    ],
+)"#;
+    let c = compile(src).unwrap_or_else(|e| panic!("{e}"));
+    let range = |name: &str| {
+        c.graph
+            .textures
+            .iter()
+            .flat_map(|t| &t.channels)
+            .find(|ch| ch.name == name)
+            .unwrap_or_else(|| panic!("`{name}` is stored"))
+            .range
+    };
+    let close = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).abs() < 1e-6 && (a.1 - b.1).abs() < 1e-6;
+    // z in [0, 1]: tanh(4z) in [0, tanh 4]; cosh(z - 0.5) in [1, cosh 0.5]; sinh(2z - 1) in [-sinh 1, sinh 1]
+    assert!(close(range("t"), (0.0, 4f64.tanh())), "{:?}", range("t"));
+    assert!(close(range("c"), (1.0, 0.5f64.cosh())), "{:?}", range("c"));
+    assert!(close(range("s"), (-1f64.sinh(), 1f64.sinh())), "{:?}", range("s"));
+    let wgsl: String = c.shaders.iter().map(|(_, s)| s.as_str()).collect();
+    for f in ["tanh(", "cosh(", "sinh("] {
+        assert!(wgsl.contains(f), "no `{f}` in the WGSL");
+    }
+    // `sinh(0.0)` and `cosh(0.0)` fold to constants: no call of them in the Shade's WGSL
+    let shade = &c.shaders.iter().find(|(f, _)| f.contains("shade")).unwrap().1;
+    assert!(!shade.contains("sinh(") && !shade.contains("cosh("), "{shade}");
+    // the CPU reference evaluates them: a receiver in front of a flat map at depth 0.5 reads
+    // tanh(tanh 2) + 0 + 1 - cosh(0) = tanh(tanh 2)
+    use sshc::interp::{Evaluation, Frame, Given, Model, Receiver, Rounding, Scratch};
+    let p = sshc::ir::Program::new(&c.ir, &c.layout);
+    let n = 8u32;
+    let frame = Frame {
+        shadow_size: n,
+        near: 8.0,
+        far: 12.0,
+        light_size: 0.0,
+        light_width: [0.0; 2],
+        light_spread: 0.0,
+        light_distant: true,
+        texel_world: [0.0, 2.0 / n as f64],
+        frame: 0,
+    };
+    let given = Given::depth(&p, vec![vec![0.5; (n * n) as usize]]);
+    let ev = Evaluation::new(p, &given, frame, Rounding::Exact, Model::Gpu).unwrap();
+    let r = Receiver {
+        uv: [0.5 + 1.0 / 64.0, 0.5 + 1.0 / 64.0],
+        d_world: 10.0,
+        ndotl: 1.0,
+        depth_slope: 0.0,
+        lod: 0.0,
+        pixel: [0.0, 0.0],
+        samples: Vec::new(),
+    };
+    let v = ev.visibility(&r, &mut Scratch::default());
+    assert!((v.value - 2f64.tanh().tanh()).abs() <= v.allowance + 1e-12, "{v:?}");
+    assert!(v.allowance < 1e-5, "{v:?}");
+}

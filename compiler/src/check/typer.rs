@@ -369,7 +369,24 @@ impl<'s, 'a> Typer<'s, 'a> {
                 }
                 if op.is_comparison() {
                     if matches!(t, Ty::Vec(_)) {
-                        return Err(mismatch());
+                        // one type, but vectors do not compare (issue 51: the help said
+                        // "both sides need one type" of two vec2s)
+                        let vector = if matches!(ta, Ty::Vec(_)) { a } else { b };
+                        let (component, reduced) = if let ExprKind::Name(n) = &vector.kind {
+                            (format!("`{n}.x`"), format!("`length({n})`, `max({n}.x, {n}.y)`"))
+                        } else {
+                            ("`(...).x`".to_string(), "`length(...)`, `max(v.x, v.y)`".to_string())
+                        };
+                        return Err(Self::err(
+                            e.span,
+                            format!("vectors do not compare: `{}` between {ta} and {tb}", op.symbol()),
+                            format!("{ta} {} {tb}", op.symbol()),
+                        )
+                        .also(a.span, format!("{ta}"))
+                        .also(b.span, format!("{tb}"))
+                        .help(format!(
+                            "compare one component at a time ({component}), or a scalar made of them ({reduced})"
+                        )));
                     }
                     Ok(Ty::Bool)
                 } else {
@@ -1193,9 +1210,32 @@ impl<'s, 'a> Typer<'s, 'a> {
             .note(d.sig.describe(name, d.arity)));
         }
         let tys = args.iter().map(|a| self.infer(a)).collect::<Result<Vec<_>, _>>()?;
-        let ty = f
-            .result(&tys)
-            .map_err(|m| Self::err(span, format!("type mismatch: {m}"), "in this call"))?;
+        let ty = f.result(&tys).map_err(|m| {
+            let mut diag = Self::err(span, format!("type mismatch: {m}"), "in this call");
+            // a vector where the function takes scalars: offer a component (issue 51)
+            if d.sig.takes_scalars() {
+                let vectors: Vec<(&Expr, Ty)> = args
+                    .iter()
+                    .zip(&tys)
+                    .filter(|(_, t)| matches!(t, Ty::Vec(_)))
+                    .map(|(a, t)| (a, *t))
+                    .collect();
+                for (a, t) in &vectors {
+                    diag = diag.also(a.span, format!("{t}: take one component, `.x` or `.y`"));
+                }
+                if let Some((a, _)) = vectors.first() {
+                    let example = if let ExprKind::Name(n) = &a.kind {
+                        format!("`{n}.x`")
+                    } else {
+                        "`(...).x`".to_string()
+                    };
+                    diag = diag.help(format!(
+                        "`{name}` takes scalars: pass one component of each vector, such as {example}, and call it once per axis"
+                    ));
+                }
+            }
+            diag
+        })?;
         // Abstract arguments take the type the builtin's signature gives each argument
         // (`Sig::arg_ty`): i32 or u32 where it computes in integers (conversions; min,
         // max, clamp, abs, sign and select of integers: `clamp(h, 1u, 90)` is u32
