@@ -855,14 +855,14 @@ fn compile_warns_about_rounding_and_explain_prints_the_estimate() {
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert!(r.status.success(), "{stderr}");
     assert!(
-        stderr.contains("storage rounding can move the visibility by up to 0.584") && stderr.contains("techniques/vsm.ron:24:34"),
+        stderr.contains("storage rounding can move the visibility by up to 1.758") && stderr.contains("techniques/vsm.ron:24:34"),
         "{stderr}"
     );
     let r = sshc(&["compile", "techniques/vsm.ron", "-o", &out]);
     assert!(!String::from_utf8_lossy(&r.stderr).contains("storage rounding"));
     let text = ok(&["explain", "techniques/vsm.ron"]);
     assert!(
-        text.contains("| m1 | F32 | 7.838e-6 | 3.750e-1 | 1.070e-3 | 7.263e-2 | 7.838e-6 |"),
+        text.contains("| m1 | F32 | 7.838e-6 | 8.965e-1 | 1.070e-3 | 6.796e-1 | 7.838e-6 |"),
         "{text}"
     );
     let _ = std::fs::remove_dir_all(&dir);

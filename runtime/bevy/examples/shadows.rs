@@ -234,7 +234,10 @@ fn save_frame(done: On<ReadbackComplete>, args: Res<Args>, frame: Res<Frame>, mu
     let path = out.join(format!("frame-{:03}.png", *saved));
     let size = args.size;
     if let Err(e) = std::fs::create_dir_all(out).map_err(|e| e.to_string()).and_then(|_| {
-        image::RgbaImage::from_raw(size, size, done.data.clone())
+        // rows come padded to wgpu's copy alignment (256 bytes)
+        let (row, stride) = (size as usize * 4, (size as usize * 4).next_multiple_of(256));
+        let pixels: Vec<u8> = done.data.chunks(stride).flat_map(|r| &r[..row.min(r.len())]).copied().collect();
+        image::RgbaImage::from_raw(size, size, pixels)
             .ok_or_else(|| format!("{} bytes for a {size}^2 frame", done.data.len()))?
             .save(&path)
             .map_err(|e| e.to_string())

@@ -25,7 +25,7 @@ mod render;
 
 pub use asset::{MAX_TECHNIQUE_BYTES, SshcTechnique, TechniqueError, TechniqueLoader, compile};
 pub use material::{SshcMaterial, SshcReceiver, visibility_image};
-pub use render::Status;
+pub use render::{Status, convert_mesh};
 pub use sshc_runtime;
 
 use bevy::asset::AssetApp;
@@ -51,6 +51,10 @@ pub struct SshcShadow {
     pub angular_diameter_degrees: f32,
     /// Off: Bevy's own shadow for this light, as if the component were absent.
     pub enabled: bool,
+    /// For comparison only: keep Bevy's own casters in its shadow maps, so that the
+    /// receivers show Bevy's shadow times sshc's, which is what
+    /// `PbrInput::directional_shadow_factor` alone gives (docs/bevy.md, "The shadow term").
+    pub keep_bevy_shadow: bool,
     /// The image sshc's visibility is copied into each frame, read by the receivers.
     pub visibility: Handle<Image>,
 }
@@ -64,6 +68,7 @@ impl SshcShadow {
             map_size: 1024,
             angular_diameter_degrees: 0.53,
             enabled: true,
+            keep_bevy_shadow: false,
             visibility: images.add(visibility_image(1, 1)),
         }
     }

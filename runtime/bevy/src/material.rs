@@ -61,7 +61,8 @@ pub fn visibility_image(width: u32, height: u32) -> Image {
         TextureFormat::R32Float,
         RenderAssetUsages::RENDER_WORLD | RenderAssetUsages::MAIN_WORLD,
     );
-    image.texture_descriptor.usage = TextureUsages::TEXTURE_BINDING | TextureUsages::COPY_DST;
+    // read by the receivers, copied into each frame, read back by a host that wants it
+    image.texture_descriptor.usage = TextureUsages::TEXTURE_BINDING | TextureUsages::COPY_DST | TextureUsages::COPY_SRC;
     image
 }
 
@@ -149,7 +150,7 @@ pub fn size_visibility(
 /// maps (they stay on, so that Bevy applies the receivers' factor, and hold nothing).
 pub fn clear_bevy_casters(status: Res<Status>, mut lights: Query<(Entity, &crate::SshcShadow, &mut CascadesVisibleEntities)>) {
     for (entity, shadow, mut visible) in &mut lights {
-        if !shadow.enabled || status.error(entity).is_some() {
+        if !shadow.enabled || shadow.keep_bevy_shadow || status.error(entity).is_some() {
             continue;
         }
         for cascades in visible.entities.values_mut() {

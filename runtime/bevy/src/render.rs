@@ -79,6 +79,9 @@ pub struct ExtractedLight {
     pub angle_degrees: f32,
     /// The image the receivers read sshc's visibility from.
     pub visibility: AssetId<Image>,
+    /// The technique file's load: still loading (`Some(None)`), or failed (the asset
+    /// server's error, which carries sshc's diagnostic).
+    pub failed: Option<Option<String>>,
 }
 
 /// What the extract step hands the prepare step for one frame.
@@ -110,6 +113,8 @@ pub struct SshcRender {
     views: EntityHashMap<ViewTargets>,
     /// The last error logged, so that a failing frame logs once, not every frame.
     logged: Option<String>,
+    /// The last failed reload logged.
+    reload_logged: Option<String>,
     status: Status,
     /// What prepare decided for record: the views that are ready, and the image to copy into.
     ready: Vec<(Entity, AssetId<Image>)>,
@@ -144,6 +149,7 @@ impl SshcRender {
             transforms: Vec::new(),
             views: EntityHashMap::default(),
             logged: None,
+            reload_logged: None,
             status,
             ready: Vec::new(),
             refused: HashMap::new(),
@@ -227,11 +233,16 @@ pub fn extract(
             direction: transform.back().to_array(),
             angle_degrees: s.angular_diameter_degrees,
             visibility: s.visibility.id(),
+            failed: match server.get_load_state(s.technique.id()) {
+                Some(bevy::asset::LoadState::Failed(e)) => Some(Some(e.to_string())),
+                Some(bevy::asset::LoadState::Loaded) => None,
+                _ => Some(None),
+            },
         });
 }
 
 /// A Bevy mesh as sshc's: triangle lists with positions and normals, indexed or not.
-fn convert_mesh(mesh: &Mesh) -> Result<sshc_gpu::Mesh, String> {
+pub fn convert_mesh(mesh: &Mesh) -> Result<sshc_gpu::Mesh, String> {
     use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
     if mesh.primitive_topology() != PrimitiveTopology::TriangleList {
         return Err(format!(
@@ -285,12 +296,29 @@ pub fn prepare(
     let Some(light) = extracted.light.clone() else {
         return;
     };
-    let outcome = prepare_light(render, &mut extracted, &light, &views);
+    // a file that failed to load (or to reload): a technique loaded before keeps rendering
+    let held = render.techniques.contains_key(&light.technique);
+    let outcome = match &light.failed {
+        Some(None) if !held => Err("its technique is loading".to_string()),
+        Some(Some(e)) if !held => Err(format!("its file did not load: {e}")),
+        _ => prepare_light(render, &mut extracted, &light, &views),
+    };
+    if let (Some(Some(e)), true) = (&light.failed, held) {
+        let m = format!(
+            "sshc: technique file {} did not reload, the previous version keeps rendering: {e}",
+            light.path
+        );
+        if render.reload_logged.as_ref() != Some(&m) {
+            error!("{m}");
+            render.reload_logged = Some(m);
+        }
+    }
+    let loading = matches!(light.failed, Some(None)) && !held;
     let message = outcome
         .err()
         .map(|e| format!("sshc's shadow for light {} (technique {}): {e}", light.entity, light.path));
     if message != render.logged {
-        if let Some(m) = &message {
+        if let (Some(m), false) = (&message, loading) {
             error!("{m}; Bevy's own shadow stays for this light");
         }
         render.logged = message.clone();

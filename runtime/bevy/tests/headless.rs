@@ -1,0 +1,453 @@
+//! The plugin inside a real Bevy 0.20 app, headless on lavapipe: a small scene (a ground,
+//! a box, a sphere) under a sun with sshc's shadow, rendered into an image and read back.
+//! Each capture is an app of its own in a process of its own (this test binary run again
+//! on the hidden test `capture_child`: two Bevy apps made one after the other in one
+//! process were seen to read back the same frame), stepped frame by frame until the
+//! technique has loaded, the pipelines are ready and the read-backs have settled.
+
+use bevy::app::AppExit;
+use bevy::asset::RenderAssetUsages;
+use bevy::camera::RenderTarget;
+use bevy::prelude::*;
+use bevy::render::gpu_readback::{Readback, ReadbackComplete};
+use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
+use bevy::window::ExitCondition;
+use bevy::winit::WinitPlugin;
+use bevy_sshc::{SshcShadow, SshcShadowsPlugin, Status};
+use std::sync::{Arc, Mutex};
+
+/// The frame's size: rows of 128 pixels of 4 bytes are already aligned for read-back.
+const SIZE: u32 = 128;
+/// Frames stepped after sshc first shades the light before the read-backs are looked at:
+/// Bevy compiles its pipelines in the background, so the first frames may lack a mesh.
+/// The scene and sun stand still, so the frames then settle: a run ends when SETTLE
+/// read-backs in a row are the same.
+const SETTLE: u32 = 10;
+/// Frames at most before a test gives up (lavapipe: about 20 ms a frame here).
+const MAX_FRAMES: u32 = 600;
+
+/// One run's set-up.
+#[derive(Clone, Debug)]
+struct Run {
+    technique: String,
+    enabled: bool,
+    /// The sun's turn about y, degrees (its elevation is 40 degrees).
+    turn: f32,
+    sun_degrees: f32,
+    /// Bevy's shadow maps for the light (on unless a test turns them off).
+    maps: bool,
+    illuminance: f32,
+    keep_bevy_shadow: bool,
+}
+
+impl Run {
+    fn of(technique: &str) -> Run {
+        Run {
+            technique: format!("techniques/{technique}.ron"),
+            enabled: true,
+            turn: 30.0,
+            sun_degrees: 4.0,
+            maps: true,
+            illuminance: 8000.0,
+            keep_bevy_shadow: false,
+        }
+    }
+}
+
+/// What a run read back, and the main world's state to compute the same frame without Bevy.
+#[derive(Default, Clone)]
+struct Captured {
+    rgba: Vec<u8>,
+    visibility: Vec<f32>,
+    /// sshc's error for the light at the end (`None`: sshc shades it).
+    status: Option<String>,
+}
+
+/// The last read-backs of the frame and of the visibility, and how many of each arrived.
+#[derive(Resource, Clone, Default)]
+struct Shared(Arc<Mutex<(Vec<u8>, Vec<u8>, u64, u64)>>);
+
+fn sun(turn: f32) -> Transform {
+    let t = turn.to_radians();
+    let to_sun = Vec3::new(t.cos() * 0.77, 0.64, t.sin() * 0.77);
+    Transform::from_translation(to_sun * 10.0).looking_at(Vec3::ZERO, Vec3::Y)
+}
+
+fn app(run: &Run) -> (App, Shared) {
+    let mut app = App::new();
+    app.add_plugins(
+        DefaultPlugins
+            .set(AssetPlugin {
+                file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/../..").into(),
+                watch_for_changes_override: Some(false),
+                ..default()
+            })
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..default()
+            })
+            .set(bevy::render::RenderPlugin {
+                // every pipeline ready in the frame that first needs it: a frame read back
+                // is whole (with background compilation the first ones lack meshes)
+                synchronous_pipeline_compilation: true,
+                ..default()
+            })
+            .disable::<WinitPlugin>(),
+    )
+    .add_plugins(SshcShadowsPlugin);
+    let shared = Shared::default();
+    app.insert_resource(shared.clone());
+    let run = run.clone();
+    app.add_systems(
+        Startup,
+        move |mut commands: Commands,
+              server: Res<AssetServer>,
+              mut meshes: ResMut<Assets<Mesh>>,
+              mut materials: ResMut<Assets<StandardMaterial>>,
+              mut images: ResMut<Assets<Image>>| {
+            let grey = materials.add(StandardMaterial {
+                base_color: Color::srgb(0.8, 0.8, 0.8),
+                perceptual_roughness: 1.0,
+                ..default()
+            });
+            commands.spawn((
+                Mesh3d(meshes.add(Plane3d::default().mesh().size(6.0, 6.0))),
+                MeshMaterial3d(grey.clone()),
+            ));
+            commands.spawn((
+                Mesh3d(meshes.add(Cuboid::new(0.8, 1.2, 0.8))),
+                MeshMaterial3d(grey.clone()),
+                Transform::from_xyz(-0.4, 0.6, 0.0),
+            ));
+            commands.spawn((
+                Mesh3d(meshes.add(Sphere::new(0.4).mesh().uv(24, 12))),
+                MeshMaterial3d(grey),
+                Transform::from_xyz(0.9, 0.9, 0.6),
+            ));
+            let mut shadow = SshcShadow::new(server.load(run.technique.clone()), &mut images);
+            shadow.enabled = run.enabled;
+            shadow.keep_bevy_shadow = run.keep_bevy_shadow;
+            shadow.angular_diameter_degrees = run.sun_degrees;
+            shadow.map_size = 512;
+            let visibility = shadow.visibility.clone();
+            commands.spawn((
+                DirectionalLight {
+                    shadow_maps_enabled: run.maps,
+                    illuminance: run.illuminance,
+                    ..default()
+                },
+                sun(run.turn),
+                shadow,
+            ));
+            let mut target = Image::new_fill(
+                Extent3d {
+                    width: SIZE,
+                    height: SIZE,
+                    depth_or_array_layers: 1,
+                },
+                TextureDimension::D2,
+                &[0, 0, 0, 255],
+                TextureFormat::Rgba8UnormSrgb,
+                RenderAssetUsages::default(),
+            );
+            target.texture_descriptor.usage = TextureUsages::RENDER_ATTACHMENT | TextureUsages::COPY_SRC | TextureUsages::TEXTURE_BINDING;
+            let target = images.add(target);
+            commands.spawn((
+                Camera3d::default(),
+                RenderTarget::Image(target.clone().into()),
+                Transform::from_xyz(-2.5, 3.0, 3.5).looking_at(Vec3::new(0.0, 0.3, 0.0), Vec3::Y),
+            ));
+            commands
+                .spawn(Readback::texture(target))
+                .observe(|done: On<ReadbackComplete>, shared: Res<Shared>| {
+                    if let Ok(mut s) = shared.0.lock() {
+                        s.0 = done.data.clone();
+                        s.2 += 1;
+                    }
+                });
+            commands
+                .spawn(Readback::texture(visibility))
+                .observe(|done: On<ReadbackComplete>, shared: Res<Shared>| {
+                    if let Ok(mut s) = shared.0.lock() {
+                        s.1 = done.data.clone();
+                        s.3 += 1;
+                    }
+                });
+        },
+    );
+    (app, shared)
+}
+
+/// Step `app` until sshc shades the light (or, `expect_error`, until it reports an error
+/// for it) and SETTLE frames more; the read-backs then.
+fn settle(app: &mut App, shared: &Shared, expect_error: bool) -> Captured {
+    app.finish();
+    app.cleanup();
+    let mut since = None;
+    let (mut last, mut counts, mut same) = ((Vec::new(), Vec::new()), (0, 0), 0);
+    for frame in 0..MAX_FRAMES {
+        app.update();
+        if let Some(AppExit::Error(e)) = app.should_exit() {
+            panic!("the app exited with {e:?}");
+        }
+        let status = {
+            let world = app.world_mut();
+            let light = world.query_filtered::<Entity, With<SshcShadow>>().iter(world).next();
+            light.and_then(|l| world.resource::<Status>().error(l))
+        };
+        // "loading" is not the outcome looked for either way
+        let decided = match &status {
+            Some(e) => expect_error && !e.contains("is loading"),
+            None => !expect_error,
+        };
+        if decided && since.is_none() {
+            since = Some(frame);
+        }
+        if since.is_some_and(|s| frame >= s + SETTLE) {
+            let (rgba, vis, frames, visibilities) = shared.0.lock().map(|s| s.clone()).unwrap_or_default();
+            // only a new read-back of each counts towards settling
+            if frames > counts.0 && visibilities > counts.1 {
+                let now = (rgba.clone(), vis.clone());
+                same = if now == last { same + 1 } else { 0 };
+                last = now;
+                counts = (frames, visibilities);
+            }
+            if same >= SETTLE && rgba.len() == (SIZE * SIZE * 4) as usize {
+                return Captured {
+                    rgba,
+                    visibility: vis.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+                    status,
+                };
+            }
+        }
+    }
+    panic!("no settled frame within {MAX_FRAMES} frames");
+}
+
+/// Capture `run` in a child process: this binary's `capture_child` test, given the run in
+/// the environment, writes what it read back into a file.
+fn capture(run: &Run, expect_error: bool) -> Captured {
+    let dir = std::env::temp_dir().join(format!("bevy-sshc-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join(format!(
+        "capture-{}.bin",
+        CAPTURES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
+    let spec = format!(
+        "{}|{}|{}|{}|{}|{}|{}|{}",
+        run.technique, run.enabled, run.turn, run.sun_degrees, run.maps, run.illuminance, run.keep_bevy_shadow, expect_error
+    );
+    let status = std::process::Command::new(std::env::current_exe().unwrap())
+        .args([
+            "capture_child",
+            "--exact",
+            "--include-ignored",
+            "--nocapture",
+            "--test-threads",
+            "1",
+        ])
+        .env("BEVY_SSHC_CAPTURE", &spec)
+        .env("BEVY_SSHC_OUT", &out)
+        .status()
+        .unwrap();
+    assert!(status.success(), "the capture of {run:?} failed");
+    let bytes = std::fs::read(&out).unwrap();
+    let _ = std::fs::remove_file(&out);
+    let word = |k: usize| u64::from_le_bytes(bytes[8 * k..8 * k + 8].try_into().unwrap()) as usize;
+    let (n_rgba, n_vis, n_status) = (word(0), word(1), word(2));
+    let mut at = 24;
+    let rgba = bytes[at..at + n_rgba].to_vec();
+    at += n_rgba;
+    let visibility = bytes[at..at + n_vis]
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    at += n_vis;
+    let status = (n_status > 0).then(|| String::from_utf8_lossy(&bytes[at..at + n_status - 1]).into_owned());
+    Captured { rgba, visibility, status }
+}
+
+static CAPTURES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// The child side of [`capture`]: not a test of its own (ignored unless run by it).
+#[test]
+#[ignore = "run by `capture` in a process of its own"]
+fn capture_child() {
+    let (Ok(spec), Ok(out)) = (std::env::var("BEVY_SSHC_CAPTURE"), std::env::var("BEVY_SSHC_OUT")) else {
+        return;
+    };
+    let f: Vec<&str> = spec.split('|').collect();
+    let run = Run {
+        technique: f[0].into(),
+        enabled: f[1] == "true",
+        turn: f[2].parse().unwrap(),
+        sun_degrees: f[3].parse().unwrap(),
+        maps: f[4] == "true",
+        illuminance: f[5].parse().unwrap(),
+        keep_bevy_shadow: f[6] == "true",
+    };
+    let (mut app, shared) = app(&run);
+    let c = settle(&mut app, &shared, f[7] == "true");
+    if let Ok(dir) = std::env::var("BEVY_SSHC_DUMP") {
+        let name = spec.replace(['|', '/', '.'], "_");
+        let _ = image::RgbaImage::from_raw(SIZE, SIZE, c.rgba.clone()).map(|i| i.save(format!("{dir}/{name}.png")));
+        let v: Vec<u8> = c.visibility.iter().map(|x| (x.clamp(0.0, 1.0) * 255.0) as u8).collect();
+        let _ = image::GrayImage::from_raw(SIZE, SIZE, v).map(|i| i.save(format!("{dir}/{name}-vis.png")));
+    }
+    let status = c.status.map(|s| format!("{s}\0")).unwrap_or_default();
+    let vis: Vec<u8> = c.visibility.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let mut bytes = Vec::new();
+    for n in [c.rgba.len(), vis.len(), status.len()] {
+        bytes.extend((n as u64).to_le_bytes());
+    }
+    bytes.extend(&c.rgba);
+    bytes.extend(&vis);
+    bytes.extend(status.as_bytes());
+    std::fs::write(out, bytes).unwrap();
+}
+
+/// Pixels whose visibility is strictly between 0 and 1 (a penumbra), and those at 0.
+fn penumbra_and_umbra(v: &[f32]) -> (usize, usize) {
+    (
+        v.iter().filter(|&&x| x > 0.0 && x < 1.0).count(),
+        v.iter().filter(|&&x| x == 0.0).count(),
+    )
+}
+
+#[test]
+fn sshc_shades_the_sun_and_its_shadow_moves_with_it() {
+    let a = capture(&Run::of("pcss"), false);
+    assert_eq!(a.visibility.len(), (SIZE * SIZE) as usize);
+    let (penumbra, umbra) = penumbra_and_umbra(&a.visibility);
+    assert!(
+        umbra > 100 && penumbra > 100,
+        "a shadow with an umbra and a penumbra: {umbra} and {penumbra} pixels"
+    );
+    let b = capture(
+        &Run {
+            turn: 120.0,
+            ..Run::of("pcss")
+        },
+        false,
+    );
+    let moved = a
+        .visibility
+        .iter()
+        .zip(&b.visibility)
+        .filter(|(x, y)| (*x - *y).abs() > 0.5)
+        .count();
+    assert!(moved > 200, "the sun turned 90 degrees and {moved} pixels changed by more than 0.5");
+    // the shaded frame shows it: darker where sshc's visibility is 0 than where it is 1
+    let luma = |c: &Captured, want: f32| {
+        let px: Vec<f32> = c
+            .visibility
+            .iter()
+            .zip(c.rgba.chunks_exact(4))
+            .filter(|(v, _)| **v == want)
+            .map(|(_, p)| f32::from(p[0]) + f32::from(p[1]) + f32::from(p[2]))
+            .collect();
+        px.iter().sum::<f32>() / px.len().max(1) as f32
+    };
+    assert!(
+        luma(&a, 0.0) < 0.8 * luma(&a, 1.0),
+        "the receivers' colour follows sshc's visibility"
+    );
+}
+
+#[test]
+fn switching_techniques_changes_the_penumbra() {
+    let pcss = capture(&Run::of("pcss"), false);
+    let hard = capture(&Run::of("hard"), false);
+    let (p_pcss, _) = penumbra_and_umbra(&pcss.visibility);
+    let (p_hard, _) = penumbra_and_umbra(&hard.visibility);
+    assert!(
+        p_pcss > 4 * p_hard.max(1),
+        "PCSS's penumbra ({p_pcss} pixels) is wider than hard shadows' ({p_hard})"
+    );
+}
+
+#[test]
+fn a_missing_or_mismatched_technique_logs_and_leaves_bevys_own_shadow() {
+    let bevy = capture(
+        &Run {
+            enabled: false,
+            ..Run::of("pcss")
+        },
+        false,
+    );
+    for (technique, says) in [("missing-technique", "did not load"), ("linear-light", "light")] {
+        let c = capture(&Run::of(technique), true);
+        let e = c.status.clone().unwrap_or_default();
+        eprintln!("{technique}: {e}");
+        assert!(
+            e.contains(says) && e.contains(&format!("techniques/{technique}.ron")),
+            "{technique}: {e}"
+        );
+        assert!(c.rgba == bevy.rgba, "{technique}: the frame is not Bevy's own shadow");
+        assert!(
+            c.visibility.iter().all(|&v| v == 1.0),
+            "{technique}: the receivers' factor is not 1"
+        );
+    }
+}
+
+/// What Bevy 0.20's `directional_shadow_factor` does, and what the plugin applies
+/// (docs/bevy.md, "The shadow term"). Frames of one scene and sun:
+/// - `unshadowed`: the light with no shadow at all (sshc off, Bevy's maps off);
+/// - `unlit`: the light's illuminance 0 (the rest of the lighting);
+/// - `sshc`: the plugin as it runs (Bevy's maps on, with no caster in them);
+/// - `product`: the factor alone (`keep_bevy_shadow`: Bevy's casters kept).
+/// Where sshc's visibility is 1 its frame is the unshadowed one, and where it is 0 the
+/// unlit one, bit for bit: the term applied is sshc's alone. The factor alone multiplies
+/// Bevy's own shadow: in sshc's penumbra, where Bevy's harder shadow is already dark,
+/// `product` is darker than `sshc`.
+#[test]
+fn the_shadow_term_applied_is_sshcs_visibility_alone() {
+    let run = Run::of("pcss");
+    let sshc = capture(&run, false);
+    let unshadowed = capture(
+        &Run {
+            enabled: false,
+            maps: false,
+            ..run.clone()
+        },
+        false,
+    );
+    let unlit = capture(
+        &Run {
+            enabled: false,
+            illuminance: 0.0,
+            ..run.clone()
+        },
+        false,
+    );
+    let product = capture(
+        &Run {
+            keep_bevy_shadow: true,
+            ..run.clone()
+        },
+        false,
+    );
+    let pixels = |c: &Captured| c.rgba.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
+    let (s, u, d, p) = (pixels(&sshc), pixels(&unshadowed), pixels(&unlit), pixels(&product));
+    let (mut lit, mut dark, mut darker) = (0, 0, 0);
+    for (k, &v) in sshc.visibility.iter().enumerate() {
+        if v == 1.0 {
+            assert_eq!(s[k], u[k], "pixel {k}: sshc's visibility is 1, the frame is not the unshadowed one");
+            lit += 1;
+        } else if v == 0.0 {
+            assert_eq!(s[k], d[k], "pixel {k}: sshc's visibility is 0, the frame is not the unlit one");
+            dark += 1;
+        } else {
+            // the factor alone: Bevy's shadow on top of sshc's, darker where it is dark
+            darker += usize::from(p[k].iter().map(|&c| u32::from(c)).sum::<u32>() < s[k].iter().map(|&c| u32::from(c)).sum::<u32>());
+        }
+    }
+    eprintln!("{lit} pixels at visibility 1, {dark} at 0; with Bevy's casters kept, {darker} of the penumbra's are darker");
+    assert!(lit > 1000 && dark > 100, "{lit} lit and {dark} dark pixels: too few to test");
+    assert!(
+        darker > 0,
+        "Bevy's own shadow never darkened sshc's penumbra: the factor alone was not measured"
+    );
+}
