@@ -61,6 +61,9 @@ struct Captured {
     visibility: Vec<f32>,
     /// sshc's error for the light at the end (`None`: sshc shades it).
     status: Option<String>,
+    /// The same frame by sshc's runtime alone, on its own device, from the main world's
+    /// meshes, transforms, camera and light (empty where sshc does not shade the light).
+    alone: Vec<f32>,
 }
 
 /// The last read-backs of the frame and of the visibility, and how many of each arrived.
@@ -216,8 +219,9 @@ fn settle(app: &mut App, shared: &Shared, expect_error: bool) -> Captured {
             if same >= SETTLE && rgba.len() == (SIZE * SIZE * 4) as usize {
                 return Captured {
                     rgba,
-                    visibility: vis.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+                    visibility: floats(&vis),
                     status,
+                    alone: Vec::new(),
                 };
             }
         }
@@ -255,17 +259,102 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
     let bytes = std::fs::read(&out).unwrap();
     let _ = std::fs::remove_file(&out);
     let word = |k: usize| u64::from_le_bytes(bytes[8 * k..8 * k + 8].try_into().unwrap()) as usize;
-    let (n_rgba, n_vis, n_status) = (word(0), word(1), word(2));
-    let mut at = 24;
+    let (n_rgba, n_vis, n_status, n_alone) = (word(0), word(1), word(2), word(3));
+    let mut at = 32;
     let rgba = bytes[at..at + n_rgba].to_vec();
     at += n_rgba;
-    let visibility = bytes[at..at + n_vis]
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect();
+    let visibility = floats(&bytes[at..at + n_vis]);
     at += n_vis;
     let status = (n_status > 0).then(|| String::from_utf8_lossy(&bytes[at..at + n_status - 1]).into_owned());
-    Captured { rgba, visibility, status }
+    at += n_status;
+    let alone = floats(&bytes[at..at + n_alone]);
+    Captured {
+        rgba,
+        visibility,
+        status,
+        alone,
+    }
+}
+
+fn floats(b: &[u8]) -> Vec<f32> {
+    b.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
+}
+
+/// The frame the plugin shaded, by sshc's runtime alone: the main world's mesh entities (in
+/// the plugin's order, by entity; every one moving, as the plugin adds them), its camera
+/// (Bevy's reverse-Z projection mapped by `Camera::from_reverse_z`, the product formed as
+/// the plugin forms it) and its sun, fitted to the casters, on a device of its own.
+fn alone(app: &mut App, run: &Run) -> Vec<f32> {
+    use sshc_runtime::gpu::{
+        Camera as SshcCamera, Fit, FrameState, Geometry, Gpu, Instance, LightInputs, Scene, Sizes, Targets, Technique,
+    };
+    let world = app.world_mut();
+    let mut entities: Vec<(Entity, AssetId<Mesh>, [f32; 16], bool, bool)> = world
+        .query::<(
+            Entity,
+            &Mesh3d,
+            &GlobalTransform,
+            Has<bevy::light::NotShadowCaster>,
+            Has<bevy::light::NotShadowReceiver>,
+        )>()
+        .iter(world)
+        .map(|(e, m, t, nc, nr)| (e, m.0.id(), t.to_matrix().to_cols_array(), !nc, !nr))
+        .collect();
+    entities.sort_by_key(|e| e.0);
+    let meshes = world.resource::<Assets<Mesh>>();
+    let mut geometry = Geometry::default();
+    let mut index = std::collections::HashMap::new();
+    for (e, id, transform, casts, receives) in &entities {
+        let mesh = *index.entry(*id).or_insert_with(|| {
+            geometry.meshes.push(bevy_sshc::convert_mesh(meshes.get(*id).unwrap()).unwrap());
+            geometry.meshes.len() - 1
+        });
+        geometry.instances.push(Instance {
+            name: format!("{e}"),
+            mesh,
+            transform: *transform,
+            casts: *casts,
+            receives: *receives,
+            moves: true,
+        });
+    }
+    let (camera, view) = world
+        .query::<(&bevy::camera::Camera, &GlobalTransform)>()
+        .iter(world)
+        .next()
+        .unwrap();
+    let clip_from_world = camera.clip_from_view() * view.to_matrix().inverse();
+    let cam = SshcCamera::from_reverse_z(clip_from_world.to_cols_array(), view.translation().to_array());
+    let (light, shadow) = world.query::<(&GlobalTransform, &SshcShadow)>().iter(world).next().unwrap();
+    let sun = sshc_runtime::light::Light::DistantDisk {
+        direction: sshc_runtime::light::glam::Vec3::from_array(light.back().to_array()),
+        angle_degrees: run.sun_degrees,
+    };
+    let map = shadow.map_size;
+    let compiled = world
+        .resource::<Assets<bevy_sshc::SshcTechnique>>()
+        .get(&shadow.technique)
+        .unwrap()
+        .compiled
+        .clone();
+    let gpu = Gpu::new().unwrap();
+    let technique = Technique::new(
+        &gpu,
+        sshc_runtime::graph::ValidGraph::try_from(compiled.graph).unwrap(),
+        compiled.shaders,
+    )
+    .unwrap();
+    let mut scene = Scene::upload(&gpu, &geometry, &[&technique]).unwrap();
+    let first = LightInputs::fit(&sun, scene.boxes(), Fit::Casters, map, 0).unwrap();
+    let mut state = FrameState::new(&technique, cam, vec![first]);
+    let sizes = Sizes {
+        camera: (SIZE, SIZE),
+        shadow: map,
+    };
+    let mut targets = Targets::new(&technique, &scene, &state, sizes).unwrap();
+    state.lights[0] = targets.fit_light(&scene, 0, &sun, Fit::Casters).unwrap();
+    targets.run_frame(&mut scene, &state).unwrap();
+    targets.inspect().read_visibilities().unwrap().rgba.iter().map(|p| p[0]).collect()
 }
 
 static CAPTURES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
@@ -288,7 +377,10 @@ fn capture_child() {
         keep_bevy_shadow: f[6] == "true",
     };
     let (mut app, shared) = app(&run);
-    let c = settle(&mut app, &shared, f[7] == "true");
+    let mut c = settle(&mut app, &shared, f[7] == "true");
+    if c.status.is_none() && run.enabled {
+        c.alone = alone(&mut app, &run);
+    }
     if let Ok(dir) = std::env::var("BEVY_SSHC_DUMP") {
         let name = spec.replace(['|', '/', '.'], "_");
         let _ = image::RgbaImage::from_raw(SIZE, SIZE, c.rgba.clone()).map(|i| i.save(format!("{dir}/{name}.png")));
@@ -298,12 +390,14 @@ fn capture_child() {
     let status = c.status.map(|s| format!("{s}\0")).unwrap_or_default();
     let vis: Vec<u8> = c.visibility.iter().flat_map(|x| x.to_le_bytes()).collect();
     let mut bytes = Vec::new();
-    for n in [c.rgba.len(), vis.len(), status.len()] {
+    let alone: Vec<u8> = c.alone.iter().flat_map(|x| x.to_le_bytes()).collect();
+    for n in [c.rgba.len(), vis.len(), status.len(), alone.len()] {
         bytes.extend((n as u64).to_le_bytes());
     }
     bytes.extend(&c.rgba);
     bytes.extend(&vis);
     bytes.extend(status.as_bytes());
+    bytes.extend(&alone);
     std::fs::write(out, bytes).unwrap();
 }
 
@@ -450,4 +544,31 @@ fn the_shadow_term_applied_is_sshcs_visibility_alone() {
         darker > 0,
         "Bevy's own shadow never darkened sshc's penumbra: the factor alone was not measured"
     );
+}
+
+/// For one frame, sshc's visibility inside Bevy (copied into the receivers' image and read
+/// back) equals sshc's runtime alone on the same meshes, camera, light and map size, bit
+/// for bit: the same shaders on the same f32 inputs (the plugin's scene is changed in place
+/// mesh by mesh and instance by instance, which frames as a fresh upload bit for bit:
+/// `a_mesh_or_instance_added_or_removed_in_place_frames_as_a_fresh_upload`), on the same
+/// kind of device (lavapipe, two devices here). So the tolerance is 0. For PCSS, and for
+/// penumbra limit maps (Geometry passes: edges, generated primitives).
+#[test]
+fn sshc_inside_bevy_equals_the_runtime_alone() {
+    for technique in ["pcss", "penumbra-limit-maps"] {
+        let c = capture(&Run::of(technique), false);
+        assert_eq!(c.alone.len(), c.visibility.len(), "{technique}");
+        let differ = c
+            .visibility
+            .iter()
+            .zip(&c.alone)
+            .filter(|(a, b)| a.to_bits() != b.to_bits())
+            .count();
+        assert_eq!(differ, 0, "{technique}: {differ} pixels differ from the runtime alone");
+        let (penumbra, umbra) = penumbra_and_umbra(&c.alone);
+        assert!(
+            penumbra > 50 && umbra > 50,
+            "{technique}: a shadow to compare ({umbra} umbra, {penumbra} penumbra pixels)"
+        );
+    }
 }
