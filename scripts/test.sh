@@ -100,6 +100,11 @@ else
     linted cargo test --workspace --no-fail-fast
 fi
 
+phase "bevy (runtime/bevy: the Bevy 0.20 plugin, a workspace of its own)"
+# Its own build (Bevy is large: only the features the plugin, its tests and its headless
+# example need), lint, headless tests on lavapipe and the example's frames (docs/bevy.md).
+scripts/bevy-test.sh
+
 phase "slurm (a single-node cluster runs a sharded sweep)"
 # A real Slurm cluster on this machine (scripts/slurm-local.sh): the job scripts of `sshc
 # sweep --slurm` for 4 shards, submitted, waited for and merged, against the unsharded

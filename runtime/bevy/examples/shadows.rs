@@ -9,6 +9,8 @@
 //! frame's width and height, `--sun-degrees D` the sun's angular diameter (3 by default:
 //! a wide penumbra, to see it at this size).
 //!
+//! The windowed mode needs the `window` feature (`--features window`).
+//!
 //! Every build of this crate passes `--ignore-rust-version` (Bevy 0.20 declares Rust
 //! 1.97.1; it builds on 1.95):
 //! `cargo run --ignore-rust-version --example shadows -- --frames 4 --out out/bevy`
@@ -19,8 +21,8 @@ use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
+use bevy::render::view::Tonemapping;
 use bevy::window::ExitCondition;
-use bevy::winit::WinitPlugin;
 use bevy_sshc::{SshcShadow, SshcShadowsPlugin, SshcTechnique};
 use std::path::PathBuf;
 
@@ -99,20 +101,29 @@ fn main() -> AppExit {
     let mut app = App::new();
     match args.frames {
         Some(_) => {
-            app.add_plugins(
-                DefaultPlugins
-                    .set(assets)
-                    .set(WindowPlugin {
-                        primary_window: None,
-                        exit_condition: ExitCondition::DontExit,
-                        ..default()
-                    })
-                    .disable::<WinitPlugin>(),
-            )
-            .add_plugins(ScheduleRunnerPlugin::run_loop(std::time::Duration::ZERO));
+            let plugins = DefaultPlugins
+                .set(assets)
+                .set(WindowPlugin {
+                    primary_window: None,
+                    exit_condition: ExitCondition::DontExit,
+                    ..default()
+                })
+                // every pipeline ready in the frame that needs it: no frame lacks a mesh
+                .set(bevy::render::RenderPlugin {
+                    synchronous_pipeline_compilation: true,
+                    ..default()
+                });
+            #[cfg(feature = "window")]
+            let plugins = plugins.disable::<bevy::winit::WinitPlugin>();
+            app.add_plugins(plugins)
+                .add_plugins(ScheduleRunnerPlugin::run_loop(std::time::Duration::ZERO));
+        }
+        None if cfg!(feature = "window") => {
+            app.add_plugins(DefaultPlugins.set(assets)).add_systems(Update, keys);
         }
         None => {
-            app.add_plugins(DefaultPlugins.set(assets)).add_systems(Update, keys);
+            eprintln!("error: the windowed example needs the `window` feature (`--features window`); headless: --frames N --out DIR");
+            return AppExit::error();
         }
     }
     app.add_plugins(SshcShadowsPlugin)
@@ -198,7 +209,13 @@ fn setup(
             );
             image.texture_descriptor.usage = TextureUsages::RENDER_ATTACHMENT | TextureUsages::COPY_SRC | TextureUsages::TEXTURE_BINDING;
             let target = images.add(image);
-            commands.spawn((Camera3d::default(), RenderTarget::Image(target.clone().into()), eye));
+            // a tonemapper that needs no tables (Bevy's default reads them: feature `window`)
+            commands.spawn((
+                Camera3d::default(),
+                Tonemapping::Reinhard,
+                RenderTarget::Image(target.clone().into()),
+                eye,
+            ));
             commands.spawn(Readback::texture(target)).observe(save_frame);
         }
         None => {
@@ -252,7 +269,7 @@ fn save_frame(done: On<ReadbackComplete>, args: Res<Args>, frame: Res<Frame>, mu
     }
 }
 
-/// Frames rendered before the first one saved (pipelines compiling, the technique loading).
+/// Frames rendered before the first one saved (the technique loading and compiling).
 const WARM_FRAMES: u32 = 30;
 
 fn keys(

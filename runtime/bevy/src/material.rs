@@ -72,7 +72,6 @@ pub struct Swapped(HashMap<AssetId<StandardMaterial>, Handle<SshcMaterial>>);
 
 /// Receivers of a light with sshc's shadow: their `StandardMaterial` is swapped for the same
 /// material extended ([`SshcMaterial`]); a `StandardMaterial` changed later is carried over.
-#[allow(clippy::type_complexity)]
 pub fn swap_materials(
     mut commands: Commands,
     mut swapped: ResMut<Swapped>,

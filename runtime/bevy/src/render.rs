@@ -163,7 +163,11 @@ impl SshcRender {
 }
 
 /// The extract step (main world read through `Extract`).
-#[allow(clippy::type_complexity)]
+#[expect(
+    clippy::type_complexity,
+    clippy::too_many_arguments,
+    reason = "a Bevy system takes its world access as parameters"
+)]
 pub fn extract(
     mut out: ResMut<Extracted>,
     render: Option<Res<SshcRender>>,

@@ -11,8 +11,8 @@ use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
+use bevy::render::view::Tonemapping;
 use bevy::window::ExitCondition;
-use bevy::winit::WinitPlugin;
 use bevy_sshc::{SshcShadow, SshcShadowsPlugin, Status};
 use std::sync::{Arc, Mutex};
 
@@ -38,6 +38,8 @@ struct Run {
     maps: bool,
     illuminance: f32,
     keep_bevy_shadow: bool,
+    /// After the first settled frame: a box spawned, and the frame settled again.
+    spawn: bool,
 }
 
 impl Run {
@@ -50,6 +52,7 @@ impl Run {
             maps: true,
             illuminance: 8000.0,
             keep_bevy_shadow: false,
+            spawn: false,
         }
     }
 }
@@ -68,7 +71,13 @@ struct Captured {
 
 /// The last read-backs of the frame and of the visibility, and how many of each arrived.
 #[derive(Resource, Clone, Default)]
-struct Shared(Arc<Mutex<(Vec<u8>, Vec<u8>, u64, u64)>>);
+struct Shared(Arc<Mutex<Readbacks>>);
+
+/// The frame's bytes, the visibility's, and the count of each read back.
+type Readbacks = (Vec<u8>, Vec<u8>, u64, u64);
+
+/// A mesh entity as the plugin extracts it: entity, mesh, transform, casts, receives.
+type Extracted = (Entity, AssetId<Mesh>, [f32; 16], bool, bool);
 
 fn sun(turn: f32) -> Transform {
     let t = turn.to_radians();
@@ -95,8 +104,7 @@ fn app(run: &Run) -> (App, Shared) {
                 // is whole (with background compilation the first ones lack meshes)
                 synchronous_pipeline_compilation: true,
                 ..default()
-            })
-            .disable::<WinitPlugin>(),
+            }),
     )
     .add_plugins(SshcShadowsPlugin);
     let shared = Shared::default();
@@ -158,6 +166,8 @@ fn app(run: &Run) -> (App, Shared) {
             let target = images.add(target);
             commands.spawn((
                 Camera3d::default(),
+                // no tonemapping tables in this build (Bevy's default reads them)
+                Tonemapping::Reinhard,
                 RenderTarget::Image(target.clone().into()),
                 Transform::from_xyz(-2.5, 3.0, 3.5).looking_at(Vec3::new(0.0, 0.3, 0.0), Vec3::Y),
             ));
@@ -179,14 +189,14 @@ fn app(run: &Run) -> (App, Shared) {
                 });
         },
     );
+    app.finish();
+    app.cleanup();
     (app, shared)
 }
 
 /// Step `app` until sshc shades the light (or, `expect_error`, until it reports an error
 /// for it) and SETTLE frames more; the read-backs then.
 fn settle(app: &mut App, shared: &Shared, expect_error: bool) -> Captured {
-    app.finish();
-    app.cleanup();
     let mut since = None;
     let (mut last, mut counts, mut same) = ((Vec::new(), Vec::new()), (0, 0), 0);
     for frame in 0..MAX_FRAMES {
@@ -239,8 +249,8 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
         CAPTURES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
     let spec = format!(
-        "{}|{}|{}|{}|{}|{}|{}|{}",
-        run.technique, run.enabled, run.turn, run.sun_degrees, run.maps, run.illuminance, run.keep_bevy_shadow, expect_error
+        "{}|{}|{}|{}|{}|{}|{}|{}|{}",
+        run.technique, run.enabled, run.turn, run.sun_degrees, run.maps, run.illuminance, run.keep_bevy_shadow, expect_error, run.spawn
     );
     let status = std::process::Command::new(std::env::current_exe().unwrap())
         .args([
@@ -289,7 +299,7 @@ fn alone(app: &mut App, run: &Run) -> Vec<f32> {
         Camera as SshcCamera, Fit, FrameState, Geometry, Gpu, Instance, LightInputs, Scene, Sizes, Targets, Technique,
     };
     let world = app.world_mut();
-    let mut entities: Vec<(Entity, AssetId<Mesh>, [f32; 16], bool, bool)> = world
+    let mut entities: Vec<Extracted> = world
         .query::<(
             Entity,
             &Mesh3d,
@@ -375,9 +385,20 @@ fn capture_child() {
         maps: f[4] == "true",
         illuminance: f[5].parse().unwrap(),
         keep_bevy_shadow: f[6] == "true",
+        spawn: f[8] == "true",
     };
     let (mut app, shared) = app(&run);
     let mut c = settle(&mut app, &shared, f[7] == "true");
+    if run.spawn {
+        // a box spawned beside the others, with a StandardMaterial as a game gives it
+        let before = c.visibility.clone();
+        let world = app.world_mut();
+        let mesh = world.resource_mut::<Assets<Mesh>>().add(Cuboid::new(0.5, 0.5, 0.5));
+        let material = world.resource_mut::<Assets<StandardMaterial>>().add(StandardMaterial::default());
+        world.spawn((Mesh3d(mesh), MeshMaterial3d(material), Transform::from_xyz(1.3, 0.25, -1.0)));
+        c = settle(&mut app, &shared, false);
+        assert!(c.visibility != before, "the spawned box changed nothing");
+    }
     if c.status.is_none() && run.enabled {
         c.alone = alone(&mut app, &run);
     }
@@ -492,6 +513,7 @@ fn a_missing_or_mismatched_technique_logs_and_leaves_bevys_own_shadow() {
 /// - `unlit`: the light's illuminance 0 (the rest of the lighting);
 /// - `sshc`: the plugin as it runs (Bevy's maps on, with no caster in them);
 /// - `product`: the factor alone (`keep_bevy_shadow`: Bevy's casters kept).
+///
 /// Where sshc's visibility is 1 its frame is the unshadowed one, and where it is 0 the
 /// unlit one, bit for bit: the term applied is sshc's alone. The factor alone multiplies
 /// Bevy's own shadow: in sshc's penumbra, where Bevy's harder shadow is already dark,
@@ -571,4 +593,26 @@ fn sshc_inside_bevy_equals_the_runtime_alone() {
             "{technique}: a shadow to compare ({umbra} umbra, {penumbra} penumbra pixels)"
         );
     }
+}
+
+/// A box spawned into the running game (a new mesh asset and entity): the plugin adds its
+/// mesh and instance to the scene in place (`Scene::add_mesh`, `add_instance`; the rest is
+/// not uploaded again) and the frame still equals sshc's runtime alone on the whole scene,
+/// bit for bit.
+#[test]
+fn a_spawned_entity_joins_the_scene_and_frames_as_the_runtime_alone() {
+    let c = capture(
+        &Run {
+            spawn: true,
+            ..Run::of("pcss")
+        },
+        false,
+    );
+    let differ = c
+        .visibility
+        .iter()
+        .zip(&c.alone)
+        .filter(|(a, b)| a.to_bits() != b.to_bits())
+        .count();
+    assert_eq!(differ, 0, "{differ} pixels differ from the runtime alone after the spawn");
 }
