@@ -40,6 +40,8 @@ struct Run {
     keep_bevy_shadow: bool,
     /// After the first settled frame: a box spawned, and the frame settled again.
     spawn: bool,
+    /// A glTF scene (`GLTF_PATH`, written by the test) loaded by Bevy's loader beside the rest.
+    gltf: bool,
 }
 
 impl Run {
@@ -53,6 +55,7 @@ impl Run {
             illuminance: 8000.0,
             keep_bevy_shadow: false,
             spawn: false,
+            gltf: false,
         }
     }
 }
@@ -136,6 +139,12 @@ fn app(run: &Run) -> (App, Shared) {
                 MeshMaterial3d(grey),
                 Transform::from_xyz(0.9, 0.9, 0.6),
             ));
+            if run.gltf {
+                commands.spawn((
+                    bevy::world_serialization::WorldAssetRoot(server.load(GltfAssetLabel::Scene(0).from_asset(GLTF_PATH))),
+                    Transform::from_xyz(1.2, 0.0, -1.0),
+                ));
+            }
             let mut shadow = SshcShadow::new(server.load(run.technique.clone()), &mut images);
             shadow.enabled = run.enabled;
             shadow.keep_bevy_shadow = run.keep_bevy_shadow;
@@ -249,8 +258,17 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
         CAPTURES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
     let spec = format!(
-        "{}|{}|{}|{}|{}|{}|{}|{}|{}",
-        run.technique, run.enabled, run.turn, run.sun_degrees, run.maps, run.illuminance, run.keep_bevy_shadow, expect_error, run.spawn
+        "{}|{}|{}|{}|{}|{}|{}|{}|{}|{}",
+        run.technique,
+        run.enabled,
+        run.turn,
+        run.sun_degrees,
+        run.maps,
+        run.illuminance,
+        run.keep_bevy_shadow,
+        expect_error,
+        run.spawn,
+        run.gltf
     );
     let status = std::process::Command::new(std::env::current_exe().unwrap())
         .args([
@@ -386,6 +404,7 @@ fn capture_child() {
         illuminance: f[5].parse().unwrap(),
         keep_bevy_shadow: f[6] == "true",
         spawn: f[8] == "true",
+        gltf: f[9] == "true",
     };
     let (mut app, shared) = app(&run);
     let mut c = settle(&mut app, &shared, f[7] == "true");
@@ -615,4 +634,82 @@ fn a_spawned_entity_joins_the_scene_and_frames_as_the_runtime_alone() {
         .filter(|(a, b)| a.to_bits() != b.to_bits())
         .count();
     assert_eq!(differ, 0, "{differ} pixels differ from the runtime alone after the spawn");
+}
+
+/// Where the glTF test writes its scene, under the asset root (the repository).
+const GLTF_PATH: &str = "runtime/bevy/target/test-assets/tower.gltf";
+
+/// A glTF 2.0 scene of one node (a tower of half-size (0.25, 0.5, 0.25), its base raised
+/// by a node translation of 0.5 and turned by 30 degrees about y) placing one indexed mesh
+/// with normals: 24 vertices, 36 indices, in a base64 buffer.
+fn write_tower_gltf() {
+    let (h, mut positions, mut normals, mut indices) = ([0.25f32, 0.5, 0.25], Vec::new(), Vec::new(), Vec::new());
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let n = Vec3::from_array(std::array::from_fn(|i| if i == axis { sign } else { 0.0 }));
+            let (u, v) = n.any_orthonormal_pair();
+            let scale = |w: Vec3| w * Vec3::from_array(h);
+            let base = positions.len() as u16;
+            for p in [n - u - v, n + u - v, n + u + v, n - u + v] {
+                positions.push(scale(p));
+                normals.push(n);
+            }
+            let quad = if u.cross(v).dot(n) > 0.0 {
+                [0, 1, 2, 0, 2, 3]
+            } else {
+                [0, 2, 1, 0, 3, 2]
+            };
+            indices.extend(quad.map(|i| base + i));
+        }
+    }
+    let mut buffer = Vec::new();
+    for p in positions.iter().chain(&normals) {
+        buffer.extend(p.to_array().iter().flat_map(|c| c.to_le_bytes()));
+    }
+    buffer.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let (vb, ib) = (positions.len() * 12, indices.len() * 2);
+    use base64::Engine;
+    let data = base64::engine::general_purpose::STANDARD.encode(&buffer);
+    let turn = (15f32).to_radians();
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+"nodes":[{{"mesh":0,"translation":[0,0.5,0],"rotation":[0,{},0,{}]}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}},"indices":2}}]}}],
+"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{data}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{vb}}},{{"buffer":0,"byteOffset":{vb},"byteLength":{vb}}},{{"buffer":0,"byteOffset":{},"byteLength":{ib}}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":24,"type":"VEC3","min":[-0.25,-0.5,-0.25],"max":[0.25,0.5,0.25]}},
+{{"bufferView":1,"componentType":5126,"count":24,"type":"VEC3"}},{{"bufferView":2,"componentType":5123,"count":36,"type":"SCALAR"}}]}}"#,
+        turn.sin(),
+        turn.cos(),
+        buffer.len(),
+        2 * vb,
+    );
+    let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join(GLTF_PATH);
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    std::fs::write(path, json).unwrap();
+}
+
+/// A glTF scene loaded by Bevy's own loader (a `SceneRoot`, its node's transform under
+/// the root's) gets sshc's shadow unchanged: the tower casts (the frame differs from the
+/// scene without it) and the frame equals sshc's runtime alone on every mesh entity, bit for
+/// bit.
+#[test]
+fn a_gltf_scene_loaded_by_bevy_gets_sshcs_shadow() {
+    write_tower_gltf();
+    let without = capture(&Run::of("pcss"), false);
+    let with = capture(
+        &Run {
+            gltf: true,
+            ..Run::of("pcss")
+        },
+        false,
+    );
+    assert!(with.visibility != without.visibility, "the glTF tower casts nothing");
+    let differ = with
+        .visibility
+        .iter()
+        .zip(&with.alone)
+        .filter(|(a, b)| a.to_bits() != b.to_bits())
+        .count();
+    assert_eq!(differ, 0, "{differ} pixels differ from the runtime alone with the glTF scene");
 }
