@@ -94,7 +94,8 @@ fn app(run: &Run) -> (App, Shared) {
         DefaultPlugins
             .set(AssetPlugin {
                 file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/../..").into(),
-                watch_for_changes_override: Some(false),
+                // the hot-reload test watches its technique file; the others read once
+                watch_for_changes_override: Some(run.technique == RELOAD_PATH),
                 ..default()
             })
             .set(WindowPlugin {
@@ -407,7 +408,11 @@ fn capture_child() {
         gltf: f[9] == "true",
     };
     let (mut app, shared) = app(&run);
-    let mut c = settle(&mut app, &shared, f[7] == "true");
+    let reload = run.technique == RELOAD_PATH;
+    let mut c = match reload {
+        true => reload_child(&mut app, &shared),
+        false => settle(&mut app, &shared, f[7] == "true"),
+    };
     if run.spawn {
         // a box spawned beside the others, with a StandardMaterial as a game gives it
         let before = c.visibility.clone();
@@ -418,7 +423,7 @@ fn capture_child() {
         c = settle(&mut app, &shared, false);
         assert!(c.visibility != before, "the spawned box changed nothing");
     }
-    if c.status.is_none() && run.enabled {
+    if c.status.is_none() && run.enabled && !reload {
         c.alone = alone(&mut app, &run);
     }
     if let Ok(dir) = std::env::var("BEVY_SSHC_DUMP") {
@@ -712,4 +717,94 @@ fn a_gltf_scene_loaded_by_bevy_gets_sshcs_shadow() {
         .filter(|(a, b)| a.to_bits() != b.to_bits())
         .count();
     assert_eq!(differ, 0, "{differ} pixels differ from the runtime alone with the glTF scene");
+}
+
+/// The hot-reload test's technique file, under the asset root (the repository).
+const RELOAD_PATH: &str = "runtime/bevy/target/test-assets/reload.ron";
+
+fn reload_file() -> std::path::PathBuf {
+    std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join(RELOAD_PATH)
+}
+
+fn bundled(name: &str) -> String {
+    std::fs::read_to_string(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../techniques")).join(format!("{name}.ron")))
+        .unwrap()
+}
+
+/// Step `app` (a little wall time a frame, for the file watcher) until `done` or a time
+/// limit; false at the limit.
+fn step_until(app: &mut App, mut done: impl FnMut(&mut App) -> bool) -> bool {
+    let start = std::time::Instant::now();
+    while start.elapsed() < std::time::Duration::from_secs(60) {
+        app.update();
+        if done(app) {
+            return true;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    false
+}
+
+/// The child side of the hot-reload test: the file's PCSS settles; the file saved broken
+/// fails to reload, and PCSS keeps rendering (the same visibility) with sshc still shading
+/// the light; the file saved as hard shadows reloads, and the penumbra goes.
+fn reload_child(app: &mut App, shared: &Shared) -> Captured {
+    let first = settle(app, shared, false);
+    let load = |app: &mut App| {
+        let world = app.world_mut();
+        let handle = world
+            .query::<&SshcShadow>()
+            .iter(world)
+            .next()
+            .map(|s| s.technique.clone())
+            .unwrap();
+        world.resource::<AssetServer>().get_load_state(&handle)
+    };
+    std::fs::write(reload_file(), "Technique(name: \"broken\", passes: [ oops").unwrap();
+    assert!(
+        step_until(app, |app| matches!(load(app), Some(bevy::asset::LoadState::Failed(_)))),
+        "the broken save was not seen as a failed reload"
+    );
+    let kept = settle(app, shared, false);
+    assert!(kept.status.is_none(), "sshc stopped shading the light: {:?}", kept.status);
+    assert!(kept.visibility == first.visibility, "a failed reload changed the shadow");
+    std::fs::write(reload_file(), bundled("hard")).unwrap();
+    let hard = |app: &mut App, shared: &Shared| {
+        let vis = floats(&shared.0.lock().unwrap().1);
+        matches!(load(app), Some(bevy::asset::LoadState::Loaded))
+            && penumbra_and_umbra(&vis).0 < penumbra_and_umbra(&first.visibility).0 / 4
+    };
+    assert!(
+        step_until(app, |app| hard(app, shared)),
+        "the file saved as hard shadows did not reload"
+    );
+    let last = settle(app, shared, false);
+    let (before, after) = (penumbra_and_umbra(&first.visibility).0, penumbra_and_umbra(&last.visibility).0);
+    eprintln!("penumbra pixels: {before} under PCSS, {after} after the file was saved as hard shadows");
+    assert!(
+        after * 4 < before,
+        "the reloaded technique did not change the penumbra ({before} -> {after})"
+    );
+    last
+}
+
+/// Hot reload through Bevy's asset watcher: a technique file saved broken keeps the last
+/// good technique rendering, unchanged (the failed reload is logged with sshc's
+/// diagnostic); saved as another technique, it reloads and renders that one.
+#[test]
+fn a_technique_file_saved_reloads_and_a_broken_save_keeps_the_last_good_one() {
+    let path = reload_file();
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    std::fs::write(&path, bundled("pcss")).unwrap();
+    let run = Run {
+        technique: RELOAD_PATH.into(),
+        ..Run::of("pcss")
+    };
+    // the child asserts each step; its last frame is hard shadows'
+    let last = capture(&run, false);
+    let hard = capture(&Run::of("hard"), false);
+    assert!(
+        last.visibility == hard.visibility,
+        "the reloaded file does not frame as the bundled hard shadows"
+    );
 }
