@@ -37,6 +37,11 @@ struct Args {
     bevy: bool,
     size: u32,
     sun_degrees: f32,
+    /// Print the plugin's CPU time and the GPU times of sshc's and Bevy's passes.
+    stats: bool,
+    /// Keep Bevy's casters in its shadow maps too (`SshcShadow::keep_bevy_shadow`): both
+    /// shadows computed in one run, for `--stats`' ratio.
+    keep_bevy: bool,
 }
 
 fn args() -> Result<Args, String> {
@@ -47,6 +52,8 @@ fn args() -> Result<Args, String> {
         bevy: false,
         size: 256,
         sun_degrees: 3.0,
+        stats: false,
+        keep_bevy: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -62,6 +69,8 @@ fn args() -> Result<Args, String> {
                 }
             }
             "--bevy" => a.bevy = true,
+            "--stats" => a.stats = true,
+            "--keep-bevy-shadow" => a.keep_bevy = true,
             "--sun-degrees" => {
                 a.sun_degrees = value()?.parse().map_err(|e| format!("--sun-degrees: {e}"))?;
                 if !(0.0..=30.0).contains(&a.sun_degrees) {
@@ -70,7 +79,7 @@ fn args() -> Result<Args, String> {
             }
             _ => {
                 return Err(format!(
-                    "unknown argument `{flag}` (--frames N --out DIR --technique NAME --size W --sun-degrees D --bevy)"
+                    "unknown argument `{flag}` (--frames N --out DIR --technique NAME --size W --sun-degrees D --bevy --stats --keep-bevy-shadow)"
                 ));
             }
         }
@@ -126,9 +135,15 @@ fn main() -> AppExit {
             return AppExit::error();
         }
     }
+    if args.stats {
+        app.add_plugins(bevy::render::diagnostic::RenderDiagnosticsPlugin)
+            .add_systems(Update, frame_wall);
+    }
     app.add_plugins(SshcShadowsPlugin)
         .insert_resource(args)
         .insert_resource(Frame(0))
+        .init_resource::<LastFrame>()
+        .add_systems(Last, finish)
         .add_systems(Startup, setup)
         .add_systems(Update, orbit)
         .run()
@@ -179,6 +194,7 @@ fn setup(
     let mut shadow = SshcShadow::new(technique, &mut images);
     shadow.enabled = !args.bevy;
     shadow.angular_diameter_degrees = args.sun_degrees;
+    shadow.keep_bevy_shadow = args.keep_bevy;
     commands.spawn((
         DirectionalLight {
             shadow_maps_enabled: true,
@@ -239,7 +255,14 @@ fn orbit(mut frame: ResMut<Frame>, mut sun: Query<&mut Transform, With<Sun>>) {
 }
 
 /// Each frame's pixels, read back, as a PNG; the app exits after the last.
-fn save_frame(done: On<ReadbackComplete>, args: Res<Args>, frame: Res<Frame>, mut exit: MessageWriter<AppExit>, mut saved: Local<u32>) {
+fn save_frame(
+    done: On<ReadbackComplete>,
+    args: Res<Args>,
+    frame: Res<Frame>,
+    mut exit: MessageWriter<AppExit>,
+    mut saved: Local<u32>,
+    mut last: ResMut<LastFrame>,
+) {
     let (Some(frames), Some(out)) = (args.frames, &args.out) else {
         return;
     };
@@ -265,8 +288,67 @@ fn save_frame(done: On<ReadbackComplete>, args: Res<Args>, frame: Res<Frame>, mu
     }
     *saved += 1;
     if *saved >= frames {
+        last.0 = true;
+    }
+}
+
+/// The app ends in the frame after the last one was saved (so that `--stats` reports in
+/// its Update first).
+fn finish(last: Res<LastFrame>, mut exit: MessageWriter<AppExit>, mut armed: Local<bool>) {
+    if last.0 && std::mem::replace(&mut *armed, true) {
         exit.write(AppExit::Success);
     }
+}
+
+/// The last frame was saved: `--stats` reports.
+#[derive(Resource, Default)]
+struct LastFrame(bool);
+
+/// Each frame's wall time, milliseconds (`--stats`), the previous frame's start, and
+/// whether the report was printed.
+#[derive(Default)]
+struct Walls(Vec<f64>, Option<std::time::Instant>, bool);
+
+/// `--stats`: the frames' wall times, and on the last frame the medians: the plugin's
+/// render-world CPU time, and the GPU times of sshc's passes and of Bevy's shadow and main
+/// passes (Bevy's render diagnostics), as ratios from the one run.
+fn frame_wall(
+    mut walls: Local<Walls>,
+    frame: Res<Frame>,
+    last: Res<LastFrame>,
+    store: Res<bevy::diagnostic::DiagnosticsStore>,
+    times: Res<bevy_sshc::CpuTimes>,
+) {
+    let now = std::time::Instant::now();
+    if let Some(t) = walls.1.replace(now)
+        && frame.0 > WARM_FRAMES
+    {
+        walls.0.push((now - t).as_secs_f64() * 1e3);
+    }
+    if !last.0 || walls.2 {
+        return;
+    }
+    walls.2 = true;
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    let gpu = |name: &str| {
+        let path = bevy::diagnostic::DiagnosticPath::new(format!("render/{name}/elapsed_gpu"));
+        median(store.get(&path).map(|d| d.values().copied().collect()).unwrap_or_default())
+    };
+    let [prepare, record] = times.medians().unwrap_or([f64::NAN; 2]);
+    let wall = median(walls.0.clone());
+    let (sshc, shadows, opaque) = (gpu("sshc_shadows"), gpu("per_view_shadow_pass"), gpu("main_opaque_pass_3d"));
+    println!("medians over {} frames (lavapipe: CPU and GPU share the cores):", walls.0.len());
+    println!(
+        "  frame wall time {wall:.2} ms; the plugin's render-world CPU: prepare {prepare:.0} us + record {record:.0} us = {:.1} % of the frame",
+        (prepare + record) / 10.0 / wall
+    );
+    println!(
+        "  GPU: sshc's passes {sshc:.3} ms, Bevy's shadow pass {shadows:.3} ms, Bevy's main opaque pass {opaque:.3} ms; sshc / Bevy's shadow pass = {:.2}",
+        sshc / shadows
+    );
 }
 
 /// Frames rendered before the first one saved (the technique loading and compiling).

@@ -25,7 +25,7 @@ mod render;
 
 pub use asset::{MAX_TECHNIQUE_BYTES, SshcTechnique, TechniqueError, TechniqueLoader, compile};
 pub use material::{SshcMaterial, SshcReceiver, visibility_image};
-pub use render::{Status, convert_mesh};
+pub use render::{CpuTimes, Status, convert_mesh};
 pub use sshc_runtime;
 
 use bevy::asset::AssetApp;
@@ -81,11 +81,13 @@ pub struct SshcShadowsPlugin;
 impl Plugin for SshcShadowsPlugin {
     fn build(&self, app: &mut App) {
         let status = Status::default();
+        let times = CpuTimes::default();
         app.init_asset::<SshcTechnique>()
             .register_asset_loader(TechniqueLoader)
             .add_plugins(MaterialPlugin::<SshcMaterial>::default())
             .init_resource::<material::Swapped>()
             .insert_resource(status.clone())
+            .insert_resource(times.clone())
             .add_systems(
                 PostUpdate,
                 (
@@ -101,6 +103,7 @@ impl Plugin for SshcShadowsPlugin {
         if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
             render_app
                 .insert_resource(status)
+                .insert_resource(times)
                 .init_resource::<render::Extracted>()
                 .add_systems(ExtractSchedule, render::extract)
                 .add_systems(Render, render::prepare.in_set(RenderSystems::Prepare))

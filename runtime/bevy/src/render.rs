@@ -23,6 +23,7 @@ use bevy::ecs::entity::EntityHashMap;
 use bevy::log::{error, info};
 use bevy::prelude::*;
 use bevy::render::Extract;
+use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderAdapter, RenderContext, RenderDevice, RenderQueue, ViewQuery};
 use bevy::render::texture::GpuImage;
@@ -52,6 +53,40 @@ impl Status {
                 None => m.remove(&light),
             };
         }
+    }
+}
+
+/// The host CPU time of the plugin's render-world work per frame, microseconds: prepare
+/// (the scene's changes, the targets, `Targets::prepare`) and record (`Targets::record` and
+/// the visibility's copy); the last [`CpuTimes::KEPT`] frames, in both worlds.
+#[derive(Resource, Clone, Default)]
+pub struct CpuTimes(pub Arc<Mutex<std::collections::VecDeque<[f64; 2]>>>);
+
+impl CpuTimes {
+    pub const KEPT: usize = 1024;
+
+    fn push(&self, k: usize, us: f64) {
+        if let Ok(mut v) = self.0.lock() {
+            if k == 0 {
+                if v.len() == Self::KEPT {
+                    v.pop_front();
+                }
+                v.push_back([us, 0.0]);
+            } else if let Some(last) = v.back_mut() {
+                last[1] += us;
+            }
+        }
+    }
+
+    /// The medians of prepare and of record over the frames kept.
+    pub fn medians(&self) -> Option<[f64; 2]> {
+        let v = self.0.lock().ok()?;
+        let median = |k: usize| {
+            let mut x: Vec<f64> = v.iter().map(|t| t[k]).collect();
+            x.sort_by(f64::total_cmp);
+            x.get(x.len() / 2).copied()
+        };
+        Some([median(0)?, median(1)?])
     }
 }
 
@@ -108,6 +143,9 @@ pub struct SshcRender {
     meshes: HashMap<AssetId<Mesh>, usize>,
     /// Instance order in `scene`: the main-world entity of each instance.
     order: Vec<Entity>,
+    /// Meshes or instances added or removed so far (the targets take the scene again when
+    /// theirs is older).
+    scene_changes: u64,
     transforms: Vec<[f32; 16]>,
     /// Per view (render-world entity): its targets, the technique they run, their sizes.
     views: EntityHashMap<ViewTargets>,
@@ -129,6 +167,8 @@ struct Loaded {
 }
 
 struct ViewTargets {
+    /// The scene's change count these targets last took (`Targets::set_scene`).
+    scene_seen: u64,
     technique: AssetId<SshcTechnique>,
     technique_version: u64,
     targets: Targets,
@@ -146,6 +186,7 @@ impl SshcRender {
             scene: None,
             meshes: HashMap::new(),
             order: Vec::new(),
+            scene_changes: 0,
             transforms: Vec::new(),
             views: EntityHashMap::default(),
             logged: None,
@@ -277,11 +318,13 @@ pub fn convert_mesh(mesh: &Mesh) -> Result<sshc_gpu::Mesh, String> {
 
 /// The prepare step: the scene, the targets and the frame's uniforms.
 pub fn prepare(
+    times: Res<CpuTimes>,
     render: Option<ResMut<SshcRender>>,
     mut extracted: ResMut<Extracted>,
     views: Query<(Entity, &ExtractedView, &bevy::render::camera::ExtractedCamera)>,
 ) {
     let Some(mut render) = render else { return };
+    let start = std::time::Instant::now();
     let render = &mut *render;
     render.ready.clear();
     for (id, t) in extracted.techniques.drain(..) {
@@ -328,6 +371,7 @@ pub fn prepare(
         render.logged = message.clone();
     }
     render.status.set(light.entity, message);
+    times.push(0, start.elapsed().as_secs_f64() * 1e6);
 }
 
 fn prepare_light(
@@ -361,6 +405,7 @@ fn prepare_light(
         match mesh.and_then(|m| scene.add_mesh(&m).map_err(|e| e.to_string())) {
             Ok(index) => {
                 render.meshes.insert(id, index);
+                render.scene_changes += 1;
             }
             Err(why) => {
                 error!("sshc: mesh {id:?} is not drawn in sshc's shadows: {why}");
@@ -380,6 +425,7 @@ fn prepare_light(
             scene.remove_instance(k).map_err(e)?;
             render.order.remove(k);
             render.transforms.remove(k);
+            render.scene_changes += 1;
         }
     }
     let held: std::collections::HashSet<Entity> = render.order.iter().copied().collect();
@@ -397,13 +443,21 @@ fn prepare_light(
             .map_err(e)?;
         render.order.push(i.entity);
         render.transforms.push(i.transform);
+        render.scene_changes += 1;
     }
+    // the transforms, written (and the instances placed again) only when one moved
+    let mut moved = false;
     for (k, entity) in render.order.iter().enumerate() {
-        if let Some(i) = wanted.get(entity) {
+        if let Some(i) = wanted.get(entity)
+            && render.transforms[k].map(f32::to_bits) != i.transform.map(f32::to_bits)
+        {
             render.transforms[k] = i.transform;
+            moved = true;
         }
     }
-    scene.set_transforms(&render.transforms).map_err(e)?;
+    if moved {
+        scene.set_transforms(&render.transforms).map_err(e)?;
+    }
     let sun = Light::DistantDisk {
         direction: sshc_runtime::light::glam::Vec3::from_array(light.direction),
         angle_degrees: light.angle_degrees,
@@ -434,6 +488,7 @@ fn prepare_light(
             render.views.insert(
                 view,
                 ViewTargets {
+                    scene_seen: render.scene_changes,
                     technique: light.technique,
                     technique_version: version,
                     targets,
@@ -447,7 +502,10 @@ fn prepare_light(
             v.targets.resize(size).map_err(e)?;
             v.sizes.camera = size;
         }
-        v.targets.set_scene(scene).map_err(e)?;
+        if v.scene_seen != render.scene_changes {
+            v.targets.set_scene(scene).map_err(e)?;
+            v.scene_seen = render.scene_changes;
+        }
         v.state.camera = cam;
         v.state.lights[0] = v.targets.fit_light(scene, 0, &sun, Fit::Casters).map_err(e)?;
         for (name, value) in &light.params {
@@ -465,9 +523,11 @@ pub fn record(
     view: ViewQuery<&ExtractedView>,
     render: Option<Res<SshcRender>>,
     images: Res<RenderAssets<GpuImage>>,
+    times: Res<CpuTimes>,
     mut ctx: RenderContext,
 ) {
     let Some(render) = render else { return };
+    let start = std::time::Instant::now();
     let entity = view.entity();
     let Some(&(_, image)) = render.ready.iter().find(|(v, _)| *v == entity) else {
         return;
@@ -475,11 +535,19 @@ pub fn record(
     let (Some(scene), Some(v)) = (&render.scene, render.views.get(&entity)) else {
         return;
     };
-    let encoder = ctx.command_encoder();
-    if let Err(e) = v.targets.record(scene, encoder) {
+    // sshc's passes as one span of Bevy's render diagnostics (`render/sshc_shadows/...`,
+    // with `RenderDiagnosticsPlugin`), beside Bevy's own passes
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    let span = diagnostics.time_span(ctx.command_encoder(), "sshc_shadows");
+    let recorded = v.targets.record(scene, ctx.command_encoder());
+    span.end(ctx.command_encoder());
+    times.push(1, start.elapsed().as_secs_f64() * 1e6);
+    if let Err(e) = recorded {
         error!("sshc: recording the shadow passes: {e}");
         return;
     }
+    let encoder = ctx.command_encoder();
     let Some(gpu_image) = images.get(image) else { return };
     let source = v.targets.visibility();
     let (w, h) = (
