@@ -422,6 +422,18 @@ fn capture_child() {
         world.spawn((Mesh3d(mesh), MeshMaterial3d(material), Transform::from_xyz(1.3, 0.25, -1.0)));
         c = settle(&mut app, &shared, false);
         assert!(c.visibility != before, "the spawned box changed nothing");
+        // then the scene's first box despawned (an instance removed in place)
+        let spawned = c.visibility.clone();
+        let world = app.world_mut();
+        let first_box = world
+            .query::<(Entity, &Transform, &Mesh3d)>()
+            .iter(world)
+            .find(|(_, t, _)| t.translation == Vec3::new(-0.4, 0.6, 0.0))
+            .map(|(e, _, _)| e)
+            .unwrap();
+        world.despawn(first_box);
+        c = settle(&mut app, &shared, false);
+        assert!(c.visibility != spawned, "the despawned box changed nothing");
     }
     if c.status.is_none() && run.enabled && !reload {
         c.alone = alone(&mut app, &run);
@@ -619,12 +631,13 @@ fn sshc_inside_bevy_equals_the_runtime_alone() {
     }
 }
 
-/// A box spawned into the running game (a new mesh asset and entity): the plugin adds its
-/// mesh and instance to the scene in place (`Scene::add_mesh`, `add_instance`; the rest is
-/// not uploaded again) and the frame still equals sshc's runtime alone on the whole scene,
-/// bit for bit.
+/// A box spawned into the running game (a new mesh asset and entity), then the scene's
+/// first box despawned: the plugin adds the mesh and instance to the scene in place and
+/// removes the other instance in place (`Scene::add_mesh`, `add_instance`,
+/// `remove_instance`; the rest is not uploaded again), each change shows, and the last
+/// frame still equals sshc's runtime alone on the scene as it then is, bit for bit.
 #[test]
-fn a_spawned_entity_joins_the_scene_and_frames_as_the_runtime_alone() {
+fn spawned_and_despawned_entities_change_the_scene_in_place_and_frame_as_the_runtime_alone() {
     let c = capture(
         &Run {
             spawn: true,
