@@ -23,6 +23,7 @@ use bevy::ecs::entity::EntityHashMap;
 use bevy::log::{error, info};
 use bevy::prelude::*;
 use bevy::render::Extract;
+use bevy::render::camera::TemporalJitter;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderAdapter, RenderContext, RenderDevice, RenderQueue, ViewQuery};
@@ -321,7 +322,12 @@ pub fn prepare(
     times: Res<CpuTimes>,
     render: Option<ResMut<SshcRender>>,
     mut extracted: ResMut<Extracted>,
-    views: Query<(Entity, &ExtractedView, &bevy::render::camera::ExtractedCamera)>,
+    views: Query<(
+        Entity,
+        &ExtractedView,
+        &bevy::render::camera::ExtractedCamera,
+        Option<&TemporalJitter>,
+    )>,
 ) {
     let Some(mut render) = render else { return };
     let start = std::time::Instant::now();
@@ -378,7 +384,12 @@ fn prepare_light(
     render: &mut SshcRender,
     extracted: &mut Extracted,
     light: &ExtractedLight,
-    views: &Query<(Entity, &ExtractedView, &bevy::render::camera::ExtractedCamera)>,
+    views: &Query<(
+        Entity,
+        &ExtractedView,
+        &bevy::render::camera::ExtractedCamera,
+        Option<&TemporalJitter>,
+    )>,
 ) -> Result<(), String> {
     let e = |e: sshc_gpu::RuntimeError| e.to_string();
     let gpu = render.gpu.clone();
@@ -462,12 +473,24 @@ fn prepare_light(
         direction: sshc_runtime::light::glam::Vec3::from_array(light.direction),
         angle_degrees: light.angle_degrees,
     };
-    for (view, extracted_view, camera) in views {
+    for (view, extracted_view, camera, jitter) in views {
         let Some(size) = camera.physical_viewport_size else { continue };
+        let view_size = size.as_vec2();
         let size = (size.x, size.y);
-        let clip_from_world = extracted_view
-            .clip_from_world
-            .unwrap_or_else(|| extracted_view.clip_from_view * extracted_view.world_from_view.to_matrix().inverse());
+        // the main pass's own projection: jittered as Bevy jitters it under temporal
+        // anti-aliasing (`prepare_view_uniforms`), so that sshc's visibility lies on the
+        // pixels the receivers are drawn at in this frame
+        let view_from_world = extracted_view.world_from_view.to_matrix().inverse();
+        let clip_from_world = match jitter {
+            Some(jitter) => {
+                let mut clip_from_view = extracted_view.clip_from_view;
+                jitter.jitter_projection(&mut clip_from_view, view_size);
+                clip_from_view * view_from_world
+            }
+            None => extracted_view
+                .clip_from_world
+                .unwrap_or_else(|| extracted_view.clip_from_view * view_from_world),
+        };
         // Bevy's projection is reverse-Z (and infinite): mapped to sshc's forward depth
         let cam = SshcCamera::from_reverse_z(
             clip_from_world.to_cols_array(),

@@ -42,6 +42,8 @@ struct Run {
     spawn: bool,
     /// A glTF scene (`GLTF_PATH`, written by the test) loaded by Bevy's loader beside the rest.
     gltf: bool,
+    /// The camera's projection jittered as temporal anti-aliasing jitters it.
+    jitter: bool,
 }
 
 impl Run {
@@ -56,6 +58,7 @@ impl Run {
             keep_bevy_shadow: false,
             spawn: false,
             gltf: false,
+            jitter: false,
         }
     }
 }
@@ -174,13 +177,18 @@ fn app(run: &Run) -> (App, Shared) {
             );
             target.texture_descriptor.usage = TextureUsages::RENDER_ATTACHMENT | TextureUsages::COPY_SRC | TextureUsages::TEXTURE_BINDING;
             let target = images.add(target);
-            commands.spawn((
+            let mut camera = commands.spawn((
                 Camera3d::default(),
                 // no tonemapping tables in this build (Bevy's default reads them)
                 Tonemapping::Reinhard,
                 RenderTarget::Image(target.clone().into()),
                 Transform::from_xyz(-2.5, 3.0, 3.5).looking_at(Vec3::new(0.0, 0.3, 0.0), Vec3::Y),
             ));
+            if run.jitter {
+                camera.insert(bevy::render::camera::TemporalJitter {
+                    offset: Vec2::new(0.375, -0.25),
+                });
+            }
             commands
                 .spawn(Readback::texture(target))
                 .observe(|done: On<ReadbackComplete>, shared: Res<Shared>| {
@@ -259,7 +267,7 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
         CAPTURES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
     let spec = format!(
-        "{}|{}|{}|{}|{}|{}|{}|{}|{}|{}",
+        "{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}",
         run.technique,
         run.enabled,
         run.turn,
@@ -269,7 +277,8 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
         run.keep_bevy_shadow,
         expect_error,
         run.spawn,
-        run.gltf
+        run.gltf,
+        run.jitter
     );
     let status = std::process::Command::new(std::env::current_exe().unwrap())
         .args([
@@ -347,12 +356,21 @@ fn alone(app: &mut App, run: &Run) -> Vec<f32> {
             moves: true,
         });
     }
-    let (camera, view) = world
-        .query::<(&bevy::camera::Camera, &GlobalTransform)>()
+    let (camera, view, jitter) = world
+        .query::<(
+            &bevy::camera::Camera,
+            &GlobalTransform,
+            Option<&bevy::render::camera::TemporalJitter>,
+        )>()
         .iter(world)
         .next()
         .unwrap();
-    let clip_from_world = camera.clip_from_view() * view.to_matrix().inverse();
+    // the main pass's projection, jittered as Bevy's `prepare_view_uniforms` does
+    let mut clip_from_view = camera.clip_from_view();
+    if let Some(j) = jitter {
+        j.jitter_projection(&mut clip_from_view, Vec2::splat(SIZE as f32));
+    }
+    let clip_from_world = clip_from_view * view.to_matrix().inverse();
     let cam = SshcCamera::from_reverse_z(clip_from_world.to_cols_array(), view.translation().to_array());
     let (light, shadow) = world.query::<(&GlobalTransform, &SshcShadow)>().iter(world).next().unwrap();
     let sun = sshc_runtime::light::Light::DistantDisk {
@@ -406,6 +424,7 @@ fn capture_child() {
         keep_bevy_shadow: f[6] == "true",
         spawn: f[8] == "true",
         gltf: f[9] == "true",
+        jitter: f[10] == "true",
     };
     let (mut app, shared) = app(&run);
     let reload = run.technique == RELOAD_PATH;
@@ -819,5 +838,31 @@ fn a_technique_file_saved_reloads_and_a_broken_save_keeps_the_last_good_one() {
     assert!(
         last.visibility == hard.visibility,
         "the reloaded file does not frame as the bundled hard shadows"
+    );
+}
+
+/// Under temporal anti-aliasing's jitter, sshc's camera takes the main pass's jittered
+/// projection, as Bevy forms it: the frame differs from the unjittered one and equals the
+/// runtime alone on the jittered projection, bit for bit.
+#[test]
+fn the_jittered_projection_of_temporal_anti_aliasing_is_followed() {
+    let still = capture(&Run::of("pcss"), false);
+    let jittered = capture(
+        &Run {
+            jitter: true,
+            ..Run::of("pcss")
+        },
+        false,
+    );
+    assert!(jittered.visibility != still.visibility, "the jitter moved nothing");
+    let differ = jittered
+        .visibility
+        .iter()
+        .zip(&jittered.alone)
+        .filter(|(a, b)| a.to_bits() != b.to_bits())
+        .count();
+    assert_eq!(
+        differ, 0,
+        "{differ} pixels differ from the runtime alone on the jittered projection"
     );
 }
