@@ -44,6 +44,8 @@ struct Run {
     gltf: bool,
     /// The camera's projection jittered as temporal anti-aliasing jitters it.
     jitter: bool,
+    /// Bevy's device with WebGPU's defaults only (no feature beyond them).
+    webgpu: bool,
 }
 
 impl Run {
@@ -59,6 +61,7 @@ impl Run {
             spawn: false,
             gltf: false,
             jitter: false,
+            webgpu: false,
         }
     }
 }
@@ -110,6 +113,13 @@ fn app(run: &Run) -> (App, Shared) {
                 // every pipeline ready in the frame that first needs it: a frame read back
                 // is whole (with background compilation the first ones lack meshes)
                 synchronous_pipeline_compilation: true,
+                render_creation: bevy::render::settings::RenderCreation::Automatic(Box::new(bevy::render::settings::WgpuSettings {
+                    priority: match run.webgpu {
+                        true => bevy::render::settings::WgpuSettingsPriority::WebGPU,
+                        false => bevy::render::settings::WgpuSettingsPriority::Functionality,
+                    },
+                    ..default()
+                })),
                 ..default()
             }),
     )
@@ -267,7 +277,7 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
         CAPTURES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
     let spec = format!(
-        "{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}",
+        "{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}",
         run.technique,
         run.enabled,
         run.turn,
@@ -278,7 +288,8 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
         expect_error,
         run.spawn,
         run.gltf,
-        run.jitter
+        run.jitter,
+        run.webgpu
     );
     let status = std::process::Command::new(std::env::current_exe().unwrap())
         .args([
@@ -425,6 +436,7 @@ fn capture_child() {
         spawn: f[8] == "true",
         gltf: f[9] == "true",
         jitter: f[10] == "true",
+        webgpu: f[11] == "true",
     };
     let (mut app, shared) = app(&run);
     let reload = run.technique == RELOAD_PATH;
@@ -548,6 +560,27 @@ fn a_missing_or_mismatched_technique_logs_and_leaves_bevys_own_shadow() {
     );
     for (technique, says) in [("missing-technique", "did not load"), ("linear-light", "light")] {
         let c = capture(&Run::of(technique), true);
+        check(technique, says, &c, &bevy);
+    }
+    // a technique needing what Bevy did not ask of its device (WebGPU's defaults only:
+    // the Shade's 36 bytes a sample of colour attachments pass their limit of 32)
+    let run = Run {
+        webgpu: true,
+        ..Run::of("pcss")
+    };
+    let bevy = capture(
+        &Run {
+            enabled: false,
+            ..run.clone()
+        },
+        false,
+    );
+    check("pcss", "cannot run on this device, which lacks", &capture(&run, true), &bevy);
+}
+
+/// `c`'s error names the light's technique file and says `says`; its frame is Bevy's own.
+fn check(technique: &str, says: &str, c: &Captured, bevy: &Captured) {
+    {
         let e = c.status.clone().unwrap_or_default();
         eprintln!("{technique}: {e}");
         assert!(
