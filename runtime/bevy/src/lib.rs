@@ -25,7 +25,7 @@ mod render;
 
 pub use asset::{MAX_TECHNIQUE_BYTES, SshcTechnique, TechniqueError, TechniqueLoader, compile};
 pub use material::{SshcMaterial, SshcReceiver, visibility_image};
-pub use render::{CpuTimes, Status, convert_mesh};
+pub use render::{CpuTimes, DEFAULT_MAP_SIZE, Status, convert_mesh};
 pub use sshc_runtime;
 
 use bevy::asset::AssetApp;
@@ -45,8 +45,9 @@ pub struct SshcShadow {
     pub technique: Handle<SshcTechnique>,
     /// Params by name, set over the technique's defaults.
     pub params: Vec<(String, f64)>,
-    /// The shadow map's texels per side.
-    pub map_size: u32,
+    /// The shadow map's texels per side; `None`: the technique's own `shadow_map:` (a
+    /// `tuned.ron` from `sshc tune` carries its tuned size), else 1024.
+    pub map_size: Option<u32>,
     /// The sun's full angular diameter in degrees (about 0.53 for the real sun).
     pub angular_diameter_degrees: f32,
     /// Off: Bevy's own shadow for this light, as if the component were absent.
@@ -60,12 +61,13 @@ pub struct SshcShadow {
 }
 
 impl SshcShadow {
-    /// A technique with its defaults: a 1024^2 map and a sun of 0.53 degrees.
+    /// A technique with its defaults: its own map size (else 1024^2) and a sun of 0.53
+    /// degrees.
     pub fn new(technique: Handle<SshcTechnique>, images: &mut Assets<Image>) -> SshcShadow {
         SshcShadow {
             technique,
             params: Vec::new(),
-            map_size: 1024,
+            map_size: None,
             angular_diameter_degrees: 0.53,
             enabled: true,
             keep_bevy_shadow: false,

@@ -91,6 +91,9 @@ impl CpuTimes {
     }
 }
 
+/// The shadow map's size where neither the component nor the technique gives one.
+pub const DEFAULT_MAP_SIZE: u32 = 1024;
+
 /// One mesh entity as extracted.
 #[derive(Clone, Debug)]
 pub struct ExtractedInstance {
@@ -109,7 +112,8 @@ pub struct ExtractedLight {
     /// The technique's asset path, for messages.
     pub path: String,
     pub params: Vec<(String, f64)>,
-    pub map_size: u32,
+    /// The component's map size, if it sets one.
+    pub map_size: Option<u32>,
     /// From the scene towards the sun (glam 0.34's order: x, y, z).
     pub direction: [f32; 3],
     pub angle_degrees: f32,
@@ -402,6 +406,8 @@ fn prepare_light(
         loaded.technique = Some(Technique::new(&gpu, graph, loaded.compiled.compiled.shaders.clone()).map_err(e)?);
     }
     let (technique, version) = (loaded.technique.clone().ok_or("no technique")?, loaded.version);
+    // the component's size, else the technique's (a tuned technique's), else 1024
+    let map_size = light.map_size.or(technique.graph().shadow_map).unwrap_or(DEFAULT_MAP_SIZE);
     // the scene: uploaded empty once, for this technique's needs, then changed in place
     let edges = technique.needs_edge_adjacency();
     if render.scene.as_ref().is_none_or(|s| edges && !s.has_edges()) {
@@ -498,7 +504,7 @@ fn prepare_light(
         );
         let sizes = Sizes {
             camera: size,
-            shadow: light.map_size,
+            shadow: map_size,
         };
         let fresh = match render.views.get(&view) {
             Some(v) => v.technique != light.technique || v.technique_version != version || v.sizes.shadow != sizes.shadow,

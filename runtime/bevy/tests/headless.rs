@@ -46,6 +46,8 @@ struct Run {
     jitter: bool,
     /// Bevy's device with WebGPU's defaults only (no feature beyond them).
     webgpu: bool,
+    /// The component's map size (`None`: the technique's own, else the default).
+    map: Option<u32>,
 }
 
 impl Run {
@@ -62,6 +64,7 @@ impl Run {
             gltf: false,
             jitter: false,
             webgpu: false,
+            map: Some(512),
         }
     }
 }
@@ -163,7 +166,7 @@ fn app(run: &Run) -> (App, Shared) {
             shadow.enabled = run.enabled;
             shadow.keep_bevy_shadow = run.keep_bevy_shadow;
             shadow.angular_diameter_degrees = run.sun_degrees;
-            shadow.map_size = 512;
+            shadow.map_size = run.map;
             let visibility = shadow.visibility.clone();
             commands.spawn((
                 DirectionalLight {
@@ -277,7 +280,7 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
         CAPTURES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
     let spec = format!(
-        "{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}",
+        "{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}",
         run.technique,
         run.enabled,
         run.turn,
@@ -289,7 +292,8 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
         run.spawn,
         run.gltf,
         run.jitter,
-        run.webgpu
+        run.webgpu,
+        run.map.map_or(0, |m| m)
     );
     let status = std::process::Command::new(std::env::current_exe().unwrap())
         .args([
@@ -388,13 +392,13 @@ fn alone(app: &mut App, run: &Run) -> Vec<f32> {
         direction: sshc_runtime::light::glam::Vec3::from_array(light.back().to_array()),
         angle_degrees: run.sun_degrees,
     };
-    let map = shadow.map_size;
     let compiled = world
         .resource::<Assets<bevy_sshc::SshcTechnique>>()
         .get(&shadow.technique)
         .unwrap()
         .compiled
         .clone();
+    let map = shadow.map_size.or(compiled.graph.shadow_map).unwrap_or(bevy_sshc::DEFAULT_MAP_SIZE);
     let gpu = Gpu::new().unwrap();
     let technique = Technique::new(
         &gpu,
@@ -437,6 +441,7 @@ fn capture_child() {
         gltf: f[9] == "true",
         jitter: f[10] == "true",
         webgpu: f[11] == "true",
+        map: Some(f[12].parse().unwrap()).filter(|&m: &u32| m > 0),
     };
     let (mut app, shared) = app(&run);
     let reload = run.technique == RELOAD_PATH;
@@ -898,4 +903,27 @@ fn the_jittered_projection_of_temporal_anti_aliasing_is_followed() {
         differ, 0,
         "{differ} pixels differ from the runtime alone on the jittered projection"
     );
+}
+
+/// A `tuned.ron` from `sshc tune` (docs/tune/grid-edge: PCSS with tuned params and a
+/// 256^2 map) as the light's technique, the component setting no map size: it loads as any
+/// technique, runs at its own map size, and frames as the runtime alone at that size.
+#[test]
+fn a_tuned_technique_runs_at_its_own_map_size() {
+    let run = Run {
+        technique: "docs/tune/grid-edge/tuned.ron".into(),
+        map: None,
+        ..Run::of("pcss")
+    };
+    let c = capture(&run, false);
+    let differ = c
+        .visibility
+        .iter()
+        .zip(&c.alone)
+        .filter(|(a, b)| a.to_bits() != b.to_bits())
+        .count();
+    assert_eq!(differ, 0, "{differ} pixels differ from the runtime alone at the tuned map size");
+    // at another size the frame differs: the size used was the file's
+    let other = capture(&Run { map: Some(1024), ..run }, false);
+    assert!(other.visibility != c.visibility, "the tuned map size made no difference");
 }
