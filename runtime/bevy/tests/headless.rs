@@ -329,6 +329,15 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
     }
 }
 
+/// Pixels whose visibility inside Bevy differs, in any bit, from the runtime alone's.
+fn differing(c: &Captured) -> usize {
+    c.visibility
+        .iter()
+        .zip(&c.alone)
+        .filter(|(a, b)| a.to_bits() != b.to_bits())
+        .count()
+}
+
 fn floats(b: &[u8]) -> Vec<f32> {
     b.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
 }
@@ -673,12 +682,7 @@ fn sshc_inside_bevy_equals_the_runtime_alone() {
     for technique in ["pcss", "penumbra-limit-maps"] {
         let c = capture(&Run::of(technique), false);
         assert_eq!(c.alone.len(), c.visibility.len(), "{technique}");
-        let differ = c
-            .visibility
-            .iter()
-            .zip(&c.alone)
-            .filter(|(a, b)| a.to_bits() != b.to_bits())
-            .count();
+        let differ = differing(&c);
         assert_eq!(differ, 0, "{technique}: {differ} pixels differ from the runtime alone");
         let (penumbra, umbra) = penumbra_and_umbra(&c.alone);
         assert!(
@@ -702,12 +706,7 @@ fn spawned_and_despawned_entities_change_the_scene_in_place_and_frame_as_the_run
         },
         false,
     );
-    let differ = c
-        .visibility
-        .iter()
-        .zip(&c.alone)
-        .filter(|(a, b)| a.to_bits() != b.to_bits())
-        .count();
+    let differ = differing(&c);
     assert_eq!(differ, 0, "{differ} pixels differ from the runtime alone after the spawn");
 }
 
@@ -780,12 +779,7 @@ fn a_gltf_scene_loaded_by_bevy_gets_sshcs_shadow() {
         false,
     );
     assert!(with.visibility != without.visibility, "the glTF tower casts nothing");
-    let differ = with
-        .visibility
-        .iter()
-        .zip(&with.alone)
-        .filter(|(a, b)| a.to_bits() != b.to_bits())
-        .count();
+    let differ = differing(&with);
     assert_eq!(differ, 0, "{differ} pixels differ from the runtime alone with the glTF scene");
 }
 
@@ -893,12 +887,7 @@ fn the_jittered_projection_of_temporal_anti_aliasing_is_followed() {
         false,
     );
     assert!(jittered.visibility != still.visibility, "the jitter moved nothing");
-    let differ = jittered
-        .visibility
-        .iter()
-        .zip(&jittered.alone)
-        .filter(|(a, b)| a.to_bits() != b.to_bits())
-        .count();
+    let differ = differing(&jittered);
     assert_eq!(
         differ, 0,
         "{differ} pixels differ from the runtime alone on the jittered projection"
@@ -916,12 +905,7 @@ fn a_tuned_technique_runs_at_its_own_map_size() {
         ..Run::of("pcss")
     };
     let c = capture(&run, false);
-    let differ = c
-        .visibility
-        .iter()
-        .zip(&c.alone)
-        .filter(|(a, b)| a.to_bits() != b.to_bits())
-        .count();
+    let differ = differing(&c);
     assert_eq!(differ, 0, "{differ} pixels differ from the runtime alone at the tuned map size");
     // at another size the frame differs: the size used was the file's
     let other = capture(&Run { map: Some(1024), ..run }, false);
