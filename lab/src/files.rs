@@ -35,6 +35,15 @@ pub fn output_folder(dir: &Path, option: &str, path: &Path) -> Result<(), String
     if dir.is_dir() {
         return Ok(());
     }
+    // a file where a folder must be, said as such (not "File exists" or "Not a directory")
+    if let Some(file) = dir.ancestors().find(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir()) {
+        return Err(format!(
+            "error: `{option} {}`: cannot create the folder `{}`: `{}` is a file, not a folder",
+            path.display(),
+            dir.display(),
+            file.display()
+        ));
+    }
     std::fs::create_dir_all(dir).map_err(|e| {
         format!(
             "error: `{option} {}`: cannot create the folder `{}`: {e}; name a file in a folder that exists or can be made",

@@ -1815,7 +1815,9 @@ fn outputs_in_missing_folders_are_created_or_refused_before_rendering() {
         let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
         assert!(!out.status.success(), "{command}: {stdout}");
         assert!(
-            stderr.contains("`-o ") && stderr.contains("cannot create the folder") && stderr.contains(&file.display().to_string()),
+            stderr.contains("`-o ")
+                && stderr.contains("cannot create the folder")
+                && stderr.contains(&format!("`{}` is a file, not a folder", file.display())),
             "{command}: {stderr}"
         );
         // nothing rendered: the device was never asked for, no line printed
