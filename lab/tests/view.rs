@@ -361,6 +361,8 @@ fn frames_on_a_technique_that_does_not_compile_fail_with_the_diagnostic_on_stder
     ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "exited 0 on a technique that does not compile:\n{stderr}");
+    // the window (with its diagnostics) is still written, as asked
+    assert!(shot.is_file(), "no screenshot written:\n{stderr}");
     let located = format!("{}:", technique.display());
     assert!(stderr.contains(&located) && stderr.contains("Parm"), "{stderr}");
     let at = &stderr[stderr.find(&located).unwrap() + located.len()..];
