@@ -17,6 +17,42 @@ pub fn writable(path: &Path) -> Result<(), String> {
     }
 }
 
+/// Readies an output named by `option` before the long work starts (issue 51): refuses
+/// what [`writable`] refuses, and creates the folders of `path` that are missing, or says
+/// why they cannot be made (a file where a folder must be, no permission), so that no
+/// command renders a frame and then fails to write it.
+pub fn output_file(path: &Path, option: &str) -> Result<(), String> {
+    writable(path)?;
+    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) => output_folder(dir, option, path),
+        None => Ok(()),
+    }
+}
+
+/// Creates the folder `dir` (and those above it) where missing, for the output `path` named
+/// by `option` (`path` is `dir` itself for an option that names a folder).
+pub fn output_folder(dir: &Path, option: &str, path: &Path) -> Result<(), String> {
+    if dir.is_dir() {
+        return Ok(());
+    }
+    // a file where a folder must be, said as such (not "File exists" or "Not a directory")
+    if let Some(file) = dir.ancestors().find(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir()) {
+        return Err(format!(
+            "error: `{option} {}`: cannot create the folder `{}`: `{}` is a file, not a folder",
+            path.display(),
+            dir.display(),
+            file.display()
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| {
+        format!(
+            "error: `{option} {}`: cannot create the folder `{}`: {e}; name a file in a folder that exists or can be made",
+            path.display(),
+            dir.display()
+        )
+    })
+}
+
 /// The one writer of every file a command writes whole (issue 48, item 15): `contents`
 /// to `path`, refusing where something other than a regular file stands there. The bytes
 /// go to a temporary file of its own beside `path` (created exclusively, so never through

@@ -157,8 +157,25 @@ fn compile_reported(common: &Common) -> Result<sshc::Compiled, String> {
     Ok(c)
 }
 
+/// Where XDG_RUNTIME_DIR is unset, sets it to a private folder of this process (0700,
+/// removed when the returned guard drops) before any thread starts: the Vulkan loader and
+/// Mesa read it on every device and print `error: XDG_RUNTIME_DIR ...` without it (issue 51).
+/// A value already set is left as it is.
+fn private_runtime_dir() -> Option<tempfile::TempDir> {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|v| !v.is_empty()) {
+        return None;
+    }
+    let dir = tempfile::Builder::new().prefix("sshc-runtime-").tempdir().ok()?;
+    // SAFETY: called from `main` before any thread is started (nothing else reads or
+    // writes the environment yet), as `set_var` requires.
+    unsafe { std::env::set_var("XDG_RUNTIME_DIR", dir.path()) };
+    Some(dir)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // kept to the end of `main`: the folder goes when the command is done
+    let _runtime_dir = private_runtime_dir();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {

@@ -13,6 +13,22 @@ use sshc_runtime::gpu::{CameraOutput, Gpu, RuntimeError};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
+/// The repository sshc's bundled files (scenes/, techniques/) come from, whatever the
+/// working folder (issue 51): the first folder above the running binary that holds both
+/// (a build under the repository's `target/`), else the one this crate was built from.
+pub fn repository() -> Option<PathBuf> {
+    let is_root = |d: &Path| d.join("scenes").is_dir() && d.join("techniques").is_dir();
+    let beside_binary = std::env::current_exe()
+        .ok()
+        .and_then(|exe| exe.ancestors().skip(1).find(|d| is_root(d)).map(Path::to_path_buf));
+    beside_binary.or_else(|| {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .parent()
+            .filter(|d| is_root(d))
+            .map(Path::to_path_buf)
+    })
+}
+
 /// Reads a text file, with the path in the error.
 pub fn read(path: &Path) -> Result<String, String> {
     read_capped(path, sshc_scene::MAX_TEXT_BYTES)
@@ -24,7 +40,7 @@ pub fn read_capped(path: &Path, max: u64) -> Result<String, String> {
     sshc_scene::read_text(path, max).map_err(|e| format!("error: cannot read `{}`: {e}", path.display()))
 }
 
-pub use crate::files::{append_to, save_image, writable, write_new};
+pub use crate::files::{append_to, output_file, output_folder, save_image, writable, write_new};
 
 /// Prints diagnostics against their source file on standard error (coloured on a terminal).
 pub fn report(diags: &Diagnostics, path: &Path, source: &str) {

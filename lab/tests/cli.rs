@@ -1755,3 +1755,122 @@ fn messages_name_the_option_the_file_and_the_unit_at_fault() {
     );
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Issue 51: `render`, `compare` and `truth` create the folders of their outputs where
+/// missing, and refuse at once (before any frame is rendered, naming the option) an output
+/// whose folder cannot be made.
+#[test]
+fn outputs_in_missing_folders_are_created_or_refused_before_rendering() {
+    let dir = temp_dir("folders");
+    let render = dir.join("a/b/render.png");
+    let vis = dir.join("c/vis.pfm");
+    ok(&[
+        "render",
+        "techniques/hard.ron",
+        "--scene",
+        "scenes/triangle.ron",
+        "--size",
+        "8x8",
+        "--shadow-map",
+        "16",
+        "-o",
+        render.to_str().unwrap(),
+        "--visibility",
+        vis.to_str().unwrap(),
+    ]);
+    assert!(render.is_file() && vis.is_file());
+    let truth = dir.join("d/e/truth.pfm");
+    let se = dir.join("f/se.pfm");
+    let fast_truth = ["--size", "8x8", "--samples", "4", "--runs", "2", "--no-cache"];
+    let mut args = vec!["truth", "--scene", "scenes/edge.ron", "-o", truth.to_str().unwrap()];
+    args.extend(["--std-error", se.to_str().unwrap()]);
+    args.extend(fast_truth);
+    ok(&args);
+    assert!(truth.is_file() && dir.join("d/e/truth.png").is_file() && se.is_file());
+    let compare = dir.join("g/h/compare.png");
+    let mut args = vec!["compare", "techniques/hard.ron", "--scene", "scenes/edge.ron"];
+    args.extend(["-o", compare.to_str().unwrap(), "--frames", "1", "--stability-frames", "0"]);
+    args.extend(fast_truth);
+    ok(&args);
+    assert!(compare.is_file());
+
+    // a file where a folder must be: refused before the GPU is touched
+    let file = dir.join("file");
+    std::fs::write(&file, "x").unwrap();
+    let inside = file.join("sub/out.png");
+    let inside = inside.to_str().unwrap();
+    let inside_pfm = inside.replace(".png", ".pfm");
+    for (command, args) in [
+        (
+            "render",
+            vec!["render", "techniques/hard.ron", "--scene", "scenes/triangle.ron", "-o", inside],
+        ),
+        (
+            "compare",
+            vec!["compare", "techniques/hard.ron", "--scene", "scenes/edge.ron", "-o", inside],
+        ),
+        ("truth", vec!["truth", "--scene", "scenes/edge.ron", "-o", &inside_pfm]),
+    ] {
+        let out = sshc(&args);
+        let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+        assert!(!out.status.success(), "{command}: {stdout}");
+        assert!(
+            stderr.contains("`-o ")
+                && stderr.contains("cannot create the folder")
+                && stderr.contains(&format!("`{}` is a file, not a folder", file.display())),
+            "{command}: {stderr}"
+        );
+        // nothing rendered: the device was never asked for, no line printed
+        assert!(stdout.is_empty(), "{command} worked before refusing:\n{stdout}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 51: `verify`'s default scene inputs (the bundled bunny and fence) come from the
+/// repository, not the working folder: run from a folder holding a partial `scenes/` (a
+/// bunny.ron without its mesh), it verifies both scenes.
+#[test]
+fn verify_finds_its_default_scenes_from_any_working_folder() {
+    let dir = temp_dir("verify-cwd");
+    std::fs::create_dir_all(dir.join("scenes")).unwrap();
+    std::fs::copy(root().join("scenes/bunny.ron"), dir.join("scenes/bunny.ron")).unwrap();
+    let technique = root().join("techniques/hard.ron");
+    let out = command(&["verify", technique.to_str().unwrap(), "--fields", "ramp"])
+        .current_dir(&dir)
+        .output()
+        .expect("sshc runs");
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{stdout}\n{stderr}");
+    for input in ["| ramp", "| bunny", "| fence"] {
+        assert!(stdout.contains(input), "`{input}` missing:\n{stdout}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 51: a GPU command run with XDG_RUNTIME_DIR unset prints no `XDG_RUNTIME_DIR`
+/// line (the Vulkan loader's and Mesa's complaint) and still works.
+#[test]
+fn a_gpu_command_without_xdg_runtime_dir_prints_no_noise_about_it() {
+    let dir = temp_dir("xdg");
+    let png = dir.join("r.png");
+    let out = command(&[
+        "render",
+        "techniques/hard.ron",
+        "--scene",
+        "scenes/triangle.ron",
+        "--size",
+        "8x8",
+        "--shadow-map",
+        "16",
+        "-o",
+        png.to_str().unwrap(),
+    ])
+    .env_remove("XDG_RUNTIME_DIR")
+    .output()
+    .expect("sshc runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(png.is_file());
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

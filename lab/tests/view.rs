@@ -16,6 +16,13 @@ const LIMIT: Duration = Duration::from_secs(240);
 
 /// Runs `sshc view ARGS` under its own virtual X server; returns (success, stdout+stderr).
 fn view(args: &[&str]) -> (bool, String) {
+    let out = view_output(args);
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    (out.status.success(), text)
+}
+
+/// Runs `sshc view ARGS` under its own virtual X server; returns what it did.
+fn view_output(args: &[&str]) -> std::process::Output {
     let xvfb = which("xvfb-run").unwrap_or_else(|| {
         panic!("xvfb-run is missing: `sshc view`'s tests open real windows on a virtual X server (as root, `scripts/setup.sh --test` installs it; or `apt-get install -y xvfb xauth`)")
     });
@@ -51,9 +58,7 @@ fn view(args: &[&str]) -> (bool, String) {
         }
         std::thread::sleep(Duration::from_millis(50));
     }
-    let out = child.wait_with_output().expect("its output");
-    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-    (out.status.success(), text)
+    child.wait_with_output().expect("its output")
 }
 
 /// `sshc view TECHNIQUE --scene SCENE --size SIZE --shadow-map 256 --script S --log L`.
@@ -330,6 +335,44 @@ fn without_a_display_the_viewer_says_how_to_get_one_and_frames_end_a_run() {
     let img = png(&shot);
     assert_eq!((img.width(), img.height()), (96, 64));
     assert!(colours_below_panels(&img) > 4);
+}
+
+/// Issue 51: `--frames N --screenshot` on a technique that does not compile exits with a
+/// failing status and prints the diagnostic (file:line:column) on standard error, not only
+/// in the window: a script can tell.
+#[test]
+fn frames_on_a_technique_that_does_not_compile_fail_with_the_diagnostic_on_stderr() {
+    let dir = temp_dir("frames-broken");
+    let technique = dir.join("broken.ron");
+    let source = std::fs::read_to_string(root().join("techniques/pcss.ron")).expect("pcss.ron reads");
+    assert!(source.contains("\"bias\": Param("));
+    std::fs::write(&technique, source.replace("\"bias\": Param(", "\"bias\": Parm(")).expect("written");
+    let shot = dir.join("shot.png");
+    let out = view_output(&[
+        technique.to_str().unwrap(),
+        "--scene",
+        "scenes/contact.ron",
+        "--size",
+        "96x64",
+        "--frames",
+        "3",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "exited 0 on a technique that does not compile:\n{stderr}");
+    // the window (with its diagnostics) is still written, as asked
+    assert!(shot.is_file(), "no screenshot written:\n{stderr}");
+    let located = format!("{}:", technique.display());
+    assert!(stderr.contains(&located) && stderr.contains("Parm"), "{stderr}");
+    let at = &stderr[stderr.find(&located).unwrap() + located.len()..];
+    let (line, rest) = at.split_once(':').unwrap_or_else(|| panic!("{stderr}"));
+    let column: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    assert!(
+        line.parse::<u32>().is_ok() && column.parse::<u32>().is_ok(),
+        "no line:column after the path: {stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Splits a command line as a POSIX shell does for the quoting `ViewState::command` writes

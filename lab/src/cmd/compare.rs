@@ -104,6 +104,8 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
             a.stability_frames
         ));
     }
+    // the image's folder made (or refused) before the frames are rendered
+    crate::session::output_file(&a.out, "-o")?;
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, loaded) = a.over.load(&gpu, &a.input, &a.scene)?;
     let light = scene

@@ -62,6 +62,20 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
     {
         return Err(format!("error: --bandwidth {b}: a bandwidth is a positive number of GB/s"));
     }
+    // every output's folder made (or refused) before the frame is rendered
+    crate::session::output_file(&a.out, "-o")?;
+    for (p, option) in [
+        (&a.visibility, "--visibility"),
+        (&a.positions, "--positions"),
+        (&a.normals, "--normals"),
+    ] {
+        if let Some(p) = p {
+            crate::session::output_file(p, option)?;
+        }
+    }
+    if let Some(dir) = &a.dump {
+        crate::session::output_folder(dir, "--dump", dir)?;
+    }
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, mut loaded) = a.over.load(&gpu, &a.input, &a.scene)?;
     // a dump reads every light's textures back: each light keeps its own

@@ -54,6 +54,12 @@ pub fn truth(a: TruthArgs) -> Result<(), String> {
     }
     let (w, h) = scene.camera_size();
     a.truth.check(u64::from(w) * u64::from(h))?;
+    // the outputs' folders made (or refused) before the truth is computed
+    crate::session::output_file(&a.out, "-o")?;
+    crate::session::output_file(&png_beside(&a.out), "-o")?;
+    if let Some(p) = &a.std_error {
+        crate::session::output_file(p, "--std-error")?;
+    }
     let gpu = Gpu::new().map_err(rt)?;
     let loaded = compile_technique(&gpu, Path::new("techniques/hard.ron"), HARD, &Default::default())?;
     let mut ex = crate::bind::bind_scene(&loaded, &scene, false)?;

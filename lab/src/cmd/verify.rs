@@ -62,14 +62,22 @@ pub struct VerifyArgs {
     images: Option<PathBuf>,
 }
 
-/// The bundled scenes' folder: `scenes/` under the working directory, or beside the crate.
-fn bundled_scenes() -> Option<PathBuf> {
-    [
-        PathBuf::from("scenes"),
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("scenes"),
-    ]
-    .into_iter()
-    .find(|p| p.join("bunny.ron").is_file())
+/// The scenes `verify` takes as inputs when `--depth-of` names none.
+const DEFAULT_SCENES: [&str; 2] = ["bunny.ron", "fence.ron"];
+
+/// The bundled scenes' folder, found from the repository (the binary's or the one it was
+/// built from, [`crate::session::repository`]), never the working folder (issue 51): a
+/// `scenes/` where the command runs is not sshc's.
+fn bundled_scenes() -> Result<PathBuf, String> {
+    crate::session::repository()
+        .map(|r| r.join("scenes"))
+        .filter(|d| DEFAULT_SCENES.iter().all(|s| d.join(s).is_file()))
+        .ok_or_else(|| {
+            format!(
+                "error: verify's default scene inputs ({}) were not found in a repository above the `sshc` binary or where it was built: name scenes with `--depth-of SCENE.ron`",
+                DEFAULT_SCENES.join(", ")
+            )
+        })
 }
 
 fn compile(path: &Path, args: &VerifyArgs, overrides: bool) -> Result<sshc::Compiled, String> {
@@ -100,6 +108,9 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
         cascade_band: args.cascade_band,
     };
     opts.check().map_err(|e| format!("error: {e}"))?;
+    if let Some(out) = &args.out {
+        crate::session::output_file(out, "--out")?;
+    }
     let gpu = Gpu::new().map_err(rt)?;
     let n = args.shadow_map;
     // a technique with Geometry passes is verified from rasterised casters; the others from
@@ -126,20 +137,28 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
             source: Source::Casters(vertices, meshes),
         });
     }
-    let scenes = if args.scenes.is_empty() {
-        bundled_scenes()
-            .map(|d| vec![d.join("bunny.ron"), d.join("fence.ron")])
-            .unwrap_or_default()
+    let defaults = args.scenes.is_empty();
+    let scenes = if defaults {
+        let dir = bundled_scenes()?;
+        DEFAULT_SCENES.iter().map(|s| dir.join(s)).collect()
     } else {
         args.scenes.clone()
+    };
+    // a default scene that fails to load says how to name another
+    let named = |e: String| {
+        if defaults {
+            format!("{e}\n(a default scene input of verify: name other scenes with `--depth-of SCENE.ron`)")
+        } else {
+            e
+        }
     };
     for s in &scenes {
         let name = s.file_stem().map_or("scene".into(), |x| x.to_string_lossy().into_owned());
         let source = if geometry {
-            let (vertices, meshes) = verify::scene_casters(s)?;
+            let (vertices, meshes) = verify::scene_casters(s).map_err(named)?;
             Source::Casters(vertices, meshes)
         } else {
-            Source::Depth(verify::scene_depth(&gpu, s, n)?)
+            Source::Depth(verify::scene_depth(&gpu, s, n).map_err(named)?)
         };
         inputs.push(Input { name, source });
     }

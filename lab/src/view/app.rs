@@ -984,7 +984,12 @@ impl App {
         }
         if script_done || (frames_done && self.screenshot.is_none()) {
             self.log.write(self.frame, json!({"event": "exit"}));
-            self.finish(event_loop, Ok(()));
+            let end = if script_done {
+                Ok(())
+            } else {
+                frames_end(self.diagnostics.as_deref())
+            };
+            self.finish(event_loop, end);
         }
         Ok(())
     }
@@ -1097,6 +1102,19 @@ impl App {
 }
 
 /// A view's `sshc render` line with its cascade options.
+/// How a `--frames` run ends (issue 51): where the technique (or its scene) did not compile
+/// or bind, with a failing status and its diagnostics (file:line:column), printed on
+/// standard error by `main`, so that a script can tell; the window showed them too.
+fn frames_end(diagnostics: Option<&str>) -> Result<(), String> {
+    match diagnostics {
+        Some(d) => Err(format!(
+            "{}\nerror: `sshc view --frames`: the technique does not compile (above); the window drew the diagnostics, not the technique",
+            d.trim_end()
+        )),
+        None => Ok(()),
+    }
+}
+
 fn with_words(mut command: String, cascading: &crate::bind::Cascading) -> String {
     for w in cascading.words() {
         command.push(' ');
