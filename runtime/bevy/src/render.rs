@@ -133,7 +133,13 @@ pub struct Extracted {
     pub light: Option<ExtractedLight>,
     /// Techniques loaded or reloaded since the last frame.
     pub techniques: Vec<(AssetId<SshcTechnique>, SshcTechnique)>,
+    /// Meshes entities place whose asset is not in the main world yet: frames waited.
+    pub missing: HashMap<AssetId<Mesh>, u32>,
 }
+
+/// Frames a mesh asset an entity places may be missing from the main world (still
+/// loading) before it is refused (not kept there).
+pub const MISSING_FRAMES: u32 = 600;
 
 /// sshc's stages in the render world.
 #[derive(Resource)]
@@ -244,13 +250,26 @@ pub fn extract(
         }
         let id = mesh.0.id();
         if !render.knows_mesh(id) && seen.insert(id) {
-            out.new_meshes.push((
-                id,
-                meshes.get(id).map_or_else(
-                    || Err("its mesh asset is not loaded (or not kept in the main world: `RenderAssetUsages::MAIN_WORLD`)".into()),
-                    convert_mesh,
-                ),
-            ));
+            // a mesh still loading waits; one absent for MISSING_FRAMES frames is refused
+            // (its data is not kept in the main world)
+            match meshes.get(id) {
+                Some(m) => {
+                    out.missing.remove(&id);
+                    out.new_meshes.push((id, convert_mesh(m)));
+                }
+                None => {
+                    let frames = out.missing.entry(id).or_insert(0);
+                    *frames += 1;
+                    if *frames == MISSING_FRAMES {
+                        out.new_meshes.push((
+                            id,
+                            Err(format!(
+                                "its mesh asset was not in the main world for {MISSING_FRAMES} frames: sshc reads the vertices there (`RenderAssetUsages::MAIN_WORLD`)"
+                            )),
+                        ));
+                    }
+                }
+            }
         }
         out.instances.push(ExtractedInstance {
             entity,
