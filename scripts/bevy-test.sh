@@ -21,8 +21,12 @@ RUSTC_WORKSPACE_WRAPPER="$clippy_driver" CLIPPY_ARGS="-D__CLIPPY_HACKERY__warnin
     cargo test --ignore-rust-version --all-targets --no-run --quiet
 
 step "headless tests"
+# each capture is an app in a process of its own (the tests run this binary again), so
+# plain `cargo test` works as well as nextest
+runner=(nextest run)
+cargo nextest --version >/dev/null 2>&1 || runner=(test)
 RUSTC_WORKSPACE_WRAPPER="$clippy_driver" CLIPPY_ARGS="-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__" \
-    timeout 900 cargo nextest run --ignore-rust-version --no-fail-fast
+    timeout 900 cargo "${runner[@]}" --ignore-rust-version --no-fail-fast
 
 step "the example, headless: four frames under the orbiting sun"
 rm -rf "$out"
