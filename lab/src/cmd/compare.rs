@@ -104,10 +104,11 @@ pub fn compare(a: CompareArgs) -> Result<(), String> {
             a.stability_frames
         ));
     }
-    // the image's folder made (or refused) before the frames are rendered
-    crate::session::output_file(&a.out, "-o")?;
     let gpu = Gpu::new().map_err(rt)?;
     let (scene, loaded) = a.over.load(&gpu, &a.input, &a.scene)?;
+    // the image's folder made (or refused) once the inputs are read and checked, before
+    // the frames are rendered
+    crate::session::output_file(&a.out, "-o")?;
     let light = scene
         .lights
         .first()

@@ -62,7 +62,10 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
     {
         return Err(format!("error: --bandwidth {b}: a bandwidth is a positive number of GB/s"));
     }
-    // every output's folder made (or refused) before the frame is rendered
+    let gpu = Gpu::new().map_err(rt)?;
+    let (scene, mut loaded) = a.over.load(&gpu, &a.input, &a.scene)?;
+    // every output's folder made (or refused) once the inputs are read and checked, before
+    // the frame is rendered
     crate::session::output_file(&a.out, "-o")?;
     for (p, option) in [
         (&a.visibility, "--visibility"),
@@ -76,8 +79,6 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
     if let Some(dir) = &a.dump {
         crate::session::output_folder(dir, "--dump", dir)?;
     }
-    let gpu = Gpu::new().map_err(rt)?;
-    let (scene, mut loaded) = a.over.load(&gpu, &a.input, &a.scene)?;
     // a dump reads every light's textures back: each light keeps its own
     loaded.limits.share_light_textures = a.dump.is_none();
     // Several lights: each light gets its own resources and passes in the same
