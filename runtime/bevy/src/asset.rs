@@ -50,7 +50,7 @@ impl std::error::Error for TechniqueError {}
 pub fn compile(path: &str, bytes: &[u8]) -> Result<sshc::Compiled, TechniqueError> {
     if bytes.len() > MAX_TECHNIQUE_BYTES {
         return Err(TechniqueError::Read(format!(
-            "{path}: {} bytes, above the {MAX_TECHNIQUE_BYTES} a technique file may have",
+            "{path}: more than the {MAX_TECHNIQUE_BYTES} bytes a technique file may have ({} read)",
             bytes.len()
         )));
     }
@@ -65,8 +65,12 @@ impl AssetLoader for TechniqueLoader {
 
     async fn load(&self, reader: &mut dyn Reader, _: &(), load_context: &mut LoadContext<'_>) -> Result<SshcTechnique, TechniqueError> {
         let path = load_context.path().to_string();
+        // read at most one byte past the cap: a larger file is refused by `compile`
+        // without being read whole
+        use bevy::tasks::futures_lite::AsyncReadExt;
         let mut bytes = Vec::new();
         reader
+            .take(MAX_TECHNIQUE_BYTES as u64 + 1)
             .read_to_end(&mut bytes)
             .await
             .map_err(|e| TechniqueError::Read(format!("{path}: {e}")))?;
@@ -77,5 +81,20 @@ impl AssetLoader for TechniqueLoader {
 
     fn extensions(&self) -> &[&str] {
         &["technique.ron", "ron"]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_past_the_cap_or_broken_is_refused_naming_it() {
+        let e = compile("t/big.ron", &vec![b' '; MAX_TECHNIQUE_BYTES + 1]).unwrap_err().to_string();
+        assert!(e.starts_with("t/big.ron: more than"), "{e}");
+        let e = compile("t/bad.ron", b"Technique(name: \"x\", passes: [").unwrap_err().to_string();
+        assert!(e.contains("t/bad.ron:1:"), "{e}");
+        let e = compile("t/bin.ron", &[0xff, 0xfe]).unwrap_err().to_string();
+        assert!(e.contains("not UTF-8"), "{e}");
     }
 }

@@ -154,6 +154,10 @@ pub struct SshcRender {
     meshes: HashMap<AssetId<Mesh>, usize>,
     /// Instance order in `scene`: the main-world entity of each instance.
     order: Vec<Entity>,
+    /// The frame's instances by entity (index into the extracted ones), and the entities
+    /// the scene holds: kept across frames so that a frame allocates nothing.
+    wanted: EntityHashMap<usize>,
+    held: bevy::ecs::entity::EntityHashSet,
     /// Meshes or instances added or removed so far (the targets take the scene again when
     /// theirs is older).
     scene_changes: u64,
@@ -197,6 +201,8 @@ impl SshcRender {
             scene: None,
             meshes: HashMap::new(),
             order: Vec::new(),
+            wanted: EntityHashMap::default(),
+            held: Default::default(),
             scene_changes: 0,
             transforms: Vec::new(),
             views: EntityHashMap::default(),
@@ -279,8 +285,8 @@ pub fn extract(
             receives: !no_receive,
         });
     }
-    // a stable draw order: by entity
-    out.instances.sort_by_key(|i| i.entity);
+    // a stable draw order: by entity (each once: an unstable sort, which allocates nothing)
+    out.instances.sort_unstable_by_key(|i| i.entity);
     for e in technique_events.read() {
         if let AssetEvent::LoadedWithDependencies { id } | AssetEvent::Modified { id } = e
             && let Some(t) = techniques.get(*id)
@@ -288,26 +294,42 @@ pub fn extract(
             out.techniques.push((*id, t.clone()));
         }
     }
-    out.light = lights
-        .iter()
-        .find(|(_, s, _)| s.enabled)
-        .map(|(entity, s, transform)| ExtractedLight {
+    // the light, updated in place: a frame whose light and technique are the ones before
+    // allocates nothing (the path is made again only for another technique)
+    let Some((entity, s, transform)) = lights.iter().find(|(_, s, _)| s.enabled) else {
+        out.light = None;
+        return;
+    };
+    let technique = s.technique.id();
+    let failed = match server.get_load_state(technique) {
+        Some(bevy::asset::LoadState::Failed(e)) => Some(Some(e.to_string())),
+        Some(bevy::asset::LoadState::Loaded) => None,
+        _ => Some(None),
+    };
+    let same = out.light.as_ref().is_some_and(|l| l.entity == entity && l.technique == technique);
+    if !same {
+        out.light = Some(ExtractedLight {
             entity,
-            technique: s.technique.id(),
+            technique,
             path: server
-                .get_path(s.technique.id())
+                .get_path(technique)
                 .map_or_else(|| "(a technique not loaded from a file)".into(), |p| p.to_string()),
-            params: s.params.clone(),
-            map_size: s.map_size,
-            direction: transform.back().to_array(),
-            angle_degrees: s.angular_diameter_degrees,
+            params: Vec::new(),
+            map_size: None,
+            direction: [0.0; 3],
+            angle_degrees: 0.0,
             visibility: s.visibility.id(),
-            failed: match server.get_load_state(s.technique.id()) {
-                Some(bevy::asset::LoadState::Failed(e)) => Some(Some(e.to_string())),
-                Some(bevy::asset::LoadState::Loaded) => None,
-                _ => Some(None),
-            },
+            failed: None,
         });
+    }
+    if let Some(l) = &mut out.light {
+        l.params.clone_from(&s.params);
+        l.map_size = s.map_size;
+        l.direction = transform.back().to_array();
+        l.angle_degrees = s.angular_diameter_degrees;
+        l.visibility = s.visibility.id();
+        l.failed = failed;
+    }
 }
 
 /// A Bevy mesh as sshc's: triangle lists with positions and normals, indexed or not.
@@ -369,7 +391,8 @@ pub fn prepare(
             },
         );
     }
-    let Some(light) = extracted.light.clone() else {
+    // taken for the frame and put back after: the next extract updates it in place
+    let Some(light) = extracted.light.take() else {
         return;
     };
     // a file that failed to load (or to reload): a technique loaded before keeps rendering
@@ -400,6 +423,7 @@ pub fn prepare(
         render.logged = message.clone();
     }
     render.status.set(light.entity, message);
+    extracted.light = Some(light);
     times.push(0, start.elapsed().as_secs_f64() * 1e6);
 }
 
@@ -450,22 +474,25 @@ fn prepare_light(
         }
     }
     // instances removed (their entity gone, or its mesh changed), from the last down
-    let wanted: EntityHashMap<&ExtractedInstance> = extracted
-        .instances
-        .iter()
-        .filter(|i| render.meshes.contains_key(&i.mesh))
-        .map(|i| (i.entity, i))
-        .collect();
+    // the frame's wanted instances (entity -> index into the extracted ones) and those the
+    // scene holds: maps kept across frames, cleared, so that a frame allocates nothing
+    render.wanted.clear();
+    for (k, i) in extracted.instances.iter().enumerate() {
+        if render.meshes.contains_key(&i.mesh) {
+            render.wanted.insert(i.entity, k);
+        }
+    }
     for k in (0..render.order.len()).rev() {
-        if !wanted.contains_key(&render.order[k]) {
+        if !render.wanted.contains_key(&render.order[k]) {
             scene.remove_instance(k).map_err(e)?;
             render.order.remove(k);
             render.transforms.remove(k);
             render.scene_changes += 1;
         }
     }
-    let held: std::collections::HashSet<Entity> = render.order.iter().copied().collect();
-    for i in extracted.instances.iter().filter(|i| !held.contains(&i.entity)) {
+    render.held.clear();
+    render.held.extend(render.order.iter().copied());
+    for i in extracted.instances.iter().filter(|i| !render.held.contains(&i.entity)) {
         let Some(&mesh) = render.meshes.get(&i.mesh) else { continue };
         scene
             .add_instance(&sshc_gpu::Instance {
@@ -484,7 +511,7 @@ fn prepare_light(
     // the transforms, written (and the instances placed again) only when one moved
     let mut moved = false;
     for (k, entity) in render.order.iter().enumerate() {
-        if let Some(i) = wanted.get(entity)
+        if let Some(i) = render.wanted.get(entity).map(|&w| &extracted.instances[w])
             && render.transforms[k].map(f32::to_bits) != i.transform.map(f32::to_bits)
         {
             render.transforms[k] = i.transform;
