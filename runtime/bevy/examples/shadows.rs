@@ -1,13 +1,15 @@
 //! A Bevy scene under an orbiting sun with sshc's shadows (docs/bevy.md).
 //!
 //! Windowed: `T` cycles the techniques, `B` toggles Bevy's own shadows for comparison; the
-//! window's title line names the technique and what shades the light.
+//! window's title line names the technique and sshc's GPU time beside Bevy's shadow pass's
+//! (Bevy's render diagnostics, smoothed).
 //!
 //! Headless: `--frames N --out DIR` renders N frames into an image (no window) and writes
 //! each as `DIR/frame-NNN.png`; `--technique NAME` picks the first technique (a bundled one,
 //! `techniques/NAME.ron`), `--bevy` renders Bevy's own shadows instead, `--size W` the
-//! frame's width and height, `--sun-degrees D` the sun's angular diameter (3 by default:
-//! a wide penumbra, to see it at this size).
+//! frame's width and height, `--sun-degrees D` the sun's angular diameter. `--still`,
+//! `--float`, `--light`, `--export` and `--visibility` are the measurement against sshc's
+//! truth (`scripts/bevy-truth.sh`); `--help` lists them all.
 //!
 //! The windowed mode needs the `window` feature (`--features window`).
 //!
@@ -17,11 +19,12 @@
 
 use bevy::app::{AppExit, ScheduleRunnerPlugin};
 use bevy::asset::RenderAssetUsages;
+use bevy::camera::Hdr;
 use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
-use bevy::render::view::Tonemapping;
+use bevy::render::view::{DebandDither, Tonemapping};
 use bevy::window::ExitCondition;
 use bevy_sshc::{SshcShadow, SshcShadowsPlugin, SshcTechnique};
 use std::path::PathBuf;
@@ -29,78 +32,99 @@ use std::path::PathBuf;
 /// The techniques `T` cycles through (bundled files).
 const TECHNIQUES: [&str; 5] = ["pcss", "pcf", "vssm", "mssm", "penumbra-limit-maps"];
 
-#[derive(Resource, Clone, Debug)]
+/// What a shaded frame's light is, for measuring a shadow's visibility from frames
+/// (docs/bevy.md, "Against the truth").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum LightMode {
+    /// The light and its shadow (sshc's, or Bevy's with `--bevy`).
+    Shadowed,
+    /// The light with no shadow at all: sshc off and Bevy's shadow maps off.
+    Unshadowed,
+    /// The light's illuminance 0: the rest of the lighting alone.
+    Off,
+}
+
+/// A Bevy scene under an orbiting sun with sshc's shadows (docs/bevy.md).
+#[derive(Resource, Clone, Debug, clap::Parser)]
 struct Args {
+    /// Headless: frames to render into an image and write (with `--out`).
+    #[arg(long, requires = "out")]
     frames: Option<u32>,
+    /// Headless: the folder the frames are written into (`frame-NNN.png`, or `.pfm` with
+    /// `--float`).
+    #[arg(long, requires = "frames")]
     out: Option<PathBuf>,
+    /// The first technique: a bundled one, `techniques/NAME.ron`.
+    #[arg(long, default_value = TECHNIQUES[0], value_parser = technique_name)]
     technique: String,
+    /// Bevy's own shadows instead of sshc's.
+    #[arg(long)]
     bevy: bool,
+    /// Bevy's PCSS (`DirectionalLight::soft_shadow_size`, its experimental feature; this
+    /// crate's `pcss` feature), with `--bevy`.
+    #[arg(long, value_name = "SIZE", requires = "bevy")]
+    bevy_pcss: Option<f32>,
+    /// The frame's width and height in pixels.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
     size: u32,
+    /// The sun's angular diameter in degrees (3 by default: a wide penumbra, to see it at
+    /// this size).
+    #[arg(long, default_value_t = 3.0, value_parser = sun_degrees)]
     sun_degrees: f32,
     /// Print the plugin's CPU time and the GPU times of sshc's and Bevy's passes.
+    #[arg(long)]
     stats: bool,
     /// Keep Bevy's casters in its shadow maps too (`SshcShadow::keep_bevy_shadow`): both
     /// shadows computed in one run, for `--stats`' ratio.
+    #[arg(long = "keep-bevy-shadow")]
     keep_bevy: bool,
+    /// The sun stays where it is in the first frame.
+    #[arg(long)]
+    still: bool,
+    /// Headless frames in linear light, as one-channel-per-colour float PFM (no tonemapping,
+    /// no dithering): what a visibility is measured from.
+    #[arg(long, requires = "frames")]
+    float: bool,
+    /// What the frame's light is (`unshadowed` and `off` are the two frames a shadow's
+    /// visibility is measured between).
+    #[arg(long, value_enum, default_value_t = LightMode::Shadowed)]
+    light: LightMode,
+    /// With the first frame written, also write the scene as the plugin shades it into
+    /// this folder (`bevy_sshc::ExportScene`), for `sshc truth --scene DIR/scene.ron`.
+    #[arg(long, value_name = "DIR", requires_all = ["frames", "still"])]
+    export: Option<PathBuf>,
+    /// Also write sshc's visibility image of each frame as `visibility-NNN.pfm`.
+    #[arg(long, requires = "frames")]
+    visibility: bool,
 }
 
-fn args() -> Result<Args, String> {
-    let mut a = Args {
-        frames: None,
-        out: None,
-        technique: TECHNIQUES[0].into(),
-        bevy: false,
-        size: 256,
-        sun_degrees: 3.0,
-        stats: false,
-        keep_bevy: false,
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(flag) = it.next() {
-        let mut value = || it.next().ok_or_else(|| format!("{flag} needs a value"));
-        match flag.as_str() {
-            "--frames" => a.frames = Some(value()?.parse().map_err(|e| format!("--frames: {e}"))?),
-            "--out" => a.out = Some(PathBuf::from(value()?)),
-            "--technique" => a.technique = value()?,
-            "--size" => {
-                a.size = value()?.parse().map_err(|e| format!("--size: {e}"))?;
-                if !(16..=4096).contains(&a.size) {
-                    return Err(format!("--size {}: from 16 to 4096", a.size));
-                }
-            }
-            "--bevy" => a.bevy = true,
-            "--stats" => a.stats = true,
-            "--keep-bevy-shadow" => a.keep_bevy = true,
-            "--sun-degrees" => {
-                a.sun_degrees = value()?.parse().map_err(|e| format!("--sun-degrees: {e}"))?;
-                if !(0.0..=30.0).contains(&a.sun_degrees) {
-                    return Err(format!("--sun-degrees {}: from 0 to 30", a.sun_degrees));
-                }
-            }
-            _ => {
-                return Err(format!(
-                    "unknown argument `{flag}` (--frames N --out DIR --technique NAME --size W --sun-degrees D --bevy --stats --keep-bevy-shadow)"
-                ));
-            }
-        }
+fn technique_name(s: &str) -> Result<String, String> {
+    match !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '-') {
+        true => Ok(s.to_string()),
+        false => Err("a bundled technique's name (letters, digits and '-')".into()),
     }
-    if a.frames.is_some() != a.out.is_some() {
-        return Err("--frames and --out go together (headless)".into());
+}
+
+fn sun_degrees(s: &str) -> Result<f32, String> {
+    let d: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    match (0.0..=30.0).contains(&d) {
+        true => Ok(d),
+        false => Err("from 0 to 30".into()),
     }
-    if !a.technique.chars().all(|c| c.is_ascii_alphanumeric() || c == '-') {
-        return Err(format!("--technique `{}`: a bundled technique's name", a.technique));
-    }
-    Ok(a)
 }
 
 fn main() -> AppExit {
-    let args = match args() {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return AppExit::error();
-        }
-    };
+    let args = <Args as clap::Parser>::parse();
+    if args.bevy_pcss.is_some() && !cfg!(feature = "pcss") {
+        eprintln!("error: --bevy-pcss needs this crate's `pcss` feature (Bevy's `experimental_pbr_pcss`)");
+        return AppExit::error();
+    }
+    if let Some(out) = &args.out
+        && let Err(e) = std::fs::create_dir_all(out)
+    {
+        eprintln!("error: {}: {e}", out.display());
+        return AppExit::error();
+    }
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
     let assets = AssetPlugin {
         file_path: root.into(),
@@ -128,7 +152,9 @@ fn main() -> AppExit {
                 .add_plugins(ScheduleRunnerPlugin::run_loop(std::time::Duration::ZERO));
         }
         None if cfg!(feature = "window") => {
-            app.add_plugins(DefaultPlugins.set(assets)).add_systems(Update, keys);
+            app.add_plugins(DefaultPlugins.set(assets))
+                .add_plugins(bevy::render::diagnostic::RenderDiagnosticsPlugin)
+                .add_systems(Update, keys);
         }
         None => {
             eprintln!("error: the windowed example needs the `window` feature (`--features window`); headless: --frames N --out DIR");
@@ -136,8 +162,10 @@ fn main() -> AppExit {
         }
     }
     if args.stats {
-        app.add_plugins(bevy::render::diagnostic::RenderDiagnosticsPlugin)
-            .add_systems(Update, frame_wall);
+        if args.frames.is_some() {
+            app.add_plugins(bevy::render::diagnostic::RenderDiagnosticsPlugin);
+        }
+        app.add_systems(Update, frame_wall);
     }
     app.add_plugins(SshcShadowsPlugin)
         .insert_resource(args)
@@ -192,19 +220,32 @@ fn setup(
     ));
     let technique: Handle<SshcTechnique> = server.load(format!("techniques/{}.ron", args.technique));
     let mut shadow = SshcShadow::new(technique, &mut images);
-    shadow.enabled = !args.bevy;
+    shadow.enabled = !args.bevy && args.light == LightMode::Shadowed;
     shadow.angular_diameter_degrees = args.sun_degrees;
     shadow.keep_bevy_shadow = args.keep_bevy;
-    commands.spawn((
-        DirectionalLight {
-            shadow_maps_enabled: true,
-            illuminance: 8000.0,
-            ..default()
-        },
-        sun_at(0),
-        Sun,
-        shadow,
-    ));
+    let visibility = shadow.visibility.clone();
+    let map_size = shadow.map_size.unwrap_or(bevy_sshc::DEFAULT_MAP_SIZE);
+    #[cfg_attr(not(feature = "pcss"), allow(unused_mut))]
+    let mut light = DirectionalLight {
+        shadow_maps_enabled: args.light == LightMode::Shadowed,
+        illuminance: if args.light == LightMode::Off { 0.0 } else { 8000.0 },
+        ..default()
+    };
+    #[cfg(feature = "pcss")]
+    {
+        light.soft_shadow_size = args.bevy_pcss;
+    }
+    // Bevy's shadow as a user would set it for this small scene: one cascade over the
+    // whole view (its default, four up to 150 units, spreads the map over empty space),
+    // at sshc's map size, so that both shadows are compared at one resolution
+    let cascades = bevy::light::CascadeShadowConfigBuilder {
+        num_cascades: 1,
+        maximum_distance: 12.0,
+        first_cascade_far_bound: 12.0,
+        ..default()
+    };
+    commands.insert_resource(bevy::light::DirectionalLightShadowMap { size: map_size as usize });
+    commands.spawn((light, cascades.build(), sun_at(0), Sun, shadow));
     commands.insert_resource(GlobalAmbientLight {
         brightness: 400.0,
         ..default()
@@ -212,6 +253,13 @@ fn setup(
     let eye = Transform::from_xyz(-3.0, 3.2, 4.2).looking_at(Vec3::new(0.0, 0.4, 0.0), Vec3::Y);
     match args.frames {
         Some(_) => {
+            // linear light (`--float`): an HDR main pass, no tonemapping, no dithering, into
+            // 32-bit floats; else sRGB bytes under a tonemapper that needs no tables
+            // (Bevy's default reads them: feature `window`)
+            let (format, bytes) = match args.float {
+                true => (TextureFormat::Rgba32Float, 16),
+                false => (TextureFormat::Rgba8UnormSrgb, 4),
+            };
             let mut image = Image::new_fill(
                 Extent3d {
                     width: args.size,
@@ -219,20 +267,21 @@ fn setup(
                     depth_or_array_layers: 1,
                 },
                 TextureDimension::D2,
-                &[0, 0, 0, 255],
-                TextureFormat::Rgba8UnormSrgb,
+                &vec![0; bytes],
+                format,
                 RenderAssetUsages::default(),
             );
             image.texture_descriptor.usage = TextureUsages::RENDER_ATTACHMENT | TextureUsages::COPY_SRC | TextureUsages::TEXTURE_BINDING;
             let target = images.add(image);
-            // a tonemapper that needs no tables (Bevy's default reads them: feature `window`)
-            commands.spawn((
-                Camera3d::default(),
-                Tonemapping::Reinhard,
-                RenderTarget::Image(target.clone().into()),
-                eye,
-            ));
+            let mut camera = commands.spawn((Camera3d::default(), RenderTarget::Image(target.clone().into()), eye));
+            match args.float {
+                true => camera.insert((Hdr, Tonemapping::None, DebandDither::Disabled)),
+                false => camera.insert(Tonemapping::Reinhard),
+            };
             commands.spawn(Readback::texture(target)).observe(save_frame);
+            if args.visibility {
+                commands.spawn(Readback::texture(visibility)).observe(save_visibility);
+            }
         }
         None => {
             commands.spawn((Camera3d::default(), eye));
@@ -247,16 +296,18 @@ fn sun_at(f: u32) -> Transform {
     Transform::from_translation(to_sun * 10.0).looking_at(Vec3::ZERO, Vec3::Y)
 }
 
-fn orbit(mut frame: ResMut<Frame>, mut sun: Query<&mut Transform, With<Sun>>) {
+fn orbit(mut frame: ResMut<Frame>, args: Res<Args>, mut sun: Query<&mut Transform, With<Sun>>) {
     for mut t in &mut sun {
-        *t = sun_at(frame.0);
+        *t = sun_at(if args.still { 0 } else { frame.0 });
     }
     frame.0 += 1;
 }
 
-/// Each frame's pixels, read back, as a PNG; the app exits after the last.
+/// Each frame's pixels, read back, as a PNG (or a float PFM with `--float`); the app exits
+/// after the last. With `--export`, the scene is written with the first.
 fn save_frame(
     done: On<ReadbackComplete>,
+    mut commands: Commands,
     args: Res<Args>,
     frame: Res<Frame>,
     mut exit: MessageWriter<AppExit>,
@@ -267,29 +318,87 @@ fn save_frame(
         return;
     };
     // the first frames render before the pipelines are ready: wait for them to settle
-    let index = frame.0.saturating_sub(1);
-    if index < WARM_FRAMES {
+    if frame.0.saturating_sub(1) < WARM_FRAMES || *saved >= frames {
         return;
     }
-    let path = out.join(format!("frame-{:03}.png", *saved));
     let size = args.size;
-    if let Err(e) = std::fs::create_dir_all(out).map_err(|e| e.to_string()).and_then(|_| {
-        // rows come padded to wgpu's copy alignment (256 bytes)
-        let (row, stride) = (size as usize * 4, (size as usize * 4).next_multiple_of(256));
-        let pixels: Vec<u8> = done.data.chunks(stride).flat_map(|r| &r[..row.min(r.len())]).copied().collect();
-        image::RgbaImage::from_raw(size, size, pixels)
-            .ok_or_else(|| format!("{} bytes for a {size}^2 frame", done.data.len()))?
-            .save(&path)
-            .map_err(|e| e.to_string())
-    }) {
+    let path = out.join(format!("frame-{:03}.{}", *saved, if args.float { "pfm" } else { "png" }));
+    let written = match args.float {
+        true => floats(&done.data, size, 4).and_then(|rgba| {
+            let rgb = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+            write_pfm(&path, size, true, rgb)
+        }),
+        false => unpadded(&done.data, size, 4).and_then(|pixels| {
+            image::RgbaImage::from_raw(size, size, pixels)
+                .ok_or_else(|| format!("{} bytes for a {size}^2 frame", done.data.len()))?
+                .save(&path)
+                .map_err(|e| e.to_string())
+        }),
+    };
+    if let Err(e) = written {
         eprintln!("error: {}: {e}", path.display());
         exit.write(AppExit::error());
         return;
+    }
+    if *saved == 0
+        && let Some(dir) = &args.export
+    {
+        commands.insert_resource(bevy_sshc::ExportScene(dir.clone()));
     }
     *saved += 1;
     if *saved >= frames {
         last.0 = true;
     }
+}
+
+/// sshc's visibility image of each frame (`--visibility`), as a one-channel PFM.
+fn save_visibility(done: On<ReadbackComplete>, args: Res<Args>, frame: Res<Frame>, mut saved: Local<u32>) {
+    let (Some(frames), Some(out)) = (args.frames, &args.out) else {
+        return;
+    };
+    if frame.0.saturating_sub(1) < WARM_FRAMES || *saved >= frames {
+        return;
+    }
+    let path = out.join(format!("visibility-{:03}.pfm", *saved));
+    // the image is the camera's size once the plugin has sized it
+    if done.data.len() < (args.size * args.size * 4) as usize {
+        return;
+    }
+    if let Err(e) = floats(&done.data, args.size, 1).and_then(|v| write_pfm(&path, args.size, false, v)) {
+        eprintln!("error: {}: {e}", path.display());
+    }
+    *saved += 1;
+}
+
+/// A read-back texture's rows without wgpu's copy alignment (256 bytes).
+fn unpadded(data: &[u8], size: u32, texel: usize) -> Result<Vec<u8>, String> {
+    let (row, stride) = (size as usize * texel, (size as usize * texel).next_multiple_of(256));
+    if data.len() < stride * (size as usize - 1) + row {
+        return Err(format!("{} bytes for a {size}^2 image of {texel}-byte texels", data.len()));
+    }
+    Ok(data.chunks(stride).take(size as usize).flat_map(|r| &r[..row]).copied().collect())
+}
+
+/// A read-back texture of `channels` f32 per texel, unpadded.
+fn floats(data: &[u8], size: u32, channels: usize) -> Result<Vec<f32>, String> {
+    let bytes = unpadded(data, size, 4 * channels)?;
+    Ok(bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect())
+}
+
+/// A PFM file (rows top first in `data`), made by the `pxm` crate, as the lab writes them.
+fn write_pfm(path: &std::path::Path, size: u32, color: bool, data: Vec<f32>) -> Result<(), String> {
+    let pfm = pxm::PFMBuilder::new()
+        .size(size as usize, size as usize)
+        .color(color)
+        .scale(-1.0)
+        .data(data)
+        .build()
+        .map_err(|e| e.to_string())?;
+    let mut file = std::fs::File::create(path).map_err(|e| e.to_string())?;
+    pfm.write_into(&mut file).map_err(|e| e.to_string())
 }
 
 /// The app ends in the frame after the last one was saved (so that `--stats` reports in
@@ -357,10 +466,17 @@ const WARM_FRAMES: u32 = 30;
 fn keys(
     input: Res<ButtonInput<KeyCode>>,
     server: Res<AssetServer>,
+    store: Res<bevy::diagnostic::DiagnosticsStore>,
     mut lights: Query<&mut SshcShadow>,
     mut index: Local<usize>,
     mut windows: Query<&mut Window>,
 ) {
+    // sshc's GPU time, and Bevy's shadow pass's, smoothed by Bevy's render diagnostics
+    let gpu = |name: &str| {
+        let path = bevy::diagnostic::DiagnosticPath::new(format!("render/{name}/elapsed_gpu"));
+        store.get(&path).and_then(|d| d.smoothed())
+    };
+    let ms = |t: Option<f64>| t.map_or_else(|| "-".to_string(), |t| format!("{t:.2} ms"));
     for mut shadow in &mut lights {
         if input.just_pressed(KeyCode::KeyT) {
             *index = (*index + 1) % TECHNIQUES.len();
@@ -370,8 +486,13 @@ fn keys(
             shadow.enabled = !shadow.enabled;
         }
         let line = match shadow.enabled {
-            true => format!("sshc: {} (T: next technique, B: Bevy's own shadows)", TECHNIQUES[*index]),
-            false => "Bevy's own shadows (B: sshc's)".to_string(),
+            true => format!(
+                "sshc: {}, GPU {} (Bevy's shadow pass {}) | T: next technique, B: Bevy's own shadows",
+                TECHNIQUES[*index],
+                ms(gpu("sshc_shadows")),
+                ms(gpu("per_view_shadow_pass"))
+            ),
+            false => format!("Bevy's own shadows, GPU {} | B: sshc's", ms(gpu("per_view_shadow_pass"))),
         };
         for mut w in &mut windows {
             if w.title != line {

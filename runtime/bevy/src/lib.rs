@@ -20,10 +20,12 @@
 //! and record (the `Core3d` schedule, before the main pass).
 
 mod asset;
+mod export;
 mod material;
 mod render;
 
 pub use asset::{MAX_TECHNIQUE_BYTES, SshcTechnique, TechniqueError, TechniqueLoader, compile};
+pub use export::{ExportScene, ExportedScene};
 pub use material::{SshcMaterial, SshcReceiver, visibility_image};
 pub use render::{CpuTimes, DEFAULT_MAP_SIZE, Status, convert_mesh};
 pub use sshc_runtime;
@@ -97,7 +99,8 @@ impl Plugin for SshcShadowsPlugin {
                     material::size_visibility,
                     material::clear_bevy_casters.after(SimulationLightSystems::CheckLightVisibility),
                 ),
-            );
+            )
+            .add_systems(Last, export::export_scene);
         let _ = app.world_mut().resource_mut::<Assets<Shader>>().insert(
             &material::RECEIVER_SHADER,
             Shader::from_wesl(include_str!("shaders/receiver.wesl"), "bevy_sshc/receiver.wesl"),

@@ -130,6 +130,9 @@ pub struct Extracted {
     pub instances: Vec<ExtractedInstance>,
     /// Meshes sshc does not hold yet: converted, or why they cannot be.
     pub new_meshes: Vec<(AssetId<Mesh>, Result<sshc_gpu::Mesh, String>)>,
+    /// Mesh assets sshc holds (or refused) that changed in the main world
+    /// (`AssetEvent::Modified`), read again.
+    pub changed_meshes: Vec<(AssetId<Mesh>, Result<sshc_gpu::Mesh, String>)>,
     pub light: Option<ExtractedLight>,
     /// Techniques loaded or reloaded since the last frame.
     pub techniques: Vec<(AssetId<SshcTechnique>, SshcTechnique)>,
@@ -152,8 +155,9 @@ pub struct SshcRender {
     scene: Option<Scene>,
     /// Mesh asset -> sshc's mesh index in `scene`.
     meshes: HashMap<AssetId<Mesh>, usize>,
-    /// Instance order in `scene`: the main-world entity of each instance.
-    order: Vec<Entity>,
+    /// Instance order in `scene`: the main-world entity of each instance and the mesh
+    /// asset it places.
+    order: Vec<(Entity, AssetId<Mesh>)>,
     /// The frame's instances by entity (index into the extracted ones), and the entities
     /// the scene holds: kept across frames so that a frame allocates nothing.
     wanted: EntityHashMap<usize>,
@@ -232,6 +236,7 @@ pub fn extract(
     meshes: Extract<Res<Assets<Mesh>>>,
     techniques: Extract<Res<Assets<SshcTechnique>>>,
     mut technique_events: Extract<MessageReader<AssetEvent<SshcTechnique>>>,
+    mut mesh_events: Extract<MessageReader<AssetEvent<Mesh>>>,
     entities: Extract<
         Query<(
             Entity,
@@ -247,8 +252,23 @@ pub fn extract(
 ) {
     out.instances.clear();
     out.new_meshes.clear();
+    out.changed_meshes.clear();
     out.techniques.clear();
-    let Some(render) = render else { return };
+    let Some(render) = render else {
+        mesh_events.clear();
+        return;
+    };
+    // a mesh sshc holds, changed in place in the main world: read again (once a frame
+    // however many times it changed); one whose data left the main world keeps sshc's copy
+    for e in mesh_events.read() {
+        if let AssetEvent::Modified { id } = e
+            && render.knows_mesh(*id)
+            && !out.changed_meshes.iter().any(|(c, _)| c == id)
+            && let Some(m) = meshes.get(*id)
+        {
+            out.changed_meshes.push((*id, convert_mesh(m)));
+        }
+    }
     let mut seen = std::collections::HashSet::new();
     for (entity, mesh, transform, visible, no_cast, no_receive) in &entities {
         if !visible.get() && no_cast {
@@ -461,6 +481,23 @@ fn prepare_light(
         render.views.clear();
     }
     let scene = render.scene.as_mut().ok_or("no scene")?;
+    // a changed mesh: its instances and the mesh removed, the new version added as a new
+    // mesh (its instances are added again below, as entities new to the scene)
+    for (id, mesh) in extracted.changed_meshes.drain(..) {
+        render.refused.remove(&id);
+        if let Some(old) = render.meshes.remove(&id) {
+            for k in (0..render.order.len()).rev() {
+                if render.order[k].1 == id {
+                    scene.remove_instance(k).map_err(e)?;
+                    render.order.remove(k);
+                    render.transforms.remove(k);
+                }
+            }
+            scene.remove_mesh(old).map_err(e)?;
+            render.scene_changes += 1;
+        }
+        extracted.new_meshes.push((id, mesh));
+    }
     for (id, mesh) in extracted.new_meshes.drain(..) {
         match mesh.and_then(|m| scene.add_mesh(&m).map_err(|e| e.to_string())) {
             Ok(index) => {
@@ -483,7 +520,9 @@ fn prepare_light(
         }
     }
     for k in (0..render.order.len()).rev() {
-        if !render.wanted.contains_key(&render.order[k]) {
+        let (entity, mesh) = render.order[k];
+        let same = render.wanted.get(&entity).is_some_and(|&w| extracted.instances[w].mesh == mesh);
+        if !same {
             scene.remove_instance(k).map_err(e)?;
             render.order.remove(k);
             render.transforms.remove(k);
@@ -491,7 +530,7 @@ fn prepare_light(
         }
     }
     render.held.clear();
-    render.held.extend(render.order.iter().copied());
+    render.held.extend(render.order.iter().map(|o| o.0));
     for i in extracted.instances.iter().filter(|i| !render.held.contains(&i.entity)) {
         let Some(&mesh) = render.meshes.get(&i.mesh) else { continue };
         scene
@@ -504,13 +543,13 @@ fn prepare_light(
                 moves: true,
             })
             .map_err(e)?;
-        render.order.push(i.entity);
+        render.order.push((i.entity, i.mesh));
         render.transforms.push(i.transform);
         render.scene_changes += 1;
     }
     // the transforms, written (and the instances placed again) only when one moved
     let mut moved = false;
-    for (k, entity) in render.order.iter().enumerate() {
+    for (k, (entity, _)) in render.order.iter().enumerate() {
         if let Some(i) = render.wanted.get(entity).map(|&w| &extracted.instances[w])
             && render.transforms[k].map(f32::to_bits) != i.transform.map(f32::to_bits)
         {

@@ -464,7 +464,7 @@ fn capture_child() {
         let world = app.world_mut();
         let mesh = world.resource_mut::<Assets<Mesh>>().add(Cuboid::new(0.5, 0.5, 0.5));
         let material = world.resource_mut::<Assets<StandardMaterial>>().add(StandardMaterial::default());
-        world.spawn((Mesh3d(mesh), MeshMaterial3d(material), Transform::from_xyz(1.3, 0.25, -1.0)));
+        world.spawn((Mesh3d(mesh.clone()), MeshMaterial3d(material), Transform::from_xyz(1.3, 0.25, -1.0)));
         c = settle(&mut app, &shared, false);
         assert!(c.visibility != before, "the spawned box changed nothing");
         // then the scene's first box despawned (an instance removed in place)
@@ -479,6 +479,15 @@ fn capture_child() {
         world.despawn(first_box);
         c = settle(&mut app, &shared, false);
         assert!(c.visibility != spawned, "the despawned box changed nothing");
+        // then the spawned box's mesh asset changed in place (`AssetEvent::Modified`):
+        // read again, its instance placing the new version
+        let despawned = c.visibility.clone();
+        let world = app.world_mut();
+        let mut meshes = world.resource_mut::<Assets<Mesh>>();
+        let grown = Mesh::from(Cuboid::new(0.5, 1.2, 0.5));
+        *meshes.get_mut(mesh.id()).expect("the spawned box's mesh") = grown;
+        c = settle(&mut app, &shared, false);
+        assert!(c.visibility != despawned, "the box's changed mesh changed nothing");
     }
     if c.status.is_none() && run.enabled && !reload {
         c.alone = alone(&mut app, &run);
@@ -693,12 +702,13 @@ fn sshc_inside_bevy_equals_the_runtime_alone() {
 }
 
 /// A box spawned into the running game (a new mesh asset and entity), then the scene's
-/// first box despawned: the plugin adds the mesh and instance to the scene in place and
-/// removes the other instance in place (`Scene::add_mesh`, `add_instance`,
-/// `remove_instance`; the rest is not uploaded again), each change shows, and the last
-/// frame still equals sshc's runtime alone on the scene as it then is, bit for bit.
+/// first box despawned, then the new box's mesh asset changed in place: the plugin adds
+/// the mesh and instance to the scene in place, removes the other instance in place
+/// (`Scene::add_mesh`, `add_instance`, `remove_instance`; the rest is not uploaded again),
+/// and replaces the changed mesh (`remove_mesh`, `add_mesh`); each change shows, and the
+/// last frame still equals sshc's runtime alone on the scene as it then is, bit for bit.
 #[test]
-fn spawned_and_despawned_entities_change_the_scene_in_place_and_frame_as_the_runtime_alone() {
+fn spawned_despawned_and_changed_meshes_change_the_scene_in_place_and_frame_as_the_runtime_alone() {
     let c = capture(
         &Run {
             spawn: true,
