@@ -56,7 +56,7 @@ shadows_args+=(
     "sshc MSSM=$out/sshc-mssm/frame-000.pfm"
     "sshc PLM=$out/sshc-plm/frame-000.pfm"
 )
-target/debug/examples/against_truth --truth "$out/truth.pfm" \
+target/debug/examples/against_truth measure --truth "$out/truth.pfm" \
     --unshadowed "$out/unshadowed/frame-000.pfm" --off "$out/off/frame-000.pfm" --out "$out" \
     --check "sshc PCSS=$out/sshc-pcss/visibility-000.pfm" \
     --check "sshc MSSM=$out/sshc-mssm/visibility-000.pfm" \

@@ -81,6 +81,10 @@ struct Args {
     /// The sun stays where it is in the first frame.
     #[arg(long)]
     still: bool,
+    /// The sun's turn about the vertical in the first frame, degrees (it turns 3 degrees a
+    /// frame unless `--still`).
+    #[arg(long, default_value_t = 0.0, value_parser = turn_degrees)]
+    sun_turn: f32,
     /// Headless frames in linear light, as one-channel-per-colour float PFM (no tonemapping,
     /// no dithering): what a visibility is measured from.
     #[arg(long, requires = "frames")]
@@ -96,12 +100,27 @@ struct Args {
     /// Also write sshc's visibility image of each frame as `visibility-NNN.pfm`.
     #[arg(long, requires = "frames")]
     visibility: bool,
+    /// Windowed: close after this many frames (the suite's run under a virtual X server).
+    #[arg(long, value_name = "N", conflicts_with = "frames")]
+    window_frames: Option<u32>,
+    /// Windowed, with `--window-frames`: a screenshot of the window in the last frame, and
+    /// the window's title line printed.
+    #[arg(long, value_name = "PNG", requires = "window_frames")]
+    screenshot: Option<PathBuf>,
 }
 
 fn technique_name(s: &str) -> Result<String, String> {
     match !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '-') {
         true => Ok(s.to_string()),
         false => Err("a bundled technique's name (letters, digits and '-')".into()),
+    }
+}
+
+fn turn_degrees(s: &str) -> Result<f32, String> {
+    let d: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    match (-360.0..=360.0).contains(&d) {
+        true => Ok(d),
+        false => Err("from -360 to 360".into()),
     }
 }
 
@@ -152,9 +171,21 @@ fn main() -> AppExit {
                 .add_plugins(ScheduleRunnerPlugin::run_loop(std::time::Duration::ZERO));
         }
         None if cfg!(feature = "window") => {
-            app.add_plugins(DefaultPlugins.set(assets))
+            // the suite's run (`--window-frames`) in a small window: lavapipe's frames cost
+            // by the pixel
+            let window = match args.window_frames {
+                Some(_) => WindowPlugin {
+                    primary_window: Some(Window {
+                        resolution: (640, 360).into(),
+                        ..default()
+                    }),
+                    ..default()
+                },
+                None => WindowPlugin::default(),
+            };
+            app.add_plugins(DefaultPlugins.set(assets).set(window))
                 .add_plugins(bevy::render::diagnostic::RenderDiagnosticsPlugin)
-                .add_systems(Update, keys);
+                .add_systems(Update, (keys, close_after));
         }
         None => {
             eprintln!("error: the windowed example needs the `window` feature (`--features window`); headless: --frames N --out DIR");
@@ -245,7 +276,7 @@ fn setup(
         ..default()
     };
     commands.insert_resource(bevy::light::DirectionalLightShadowMap { size: map_size as usize });
-    commands.spawn((light, cascades.build(), sun_at(0), Sun, shadow));
+    commands.spawn((light, cascades.build(), sun_at(args.sun_turn, 0), Sun, shadow));
     commands.insert_resource(GlobalAmbientLight {
         brightness: 400.0,
         ..default()
@@ -289,16 +320,16 @@ fn setup(
     }
 }
 
-/// The sun at frame `f`: 40 degrees up, turning 3 degrees a frame.
-fn sun_at(f: u32) -> Transform {
-    let turn = (f as f32 * 3.0).to_radians();
+/// The sun at frame `f`: 40 degrees up, turning 3 degrees a frame from `turn` degrees.
+fn sun_at(turn: f32, f: u32) -> Transform {
+    let turn = (turn + f as f32 * 3.0).to_radians();
     let to_sun = Vec3::new(turn.cos() * 0.77, 0.64, turn.sin() * 0.77);
     Transform::from_translation(to_sun * 10.0).looking_at(Vec3::ZERO, Vec3::Y)
 }
 
 fn orbit(mut frame: ResMut<Frame>, args: Res<Args>, mut sun: Query<&mut Transform, With<Sun>>) {
     for mut t in &mut sun {
-        *t = sun_at(if args.still { 0 } else { frame.0 });
+        *t = sun_at(args.sun_turn, if args.still { 0 } else { frame.0 });
     }
     frame.0 += 1;
 }
@@ -406,6 +437,33 @@ fn write_pfm(path: &std::path::Path, size: u32, color: bool, data: Vec<f32>) -> 
 fn finish(last: Res<LastFrame>, mut exit: MessageWriter<AppExit>, mut armed: Local<bool>) {
     if last.0 && std::mem::replace(&mut *armed, true) {
         exit.write(AppExit::Success);
+    }
+}
+
+/// `--window-frames N`: in frame N the window's screenshot is taken (`--screenshot`) and
+/// its title printed, and the app closes once it is saved.
+fn close_after(mut commands: Commands, args: Res<Args>, frame: Res<Frame>, windows: Query<&Window>, mut exit: MessageWriter<AppExit>) {
+    let Some(n) = args.window_frames else { return };
+    if frame.0 != n {
+        return;
+    }
+    for w in &windows {
+        println!("title: {}", w.title);
+    }
+    match &args.screenshot {
+        Some(path) => {
+            commands
+                .spawn(bevy::render::view::screenshot::Screenshot::primary_window())
+                .observe(bevy::render::view::screenshot::save_to_disk(path.clone()))
+                .observe(
+                    |_: On<bevy::render::view::screenshot::ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
+                        exit.write(AppExit::Success);
+                    },
+                );
+        }
+        None => {
+            exit.write(AppExit::Success);
+        }
     }
 }
 

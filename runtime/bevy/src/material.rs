@@ -118,7 +118,7 @@ pub fn swap_materials(
 /// shadow (its casters back in its maps) is all the receivers show.
 pub fn size_visibility(
     lights: Query<(Entity, &crate::SshcShadow)>,
-    cameras: Query<&Camera, With<Camera3d>>,
+    cameras: Query<(Entity, &Camera), With<Camera3d>>,
     status: Res<Status>,
     mut reset: Local<bool>,
     mut images: ResMut<Assets<Image>>,
@@ -127,7 +127,7 @@ pub fn size_visibility(
     let Some((light, shadow)) = lights.iter().find(|(_, s)| s.enabled) else {
         return;
     };
-    let Some(size) = cameras.iter().find_map(|c| c.physical_viewport_size()) else {
+    let Some(size) = crate::render::shaded_camera(cameras.iter()).and_then(|(_, c)| c.physical_viewport_size()) else {
         return;
     };
     let current = images.get(&shadow.visibility).map(|i| (i.width(), i.height()));

@@ -20,13 +20,14 @@
 use crate::asset::SshcTechnique;
 use bevy::asset::AssetId;
 use bevy::ecs::entity::EntityHashMap;
-use bevy::log::{error, info};
+use bevy::log::{error, info, warn};
 use bevy::prelude::*;
 use bevy::render::Extract;
 use bevy::render::camera::TemporalJitter;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderAdapter, RenderContext, RenderDevice, RenderQueue, ViewQuery};
+use bevy::render::sync_world::MainEntity;
 use bevy::render::texture::GpuImage;
 use bevy::render::view::ExtractedView;
 use sshc_runtime::gpu::{self as sshc_gpu, Camera as SshcCamera, Fit, FrameState, Gpu, LightInputs, Scene, Sizes, Targets, Technique};
@@ -134,10 +135,22 @@ pub struct Extracted {
     /// (`AssetEvent::Modified`), read again.
     pub changed_meshes: Vec<(AssetId<Mesh>, Result<sshc_gpu::Mesh, String>)>,
     pub light: Option<ExtractedLight>,
+    /// The main-world camera whose view sshc shades ([`shaded_camera`]), and whether
+    /// other active 3D cameras render too.
+    pub camera: Option<(Entity, bool)>,
     /// Techniques loaded or reloaded since the last frame.
     pub techniques: Vec<(AssetId<SshcTechnique>, SshcTechnique)>,
     /// Meshes entities place whose asset is not in the main world yet: frames waited.
     pub missing: HashMap<AssetId<Mesh>, u32>,
+}
+
+/// The camera whose view sshc shades: the active `Camera3d` of the lowest `Camera::order`
+/// (Bevy draws it first: a game's main view, before a minimap or an overlay), the lowest
+/// entity among equals. The receivers' material holds one visibility image, so one view
+/// is shaded; the others' receivers read it too (docs/bevy.md, "Not yet"), which the
+/// plugin logs once.
+pub fn shaded_camera<'a>(cameras: impl Iterator<Item = (Entity, &'a Camera)>) -> Option<(Entity, &'a Camera)> {
+    cameras.filter(|(_, c)| c.is_active).min_by_key(|(e, c)| (c.order, *e))
 }
 
 /// Frames a mesh asset an entity places may be missing from the main world (still
@@ -172,6 +185,8 @@ pub struct SshcRender {
     logged: Option<String>,
     /// The last failed reload logged.
     reload_logged: Option<String>,
+    /// Whether "several cameras, one view shaded" was logged.
+    views_logged: bool,
     status: Status,
     /// What prepare decided for record: the views that are ready, and the image to copy into.
     ready: Vec<(Entity, AssetId<Image>)>,
@@ -212,6 +227,7 @@ impl SshcRender {
             views: EntityHashMap::default(),
             logged: None,
             reload_logged: None,
+            views_logged: false,
             status,
             ready: Vec::new(),
             refused: HashMap::new(),
@@ -248,8 +264,10 @@ pub fn extract(
         )>,
     >,
     lights: Extract<Query<(Entity, &crate::SshcShadow, &GlobalTransform), With<DirectionalLight>>>,
+    cameras: Extract<Query<(Entity, &Camera), With<Camera3d>>>,
     server: Extract<Res<AssetServer>>,
 ) {
+    out.camera = shaded_camera(cameras.iter()).map(|(e, _)| (e, cameras.iter().filter(|(_, c)| c.is_active).count() > 1));
     out.instances.clear();
     out.new_meshes.clear();
     out.changed_meshes.clear();
@@ -389,6 +407,7 @@ pub fn prepare(
     mut extracted: ResMut<Extracted>,
     views: Query<(
         Entity,
+        &MainEntity,
         &ExtractedView,
         &bevy::render::camera::ExtractedCamera,
         Option<&TemporalJitter>,
@@ -453,6 +472,7 @@ fn prepare_light(
     light: &ExtractedLight,
     views: &Query<(
         Entity,
+        &MainEntity,
         &ExtractedView,
         &bevy::render::camera::ExtractedCamera,
         Option<&TemporalJitter>,
@@ -564,7 +584,19 @@ fn prepare_light(
         direction: sshc_runtime::light::glam::Vec3::from_array(light.direction),
         angle_degrees: light.angle_degrees,
     };
-    for (view, extracted_view, camera, jitter) in views {
+    let Some((shaded, others)) = extracted.camera else {
+        return Ok(());
+    };
+    if others && !render.views_logged {
+        warn!(
+            "sshc: several active 3D cameras; sshc shades camera {shaded}'s view only (the lowest order), and the receivers in the others read its visibility"
+        );
+        render.views_logged = true;
+    }
+    for (view, main, extracted_view, camera, jitter) in views {
+        if main.id() != shaded {
+            continue;
+        }
         let Some(size) = camera.physical_viewport_size else { continue };
         let view_size = size.as_vec2();
         let size = (size.x, size.y);

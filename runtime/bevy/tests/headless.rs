@@ -48,6 +48,8 @@ struct Run {
     webgpu: bool,
     /// The component's map size (`None`: the technique's own, else the default).
     map: Option<u32>,
+    /// A second camera (order 1, another view, a 64^2 image of its own), as a minimap.
+    second_camera: bool,
 }
 
 impl Run {
@@ -65,6 +67,7 @@ impl Run {
             jitter: false,
             webgpu: false,
             map: Some(512),
+            second_camera: false,
         }
     }
 }
@@ -99,34 +102,35 @@ fn sun(turn: f32) -> Transform {
 
 fn app(run: &Run) -> (App, Shared) {
     let mut app = App::new();
-    app.add_plugins(
-        DefaultPlugins
-            .set(AssetPlugin {
-                file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/../..").into(),
-                // the hot-reload test watches its technique file; the others read once
-                watch_for_changes_override: Some(run.technique == RELOAD_PATH),
+    let plugins = DefaultPlugins
+        .set(AssetPlugin {
+            file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/../..").into(),
+            // the hot-reload test watches its technique file; the others read once
+            watch_for_changes_override: Some(run.technique == RELOAD_PATH),
+            ..default()
+        })
+        .set(WindowPlugin {
+            primary_window: None,
+            exit_condition: ExitCondition::DontExit,
+            ..default()
+        })
+        .set(bevy::render::RenderPlugin {
+            // every pipeline ready in the frame that first needs it: a frame read back
+            // is whole (with background compilation the first ones lack meshes)
+            synchronous_pipeline_compilation: true,
+            render_creation: bevy::render::settings::RenderCreation::Automatic(Box::new(bevy::render::settings::WgpuSettings {
+                priority: match run.webgpu {
+                    true => bevy::render::settings::WgpuSettingsPriority::WebGPU,
+                    false => bevy::render::settings::WgpuSettingsPriority::Functionality,
+                },
                 ..default()
-            })
-            .set(WindowPlugin {
-                primary_window: None,
-                exit_condition: ExitCondition::DontExit,
-                ..default()
-            })
-            .set(bevy::render::RenderPlugin {
-                // every pipeline ready in the frame that first needs it: a frame read back
-                // is whole (with background compilation the first ones lack meshes)
-                synchronous_pipeline_compilation: true,
-                render_creation: bevy::render::settings::RenderCreation::Automatic(Box::new(bevy::render::settings::WgpuSettings {
-                    priority: match run.webgpu {
-                        true => bevy::render::settings::WgpuSettingsPriority::WebGPU,
-                        false => bevy::render::settings::WgpuSettingsPriority::Functionality,
-                    },
-                    ..default()
-                })),
-                ..default()
-            }),
-    )
-    .add_plugins(SshcShadowsPlugin);
+            })),
+            ..default()
+        });
+    // the suite builds with the example's window (feature `window`): no window here
+    #[cfg(feature = "window")]
+    let plugins = plugins.disable::<bevy::winit::WinitPlugin>();
+    app.add_plugins(plugins).add_plugins(SshcShadowsPlugin);
     let shared = Shared::default();
     app.insert_resource(shared.clone());
     let run = run.clone();
@@ -201,6 +205,28 @@ fn app(run: &Run) -> (App, Shared) {
                 camera.insert(bevy::render::camera::TemporalJitter {
                     offset: Vec2::new(0.375, -0.25),
                 });
+            }
+            if run.second_camera {
+                let mut minimap = Image::new_fill(
+                    Extent3d {
+                        width: 64,
+                        height: 64,
+                        depth_or_array_layers: 1,
+                    },
+                    TextureDimension::D2,
+                    &[0, 0, 0, 255],
+                    TextureFormat::Rgba8UnormSrgb,
+                    RenderAssetUsages::default(),
+                );
+                minimap.texture_descriptor.usage =
+                    TextureUsages::RENDER_ATTACHMENT | TextureUsages::COPY_SRC | TextureUsages::TEXTURE_BINDING;
+                commands.spawn((
+                    Camera3d::default(),
+                    bevy::camera::Camera { order: 1, ..default() },
+                    Tonemapping::Reinhard,
+                    RenderTarget::Image(images.add(minimap).into()),
+                    Transform::from_xyz(0.5, 6.0, 0.5).looking_at(Vec3::ZERO, Vec3::Z),
+                ));
             }
             commands
                 .spawn(Readback::texture(target))
@@ -280,7 +306,7 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
         CAPTURES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
     let spec = format!(
-        "{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}",
+        "{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}",
         run.technique,
         run.enabled,
         run.turn,
@@ -293,7 +319,8 @@ fn capture(run: &Run, expect_error: bool) -> Captured {
         run.gltf,
         run.jitter,
         run.webgpu,
-        run.map.map_or(0, |m| m)
+        run.map.map_or(0, |m| m),
+        run.second_camera
     );
     let status = std::process::Command::new(std::env::current_exe().unwrap())
         .args([
@@ -387,7 +414,7 @@ fn alone(app: &mut App, run: &Run) -> Vec<f32> {
             Option<&bevy::render::camera::TemporalJitter>,
         )>()
         .iter(world)
-        .next()
+        .find(|(c, _, _)| c.order == 0)
         .unwrap();
     // the main pass's projection, jittered as Bevy's `prepare_view_uniforms` does
     let mut clip_from_view = camera.clip_from_view();
@@ -451,6 +478,7 @@ fn capture_child() {
         jitter: f[10] == "true",
         webgpu: f[11] == "true",
         map: Some(f[12].parse().unwrap()).filter(|&m: &u32| m > 0),
+        second_camera: f[13] == "true",
     };
     let (mut app, shared) = app(&run);
     let reload = run.technique == RELOAD_PATH;
@@ -718,6 +746,27 @@ fn spawned_despawned_and_changed_meshes_change_the_scene_in_place_and_frame_as_t
     );
     let differ = differing(&c);
     assert_eq!(differ, 0, "{differ} pixels differ from the runtime alone after the spawn");
+}
+
+/// A second camera (a minimap: order 1, its own view and 64^2 image) beside the main one:
+/// sshc shades the main camera's view (the lowest order) and no other view overwrites its
+/// visibility, which equals the runtime alone on the main camera, bit for bit.
+#[test]
+fn with_a_second_camera_the_main_view_is_shaded() {
+    let c = capture(
+        &Run {
+            second_camera: true,
+            ..Run::of("pcss")
+        },
+        false,
+    );
+    let differ = differing(&c);
+    assert_eq!(differ, 0, "{differ} pixels differ from the runtime alone on the main camera");
+    let (penumbra, umbra) = penumbra_and_umbra(&c.visibility);
+    assert!(
+        umbra > 100 && penumbra > 100,
+        "a shadow to compare ({umbra} umbra, {penumbra} penumbra pixels)"
+    );
 }
 
 /// Where the glTF test writes its scene, under the asset root (the repository).
