@@ -690,6 +690,8 @@ pub const TELLS_APART: f64 = 0.5;
 
 /// Whether the GPU's `got` is admitted by `e` only because `e`'s allowance is too wide to
 /// tell lit from shadowed ([`TELLS_APART`]): within the allowance, but a real difference.
+/// Judged on visibilities (and a reference's), whose range is [0, 1]; debug outputs, of
+/// any range, are not.
 pub fn unchecked(got: f64, e: &Allowed) -> bool {
     e.admits(got) && e.half_width() >= TELLS_APART && (got - e.value).abs() >= TELLS_APART
 }
@@ -718,7 +720,8 @@ pub struct Row {
     pub camera: u32,
     /// Receivers compared.
     pub receivers: usize,
-    /// Receivers whose allowance is at least 1/2: a site there jumps (a tie).
+    /// Receivers whose allowance is at least 1/2 ([`TELLS_APART`]): a site there jumps (a
+    /// tie), and a GPU value 1/2 or more from the CPU's there leaves the row UNCHECKED.
     pub loose: usize,
     /// Receivers outside their allowance.
     pub outside: usize,

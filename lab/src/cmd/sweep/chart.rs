@@ -65,7 +65,9 @@ const FONT: &str = "sshc-sweep";
 pub(crate) struct Layout {
     /// The plotting area (inside the axes).
     pub plot: (Range<i32>, Range<i32>),
-    /// The legend panel's left edge: every legend entry lies right of it.
+    /// The legend panel's left edge: every legend entry lies right of it (what the tests
+    /// check the legend's place against).
+    #[cfg_attr(not(test), expect(dead_code))]
     pub legend_x: i32,
     /// Each front point's label and the box it was drawn in.
     pub labels: Vec<(String, (i32, i32, i32, i32))>,
@@ -664,6 +666,17 @@ mod tests {
             assert_eq!(under.iter().filter(|x| **x == t).count(), 1, "tick {t}: {under:?}");
         }
         assert!(!texts.iter().any(|t| t.2.contains(". ")), "a label with a stray space");
+
+        // the tuner's chosen point: a cross, named in the plot and in the legend
+        let chosen = Chart {
+            mark: Some((1.5, 12.0, "chosen: pcf")),
+            ..c
+        };
+        let (svg, layout) = super::svg(&pts, &chosen).unwrap();
+        let texts = super::tests::texts(&svg);
+        let at = |name: &str| texts.iter().find(|t| t.2 == name).map(|t| t.0);
+        assert!(at("chosen: pcf").is_some_and(|x| xr.contains(&x)), "{layout:?}");
+        assert!(at("chosen").is_some_and(|x| x >= layout.legend_x), "{layout:?}");
 
         // one timing per configuration: no bar, and no caption for bars
         let single: Vec<Point> = pts.iter().map(|p| Point { spread: None, ..p.clone() }).collect();
