@@ -36,18 +36,19 @@ run() {
         return
     fi
     [ -n "$device" ] || device=$(head -1 "$tmp/out" | sed 's/^[^ ]* on //; s/, shadow map.*//')
-    local rows agree differ lossy loose receivers
-    rows=$(grep -cE '\| (agrees|DIFFERS|LOSSY) \|$' "$tmp/t.md" || true)
+    local rows agree unchecked differ lossy loose receivers
+    rows=$(grep -cE '\| (agrees|UNCHECKED|DIFFERS|LOSSY) \|$' "$tmp/t.md" || true)
     agree=$(grep -c '| agrees |$' "$tmp/t.md" || true)
+    unchecked=$(grep -c '| UNCHECKED |$' "$tmp/t.md" || true)
     differ=$(grep -c '| DIFFERS |$' "$tmp/t.md" || true)
     lossy=$(grep -c '| LOSSY |$' "$tmp/t.md" || true)
     # receivers, and those whose allowance is 1/2 or more (column 5)
     receivers=$(awk -F'|' 'NR > 2 { s += $4 } END { print s }' "$tmp/t.md")
     loose=$(awk -F'|' 'NR > 2 { s += $5 } END { print s }' "$tmp/t.md")
-    printf '| %s | `%s` | %s | %s | %s | %s | %s | %s | %.1f |\n' "$label" "$*" "$rows" "$agree" "$differ" "$lossy" \
+    printf '| %s | `%s` | %s | %s | %s | %s | %s | %s | %s | %.1f |\n' "$label" "$*" "$rows" "$agree" "$unchecked" "$differ" "$lossy" \
         "$receivers" "$loose" "$(echo "$end - $start" | bc)" >> "$summary"
     { echo; echo "### $label"; echo; echo "\`sshc verify $file $*\` (exit status $status)"; echo; cat "$tmp/t.md"; } >> "$tables"
-    echo "$label: $agree of $rows agree, $differ differ, $lossy lossy" >&2
+    echo "$label: $agree of $rows agree, $unchecked unchecked, $differ differ, $lossy lossy" >&2
 }
 for f in techniques/*.ron techniques/examples/*.ron; do
     t=${f#techniques/}
@@ -67,8 +68,8 @@ run "vsm, moments at Unorm8" techniques/vsm.ron --precision m1=unorm8 --precisio
     echo "5, says what it covers); a row is one input under one camera. \"seconds\" is the command's wall"
     echo "time (GPU runs and both CPU evaluations), one run on a shared machine: a rough figure."
     echo
-    echo "| run | arguments | rows | agree | differ | lossy | receivers | loose (allowance >= 1/2) | seconds |"
-    echo "|---|---|---|---|---|---|---|---|---|"
+    echo "| run | arguments | rows | agree | unchecked | differ | lossy | receivers | loose (allowance >= 1/2) | seconds |"
+    echo "|---|---|---|---|---|---|---|---|---|---|"
     cat "$summary"
     echo
     if [ -s "$refused" ]; then

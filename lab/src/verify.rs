@@ -15,8 +15,13 @@
 //! when the GPU agrees but storage rounding alone (the CPU evaluation with every texel
 //! rounded as stored, against the exact one) moves the visibility by more than
 //! [`sshc::rounding::WARN_ABOVE`] at 1 % of the receivers or more: a precision that loses the
-//! signal. With a reference technique (`--reference`), its f64 CPU evaluation is compared
-//! with the technique's under the same allowance: an independent reading of the math.
+//! signal; **UNCHECKED** when nothing differs or is lossy, but at some receiver the GPU's
+//! value is [`TELLS_APART`] or more from the CPU's and only an allowance of [`TELLS_APART`]
+//! or more admits it: an allowance that wide cannot tell a lit pixel from a shadowed one, so
+//! the comparison there checked nothing, and the row is not reported as agreement (nor as a
+//! failure: the bound is honest, only too loose to decide). With a reference technique
+//! (`--reference`), its f64 CPU evaluation is compared with the technique's under the same
+//! allowance: an independent reading of the math.
 
 use crate::run::{Bound, Loaded};
 use crate::scene;
@@ -637,9 +642,15 @@ impl Default for Options {
 /// The verdict of one (input, camera).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Verdict {
+    /// Every receiver within its allowance, and none whose agreement rests on an allowance
+    /// too wide to have caught a real difference ([`TELLS_APART`]).
     Agrees,
     Differs,
     Lossy,
+    /// Nothing outside its allowance and nothing lossy, but some receiver's GPU value is
+    /// [`TELLS_APART`] or more from the CPU's, admitted only by an allowance of
+    /// [`TELLS_APART`] or more: not a failure, never agreement.
+    Unchecked,
 }
 
 impl Verdict {
@@ -648,8 +659,41 @@ impl Verdict {
             Verdict::Agrees => "agrees",
             Verdict::Differs => "DIFFERS",
             Verdict::Lossy => "LOSSY",
+            Verdict::Unchecked => "UNCHECKED",
         }
     }
+
+    /// Whether the verdict fails the command (DIFFERS, LOSSY): UNCHECKED does not by itself.
+    pub fn fails(self) -> bool {
+        matches!(self, Verdict::Differs | Verdict::Lossy)
+    }
+}
+
+/// The allowance (half-width of the interval allowed about the CPU's visibility, in [0, 1])
+/// from which a comparison can no longer tell a lit pixel from a shadowed one, and the
+/// difference that is a real one: 1/2 of the visibility's range.
+///
+/// Derivation. The allowed interval `[lo, hi]` lies within `value -+ a`, of width at most
+/// `2a`. A fully lit receiver reads 1 and a fully shadowed one 0, a distance of 1 apart:
+/// an interval of width `2a < 1` never holds both, so wherever it lies, a GPU that reads
+/// lit where the CPU reads shadowed (or the reverse) is caught; at `a >= 1/2` an interval
+/// about `1/2` holds both, and a comparison under it can pass a pixel lit for one that is
+/// shadowed. Conversely, two visibilities in [0, 1] that are 1/2 or more apart lie on
+/// either side of 1/2 (if both were below it, or both above, they would be closer): one
+/// reads more lit than shadowed, the other more shadowed than lit. So a receiver whose
+/// GPU value is within its allowance but 1/2 or more from the CPU's, under an allowance
+/// of 1/2 or more, is a real difference that only the allowance excuses: UNCHECKED.
+/// A receiver under a wide allowance whose values are closer than 1/2 shows no such
+/// difference, and one under an allowance below 1/2 would have been caught (DIFFERS), so
+/// a row with neither kind of receiver AGREES. The same 1/2 is the `loose` count's.
+pub const TELLS_APART: f64 = 0.5;
+
+/// Whether the GPU's `got` is admitted by `e` only because `e`'s allowance is too wide to
+/// tell lit from shadowed ([`TELLS_APART`]): within the allowance, but a real difference.
+/// Judged on visibilities (and a reference's), whose range is [0, 1]; debug outputs, of
+/// any range, are not.
+pub fn unchecked(got: f64, e: &Allowed) -> bool {
+    e.admits(got) && e.half_width() >= TELLS_APART && (got - e.value).abs() >= TELLS_APART
 }
 
 /// One receiver compared, kept for the worst of a row.
@@ -676,10 +720,16 @@ pub struct Row {
     pub camera: u32,
     /// Receivers compared.
     pub receivers: usize,
-    /// Receivers whose allowance is at least 1/2: a site there jumps (a tie).
+    /// Receivers whose allowance is at least 1/2 ([`TELLS_APART`]): a site there jumps (a
+    /// tie), and a GPU value 1/2 or more from the CPU's there leaves the row UNCHECKED.
     pub loose: usize,
     /// Receivers outside their allowance.
     pub outside: usize,
+    /// Receivers within their allowance only because it is too wide to tell lit from
+    /// shadowed ([`unchecked`]; with a reference, its comparisons counted too).
+    pub unchecked: usize,
+    /// The unchecked receiver with the largest difference.
+    pub unchecked_worst: Option<Worst>,
     pub max_diff: f64,
     pub median_allowance: f64,
     /// The receiver with the largest difference over its allowance.
@@ -748,6 +798,101 @@ fn tally((outside, max_diff, worst): (&mut usize, &mut f64, &mut Option<Worst>),
 }
 
 impl Row {
+    /// An empty row of `input` under `camera` (nothing compared yet: it agrees).
+    pub fn new(input: &str, camera: u32, reference: bool) -> Row {
+        Row {
+            input: input.to_string(),
+            camera,
+            receivers: 0,
+            loose: 0,
+            outside: 0,
+            unchecked: 0,
+            unchecked_worst: None,
+            max_diff: 0.0,
+            median_allowance: 0.0,
+            worst: None,
+            storage: 0.0,
+            reference: reference.then_some((0, 0.0, None)),
+            verdict: Verdict::Agrees,
+            compared: Vec::new(),
+            clamped: Vec::new(),
+            debug: Vec::new(),
+        }
+    }
+
+    /// Count the GPU's `got` at camera pixel `i` against the CPU's allowed `e`: outside,
+    /// loose (allowance of 1/2 or more), unchecked ([`unchecked`]), and the largest
+    /// difference and worst receiver.
+    pub fn compare(&mut self, i: usize, got: f64, e: &Allowed) {
+        let camera = self.camera.max(1) as usize;
+        let at = (i % camera, i / camera);
+        let w = tally((&mut self.outside, &mut self.max_diff, &mut self.worst), at, got, e);
+        let ratio = if e.admits(got) {
+            w.ratio().min(1.0)
+        } else {
+            w.ratio().max(1.0 + f64::EPSILON)
+        };
+        self.compared.push((i, got, e.value, ratio));
+        if e.half_width() >= TELLS_APART {
+            self.loose += 1;
+        }
+        if unchecked(got, e) {
+            self.note_unchecked(w);
+        }
+    }
+
+    /// Count the reference's f64 evaluation `f` against the technique's `t` at camera pixel
+    /// `i`, their intervals widened by `tol`: outside where they do not meet, unchecked where
+    /// they meet only because they are wide ([`TELLS_APART`] or more apart).
+    pub fn compare_reference(&mut self, i: usize, t: &Allowed, f: &Allowed, tol: f64) {
+        let camera = self.camera.max(1) as usize;
+        let w = Worst {
+            pixel: (i % camera, i / camera),
+            got: f.value,
+            expected: t.value,
+            allowance: t.half_width() + f.half_width() + tol,
+        };
+        let Some((out, max, worst)) = self.reference.as_mut() else { return };
+        let diff = (f.value - t.value).abs();
+        *max = max.max(diff);
+        let met = overlap(t, f, tol);
+        if !met {
+            *out += 1;
+        }
+        if worst.is_none_or(|x| w.ratio() > x.ratio()) {
+            *worst = Some(w);
+        }
+        // intervals that meet across a difference of 1/2 or more are together that wide
+        if met && diff >= TELLS_APART {
+            self.note_unchecked(w);
+        }
+    }
+
+    fn note_unchecked(&mut self, w: Worst) {
+        self.unchecked += 1;
+        let diff = |w: &Worst| (w.got - w.expected).abs();
+        if self.unchecked_worst.is_none_or(|x| diff(&w) > diff(&x)) {
+            self.unchecked_worst = Some(w);
+        }
+    }
+
+    /// The row's verdict from what it counted: DIFFERS where anything (the visibility, the
+    /// reference, a debug output) lies outside its allowance; LOSSY where storage rounding
+    /// alone moves the visibility by more than [`sshc::rounding::WARN_ABOVE`] at
+    /// [`LOSSY_SHARE`] of the receivers; UNCHECKED where some receiver agrees only under an
+    /// allowance too wide to tell lit from shadowed; agrees otherwise.
+    pub fn judge(&self) -> Verdict {
+        if self.outside > 0 || self.reference.is_some_and(|r| r.0 > 0) || self.debug.iter().any(|d| d.outside > 0) {
+            Verdict::Differs
+        } else if self.storage > sshc::rounding::WARN_ABOVE {
+            Verdict::Lossy
+        } else if self.unchecked > 0 {
+            Verdict::Unchecked
+        } else {
+            Verdict::Agrees
+        }
+    }
+
     /// The row as a picture, `scale` screen pixels per camera pixel: the GPU's visibility,
     /// the CPU's, and the difference over the allowance (black: equal; through the viridis
     /// map up to the allowance; red: outside it). Pixels not compared stay dark blue.
@@ -783,7 +928,7 @@ impl Row {
 }
 
 /// Receivers at or past this share of storage error make a row lossy.
-const LOSSY_SHARE: f64 = 0.01;
+pub const LOSSY_SHARE: f64 = 0.01;
 
 /// Read back every channel of `slots` after a frame, light (cascade) `light`'s: one decoded
 /// map per view.
@@ -958,20 +1103,10 @@ pub fn verify(
                 })
                 .collect();
             let mut row = Row {
-                input: input.name.clone(),
-                camera,
                 receivers: evaluated.len(),
-                loose: 0,
-                outside: 0,
-                max_diff: 0.0,
-                median_allowance: 0.0,
-                worst: None,
-                storage: 0.0,
-                reference: reference_program.map(|_| (0, 0.0, None)),
-                verdict: Verdict::Agrees,
                 compared: Vec::with_capacity(evaluated.len()),
-                clamped: Vec::new(),
                 debug: debug_rows(&ex, &cascades, &points, camera as usize, &scene.samples)?,
+                ..Row::new(&input.name, camera, reference_program.is_some())
             };
             for c in &cascades {
                 for (name, n) in c.exact.clamped() {
@@ -984,35 +1119,12 @@ pub fn verify(
             let mut allowances = Vec::new();
             let mut storage = Vec::new();
             for &(i, e, s, f) in &evaluated {
-                let at = (i % camera as usize, i / camera as usize);
                 let g = got.get(i).copied().unwrap_or(f32::NAN) as f64;
-                let w = tally((&mut row.outside, &mut row.max_diff, &mut row.worst), at, g, &e);
-                let ratio = if e.admits(g) {
-                    w.ratio().min(1.0)
-                } else {
-                    w.ratio().max(1.0 + f64::EPSILON)
-                };
-                row.compared.push((i, g, e.value, ratio));
-                if e.half_width() >= 0.5 {
-                    row.loose += 1;
-                }
+                row.compare(i, g, &e);
                 allowances.push(e.half_width());
                 storage.push((s - e.value).abs());
-                if let (Some((t, f)), Some((out, max, worst))) = (f, row.reference.as_mut()) {
-                    let tol = opts.reference_tolerance;
-                    let w = Worst {
-                        pixel: at,
-                        got: f.value,
-                        expected: t.value,
-                        allowance: t.half_width() + f.half_width() + tol,
-                    };
-                    *max = max.max((f.value - t.value).abs());
-                    if !overlap(&t, &f, tol) {
-                        *out += 1;
-                    }
-                    if worst.is_none_or(|x| w.ratio() > x.ratio()) {
-                        *worst = Some(w);
-                    }
+                if let Some((t, f)) = f {
+                    row.compare_reference(i, &t, &f, opts.reference_tolerance);
                 }
             }
             allowances.sort_by(f64::total_cmp);
@@ -1023,13 +1135,7 @@ pub fn verify(
                 .or(storage.last())
                 .copied()
                 .unwrap_or(0.0);
-            row.verdict = if row.outside > 0 || row.reference.is_some_and(|r| r.0 > 0) || row.debug.iter().any(|d| d.outside > 0) {
-                Verdict::Differs
-            } else if row.storage > sshc::rounding::WARN_ABOVE {
-                Verdict::Lossy
-            } else {
-                Verdict::Agrees
-            };
+            row.verdict = row.judge();
             rows.push(row);
         }
     }
@@ -1189,6 +1295,75 @@ fn overlap(a: &Allowed, b: &Allowed, tol: f64) -> bool {
     a.lo - tol <= b.hi && b.lo - tol <= a.hi
 }
 
+/// How many rows got each verdict.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Summary {
+    pub agree: usize,
+    pub unchecked: usize,
+    pub differ: usize,
+    pub lossy: usize,
+}
+
+impl Summary {
+    pub fn of(rows: &[Row]) -> Summary {
+        let mut s = Summary::default();
+        for r in rows {
+            *match r.verdict {
+                Verdict::Agrees => &mut s.agree,
+                Verdict::Unchecked => &mut s.unchecked,
+                Verdict::Differs => &mut s.differ,
+                Verdict::Lossy => &mut s.lossy,
+            } += 1;
+        }
+        s
+    }
+
+    /// The counts in words: `14 agree, 2 UNCHECKED, 0 DIFFER, 0 LOSSY (16 rows)`.
+    pub fn counts(&self) -> String {
+        format!(
+            "{} agree, {} UNCHECKED, {} DIFFER, {} LOSSY ({} rows)",
+            self.agree,
+            self.unchecked,
+            self.differ,
+            self.lossy,
+            self.agree + self.unchecked + self.differ + self.lossy
+        )
+    }
+
+    /// The command's last line when nothing fails (DIFFERS, LOSSY): agreement on every
+    /// input only where every row agrees; UNCHECKED rows said to be such.
+    pub fn line(&self) -> String {
+        if self.unchecked == 0 {
+            format!("verdict: agrees on every input: {}", self.counts())
+        } else {
+            format!(
+                "verdict: nothing differs, but {} row{} UNCHECKED (an allowance of 1/2 or more admits a GPU value 1/2 or more from the CPU's: lit cannot be told from shadowed there): {}",
+                self.unchecked,
+                if self.unchecked == 1 { " is" } else { "s are" },
+                self.counts()
+            )
+        }
+    }
+}
+
+/// What `sshc verify` says after its table of an UNCHECKED row: how many receivers, and the
+/// one with the largest difference.
+pub fn unchecked_note(r: &Row) -> Option<String> {
+    let w = r.unchecked_worst?;
+    Some(format!(
+        "note: {} (camera {}): UNCHECKED at {} receiver{}: GPU and CPU 1/2 or more apart within an allowance of 1/2 or more, which tells a lit pixel from a shadowed one at none of them; the largest at ({}, {}): {:.6} against {:.6}, allowance {:.3}",
+        r.input,
+        r.camera,
+        r.unchecked,
+        if r.unchecked == 1 { "" } else { "s" },
+        w.pixel.0,
+        w.pixel.1,
+        w.got,
+        w.expected,
+        w.allowance
+    ))
+}
+
 /// The rows as a Markdown table.
 pub fn table(rows: &[Row]) -> String {
     let with_reference = rows.iter().any(|r| r.reference.is_some());
@@ -1264,6 +1439,94 @@ mod tests {
         vertices
             .chunks(6)
             .all(|v| (CASTER_SLAB.0 - 1e-5..=CASTER_SLAB.1 + 1e-5).contains(&v[1]) && v[0].abs() < 1.0 && v[2].abs() < 1.0)
+    }
+
+    /// An allowed value as the Shade's evaluation gives it: `raw -+ allowance`, clamped to
+    /// [0, 1] with the value.
+    fn allowed(raw: f64, allowance: f64) -> Allowed {
+        let value = raw.clamp(0.0, 1.0);
+        Allowed {
+            value,
+            lo: (raw - allowance).clamp(0.0, 1.0),
+            hi: (raw + allowance).clamp(0.0, 1.0),
+            raw,
+            allowance,
+        }
+    }
+
+    /// Issue 51: GPU 0.040 against CPU 0.967 within an allowance of 0.967 was reported as
+    /// agreement. It is UNCHECKED now, counted as such, and no failure; the receivers beside
+    /// it, under tight allowances, still decide the rest.
+    #[test]
+    fn an_allowance_too_wide_to_tell_lit_from_shadowed_leaves_the_row_unchecked() {
+        let mut row = Row::new("essm", 64, false);
+        row.compare(0, 0.62, &allowed(0.62, 1e-3));
+        row.compare(1, 0.040, &allowed(0.967, 0.967));
+        assert_eq!(row.outside, 0, "the GPU value lies within the allowance");
+        assert_eq!((row.loose, row.unchecked), (1, 1));
+        assert_eq!(row.judge(), Verdict::Unchecked);
+        let w = row.unchecked_worst.expect("the unchecked receiver");
+        assert_eq!((w.pixel, w.got, w.expected), ((1, 0), 0.040, 0.967));
+        // a wide allowance whose values are close shows no real difference
+        let mut close = Row::new("tie", 64, false);
+        close.compare(0, 0.9, &allowed(0.95, 0.95));
+        assert_eq!((close.loose, close.unchecked, close.judge()), (1, 0, Verdict::Agrees));
+        // just under 1/2 either way: a tight allowance decides, a close value shows nothing
+        let mut edge = Row::new("edge", 64, false);
+        edge.compare(0, 0.0, &allowed(0.49, 0.49));
+        edge.compare(1, 1.0, &allowed(0.501, 0.5));
+        assert_eq!((edge.unchecked, edge.judge()), (0, Verdict::Agrees));
+        edge.compare(2, 0.0, &allowed(0.5, 0.5));
+        assert_eq!((edge.unchecked, edge.judge()), (1, Verdict::Unchecked));
+        // outside its allowance: DIFFERS, whatever else
+        row.compare(2, 0.5, &allowed(0.62, 1e-3));
+        assert_eq!(row.judge(), Verdict::Differs);
+        assert!(Verdict::Differs.fails() && Verdict::Lossy.fails() && !Verdict::Unchecked.fails());
+
+        // a reference that meets the technique only because both are wide
+        let mut r = Row::new("reference", 16, true);
+        r.compare(0, 0.5, &allowed(0.5, 1e-6));
+        r.compare_reference(0, &allowed(0.9, 0.6), &allowed(0.1, 0.2), 1e-6);
+        assert_eq!((r.reference.map(|x| x.0), r.unchecked, r.judge()), (Some(0), 1, Verdict::Unchecked));
+
+        // the summary counts it, and says no agreement on every input
+        let mut agreeing = Row::new("ramp", 64, false);
+        agreeing.compare(0, 0.3, &allowed(0.3, 1e-3));
+        let rows: Vec<Row> = [row.clone(), close, agreeing, {
+            let mut u = Row::new("essm", 16, false);
+            u.compare(0, 0.040, &allowed(0.967, 0.967));
+            u
+        }]
+        .into_iter()
+        .map(|mut r| {
+            r.verdict = r.judge();
+            r
+        })
+        .collect();
+        let s = Summary::of(&rows);
+        assert_eq!(
+            s,
+            Summary {
+                agree: 2,
+                unchecked: 1,
+                differ: 1,
+                lossy: 0
+            }
+        );
+        assert_eq!(s.counts(), "2 agree, 1 UNCHECKED, 1 DIFFER, 0 LOSSY (4 rows)");
+        let only = Summary::of(&rows[1..]);
+        assert!(
+            only.line().contains("1 row is UNCHECKED") && !only.line().contains("agrees on every input"),
+            "{}",
+            only.line()
+        );
+        assert!(Summary::of(&rows[1..3]).line().starts_with("verdict: agrees on every input"));
+        let note = unchecked_note(&rows[3]).expect("a note");
+        assert!(
+            note.contains("essm (camera 16): UNCHECKED at 1 receiver") && note.contains("0.040000 against 0.967000"),
+            "{note}"
+        );
+        assert!(table(&rows).contains("| UNCHECKED |"));
     }
 
     #[test]

@@ -130,6 +130,45 @@ fn sweep_writes_a_row_per_configuration_and_the_charts() {
     assert_eq!(&png[1..4], b"PNG");
     let svg = std::fs::read_to_string(out.join("pareto-triangle-time.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("Pareto front"));
+    // Issue 51: each point of the front is labelled with its configuration; the legend
+    // lies right of the plot (its entries' x beyond every tick's); the frames' spread
+    // (2 frames a configuration here) is drawn and said to be.
+    let gpu: Vec<&Vec<String>> = rows.iter().filter(|r| !r[col("technique")].contains("(CPU)")).collect();
+    let mut order: Vec<(f64, f64, String)> = gpu
+        .iter()
+        .map(|r| {
+            let label = format!("{}: {}", r[col("technique")], r[col("config")]);
+            (num(r, "time_ratio"), num(r, "rms_penumbra"), label)
+        })
+        .collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let mut best = f64::INFINITY;
+    for (_, err, label) in &order {
+        if *err < best {
+            best = *err;
+            assert!(svg.contains(&format!(">\n{label}\n</text>")), "no label `{label}` on the chart");
+        }
+    }
+    let text_x = |body: &str| -> i32 {
+        let at = svg
+            .find(&format!(">\n{body}\n</text>"))
+            .unwrap_or_else(|| panic!("no text `{body}`"));
+        let start = svg[..at].rfind("<text").unwrap();
+        let x = svg[start..at].split(" x=\"").nth(1).unwrap().split('"').next().unwrap();
+        x.parse().unwrap()
+    };
+    assert!(
+        text_x("Pareto front (labelled)") > 800 && text_x("csm") > 800,
+        "the legend is beside the plot"
+    );
+    assert!(
+        svg.contains("error bars: fastest to slowest"),
+        "no error bars for 2 frames a configuration"
+    );
+    for r in &gpu {
+        let (lo, ms, hi) = (num(r, "gpu_ms_min"), num(r, "gpu_ms"), num(r, "gpu_ms_max"));
+        assert!(lo > 0.0 && lo <= ms + 1e-4 && ms <= hi + 1e-4, "{r:?}");
+    }
 
     // two shards hold exactly the configurations of the whole
     let (a, b) = (tmp("shard0"), tmp("shard1"));

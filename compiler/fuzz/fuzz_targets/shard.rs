@@ -129,6 +129,7 @@ fn record(u: &mut Unstructured, m: &Manifest) -> Result<Record> {
                 reference_ms: None,
                 shard: (0, 1),
                 device: Default::default(),
+                ms_range: if u.arbitrary()? { Some((float(u)?, float(u)?)) } else { None },
             }),
         }
     })

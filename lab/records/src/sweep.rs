@@ -42,6 +42,10 @@ pub struct Row {
     pub light_scale: f64,
     /// Median GPU ms per frame (all passes), or none for CPU baselines.
     pub ms: Option<f64>,
+    /// The fastest and the slowest of the timed frames whose median is `ms` (the charts'
+    /// error bars); none for CPU baselines and for rows recorded before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ms_range: Option<(f64, f64)>,
     pub peak_bytes: u64,
     pub fetches: f64,
     pub ops: f64,
@@ -266,6 +270,13 @@ impl Record {
                     && !(ms.is_finite() && ms > 0.0)
                 {
                     return Some(format!("a row timed at {ms} ms"));
+                }
+                if let Some((lo, hi)) = row.ms_range {
+                    // the median of frames lies between their fastest and their slowest
+                    let inside = row.ms.is_some_and(|ms| lo <= ms && ms <= hi);
+                    if !(lo.is_finite() && lo > 0.0 && hi.is_finite() && inside) {
+                        return Some(format!("a row timed at {:?} ms with frames from {lo} to {hi} ms", row.ms));
+                    }
                 }
                 for s in stats {
                     if bad(s.rms) || bad(s.max) || !s.mean.is_finite() {

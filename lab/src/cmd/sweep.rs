@@ -15,6 +15,7 @@
 //! ([`slurm`]) writes the job scripts that run the shards as a Slurm array and then the
 //! merge (docs/cluster.md).
 
+pub mod chart;
 pub mod merge;
 pub mod report;
 pub mod shard;
@@ -324,6 +325,8 @@ pub(crate) struct Ran {
     pub ex: Bound,
     /// Median GPU ms per frame (none where the device has no timestamps).
     pub ms: Option<f64>,
+    /// The fastest and the slowest of those frames.
+    pub ms_range: Option<(f64, f64)>,
     /// Bytes of every texture the targets hold.
     pub peak: u64,
     pub fetches: f64,
@@ -373,12 +376,13 @@ pub(crate) fn run_config(
     let (mut ex, _) = cascading.bind_or_scene(&loaded, scene, false)?;
     let edges = ex.scene.edge_counts().map_or(0, |c| u64::from(c.edges));
     let (fetches, ops) = work(ex.graph(), scene.shadow_map, scene.camera_size(), edges);
-    let ms = time_frames(&mut ex, frames)?;
+    let timing = time_frames(&mut ex, frames)?;
     let visibility = ex.inspect().read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
     let peak = ex.inspect().memory().iter().map(|(_, b)| b).sum();
     Ok(Ran {
         ex,
-        ms,
+        ms: timing.map(|t| t.median),
+        ms_range: timing.map(|t| (t.min, t.max)),
         peak,
         fetches,
         ops,
@@ -386,8 +390,30 @@ pub(crate) fn run_config(
     })
 }
 
-/// Median of per-frame GPU times (sum over passes) over `frames` frames after a warm-up.
-fn time_frames(ex: &mut Bound, frames: usize) -> Result<Option<f64>, String> {
+/// The per-frame GPU times (sum over passes) of `frames` frames: their median, fastest and
+/// slowest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Timing {
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Timing {
+    /// The timing of `t` (none for no frame timed).
+    pub(crate) fn of(mut t: Vec<f64>) -> Option<Timing> {
+        t.sort_by(f64::total_cmp);
+        Some(Timing {
+            median: *t.get(t.len() / 2)?,
+            min: *t.first()?,
+            max: *t.last()?,
+        })
+    }
+}
+
+/// The per-frame GPU times over `frames` frames after a warm-up (none where the device has
+/// no timestamps).
+fn time_frames(ex: &mut Bound, frames: usize) -> Result<Option<Timing>, String> {
     ex.run_frame().map_err(rt)?;
     let mut t = Vec::new();
     for _ in 0..frames.max(1) {
@@ -397,8 +423,7 @@ fn time_frames(ex: &mut Bound, frames: usize) -> Result<Option<f64>, String> {
             t.push(ms);
         }
     }
-    t.sort_by(f64::total_cmp);
-    Ok(t.get(t.len() / 2).copied())
+    Ok(Timing::of(t))
 }
 
 /// Fetches and operations per frame, summed over the passes of [`crate::cmd::render::pass_work`].
@@ -875,8 +900,8 @@ fn measure(
         for (sc, c, scene) in &reference_runs {
             let loaded = crate::run::Loaded::new(gpu, c.graph.clone(), c.shaders.clone()).map_err(rt)?;
             let (mut ex, _) = a.cascading.bind_or_scene(&loaded, scene, false)?;
-            if let Some(ms) = time_frames(&mut ex, file.frames)? {
-                log.append(&Record::Reference { scene: *sc, ms })?;
+            if let Some(t) = time_frames(&mut ex, file.frames)? {
+                log.append(&Record::Reference { scene: *sc, ms: t.median })?;
             }
         }
         Ok(())
@@ -896,6 +921,7 @@ fn measure(
         let Ran {
             ex,
             ms,
+            ms_range,
             peak,
             fetches,
             ops,
@@ -929,6 +955,7 @@ fn measure(
             shadow_map: scene.shadow_map,
             light_scale,
             ms,
+            ms_range,
             peak_bytes: peak,
             fetches,
             ops,
@@ -979,6 +1006,7 @@ fn measure(
             shadow_map: 0,
             light_scale: 1.0,
             ms: None,
+            ms_range: None,
             peak_bytes: 0,
             fetches: 0.0,
             ops: 0.0,

@@ -1,10 +1,11 @@
 //! `sshc verify T.ron`: the technique on the GPU against its f64 evaluation on the CPU, over
 //! the synthetic depth fields and scene depth maps of the agreement tests (see
-//! [`crate::verify`]); a table and a verdict per input, and a failing exit status when any
-//! input differs or is lossy.
+//! [`crate::verify`]); a table and a verdict per input, a summary line counting each
+//! verdict, and a failing exit status when any input differs or is lossy (an UNCHECKED one
+//! is said to be such, and fails nothing by itself).
 
 use crate::session::{Variants, read, report, rt};
-use crate::verify::{self, CASTERS, FIELDS, Input, Options, Source, Verdict};
+use crate::verify::{self, CASTERS, FIELDS, Input, Options, Source};
 use sshc_runtime::gpu::Gpu;
 use std::path::{Path, PathBuf};
 
@@ -219,15 +220,25 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
     if let Some(out) = &args.out {
         crate::session::write_new(out, &table)?;
     }
+    for note in rows.iter().filter_map(verify::unchecked_note) {
+        println!("{note}");
+    }
+    let summary = verify::Summary::of(&rows);
     let bad: Vec<String> = rows
         .iter()
-        .filter(|r| r.verdict != Verdict::Agrees)
+        .filter(|r| r.verdict.fails())
         .map(|r| format!("{} (camera {}): {}", r.input, r.camera, r.verdict.name()))
         .collect();
     if bad.is_empty() {
-        println!("\nverdict: agrees on every input");
+        println!("\n{}", summary.line());
         Ok(())
     } else {
-        Err(format!("verdict: {} of {} inputs fail: {}", bad.len(), rows.len(), bad.join("; ")))
+        Err(format!(
+            "verdict: {} of {} inputs fail: {}; {}",
+            bad.len(),
+            rows.len(),
+            bad.join("; "),
+            summary.counts()
+        ))
     }
 }

@@ -1,9 +1,10 @@
 //! What a sweep writes, unsharded or merged from shards: `sweep.csv`, `sweep.md` and the
 //! Pareto charts (error against time, error against memory), from its rows. Each chart is
 //! drawn twice, against either metric: the RMS error of the sweep's pixel set
-//! (`pareto-SCENE-WHAT.*`) and FLIP over the facing pixels (`pareto-SCENE-WHAT-flip.*`).
+//! (`pareto-SCENE-WHAT.*`) and FLIP over the facing pixels (`pareto-SCENE-WHAT-flip.*`);
+//! how a chart is drawn (labels, legend, ticks, error bars) is [`super::chart`]'s.
 
-use plotters::prelude::*;
+use super::chart::{Chart, Point, chart};
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -101,13 +102,16 @@ pub fn write(out: &Path, o: &Outputs) -> Result<(), String> {
         for (what, x_of, x_label) in [
             (
                 "time",
-                (|r: &Row| r.ratio()) as fn(&Row) -> Option<f64>,
-                "GPU time per frame / reference technique's",
+                ((|r: &Row| r.ratio()) as XAxis, time_spread as Spread),
+                "GPU time per frame / reference technique's (log)",
             ),
             (
                 "memory",
-                |r: &Row| (r.ms.is_some()).then_some(r.peak_bytes as f64 / (1 << 20) as f64),
-                "peak memory (MiB)",
+                (
+                    |r: &Row| (r.ms.is_some()).then_some(r.peak_bytes as f64 / (1 << 20) as f64),
+                    (|_: &Row| None) as Spread,
+                ),
+                "peak memory (MiB, log)",
             ),
         ] {
             let set = match o.pixels {
@@ -147,12 +151,12 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 /// The CSV: a row per configuration, every figure a row has, with its shard and device.
 fn csv(rows: &[Row]) -> String {
     let mut s = String::from(
-        "shard,device,scene,technique,config,shadow_map,light_scale,gpu_ms,reference_ms,time_ratio,peak_bytes,fetches,ops,rms_facing,max_facing,rms_penumbra,max_penumbra,facing_pixels,penumbra_pixels,truth_max_se,rms_ground,max_ground,ground_pixels,flip\n",
+        "shard,device,scene,technique,config,shadow_map,light_scale,gpu_ms,reference_ms,time_ratio,peak_bytes,fetches,ops,rms_facing,max_facing,rms_penumbra,max_penumbra,facing_pixels,penumbra_pixels,truth_max_se,rms_ground,max_ground,ground_pixels,flip,gpu_ms_min,gpu_ms_max\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{}/{},\"{}\",{},{},\"{}\",{},{},{},{},{},{},{:.0},{:.0},{:.3},{:.3},{:.3},{:.3},{},{},{:.5},{},{},{},{}",
+            "{}/{},\"{}\",{},{},\"{}\",{},{},{},{},{},{},{:.0},{:.0},{:.3},{:.3},{:.3},{:.3},{},{},{:.5},{},{},{},{},{},{}",
             r.shard.0,
             r.shard.1,
             r.device.0,
@@ -178,6 +182,8 @@ fn csv(rows: &[Row]) -> String {
             opt(r.acc.ground.map(|g| g.max), 3),
             r.acc.ground.map(|g| g.pixels.to_string()).unwrap_or_default(),
             opt(r.acc.flip, 5),
+            opt(r.ms_range.map(|m| m.0), 4),
+            opt(r.ms_range.map(|m| m.1), 4),
         );
     }
     s
@@ -262,151 +268,65 @@ fn markdown(rows: &[Row], reference: &str, pixels: PixelSet) -> String {
     s
 }
 
-/// The configurations no other one beats on both axes (lower x and lower error).
 /// A chart's file name: `pareto-SCENE-WHAT[-flip].EXT`, the scene's row name with its
 /// spaces as `-` (a scene of several lights has a row per light, `three-lights light 0`).
 fn chart_file(scene: &str, what: &str, suffix: &str, ext: &str) -> String {
     format!("pareto-{}-{what}{suffix}.{ext}", scene.replace(' ', "-"))
 }
 
-fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
-    let mut p: Vec<(f64, f64)> = points.to_vec();
-    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    let mut front: Vec<(f64, f64)> = Vec::new();
-    for q in p {
-        if front.last().is_none_or(|l| q.1 < l.1) {
-            front.push(q);
-        }
-    }
-    front
-}
+/// What the time charts' error bars span ([`time_spread`]).
+pub const TIME_SPREAD: &str =
+    "error bars: fastest to slowest of the configuration's timed frames (the point: their median), over the reference's median";
 
-const FONT: &str = "sshc-sweep";
+/// A row's time ratio's spread: its fastest and slowest frames over the reference's median
+/// (the reference's own spread is not in it).
+fn time_spread(r: &Row) -> Option<(f64, f64)> {
+    let (lo, hi) = r.ms_range?;
+    let reference = r.reference_ms?;
+    Some((lo / reference, hi / reference))
+}
 
 /// The error of a row a chart ranks by, and its axis label.
 type YAxis<'a> = (&'a dyn Fn(&Row) -> f64, &'a str);
 
+/// A row's cost on a chart's x axis.
+type XAxis = fn(&Row) -> Option<f64>;
+/// A row's spread on a chart's x axis (none on the memory charts).
+type Spread = fn(&Row) -> Option<(f64, f64)>;
+
 fn pareto(
     path: &Path,
     rows: &[&Row],
-    x_of: fn(&Row) -> Option<f64>,
+    (x_of, spread_of): (XAxis, Spread),
     x_label: &str,
     (y_of, y_label): YAxis,
     title: &str,
 ) -> Result<(), String> {
-    let pts: Vec<(String, f64, f64)> = rows
+    let pts: Vec<Point> = rows
         .iter()
-        .filter_map(|r| Some((r.label.clone(), x_of(r)?, y_of(r))))
-        .filter(|(_, x, y)| x.is_finite() && y.is_finite() && *x > 0.0)
+        .filter_map(|r| {
+            Some(Point {
+                technique: r.label.clone(),
+                config: r.config.clone(),
+                x: x_of(r)?,
+                y: y_of(r),
+                spread: spread_of(r),
+            })
+        })
+        .filter(|p| p.x.is_finite() && p.y.is_finite() && p.x > 0.0)
         .collect();
-    chart(path, &pts, None, x_label, y_label, title)
-}
-
-/// A Pareto chart of labelled points (`x > 0`, log scale), each label its own colour, the
-/// front drawn through them, and `mark` (a point and its label) drawn as a cross with its
-/// label beside it: the tuner's chosen configuration. SVG or PNG by the file's extension.
-pub(crate) fn chart(
-    path: &Path,
-    pts: &[(String, f64, f64)],
-    mark: Option<(f64, f64, &str)>,
-    x_label: &str,
-    y_label: &str,
-    title: &str,
-) -> Result<(), String> {
-    if pts.is_empty() {
-        return Err(format!("error: {}: nothing to plot", path.display()));
-    }
-    crate::session::writable(path)?;
-    let svg = path.extension().is_some_and(|e| e == "svg");
-    let size = (900, 600);
-    // text is measured with the bundled font in both backends
-    plotters::style::register_font(FONT, FontStyle::Normal, epaint_default_fonts::HACK_REGULAR)
-        .map_err(|_| "error: the bundled font cannot be read".to_string())?;
-    if svg {
-        let mut text = String::new();
-        {
-            let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
-            draw(&root, pts, mark, x_label, y_label, title, FONT)?;
-        }
-        crate::session::write_new(path, text)
-    } else {
-        let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
-        {
-            let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
-            draw(&root, pts, mark, x_label, y_label, title, FONT)?;
-        }
-        let img = image::RgbImage::from_raw(size.0, size.1, buf).ok_or_else(|| "error: chart buffer of the wrong size".to_string())?;
-        crate::session::save_image(&img, path)
-    }
-}
-
-fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, plotters::coord::Shift>,
-    pts: &[(String, f64, f64)],
-    mark: Option<(f64, f64, &str)>,
-    x_label: &str,
-    y_label: &str,
-    title: &str,
-    font: &str,
-) -> Result<(), String>
-where
-    DB::ErrorType: 'static,
-{
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| format!("error: drawing a chart: {e}");
-    root.fill(&WHITE).map_err(e)?;
-    let (x0, x1) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
-    let y1 = pts.iter().fold(0.0f64, |a, p| a.max(p.2));
-    let mut chart = ChartBuilder::on(root)
-        .caption(title, (font, 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(56)
-        .build_cartesian_2d((x0 * 0.8..x1 * 1.25).log_scale(), 0.0..y1 * 1.1 + 1e-3)
-        .map_err(e)?;
-    chart
-        .configure_mesh()
-        .x_desc(x_label)
-        .y_desc(y_label)
-        .label_style((font, 13))
-        .draw()
-        .map_err(e)?;
-    let mut labels: Vec<&str> = pts.iter().map(|p| p.0.as_str()).collect();
-    labels.sort();
-    labels.dedup();
-    for (i, l) in labels.iter().enumerate() {
-        let colour = Palette99::pick(i).to_rgba();
-        let mine: Vec<(f64, f64)> = pts.iter().filter(|p| p.0 == *l).map(|p| (p.1, p.2)).collect();
-        chart
-            .draw_series(mine.iter().map(|&(x, y)| Circle::new((x, y), 5, colour.filled())))
-            .map_err(e)?
-            .label(*l)
-            .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
-    }
-    let all: Vec<(f64, f64)> = pts.iter().map(|p| (p.1, p.2)).collect();
-    chart
-        .draw_series(LineSeries::new(pareto_front(&all), BLACK.stroke_width(1)))
-        .map_err(e)?
-        .label("Pareto front")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK));
-    if let Some((x, y, label)) = mark {
-        chart
-            .draw_series(std::iter::once(Cross::new((x, y), 9, BLACK.stroke_width(3))))
-            .map_err(e)?;
-        chart
-            .draw_series(std::iter::once(Text::new(label.to_string(), (x, y), (font, 14).into_font())))
-            .map_err(e)?;
-    }
-    chart
-        .configure_series_labels()
-        // low error at low cost is the corner no technique reaches: the legend hides least there
-        .position(SeriesLabelPosition::LowerLeft)
-        .label_font((font, 13))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(e)?;
-    root.present().map_err(e)?;
-    Ok(())
+    chart(
+        path,
+        &pts,
+        &Chart {
+            title,
+            x_label,
+            y_label,
+            spread: TIME_SPREAD,
+            mark: None,
+        },
+    )
+    .map(|_| ())
 }
 
 #[cfg(test)]
@@ -420,11 +340,5 @@ mod tests {
             "pareto-three-lights-light-0-time-flip.svg"
         );
         assert_eq!(chart_file("bunny", "memory", "", "png"), "pareto-bunny-memory.png");
-    }
-
-    #[test]
-    fn pareto_front_keeps_only_undominated_points() {
-        let f = pareto_front(&[(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (0.5, 9.0)]);
-        assert_eq!(f, vec![(0.5, 9.0), (1.0, 5.0), (2.0, 3.0), (4.0, 1.0)]);
     }
 }

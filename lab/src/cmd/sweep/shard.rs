@@ -155,6 +155,7 @@ mod tests {
             reference_ms: None,
             shard: (0, 1),
             device: Default::default(),
+            ms_range: None,
         };
         let line = |r: &Record| format!("{}\n", ron::to_string(r).unwrap());
         let good = Record::Row {
@@ -176,6 +177,20 @@ mod tests {
         big_flip.acc.flip = Some(7.5);
         let mut inf_ms = row.clone();
         inf_ms.ms = Some(f64::INFINITY);
+        // the frames' spread is kept (written only where known: a row without it, as
+        // written before, reads as none), and one that does not hold the median is refused
+        let mut spread = row.clone();
+        spread.ms_range = Some((0.5, 1.25));
+        let with_spread = Record::Row {
+            index: 0,
+            scene: 0,
+            row: Box::new(spread.clone()),
+        };
+        assert!(!line(&good).contains("ms_range") && line(&with_spread).contains("ms_range"));
+        std::fs::write(dir.join(RECORDS), line(&with_spread)).unwrap();
+        assert_eq!(read_records(&dir, false, &m).unwrap().0.rows[&0].1.ms_range, Some((0.5, 1.25)));
+        let mut outside = spread.clone();
+        outside.ms_range = Some((2.0, 3.0));
         for (bad, want) in [
             (Record::Reference { scene: 0, ms: f64::NAN }, "a reference timing of NaN ms"),
             (
@@ -185,6 +200,14 @@ mod tests {
                     row: Box::new(inf_ms),
                 },
                 "a row timed at inf ms",
+            ),
+            (
+                Record::Row {
+                    index: 1,
+                    scene: 0,
+                    row: Box::new(outside),
+                },
+                "a row timed at Some(1.0) ms with frames from 2 to 3 ms",
             ),
             (
                 Record::Row {

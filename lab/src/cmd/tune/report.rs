@@ -3,8 +3,9 @@
 //! the generalisation gap, runners-up, the Pareto fronts with the chosen point marked,
 //! each axis's sensitivity), the charts and the error images.
 
-use super::search::{Candidate, Found, Measured, Outcome, Plan, Verdict, median};
+use super::search::{self, Candidate, Found, Measured, Outcome, Plan, Verdict, median};
 use super::{Detail, Tuner};
+use crate::cmd::sweep::chart::{Chart, Point, chart};
 use crate::cmd::sweep::{SceneTruth, run_config};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -15,6 +16,10 @@ pub(crate) fn create_out(out: &Path) -> Result<(), String> {
 }
 
 pub(crate) use crate::session::{writable, write_new};
+
+/// What the tuner's time charts' error bars span: its repeated timings at the final rung
+/// (`--repeats`), each the median of its frames.
+const TUNE_SPREAD: &str = "error bars: fastest to slowest of the repeated timings (--repeats; the point: their median)";
 
 /// The command line as typed, each word quoted where the shell would need it.
 fn command_line() -> String {
@@ -491,34 +496,44 @@ pub(crate) fn write(t: &Tuner, tiers: &[(f64, Plan, Found)]) -> Result<(), Strin
             let _ = writeln!(md, "| {axis} | {value} | {err:.4} | {:+.4} |", err - ch.measured.error);
         }
         // charts of the final fidelity, the chosen point marked
-        let pts: Vec<(String, f64, f64)> = finals
+        let point = |c: &Candidate, x: f64, m: &Measured, spread: bool| Point {
+            technique: t.entries[c.technique].label.clone(),
+            config: c.describe(),
+            x,
+            y: m.error,
+            spread: spread.then(|| search::spread(&m.times)).flatten(),
+        };
+        let pts: Vec<Point> = finals.iter().map(|(c, m)| point(c, median(&m.times), m, true)).collect();
+        let mem: Vec<Point> = finals
             .iter()
-            .map(|(c, m)| (t.entries[c.technique].label.clone(), median(&m.times), m.error))
+            .map(|(c, m)| point(c, m.bytes as f64 / (1 << 20) as f64, m, false))
             .collect();
-        let mem: Vec<(String, f64, f64)> = finals
-            .iter()
-            .map(|(c, m)| (t.entries[c.technique].label.clone(), m.bytes as f64 / (1 << 20) as f64, m.error))
-            .collect();
-        let label = format!("  chosen: {}", e.label);
+        let label = format!("chosen: {}", e.label);
         let time_chart = format!("pareto-{name}-time.png");
         let mem_chart = format!("pareto-{name}-memory.png");
         writable(&out.join(&time_chart))?;
         writable(&out.join(&mem_chart))?;
-        crate::cmd::sweep::report::chart(
+        chart(
             &out.join(&time_chart),
             &pts,
-            Some((median(&ch.measured.times), ch.measured.error, &label)),
-            &format!("GPU time ({})", t.budget.unit()),
-            &t.a.metric,
-            &format!("sshc tune: the final fidelity's configurations ({name})"),
+            &Chart {
+                title: &format!("sshc tune: the final fidelity's configurations ({name})"),
+                x_label: &format!("GPU time ({}, log)", t.budget.unit()),
+                y_label: &t.a.metric,
+                spread: TUNE_SPREAD,
+                mark: Some((median(&ch.measured.times), ch.measured.error, &label)),
+            },
         )?;
-        crate::cmd::sweep::report::chart(
+        chart(
             &out.join(&mem_chart),
             &mem,
-            Some((ch.measured.bytes as f64 / (1 << 20) as f64, ch.measured.error, &label)),
-            "texture and buffer MiB",
-            &t.a.metric,
-            &format!("sshc tune: error against memory ({name})"),
+            &Chart {
+                title: &format!("sshc tune: error against memory ({name})"),
+                x_label: "texture and buffer MiB (log)",
+                y_label: &t.a.metric,
+                spread: TUNE_SPREAD,
+                mark: Some((ch.measured.bytes as f64 / (1 << 20) as f64, ch.measured.error, &label)),
+            },
         )?;
         let _ = writeln!(md, "\n![error against time]({time_chart})\n![error against memory]({mem_chart})\n");
         if k + 1 == tiers.len() {

@@ -252,6 +252,17 @@ pub fn median(v: &[f64]) -> f64 {
     }
 }
 
+/// The fastest and the slowest of `v`, where it holds two or more timings (the charts'
+/// error bars).
+pub fn spread(v: &[f64]) -> Option<(f64, f64)> {
+    if v.len() < 2 {
+        return None;
+    }
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Some((lo, hi))
+}
+
 /// A configuration measured at one fidelity, over the scenes and views of that fidelity.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Measured {
@@ -591,6 +602,8 @@ mod tests {
         assert_eq!(verdict(&[1.2, 1.1], 1.0), Verdict::Over);
         assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert_eq!(spread(&[0.9, 0.53, 1.22]), Some((0.53, 1.22)));
+        assert_eq!(spread(&[0.9]), None);
     }
 
     /// A made-up world: error falls and time grows with N and the map size, so that the
