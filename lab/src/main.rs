@@ -86,6 +86,15 @@ enum Command {
     /// texture of the graph (docs/viewer.md).
     #[cfg(feature = "view")]
     View(sshc_lab::view::ViewArgs),
+    /// A live window on a technique (docs/viewer.md): not in this build, which was made
+    /// without the `view` feature (as `scripts/run.sh` makes it, for a quicker first build);
+    /// the message names the command that builds it.
+    #[cfg(not(feature = "view"))]
+    View {
+        /// The viewer's arguments (docs/viewer.md).
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Generate a scene: `sshc scene city` writes the procedural city as a GLB file (the
     /// mesh a scene file names `City(triangles: N, seed: S)`), to load as `--scene`.
     #[command(subcommand)]
@@ -187,6 +196,10 @@ fn main() -> ExitCode {
     }
 }
 
+/// The command that builds `sshc` with its viewer.
+#[cfg(not(feature = "view"))]
+const VIEW_BUILD: &str = "cargo build --release -p sshc-lab (then ./target/release/sshc view ...)";
+
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Render(args) => render::render(args),
@@ -196,6 +209,10 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Tune(args) => tune::tune(*args),
         #[cfg(feature = "view")]
         Command::View(args) => sshc_lab::view::view(args),
+        #[cfg(not(feature = "view"))]
+        Command::View { .. } => Err(format!(
+            "error: this `sshc` was built without the viewer (feature `view`; `scripts/run.sh` leaves it out for a quicker first build); build it with: {VIEW_BUILD}"
+        )),
         Command::Verify(args) => verify::verify(args),
         Command::Scene(SceneCommand::City { triangles, seed, out }) => {
             let limit = sshc_lab::scene::MAX_SCENE_TRIANGLES;
