@@ -754,3 +754,94 @@ fn a_wait_for_nothing_ends_and_an_unknown_texture_is_named() {
     );
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Issue 51's viewer: a script folds the panels away (`Panels(false)`), a debug output's
+/// background (NaN where the camera sees no surface) shows magenta as docs/viewer.md says
+/// (it showed viridis(0), dark purple: `x != x` is no NaN test in WGSL), a channel is
+/// shown by its name (`ShowChannel`) exactly as by its texture and component, and the
+/// logarithmic map draws another image than the linear one.
+#[test]
+fn panels_fold_away_nan_shows_magenta_and_a_channel_is_shown_by_name() {
+    let dir = temp_dir("panels");
+    let technique = "techniques/examples/vssm-subdivided.ron";
+    let source = std::fs::read_to_string(root().join(technique)).expect("the technique reads");
+    let options = sshc::CompileOptions {
+        debug: true,
+        ..Default::default()
+    };
+    let graph = sshc::compile_str(&source, &options).expect("it compiles").graph;
+    let debug = graph
+        .textures
+        .iter()
+        .find(|t| t.name.starts_with("debug_"))
+        .expect("a debug output");
+    let (texture, channel) = graph
+        .textures
+        .iter()
+        .filter(|t| !t.name.starts_with("debug_") && !t.format.is_table())
+        .find_map(|t| t.channels.first().map(|c| (t, c)))
+        .expect("a channel in a texture");
+    let shot = |name: &str| dir.join(format!("{name}.png"));
+    let texture_show = |map: &str, lo: f32| {
+        format!(
+            "Show(Texture(name: \"{}\", layer: {}, level: 0, channel: {}, lo: {lo:?}, hi: 1.0, map: {map}))",
+            texture.name, channel.layer, channel.component
+        )
+    };
+    let script = write_script(
+        &dir,
+        &format!(
+            "[
+    WaitReady,
+    Show(Texture(name: \"{debug}\", layer: 0, level: 0, channel: 0, lo: 0.0, hi: 1.0, map: Viridis)), Wait(1), Screenshot({with_panels:?}),
+    Panels(false), Wait(1), Screenshot({alone:?}),
+    ShowChannel(name: \"{channel}\", level: 0, lo: 0.001, hi: 1.0, map: Viridis), Wait(1), Screenshot({by_name:?}),
+    {by_number_show}, Wait(1), Screenshot({by_number:?}),
+    {log_show}, Wait(1), Screenshot({log:?}),
+]",
+            debug = debug.name,
+            with_panels = shot("with-panels"),
+            alone = shot("alone"),
+            channel = channel.name,
+            by_name = shot("by-name"),
+            by_number_show = texture_show("Viridis", 0.001),
+            by_number = shot("by-number"),
+            log_show = texture_show("LogViridis", 0.001),
+            log = shot("log"),
+        ),
+    );
+    let (ok, out) = scripted(technique, "scenes/bunny.ron", "96x96", &script, &dir.join("log.jsonl"));
+    assert!(ok, "sshc view failed:\n{out}");
+    let magenta = [255u8, 0, 255, 255];
+    let alone = png(&shot("alone"));
+    let with_panels = png(&shot("with-panels"));
+    let count = |img: &image::RgbaImage| img.pixels().filter(|p| p.0 == magenta).count();
+    // the bunny's camera sees the background above it: NaN in every debug output there
+    assert!(
+        count(&alone) > 500,
+        "{} magenta pixels where the camera sees no surface",
+        count(&alone)
+    );
+    assert_eq!(
+        alone.get_pixel(2, 2).0,
+        magenta,
+        "the top-left corner, background, without the panels"
+    );
+    assert_ne!(
+        with_panels.get_pixel(2, 2).0,
+        magenta,
+        "the panels' title bar covers the top-left corner when they are drawn"
+    );
+    let differ = alone.pixels().zip(with_panels.pixels()).filter(|(a, b)| a != b).count();
+    assert!(differ > 100, "folding the panels changed {differ} pixels");
+    let (by_name, by_number, log) = (png(&shot("by-name")), png(&shot("by-number")), png(&shot("log")));
+    assert!(
+        by_name == by_number,
+        "channel `{}` by name differs from {} channel {}",
+        channel.name,
+        texture.name,
+        channel.component
+    );
+    let changed = log.pixels().zip(by_number.pixels()).filter(|(a, b)| a != b).count();
+    assert!(changed > 100, "the logarithmic map changed {changed} pixels of the linear one");
+}

@@ -49,16 +49,21 @@ pub enum ColourMap {
     Viridis,
     /// Blue below the middle, white at it, red above: for signed values.
     Diverging,
+    /// Viridis over the logarithm: `lo` to `hi` (both above 0) spread by their ratio, so
+    /// that a mip level of `exp(-80 z)` reads across its decades; values at or below 0 take
+    /// `lo`'s colour.
+    LogViridis,
 }
 
 impl ColourMap {
-    pub const ALL: [ColourMap; 3] = [ColourMap::Grey, ColourMap::Viridis, ColourMap::Diverging];
+    pub const ALL: [ColourMap; 4] = [ColourMap::Grey, ColourMap::Viridis, ColourMap::Diverging, ColourMap::LogViridis];
 
     pub fn name(self) -> &'static str {
         match self {
             ColourMap::Grey => "grey",
             ColourMap::Viridis => "viridis",
             ColourMap::Diverging => "diverging",
+            ColourMap::LogViridis => "log viridis",
         }
     }
 
@@ -68,6 +73,7 @@ impl ColourMap {
             ColourMap::Grey => 0,
             ColourMap::Viridis => 1,
             ColourMap::Diverging => 2,
+            ColourMap::LogViridis => 3,
         }
     }
 }
@@ -238,6 +244,18 @@ pub enum Event {
     Schedule { pass: String, value: String },
     /// Show this.
     Show(Mode),
+    /// Show a channel of the technique by its name: the texture, layer and component its
+    /// packing gave it (`sshc explain` lists them), mapped from `[lo, hi]` (stored values).
+    ShowChannel {
+        name: String,
+        level: u32,
+        lo: f32,
+        hi: f32,
+        map: ColourMap,
+    },
+    /// Draw the panels (`true`) or the view alone (`false`: screenshots without them; the
+    /// Tab key does the same in the window).
+    Panels(bool),
     /// Show a second technique or setting on the right half (`None`: the whole window is
     /// the main one again).
     Split(Option<Split>),
@@ -295,6 +313,19 @@ pub fn check(events: &[Event]) -> Result<(), (usize, String)> {
             Event::Show(Mode::Texture { lo, hi, channel, .. }) if !(lo.is_finite() && hi.is_finite() && lo < hi) || *channel > 3 => {
                 "a texture is shown from `lo` to `hi`, finite with lo < hi, in channel 0 to 3".into()
             }
+            Event::ShowChannel { lo, hi, .. } if !(lo.is_finite() && hi.is_finite() && lo < hi) => {
+                "a channel is shown from `lo` to `hi`, finite with lo < hi".into()
+            }
+            Event::Show(Mode::Texture {
+                lo,
+                map: ColourMap::LogViridis,
+                ..
+            })
+            | Event::ShowChannel {
+                lo,
+                map: ColourMap::LogViridis,
+                ..
+            } if *lo <= 0.0 => "a logarithmic map needs `lo` above 0".into(),
             _ => continue,
         };
         return Err((i, why));
@@ -324,6 +355,16 @@ mod tests {
             ("[WaitTruth(100000)]", 0, "at most 4096 rounds"),
             ("[Show(Error(range: NaN))]", 0, "the range is a finite number above 0"),
             ("[Show(StdError(range: 0.0))]", 0, "the range"),
+            (
+                "[Panels(false), Show(Texture(name: \"m\", layer: 0, level: 0, channel: 0, lo: 0.0, hi: 1.0, map: LogViridis))]",
+                1,
+                "a logarithmic map needs `lo` above 0",
+            ),
+            (
+                "[ShowChannel(name: \"z\", level: 0, lo: 1.0, hi: 1.0, map: Grey)]",
+                0,
+                "finite with lo < hi",
+            ),
             (
                 "[Show(Texture(name: \"moments\", layer: 0, level: 0, channel: 0, lo: NaN, hi: 1.0, map: Viridis))]",
                 0,

@@ -101,6 +101,8 @@ struct App {
     args: ViewArgs,
     /// The technique files the picker lists: `techniques/*.ron` and the one given.
     techniques: Vec<PathBuf>,
+    /// Whether the panels are drawn (Tab, or a script's `Panels`).
+    show_panels: bool,
     /// The scene (its camera and lights the window's, set in place: `sync_scene`), the
     /// file's camera and lights, and the window's state.
     scene: Scene,
@@ -174,17 +176,7 @@ impl App {
         if let Some((w, h)) = args.size {
             scene.set_camera_size(w, h);
         }
-        let mut techniques: Vec<PathBuf> = std::fs::read_dir("techniques")
-            .map(|d| {
-                d.filter_map(|e| e.ok().map(|e| e.path()))
-                    .filter(|p| p.extension().is_some_and(|x| x == "ron"))
-                    .collect()
-            })
-            .unwrap_or_default();
-        if !techniques.contains(&args.technique) {
-            techniques.push(args.technique.clone());
-        }
-        techniques.sort();
+        let techniques = technique_files(&args.technique);
         let state = ViewState {
             technique: args.technique.clone(),
             scene: args.scene.clone(),
@@ -208,6 +200,7 @@ impl App {
             file: (scene.camera.clone(), scene.lights.clone()),
             last_move: 0,
             techniques,
+            show_panels: true,
             scene,
             state,
             gfx: None,
@@ -539,6 +532,40 @@ impl App {
                 self.saved_at = Some(Instant::now());
             }
             Event::Screenshot(p) => self.screenshot = Some(p),
+            Event::Panels(on) => self.show_panels = on,
+            Event::ShowChannel { name, level, lo, hi, map } => {
+                let Some(ex) = &self.ex else {
+                    return Err(format!(
+                        "error: ShowChannel: `{name}`: no technique is compiled yet (a WaitReady first)"
+                    ));
+                };
+                let found = ex
+                    .graph()
+                    .textures
+                    .iter()
+                    .find_map(|t| t.channels.iter().find(|c| c.name == name).map(|c| (t, c)));
+                let Some((texture, channel)) = found else {
+                    let known: Vec<&str> = ex
+                        .graph()
+                        .textures
+                        .iter()
+                        .flat_map(|t| t.channels.iter().map(|c| c.name.as_str()))
+                        .collect();
+                    return Err(format!(
+                        "error: ShowChannel: the graph has no channel `{name}`; it has {}",
+                        known.join(", ")
+                    ));
+                };
+                self.state.mode = Mode::Texture {
+                    name: texture.name.clone(),
+                    layer: channel.layer,
+                    level,
+                    channel: channel.component,
+                    lo,
+                    hi,
+                    map,
+                };
+            }
             Event::State(s) => {
                 let recompile = s.technique != self.state.technique
                     || s.fixed != self.state.fixed
@@ -852,7 +879,12 @@ impl App {
             truth: self.truth.as_ref(),
             rms: self.rms,
         };
-        let out = gfx.egui.run_pass(raw, |ctx| panels(ctx, &ui, &mut actions));
+        let show_panels = self.show_panels;
+        let out = gfx.egui.run_pass(raw, |ctx| {
+            if show_panels {
+                panels(ctx, &ui, &mut actions);
+            }
+        });
         gfx.egui_winit.handle_platform_output(&gfx.window, out.platform_output);
         let jobs = gfx.egui.tessellate(out.shapes, out.pixels_per_point);
         push(&mut self.times.ui_ms, ui_start.elapsed().as_secs_f64() * 1e3);
@@ -1371,6 +1403,27 @@ const TRUTH_SETTLE: u64 = 3;
 const PRECISIONS: [&str; 5] = ["auto", "unorm8", "unorm16", "f16", "f32"];
 
 /// The panels: technique, params, storage and schedules, lights, what is shown, times.
+/// The technique files the picker lists: the working folder's `techniques/*.ron` (a
+/// researcher's own), the repository's bundled ones where `sshc` runs from elsewhere, and
+/// the file given; each once (by its canonical path), sorted.
+fn technique_files(given: &Path) -> Vec<PathBuf> {
+    let mut dirs = vec![PathBuf::from("techniques")];
+    if let Some(repo) = crate::session::repository() {
+        dirs.push(repo.join("techniques"));
+    }
+    let mut seen = std::collections::HashSet::new();
+    let mut files: Vec<PathBuf> = dirs
+        .iter()
+        .filter_map(|d| std::fs::read_dir(d).ok())
+        .flat_map(|d| d.filter_map(|e| e.ok().map(|e| e.path())))
+        .filter(|p| p.extension().is_some_and(|x| x == "ron") && p.is_file())
+        .chain(std::iter::once(given.to_path_buf()))
+        .filter(|p| seen.insert(p.canonicalize().unwrap_or_else(|_| p.clone())))
+        .collect();
+    files.sort();
+    files
+}
+
 fn panels(ctx: &egui::Context, d: &UiData, actions: &mut Vec<Action>) {
     // the panels start folded on a small window, which they would cover
     let wide = ctx.content_rect().width() >= 600.0;
@@ -1756,6 +1809,13 @@ impl ApplicationHandler for App {
                     self.set_camera_size(size.width, size.height);
                     self.resized = true;
                 }
+            }
+            WindowEvent::KeyboardInput { event, .. }
+                if event.state == ElementState::Pressed
+                    && !event.repeat
+                    && event.logical_key == winit::keyboard::Key::Named(winit::keyboard::NamedKey::Tab) =>
+            {
+                self.show_panels = !self.show_panels;
             }
             WindowEvent::ModifiersChanged(m) => {
                 self.mouse.shift = m.state().shift_key();

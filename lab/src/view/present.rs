@@ -52,13 +52,22 @@ fn fs(@builtin(position) at: vec4<f32>) -> @location(0) vec4<f32> {
         return vec4<f32>(v.rgb, 1.0);
     }
     let x = v[min(show.pick.z, 3u)];
-    // NaN shows magenta, infinities the colour of the end they lie past
-    if x != x {
+    // NaN shows magenta, infinities the colour of the end they lie past. NaN is told by
+    // its bits: WGSL lets an implementation assume no NaN, and `x != x` compiled as an
+    // ordered comparison is false for NaN (the debug outputs' background, NaN where the
+    // camera sees no surface, showed viridis(0), dark purple, on lavapipe)
+    let bits = bitcast<u32>(x);
+    if (bits & 0x7f800000u) == 0x7f800000u && (bits & 0x007fffffu) != 0u {
         return vec4<f32>(1.0, 0.0, 1.0, 1.0);
     }
-    let t = clamp((x - show.range.x) / max(show.range.y - show.range.x, 1e-30), 0.0, 1.0);
+    var t = clamp((x - show.range.x) / max(show.range.y - show.range.x, 1e-30), 0.0, 1.0);
+    if show.pick.w == 3u {
+        // viridis over log(x): lo (above 0, the script checks) to hi by their ratio
+        let lo = max(show.range.x, 1e-30);
+        t = clamp(log(max(x, lo) / lo) / max(log(max(show.range.y, lo) / lo), 1e-30), 0.0, 1.0);
+    }
     var c = vec3<f32>(t);
-    if show.pick.w == 1u {
+    if show.pick.w == 1u || show.pick.w == 3u {
         c = clamp(viridis(t), vec3<f32>(0.0), vec3<f32>(1.0));
     } else if show.pick.w == 2u {
         let s = t * 2.0 - 1.0;
