@@ -67,13 +67,13 @@ fn mode(u: &mut Unstructured) -> Result<Mode> {
             channel: u.int_in_range(0..=5)?,
             lo: float(u)?,
             hi: float(u)?,
-            map: [ColourMap::Grey, ColourMap::Viridis, ColourMap::Diverging][u.int_in_range(0..=2usize)?],
+            map: ColourMap::ALL[u.int_in_range(0..=ColourMap::ALL.len() - 1)?],
         },
     })
 }
 
 fn event(u: &mut Unstructured) -> Result<Event> {
-    Ok(match u.int_in_range(0..=14u8)? {
+    Ok(match u.int_in_range(0..=16u8)? {
         0 => Event::Wait(frames(u)?),
         1 => Event::WaitReady,
         2 => Event::WaitCompiled,
@@ -94,6 +94,14 @@ fn event(u: &mut Unstructured) -> Result<Event> {
         11 => Event::Show(mode(u)?),
         12 => Event::Screenshot("shot.png".into()),
         13 => Event::Technique("techniques/pcf.ron".into()),
+        14 => Event::Panels(u.arbitrary()?),
+        15 => Event::ShowChannel {
+            name: "z".into(),
+            level: u.arbitrary()?,
+            lo: float(u)?,
+            hi: float(u)?,
+            map: ColourMap::ALL[u.int_in_range(0..=ColourMap::ALL.len() - 1)?],
+        },
         _ => Event::Reset,
     })
 }
@@ -110,7 +118,10 @@ fn finite(e: &Event) -> bool {
         Event::LightSize { size, .. } => f(*size) && *size >= 0.0,
         Event::Set { value, .. } => value.is_finite(),
         Event::Show(Mode::Error { range } | Mode::StdError { range }) => f(*range) && *range > 0.0,
-        Event::Show(Mode::Texture { lo, hi, channel, .. }) => f(*lo) && f(*hi) && lo < hi && *channel <= 3,
+        Event::Show(Mode::Texture { lo, hi, channel, map, .. }) => {
+            f(*lo) && f(*hi) && lo < hi && *channel <= 3 && (*map != ColourMap::LogViridis || *lo > 0.0)
+        }
+        Event::ShowChannel { lo, hi, map, .. } => f(*lo) && f(*hi) && lo < hi && (*map != ColourMap::LogViridis || *lo > 0.0),
         _ => true,
     }
 }
