@@ -1326,6 +1326,41 @@ impl<'s, 'a> Typer<'s, 'a> {
                         .help("look it up outside `at_sample`")
                     });
                 }
+                // the box lookups on a mip chain combine a Mean chain's texels
+                if how.needs_mean_chain() && !table {
+                    let writer = &self.sym.t.passes[self.sym.resources[holder.as_str()].writer];
+                    match &writer.kind {
+                        PassKind::Mipmap { reduce: Reduce::Mean, .. } => {}
+                        PassKind::Mipmap { reduce, .. } => {
+                            return Err(Self::err(
+                                span,
+                                format!("`{name}` takes a mean over a box, but `{holder}` is a {reduce:?} mip chain"),
+                                "needs a Mean chain",
+                            )
+                            .also(writer.name.span, format!("`reduce: {reduce:?}` here"))
+                            .note("a Max or Min chain keeps each block's extreme, not its mean: no combination of its texels is the box's mean")
+                            .help(format!(
+                                "read a Mean chain of `{target}` (a Mipmap pass with `reduce: Mean`), or bound the box with `nearest_level_at` on this one"
+                            )));
+                        }
+                        other @ (PassKind::Depth { .. }
+                        | PassKind::Map { .. }
+                        | PassKind::Filter { .. }
+                        | PassKind::SummedArea { .. }
+                        | PassKind::Geometry { .. }
+                        | PassKind::Shade { .. }) => {
+                            return Err(
+                                Self::err(span, format!("`{name}` reads a mip chain, but `{holder}` has none"), "no mip chain")
+                                    .also(
+                                        writer.name.span,
+                                        format!("`{holder}` is written by this {} pass", other.kind_name()),
+                                    )
+                                    .note("the lookup reads the level where the box spans one to two texels")
+                                    .help(format!("add a Mipmap pass with `reduce: Mean` over `{holder}` and read its output")),
+                            );
+                        }
+                    }
+                }
                 if if table { !how.table_may_answer() } else { how.reads_table() } {
                     let d = if table {
                         Self::err(
