@@ -1805,6 +1805,14 @@ pub enum SampleFn {
     NearestLevel,
     /// `nearest_level_at(ch, level, du, dv)`: [`SampleFn::NearestLevel`] at `uv + (du, dv)`.
     NearestLevelAt,
+    /// `sample_mip_box(ch, w)`: the mean over the box `w` wide (uv units, at least a texel)
+    /// centred at `uv`, clipped to the map, of the piecewise-constant texels of the Mean mip
+    /// level where the box spans one to two texels: at most 3 x 3 texel loads, equal to the
+    /// coverage-weighted mean of the level-0 texels where the box's edges lie on that
+    /// level's texel edges (docs/language.md 8.7).
+    MipBox,
+    /// `sample_mip_box_at(ch, du, dv, w)`: [`SampleFn::MipBox`] centred at `uv + (du, dv)`.
+    MipBoxAt,
 }
 
 /// Everything the compiler knows about one lookup function.
@@ -1844,7 +1852,7 @@ impl fmt::Debug for SampleWgsl {
 }
 
 impl SampleFn {
-    pub const ALL: [SampleFn; 12] = [
+    pub const ALL: [SampleFn; 14] = [
         SampleFn::Sample,
         SampleFn::SampleLod,
         SampleFn::SampleWidth,
@@ -1857,11 +1865,13 @@ impl SampleFn {
         SampleFn::SampleWidthAt,
         SampleFn::NearestLevel,
         SampleFn::NearestLevelAt,
+        SampleFn::MipBox,
+        SampleFn::MipBoxAt,
     ];
 
     /// Every lookup function of the language (the names of [`SampleFn::ALL`], then their
     /// `expand` forms).
-    pub const NAMES: [&'static str; 24] = [
+    pub const NAMES: [&'static str; 28] = [
         "sample",
         "sample_lod",
         "sample_width",
@@ -1874,6 +1884,8 @@ impl SampleFn {
         "sample_width_at",
         "nearest_level",
         "nearest_level_at",
+        "sample_mip_box",
+        "sample_mip_box_at",
         "expand",
         "expand_lod",
         "expand_width",
@@ -1886,6 +1898,8 @@ impl SampleFn {
         "expand_width_at",
         "expand_nearest_level",
         "expand_nearest_level_at",
+        "expand_mip_box",
+        "expand_mip_box_at",
     ];
 
     /// Lookups that read a summed-area table: the box ones always, `nearest` and
@@ -2032,6 +2046,24 @@ impl SampleFn {
                     read: |tex, layer, uv, _base, a| level_read(tex, layer, &format!("({uv} + vec2<f32>({}, {}))", a[1], a[2]), &a[0]),
                 },
             },
+            SampleFn::MipBox => &SampleDesc {
+                name: "sample_mip_box",
+                expand_name: "expand_mip_box",
+                extra_args: &[Ty::F32],
+                wgsl: Texture {
+                    sampler: false,
+                    read: |tex, layer, uv, _base, a| format!("{MIP_BOX}({tex}, {layer}, {uv}, {})", a[0]),
+                },
+            },
+            SampleFn::MipBoxAt => &SampleDesc {
+                name: "sample_mip_box_at",
+                expand_name: "expand_mip_box_at",
+                extra_args: &[Ty::F32, Ty::F32, Ty::F32],
+                wgsl: Texture {
+                    sampler: false,
+                    read: |tex, layer, uv, _base, a| format!("{MIP_BOX}({tex}, {layer}, {uv} + vec2<f32>({}, {}), {})", a[0], a[1], a[2]),
+                },
+            },
         }
     }
 
@@ -2058,6 +2090,49 @@ impl SampleFn {
         if expand { self.desc().expand_name } else { self.desc().name }
     }
 }
+
+/// Whether a lookup needs a Mean mip chain (the box lookups on one).
+impl SampleFn {
+    pub fn needs_mean_chain(self) -> bool {
+        matches!(self, SampleFn::MipBox | SampleFn::MipBoxAt)
+    }
+}
+
+/// The WGSL function the mip-chain box lookups call (declared by [`MIP_BOX_WGSL`]).
+pub const MIP_BOX: &str = "mip_box";
+
+/// `sample_mip_box` in WGSL: the level where the box, `max(w N, 1)` level-0 texels wide,
+/// spans one to two texels (`firstLeadingBit` of its whole width: exact, unlike `log2`),
+/// the box in that level's texels (centre clamped to the map, clipped to it), and the
+/// coverage-weighted sum of the at most 3 x 3 texels it touches over its area. The same
+/// arithmetic in f64 is `interp`'s `Texels::mip_box`.
+pub const MIP_BOX_WGSL: &str = "
+// the mean over the box `w` wide (uv units, one texel at least) centred at `uv`, clipped
+// to the map, of the texels of the Mean mip level where it spans one to two texels
+// (docs/language.md 8.7, sample_mip_box): at most 3 x 3 loads
+fn mip_box(t: texture_2d_array<f32>, layer: i32, uv: vec2<f32>, w: f32) -> vec4<f32> {
+    let n = vec2<f32>(textureDimensions(t, 0i));
+    let width = clamp(w * n.x, 1.0, 4294967040.0);
+    let level = clamp(i32(firstLeadingBit(u32(width))), 0i, i32(textureNumLevels(t)) - 1i);
+    let s = f32(1u << u32(level));
+    let size = vec2<i32>(textureDimensions(t, level));
+    let c = clamp(uv * n, vec2<f32>(0.0), n);
+    let lo = max((c - 0.5 * width) / s, vec2<f32>(0.0));
+    let hi = min((c + 0.5 * width) / s, vec2<f32>(size));
+    let first = vec2<i32>(floor(lo));
+    var sum = vec4<f32>(0.0);
+    for (var j = 0i; j < 3i; j++) {
+        let y = f32(first.y + j);
+        let wy = max(min(hi.y, y + 1.0) - max(lo.y, y), 0.0);
+        for (var i = 0i; i < 3i; i++) {
+            let x = f32(first.x + i);
+            let wx = max(min(hi.x, x + 1.0) - max(lo.x, x), 0.0);
+            sum += (wx * wy) * textureLoad(t, min(first + vec2<i32>(i, j), size - 1i), layer, level);
+        }
+    }
+    return sum / ((hi.x - lo.x) * (hi.y - lo.y));
+}
+";
 
 /// WGSL of an unfiltered read of mip level `level` (an i32 expression, clamped to the
 /// chain) at `uv`: the texel of that level containing it, clamped to the edge.
@@ -2117,7 +2192,7 @@ mod tests {
         order.sort_unstable();
         assert_eq!(order, (0..SampleFn::ALL.len()).collect::<Vec<_>>());
         assert_eq!(
-            SampleFn::NearestLevelAt as usize + 1,
+            SampleFn::MipBoxAt as usize + 1,
             SampleFn::ALL.len(),
             "a SampleFn is missing from SampleFn::ALL"
         );
@@ -2333,7 +2408,7 @@ mod tests {
         }
         body.push_str("    let in_pixel_used = in_pixel;\n");
         let module = format!(
-            "{}{}@group(0) @binding(0) var<uniform> frame: Frame;
+            "{}{}{}@group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(2) var smp: sampler;
 @group(1) @binding(0) var t_x: texture_2d_array<f32>;
 
@@ -2351,6 +2426,7 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {{
 }}
 ",
             crate::builtins::NOISE_WGSL,
+            MIP_BOX_WGSL,
             sshc_graph::FRAME_WGSL
         );
         if let Err(e) = crate::back::validate(&module) {

@@ -581,6 +581,79 @@ impl Texels {
         (v, mean(asums) + weighing + table)
     }
 
+    /// `sample_mip_box`: the mean over the box `w` wide (uv units, a texel at least) centred
+    /// at uv (clamped to the map), clipped to the map, of the piecewise-constant texels of
+    /// the level where the box spans one to two texels, as WGSL's `mip_box`
+    /// (`builtins::MIP_BOX_WGSL`) computes it, in f64. The allowance: the covered texels'
+    /// allowances weighed as their values are; what the GPU's coordinate error can do, the
+    /// box moved by `margin` (level-0 texels: the receiver's uv error, and a few f32
+    /// roundings of coordinates as large as the map) either way along each axis and widened
+    /// or narrowed by twice that (which takes a jump to the next level where the width
+    /// crosses a power of two); and the f32 weighing of nine texels and the division, 16
+    /// roundings of the largest texel read.
+    fn mip_box(&self, uv: [f64; 2], w: f64, margin: f64, model: Model) -> (f64, f64) {
+        let Some((v, a, big)) = self.mip_box_exact(uv, w) else {
+            return (f64::NAN, 0.0);
+        };
+        let n = self.base().size as f64;
+        let shift = margin + 4.0 * model.ulp(n);
+        let mut moved = 0.0;
+        if shift > 0.0 {
+            let d = shift / n;
+            for moves in [
+                [([d, 0.0], 0.0), ([-d, 0.0], 0.0)],
+                [([0.0, d], 0.0), ([0.0, -d], 0.0)],
+                [([0.0, 0.0], 2.0 * d), ([0.0, 0.0], -2.0 * d)],
+            ] {
+                let mut worst = 0.0f64;
+                for (duv, dw) in moves {
+                    let m = self
+                        .mip_box_exact([uv[0] + duv[0], uv[1] + duv[1]], w + dw)
+                        .map_or(f64::INFINITY, |m| (m.0 - v).abs());
+                    worst = worst.max(m);
+                }
+                moved += worst;
+            }
+        }
+        (v, a + moved + 16.0 * model.ulp(big))
+    }
+
+    /// [`Texels::mip_box`]'s value, its texels' weighed allowance and the largest magnitude
+    /// among the texels it read (`None` for a width or centre that is not a number).
+    fn mip_box_exact(&self, uv: [f64; 2], w: f64) -> Option<(f64, f64, f64)> {
+        let n = self.base().size as f64;
+        let width = (w * n).clamp(1.0, 4294967040.0);
+        if width.is_nan() || uv.iter().any(|c| c.is_nan()) {
+            return None;
+        }
+        let level = ((width as u64).ilog2() as usize).min(self.levels.len() - 1);
+        let s = (1u64 << level) as f64;
+        let lv = &self.levels[level];
+        let size = lv.size as f64;
+        let c = [(uv[0] * n).clamp(0.0, n), (uv[1] * n).clamp(0.0, n)];
+        let lo = [((c[0] - 0.5 * width) / s).max(0.0), ((c[1] - 0.5 * width) / s).max(0.0)];
+        let hi = [((c[0] + 0.5 * width) / s).min(size), ((c[1] + 0.5 * width) / s).min(size)];
+        let first = [lo[0].floor(), lo[1].floor()];
+        let cover = |k: usize, t: f64| (hi[k].min(t + 1.0) - lo[k].max(t)).max(0.0);
+        let (mut v, mut a, mut big) = (0.0, 0.0, 0.0f64);
+        for j in 0..3 {
+            let y = first[1] + j as f64;
+            let wy = cover(1, y);
+            for i in 0..3 {
+                let x = first[0] + i as f64;
+                let wxy = cover(0, x) * wy;
+                let (tv, ta) = lv.at((x as i64).min(lv.size as i64 - 1), (y as i64).min(lv.size as i64 - 1));
+                if wxy > 0.0 {
+                    v += wxy * tv;
+                    a += wxy * ta;
+                    big = big.max(tv.abs());
+                }
+            }
+        }
+        let area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
+        Some((v / area, a / area, big))
+    }
+
     /// `nearest` on a table: the texel's value from four entries, with what the table's
     /// storage adds (an f32 table's four entries' rounding and three f32 subtractions of
     /// entries that large; a fixed-point table's decode).
@@ -1208,6 +1281,8 @@ impl<'p> Evaluation<'p> {
                         SampleFn::SampleWidthAt => t.filtered([at[0] + a(0), at[1] + a(1)], (a(2) * n).max(1.0).log2() + by[2]),
                         SampleFn::NearestLevel => t.nearest_level(s.uv, a(0), margin),
                         SampleFn::NearestLevelAt => t.nearest_level([s.uv[0] + a(1), s.uv[1] + a(2)], a(0), margin),
+                        SampleFn::MipBox => t.mip_box(s.uv, a(0), margin, self.model),
+                        SampleFn::MipBoxAt => t.mip_box([s.uv[0] + a(0), s.uv[1] + a(1)], a(2), margin, self.model),
                     })
                 }
                 Node::Channel(..)

@@ -39,6 +39,12 @@ struct Lowerer<'s, 'a> {
     samples: u32,
     /// Locals below this index are the callers' of the function bodies being inlined.
     floor: usize,
+    /// The `Channel` and `Expansion` parameters of the function bodies being inlined: name,
+    /// the item their argument named, and `locals.len()` where they were bound (a `let` of
+    /// the body bound after one shadows it, as in `check`).
+    aliases: Vec<(String, Item, usize)>,
+    /// Aliases below this index are the callers'.
+    alias_floor: usize,
 }
 
 /// An invariant `check` established does not hold: a compiler bug, reported as a value.
@@ -67,6 +73,8 @@ impl<'s, 'a> Lowerer<'s, 'a> {
             view: None,
             samples: 1,
             floor: 0,
+            aliases: vec![],
+            alias_floor: 0,
         }
     }
 
@@ -362,6 +370,16 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         })
     }
 
+    /// The item a function body's `Channel` or `Expansion` parameter `n` names, unless a
+    /// `let` of the body bound after it shadows it.
+    fn alias(&self, n: &str) -> Option<Item> {
+        let (_, item, at) = self.aliases[self.alias_floor..].iter().rev().find(|a| a.0 == n)?;
+        if self.locals[(*at).max(self.floor)..].iter().any(|l| l.0 == n) {
+            return None;
+        }
+        Some(*item)
+    }
+
     fn call(&mut self, name: &str, args: &[Expr], e: &Expr) -> Result<ExprId, Diagnostic> {
         let span = e.span;
         if name == crate::builtins::NEIGHBOUR {
@@ -387,15 +405,36 @@ impl<'s, 'a> Lowerer<'s, 'a> {
             // parameters bound to them (check refused recursion and bounded the size)
             let f = &self.sym.t.functions[fi];
             let mut bound = Vec::with_capacity(args.len());
-            for (a, (p, _)) in args.iter().zip(&f.params) {
-                bound.push((p.value.clone(), self.expr_coerced(a)?));
+            let mut items = Vec::new();
+            let depth = self.locals.len();
+            for (a, (p, ty)) in args.iter().zip(&f.params) {
+                match ty.value {
+                    ParamTy::Value(_) => bound.push((p.value.clone(), self.expr_coerced(a)?)),
+                    // passed by name: the caller's parameter's item, or the declared one
+                    ParamTy::Channel | ParamTy::Expansion => {
+                        let ExprKind::Name(n) = &a.kind else {
+                            return Err(internal(a.span, "a channel argument that is not a name"));
+                        };
+                        let item = match (self.alias(n), ty.value) {
+                            (Some(i), _) => Some(i),
+                            (None, ParamTy::Channel) => self.sym.channels.get(n.as_str()).map(|&c| Item::Channel(c)),
+                            (None, _) => self.sym.expansions.get(n.as_str()).map(|&e| Item::Expansion(e)),
+                        };
+                        let item = item.ok_or_else(|| internal(a.span, "a channel argument not resolved by check"))?;
+                        items.push((p.value.clone(), item, depth));
+                    }
+                }
             }
-            let (floor, depth) = (self.floor, self.locals.len());
+            let (floor, alias_floor, aliases) = (self.floor, self.alias_floor, self.aliases.len());
             self.floor = depth;
+            self.alias_floor = aliases;
+            self.aliases.extend(items);
             self.locals.extend(bound);
             let r = self.expr_coerced(&f.body);
             self.locals.truncate(depth);
+            self.aliases.truncate(aliases);
             self.floor = floor;
+            self.alias_floor = alias_floor;
             return r;
         }
         if name == AT_SAMPLE {
@@ -435,8 +474,12 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 extra.push(self.expr_coerced(a)?);
             }
             let find = |item: Item| reads.iter().find(|(i, _)| *i == item).map(|(_, r)| *r);
+            let alias = self.alias(target);
             if expand {
-                let e = self.sym.expansions[target.as_str()];
+                let e = match alias {
+                    Some(Item::Expansion(e)) => e,
+                    _ => self.sym.expansions[target.as_str()],
+                };
                 let res = find(Item::Expansion(e)).ok_or_else(|| internal(args[0].span, "expansion not read by this pass"))?;
                 let exp = self.expansions[ExpansionId::new(e)].clone();
                 let mut acc = exp.constant;
@@ -458,7 +501,10 @@ impl<'s, 'a> Lowerer<'s, 'a> {
                 }
                 return Ok(acc);
             }
-            let c = self.sym.channels[target.as_str()];
+            let c = match alias {
+                Some(Item::Channel(c)) => c,
+                _ => self.sym.channels[target.as_str()],
+            };
             let res = find(Item::Channel(c)).ok_or_else(|| internal(args[0].span, "channel not read by this pass"))?;
             let ch = self.channel_ids[c];
             return Ok(self.arena.add(

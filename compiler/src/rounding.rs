@@ -148,6 +148,8 @@ fn footprint(how: SampleFn, args: &[ExprId], arg: &dyn Fn(&ExprId) -> f64, texel
         SampleFn::SampleWidthAt => (at(0), 0.5 * at(2)),
         SampleFn::NearestLevel => (0.0, level(0)),
         SampleFn::NearestLevelAt => (at(1), level(0)),
+        SampleFn::MipBox => (0.0, 0.5 * at(0)),
+        SampleFn::MipBoxAt => (at(0), 0.5 * at(2)),
     };
     let du = if du.is_finite() { du } else { 0.0 };
     (du, if h.is_finite() { h.max(half) } else { half })

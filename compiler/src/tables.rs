@@ -108,7 +108,9 @@ fn lookups(p: &Program) -> Vec<Lookup> {
             | SampleFn::SampleAt
             | SampleFn::SampleWidthAt
             | SampleFn::NearestLevel
-            | SampleFn::NearestLevelAt => &[][..],
+            | SampleFn::NearestLevelAt
+            | SampleFn::MipBox
+            | SampleFn::MipBoxAt => &[][..],
         };
         let area = if widths.len() == 2 {
             let side = |w: WidthRange| ((w.0 * n).clamp(1.0, n), (w.1 * n).clamp(1.0, n));

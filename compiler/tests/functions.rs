@@ -349,3 +349,127 @@ fn hyperbolic_functions_are_typed_ranged_folded_and_emitted() {
     assert!((v.value - 2f64.tanh().tanh()).abs() <= v.allowance + 1e-12, "{v:?}");
     assert!(v.allowance < 1e-5, "{v:?}");
 }
+
+/// `Channel` parameters (issue 51): a helper that looks up a channel is written once and
+/// called per channel; the argument names the channel (or the caller's own channel
+/// parameter), and the compiled Shade is the one written inline, lookup for lookup.
+#[test]
+fn channel_parameters_compile_to_the_lookups_written_inline() {
+    let bundled = compile(&vsm()).unwrap();
+    let shade = |c: &sshc::Compiled| c.shaders.iter().find(|(f, _)| f.ends_with("shade.wgsl")).unwrap().1.clone();
+    let fns = format!(
+        r#"{CHEBYSHEV}
+        "moment": Function(params: {{ "m": Channel }}, body: "sample(m)"),
+        "through": Function(params: {{ "c": Channel }}, body: "moment(c)"),
+        "bound": Function(params: {{ "a": Channel, "b": Channel, "t": F32 }}, body: "chebyshev(through(a), moment(b), t)"),"#
+    );
+    for visibility in [
+        // each channel through a one-lookup helper
+        "let d_biased = d - bias - slope_bias * depth_slope; linstep(bleed, 1.0, chebyshev(moment(m1), moment(m2), d_biased))",
+        // both channels through one helper, one of them passed on by a channel parameter
+        "let d_biased = d - bias - slope_bias * depth_slope; linstep(bleed, 1.0, bound(m1, m2, d_biased))",
+    ] {
+        let with = compile(&vsm_with(&fns, visibility)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(with.cost.shade, bundled.cost.shade, "{visibility}");
+        assert_eq!(renumbered(&shade(&with)), renumbered(&shade(&bundled)), "{visibility}");
+    }
+    // the argument decides which channel is read, even where the parameter is named like
+    // another channel: `first(m2)` reads m2, `first(m1)` m1
+    let first = r#"        "first": Function(params: { "m1": Channel }, body: "sample(m1)"),"#;
+    for ch in ["m1", "m2"] {
+        let called = compile(&vsm_with(first, &format!("first({ch})"))).unwrap_or_else(|e| panic!("{e}"));
+        let inline = compile(&vsm_with("", &format!("sample({ch})"))).unwrap();
+        assert_eq!(renumbered(&shade(&called)), renumbered(&shade(&inline)), "first({ch})");
+    }
+    // the lookups with extra arguments: a box of taps at offsets, the same as written inline
+    let taps = r#"        "cross": Function(params: { "m": Channel, "r": F32 }, body: "0.25 * (nearest_at(m, r, 0.0) + nearest_at(m, -r, 0.0) + nearest_at(m, 0.0, r) + nearest_at(m, 0.0, -r))"),"#;
+    let called = compile(&vsm_with(
+        taps,
+        "clamp(cross(m1, 2.0 * texel_size) - cross(m2, texel_size), 0.0, 1.0)",
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    let inline = compile(&vsm_with(
+        "",
+        "clamp(0.25 * (nearest_at(m1, 2.0 * texel_size, 0.0) + nearest_at(m1, -(2.0 * texel_size), 0.0) + nearest_at(m1, 0.0, 2.0 * texel_size) + nearest_at(m1, 0.0, -(2.0 * texel_size))) - 0.25 * (nearest_at(m2, texel_size, 0.0) + nearest_at(m2, -texel_size, 0.0) + nearest_at(m2, 0.0, texel_size) + nearest_at(m2, 0.0, -texel_size)), 0.0, 1.0)",
+    ))
+    .unwrap();
+    assert_eq!(called.cost.shade, inline.cost.shade);
+    assert_eq!(called.cost.shade.fetches, 8, "{:?}", called.cost.shade);
+    assert_eq!(renumbered(&shade(&called)), renumbered(&shade(&inline)));
+}
+
+/// `Expansion` parameters: `expand` and its forms through a helper, the same code as inline.
+#[test]
+fn expansion_parameters_compile_to_the_expansion_written_inline() {
+    let csm = std::fs::read_to_string(root().join("techniques/csm.ron")).unwrap();
+    let with = csm.replace("let s = expand(f);", "let s = series(f);").replace(
+        "    passes: [",
+        "    functions: { \"series\": Function(params: { \"e\": Expansion }, body: \"expand(e)\") },\n    passes: [",
+    );
+    assert_ne!(with, csm);
+    let (a, b) = (compile(&csm).unwrap(), compile(&with).unwrap_or_else(|e| panic!("{e}")));
+    let shade = |c: &sshc::Compiled| c.shaders.iter().find(|(f, _)| f.ends_with("shade.wgsl")).unwrap().1.clone();
+    assert_eq!(a.cost.shade, b.cost.shade);
+    assert_eq!(renumbered(&shade(&a)), renumbered(&shade(&b)));
+    // a channel where the expansion is taken, and the other way round
+    refused(
+        &with.replace("series(f)", "series(z)"),
+        &["parameter `e` of `series` takes an expansion by name, found `z`, a channel"],
+    );
+}
+
+/// What a `Channel` parameter refuses, each at the call (or at the use, with the call
+/// named), with file:line:column: a value for the channel, the parameter used as a value,
+/// a channel the caller's Shade does not read, a lookup of the wrong kind.
+#[test]
+fn channel_parameters_refuse_values_and_unread_channels() {
+    let lit = r#"        "lit": Function(params: { "m": Channel, "t": F32 }, body: "select(0.0, 1.0, t <= sample(m))"),"#;
+    refused(
+        &vsm_with(lit, "lit(d, d)"),
+        &[
+            "parameter `m` of `lit` takes a channel by name, found `d`, a built-in value",
+            "declared here: lit(m: channel, t: f32)",
+            "t.ron:",
+            "help: pass the name of a channel: `z`, `m1`, `m2`",
+        ],
+    );
+    refused(
+        &vsm_with(lit, "lit(m1 + 1.0, d)"),
+        &["takes a channel by name, found an expression"],
+    );
+    refused(&vsm_with(lit, "lit(bias, d)"), &["found `bias`, a param (a value)"]);
+    refused(
+        &vsm_with(lit, "lit(m3, d)"),
+        &["found `m3`, which is not declared", "did you mean `m1`?"],
+    );
+    refused(&vsm_with(lit, "let x = d; lit(x, d)"), &["found `x`, a value"]);
+    refused(
+        &vsm_with(r#"        "lit": Function(params: { "m": Channel }, body: "m * 2.0"),"#, "lit(m1)"),
+        &[
+            "`m` is a channel parameter, not a value",
+            "the channel `m1` here",
+            "in this call of `lit`",
+            "help: look it up, as `sample(m)`",
+        ],
+    );
+    // `z` is carried by `shadow`, which the Shade does not read: refused at the argument
+    refused(
+        &vsm_with(lit, "lit(z, d)"),
+        &[
+            "`z` is not carried by any resource this Shade pass reads",
+            "passed to `m` of `lit`, whose body looks it up",
+            "add `shadow` (which carries it) to the Shade pass's `reads`",
+        ],
+    );
+    refused(
+        &vsm_with(r#"        "e": Function(params: { "m": Channel }, body: "expand(m)"),"#, "e(m1)"),
+        &[
+            "`m` is a channel parameter (`m1` here), but `expand` takes an expansion",
+            "look it up with `sample`, the same lookup on a channel",
+        ],
+    );
+    refused(
+        &vsm_with(r#"        "f": Function(params: { "m": Chanel }, body: "sample(m)"),"#, "f(m1)"),
+        &["unknown parameter type `Chanel`", "Channel, Expansion"],
+    );
+}

@@ -843,3 +843,16 @@ fn vector_constants_fold_to_the_hand_simplified_cost() {
     let (plain, _) = ops("step(d, nearest_at(z, c * 0.001, c * 0.002))");
     assert_eq!(picked, plain);
 }
+
+/// `sample_mip_box` and `sample_mip_box_at` (issue 51): the Shade calls the module's
+/// `mip_box` function on the Mean chain, declared once; snapshot of the module.
+#[test]
+fn the_mip_box_lookup_compiles_to_one_function_on_the_chain() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/mip-box.ron");
+    let src = std::fs::read_to_string(&p).unwrap();
+    let c = sshc::compile_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("mip-box.ron", &src)));
+    let (_, shade) = c.shaders.iter().find(|(f, _)| f.ends_with("shade.wgsl")).unwrap();
+    assert_eq!(shade.matches("fn mip_box(").count(), 1, "{shade}");
+    assert_eq!(shade.matches("mip_box(t_").count(), 2, "{shade}");
+    insta::assert_snapshot!("fixture.mip-box.shade.wgsl", shade);
+}

@@ -256,6 +256,40 @@ fn region_and_level_lookups_agree_and_injected_bugs_are_caught() {
     }
 }
 
+/// `sample_mip_box` and `sample_mip_box_at` (issue 51) on a Mean chain at F16 and Unorm8:
+/// the GPU agrees with the CPU's f64 reading (`interp`'s `Texels::mip_box`) on every
+/// input, and a bug injected into the WGSL's box (its lower edge a tenth too near) is
+/// caught.
+const MIP_BOX_PROBE: &str = r#"Technique(
+    name: "mip_box_probe",
+    channels: {
+        "z": Channel(precision: F32),
+        "a": Channel(precision: F16, value: "z"),
+        "b": Channel(precision: Unorm8, value: "z * z"),
+    },
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Map(name: "mean", reads: ["shadow"], writes: "means", channels: ["a", "b"]),
+        Mipmap(name: "mips", reads: "means", writes: "chain", reduce: Mean),
+        Shade(name: "shade", reads: ["chain"],
+              visibility: "saturate(0.25 * (sample_mip_box(a, 3.0 * texel_size) + sample_mip_box_at(b, 1.5 * texel_size, -0.5 * texel_size, 5.0 * texel_size) + sample_mip_box(b, 1.0 * texel_size) + sample_mip_box_at(a, -2.0 * texel_size, 0.0, 9.0 * texel_size)))"),
+    ],
+)"#;
+
+#[test]
+fn mip_box_lookups_agree_and_an_injected_bug_is_caught() {
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("verify needs an adapter: {e}"));
+    let c = sshc::compile_str(MIP_BOX_PROBE, &sshc::CompileOptions::default())
+        .unwrap_or_else(|d| panic!("{}", d.render("mip_box_probe", MIP_BOX_PROBE)));
+    let good = verdicts(&rows(&gpu, &c));
+    assert!(good.iter().all(|v| *v == Verdict::Agrees), "as generated: {good:?}");
+    let bad = rows(
+        &gpu,
+        &injected(&c, "shade", "max((c - 0.5 * width) / s", "max((c - 0.45 * width) / s"),
+    );
+    assert!(verdicts(&bad).contains(&Verdict::Differs), "not caught: {:?}", verdicts(&bad));
+}
+
 /// A probe of real branches (`if c { a } else { b }`): a branch in a Map channel's value,
 /// and in the Shade an `else if` chain whose arms share a value, read a lookup with an
 /// implicit level bound before the `if`, and hold a series whose branch folds per term.

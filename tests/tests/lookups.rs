@@ -286,3 +286,134 @@ fn depth_overrides_fill_each_light_samples_view() {
     let err = err.to_string();
     assert!(err.contains("depth override has 3 maps, the Depth pass `depth` 2 view(s)"), "{err}");
 }
+
+/// A probe of `sample_mip_box_at`: `m` = z stored at `precision`, a Mean mip chain over it
+/// (built in place: the chain's levels are texture `mapped`'s), and the Shade reading the
+/// box `w` texels wide centred `(du, dv)` texels off the receiver.
+fn mip_box_probe(precision: &str) -> sshc::Compiled {
+    let src = format!(
+        r#"Technique(
+    name: "mip_box_probe",
+    params: {{
+        "w": Param(ty: F32, default: 1.0, range: (0.0, 64.0), doc: "box width in texels"),
+        "du": Param(ty: F32, default: 0.0, range: (-8.0, 8.0), doc: "offset in texels"),
+        "dv": Param(ty: F32, default: 0.0, range: (-8.0, 8.0), doc: "offset in texels"),
+    }},
+    channels: {{
+        "z": Channel(precision: F32),
+        "m": Channel(precision: {precision}, value: "z"),
+    }},
+    passes: [
+        Depth(name: "depth", writes: "shadow", channel: "z"),
+        Map(name: "map", reads: ["shadow"], writes: "mapped", channels: ["m"]),
+        Mipmap(name: "mips", reads: "mapped", writes: "chain", reduce: Mean),
+        Shade(name: "shade", reads: ["chain"], visibility: "sample_mip_box_at(m, du * texel_size, dv * texel_size, w * texel_size)"),
+    ],
+)"#
+    );
+    compile_source("mip_box_probe", &src, &[], &[])
+}
+
+/// Every level of the chain the GPU stored, level 0 first (level l is `N >> l` wide).
+fn stored_levels(c: &sshc::Compiled, depth: &[f32]) -> Vec<Vec<f64>> {
+    let ex = sshc_lab::run::Loaded::new(gpu(), c.graph.clone(), c.shaders.clone()).unwrap();
+    let mut ex = ex.bind_scene(&plane().inputs()).unwrap();
+    ex.set_depth_override(Some(depth.to_vec()));
+    ex.run_frame().unwrap();
+    (0..=N.ilog2())
+        .map(|l| {
+            let img = ex.inspect().read_texture("mapped", 0, l).unwrap();
+            assert_eq!(img.rgba.len(), ((N >> l) * (N >> l)) as usize, "level {l}");
+            img.rgba.iter().map(|t| t[0] as f64).collect()
+        })
+        .collect()
+}
+
+/// The coverage-weighted mean of the texels of a level `size` wide over the box
+/// `[lo, hi]` (in that level's texels): each texel constant over its footprint.
+fn covered_mean(level: &[f64], size: usize, lo: [f64; 2], hi: [f64; 2]) -> f64 {
+    let overlap = |a: f64, b: f64, i: usize| (b.min(i as f64 + 1.0) - a.max(i as f64)).max(0.0);
+    let mut sum = 0.0;
+    for j in 0..size {
+        for i in 0..size {
+            sum += overlap(lo[0], hi[0], i) * overlap(lo[1], hi[1], j) * level[j * size + i];
+        }
+    }
+    sum / ((hi[0] - lo[0]) * (hi[1] - lo[1]))
+}
+
+/// `sample_mip_box` (docs/language.md 8.7) on lavapipe, at several widths (levels 0 to 5 of
+/// a 32^2 map) and offsets, against CPU means of the texels the GPU stored:
+/// - everywhere, the definition: the covered mean of level L's stored texels, L the level
+///   where the box spans one to two texels;
+/// - where the box's edges lie on level L's texel edges (or the map's), exactness: the
+///   covered mean of the level-0 texels, as a summed-area table would give it.
+#[test]
+fn the_mip_box_is_the_covered_mean_of_the_level_and_exact_when_aligned() {
+    let p = plane();
+    let n = N as f64;
+    let depth = depth_field("noise", N);
+    let mut aligned_above_0 = 0;
+    for precision in ["F32", "Unorm8"] {
+        let c = mip_box_probe(precision);
+        let levels = stored_levels(&c, &depth);
+        // What storing a level's mean may move it by, per level (the chain's stores add
+        // up along it): F32, the mean's three roundings of 2^-24 relative (values in
+        // [0, 1]); Unorm8, half a code (round to nearest, the interpreter's model of
+        // lavapipe's stores, `interp::Model::storage`).
+        let store = if precision == "F32" { 3.0 * 2f64.powi(-24) } else { 0.5 / 255.0 };
+        // The lookup's own error: the box's edges off by the receiver's uv error (a few f32
+        // roundings of a uv below 1: 4 * 2^-24, times N texels) and by the rounding of the
+        // coordinates computed from it (two more of magnitude N), in level-0 texels; an
+        // edge off by delta moves the mean by at most delta / (the box's extent, half a
+        // texel at least after clipping) * (the values' spread, 1), four edges: 8 delta.
+        // Then the f32 weighing of nine texels and the division: 32 roundings of 2^-24 of
+        // values at most 1.
+        let delta = 6.0 * n * 2f64.powi(-24);
+        let lookup = 8.0 * delta + 32.0 * 2f64.powi(-24);
+        let mut aligned = 0;
+        for (du, dv) in [(0.75, 0.75), (3.3, -1.6)] {
+            for w in [1.5, 2.0, 3.0, 4.0, 6.0, 16.0, 40.0] {
+                let run = run_plane(&c, &p, &depth, &[("w", w), ("du", du), ("dv", dv)], 1);
+                let width = f64::max(w, 1.0);
+                let l = (width.log2().floor() as usize).min(levels.len() - 1);
+                let (s, size) = ((1usize << l) as f64, N as usize >> l);
+                let mut checked = 0;
+                for (v, pos) in run.visibility.iter().zip(&run.positions) {
+                    if pos[0].is_nan() {
+                        continue;
+                    }
+                    let (uv, _) = p.project(*pos);
+                    let c = [(uv[0] * n + du).clamp(0.0, n), (uv[1] * n + dv).clamp(0.0, n)];
+                    let lo = [(c[0] - 0.5 * width).max(0.0), (c[1] - 0.5 * width).max(0.0)];
+                    let hi = [(c[0] + 0.5 * width).min(n), (c[1] + 0.5 * width).min(n)];
+                    let (v, got_lo, got_hi) = (*v as f64, lo.map(|x| x / s), hi.map(|x| x / s));
+                    let def = covered_mean(&levels[l], size, got_lo, got_hi);
+                    assert!(
+                        (v - def).abs() <= lookup,
+                        "{precision} w {w} at ({du}, {dv}), uv {uv:?}: {v} against the level-{l} mean {def}"
+                    );
+                    checked += 1;
+                    // aligned: every edge on a level-L texel edge (the query plane's pixel
+                    // centres sit on quarter texels; the projection's f64 of f32 positions
+                    // is within 1e-6 texel of them, which `lookup` covers)
+                    let on_edge = |x: &f64| (x - x.round()).abs() < 1e-6;
+                    if got_lo.iter().chain(&got_hi).all(on_edge) {
+                        let snap = |b: [f64; 2]| b.map(|x| (x / s).round() * s);
+                        let exact = covered_mean(&levels[0], N as usize, snap(lo), snap(hi));
+                        let allowed = lookup + l as f64 * store;
+                        assert!(
+                            (v - exact).abs() <= allowed,
+                            "{precision} w {w} at ({du}, {dv}), uv {uv:?}: {v} against the level-0 mean {exact} (allowed {allowed})"
+                        );
+                        aligned += 1;
+                        aligned_above_0 += usize::from(l > 0);
+                    }
+                }
+                assert!(checked > run.visibility.len() / 2, "{precision} w {w}: {checked} pixels checked");
+            }
+        }
+        assert!(aligned > 100, "{precision}: only {aligned} aligned boxes");
+    }
+    assert!(aligned_above_0 > 20, "only {aligned_above_0} aligned boxes above level 0");
+}

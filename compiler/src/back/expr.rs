@@ -63,6 +63,8 @@ pub(crate) struct Emitter<'a> {
     table_texels: std::collections::BTreeSet<String>,
     pub(crate) uses_params: bool,
     pub(crate) uses_sampler: bool,
+    /// The body calls the mip-chain box lookup's WGSL function (`builtins::MIP_BOX_WGSL`).
+    uses_mip_box: bool,
     /// Map side: the resources the pass reads.
     reads: Vec<ResId>,
     counter: usize,
@@ -96,6 +98,7 @@ impl<'a> Emitter<'a> {
             table_texels: Default::default(),
             uses_params: false,
             uses_sampler: false,
+            uses_mip_box: false,
             reads,
             counter: 0,
             views: Default::default(),
@@ -452,7 +455,9 @@ impl<'a> Emitter<'a> {
                             | SampleFn::SampleAt
                             | SampleFn::SampleWidthAt
                             | SampleFn::NearestLevel
-                            | SampleFn::NearestLevelAt => return Err(internal("a texture lookup of a summed-area table")),
+                            | SampleFn::NearestLevelAt
+                            | SampleFn::MipBox
+                            | SampleFn::MipBoxAt => return Err(internal("a texture lookup of a summed-area table")),
                         }
                     }
                     // `shade_refusal` keeps per-sample implicit-LOD lookups forward
@@ -462,6 +467,7 @@ impl<'a> Emitter<'a> {
                     }
                     SampleWgsl::Texture { sampler, read } => {
                         self.uses_sampler |= sampler;
+                        self.uses_mip_box |= how.needs_mean_chain();
                         read(&tex, &layer, &uv, &base, &args)
                     }
                     // reads_table holds for every lookup of this form
@@ -495,6 +501,9 @@ impl<'a> Emitter<'a> {
         if !self.views.is_empty() {
             s.push_str(graph::LIGHT_SAMPLES_WGSL);
             s.push_str("@group(0) @binding(3) var<uniform> light_samples: LightSamples;\n");
+        }
+        if self.uses_mip_box {
+            s.push_str(crate::builtins::MIP_BOX_WGSL);
         }
         for (i, (name, _)) in self.bindings.iter().enumerate() {
             match self.tables.iter().find(|(n, _)| n == name) {

@@ -12,7 +12,7 @@ use crate::front::ast::*;
 use crate::front::expr::{BinOp, Expr, ExprKind, Literal, UnOp};
 use crate::front::parse::closest;
 use crate::resolve::{Item, Symbols};
-use crate::span::Span;
+use crate::span::{Span, Spanned};
 use crate::types::{Resolved, Types, comp_index};
 
 /// The context an expression is typed in.
@@ -93,6 +93,9 @@ pub(crate) enum Bind<'a> {
     Let(&'a Expr),
     /// Anything else: not known to the series limit.
     Other,
+    /// A function's `Channel` or `Expansion` parameter: the item its argument named, usable
+    /// only as a lookup's first argument.
+    Item(Item),
 }
 
 /// Type inference for one expression in one context; what it infers goes into `types`.
@@ -642,7 +645,7 @@ impl<'s, 'a> Typer<'s, 'a> {
                         Slot::Known(consteval::eval(self.sym, x, &mut once).ok())
                     }
                 }
-                Bind::Other => Slot::Known(None),
+                Bind::Other | Bind::Item(_) => Slot::Known(None),
             };
             match &slot {
                 Slot::Known(v) => {
@@ -686,6 +689,31 @@ impl<'s, 'a> Typer<'s, 'a> {
 
     fn resolve_name(&mut self, n: &str, span: Span) -> Result<(Ty, Resolved), Diagnostic> {
         if let Some(l) = self.locals[self.floor..].iter().rev().find(|l| l.name == n) {
+            if let Bind::Item(item) = l.bind {
+                let (what, named, example) = match item {
+                    Item::Channel(c) => (
+                        "channel",
+                        &self.sym.t.channels[c].name.value,
+                        format!("`sample({n})`, `nearest({n})`, `fetch({n}, dx, dy)`"),
+                    ),
+                    Item::Expansion(e) => (
+                        "expansion",
+                        &self.sym.t.expansions[e].name.value,
+                        format!("`expand({n})`, `expand_width({n}, w)`"),
+                    ),
+                };
+                return Err(Self::err(
+                    span,
+                    format!("`{n}` is a {what} parameter, not a value"),
+                    format!("the {what} `{named}` here"),
+                )
+                .note(format!(
+                    "a {what} parameter names the {what} its call passed; it is read only through a lookup"
+                ))
+                .help(format!(
+                    "look it up, as {example}, or declare the parameter `F32` and pass the looked-up value"
+                )));
+            }
             let ty = l.ty;
             if !l.konst {
                 if self.mode == Mode::Const {
@@ -990,6 +1018,21 @@ impl<'s, 'a> Typer<'s, 'a> {
         // the arguments, in the caller's scope
         let mut bound = Vec::with_capacity(args.len());
         for (a, (p, want)) in args.iter().zip(&f.params) {
+            let want = match want.value {
+                ParamTy::Value(t) => Spanned::new(t, want.span),
+                kind @ (ParamTy::Channel | ParamTy::Expansion) => {
+                    let item = self.item_argument(a, kind == ParamTy::Expansion, name, p, &signature)?;
+                    bound.push(Local {
+                        name: p.value.clone(),
+                        ty: Ty::F32,
+                        uses: vec![],
+                        konst: false,
+                        bind: Bind::Item(item),
+                    });
+                    continue;
+                }
+            };
+            let want = &want;
             let before = self.uses.len();
             let runtime = self.runtime;
             let t = self.infer(a)?;
@@ -1024,6 +1067,106 @@ impl<'s, 'a> Typer<'s, 'a> {
         self.locals.truncate(depth);
         self.floor = floor;
         r.map_err(|d| d.also(name_span, format!("in this call of `{name}`")))
+    }
+
+    /// The item a call passes for a `Channel` (or, with `expand`, `Expansion`) parameter `p`
+    /// of function `fname`: a declared channel's name or the caller's own parameter of that
+    /// kind, and in a Shade pass one its reads carry.
+    fn item_argument(&self, a: &Expr, expand: bool, fname: &str, p: &Name, signature: &dyn Fn() -> String) -> Result<Item, Diagnostic> {
+        let (what, a_what) = if expand {
+            ("expansion", "an expansion")
+        } else {
+            ("channel", "a channel")
+        };
+        let names: Vec<&str> = if expand {
+            self.sym.expansions.keys().map(String::as_str).collect()
+        } else {
+            self.sym.channels.keys().map(String::as_str).collect()
+        };
+        let refuse = |found: String, hint: Option<&str>| {
+            let d = Self::err(
+                a.span,
+                format!("parameter `{}` of `{fname}` takes {a_what} by name, found {found}", p.value),
+                format!("not a {what}"),
+            )
+            .also(p.span, format!("declared here: {}", signature()))
+            .note(format!("calls are inlined: the body's lookups read the {what} named here"));
+            match hint {
+                Some(h) => d.help(format!("did you mean `{h}`?")),
+                None if names.is_empty() => d.help(format!("the technique declares no {what}")),
+                None => d.help(format!(
+                    "pass the name of a {what}: {}",
+                    names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+                )),
+            }
+        };
+        let ExprKind::Name(n) = &a.kind else {
+            return Err(refuse("an expression".to_string(), None));
+        };
+        let item = if let Some(l) = self.locals[self.floor..].iter().rev().find(|l| &l.name == n) {
+            match l.bind {
+                Bind::Item(item @ Item::Channel(_)) if !expand => item,
+                Bind::Item(item @ Item::Expansion(_)) if expand => item,
+                Bind::Item(_) => {
+                    let other = if expand { "a channel" } else { "an expansion" };
+                    return Err(refuse(format!("`{n}`, {other} parameter"), None));
+                }
+                Bind::Series | Bind::Let(_) | Bind::Other => {
+                    return Err(refuse(
+                        format!("`{n}`, a value (a `let`, a series variable or a value parameter)"),
+                        None,
+                    ));
+                }
+            }
+        } else if !expand && let Some(&c) = self.sym.channels.get(n) {
+            Item::Channel(c)
+        } else if expand && let Some(&e) = self.sym.expansions.get(n) {
+            Item::Expansion(e)
+        } else {
+            let found = if self.sym.channels.contains_key(n) {
+                format!("`{n}`, a channel")
+            } else if self.sym.expansions.contains_key(n) {
+                format!("`{n}`, an expansion")
+            } else if self.sym.param(n).is_some() {
+                format!("`{n}`, a param (a value)")
+            } else if Input::from_name(n).is_some() || constant(n).is_some() {
+                format!("`{n}`, a built-in value")
+            } else {
+                // an unknown name: perhaps a misspelt channel
+                return Err(refuse(format!("`{n}`, which is not declared"), closest(n, &names)));
+            };
+            return Err(refuse(found, None));
+        };
+        if self.mode == Mode::Shade
+            && let Some(avail) = &self.available
+            && !avail.iter().any(|(i, _, _)| *i == item)
+        {
+            let carriers: Vec<String> = self
+                .carriers
+                .iter()
+                .filter(|(i, _)| *i == item)
+                .map(|(_, r)| format!("`{r}`"))
+                .collect();
+            let real = self.item_name(item);
+            return Err(Self::err(
+                a.span,
+                format!("`{real}` is not carried by any resource this Shade pass reads"),
+                format!("passed to `{}` of `{fname}`, whose body looks it up", p.value),
+            )
+            .help(if carriers.is_empty() {
+                "no pass writes it: list it in the `channels` of a Map, Geometry or Depth pass".to_string()
+            } else {
+                format!("add {} (which carries it) to the Shade pass's `reads`", carriers.join(" or "))
+            }));
+        }
+        Ok(item)
+    }
+
+    fn item_name(&self, item: Item) -> &'a str {
+        match item {
+            Item::Channel(c) => &self.sym.t.channels[c].name.value,
+            Item::Expansion(e) => &self.sym.t.expansions[e].name.value,
+        }
     }
 
     fn call(&mut self, name: &str, name_span: Span, args: &'a [Expr], span: Span) -> Result<Ty, Diagnostic> {
@@ -1081,11 +1224,42 @@ impl<'s, 'a> Typer<'s, 'a> {
                     "expected a name",
                 ));
             };
-            let item = if expand {
-                self.sym.expansions.get(target).map(|&i| Item::Expansion(i))
-            } else {
-                self.sym.channels.get(target).map(|&i| Item::Channel(i))
+            // a function's `Channel` or `Expansion` parameter names its argument's item
+            let alias = match self.locals[self.floor..].iter().rev().find(|l| &l.name == target).map(|l| &l.bind) {
+                Some(Bind::Item(i)) => Some(*i),
+                _ => None,
             };
+            let item = match alias {
+                Some(i @ Item::Channel(_)) if !expand => Some(i),
+                Some(i @ Item::Expansion(_)) if expand => Some(i),
+                Some(i) => {
+                    let (is, other) = if expand {
+                        ("a channel", SampleFn::name(how, false))
+                    } else {
+                        ("an expansion", SampleFn::name(how, true))
+                    };
+                    return Err(Self::err(
+                        args[0].span,
+                        format!(
+                            "`{target}` is {is} parameter (`{}` here), but `{name}` takes {}",
+                            self.item_name(i),
+                            if expand { "an expansion" } else { "a channel" }
+                        ),
+                        format!("{is} parameter"),
+                    )
+                    .help(format!(
+                        "look it up with `{other}`, the same lookup on {}",
+                        if expand { "a channel" } else { "an expansion" }
+                    )));
+                }
+                None if expand => self.sym.expansions.get(target).map(|&i| Item::Expansion(i)),
+                None => self.sym.channels.get(target).map(|&i| Item::Channel(i)),
+            };
+            let real: &str = match (alias, item) {
+                (Some(_), Some(i)) => self.item_name(i),
+                _ => target,
+            };
+            let target = real;
             let Some(item) = item else {
                 let what = if expand { "expansion" } else { "channel" };
                 let cands: Vec<&str> = if expand {
@@ -1151,6 +1325,41 @@ impl<'s, 'a> Typer<'s, 'a> {
                         .note("inside `at_sample(k, ..)` the receiver's uv and depth are those of sample k's view")
                         .help("look it up outside `at_sample`")
                     });
+                }
+                // the box lookups on a mip chain combine a Mean chain's texels
+                if how.needs_mean_chain() && !table {
+                    let writer = &self.sym.t.passes[self.sym.resources[holder.as_str()].writer];
+                    match &writer.kind {
+                        PassKind::Mipmap { reduce: Reduce::Mean, .. } => {}
+                        PassKind::Mipmap { reduce, .. } => {
+                            return Err(Self::err(
+                                span,
+                                format!("`{name}` takes a mean over a box, but `{holder}` is a {reduce:?} mip chain"),
+                                "needs a Mean chain",
+                            )
+                            .also(writer.name.span, format!("`reduce: {reduce:?}` here"))
+                            .note("a Max or Min chain keeps each block's extreme, not its mean: no combination of its texels is the box's mean")
+                            .help(format!(
+                                "read a Mean chain of `{target}` (a Mipmap pass with `reduce: Mean`), or bound the box with `nearest_level_at` on this one"
+                            )));
+                        }
+                        other @ (PassKind::Depth { .. }
+                        | PassKind::Map { .. }
+                        | PassKind::Filter { .. }
+                        | PassKind::SummedArea { .. }
+                        | PassKind::Geometry { .. }
+                        | PassKind::Shade { .. }) => {
+                            return Err(
+                                Self::err(span, format!("`{name}` reads a mip chain, but `{holder}` has none"), "no mip chain")
+                                    .also(
+                                        writer.name.span,
+                                        format!("`{holder}` is written by this {} pass", other.kind_name()),
+                                    )
+                                    .note("the lookup reads the level where the box spans one to two texels")
+                                    .help(format!("add a Mipmap pass with `reduce: Mean` over `{holder}` and read its output")),
+                            );
+                        }
+                    }
                 }
                 if if table { !how.table_may_answer() } else { how.reads_table() } {
                     let d = if table {

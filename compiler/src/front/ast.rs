@@ -143,11 +143,31 @@ pub struct Param {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Function {
     pub name: Name,
-    /// In call order: each parameter's name and type (`F32`, `I32`, `U32`, `Bool`, `Vec2` to `Vec4`).
-    pub params: Vec<(Name, Spanned<Ty>)>,
+    /// In call order: each parameter's name and type (`F32`, `I32`, `U32`, `Bool`, `Vec2` to
+    /// `Vec4`, or `Channel` / `Expansion`: a name passed through to the lookups).
+    pub params: Vec<(Name, Spanned<ParamTy>)>,
     pub body: Expr,
     pub doc: Option<String>,
     pub span: Span,
+}
+
+/// The type of a function's parameter: a value, or a channel or expansion passed by name
+/// (calls are inlined, so the body's lookups read the argument's channel).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ParamTy {
+    Value(Ty),
+    Channel,
+    Expansion,
+}
+
+impl fmt::Display for ParamTy {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ParamTy::Value(t) => write!(f, "{t}"),
+            ParamTy::Channel => write!(f, "channel"),
+            ParamTy::Expansion => write!(f, "expansion"),
+        }
+    }
 }
 
 /// A constant array of the technique: elements of one type, each an expression known at

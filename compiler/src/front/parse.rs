@@ -504,6 +504,25 @@ fn array(name: Name, node: &Node) -> Result<ArrayDecl, Diagnostic> {
     })
 }
 
+/// A function parameter's type: a value type, or `Channel` / `Expansion` (passed by name).
+fn param_ty(v: &Node) -> Result<Spanned<ParamTy>, Diagnostic> {
+    let (t, span) = variant(v)?;
+    match t.as_str() {
+        "Channel" => Ok(Spanned::new(ParamTy::Channel, v.span)),
+        "Expansion" => Ok(Spanned::new(ParamTy::Expansion, v.span)),
+        "F32" | "I32" | "U32" | "Bool" | "Vec2" | "Vec3" | "Vec4" => {
+            let ty = value_ty(v, "parameter type")?;
+            Ok(Spanned::new(ParamTy::Value(ty.value), ty.span))
+        }
+        _ => Err(unknown_variant(
+            span,
+            &t,
+            "parameter type",
+            &["F32", "I32", "U32", "Bool", "Vec2", "Vec3", "Vec4", "Channel", "Expansion"],
+        )),
+    }
+}
+
 /// `"name": Function(params: { "x": F32, ... }, body: "...", doc: "...")`.
 fn function(name: Name, node: &Node) -> Result<Function, Diagnostic> {
     let mut f = Fields::of(node, "Function")?;
@@ -511,7 +530,7 @@ fn function(name: Name, node: &Node) -> Result<Function, Diagnostic> {
         None => vec![],
         Some(n) => map_entries(n)?
             .into_iter()
-            .map(|(k, v)| Ok((k, value_ty(v, "parameter type")?)))
+            .map(|(k, v)| Ok((k, param_ty(v)?)))
             .collect::<Result<_, _>>()?,
     };
     let body = expression(f.req("body")?)?;
