@@ -12,6 +12,8 @@ use sshc_lab::session::{compile_technique, positions_normals};
 use sshc_lab::visibility::Visibility;
 use sshc_runtime::gpu::{CameraOutput, Gpu};
 
+mod common;
+
 const TECHNIQUES: [&str; 9] = ["hard", "pcf", "vsm", "esm", "evsm", "msm", "csm", "pcss", "cssm"];
 
 fn root() -> &'static Path {
@@ -232,11 +234,23 @@ fn cascades_select_by_view_distance_and_one_cascade_is_the_plain_binding() {
         no_snap: false,
         cascade_offset: None,
     };
-    // every bundled technique that renders a light at infinity: the per-sample ones look
-    // from points on a local light, and cascades refuse them
-    let geometry = ["penumbra-limit-maps", "penumbra-maps", "smoothies", "single-sample"];
-    // and the methods since 2010
-    for t in TECHNIQUES.into_iter().chain(geometry).chain(["vssm", "mssm", "msm-hausdorff"]) {
+    // every bundled technique that renders a light at infinity, found in techniques/ (not
+    // listed): the per-sample ones look from points on a local light, and cascades refuse
+    // them
+    let at_infinity: Vec<String> = common::bundled_techniques()
+        .into_iter()
+        .filter(|t| !t.starts_with("examples/"))
+        .filter(|t| {
+            let path = root().join("techniques").join(format!("{t}.ron"));
+            let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let graph = sshc::compile_str(&source, &Default::default())
+                .unwrap_or_else(|d| panic!("{}", d.render(t, &source)))
+                .graph;
+            !graph.passes.iter().any(|p| p.views == sshc_graph::Views::PerLightSample)
+        })
+        .collect();
+    assert!(at_infinity.len() >= 16, "{at_infinity:?}");
+    for t in at_infinity.iter().map(String::as_str) {
         let path = root().join("techniques").join(format!("{t}.ron"));
         let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let loaded = compile_technique(&gpu, &path, &source, &Default::default()).unwrap_or_else(|e| panic!("{t}: {e}"));

@@ -1141,25 +1141,31 @@ impl<'s, 'a> Typer<'s, 'a> {
             && let Some(avail) = &self.available
             && !avail.iter().any(|(i, _, _)| *i == item)
         {
-            let carriers: Vec<String> = self
-                .carriers
-                .iter()
-                .filter(|(i, _)| *i == item)
-                .map(|(_, r)| format!("`{r}`"))
-                .collect();
             let real = self.item_name(item);
             return Err(Self::err(
                 a.span,
                 format!("`{real}` is not carried by any resource this Shade pass reads"),
                 format!("passed to `{}` of `{fname}`, whose body looks it up", p.value),
             )
-            .help(if carriers.is_empty() {
-                "no pass writes it: list it in the `channels` of a Map, Geometry or Depth pass".to_string()
-            } else {
-                format!("add {} (which carries it) to the Shade pass's `reads`", carriers.join(" or "))
-            }));
+            .help(self.carriers_help(item)));
         }
         Ok(item)
+    }
+
+    /// The help for a channel or expansion the Shade pass does not read: the resources
+    /// that carry it, to add to its `reads`, or that no pass writes it.
+    fn carriers_help(&self, item: Item) -> String {
+        let carriers: Vec<String> = self
+            .carriers
+            .iter()
+            .filter(|(i, _)| *i == item)
+            .map(|(_, r)| format!("`{r}`"))
+            .collect();
+        if carriers.is_empty() {
+            "no pass writes it: list it in the `channels` of a Map, Geometry or Depth pass".to_string()
+        } else {
+            format!("add {} (which carries it) to the Shade pass's `reads`", carriers.join(" or "))
+        }
     }
 
     fn item_name(&self, item: Item) -> &'a str {
@@ -1276,22 +1282,12 @@ impl<'s, 'a> Typer<'s, 'a> {
             if let Some(avail) = &self.available {
                 let holders: Vec<(&String, bool)> = avail.iter().filter(|(i, _, _)| *i == item).map(|(_, r, t)| (r, *t)).collect();
                 if holders.is_empty() {
-                    let carriers: Vec<String> = self
-                        .carriers
-                        .iter()
-                        .filter(|(i, _)| *i == item)
-                        .map(|(_, r)| format!("`{r}`"))
-                        .collect();
                     return Err(Self::err(
                         args[0].span,
                         format!("`{target}` is not carried by any resource this Shade pass reads"),
                         "not available here",
                     )
-                    .help(if carriers.is_empty() {
-                        "no pass writes it: list it in the `channels` of a Map, Geometry or Depth pass".to_string()
-                    } else {
-                        format!("add {} (which carries it) to the Shade pass's `reads`", carriers.join(" or "))
-                    }));
+                    .help(self.carriers_help(item)));
                 }
                 if holders.len() > 1 {
                     return Err(Self::err(

@@ -21,6 +21,34 @@ pub fn bundled_scenes() -> Vec<String> {
     names
 }
 
+/// The names of every bundled technique (`techniques/*.ron`) and authoring example
+/// (`techniques/examples/*.ron`, named `examples/NAME`), sorted: the tests that walk them
+/// all follow the folders, so a technique added there is tested without being listed
+/// (issue 52), each kind told apart by what its compiled graph holds.
+pub fn bundled_techniques() -> Vec<String> {
+    let mut names = Vec::new();
+    for (dir, prefix) in [("techniques", ""), ("techniques/examples", "examples/")] {
+        let dir = root().join(dir);
+        names.extend(
+            std::fs::read_dir(&dir)
+                .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+                .filter_map(|e| e.ok())
+                .filter_map(|e| e.path().file_name()?.to_str()?.strip_suffix(".ron").map(|n| format!("{prefix}{n}"))),
+        );
+    }
+    names.sort();
+    names
+}
+
+/// Whether bundled technique `name` ([`bundled_techniques`]) has a Geometry pass: its
+/// shadow comes from meshes, not from a depth map alone.
+pub fn has_geometry_pass(name: &str) -> bool {
+    let path = root().join("techniques").join(format!("{name}.ron"));
+    let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let compiled = sshc::compile_str(&source, &Default::default()).unwrap_or_else(|d| panic!("{}", d.render(name, &source)));
+    compiled.graph.passes.iter().any(|p| p.kind == sshc_graph::PassKind::Geometry)
+}
+
 /// Runs the `sshc` binary at `exe` (a test's `env!("CARGO_BIN_EXE_sshc")`) with `args` from
 /// the repository's root, on lavapipe's two threads, and returns what it did.
 pub fn sshc(exe: &str, args: &[&str]) -> std::process::Output {

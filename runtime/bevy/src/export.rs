@@ -38,21 +38,32 @@ const KINDS: [(&str, bool, bool); 4] = [
     ("seen.glb", false, false),
 ];
 
+/// The mesh entities as the extract step reads them.
+type MeshEntities<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static Mesh3d,
+        &'static GlobalTransform,
+        &'static ViewVisibility,
+        Has<NotShadowCaster>,
+        Has<NotShadowReceiver>,
+    ),
+>;
+type Cameras<'w, 's> = Query<'w, 's, (&'static Camera, &'static GlobalTransform, &'static Projection)>;
+type Lights<'w, 's> = Query<'w, 's, (&'static SshcShadow, &'static GlobalTransform), With<DirectionalLight>>;
+
+/// A kind's triangles and their corners' normals, in world space.
+type Soup = (Vec<[SVec3; 3]>, Vec<[SVec3; 3]>);
+
 /// The system behind [`ExportScene`] (in `Last`).
-#[expect(clippy::type_complexity, reason = "a Bevy system takes its world access as parameters")]
 pub fn export_scene(
     mut commands: Commands,
     request: Option<Res<ExportScene>>,
     meshes: Res<Assets<Mesh>>,
-    entities: Query<(
-        &Mesh3d,
-        &GlobalTransform,
-        &ViewVisibility,
-        Has<NotShadowCaster>,
-        Has<NotShadowReceiver>,
-    )>,
-    cameras: Query<(&Camera, &GlobalTransform, &Projection)>,
-    lights: Query<(&SshcShadow, &GlobalTransform), With<DirectionalLight>>,
+    entities: MeshEntities,
+    cameras: Cameras,
+    lights: Lights,
 ) {
     let Some(request) = request else { return };
     let dir = request.0.clone();
@@ -65,20 +76,7 @@ pub fn export_scene(
     commands.insert_resource(ExportedScene(outcome));
 }
 
-#[expect(clippy::type_complexity, reason = "the system's queries, passed on")]
-fn write_scene(
-    dir: &Path,
-    meshes: &Assets<Mesh>,
-    entities: &Query<(
-        &Mesh3d,
-        &GlobalTransform,
-        &ViewVisibility,
-        Has<NotShadowCaster>,
-        Has<NotShadowReceiver>,
-    )>,
-    cameras: &Query<(&Camera, &GlobalTransform, &Projection)>,
-    lights: &Query<(&SshcShadow, &GlobalTransform), With<DirectionalLight>>,
-) -> Result<PathBuf, String> {
+fn write_scene(dir: &Path, meshes: &Assets<Mesh>, entities: &MeshEntities, cameras: &Cameras, lights: &Lights) -> Result<PathBuf, String> {
     let camera = scene_camera(cameras)?;
     let (shadow, sun) = lights
         .iter()
@@ -90,7 +88,7 @@ fn write_scene(
         angle_degrees: shadow.angular_diameter_degrees,
     };
     // each kind's triangles and corner normals, in world space
-    let mut soups: [(Vec<[SVec3; 3]>, Vec<[SVec3; 3]>); 4] = Default::default();
+    let mut soups: [Soup; 4] = Default::default();
     for (mesh, transform, visible, no_cast, no_receive) in entities {
         // as the extract step: an entity neither seen nor casting is not in sshc's scene
         if !visible.get() && no_cast {
@@ -152,7 +150,7 @@ fn write_scene(
 }
 
 /// The first active camera with a perspective projection, as sshc's scene camera.
-fn scene_camera(cameras: &Query<(&Camera, &GlobalTransform, &Projection)>) -> Result<SceneCamera, String> {
+fn scene_camera(cameras: &Cameras) -> Result<SceneCamera, String> {
     let (camera, transform, projection) = cameras
         .iter()
         .find(|(c, _, p)| c.is_active && matches!(p, Projection::Perspective(_)))
