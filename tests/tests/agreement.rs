@@ -138,8 +138,16 @@ fn compare(v: &Variant, hand: &GpuReference, inputs: &[(String, Vec<f32>)], row:
     }
 }
 
+/// The share of a variant's queries that may be ties (skipped, unchecked). Ties are inputs on
+/// a decision's edge: a depth within 2^-22 of a blocker's, a uv on a texel's boundary; on the
+/// continuous fields and scenes here they are rare (docs/agreement.md: PCSS's 4- and
+/// 3-sample variants, whose few blocker samples make every sample a decision, 1.9 %; every
+/// other variant under 0.5 %). Over 5 % means the inputs sit on boundaries (a quantised
+/// field, a degenerate camera) and the comparison checks too little to mean agreement.
+const MAX_TIE_SHARE: f64 = 0.05;
+
 /// Compare every variant on every input; write the table; fail on any disagreement or
-/// when ties hollow a comparison out.
+/// when ties hollow a comparison out (more than [`MAX_TIE_SHARE`] of its queries).
 fn agree(test: &str, variants: &[Variant], fields: &[&str]) {
     let hand = GpuReference::new(gpu()).unwrap_or_else(|e| panic!("{e}"));
     let inputs = inputs(fields);
@@ -172,8 +180,16 @@ fn agree(test: &str, variants: &[Variant], fields: &[&str]) {
             median_of(&allowances),
             allowances.iter().copied().fold(0.0, f64::max)
         ));
-        if checked < 4 * ties.max(1) / 3 && checked < 1000 {
-            failures.push(format!("{}: only {checked} queries checked against {ties} ties", r.label));
+        // A tie (the result changes when d or uv moves by 2^-22) is skipped, not checked: at
+        // most MAX_TIE_SHARE of a variant's queries may be (the rule before, "fewer checked
+        // than 4/3 of the ties, and fewer than 1000", let up to 43 % go unchecked; issue 52)
+        if ties as f64 > MAX_TIE_SHARE * (checked + ties) as f64 {
+            failures.push(format!(
+                "{}: {ties} of {} queries are ties, unchecked: more than {:.0} %",
+                r.label,
+                checked + ties,
+                100.0 * MAX_TIE_SHARE
+            ));
         }
         for c in r.generated.iter().chain(&r.hand_written) {
             failures.extend(c.errors());
