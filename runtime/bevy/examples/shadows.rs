@@ -521,41 +521,66 @@ fn frame_wall(
 /// Frames rendered before the first one saved (the technique loading and compiling).
 const WARM_FRAMES: u32 = 30;
 
+/// The title line's state, kept across frames so that a frame allocates nothing: the
+/// diagnostic paths (made once), the line's buffer, and when it was last written.
+#[derive(Default)]
+struct TitleLine {
+    paths: Option<[bevy::diagnostic::DiagnosticPath; 2]>,
+    line: String,
+    written: Option<std::time::Instant>,
+}
+
+/// How often the title's times are written again (their values are smoothed anyway).
+const TITLE_EVERY: std::time::Duration = std::time::Duration::from_millis(500);
+
 fn keys(
     input: Res<ButtonInput<KeyCode>>,
     server: Res<AssetServer>,
     store: Res<bevy::diagnostic::DiagnosticsStore>,
     mut lights: Query<&mut SshcShadow>,
     mut index: Local<usize>,
+    mut title: Local<TitleLine>,
     mut windows: Query<&mut Window>,
 ) {
-    // sshc's GPU time, and Bevy's shadow pass's, smoothed by Bevy's render diagnostics
-    let gpu = |name: &str| {
-        let path = bevy::diagnostic::DiagnosticPath::new(format!("render/{name}/elapsed_gpu"));
-        store.get(&path).and_then(|d| d.smoothed())
-    };
-    let ms = |t: Option<f64>| t.map_or_else(|| "-".to_string(), |t| format!("{t:.2} ms"));
+    use std::fmt::Write as _;
+    let mut pressed = false;
     for mut shadow in &mut lights {
         if input.just_pressed(KeyCode::KeyT) {
             *index = (*index + 1) % TECHNIQUES.len();
             shadow.technique = server.load(format!("techniques/{}.ron", TECHNIQUES[*index]));
+            pressed = true;
         }
         if input.just_pressed(KeyCode::KeyB) {
             shadow.enabled = !shadow.enabled;
+            pressed = true;
         }
-        let line = match shadow.enabled {
-            true => format!(
-                "sshc: {}, GPU {} (Bevy's shadow pass {}) | T: next technique, B: Bevy's own shadows",
-                TECHNIQUES[*index],
-                ms(gpu("sshc_shadows")),
-                ms(gpu("per_view_shadow_pass"))
-            ),
-            false => format!("Bevy's own shadows, GPU {} | B: sshc's", ms(gpu("per_view_shadow_pass"))),
-        };
-        for mut w in &mut windows {
-            if w.title != line {
-                w.title = line.clone();
-            }
+    }
+    let now = std::time::Instant::now();
+    if !pressed && title.written.is_some_and(|t| now - t < TITLE_EVERY) {
+        return;
+    }
+    let title = &mut *title;
+    title.written = Some(now);
+    // sshc's GPU time, and Bevy's shadow pass's, smoothed by Bevy's render diagnostics
+    let [sshc, bevy_shadow] = title.paths.get_or_insert_with(|| {
+        ["sshc_shadows", "per_view_shadow_pass"].map(|name| bevy::diagnostic::DiagnosticPath::new(format!("render/{name}/elapsed_gpu")))
+    });
+    let time = |path: &bevy::diagnostic::DiagnosticPath| store.get(path).and_then(|d| d.smoothed()).unwrap_or(f64::NAN);
+    let (sshc, bevy_shadow) = (time(sshc), time(bevy_shadow));
+    let line = &mut title.line;
+    line.clear();
+    // `write!` into the kept buffer: no allocation once it has grown to the line's length
+    let _ = match lights.iter().next().map(|s| s.enabled) {
+        Some(true) => write!(
+            line,
+            "sshc: {}, GPU {sshc:.2} ms (Bevy's shadow pass {bevy_shadow:.2} ms) | T: next technique, B: Bevy's own shadows",
+            TECHNIQUES[*index]
+        ),
+        _ => write!(line, "Bevy's own shadows, GPU {bevy_shadow:.2} ms | B: sshc's"),
+    };
+    for mut w in &mut windows {
+        if w.title != *line {
+            w.title.clone_from(line);
         }
     }
 }

@@ -400,19 +400,21 @@ pub fn convert_mesh(mesh: &Mesh) -> Result<sshc_gpu::Mesh, String> {
     })
 }
 
-/// The prepare step: the scene, the targets and the frame's uniforms.
-pub fn prepare(
-    times: Res<CpuTimes>,
-    render: Option<ResMut<SshcRender>>,
-    mut extracted: ResMut<Extracted>,
-    views: Query<(
+/// The camera views prepare reads: render entity, main-world camera, view, size, jitter.
+type Views<'w, 's> = Query<
+    'w,
+    's,
+    (
         Entity,
-        &MainEntity,
-        &ExtractedView,
-        &bevy::render::camera::ExtractedCamera,
-        Option<&TemporalJitter>,
-    )>,
-) {
+        &'static MainEntity,
+        &'static ExtractedView,
+        &'static bevy::render::camera::ExtractedCamera,
+        Option<&'static TemporalJitter>,
+    ),
+>;
+
+/// The prepare step: the scene, the targets and the frame's uniforms.
+pub fn prepare(times: Res<CpuTimes>, render: Option<ResMut<SshcRender>>, mut extracted: ResMut<Extracted>, views: Views) {
     let Some(mut render) = render else { return };
     let start = std::time::Instant::now();
     let render = &mut *render;
@@ -466,18 +468,7 @@ pub fn prepare(
     times.push(0, start.elapsed().as_secs_f64() * 1e6);
 }
 
-fn prepare_light(
-    render: &mut SshcRender,
-    extracted: &mut Extracted,
-    light: &ExtractedLight,
-    views: &Query<(
-        Entity,
-        &MainEntity,
-        &ExtractedView,
-        &bevy::render::camera::ExtractedCamera,
-        Option<&TemporalJitter>,
-    )>,
-) -> Result<(), String> {
+fn prepare_light(render: &mut SshcRender, extracted: &mut Extracted, light: &ExtractedLight, views: &Views) -> Result<(), String> {
     let e = |e: sshc_gpu::RuntimeError| e.to_string();
     let gpu = render.gpu.clone();
     let loaded = render
