@@ -383,8 +383,11 @@ impl<'s, 'a> Lowerer<'s, 'a> {
     fn call(&mut self, name: &str, args: &[Expr], e: &Expr) -> Result<ExprId, Diagnostic> {
         let span = e.span;
         if name == crate::builtins::NEIGHBOUR {
-            let Some(Resolved::Channel(c)) = self.types.name(&args[0]) else {
-                return Err(internal(args[0].span, "`neighbour` of something other than a channel"));
+            // a declared channel, or a function's `Channel` parameter standing for one
+            let param = if let ExprKind::Name(n) = &args[0].kind { self.alias(n) } else { None };
+            let c = match (param, self.types.name(&args[0])) {
+                (Some(Item::Channel(c)), _) | (None, Some(Resolved::Channel(c))) => c,
+                _ => return Err(internal(args[0].span, "`neighbour` of something other than a channel")),
             };
             let mut offset = [0i32; 2];
             for (o, a) in offset.iter_mut().zip(&args[1..]) {

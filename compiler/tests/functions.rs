@@ -211,6 +211,27 @@ fn neighbourhood_reads_are_map_side_and_bounded() {
     refused(&with_value("neighbour(z, 32, 0)"), &["offset 32 is farther than 31 texels"]);
     refused(&with_value("neighbour(z, i32(z), 0)"), &["is not known at compile time"]);
     refused(&with_value("neighbour(nope, 0, 0)"), &["unknown channel `nope`"]);
+    // through a function's `Channel` parameter (issue 51): the same code as written inline
+    let with_fn = |functions: &str, value: &str| {
+        with_value(value).replace("    passes: [", &format!("    functions: {{\n{functions}\n    }},\n    passes: ["))
+    };
+    let row = r#"        "row": Function(params: { "c": Channel, "r": I32 }, body: "sum(dx in -2..=2, neighbour(c, dx, r) * neighbour(c, dx, r)) / 5.0"),"#;
+    let called = compile(&with_fn(row, "row(z, 1)")).unwrap_or_else(|e| panic!("{e}"));
+    let inline = compile(&with_value("sum(dx in -2..=2, neighbour(z, dx, 1) * neighbour(z, dx, 1)) / 5.0")).unwrap();
+    let map = |c: &sshc::Compiled| c.shaders.iter().find(|(f, _)| f.ends_with("moments.wgsl")).map(|s| renumbered(&s.1));
+    assert!(map(&inline).is_some(), "{:?}", inline.shaders.iter().map(|s| &s.0).collect::<Vec<_>>());
+    assert_eq!(map(&called), map(&inline));
+    let esm = std::fs::read_to_string(root().join("techniques/esm.ron")).unwrap();
+    let esm_with = esm.replace("value: \"z\", doc: \"copy", "value: \"f(e)\", doc: \"copy").replace(
+        "    expansions: {",
+        "    functions: { \"f\": Function(params: { \"x\": Expansion }, body: \"neighbour(x, 0, 0)\") },\n    expansions: {",
+    );
+    assert_ne!(esm_with, esm);
+    refused(&esm_with, &["`x` is an expansion parameter, but `neighbour` reads one channel"]);
+    refused(
+        &with_fn(r#"        "v": Function(params: { "z": F32 }, body: "neighbour(z, 0, 0)"),"#, "v(z)"),
+        &["`z` here is a value, not a channel"],
+    );
     refused(
         &vsm_with("", "neighbour(m1, 1, 0)"),
         &["`neighbour` reads the map around the texel being computed", "fetch(ch, dx, dy)"],

@@ -853,10 +853,33 @@ impl<'s, 'a> Typer<'s, 'a> {
                 "expected a channel name",
             ));
         };
-        if !self.sym.channels.contains_key(ch) {
-            return Err(Self::err(args[0].span, format!("unknown channel `{ch}`"), "not a declared channel"));
+        // a function's `Channel` parameter names its argument's channel; any other local
+        // of that name hides the channel
+        match self.locals[self.floor..].iter().rev().find(|l| &l.name == ch).map(|l| &l.bind) {
+            Some(Bind::Item(Item::Channel(_))) => {}
+            Some(Bind::Item(Item::Expansion(_))) => {
+                return Err(Self::err(
+                    args[0].span,
+                    format!("`{ch}` is an expansion parameter, but `{NEIGHBOUR}` reads one channel"),
+                    "an expansion parameter",
+                )
+                .help("pass the channel itself, or evaluate the expansion term by term with `neighbour` of each channel"));
+            }
+            Some(_) => {
+                return Err(Self::err(
+                    args[0].span,
+                    format!("`{ch}` here is a value, not a channel: the first argument of `{NEIGHBOUR}` names a channel"),
+                    "a value",
+                )
+                .help("rename the `let` or parameter that hides the channel"));
+            }
+            None => {
+                if !self.sym.channels.contains_key(ch) {
+                    return Err(Self::err(args[0].span, format!("unknown channel `{ch}`"), "not a declared channel"));
+                }
+                self.infer(&args[0])?;
+            }
         }
-        self.infer(&args[0])?;
         let mode = self.mode;
         self.mode = Mode::Const;
         for a in &args[1..] {
