@@ -491,15 +491,20 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
                         slot.precision.name()
                     )
                 };
-                d = d
-                    .help(format!("{what}, or store `{}` at a wider precision", ch.name))
-                    .also(p.name_span, format!("`{}` declared here", p.name));
+                let help = if slot.precision.is_widest() {
+                    what
+                } else {
+                    format!("{what}, or store `{}` at a wider precision", ch.name)
+                };
+                d = d.help(help).also(p.name_span, format!("`{}` declared here", p.name));
                 suggested = true;
                 break;
             }
             if !suggested {
-                d = d.help(if r.is_finite() {
+                d = d.help(if r.is_finite() && !slot.precision.is_widest() {
                     "store the channel at F32".to_string()
+                } else if r.is_finite() {
+                    "F32 is the widest precision: shrink the value's range (a smaller exponent or scale), or clamp it".to_string()
                 } else {
                     "bound the value: give the params it uses a `range`, or clamp it".to_string()
                 });

@@ -2104,8 +2104,9 @@ pub const MIP_BOX: &str = "mip_box";
 /// `sample_mip_box` in WGSL: the level where the box, `max(w N, 1)` level-0 texels wide,
 /// spans one to two texels (`firstLeadingBit` of its whole width: exact, unlike `log2`),
 /// the box in that level's texels (centre clamped to the map, clipped to it), and the
-/// coverage-weighted sum of the at most 3 x 3 texels it touches over its area. The same
-/// arithmetic in f64 is `interp`'s `Texels::mip_box`.
+/// coverage-weighted sum of the at most 3 x 3 texels it touches over its area (a texel it
+/// misses not read, as a non-finite one would poison the sum). The same arithmetic in f64
+/// is `interp`'s `Texels::mip_box`.
 pub const MIP_BOX_WGSL: &str = "
 // the mean over the box `w` wide (uv units, one texel at least) centred at `uv`, clipped
 // to the map, of the texels of the Mean mip level where it spans one to two texels
@@ -2127,7 +2128,10 @@ fn mip_box(t: texture_2d_array<f32>, layer: i32, uv: vec2<f32>, w: f32) -> vec4<
         for (var i = 0i; i < 3i; i++) {
             let x = f32(first.x + i);
             let wx = max(min(hi.x, x + 1.0) - max(lo.x, x), 0.0);
-            sum += (wx * wy) * textureLoad(t, min(first + vec2<i32>(i, j), size - 1i), layer, level);
+            // a texel the box misses is not read: 0 times an infinite or NaN texel is NaN
+            if (wx * wy > 0.0) {
+                sum += (wx * wy) * textureLoad(t, min(first + vec2<i32>(i, j), size - 1i), layer, level);
+            }
         }
     }
     return sum / ((hi.x - lo.x) * (hi.y - lo.y));

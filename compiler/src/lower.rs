@@ -384,7 +384,11 @@ impl<'s, 'a> Lowerer<'s, 'a> {
         let span = e.span;
         if name == crate::builtins::NEIGHBOUR {
             // a declared channel, or a function's `Channel` parameter standing for one
-            let param = if let ExprKind::Name(n) = &args[0].kind { self.alias(n) } else { None };
+            let param = if let ExprKind::Name(n) = &args[0].kind {
+                self.alias(n)
+            } else {
+                None
+            };
             let c = match (param, self.types.name(&args[0])) {
                 (Some(Item::Channel(c)), _) | (None, Some(Resolved::Channel(c))) => c,
                 _ => return Err(internal(args[0].span, "`neighbour` of something other than a channel")),

@@ -218,8 +218,17 @@ fn neighbourhood_reads_are_map_side_and_bounded() {
     let row = r#"        "row": Function(params: { "c": Channel, "r": I32 }, body: "sum(dx in -2..=2, neighbour(c, dx, r) * neighbour(c, dx, r)) / 5.0"),"#;
     let called = compile(&with_fn(row, "row(z, 1)")).unwrap_or_else(|e| panic!("{e}"));
     let inline = compile(&with_value("sum(dx in -2..=2, neighbour(z, dx, 1) * neighbour(z, dx, 1)) / 5.0")).unwrap();
-    let map = |c: &sshc::Compiled| c.shaders.iter().find(|(f, _)| f.ends_with("moments.wgsl")).map(|s| renumbered(&s.1));
-    assert!(map(&inline).is_some(), "{:?}", inline.shaders.iter().map(|s| &s.0).collect::<Vec<_>>());
+    let map = |c: &sshc::Compiled| {
+        c.shaders
+            .iter()
+            .find(|(f, _)| f.ends_with("moments.wgsl"))
+            .map(|s| renumbered(&s.1))
+    };
+    assert!(
+        map(&inline).is_some(),
+        "{:?}",
+        inline.shaders.iter().map(|s| &s.0).collect::<Vec<_>>()
+    );
     assert_eq!(map(&called), map(&inline));
     let esm = std::fs::read_to_string(root().join("techniques/esm.ron")).unwrap();
     let esm_with = esm.replace("value: \"z\", doc: \"copy", "value: \"f(e)\", doc: \"copy").replace(
@@ -229,7 +238,10 @@ fn neighbourhood_reads_are_map_side_and_bounded() {
     assert_ne!(esm_with, esm);
     refused(&esm_with, &["`x` is an expansion parameter, but `neighbour` reads one channel"]);
     refused(
-        &with_fn(r#"        "v": Function(params: { "z": F32 }, body: "neighbour(z, 0, 0)"),"#, "v(z)"),
+        &with_fn(
+            r#"        "v": Function(params: { "z": F32 }, body: "neighbour(z, 0, 0)"),"#,
+            "v(z)",
+        ),
         &["`z` here is a value, not a channel"],
     );
     refused(

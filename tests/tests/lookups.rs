@@ -291,6 +291,14 @@ fn depth_overrides_fill_each_light_samples_view() {
 /// (built in place: the chain's levels are texture `mapped`'s), and the Shade reading the
 /// box `w` texels wide centred `(du, dv)` texels off the receiver.
 fn mip_box_probe(precision: &str) -> sshc::Compiled {
+    mip_box_probe_of(precision, LOOKUP)
+}
+
+/// The probe's lookup.
+const LOOKUP: &str = "sample_mip_box_at(m, du * texel_size, dv * texel_size, w * texel_size)";
+
+/// [`mip_box_probe`] with the Shade's visibility `visibility` (of [`LOOKUP`]).
+fn mip_box_probe_of(precision: &str, visibility: &str) -> sshc::Compiled {
     let src = format!(
         r#"Technique(
     name: "mip_box_probe",
@@ -307,7 +315,7 @@ fn mip_box_probe(precision: &str) -> sshc::Compiled {
         Depth(name: "depth", writes: "shadow", channel: "z"),
         Map(name: "map", reads: ["shadow"], writes: "mapped", channels: ["m"]),
         Mipmap(name: "mips", reads: "mapped", writes: "chain", reduce: Mean),
-        Shade(name: "shade", reads: ["chain"], visibility: "sample_mip_box_at(m, du * texel_size, dv * texel_size, w * texel_size)"),
+        Shade(name: "shade", reads: ["chain"], visibility: "{visibility}"),
     ],
 )"#
     );
@@ -416,4 +424,54 @@ fn the_mip_box_is_the_covered_mean_of_the_level_and_exact_when_aligned() {
         assert!(aligned > 100, "{precision}: only {aligned} aligned boxes");
     }
     assert!(aligned_above_0 > 20, "only {aligned_above_0} aligned boxes above level 0");
+}
+
+/// A texel of the 3 x 3 window that the box does not cover weighs nothing, whatever it
+/// holds: `0 * inf` and `0 * NaN` are NaN, so a weight-0 texel holding either made the whole
+/// lookup NaN (issue 51). Analysis keeps a channel's values finite, so the map's texels are
+/// set through the depth override, which nothing bounds: 0.25 left of the middle column,
+/// +inf (then NaN) right of it; every box left of the middle must read 0.25, including
+/// those whose window reaches across it. The boxes that cover the bad texels read them, so
+/// the probe's visibility is the lookup where it is below 1/2 and 1 elsewhere (NaN
+/// compares false): a frame with non-finite visibility is refused.
+#[test]
+fn texels_outside_the_mip_box_weigh_nothing_even_when_not_finite() {
+    let p = plane();
+    let n = N as f64;
+    let c = mip_box_probe_of("F32", &format!("let v = {LOOKUP}; select(1.0, v, v < 0.5)"));
+    for bad in [f32::INFINITY, f32::NAN] {
+        let depth: Vec<f32> = (0..N * N).map(|i| if i % N < N / 2 { 0.25 } else { bad }).collect();
+        let levels = stored_levels(&c, &depth);
+        assert!(
+            !levels[0][(N / 2) as usize].is_finite() && levels[0][0] == 0.25,
+            "the map is not the step it should be"
+        );
+        // the mean of equal values: the f32 weighing of nine texels and the division (32
+        // roundings of 2^-24 of a value below 1), as in the test above
+        let allowed = 32.0 * 2f64.powi(-24);
+        let mut across = 0;
+        for w in [1.5, 3.0] {
+            let run = run_plane(&c, &p, &depth, &[("w", w), ("du", 0.25), ("dv", 0.25)], 1);
+            let s = (1 << (w.log2().floor() as i32)) as f64;
+            for (v, pos) in run.visibility.iter().zip(&run.positions) {
+                if pos[0].is_nan() {
+                    continue;
+                }
+                let (uv, _) = p.project(*pos);
+                let cx = (uv[0] * n + 0.25).clamp(0.0, n);
+                let (lo, hi) = (((cx - 0.5 * w) / s).max(0.0), (cx + 0.5 * w) / s);
+                // boxes wholly left of the middle (with a margin for the coordinates' rounding)
+                if hi > n / 2.0 / s - 1e-3 {
+                    continue;
+                }
+                assert!(
+                    (*v as f64 - 0.25).abs() <= allowed,
+                    "{bad} w {w}, uv {uv:?}: {v} (box [{lo}, {hi}], texel {s})"
+                );
+                // the window's third column lies at or right of the middle
+                across += usize::from(lo.floor() + 2.0 >= n / 2.0 / s);
+            }
+        }
+        assert!(across > 10, "{bad}: only {across} windows reached the texels right of the middle");
+    }
 }

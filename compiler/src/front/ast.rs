@@ -225,6 +225,14 @@ impl Precision {
     pub fn is_unorm(self) -> bool {
         matches!(self, Precision::Unorm8 | Precision::Unorm16)
     }
+
+    /// Whether no precision holds a wider range (so "store it wider" is no fix).
+    pub fn is_widest(self) -> bool {
+        match self {
+            Precision::F32 => true,
+            Precision::Unorm8 | Precision::Unorm16 | Precision::F16 => false,
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
