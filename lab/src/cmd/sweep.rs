@@ -75,6 +75,11 @@ pub struct SweepArgs {
     /// (by default a run carries on from them).
     #[arg(long)]
     fresh: bool,
+    /// Measure nothing: write sweep.md and the charts again from the output folder's
+    /// sweep.csv (after a change to how they are drawn, or to draw a sweep of an older
+    /// version). Rows without the timings' spread are drawn without error bars.
+    #[arg(long, conflicts_with = "fresh")]
+    redraw: bool,
     #[command(flatten)]
     truth: TruthOpts,
     /// Cascades for every configuration (each scene file's `cascades:` otherwise): see
@@ -753,6 +758,9 @@ fn run(a: SweepArgs) -> Result<(), String> {
     let start = Instant::now();
     let sweep_path = a.sweep.clone().ok_or("error: name a sweep file")?;
     let l = load(&sweep_path)?;
+    if a.redraw {
+        return redraw(&a.out, &l);
+    }
     let file = &l.file;
     let all = configs(file);
     let (si, sn) = a.shard;
@@ -853,6 +861,32 @@ fn run(a: SweepArgs) -> Result<(), String> {
         r.seconds = Some(start.elapsed().as_secs_f64());
     }
     shard::write_manifest(&a.out, &manifest)
+}
+
+/// `--redraw`: sweep.md and the charts of `out` written again from its sweep.csv, with
+/// the sweep file's scenes, reference and pixel set; nothing measured.
+fn redraw(out: &Path, l: &Loaded) -> Result<(), String> {
+    let path = out.join("sweep.csv");
+    let text = crate::session::read_capped(&path, report::MAX_CSV_BYTES)?;
+    let rows = report::read_csv(&path, &text)?;
+    if rows.is_empty() {
+        return Err(format!("error: {}: no rows to draw", path.display()));
+    }
+    let spread = rows.iter().filter(|r| r.ms_range.is_some()).count();
+    eprintln!(
+        "sweep: drawing the {} rows of {} again (nothing measured; {spread} with the timings' spread)",
+        rows.len(),
+        path.display()
+    );
+    report::write(
+        out,
+        &Outputs {
+            rows: &rows,
+            scenes: &l.file.scenes,
+            reference: &l.file.reference,
+            pixels: l.file.pixels,
+        },
+    )
 }
 
 /// Measures the configurations and CPU baselines `todo` (indices in the whole sweep),

@@ -189,6 +189,145 @@ fn csv(rows: &[Row]) -> String {
     s
 }
 
+/// The largest `sweep.csv` read back (`--redraw`): as large as the records it was written
+/// from may be.
+pub const MAX_CSV_BYTES: u64 = sshc_records::sweep::MAX_RECORDS_BYTES;
+
+/// One line of `sweep.csv` as [`csv`] writes it, read back by `sshc sweep --redraw`. The
+/// columns added after the first sweeps (the ground, FLIP, the timings' spread) may be
+/// absent, so that the CSVs of older runs read too; `time_ratio` is derived, not read.
+#[derive(serde::Deserialize)]
+struct CsvLine {
+    shard: String,
+    device: String,
+    scene: String,
+    technique: String,
+    config: String,
+    shadow_map: u32,
+    light_scale: f64,
+    gpu_ms: Option<f64>,
+    reference_ms: Option<f64>,
+    peak_bytes: u64,
+    fetches: f64,
+    ops: f64,
+    rms_facing: f64,
+    max_facing: f64,
+    rms_penumbra: f64,
+    max_penumbra: f64,
+    facing_pixels: usize,
+    penumbra_pixels: usize,
+    truth_max_se: f64,
+    #[serde(default)]
+    rms_ground: Option<f64>,
+    #[serde(default)]
+    max_ground: Option<f64>,
+    #[serde(default)]
+    ground_pixels: Option<usize>,
+    #[serde(default)]
+    flip: Option<f64>,
+    #[serde(default)]
+    gpu_ms_min: Option<f64>,
+    #[serde(default)]
+    gpu_ms_max: Option<f64>,
+}
+
+/// The adapter's name in a device's full description (`NAME (BACKEND, DRIVER INFO)`, the
+/// runtime's `Gpu::describe`): what the charts' titles name.
+fn adapter_name(full: &str) -> &str {
+    ["Vulkan", "Metal", "Dx12", "Gl", "BrowserWebGpu", "Noop"]
+        .iter()
+        .filter_map(|b| full.rfind(&format!(" ({b}, ")))
+        .max()
+        .map_or(full, |i| &full[..i])
+}
+
+/// The rows of a `sweep.csv` (`path`, for errors) as [`csv`] wrote them: every figure the
+/// charts and the table use (the regions' signed means and the non-finite counts, which the
+/// CSV does not keep, read as zero). Refuses a line that does not parse or whose numbers
+/// are out of their domain, naming its line.
+pub fn read_csv(path: &Path, text: &str) -> Result<Vec<Row>, String> {
+    let mut reader = csv::ReaderBuilder::new().from_reader(text.as_bytes());
+    let mut rows = Vec::new();
+    for (k, line) in reader.deserialize::<CsvLine>().enumerate() {
+        // line 1 is the header
+        let at = |what: String| format!("error: {}:{}: {what}", path.display(), k + 2);
+        let l = line.map_err(|e| at(format!("not a line of a sweep's CSV: {e}")))?;
+        let shard = l
+            .shard
+            .split_once('/')
+            .and_then(|(i, n)| Some((i.parse::<usize>().ok()?, n.parse::<usize>().ok()?)))
+            .filter(|&(i, n)| i < n && n <= sshc_records::sweep::MAX_SHARDS)
+            .ok_or_else(|| at(format!("shard `{}` is not i/n with i < n", l.shard)))?;
+        let times = [l.gpu_ms, l.reference_ms, l.gpu_ms_min, l.gpu_ms_max];
+        let figures = [
+            l.light_scale,
+            l.fetches,
+            l.ops,
+            l.rms_facing,
+            l.max_facing,
+            l.rms_penumbra,
+            l.max_penumbra,
+            l.truth_max_se,
+        ];
+        if times
+            .iter()
+            .flatten()
+            .chain(&figures)
+            .chain(l.rms_ground.iter())
+            .chain(l.max_ground.iter())
+            .chain(l.flip.iter())
+            .any(|x| !x.is_finite() || *x < 0.0)
+        {
+            return Err(at("a time or a figure is negative or not a number".into()));
+        }
+        let stats = |rms, max, pixels| sshc_records::accuracy::ErrorStats {
+            rms,
+            max,
+            pixels,
+            ..Default::default()
+        };
+        let ground = match (l.rms_ground, l.max_ground, l.ground_pixels) {
+            (Some(rms), Some(max), Some(pixels)) => Some(stats(rms, max, pixels)),
+            (None, None, None) => None,
+            _ => return Err(at("the ground's columns are partly empty".into())),
+        };
+        let ms_range = match (l.gpu_ms_min, l.gpu_ms_max) {
+            (Some(a), Some(b)) if a <= b => Some((a, b)),
+            (None, None) => None,
+            _ => {
+                return Err(at(
+                    "the timings' spread is partly empty or its fastest is slower than its slowest".into()
+                ));
+            }
+        };
+        let short = adapter_name(&l.device).to_string();
+        rows.push(Row {
+            scene: l.scene,
+            label: l.technique,
+            config: l.config,
+            shadow_map: l.shadow_map,
+            light_scale: l.light_scale,
+            ms: l.gpu_ms,
+            ms_range,
+            peak_bytes: l.peak_bytes,
+            fetches: l.fetches,
+            ops: l.ops,
+            acc: sshc_records::accuracy::Accuracy {
+                facing: stats(l.rms_facing, l.max_facing, l.facing_pixels),
+                penumbra: stats(l.rms_penumbra, l.max_penumbra, l.penumbra_pixels),
+                ground,
+                flip: l.flip,
+                ..Default::default()
+            },
+            truth_se: l.truth_max_se,
+            reference_ms: l.reference_ms,
+            shard,
+            device: (l.device, short),
+        });
+    }
+    Ok(rows)
+}
+
 /// The Markdown table per scene. Rows of several devices (a merge of shards that ran on
 /// different GPUs) are said to be so, with a device column: each row's time ratio is
 /// against the reference timed by its own shard, on its own device.
@@ -332,6 +471,76 @@ fn pareto(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn row(ms: Option<f64>, ground: bool) -> Row {
+        let stats = |rms, max, pixels| sshc_records::accuracy::ErrorStats {
+            rms,
+            max,
+            pixels,
+            ..Default::default()
+        };
+        Row {
+            scene: "bunny".into(),
+            label: "pcss".into(),
+            config: "N=3 bias=0.0005".into(),
+            shadow_map: 512,
+            light_scale: 1.5,
+            ms,
+            ms_range: ms.map(|m| (m - 0.25, m + 0.5)),
+            peak_bytes: 1 << 20,
+            fetches: 6553600.0,
+            ops: 113377280.0,
+            acc: sshc_records::accuracy::Accuracy {
+                facing: stats(23.781, 255.0, 49041),
+                penumbra: stats(78.081, 254.502, 2407),
+                ground: ground.then(|| stats(12.5, 200.25, 900)),
+                flip: ms.map(|_| 0.02722),
+                ..Default::default()
+            },
+            truth_se: 0.00907,
+            reference_ms: ms.map(|_| 20.0024),
+            shard: (1, 3),
+            device: (
+                "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, llvmpipe Mesa 22.3.6 (LLVM 15.0.6))".into(),
+                "llvmpipe (LLVM 15.0.6, 256 bits)".into(),
+            ),
+        }
+    }
+
+    /// `--redraw` reads back what a sweep wrote: every figure the charts and the table use,
+    /// the device's short name included (figures chosen exact at the CSV's digits).
+    #[test]
+    fn the_csv_reads_back_the_rows_it_was_written_from() {
+        let rows = vec![row(Some(19.9596), false), row(Some(8.5), true), row(None, false)];
+        let back = read_csv(Path::new("sweep.csv"), &csv(&rows)).unwrap();
+        assert_eq!(back, rows);
+        // a CSV of an older sweep: no ground, FLIP or spread columns
+        let old = "shard,device,scene,technique,config,shadow_map,light_scale,gpu_ms,reference_ms,time_ratio,peak_bytes,fetches,ops,rms_facing,max_facing,rms_penumbra,max_penumbra,facing_pixels,penumbra_pixels,truth_max_se\n\
+            0/1,\"llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, llvmpipe Mesa 22.3.6 (LLVM 15.0.6))\",bunny,hard,\"shadow_map=256\",256,1,8.6376,10.5794,0.8165,262144,65536,4390912,21.547,255.000,91.346,254.751,49041,2043,0.00923\n";
+        let back = read_csv(Path::new("old.csv"), old).unwrap();
+        assert_eq!(back.len(), 1);
+        assert_eq!((back[0].ms, back[0].ms_range, back[0].acc.flip), (Some(8.6376), None, None));
+        assert_eq!(back[0].device.1, "llvmpipe (LLVM 15.0.6, 256 bits)");
+    }
+
+    /// A hostile CSV is refused with its file and line, never drawn from.
+    #[test]
+    fn a_bad_csv_line_is_refused_with_its_line() {
+        let good = csv(&[row(Some(8.5), true)]);
+        let (head, line) = good.split_once('\n').unwrap();
+        for (bad, want) in [
+            (line.replacen("1/3", "3/3", 1), "shard `3/3` is not i/n"),
+            (line.replacen("8.5000", "-8.5", 1), "negative or not a number"),
+            (line.replacen("8.5000", "NaN", 1), "negative or not a number"),
+            (line.replacen(",512,", ",big,", 1), "not a line of a sweep's CSV"),
+            (line.replacen("12.500", "", 1), "the ground's columns are partly empty"),
+            (line.replacen("8.2500", "9.5", 1), "its fastest is slower than its slowest"),
+        ] {
+            let text = format!("{head}\n{line}{bad}");
+            let err = read_csv(Path::new("s.csv"), &text).expect_err(want);
+            assert!(err.contains("s.csv:3:") && err.contains(want), "{want}: {err}");
+        }
+    }
 
     #[test]
     fn chart_files_have_no_spaces() {
