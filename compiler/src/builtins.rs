@@ -2110,39 +2110,54 @@ pub const MIP_BOX: &str = "mip_box";
 pub const MIP_BOX_WGSL: &str = "
 // the mean over the box `w` wide (uv units, one texel at least) centred at `uv`, clipped
 // to the map, of the texels of the Mean mip level where it spans one to two texels
-// (docs/language.md 8.7, sample_mip_box): at most 3 x 3 loads
+// (docs/language.md 8.7, sample_mip_box): at most 3 x 3 loads, one call of mip_box_texel
+// each (so that the cost model counts each load). The level's size is level 0's shifted,
+// not queried at the level: where neighbouring pixels chose different levels, lavapipe
+// answered textureDimensions(t, level) wrongly for some of them (whole columns read 0).
 fn mip_box(t: texture_2d_array<f32>, layer: i32, uv: vec2<f32>, w: f32) -> vec4<f32> {
-    let n = vec2<f32>(textureDimensions(t, 0i));
+    let base = vec2<i32>(textureDimensions(t, 0i));
+    let n = vec2<f32>(base);
     let width = clamp(w * n.x, 1.0, 4294967040.0);
     let level = clamp(i32(firstLeadingBit(u32(width))), 0i, i32(textureNumLevels(t)) - 1i);
     let s = f32(1u << u32(level));
-    let size = vec2<i32>(textureDimensions(t, level));
+    let size = max(base >> vec2<u32>(u32(level)), vec2<i32>(1i));
     let c = clamp(uv * n, vec2<f32>(0.0), n);
     let lo = max((c - 0.5 * width) / s, vec2<f32>(0.0));
     let hi = min((c + 0.5 * width) / s, vec2<f32>(size));
     let first = vec2<i32>(floor(lo));
-    var sum = vec4<f32>(0.0);
-    for (var j = 0i; j < 3i; j++) {
-        let y = f32(first.y + j);
-        let wy = max(min(hi.y, y + 1.0) - max(lo.y, y), 0.0);
-        for (var i = 0i; i < 3i; i++) {
-            let x = f32(first.x + i);
-            let wx = max(min(hi.x, x + 1.0) - max(lo.x, x), 0.0);
-            // a texel the box misses is not read: 0 times an infinite or NaN texel is NaN
-            if (wx * wy > 0.0) {
-                sum += (wx * wy) * textureLoad(t, min(first + vec2<i32>(i, j), size - 1i), layer, level);
-            }
-        }
-    }
+    let sum = mip_box_texel(t, layer, level, first, size, lo, hi, vec2<i32>(0i, 0i))
+        + mip_box_texel(t, layer, level, first, size, lo, hi, vec2<i32>(1i, 0i))
+        + mip_box_texel(t, layer, level, first, size, lo, hi, vec2<i32>(2i, 0i))
+        + mip_box_texel(t, layer, level, first, size, lo, hi, vec2<i32>(0i, 1i))
+        + mip_box_texel(t, layer, level, first, size, lo, hi, vec2<i32>(1i, 1i))
+        + mip_box_texel(t, layer, level, first, size, lo, hi, vec2<i32>(2i, 1i))
+        + mip_box_texel(t, layer, level, first, size, lo, hi, vec2<i32>(0i, 2i))
+        + mip_box_texel(t, layer, level, first, size, lo, hi, vec2<i32>(1i, 2i))
+        + mip_box_texel(t, layer, level, first, size, lo, hi, vec2<i32>(2i, 2i));
     return sum / ((hi.x - lo.x) * (hi.y - lo.y));
+}
+
+// texel `first + o` of the level weighted by the area of it the box [lo, hi] covers; a
+// texel the box misses is not read: 0 times an infinite or NaN texel is NaN
+fn mip_box_texel(t: texture_2d_array<f32>, layer: i32, level: i32, first: vec2<i32>, size: vec2<i32>, lo: vec2<f32>, hi: vec2<f32>, o: vec2<i32>) -> vec4<f32> {
+    let x = vec2<f32>(first + o);
+    let cover = max(min(hi, x + 1.0) - max(lo, x), vec2<f32>(0.0));
+    let weight = cover.x * cover.y;
+    if (weight > 0.0) {
+        return weight * textureLoad(t, min(first + o, size - 1i), layer, level);
+    }
+    return vec4<f32>(0.0);
 }
 ";
 
 /// WGSL of an unfiltered read of mip level `level` (an i32 expression, clamped to the
-/// chain) at `uv`: the texel of that level containing it, clamped to the edge.
+/// chain) at `uv`: the texel of that level containing it, clamped to the edge. The level's
+/// size is level 0's shifted, not queried at the level, by the rule of [`MIP_BOX_WGSL`]
+/// (where lavapipe answered the query wrongly for pixels whose neighbours chose another
+/// level; here a GPU test with per-pixel levels passes either way).
 fn level_read(tex: &str, layer: &str, uv: &str, level: &str) -> String {
     let level = format!("clamp({level}, 0i, i32(textureNumLevels({tex})) - 1i)");
-    let size = format!("vec2<i32>(textureDimensions({tex}, {level}))");
+    let size = format!("max(vec2<i32>(textureDimensions({tex}, 0i)) >> vec2<u32>(u32({level})), vec2<i32>(1i))");
     format!("textureLoad({tex}, clamp(vec2<i32>(floor({uv} * vec2<f32>({size}))), vec2<i32>(0i), {size} - 1i), {layer}, {level})")
 }
 

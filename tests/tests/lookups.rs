@@ -475,3 +475,86 @@ fn texels_outside_the_mip_box_weigh_nothing_even_when_not_finite() {
         assert!(across > 10, "{bad}: only {across} windows reached the texels right of the middle");
     }
 }
+
+/// The box's width varying from pixel to pixel, so that neighbouring pixels read different
+/// levels (the researcher's walkthrough of issue 51: lavapipe answered the level's size
+/// query with one level for a whole group of pixels, and whole columns read 0 where the
+/// width crossed 2 and 4 texels). Against the covered mean of each pixel's own level, on a
+/// noise field (so that a texel read from the wrong level shows).
+#[test]
+fn a_mip_box_whose_width_varies_per_pixel_reads_each_pixels_level() {
+    let p = plane();
+    let n = N as f64;
+    let depth = depth_field("noise", N);
+    let c = mip_box_probe_of(
+        "F32",
+        "sample_mip_box_at(m, du * texel_size, dv * texel_size, w * texel_size * (0.5 + d))",
+    );
+    let levels = stored_levels(&c, &depth);
+    // as in the test above: the edges' f32 error and the weighing's roundings
+    let lookup = 8.0 * 6.0 * n * 2f64.powi(-24) + 32.0 * 2f64.powi(-24);
+    let mut by_level = [0usize; 6];
+    for w in [3.0, 6.0] {
+        let run = run_plane(&c, &p, &depth, &[("w", w), ("du", 0.25), ("dv", 0.25)], 1);
+        for (v, pos) in run.visibility.iter().zip(&run.positions) {
+            if pos[0].is_nan() {
+                continue;
+            }
+            let (uv, d) = p.project(*pos);
+            let width = f64::max(w * (0.5 + d), 1.0);
+            // a width within f32's reach of a power of two may take either level
+            if (width.log2() - width.log2().round()).abs() < 1e-5 {
+                continue;
+            }
+            let l = (width.log2().floor() as usize).min(levels.len() - 1);
+            let (s, size) = ((1usize << l) as f64, N as usize >> l);
+            let c = [(uv[0] * n + 0.25).clamp(0.0, n), (uv[1] * n + 0.25).clamp(0.0, n)];
+            let lo = [(c[0] - 0.5 * width).max(0.0) / s, (c[1] - 0.5 * width).max(0.0) / s];
+            let hi = [(c[0] + 0.5 * width).min(n) / s, (c[1] + 0.5 * width).min(n) / s];
+            let def = covered_mean(&levels[l], size, lo, hi);
+            assert!(
+                (*v as f64 - def).abs() <= lookup,
+                "w {w}, uv {uv:?}, d {d}: {v} against the level-{l} mean {def}"
+            );
+            by_level[l] += 1;
+        }
+    }
+    assert!(by_level[..3].iter().all(|&k| k > 100), "pixels per level: {by_level:?}");
+}
+
+/// `nearest_level(ch, level)` with a level that differs from pixel to pixel (0 to 3, from
+/// the receiver's depth): each pixel reads the texel of its own level containing its uv,
+/// exactly (an unfiltered read; lavapipe's per-group answer to the level's size query
+/// read the wrong texel or none).
+#[test]
+fn nearest_level_reads_each_pixels_own_level() {
+    let p = plane();
+    let n = N as f64;
+    let depth = depth_field("noise", N);
+    let c = mip_box_probe_of("F32", "nearest_level(m, i32(floor(d * 4.0))) + 0.0 * (w + du + dv)");
+    let levels = stored_levels(&c, &depth);
+    let run = run_plane(&c, &p, &depth, &[], 1);
+    let mut by_level = [0usize; 4];
+    for (v, pos) in run.visibility.iter().zip(&run.positions) {
+        if pos[0].is_nan() {
+            continue;
+        }
+        let (uv, d) = p.project(*pos);
+        // the level is floor(4 d) of an f32 d: skip depths within its reach of a boundary,
+        // and uvs within a texel's f32 reach of a texel edge at that level
+        let l = (d * 4.0).floor();
+        if (d * 4.0 - (d * 4.0).round()).abs() < 1e-5 {
+            continue;
+        }
+        let l = (l as usize).min(3);
+        let size = N as usize >> l;
+        let texel = uv.map(|u| u * size as f64);
+        if texel.iter().any(|t| (t - t.round()).abs() < 1e-4 * n) {
+            continue;
+        }
+        let [i, j] = texel.map(|t| (t.floor() as usize).min(size - 1));
+        assert_eq!(*v as f64, levels[l][j * size + i], "uv {uv:?}, d {d}: level {l}, texel ({i}, {j})");
+        by_level[l] += 1;
+    }
+    assert!(by_level.iter().filter(|&&k| k > 50).count() >= 3, "pixels per level: {by_level:?}");
+}
