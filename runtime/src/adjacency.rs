@@ -147,42 +147,9 @@ impl Weld {
     }
 }
 
-/// One edge as the GPU reads it (std430, 48 bytes): its two welded end points, the range
-/// of its face references in [`Adjacency::edge_faces`], and its end points' indices among
-/// all welded vertices of the scene (so that something drawn once per silhouette vertex,
-/// such as a penumbra map's cone, can be claimed by exactly one of its edges).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C)]
-pub struct GpuEdge {
-    pub a: [f32; 3],
-    /// First entry of this edge's faces in [`Adjacency::edge_faces`].
-    pub first_face: u32,
-    pub b: [f32; 3],
-    /// Number of faces around the edge (1: open boundary, 2: manifold, more: non-manifold).
-    pub face_count: u32,
-    /// Indices of `a` and `b` among the scene's welded vertices (below [`Adjacency::vertices`]).
-    pub ia: u32,
-    pub ib: u32,
-    pub pad: [u32; 2],
-}
-
-impl GpuEdge {
-    /// The edge in its std430 layout (48 bytes, little-endian).
-    pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(48);
-        for x in self.a {
-            out.extend(x.to_le_bytes());
-        }
-        out.extend(self.first_face.to_le_bytes());
-        for x in self.b {
-            out.extend(x.to_le_bytes());
-        }
-        for x in [self.face_count, self.ia, self.ib, self.pad[0], self.pad[1]] {
-            out.extend(x.to_le_bytes());
-        }
-        out
-    }
-}
+/// One edge as the GPU reads it (std430, 48 bytes): the one definition, shared with the
+/// compiler's silhouette library and checked against naga's layout, is the schema's.
+pub use sshc_graph::GpuEdge;
 
 /// What [`Adjacency::build`] found, for `sshc render` and the tests.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -495,6 +495,73 @@ mod tests {
         );
     }
 
+    /// The structs the runtime shares with its own shaders and the compiler's (`Edge`, a
+    /// storage array's element; `Placement` and `Slices`, uniforms): their field tables,
+    /// Rust structs and WGSL as naga lays them out, and each field's bytes at its offset
+    /// (u32 fields too: a value per field, read back where naga puts it).
+    #[test]
+    fn the_shared_structs_layouts_are_nagas() {
+        use sshc_graph::{
+            EDGE_FIELDS, EDGE_SIZE, EDGE_WGSL, GpuEdge, PLACEMENT_FIELDS, PLACEMENT_SIZE, PLACEMENT_WGSL, PlacementUniform, SLICES_FIELDS,
+            SLICES_SIZE, SLICES_WGSL, SlicesUniform,
+        };
+        let rust = |offsets: Vec<usize>, size: usize| (offsets, size);
+        for (wgsl, name, fields, size, (offsets, rust_size)) in [
+            (
+                EDGE_WGSL,
+                "Edge",
+                EDGE_FIELDS,
+                EDGE_SIZE,
+                rust(GpuEdge::rust_offsets(), std::mem::size_of::<GpuEdge>()),
+            ),
+            (
+                PLACEMENT_WGSL,
+                "Placement",
+                PLACEMENT_FIELDS,
+                PLACEMENT_SIZE,
+                rust(PlacementUniform::rust_offsets(), std::mem::size_of::<PlacementUniform>()),
+            ),
+            (
+                SLICES_WGSL,
+                "Slices",
+                SLICES_FIELDS,
+                SLICES_SIZE,
+                rust(SlicesUniform::rust_offsets(), std::mem::size_of::<SlicesUniform>()),
+            ),
+        ] {
+            agrees(wgsl, name, fields, size, &offsets, rust_size);
+        }
+        // an edge of an array strides by its size: 48 bytes, as the adjacency writes them
+        let (_, span, ..) = naga_layout(&format!("{EDGE_WGSL}@group(0) @binding(0) var<storage> e: array<Edge>;"), "Edge");
+        assert_eq!((span, EDGE_SIZE), (48, 48));
+        let e = GpuEdge {
+            a: [1.0, 2.0, 3.0],
+            first_face: 4,
+            b: [5.0, 6.0, 7.0],
+            face_count: 8,
+            ia: 9,
+            ib: 10,
+            pad: [11, 12],
+        };
+        let bytes = e.to_bytes();
+        let (members, ..) = naga_layout(EDGE_WGSL, "Edge");
+        let word = |name: &str, k: usize| {
+            let at = members.iter().find(|m| m.0 == name).unwrap().1 as usize + 4 * k;
+            <[u8; 4]>::try_from(&bytes[at..at + 4]).unwrap()
+        };
+        assert_eq!([f32::from_le_bytes(word("a", 2)), f32::from_le_bytes(word("b", 0))], [3.0, 5.0]);
+        let words = [
+            ("first_face", 0, 4),
+            ("face_count", 0, 8),
+            ("ia", 0, 9),
+            ("ib", 0, 10),
+            ("pad", 1, 12),
+        ];
+        for (name, k, v) in words {
+            assert_eq!(u32::from_le_bytes(word(name, k)), v, "{name}");
+        }
+    }
+
     #[test]
     fn frame_bytes_put_each_field_at_its_offset() {
         let mut f = FrameUniform::default();

@@ -123,6 +123,7 @@ pub const MAX_INSTANCES: usize = 1 << 16;
 /// Bytes of one instance's placement record (a uniform read at a dynamic offset, which
 /// WebGPU aligns to 256 bytes).
 const RECORD_BYTES: u64 = 256;
+const _: () = assert!(sshc_graph::PLACEMENT_SIZE as u64 <= RECORD_BYTES);
 
 /// `M p` for a column-major affine `m`, as the placement shader computes it.
 pub fn transform_point(m: &[f32; 16], p: [f32; 3]) -> [f32; 3] {
@@ -636,7 +637,7 @@ impl SceneDraw {
 /// The edges, face planes and face references of a casting instance in world space (`m`
 /// `None`) or placed at upload (`m` its transform), written into the placed buffers' bytes
 /// (`out`: edges, planes, face references) at `at` (their first places) with `welded` its
-/// first welded vertex: what `PLACE_WGSL` writes, computed on the CPU. In world space, as
+/// first welded vertex: what [`place_wgsl`] writes, computed on the CPU. In world space, as
 /// under the identity, with no arithmetic on the values (the face and welded-vertex indices
 /// offset, the planes as they are, none mirrored); placed, the end points by
 /// [`transform_point`] and the planes `(N n, d - (N n) . t)` with the normal matrix,
@@ -696,29 +697,17 @@ fn placed_copy(mesh: &Mesh, m: &[f32; 16]) -> Vec<u8> {
     out
 }
 
-const PLACE_WGSL: &str = "
-// One instance's placement (a 256-byte record read at a dynamic offset): its matrix and
-// normal matrix, then for vertices, edges, face planes and face references: where the
-// instance's mesh's ones start, how many, and where the placed ones go; plus the first
-// welded vertex (edges), whether the matrix mirrors (planes) and the first plane (faces).
-struct Placement {
-    model: mat4x4<f32>,
-    normal: mat4x4<f32>,
-    vertices: vec4<u32>,
-    edges: vec4<u32>,
-    planes: vec4<u32>,
-    faces: vec4<u32>,
+/// The placement step's shaders: `Placement` and `Edge` are the schema's
+/// (`sshc_graph::PLACEMENT_WGSL`, `EDGE_WGSL`: one definition each, checked against
+/// naga's layout), then [`PLACE_BODY`].
+fn place_wgsl() -> String {
+    format!("{}{}{PLACE_BODY}", sshc_graph::PLACEMENT_WGSL, sshc_graph::EDGE_WGSL)
 }
-struct Edge {
-    a: vec3<f32>,
-    first_face: u32,
-    b: vec3<f32>,
-    face_count: u32,
-    ia: u32,
-    ib: u32,
-    pad0: u32,
-    pad1: u32,
-}
+
+/// The placement step's bindings and entry points: each instance's `Placement` (a
+/// 256-byte record read at a dynamic offset) moves its mesh's vertices, edges, face planes
+/// and face references into the scene's world-space buffers.
+const PLACE_BODY: &str = "
 @group(0) @binding(0) var<uniform> place: Placement;
 @group(0) @binding(1) var<storage, read> meshes: array<f32>;
 @group(0) @binding(2) var<storage, read_write> placed: array<f32>;
@@ -880,35 +869,20 @@ fn draw_range(m: &MeshSlot, s: &InstanceSlot, casts: bool) -> Result<DrawRange> 
 }
 
 /// One instance's placement record: its matrix and normal matrix, then its spans (the
-/// layout of `Placement` in `PLACE_WGSL`).
+/// schema's `Placement`), padded to [`RECORD_BYTES`].
 fn record_of(t: &[f32; 16], s: &Spans) -> [u8; RECORD_BYTES as usize] {
     let mut r = [0u8; RECORD_BYTES as usize];
-    let n = normal_matrix(t).unwrap_or(IDENTITY);
     // a mirroring matrix turns the winding: the planes are negated to follow it
     let mirrors = determinant3(t) < 0.0;
-    let values = t.iter().chain(&n).map(|c| c.to_le_bytes());
-    let words = [
-        s.vertices[0],
-        s.vertices[1],
-        s.vertices[2],
-        0,
-        s.edges[0],
-        s.edges[1],
-        s.edges[2],
-        s.welded,
-        s.planes[0],
-        s.planes[1],
-        s.planes[2],
-        u32::from(mirrors),
-        s.faces[0],
-        s.faces[1],
-        s.faces[2],
-        s.planes[2],
-    ]
-    .map(|w| w.to_le_bytes());
-    for (k, b) in values.chain(words).enumerate() {
-        r[4 * k..4 * k + 4].copy_from_slice(&b);
-    }
+    let placement = sshc_graph::PlacementUniform {
+        model: *t,
+        normal: normal_matrix(t).unwrap_or(IDENTITY),
+        vertices: [s.vertices[0], s.vertices[1], s.vertices[2], 0],
+        edges: [s.edges[0], s.edges[1], s.edges[2], s.welded],
+        planes: [s.planes[0], s.planes[1], s.planes[2], u32::from(mirrors)],
+        faces: [s.faces[0], s.faces[1], s.faces[2], s.planes[2]],
+    };
+    r[..sshc_graph::PLACEMENT_SIZE as usize].copy_from_slice(&placement.to_array());
     r
 }
 
@@ -1364,7 +1338,7 @@ impl GeometryBuffers {
             );
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("place instances"),
-                source: wgpu::ShaderSource::Wgsl(PLACE_WGSL.into()),
+                source: wgpu::ShaderSource::Wgsl(place_wgsl().into()),
             });
             let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
                 binding,

@@ -50,19 +50,14 @@ fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
 /// slice, so that no seam shows where two cascades meet; beyond the last split, the last
 /// cascade. Colour and visibility (channel 0) come from that mixture; channel 1 holds the
 /// cascade, fractional in a band (`sshc render --visibility` and the viewer can show it).
+/// `Slices` is the schema's (`sshc_graph::SLICES_WGSL`, checked against naga's layout),
+/// declared before it ([`cascades_wgsl`]).
 const CASCADES_WGSL: &str = "
 @group(0) @binding(0) var visibility: texture_2d_array<f32>;
 @group(0) @binding(1) var color: texture_2d_array<f32>;
 @group(0) @binding(2) var out_color: texture_storage_2d<rgba8unorm, write>;
 @group(0) @binding(3) var out_visibility: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(4) var position: texture_2d<f32>;
-struct Slices {
-    // eye.xyz, band; forward.xyz, cascades; the n + 1 split distances
-    eye: vec4<f32>,
-    forward: vec4<f32>,
-    lo: vec4<f32>,
-    hi: vec4<f32>,
-}
 @group(0) @binding(5) var<uniform> slices: Slices;
 
 fn split(i: u32) -> f32 {
@@ -185,9 +180,14 @@ fn targets(
     (layers, color, visibility, group)
 }
 
-/// The cascades' uniform (`Slices` of `CASCADES_WGSL`): eye and band, forward and count,
-/// the splits (unused ones past the last).
-fn slices_words(s: &Slices) -> [f32; 16] {
+/// The cascades' combining shader: the schema's `Slices`, then [`CASCADES_WGSL`].
+fn cascades_wgsl() -> String {
+    format!("{}{CASCADES_WGSL}", sshc_graph::SLICES_WGSL)
+}
+
+/// The cascades' uniform (the schema's `Slices`): eye and band, forward and count, the
+/// splits (unused ones past the last).
+fn slices_uniform(s: &Slices) -> sshc_graph::SlicesUniform {
     let Slices {
         eye,
         forward,
@@ -195,24 +195,12 @@ fn slices_words(s: &Slices) -> [f32; 16] {
         band,
     } = s;
     let at = |i: usize| splits.get(i).copied().unwrap_or(f32::MAX);
-    [
-        eye[0],
-        eye[1],
-        eye[2],
-        *band,
-        forward[0],
-        forward[1],
-        forward[2],
-        splits.len().saturating_sub(1) as f32,
-        at(0),
-        at(1),
-        at(2),
-        at(3),
-        at(4),
-        0.0,
-        0.0,
-        0.0,
-    ]
+    sshc_graph::SlicesUniform {
+        eye: [eye[0], eye[1], eye[2], *band],
+        forward: [forward[0], forward[1], forward[2], splits.len().saturating_sub(1) as f32],
+        lo: [at(0), at(1), at(2), at(3)],
+        hi: [at(4), 0.0, 0.0, 0.0],
+    }
 }
 
 /// How the combining step makes one frame of the bound light views.
@@ -298,12 +286,12 @@ impl Combine {
         gpu.scoped("creating the lights' combining step", || {
             let device = &gpu.device;
             let source = match mode {
-                Combining::Lights => COMBINE_WGSL,
-                Combining::Cascades(_) => CASCADES_WGSL,
+                Combining::Lights => COMBINE_WGSL.into(),
+                Combining::Cascades(_) => cascades_wgsl().into(),
             };
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("combine lights"),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
+                source: wgpu::ShaderSource::Wgsl(source),
             });
             let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some("combine lights"),
@@ -317,11 +305,11 @@ impl Combine {
                 Combining::Cascades(s) => {
                     let b = device.create_buffer(&wgpu::BufferDescriptor {
                         label: Some("cascade slices"),
-                        size: 64,
+                        size: u64::from(sshc_graph::SLICES_SIZE),
                         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                         mapped_at_creation: false,
                     });
-                    gpu.queue.write_buffer(&b, 0, &crate::resources::f32_bytes(&slices_words(s)));
+                    gpu.queue.write_buffer(&b, 0, &slices_uniform(s).to_array());
                     Some(b)
                 }
                 Combining::Lights => None,
@@ -358,11 +346,7 @@ impl Combine {
     pub fn set_slices(&self, queue: &wgpu::Queue, slices: &Slices) {
         if let Some(b) = &self.slices {
             // on the stack: a host refits every frame the camera moves
-            let mut bytes = [0u8; 64];
-            for (chunk, w) in bytes.chunks_exact_mut(4).zip(slices_words(slices)) {
-                chunk.copy_from_slice(&w.to_le_bytes());
-            }
-            queue.write_buffer(b, 0, &bytes);
+            queue.write_buffer(b, 0, &slices_uniform(slices).to_array());
         }
     }
 

@@ -21,8 +21,7 @@ fn shaders() -> (String, String) {
     let classify = format!(
         "{FRAME_WGSL}
 @group(0) @binding(0) var<uniform> frame: Frame;
-struct Edge {{ a: vec3<f32>, first_face: u32, b: vec3<f32>, face_count: u32, ia: u32, ib: u32, pad: vec2<u32> }}
-struct Record {{ a: vec4<f32>, b: vec4<f32> }}
+{EDGE_WGSL}struct Record {{ a: vec4<f32>, b: vec4<f32> }}
 struct Generated {{
     vertex_count: atomic<u32>, instance_count: u32, first_vertex: u32, first_instance: u32,
     claimed: atomic<u32>, dropped: atomic<u32>, pad: vec2<u32>,

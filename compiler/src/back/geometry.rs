@@ -27,6 +27,13 @@ pub const CONES_AND_SHEETS_VERTICES: u32 = 2 * 3 * CONE_SEGMENTS + 6 * SHEET_STR
 pub const RIBBON_MARGIN: u32 = 2;
 
 const SILHOUETTES: &str = include_str!("silhouettes.wgsl");
+
+/// `silhouettes.wgsl` with the `Edge` struct the runtime writes (`sshc_graph::EDGE_WGSL`,
+/// the one definition, checked against naga's layout) after its opening comment.
+fn silhouettes() -> String {
+    let (head, body) = SILHOUETTES.split_once("\n\n").unwrap_or(("", SILHOUETTES));
+    format!("{head}\n\n{}{body}", sshc_graph::EDGE_WGSL)
+}
 const CONES_AND_SHEETS: &str = include_str!("cones_and_sheets.wgsl");
 const RIBBONS: &str = include_str!("ribbons.wgsl");
 const SKINS: &str = include_str!("skins.wgsl");
@@ -129,8 +136,9 @@ fn cs_commit(vertices: u32) {{
                 "const CONE_SEGMENTS: u32 = {CONE_SEGMENTS}u;
 const SHEET_STRIPS: u32 = {SHEET_STRIPS}u;
 const VERTICES_PER_RECORD: u32 = {CONES_AND_SHEETS_VERTICES}u;
-{SILHOUETTES}
+{}
 {CONES_AND_SHEETS}{}{bindings}",
+                silhouettes(),
                 generated("ConeSheet")
             ),
         }),
@@ -146,8 +154,9 @@ const VERTICES_PER_RECORD: u32 = {CONES_AND_SHEETS_VERTICES}u;
             source: format!(
                 "const RIBBON_MARGIN: u32 = {RIBBON_MARGIN}u;
 const VERTICES_PER_RECORD: u32 = 6u;
-{SILHOUETTES}
+{}
 {RIBBONS}{}{bindings}",
+                silhouettes(),
                 generated("Ribbon")
             ),
         }),

@@ -8,16 +8,6 @@
 // module: an open boundary, or faces on both sides of the light. A primitive's compute
 // entry calls it once per edge (see `Draw::Silhouettes`) and appends its own record.
 
-struct Edge {
-    a: vec3<f32>,
-    first_face: u32,
-    b: vec3<f32>,
-    face_count: u32,
-    // the end points' indices among the scene's welded vertices
-    ia: u32,
-    ib: u32,
-    pad: vec2<u32>,
-}
 
 // Light view space -> world, for a rigid light view (rotation and translation: how the
 // scene's light views are built).
