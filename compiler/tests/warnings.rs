@@ -103,7 +103,7 @@ fn the_rounding_estimate_sees_a_channel_read_only_by_the_blocker_search() {
 }
 
 /// The storage loss of a compiled technique judged without the compiler's estimate, as
-/// `sshc verify` judges LOSSY (lab/src/verify.rs, `LOSSY_SHARE`): its CPU evaluation
+/// `sshc verify` judges LOSSY (lab/src/verify/verdict.rs, `LOSSY_SHARE`): its CPU evaluation
 /// (`sshc::interp`) with every stored texel rounded as the GPU stores it, against the exact
 /// one, on a depth edge and a ramp, at receivers across the map and across depth [0, 1];
 /// the difference that 1 % of the receivers exceed.
