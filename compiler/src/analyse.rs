@@ -590,7 +590,7 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
                                 short(zero)
                             ),
                         )
-                        .at(ch.precision_span, "nonzero values stored as 0")
+                        .at(ch.precision_span, set_by(ch, "nonzero values stored as 0"))
                         .note("a quotient or a product with a large factor (an exponential warp undone in the Shade) reads 0 there")
                         .help("rescale the channel, or store it at F32");
                         if s.precision == Precision::F16 && !ch.precision_overridden {
@@ -611,14 +611,28 @@ pub fn analyse(ir: &Ir, probe: Probe) -> Result<(Analysis, Vec<Diagnostic>), Dia
                                 short(m)
                             ),
                         )
-                        .at(ch.precision_span, "values underflow to subnormals or zero")
-                        .help("rescale the channel, or store it at a wider precision"),
+                        .at(ch.precision_span, set_by(ch, "values underflow to subnormals or zero"))
+                        .help(if s.precision.is_widest() {
+                            "rescale the channel"
+                        } else {
+                            "rescale the channel, or store it at a wider precision"
+                        }),
                     );
                 }
             }
         }
     }
     Ok((analysis, warnings))
+}
+
+/// A label on a channel's precision, saying so where `--precision` set it (the caret is
+/// on the file's precision, which the command line overrode).
+fn set_by(ch: &IrChannel, label: &str) -> String {
+    if ch.precision_overridden {
+        format!("{label} (the precision set by `--precision`)")
+    } else {
+        label.to_string()
+    }
 }
 
 /// The value of channel `c` at a texel of depth `z`: the depth itself for a Depth

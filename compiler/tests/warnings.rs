@@ -210,3 +210,25 @@ fn every_suggested_fix_is_checked_again() {
     // the fixes this test exercises, at least the removed pass's and the table's
     assert!(applied.len() >= 2, "{applied:#?}");
 }
+
+/// A precision set by `--precision` is said to be, at every warning whose caret sits on the
+/// file's precision (the researcher's walkthrough of issue 51: the underflow warning's
+/// caret was on `precision: F32` with no word of the command line's F16).
+#[test]
+fn a_warning_on_a_precision_set_by_the_command_line_says_so() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/warnings");
+    let source = std::fs::read_to_string(root.join("esm_f16_underflow.ron"))
+        .unwrap()
+        .replace(r#""e": Channel(precision: F16"#, r#""e": Channel(precision: F32"#);
+    let opts = sshc::CompileOptions {
+        precision: vec![("e".into(), "F16".into())],
+        ..Default::default()
+    };
+    let c = sshc::compile_str(&source, &opts).unwrap_or_else(|d| panic!("{}", d.render("t.ron", &source)));
+    let got = sshc::diag::Diagnostics(c.warnings.clone()).render("t.ron", &source);
+    assert!(got.contains("channel `e` at F16 underflows to 0"), "{got}");
+    assert!(
+        got.contains("nonzero values stored as 0 (the precision set by `--precision`)"),
+        "{got}"
+    );
+}

@@ -1175,6 +1175,15 @@ impl<'s, 'a> Typer<'s, 'a> {
         Ok(item)
     }
 
+    /// `NAME_tI_kK`, the name of an expansion's unrolled channel (term I at index value K):
+    /// the expansion's name, I and K, where NAME is a declared expansion.
+    fn basis_channel<'n>(&self, name: &'n str) -> Option<(&'n str, usize, i64)> {
+        let (rest, k) = name.rsplit_once("_k")?;
+        let (e, term) = rest.rsplit_once("_t")?;
+        let (term, k) = (term.parse().ok()?, k.parse().ok()?);
+        self.sym.expansions.contains_key(e).then_some((e, term, k))
+    }
+
     /// The help for a channel or expansion the Shade pass does not read: the resources
     /// that carry it, to add to its `reads`, or that no pass writes it.
     fn carriers_help(&self, item: Item) -> String {
@@ -1297,7 +1306,15 @@ impl<'s, 'a> Typer<'s, 'a> {
                     self.sym.channels.keys().map(String::as_str).collect()
                 };
                 let mut d = Self::err(args[0].span, format!("unknown {what} `{target}`"), format!("not a declared {what}"));
-                if let Some(s) = closest(target, &cands) {
+                if let (false, Some((e, term, k))) = (expand, self.basis_channel(target)) {
+                    // the name `explain` lists for an expansion's unrolled channel
+                    d = d
+                        .note(format!(
+                            "`{target}` is the channel the compiler makes for term {term} at {} = {k} of expansion `{e}`; the language names it only through the expansion",
+                            self.sym.t.expansions[self.sym.expansions[e]].index.value
+                        ))
+                        .help(format!("read the expansion: `{}({e}, ...)`", SampleFn::name(how, true)));
+                } else if let Some(s) = closest(target, &cands) {
                     d = d.help(format!("did you mean `{s}`?"));
                 }
                 return Err(d);

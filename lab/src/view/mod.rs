@@ -14,15 +14,22 @@ pub mod state;
 mod worker;
 
 use crate::session::{Variants, size};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+/// The scene `sshc view` opens when none is named: `scenes/bunny.ron` of the repository
+/// the binary belongs to (`session::repository`), else of the working folder.
+fn default_scene() -> PathBuf {
+    let bunny = Path::new("scenes").join("bunny.ron");
+    crate::session::repository().map_or(bunny.clone(), |r| r.join(bunny))
+}
 
 /// `sshc view`'s arguments.
 #[derive(clap::Args)]
 pub struct ViewArgs {
     /// The technique file (RON).
     pub technique: PathBuf,
-    /// The scene (RON).
-    #[arg(long)]
+    /// The scene (RON; default: the bundled bunny scene, the main job's).
+    #[arg(long, default_value_os_t = default_scene())]
     pub scene: PathBuf,
     /// Params, precisions and schedules to start with.
     #[command(flatten)]

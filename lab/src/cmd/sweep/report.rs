@@ -126,6 +126,13 @@ pub fn write(out: &Path, o: &Outputs) -> Result<(), String> {
                 ("-flip", (&flip, "mean FLIP facing the light (0..1)"), "FLIP".to_string()),
             ];
             for (suffix, (y_of, y_label), metric) in metrics {
+                // a sweep of an older version kept no FLIP (`--redraw` of its CSV)
+                if suffix == "-flip" && these.iter().all(|r| r.acc.flip.is_none()) {
+                    if what == "time" {
+                        println!("no FLIP recorded on {scene}: its FLIP charts are not drawn");
+                    }
+                    continue;
+                }
                 for ext in ["svg", "png"] {
                     let p = out.join(chart_file(&scene, what, suffix, ext));
                     pareto(
