@@ -14,7 +14,24 @@ use sshc_runtime::gpu::{CameraOutput, Gpu};
 
 mod common;
 
-const TECHNIQUES: [&str; 9] = ["hard", "pcf", "vsm", "esm", "evsm", "msm", "csm", "pcss", "cssm"];
+/// Every bundled technique whose `light:` takes the sphere light of [`quad_scene`], found
+/// in `techniques/` (issue 52: no hand-kept list; a technique for other lights only, such
+/// as the linear-light ones, is left out by its own declaration).
+fn sphere_techniques() -> Vec<String> {
+    let names: Vec<String> = common::bundled_techniques().into_iter().filter(|t| !t.starts_with("examples/")).collect();
+    let taken: Vec<String> = names
+        .iter()
+        .filter(|t| {
+            let path = root().join("techniques").join(format!("{t}.ron"));
+            let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let c = sshc::compile_str(&source, &Default::default()).unwrap_or_else(|d| panic!("{}", d.render(t, &source)));
+            c.graph.lights.iter().any(|m| m.accepts(sshc_graph::LightKind::Sphere))
+        })
+        .cloned()
+        .collect();
+    assert!(taken.len() >= 15 && taken.len() < names.len(), "{} of {} techniques take a sphere light", taken.len(), names.len());
+    taken
+}
 
 fn root() -> &'static Path {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
@@ -60,7 +77,8 @@ fn an_open_quad_is_shadowed_seen_from_behind_and_lit_seen_from_the_front() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("no adapter (install lavapipe): {e}"));
     let below = quad_scene(Vec3::new(0.3, -3.0, 0.8));
     let above = quad_scene(Vec3::new(0.3, 3.0, 0.8));
-    for t in TECHNIQUES {
+    for t in &sphere_techniques() {
+        let t = t.as_str();
         let seen = render(&gpu, t, &below);
         assert!(seen.len() > 100, "{t}: the camera below sees {} pixels of the quad", seen.len());
         for &(v, n, truth) in &seen {
