@@ -150,8 +150,45 @@ fn compare(v: &Variant, hand: &GpuReference, inputs: &[(String, Vec<f32>)], row:
 /// field, a degenerate camera) and the comparison checks too little to mean agreement.
 const MAX_TIE_SHARE: f64 = 0.05;
 
-/// Compare every variant on every input; write the table; fail on any disagreement or
-/// when ties hollow a comparison out (more than [`MAX_TIE_SHARE`] of its queries).
+/// The share of a variant's checked queries whose allowance may be the whole of [0, 1]
+/// (compared, but any value in range passes): where an error model cannot bound a result
+/// more tightly, which on these inputs is rare (every variant not in [`WIDE_VARIANTS`]
+/// measured under 1.2 %, docs/agreement.md). More means a model fell back broadly and the
+/// comparison checks less than its row says.
+const MAX_WHOLE_SHARE: f64 = 0.02;
+
+/// Variants whose error models legitimately leave more of their queries unbounded: (label
+/// prefix, the share allowed, why). Each share is the measured one (lavapipe, these inputs:
+/// deterministic) rounded up to the next percent, so that a model that widens fails.
+const WIDE_VARIANTS: &[(&str, f64, &str)] = &[
+    (
+        "msm-hausdorff",
+        0.40,
+        "Hausdorff MSM's bound is enclosed over the corners of the moments' error box (moments_tolerance::hausdorff_allowed), and that enclosure is all of [0, 1] for 35.3 % of the queries, 39.3 % at K = 1; which inputs, and whether a tighter enclosure exists, is not analysed yet",
+    ),
+    (
+        "mssm quantise=0 light 1",
+        0.16,
+        "MSSM without quantisation decodes its moments with coefficients up to 80 (moments_tolerance::mssm_decode_err; the quantised transform's are at most 2.05), so its tables' error reaches the ill-conditioned 4MSM solve 40 times larger; under the widest light (the largest boxes) 15.0 % of the queries get all of [0, 1]",
+    ),
+    (
+        "cssm filter=1 light 1",
+        0.11,
+        "CSSM with its summed-area filter under the widest light: 10.8 % of the queries get all of [0, 1] from the Fourier terms' box means' error model; which term dominates is not analysed yet",
+    ),
+];
+
+/// The share of `label`'s checked queries allowed the whole of [0, 1], and why.
+fn whole_share_allowed(label: &str) -> (f64, &'static str) {
+    WIDE_VARIANTS
+        .iter()
+        .find(|(prefix, ..)| label.starts_with(prefix))
+        .map_or((MAX_WHOLE_SHARE, "the default bound (MAX_WHOLE_SHARE)"), |&(_, share, why)| (share, why))
+}
+
+/// Compare every variant on every input; write the table; fail on any disagreement, when
+/// ties hollow a comparison out (more than [`MAX_TIE_SHARE`] of its queries) or when more
+/// of its queries than [`whole_share_allowed`] are allowed the whole of [0, 1].
 fn agree(test: &str, variants: &[Variant], fields: &[&str]) {
     let hand = GpuReference::new(gpu()).unwrap_or_else(|e| panic!("{e}"));
     let inputs = inputs(fields);
@@ -194,6 +231,15 @@ fn agree(test: &str, variants: &[Variant], fields: &[&str]) {
                 r.label,
                 checked + ties,
                 100.0 * MAX_TIE_SHARE
+            ));
+        }
+        let (allowed, why) = whole_share_allowed(&r.label);
+        if r.whole as f64 > allowed * checked as f64 {
+            failures.push(format!(
+                "{}: {} of {checked} checked queries allowed the whole of [0, 1]: more than {:.0} % ({why})",
+                r.label,
+                r.whole,
+                100.0 * allowed
             ));
         }
         for c in r.generated.iter().chain(&r.hand_written) {
