@@ -9,118 +9,85 @@ pub const SCHEMA_VERSION: u32 = 1;
 
 /// Workgroup size of compute steps ([`Draw::ComputeRows`], [`Draw::ComputeColumns`]).
 pub const COMPUTE_WORKGROUP: u32 = 64;
+/// What a step's [`Draw`] is, as the compiler, the validator and the runtime ask it: one
+/// row per draw in [`Draw::facts`], so a new draw states all of them in one place.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct DrawFacts {
+    /// A compute dispatch (else a raster draw).
+    dispatch: bool,
+    /// Appends records to a generated buffer (a Geometry pass's classification).
+    generates: bool,
+    /// Part of a deferred Shade (its G-buffer raster or its compute step over pixels).
+    deferred: bool,
+    /// Stores into its target textures (which need a storage format).
+    stores: bool,
+    /// Its targets are camera-sized (else the shadow map's).
+    camera: bool,
+    /// Writes the levels below the base of its targets' mip chains.
+    below_base: bool,
+}
+
 impl Draw {
+    /// Every fact of every draw: one exhaustive table.
+    fn facts(&self) -> DrawFacts {
+        let f = |dispatch, generates, deferred, stores, camera, below_base| DrawFacts {
+            dispatch,
+            generates,
+            deferred,
+            stores,
+            camera,
+            below_base,
+        };
+        // the columns: dispatch, generates, deferred, stores, camera, below_base
+        match self {
+            Draw::SceneFromLight => f(false, false, false, false, false, false),
+            Draw::SceneFromCamera => f(false, false, false, false, true, false),
+            Draw::CameraGBuffer => f(false, false, true, false, false, false),
+            Draw::ComputePixels => f(true, false, true, false, true, false),
+            Draw::FullScreen => f(false, false, false, false, false, false),
+            Draw::MipLevels => f(false, false, false, false, false, true),
+            Draw::ComputeRows => f(true, false, false, false, false, false),
+            Draw::ComputeColumns => f(true, false, false, false, false, false),
+            Draw::ComputeTexels => f(true, false, false, true, false, false),
+            Draw::ComputeMipLevels => f(true, false, false, true, false, true),
+            Draw::Silhouettes { .. } => f(true, true, false, false, false, false),
+            Draw::Discontinuities { .. } => f(true, true, false, false, false, false),
+            Draw::Primitives { .. } => f(false, false, false, false, false, false),
+        }
+    }
+
     /// Whether the step is a compute dispatch (else a raster draw).
     pub fn is_dispatch(&self) -> bool {
-        match self {
-            Draw::ComputeRows
-            | Draw::ComputeColumns
-            | Draw::ComputeTexels
-            | Draw::ComputeMipLevels
-            | Draw::ComputePixels
-            | Draw::Silhouettes { .. }
-            | Draw::Discontinuities { .. } => true,
-            Draw::SceneFromLight
-            | Draw::SceneFromCamera
-            | Draw::CameraGBuffer
-            | Draw::FullScreen
-            | Draw::MipLevels
-            | Draw::Primitives { .. } => false,
-        }
+        self.facts().dispatch
     }
 
     /// Whether the step appends records to a generated buffer (a Geometry pass's
     /// classification: silhouette edges, depth discontinuities).
     pub fn generates_records(&self) -> bool {
-        match self {
-            Draw::Silhouettes { .. } | Draw::Discontinuities { .. } => true,
-            Draw::SceneFromLight
-            | Draw::SceneFromCamera
-            | Draw::CameraGBuffer
-            | Draw::ComputePixels
-            | Draw::FullScreen
-            | Draw::MipLevels
-            | Draw::ComputeRows
-            | Draw::ComputeColumns
-            | Draw::ComputeTexels
-            | Draw::ComputeMipLevels
-            | Draw::Primitives { .. } => false,
-        }
+        self.facts().generates
     }
 
     /// Whether the step is part of a deferred Shade (its G-buffer raster, or the compute
     /// step over its pixels), which only a Shade pass may hold.
     pub fn is_deferred_shade(&self) -> bool {
-        match self {
-            Draw::CameraGBuffer | Draw::ComputePixels => true,
-            Draw::SceneFromLight
-            | Draw::SceneFromCamera
-            | Draw::FullScreen
-            | Draw::MipLevels
-            | Draw::ComputeRows
-            | Draw::ComputeColumns
-            | Draw::ComputeTexels
-            | Draw::ComputeMipLevels
-            | Draw::Silhouettes { .. }
-            | Draw::Primitives { .. }
-            | Draw::Discontinuities { .. } => false,
-        }
+        self.facts().deferred
     }
 
     /// Whether a compute step stores into its target textures (which must then have a
     /// storage format).
     pub fn stores_textures(&self) -> bool {
-        match self {
-            Draw::ComputeTexels | Draw::ComputeMipLevels => true,
-            Draw::SceneFromLight
-            | Draw::SceneFromCamera
-            | Draw::CameraGBuffer
-            | Draw::ComputePixels
-            | Draw::FullScreen
-            | Draw::MipLevels
-            | Draw::ComputeRows
-            | Draw::ComputeColumns
-            | Draw::Silhouettes { .. }
-            | Draw::Primitives { .. }
-            | Draw::Discontinuities { .. } => false,
-        }
+        self.facts().stores
     }
 
     /// Whether the step's targets are camera-sized ([`Extent::Camera`]: a Shade's debug
     /// outputs, after its camera outputs); every other step's are the shadow map's.
     pub fn writes_camera_textures(&self) -> bool {
-        match self {
-            Draw::SceneFromCamera | Draw::ComputePixels => true,
-            Draw::SceneFromLight
-            | Draw::CameraGBuffer
-            | Draw::FullScreen
-            | Draw::MipLevels
-            | Draw::ComputeRows
-            | Draw::ComputeColumns
-            | Draw::ComputeTexels
-            | Draw::ComputeMipLevels
-            | Draw::Silhouettes { .. }
-            | Draw::Primitives { .. }
-            | Draw::Discontinuities { .. } => false,
-        }
+        self.facts().camera
     }
 
     /// Whether the step writes the levels below the base of its targets' mip chains.
     pub fn writes_levels_below_base(&self) -> bool {
-        match self {
-            Draw::MipLevels | Draw::ComputeMipLevels => true,
-            Draw::SceneFromLight
-            | Draw::SceneFromCamera
-            | Draw::CameraGBuffer
-            | Draw::ComputePixels
-            | Draw::FullScreen
-            | Draw::ComputeRows
-            | Draw::ComputeColumns
-            | Draw::ComputeTexels
-            | Draw::Silhouettes { .. }
-            | Draw::Primitives { .. }
-            | Draw::Discontinuities { .. } => false,
-        }
+        self.facts().below_base
     }
 }
 

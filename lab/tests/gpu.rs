@@ -18,7 +18,10 @@ mod common;
 /// in `techniques/` (issue 52: no hand-kept list; a technique for other lights only, such
 /// as the linear-light ones, is left out by its own declaration).
 fn sphere_techniques() -> Vec<String> {
-    let names: Vec<String> = common::bundled_techniques().into_iter().filter(|t| !t.starts_with("examples/")).collect();
+    let names: Vec<String> = common::bundled_techniques()
+        .into_iter()
+        .filter(|t| !t.starts_with("examples/"))
+        .collect();
     let taken: Vec<String> = names
         .iter()
         .filter(|t| {
@@ -29,7 +32,12 @@ fn sphere_techniques() -> Vec<String> {
         })
         .cloned()
         .collect();
-    assert!(taken.len() >= 15 && taken.len() < names.len(), "{} of {} techniques take a sphere light", taken.len(), names.len());
+    assert!(
+        taken.len() >= 15 && taken.len() < names.len(),
+        "{} of {} techniques take a sphere light",
+        taken.len(),
+        names.len()
+    );
     taken
 }
 

@@ -183,7 +183,9 @@ fn whole_share_allowed(label: &str) -> (f64, &'static str) {
     WIDE_VARIANTS
         .iter()
         .find(|(prefix, ..)| label.starts_with(prefix))
-        .map_or((MAX_WHOLE_SHARE, "the default bound (MAX_WHOLE_SHARE)"), |&(_, share, why)| (share, why))
+        .map_or((MAX_WHOLE_SHARE, "the default bound (MAX_WHOLE_SHARE)"), |&(_, share, why)| {
+            (share, why)
+        })
 }
 
 /// Compare every variant on every input; write the table; fail on any disagreement, when
