@@ -447,6 +447,12 @@ pub enum Resolve {
     Nearest,
 }
 
+impl Resolve {
+    /// The blended rules, in the order of the integer a technique's `resolve` expression
+    /// gives (0 to 3).
+    pub const ALL: [Resolve; 4] = [Resolve::KeepMin, Resolve::KeepMax, Resolve::Add, Resolve::Multiply];
+}
+
 /// A buffer of records generated on the GPU by a `Silhouettes` (or `Discontinuities`)
 /// step: a [`GENERATED_HEADER_BYTES`] header, then the records of `record_bytes`. The
 /// header is 16 bytes of draw arguments (`vertex_count`, `instance_count`,

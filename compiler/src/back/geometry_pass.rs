@@ -52,17 +52,6 @@ pub(crate) fn geometry_buffers(pass: &IrPass, steps: &[Step]) -> Vec<graph::Buff
         .collect()
 }
 
-/// The graph's resolve rule of a technique's.
-fn graph_resolve(r: Resolve) -> graph::Resolve {
-    match r {
-        Resolve::KeepMin => graph::Resolve::KeepMin,
-        Resolve::KeepMax => graph::Resolve::KeepMax,
-        Resolve::Add => graph::Resolve::Add,
-        Resolve::Multiply => graph::Resolve::Multiply,
-        Resolve::Nearest => graph::Resolve::Nearest,
-    }
-}
-
 /// A Geometry pass: one fragment entry per group of layers, writing the pass's channels
 /// per fragment of its primitives; overlaps combine by the resolve rule (graph
 /// `Resolve`): blending, or a depth test (`Nearest`). `Add` keeps `1 - sum(1 - v)`: its
@@ -212,7 +201,7 @@ pub(crate) fn geometry(
                         entry,
                         Draw::Primitives {
                             buffer: buffer.clone(),
-                            resolve: graph_resolve(resolve),
+                            resolve,
                         },
                         vec![],
                         texture,

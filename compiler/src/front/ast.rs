@@ -451,20 +451,8 @@ impl Primitive {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Resolve {
-    KeepMin,
-    KeepMax,
-    Add,
-    Multiply,
-    /// The fragment nearest the light wins (a depth test); Ribbons and BackFaces.
-    Nearest,
-}
-
-impl Resolve {
-    /// In the order of the integer a `resolve` expression gives (0 to 3).
-    pub const ALL: [Resolve; 4] = [Resolve::KeepMin, Resolve::KeepMax, Resolve::Add, Resolve::Multiply];
-}
+/// A Geometry pass's resolve rule: the graph's (one definition, issue 52).
+pub use sshc_graph::Resolve;
 
 /// A Geometry pass's resolve rule: named, or an integer known at compile time (a fixed
 /// param, so that sweeps vary it) indexing [`Resolve::ALL`].
