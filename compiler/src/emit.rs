@@ -2,11 +2,10 @@
 //! a cost report (bytes per texel of every resource; fetches and operations per invocation
 //! of every step, counted on the naga IR).
 
-use crate::back::formats::texture_format;
 use crate::back::wgsl::Output;
 use crate::front::ast::{ConstValue, LightView, ScalarTy};
 use crate::ir::*;
-use crate::pack::{mip_source, table_source};
+use crate::pack::{mip_source, table_source, texture_format};
 use sshc_graph::{self as graph, ChannelDecl, Extent, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
 use std::fmt::Write as _;
 

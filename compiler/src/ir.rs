@@ -721,7 +721,7 @@ pub struct IrChannel {
     pub precision_span: Span,
     /// The precision came from `--precision` rather than the file.
     pub precision_overridden: bool,
-    /// The precision is left to the compiler (`Auto`): `analyse::choose_precisions` sets it.
+    /// The precision is left to the compiler (`Auto`): `lower` chooses it, last (`choose_precisions`).
     pub precision_auto: bool,
     pub value: Option<ExprId>,
     /// The declared range (`range: (lo, hi)`): values are clamped to it when stored.
@@ -1033,7 +1033,7 @@ pub struct Ir {
     /// The scene it was specialised for (`--scene`), and what that folded.
     pub specialised: Option<Specialised>,
     /// The precisions left to the compiler (`Auto`) and why each was chosen, one line
-    /// each (`analyse::choose_precisions`; shown by `explain`).
+    /// each (`lower`'s `choose_precisions`; shown by `explain`).
     pub precision_choices: Vec<String>,
     /// The Shade's debug outputs, where the build asks for them (`CompileOptions::debug`;
     /// else empty): roots of the Shade besides its visibility.

@@ -32,6 +32,7 @@ pub mod interval;
 pub mod ir;
 pub mod lower;
 pub mod pack;
+pub mod ranges;
 pub mod resolve;
 pub mod rounding;
 pub mod schedule;
@@ -55,19 +56,21 @@ pub enum DumpPhase {
     Lower,
     Analyse,
     Pack,
+    Schedule,
     Codegen,
     Emit,
 }
 
 impl DumpPhase {
-    /// Every phase, in pipeline order.
-    pub const ALL: [DumpPhase; 8] = [
+    /// Every phase, in the order the driver runs them (`Outcome::phases`).
+    pub const ALL: [DumpPhase; 9] = [
         DumpPhase::Parse,
         DumpPhase::Resolve,
         DumpPhase::Check,
         DumpPhase::Lower,
         DumpPhase::Analyse,
         DumpPhase::Pack,
+        DumpPhase::Schedule,
         DumpPhase::Codegen,
         DumpPhase::Emit,
     ];
@@ -81,6 +84,7 @@ impl DumpPhase {
             DumpPhase::Lower => "lower",
             DumpPhase::Analyse => "analyse",
             DumpPhase::Pack => "pack",
+            DumpPhase::Schedule => "schedule",
             DumpPhase::Codegen => "codegen",
             DumpPhase::Emit => "emit",
         }
@@ -148,6 +152,8 @@ pub struct Compiled {
 pub struct Outcome {
     pub result: Result<Compiled, Diagnostics>,
     pub dump: Option<String>,
+    /// The phases that ran to their end, in the order they ran.
+    pub phases: Vec<DumpPhase>,
 }
 
 /// Stop after `check` (used by `sshc check`), or go all the way.
@@ -225,43 +231,39 @@ fn run(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
 
 fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
     let mut dump = None;
-    let want = |p: DumpPhase| opts.dump_after == Some(p);
+    let mut phases = Vec::new();
+    // the end of phase `p`: recorded, and its dump made where it was asked for
+    let mut ended = |p: DumpPhase, text: &dyn Fn() -> String| {
+        phases.push(p);
+        if opts.dump_after == Some(p) {
+            dump = Some(text());
+        }
+    };
     let result = (|| {
         let ast = front::parse::parse(source).map_err(Diagnostics::from)?;
         // the `tune:` block names params, channels and passes: checked once they are read
         tune::check(&ast).map_err(Diagnostics::from)?;
-        if want(DumpPhase::Parse) {
-            dump = Some(format!("{ast:#?}\n"));
-        }
+        ended(DumpPhase::Parse, &|| format!("{ast:#?}\n"));
         let sym = resolve::resolve(&ast, opts)?;
-        if want(DumpPhase::Resolve) {
-            dump = Some(resolve_dump(&sym));
-        }
+        ended(DumpPhase::Resolve, &|| resolve_dump(&sym));
         let checked = check::check(&sym)?;
-        if want(DumpPhase::Check) {
+        ended(DumpPhase::Check, &|| {
             let order: Vec<&str> = checked.order.iter().map(|&i| ast.passes[i].name.value.as_str()).collect();
             let mut s = format!("execution order: {}\n", order.join(" -> "));
             for (r, items) in &checked.items {
                 s.push_str(&format!("resource {r}: {items:?}\n"));
             }
-            dump = Some(s);
-        }
+            s
+        });
         if until == Until::Check {
             return Err(Diagnostics::default());
         }
-        let mut ir = lower::lower(&sym, &checked)?;
-        analyse::choose_precisions(&mut ir);
+        // the IR is final here: no later phase changes it
+        let ir = lower::lower(&sym, &checked)?;
         debug_validate(ir::Program::lowered(&ir), "lower");
-        if want(DumpPhase::Lower) {
-            dump = Some(ir.to_string());
-        }
-        let probe = |param: ir::ParamId, value: f64, res: ir::ResId, slot: usize| -> Option<ir::Interval> {
-            probe_range(&sym, &checked, &ir, param, value, res, slot)
-        };
-        let (analysis, warnings) = analyse::analyse(&ir, &probe)?;
-        if want(DumpPhase::Analyse) {
-            dump = Some(ir::WithAnalysis(&ir, &analysis).to_string());
-        }
+        ended(DumpPhase::Lower, &|| ir.to_string());
+        let (analysis, warnings) = analyse::analyse(&ir, &sym, &checked)?;
+        ended(DumpPhase::Analyse, &|| ir::WithAnalysis(&ir, &analysis).to_string());
         let layout = pack::pack(&ir, &analysis, &opts.limits)?;
         let program = ir::Program::new(&ir, &layout);
         debug_validate(program, "pack");
@@ -273,24 +275,19 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         }
         // a fixed-point table's overflow always; an f32 table's bound with the estimate
         warnings.extend(tables::warnings(&program, opts.rounding));
-        if want(DumpPhase::Pack) {
-            dump = Some(program.to_string());
-        }
+        ended(DumpPhase::Pack, &|| program.to_string());
         let schedules = schedule::choose(&program);
+        ended(DumpPhase::Schedule, &|| schedules.dump(&program));
         let out = back::wgsl::codegen(&program, &schedules, &opts.limits, opts.split)?;
-        if want(DumpPhase::Codegen) {
-            dump = Some(
-                out.modules
-                    .iter()
-                    .map(|m| format!("// ----- {} -----\n{}", m.file, m.source))
-                    .collect(),
-            );
-        }
+        ended(DumpPhase::Codegen, &|| {
+            out.modules
+                .iter()
+                .map(|m| format!("// ----- {} -----\n{}", m.file, m.source))
+                .collect()
+        });
         let graph = emit::graph(&program, &out);
         warnings.extend(back::formats::render_target_warnings(&program, &graph, &opts.limits));
-        if want(DumpPhase::Emit) {
-            dump = Some(graph.to_ron());
-        }
+        ended(DumpPhase::Emit, &|| graph.to_ron());
         let cost = emit::Cost::of(&graph);
         let shaders = out.modules.into_iter().map(|m| (m.file, m.source)).collect();
         Ok(Compiled {
@@ -307,7 +304,7 @@ fn run_phases(source: &str, opts: &CompileOptions, until: Until) -> Outcome {
         (Err(d), Until::Check) if d.is_empty() => Err(Diagnostics::default()),
         (r, _) => r,
     };
-    Outcome { result, dump }
+    Outcome { result, dump, phases }
 }
 
 /// A warning where storage rounding can move the visibility by more than
@@ -369,40 +366,6 @@ fn debug_validate<S: ir::SlotView>(ir: ir::Program<S>, after: &str) {
     {
         panic!("internal compiler error: invalid IR after {after}: {e}");
     }
-}
-
-/// Range of one slot with one param changed (for the "largest safe value" of `analyse`).
-/// A runtime param is evaluated over a wider range on the same IR; a fixed one is
-/// substituted at lowering, so the technique is lowered again with the other value.
-fn probe_range(
-    sym: &resolve::Symbols,
-    checked: &check::Checked,
-    ir: &ir::Ir,
-    param: ir::ParamId,
-    value: f64,
-    res: ir::ResId,
-    slot: usize,
-) -> Option<ir::Interval> {
-    let p = &ir.params[param];
-    if p.uniform {
-        let lo = p.range.map(|r| r.0).unwrap_or(value).min(value);
-        let over = ir::Interval { lo, hi: value };
-        return analyse::slot_ranges(ir, Some((param, over))).get(res.index())?.get(slot).copied();
-    }
-    let mut values = sym.values.clone();
-    // IR params are the technique's, in order.
-    values[param.index()].value = match p.value {
-        front::ast::ConstValue::Int(_) => front::ast::ConstValue::Int(value.floor() as i64),
-        front::ast::ConstValue::Float(_) | front::ast::ConstValue::Bool(_) | front::ast::ConstValue::Uint(_) => {
-            front::ast::ConstValue::Float(value)
-        }
-    };
-    let sym2 = resolve::Symbols {
-        values,
-        ..sym.clone_shallow()
-    };
-    let ir2 = lower::lower(&sym2, checked).ok()?;
-    analyse::slot_ranges(&ir2, None).get(res.index())?.get(slot).copied()
 }
 
 fn resolve_dump(sym: &resolve::Symbols) -> String {

@@ -2,6 +2,8 @@
 //! into one concrete channel per basis term, `expand(f)` rewritten as
 //! `constant + sum_i a_i(d) * lookup(B_i)` (Annen eq. 5.8), and passes put in execution
 //! order. Expressions go into the hash-consed arena, which folds constants as it goes.
+//! Last, the precisions left to the compiler (`Auto`) are chosen on the channels' ranges:
+//! the IR is final when `lower` returns.
 
 use crate::builtins::{AT_SAMPLE, Func, SampleFn, Ty};
 use crate::check::Checked;
@@ -11,6 +13,7 @@ use crate::front::ast::*;
 use crate::front::expr::{BinOp, Expr, ExprKind, Literal, UnOp};
 use crate::handle::Table;
 use crate::ir::*;
+use crate::ranges::{F16_MAX, F16_MIN_NORMAL, fits, scene_slot_ranges, smallest_magnitude};
 use crate::resolve::{Item, Symbols};
 use crate::span::Span;
 use crate::types::{Resolved, Types, comp_index};
@@ -781,7 +784,7 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
         });
     }
 
-    Ok(Ir {
+    let mut ir = Ir {
         technique: t.name.value.clone(),
         title: t.title.clone(),
         paper: t.paper.clone(),
@@ -828,5 +831,79 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                 .collect(),
         }),
         precision_choices: Vec::new(),
-    })
+    };
+    choose_precisions(&mut ir);
+    Ok(ir)
+}
+
+/// The technique lowered again with fixed param `param` at `value` (an integer param at
+/// its floor), for `analyse`'s probe of the largest safe value: a fixed param is
+/// substituted here, so another value is another IR. `None` where it does not lower.
+pub fn lower_with_value(sym: &Symbols, checked: &Checked, param: ParamId, value: f64) -> Option<Ir> {
+    let mut values = sym.values.clone();
+    // IR params are the technique's, in order
+    let v = &mut values.get_mut(param.index())?.value;
+    *v = match *v {
+        ConstValue::Int(_) => ConstValue::Int(value.floor() as i64),
+        ConstValue::Float(_) | ConstValue::Bool(_) | ConstValue::Uint(_) => ConstValue::Float(value),
+    };
+    let sym = Symbols {
+        values,
+        ..sym.clone_shallow()
+    };
+    lower(&sym, checked).ok()
+}
+
+/// Choose the precision of every channel left to the compiler (`precision: Auto`, or
+/// `--precision NAME=auto`): F16 where the channel's range, where it is made, fits F16
+/// (at most 65504) and stays clear of F16's subnormals (at least 6.1e-5 in magnitude
+/// when it does not straddle 0), else F32. The range is the one the range analysis
+/// computes (`ranges.rs`, which `analyse` fits the precisions to), so a technique specialised for a scene (`--scene`) is judged on the scene's depths
+/// (`SceneFacts::depth_floor`). The choice weighs range only: how finely a value must be
+/// kept (a depth compared with a small bias) is the author's to state with an explicit
+/// precision. Records one line per channel in `Ir::precision_choices`. The last step of
+/// [`lower`]: no later phase changes the IR.
+fn choose_precisions(ir: &mut Ir) {
+    if !ir.channels.iter().any(|c| c.precision_auto) {
+        return;
+    }
+    let ranges = scene_slot_ranges(ir);
+    let mut chosen: Vec<(ChannelId, Precision, Interval)> = Vec::new();
+    for (ri, res) in ir.resources.with_handles() {
+        // where the channel is made: the Depth, Map or Geometry pass writing it
+        if ir.passes[res.writer].kind.copies_source() {
+            continue;
+        }
+        for (si, slot) in res.slots.iter().enumerate() {
+            if !ir.channels[slot.channel].precision_auto || chosen.iter().any(|c| c.0 == slot.channel) {
+                continue;
+            }
+            let r = ranges[ri.index()][si];
+            let p = if fits(Precision::F16, r) && smallest_magnitude(r) >= F16_MIN_NORMAL {
+                Precision::F16
+            } else {
+                Precision::F32
+            };
+            chosen.push((slot.channel, p, r));
+        }
+    }
+    for &(c, p, r) in &chosen {
+        ir.channels[c].precision = p;
+        let why = match p {
+            Precision::F16 => "within F16's 65504 and above its smallest normal 6.1e-5".to_string(),
+            Precision::F32 | Precision::Unorm8 | Precision::Unorm16 if r.magnitude() > F16_MAX => "beyond F16's 65504".to_string(),
+            Precision::F32 | Precision::Unorm8 | Precision::Unorm16 => {
+                format!("down to {}, below F16's smallest normal 6.1e-5", short(smallest_magnitude(r)))
+            }
+        };
+        let line = format!("channel `{}` (Auto): {}, spanning {r}, {why}", ir.channels[c].name, p.name());
+        ir.precision_choices.push(line);
+    }
+    for res in ir.resources.iter_mut() {
+        for slot in res.slots.iter_mut() {
+            if let Some(&(_, p, _)) = chosen.iter().find(|c| c.0 == slot.channel) {
+                slot.precision = p;
+            }
+        }
+    }
 }

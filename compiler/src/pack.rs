@@ -7,6 +7,7 @@ use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::{Precision, TableSum};
 use crate::handle::Table;
 use crate::ir::*;
+use sshc_graph as graph;
 use std::collections::{HashMap, HashSet};
 
 /// The device limits a technique is compiled against (default: WebGPU's).
@@ -47,6 +48,34 @@ pub fn components_for(n: usize) -> u32 {
 /// Bytes of one texel of a texture.
 pub fn texel_bytes(p: Precision, components: u32) -> u32 {
     p.bytes() * components
+}
+
+/// The precision of a separable filter's intermediate: wide enough that the first axis's
+/// result is not rounded to the destination's precision before the second axis.
+pub fn scratch_precision(p: Precision) -> Precision {
+    match p {
+        Precision::Unorm8 => Precision::F16,
+        Precision::Unorm16 | Precision::F16 | Precision::F32 => Precision::F32,
+    }
+}
+
+/// The format a texture is stored in: its precision, with one, two or four components.
+pub fn texture_format(t: &Texture) -> graph::Format {
+    use graph::Format::*;
+    match (t.precision, t.components) {
+        (Precision::Unorm8, 1) => R8Unorm,
+        (Precision::Unorm8, 2) => Rg8Unorm,
+        (Precision::Unorm8, _) => Rgba8Unorm,
+        (Precision::Unorm16, 1) => R16Unorm,
+        (Precision::Unorm16, 2) => Rg16Unorm,
+        (Precision::Unorm16, _) => Rgba16Unorm,
+        (Precision::F16, 1) => R16Float,
+        (Precision::F16, 2) => Rg16Float,
+        (Precision::F16, _) => Rgba16Float,
+        (Precision::F32, 1) => R32Float,
+        (Precision::F32, 2) => Rg32Float,
+        (Precision::F32, _) => Rgba32Float,
+    }
 }
 
 /// The resources and passes of the IR while `pack` works on them: slots not laid out yet.

@@ -274,7 +274,7 @@ pub fn estimate_with(p: &Program, detail: Detail, moved_by: &HashMap<(ResId, Cha
             name: p.channels[*c].name.clone(),
             precision: slot.precision,
             error: 0.0,
-            at: Precision::ALL.map(|q| (detail == Detail::Explain && crate::analyse::fits(q, slot.range)).then_some(0.0)),
+            at: Precision::ALL.map(|q| (detail == Detail::Explain && crate::ranges::fits(q, slot.range)).then_some(0.0)),
         })
         .collect();
     let (mut total, mut configurations, mut skipped) = (0.0f64, 0, 0);

@@ -5,12 +5,11 @@
 //! [`shade_refusal`]). Codegen generates the chosen form and `explain` reports it, with
 //! the reason, from the same [`Schedules`].
 
-use crate::back::filter::filter_tile;
-use crate::back::formats::{scratch_precision, texture_format};
 use crate::builtins::{Input, SampleFn};
 use crate::front::ast::Schedule;
 use crate::handle::Table;
-use crate::ir::{IrPass, IrPassKind, Node, PassId, Program, Texture};
+use crate::ir::{IrKernel, IrPass, IrPassKind, Node, PassId, Program, Texture};
+use crate::pack::{scratch_precision, texture_format};
 use sshc_graph as graph;
 
 /// How a pass with schedules to choose from runs.
@@ -51,6 +50,28 @@ impl Schedules {
     pub fn compute(&self, p: PassId) -> bool {
         self.of(p).is_some_and(|c| c.runs() == Schedule::Compute)
     }
+
+    /// The text of `--dump-ir-after schedule`: every pass, in execution order, with the
+    /// schedule it runs in and, where the compute one asked for was refused, why.
+    pub fn dump(&self, ir: &Program) -> String {
+        let mut s = format!("technique {}: schedules\n", ir.technique);
+        for (pi, pass) in ir.passes.with_handles() {
+            let shade = matches!(pass.kind, IrPassKind::Shade { .. });
+            let form = |runs: Schedule| match (runs, shade) {
+                (Schedule::Fragment, true) => "fragment (forward)",
+                (Schedule::Compute, true) => "compute (deferred)",
+                (runs, false) => runs.name(),
+            };
+            let how = match self.of(pi) {
+                None if !pass.live => "removed by dead-code elimination".to_string(),
+                None => "the one schedule of its kind".to_string(),
+                Some(c @ (Choice::Fragment | Choice::Compute)) => format!("{}, as asked", form(c.runs())),
+                Some(Choice::Refused(why)) => format!("{}; {} was asked for, but {why}", form(Schedule::Fragment), form(Schedule::Compute)),
+            };
+            s.push_str(&format!("  pass {} ({}): {how}\n", pass.name, pass.kind_name()));
+        }
+        s
+    }
 }
 
 /// The schedule of every live pass of `ir`.
@@ -80,6 +101,20 @@ fn choice(ir: &Program, pass: &IrPass) -> Option<Choice> {
 /// refuses it ([`compute_refusal`]).
 pub fn map_runs_as_compute(ir: &Program, pass: &IrPass) -> bool {
     pass.schedule == Schedule::Compute && compute_refusal(ir, pass).is_none()
+}
+
+/// A Filter's workgroup tile in the compute schedule: (apron x, apron y, width, height) in
+/// texels for a workgroup of [`graph::TEXEL_WORKGROUP`] squared invocations, on one axis
+/// of a separable kernel (`horizontal`) or both (the 3 x 3 LoG).
+pub fn filter_tile(kernel: &IrKernel, horizontal: bool) -> (i32, i32, i32, i32) {
+    let r = (kernel.size() as i32 - 1) / 2;
+    let (ax, ay) = match (kernel.separable(), horizontal) {
+        (false, _) => (r, r),
+        (true, true) => (r, 0),
+        (true, false) => (0, r),
+    };
+    let g = graph::TEXEL_WORKGROUP as i32;
+    (ax, ay, g + 2 * ax, g + 2 * ay)
 }
 
 /// WebGPU's guaranteed workgroup memory (`maxComputeWorkgroupStorageSize`), bytes.

@@ -22,12 +22,12 @@
 //!   `4228 m / A`: a bound, reached only by adversarial roundings, and what the warning
 //!   uses; docs/language.md gives the error measured on depth maps beside it.
 
-use crate::analyse::RangeEval;
 use crate::back::summed_area::{TableCode, table_code};
 use crate::builtins::SampleFn;
 use crate::diag::{Diagnostic, Phase};
 use crate::front::ast::TableSum;
 use crate::ir::{ChannelId, Node, Program, ResId};
+use crate::ranges::RangeEval;
 use std::collections::HashMap;
 
 /// The map size the stated bounds and the warnings take (the runtime's size is the

@@ -132,3 +132,226 @@ fn no_modules_import_each_other_around_a_circle() {
         }
     }
 }
+
+/// The compiler's phases in the order `run_phases` runs them (the names of
+/// `sshc::DumpPhase::ALL`), each with the modules that make it up: a module belongs to the
+/// phase whose entry is the longest prefix of its path.
+const PHASES: [(&str, &[&str]); 9] = [
+    ("parse", &["front"]),
+    ("resolve", &["resolve"]),
+    ("check", &["check"]),
+    ("lower", &["lower"]),
+    ("analyse", &["analyse"]),
+    ("pack", &["pack"]),
+    ("schedule", &["schedule"]),
+    ("codegen", &["back"]),
+    ("emit", &["emit"]),
+];
+
+/// What every phase may import besides the phases before it, each with why. These are
+/// the data the phases hand on and the rules several of them apply; that they import no
+/// circle among themselves is the two tests above.
+const SHARED: [(&str, &str); 11] = [
+    ("span", "source positions: every node and diagnostic carries them"),
+    ("diag", "the diagnostics every phase returns"),
+    ("handle", "typed indices and tables: the IR's and its side tables'"),
+    (
+        "front::ast",
+        "the technique's declarations (`Precision`, `Schedule`, kinds) the IR keeps",
+    ),
+    (
+        "builtins",
+        "the builtins' descriptors, which parse, check, lower, analyse and codegen read",
+    ),
+    ("types", "check's typing (`Types`), which lower reads, inferring nothing again"),
+    (
+        "consteval",
+        "constant evaluation by the rules the IR's arena folds with (check and lower)",
+    ),
+    ("interval", "the interval type of the builtins' range rules and of the analysis"),
+    (
+        "ranges",
+        "the IR's range analysis: lower chooses `Auto` precisions on it, analyse fits them",
+    ),
+    ("ir", "the IR: lower's product, which every later phase reads"),
+    ("CompileOptions", "the driver's options (lib.rs), which resolve applies"),
+];
+
+/// Beside the phases: tools over compiled techniques and the driver, which no phase imports.
+const TOOLS: [(&str, &str); 6] = [
+    ("crate", "lib.rs, the driver: runs the phases"),
+    ("explain", "`sshc explain`, from a compiled technique"),
+    ("interp", "`sshc verify`'s CPU evaluation of a compiled technique"),
+    ("rounding", "the storage-rounding estimate, after pack"),
+    ("tables", "the summed-area tables' error, after pack"),
+    ("tune", "`sshc tune`'s search space, and writing a tuned file"),
+];
+
+/// The paths a `crate::` path or use tree names, from the text after `crate::`: `a::b::C`
+/// gives `a::b::C`; `{a, b::{c, d}}` gives `a`, `b::c`, `b::d`.
+fn use_tree(text: &str) -> Vec<String> {
+    fn tree(s: &[u8], i: &mut usize, prefix: &str, out: &mut Vec<String>) {
+        let ws = |i: &mut usize| {
+            while s.get(*i).is_some_and(|c| c.is_ascii_whitespace()) {
+                *i += 1;
+            }
+        };
+        let mut path = prefix.to_string();
+        loop {
+            ws(i);
+            if s.get(*i) == Some(&b'{') {
+                *i += 1;
+                loop {
+                    ws(i);
+                    if s.get(*i) == Some(&b'}') {
+                        *i += 1;
+                        return;
+                    }
+                    let before = *i;
+                    tree(s, i, &path, out);
+                    ws(i);
+                    match s.get(*i) {
+                        Some(b',') => *i += 1,
+                        Some(b'}') => {
+                            *i += 1;
+                            return;
+                        }
+                        _ => return,
+                    }
+                    if *i == before {
+                        return;
+                    }
+                }
+            }
+            let start = *i;
+            while s.get(*i).is_some_and(|c| c.is_ascii_alphanumeric() || *c == b'_' || *c == b'*') {
+                *i += 1;
+            }
+            let ident = String::from_utf8_lossy(&s[start..*i]).into_owned();
+            if ident.is_empty() {
+                if !path.is_empty() {
+                    out.push(path);
+                }
+                return;
+            }
+            path = if path.is_empty() { ident } else { format!("{path}::{ident}") };
+            if s.get(*i..*i + 2) == Some(b"::".as_slice()) {
+                *i += 2;
+            } else {
+                out.push(path);
+                return;
+            }
+        }
+    }
+    let mut out = Vec::new();
+    tree(text.as_bytes(), &mut 0, "", &mut out);
+    out
+}
+
+/// Whether `path` is `prefix` or lies below it (`ir::validate` below `ir`).
+fn below(path: &str, prefix: &str) -> bool {
+    path == prefix || path.strip_prefix(prefix).is_some_and(|r| r.starts_with("::"))
+}
+
+/// The index in [`PHASES`] of the phase `module` belongs to, if any.
+fn phase_of(module: &str) -> Option<usize> {
+    PHASES
+        .iter()
+        .enumerate()
+        .flat_map(|(i, (_, ms))| ms.iter().map(move |m| (i, *m)))
+        .filter(|(_, m)| below(module, m))
+        .max_by_key(|(_, m)| m.len())
+        .map(|(i, _)| i)
+}
+
+/// Whether `module` is shared (a longer match than its phase's: `front::ast` in `front`).
+fn shared(module: &str) -> bool {
+    let phase_len = phase_of(module).map_or(0, |i| {
+        PHASES[i].1.iter().filter(|m| below(module, m)).map(|m| m.len()).max().unwrap_or(0)
+    });
+    SHARED.iter().any(|(m, _)| below(module, m) && m.len() > phase_len)
+}
+
+/// The phase order is the import order: each phase's modules import (by `crate::` paths,
+/// comments and the unit tests after `#[cfg(test)]` left out) only modules of the phases
+/// before it or of its own, and the shared ones. Every module of the compiler is a phase's,
+/// shared or a tool, so a new one is placed here.
+#[test]
+fn phases_import_only_the_phases_before_them() {
+    let names: Vec<&str> = sshc::DumpPhase::ALL.iter().map(|p| p.name()).collect();
+    let phases: Vec<&str> = PHASES.iter().map(|(n, _)| *n).collect();
+    assert_eq!(phases, names, "the phases here and `DumpPhase::ALL`");
+
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let src = root.join("compiler/src");
+    let mut list = Vec::new();
+    files(&src, &mut list);
+    let modules: BTreeSet<String> = list.iter().map(|f| module(&src, f)).collect();
+    let mut unplaced = Vec::new();
+    let mut wrong = Vec::new();
+    let mut checked = 0;
+    for f in &list {
+        let m = module(&src, f);
+        let tool = TOOLS.iter().any(|(t, _)| if *t == "crate" { m == "crate" } else { below(&m, t) });
+        if shared(&m) || tool {
+            continue;
+        }
+        let Some(at) = phase_of(&m) else {
+            unplaced.push(m);
+            continue;
+        };
+        let text = std::fs::read_to_string(f).unwrap();
+        let code: String = text
+            .lines()
+            .take_while(|l| l.trim() != "#[cfg(test)]")
+            .filter(|l| !l.trim_start().starts_with("//"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        checked += 1;
+        for (i, _) in code.match_indices("crate::") {
+            for path in use_tree(&code[i + 7..]) {
+                let segs: Vec<&str> = path.split("::").collect();
+                // the longest prefix that is a module; else an item of lib.rs
+                let named = (1..=segs.len())
+                    .rev()
+                    .map(|n| segs[..n].join("::"))
+                    .find(|p| modules.contains(p))
+                    .unwrap_or_else(|| segs[0].to_string());
+                if shared(&named) {
+                    continue;
+                }
+                match phase_of(&named) {
+                    Some(p) if p <= at => {}
+                    Some(p) => wrong.push(format!(
+                        "`{m}` ({}) imports `{path}` of `{named}` ({}), a later phase",
+                        PHASES[at].0, PHASES[p].0
+                    )),
+                    None => wrong.push(format!(
+                        "`{m}` ({}) imports `{path}` of `{named}`, neither a phase nor shared",
+                        PHASES[at].0
+                    )),
+                }
+            }
+        }
+    }
+    for m in &modules {
+        let tool = TOOLS.iter().any(|(t, _)| if *t == "crate" { m == "crate" } else { below(m, t) });
+        if !tool && !shared(m) && phase_of(m).is_none() && !unplaced.contains(m) {
+            unplaced.push(m.clone());
+        }
+    }
+    assert!(unplaced.is_empty(), "modules in no phase, not shared and no tool: {unplaced:?}");
+    assert!(checked >= 20, "{checked} phase modules read");
+    assert!(wrong.is_empty(), "imports against the phase order:\n{}", wrong.join("\n"));
+}
+
+#[test]
+fn use_trees_name_each_path() {
+    assert_eq!(use_tree("a::b::C;"), ["a::b::C"]);
+    assert_eq!(use_tree("{CompileOptions, builtins};"), ["CompileOptions", "builtins"]);
+    assert_eq!(
+        use_tree("front::{ast::*, expr::{Expr, UnOp}};"),
+        ["front::ast::*", "front::expr::Expr", "front::expr::UnOp"]
+    );
+    assert_eq!(use_tree("back::formats::texture_format(t)"), ["back::formats::texture_format"]);
+}

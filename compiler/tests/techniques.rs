@@ -778,6 +778,61 @@ fn map_pass_schedules() {
     }
 }
 
+/// `--dump-ir-after` has a dump after every phase, `schedule` included, each phase by its
+/// name, and `DumpPhase::ALL` is the order the driver runs the phases in.
+#[test]
+fn every_phase_dumps_and_all_is_the_order_they_run() {
+    use sshc::DumpPhase;
+    let src = source("vsm");
+    let whole = sshc::compile_with_dump(&src, &CompileOptions::default());
+    assert!(whole.result.is_ok());
+    assert!(whole.dump.is_none());
+    assert_eq!(whole.phases, DumpPhase::ALL, "the phases as the driver ran them");
+    for p in DumpPhase::ALL {
+        assert_eq!(p.name().parse::<DumpPhase>(), Ok(p));
+        let o = sshc::compile_with_dump(
+            &src,
+            &CompileOptions {
+                dump_after: Some(p),
+                ..Default::default()
+            },
+        );
+        assert!(o.result.is_ok(), "{}", p.name());
+        let dump = o.dump.unwrap_or_else(|| panic!("no dump after {}", p.name()));
+        assert!(!dump.trim().is_empty(), "an empty dump after {}", p.name());
+    }
+    // the front end alone stops after check
+    let front = sshc::check_with_dump(
+        &src,
+        &CompileOptions {
+            dump_after: Some(DumpPhase::Schedule),
+            ..Default::default()
+        },
+    );
+    assert!(front.0.is_ok());
+    assert!(front.1.is_none());
+    // the schedule's dump: every pass's schedule, and why a compute one asked for was refused
+    let o = sshc::compile_with_dump(
+        &src,
+        &CompileOptions {
+            dump_after: Some(DumpPhase::Schedule),
+            schedule: vec![("*".into(), "compute".into())],
+            precision: vec![("m1".into(), "Unorm16".into()), ("m2".into(), "Unorm16".into())],
+            ..Default::default()
+        },
+    );
+    assert!(o.result.is_ok());
+    let dump = o.dump.unwrap_or_default();
+    for line in [
+        "technique vsm: schedules",
+        "  pass depth (Depth): the one schedule of its kind",
+        "  pass moments (Map): fragment; compute was asked for, but Rg16Unorm is not a storage format",
+        "  pass shade (Shade): compute (deferred), as asked",
+    ] {
+        assert!(dump.lines().any(|l| l == line), "{line:?} in\n{dump}");
+    }
+}
+
 /// A raster pass rendering into a 16-bit norm format is warned about at compile time, the
 /// channels and the fix named, unless the limits profile renders to them (the
 /// runtime refuses such a graph on a device without the feature).

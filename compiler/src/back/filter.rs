@@ -1,15 +1,16 @@
 //! The Filter pass: separable kernels (Box, Gaussian, Max, Min) in two axes through a
 //! scratch texture of a wider precision, the 3x3 LoG in one; in the fragment or the
-//! compute schedule (a workgroup tile with the kernel's apron, [`filter_tile`]). The last
-//! axis re-encodes each component from its source's storage to its destination's.
+//! compute schedule (a workgroup tile with the kernel's apron: the schedule's
+//! [`filter_tile`]). The last axis re-encodes each component from its source's storage to
+//! its destination's.
 
-use crate::back::formats::{scratch_precision, texture_format};
 use crate::back::internal;
 use crate::back::steps::{fullscreen_step, layer_chunks};
 use crate::back::text::{FULLSCREEN_VS, f32_lit, header, out_struct};
 use crate::diag::Diagnostic;
 use crate::ir::{IrKernel, IrPass, Program, Texture};
-use crate::pack::Limits;
+use crate::pack::{Limits, scratch_precision, texture_format};
+use crate::schedule::filter_tile;
 use sshc_graph::{self as graph, Binding, Draw, FRAME_WGSL, Step, View};
 use std::fmt::Write as _;
 
@@ -19,20 +20,6 @@ pub struct Scratch {
     pub name: String,
     pub like: String,
     pub format: graph::Format,
-}
-
-/// A Filter's workgroup tile in the compute schedule: (apron x, apron y, width, height) in
-/// texels for a workgroup of [`graph::TEXEL_WORKGROUP`] squared invocations, on one axis
-/// of a separable kernel (`horizontal`) or both (the 3 x 3 LoG).
-pub(crate) fn filter_tile(kernel: &IrKernel, horizontal: bool) -> (i32, i32, i32, i32) {
-    let r = (kernel.size() as i32 - 1) / 2;
-    let (ax, ay) = match (kernel.separable(), horizontal) {
-        (false, _) => (r, r),
-        (true, true) => (r, 0),
-        (true, false) => (0, r),
-    };
-    let g = graph::TEXEL_WORKGROUP as i32;
-    (ax, ay, g + 2 * ax, g + 2 * ay)
 }
 
 /// A Filter pass: per texture of its output, one step per axis of a separable kernel (the

@@ -1,40 +1,10 @@
-//! Texture formats: the format each texture is stored in, the wider precision of a
-//! separable filter's scratch texture, and the warnings for raster targets in a format
-//! the limits profile cannot render to.
+//! The warnings for raster targets in a format the limits profile cannot render to (the
+//! formats themselves are pack's: `pack::texture_format`).
 
 use crate::diag::{Diagnostic, Phase};
-use crate::front::ast::Precision;
-use crate::ir::{IrChannel, Program, Texture};
+use crate::ir::{IrChannel, Program};
 use crate::pack::Limits;
 use sshc_graph as graph;
-
-/// The precision of a separable filter's intermediate: wide enough that the first axis's
-/// result is not rounded to the destination's precision before the second axis.
-pub fn scratch_precision(p: Precision) -> Precision {
-    match p {
-        Precision::Unorm8 => Precision::F16,
-        Precision::Unorm16 | Precision::F16 | Precision::F32 => Precision::F32,
-    }
-}
-
-/// The format a texture is stored in: its precision, with one, two or four components.
-pub fn texture_format(t: &Texture) -> graph::Format {
-    use graph::Format::*;
-    match (t.precision, t.components) {
-        (Precision::Unorm8, 1) => R8Unorm,
-        (Precision::Unorm8, 2) => Rg8Unorm,
-        (Precision::Unorm8, _) => Rgba8Unorm,
-        (Precision::Unorm16, 1) => R16Unorm,
-        (Precision::Unorm16, 2) => Rg16Unorm,
-        (Precision::Unorm16, _) => Rgba16Unorm,
-        (Precision::F16, 1) => R16Float,
-        (Precision::F16, 2) => Rg16Float,
-        (Precision::F16, _) => Rgba16Float,
-        (Precision::F32, 1) => R32Float,
-        (Precision::F32, 2) => Rg32Float,
-        (Precision::F32, _) => Rgba32Float,
-    }
-}
 
 /// Warnings for textures a raster step writes in a format the limits profile cannot render
 /// to (16-bit norm formats: an adapter-specific feature), naming the channels stored there

@@ -3,7 +3,6 @@
 //! which Map passes and the fragments of Geometry passes share ([`channel_entries`]).
 
 use crate::back::expr::{Emitter, Site};
-use crate::back::formats::texture_format;
 use crate::back::internal;
 use crate::back::parts::Split;
 use crate::back::steps::{fullscreen_step, layer_chunks};
@@ -11,7 +10,7 @@ use crate::back::text::{FULLSCREEN_VS, encode_expr, f32_lit, header, out_struct}
 use crate::diag::Diagnostic;
 use crate::front::ast::LightView;
 use crate::ir::{IrPass, IrPassKind, PlacedSlot, Program};
-use crate::pack::Limits;
+use crate::pack::{Limits, texture_format};
 use sshc_graph::{self as graph, Draw, Step};
 use std::fmt::Write as _;
 

@@ -1,14 +1,13 @@
 //! The Mipmap pass: a mip chain built in place, each level the Mean, Max or Min of 2x2
 //! texels of the level above.
 
-use crate::back::formats::texture_format;
 use crate::back::internal;
 use crate::back::steps::{fullscreen_step, layer_chunks};
 use crate::back::text::{FULLSCREEN_VS, header, out_struct};
 use crate::diag::Diagnostic;
 use crate::front::ast::Reduce;
 use crate::ir::{IrPass, Program};
-use crate::pack::Limits;
+use crate::pack::{Limits, texture_format};
 use sshc_graph::{self as graph, Binding, Draw, FRAME_WGSL, Step, View};
 use std::fmt::Write as _;
 

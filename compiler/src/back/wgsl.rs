@@ -21,10 +21,8 @@ use crate::schedule::Schedules;
 use sshc_graph::{self as graph, Step};
 
 pub use crate::back::filter::Scratch;
-pub use crate::back::formats::{render_target_warnings, scratch_precision, texture_format};
+pub use crate::back::formats::render_target_warnings;
 pub use crate::back::text::{f32_lit, params_struct};
-/// The rules the `schedule` phase applies to one pass.
-pub use crate::schedule::{compute_refusal, map_runs_as_compute, shade_is_deferred, shade_refusal};
 
 /// One generated module and the steps that run it.
 #[derive(Clone, Debug)]

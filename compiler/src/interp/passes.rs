@@ -196,7 +196,7 @@ impl Evaluation<'_> {
 /// at the scratch precision, the Laplacian in one step; allowances carried through.
 fn filter(src: &Level, kernel: &IrKernel, slot: &PlacedSlot, rounding: Rounding, model: Model) -> Level {
     let n = src.size as i64;
-    let scratch = crate::back::formats::scratch_precision(slot.precision);
+    let scratch = crate::pack::scratch_precision(slot.precision);
     let keep = |v: f64, p: Precision| match rounding {
         Rounding::Exact => v,
         Rounding::Stored => stored_at(p, slot.encode.bias, slot.encode.scale, v),
