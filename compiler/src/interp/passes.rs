@@ -56,7 +56,7 @@ impl Evaluation<'_> {
             IrPassKind::Depth { .. } | IrPassKind::Geometry { .. } => {
                 let read_back = matches!(pass.kind, IrPassKind::Geometry { .. });
                 for slot in self.slots(out) {
-                    let unorm = matches!(slot.precision, Precision::Unorm8 | Precision::Unorm16);
+                    let unorm = slot.precision.is_unorm();
                     let allow = |x: f64| match (read_back, unorm) {
                         (false, _) => self.model.storage(&slot, x),
                         (true, true) => self.model.ulp(x),
