@@ -87,7 +87,7 @@ impl Light {
         fn direction(v: &Vec3, field: &'static str) -> Option<LightFault> {
             if !v.is_finite() {
                 Some(fault(field, field, Problem::DirectionNotFinite(*v)))
-            } else if !(v.length_squared() > 0.0) {
+            } else if v.length_squared() == 0.0 {
                 Some(fault(field, field, Problem::DirectionZero))
             } else {
                 None
@@ -116,7 +116,7 @@ impl Light {
                 .or_else(|| {
                     let problem = if !u_axis.is_finite() {
                         Problem::AxisNotFinite(*u_axis)
-                    } else if !(u_axis.length_squared() > 0.0) {
+                    } else if u_axis.length_squared() == 0.0 {
                         Problem::AxisZero
                     } else {
                         let u = in_plane(*u_axis, unit(*normal));
