@@ -31,7 +31,7 @@ use crate::session::{read, report};
 use indexmap::IndexMap;
 use serde::Deserialize;
 use sshc_runtime::gpu::{CameraOutput, Gpu};
-use sshc_runtime::graph::PassGraph;
+use sshc_runtime::graph::cost;
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -380,7 +380,11 @@ pub(crate) fn run_config(
     crate::bind::check_cascades(scene, &cascading)?;
     let (mut ex, _) = cascading.bind_or_scene(&loaded, scene, false)?;
     let edges = ex.scene.edge_counts().map_or(0, |c| u64::from(c.edges));
-    let (fetches, ops) = work(ex.graph(), scene.shadow_map, scene.camera_size(), edges);
+    let sizes = cost::Sizes {
+        shadow: scene.shadow_map,
+        camera: scene.camera_size(),
+    };
+    let (fetches, ops) = cost::work::total(ex.graph(), sizes, edges);
     let timing = time_frames(&mut ex, frames)?;
     let visibility = ex.inspect().read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
     let peak = ex.inspect().memory().iter().map(|(_, b)| b).sum();
@@ -429,13 +433,6 @@ fn time_frames(ex: &mut Bound, frames: usize) -> Result<Option<Timing>, String> 
         }
     }
     Ok(Timing::of(t))
-}
-
-/// Fetches and operations per frame, summed over the passes of [`crate::cmd::render::pass_work`].
-fn work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edges: u64) -> (f64, f64) {
-    crate::cmd::render::pass_work(graph, shadow, camera, edges)
-        .iter()
-        .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops))
 }
 
 /// The most light samples per pixel of a `stochastic` baseline: 2^36 light samples
