@@ -1,13 +1,14 @@
-//! Phase `emit`: the pass graph (the runtime crate's versioned schema), the WGSL files and
-//! a cost report (bytes per texel of every resource; fetches and operations per invocation
-//! of every step, counted on the naga IR).
+//! Phase `emit`: the pass graph (the runtime crate's versioned schema) and the WGSL files.
+//! Its cost report ([`Cost`]: bytes per texel of every resource, fetches and operations
+//! per invocation of every step, counted on the naga IR) is the schema crate's cost model
+//! (`sshc_graph::cost`) applied to that graph.
 
 use crate::back::wgsl::Output;
 use crate::front::ast::{ConstValue, LightView, ScalarTy};
 use crate::ir::*;
 use crate::pack::{mip_source, table_source, texture_format};
-use sshc_graph::{self as graph, ChannelDecl, Extent, OpCount, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
-use std::fmt::Write as _;
+pub use sshc_graph::cost::Cost;
+use sshc_graph::{self as graph, ChannelDecl, Extent, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
 
 fn kind(p: &IrPass) -> graph::PassKind {
     match p.kind {
@@ -180,82 +181,5 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
         removed: ir.removed.to_vec(),
         specialised: ir.ir.specialised.as_ref().map(|s| s.facts.clone()),
         shadow_map: ir.ir.shadow_map,
-    }
-}
-
-/// Cost of a compiled technique.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Cost {
-    /// (texture, format, layers, bytes per shadow-map texel including a mip chain's 4/3).
-    pub textures: Vec<(String, graph::Format, u32, f64)>,
-    /// (pass, kind, steps, fetches and ops summed over one invocation of each step).
-    pub passes: Vec<(String, graph::PassKind, usize, OpCount)>,
-    /// Per shaded pixel.
-    pub shade: OpCount,
-}
-
-impl Cost {
-    pub fn of(g: &PassGraph) -> Cost {
-        // per shadow-map texel: the camera-sized debug outputs are not among them
-        let textures = g
-            .textures
-            .iter()
-            .filter(|t| t.extent == Extent::ShadowMap)
-            .map(|t| {
-                // a per-sample texture holds `layers` per light sample
-                let base = (t.format.bytes_per_texel() * t.array_layers()) as f64;
-                (
-                    t.name.clone(),
-                    t.format,
-                    t.array_layers(),
-                    if t.mips { base * 4.0 / 3.0 } else { base },
-                )
-            })
-            .collect();
-        let mut shade = OpCount::default();
-        let passes = g
-            .passes
-            .iter()
-            .map(|p| {
-                let mut c = OpCount::default();
-                for s in &p.steps {
-                    c.fetches += s.cost.fetches;
-                    c.ops += s.cost.ops;
-                }
-                if p.kind == graph::PassKind::Shade {
-                    shade = c;
-                }
-                (p.name.clone(), p.kind, p.steps.len(), c)
-            })
-            .collect();
-        Cost { textures, passes, shade }
-    }
-
-    /// Bytes per shadow-map texel of all persistent and transient textures.
-    pub fn bytes_per_texel(&self) -> f64 {
-        self.textures.iter().map(|t| t.3).sum()
-    }
-
-    pub fn markdown(&self, technique: &str) -> String {
-        let mut s = format!(
-            "# Cost of `{technique}`\n\nCounted on the naga IR of the generated WGSL (straight-line code: each counted operation runs once per invocation).\n\n## Memory\n\n| texture | format | layers | bytes per shadow-map texel |\n|---|---|---|---|\n"
-        );
-        for (n, f, l, b) in &self.textures {
-            let _ = writeln!(s, "| {n} | {f:?} | {l} | {b:.2} |");
-        }
-        let _ = writeln!(s, "| **total** | | | **{:.2}** |\n", self.bytes_per_texel());
-        s.push_str(
-            "## Work\n\n| pass | kind | steps | texture fetches per invocation | operations per invocation |\n|---|---|---|---|---|\n",
-        );
-        for (n, k, steps, c) in &self.passes {
-            let _ = writeln!(s, "| {n} | {k:?} | {steps} | {} | {} |", c.fetches, c.ops);
-        }
-        let _ = writeln!(
-            s,
-            "\nPer shaded pixel: {} texture fetches, {} arithmetic operations.",
-            self.shade.fetches, self.shade.ops
-        );
-        s.push_str("Map, Filter and Mipmap passes run once per shadow-map texel and step (Mipmap steps once per level, on a quarter of the texels of the level above).\n");
-        s
     }
 }

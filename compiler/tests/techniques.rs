@@ -637,11 +637,11 @@ fn pcss_grid_samples_and_precision() {
     }
 }
 
-/// The compulsory bytes of each pass (`sshc_graph::traffic`), derived by hand from the
+/// The compulsory bytes of each pass (`sshc_graph::cost::traffic`), derived by hand from the
 /// formats: at 2048^2 texels and 1920 x 1080 pixels.
 #[test]
 fn compulsory_bytes_follow_from_the_formats_and_sizes() {
-    use sshc_graph::traffic::{Sizes, passes};
+    use sshc_graph::cost::{Sizes, traffic::passes};
     let sizes = Sizes {
         shadow: 2048,
         camera: (1920, 1080),

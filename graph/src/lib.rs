@@ -20,7 +20,7 @@
 
 #![deny(clippy::wildcard_enum_match_arm)]
 
-pub mod traffic;
+pub mod cost;
 
 mod lights;
 mod schema;

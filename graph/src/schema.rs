@@ -212,7 +212,7 @@ pub enum Format {
 }
 
 impl Format {
-    pub fn bytes_per_texel(self) -> u32 {
+    pub const fn bytes_per_texel(self) -> u32 {
         match self {
             Format::R8Unorm => 1,
             Format::Rg8Unorm | Format::R16Unorm | Format::R16Float => 2,
@@ -334,6 +334,17 @@ pub struct PassDecl {
     /// The WGSL file, relative to the graph's folder.
     pub shader: String,
     pub steps: Vec<Step>,
+}
+
+impl PassGraph {
+    /// Views `pass` runs in a frame: one per light sample ([`PassGraph::samples`]) for a
+    /// `PerLightSample` pass, else one.
+    pub fn views_of(&self, pass: &PassDecl) -> u32 {
+        match pass.views {
+            Views::PerLightSample => self.samples,
+            Views::LightCenter => 1,
+        }
+    }
 }
 
 /// Which light views a pass that draws the scene from the light renders.

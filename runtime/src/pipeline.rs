@@ -368,3 +368,25 @@ impl StepPipeline {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::graph::{CAMERA_OUTPUTS, GBUFFER, cost};
+
+    /// The cost model's bytes of the fixed attachments (`sshc_graph::cost`, which the
+    /// allocation check also counts with) are the formats the runtime makes them in.
+    #[test]
+    fn the_cost_model_counts_the_attachments_at_their_formats() {
+        let bytes = |f: wgpu::TextureFormat| f.block_copy_size(None).unwrap_or(0);
+        assert_eq!(CAMERA_OUTPUTS.map(wgpu_format), CAMERA_FORMATS.map(Some));
+        assert_eq!(CAMERA_FORMATS.iter().map(|f| bytes(*f)).sum::<u32>(), cost::CAMERA_BYTES_PER_PIXEL);
+        let gbuffer: Vec<_> = GBUFFER.iter().filter_map(|f| wgpu_format(*f)).collect();
+        assert_eq!(gbuffer.len(), GBUFFER.len());
+        assert_eq!(gbuffer.iter().map(|f| bytes(*f)).sum::<u32>(), cost::GBUFFER_BYTES_PER_PIXEL);
+        assert_eq!(
+            DEPTH_FORMAT.block_copy_size(Some(wgpu::TextureAspect::DepthOnly)),
+            Some(cost::DEPTH_BYTES_PER_TEXEL)
+        );
+    }
+}

@@ -39,14 +39,10 @@ pub(crate) struct Usages {
 }
 
 /// Bytes of a graph texture at a shadow-map and camera size: the shadow map's texels, or
-/// the camera's for a camera-sized one (a Shade's debug output), a mip chain's 4/3 included.
-pub(crate) fn texture_bytes(t: &TextureDecl, shadow_size: u32, (cw, ch): (u32, u32)) -> u64 {
-    let texels = match t.extent {
-        graph::Extent::ShadowMap => shadow_size as u64 * shadow_size as u64,
-        graph::Extent::Camera => cw as u64 * ch as u64,
-    };
-    let per = t.format.bytes_per_texel() as u64 * t.array_layers() as u64 * texels;
-    if t.mips { per * 4 / 3 } else { per }
+/// the camera's for a camera-sized one (a Shade's debug output), a mip chain's 4/3 included
+/// (the cost model's [`TextureDecl::bytes`]).
+pub(crate) fn texture_bytes(t: &TextureDecl, shadow: u32, camera: (u32, u32)) -> u64 {
+    t.bytes(graph::cost::Sizes { shadow, camera })
 }
 
 pub(crate) fn f32_bytes(v: &[f32]) -> Vec<u8> {
@@ -400,7 +396,12 @@ fn check_sizes(gpu: &Gpu, graph: &PassGraph, shadow_size: u32, camera_size: (u32
             limit: max_dim as u64,
         });
     }
-    let mut bytes: u64 = shadow_size as u64 * shadow_size as u64 * 4 + cw as u64 * ch as u64 * (4 + 4 + 16 + 8 + 4);
+    // the light's depth attachment, the camera's four targets and its depth
+    let (depth, camera) = (
+        u64::from(graph::cost::DEPTH_BYTES_PER_TEXEL),
+        u64::from(graph::cost::CAMERA_BYTES_PER_PIXEL),
+    );
+    let mut bytes: u64 = shadow_size as u64 * shadow_size as u64 * depth + cw as u64 * ch as u64 * (camera + depth);
     for t in &graph.textures {
         bytes += texture_bytes(t, shadow_size, camera_size);
     }

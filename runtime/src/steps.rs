@@ -498,11 +498,7 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 sampler: step.sampler,
                 kind,
                 light_samples: step.light_samples,
-                views: if pass.views == graph::Views::PerLightSample {
-                    graph.samples
-                } else {
-                    1
-                },
+                views: graph.views_of(pass),
                 per_sample: pass.views == graph::Views::PerLightSample,
                 view_layers: step
                     .writes

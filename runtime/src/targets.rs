@@ -1058,11 +1058,7 @@ fn write_depth_overrides(t: &Targets, maps: &[Vec<f32>]) -> Result<()> {
     let graph = t.technique.graph();
     for res in &t.bound {
         for decl in graph.passes.iter().filter(|p| p.kind == graph::PassKind::Depth) {
-            let views = if decl.views == graph::Views::PerLightSample {
-                graph.samples
-            } else {
-                1
-            };
+            let views = graph.views_of(decl);
             if maps.is_empty() || (maps.len() != 1 && maps.len() != views as usize) {
                 return Err(RuntimeError::Param(format!(
                     "depth override has {} maps, the Depth pass `{}` {views} view(s)",

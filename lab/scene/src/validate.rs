@@ -4,7 +4,7 @@ use crate::error::SceneError;
 use crate::schema::{Camera, Mesh, Object, Rotation, SceneDesc};
 
 use glam::{Vec2, Vec3};
-use sshc_light::Light;
+use sshc_light::{Light, LightFault, Problem};
 
 /// Most segments of a `Sphere` mesh (it has `segments * max(2, segments / 2) * 2`
 /// triangles: 1,048,576 at this limit).
@@ -223,99 +223,38 @@ pub(crate) fn validate_camera(camera: &Camera) -> Result<(), SceneError> {
     Ok(())
 }
 
-fn check_unit(v: &mut Vec3, at: String) -> Result<(), SceneError> {
-    if !(finite3(*v) && v.length_squared() > 0.0) {
-        return Err(SceneError::invalid(
-            at,
-            "the direction is zero or not finite",
-            "write a non-zero direction such as (0.0, -1.0, 0.0)",
-        ));
-    }
-    // a direction already of unit length to within f32 rounding is kept as it is, so that
-    // checking a light twice (a scene written out and read back) changes nothing
-    if (v.length_squared() - 1.0).abs() > 4.0 * f32::EPSILON {
-        *v = v.normalize();
-    }
+/// A light checked and normalised by its crate's one definition ([`Light::checked`]), the
+/// fault worded for a scene file: the value's path (`at` of the field) and a fix.
+pub(crate) fn validate_light(light: &mut Light, at: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
+    *light = light.checked().map_err(|f| light_error(&f, at))?;
     Ok(())
 }
 
-fn check_point(v: &Vec3, at: String) -> Result<(), SceneError> {
-    if finite3(*v) {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(at, "the position is not finite", "write finite numbers"))
-    }
-}
-
-fn check_size(x: f32, at: String, what: &str) -> Result<(), SceneError> {
-    if x >= 0.0 && x.is_finite() {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
+/// A light's fault ([`Light::fault`]) as a scene file's error.
+pub(crate) fn light_error(f: &LightFault, at: &dyn Fn(&str) -> String) -> SceneError {
+    let at = at(f.field);
+    match f.problem {
+        Problem::PositionNotFinite(_) => SceneError::invalid(at, "the position is not finite", "write finite numbers"),
+        Problem::DirectionNotFinite(_) | Problem::DirectionZero => SceneError::invalid(
             at,
-            format!("{what} {x} is negative or not finite"),
-            format!("write a {what} >= 0"),
-        ))
-    }
-}
-
-pub(crate) fn validate_light(light: &mut Light, at: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
-    match light {
-        Light::Point { position } => check_point(position, at("position")),
-        Light::Directional { direction } => check_unit(direction, at("direction")),
-        Light::Sphere { center, radius } => {
-            check_point(center, at("center"))?;
-            check_size(*radius, at("radius"), "radius")
-        }
-        Light::Disk { center, normal, radius } => {
-            check_point(center, at("center"))?;
-            check_unit(normal, at("normal"))?;
-            check_size(*radius, at("radius"), "radius")
-        }
-        Light::Rectangle {
-            center,
-            normal,
-            u_axis,
-            half_width,
-            half_height,
-        } => {
-            check_point(center, at("center"))?;
-            check_unit(normal, at("normal"))?;
-            check_size(*half_width, at("half_width"), "half width")?;
-            check_size(*half_height, at("half_height"), "half height")?;
-            let u = *u_axis - *normal * u_axis.dot(*normal);
-            if !(u.is_finite() && u.length() > 1e-4 * u_axis.length()) {
-                return Err(SceneError::invalid(
-                    at("u_axis"),
-                    "`u_axis` is zero or parallel to `normal`",
-                    "write an axis that lies in the rectangle's plane, perpendicular to `normal`",
-                ));
-            }
-            if (u.length_squared() - 1.0).abs() > 4.0 * f32::EPSILON || u != *u_axis {
-                *u_axis = u.normalize();
-            }
-            Ok(())
-        }
-        Light::Segment { a, b } => {
-            check_point(a, at("a"))?;
-            check_point(b, at("b"))
-        }
-        Light::Triangle { a, b, c } => {
-            check_point(a, at("a"))?;
-            check_point(b, at("b"))?;
-            check_point(c, at("c"))
-        }
-        Light::DistantDisk { direction, angle_degrees } => {
-            check_unit(direction, at("direction"))?;
-            if !(*angle_degrees >= 0.0 && *angle_degrees < 180.0) {
-                return Err(SceneError::invalid(
-                    at("angle_degrees"),
-                    format!("angular diameter {angle_degrees} is outside [0, 180) degrees"),
-                    "write the full angular diameter in degrees, such as 0.53 for the sun",
-                ));
-            }
-            Ok(())
-        }
+            "the direction is zero or not finite",
+            "write a non-zero direction such as (0.0, -1.0, 0.0)",
+        ),
+        Problem::AxisNotFinite(_) | Problem::AxisZero | Problem::AxisAlongNormal => SceneError::invalid(
+            at,
+            "`u_axis` is zero or parallel to `normal`",
+            "write an axis that lies in the rectangle's plane, perpendicular to `normal`",
+        ),
+        Problem::Length(x) => SceneError::invalid(
+            at,
+            format!("{} {x} is negative or not finite", f.words),
+            format!("write a {} >= 0", f.words),
+        ),
+        Problem::Angle(a) => SceneError::invalid(
+            at,
+            format!("angular diameter {a} is outside [0, 180) degrees"),
+            "write the full angular diameter in degrees, such as 0.53 for the sun",
+        ),
     }
 }
 
@@ -408,5 +347,261 @@ fn validate_object(object: &Object, at: &dyn Fn(&str) -> String) -> Result<(), S
         | Mesh::Obj { .. }
         | Mesh::Gltf { .. }
         | Mesh::City { .. } => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::checked_light;
+    use glam::Vec3;
+    use sshc_light::Light;
+
+    /// The two paths a light is checked by, the runtime's (`Light::check`, a host's light)
+    /// and a scene file's (`checked_light`), word one decision (`Light::fault`): a light one
+    /// refuses the other refuses, at the same field, and each keeps its words.
+    #[test]
+    fn a_light_refused_by_the_runtime_is_refused_by_the_scene_with_the_same_reason() {
+        let (nan, inf) = (f32::NAN, f32::INFINITY);
+        let p = Vec3::new(0.0, 2.0, 0.0);
+        let bad = Vec3::new(nan, 1.0, 0.0);
+        let n = Vec3::NEG_Y;
+        // (light, the scene's field path, its message, the runtime's message)
+        let cases: Vec<(Light, &str, String, String)> = vec![
+            (
+                Light::Point { position: bad },
+                "Point).position",
+                "the position is not finite".into(),
+                format!("its position {bad} is not finite"),
+            ),
+            (
+                Light::Directional { direction: Vec3::ZERO },
+                "Directional).direction",
+                "the direction is zero or not finite".into(),
+                "its direction is zero".into(),
+            ),
+            (
+                Light::Directional { direction: bad },
+                "Directional).direction",
+                "the direction is zero or not finite".into(),
+                format!("its direction {bad} is not finite"),
+            ),
+            (
+                Light::Sphere { center: p, radius: -1.0 },
+                "Sphere).radius",
+                "radius -1 is negative or not finite".into(),
+                "its radius -1 is not a finite length >= 0".into(),
+            ),
+            (
+                Light::Sphere { center: bad, radius: -1.0 },
+                "Sphere).center",
+                "the position is not finite".into(),
+                format!("its centre {bad} is not finite"),
+            ),
+            (
+                Light::Disk {
+                    center: p,
+                    normal: Vec3::ZERO,
+                    radius: 1.0,
+                },
+                "Disk).normal",
+                "the direction is zero or not finite".into(),
+                "its normal is zero".into(),
+            ),
+            (
+                Light::Disk {
+                    center: p,
+                    normal: n,
+                    radius: inf,
+                },
+                "Disk).radius",
+                "radius inf is negative or not finite".into(),
+                "its radius inf is not a finite length >= 0".into(),
+            ),
+            (
+                Light::Rectangle {
+                    center: p,
+                    normal: n,
+                    u_axis: Vec3::X,
+                    half_width: nan,
+                    half_height: 1.0,
+                },
+                "Rectangle).half_width",
+                "half width NaN is negative or not finite".into(),
+                "its half width NaN is not a finite length >= 0".into(),
+            ),
+            (
+                Light::Rectangle {
+                    center: p,
+                    normal: n,
+                    u_axis: Vec3::X,
+                    half_width: 1.0,
+                    half_height: -0.5,
+                },
+                "Rectangle).half_height",
+                "half height -0.5 is negative or not finite".into(),
+                "its half height -0.5 is not a finite length >= 0".into(),
+            ),
+            (
+                Light::Rectangle {
+                    center: p,
+                    normal: n,
+                    u_axis: Vec3::new(0.0, 3.0, 0.0),
+                    half_width: 1.0,
+                    half_height: 1.0,
+                },
+                "Rectangle).u_axis",
+                "`u_axis` is zero or parallel to `normal`".into(),
+                "its `u_axis` is parallel to its normal".into(),
+            ),
+            (
+                Light::Rectangle {
+                    center: p,
+                    normal: n,
+                    u_axis: Vec3::ZERO,
+                    half_width: 1.0,
+                    half_height: 1.0,
+                },
+                "Rectangle).u_axis",
+                "`u_axis` is zero or parallel to `normal`".into(),
+                "its u_axis is zero".into(),
+            ),
+            (
+                Light::Rectangle {
+                    center: p,
+                    normal: n,
+                    u_axis: bad,
+                    half_width: 1.0,
+                    half_height: 1.0,
+                },
+                "Rectangle).u_axis",
+                "`u_axis` is zero or parallel to `normal`".into(),
+                format!("its u_axis {bad} is not finite"),
+            ),
+            (
+                Light::Segment { a: p, b: bad },
+                "Segment).b",
+                "the position is not finite".into(),
+                format!("its end b {bad} is not finite"),
+            ),
+            (
+                Light::Triangle { a: p, b: p, c: bad },
+                "Triangle).c",
+                "the position is not finite".into(),
+                format!("its corner c {bad} is not finite"),
+            ),
+            (
+                Light::DistantDisk {
+                    direction: Vec3::Y,
+                    angle_degrees: 180.0,
+                },
+                "DistantDisk).angle_degrees",
+                "angular diameter 180 is outside [0, 180) degrees".into(),
+                "its angular diameter 180 is outside [0, 180) degrees".into(),
+            ),
+        ];
+        for (light, at, scene, runtime) in cases {
+            let e = checked_light(2, light.clone()).unwrap_err();
+            assert_eq!(e.at(), Some(format!("lights[2] ({at}").as_str()), "{light:?}");
+            assert_eq!(e.message(), scene, "{light:?}");
+            assert!(e.hint().is_some(), "{light:?}");
+            assert_eq!(light.check(), Err(runtime), "{light:?}");
+        }
+    }
+
+    /// Every light built from good and bad values of each field: accepted or refused alike
+    /// by both paths, refused at the field `Light::fault` names, and a light the scene
+    /// accepts (normalised) accepted again (unchanged, but for a rectangle's `u_axis`).
+    #[test]
+    fn both_paths_decide_every_light_alike() {
+        let (nan, inf) = (f32::NAN, f32::INFINITY);
+        let points = [Vec3::new(0.5, 2.0, -1.0), Vec3::new(nan, 0.0, 0.0), Vec3::new(0.0, -inf, 0.0)];
+        let dirs = [
+            Vec3::new(0.0, -2.0, 0.0),
+            Vec3::new(0.3, -1.0, 0.2),
+            Vec3::ZERO,
+            Vec3::new(0.0, nan, 0.0),
+            Vec3::new(inf, 1.0, 0.0),
+            Vec3::new(1e-30, 0.0, 0.0),
+        ];
+        let axes = [
+            Vec3::X,
+            Vec3::new(2.0, 0.5, 0.0),
+            Vec3::new(0.0, 5.0, 0.0),
+            Vec3::new(1e-6, 1.0, 0.0),
+            Vec3::ZERO,
+            Vec3::new(nan, 0.0, 1.0),
+        ];
+        let sizes = [0.5, 0.0, -1.0, nan, inf, 1e38];
+        let angles = [0.53, 0.0, 179.9, 180.0, -0.1, nan];
+        let mut lights = Vec::new();
+        for &p in &points {
+            lights.push(Light::Point { position: p });
+            lights.push(Light::Segment { a: p, b: points[0] });
+            lights.push(Light::Segment { a: points[0], b: p });
+            lights.push(Light::Triangle {
+                a: points[0],
+                b: p,
+                c: points[0],
+            });
+            for &r in &sizes {
+                lights.push(Light::Sphere { center: p, radius: r });
+                for &d in &dirs {
+                    lights.push(Light::Disk {
+                        center: p,
+                        normal: d,
+                        radius: r,
+                    });
+                }
+            }
+        }
+        for &d in &dirs {
+            lights.push(Light::Directional { direction: d });
+            for &a in &angles {
+                lights.push(Light::DistantDisk {
+                    direction: d,
+                    angle_degrees: a,
+                });
+            }
+            for &u in &axes {
+                for &w in &sizes {
+                    for &h in &sizes {
+                        for &c in &points[..2] {
+                            lights.push(Light::Rectangle {
+                                center: c,
+                                normal: d,
+                                u_axis: u,
+                                half_width: w,
+                                half_height: h,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        let (mut accepted, mut refused) = (0, 0);
+        for light in lights {
+            let name = light.kind_name();
+            match (light.fault(), checked_light(0, light.clone())) {
+                (None, Ok(checked)) => {
+                    accepted += 1;
+                    assert_eq!(light.check(), Ok(()), "{light:?}");
+                    assert_eq!(checked.check(), Ok(()), "{checked:?}");
+                    let again = checked_light(0, checked.clone());
+                    assert!(again.is_ok(), "{light:?}");
+                    // (a rectangle's `u_axis` is made perpendicular again, which may move
+                    // it by an ulp)
+                    if !matches!(light, Light::Rectangle { .. }) {
+                        assert_eq!(again.ok(), Some(checked), "{light:?}");
+                    }
+                }
+                (Some(f), Err(e)) => {
+                    refused += 1;
+                    assert_eq!(light.check(), Err(f.to_string()), "{light:?}");
+                    assert_eq!(e.at(), Some(format!("lights[0] ({name}).{}", f.field).as_str()), "{light:?}");
+                }
+                (f, e) => panic!("{light:?}: the runtime's fault {f:?}, the scene's {e:?}"),
+            }
+        }
+        assert!(accepted > 50 && refused > 1000, "{accepted} accepted, {refused} refused");
     }
 }

@@ -5,7 +5,7 @@ use crate::image_io::ImageFiles;
 use crate::run::Bound;
 use crate::session::{Overrides, rt};
 use sshc_runtime::gpu::{CameraOutput, Gpu, RuntimeError};
-use sshc_runtime::graph::{Draw, PassGraph, Views, traffic};
+use sshc_runtime::graph::{Draw, cost};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -235,17 +235,12 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
             }
         }
     }
-    let work = pass_work(
-        ex.graph(),
-        scene.shadow_map,
-        scene.camera_size(),
-        edges.map_or(0, |c| u64::from(c.edges)),
-    );
-    let sizes = traffic::Sizes {
+    let sizes = cost::Sizes {
         shadow: scene.shadow_map,
         camera: scene.camera_size(),
     };
-    let bytes = traffic::passes(ex.graph(), sizes);
+    let work = cost::work::passes(ex.graph(), sizes, edges.map_or(0, |c| u64::from(c.edges)));
+    let bytes = cost::traffic::passes(ex.graph(), sizes);
     let gbps = match a.bandwidth {
         Some(b) => {
             println!("bandwidth: {b:.1} GB/s (given)");
@@ -319,75 +314,6 @@ fn schedule(steps: &[sshc_runtime::graph::Step]) -> &'static str {
     let mut kinds = steps.iter().map(|s| kind(&s.draw));
     let first = kinds.next().unwrap_or("");
     if kinds.all(|k| k == first) { first } else { "mixed" }
-}
-
-/// The work of one pass in a frame.
-pub(crate) struct PassWork {
-    pub pass: String,
-    /// Shader invocations per frame, over all the pass's steps.
-    pub invocations: f64,
-    /// Fetches (texture reads, table loads) and operations per frame: each step's
-    /// per-invocation counts (counted on the naga IR by the compiler) times its invocations.
-    pub fetches: f64,
-    pub ops: f64,
-}
-
-/// Invocations, fetches and operations per frame of every pass: a step's invocations are
-/// texels for map-side steps (summed over the mip levels below the base for a mip chain),
-/// pixels for the Shade pass, and rows or columns for compute steps, whose counts are per
-/// texel of the row or column they walk, in every layer of the table they write.
-pub(crate) fn pass_work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edges: u64) -> Vec<PassWork> {
-    let texels = f64::from(shadow) * f64::from(shadow);
-    graph
-        .passes
-        .iter()
-        .map(|p| {
-            let mut w = PassWork {
-                pass: p.name.clone(),
-                invocations: 0.0,
-                fetches: 0.0,
-                ops: 0.0,
-            };
-            for s in &p.steps {
-                // (invocations, how many times the counted code runs)
-                let (n, runs) = match &s.draw {
-                    Draw::SceneFromCamera | Draw::CameraGBuffer | Draw::ComputePixels => (f64::from(camera.0) * f64::from(camera.1), 1.0),
-                    Draw::SceneFromLight | Draw::FullScreen | Draw::ComputeTexels => (texels, 1.0),
-                    // levels 1.. of the chain: texels (1/4 + 1/16 + ...)
-                    Draw::MipLevels | Draw::ComputeMipLevels => (texels / 3.0, 1.0),
-                    // one invocation per row or column, whose loop body (counted once)
-                    // runs once per texel of it in each layer of the table
-                    Draw::ComputeRows | Draw::ComputeColumns => {
-                        let layers = s
-                            .writes
-                            .first()
-                            .and_then(|w| graph.textures.iter().find(|t| t.name == w.texture))
-                            .map_or(1, |t| t.layers);
-                        (f64::from(shadow), f64::from(shadow) * f64::from(layers))
-                    }
-                    // Geometry passes: one classification per edge of the scene's meshes
-                    Draw::Silhouettes { .. } => (edges as f64, 1.0),
-                    // skins: one invocation per cell of the mesh of texel centres
-                    Draw::Discontinuities { .. } => {
-                        let cells = f64::from(shadow.saturating_sub(1));
-                        (cells * cells, 1.0)
-                    }
-                    // and the generated primitives' fragments, which no count of the graph
-                    // and the sizes gives (`sshc render` prints the vertices drawn)
-                    Draw::Primitives { .. } => (0.0, 0.0),
-                };
-                w.invocations += n;
-                w.fetches += f64::from(s.cost.fetches) * n * runs;
-                w.ops += f64::from(s.cost.ops) * n * runs;
-            }
-            // a per-sample pass runs once per light sample
-            if p.views == Views::PerLightSample {
-                let k = f64::from(graph.samples);
-                (w.invocations, w.fetches, w.ops) = (w.invocations * k, w.fetches * k, w.ops * k);
-            }
-            w
-        })
-        .collect()
 }
 
 /// Every texture, layer, mip level and channel as PNG (scaled by the channel's range) and PFM.
@@ -494,7 +420,7 @@ fn dump_debug(ex: &Bound, dir: &Path) -> Result<(), RuntimeError> {
 
 #[cfg(test)]
 mod tests {
-    use super::pass_work;
+    use sshc_runtime::graph::cost;
 
     /// Every pass of CSSM with summed-area tables (`filter = 1`, defaults otherwise: M = 4,
     /// K = 3) counted by hand from its generated WGSL (the snapshots
@@ -524,7 +450,7 @@ mod tests {
         };
         let c = sshc::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("cssm.ron", src)));
         let (shadow, camera) = (512u32, (256u32, 128u32));
-        let work = pass_work(&c.graph, shadow, camera, 0);
+        let work = cost::work::passes(&c.graph, cost::Sizes { shadow, camera }, 0);
         let names: Vec<&str> = work.iter().map(|w| w.pass.as_str()).collect();
         assert_eq!(names, ["depth", "basis_sat", "blur_sat", "sat", "shade"]);
         let texels = 512.0 * 512.0;

@@ -11,6 +11,8 @@
 //!   set of points that holds them ([`Occluders`]: a scene's vertices in the lab, the
 //!   corners of the instances' bounding boxes in a host, every frame).
 //!   [`sample_views`] makes the per-sample views and weights of a linear or area light.
+//! - What a valid light is ([`Light::fault`], `valid.rs`): the runtime's [`Light::check`]
+//!   and the scene files' [`Light::checked`] both word it.
 //!
 //! Conventions: right-handed world, +Y up, views look down -Z, projections map depth to
 //! WebGPU's [0, 1]. Matrices are glam's (column-major).
@@ -19,6 +21,8 @@
 
 mod cascades;
 pub use cascades::{CameraFrustum, Cascade, MAX_CASCADES, cascade_views, practical_splits};
+mod valid;
+pub use valid::{LightFault, Problem};
 
 /// Most lights one frame combines: the runtime gathers their visibilities four lights to an
 /// RGBA layer (`Targets::visibility`, light `l` in layer `l / 4`, channel `l % 4`), and each
@@ -228,72 +232,6 @@ impl Light {
             Light::Segment { .. } => LightKind::Segment,
             Light::DistantDisk { .. } => LightKind::DistantDisk,
             Light::Triangle { .. } => LightKind::Triangle,
-        }
-    }
-
-    /// Refuse what no view can be fitted to: a value that is not finite, a negative
-    /// radius or half-extent, a zero direction or normal, a rectangle's `u_axis` parallel
-    /// to its normal, an angular diameter outside [0, 180) degrees. (A scene file's lights
-    /// are checked when it is read, with the value's path; this is the check for lights
-    /// made in code, such as a host's.)
-    pub fn check(&self) -> Result<(), String> {
-        let point = |v: &Vec3, what: &str| {
-            if v.is_finite() {
-                Ok(())
-            } else {
-                Err(format!("its {what} {v} is not finite"))
-            }
-        };
-        let unit = |v: &Vec3, what: &str| {
-            point(v, what)?;
-            if v.length() > 0.0 {
-                Ok(())
-            } else {
-                Err(format!("its {what} is zero"))
-            }
-        };
-        let size = |x: f32, what: &str| {
-            if x.is_finite() && x >= 0.0 {
-                Ok(())
-            } else {
-                Err(format!("its {what} {x} is not a finite length >= 0"))
-            }
-        };
-        match self {
-            Light::Point { position } => point(position, "position"),
-            Light::Directional { direction } => unit(direction, "direction"),
-            Light::Sphere { center, radius } => point(center, "centre").and(size(*radius, "radius")),
-            Light::Disk { center, normal, radius } => point(center, "centre").and(unit(normal, "normal")).and(size(*radius, "radius")),
-            Light::Rectangle {
-                center,
-                normal,
-                u_axis,
-                half_width,
-                half_height,
-            } => {
-                point(center, "centre")?;
-                unit(normal, "normal")?;
-                unit(u_axis, "u_axis")?;
-                size(*half_width, "half width")?;
-                size(*half_height, "half height")?;
-                let n = normal.normalize();
-                let u = *u_axis - n * u_axis.dot(n);
-                if u.length() > 1e-4 * u_axis.length() {
-                    Ok(())
-                } else {
-                    Err("its `u_axis` is parallel to its normal".into())
-                }
-            }
-            Light::Segment { a, b } => point(a, "end a").and(point(b, "end b")),
-            Light::Triangle { a, b, c } => point(a, "corner a").and(point(b, "corner b")).and(point(c, "corner c")),
-            Light::DistantDisk { direction, angle_degrees } => {
-                unit(direction, "direction")?;
-                if (0.0..180.0).contains(angle_degrees) {
-                    Ok(())
-                } else {
-                    Err(format!("its angular diameter {angle_degrees} is outside [0, 180) degrees"))
-                }
-            }
         }
     }
 

@@ -8,7 +8,7 @@ use crate::metrics;
 use crate::run::Bound;
 use crate::session::{TruthOpts, positions_normals, report, rt, truth_at};
 use sshc_runtime::gpu::{CameraOutput, Gpu};
-use sshc_runtime::graph::PassGraph;
+use sshc_runtime::graph::cost;
 use std::path::Path;
 
 /// The truth of one scene as the sweep and the tuner score against it: visibility, its
@@ -115,7 +115,11 @@ pub(crate) fn run_config(
     crate::bind::check_cascades(scene, &cascading)?;
     let (mut ex, _) = cascading.bind_or_scene(&loaded, scene, false)?;
     let edges = ex.scene.edge_counts().map_or(0, |c| u64::from(c.edges));
-    let (fetches, ops) = work(ex.graph(), scene.shadow_map, scene.camera_size(), edges);
+    let sizes = cost::Sizes {
+        shadow: scene.shadow_map,
+        camera: scene.camera_size(),
+    };
+    let (fetches, ops) = cost::work::total(ex.graph(), sizes, edges);
     let timing = time_frames(&mut ex, frames)?;
     let visibility = ex.inspect().read_camera(CameraOutput::Visibility).map_err(rt)?.channel(0);
     let peak = ex.inspect().memory().iter().map(|(_, b)| b).sum();
@@ -164,13 +168,6 @@ pub(super) fn time_frames(ex: &mut Bound, frames: usize) -> Result<Option<Timing
         }
     }
     Ok(Timing::of(t))
-}
-
-/// Fetches and operations per frame, summed over the passes of [`crate::cmd::render::pass_work`].
-fn work(graph: &PassGraph, shadow: u32, camera: (u32, u32), edges: u64) -> (f64, f64) {
-    crate::cmd::render::pass_work(graph, shadow, camera, edges)
-        .iter()
-        .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops))
 }
 
 pub(super) fn compile(

@@ -338,8 +338,9 @@ impl Tuner<'_> {
     }
 
     /// The fetches, operations and shadow-map bytes per frame of `c`'s graph, from the
-    /// compiler's counts (`render::pass_work`, `emit::Cost`) at the first scene's camera and
-    /// `c`'s map size: known before running it. None where it does not compile.
+    /// compiler's counts through the cost model (`sshc_graph::cost`: `work::total`,
+    /// `Cost::shadow_map_bytes`) at the first scene's camera and `c`'s map size: known
+    /// before running it. None where it does not compile.
     fn work_of(&self, c: &Candidate) -> Option<Work> {
         let key = (c.technique, c.describe());
         if let Some(w) = self.work.borrow().get(&key) {
@@ -356,14 +357,12 @@ impl Tuner<'_> {
             let compiled = sshc::compile_str(&e.source, &opts).ok()?;
             let scene = &self.scenes[0].train[0];
             let n = s.shadow_map.unwrap_or(scene.shadow_map);
-            let bytes: f64 = sshc::emit::Cost::of(&compiled.graph)
-                .textures
-                .iter()
-                .map(|t| t.3 * f64::from(n) * f64::from(n))
-                .sum();
-            let (f, o) = crate::cmd::render::pass_work(&compiled.graph, n, scene.camera_size(), 0)
-                .iter()
-                .fold((0.0, 0.0), |(f, o), w| (f + w.fetches, o + w.ops));
+            let bytes = compiled.cost.shadow_map_bytes(n);
+            let sizes = sshc_runtime::graph::cost::Sizes {
+                shadow: n,
+                camera: scene.camera_size(),
+            };
+            let (f, o) = sshc_runtime::graph::cost::work::total(&compiled.graph, sizes, 0);
             Some((f, o, bytes))
         });
         self.work.borrow_mut().insert(key, w);

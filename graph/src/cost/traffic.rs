@@ -9,8 +9,8 @@
 //!
 //! - writes: every target layer at its format over its extent (a mip chain's levels below
 //!   the base: a third of the base); a depth pass's `Depth32Float` attachment (4 bytes a
-//!   texel); the Shade's four camera targets ([`CAMERA_BYTES_PER_PIXEL`]) and its depth
-//!   (a deferred Shade: the G-buffer, [`GBUFFER_BYTES_PER_PIXEL`], and the depth, then the
+//!   texel); the Shade's four camera targets (`CAMERA_BYTES_PER_PIXEL`) and its depth
+//!   (a deferred Shade: the G-buffer, `GBUFFER_BYTES_PER_PIXEL`, and the depth, then the
 //!   four targets from the compute step, which reads the G-buffer back once); a
 //!   summed-area table's 16-byte cells;
 //! - reads, for steps over the shadow map: each texture it binds, over the base level, in
@@ -21,15 +21,10 @@
 //!   what a Shade reads (it depends on what the camera sees: at most the textures it
 //!   binds), generated primitives and the records of Geometry passes.
 
-use crate::{Draw, Extent, PassGraph, PassKind, Step, View, Views};
-
-/// The Shade pass's targets: visibility (r32float), colour (rgba8unorm), position
-/// (rgba32float) and normal (rgba16float).
-pub const CAMERA_BYTES_PER_PIXEL: f64 = 32.0;
-/// A deferred Shade's G-buffer ([`crate::GBUFFER`]): 16 + 8 + 8 bytes.
-pub const GBUFFER_BYTES_PER_PIXEL: f64 = 32.0;
-/// `Depth32Float`.
-pub const DEPTH_BYTES_PER_TEXEL: f64 = 4.0;
+use crate::cost::sizes::{
+    CAMERA_BYTES_PER_PIXEL, DEPTH_BYTES_PER_TEXEL, GBUFFER_BYTES_PER_PIXEL, Sizes, below_base, with_levels, written_layers,
+};
+use crate::{Draw, Extent, PassGraph, PassKind, Step, View};
 
 /// Compulsory bytes of one frame of a pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -46,24 +41,6 @@ impl Traffic {
     /// The lower bound on time, in milliseconds, at `gbps` (10^9 bytes a second).
     pub fn bound_ms(&self, gbps: f64) -> f64 {
         self.total() / (gbps * 1e9) * 1e3
-    }
-}
-
-/// The sizes a frame runs at.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sizes {
-    /// Shadow-map resolution (texels on a side).
-    pub shadow: u32,
-    /// Camera resolution (width, height).
-    pub camera: (u32, u32),
-}
-
-impl Sizes {
-    fn texels(&self, e: Extent) -> f64 {
-        match e {
-            Extent::ShadowMap => f64::from(self.shadow) * f64::from(self.shadow),
-            Extent::Camera => f64::from(self.camera.0) * f64::from(self.camera.1),
-        }
     }
 }
 
@@ -89,30 +66,31 @@ fn reads_whole_textures(d: &Draw) -> bool {
 
 /// Compulsory bytes of one step (one view of it).
 pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffic {
-    let texture = |name: &str| graph.textures.iter().find(|t| t.name == name);
     let base = sizes.texels(Extent::ShadowMap);
+    let camera = sizes.texels(Extent::Camera);
     let mut t = Traffic::default();
-    // the levels below the base of a chain: 1/4 + 1/16 + ... of it
-    let chain = |d: &Draw| {
-        if d.writes_levels_below_base() { 1.0 / 3.0 } else { 1.0 }
-    };
     for w in &s.writes {
-        if let Some(tex) = texture(&w.texture) {
-            t.written += f64::from(tex.format.bytes_per_texel()) * sizes.texels(tex.extent) * chain(&s.draw);
+        if let Some(tex) = graph.texture(&w.texture) {
+            let bytes = f64::from(tex.format.bytes_per_texel()) * sizes.texels(tex.extent);
+            t.written += if s.draw.writes_levels_below_base() {
+                below_base(bytes)
+            } else {
+                bytes
+            };
         }
     }
     match s.draw {
-        Draw::SceneFromLight => t.written += DEPTH_BYTES_PER_TEXEL * base,
+        Draw::SceneFromLight => t.written += f64::from(DEPTH_BYTES_PER_TEXEL) * base,
         Draw::SceneFromCamera => {
-            t.written += (CAMERA_BYTES_PER_PIXEL + DEPTH_BYTES_PER_TEXEL) * sizes.texels(Extent::Camera);
+            t.written += f64::from(CAMERA_BYTES_PER_PIXEL + DEPTH_BYTES_PER_TEXEL) * camera;
         }
         // a deferred Shade: the G-buffer written, then read back and the outputs stored
         Draw::CameraGBuffer => {
-            t.written += (GBUFFER_BYTES_PER_PIXEL + DEPTH_BYTES_PER_TEXEL) * sizes.texels(Extent::Camera);
+            t.written += f64::from(GBUFFER_BYTES_PER_PIXEL + DEPTH_BYTES_PER_TEXEL) * camera;
         }
         Draw::ComputePixels => {
-            t.read += GBUFFER_BYTES_PER_PIXEL * sizes.texels(Extent::Camera);
-            t.written += CAMERA_BYTES_PER_PIXEL * sizes.texels(Extent::Camera);
+            t.read += f64::from(GBUFFER_BYTES_PER_PIXEL) * camera;
+            t.written += f64::from(CAMERA_BYTES_PER_PIXEL) * camera;
         }
         // their targets' bytes (above) and reads (below) are all they move
         Draw::FullScreen
@@ -128,19 +106,14 @@ pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffi
     if kind == PassKind::Shade || !reads_whole_textures(&s.draw) {
         return t;
     }
-    let written_layers = s.writes.len() as u32;
-    let written_layer_count = s.writes.first().and_then(|w| texture(&w.texture)).map(|t| t.layers);
+    let written_layers_now = s.writes.len() as u32;
+    let written_layer_count = written_layers(graph, s);
     for b in &s.reads {
-        let Some(tex) = texture(&b.texture) else { continue };
-        let layers = if written_layers > 0 && written_layer_count == Some(tex.layers) {
-            written_layers.min(tex.layers)
+        let Some(tex) = graph.texture(&b.texture) else { continue };
+        let layers = if written_layers_now > 0 && written_layer_count == Some(tex.layers) {
+            written_layers_now.min(tex.layers)
         } else {
             tex.layers
-        };
-        let level = match b.view {
-            // level k - 1 for each level k >= 1 written: the base and all but the last
-            View::PreviousLevel => 4.0 / 3.0,
-            View::Base | View::All => 1.0,
         };
         let texels = match s.draw {
             // the neighbour's depth map: one layer of the per-sample block
@@ -158,23 +131,24 @@ pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffi
             | Draw::Silhouettes { .. }
             | Draw::Primitives { .. } => sizes.texels(tex.extent) * f64::from(layers),
         };
-        t.read += f64::from(tex.format.bytes_per_texel()) * texels * level;
+        let bytes = f64::from(tex.format.bytes_per_texel()) * texels;
+        t.read += match b.view {
+            // level k - 1 for each level k >= 1 written: the base and all but the last
+            View::PreviousLevel => with_levels(bytes),
+            View::Base | View::All => bytes,
+        };
     }
     t
 }
 
 /// Compulsory bytes of one frame of each pass, in the graph's order: its steps, once per
-/// light sample for a per-sample pass.
+/// light sample for a per-sample pass ([`PassGraph::views_of`]).
 pub fn passes(graph: &PassGraph, sizes: Sizes) -> Vec<(String, Traffic)> {
     graph
         .passes
         .iter()
         .map(|p| {
-            let views = if p.views == Views::PerLightSample {
-                f64::from(graph.samples)
-            } else {
-                1.0
-            };
+            let views = f64::from(graph.views_of(p));
             let mut t = Traffic::default();
             for s in &p.steps {
                 let st = step(graph, p.kind, s, sizes);
