@@ -105,7 +105,7 @@ fi
     echo "forward), then as compute (the Map, Filter and Mipmap passes whose formats allow it, and the"
     echo "Shade deferred: a G-buffer raster, then a compute step per pixel), then as fragment with only"
     echo "the Shade deferred (its own wall-clock row). *Compulsory MB*: the bytes any schedule of the pass"
-    echo "must move at a perfect cache (docs/architecture.md section 7); *bound ms*: those bytes at"
+    echo "must move at a perfect cache (docs/architecture.md section 6); *bound ms*: those bytes at"
     echo "the device's bandwidth; *best / bound*: how far the faster schedule is from it (1 is at the"
     echo "bound). A Shade's bytes are its writes only (what it reads depends on the view). The last"
     echo "row of each table is the whole frame's wall time (submission to completion, median): on"

@@ -1,7 +1,7 @@
 //! Phase `pack`: dead channel and dead pass elimination (what no shaded pixel can reach
 //! is removed, and the reason recorded), then channels are packed into textures: per
 //! resource, one 2D-array texture per precision, up to four channels per texel and as
-//! many layers as needed, within the limits profile (docs/architecture.md section 10).
+//! many layers as needed, within the limits profile (docs/architecture.md section 7).
 
 use crate::diag::{Diagnostic, Diagnostics, Phase};
 use crate::front::ast::{Precision, TableSum};

@@ -44,7 +44,7 @@ fn combine(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 ";
 
-/// Cascades of one light (docs/architecture.md, section 2a): per pixel, the cascade whose
+/// Cascades of one light (docs/runtime.md, section 1): per pixel, the cascade whose
 /// slice of view distances holds the pixel's (`dot(p - eye, forward)`, `p` the camera
 /// pass's world position), mixed with the next cascade over the last `band` fraction of its
 /// slice, so that no seam shows where two cascades meet; beyond the last split, the last
