@@ -513,8 +513,11 @@ impl Light {
                     half_height,
                     ..
                 } => {
-                    let w = normal.cross(*u_axis).normalize_or_zero();
-                    half_width * u_axis.dot(axis).abs() + half_height * w.dot(axis).abs()
+                    // a host's light is used as given (a scene file's is normalised on
+                    // load): a `u_axis` not of unit length would scale the width
+                    let u = valid::unit(*u_axis);
+                    let w = normal.cross(u).normalize_or_zero();
+                    half_width * u.dot(axis).abs() + half_height * w.dot(axis).abs()
                 }
                 Light::Segment { a, b } => 0.5 * (*b - *a).dot(axis).abs(),
                 // about the centroid: the farthest corner's offset (at least half the
@@ -915,6 +918,25 @@ pub fn sample_views(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A host's rectangle whose `u_axis` is not of unit length (the runtime fits a host's
+    /// light as given) has the extents of the same rectangle with a unit axis.
+    #[test]
+    fn a_rectangle_axis_of_any_length_gives_the_same_extents() {
+        let rect = |u: Vec3| Light::Rectangle {
+            center: Vec3::new(0.3, 4.0, -0.2),
+            normal: Vec3::new(0.0, -1.0, 0.0),
+            u_axis: u,
+            half_width: 0.5,
+            half_height: 0.25,
+        };
+        let bounds = (Vec3::splat(-1.0), Vec3::splat(1.0));
+        let unit = rect(Vec3::X).view(bounds);
+        for u in [Vec3::X * 2.0, Vec3::X * 0.5] {
+            let v = rect(u).view(bounds);
+            assert_eq!(v.half_extents, unit.half_extents, "u_axis {u}");
+        }
+    }
 
     /// Boxes as occluders: casters' corners, and every object's.
     struct Boxes {

@@ -57,7 +57,7 @@ impl fmt::Display for LightFault {
 
 /// `v` normalised, or kept as it is where it is already of unit length to within f32
 /// rounding (so that normalising a normalised light changes nothing).
-fn unit(v: Vec3) -> Vec3 {
+pub(crate) fn unit(v: Vec3) -> Vec3 {
     if (v.length_squared() - 1.0).abs() > 4.0 * f32::EPSILON {
         v.normalize()
     } else {
