@@ -17,29 +17,29 @@
 // must be handled.
 #![deny(clippy::wildcard_enum_match_arm)]
 
-pub mod analyse;
+pub(crate) mod analyse;
 pub mod back;
 pub mod builtins;
-pub mod check;
-pub mod consteval;
+pub(crate) mod check;
+pub(crate) mod consteval;
 pub mod diag;
-pub mod emit;
+pub(crate) mod emit;
 pub mod explain;
 pub mod front;
-pub mod handle;
+pub(crate) mod handle;
 pub mod interp;
-pub mod interval;
+pub(crate) mod interval;
 pub mod ir;
-pub mod lower;
-pub mod pack;
-pub mod ranges;
-pub mod resolve;
+pub(crate) mod lower;
+pub(crate) mod pack;
+pub(crate) mod ranges;
+pub(crate) mod resolve;
 pub mod rounding;
-pub mod schedule;
-pub mod span;
+pub(crate) mod schedule;
+pub(crate) mod span;
 pub mod tables;
 pub mod tune;
-pub mod types;
+pub(crate) mod types;
 
 pub use diag::{Diagnostic, Diagnostics};
 pub use pack::Limits;

@@ -97,12 +97,6 @@ fn choice(ir: &Program, pass: &IrPass) -> Option<Choice> {
     })
 }
 
-/// Whether a Map, Filter or Mipmap pass runs as compute: its schedule asks for it and nothing
-/// refuses it ([`compute_refusal`]).
-pub fn map_runs_as_compute(ir: &Program, pass: &IrPass) -> bool {
-    pass.schedule == Schedule::Compute && compute_refusal(ir, pass).is_none()
-}
-
 /// A Filter's workgroup tile in the compute schedule: (apron x, apron y, width, height) in
 /// texels for a workgroup of [`graph::TEXEL_WORKGROUP`] squared invocations, on one axis
 /// of a separable kernel (`horizontal`) or both (the 3 x 3 LoG).
@@ -179,10 +173,4 @@ pub fn shade_refusal(ir: &Program, pass: &IrPass) -> Option<String> {
         }
         None
     })
-}
-
-/// Whether a Shade pass runs deferred: its schedule asks for compute and nothing refuses it
-/// ([`shade_refusal`]).
-pub fn shade_is_deferred(ir: &Program, pass: &IrPass) -> bool {
-    pass.schedule == Schedule::Compute && shade_refusal(ir, pass).is_none()
 }

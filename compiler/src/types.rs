@@ -90,14 +90,6 @@ impl Types {
     pub fn converts_to_f32(&self, e: &Expr) -> bool {
         self.to_f32.contains(&ExprId::of(e))
     }
-
-    pub fn len(&self) -> usize {
-        self.types.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.types.is_empty()
-    }
 }
 
 /// Index of a vector component named `x`/`r` (0), `y`/`g` (1), `z`/`b` (2), `w`/`a` (3);
