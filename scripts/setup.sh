@@ -14,6 +14,8 @@ if [ "${1:-}" = "--test" ]; then
     # `sshc view`'s tests open real windows on a virtual X server
     command -v xvfb-run >/dev/null 2>&1 || missing+=(xvfb)
     command -v xauth >/dev/null 2>&1 || missing+=(xauth)
+    # the extension costs' table of docs/extending.md, checked against the code
+    command -v python3 >/dev/null 2>&1 || missing+=(python3)
 fi
 if [ ${#missing[@]} -gt 0 ]; then
     if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then

@@ -78,6 +78,11 @@ for pkg in sshc sshc-shaders-gen sshc-scene sshc-light sshc-records; do
     echo "$pkg: $(wc -l <<<"$tree") crates, none of wgpu clap image rayon sshc-runtime sshc-lab"
 done
 
+phase "docs (the extension costs of docs/extending.md against the code)"
+# the places a new kind touches, counted in the code (scripts/extension-costs.py): a change
+# that adds or removes one updates the table (`--check` prints the difference)
+python3 scripts/extension-costs.py --check
+
 phase "fuzz (short run)"
 # A workspace of its own (compiler/fuzz, excluded from the root one). scripts/fuzz.sh
 # builds the eight targets with libFuzzer's coverage instrumentation, no sanitizer, at
