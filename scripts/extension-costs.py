@@ -44,7 +44,7 @@ ROOT = Path(__file__).resolve().parent.parent
 KINDS = {
     "pass kind": [
         ("PassKind", "compiler/src/front/ast.rs"),
-        ("IrPassKind", "compiler/src/ir.rs"),
+        ("IrPassKind", "compiler/src/ir/passes.rs"),
         ("PassKind", "graph/src/schema.rs"),
     ],
     "draw": [("Draw", "graph/src/schema.rs")],

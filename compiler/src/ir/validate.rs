@@ -10,7 +10,10 @@
 //! exactly one; placements (after `pack`) lie inside their textures.
 
 use super::*;
+use crate::builtins::Ty;
+use crate::front::expr::{BinOp, UnOp};
 use std::collections::HashSet;
+use std::fmt;
 
 /// Why an IR is invalid.
 #[derive(Clone, Debug, PartialEq)]
@@ -454,6 +457,7 @@ fn resources_and_passes<S: SlotView>(ir: &Program<S>) -> Result<(), ValidationEr
 mod tests {
     use super::*;
     use crate::CompileOptions;
+    use crate::span::Span;
 
     fn compiled_with_layout(name: &str) -> crate::Compiled {
         let path = format!("{}/../techniques/{name}.ron", env!("CARGO_MANIFEST_DIR"));
