@@ -89,7 +89,7 @@ pub fn analyse(ir: &Ir, sym: &Symbols, checked: &Checked) -> Result<(Analysis, V
     // a declared range the value cannot reach: every texel would be clamped to its edge
     let analysed = value_slot_ranges(ir);
     for (ri, res) in ir.resources.with_handles() {
-        if !matches!(ir.passes[res.writer].kind, IrPassKind::Map) {
+        if !ir.passes[res.writer].kind.kind().is_map() {
             continue;
         }
         for (si, slot) in res.slots.iter().enumerate() {
@@ -268,8 +268,7 @@ pub fn analyse(ir: &Ir, sym: &Symbols, checked: &Checked) -> Result<(Analysis, V
                 // function of depth (a Map's channel; Geometry outputs are not), and warn
                 // where a nonzero value is stored as 0 (issue 51: exp(-80 z) at F16 with
                 // a range touching 0 was silent)
-                let made_by_map = matches!(ir.passes[res.writer].kind, IrPassKind::Map)
-                    && !ir.passes.iter().any(|p| matches!(p.kind, IrPassKind::Geometry { .. }));
+                let made_by_map = ir.passes[res.writer].kind.kind().is_map() && !ir.passes.iter().any(|p| p.kind.kind().is_geometry());
                 if smallest.is_infinite()
                     && made_by_map
                     && let Some(zero) = flushes_below(s.precision)

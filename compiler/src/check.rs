@@ -52,7 +52,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
     check_params(sym, &mut diags);
 
     // Exactly one Shade pass.
-    let shades: Vec<&Pass> = t.passes.iter().filter(|p| matches!(p.kind, PassKind::Shade { .. })).collect();
+    let shades: Vec<&Pass> = t.passes.iter().filter(|p| p.kind.kind().is_shade()).collect();
     if shades.is_empty() {
         diags.push(
             Diagnostic::error(Phase::Check, "the technique has no Shade pass")
@@ -199,7 +199,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                     | PassKind::Shade { .. } => false,
                 })
                 .collect();
-            if let Some(p) = writers.iter().find(|p| !matches!(p.kind, PassKind::Geometry { .. })) {
+            if let Some(p) = writers.iter().find(|p| !p.kind.kind().is_geometry()) {
                 for u in ty.uses.iter().filter(|u| u.side == Side::Geometry) {
                     diags.push(geometry_only(
                         u,
@@ -308,7 +308,7 @@ pub fn check(sym: &Symbols) -> Result<Checked, Diagnostics> {
                 let carried: Vec<(Item, String, bool)> = reads
                     .iter()
                     .flat_map(|r| {
-                        let table = matches!(t.passes[sym.resources[&r.value].writer].kind, PassKind::SummedArea { .. });
+                        let table = t.passes[sym.resources[&r.value].writer].kind.kind().makes_table();
                         items
                             .get(&r.value)
                             .cloned()
@@ -492,7 +492,7 @@ fn is_depth_resource(sym: &Symbols, name: &str) -> bool {
     sym.t
         .passes
         .iter()
-        .any(|p| matches!(p.kind, PassKind::Depth { .. }) && p.kind.writes().is_some_and(|w| w.value == name))
+        .any(|p| p.kind.kind().is_depth() && p.kind.writes().is_some_and(|w| w.value == name))
 }
 
 fn expect_f32(t: Ty, span: Span, what: &str, diags: &mut Diagnostics) {

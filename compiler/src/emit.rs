@@ -10,18 +10,6 @@ use crate::pack::{mip_source, table_source, texture_format};
 pub use sshc_graph::cost::Cost;
 use sshc_graph::{self as graph, ChannelDecl, Extent, ParamDecl, ParamType, PassDecl, PassGraph, TextureDecl, Views};
 
-fn kind(p: &IrPass) -> graph::PassKind {
-    match p.kind {
-        IrPassKind::Depth { .. } => graph::PassKind::Depth,
-        IrPassKind::Map => graph::PassKind::Map,
-        IrPassKind::Filter { .. } => graph::PassKind::Filter,
-        IrPassKind::Mipmap { .. } => graph::PassKind::Mipmap,
-        IrPassKind::SummedArea { .. } => graph::PassKind::SummedArea,
-        IrPassKind::Geometry { .. } => graph::PassKind::Geometry,
-        IrPassKind::Shade { .. } => graph::PassKind::Shade,
-    }
-}
-
 pub fn graph(ir: &Program, out: &Output) -> PassGraph {
     let mut params = Vec::new();
     let mut offset = 0u32;
@@ -145,7 +133,7 @@ pub fn graph(ir: &Program, out: &Output) -> PassGraph {
         .iter()
         .map(|m| PassDecl {
             name: ir.passes[m.pass].name.clone(),
-            kind: kind(&ir.passes[m.pass]),
+            kind: ir.passes[m.pass].kind.kind(),
             views: match ir.passes[m.pass].kind {
                 IrPassKind::Depth {
                     view: LightView::PerSample,

@@ -736,8 +736,8 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
             let (mips, sat, slots) = match &p.kind {
                 PassKind::Filter { .. } | PassKind::Mipmap { .. } | PassKind::SummedArea { .. } => {
                     let src = &resources[reads[0]];
-                    let mips = matches!(p.kind, PassKind::Mipmap { .. });
-                    let sat = matches!(p.kind, PassKind::SummedArea { .. });
+                    let mips = p.kind.kind().makes_mip_chain();
+                    let sat = p.kind.kind().makes_table();
                     (mips, sat, src.slots.clone())
                 }
                 PassKind::Depth { .. } | PassKind::Map { .. } | PassKind::Geometry { .. } | PassKind::Shade { .. } => {

@@ -87,7 +87,7 @@ struct Working {
 
 /// Remove what the Shade pass cannot reach.
 fn eliminate(ir: &Ir, lay: &mut Working) {
-    let Some((shade, _)) = lay.passes.with_handles().find(|(_, p)| matches!(p.kind, IrPassKind::Shade { .. })) else {
+    let Some((shade, _)) = lay.passes.with_handles().find(|(_, p)| p.kind.kind().is_shade()) else {
         return;
     };
     let mut live: HashSet<(ResId, ChannelId)> = HashSet::new();
@@ -223,7 +223,7 @@ pub fn removed_pass_warnings(ir: &Ir, layout: &Layout, source: &str) -> Vec<Diag
                         list.join(", "),
                         written.name,
                         pass.name,
-                        if matches!(pass.kind, IrPassKind::Mipmap { .. }) {
+                        if pass.kind.kind().makes_mip_chain() {
                             " (a texture without mip levels)"
                         } else {
                             ""

@@ -56,7 +56,7 @@ impl Schedules {
     pub fn dump(&self, ir: &Program) -> String {
         let mut s = format!("technique {}: schedules\n", ir.technique);
         for (pi, pass) in ir.passes.with_handles() {
-            let shade = matches!(pass.kind, IrPassKind::Shade { .. });
+            let shade = pass.kind.kind().is_shade();
             let form = |runs: Schedule| match (runs, shade) {
                 (Schedule::Fragment, true) => "fragment (forward)",
                 (Schedule::Compute, true) => "compute (deferred)",

@@ -313,6 +313,8 @@ pub struct ChannelDecl {
     pub range: (f64, f64),
 }
 
+/// What a pass is, without its data: the one pass-kind enum whose facts every phase asks
+/// (the compiler's AST and IR kinds carry the data and answer `kind()` with this).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum PassKind {
     Depth,
@@ -322,6 +324,52 @@ pub enum PassKind {
     SummedArea,
     Geometry,
     Shade,
+}
+
+impl PassKind {
+    /// The pass that evaluates visibility per camera pixel (one per technique).
+    pub fn is_shade(self) -> bool {
+        self.facts().0
+    }
+
+    /// Rasterises the scene's depth from the light.
+    pub fn is_depth(self) -> bool {
+        self.facts().1
+    }
+
+    /// Computes channel values per shadow-map texel from the maps it reads.
+    pub fn is_map(self) -> bool {
+        self.facts().2
+    }
+
+    /// Rasterises primitives generated from the scene's edges or discontinuities.
+    pub fn is_geometry(self) -> bool {
+        self.facts().3
+    }
+
+    /// Makes a mip chain of its source (lookups with a width read its levels).
+    pub fn makes_mip_chain(self) -> bool {
+        self.facts().4
+    }
+
+    /// Makes a summed-area table of its source (box lookups read it).
+    pub fn makes_table(self) -> bool {
+        self.facts().5
+    }
+
+    /// Every fact of every kind, one row each: (shade, depth, map, geometry, mip chain,
+    /// table).
+    fn facts(self) -> (bool, bool, bool, bool, bool, bool) {
+        match self {
+            PassKind::Depth => (false, true, false, false, false, false),
+            PassKind::Map => (false, false, true, false, false, false),
+            PassKind::Filter => (false, false, false, false, false, false),
+            PassKind::Mipmap => (false, false, false, false, true, false),
+            PassKind::SummedArea => (false, false, false, false, false, true),
+            PassKind::Geometry => (false, false, false, true, false, false),
+            PassKind::Shade => (true, false, false, false, false, false),
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -98,7 +98,7 @@ pub(crate) fn geometry(
         Some(
             pass.reads
                 .iter()
-                .find(|&&r| matches!(ir.passes[ir.resources[r].writer].kind, IrPassKind::Depth { .. }))
+                .find(|&&r| ir.passes[ir.resources[r].writer].kind.kind().is_depth())
                 .and_then(|&r| ir.resources[r].slots.first().map(|s| s.channel))
                 .ok_or_else(|| {
                     Diagnostic::error(Phase::Codegen, format!("Geometry pass `{}` reads no Depth resource", pass.name))
@@ -116,7 +116,7 @@ pub(crate) fn geometry(
             .reads
             .iter()
             .copied()
-            .find(|&r| matches!(ir.passes[ir.resources[r].writer].kind, IrPassKind::Depth { .. }))
+            .find(|&r| ir.passes[ir.resources[r].writer].kind.kind().is_depth())
             .ok_or_else(|| internal("Skins pass without a Depth resource (check refuses it)"))?;
         let threshold = ir
             .params

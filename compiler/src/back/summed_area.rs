@@ -7,7 +7,7 @@ use crate::back::internal;
 use crate::back::text::{f32_lit, header};
 use crate::diag::Diagnostic;
 use crate::front::ast::{Precision, TableSum};
-use crate::ir::{IrPass, IrPassKind, PlacedSlot, Program, ResId};
+use crate::ir::{IrPass, PlacedSlot, Program, ResId};
 use sshc_graph::{Binding, Draw, FRAME_WGSL, OpCount, Step, Target, View};
 use std::fmt::Write as _;
 
@@ -37,7 +37,7 @@ impl TableCode {
 /// How texture `texture` of summed-area table `table` holds its sums.
 pub(crate) fn table_code(ir: &Program, table: ResId, texture: usize) -> Result<TableCode, Diagnostic> {
     let writer = &ir.passes[ir.resources[table].writer].kind;
-    if !matches!(writer, IrPassKind::SummedArea { .. }) {
+    if !writer.kind().makes_table() {
         return Err(internal("a summed-area table not written by a SummedArea pass"));
     }
     let sum = writer.table_sum().map(|s| s.0);

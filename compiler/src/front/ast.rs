@@ -553,6 +553,20 @@ pub struct DebugOutput {
 }
 
 impl PassKind {
+    /// The kind without its data, whose facts every phase asks (`sshc_graph::PassKind`).
+    pub fn kind(&self) -> sshc_graph::PassKind {
+        use sshc_graph::PassKind as K;
+        match self {
+            PassKind::Depth { .. } => K::Depth,
+            PassKind::Map { .. } => K::Map,
+            PassKind::Filter { .. } => K::Filter,
+            PassKind::Mipmap { .. } => K::Mipmap,
+            PassKind::SummedArea { .. } => K::SummedArea,
+            PassKind::Geometry { .. } => K::Geometry,
+            PassKind::Shade { .. } => K::Shade,
+        }
+    }
+
     pub fn kind_name(&self) -> &'static str {
         match self {
             PassKind::Depth { .. } => "Depth",

@@ -54,7 +54,7 @@ impl Evaluation<'_> {
             // but for a unorm code's conversion to f32 in the shader: `k * (1 / 255)` on
             // lavapipe, an ulp from `k / 255`)
             IrPassKind::Depth { .. } | IrPassKind::Geometry { .. } => {
-                let read_back = matches!(pass.kind, IrPassKind::Geometry { .. });
+                let read_back = pass.kind.kind().is_geometry();
                 for slot in self.slots(out) {
                     let unorm = slot.precision.is_unorm();
                     let allow = |x: f64| match (read_back, unorm) {

@@ -77,6 +77,20 @@ pub enum IrPassKind {
 }
 
 impl IrPassKind {
+    /// The kind without its data, whose facts every phase asks (`sshc_graph::PassKind`).
+    pub fn kind(&self) -> sshc_graph::PassKind {
+        use sshc_graph::PassKind as K;
+        match self {
+            IrPassKind::Depth { .. } => K::Depth,
+            IrPassKind::Map => K::Map,
+            IrPassKind::Filter { .. } => K::Filter,
+            IrPassKind::Mipmap { .. } => K::Mipmap,
+            IrPassKind::SummedArea { .. } => K::SummedArea,
+            IrPassKind::Geometry { .. } => K::Geometry,
+            IrPassKind::Shade { .. } => K::Shade,
+        }
+    }
+
     /// A SummedArea pass's `sum:` as written, with its span (`None` where it is absent, and
     /// for every other kind).
     pub fn table_sum(&self) -> Option<(crate::front::ast::TableSum, Span)> {

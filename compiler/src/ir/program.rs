@@ -154,7 +154,7 @@ impl<'a> Program<'a, Slot> {
 
 impl<'a, S> Program<'a, S> {
     pub fn shade_pass(&self) -> Option<&'a IrPass> {
-        self.passes.iter().find(|p| matches!(p.kind, IrPassKind::Shade { .. }))
+        self.passes.iter().find(|p| p.kind.kind().is_shade())
     }
 }
 
@@ -167,7 +167,7 @@ impl<S> std::ops::Deref for Program<'_, S> {
 
 impl Ir {
     pub fn shade_pass(&self) -> Option<&IrPass> {
-        self.passes.iter().find(|p| matches!(p.kind, IrPassKind::Shade { .. }))
+        self.passes.iter().find(|p| p.kind.kind().is_shade())
     }
 
     pub fn uniform_params(&self) -> impl Iterator<Item = (ParamId, &IrParam)> {
