@@ -25,34 +25,39 @@ struct DrawFacts {
     camera: bool,
     /// Writes the levels below the base of its targets' mip chains.
     below_base: bool,
+    /// Reads every texel of what it reads, once (a full-screen or compute step over the
+    /// map); else only where its fragments or edges look (the camera's raster, a
+    /// classification over the scene's edges, a draw of generated primitives).
+    whole_reads: bool,
 }
 
 impl Draw {
     /// Every fact of every draw: one exhaustive table.
     fn facts(&self) -> DrawFacts {
-        let f = |dispatch, generates, deferred, stores, camera, below_base| DrawFacts {
+        let f = |dispatch, generates, deferred, stores, camera, below_base, whole_reads| DrawFacts {
             dispatch,
             generates,
             deferred,
             stores,
             camera,
             below_base,
+            whole_reads,
         };
-        // the columns: dispatch, generates, deferred, stores, camera, below_base
+        // the columns: dispatch, generates, deferred, stores, camera, below_base, whole_reads
         match self {
-            Draw::SceneFromLight => f(false, false, false, false, false, false),
-            Draw::SceneFromCamera => f(false, false, false, false, true, false),
-            Draw::CameraGBuffer => f(false, false, true, false, false, false),
-            Draw::ComputePixels => f(true, false, true, false, true, false),
-            Draw::FullScreen => f(false, false, false, false, false, false),
-            Draw::MipLevels => f(false, false, false, false, false, true),
-            Draw::ComputeRows => f(true, false, false, false, false, false),
-            Draw::ComputeColumns => f(true, false, false, false, false, false),
-            Draw::ComputeTexels => f(true, false, false, true, false, false),
-            Draw::ComputeMipLevels => f(true, false, false, true, false, true),
-            Draw::Silhouettes { .. } => f(true, true, false, false, false, false),
-            Draw::Discontinuities { .. } => f(true, true, false, false, false, false),
-            Draw::Primitives { .. } => f(false, false, false, false, false, false),
+            Draw::SceneFromLight => f(false, false, false, false, false, false, true),
+            Draw::SceneFromCamera => f(false, false, false, false, true, false, false),
+            Draw::CameraGBuffer => f(false, false, true, false, false, false, true),
+            Draw::ComputePixels => f(true, false, true, false, true, false, true),
+            Draw::FullScreen => f(false, false, false, false, false, false, true),
+            Draw::MipLevels => f(false, false, false, false, false, true, true),
+            Draw::ComputeRows => f(true, false, false, false, false, false, true),
+            Draw::ComputeColumns => f(true, false, false, false, false, false, true),
+            Draw::ComputeTexels => f(true, false, false, true, false, false, true),
+            Draw::ComputeMipLevels => f(true, false, false, true, false, true, true),
+            Draw::Silhouettes { .. } => f(true, true, false, false, false, false, false),
+            Draw::Discontinuities { .. } => f(true, true, false, false, false, false, true),
+            Draw::Primitives { .. } => f(false, false, false, false, false, false, false),
         }
     }
 
@@ -88,6 +93,13 @@ impl Draw {
     /// Whether the step writes the levels below the base of its targets' mip chains.
     pub fn writes_levels_below_base(&self) -> bool {
         self.facts().below_base
+    }
+
+    /// Whether the step's reads are compulsory traffic, every texel of what it reads once
+    /// (the cost model's traffic): a full-screen or compute step over the map; not the
+    /// camera's raster, a classification over edges or a draw of generated primitives.
+    pub fn reads_whole_textures(&self) -> bool {
+        self.facts().whole_reads
     }
 }
 
@@ -329,46 +341,32 @@ pub enum PassKind {
 impl PassKind {
     /// The pass that evaluates visibility per camera pixel (one per technique).
     pub fn is_shade(self) -> bool {
-        self.facts().0
+        matches!(self, PassKind::Shade)
     }
 
     /// Rasterises the scene's depth from the light.
     pub fn is_depth(self) -> bool {
-        self.facts().1
+        matches!(self, PassKind::Depth)
     }
 
     /// Computes channel values per shadow-map texel from the maps it reads.
     pub fn is_map(self) -> bool {
-        self.facts().2
+        matches!(self, PassKind::Map)
     }
 
     /// Rasterises primitives generated from the scene's edges or discontinuities.
     pub fn is_geometry(self) -> bool {
-        self.facts().3
+        matches!(self, PassKind::Geometry)
     }
 
     /// Makes a mip chain of its source (lookups with a width read its levels).
     pub fn makes_mip_chain(self) -> bool {
-        self.facts().4
+        matches!(self, PassKind::Mipmap)
     }
 
     /// Makes a summed-area table of its source (box lookups read it).
     pub fn makes_table(self) -> bool {
-        self.facts().5
-    }
-
-    /// Every fact of every kind, one row each: (shade, depth, map, geometry, mip chain,
-    /// table).
-    fn facts(self) -> (bool, bool, bool, bool, bool, bool) {
-        match self {
-            PassKind::Depth => (false, true, false, false, false, false),
-            PassKind::Map => (false, false, true, false, false, false),
-            PassKind::Filter => (false, false, false, false, false, false),
-            PassKind::Mipmap => (false, false, false, false, true, false),
-            PassKind::SummedArea => (false, false, false, false, false, true),
-            PassKind::Geometry => (false, false, false, true, false, false),
-            PassKind::Shade => (true, false, false, false, false, false),
-        }
+        matches!(self, PassKind::SummedArea)
     }
 }
 

@@ -170,6 +170,114 @@ fn sweep_writes_a_row_per_configuration_and_the_charts() {
         assert!(lo > 0.0 && lo <= ms + 1e-4 && ms <= hi + 1e-4, "{r:?}");
     }
 
+    // `--redraw` (issue 51): sweep.md and every chart written again from sweep.csv alone,
+    // nothing measured: the same files as the run wrote
+    let written: Vec<(String, Vec<u8>)> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("pareto-") || n == "sweep.md" || n == "sweep.csv")
+        .map(|n| (n.clone(), std::fs::read(out.join(&n)).unwrap()))
+        .collect();
+    assert_eq!(written.len(), 10, "{:?}", written.iter().map(|w| &w.0).collect::<Vec<_>>());
+    for (n, _) in &written {
+        if n != "sweep.csv" {
+            std::fs::remove_file(out.join(n)).unwrap();
+        }
+    }
+    std::fs::remove_file(out.join("records.ron")).unwrap();
+    run(&out, &["--redraw"]);
+    // What the CSV keeps is rounded (times to 4 decimals, FLIP to 5), so what is drawn
+    // again from it is the run's output up to that rounding: every CSV field the same but
+    // the time ratio, which is computed again from the rounded times (it moves by at most
+    // their half-units' relative error, plus its own rounding); the table the same but
+    // its time ratio, within one unit of its 2 decimals; every chart's texts (title, axes,
+    // ticks, labels, legend) the same, its points moved only by the rounding.
+    let again = |n: &str| std::fs::read(out.join(n)).unwrap_or_else(|e| panic!("{n} not drawn again: {e}"));
+    let before = |n: &str| &written.iter().find(|w| w.0 == n).unwrap().1;
+    let records = |b: &[u8]| self::rows(&String::from_utf8_lossy(b));
+    let (old_rows, new_rows) = (records(before("sweep.csv")), records(&again("sweep.csv")));
+    assert_eq!(old_rows.len(), new_rows.len());
+    for (o, n) in old_rows.iter().zip(&new_rows) {
+        for (k, (a, b)) in o.iter().zip(n).enumerate() {
+            if header[k] == "time_ratio" && a != b {
+                let (ms, reference, ratio) = (num(o, "gpu_ms"), num(o, "reference_ms"), num(o, "time_ratio"));
+                let moved = ratio * (0.5e-4 / ms + 0.5e-4 / reference) + 1e-4;
+                assert!(
+                    (a.parse::<f64>().unwrap() - b.parse::<f64>().unwrap()).abs() <= moved,
+                    "{a} vs {b}: {o:?}"
+                );
+            } else {
+                assert_eq!(a, b, "{}: {o:?}", header[k]);
+            }
+        }
+    }
+    let md = |b: &[u8]| String::from_utf8_lossy(b).lines().map(str::to_string).collect::<Vec<_>>();
+    let (old_md, new_md) = (md(before("sweep.md")), md(&again("sweep.md")));
+    assert_eq!(old_md.len(), new_md.len());
+    let mut ratio_cell = None;
+    for (o, n) in old_md.iter().zip(&new_md) {
+        let (oc, nc): (Vec<&str>, Vec<&str>) = (o.split('|').collect(), n.split('|').collect());
+        if let Some(k) = oc.iter().position(|c| c.trim() == "time ratio") {
+            ratio_cell = Some(k);
+        }
+        for (k, (a, b)) in oc.iter().zip(&nc).enumerate() {
+            if a != b {
+                assert_eq!(Some(k), ratio_cell, "sweep.md: `{o}` became `{n}`");
+                let d = a.trim().parse::<f64>().unwrap() - b.trim().parse::<f64>().unwrap();
+                assert!(d.abs() <= 0.0101, "sweep.md: `{o}` became `{n}`");
+            }
+        }
+    }
+    let texts = |svg: &[u8]| -> Vec<String> {
+        let svg = String::from_utf8_lossy(svg);
+        svg.split("</text>")
+            .filter_map(|t| t.rsplit_once(">\n").map(|(_, body)| body.trim().to_string()))
+            .collect()
+    };
+    for (n, _) in written.iter().filter(|w| w.0.starts_with("pareto-")) {
+        let drawn = again(n);
+        if n.ends_with(".svg") {
+            assert_eq!(texts(&drawn), texts(before(n)), "{n}");
+        } else {
+            assert_eq!(&drawn[1..4], b"PNG", "{n}");
+        }
+    }
+    // a CSV without FLIP (a sweep of an older version): no FLIP charts, the others drawn
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(&header).unwrap();
+    for mut r in rows.clone() {
+        r[col("flip")] = String::new();
+        w.write_record(&r).unwrap();
+    }
+    let no_flip = String::from_utf8(w.into_inner().unwrap()).unwrap();
+    let old = tmp("redraw-old");
+    std::fs::create_dir_all(&old).unwrap();
+    std::fs::write(old.join("sweep.csv"), &no_flip).unwrap();
+    run(&old, &["--redraw"]);
+    assert!(old.join("pareto-triangle-time.svg").exists() && !old.join("pareto-triangle-time-flip.svg").exists());
+    // a bad line is refused with its file and line
+    std::fs::write(old.join("sweep.csv"), no_flip.replacen("0/1,", "7/1,", 1)).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_sshc"))
+        .args(["sweep", concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sweep.ron"), "--redraw", "-o"])
+        .arg(&old)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("sweep.csv:2: shard `7/1`"), "{err}");
+    // nothing to draw: said, with what to do
+    let empty = tmp("redraw-empty");
+    let o = Command::new(env!("CARGO_BIN_EXE_sshc"))
+        .args(["sweep", concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sweep.ron"), "--redraw", "-o"])
+        .arg(&empty)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("sweep.csv") && err.contains("run the sweep there first"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&old);
+
     // two shards hold exactly the configurations of the whole
     let (a, b) = (tmp("shard0"), tmp("shard1"));
     let (s0, s1) = (run(&a, &["--shard", "0/2"]), run(&b, &["--shard", "1/2"]));

@@ -44,26 +44,6 @@ impl Traffic {
     }
 }
 
-/// Whether a step's reads are compulsory traffic, every texel of what it reads once: a
-/// full-screen or compute step over the map reads its inputs whole; the camera's raster, a
-/// classification over the scene's edges and a draw of generated primitives read only
-/// where their fragments or edges look.
-fn reads_whole_textures(d: &Draw) -> bool {
-    match d {
-        Draw::SceneFromCamera | Draw::Silhouettes { .. } | Draw::Primitives { .. } => false,
-        Draw::SceneFromLight
-        | Draw::CameraGBuffer
-        | Draw::ComputePixels
-        | Draw::FullScreen
-        | Draw::MipLevels
-        | Draw::ComputeRows
-        | Draw::ComputeColumns
-        | Draw::ComputeTexels
-        | Draw::ComputeMipLevels
-        | Draw::Discontinuities { .. } => true,
-    }
-}
-
 /// Compulsory bytes of one step (one view of it).
 pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffic {
     let base = sizes.texels(Extent::ShadowMap);
@@ -103,7 +83,7 @@ pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffi
         | Draw::Primitives { .. }
         | Draw::Discontinuities { .. } => {}
     }
-    if kind == PassKind::Shade || !reads_whole_textures(&s.draw) {
+    if kind == PassKind::Shade || !s.draw.reads_whole_textures() {
         return t;
     }
     let written_layers_now = s.writes.len() as u32;

@@ -77,23 +77,9 @@ pub fn temp_dir(name: &str) -> PathBuf {
 
 /// The rows of a sweep's CSV, each a list of fields.
 pub fn csv_rows(csv: &str) -> Vec<Vec<String>> {
-    // quoted fields hold no commas except the device name, which is quoted
-    csv.lines()
-        .skip(1)
-        .map(|l| {
-            let mut fields = Vec::new();
-            let mut cur = String::new();
-            let mut quoted = false;
-            for ch in l.chars() {
-                match ch {
-                    '"' => quoted = !quoted,
-                    ',' if !quoted => fields.push(std::mem::take(&mut cur)),
-                    c => cur.push(c),
-                }
-            }
-            fields.push(cur);
-            fields
-        })
+    csv::Reader::from_reader(csv.as_bytes())
+        .records()
+        .map(|r| r.expect("a CSV record").iter().map(str::to_string).collect())
         .collect()
 }
 

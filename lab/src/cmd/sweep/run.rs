@@ -262,10 +262,11 @@ pub(super) fn run(a: SweepArgs) -> Result<(), String> {
 /// the sweep file's scenes, reference and pixel set; nothing measured.
 fn redraw(out: &Path, l: &Loaded) -> Result<(), String> {
     let path = out.join("sweep.csv");
-    let text = crate::session::read_capped(&path, report::MAX_CSV_BYTES)?;
+    let run_first = "help: --redraw draws what a run of this sweep wrote into -o; run the sweep there first (without --redraw)";
+    let text = crate::session::read_capped(&path, report::MAX_CSV_BYTES).map_err(|e| format!("{e}\n{run_first}"))?;
     let rows = report::read_csv(&path, &text)?;
     if rows.is_empty() {
-        return Err(format!("error: {}: no rows to draw", path.display()));
+        return Err(format!("error: {}: no rows to draw\n{run_first}", path.display()));
     }
     let spread = rows.iter().filter(|r| r.ms_range.is_some()).count();
     eprintln!(
