@@ -440,7 +440,7 @@ fn check_sample_views(sym: &Symbols, per_sample: &[String], diags: &mut Diagnost
         }
         if let PassKind::Geometry { primitive, view, from, .. } = &p.kind {
             let skins = primitive.joins_sample_views();
-            if skins && *view != LightView::PerSample {
+            if skins && !view.is_per_sample() {
                 diags.push(
                     Diagnostic::error(Phase::Check, format!("Geometry pass `{}` draws Skins from the light's centre", p.name.value))
                         .at(p.kind_span, "skins join two sample views")
@@ -448,7 +448,7 @@ fn check_sample_views(sym: &Symbols, per_sample: &[String], diags: &mut Diagnost
                         .help("write `view: PerSample`"),
                 );
             }
-            if !skins && *view == LightView::PerSample {
+            if !skins && view.is_per_sample() {
                 diags.push(
                     Diagnostic::error(
                         Phase::Check,

@@ -95,6 +95,11 @@ pub fn apply(source: &str, edits: &[Edit]) -> String {
 }
 
 impl Diagnostic {
+    /// `source` with this diagnostic's suggested fix applied ([`Diagnostic::fix`]).
+    pub fn fixed(&self, source: &str) -> String {
+        apply(source, &self.fix)
+    }
+
     pub fn error(phase: Phase, message: impl Into<String>) -> Self {
         Diagnostic {
             level: Level::Error,

@@ -228,9 +228,7 @@ pub fn explain(c: &Compiled) -> String {
         }
         let _ = writeln!(s, "; {steps} GPU step(s)");
     }
-    if let Some(p) = ir.shade_pass()
-        && let IrPassKind::Shade { visibility } = p.kind
-    {
+    if let Some(visibility) = ir.shade_pass().and_then(|p| p.kind.visibility()) {
         let text = ir.arena.display(visibility, Some(ir));
         let shown = if text.len() > 400 {
             format!(

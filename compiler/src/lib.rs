@@ -17,33 +17,42 @@
 // must be handled.
 #![deny(clippy::wildcard_enum_match_arm)]
 
-pub(crate) mod analyse;
-pub mod back;
-pub mod builtins;
-pub(crate) mod check;
-pub(crate) mod consteval;
-pub mod diag;
-pub(crate) mod emit;
-pub mod explain;
-pub mod front;
-pub(crate) mod handle;
-pub mod interp;
-pub(crate) mod interval;
-pub mod ir;
-pub(crate) mod lower;
-pub(crate) mod pack;
-pub(crate) mod ranges;
-pub(crate) mod resolve;
-pub mod rounding;
-pub(crate) mod schedule;
-pub(crate) mod span;
-pub mod tables;
+// The public API is what this file declares and re-exports, and the two facade modules
+// `eval` and `tune`; every phase and data structure behind them is private to the crate
+// (docs/architecture.md, "The public API").
+mod analyse;
+mod back;
+mod builtins;
+mod check;
+mod consteval;
+mod diag;
+mod emit;
+pub mod eval;
+mod explain;
+mod front;
+mod handle;
+mod interp;
+mod interval;
+mod ir;
+mod lower;
+mod pack;
+mod ranges;
+mod resolve;
+mod rounding;
+mod schedule;
+mod span;
+mod tables;
 pub mod tune;
-pub(crate) mod types;
+mod types;
 
-pub use diag::{Diagnostic, Diagnostics};
+pub use back::parts::Split;
+pub use back::validate as validate_wgsl;
+pub use diag::{Diagnostic, Diagnostics, Edit, Level, Phase};
+pub use front::ast::Precision;
 pub use pack::Limits;
+pub use span::Span;
 pub use sshc_graph::PassGraph;
+pub use sshc_graph::cost::Cost;
 
 use std::path::Path;
 
@@ -113,8 +122,8 @@ pub struct CompileOptions {
     pub schedule: Vec<(String, String)>,
     pub limits: Limits,
     pub dump_after: Option<DumpPhase>,
-    /// Where long generated bodies are split into functions (`back::parts`).
-    pub split: back::parts::Split,
+    /// Where long generated bodies are split into functions ([`Split`]).
+    pub split: Split,
     /// `--scene`: specialise for the scene's facts: refuse a scene light the
     /// technique's `light:` list does not admit, fold the light inputs that are 0 for it.
     pub scene: Option<sshc_graph::SceneFacts>,
@@ -135,17 +144,71 @@ pub struct CompileOptions {
 #[derive(Clone, Debug)]
 pub struct Compiled {
     /// The IR as `lower` produced it (no later phase changes it).
-    pub ir: ir::Ir,
+    pub(crate) ir: ir::Ir,
     /// Its layout after `pack`: live resources and passes, placements, textures.
-    pub layout: ir::Layout,
+    pub(crate) layout: ir::Layout,
     /// The schedule each live pass runs in, as the `schedule` phase chose it: what codegen
     /// generated and `explain` reports.
-    pub schedules: schedule::Schedules,
+    pub(crate) schedules: schedule::Schedules,
     pub graph: PassGraph,
     /// (file name, WGSL source), in pass order.
     pub shaders: Vec<(String, String)>,
-    pub cost: emit::Cost,
+    pub cost: Cost,
     pub warnings: Vec<Diagnostic>,
+}
+
+impl Compiled {
+    /// The technique's name (`name:` in its file).
+    pub fn technique(&self) -> &str {
+        &self.ir.technique
+    }
+
+    /// What `sshc explain` prints: passes, resources and their formats, schedules, costs,
+    /// the rounding estimate at each precision.
+    pub fn explain(&self) -> String {
+        explain::explain(self)
+    }
+
+    /// What specialising this (generic) compilation for a scene's facts changed, compared
+    /// with `specialised` (`sshc explain --scene`).
+    pub fn specialisation(&self, specialised: &Compiled) -> String {
+        explain::specialisation(self, specialised)
+    }
+
+    /// The WGSL of the technique's `Params` uniform struct (what `sshc-shaders` embeds
+    /// beside the shaders).
+    pub fn params_struct(&self) -> String {
+        back::wgsl::params_struct(&self.program())
+    }
+
+    /// The debug outputs checked and then left out of this build (compiled without
+    /// `CompileOptions::debug`).
+    pub fn debug_omitted(&self) -> &[String] {
+        &self.ir.debug_omitted
+    }
+
+    /// The names a `--precision NAME=P` option takes: every channel (basis channels
+    /// included), then every expansion.
+    pub fn stored_names(&self) -> Vec<String> {
+        let channels = self.ir.channels.iter().map(|c| c.name.clone());
+        channels.chain(self.ir.expansions.iter().map(|e| e.name.clone())).collect()
+    }
+
+    /// Each live pass that has a schedule (Map, Filter, Mipmap, ...), with whether it runs
+    /// as a compute shader: what `--schedule PASS=S` can change.
+    pub fn schedules(&self) -> Vec<(String, bool)> {
+        self.ir
+            .passes
+            .with_handles()
+            .filter(|(id, _)| self.schedules.of(*id).is_some())
+            .map(|(id, p)| (p.name.clone(), self.schedules.compute(id)))
+            .collect()
+    }
+
+    /// The IR and its layout, as the back end and the CPU evaluation read them.
+    pub(crate) fn program(&self) -> ir::Program<'_> {
+        ir::Program::new(&self.ir, &self.layout)
+    }
 }
 
 /// The result of a compilation with the IR dump that was asked for (also on failure).

@@ -726,7 +726,6 @@ pub fn lower(sym: &Symbols, checked: &Checked) -> Result<Ir, Diagnostics> {
                         name: o.name.value.clone(),
                         texture: crate::resolve::debug_texture(&o.name.value),
                         expr,
-                        span: o.value.span,
                     });
                 }
                 IrPassKind::Shade { visibility: v }

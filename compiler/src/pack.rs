@@ -61,21 +61,13 @@ pub fn scratch_precision(p: Precision) -> Precision {
 
 /// The format a texture is stored in: its precision, with one, two or four components.
 pub fn texture_format(t: &Texture) -> graph::Format {
-    use graph::Format::*;
-    match (t.precision, t.components) {
-        (Precision::Unorm8, 1) => R8Unorm,
-        (Precision::Unorm8, 2) => Rg8Unorm,
-        (Precision::Unorm8, _) => Rgba8Unorm,
-        (Precision::Unorm16, 1) => R16Unorm,
-        (Precision::Unorm16, 2) => Rg16Unorm,
-        (Precision::Unorm16, _) => Rgba16Unorm,
-        (Precision::F16, 1) => R16Float,
-        (Precision::F16, 2) => Rg16Float,
-        (Precision::F16, _) => Rgba16Float,
-        (Precision::F32, 1) => R32Float,
-        (Precision::F32, 2) => Rg32Float,
-        (Precision::F32, _) => Rgba32Float,
-    }
+    // a texel of three components is stored in four (WebGPU has no three-component formats)
+    let count = match t.components {
+        1 | 2 => t.components,
+        _ => 4,
+    };
+    let component = t.precision.component();
+    graph::Format::of(component, count).unwrap_or_else(|| unreachable!("every precision has 1-, 2- and 4-component formats"))
 }
 
 /// The resources and passes of the IR while `pack` works on them: slots not laid out yet.
@@ -93,7 +85,7 @@ fn eliminate(ir: &Ir, lay: &mut Working) {
     let mut live: HashSet<(ResId, ChannelId)> = HashSet::new();
     let mut live_pass = vec![false; lay.passes.len()];
     live_pass[shade.index()] = true;
-    if let IrPassKind::Shade { visibility } = lay.passes[shade].kind {
+    if let Some(visibility) = lay.passes[shade].kind.visibility() {
         for h in ir.arena.postorder(&ir.shade_roots(visibility)) {
             if let Node::Sample { channel, resource, .. } = ir.arena.node(h) {
                 live.insert((*resource, *channel));
@@ -261,7 +253,11 @@ pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Dia
     // A Mipmap pass builds the chain in place: its output shares the textures of its input,
     // which must therefore keep every channel the output needs.
     for pi in lay.passes.handles() {
-        if let (IrPassKind::Mipmap { .. }, Some(w), true) = (&lay.passes[pi].kind, lay.passes[pi].writes, lay.passes[pi].live) {
+        if let (true, Some(w), true) = (
+            lay.passes[pi].kind.kind().makes_mip_chain(),
+            lay.passes[pi].writes,
+            lay.passes[pi].live,
+        ) {
             let src = lay.passes[pi].reads[0];
             let keep: Vec<ChannelId> = lay.resources[src].slots.iter().map(|s| s.channel).collect();
             let out_slots = lay.resources[src].slots.clone();

@@ -152,7 +152,7 @@ pub fn compute_refusal(ir: &Program, pass: &IrPass) -> Option<String> {
 /// what the G-buffer does not carry, the screen-space derivatives of a light sample's view
 /// (its `depth_slope`, the footprint of its implicit-LOD `sample`).
 pub fn shade_refusal(ir: &Program, pass: &IrPass) -> Option<String> {
-    let IrPassKind::Shade { visibility } = pass.kind else { return None };
+    let visibility = pass.kind.visibility()?;
     let arena = &ir.ir.arena;
     // the per-sample lookups and inputs
     arena.postorder(&ir.shade_roots(visibility)).into_iter().find_map(|h| {

@@ -68,8 +68,14 @@ fn diag(span: Span, msg: impl Into<String>, label: impl Into<String>) -> Diagnos
     Diagnostic::error(Phase::Parse, msg).at(span, label)
 }
 
+/// A real written the way a RON F32 literal reads it back: the shortest text that reads
+/// back as the same f32 (what `sshc tune` writes into a tuned technique).
+pub fn real_literal(x: f64) -> String {
+    literal(ScalarTy::F32, x)
+}
+
 /// A number written the way a RON literal of `ty` reads it back.
-pub fn literal(ty: ScalarTy, x: f64) -> String {
+pub(crate) fn literal(ty: ScalarTy, x: f64) -> String {
     match ty {
         ScalarTy::I32 => format!("{}", x.round() as i64),
         ScalarTy::Bool => (x != 0.0).to_string(),
@@ -103,7 +109,7 @@ fn axis_kinds(t: &Technique) -> Vec<String> {
 /// Checks the `tune:` block against the technique: each entry names a param, a channel's or
 /// expansion's precision, a schedulable pass's schedule, `shadow_map` or `cascades`, and its
 /// values lie in the axis's domain (a param's declared range, whole numbers for an I32).
-pub fn check(t: &Technique) -> Result<(), Diagnostic> {
+pub(crate) fn check(t: &Technique) -> Result<(), Diagnostic> {
     for axis in &t.tune {
         check_axis(t, axis)?;
     }

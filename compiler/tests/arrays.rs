@@ -88,7 +88,7 @@ fn scalar_arrays_serve_compile_time_values() {
         "sum(j in 0..=counts[2] - 1, weights[1] * d) / f32(counts[1]) + 0.0 * nearest(z)",
     );
     let c = compile(&src).unwrap_or_else(|e| panic!("{e}"));
-    assert!(sshc::explain::explain(&c).contains("visibility"), "explained");
+    assert!(c.explain().contains("visibility"), "explained");
 }
 
 #[test]

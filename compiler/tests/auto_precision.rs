@@ -23,7 +23,7 @@ fn options(floor: Option<f32>) -> sshc::CompileOptions {
 fn chosen(src: &str, o: &sshc::CompileOptions) -> (sshc_graph::Format, String) {
     let c = sshc::compile_str(src, o).unwrap_or_else(|d| panic!("{}", d.render("esm-auto.ron", src)));
     let t = c.graph.textures.iter().find(|t| t.name == "esm").expect("the basis texture");
-    let text = sshc::explain::explain(&c);
+    let text = c.explain();
     let line = text
         .lines()
         .find(|l| l.contains("channel `e` (Auto)"))

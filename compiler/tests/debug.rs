@@ -170,9 +170,9 @@ fn the_example_with_debug_outputs_builds_as_if_it_had_none() {
     );
     assert_eq!(a.graph.to_ron(), b.graph.to_ron());
     assert_eq!(a.shaders, b.shaders);
-    assert!(sshc::explain::explain(&a).contains("left out of this build"));
+    assert!(a.explain().contains("left out of this build"));
     let on = compile("vssm-subdivided", &src, &debugged());
-    let explained = sshc::explain::explain(&on);
+    let explained = on.explain();
     assert!(explained.contains("z_mean -> debug_z_mean (R32Float)"), "{explained}");
 }
 

@@ -300,7 +300,7 @@ fn the_example_techniques_compile_and_use_what_they_show() {
         let c = compile(&src).unwrap_or_else(|e| panic!("{name}: {e}"));
         // a table of Unorm16 moments is rendered into Rg16Unorm, which WebGPU renders to only
         // with an adapter feature (lavapipe has it): that warning, and no other
-        let expected = |w: &sshc::diag::Diagnostic| name == "vssm-subdivided" && w.message.contains("16-bit norm format");
+        let expected = |w: &sshc::Diagnostic| name == "vssm-subdivided" && w.message.contains("16-bit norm format");
         assert!(c.warnings.iter().all(expected), "{name}: {:?}", c.warnings);
         seen += usize::from(folder == "techniques/examples");
     }
@@ -353,8 +353,7 @@ fn hyperbolic_functions_are_typed_ranged_folded_and_emitted() {
     assert!(!shade.contains("sinh(") && !shade.contains("cosh("), "{shade}");
     // the CPU reference evaluates them: a receiver in front of a flat map at depth 0.5 reads
     // tanh(tanh 2) + 0 + 1 - cosh(0) = tanh(tanh 2)
-    use sshc::interp::{Evaluation, Frame, Given, Model, Receiver, Rounding, Scratch};
-    let p = sshc::ir::Program::new(&c.ir, &c.layout);
+    use sshc::eval::{Evaluation, Frame, Given, Model, Receiver, Rounding, Scratch};
     let n = 8u32;
     let frame = Frame {
         shadow_size: n,
@@ -367,8 +366,8 @@ fn hyperbolic_functions_are_typed_ranged_folded_and_emitted() {
         texel_world: [0.0, 2.0 / n as f64],
         frame: 0,
     };
-    let given = Given::depth(&p, vec![vec![0.5; (n * n) as usize]]);
-    let ev = Evaluation::new(p, &given, frame, Rounding::Exact, Model::Gpu).unwrap();
+    let given = Given::depth(&c, vec![vec![0.5; (n * n) as usize]]);
+    let ev = Evaluation::new(&c, &given, frame, Rounding::Exact, Model::Gpu).unwrap();
     let r = Receiver {
         uv: [0.5 + 1.0 / 64.0, 0.5 + 1.0 / 64.0],
         d_world: 10.0,

@@ -178,8 +178,9 @@ const SHARED: [(&str, &str); 11] = [
 ];
 
 /// Beside the phases: tools over compiled techniques and the driver, which no phase imports.
-const TOOLS: [(&str, &str); 6] = [
+const TOOLS: [(&str, &str); 7] = [
     ("crate", "lib.rs, the driver: runs the phases"),
+    ("eval", "the public facade of verify's evaluation (interp, rounding, tables)"),
     ("explain", "`sshc explain`, from a compiled technique"),
     ("interp", "`sshc verify`'s CPU evaluation of a compiled technique"),
     ("rounding", "the storage-rounding estimate, after pack"),

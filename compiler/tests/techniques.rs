@@ -4,8 +4,7 @@
 //! the textures the packing rules give and the fetches its source counts, both by hand;
 //! and the CSM convergence check.
 
-use sshc::front::ast::Precision;
-use sshc::ir::{Node, Origin};
+use sshc::Precision;
 use sshc::{CompileOptions, Limits};
 use std::path::{Path, PathBuf};
 
@@ -50,7 +49,7 @@ fn snapshots_of_every_technique() {
         for (file, src) in &c.shaders {
             insta::assert_snapshot!(file.clone(), src);
         }
-        insta::assert_snapshot!(format!("{t}.explain"), sshc::explain::explain(&c));
+        insta::assert_snapshot!(format!("{t}.explain"), c.explain());
         // What the compiler reports equals what it writes.
         let back = sshc::PassGraph::from_ron(&c.graph.to_ron()).expect("emitted graph reads back");
         assert_eq!(back, c.graph);
@@ -204,93 +203,6 @@ fn pcf_and_hard_grids() {
     }
 }
 
-/// f(d, z) of the compiled CSM expansion on a grid of `n + 1` values of d and z in [0, 1],
-/// evaluated on the CPU from the IR (no quantisation). The expansion is separable, so the
-/// coefficients are evaluated once per d and the basis functions once per z.
-fn csm_reconstruction(m: i64, n: usize) -> Vec<Vec<f64>> {
-    let o = opts(&[("M", m.to_string()), ("alpha", "0.0".into()), ("fix", "0".into())], &[]);
-    let c = sshc::compile_str(&source("csm"), &o).unwrap();
-    let ir = c.ir;
-    let e = ir.expansions.iter().next().unwrap();
-    let at = |i: usize| i as f64 / n as f64;
-    let params = &ir.params;
-    let receiver = |d: f64| {
-        move |node: &Node| match node {
-            Node::Input(sshc::builtins::Input::D, _) => Some(d),
-            Node::Input(sshc::builtins::Input::Slope | sshc::builtins::Input::TexelDepth | sshc::builtins::Input::DepthSlope, _) => {
-                Some(0.0)
-            }
-            Node::Param(p) => Some(params[*p].value.as_f64()),
-            _ => None,
-        }
-    };
-    let coeffs: Vec<(f64, Vec<f64>)> = (0..=n)
-        .map(|i| {
-            let leaf = receiver(at(i));
-            (
-                ir.arena.eval(e.constant, &leaf),
-                e.terms.iter().map(|(a, _)| ir.arena.eval(*a, &leaf)).collect(),
-            )
-        })
-        .collect();
-    let bases: Vec<Vec<f64>> = (0..=n)
-        .map(|j| {
-            let z = at(j);
-            let leaf = |node: &Node| matches!(node, Node::Channel(..)).then_some(z);
-            e.terms
-                .iter()
-                .map(|(_, ch)| {
-                    assert!(matches!(ir.channels[*ch].origin, Origin::Basis { .. }));
-                    ir.arena.eval(ir.channels[*ch].value.unwrap(), &leaf)
-                })
-                .collect()
-        })
-        .collect();
-    coeffs
-        .iter()
-        .map(|(c0, a)| {
-            bases
-                .iter()
-                .map(|b| c0 + a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>())
-                .collect()
-        })
-        .collect()
-}
-
-#[test]
-fn csm_reconstruction_approaches_the_step_as_m_grows() {
-    // Away from the step (|z - d| >= 0.1) and from the square wave's next edge (|z - d| <= 0.9),
-    // the reconstruction of eq. 6.5 with c_k = pi (2k - 1) converges to 1 (lit, d < z) and
-    // 0 (shadowed, d > z); the largest error must fall as M grows. With c_k = 2k - 1, as
-    // printed in eq. 6.3, it would not: the period would be 2 pi, not 2.
-    let mut last = f64::INFINITY;
-    let mut errors = Vec::new();
-    for m in [1, 2, 4, 8, 16, 32, 64] {
-        let f = csm_reconstruction(m, 100);
-        let mut worst: f64 = 0.0;
-        for (i, row) in f.iter().enumerate() {
-            for (j, v) in row.iter().enumerate() {
-                let (d, z) = (i as f64 / 100.0, j as f64 / 100.0);
-                let t = (z - d).abs();
-                if !(0.1..=0.9).contains(&t) {
-                    continue;
-                }
-                let truth = if d <= z { 1.0 } else { 0.0 };
-                worst = worst.max((v - truth).abs());
-            }
-        }
-        errors.push((m, worst));
-        assert!(worst < last, "max error away from the step did not fall at M = {m}: {errors:?}");
-        last = worst;
-    }
-    // The Fourier partial sum of the unit square wave at distance 0.1 from its edge decays
-    // like 1 / (pi^2 M 0.1); at M = 64 that is below 0.02.
-    assert!(last < 0.02, "M = 64 still far from the step: {errors:?}");
-    // At the step itself the series reads 1/2 (the lit-surface problem of fig. 6.3).
-    let f = csm_reconstruction(16, 2);
-    assert!((f[1][1] - 0.5).abs() < 1e-6, "f(0.5, 0.5) = {}", f[1][1]);
-}
-
 mod mutations {
     use super::*;
     use proptest::prelude::*;
@@ -375,7 +287,7 @@ mod mutations {
 /// Errors of a technique that `check_str` accepted: none may come from a front-end phase,
 /// and none may be an internal error of `lower` (an invariant check should have made).
 fn assert_later_than_check(d: &sshc::Diagnostics, text: &str) {
-    use sshc::diag::Phase;
+    use sshc::Phase;
     for e in d.errors() {
         assert!(
             !matches!(e.phase, Phase::Syntax | Phase::Parse | Phase::Resolve | Phase::Check),
@@ -401,7 +313,7 @@ fn check_and_compile_agree_on_integer_literals() {
         sshc::compile_str(&src, &CompileOptions::default()).unwrap_err(),
     ] {
         let e = d.errors().next().unwrap();
-        assert_eq!(e.phase, sshc::diag::Phase::Check, "{}", d.render("hard", &src));
+        assert_eq!(e.phase, sshc::Phase::Check, "{}", d.render("hard", &src));
         assert_eq!(
             (e.primary.0.start as usize, e.primary.0.end as usize),
             (at, at + 10),
@@ -418,16 +330,18 @@ fn check_and_compile_agree_on_integer_literals() {
         );
         if ok.contains("7 / 2") {
             // abstract 7 / 2 is the integer 3, then the f32 3.0 (as WGSL)
-            let c = sshc::compile_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("hard", &src)));
-            let shade = c.ir.shade_pass().unwrap();
-            let sshc::ir::IrPassKind::Shade { visibility } = shade.kind else {
-                unreachable!()
+            let dumped = CompileOptions {
+                dump_after: Some(sshc::DumpPhase::Lower),
+                ..Default::default()
             };
-            assert!(
-                c.ir.arena.display(visibility, Some(&c.ir)).contains("* 3.0)"),
-                "{}",
-                c.ir.arena.display(visibility, Some(&c.ir))
-            );
+            let out = sshc::compile_with_dump(&src, &dumped);
+            out.result.unwrap_or_else(|d| panic!("{}", d.render("hard", &src)));
+            let dump = out.dump.expect("dumped after lower");
+            let visibility = dump
+                .lines()
+                .find(|l| l.trim_start().starts_with("visibility = "))
+                .expect("a visibility");
+            assert!(visibility.contains("* 3.0)"), "{visibility}");
         }
         sshc::check_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{ok}: {}", d.render("hard", &src)));
         sshc::compile_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{ok}: {}", d.render("hard", &src)));
@@ -450,7 +364,7 @@ fn check_and_compile_agree_on_integer_literals() {
 /// same diagnostic; what compile refuses later, check accepts.
 #[test]
 fn check_and_compile_agree_on_every_error_fixture() {
-    use sshc::diag::Phase;
+    use sshc::Phase;
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/errors");
     for f in std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).map(|e| e.path()) {
         if f.extension().is_none_or(|x| x != "ron") {
@@ -493,7 +407,7 @@ fn check_and_compile_agree_on_empty_series() {
         sshc::check_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{body}: {}", d.render("hard", &src)));
         let c = sshc::compile_str(&src, &CompileOptions::default()).unwrap_or_else(|d| panic!("{body}: {}", d.render("hard", &src)));
         for (file, wgsl) in &c.shaders {
-            sshc::back::validate(wgsl).unwrap_or_else(|e| panic!("{file}: {e}"));
+            sshc::validate_wgsl(wgsl).unwrap_or_else(|e| panic!("{file}: {e}"));
         }
     }
 }
@@ -524,7 +438,7 @@ fn cssm_with_summed_area_tables_snapshots() {
     for (file, wgsl) in &c.shaders {
         insta::assert_snapshot!(format!("cssm-filter1.{file}"), wgsl);
     }
-    insta::assert_snapshot!("cssm-filter1.explain", sshc::explain::explain(&c));
+    insta::assert_snapshot!("cssm-filter1.explain", c.explain());
 }
 
 #[test]
@@ -539,7 +453,7 @@ fn cssm_filter_param_removes_the_unused_prefilter() {
     ] {
         let c = sshc::compile_str(&src, &opts(&[("filter", filter.into())], &[])).unwrap_or_else(|d| panic!("{}", d.render("cssm", &src)));
         let passes: Vec<&str> = c.graph.passes.iter().map(|p| p.name.as_str()).collect();
-        let text = sshc::explain::explain(&c);
+        let text = c.explain();
         let removed = text
             .split("\nRemoved:")
             .nth(1)
@@ -724,7 +638,7 @@ fn map_pass_schedules() {
         draws(&compiles("vsm", &CompileOptions::default()), "mips"),
         [Draw::ComputeMipLevels]
     );
-    assert!(sshc::explain::explain(&vsm).contains("(schedule: fragment, a full-screen triangle)"));
+    assert!(vsm.explain().contains("(schedule: fragment, a full-screen triangle)"));
     for name in ["moments", "*"] {
         let c = compiles("vsm", &sched(&[(name, "compute")], &[]));
         assert_eq!(draws(&c, "moments"), [Draw::ComputeTexels], "{name}");
@@ -753,7 +667,7 @@ fn map_pass_schedules() {
                 _ => assert_eq!(a.3, b.3, "{a:?} {b:?}"),
             }
         }
-        assert!(sshc::explain::explain(&c).contains("(schedule: compute, 8 x 8 texels per workgroup"));
+        assert!(c.explain().contains("(schedule: compute, 8 x 8 texels per workgroup"));
     }
     // Rg16Unorm is not a storage format: fragment, and why
     let c = compiles(
@@ -762,9 +676,9 @@ fn map_pass_schedules() {
     );
     assert_eq!(draws(&c, "moments"), [Draw::FullScreen]);
     assert!(
-        sshc::explain::explain(&c).contains("compute was asked for, but Rg16Unorm is not a storage format"),
+        c.explain().contains("compute was asked for, but Rg16Unorm is not a storage format"),
         "{}",
-        sshc::explain::explain(&c)
+        c.explain()
     );
     // refused: a pass that is not a Map pass, no such pass, no such schedule
     for (pairs, want) in [

@@ -1,9 +1,9 @@
 //! Precision warnings: every `warnings/*.ron` compiles, and its rendered
 //! warnings must match `warnings/*.stderr` (empty: none). The storage-rounding estimate
-//! (`sshc::rounding`) warns for VSM and MSM moments at Unorm8 (VSM's in a summed-area table
+//! (`sshc::eval::estimate`) warns for VSM and MSM moments at Unorm8 (VSM's in a summed-area table
 //! too), the render-target check
 //! for Unorm16 channels; EVSM at F32 and at F16 within its exponent limits gives none;
-//! tables over float channels warn of their stated bound (`sshc::tables`).
+//! tables over float channels warn of their stated bound (`sshc::eval`'s table bounds).
 //! Set `UPDATE_EXPECT=1` to rewrite the expected files after reviewing a change.
 
 mod expect;
@@ -21,7 +21,7 @@ fn every_precision_fixture_has_its_warnings() {
             ..Default::default()
         };
         let c = sshc::compile_str(&source, &opts).unwrap_or_else(|d| panic!("{name}: refused\n{}", d.render(name, &source)));
-        let got = sshc::diag::Diagnostics(c.warnings.clone()).render(name, &source);
+        let got = sshc::Diagnostics(c.warnings.clone()).render(name, &source);
         // the cases the issue names
         let rounding = got.contains("storage rounding can move the visibility");
         match name {
@@ -67,8 +67,7 @@ fn the_rounding_estimate_orders_the_precisions() {
     ] {
         let source = std::fs::read_to_string(root.join(file)).unwrap();
         let c = sshc::compile_str(&source, &sshc::CompileOptions::default()).unwrap();
-        let program = sshc::ir::Program::new(&c.ir, &c.layout);
-        let e = sshc::rounding::estimate(&program, sshc::rounding::Detail::Explain).expect("estimated");
+        let e = sshc::eval::estimate(&c, sshc::eval::Detail::Explain).expect("estimated");
         assert!(e.configurations > 500, "{file}: {} configurations", e.configurations);
         for ch in &e.channels {
             let [u8, u16, f16, f32] = ch.at;
@@ -91,8 +90,7 @@ fn the_rounding_estimate_sees_a_channel_read_only_by_the_blocker_search() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/blocker-search-unorm8.ron");
     let source = std::fs::read_to_string(path).unwrap();
     let c = sshc::compile_str(&source, &sshc::CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("f", &source)));
-    let program = sshc::ir::Program::new(&c.ir, &c.layout);
-    let e = sshc::rounding::estimate(&program, sshc::rounding::Detail::Explain).expect("estimated");
+    let e = sshc::eval::estimate(&c, sshc::eval::Detail::Explain).expect("estimated");
     let zb = e.channels.iter().find(|ch| ch.name == "zb").expect("`zb` is estimated");
     let [u8, u16, _, f32] = zb.at;
     let (u8, u16, f32) = (u8.unwrap(), u16.unwrap(), f32.unwrap());
@@ -104,12 +102,11 @@ fn the_rounding_estimate_sees_a_channel_read_only_by_the_blocker_search() {
 
 /// The storage loss of a compiled technique judged without the compiler's estimate, as
 /// `sshc verify` judges LOSSY (lab/src/verify/verdict.rs, `LOSSY_SHARE`): its CPU evaluation
-/// (`sshc::interp`) with every stored texel rounded as the GPU stores it, against the exact
+/// (`sshc::eval`) with every stored texel rounded as the GPU stores it, against the exact
 /// one, on a depth edge and a ramp, at receivers across the map and across depth [0, 1];
 /// the difference that 1 % of the receivers exceed.
 fn storage_loss(c: &sshc::Compiled) -> f64 {
-    use sshc::interp::{Evaluation, Frame, Given, Model, Receiver, Rounding, Scratch};
-    let p = sshc::ir::Program::new(&c.ir, &c.layout);
+    use sshc::eval::{Evaluation, Frame, Given, Model, Receiver, Rounding, Scratch};
     let n = 32u32;
     let frame = Frame {
         shadow_size: n,
@@ -126,9 +123,9 @@ fn storage_loss(c: &sshc::Compiled) -> f64 {
     let ramp: Vec<f32> = (0..n * n).map(|k| (k % n) as f32 / n as f32).collect();
     let mut diffs = Vec::new();
     for map in [edge, ramp] {
-        let given = Given::depth(&p, vec![map]);
-        let exact = Evaluation::new(p, &given, frame, Rounding::Exact, Model::Gpu).unwrap();
-        let stored = Evaluation::new(p, &given, frame, Rounding::Stored, Model::Gpu).unwrap();
+        let given = Given::depth(c, vec![map]);
+        let exact = Evaluation::new(c, &given, frame, Rounding::Exact, Model::Gpu).unwrap();
+        let stored = Evaluation::new(c, &given, frame, Rounding::Stored, Model::Gpu).unwrap();
         let mut s = Scratch::default();
         for i in 0..=16 {
             let d = i as f64 / 16.0;
@@ -184,7 +181,7 @@ fn every_suggested_fix_is_checked_again() {
         let source = std::fs::read_to_string(f).unwrap();
         let c = sshc::compile_str(&source, &opts).unwrap_or_else(|d| panic!("{name}: {}", d.render(&name, &source)));
         for w in c.warnings.iter().filter(|w| !w.fix.is_empty()) {
-            let fixed = sshc::diag::apply(&source, &w.fix);
+            let fixed = w.fixed(&source);
             let c2 = sshc::compile_str(&fixed, &opts)
                 .unwrap_or_else(|d| panic!("{name}: the fix of `{}` does not compile:\n{}", w.message, d.render(&name, &fixed)));
             applied.push(format!("{name}: {}", w.message));
@@ -194,16 +191,14 @@ fn every_suggested_fix_is_checked_again() {
             }
             let loss = storage_loss(&c2);
             assert!(
-                loss <= sshc::rounding::WARN_ABOVE,
+                loss <= sshc::eval::WARN_ABOVE,
                 "{name}: after the fix of `{}` check is silent, yet storage moves the visibility by {loss}:\n{fixed}",
                 w.message
             );
-            for p in c2.layout.passes.iter().filter(|p| about.contains(&p.name)) {
-                assert!(
-                    p.live,
-                    "{name}: after the fix of `{}` pass `{}` is still removed",
-                    w.message, p.name
-                );
+            // the graph lists each pass the compiler removed, and why (`pass `NAME`: ...`)
+            let still = |r: &&String| about.iter().any(|s| r.starts_with(&format!("pass `{s}`")));
+            if let Some(removed) = c2.graph.removed.iter().find(still) {
+                panic!("{name}: after the fix of `{}` {removed}", w.message);
             }
         }
     }
@@ -225,7 +220,7 @@ fn a_warning_on_a_precision_set_by_the_command_line_says_so() {
         ..Default::default()
     };
     let c = sshc::compile_str(&source, &opts).unwrap_or_else(|d| panic!("{}", d.render("t.ron", &source)));
-    let got = sshc::diag::Diagnostics(c.warnings.clone()).render("t.ron", &source);
+    let got = sshc::Diagnostics(c.warnings.clone()).render("t.ron", &source);
     assert!(got.contains("channel `e` at F16 underflows to 0"), "{got}");
     assert!(
         got.contains("nonzero values stored as 0 (the precision set by `--precision`)"),

@@ -38,6 +38,28 @@ pub use wgsl::*;
 mod tests {
     use super::*;
 
+    /// The format table read both ways: each texture format is the one `Format::of` gives
+    /// for its layout, its size is its components' (WGSL's sizes: 1, 2, 4 bytes), and the
+    /// families the runtime and the compiler ask about are the ones WebGPU names so.
+    #[test]
+    fn each_format_is_found_from_its_layout() {
+        for f in Format::ALL {
+            let (component, count) = f.layout();
+            assert_eq!(f.bytes_per_texel(), component.bytes() * count, "{f:?}");
+            if f.is_table() {
+                assert_eq!(f.bytes_per_texel(), 16, "{f:?}: a vec4 of 32-bit sums");
+            } else {
+                assert_eq!(Format::of(component, count), Some(f), "{f:?}");
+                let name = format!("{f:?}");
+                assert_eq!(f.is_norm16(), name.ends_with("16Unorm"), "{f:?}");
+                assert_eq!(f.is_float32(), name.ends_with("32Float"), "{f:?}");
+                assert_eq!(component.is_unorm(), name.ends_with("Unorm"), "{f:?}");
+            }
+        }
+        assert_eq!(Format::of(Component::Float32, 3), None);
+        assert_eq!(Format::of(Component::Uint32, 4), None, "a u32 texel is a table's alone");
+    }
+
     fn tiny() -> PassGraph {
         PassGraph {
             version: SCHEMA_VERSION,

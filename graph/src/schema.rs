@@ -223,21 +223,119 @@ pub enum Format {
     SummedAreaF32,
 }
 
-impl Format {
-    pub const fn bytes_per_texel(self) -> u32 {
+/// How one component of a texel is stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Component {
+    /// An unsigned 8-bit code `c`, read as `c / 255`.
+    Unorm8,
+    /// An unsigned 16-bit code `c`, read as `c / 65535`.
+    Unorm16,
+    /// An IEEE half.
+    Float16,
+    /// An IEEE single.
+    Float32,
+    /// An unsigned 32-bit integer (a fixed-point summed-area table's sums).
+    Uint32,
+}
+
+impl Component {
+    /// An unsigned code read as a fraction of its largest value.
+    pub fn is_unorm(self) -> bool {
         match self {
-            Format::R8Unorm => 1,
-            Format::Rg8Unorm | Format::R16Unorm | Format::R16Float => 2,
-            Format::Rgba8Unorm | Format::Rg16Unorm | Format::Rg16Float | Format::R32Float => 4,
-            Format::Rgba16Unorm | Format::Rgba16Float | Format::Rg32Float => 8,
-            Format::Rgba32Float => 16,
-            Format::SummedAreaU32 | Format::SummedAreaF32 => 16,
+            Component::Unorm8 | Component::Unorm16 => true,
+            Component::Float16 | Component::Float32 | Component::Uint32 => false,
         }
+    }
+
+    pub const fn bytes(self) -> u32 {
+        match self {
+            Component::Unorm8 => 1,
+            Component::Unorm16 | Component::Float16 => 2,
+            Component::Float32 | Component::Uint32 => 4,
+        }
+    }
+}
+
+impl Format {
+    /// Every format, in declaration order.
+    pub const ALL: [Format; 14] = [
+        Format::R8Unorm,
+        Format::Rg8Unorm,
+        Format::Rgba8Unorm,
+        Format::R16Unorm,
+        Format::Rg16Unorm,
+        Format::Rgba16Unorm,
+        Format::R16Float,
+        Format::Rg16Float,
+        Format::Rgba16Float,
+        Format::R32Float,
+        Format::Rg32Float,
+        Format::Rgba32Float,
+        Format::SummedAreaU32,
+        Format::SummedAreaF32,
+    ];
+
+    /// The one table of the formats' layouts: how each component is stored, and how many
+    /// components a texel has (a summed-area table's texel is a `vec4` of sums). Every
+    /// other fact of layout ([`Format::bytes_per_texel`], [`Format::of`], the 16-bit norm
+    /// and 32-bit float families, how the runtime decodes a texel) follows from it.
+    pub const fn layout(self) -> (Component, u32) {
+        match self {
+            Format::R8Unorm => (Component::Unorm8, 1),
+            Format::Rg8Unorm => (Component::Unorm8, 2),
+            Format::Rgba8Unorm => (Component::Unorm8, 4),
+            Format::R16Unorm => (Component::Unorm16, 1),
+            Format::Rg16Unorm => (Component::Unorm16, 2),
+            Format::Rgba16Unorm => (Component::Unorm16, 4),
+            Format::R16Float => (Component::Float16, 1),
+            Format::Rg16Float => (Component::Float16, 2),
+            Format::Rgba16Float => (Component::Float16, 4),
+            Format::R32Float => (Component::Float32, 1),
+            Format::Rg32Float => (Component::Float32, 2),
+            Format::Rgba32Float => (Component::Float32, 4),
+            Format::SummedAreaU32 => (Component::Uint32, 4),
+            Format::SummedAreaF32 => (Component::Float32, 4),
+        }
+    }
+
+    /// The texture format (not a table) with `count` components stored as `component`;
+    /// `None` where there is none (three components, a `Uint32` texture).
+    pub fn of(component: Component, count: u32) -> Option<Format> {
+        Format::ALL.into_iter().find(|f| !f.is_table() && f.layout() == (component, count))
+    }
+
+    pub const fn bytes_per_texel(self) -> u32 {
+        let (component, count) = self.layout();
+        component.bytes() * count
+    }
+
+    /// A 16-bit norm format: rendering into one is an adapter's format feature.
+    pub fn is_norm16(self) -> bool {
+        !self.is_table() && matches!(self.layout().0, Component::Unorm16)
+    }
+
+    /// A 32-bit float texture format: filtering and blending one are features.
+    pub fn is_float32(self) -> bool {
+        !self.is_table() && matches!(self.layout().0, Component::Float32)
     }
 
     /// A summed-area table: a storage buffer of `vec4` prefix sums, one per texel.
     pub fn is_table(self) -> bool {
-        matches!(self, Format::SummedAreaU32 | Format::SummedAreaF32)
+        match self {
+            Format::SummedAreaU32 | Format::SummedAreaF32 => true,
+            Format::R8Unorm
+            | Format::Rg8Unorm
+            | Format::Rgba8Unorm
+            | Format::R16Unorm
+            | Format::Rg16Unorm
+            | Format::Rgba16Unorm
+            | Format::R16Float
+            | Format::Rg16Float
+            | Format::Rgba16Float
+            | Format::R32Float
+            | Format::Rg32Float
+            | Format::Rgba32Float => false,
+        }
     }
 
     /// Whether WebGPU can write the format from a shader without an optional feature
@@ -339,6 +437,19 @@ pub enum PassKind {
 }
 
 impl PassKind {
+    /// The name a technique file writes (`Shade(...)`).
+    pub fn name(self) -> &'static str {
+        match self {
+            PassKind::Depth => "Depth",
+            PassKind::Map => "Map",
+            PassKind::Filter => "Filter",
+            PassKind::Mipmap => "Mipmap",
+            PassKind::SummedArea => "SummedArea",
+            PassKind::Geometry => "Geometry",
+            PassKind::Shade => "Shade",
+        }
+    }
+
     /// The pass that evaluates visibility per camera pixel (one per technique).
     pub fn is_shade(self) -> bool {
         matches!(self, PassKind::Shade)

@@ -2,8 +2,7 @@
 //! references, params, layers, samples and formats.
 
 use crate::schema::{
-    BufferDecl, Draw, Extent, GraphError, MAX_RECORD_BYTES, MAX_VERTICES_PER_RECORD, PassGraph, PassKind, SCHEMA_VERSION, TextureDecl,
-    View, Views,
+    BufferDecl, Draw, Extent, GraphError, MAX_RECORD_BYTES, MAX_VERTICES_PER_RECORD, PassGraph, SCHEMA_VERSION, TextureDecl, View, Views,
 };
 use crate::uniforms::MAX_LIGHT_SAMPLES;
 use serde::Deserialize;
@@ -274,7 +273,7 @@ impl PassGraph {
                     });
                 }
                 // a deferred Shade: the G-buffer, then the pixels that read it
-                if s.draw.is_deferred_shade() && p.kind != PassKind::Shade {
+                if s.draw.is_deferred_shade() && !p.kind.is_shade() {
                     return Err(GraphError::Step {
                         pass: p.name.clone(),
                         message: format!("a {:?} step belongs to a Shade pass, not a {:?} pass", s.draw, p.kind),

@@ -259,7 +259,7 @@ fn run(cli: Cli) -> Result<(), String> {
         }
         Command::Explain { common } => {
             let c = compile_reported(&common)?;
-            print!("{}", sshc::explain::explain(&c));
+            print!("{}", c.explain());
             if common.scene.is_some() {
                 let generic = Common {
                     scene: None,
@@ -269,7 +269,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     report(&d, &common.technique, &read(&common.technique).unwrap_or_default());
                     String::new()
                 })?;
-                print!("{}", sshc::explain::specialisation(&g, &c));
+                print!("{}", g.specialisation(&c));
             }
             Ok(())
         }

@@ -40,7 +40,7 @@ use serde::{Deserialize, Serialize};
 use xxhash_rust::xxh3::{Xxh3, xxh3_64};
 
 use crate::claim::{self, Attempt, Claim, Watch};
-use crate::scene::{Light, Scene};
+use crate::scene::Scene;
 use crate::visibility::Visibility;
 
 /// The largest cached truth record read: the most pixels a camera has
@@ -208,20 +208,6 @@ pub fn strata(samples: u32) -> u32 {
     n
 }
 
-/// True when the light has no extent: one ray answers (0 or 1), whatever the samples.
-fn is_binary(light: &Light) -> bool {
-    match light {
-        Light::Point { .. } | Light::Directional { .. } => true,
-        Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius <= 0.0,
-        Light::Rectangle {
-            half_width, half_height, ..
-        } => *half_width <= 0.0 && *half_height <= 0.0,
-        Light::Segment { a, b } => a == b,
-        Light::Triangle { a, b, c } => a == b && b == c,
-        Light::DistantDisk { angle_degrees, .. } => *angle_degrees <= 0.0,
-    }
-}
-
 /// Computes the ground truth at `points` with the scene's first light, casting rays
 /// against `vis` (built from the same scene). `progress` is called after every chunk of
 /// pixels.
@@ -251,7 +237,7 @@ pub fn compute(
         vec![false; pixels]
     };
     let surface_pixels = surface.iter().filter(|&&s| s).count() as u64;
-    let binary = is_binary(light);
+    let binary = !light.has_extent();
     let mut n = strata(settings.samples);
     let cap = strata(settings.max_samples.max(settings.samples));
     let runs = settings.runs;

@@ -505,7 +505,7 @@ fn the_min_mip_early_out_gives_its_pcf_bit_for_bit() {
 }
 
 /// An f32 summed-area table (`SummedArea(sum: F32)`) is the CPU's f32 emulation
-/// (`sshc::tables::f32_table`: the same additions in the same order) bit for bit, at
+/// (`sshc::eval::f32_table`: the same additions in the same order) bit for bit, at
 /// 2048 x 2048 on the bunny's depth map; and that table's rounding against the f64 sums,
 /// which docs/language.md quotes (run with `--no-capture`), lies within the stated bounds.
 #[test]
@@ -534,13 +534,13 @@ fn an_f32_table_is_its_cpu_emulation_bit_for_bit_and_within_the_stated_bound() {
     ex.run_frame().unwrap();
     let values = ex.inspect().read_texture("mapped", 0, 0).unwrap().channel(0);
     let table = ex.inspect().read_texture("table", 0, 0).unwrap().channel(0);
-    let cpu = sshc::tables::f32_table(&values, n, 0.5);
+    let cpu = sshc::eval::f32_table(&values, n, 0.5);
     let differ = table.iter().zip(&cpu).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
     assert_eq!(differ, 0, "{differ} of {} entries differ from the emulation", n * n);
     // the rounding against the exact sums: entries, and box means of side k anywhere
-    let exact = sshc::tables::f64_table(&values, n, 0.5);
+    let exact = sshc::eval::f64_table(&values, n, 0.5);
     let entry = table.iter().zip(&exact).map(|(a, b)| (f64::from(*a) - b).abs()).fold(0.0, f64::max);
-    let bound = sshc::tables::f32_entry_bound(n as f64, 0.5);
+    let bound = sshc::eval::f32_entry_bound(n as f64, 0.5);
     eprintln!("f32 table, bunny depth, {n}^2: largest entry error {entry:.3e} (stated bound {bound:.3e})");
     assert!(entry <= bound);
     let at = |t: &dyn Fn(usize) -> f64, x: isize, y: isize| if x < 0 || y < 0 { 0.0 } else { t(y as usize * n + x as usize) };
@@ -559,7 +559,7 @@ fn an_f32_table_is_its_cpu_emulation_bit_for_bit_and_within_the_stated_bound() {
                 count += 1;
             }
         }
-        let stated = sshc::tables::f32_box_bound(n as f64, 0.5, (k * k) as f64);
+        let stated = sshc::eval::f32_box_bound(n as f64, 0.5, (k * k) as f64);
         eprintln!(
             "  boxes of {k} x {k}: largest error {worst:.3e}, RMS {:.3e} over {count} boxes (stated bound {stated:.3e})",
             (sq / count as f64).sqrt()

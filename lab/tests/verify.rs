@@ -44,7 +44,7 @@ fn verdicts(rows: &[verify::Row]) -> Vec<Verdict> {
 /// `c` with `from` replaced by `to` in the module of pass `pass` (which must contain it).
 fn injected(c: &sshc::Compiled, pass: &str, from: &str, to: &str) -> sshc::Compiled {
     let mut bad = c.clone();
-    let file = format!("{}.{pass}.wgsl", c.ir.technique);
+    let file = format!("{}.{pass}.wgsl", c.technique());
     let module = bad
         .shaders
         .iter_mut()
@@ -414,13 +414,17 @@ const DECLARED_RANGE: &str = r#"Technique(
 #[test]
 fn declared_ranges_clamp_at_encode_and_verify_reports_the_clamped_texels() {
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("verify needs an adapter: {e}"));
-    let c = sshc::compile_str(DECLARED_RANGE, &sshc::CompileOptions::default())
+    let dumped = sshc::CompileOptions {
+        dump_after: Some(sshc::DumpPhase::Pack),
+        ..Default::default()
+    };
+    let out = sshc::compile_with_dump(DECLARED_RANGE, &dumped);
+    let c = out
+        .result
         .unwrap_or_else(|d| panic!("{}", d.render("declared_range", DECLARED_RANGE)));
-    // the encodes use the declared ranges: b's Unorm8 over [0, 2]
-    let p = sshc::ir::Program::new(&c.ir, &c.layout);
-    let mapped = p.resources.iter().find(|r| r.name == "mapped").expect("mapped");
-    let b = mapped.slots.iter().find(|s| p.channels[s.channel].name == "b").expect("b");
-    assert_eq!((b.range.lo, b.range.hi), (0.0, 2.0));
+    // the encodes use the declared ranges: b's Unorm8 over [0, 2] (the layout's dump)
+    let dump = out.dump.expect("dumped after pack");
+    assert!(dump.contains("b : Unorm8 range [0, 2] stored as"), "{dump}");
     let good = rows(&gpu, &c);
     assert!(verdicts(&good).iter().all(|v| *v == Verdict::Agrees), "{:?}", verdicts(&good));
     // the step and noise fields and the bunny hold depths below 1/4 and above 3/4

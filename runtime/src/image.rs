@@ -1,7 +1,7 @@
 //! Textures and summed-area tables read back from the device as f32 RGBA images.
 
 use crate::device::{Gpu, Result};
-use crate::graph::Format;
+use crate::graph::{Component, Format};
 
 /// A texture read back, as f32 RGBA per texel (missing components 0, alpha 1), rows top first.
 #[derive(Clone, Debug, PartialEq)]
@@ -93,26 +93,16 @@ pub(crate) fn read_back(gpu: &Gpu, tex: &wgpu::Texture, layer: u32, level: u32, 
 /// One texel of `f` as f32 RGBA (missing components 0, alpha 1).
 fn decode_texel(b: &[u8], f: Format) -> [f32; 4] {
     let mut out = [0.0, 0.0, 0.0, 1.0];
-    let (n, size) = match f {
-        Format::R8Unorm | Format::R16Unorm | Format::R16Float | Format::R32Float => (1, f.bytes_per_texel()),
-        Format::Rg8Unorm | Format::Rg16Unorm | Format::Rg16Float | Format::Rg32Float => (2, f.bytes_per_texel() / 2),
-        Format::Rgba8Unorm
-        | Format::Rgba16Unorm
-        | Format::Rgba16Float
-        | Format::Rgba32Float
-        | Format::SummedAreaU32
-        | Format::SummedAreaF32 => (4, f.bytes_per_texel() / 4),
-    };
-    for (i, o) in out.iter_mut().enumerate().take(n) {
-        let c = &b[i * size as usize..(i + 1) * size as usize];
-        *o = match f {
-            Format::R8Unorm | Format::Rg8Unorm | Format::Rgba8Unorm => c[0] as f32 / 255.0,
-            Format::R16Unorm | Format::Rg16Unorm | Format::Rgba16Unorm => u16::from_le_bytes([c[0], c[1]]) as f32 / 65535.0,
-            Format::R16Float | Format::Rg16Float | Format::Rgba16Float => half::f16::from_bits(u16::from_le_bytes([c[0], c[1]])).to_f32(),
-            Format::R32Float | Format::Rg32Float | Format::Rgba32Float | Format::SummedAreaF32 => {
-                f32::from_le_bytes([c[0], c[1], c[2], c[3]])
-            }
-            Format::SummedAreaU32 => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f32,
+    let (component, n) = f.layout();
+    let size = component.bytes() as usize;
+    for (i, o) in out.iter_mut().enumerate().take(n as usize) {
+        let c = &b[i * size..(i + 1) * size];
+        *o = match component {
+            Component::Unorm8 => c[0] as f32 / 255.0,
+            Component::Unorm16 => u16::from_le_bytes([c[0], c[1]]) as f32 / 65535.0,
+            Component::Float16 => half::f16::from_bits(u16::from_le_bytes([c[0], c[1]])).to_f32(),
+            Component::Float32 => f32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+            Component::Uint32 => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f32,
         };
     }
     out

@@ -6,7 +6,7 @@
 
 use crate::device::Gpu;
 use crate::error::{Result, RuntimeError};
-use crate::graph::{self, Format, PassGraph};
+use crate::graph::{self, PassGraph};
 use crate::pipeline::{CAMERA_FORMATS, wgpu_format};
 use crate::steps::{self, Dispatch, NodeKind, Targets};
 
@@ -111,15 +111,6 @@ pub struct Requirements {
     /// also allow them as render attachments (an adapter-specific format feature), which
     /// only the adapter answers ([`Gpu::renderable_norm16`]).
     pub rendered_norm16: Vec<(String, wgpu::TextureFormat)>,
-}
-
-/// The 32-bit float formats: filtering and blending them are features.
-fn is_float32(f: Format) -> bool {
-    matches!(f, Format::R32Float | Format::Rg32Float | Format::Rgba32Float)
-}
-
-fn is_norm16(f: Format) -> bool {
-    matches!(f, Format::R16Unorm | Format::Rg16Unorm | Format::Rgba16Unorm)
 }
 
 /// What one step binds, counted per shader stage (every binding is visible to the stages
@@ -273,7 +264,7 @@ impl Requirements {
         let mut feature = |feature: wgpu::Features, who: String, why: String| {
             r.features.push(FeatureNeed { feature, who, why });
         };
-        for t in graph.textures.iter().filter(|t| is_norm16(t.format)) {
+        for t in graph.textures.iter().filter(|t| t.format.is_norm16()) {
             let owner = graph
                 .passes
                 .iter()
@@ -289,7 +280,7 @@ impl Requirements {
             for (step, c) in pass.steps.iter().zip(steps) {
                 if step.sampler {
                     for read in &step.reads {
-                        if let Some(t) = graph.texture(&read.texture).filter(|t| is_float32(t.format)) {
+                        if let Some(t) = graph.texture(&read.texture).filter(|t| t.format.is_float32()) {
                             feature(
                                 wgpu::Features::FLOAT32_FILTERABLE,
                                 format!("pass `{}`", pass.name),
@@ -302,7 +293,7 @@ impl Requirements {
                 let raster = step.compute.is_none();
                 for w in &step.writes {
                     let Some(t) = graph.texture(&w.texture) else { continue };
-                    if blends && is_float32(t.format) {
+                    if blends && t.format.is_float32() {
                         feature(
                             wgpu::Features::FLOAT32_BLENDABLE,
                             format!("pass `{}`", pass.name),
@@ -310,7 +301,7 @@ impl Requirements {
                         );
                     }
                     if raster
-                        && is_norm16(t.format)
+                        && t.format.is_norm16()
                         && let Some(f) = wgpu_format(t.format)
                         && !r.rendered_norm16.iter().any(|(n, _)| n == &t.name)
                     {

@@ -651,7 +651,7 @@ impl Targets {
         let slot = self.slot;
         for (l, res) in self.bound.iter().enumerate() {
             for (pi, pass) in self.technique.passes().iter().enumerate() {
-                if skip_depth && pass.kind == graph::PassKind::Depth {
+                if skip_depth && pass.kind.is_depth() {
                     continue;
                 }
                 let (Some(plan), Some(bindings)) = (
@@ -1048,7 +1048,7 @@ pub(crate) fn shade_name(graph: &PassGraph) -> &str {
         .passes
         .iter()
         .rev()
-        .find(|p| p.kind == graph::PassKind::Shade)
+        .find(|p| p.kind.is_shade())
         .map_or("shade", |p| p.name.as_str())
 }
 
@@ -1057,7 +1057,7 @@ pub(crate) fn shade_name(graph: &PassGraph) -> &str {
 fn write_depth_overrides(t: &Targets, maps: &[Vec<f32>]) -> Result<()> {
     let graph = t.technique.graph();
     for res in &t.bound {
-        for decl in graph.passes.iter().filter(|p| p.kind == graph::PassKind::Depth) {
+        for decl in graph.passes.iter().filter(|p| p.kind.is_depth()) {
             let views = graph.views_of(decl);
             if maps.is_empty() || (maps.len() != 1 && maps.len() != views as usize) {
                 return Err(RuntimeError::Param(format!(

@@ -23,7 +23,7 @@ impl Usages {
                 for b in &step.reads {
                     add(&b.texture, U::TEXTURE_BINDING);
                 }
-                if pass.kind == graph::PassKind::Depth {
+                if pass.kind.is_depth() {
                     for t in &step.writes {
                         add(&t.texture, U::COPY_DST);
                     }

@@ -155,3 +155,182 @@ fn steps_and_names_are_read_from_numbered_items() {
     assert!(code_names(&s[1].1).is_empty());
     assert!(has_word("fn f_g() { f(1) }", "f") && !has_word("fn f_g()", "f"));
 }
+
+/// Crates and modules outside the repository whose paths the docs may name.
+const EXTERNAL: &[&str] = &[
+    "std",
+    "core",
+    "wgpu",
+    "naga",
+    "glam",
+    "bevy",
+    "egui",
+    "egui_wgpu",
+    "egui_winit",
+    "winit",
+    "serde",
+    "ron",
+    "clap",
+    "image",
+    "gltf",
+    "plotters",
+    "rayon",
+    "csv",
+    "half",
+    "insta",
+    "proptest",
+    "stacker",
+    "xxhash_rust",
+    "nvtx",
+    "libfuzzer_sys",
+    "arbitrary",
+    "bvh",
+    "obj",
+    "tobj",
+    "nu_ansi_term",
+    "bytemuck",
+    "pollster",
+    "anyhow",
+    "thiserror",
+    "tempfile",
+    "cargo",
+    "slurm",
+    "flip",
+    "nv_flip",
+    "rand",
+    "rand_pcg",
+    "fastrand",
+    "sha2",
+    "ctrlc",
+    "crossbeam",
+    "parking_lot",
+    "log",
+    // Rust's primitive types, clippy's lints, naga's, glam's, wgpu's and Bevy's types
+    "f32",
+    "f64",
+    "u32",
+    "usize",
+    "clippy",
+    "Typifier",
+    "Mat4",
+    "Queue",
+    "Tonemapping",
+    "AssetEvent",
+    "Assets",
+    "RenderSystems",
+    "WgpuSettingsPriority",
+    "ShadowFilteringMethod",
+    "PbrInput",
+];
+
+/// Every item defined in `src` (a Rust file): functions, types, constants, modules,
+/// macros, enum variants and struct fields (a word at the start of a line followed by
+/// `,`, `(`, ` {` or `:`).
+fn definitions(src: &str, out: &mut std::collections::HashSet<String>) {
+    const KEYWORDS: &[&str] = &[
+        "fn ",
+        "struct ",
+        "enum ",
+        "const ",
+        "static ",
+        "type ",
+        "trait ",
+        "mod ",
+        "macro_rules! ",
+        "union ",
+    ];
+    for line in src.lines() {
+        let t = line.trim_start();
+        let t = t
+            .strip_prefix("pub(crate) ")
+            .or_else(|| t.strip_prefix("pub(super) "))
+            .or_else(|| t.strip_prefix("pub "))
+            .unwrap_or(t);
+        let t = t.strip_prefix("const ").filter(|r| r.starts_with("fn ")).unwrap_or(t);
+        let t = t.strip_prefix("async ").unwrap_or(t);
+        let ident: String = KEYWORDS
+            .iter()
+            .find_map(|k| t.strip_prefix(k))
+            .unwrap_or(t)
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect();
+        if !ident.is_empty() {
+            out.insert(ident);
+        }
+    }
+}
+
+/// The docs' code paths are the code's: every backticked path of identifiers in
+/// `docs/*.md` and `README.md` (`verify::verify`, `Light::kind`, `sshc::eval::estimate`,
+/// `run()`) names an item the repository's Rust sources define (its last segment: a
+/// function, type, constant, module, variant or field), and each of its other segments is
+/// a word of those sources; paths into other crates (`wgpu::...`) are not checked.
+#[test]
+fn every_code_path_the_docs_name_is_defined() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let (mut defined, mut words) = (std::collections::HashSet::new(), std::collections::HashSet::new());
+    let mut stack: Vec<std::path::PathBuf> = ["compiler", "graph", "runtime", "lab", "tests", "shaders-gen"]
+        .iter()
+        .map(|d| root.join(d))
+        .collect();
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).unwrap().filter_map(Result::ok) {
+            let p = e.path();
+            let name = e.file_name();
+            if name == "target" || name.to_string_lossy().starts_with('.') {
+                continue;
+            }
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                // a file is a module (or a test binary) of its name
+                let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+                defined.insert(stem.clone());
+                words.insert(stem);
+                let src = std::fs::read_to_string(&p).unwrap();
+                definitions(&src, &mut defined);
+                words.extend(
+                    src.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                        .filter(|w| !w.is_empty())
+                        .map(str::to_string),
+                );
+            }
+        }
+    }
+    let mut docs: Vec<_> = std::fs::read_dir(root.join("docs"))
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    docs.push(root.join("README.md"));
+    let (mut checked, mut missing) = (0, Vec::new());
+    for doc in &docs {
+        let text = std::fs::read_to_string(doc).unwrap();
+        for (i, line) in text.lines().enumerate() {
+            for span in line.split('`').skip(1).step_by(2) {
+                let called = span.strip_suffix("()");
+                let path = called.unwrap_or(span);
+                if !(path.contains("::") || called.is_some()) || code_names(&format!("`{path}`")).is_empty() {
+                    continue;
+                }
+                let segments: Vec<&str> = path.split("::").collect();
+                if EXTERNAL.contains(&segments[0]) {
+                    continue;
+                }
+                checked += 1;
+                let last = segments[segments.len() - 1];
+                let known = defined.contains(last) && segments.iter().all(|s| words.contains(*s));
+                if !known {
+                    missing.push(format!("{}:{}: `{span}`", doc.strip_prefix(&root).unwrap_or(doc).display(), i + 1));
+                }
+            }
+        }
+    }
+    assert!(checked > 200, "only {checked} code paths found: the scan is broken");
+    assert!(
+        missing.is_empty(),
+        "the docs name code that is not defined:\n{}",
+        missing.join("\n")
+    );
+}

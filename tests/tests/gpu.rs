@@ -302,7 +302,7 @@ fn same_bits(a: &[f32], b: &[f32], what: &str) {
     }
 }
 
-/// Long bodies, and long arms of branches, are emitted as functions (`sshc::back::parts`:
+/// Long bodies, and long arms of branches, are emitted as functions (`sshc::Split`:
 /// naga's WGSL front end is quadratic in a function's expressions). Split at every fifth `let` here, every bundled
 /// technique's passes run as chains of small functions, and the visibility is the same, bit
 /// for bit: the split moves code into functions that the shader compiler inlines, in the
@@ -310,7 +310,7 @@ fn same_bits(a: &[f32], b: &[f32], what: &str) {
 #[test]
 fn bodies_split_into_functions_compute_the_same_visibility() {
     let gpu = gpu();
-    let tiny = sshc::back::parts::Split { max_run: 4, part: 3 };
+    let tiny = sshc::Split { max_run: 4, part: 3 };
     let (mut split_passes, mut split_arms) = (0, 0);
     for t in bundled("techniques") {
         let src = std::fs::read_to_string(root().join("techniques").join(format!("{t}.ron"))).unwrap();
@@ -829,7 +829,7 @@ fn a_deferred_shade_gives_the_forward_values() {
             p.steps.iter().map(|s| s.draw.clone()).collect()
         };
         assert_eq!(draws(&forward), [Draw::SceneFromCamera], "{t}: the default is forward");
-        let text = sshc::explain::explain(&deferred);
+        let text = deferred.explain();
         if draws(&deferred) == [Draw::SceneFromCamera] {
             let why = FORWARD_ONLY
                 .iter()

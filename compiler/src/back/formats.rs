@@ -22,10 +22,7 @@ pub fn render_target_warnings(ir: &Program, g: &graph::PassGraph, limits: &Limit
                     continue;
                 }
                 let Some(d) = g.texture(&w.texture) else { continue };
-                if !matches!(
-                    d.format,
-                    graph::Format::R16Unorm | graph::Format::Rg16Unorm | graph::Format::Rgba16Unorm
-                ) {
+                if !d.format.is_norm16() {
                     continue;
                 }
                 warned.push(&w.texture);

@@ -13,6 +13,7 @@
 //! `BackFaces` draws the scene's own triangles and needs no library (`geometry_pass.rs`).
 
 use crate::front::ast::Primitive;
+#[cfg(test)]
 use sshc_graph::FRAME_WGSL;
 
 /// Triangles per cone (the base polygon is circumscribed about the cone's circle).
@@ -51,7 +52,9 @@ pub struct Library {
     pub vertex: &'static str,
     /// Bytes of one record (the WGSL struct's size).
     pub record_bytes: u32,
-    /// The record's WGSL struct name.
+    /// The record's WGSL struct name (the library's test checks its size against
+    /// `record_bytes`).
+    #[cfg_attr(not(test), allow(dead_code))]
     pub record: &'static str,
     pub vertices_per_record: u32,
     /// The fragment entries' parameter type.
@@ -183,9 +186,10 @@ const VERTICES_PER_RECORD: u32 = 6u;
 }
 
 /// A whole module around a library: the `Frame` declaration and a fragment entry writing
-/// `value` (a WGSL expression of `in`, the library's varying). For tests and for the
-/// runtime's reference of the machinery.
-pub fn module(primitive: Primitive, value: &str) -> Option<String> {
+/// `value` (a WGSL expression of `in`, the library's varying): what the library's test
+/// validates.
+#[cfg(test)]
+fn module(primitive: Primitive, value: &str) -> Option<String> {
     let lib = library(primitive)?;
     Some(format!(
         "{FRAME_WGSL}@group(0) @binding(0) var<uniform> frame: Frame;

@@ -22,20 +22,15 @@ use std::fmt::Write as _;
 
 /// The buffer a Geometry pass's classification appends to.
 fn geometry_buffer_name(pass: &IrPass) -> String {
-    let skins = matches!(
-        pass.kind,
-        IrPassKind::Geometry {
-            primitive: Primitive::Skins,
-            ..
-        }
-    );
+    // skins join two views' discontinuities; the others classify one view's silhouettes
+    let skins = pass.kind.primitive().is_some_and(Primitive::joins_sample_views);
     format!("{}.{}", pass.name, if skins { "skins" } else { "silhouettes" })
 }
 
 /// The generated buffers of a module: one per `Silhouettes` step, laid out as its
 /// primitive's library says.
 pub(crate) fn geometry_buffers(pass: &IrPass, steps: &[Step]) -> Vec<graph::BufferDecl> {
-    let IrPassKind::Geometry { primitive, .. } = pass.kind else {
+    let Some(primitive) = pass.kind.primitive() else {
         return vec![];
     };
     let Some(lib) = geometry::library(primitive) else {

@@ -9,7 +9,7 @@ use crate::back::steps::{fullscreen_step, layer_chunks};
 use crate::back::text::{FULLSCREEN_VS, encode_expr, f32_lit, header, out_struct};
 use crate::diag::Diagnostic;
 use crate::front::ast::LightView;
-use crate::ir::{IrPass, IrPassKind, PlacedSlot, Program};
+use crate::ir::{IrPass, PlacedSlot, Program};
 use crate::pack::{Limits, texture_format};
 use sshc_graph::{self as graph, Draw, Step};
 use std::fmt::Write as _;
@@ -105,13 +105,7 @@ pub(crate) fn channel_entries<'a>(
     let res = &ir.resources[w];
     let (mut bodies, mut structs, mut steps) = (String::new(), String::new(), Vec::new());
     // a per-sample pass reads per-sample resources in the view it renders
-    let per_sample = matches!(
-        pass.kind,
-        IrPassKind::Geometry {
-            view: LightView::PerSample,
-            ..
-        }
-    );
+    let per_sample = pass.kind.kind().is_geometry() && pass.kind.view().is_some_and(LightView::is_per_sample);
     let mut decl = Emitter::new(ir, site, pass.reads.clone());
     decl.per_sample_pass = per_sample;
     for (ti, tex) in res.textures.iter().enumerate() {

@@ -21,8 +21,7 @@ use crate::schedule::Schedules;
 use sshc_graph::{self as graph, Step};
 
 pub use crate::back::filter::Scratch;
-pub use crate::back::formats::render_target_warnings;
-pub use crate::back::text::{f32_lit, params_struct};
+pub use crate::back::text::params_struct;
 
 /// One generated module and the steps that run it.
 #[derive(Clone, Debug)]

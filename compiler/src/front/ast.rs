@@ -213,17 +213,24 @@ impl Precision {
         })
     }
 
-    /// Bytes of one channel.
-    pub fn bytes(self) -> u32 {
+    /// How a channel of this precision is stored: one component of a texture format
+    /// (the graph's table of formats says the rest).
+    pub fn component(self) -> sshc_graph::Component {
         match self {
-            Precision::Unorm8 => 1,
-            Precision::Unorm16 | Precision::F16 => 2,
-            Precision::F32 => 4,
+            Precision::Unorm8 => sshc_graph::Component::Unorm8,
+            Precision::Unorm16 => sshc_graph::Component::Unorm16,
+            Precision::F16 => sshc_graph::Component::Float16,
+            Precision::F32 => sshc_graph::Component::Float32,
         }
     }
 
+    /// Bytes of one channel.
+    pub fn bytes(self) -> u32 {
+        self.component().bytes()
+    }
+
     pub fn is_unorm(self) -> bool {
-        matches!(self, Precision::Unorm8 | Precision::Unorm16)
+        self.component().is_unorm()
     }
 
     /// Whether no precision holds a wider range (so "store it wider" is no fix).
@@ -293,6 +300,16 @@ pub enum LightView {
     Center,
     /// One view per light sample (linear lights).
     PerSample,
+}
+
+impl LightView {
+    /// One view per light sample (rather than the centre's alone).
+    pub fn is_per_sample(self) -> bool {
+        match self {
+            LightView::PerSample => true,
+            LightView::Center => false,
+        }
+    }
 }
 
 /// How a pass runs on the GPU (the technique says what is computed, the

@@ -339,6 +339,7 @@ impl Expr {
     }
 
     /// Number of nodes, used to bound unrolled series.
+    #[cfg(test)]
     pub fn size(&self) -> usize {
         self.nodes as usize
     }

@@ -52,9 +52,16 @@ impl<'p> Evaluation<'p> {
         self.clamped.iter().map(|(c, n)| (self.p.channels[*c].name.clone(), *n)).collect()
     }
 
-    /// Run every pass after Depth and Geometry, whose outputs are `given` (`size` x `size`
-    /// texels per view, row 0 first).
-    pub fn new(p: Program<'p>, given: &Given, frame: Frame, rounding: Rounding, model: Model) -> Result<Evaluation<'p>, String> {
+    /// Run every pass of `compiled` after Depth and Geometry, whose outputs are `given`
+    /// (`size` x `size` texels per view, row 0 first).
+    pub fn new(
+        compiled: &'p crate::Compiled,
+        given: &Given,
+        frame: Frame,
+        rounding: Rounding,
+        model: Model,
+    ) -> Result<Evaluation<'p>, String> {
+        let p = compiled.program();
         let shade = Prepared::new(&p, p.shade().ok_or("the technique has no live Shade pass")?);
         let filtered = filtered_views(&p, &shade.order);
         let debug = p

@@ -14,9 +14,9 @@ pub struct Given {
 
 impl Given {
     /// The Depth pass's output: one linear depth map per view.
-    pub fn depth(p: &Program, views: Vec<Vec<f32>>) -> Given {
+    pub fn depth(compiled: &crate::Compiled, views: Vec<Vec<f32>>) -> Given {
         let mut g = Given::default();
-        for s in given_slots(p).into_iter().filter(|s| !s.geometry) {
+        for s in slots(&compiled.program()).into_iter().filter(|s| !s.geometry) {
             g.insert(
                 s.resource,
                 s.channel,
@@ -70,9 +70,13 @@ impl GivenSlot {
     }
 }
 
-/// The channels written by the live Depth and Geometry passes of `p`: what an evaluation is
-/// given rather than computes.
-pub fn given_slots(p: &Program) -> Vec<GivenSlot> {
+/// The channels written by the live Depth and Geometry passes of `compiled`: what an
+/// evaluation is given rather than computes.
+pub fn given_slots(compiled: &crate::Compiled) -> Vec<GivenSlot> {
+    slots(&compiled.program())
+}
+
+fn slots(p: &Program) -> Vec<GivenSlot> {
     let mut out = Vec::new();
     for pass in p.passes.iter().filter(|pass| pass.live) {
         let geometry = match pass.kind {

@@ -86,4 +86,4 @@ mod texels;
 pub use evaluation::{Evaluation, Scratch};
 pub use given::{Given, GivenSlot, given_slots};
 pub use inputs::{Frame, Receiver, Seen, noise};
-pub use model::{Allowed, Model, Rounding, call_error, half_step, input_error, round_f16, stored};
+pub use model::{Allowed, Model, Rounding, call_error, half_step, input_error, stored};

@@ -1,8 +1,8 @@
 //! Unit tests of the evaluation: f16 rounding, debug outputs, exact hard shadows and ties,
 //! storage rounding, the f64 model, per-sample views, given Geometry outputs.
 
+use super::model::round_f16;
 use super::*;
-use crate::ir::Program;
 
 fn compiled(src: &str) -> crate::Compiled {
     crate::compile_str(src, &crate::CompileOptions::default()).unwrap_or_else(|d| panic!("{}", d.render("t.ron", src)))
@@ -35,8 +35,8 @@ fn receiver(d: f64) -> Receiver {
     }
 }
 
-fn depth(p: &Program, map: &[f32]) -> Given {
-    Given::depth(p, vec![map.to_vec()])
+fn depth(c: &crate::Compiled, map: &[f32]) -> Given {
+    Given::depth(c, vec![map.to_vec()])
 }
 
 #[test]
@@ -69,10 +69,9 @@ fn debug_outputs_evaluate_unclamped_to_their_closed_forms() {
         ..Default::default()
     };
     let c = crate::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("t.ron", src)));
-    let p = Program::new(&c.ir, &c.layout);
     let n = 8;
     let map = vec![0.375f32; (n * n) as usize];
-    let ev = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
+    let ev = Evaluation::new(&c, &depth(&c, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
     assert_eq!(ev.debug_names(), ["depth", "pair", "raw"]);
     let mut s = Scratch::default();
     let d = 0.75;
@@ -97,10 +96,9 @@ fn debug_outputs_evaluate_unclamped_to_their_closed_forms() {
 #[test]
 fn hard_shadows_evaluate_exactly_and_allow_both_sides_only_at_a_tie() {
     let c = compiled(include_str!("../../../techniques/hard.ron"));
-    let p = Program::new(&c.ir, &c.layout);
     let n = 8;
     let map = vec![0.5f32; (n * n) as usize];
-    let ev = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
+    let ev = Evaluation::new(&c, &depth(&c, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
     let mut s = Scratch::default();
     // in front of the occluder: lit; behind it: shadowed; both within f32's reach
     let lit = ev.visibility(&receiver(0.25), &mut s);
@@ -123,11 +121,10 @@ fn storage_rounding_is_what_separates_the_two_evaluations() {
         ..Default::default()
     };
     let c = crate::compile_str(src, &opts).unwrap_or_else(|d| panic!("{}", d.render("esm.ron", src)));
-    let p = Program::new(&c.ir, &c.layout);
     let n = 8;
     let map: Vec<f32> = (0..n * n).map(|k| 0.3 + 0.4 * (k % n) as f32 / n as f32).collect();
-    let exact = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
-    let rounded = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Stored, Model::Gpu).unwrap();
+    let exact = Evaluation::new(&c, &depth(&c, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
+    let rounded = Evaluation::new(&c, &depth(&c, &map), frame(n), Rounding::Stored, Model::Gpu).unwrap();
     let mut s = Scratch::default();
     let r = receiver(0.55);
     let e = exact.visibility(&r, &mut s);
@@ -139,11 +136,10 @@ fn storage_rounding_is_what_separates_the_two_evaluations() {
 #[test]
 fn an_f64_model_allows_only_f64_rounding_where_the_math_is_well_conditioned() {
     let c = compiled(include_str!("../../../techniques/vsm.ron"));
-    let p = Program::new(&c.ir, &c.layout);
     let n = 8;
     let map: Vec<f32> = (0..n * n).map(|k| 0.2 + 0.05 * (k % 7) as f32).collect();
-    let gpu = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
-    let f64m = Evaluation::new(p, &depth(&p, &map), frame(n), Rounding::Exact, Model::F64).unwrap();
+    let gpu = Evaluation::new(&c, &depth(&c, &map), frame(n), Rounding::Exact, Model::Gpu).unwrap();
+    let f64m = Evaluation::new(&c, &depth(&c, &map), frame(n), Rounding::Exact, Model::F64).unwrap();
     let mut s = Scratch::default();
     let r = receiver(0.4);
     let (a, b) = (gpu.visibility(&r, &mut s), f64m.visibility(&r, &mut s));
@@ -157,14 +153,13 @@ fn an_f64_model_allows_only_f64_rounding_where_the_math_is_well_conditioned() {
 #[test]
 fn each_light_sample_reads_its_own_view_of_the_receiver_and_its_own_map() {
     let c = compiled(include_str!("../../../techniques/point-samples.ron"));
-    let p = Program::new(&c.ir, &c.layout);
-    assert_eq!(p.samples, 2);
+    assert_eq!(c.ir.samples, 2);
     let n = 8;
     // sample 0's map puts an occluder in front of the receiver, sample 1's does not
     let near = vec![0.2f32; (n * n) as usize];
     let far = vec![1.0f32; (n * n) as usize];
-    let given = Given::depth(&p, vec![near, far]);
-    let ev = Evaluation::new(p, &given, frame(n), Rounding::Exact, Model::Gpu).unwrap();
+    let given = Given::depth(&c, vec![near, far]);
+    let ev = Evaluation::new(&c, &given, frame(n), Rounding::Exact, Model::Gpu).unwrap();
     let seen = |k: usize| Seen {
         uv: [0.3 + 0.25 * k as f64, 0.5 + 1.0 / 64.0],
         d_world: 10.0,
@@ -185,21 +180,20 @@ fn each_light_sample_reads_its_own_view_of_the_receiver_and_its_own_map() {
     assert_eq!(v.value, 0.5, "{v:?}");
     assert!(v.allowance <= 2.5 * 2f64.powi(-23), "{v:?}");
     // one map for two views is refused
-    let one = Given::depth(&p, vec![vec![1.0; (n * n) as usize]]);
-    let err = Evaluation::new(p, &one, frame(n), Rounding::Exact, Model::Gpu).err().unwrap();
+    let one = Given::depth(&c, vec![vec![1.0; (n * n) as usize]]);
+    let err = Evaluation::new(&c, &one, frame(n), Rounding::Exact, Model::Gpu).err().unwrap();
     assert!(err.contains("given 1 view(s), not 2"), "{err}");
 }
 
 #[test]
 fn geometry_outputs_are_given_and_read_as_stored() {
     let c = compiled(include_str!("../../../techniques/penumbra-maps.ron"));
-    let p = Program::new(&c.ir, &c.layout);
-    let slots = given_slots(&p);
+    let slots = given_slots(&c);
     let geometry: Vec<_> = slots.iter().filter(|s| s.geometry).collect();
     assert!(!geometry.is_empty() && geometry.iter().all(|s| s.views == 1), "{slots:?}");
     let n = 8;
-    let only_depth = Given::depth(&p, vec![vec![1.0; (n * n) as usize]]);
-    let err = Evaluation::new(p, &only_depth, frame(n), Rounding::Exact, Model::Gpu)
+    let only_depth = Given::depth(&c, vec![vec![1.0; (n * n) as usize]]);
+    let err = Evaluation::new(&c, &only_depth, frame(n), Rounding::Exact, Model::Gpu)
         .err()
         .unwrap();
     assert!(err.contains("is not given"), "{err}");
@@ -207,17 +201,17 @@ fn geometry_outputs_are_given_and_read_as_stored() {
     for s in &geometry {
         given.insert(s.resource, s.channel, vec![vec![s.decode(0.25); (n * n) as usize]]);
     }
-    let ev = Evaluation::new(p, &given, frame(n), Rounding::Exact, Model::Gpu).unwrap();
+    let ev = Evaluation::new(&c, &given, frame(n), Rounding::Exact, Model::Gpu).unwrap();
     let v = ev.visibility(&receiver(0.5), &mut Scratch::default());
     // the depth map (all 1) lights the receiver at 0.5, so the visibility is the
     // penumbra map's intensity as given: 0.25, exact at its F16 (`select(0, p, lit)`,
     // techniques/penumbra-maps.ron)
     assert_eq!(v.value, 0.25, "{v:?}");
     // a depth map of 0.25 shadows it: the umbra, whatever the penumbra map holds
-    let mut umbra = Given::depth(&p, vec![vec![0.25; (n * n) as usize]]);
+    let mut umbra = Given::depth(&c, vec![vec![0.25; (n * n) as usize]]);
     for s in &geometry {
         umbra.insert(s.resource, s.channel, vec![vec![s.decode(0.25); (n * n) as usize]]);
     }
-    let ev = Evaluation::new(p, &umbra, frame(n), Rounding::Exact, Model::Gpu).unwrap();
+    let ev = Evaluation::new(&c, &umbra, frame(n), Rounding::Exact, Model::Gpu).unwrap();
     assert_eq!(ev.visibility(&receiver(0.5), &mut Scratch::default()).value, 0.0);
 }

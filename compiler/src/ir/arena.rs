@@ -65,10 +65,6 @@ impl Arena {
         self.nodes.len()
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.nodes.is_empty()
-    }
-
     pub fn f32(&mut self, v: f64) -> ExprId {
         self.add(Node::F32((v as f32).to_bits()), Ty::F32, Span::UNDEFINED)
     }

@@ -20,12 +20,14 @@ mod eval;
 mod passes;
 mod program;
 mod resources;
+#[cfg(test)]
+mod tests;
 pub mod validate;
 
 pub use arena::{Arena, Node, eval_call};
 pub use display::WithAnalysis;
 pub use entities::{IrChannel, IrExpansion, IrParam, Origin};
-pub use eval::{Hooks, Leaf};
+pub use eval::Hooks;
 pub use passes::{IrKernel, IrPass, IrPassKind};
 pub use program::{Ir, IrDebug, Layout, Program, Specialised};
 pub use resources::{Analysis, Encode, IrResource, PlacedResource, PlacedSlot, Resource, Slot, SlotInfo, SlotView, Texture};

@@ -91,6 +91,45 @@ impl IrPassKind {
         }
     }
 
+    /// A Shade pass's visibility expression (`None` for every other kind).
+    pub fn visibility(&self) -> Option<ExprId> {
+        match self {
+            IrPassKind::Shade { visibility } => Some(*visibility),
+            IrPassKind::Depth { .. }
+            | IrPassKind::Map
+            | IrPassKind::Filter { .. }
+            | IrPassKind::Mipmap { .. }
+            | IrPassKind::SummedArea { .. }
+            | IrPassKind::Geometry { .. } => None,
+        }
+    }
+
+    /// A Geometry pass's primitive (`None` for every other kind).
+    pub fn primitive(&self) -> Option<Primitive> {
+        match self {
+            IrPassKind::Geometry { primitive, .. } => Some(*primitive),
+            IrPassKind::Depth { .. }
+            | IrPassKind::Map
+            | IrPassKind::Filter { .. }
+            | IrPassKind::Mipmap { .. }
+            | IrPassKind::SummedArea { .. }
+            | IrPassKind::Shade { .. } => None,
+        }
+    }
+
+    /// The view a rasterising pass renders: a Depth's and a Geometry's (the light's centre,
+    /// or each light sample); `None` for the passes that render no view of their own.
+    pub fn view(&self) -> Option<LightView> {
+        match self {
+            IrPassKind::Depth { view } | IrPassKind::Geometry { view, .. } => Some(*view),
+            IrPassKind::Map
+            | IrPassKind::Filter { .. }
+            | IrPassKind::Mipmap { .. }
+            | IrPassKind::SummedArea { .. }
+            | IrPassKind::Shade { .. } => None,
+        }
+    }
+
     /// A SummedArea pass's `sum:` as written, with its span (`None` where it is absent, and
     /// for every other kind).
     pub fn table_sum(&self) -> Option<(crate::front::ast::TableSum, Span)> {
@@ -148,14 +187,6 @@ pub struct IrPass {
 
 impl IrPass {
     pub fn kind_name(&self) -> &'static str {
-        match self.kind {
-            IrPassKind::Depth { .. } => "Depth",
-            IrPassKind::Map => "Map",
-            IrPassKind::Filter { .. } => "Filter",
-            IrPassKind::Mipmap { .. } => "Mipmap",
-            IrPassKind::SummedArea { .. } => "SummedArea",
-            IrPassKind::Geometry { .. } => "Geometry",
-            IrPassKind::Shade { .. } => "Shade",
-        }
+        self.kind.kind().name()
     }
 }

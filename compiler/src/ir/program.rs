@@ -9,7 +9,6 @@ use super::{
 };
 use crate::front::ast::{LightModel, LightView};
 use crate::handle::Table;
-use crate::span::Span;
 
 #[derive(Clone, Debug)]
 pub struct Ir {
@@ -48,7 +47,6 @@ pub struct IrDebug {
     pub name: String,
     pub texture: String,
     pub expr: ExprId,
-    pub span: Span,
 }
 
 /// A compilation specialised for a scene's facts.
@@ -166,6 +164,8 @@ impl<S> std::ops::Deref for Program<'_, S> {
 }
 
 impl Ir {
+    /// The Shade pass (the IR's tests ask the lowered IR; the phases ask the `Program`).
+    #[cfg(test)]
     pub fn shade_pass(&self) -> Option<&IrPass> {
         self.passes.iter().find(|p| p.kind.kind().is_shade())
     }

@@ -122,7 +122,9 @@ impl fmt::Display for ValidationError {
 
 impl std::error::Error for ValidationError {}
 
-/// Check the invariants of the IR of `lower` (see the module documentation).
+/// Check the invariants of the IR of `lower` (see the module documentation); the driver
+/// checks `Program::lowered` directly.
+#[cfg(test)]
 pub fn validate_ir(ir: &Ir) -> Result<(), ValidationError> {
     validate(&Program::lowered(ir))
 }

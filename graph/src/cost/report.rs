@@ -35,7 +35,7 @@ impl Cost {
                     c.fetches += s.cost.fetches;
                     c.ops += s.cost.ops;
                 }
-                if p.kind == PassKind::Shade {
+                if p.kind.is_shade() {
                     shade = c;
                 }
                 (p.name.clone(), p.kind, p.steps.len(), c)

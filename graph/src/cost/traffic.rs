@@ -83,7 +83,7 @@ pub fn step(graph: &PassGraph, kind: PassKind, s: &Step, sizes: Sizes) -> Traffi
         | Draw::Primitives { .. }
         | Draw::Discontinuities { .. } => {}
     }
-    if kind == PassKind::Shade || !s.draw.reads_whole_textures() {
+    if kind.is_shade() || !s.draw.reads_whole_textures() {
         return t;
     }
     let written_layers_now = s.writes.len() as u32;

@@ -683,13 +683,7 @@ impl Scene {
             if d * eps * margin <= texel {
                 continue;
             }
-            let field = match light {
-                Light::Point { .. } => "position",
-                Light::Segment { .. } | Light::Triangle { .. } => "a",
-                Light::Sphere { .. } | Light::Disk { .. } | Light::Rectangle { .. } => "center",
-                // distant lights have no distance (the loop skips them)
-                Light::Directional { .. } | Light::DistantDisk { .. } => "direction",
-            };
+            let field = light.placing_field();
             let dir = (c - centre) / d;
             let dir = format!("({}, {}, {})", dir.x, dir.y, dir.z);
             let r = light.bounding_radius();

@@ -116,9 +116,7 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
     let n = args.shadow_map;
     // a technique with Geometry passes is verified from rasterised casters; the others from
     // depth maps unless casters are asked for
-    let geometry = sshc::interp::given_slots(&sshc::ir::Program::new(&c.ir, &c.layout))
-        .iter()
-        .any(|s| s.geometry);
+    let geometry = sshc::eval::given_slots(&c).iter().any(|s| s.geometry);
     let default = |on: bool, names: &[&str]| on.then(|| names.iter().map(|s| s.to_string()).collect::<Vec<_>>());
     let fields = args.fields.clone().or_else(|| default(!geometry, &FIELDS)).unwrap_or_default();
     let casters = args.casters.clone().or_else(|| default(geometry, &CASTERS)).unwrap_or_default();
@@ -201,10 +199,10 @@ pub fn verify(args: VerifyArgs) -> Result<(), String> {
             );
         }
     }
-    if !c.ir.debug_omitted.is_empty() {
+    if !c.debug_omitted().is_empty() {
         println!(
             "note: debug outputs {} were left out of this build: `--debug` compiles them in and compares each with its CPU evaluation",
-            c.ir.debug_omitted.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+            c.debug_omitted().iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
         );
     }
     if let Some(dir) = &args.images {

@@ -3,7 +3,7 @@
 //! rounding.
 
 use super::plane::QueryPlane;
-use sshc::interp::{Allowed, Evaluation, Scratch};
+use sshc::eval::{Allowed, Evaluation, Scratch};
 use sshc_runtime::gpu::SampleView;
 
 /// One cascade of the query plane and its evaluations: the technique's (exact and as

@@ -67,7 +67,7 @@ pub fn scene_depth(gpu: &Gpu, path: &Path, n: u32) -> Result<Vec<f32>, String> {
         .graph
         .passes
         .iter()
-        .find(|p| p.kind == sshc_runtime::graph::PassKind::Depth)
+        .find(|p| p.kind.is_depth())
         .ok_or("the hard technique has no Depth pass")?;
     Ok(ex
         .inspect()

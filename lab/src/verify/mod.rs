@@ -1,6 +1,6 @@
 //! `sshc verify`: a compiled technique run on the GPU over the inputs of the
 //! agreement tests and compared, receiver by receiver, with the compiler's f64 evaluation
-//! of the same technique on the CPU (`sshc::interp`), within that evaluation's allowance.
+//! of the same technique on the CPU (`sshc::eval`), within that evaluation's allowance.
 //!
 //! The inputs: synthetic depth fields ([`FIELDS`]: a ramp, a step, a checkerboard, noise,
 //! all 0 and all 1) and the light's depth maps of bundled scenes, each fed to the passes
@@ -14,7 +14,7 @@
 //! code generation bug, or a technique whose result the model does not bound); **lossy**
 //! when the GPU agrees but storage rounding alone (the CPU evaluation with every texel
 //! rounded as stored, against the exact one) moves the visibility by more than
-//! [`sshc::rounding::WARN_ABOVE`] at 1 % of the receivers or more: a precision that loses the
+//! [`sshc::eval::WARN_ABOVE`] at 1 % of the receivers or more: a precision that loses the
 //! signal; **UNCHECKED** when nothing differs or is lossy, but at some receiver the GPU's
 //! value is [`TELLS_APART`] or more from the CPU's and only an allowance of [`TELLS_APART`]
 //! or more admits it: an allowance that wide cannot tell a lit pixel from a shadowed one, so

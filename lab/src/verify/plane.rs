@@ -4,7 +4,7 @@
 
 use crate::scene;
 use glam::{Mat4, Vec3};
-use sshc::interp::{Frame, Receiver, Seen};
+use sshc::eval::{Frame, Receiver, Seen};
 use sshc_runtime::gpu::{SampleView, SceneInputs};
 
 /// The query plane: an orthographic light looking straight down at a receiver tilted

@@ -9,8 +9,7 @@ use super::plane::QueryPlane;
 use super::verdict::{DebugRow, LOSSY_SHARE, Row};
 use crate::run::{Bound, Loaded};
 use rayon::prelude::*;
-use sshc::interp::{Allowed, Evaluation, Given, GivenSlot, Model, Rounding, Scratch};
-use sshc::ir::Program;
+use sshc::eval::{Allowed, Evaluation, Given, GivenSlot, Model, Rounding, Scratch};
 use sshc_runtime::gpu::{CameraOutput, Gpu, SampleView};
 
 /// Read back every channel of `slots` after a frame, light (cascade) `light`'s: one decoded
@@ -58,26 +57,25 @@ pub fn verify(
     opts: &Options,
     progress: &mut dyn FnMut(&str, u32),
 ) -> Result<Vec<Row>, String> {
-    let program = Program::new(&c.ir, &c.layout);
     opts.check()?;
     let n = opts.shadow;
-    let slots = sshc::interp::given_slots(&program);
+    let slots = sshc::eval::given_slots(c);
     let geometry = slots.iter().find(|s| s.geometry).map(|s| s.pass.clone());
     let per_sample = c.graph.passes.iter().any(|p| p.views == sshc_runtime::graph::Views::PerLightSample);
     let samples = if per_sample { c.graph.samples } else { 0 };
-    let reference_program = reference.map(|r| Program::new(&r.ir, &r.layout));
-    if let Some(p) = &reference_program
-        && let Some(s) = sshc::interp::given_slots(p).into_iter().find(|s| s.geometry)
+    if let Some(r) = reference
+        && let Some(s) = sshc::eval::given_slots(r).into_iter().find(|s| s.geometry)
     {
         return Err(format!(
             "the reference `{}` has a Geometry pass (`{}`): a reference is evaluated from the technique's depth maps alone",
-            p.ir.technique, s.pass
+            r.technique(),
+            s.pass
         ));
     }
     if opts.cascades > 1 && per_sample {
         return Err(format!(
             "cascades and per-sample techniques do not mix: `{}` renders views from points on a local light, and cascades split the view of a light at infinity",
-            c.ir.technique
+            c.technique()
         ));
     }
     let splits = opts.splits();
@@ -90,7 +88,8 @@ pub fn verify(
             if let Some(pass) = &geometry {
                 return Err(format!(
                     "input `{}` is a depth map, but `{}` rasterises Geometry pass `{pass}` from meshes: give it casters",
-                    input.name, c.ir.technique
+                    input.name,
+                    c.technique()
                 ));
             }
             if depth.len() != (n * n) as usize {
@@ -161,19 +160,19 @@ pub fn verify(
                 let given = read_given(&ex, &slots, k)?;
                 let frame = p.frame(opts.light_width);
                 // the technique and its reference, each with what f64 rounding allows it
-                let pair = reference_program
+                let pair = reference
                     .map(|r| -> Result<_, String> {
-                        let theirs = Given::depth(&r, depth_views(&given, &slots));
+                        let theirs = Given::depth(r, depth_views(&given, &slots));
                         Ok((
-                            Evaluation::new(program, &given, frame, Rounding::Exact, Model::F64)?,
+                            Evaluation::new(c, &given, frame, Rounding::Exact, Model::F64)?,
                             Evaluation::new(r, &theirs, frame, Rounding::Exact, Model::F64)?,
                         ))
                     })
                     .transpose()?;
                 cascades.push(Cascade {
                     plane: p,
-                    exact: Evaluation::new(program, &given, frame, Rounding::Exact, Model::Gpu)?,
-                    rounded: Evaluation::new(program, &given, frame, Rounding::Stored, Model::Gpu)?,
+                    exact: Evaluation::new(c, &given, frame, Rounding::Exact, Model::Gpu)?,
+                    rounded: Evaluation::new(c, &given, frame, Rounding::Stored, Model::Gpu)?,
                     pair,
                 });
             }
@@ -189,7 +188,7 @@ pub fn verify(
                 receivers: evaluated.len(),
                 compared: Vec::with_capacity(evaluated.len()),
                 debug: debug_rows(&ex, &cascades, &points, camera as usize, &scene.samples)?,
-                ..Row::new(&input.name, camera, reference_program.is_some())
+                ..Row::new(&input.name, camera, reference.is_some())
             };
             for c in &cascades {
                 for (name, n) in c.exact.clamped() {

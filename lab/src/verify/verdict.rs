@@ -2,7 +2,7 @@
 //! the reference's comparison, the debug outputs', and what an allowance too wide to tell
 //! lit from shadowed ([`TELLS_APART`]) leaves unchecked.
 
-use sshc::interp::Allowed;
+use sshc::eval::Allowed;
 
 /// The verdict of one (input, camera).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -243,13 +243,13 @@ impl Row {
 
     /// The row's verdict from what it counted: DIFFERS where anything (the visibility, the
     /// reference, a debug output) lies outside its allowance; LOSSY where storage rounding
-    /// alone moves the visibility by more than [`sshc::rounding::WARN_ABOVE`] at
+    /// alone moves the visibility by more than [`sshc::eval::WARN_ABOVE`] at
     /// [`LOSSY_SHARE`] of the receivers; UNCHECKED where some receiver agrees only under an
     /// allowance too wide to tell lit from shadowed; agrees otherwise.
     pub fn judge(&self) -> Verdict {
         if self.outside > 0 || self.reference.is_some_and(|r| r.0 > 0) || self.debug.iter().any(|d| d.outside > 0) {
             Verdict::Differs
-        } else if self.storage > sshc::rounding::WARN_ABOVE {
+        } else if self.storage > sshc::eval::WARN_ABOVE {
             Verdict::Lossy
         } else if self.unchecked > 0 {
             Verdict::Unchecked

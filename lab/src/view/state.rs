@@ -100,42 +100,6 @@ pub fn moved(light: &Light, by: Vec3) -> Light {
     light.translated(by).turned(turn)
 }
 
-/// The light's size: radius, half extent, half length or angle; `None` for a light with
-/// no extent.
-pub fn size(light: &Light) -> Option<f32> {
-    match light {
-        Light::Point { .. } | Light::Directional { .. } => None,
-        Light::Sphere { radius, .. } | Light::Disk { radius, .. } => Some(*radius),
-        Light::Rectangle { half_width, .. } => Some(*half_width),
-        Light::Segment { a, b } => Some(0.5 * (*b - *a).length()),
-        Light::Triangle { a, b, c } => {
-            let m = (*a + *b + *c) / 3.0;
-            Some((*a - m).length())
-        }
-        Light::DistantDisk { angle_degrees, .. } => Some(*angle_degrees),
-    }
-}
-
-/// The light with its size set to `s` (its shape kept: [`Light::scaled`] about its
-/// centre by the ratio of the sizes).
-pub fn resized(light: &Light, s: f32) -> Light {
-    let s = s.max(0.0);
-    match size(light).filter(|&old| old > 0.0) {
-        Some(old) => light.scaled(s / old),
-        // a light of size 0 grows from nothing: set its size itself
-        None => {
-            let mut l = light.clone();
-            match &mut l {
-                Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius = s,
-                Light::Rectangle { half_width, .. } => *half_width = s,
-                Light::DistantDisk { angle_degrees, .. } => *angle_degrees = s.min(179.0),
-                Light::Point { .. } | Light::Directional { .. } | Light::Segment { .. } | Light::Triangle { .. } => {}
-            }
-            l
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -176,8 +140,8 @@ mod tests {
             b: Vec3::new(1.0, 4.0, 0.0),
         };
         let m = moved(&l, Vec3::new(0.5, 0.0, 0.0));
-        assert_eq!(size(&m), Some(1.0));
-        let r = resized(&m, 2.0);
+        assert_eq!(m.size(), Some(1.0));
+        let r = m.resized(2.0);
         assert_eq!(
             r,
             Light::Segment {

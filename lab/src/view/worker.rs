@@ -167,22 +167,8 @@ fn build(gpu: &Gpu, r: Request) -> Result<Ready, String> {
     let compile_ms = t.elapsed().as_secs_f64() * 1e3;
     let warnings = render_diagnostics(&sshc::Diagnostics(compiled.warnings.clone()), &r.technique, &source);
     let controls = Controls {
-        storage: compiled
-            .ir
-            .channels
-            .iter()
-            .map(|c| c.name.clone())
-            .chain(compiled.ir.expansions.iter().map(|e| e.name.clone()))
-            .collect(),
-        schedules: compiled
-            .ir
-            .passes
-            .with_handles()
-            .filter_map(|(id, p)| {
-                let compute = compiled.schedules.of(id)?.runs() == sshc::front::ast::Schedule::Compute;
-                Some((p.name.clone(), compute))
-            })
-            .collect(),
+        storage: compiled.stored_names(),
+        schedules: compiled.schedules(),
         warnings,
     };
     let t = Instant::now();

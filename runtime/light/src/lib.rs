@@ -312,6 +312,69 @@ impl Light {
         l
     }
 
+    /// The light's size: radius, half extent, half length (of a segment; a triangle's
+    /// centre-to-corner distance) or angle; `None` for a light with no size to set (a point,
+    /// a directional light).
+    pub fn size(&self) -> Option<f32> {
+        match self {
+            Light::Point { .. } | Light::Directional { .. } => None,
+            Light::Sphere { radius, .. } | Light::Disk { radius, .. } => Some(*radius),
+            Light::Rectangle { half_width, .. } => Some(*half_width),
+            Light::Segment { a, b } => Some(0.5 * (*b - *a).length()),
+            Light::Triangle { a, b, c } => {
+                let m = (*a + *b + *c) / 3.0;
+                Some((*a - m).length())
+            }
+            Light::DistantDisk { angle_degrees, .. } => Some(*angle_degrees),
+        }
+    }
+
+    /// The light with its [`Light::size`] set to `s` (its shape kept: [`Light::scaled`]
+    /// about its centre by the ratio of the sizes; a light of size 0 has its size set).
+    pub fn resized(&self, s: f32) -> Light {
+        let s = s.max(0.0);
+        match self.size().filter(|&old| old > 0.0) {
+            Some(old) => self.scaled(s / old),
+            // a light of size 0 grows from nothing: set its size itself
+            None => {
+                let mut l = self.clone();
+                match &mut l {
+                    Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius = s,
+                    Light::Rectangle { half_width, .. } => *half_width = s,
+                    Light::DistantDisk { angle_degrees, .. } => *angle_degrees = s.min(179.0),
+                    Light::Point { .. } | Light::Directional { .. } | Light::Segment { .. } | Light::Triangle { .. } => {}
+                }
+                l
+            }
+        }
+    }
+
+    /// Whether the light has an extent: `false` where one ray from a point answers its
+    /// visibility (0 or 1), as for a point, a directional light and any light of size 0.
+    pub fn has_extent(&self) -> bool {
+        match self {
+            Light::Point { .. } | Light::Directional { .. } => false,
+            Light::Sphere { radius, .. } | Light::Disk { radius, .. } => *radius > 0.0,
+            Light::Rectangle {
+                half_width, half_height, ..
+            } => *half_width > 0.0 || *half_height > 0.0,
+            Light::Segment { a, b } => a != b,
+            Light::Triangle { a, b, c } => a != b || b != c,
+            Light::DistantDisk { angle_degrees, .. } => *angle_degrees > 0.0,
+        }
+    }
+
+    /// The scene file's field that places the light (`position`, `center`, the first
+    /// corner `a`, or a distant light's `direction`): where a message about its place points.
+    pub fn placing_field(&self) -> &'static str {
+        match self {
+            Light::Point { .. } => "position",
+            Light::Segment { .. } | Light::Triangle { .. } => "a",
+            Light::Sphere { .. } | Light::Disk { .. } | Light::Rectangle { .. } => "center",
+            Light::Directional { .. } | Light::DistantDisk { .. } => "direction",
+        }
+    }
+
     /// The centre of a light at a finite position (the midpoint of a segment); `None` for
     /// lights at infinity.
     pub fn center(&self) -> Option<Vec3> {
@@ -918,6 +981,42 @@ pub fn sample_views(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A light of size 0 of every kind is answered by one ray; any size makes it an extent,
+    /// and resizing one from 0 gives it that size.
+    #[test]
+    fn a_light_has_an_extent_exactly_when_it_has_a_size() {
+        let zero = [
+            Light::Point { position: Vec3::Y },
+            Light::Directional { direction: Vec3::Y },
+            Light::Sphere {
+                center: Vec3::Y,
+                radius: 0.0,
+            },
+            Light::Disk {
+                center: Vec3::Y,
+                normal: Vec3::NEG_Y,
+                radius: 0.0,
+            },
+            Light::Segment { a: Vec3::Y, b: Vec3::Y },
+            Light::DistantDisk {
+                direction: Vec3::Y,
+                angle_degrees: 0.0,
+            },
+        ];
+        for l in zero {
+            assert!(!l.has_extent(), "{l:?}");
+            let grown = l.resized(0.5);
+            assert_eq!(
+                grown.has_extent(),
+                l.size().is_some() && grown.size() == Some(0.5),
+                "{l:?} -> {grown:?}"
+            );
+        }
+        let segment = Light::Segment { a: Vec3::ZERO, b: Vec3::X };
+        assert!(segment.has_extent());
+        assert_eq!((segment.size(), segment.placing_field()), (Some(0.5), "a"));
+    }
 
     /// A host's rectangle whose `u_axis` is not of unit length (the runtime fits a host's
     /// light as given) has the extents of the same rectangle with a unit axis.

@@ -354,10 +354,7 @@ fn generate(input: &TechniqueInput, base: &Path) -> Result<TokenStream, TokenStr
     let uniform: Vec<&ParamDecl> = graph.params.iter().filter(|p| p.offset.is_some()).collect();
     let mut layout: Option<UniformLayout> = None;
     if !uniform.is_empty() {
-        let decl = format!(
-            "{}@group(0) @binding(1) var<uniform> params: Params;\n",
-            sshc::back::wgsl::params_struct(&sshc::ir::Program::new(&compiled.ir, &compiled.layout))
-        );
+        let decl = format!("{}@group(0) @binding(1) var<uniform> params: Params;\n", compiled.params_struct());
         let l = params_layout(&decl).map_err(|e| internal(format!("the `Params` declaration: {e}")))?;
         layout = Some(l.ok_or_else(|| internal("the `Params` declaration declares no `Params`".into()))?);
     }

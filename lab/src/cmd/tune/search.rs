@@ -33,7 +33,7 @@ impl Candidate {
 /// A real value as the tuner writes it: three significant digits, read back as an f32.
 fn real(x: f64) -> String {
     let rounded: f64 = format!("{x:.2e}").parse().unwrap_or(x);
-    sshc::tune::literal(sshc::front::ast::ScalarTy::F32, rounded)
+    sshc::tune::real_literal(rounded)
 }
 
 /// Whether a real axis is searched on a log scale: non-negative, and spanning more than two

@@ -46,7 +46,7 @@ impl App {
             }
             Event::LightSize { light, size } => {
                 let l = self.light(light)?;
-                self.set_light(l, state::resized(&self.state.lights[l], size))?;
+                self.set_light(l, self.state.lights[l].resized(size))?;
             }
             Event::Set { name, value } => self.set(&name, value)?,
             Event::Precision { name, value } => {

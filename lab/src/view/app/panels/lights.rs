@@ -2,13 +2,12 @@
 
 use super::{Action, UiData};
 use crate::view::script::Event;
-use crate::view::state;
 
 pub(super) fn lights(ui: &mut egui::Ui, d: &UiData, actions: &mut Vec<Action>) {
     ui.label("shift-drag: move light 0 across; ctrl-drag: up and down");
     for (i, l) in d.state.lights.iter().enumerate() {
         ui.label(format!("light {i}: {}", l.kind_name()));
-        if let Some(mut s) = state::size(l) {
+        if let Some(mut s) = l.size() {
             let before = s;
             let max = if l.is_distant() { 20.0 } else { (before * 4.0).max(1.0) };
             ui.add(egui::Slider::new(&mut s, 0.0..=max).text("size"));
