@@ -1,6 +1,6 @@
 //! Phase `check`, the graph checks: the pass graph is a DAG whose order follows from
 //! reads and writes; every read comes after a write; exactly one Shade pass; every
-//! expression is typed in its context (by the typer, `check/typer.rs`) and its inputs come
+//! expression is typed in its context (by the typer, `check/typer/`) and its inputs come
 //! from the side it may read: basis expansions are separable (Annen eq. 5.6: coefficients
 //! use receiver-side inputs only, basis functions map-side inputs only), geometry inputs
 //! only in what Geometry passes write; per-sample resources are read where each view is

@@ -73,7 +73,7 @@ pub fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
-// Sweeps: the CSV that `sshc sweep` and `sshc sweep merge` write (tests/sweep.rs, tests/slurm.rs).
+// Sweeps: the CSV that `sshc sweep` and `sshc sweep merge` write (tests/sweep/, tests/slurm.rs).
 
 /// The rows of a sweep's CSV, each a list of fields.
 pub fn csv_rows(csv: &str) -> Vec<Vec<String>> {
