@@ -6,7 +6,7 @@ use crate::error::SceneError;
 use crate::schema::{Camera, ShadowFit};
 use crate::validate::{LIGHT_PRECISION_MARGIN, MAX_DEPTH_RATIO, PRECISION_RATIO};
 
-use sshc_light::{Light, bounds_of};
+use sshc_light::bounds_of;
 
 impl Scene {
     /// Checks the scene's precision budget in f32 (called when the scene is built; call
