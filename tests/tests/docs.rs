@@ -334,3 +334,73 @@ fn every_code_path_the_docs_name_is_defined() {
         missing.join("\n")
     );
 }
+
+/// README's layout table is complete: its `scenes/` row names every bundled scene (each
+/// `.ron` under scenes/, its stem in backticks) and its `sweeps/` row every sweep file.
+#[test]
+fn the_readme_names_every_bundled_scene_and_sweep() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let row = |folder: &str| {
+        readme
+            .lines()
+            .find(|l| l.starts_with(&format!("| `{folder}/` |")))
+            .unwrap_or_else(|| panic!("README.md has no layout row for {folder}/"))
+            .to_string()
+    };
+    let mut missing = Vec::new();
+    for folder in ["scenes", "sweeps"] {
+        let row = row(folder);
+        let mut stack = vec![root.join(folder)];
+        let mut found = 0;
+        while let Some(dir) = stack.pop() {
+            for e in std::fs::read_dir(&dir).unwrap().filter_map(Result::ok) {
+                let p = e.path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else if p.extension().is_some_and(|x| x == "ron") {
+                    found += 1;
+                    let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
+                    if !row.contains(&format!("`{stem}`")) {
+                        missing.push(format!("{folder}/: `{stem}`"));
+                    }
+                }
+            }
+        }
+        assert!(found >= 10, "only {found} files in {folder}/: the scan is broken");
+    }
+    assert!(missing.is_empty(), "README.md's layout table leaves out:\n{}", missing.join("\n"));
+}
+
+/// README's tour names every command of the `sshc` binary (`sshc verify`, `sshc view`,
+/// ...): each variant of `enum Command` in lab/src/main.rs, in kebab case.
+#[test]
+fn the_readme_names_every_command() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let main = std::fs::read_to_string(root.join("lab/src/main.rs")).unwrap();
+    let body = main
+        .split("enum Command {")
+        .nth(1)
+        .expect("lab/src/main.rs declares `enum Command`");
+    let body = &body[..body.find("\n}").expect("the enum ends")];
+    let mut commands: Vec<String> = body
+        .lines()
+        .filter(|l| l.starts_with("    ") && !l.starts_with("     ") && l.trim_start().starts_with(|c: char| c.is_ascii_uppercase()))
+        .map(|l| {
+            let name: String = l.trim().chars().take_while(char::is_ascii_alphanumeric).collect();
+            let mut kebab = String::new();
+            for (i, c) in name.chars().enumerate() {
+                if c.is_ascii_uppercase() && i > 0 {
+                    kebab.push('-');
+                }
+                kebab.push(c.to_ascii_lowercase());
+            }
+            kebab
+        })
+        .collect();
+    commands.dedup();
+    assert!(commands.len() >= 10, "only {commands:?} found: the scan is broken");
+    let missing: Vec<&String> = commands.iter().filter(|c| !readme.contains(&format!("sshc {c}"))).collect();
+    assert!(missing.is_empty(), "README.md never shows `sshc {missing:?}`");
+}

@@ -4,3 +4,6 @@ pub mod ast;
 pub mod expr;
 pub mod parse;
 pub mod ron;
+
+#[cfg(test)]
+mod tests;
