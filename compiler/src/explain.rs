@@ -34,7 +34,7 @@ fn debug_outputs(s: &mut String, ir: &Program, g: &sshc_graph::PassGraph) {
 
 fn cascades(s: &mut String, ir: &Program, g: &sshc_graph::PassGraph) {
     let _ = writeln!(s, "\nUnder cascades (`--cascades N`, a light at infinity):");
-    if g.passes.iter().any(|p| p.views == sshc_graph::Views::PerLightSample) {
+    if g.passes.iter().any(|p| p.views.is_per_sample()) {
         let _ = writeln!(
             s,
             "  refused: the per-sample passes render views from points on a local light, and cascades split the view of a light at infinity"
@@ -183,7 +183,11 @@ pub fn explain(c: &Compiled) -> String {
                 let buffers: Vec<String> = g
                     .buffers
                     .iter()
-                    .filter(|b| g.passes.iter().any(|gp| gp.name == p.name && gp.steps.iter().any(|st| matches!(&st.draw, sshc_graph::Draw::Silhouettes { buffer } if *buffer == b.name))))
+                    .filter(|b| {
+                        // the buffers its silhouette steps append to (one record per edge)
+                        let silhouettes = |st: &sshc_graph::Step| !st.draw.joins_sample_views() && st.draw.appends_to() == Some(b.name.as_str());
+                        g.passes.iter().any(|gp| gp.name == p.name && gp.steps.iter().any(silhouettes))
+                    })
                     .map(|b| {
                         format!(
                             "buffer `{}`: a {}-byte header (draw arguments, records claimed and dropped) and at most one {}-byte record per edge of the scene's meshes, as many as one storage binding holds, {} vertices drawn per record",

@@ -233,12 +233,7 @@ pub use sshc_graph::SceneFacts;
 /// reports the error.
 pub fn admits(source: &str, kind: sshc_graph::LightKind) -> bool {
     match front::parse::parse(source) {
-        Ok(t) => {
-            t.lights.is_empty()
-                || t.lights
-                    .iter()
-                    .any(|l| l.value == sshc_graph::LightModel::Any || l.value.kind() == Some(kind))
-        }
+        Ok(t) => t.lights.is_empty() || t.lights.iter().any(|l| l.value.accepts(kind)),
         Err(_) => true,
     }
 }

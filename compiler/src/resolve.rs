@@ -383,10 +383,7 @@ pub fn resolve<'a>(t: &'a Technique, opts: &CompileOptions) -> Result<Symbols<'a
 
     // A scene's light must be one the technique admits (an absent `light:` admits any).
     if let Some(facts) = &opts.scene {
-        let admits = t.lights.is_empty()
-            || t.lights
-                .iter()
-                .any(|l| l.value == sshc_graph::LightModel::Any || l.value.kind() == Some(facts.light));
+        let admits = t.lights.is_empty() || t.lights.iter().any(|l| l.value.accepts(facts.light));
         // (`crate::admits` answers the same from the source, for the command line)
         if !admits {
             let names: Vec<&str> = t.lights.iter().filter_map(|l| l.value.kind()).map(|k| k.name()).collect();

@@ -48,7 +48,7 @@ impl Schedules {
 
     /// Whether pass `p` runs in the compute schedule.
     pub fn compute(&self, p: PassId) -> bool {
-        self.of(p).is_some_and(|c| c.runs() == Schedule::Compute)
+        self.of(p).is_some_and(|c| c.runs().is_compute())
     }
 
     /// The text of `--dump-ir-after schedule`: every pass, in execution order, with the

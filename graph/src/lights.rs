@@ -155,6 +155,21 @@ impl LightKind {
         }
     }
 
+    /// Whether a technique's model of it says how many views it renders along the light
+    /// (`Segment(samples: N)`: one view per sample, Heidrich et al. 2000).
+    pub fn takes_samples(self) -> bool {
+        match self {
+            LightKind::Segment => true,
+            LightKind::Point
+            | LightKind::Directional
+            | LightKind::Sphere
+            | LightKind::Disk
+            | LightKind::Rectangle
+            | LightKind::DistantDisk
+            | LightKind::Triangle => false,
+        }
+    }
+
     /// True for lights at infinity (orthographic light views).
     pub fn is_distant(self) -> bool {
         match self {

@@ -74,6 +74,56 @@ impl Draw {
 
     /// Whether the step is part of a deferred Shade (its G-buffer raster, or the compute
     /// step over its pixels), which only a Shade pass may hold.
+    /// The buffer of records the step appends to (`Silhouettes`, `Discontinuities`); `None`
+    /// for every other step (a `Primitives` step draws from its buffer).
+    pub fn appends_to(&self) -> Option<&str> {
+        match self {
+            Draw::Silhouettes { buffer } | Draw::Discontinuities { buffer, .. } => Some(buffer),
+            Draw::SceneFromLight
+            | Draw::SceneFromCamera
+            | Draw::CameraGBuffer
+            | Draw::ComputePixels
+            | Draw::FullScreen
+            | Draw::MipLevels
+            | Draw::ComputeRows
+            | Draw::ComputeColumns
+            | Draw::ComputeTexels
+            | Draw::ComputeMipLevels
+            | Draw::Primitives { .. } => None,
+        }
+    }
+
+    /// Finds the depth discontinuities between two light-sample views (skins): the pass
+    /// must render one view per sample.
+    pub fn joins_sample_views(&self) -> bool {
+        match self {
+            Draw::Discontinuities { .. } => true,
+            Draw::SceneFromLight
+            | Draw::SceneFromCamera
+            | Draw::CameraGBuffer
+            | Draw::ComputePixels
+            | Draw::FullScreen
+            | Draw::MipLevels
+            | Draw::ComputeRows
+            | Draw::ComputeColumns
+            | Draw::ComputeTexels
+            | Draw::ComputeMipLevels
+            | Draw::Silhouettes { .. }
+            | Draw::Primitives { .. } => false,
+        }
+    }
+
+    /// The deferred Shade's compute step, which reads the G-buffer an earlier step of its
+    /// pass wrote.
+    pub fn reads_gbuffer(&self) -> bool {
+        self.is_deferred_shade() && self.is_dispatch()
+    }
+
+    /// The deferred Shade's raster step, which writes the G-buffer.
+    pub fn writes_gbuffer(&self) -> bool {
+        self.is_deferred_shade() && !self.is_dispatch()
+    }
+
     pub fn is_deferred_shade(&self) -> bool {
         self.facts().deferred
     }
@@ -511,6 +561,16 @@ pub enum Views {
     LightCenter,
     /// One view per light sample; the pass's textures get one layer block per view.
     PerLightSample,
+}
+
+impl Views {
+    /// One view per light sample (rather than the centre's alone).
+    pub fn is_per_sample(self) -> bool {
+        match self {
+            Views::PerLightSample => true,
+            Views::LightCenter => false,
+        }
+    }
 }
 
 /// What one step draws or dispatches.

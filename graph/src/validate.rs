@@ -2,7 +2,7 @@
 //! references, params, layers, samples and formats.
 
 use crate::schema::{
-    BufferDecl, Draw, Extent, GraphError, MAX_RECORD_BYTES, MAX_VERTICES_PER_RECORD, PassGraph, SCHEMA_VERSION, TextureDecl, View, Views,
+    BufferDecl, Draw, Extent, GraphError, MAX_RECORD_BYTES, MAX_VERTICES_PER_RECORD, PassGraph, SCHEMA_VERSION, TextureDecl, View,
 };
 use crate::uniforms::MAX_LIGHT_SAMPLES;
 use serde::Deserialize;
@@ -182,7 +182,7 @@ impl PassGraph {
                     path: p.shader.clone(),
                 });
             }
-            let per_sample = p.views == Views::PerLightSample;
+            let per_sample = p.views.is_per_sample();
             for s in &p.steps {
                 for w in &s.writes {
                     let views = g.texture(&w.texture).map_or(1, |t| t.views);
@@ -193,7 +193,7 @@ impl PassGraph {
                         )));
                     }
                 }
-                if matches!(s.draw, Draw::Discontinuities { .. }) && !per_sample {
+                if s.draw.joins_sample_views() && !per_sample {
                     return Err(GraphError::Samples(format!(
                         "pass `{}` finds discontinuities between sample views, but renders the light's centre only",
                         p.name
@@ -279,13 +279,7 @@ impl PassGraph {
                         message: format!("a {:?} step belongs to a Shade pass, not a {:?} pass", s.draw, p.kind),
                     });
                 }
-                if s.draw == Draw::ComputePixels
-                    && !p
-                        .steps
-                        .iter()
-                        .take_while(|t| !std::ptr::eq(*t, s))
-                        .any(|t| t.draw == Draw::CameraGBuffer)
-                {
+                if s.draw.reads_gbuffer() && !p.steps.iter().take_while(|t| !std::ptr::eq(*t, s)).any(|t| t.draw.writes_gbuffer()) {
                     return Err(GraphError::Step {
                         pass: p.name.clone(),
                         message: "a ComputePixels step reads the G-buffer, which no earlier CameraGBuffer step of its pass writes".into(),

@@ -3,7 +3,7 @@
 use crate::run::{Bound, Loaded};
 use crate::scene::{Light, Scene};
 use sshc_runtime::gpu::{Camera, Geometry, IDENTITY, Instance, LightInputs, Mesh, SceneInputs, Slices};
-use sshc_runtime::graph::{MAX_LIGHT_SAMPLES, PassGraph, Views};
+use sshc_runtime::graph::{MAX_LIGHT_SAMPLES, PassGraph};
 use sshc_runtime::light::{SampleFit, sample_views};
 
 /// The scene's geometry, camera and first light, as the runtime takes them.
@@ -193,7 +193,7 @@ pub fn bind_scene(ex: &Loaded, scene: &Scene, all: bool) -> Result<Bound, String
 /// The light samples `graph` renders views of: [`PassGraph::samples`] when some pass has
 /// `views: PerLightSample`, else 0 (bind none).
 pub fn graph_samples(graph: &PassGraph) -> u32 {
-    if graph.passes.iter().any(|p| p.views == Views::PerLightSample) {
+    if graph.passes.iter().any(|p| p.views.is_per_sample()) {
         graph.samples
     } else {
         0
@@ -806,7 +806,7 @@ mod tests {
         g.samples = 5;
         assert_eq!(graph_samples(&g), 0);
         assert!(scene_inputs_for(&s, &g).unwrap().samples.is_empty());
-        g.passes[0].views = Views::PerLightSample;
+        g.passes[0].views = sshc_runtime::graph::Views::PerLightSample;
         for n in [1, 2, 5, 9, 16] {
             g.samples = n;
             assert_eq!(graph_samples(&g), n);

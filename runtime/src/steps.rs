@@ -499,7 +499,7 @@ pub(crate) fn build(gpu: &Gpu, graph: &PassGraph, sources: &HashMap<String, Arc<
                 kind,
                 light_samples: step.light_samples,
                 views: graph.views_of(pass),
-                per_sample: pass.views == graph::Views::PerLightSample,
+                per_sample: pass.views.is_per_sample(),
                 view_layers: step
                     .writes
                     .iter()

@@ -142,7 +142,7 @@ impl Targets {
             check_light_kind(graph, l, light.kind)?;
         }
         check_floor_exact(graph, scene, &state.lights)?;
-        if graph.passes.iter().any(|p| p.views == graph::Views::PerLightSample)
+        if graph.passes.iter().any(|p| p.views.is_per_sample())
             && let Some(l) = state.lights.iter().position(|l| l.samples.len() != graph.samples as usize)
         {
             return Err(RuntimeError::Param(format!(

@@ -379,6 +379,14 @@ impl Schedule {
         }
     }
 
+    /// One invocation per texel or pixel, rather than a raster.
+    pub fn is_compute(self) -> bool {
+        match self {
+            Schedule::Compute => true,
+            Schedule::Fragment => false,
+        }
+    }
+
     /// The name a technique file writes (`Compute`).
     pub fn variant(self) -> &'static str {
         match self {

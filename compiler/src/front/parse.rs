@@ -555,7 +555,7 @@ fn light(node: &Node) -> Result<Spanned<LightModel>, Diagnostic> {
         return Err(unknown_variant(span, &v, "light model", &names));
     };
     let mut samples = 0;
-    if kind == LightKind::Segment {
+    if kind.takes_samples() {
         let mut f = Fields::of(node, "Segment")?;
         let n = f.req("samples")?;
         samples = match n.value {

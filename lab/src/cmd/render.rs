@@ -220,7 +220,7 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
                 .passes
                 .iter()
                 .flat_map(|p| &p.steps)
-                .any(|s| matches!(&s.draw, sshc_runtime::graph::Draw::Discontinuities { buffer, .. } if *buffer == b.name));
+                .any(|s| s.draw.joins_sample_views() && s.draw.appends_to() == Some(b.name.as_str()));
             let what = if skins {
                 "skin triangle(s) in the last view of the last frame"
             } else {
@@ -297,7 +297,7 @@ pub fn render(mut a: RenderArgs) -> Result<(), String> {
 /// a texture) or `raster` (the scene or generated primitives), `deferred` for a deferred
 /// Shade (a G-buffer raster, then a compute step per pixel); `mixed` for several kinds.
 fn schedule(steps: &[sshc_runtime::graph::Step]) -> &'static str {
-    if steps.iter().any(|s| s.draw == Draw::ComputePixels) {
+    if steps.iter().any(|s| s.draw.reads_gbuffer()) {
         return "deferred";
     }
     let kind = |d: &Draw| match d {
