@@ -39,15 +39,21 @@ fn paths(line: &str) -> Vec<&str> {
         .collect()
 }
 
-#[test]
-fn every_file_the_docs_name_exists() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+/// The Markdown files the docs are: `docs/*.md` and `README.md`.
+fn markdown(root: &Path) -> Vec<std::path::PathBuf> {
     let mut docs: Vec<_> = std::fs::read_dir(root.join("docs"))
         .unwrap()
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|e| e == "md"))
         .collect();
     docs.push(root.join("README.md"));
+    docs
+}
+
+#[test]
+fn every_file_the_docs_name_exists() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let docs = markdown(&root);
     let (mut named, mut missing) = (0, Vec::new());
     for doc in &docs {
         let text = std::fs::read_to_string(doc).unwrap();
@@ -298,12 +304,7 @@ fn every_code_path_the_docs_name_is_defined() {
             }
         }
     }
-    let mut docs: Vec<_> = std::fs::read_dir(root.join("docs"))
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "md"))
-        .collect();
-    docs.push(root.join("README.md"));
+    let docs = markdown(&root);
     let (mut checked, mut missing) = (0, Vec::new());
     for doc in &docs {
         let text = std::fs::read_to_string(doc).unwrap();
@@ -403,4 +404,30 @@ fn the_readme_names_every_command() {
     assert!(commands.len() >= 10, "only {commands:?} found: the scan is broken");
     let missing: Vec<&String> = commands.iter().filter(|c| !readme.contains(&format!("sshc {c}"))).collect();
     assert!(missing.is_empty(), "README.md never shows `sshc {missing:?}`");
+}
+
+/// docs/compile-time.md's section "Every bundled technique" has a row for each file in
+/// techniques/ (README's "every bundled technique under 5 ms but PCSS" rests on it).
+#[test]
+fn the_compile_time_table_has_every_technique() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let text = std::fs::read_to_string(root.join("docs/compile-time.md")).unwrap();
+    let section = text
+        .split("\n## ")
+        .find(|s| s.starts_with("Every bundled technique"))
+        .expect("docs/compile-time.md has a section \"Every bundled technique\"");
+    let mut missing = Vec::new();
+    let mut found = 0;
+    for e in std::fs::read_dir(root.join("techniques")).unwrap().filter_map(Result::ok) {
+        let p = e.path();
+        if p.extension().is_some_and(|x| x == "ron") {
+            found += 1;
+            let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
+            if !section.lines().any(|l| l.starts_with(&format!("| {stem} |"))) {
+                missing.push(stem);
+            }
+        }
+    }
+    assert!(found >= 10, "only {found} techniques found: the scan is broken");
+    assert!(missing.is_empty(), "docs/compile-time.md has no row for {missing:?}");
 }

@@ -115,15 +115,7 @@ impl<S> Copy for Program<'_, S> {}
 impl<S> Program<'_, S> {
     /// The visibility expression of the live Shade pass.
     pub fn shade(&self) -> Option<ExprId> {
-        self.passes.iter().filter(|pass| pass.live).find_map(|pass| match pass.kind {
-            IrPassKind::Shade { visibility } => Some(visibility),
-            IrPassKind::Depth { .. }
-            | IrPassKind::Map
-            | IrPassKind::Filter { .. }
-            | IrPassKind::Mipmap { .. }
-            | IrPassKind::SummedArea { .. }
-            | IrPassKind::Geometry { .. } => None,
-        })
+        self.passes.iter().filter(|pass| pass.live).find_map(|pass| pass.kind.visibility())
     }
 }
 
