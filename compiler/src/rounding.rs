@@ -107,7 +107,7 @@ pub fn unsupported(p: &Program) -> Option<String> {
 }
 
 /// The value an input takes in the typical configuration its descriptor states
-/// ([`InputDesc::typical`](crate::builtins::InputDesc::typical)).
+/// (`InputDesc::typical`, in `builtins::inputs`).
 pub fn typical(i: Input) -> f64 {
     i.desc().typical
 }

@@ -3,7 +3,7 @@
 //! [`space`] reads a technique's axes: every param with a declared `range:` (fixed or
 //! runtime, the biases included), every channel's and expansion's precision, every
 //! schedulable pass's schedule, the shadow-map size and the cascade count, each narrowed or
-//! frozen by the technique's `tune:` block. [`check`] refuses a `tune:` entry that names
+//! frozen by the technique's `tune:` block. `check` (run at parse) refuses a `tune:` entry that names
 //! no axis or leaves a param's declared range, at the entry. [`rewrite`] edits the source
 //! text at the spans the parser kept: the chosen values become the defaults, precisions
 //! and schedules, the map size a `shadow_map:` field, and the rest of the file (comments,

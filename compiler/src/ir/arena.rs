@@ -38,7 +38,7 @@ pub enum Node {
     Unary(UnOp, ExprId),
     Binary(BinOp, ExprId, ExprId),
     Call(Func, Vec<ExprId>),
-    /// Vector components, e.g. `.x` = [0], `.xy` = [0, 1].
+    /// Vector components, e.g. `.x` is `[0]`, `.xy` is `[0, 1]`.
     Swizzle(ExprId, Vec<u8>),
 }
 
