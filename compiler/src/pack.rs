@@ -466,29 +466,16 @@ pub fn pack(ir: &Ir, analysis: &Analysis, limits: &Limits) -> Result<Layout, Dia
 /// The resource whose textures a Mipmap output shares.
 pub fn mip_source(ir: &Ir, r: ResId) -> Option<ResId> {
     let w = &ir.passes[ir.resources[r].writer];
-    match w.kind {
-        IrPassKind::Mipmap { .. } => Some(mip_source(ir, w.reads[0]).unwrap_or(w.reads[0])),
-        IrPassKind::Depth { .. }
-        | IrPassKind::Map
-        | IrPassKind::Filter { .. }
-        | IrPassKind::SummedArea { .. }
-        | IrPassKind::Geometry { .. }
-        | IrPassKind::Shade { .. } => None,
-    }
+    w.kind
+        .kind()
+        .makes_mip_chain()
+        .then(|| mip_source(ir, w.reads[0]).unwrap_or(w.reads[0]))
 }
 
 /// The resource a SummedArea output sums.
 pub fn table_source(ir: &Ir, r: ResId) -> Option<ResId> {
     let w = &ir.passes[ir.resources[r].writer];
-    match w.kind {
-        IrPassKind::SummedArea { .. } => Some(w.reads[0]),
-        IrPassKind::Depth { .. }
-        | IrPassKind::Map
-        | IrPassKind::Filter { .. }
-        | IrPassKind::Mipmap { .. }
-        | IrPassKind::Geometry { .. }
-        | IrPassKind::Shade { .. } => None,
-    }
+    w.kind.kind().makes_table().then(|| w.reads[0])
 }
 
 /// How many layers of a texture one render pass can write at once under the limits.

@@ -141,6 +141,39 @@ impl Arena {
         is(h) || self.components(h).is_some_and(|c| c.iter().all(|&x| is(x)))
     }
 
+    /// The identities that hold for every finite value, with a constant operand of zeros
+    /// or ones (a scalar, or a vector constructor of them): `0 + x`, `x + 0`, `x - 0`,
+    /// `1 * x`, `x * 1`, `x / 1` are `x`, where `x` already has the result's type (a
+    /// scalar broadcast into a vector operation does not).
+    fn identity(&self, op: BinOp, a: ExprId, b: ExprId, ty: Ty) -> Option<ExprId> {
+        let keep = |h: ExprId| (self.ty(h) == ty).then_some(h);
+        let (zero, one) = (|h| self.is_splat_of(h, 0.0), |h| self.is_splat_of(h, 1.0));
+        match op {
+            BinOp::Add if zero(a) => keep(b),
+            BinOp::Add | BinOp::Sub if zero(b) => keep(a),
+            BinOp::Mul if one(a) => keep(b),
+            BinOp::Mul | BinOp::Div if one(b) => keep(a),
+            BinOp::Add
+            | BinOp::Sub
+            | BinOp::Mul
+            | BinOp::Div
+            | BinOp::Rem
+            | BinOp::Lt
+            | BinOp::Le
+            | BinOp::Gt
+            | BinOp::Ge
+            | BinOp::Eq
+            | BinOp::Ne
+            | BinOp::And
+            | BinOp::Or
+            | BinOp::BitAnd
+            | BinOp::BitOr
+            | BinOp::BitXor
+            | BinOp::Shl
+            | BinOp::Shr => None,
+        }
+    }
+
     /// Vector folds that only ever remove work (a fold that split one vector operation
     /// into several scalar ones would add operations: docs/language.md section 8.9):
     /// identities with a constant operand of zeros or ones, operations whose operands
@@ -149,39 +182,8 @@ impl Arena {
         match node {
             Node::Binary(op, a, b) if matches!(ty, Ty::Vec(_)) => {
                 let (a, b) = (*a, *b);
-                // identities: the kept operand already has the result's type
-                let keep = |h: ExprId| (self.ty(h) == ty).then_some(h);
-                match op {
-                    BinOp::Add if self.is_splat_of(a, 0.0) => return keep(b),
-                    BinOp::Add | BinOp::Sub if self.is_splat_of(b, 0.0) => {
-                        if let Some(h) = keep(a) {
-                            return Some(h);
-                        }
-                    }
-                    BinOp::Mul if self.is_splat_of(a, 1.0) => return keep(b),
-                    BinOp::Mul | BinOp::Div if self.is_splat_of(b, 1.0) => {
-                        if let Some(h) = keep(a) {
-                            return Some(h);
-                        }
-                    }
-                    BinOp::Add
-                    | BinOp::Sub
-                    | BinOp::Mul
-                    | BinOp::Div
-                    | BinOp::Rem
-                    | BinOp::Lt
-                    | BinOp::Le
-                    | BinOp::Gt
-                    | BinOp::Ge
-                    | BinOp::Eq
-                    | BinOp::Ne
-                    | BinOp::And
-                    | BinOp::Or
-                    | BinOp::BitAnd
-                    | BinOp::BitOr
-                    | BinOp::BitXor
-                    | BinOp::Shl
-                    | BinOp::Shr => {}
+                if let Some(h) = self.identity(*op, a, b, ty) {
+                    return Some(h);
                 }
                 if !matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div) {
                     return None;
@@ -239,33 +241,10 @@ impl Arena {
             }
             Node::Binary(op, a, b) => {
                 let (x, y) = (self.as_const(*a), self.as_const(*b));
-                // Identities that hold for every finite value.
-                if matches!(ty, Ty::F32 | Ty::I32 | Ty::U32) {
-                    let is = |c: Option<ConstValue>, v: f64| c.is_some_and(|c| c.as_f64() == v);
-                    match op {
-                        BinOp::Add if is(x, 0.0) => return Some(*b),
-                        BinOp::Add | BinOp::Sub if is(y, 0.0) => return Some(*a),
-                        BinOp::Mul if is(x, 1.0) => return Some(*b),
-                        BinOp::Mul | BinOp::Div if is(y, 1.0) => return Some(*a),
-                        BinOp::Add
-                        | BinOp::Sub
-                        | BinOp::Mul
-                        | BinOp::Div
-                        | BinOp::Rem
-                        | BinOp::Lt
-                        | BinOp::Le
-                        | BinOp::Gt
-                        | BinOp::Ge
-                        | BinOp::Eq
-                        | BinOp::Ne
-                        | BinOp::And
-                        | BinOp::Or
-                        | BinOp::BitAnd
-                        | BinOp::BitOr
-                        | BinOp::BitXor
-                        | BinOp::Shl
-                        | BinOp::Shr => {}
-                    }
+                if matches!(ty, Ty::F32 | Ty::I32 | Ty::U32)
+                    && let Some(h) = self.identity(*op, *a, *b, ty)
+                {
+                    return Some(h);
                 }
                 // (c1 * x) / c2 -> (c1 / c2) * x
                 if let (BinOp::Div, Some(Float(c2)), Node::Binary(BinOp::Mul, m1, m2)) = (op, y, self.node(*a).clone())
